@@ -1,0 +1,234 @@
+r"""Prefix-based equalized-recovery design (Theorem 3 of the prefix-based paper).
+
+Decision variables: one block per prefix-tree node.  The node of prefix
+``q(0..t)`` owns the gain row of time ``t`` of the Q-parametrisation,
+``Q(t, τ)`` for the measured ``τ <= t`` of the prefix, and ``r(t)``.  Words
+that share a prefix therefore share these rows by construction, which is the
+polyhedral set :math:`\mathcal Q(\mathcal L)` of eq. (11) without any equality
+constraint between copies (:mod:`tests.test_design_prefix` checks it against
+the paper's copy-per-word form).  ``Q(t, τ)`` for a missing ``τ`` multiplies
+:math:`y_\xi(\tau) = 0` and is omitted (it is set to zero).
+
+The error at time ``t`` depends only on the prefix ``q(0..t-1)`` (eq. (13)
+restricted to its first ``t`` blocks, a consequence of Lemma 1), so the
+robust constraints are written once per node:
+
+.. math:: \xi(t) = \mathrm{Ol}_t\,\delta + \sum_{s<t} \Phi(t, s{+}1)
+          \Big(\sum_{\tau \le s,\ q(\tau) = 1} Q(s,\tau) Y_\tau \delta + r(s)\Big),
+
+where :math:`\mathrm{Ol}_t` is the open-loop error map and :math:`Y_\tau` the
+output-error map of :class:`eqrec.stacking.Stacking`.  Nodes where a word
+ends get level ``M1``, the others the variable ``M2`` (eq. (12b)); ``M2 >=
+M1`` covers ``t = 0``.  The time-based estimator of the authors' earlier work
+is the special case of a single (worst-case) word.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import InputError
+from .gains import GainSchedule, q_to_f, schedule_from_word_gains
+from .languages import PrefixTree
+from .lp import LinearProgram, LPBuilder, LPSolution, solve_lp
+from .robust import UncertainAffineRows, add_robust_rows
+from .stacking import Stacking
+from .systems import AffineSystem
+
+
+@dataclass
+class PrefixLP:
+    """The built LP of a prefix-based design and where its variables are."""
+
+    lp: LinearProgram
+    stacking: Stacking
+    tree: PrefixTree
+    M1: float
+    mu2_col: int
+    q_cols: dict[int, np.ndarray]  # node index -> columns of Q row (n x k p, row-major)
+    r_cols: dict[int, np.ndarray]  # node index -> columns of r(t)
+    measured: dict[int, list[int]]  # node index -> measured times τ <= t
+    build_time: float = 0.0
+
+
+@dataclass
+class Design:
+    """A solved and certified equalized-recovery design."""
+
+    method: str
+    system: AffineSystem
+    words: tuple[str, ...]
+    T: int
+    M1: float
+    mu2: float
+    schedule: GainSchedule
+    solution: LPSolution
+    build_time: float
+    certificate: "object | None" = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def solve_time(self) -> float:
+        return self.solution.solve_time
+
+
+def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
+                    form: str = "abs") -> PrefixLP:
+    """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
+
+    Parameters
+    ----------
+    system
+        The affine system.
+    words
+        The language (words may differ in length: Section V extension; the
+        recovery level ``M1`` is then imposed at each word's end).
+    M1
+        Equalized recovery level.
+    T
+        Horizon for the stacked matrices (default: the longest word).
+    form
+        Robust counterpart: ``"abs"`` or the paper's Π-dual ``"dual"``.
+    """
+    t_start = time.perf_counter()
+    tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
+    T = tree.depth if T is None else T
+    if tree.depth > T:
+        raise InputError(f"words of length {tree.depth} exceed the horizon T = {T}")
+    M1 = float(M1)
+    if not np.isfinite(M1) or M1 <= 0:
+        raise InputError(f"the recovery level M1 must be positive, got {M1}", field="mu1")
+    st = Stacking(system, T)
+    n, p = system.n, system.p
+    lay = st.layout
+    phi, Ol, Y = st.transition, st.open_loop, st.output_maps
+
+    b = LPBuilder()
+    mu2 = int(b.add_variables(1, lower=M1, name="mu2")[0])
+    b.set_cost(mu2, 1.0)
+    q_cols: dict[int, np.ndarray] = {}
+    r_cols: dict[int, np.ndarray] = {}
+    measured: dict[int, list[int]] = {}
+    for node in tree:
+        taus = [tau for tau in range(node.depth) if node.prefix[tau] == "1"]
+        measured[node.index] = taus
+        q_cols[node.index] = b.add_variables(n * p * len(taus), name=f"Q[{node.prefix}]")
+        r_cols[node.index] = b.add_variables(n, name=f"r[{node.prefix}]")
+
+    # Robust rows of ξ(t) for every node of depth t (the error after that prefix).
+    entry_row, entry_coord, G0, gx_r, gx_c, gx_v = [], [], [], [], [], []
+    c_r, c_c, c_v = [], [], []
+    level_const, level_coef = [], []
+    row0 = 0
+    ent0 = 0
+    D = lay.size
+    for node in tree:
+        t = node.depth
+        path = tree.path(node.prefix)  # ancestors at depths 1..t (times 0..t-1)
+        blocks = []  # (columns, coefficient matrix of vec(G_t) (nD x len(columns)))
+        for s, anc in enumerate(path):
+            taus = measured[anc.index]
+            if taus:
+                Ys = Y[taus].reshape(len(taus) * p, D)
+                blocks.append((q_cols[anc.index], np.kron(phi[t][s + 1], Ys.T)))
+        const = Ol[t].reshape(-1)
+        K = np.hstack([blk for _, blk in blocks]) if blocks else np.zeros((n * D, 0))
+        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
+        structural = (const != 0) | np.any(K != 0, axis=1)
+        idx = np.flatnonzero(structural)
+        entry_row.append(row0 + idx // D)
+        entry_coord.append(idx % D)
+        G0.append(const[idx])
+        Ks = sp.coo_matrix(K[idx])
+        gx_r.append(Ks.row + ent0)
+        gx_c.append(cols[Ks.col])
+        gx_v.append(Ks.data)
+        ent0 += idx.size
+        # certain part c_t = Σ_s Φ(t, s+1) r(s)
+        for s, anc in enumerate(path):
+            P = phi[t][s + 1]
+            rr, cc = np.nonzero(P)
+            c_r.append(row0 + rr)
+            c_c.append(r_cols[anc.index][cc])
+            c_v.append(P[rr, cc])
+        if node.terminal:
+            level_const.append(np.full(n, M1))
+            level_coef.append(np.zeros(n))
+        else:
+            level_const.append(np.zeros(n))
+            level_coef.append(np.ones(n))
+        row0 += n
+    nx = b.num_variables
+    rows = UncertainAffineRows(
+        entry_row=np.concatenate(entry_row), entry_coord=np.concatenate(entry_coord), G0=np.concatenate(G0),
+        Gx=sp.csr_matrix((np.concatenate(gx_v), (np.concatenate(gx_r), np.concatenate(gx_c))), shape=(ent0, nx)),
+        c0=np.zeros(row0),
+        cx=sp.csr_matrix((np.concatenate(c_v), (np.concatenate(c_r), np.concatenate(c_c))), shape=(row0, nx)),
+    )
+    radius = lay.radius(system.eta_w, system.eta_v, M1)
+    add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const), level_col=mu2,
+                    level_coef=np.concatenate(level_coef), form=form)
+    lp = b.build()
+    return PrefixLP(lp=lp, stacking=st, tree=tree, M1=M1, mu2_col=mu2, q_cols=q_cols, r_cols=r_cols,
+                    measured=measured, build_time=time.perf_counter() - t_start)
+
+
+def word_Q_r(model: PrefixLP, x: np.ndarray, word: str) -> tuple[np.ndarray, np.ndarray]:
+    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one word from the node variables."""
+    sys = model.stacking.system
+    n, p, T = sys.n, sys.p, len(word)
+    Q = np.zeros((T * n, T * p))
+    r = np.zeros(T * n)
+    for node in model.tree.path(word):
+        t = node.depth - 1
+        taus = model.measured[node.index]
+        vals = x[model.q_cols[node.index]].reshape(n, len(taus) * p) if taus else np.zeros((n, 0))
+        for j, tau in enumerate(taus):
+            Q[t * n:(t + 1) * n, tau * p:(tau + 1) * p] = vals[:, j * p:(j + 1) * p]
+        r[t * n:(t + 1) * n] = x[model.r_cols[node.index]]
+    return Q, r
+
+
+def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = False) -> GainSchedule:
+    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution (eqs. (1), (2))."""
+    st = model.stacking
+    sys = st.system
+    word_gains = {}
+    for word in model.tree.words:
+        Tw = len(word)
+        Q, r = word_Q_r(model, solution.x, word)
+        CS = (st.C_bar(word.ljust(st.T, "0")) @ st.S)[: Tw * sys.p, : Tw * sys.n]
+        word_gains[word] = q_to_f(Q, r, CS)
+    return schedule_from_word_gains(model.tree, word_gains, sys.n, sys.p, time_based=time_based)
+
+
+def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
+                  form: str = "abs", certify: bool = True, method: str = "prefix") -> Design:
+    """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
+
+    Returns a :class:`Design` whose gains have been certified independently
+    (:func:`eqrec.certify.certify_design`) unless ``certify=False``.
+
+    Raises
+    ------
+    InfeasibleDesign
+        If no prefix-based estimator achieves recovery level ``M1``.
+    SolverFailure
+        If the solver stops without an optimum.
+    CertificationFailure
+        If the recovered gains do not achieve the optimum.
+    """
+    model = build_prefix_lp(system, words, M1, T=T, form=form)
+    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {M1:g})")
+    schedule = read_schedule(model, sol, time_based=(method == "time"))
+    design = Design(method=method, system=system, words=model.tree.words, T=model.stacking.T, M1=model.M1,
+                    mu2=float(sol.x[model.mu2_col]), schedule=schedule, solution=sol, build_time=model.build_time)
+    if certify:
+        from .certify import certify_design
+
+        certify_design(design)
+    return design

@@ -1,0 +1,143 @@
+r"""Estimator gains: recovery from the Q-parametrisation and gain schedules.
+
+The output injection of eq. (7) of the prefix-based paper is
+
+.. math:: u_e(t) = u_0(t, q_{0:t}) + \sum_{\tau \le t} F(t, \tau, q_{0:t})\, y_\xi(\tau),
+
+with :math:`y_\xi(\tau) = y(\tau) - C\hat x(\tau)` when measured and 0 otherwise.
+For one word, stacking the gains gives a block lower-triangular ``F`` and a
+vector ``u0``; eqs. (1) and (2) map them to ``(Q, r)``:
+
+.. math:: Q = F(I - \bar C S F)^{-1}, \qquad r = (I + Q\bar C S) u_0,
+
+with inverses :math:`F = (I + Q\bar C S)^{-1} Q` and
+:math:`u_0 = (I + Q\bar C S)^{-1} r` (the proof of Proposition 1).
+
+A :class:`GainSchedule` holds one gain row per prefix-tree node (a
+prefix-based estimator) or per time step (a time-based estimator, which
+ignores the observed prefix).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+from .errors import InputError
+from .languages import PrefixTree, prefixes
+
+
+def _solve_unit_lower(Mtx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    # I + Q C̄ S is unit lower triangular (Q C̄ S is strictly block lower triangular).
+    return sla.solve_triangular(Mtx, rhs, lower=True, unit_diagonal=True)
+
+
+def q_to_f(Q: np.ndarray, r: np.ndarray, CS: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse of eqs. (1)-(2) of the prefix-based paper: ``(Q, r) -> (F, u0)``.
+
+    Parameters
+    ----------
+    Q : ndarray, shape (Tn, Tp)
+        Block lower-triangular Q-parameter.
+    r : ndarray, shape (Tn,)
+    CS : ndarray, shape (Tp, Tn)
+        The product ``C̄ S`` (strictly block lower triangular).
+    """
+    Mtx = np.eye(Q.shape[0]) + Q @ CS
+    return _solve_unit_lower(Mtx, Q), _solve_unit_lower(Mtx, r)
+
+
+def f_to_q(F: np.ndarray, u0: np.ndarray, CS: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. (1)-(2) of the prefix-based paper: ``Q = F (I - C̄ S F)^{-1}``, ``r = (I + Q C̄ S) u0``."""
+    Q = np.linalg.solve((np.eye(CS.shape[0]) - CS @ F).T, F.T).T
+    r = (np.eye(Q.shape[0]) + Q @ CS) @ u0
+    return Q, r
+
+
+@dataclass
+class GainRow:
+    """Gains used at time ``t``: ``F(t, 0..t)`` as one ``n x (t+1)p`` block row and ``u0(t)``."""
+
+    F: np.ndarray
+    u0: np.ndarray
+
+
+@dataclass
+class GainSchedule:
+    """Gains of a prefix-based (eq. (7)) or time-based (eq. (6)) estimator.
+
+    Attributes
+    ----------
+    rows
+        ``rows[prefix]`` is the gain row used at time ``len(prefix) - 1``
+        after observing ``prefix``.
+    time_based
+        If true the schedule has a single designed word and the gains are
+        chosen by time only; the observed prefix is ignored (so measurements
+        that the designed word does not have get zero gain).
+    n, p
+        State and output dimensions.
+    """
+
+    rows: dict[str, GainRow]
+    n: int
+    p: int
+    time_based: bool = False
+    designed_words: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def horizon(self) -> int:
+        return max(len(k) for k in self.rows)
+
+    def row(self, observed_prefix: str) -> GainRow:
+        """Gain row after observing ``observed_prefix`` (length ``t + 1``)."""
+        if self.time_based:
+            key = self.designed_words[0][: len(observed_prefix)]
+            if len(key) < len(observed_prefix):
+                raise InputError(f"time {len(observed_prefix) - 1} is beyond the horizon {self.horizon}")
+            return self.rows[key]
+        try:
+            return self.rows[observed_prefix]
+        except KeyError:
+            raise InputError(f"observed missing-data prefix {observed_prefix!r} is not a prefix of any word "
+                             f"of the design language {list(self.designed_words)}") from None
+
+    def word_matrices(self, word: str) -> tuple[np.ndarray, np.ndarray]:
+        """Stacked ``F (Tn x Tp)`` and ``u0 (Tn)`` used along ``word`` (eq. (9))."""
+        T, n, p = len(word), self.n, self.p
+        F = np.zeros((T * n, T * p))
+        u0 = np.zeros(T * n)
+        for t, pre in enumerate(prefixes(word)):
+            g = self.row(pre)
+            F[t * n:(t + 1) * n, : (t + 1) * p] = g.F
+            u0[t * n:(t + 1) * n] = g.u0
+        return F, u0
+
+    def to_json(self) -> dict:
+        """Per designed word ``{"F": ..., "u0": ...}`` in the CLI output convention."""
+        return {w: dict(zip(("F", "u0"), (m.tolist() for m in self.word_matrices(w)))) for w in self.designed_words}
+
+
+def schedule_from_word_gains(tree: PrefixTree, word_gains: dict[str, tuple[np.ndarray, np.ndarray]], n: int, p: int,
+                             time_based: bool = False, consistency_tol: float = 1e-7) -> GainSchedule:
+    """Assemble a schedule from per-word stacked gains, checking prefix consistency.
+
+    Words sharing a prefix must have the same gain rows on it (Proposition 1
+    of the prefix-based paper); a violation beyond ``consistency_tol``
+    (relative) raises :class:`AssertionError`.
+    """
+    rows: dict[str, GainRow] = {}
+    for word, (F, u0) in word_gains.items():
+        for t, pre in enumerate(prefixes(word)):
+            row = GainRow(F[t * n:(t + 1) * n, : (t + 1) * p].copy(), u0[t * n:(t + 1) * n].copy())
+            if pre in rows:
+                old = rows[pre]
+                scale = 1.0 + max(np.abs(old.F).max(initial=0), np.abs(old.u0).max(initial=0))
+                diff = max(np.abs(old.F - row.F).max(initial=0), np.abs(old.u0 - row.u0).max(initial=0))
+                if diff > consistency_tol * scale:
+                    raise AssertionError(f"gains of prefix {pre!r} differ between words by {diff:.3g}")
+            else:
+                rows[pre] = row
+    return GainSchedule(rows=rows, n=n, p=p, time_based=time_based, designed_words=tree.words)

@@ -1,0 +1,273 @@
+"""Affine discrete-time systems with bounded noise.
+
+The model of eq. (3) of the prefix-based paper, with the noise gains of its
+Remark 1 and of eq. (1) of the augmented paper::
+
+    x(t+1) = A(t) x(t) + B(t) u(t) + f + E(t) w(t),   ||w(t)||_inf <= eta_w
+    y(t)   = C(t) x(t) + V(t) v(t)   if q(t) = 1,     ||v(t)||_inf <= eta_v
+    y(t)   = (missing)               if q(t) = 0.
+
+Time-varying matrices are given as arrays with a leading time axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+
+
+def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"not a numeric matrix ({exc})", source, name) from None
+    if arr.ndim == 1 and 2 in ndim_ok:
+        arr = arr.reshape(-1, 1) if name in ("E", "B") else arr.reshape(1, -1)
+    if arr.ndim not in ndim_ok:
+        raise InputError(f"expected a matrix, got an array with {arr.ndim} dimensions", source, name)
+    if not np.all(np.isfinite(arr)):
+        raise InputError("contains NaN or infinite entries", source, name)
+    return arr
+
+
+@dataclass(frozen=True)
+class AffineSystem:
+    """Affine (possibly time-varying) system with box-bounded noise.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n) or (T, n, n)
+        State matrix (a leading axis makes it time-varying).
+    C : ndarray, shape (p, n) or (T, p, n)
+        Output matrix.
+    E : ndarray, shape (n, nw) or (T, n, nw)
+        Process-noise gain (``W_k`` in the augmented paper).
+    eta_w, eta_v : float
+        Infinity-norm bounds of ``w`` and ``v``.
+    B : ndarray, shape (n, m), optional
+        Input matrix (does not enter the error dynamics).
+    f : ndarray, shape (n,), optional
+        Affine term (does not enter the error dynamics).
+    V : ndarray, shape (p, nv), optional
+        Measurement-noise gain, identity by default.
+    name : str
+        Label used in reports.
+    """
+
+    A: np.ndarray
+    C: np.ndarray
+    E: np.ndarray
+    eta_w: float
+    eta_v: float
+    B: np.ndarray | None = None
+    f: np.ndarray | None = None
+    V: np.ndarray | None = None
+    name: str = "system"
+    source: str | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        src = self.source
+        A = _as_matrix(self.A, "A", src)
+        C = _as_matrix(self.C, "C", src)
+        E = _as_matrix(self.E, "E", src)
+        n = A.shape[-1]
+        if A.shape[-2] != n:
+            raise InputError(f"A must be square, got shape {A.shape}", src, "A")
+        if C.shape[-1] != n:
+            raise InputError(f"C must have {n} columns (n = {n}), got shape {C.shape}", src, "C")
+        if E.shape[-2] != n:
+            raise InputError(f"E must have {n} rows (n = {n}), got shape {E.shape}", src, "E")
+        p = C.shape[-2]
+        V = np.eye(p) if self.V is None else _as_matrix(self.V, "V", src)
+        if V.shape[-2] != p:
+            raise InputError(f"V must have {p} rows (p = {p}), got shape {V.shape}", src, "V")
+        B = None if self.B is None else _as_matrix(self.B, "B", src)
+        if B is not None and B.shape[-2] != n:
+            raise InputError(f"B must have {n} rows, got shape {B.shape}", src, "B")
+        f = np.zeros(n) if self.f is None else np.asarray(self.f, dtype=float).reshape(-1)
+        if f.shape != (n,):
+            raise InputError(f"f must have {n} entries, got {f.size}", src, "f")
+        for name in ("eta_w", "eta_v"):
+            val = getattr(self, name)
+            try:
+                val = float(val)
+            except (TypeError, ValueError):
+                raise InputError("must be a number", src, name) from None
+            if not np.isfinite(val) or val < 0:
+                raise InputError(f"must be a finite non-negative number, got {val}", src, name)
+            object.__setattr__(self, name, val)
+        lengths = {arr.shape[0] for arr in (A, C, E, V) if arr.ndim == 3}
+        if len(lengths) > 1:
+            raise InputError(f"time-varying matrices have different horizons {sorted(lengths)}", src)
+        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f).items():
+            object.__setattr__(self, key, val)
+
+    # -- dimensions -------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """State dimension."""
+        return self.A.shape[-1]
+
+    @property
+    def p(self) -> int:
+        """Output dimension."""
+        return self.C.shape[-2]
+
+    @property
+    def nw(self) -> int:
+        """Process-noise dimension."""
+        return self.E.shape[-1]
+
+    @property
+    def nv(self) -> int:
+        """Measurement-noise dimension."""
+        return self.V.shape[-1]
+
+    @property
+    def m(self) -> int:
+        """Input dimension (0 without B)."""
+        return 0 if self.B is None else self.B.shape[-1]
+
+    @property
+    def horizon_limit(self) -> int | None:
+        """Length of the time-varying data, ``None`` if time-invariant."""
+        for arr in (self.A, self.C, self.E, self.V):
+            if arr.ndim == 3:
+                return arr.shape[0]
+        return None
+
+    @property
+    def is_time_varying(self) -> bool:
+        return self.horizon_limit is not None
+
+    # -- time-indexed access ---------------------------------------------
+    @staticmethod
+    def _at(arr: np.ndarray, t: int) -> np.ndarray:
+        return arr[t] if arr.ndim == 3 else arr
+
+    def A_at(self, t: int) -> np.ndarray:
+        return self._at(self.A, t)
+
+    def C_at(self, t: int) -> np.ndarray:
+        return self._at(self.C, t)
+
+    def E_at(self, t: int) -> np.ndarray:
+        return self._at(self.E, t)
+
+    def V_at(self, t: int) -> np.ndarray:
+        return self._at(self.V, t)
+
+    def B_at(self, t: int) -> np.ndarray:
+        if self.B is None:
+            return np.zeros((self.n, 0))
+        return self._at(self.B, t)
+
+    def check_horizon(self, T: int) -> None:
+        """Raise if a time-varying system is shorter than the horizon ``T``."""
+        lim = self.horizon_limit
+        if lim is not None and lim < T:
+            raise InputError(f"time-varying data covers {lim} steps, horizon needs {T}", self.source)
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable description (matrices as nested lists)."""
+        out = {
+            "name": self.name,
+            "A": self.A.tolist(),
+            "C": self.C.tolist(),
+            "E": self.E.tolist(),
+            "V": self.V.tolist(),
+            "f": self.f.tolist(),
+            "eta_w": self.eta_w,
+            "eta_v": self.eta_v,
+        }
+        if self.B is not None:
+            out["B"] = self.B.tolist()
+        return out
+
+
+# ---------------------------------------------------------------------------
+# The adaptive cruise control example
+# ---------------------------------------------------------------------------
+
+#: Table I of the prefix-based paper (SI units).
+ACC_CONSTANTS = {"m": 1370.0, "k0": 7.58, "k1": 9.9407, "Ts": 0.5, "eta_w": 0.1, "eta_v": 0.05}
+
+
+def acc_system(m: float = ACC_CONSTANTS["m"], k0: float = ACC_CONSTANTS["k0"],
+               k1: float = ACC_CONSTANTS["k1"], Ts: float = ACC_CONSTANTS["Ts"],
+               eta_w: float = ACC_CONSTANTS["eta_w"], eta_v: float = ACC_CONSTANTS["eta_v"]) -> AffineSystem:
+    """Discrete adaptive-cruise-control model of Section VI of the prefix-based paper.
+
+    Exact zero-order-hold discretisation of ``m dv_e/dt = u - k0 - k1 v_e``,
+    ``dh/dt = v_L - v_e``, ``dv_L/dt = w`` (lead acceleration), with state
+    ``x = [v_e, h, v_L]`` and outputs ``[v_e, h]``; built from the Table I
+    constants, not from rounded matrices.
+
+    Returns
+    -------
+    AffineSystem
+        With ``E = [0, Ts^2/2, Ts]^T`` and ``V = I``.
+    """
+    kappa = k1 / m
+    a = np.exp(-kappa * Ts)
+    A = np.array([[a, 0.0, 0.0],
+                  [(a - 1.0) / kappa, 1.0, Ts],
+                  [0.0, 0.0, 1.0]])
+    B = (1.0 / k1**2) * np.array([[(1.0 - a) * k1], [m * (1.0 - a) - k1 * Ts], [0.0]])
+    f = np.array([-(k0 / k1) * (1.0 - a), -(k0 / k1**2) * (m * (1.0 - a) - k1 * Ts), 0.0])
+    C = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    E = np.array([[0.0], [Ts**2 / 2.0], [Ts]])
+    return AffineSystem(A=A, B=B, f=f, C=C, E=E, eta_w=eta_w, eta_v=eta_v, name="ACC")
+
+
+# ---------------------------------------------------------------------------
+# Loading user systems
+# ---------------------------------------------------------------------------
+
+SYSTEM_KEYS = {"A", "C", "E", "eta_w", "eta_v", "T", "B", "f", "V", "name"}
+
+
+def system_from_mapping(data: Any, source: str = "<mapping>") -> tuple[AffineSystem, int | None]:
+    """Build a system from a mapping (e.g. parsed YAML).
+
+    Returns
+    -------
+    system : AffineSystem
+    T : int or None
+        The optional horizon ``T`` of the file.
+    """
+    if not isinstance(data, dict):
+        raise InputError("top level must be a mapping with keys A, C, E, eta_w, eta_v", source)
+    for key in ("A", "C", "E", "eta_w", "eta_v"):
+        if key not in data:
+            raise InputError("missing required field", source, key)
+    unknown = set(data) - SYSTEM_KEYS
+    if unknown:
+        raise InputError(f"unknown field(s) {sorted(unknown)}; allowed: {sorted(SYSTEM_KEYS)}", source)
+    T = data.get("T")
+    if T is not None:
+        if isinstance(T, bool) or not isinstance(T, int) or T < 1:
+            raise InputError(f"must be a positive integer, got {T!r}", source, "T")
+    sys = AffineSystem(A=data["A"], C=data["C"], E=data["E"], eta_w=data["eta_w"], eta_v=data["eta_v"],
+                       B=data.get("B"), f=data.get("f"), V=data.get("V"),
+                       name=str(data.get("name", Path(source).stem)), source=source)
+    return sys, T
+
+
+def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
+    """Read a system YAML file (keys ``A, C, E, eta_w, eta_v`` and optional ``T, B, f, V``)."""
+    import yaml
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("file not found", str(path))
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise InputError(f"not valid YAML ({exc})", str(path)) from None
+    return system_from_mapping(data, str(path))
