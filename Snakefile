@@ -2,9 +2,9 @@
 # papers and the LMV companion study, then compares them with the published
 # values (results/claims.csv, results/REPRODUCTION.md).
 #
-#   snakemake --cores 2            # everything on the default config
-#   snakemake --cores 2 p1         # one paper
-#   snakemake --report report.html # browsable report with figure captions
+#   snakemake --cores 2              # everything, default config
+#   snakemake --cores 2 p1           # one paper (p1, p2, p4)
+#   snakemake --report report.html   # browsable report with figure captions
 from pathlib import Path
 
 from snakemake.utils import min_version, validate
@@ -17,8 +17,16 @@ configfile: "config/config.yaml"
 
 validate(config, "config/schemas/config.schema.yaml")
 
-# Each rules file appends the values.json files its analysis writes; the
-# claims table needs all of them.
+# Paper sections with their own parameter files.
+for _part in ("p2", "p4"):
+    if Path(f"config/{_part}.yaml").exists():
+
+        configfile: f"config/{_part}.yaml"
+
+        validate(config[_part], f"config/schemas/{_part}.schema.yaml")
+
+# Each rules file appends the values.json its analysis writes; the claims
+# table (claims.smk, included last) needs all of them.
 VALUES_FILES = []
 
 
@@ -36,7 +44,11 @@ if Path("workflow/rules/p4.smk").exists():
     include: "workflow/rules/p4.smk"
 
 
+include: "workflow/rules/claims.smk"
+
+
 rule all:
     default_target: True
     input:
         rules.claims.output,
+        rules.p1.input,

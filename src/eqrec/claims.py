@@ -25,6 +25,8 @@ Comparison kinds
     ``atol`` is half a unit of the last printed digit of the paper's value.
 ``interval``
     ``paper_value`` and ours are ``[lo, hi]``; compared endpoint-wise.
+``array``
+    Nested lists (matrices) compared entry-wise with ``atol``.
 ``text``
     Exact (case-insensitive) match of strings, e.g. "hold-input".
 ``none``
@@ -39,6 +41,7 @@ from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import yaml
 
@@ -70,7 +73,7 @@ def load_claims(path: str | Path) -> list[dict]:
             raise InputError(f"duplicate claim id {entry['id']}", str(path), "id")
         seen.add(entry["id"])
         kind = entry["compare"].get("kind")
-        if kind not in ("number", "interval", "text", "none"):
+        if kind not in ("number", "interval", "array", "text", "none"):
             raise InputError(f"claim {entry['id']}: unknown compare kind {kind!r}", str(path), "compare")
     return data
 
@@ -116,6 +119,13 @@ def compare_one(entry: dict, ours: Any) -> tuple[str, str]:
         rtol = float(cmp.get("rtol", 0.0))
         ok = abs(float(ours) - float(paper)) <= atol + rtol * abs(float(paper))
         return ("reproduced" if ok else "differs"), f"tolerance {atol:g} + {rtol:g}|paper|"
+    if kind == "array":
+        a, b = np.asarray(ours, float), np.asarray(paper, float)
+        atol = float(cmp.get("atol", 0.0))
+        if a.shape != b.shape:
+            return "differs", f"shape {a.shape} vs published {b.shape}"
+        gap = float(np.max(np.abs(a - b))) if a.size else 0.0
+        return ("reproduced" if gap <= atol else "differs"), f"largest entry gap {gap:.2g} (tolerance {atol:g})"
     if kind == "interval":
         atol = float(cmp.get("atol", max(default_atol(paper[0]), default_atol(paper[1]))))
         ok = all(abs(float(a) - float(b)) <= atol for a, b in zip(ours, paper))
@@ -190,3 +200,23 @@ def write_values(path: str | Path, values: dict[str, Any]) -> None:
         return {"value": v}
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text(json.dumps({k: norm(v) for k, v in values.items()}, indent=2, default=float) + "\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m eqrec.claims``: build the claims table (a Snakemake rule)."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m eqrec.claims",
+                                 description="Compare published values (claims file) with the pipeline's results.")
+    ap.add_argument("--claims", required=True, help="claims YAML (config/claims.yaml)")
+    ap.add_argument("--results", required=True, help="results directory holding the values.json files")
+    ap.add_argument("--csv", required=True, help="output CSV")
+    ap.add_argument("--md", required=True, help="output Markdown report")
+    a = ap.parse_args(argv)
+    table = write_claims(a.claims, a.results, a.csv, a.md)
+    print(table["status"].value_counts().to_string())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
