@@ -137,9 +137,9 @@ def step_tracking(cfg: dict, out_npz: str | Path, figs: Sequence[tuple[str, str]
     _savez(out_npz, x=x, filt=filt, pred=pred, smooth=smooth, eta=sim["eta"][0], y=sim["y_zero"][0],
              N=N, eta_bar=eta)
     _progress(f"tracking {ex}: {int(sim['eta'][0].sum())}/{T + 1} packets arrived")
-    labels = [("filter", r"$\hat{x}(t|t)$", filt),
-              ("one-step predictor", r"$\hat{x}(t|t-1)$", pred),
-              (f"{N}-step smoother", rf"$\hat{{x}}(t|t+{N})$", smooth)]
+    labels = [("filter", r"$\hat{{x}}_{i}(t|t)$", filt),
+              ("one-step predictor", r"$\hat{{x}}_{i}(t|t-1)$", pred),
+              (f"{N}-step smoother", r"$\hat{{x}}_{i}(t|t+" + str(N) + ")$", smooth)]
     for (title, sym, est), (pdf, png), num in zip(labels, figs, (1, 2, 3)):
         fig_tracking(x, est, title, sym, eta, num, pdf, png)
 
@@ -512,7 +512,7 @@ def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: floa
     t = np.arange(x.shape[0])
     for i, ax in enumerate(np.atleast_1d(axes)):
         ax.plot(t, x[:, i], "k-", label=rf"true $x_{i + 1}(t)$")
-        ax.plot(t, est[:, i], "r--", label=sym.replace("x}", f"x}}_{i + 1}").replace("$\\hat{x}", rf"$\hat{{x}}_{i + 1}"))
+        ax.plot(t, est[:, i], "r--", label="estimate " + sym.format(i=i + 1))
         ax.set_ylabel(rf"$x_{i + 1}$ (state units)")
         ax.legend(loc="upper right", ncol=2)
     np.atleast_1d(axes)[-1].set_xlabel("time step $t$")

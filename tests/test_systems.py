@@ -1,0 +1,68 @@
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from eqrec.errors import InputError
+from eqrec.systems import ACC_CONSTANTS, AffineSystem, acc_system, load_system, system_from_mapping
+
+
+def test_acc_matches_exact_zoh_of_continuous_model():
+    # Independent derivation: ZOH of  m dve = u - k0 - k1 ve,  dh = vL - ve,  dvL = w  via the matrix exponential.
+    c = ACC_CONSTANTS
+    Ac = np.array([[-c["k1"] / c["m"], 0, 0], [-1, 0, 1], [0, 0, 0]])
+    Bc = np.array([[1 / c["m"], 0.0], [0, 0], [0, 1]])  # columns: force u (f = -k0 u-channel), lead accel w
+    M = np.zeros((5, 5))
+    M[:3, :3], M[:3, 3:] = Ac, Bc
+    Md = sla.expm(M * c["Ts"])
+    Ad, Bd = Md[:3, :3], Md[:3, 3:]
+    s = acc_system()
+    np.testing.assert_allclose(s.A, Ad, atol=1e-12)
+    np.testing.assert_allclose(s.B[:, 0], Bd[:, 0], atol=1e-12)
+    np.testing.assert_allclose(s.f, -c["k0"] * Bd[:, 0], atol=1e-12)
+    # E of the paper is the ZOH of a constant lead acceleration only for the vL row;
+    # the headway row Ts^2/2 is the exact double integral of it.
+    np.testing.assert_allclose(s.E[:, 0], [0, c["Ts"] ** 2 / 2, c["Ts"]])
+    np.testing.assert_allclose(Bd[1:, 1], [c["Ts"] ** 2 / 2, c["Ts"]], atol=1e-12)
+
+
+def test_dimensions(acc):
+    assert (acc.n, acc.p, acc.nw, acc.nv, acc.m) == (3, 2, 1, 2, 1)
+
+
+@pytest.mark.parametrize("field,kwargs", [
+    ("A", dict(A=np.ones((2, 3)))),
+    ("C", dict(C=np.ones((2, 4)))),
+    ("E", dict(E=np.ones((2, 1)))),
+    ("eta_w", dict(eta_w=-1.0)),
+    ("V", dict(V=np.ones((3, 3)))),
+])
+def test_bad_shapes_name_the_field(field, kwargs):
+    base = dict(A=np.eye(3), C=np.eye(3)[:2], E=np.ones((3, 1)), eta_w=0.1, eta_v=0.1)
+    base.update(kwargs)
+    with pytest.raises(InputError, match=f"'{field}'"):
+        AffineSystem(**base, source="sys.yaml")
+
+
+def test_load_system_errors_name_file_and_field(tmp_path):
+    p = tmp_path / "s.yaml"
+    p.write_text("A: [[1, 0], [0, 1]]\nC: [[1, 0]]\nE: [[0], [1]]\neta_w: 0.1\n")
+    with pytest.raises(InputError, match=r"s\.yaml.*eta_v"):
+        load_system(p)
+    p.write_text("A: [[1, 0], [0, 1]]\nC: [[1, 0]]\nE: [[0], [1]]\neta_w: 0.1\neta_v: 0.1\nT: -2\n")
+    with pytest.raises(InputError, match="'T'"):
+        load_system(p)
+    p.write_text("A: [[1, 0], [0, 1]]\nC: [[1, 0]]\nE: [[0], [1]]\neta_w: 0.1\neta_v: 0.1\nZ: 3\n")
+    with pytest.raises(InputError, match="unknown field"):
+        load_system(p)
+    p.write_text(": : :")
+    with pytest.raises(InputError, match="YAML"):
+        load_system(p)
+
+
+def test_time_varying_access():
+    A = np.stack([np.eye(2) * (1 + k) for k in range(4)])
+    s, _ = system_from_mapping(dict(A=A.tolist(), C=[[1, 0]], E=[[1], [0]], eta_w=0.1, eta_v=0.1))
+    assert s.is_time_varying and s.horizon_limit == 4
+    np.testing.assert_allclose(s.A_at(2), 3 * np.eye(2))
+    with pytest.raises(InputError, match="horizon"):
+        s.check_horizon(5)
