@@ -113,7 +113,7 @@ def compare_one(entry: dict, ours: Any) -> tuple[str, str]:
         return "differs", "our computation produced no value"
     if kind == "text":
         same = str(ours).strip().lower() == str(paper).strip().lower()
-        return ("reproduced" if same else "differs"), ""
+        return ("reproduced" if same else "differs"), "exact match" if same else ""
     if kind == "number":
         atol = float(cmp.get("atol", default_atol(paper)))
         rtol = float(cmp.get("rtol", 0.0))
@@ -154,7 +154,7 @@ def build_claims_table(claims_path: str | Path, results_dir: str | Path) -> pd.D
             if not parts:
                 parts.append("unexplained")
         elif status == "reproduced":
-            parts.append(f"within {tol}" + (f"; {note}" if note else ""))
+            parts.append(("within " if tol != "exact match" else "") + tol + (f"; {note}" if note else ""))
         else:
             parts.extend(p for p in (tol, note) if p)
         rows.append({"id": entry["id"], "quantity": entry["quantity"], "paper_value": _format(entry["paper_value"]),

@@ -345,13 +345,14 @@ def step_values(cfg: dict, tracking_npz: str, mc_json: dict[str, str], mc_npz: d
     tr = np.load(tracking_npz)
     x = tr["x"]
     rms_x = np.sqrt(np.mean(x ** 2, axis=0))
-    rel = {name: np.sqrt(np.mean((x - tr[name]) ** 2, axis=0)) / rms_x for name in ("filt", "pred", "smooth")}
-    corr = {name: [float(np.corrcoef(x[:, i], tr[name][:, i])[0, 1]) for i in range(x.shape[1])]
+    ok = ~np.isnan(tr["smooth"][:, 0])      # the N-step smoother ends N steps before T
+    rel = {name: np.sqrt(np.mean((x[ok] - tr[name][ok]) ** 2, axis=0)) / rms_x for name in ("filt", "pred", "smooth")}
+    corr = {name: [float(np.corrcoef(x[ok, i], tr[name][ok, i])[0, 1]) for i in range(x.shape[1])]
             for name in ("filt", "pred", "smooth")}
     values["tracking"] = {
         "value": "; ".join(f"{n}: rms error/rms state {_fmt(rel[n])}, correlation {_fmt(corr[n])}"
                            for n in ("filt", "pred", "smooth")),
-        "note": f"one realisation of {ex0}, eta_bar = {eta}, t = 0..{T}, seed {cfg['tracking']['seed']}; "
+        "note": f"one realisation of {ex0}, eta_bar = {eta}, t = 0..{int(np.flatnonzero(ok)[-1])}, seed {cfg['tracking']['seed']}; "
                 "the paper shows the plots only (no numbers)."}
 
     # P4-F4: ordering (steady state and whole horizon, theory and MC)
@@ -420,7 +421,8 @@ def step_values(cfg: dict, tracking_npz: str, mc_json: dict[str, str], mc_npz: d
         ssz = _steady_row(plant_of(cfg, ex), "zero-input", eta, N, cfg["steady"])["filt"]
         ssh = _steady_row(plant_of(cfg, ex), "hold-input", eta, N, cfg["steady"])["filt"]
         verdict = _better(ssz, ssh)
-        all_t = {m: bool(np.all(_better_t(d, m, T))) for m in ("zero-input", "hold-input")}
+        from_t = {m: _from_t(_better_t(d, m, T)) for m in ("zero-input", "hold-input")}
+        thr = _qlam_threshold(plant_of(cfg, ex), eta, N, cfg["steady"])
         # where would the other verdict hold? eta_bar sweep and Q grid
         ez, eh = e[f"{ex}/zero/filt"], e[f"{ex}/hold/filt"]
         hold_better_eta = etas[np.all(eh < ez, axis=1)]
@@ -433,8 +435,8 @@ def step_values(cfg: dict, tracking_npz: str, mc_json: dict[str, str], mc_npz: d
             "note": (f"{ex}, eta_bar = {eta}: steady filter error variances zero-input {_fmt(ssz)}, hold-input "
                      f"{_fmt(ssh)} (per component; trace {ssz.sum():.4g} vs {ssh.sum():.4g}); at t = {T} theory "
                      f"{_fmt(zt)} vs {_fmt(ht)}, Monte Carlo ({rep['runs']} runs) {_fmt(zm)} vs {_fmt(hm)}. "
-                     f"Lower in every component at every t = 1..{T}: zero-input {all_t['zero-input']}, "
-                     f"hold-input {all_t['hold-input']}. Over eta_bar in [{etas[0]:g}, {etas[-1]:g}] hold-input is "
+                     f"Lower in every component at all t0 <= t <= {T}: zero-input with t0 = "
+                     f"{from_t['zero-input']}, hold-input with t0 = {from_t['hold-input']}. {thr} Over eta_bar in [{etas[0]:g}, {etas[-1]:g}] hold-input is "
                      f"lower in all components for {_ranges(hold_better_eta)}, zero-input for "
                      f"{_ranges(zero_better_eta)}; over the (Q_xi, Q_lambda) grid on [{q['qxi'][0]:g}, "
                      f"{q['qxi'][-1]:g}]^2 at eta_bar = {eta}: hold-input lower in {100 * frac_hold:.0f}% of the "
@@ -485,6 +487,35 @@ def step_values(cfg: dict, tracking_npz: str, mc_json: dict[str, str], mc_npz: d
 def _better_t(d, mech: str, T: int) -> np.ndarray:
     z, h = d["zero/theory_filt"][1: T + 1], d["hold/theory_filt"][1: T + 1]
     return (z < h) if mech == "zero-input" else (h < z)
+
+
+def _from_t(better: np.ndarray) -> str:
+    """First t (1-based index into t = 1..T) from which ``better`` holds in all components until T."""
+    allc = np.all(better, axis=1)
+    if not allc[-1]:
+        return "never"
+    bad = np.flatnonzero(~allc)
+    return str(1 if len(bad) == 0 else int(bad[-1]) + 2)
+
+
+def _qlam_threshold(plant: Plant, eta: float, N: int, steady: dict) -> str:
+    """Q_lambda at which the steady filter-variance traces of both mechanisms are equal (plant's Q_xi)."""
+    from scipy.optimize import brentq
+
+    def diff(ql: float) -> float:
+        p = plant.with_(Qlam=ql)
+        return float(_steady_row(p, "hold-input", eta, N, steady)["filt"].sum()
+                     - _steady_row(p, "zero-input", eta, N, steady)["filt"].sum())
+    lo, hi = 0.0, max(2.0 * plant.Qlam, 4.0)
+    dlo, dhi = diff(lo), diff(hi)
+    if np.sign(dlo) == np.sign(dhi):
+        who = "hold-input" if dlo < 0 else "zero-input"
+        return f"At Q_xi = {plant.Qxi:g}, {who} has the lower trace for every Q_lambda in [{lo:g}, {hi:g}]."
+    root = brentq(diff, lo, hi, xtol=1e-6)
+    below = "hold-input" if dlo < 0 else "zero-input"
+    above = "zero-input" if below == "hold-input" else "hold-input"
+    return (f"At Q_xi = {plant.Qxi:g} the traces are equal at Q_lambda = {root:.4f}: {below} is better for "
+            f"smaller, {above} for larger Q_lambda.")
 
 
 def _ranges(vals: np.ndarray) -> str:

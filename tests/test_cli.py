@@ -1,0 +1,61 @@
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from eqrec.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+SYSTEM = ROOT / "examples" / "acc_system.yaml"
+
+
+def test_design_prefix_writes_contract(tmp_path):
+    out = tmp_path / "d.json"
+    rc = main(["design", str(SYSTEM), "--words", "101111,110111,111011,111101", "--method", "prefix",
+               "--out", str(out)])
+    assert rc == 0
+    d = json.loads(out.read_text())
+    for key in ("method", "mu1", "mu2", "certified_mu2", "solver", "status", "words", "gains"):
+        assert key in d
+    assert d["certified_mu2"] == pytest.approx(d["mu2"], rel=1e-6)
+    F = np.asarray(d["gains"]["101111"]["F"])
+    assert F.shape == (6 * 3, 6 * 2) and len(d["gains"]["101111"]["u0"]) == 18
+    assert np.allclose(np.triu(F, 2)[:, ::1][0, 2:], 0)  # causal: F(0, τ>0) = 0
+
+
+def test_time_method_uses_worst_case_word(tmp_path, capsys):
+    rc = main(["design", str(SYSTEM), "--words", "101111,110111", "--method", "time", "--solver", "clarabel"])
+    assert rc == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["worst_case_word"] == "100111" and list(d["gains"]) == ["100111"]
+
+
+def test_infeasible_exits_2_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "d.json"
+    rc = main(["design", str(SYSTEM), "--words", "101111", "--mu1", "0.05", "--out", str(out)])
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "infeasible" in err[0]
+
+
+@pytest.mark.parametrize("words,msg", [("1011,110111", "mixed lengths"), ("10a111", "alphabet"),
+                                       ("1011", "required length 6")])
+def test_bad_words(words, msg, capsys):
+    assert main(["design", str(SYSTEM), "--words", words]) == 1
+    assert msg in capsys.readouterr().err
+
+
+def test_malformed_system_names_file_and_field(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("A: [[1, 0], [0, 1]]\nC: [[1, 0, 0]]\nE: [[0], [1]]\neta_w: 0.1\neta_v: 0.1\n")
+    assert main(["design", str(bad), "--words", "11"]) == 1
+    err = capsys.readouterr().err
+    assert "bad.yaml" in err and "'C'" in err
+
+
+def test_console_script_help():
+    out = subprocess.run([sys.executable, "-m", "eqrec.cli", "design", "--help"], capture_output=True, text=True)
+    assert out.returncode == 0 and "SYSTEM.yaml keys" in out.stdout and "--method" in out.stdout
