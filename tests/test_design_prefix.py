@@ -108,3 +108,14 @@ def test_optimum_is_a_lower_bound(acc, L1_words):
     from eqrec.lp import solve_lp
 
     assert solve_lp(m.lp, "highs").status == "infeasible"
+
+
+@pytest.mark.parametrize("method", ["prefix", "time"])
+def test_zero_offset_loses_no_optimality(acc, L1_words, method):
+    from eqrec.languages import worst_case_word
+
+    words = L1_words if method == "prefix" else [worst_case_word(L1_words)]
+    free = design_prefix(acc, words, 1.0, zero_offset=False)
+    fixed = design_prefix(acc, words, 1.0)
+    assert fixed.mu2 == pytest.approx(free.mu2, rel=1e-7)
+    assert np.all(fixed.schedule.word_matrices(words[0])[1] == 0)

@@ -19,7 +19,15 @@ robust constraints are written once per node:
 where :math:`\mathrm{Ol}_t` is the open-loop error map and :math:`Y_\tau` the
 output-error map of :class:`eqrec.stacking.Stacking`.  Nodes where a word
 ends get level ``M1``, the others the variable ``M2`` (eq. (12b)); ``M2 >=
-M1`` covers ``t = 0``.  The time-based estimator of the authors' earlier work
+M1`` covers ``t = 0``.
+
+Offsets ``r`` (hence ``u0``) are fixed to zero by default.  This loses no
+optimality: the error has no constant term except ``S r`` and the box is
+symmetric, so if ``(Q, r)`` is feasible then so is ``(Q, -r)`` and, by
+convexity, ``(Q, 0)``.  Without it a simplex solver returns a vertex with an
+arbitrary bias that drives every run to the same extreme error (certified,
+but not what a user wants); ``zero_offset=False`` keeps the paper's free ``r``
+(tests check both optima agree).  The time-based estimator of the authors' earlier work
 is the special case of a single (worst-case) word.
 """
 
@@ -77,7 +85,7 @@ class Design:
 
 
 def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
-                    form: str = "abs") -> PrefixLP:
+                    form: str = "abs", zero_offset: bool = True) -> PrefixLP:
     """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
 
     Parameters
@@ -93,6 +101,8 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         Horizon for the stacked matrices (default: the longest word).
     form
         Robust counterpart: ``"abs"`` or the paper's Π-dual ``"dual"``.
+    zero_offset
+        Fix ``r = 0`` (no loss of optimality, see the module docstring).
     """
     t_start = time.perf_counter()
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
@@ -117,7 +127,8 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         taus = [tau for tau in range(node.depth) if node.prefix[tau] == "1"]
         measured[node.index] = taus
         q_cols[node.index] = b.add_variables(n * p * len(taus), name=f"Q[{node.prefix}]")
-        r_cols[node.index] = b.add_variables(n, name=f"r[{node.prefix}]")
+        bound = 0.0 if zero_offset else np.inf
+        r_cols[node.index] = b.add_variables(n, lower=-bound, upper=bound, name=f"r[{node.prefix}]")
 
     # Robust rows of ξ(t) for every node of depth t (the error after that prefix).
     entry_row, entry_coord, G0, gx_r, gx_c, gx_v = [], [], [], [], [], []
@@ -207,7 +218,8 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
 
 
 def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
-                  form: str = "abs", certify: bool = True, method: str = "prefix") -> Design:
+                  form: str = "abs", certify: bool = True, method: str = "prefix",
+                  zero_offset: bool = True) -> Design:
     """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
     Returns a :class:`Design` whose gains have been certified independently
@@ -222,7 +234,7 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     CertificationFailure
         If the recovered gains do not achieve the optimum.
     """
-    model = build_prefix_lp(system, words, M1, T=T, form=form)
+    model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset)
     sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {M1:g})")
     schedule = read_schedule(model, sol, time_based=(method == "time"))
     design = Design(method=method, system=system, words=model.tree.words, T=model.stacking.T, M1=model.M1,

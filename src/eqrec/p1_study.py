@@ -25,7 +25,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .certify import certify_schedule
 from .claims import write_values
 from .design_prefix import Design, build_prefix_lp, design_prefix
 from .design_time import design_time_based
@@ -201,8 +200,9 @@ def run_figure1(sim_npz: str, out_pdf: str, out_png: str) -> None:
         T = errs.shape[1] - 1
         levels = [M1] + [mu2] * (T - 1) + [M1]
         trajectory_panel(axes[:, col], errs, levels,
-                         f"{name} estimator ($M_1$ = {M1:g}, $M_2^*$ = {mu2:.4f})")
-    axes[0, 0].legend(loc="upper right")
+                         f"{name} estimator ($M_1$ = {M1:g}, $M_2^*$ = {mu2:.4f})", ylabels=(col == 0))
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"ACC, $L_1$, {errs.shape[0]} runs: estimation errors and guarantees")
     save_figure(fig, out_pdf, out_png)
 

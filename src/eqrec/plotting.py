@@ -58,7 +58,8 @@ def error_trajectories(ax: plt.Axes, errors: np.ndarray, color: str = "C0", alph
 
 
 def trajectory_panel(axes_column: Sequence[plt.Axes], errors: np.ndarray, levels: Sequence[float],
-                     title: str, state_labels: Sequence[str] = STATE_LABELS_ACC, color: str = "C0") -> None:
+                     title: str, state_labels: Sequence[str] = STATE_LABELS_ACC, color: str = "C0",
+                     ylabels: bool = True) -> None:
     """One column of a Fig.-1-like panel: a subplot per state with runs and bars.
 
     Parameters
@@ -76,7 +77,8 @@ def trajectory_panel(axes_column: Sequence[plt.Axes], errors: np.ndarray, levels
         lim = 1.15 * max(np.max(levels), np.max(np.abs(errors[:, :, i])))
         ax.set_ylim(-lim, lim)
         ax.set_xlim(-0.6, errors.shape[1] - 0.4)
-        ax.set_ylabel(state_labels[i] if i < len(state_labels) else rf"$\xi_{i + 1}$")
+        if ylabels:
+            ax.set_ylabel(state_labels[i] if i < len(state_labels) else rf"$\xi_{i + 1}$")
         if i == 0:
             ax.set_title(title)
     axes_column[-1].set_xlabel("time step $t$")

@@ -1,0 +1,163 @@
+# P2: state-augmented estimator (Hassaan, Shen, Yong, ACC 2019).
+# Thin rules: each runs one step of eqrec.p2_study; parameters from config["p2"]
+# (config/p2.yaml, schema config/schemas/p2.schema.yaml).
+VALUES_FILES.append("results/p2/values.json")
+# config["p2"] is loaded and validated (config/schemas/p2.schema.yaml) by the Snakefile.
+
+P2 = f"{PY} -m eqrec.p2_study"
+P2_CONFIG = "config/p2.yaml"
+P2_VARIANTS = config["p2"]["heatmap"]["variants"]
+P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
+
+
+rule p2_designs:
+    """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
+    input:
+        P2_CONFIG,
+    output:
+        json="results/p2/designs.json",
+        npz="results/p2/designs.npz",
+    log:
+        "logs/p2/designs.log",
+    shell:
+        "{P2} designs --config {input} --out {output.json} --npz {output.npz} > {log} 2>&1"
+
+
+rule p2_simulate:
+    """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
+    input:
+        config=P2_CONFIG,
+        designs="results/p2/designs.npz",
+    output:
+        "results/p2/simulation.npz",
+    log:
+        "logs/p2/simulate.log",
+    shell:
+        "{P2} simulate --config {input.config} --designs {input.designs} --out {output} > {log} 2>&1"
+
+
+rule p2_heatmap_chunk:
+    """P2-F3a: one theta-chunk of the eigenvalue sweep (one LP built, L values updated)."""
+    input:
+        P2_CONFIG,
+    output:
+        "results/p2/heatmap/{variant}_{chunk}.csv",
+    log:
+        "logs/p2/heatmap_{variant}_{chunk}.log",
+    wildcard_constraints:
+        chunk=r"\d+",
+    shell:
+        "{P2} heatmap-chunk --config {input} --variant {wildcards.variant} --chunk {wildcards.chunk}"
+        " --out {output} > {log} 2>&1"
+
+
+rule p2_heatmap_merge:
+    """P2-F3a: the whole grid."""
+    input:
+        expand("results/p2/heatmap/{variant}_{chunk}.csv", variant=P2_VARIANTS, chunk=P2_CHUNKS),
+    output:
+        "results/p2/heatmap.csv",
+    log:
+        "logs/p2/heatmap_merge.log",
+    shell:
+        "{P2} heatmap-merge {input} --out {output} > {log} 2>&1"
+
+
+rule p2_realaxis:
+    """P2-F3b: real double eigenvalue sweep."""
+    input:
+        P2_CONFIG,
+    output:
+        "results/p2/realaxis.csv",
+    log:
+        "logs/p2/realaxis.log",
+    shell:
+        "{P2} realaxis --config {input} --out {output} > {log} 2>&1"
+
+
+rule p2_checks:
+    """P2-S0, P2-SOLVER."""
+    input:
+        P2_CONFIG,
+    output:
+        "results/p2/checks.json",
+    log:
+        "logs/p2/checks.log",
+    shell:
+        "{P2} checks --config {input} --out {output} > {log} 2>&1"
+
+
+rule p2_values:
+    """Our value of every published P2 number, with evidence."""
+    input:
+        config=P2_CONFIG,
+        designs="results/p2/designs.json",
+        simulation="results/p2/simulation.npz",
+        heatmap="results/p2/heatmap.csv",
+        realaxis="results/p2/realaxis.csv",
+        checks="results/p2/checks.json",
+    output:
+        "results/p2/values.json",
+    log:
+        "logs/p2/values.log",
+    shell:
+        "{P2} values --config {input.config} --designs {input.designs} --simulation {input.simulation}"
+        " --heatmap {input.heatmap} --realaxis {input.realaxis} --checks {input.checks} --out {output} > {log} 2>&1"
+
+
+rule p2_figure_trajectories:
+    """P2-F1 / P2-F2 figures."""
+    input:
+        config=P2_CONFIG,
+        designs="results/p2/designs.json",
+        simulation="results/p2/simulation.npz",
+    output:
+        pdf=report("results/p2/{fig}_trajectories.pdf", caption="../report/p2_{fig}.rst", category="P2"),
+        png="results/p2/{fig}_trajectories.png",
+    log:
+        "logs/p2/figure_{fig}.log",
+    wildcard_constraints:
+        fig="f1|f2",
+    shell:
+        "{P2} figure-trajectories --config {input.config} --designs {input.designs} --simulation {input.simulation}"
+        " --fig {wildcards.fig} --pdf {output.pdf} --png {output.png} > {log} 2>&1"
+
+
+rule p2_figure_heatmap:
+    """P2-F3a figure."""
+    input:
+        config=P2_CONFIG,
+        heatmap="results/p2/heatmap.csv",
+    output:
+        pdf=report("results/p2/f3a_heatmap.pdf", caption="../report/p2_f3a.rst", category="P2"),
+        png="results/p2/f3a_heatmap.png",
+    log:
+        "logs/p2/figure_f3a.log",
+    shell:
+        "{P2} figure-heatmap --config {input.config} --heatmap {input.heatmap} --pdf {output.pdf} --png {output.png}"
+        " > {log} 2>&1"
+
+
+rule p2_figure_realaxis:
+    """P2-F3b figure."""
+    input:
+        config=P2_CONFIG,
+        realaxis="results/p2/realaxis.csv",
+    output:
+        pdf=report("results/p2/f3b_realaxis.pdf", caption="../report/p2_f3b.rst", category="P2"),
+        png="results/p2/f3b_realaxis.png",
+    log:
+        "logs/p2/figure_f3b.log",
+    shell:
+        "{P2} figure-realaxis --config {input.config} --realaxis {input.realaxis} --pdf {output.pdf}"
+        " --png {output.png} > {log} 2>&1"
+
+
+rule p2:
+    """All P2 outputs."""
+    input:
+        rules.p2_values.output,
+        expand("results/p2/{fig}_trajectories.pdf", fig=["f1", "f2"]),
+        rules.p2_figure_heatmap.output,
+        rules.p2_figure_realaxis.output,
+        rules.p2_checks.output,
