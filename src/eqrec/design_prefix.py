@@ -159,8 +159,8 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         gx_c.append(cols[Ks.col])
         gx_v.append(Ks.data)
         ent0 += idx.size
-        # certain part c_t = Σ_s Φ(t, s+1) r(s)
-        for s, anc in enumerate(path):
+        # certain part c_t = Σ_s Φ(t, s+1) r(s) (identically zero when r is fixed to zero)
+        for s, anc in enumerate(path if not zero_offset else []):
             P = phi[t][s + 1]
             rr, cc = np.nonzero(P)
             c_r.append(row0 + rr)
@@ -178,7 +178,9 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         entry_row=np.concatenate(entry_row), entry_coord=np.concatenate(entry_coord), G0=np.concatenate(G0),
         Gx=sp.csr_matrix((np.concatenate(gx_v), (np.concatenate(gx_r), np.concatenate(gx_c))), shape=(ent0, nx)),
         c0=np.zeros(row0),
-        cx=sp.csr_matrix((np.concatenate(c_v), (np.concatenate(c_r), np.concatenate(c_c))), shape=(row0, nx)),
+        cx=sp.csr_matrix((np.concatenate(c_v or [np.zeros(0)]),
+                          (np.concatenate(c_r or [np.zeros(0, int)]), np.concatenate(c_c or [np.zeros(0, int)]))),
+                         shape=(row0, nx)),
     )
     radius = lay.radius(system.eta_w, system.eta_v, M1)
     add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const), level_col=mu2,

@@ -113,7 +113,9 @@ def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
         v = np.concatenate([np.ones(k), -sign * sub.data])
         builder.add_rows(r, c, v, lower=sign * rows.G0[var_entries], upper=np.inf, count=k)
     # ±(c0 + cx x) + Σ b_e a_e + const_part <= level_const + level_coef * x[level_col]
-    for sign in (+1.0, -1.0):
+    # (one row suffices when the certain term is identically zero)
+    signs = (+1.0,) if (cx.nnz == 0 and not np.any(rows.c0)) else (+1.0, -1.0)
+    for sign in signs:
         r = [cx.row, rows.entry_row[var_entries]]
         c = [cx.col, aux]
         v = [sign * cx.data, b[var_entries]]
