@@ -6,11 +6,14 @@ rule claims:
     input:
         claims="config/claims.yaml",
         values=VALUES_FILES,
+        code=PKG_SRC,
     output:
         csv="results/claims.csv",
         md=report("results/REPRODUCTION.md", caption="../report/claims.rst", category="Claims"),
+    params:
+        cmd=f"{PY} -m eqrec.claims",
     log:
         "logs/claims.log",
     shell:
-        "{PY} -m eqrec.claims --claims {input.claims} --results results"
+        "{params.cmd} --claims {input.claims} --results results"
         " --csv {output.csv} --md {output.md} > {log} 2>&1"
