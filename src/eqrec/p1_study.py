@@ -296,9 +296,20 @@ def run_figure_ext(ext_json: str, out_pdf: str, out_png: str) -> None:
     ax1.set_ylabel("optimal intermediate level $M_2^*$")
     ax1.set_title("$M_2^*(M_1)$ on $L_1$ (dotted: smallest feasible $M_1$)")
     ax1.legend()
-    mt = [(r["M1"], r["T"]) for r in res["min_T"] if r["T"] is not None]
-    if mt:
-        ax2.step([a for a, _ in mt], [b for _, b in mt], where="mid", marker="o")
+    near = [r for r in res["min_T"] if r["M1"] <= 1.05 * res["min_M1"]["prefix"]]  # where T grows
+    far = [r for r in res["min_T"] if r not in near]
+    ok = [(r["M1"], r["T"]) for r in near if r["T"] is not None]
+    if ok:
+        ax2.plot([a for a, _ in ok], [b for _, b in ok], "C0o-", label="minimum $T$")
+    t_max = max([b for _, b in ok] + [6])
+    for r in near:
+        if r["T"] is None:
+            ax2.plot(r["M1"], t_max + 1, "C3x", label="none up to $T_{max}$")
+    ax2.axvline(res["min_M1"]["prefix"], color="0.5", ls=":", lw=0.8, label="smallest $M_1$ at $T = 6$")
+    if far:
+        ax2.text(0.98, 0.05, "; ".join(f"$M_1$ = {r['M1']:g}: $T$ = {r['T']}" for r in far),
+                 transform=ax2.transAxes, ha="right", fontsize=7)
+    ax2.legend(fontsize=7)
     ax2.set_xlabel("recovery level $M_1$")
     ax2.set_ylabel("minimum recovery time $T$")
     ax2.set_title("Minimum $T$ for $L_1$ (words extended by 1s)")
