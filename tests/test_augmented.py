@@ -1,0 +1,112 @@
+"""Augmented estimator: stacked maps, conversion both ways, runtime recursions."""
+import numpy as np
+import pytest
+
+from eqrec.augmented import (AugmentedEstimator, AugmentedGains, AugmentedStacking, as_time_varying_L,
+                             augmented_to_time_based, schedule_from_augmented, time_based_to_augmented)
+from eqrec.certify import closed_loop_maps
+from eqrec.errors import InputError
+from eqrec.simulate import sample_uncertainty, simulate_run
+from eqrec.stacking import UncertaintyLayout
+
+
+def random_gains(rng, word, n=3, p=2, mode="theorem2", time_varying=False):
+    T = len(word)
+    L = rng.normal(size=(T, n, p)) * 0.5 if time_varying else rng.normal(size=(n, p)) * 0.5
+    M = np.zeros((T * n, T * p))
+    for k in range(T):
+        for i in range(k + 1):
+            if word[i] == "1":
+                M[k * n:(k + 1) * n, i * p:(i + 1) * p] = rng.normal(size=(n, p)) * 0.3
+    return AugmentedGains(word, as_time_varying_L(L, T, n, p), rng.normal(size=n), M, rng.normal(size=T * n) * 0.1, mode)
+
+
+@pytest.mark.parametrize("word", ["111111", "100111", "011010"])
+@pytest.mark.parametrize("mode", ["theorem2", "leak"])
+def test_paper_formulas_match_propagation(acc, rng, word, mode):
+    """Eq. (5) literally (Appendix matrices, time-varying Φ_k) equals the propagated error map."""
+    g = random_gains(rng, word, time_varying=True)
+    aug = AugmentedStacking(acc, word, g.L, mode)
+    G, c = aug.error_map(g.M, g.nu, g.s0)
+    pb = aug.paper_blocks(g.M)
+    Gp = np.hstack([pb["Theta"], pb["Psi"], pb["Xi"]])
+    assert np.allclose(Gp, G, atol=1e-12)
+    assert np.allclose(pb["Upsilon"] @ g.s0 + pb["E"] @ g.nu, c, atol=1e-12)
+
+
+@pytest.mark.parametrize("word", ["111111", "100111", "110011"])
+def test_forward_conversion_reproduces_error_map(acc, rng, word):
+    """The converted time-based estimator has exactly the augmented error map (eq. (10))."""
+    g = random_gains(rng, word)
+    sch = schedule_from_augmented(acc, g)
+    Gc, cc, lay = closed_loop_maps(acc, sch, word)
+    G, c = AugmentedStacking(acc, word, g.L, "theorem2").error_map(g.M, g.nu, g.s0)
+    assert np.allclose(Gc.reshape(-1, lay.size), G, atol=1e-12)
+    assert np.allclose(cc.reshape(-1), c, atol=1e-12)
+
+
+@pytest.mark.parametrize("runtime", ["theorem2", "hold"])
+@pytest.mark.parametrize("word", ["111111", "100111"])
+def test_round_trip_both_directions(acc, rng, word, runtime):
+    g = random_gains(rng, word, mode=runtime)
+    F, u0 = augmented_to_time_based(acc, g, runtime)
+    g2 = time_based_to_augmented(acc, word, F, u0, g.L, g.s0, runtime)
+    assert np.allclose(g2.M, g.M, atol=1e-10) and np.allclose(g2.nu, g.nu, atol=1e-10)
+    # time-based -> augmented -> time-based for random (F, u0), another L and s0
+    T, n, p = 6, 3, 2
+    F = np.zeros((T * n, T * p))
+    for k in range(T):
+        for i in range(k + 1):
+            if word[i] == "1":
+                F[k * n:(k + 1) * n, i * p:(i + 1) * p] = rng.normal(size=(n, p))
+    u0 = rng.normal(size=T * n)
+    ga = time_based_to_augmented(acc, word, F, u0, rng.normal(size=(n, p)), rng.normal(size=n), runtime)
+    F2, u02 = augmented_to_time_based(acc, ga, runtime)
+    assert np.allclose(F2, F, atol=1e-9) and np.allclose(u02, u0, atol=1e-9)
+    # M is block lower triangular with zero columns at missing steps
+    miss = np.repeat(np.array([c == "0" for c in word]), p)
+    assert np.all(ga.M[:, miss] == 0)
+    assert np.allclose(np.triu(ga.M, 1)[np.kron(np.tri(T, T, -1).T, np.ones((n, p))) > 0], 0)
+
+
+@pytest.mark.parametrize("runtime", ["theorem2", "hold"])
+def test_runtime_estimator_equals_converted(acc, rng, runtime):
+    """Both recursions (x̂, s) run causally give the x̂ of the converted time-based estimator."""
+    word = "100111"
+    g = random_gains(rng, word, mode=runtime)
+    sch = schedule_from_augmented(acc, g, runtime)
+    lay = UncertaintyLayout(6, acc.nw, acc.nv, acc.n)
+    rad = lay.radius(acc.eta_w, acc.eta_v, 1.0)
+    x0 = np.array([20.0, 40.0, 20.0])
+    for actual in ("100111", "101111"):
+        delta = sample_uncertainty(lay, rad, rng)
+        tr = simulate_run(acc, sch, actual, delta, x0)
+        w, v, xi0 = lay.split(delta)
+        est = AugmentedEstimator(acc, g, x0 - xi0, runtime)
+        x = x0.copy()
+        for t in range(6):
+            y = acc.C @ x + v[t] if actual[t] == "1" else None
+            xh = est.step(y)
+            x = acc.A @ x + acc.f + acc.E @ w[t]
+            assert np.allclose(xh, tr.xhat[t + 1], atol=1e-10)
+    with pytest.raises(InputError):
+        est.step(None)
+
+
+def test_hold_and_theorem2_differ(acc, rng):
+    """The missing-step reading matters for given gains (not a vacuous option)."""
+    g = random_gains(rng, "100111")
+    F1, _ = augmented_to_time_based(acc, g, "theorem2")
+    F2, _ = augmented_to_time_based(acc, g, "hold")
+    assert np.abs(F1 - F2).max() > 1e-3
+
+
+def test_bad_inputs(acc):
+    with pytest.raises(InputError):
+        as_time_varying_L(np.zeros((2, 2)), 6, 3, 2)
+    with pytest.raises(InputError):
+        AugmentedStacking(acc, "100111", np.zeros((3, 2)), mode="hold")
+    with pytest.raises(InputError):
+        AugmentedStacking(acc, "10a111", np.zeros((3, 2)))
+    with pytest.raises(InputError):
+        time_based_to_augmented(acc, "111111", np.zeros((3, 3)), np.zeros(18), np.zeros((3, 2)), np.zeros(3))

@@ -1,0 +1,110 @@
+"""Augmented designs: LP with fixed L, s0 (HiGHS/Clarabel), value updates, IPOPT, certification."""
+import numpy as np
+import pytest
+
+from eqrec.augmented import AugmentedGains, AugmentedStacking, augmented_to_time_based
+from eqrec.design_augmented import (AugmentedLP, design_augmented, heatmap_poles, place_observer,
+                                    solve_free_ipopt)
+from eqrec.design_time import design_time_based
+from eqrec.errors import InputError
+from eqrec.lp import solve_lp
+
+
+@pytest.fixture(scope="module")
+def L0(acc):
+    return place_observer(acc.A, acc.C, [0.0, 0.5, -0.5]).L
+
+
+@pytest.fixture(scope="module")
+def tb_100111(acc):
+    return design_time_based(acc, ["100111"], 1.0).mu2
+
+
+def test_pole_placement(acc):
+    pp = place_observer(acc.A, acc.C, heatmap_poles(0.8, 1.0))
+    assert pp.ok
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(acc.A - pp.L @ acc.C)),
+                       np.sort_complex(heatmap_poles(0.8, 1.0)), atol=1e-8)
+    bad = place_observer(acc.A, acc.C, [0.0, 0.0, 0.0])  # triple pole, rank C = 2
+    assert not bad.ok and bad.L is None and "repeated" in bad.message
+    assert place_observer(acc.A, acc.C, heatmap_poles(0.5, np.pi)).ok  # θ = π is a real double pole
+
+
+@pytest.mark.parametrize("word", ["111111", "100111"])
+def test_lp_equals_time_based_and_solvers_agree(acc, L0, word):
+    """Fixed L, s0: the augmented optimum is the time-based optimum (bijection); HiGHS and Clarabel agree."""
+    m = AugmentedLP(acc, word, 1.0, L0)
+    h = m.solve("highs").require_optimal()
+    c = m.solve("clarabel").require_optimal()
+    tb = design_time_based(acc, [word], 1.0).mu2
+    assert h.objective == pytest.approx(tb, rel=1e-7)
+    assert c.objective == pytest.approx(h.objective, rel=1e-6)
+
+
+def test_set_L_matches_fresh_build(acc, L0):
+    m = AugmentedLP(acc, "100111", 1.0, L0, mode="leak")
+    L1 = place_observer(acc.A, acc.C, heatmap_poles(1.2, 0.4)).L
+    lp = m.set_L(L1)
+    fresh = AugmentedLP(acc, "100111", 1.0, L1, mode="leak").lp
+    assert abs(lp.A - fresh.A).max() < 1e-12
+    assert np.array_equal(lp.row_upper, fresh.row_upper) and np.array_equal(lp.row_lower, fresh.row_lower)
+    assert solve_lp(lp).objective == pytest.approx(solve_lp(fresh).objective, rel=1e-9)
+
+
+def test_s0_invariance(acc, L0, tb_100111):
+    """P2-S0: s0 changes neither the optimum nor, for the mapped optimum, the estimator."""
+    m0 = AugmentedLP(acc, "100111", 1.0, L0)
+    g0 = m0.gains(m0.solve().require_optimal())
+    s0 = np.array([1.0, -2.0, 0.5])
+    m1 = AugmentedLP(acc, "100111", 1.0, L0, s0=s0)
+    assert m1.solve().objective == pytest.approx(tb_100111, rel=1e-7)
+    with pytest.raises(InputError):
+        m1.set_L(L0)
+    z0 = AugmentedStacking(acc, "100111", L0).Zs.reshape(-1, 3) @ s0
+    g1 = AugmentedGains("100111", g0.L, s0, g0.M, g0.nu - g0.M @ z0)
+    F0, u00 = augmented_to_time_based(acc, g0)
+    F1, u01 = augmented_to_time_based(acc, g1)
+    assert np.allclose(F0, F1, atol=1e-10) and np.allclose(u00, u01, atol=1e-10)
+    g_bad = AugmentedGains("100111", g0.L, s0, g0.M, g0.nu)  # same (M, ν), other s0: a different estimator
+    assert np.abs(augmented_to_time_based(acc, g_bad)[1] - u00).max() > 1e-3
+
+
+def test_design_augmented_certified(acc, tb_100111):
+    d = design_augmented(acc, ["101111", "110111"], 1.0)
+    assert d.method == "augmented" and d.words == ("100111",)
+    assert d.schedule.time_based
+    assert d.certificate.mu2 == pytest.approx(tb_100111, rel=1e-7)
+    assert d.certificate.terminal <= 1.0 + 1e-7
+    assert set(d.extra) >= {"L", "s0", "M", "nu"}
+    d2 = design_augmented(acc, ["111111"], 1.0, L=np.zeros((3, 2)), solver="clarabel")
+    assert d2.certificate.mu2 == pytest.approx(1.05, abs=1e-6)
+
+
+def test_ipopt_free_design(acc, tb_100111):
+    d = design_augmented(acc, ["100111"], 1.0, L="free")
+    assert d.solution.solver == "ipopt" and d.extra["ipopt_iterations"] > 0
+    assert d.certificate.mu2 == pytest.approx(tb_100111, rel=1e-6)  # cannot beat the time-based bound
+
+
+def test_ipopt_solves_the_lp(acc, L0, tb_100111):
+    m = AugmentedLP(acc, "100111", 1.0, L0)
+    g0 = AugmentedGains("100111", m.L, np.zeros(3), np.zeros((18, 12)), np.zeros(18))
+    res = solve_free_ipopt(m, g0, 10.0, free_L=False, free_s0=False)
+    assert res.success and res.mu2 == pytest.approx(tb_100111, rel=1e-6)
+    assert np.allclose(res.gains.L, m.L)
+
+
+def test_strictly_causal_reading_is_worse(acc, L0):
+    m = AugmentedLP(acc, "111111", 1.0, L0, strictly_causal=True)
+    assert m.solve().objective > 1.05 + 1e-3
+
+
+def test_bad_inputs(acc):
+    with pytest.raises(InputError):
+        design_augmented(acc, ["111111"], 1.0, L="auto")
+    with pytest.raises(InputError):
+        design_augmented(acc, ["111111"], 1.0, poles=[0.0, 0.0, 0.0])
+    with pytest.raises(InputError):
+        AugmentedLP(acc, "111111", -1.0, np.zeros((3, 2)))
+    with pytest.raises(InputError):
+        design_augmented(acc, ["111111"], 1.0, mode="hold")

@@ -1,0 +1,17 @@
+import pytest
+
+from eqrec.design_time import design_time_based
+from eqrec.errors import InputError
+
+
+def test_time_based_is_designed_for_the_worst_case_word(acc, L1_words):
+    d = design_time_based(acc, L1_words, 1.0)
+    assert d.extra["worst_case_word"] == "100001"
+    assert d.schedule.time_based and d.schedule.designed_words == ("100001",)
+    # certified on every word of the language and on the worst-case word itself
+    assert set(d.certificate.words) == set(L1_words) | {"100001"}
+
+
+def test_time_based_rejects_mixed_lengths(acc):
+    with pytest.raises(InputError, match="mixed lengths"):
+        design_time_based(acc, ["1011", "10111"], 1.0)

@@ -1,0 +1,112 @@
+"""P2 pipeline steps on a small configuration, and checks of the paper's printed numbers."""
+import itertools
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from eqrec import p2_study
+from eqrec.errors import InputError
+
+
+def test_one_based_word():
+    assert p2_study.one_based_word("100111") == "110011"
+    assert p2_study.one_based_word("111110") == "111111"  # shifted past the horizon
+
+
+def test_constant_interval():
+    lam = np.linspace(-1, 1, 5)
+    assert p2_study.constant_interval(lam, np.array([2, 1, 1, 1, 2.0]), 1e-9) == [-0.5, 0.5]
+    assert p2_study.constant_interval(lam, np.array([1, 1, np.nan, 1, 1.0]), 1e-9) in ([-1.0, -0.5], [0.5, 1.0])
+
+
+def test_config_errors(tmp_path):
+    p = tmp_path / "c.yaml"
+    p.write_text("q: 1\n")
+    with pytest.raises(InputError):
+        p2_study.load_config(p)
+    with pytest.raises(InputError):
+        p2_study.load_config({"heatmap": {"chunks": 0}})
+    with pytest.raises(InputError):
+        p2_study.variant_word("100111", "nonsense")
+
+
+def _claim(cid):
+    data = yaml.safe_load(open("config/claims.yaml"))
+    return next(c for c in data if c["id"] == cid)
+
+
+def _eigs(acc, L):
+    return np.linalg.eigvals(acc.A - np.asarray(L) @ acc.C)
+
+
+def test_printed_F1_L_has_printed_eigenvalues(acc):
+    ev = _eigs(acc, _claim("P2-F1:L")["paper_value"])
+    real = ev[np.abs(ev.imag) < 1e-9].real
+    pair = ev[ev.imag > 0][0]
+    assert abs(real[0] - 1.04) < 0.005 and abs(pair.real - 0.07) < 0.005 and abs(pair.imag - 0.48) < 0.005
+
+
+def test_printed_F2_L_eigenvalues_only_within_rounding(acc):
+    L = np.asarray(_claim("P2-F2:L")["paper_value"], float)
+    ev = _eigs(acc, L)
+    real = ev[np.abs(ev.imag) < 1e-9].real[0]
+    assert abs(real - (-0.09)) > 0.02  # the rounded L does not have the printed real eigenvalue
+    rng = np.random.default_rng(1)
+
+    def ok(d):
+        e = _eigs(acc, L + d.reshape(3, 2))
+        r = e[np.abs(e.imag) < 1e-9]
+        c = e[e.imag > 1e-9]
+        return (r.size == 1 and c.size == 1 and abs(r[0].real + 0.09) <= 0.005 and abs(c[0].real - 0.18) <= 0.005
+                and abs(c[0].imag - 0.07) <= 0.005)
+    assert any(ok(rng.uniform(-0.005, 0.005, 6)) for _ in range(20000))
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("p2")
+    cfg = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants": ["theorem2", "leak"]},
+           "realaxis": {"n": 7}, "s0_samples": [[1.0, 0.0, -1.0]]}
+    p2_study.step_designs(cfg, d / "designs.json", d / "designs.npz")
+    p2_study.step_simulate(cfg, d / "designs.npz", d / "simulation.npz")
+    chunks = []
+    for v in cfg["heatmap"]["variants"]:
+        for c in range(2):
+            out = d / f"hm_{v}_{c}.csv"
+            p2_study.step_heatmap_chunk(cfg, v, c, out)
+            chunks.append(str(out))
+    p2_study.step_heatmap_merge(chunks, d / "heatmap.csv")
+    p2_study.step_realaxis(cfg, d / "realaxis.csv")
+    p2_study.step_checks(cfg, d / "checks.json")
+    vals = p2_study.step_values(cfg, d / "designs.json", d / "simulation.npz", d / "heatmap.csv",
+                                d / "realaxis.csv", d / "checks.json", d / "values.json")
+    return d, cfg, vals
+
+
+def test_pipeline_values(small_run, acc):
+    d, cfg, _ = small_run
+    vals = json.loads((d / "values.json").read_text())
+    tb = vals["f2_mu2_time"]["value"]
+    assert vals["f2_mu2_augmented"]["value"] == pytest.approx(tb, rel=1e-6)  # augmented ⊂ time-based
+    assert vals["f1_mu2_augmented"]["value"] == pytest.approx(vals["f1_mu2_time"]["value"], rel=1e-6)
+    assert vals["f2_mu2_one_based_augmented"]["value"] < tb - 0.1
+    assert vals["s0_mu2_unchanged"]["value"] == "unchanged"
+    assert vals["runtime_equivalence"]["value"] < 1e-9
+    hm = pd.read_csv(d / "heatmap.csv")
+    assert len(hm) == 2 * 16
+    assert set(hm[hm["r"] == 0]["status"]) == {"placement_failed"}  # marked, not dropped
+    sim = np.load(d / "simulation.npz")
+    assert sim["f1/time"].shape == (20, 7, 3)
+
+
+def test_figures(small_run, tmp_path):
+    d, cfg, _ = small_run
+    for fig in ("f1", "f2"):
+        p2_study.figure_trajectories(cfg, d / "designs.json", d / "simulation.npz", fig, tmp_path / f"{fig}.pdf",
+                                     tmp_path / f"{fig}.png")
+    p2_study.figure_heatmap(cfg, d / "heatmap.csv", tmp_path / "h.pdf", tmp_path / "h.png")
+    p2_study.figure_realaxis(cfg, d / "realaxis.csv", tmp_path / "r.pdf", tmp_path / "r.png")
+    assert all((tmp_path / f).stat().st_size > 1000 for f in ("f1.png", "f2.png", "h.png", "r.png"))

@@ -1,0 +1,25 @@
+import numpy as np
+
+from eqrec.plotting import guarantee_bars, paper_style, save_figure, trajectory_panel
+
+
+def test_trajectory_panel_writes_pdf_and_png(tmp_path):
+    import matplotlib.pyplot as plt
+
+    paper_style()
+    fig, axes = plt.subplots(3, 1)
+    errs = np.random.default_rng(0).uniform(-1, 1, (5, 7, 3))
+    trajectory_panel(axes, errs, [1] + [1.2] * 5 + [1], "test")
+    assert len(axes[0].patches) == 7  # one guarantee bar per time step
+    assert axes[-1].get_xlabel() == "time step $t$"
+    save_figure(fig, tmp_path / "f.pdf", tmp_path / "f.png")
+    assert (tmp_path / "f.pdf").stat().st_size > 1000 and (tmp_path / "f.png").stat().st_size > 1000
+
+
+def test_guarantee_bar_heights():
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots()
+    guarantee_bars(ax, [1.0, 2.0])
+    assert [p.get_height() for p in ax.patches] == [2.0, 4.0]
+    plt.close(fig)
