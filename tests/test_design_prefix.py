@@ -48,7 +48,7 @@ def test_node_shared_form_equals_paper_copy_per_word_form(acc, words):
     assert ours == pytest.approx(paper, rel=1e-6)
 
 
-@pytest.mark.parametrize("form", ["abs", "dual"])
+@pytest.mark.parametrize("form", ["split", "abs", "dual"])
 @pytest.mark.parametrize("solver", ["highs", "clarabel"])
 def test_solvers_and_robust_forms_agree(acc, L1_words, solver, form):
     ref = design_prefix(acc, L1_words, 1.0).mu2

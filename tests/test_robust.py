@@ -39,8 +39,9 @@ def _random_problem(rng, form):
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_abs_form_equals_paper_dual_form(seed):
-    lp_abs, rows, radius, level, x = _random_problem(np.random.default_rng(seed), "abs")
+@pytest.mark.parametrize("form", ["split", "abs"])
+def test_forms_equal_paper_dual_form(seed, form):
+    lp_abs, rows, radius, level, x = _random_problem(np.random.default_rng(seed), form)
     lp_dual, *_ = _random_problem(np.random.default_rng(seed), "dual")
     s1, s2 = solve_lp(lp_abs), solve_lp(lp_dual)
     assert s1.optimal and s2.optimal

@@ -85,7 +85,7 @@ class Design:
 
 
 def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
-                    form: str = "abs", zero_offset: bool = True) -> PrefixLP:
+                    form: str = "split", zero_offset: bool = True) -> PrefixLP:
     """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
 
     Parameters
@@ -100,7 +100,8 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     T
         Horizon for the stacked matrices (default: the longest word).
     form
-        Robust counterpart: ``"abs"`` or the paper's Π-dual ``"dual"``.
+        Robust counterpart (:func:`eqrec.robust.add_robust_rows`): ``"split"``,
+        ``"abs"`` or the paper's Π-dual ``"dual"``.
     zero_offset
         Fix ``r = 0`` (no loss of optimality, see the module docstring).
     """
@@ -220,7 +221,7 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
 
 
 def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
-                  form: str = "abs", certify: bool = True, method: str = "prefix",
+                  form: str = "split", certify: bool = True, method: str = "prefix",
                   zero_offset: bool = True) -> Design:
     """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 

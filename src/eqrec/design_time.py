@@ -16,7 +16,7 @@ from .systems import AffineSystem
 
 
 def design_time_based(system: AffineSystem, words, M1: float, *, solver: str = "highs",
-                      certify: bool = True, form: str = "abs") -> Design:
+                      certify: bool = True, form: str = "split") -> Design:
     """Minimise ``M2`` of a time-based estimator for the worst-case word of ``words``.
 
     The certificate covers every word of the language and the worst-case word.

@@ -12,8 +12,12 @@ constraint is equivalent to
 
 .. math::  |c_k(x)| + |g_k(x)|^\top b \le \ell_k(x),
 
-which becomes linear with auxiliary variables :math:`a \ge \pm g_k(x)`
-(:func:`add_robust_rows` with ``form="abs"``).  The prefix-based paper writes
+which becomes linear with auxiliary variables, either
+:math:`a \ge \pm g_k(x)` (``form="abs"``, two inequalities per entry) or a
+split :math:`g_k(x) = p - m`, :math:`p, m \ge 0`, bounding
+:math:`|g_k| \le p + m` (``form="split"``, one equality per entry; the
+default, about twice as fast with HiGHS on the P1 designs).  Both are exact:
+the bound is tight at :math:`p = g^+, m = g^-`.  The prefix-based paper writes
 the same counterpart through LP duality with multipliers
 :math:`\Pi \ge 0, \Pi\Omega = [I; -I] G` (eq. (16)); ``form="dual"`` builds
 that form literally so the two can be compared.
@@ -64,7 +68,7 @@ class UncertainAffineRows:
 
 def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.ndarray,
                     level_const: np.ndarray | float, level_col: int | None = None,
-                    level_coef: np.ndarray | float = 1.0, form: str = "abs") -> None:
+                    level_coef: np.ndarray | float = 1.0, form: str = "split") -> None:
     """Add ``|e_k(x, δ)| <= level_const_k + level_coef_k * x[level_col]`` for all ``|δ| <= radius``.
 
     Parameters
@@ -79,6 +83,7 @@ def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.nd
         The bound ``ℓ_k``: a constant, plus optionally a multiple of one
         decision variable (e.g. the intermediate level ``M2``).
     form
+        ``"split"`` (default): ``G_e(x) = p_e - m_e``, ``p, m >= 0``;
         ``"abs"``: auxiliary ``a_e >= |G_e(x)|`` (one per variable entry);
         ``"dual"``: the Π multipliers of eq. (16) of the prefix-based paper.
     """
@@ -90,10 +95,12 @@ def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.nd
     cx = rows.cx.tocoo()
     if form == "abs":
         _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef)
+    elif form == "split":
+        _add_split_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef)
     elif form == "dual":
         _add_dual_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef)
     else:
-        raise ValueError(f"unknown robust-counterpart form {form!r} (use 'abs' or 'dual')")
+        raise ValueError(f"unknown robust-counterpart form {form!r} (use 'split', 'abs' or 'dual')")
 
 
 def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
@@ -124,6 +131,34 @@ def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
             c.append(np.full(R, level_col))
             v.append(-level_coef)
         builder.add_rows(np.concatenate(r), np.concatenate(c), np.concatenate(v), lower=-np.inf,
+                         upper=level_const - const_part - sign * rows.c0, count=R)
+
+
+def _add_split_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
+    # G_e(x) = p_e - m_e with p, m >= 0; |G_e| <= p_e + m_e (tight at an optimum of the bound).
+    R = rows.num_rows
+    has_var = np.diff(Gx.indptr) > 0
+    var_entries = np.flatnonzero(has_var)
+    const_part = np.bincount(rows.entry_row[~has_var], weights=np.abs(rows.G0[~has_var]) * b[~has_var],
+                             minlength=R)
+    k = var_entries.size
+    pos = builder.add_variables(k, lower=0.0)
+    neg = builder.add_variables(k, lower=0.0)
+    sub = Gx[var_entries].tocoo()
+    r = np.concatenate([np.arange(k), np.arange(k), sub.row])
+    c = np.concatenate([pos, neg, sub.col])
+    v = np.concatenate([np.ones(k), -np.ones(k), -sub.data])
+    builder.add_rows(r, c, v, lower=rows.G0[var_entries], upper=rows.G0[var_entries], count=k)
+    signs = (+1.0,) if (cx.nnz == 0 and not np.any(rows.c0)) else (+1.0, -1.0)
+    for sign in signs:
+        rr = [cx.row, rows.entry_row[var_entries], rows.entry_row[var_entries]]
+        cc = [cx.col, pos, neg]
+        vv = [sign * cx.data, b[var_entries], b[var_entries]]
+        if level_col is not None:
+            rr.append(np.arange(R))
+            cc.append(np.full(R, level_col))
+            vv.append(-level_coef)
+        builder.add_rows(np.concatenate(rr), np.concatenate(cc), np.concatenate(vv), lower=-np.inf,
                          upper=level_const - const_part - sign * rows.c0, count=R)
 
 
