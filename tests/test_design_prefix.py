@@ -119,3 +119,20 @@ def test_zero_offset_loses_no_optimality(acc, L1_words, method):
     fixed = design_prefix(acc, words, 1.0)
     assert fixed.mu2 == pytest.approx(free.mu2, rel=1e-7)
     assert np.all(fixed.schedule.word_matrices(words[0])[1] == 0)
+
+
+def test_time_varying_system_with_constant_data_matches_lti(acc, L1_words):
+    from eqrec.systems import AffineSystem
+
+    tv = AffineSystem(A=np.stack([acc.A] * 6), C=np.stack([acc.C] * 6), E=np.stack([acc.E] * 6),
+                      eta_w=acc.eta_w, eta_v=acc.eta_v)
+    assert design_prefix(tv, L1_words, 1.0).mu2 == pytest.approx(design_prefix(acc, L1_words, 1.0).mu2, rel=1e-8)
+
+
+def test_time_varying_system_is_certified(acc):
+    from eqrec.systems import AffineSystem
+
+    A = np.stack([acc.A * (1 + 0.02 * k) for k in range(5)])
+    tv = AffineSystem(A=A, C=acc.C, E=acc.E, eta_w=acc.eta_w, eta_v=acc.eta_v)
+    d = design_prefix(tv, ["10111", "11011"], 1.0)
+    assert d.certificate.mu2 <= d.mu2 * (1 + 1e-6)
