@@ -146,7 +146,10 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
             taus = measured[anc.index]
             if taus:
                 Ys = Y[taus].reshape(len(taus) * p, D)
-                blocks.append((q_cols[anc.index], np.kron(phi[t][s + 1], Ys.T)))
+                # vec_r(Φ Q Y) = (Φ ⊗ Yᵀ) vec_r(Q), written as a broadcast outer product
+                P = phi[t][s + 1]
+                blocks.append((q_cols[anc.index],
+                               (P[:, None, :, None] * Ys.T[None, :, None, :]).reshape(n * D, n * Ys.shape[0])))
         const = Ol[t].reshape(-1)
         K = np.hstack([blk for _, blk in blocks]) if blocks else np.zeros((n * D, 0))
         cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
