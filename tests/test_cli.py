@@ -59,3 +59,16 @@ def test_malformed_system_names_file_and_field(tmp_path, capsys):
 def test_console_script_help():
     out = subprocess.run([sys.executable, "-m", "eqrec.cli", "design", "--help"], capture_output=True, text=True)
     assert out.returncode == 0 and "SYSTEM.yaml keys" in out.stdout and "--method" in out.stdout
+
+
+def test_augmented_free_L_prints_clean_json(capsys):
+    # IPOPT's banner must not leak into the JSON written to stdout
+    assert main(["design", str(SYSTEM), "--words", "111111", "--method", "augmented", "--L", "free"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["method"] == "augmented" and np.asarray(d["L"]).shape == (3, 2)
+    assert d["certified_mu2"] <= d["mu2"] * (1 + 1e-6) + 1e-9
+
+
+def test_augmented_options_rejected_for_other_methods(capsys):
+    assert main(["design", str(SYSTEM), "--words", "111111", "--L", "free"]) == 1
+    assert "augmented only" in capsys.readouterr().err

@@ -420,7 +420,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
     xvar = ca.vertcat(mu2, mvec, nu, Lsym, s0, aux_all)
     cons = ca.vertcat(*g_list, *rows_c)
     nlp = {"x": xvar, "f": mu2, "g": cons}
-    opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-9, "ipopt.max_iter": 3000,
+    opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9, "ipopt.max_iter": 3000,
             "ipopt.acceptable_tol": 1e-7}
     opts.update(options or {})
     solver = ca.nlpsol("augmented", "ipopt", nlp, opts)

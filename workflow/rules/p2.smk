@@ -4,7 +4,6 @@
 VALUES_FILES.append("results/p2/values.json")
 # config["p2"] is loaded and validated (config/schemas/p2.schema.yaml) by the Snakefile.
 
-P2 = f"{PY} -m eqrec.p2_study"
 P2_CONFIG = "config/p2.yaml"
 P2_VARIANTS = config["p2"]["heatmap"]["variants"]
 P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
@@ -13,83 +12,102 @@ P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
 rule p2_designs:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
     input:
-        P2_CONFIG,
+        config=P2_CONFIG,
+        code=PKG_SRC,
     output:
         json="results/p2/designs.json",
         npz="results/p2/designs.npz",
+    params:
+        step=study_cmd("p2_study", "designs"),
     log:
         "logs/p2/designs.log",
     shell:
-        "{P2} designs --config {input} --out {output.json} --npz {output.npz} > {log} 2>&1"
+        "{params.step} --config {input.config} --out {output.json} --npz {output.npz} > {log} 2>&1"
 
 
 rule p2_simulate:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
     input:
+        code=PKG_SRC,
         config=P2_CONFIG,
         designs="results/p2/designs.npz",
     output:
         "results/p2/simulation.npz",
+    params:
+        step=study_cmd("p2_study", "simulate"),
     log:
         "logs/p2/simulate.log",
     shell:
-        "{P2} simulate --config {input.config} --designs {input.designs} --out {output} > {log} 2>&1"
+        "{params.step} --config {input.config} --designs {input.designs} --out {output} > {log} 2>&1"
 
 
 rule p2_heatmap_chunk:
     """P2-F3a: one theta-chunk of the eigenvalue sweep (one LP built, L values updated)."""
     input:
-        P2_CONFIG,
+        config=P2_CONFIG,
+        code=PKG_SRC,
     output:
         "results/p2/heatmap/{variant}_{chunk}.csv",
+    params:
+        step=study_cmd("p2_study", "heatmap-chunk"),
     log:
         "logs/p2/heatmap_{variant}_{chunk}.log",
     wildcard_constraints:
         chunk=r"\d+",
     shell:
-        "{P2} heatmap-chunk --config {input} --variant {wildcards.variant} --chunk {wildcards.chunk}"
+        "{params.step} --config {input.config} --variant {wildcards.variant} --chunk {wildcards.chunk}"
         " --out {output} > {log} 2>&1"
 
 
 rule p2_heatmap_merge:
     """P2-F3a: the whole grid."""
     input:
-        expand("results/p2/heatmap/{variant}_{chunk}.csv", variant=P2_VARIANTS, chunk=P2_CHUNKS),
+        chunks=expand("results/p2/heatmap/{variant}_{chunk}.csv", variant=P2_VARIANTS, chunk=P2_CHUNKS),
+        code=PKG_SRC,
     output:
         "results/p2/heatmap.csv",
+    params:
+        step=study_cmd("p2_study", "heatmap-merge"),
     log:
         "logs/p2/heatmap_merge.log",
     shell:
-        "{P2} heatmap-merge {input} --out {output} > {log} 2>&1"
+        "{params.step} {input.chunks} --out {output} > {log} 2>&1"
 
 
 rule p2_realaxis:
     """P2-F3b: real double eigenvalue sweep."""
     input:
-        P2_CONFIG,
+        config=P2_CONFIG,
+        code=PKG_SRC,
     output:
         "results/p2/realaxis.csv",
+    params:
+        step=study_cmd("p2_study", "realaxis"),
     log:
         "logs/p2/realaxis.log",
     shell:
-        "{P2} realaxis --config {input} --out {output} > {log} 2>&1"
+        "{params.step} --config {input.config} --out {output} > {log} 2>&1"
 
 
 rule p2_checks:
     """P2-S0, P2-SOLVER."""
     input:
-        P2_CONFIG,
+        config=P2_CONFIG,
+        code=PKG_SRC,
     output:
         "results/p2/checks.json",
+    params:
+        step=study_cmd("p2_study", "checks"),
     log:
         "logs/p2/checks.log",
     shell:
-        "{P2} checks --config {input} --out {output} > {log} 2>&1"
+        "{params.step} --config {input.config} --out {output} > {log} 2>&1"
 
 
 rule p2_values:
     """Our value of every published P2 number, with evidence."""
     input:
+        code=PKG_SRC,
         config=P2_CONFIG,
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
@@ -98,58 +116,69 @@ rule p2_values:
         checks="results/p2/checks.json",
     output:
         "results/p2/values.json",
+    params:
+        step=study_cmd("p2_study", "values"),
     log:
         "logs/p2/values.log",
     shell:
-        "{P2} values --config {input.config} --designs {input.designs} --simulation {input.simulation}"
+        "{params.step} --config {input.config} --designs {input.designs} --simulation {input.simulation}"
         " --heatmap {input.heatmap} --realaxis {input.realaxis} --checks {input.checks} --out {output} > {log} 2>&1"
 
 
 rule p2_figure_trajectories:
     """P2-F1 / P2-F2 figures."""
     input:
+        code=PKG_SRC,
         config=P2_CONFIG,
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
     output:
         pdf=report("results/p2/{fig}_trajectories.pdf", caption="../report/p2_{fig}.rst", category="P2"),
         png="results/p2/{fig}_trajectories.png",
+    params:
+        step=study_cmd("p2_study", "figure-trajectories"),
     log:
         "logs/p2/figure_{fig}.log",
     wildcard_constraints:
         fig="f1|f2",
     shell:
-        "{P2} figure-trajectories --config {input.config} --designs {input.designs} --simulation {input.simulation}"
+        "{params.step} --config {input.config} --designs {input.designs} --simulation {input.simulation}"
         " --fig {wildcards.fig} --pdf {output.pdf} --png {output.png} > {log} 2>&1"
 
 
 rule p2_figure_heatmap:
     """P2-F3a figure."""
     input:
+        code=PKG_SRC,
         config=P2_CONFIG,
         heatmap="results/p2/heatmap.csv",
     output:
         pdf=report("results/p2/f3a_heatmap.pdf", caption="../report/p2_f3a.rst", category="P2"),
         png="results/p2/f3a_heatmap.png",
+    params:
+        step=study_cmd("p2_study", "figure-heatmap"),
     log:
         "logs/p2/figure_f3a.log",
     shell:
-        "{P2} figure-heatmap --config {input.config} --heatmap {input.heatmap} --pdf {output.pdf} --png {output.png}"
+        "{params.step} --config {input.config} --heatmap {input.heatmap} --pdf {output.pdf} --png {output.png}"
         " > {log} 2>&1"
 
 
 rule p2_figure_realaxis:
     """P2-F3b figure."""
     input:
+        code=PKG_SRC,
         config=P2_CONFIG,
         realaxis="results/p2/realaxis.csv",
     output:
         pdf=report("results/p2/f3b_realaxis.pdf", caption="../report/p2_f3b.rst", category="P2"),
         png="results/p2/f3b_realaxis.png",
+    params:
+        step=study_cmd("p2_study", "figure-realaxis"),
     log:
         "logs/p2/figure_f3b.log",
     shell:
-        "{P2} figure-realaxis --config {input.config} --realaxis {input.realaxis} --pdf {output.pdf}"
+        "{params.step} --config {input.config} --realaxis {input.realaxis} --pdf {output.pdf}"
         " --png {output.png} > {log} 2>&1"
 
 
