@@ -619,9 +619,13 @@ def figure_trajectories(config, designs_json, simulation_npz, fig: str, pdf: str
                      c, "C3"))
     errs0 = sim[f"{fig}/time"]
     T = errs0.shape[1] - 1
-    f, axes = plt.subplots(3, len(cols), figsize=(3.2 * len(cols), 5.6), sharex=True, squeeze=False)
+    f, axes = plt.subplots(3, len(cols), figsize=(3.3 * len(cols), 6.0), sharex=True, squeeze=False,
+                           layout="constrained")
     for j, (name, title, mu2, color) in enumerate(cols):
-        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, M1, mu2), title, color=color)
+        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, M1, mu2), title, color=color,
+                         ylabels=(j == 0))
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    f.legend(handles, ["estimation error", "certified guarantee"], loc="outside lower center", ncol=2)
     f.suptitle(f"{'no missing data' if fig == 'f1' else 'language ' + str(d['language'])}: "
                f"{errs0.shape[0]} runs, same draws for every estimator")
     save_figure(f, pdf, png)
@@ -636,7 +640,8 @@ def figure_heatmap(config, heatmap_csv, pdf: str | Path, png: str | Path) -> Non
     paper_style()
     df = pd.read_csv(heatmap_csv)
     variants = list(dict.fromkeys(df["variant"]))
-    f, axes = plt.subplots(1, len(variants), figsize=(3.6 * len(variants), 2.6), squeeze=False)
+    f, axes = plt.subplots(1, len(variants), figsize=(3.9 * len(variants), 3.2), squeeze=False,
+                           layout="constrained")
     for ax, var in zip(axes[0], variants):
         g = df[df["variant"] == var]
         x = g["r"] * np.cos(g["theta"])
@@ -653,10 +658,17 @@ def figure_heatmap(config, heatmap_csv, pdf: str | Path, png: str | Path) -> Non
         ax.scatter(x[fl], y[fl], s=25, marker="x", color="red", label="placement failed")
         ax.set_aspect("equal")
         ax.set_xlabel(r"Re $\lambda$")
-        ax.set_ylabel(r"Im $\lambda$")
+        if ax is axes[0][0]:
+            ax.set_ylabel(r"Im $\lambda$")
         ax.set_title(f"{var} (word {g['word'].iloc[0]})")
-        f.colorbar(sc, ax=ax, label=r"optimal $\mu_2$")
-        ax.legend(loc="upper left", fontsize=6)
+        f.colorbar(sc, ax=ax, label=r"optimal $\mu_2$", shrink=0.7, location="bottom")
+    handles, labels = [], []
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    f.legend(handles, labels, loc="outside upper center", ncol=len(labels))
     save_figure(f, pdf, png)
 
 
