@@ -510,7 +510,7 @@ def step_values(config, designs_json, simulation_npz, heatmap_csv, realaxis_csv,
         f"estimator beats the time-based optimum {f2['time']['certified_mu2']:.6g} on {f2['worst_case_word']}; "
         f"IPOPT (L, s0 free) reaches it. Reading the word's missing positions as 1-based time indices "
         f"(word {ob['word']}, missing k = 2, 3 as in the Fig. 2 caption) gives augmented "
-        f"{ob['augmented_free']['certified_mu2']:.6g} and time-based {ob['time_mu2']:.6g}: the paper's 1.05; those "
+        f"{ob['augmented_free']['certified_mu2']:.6g} and time-based {ob['time_mu2']:.6g}; those "
         f"gains run on the true word {f2['worst_case_word']} guarantee only "
         f"{ob['certified_on_true_words'][f2['worst_case_word']]:.6g}. Leak reading (constant L at the missing "
         f"steps, measurement inside s): {leak_txt}.")}
@@ -559,8 +559,7 @@ def step_values(config, designs_json, simulation_npz, heatmap_csv, realaxis_csv,
     whole = [float(okg["lam"].min()), float(okg["lam"].max())] if np.ptp(okg["mu2"]) <= tol else interval
     v["f3b_interval"] = {"value": whole, "note": (
         f"{cfg['realaxis']['n']} real eigenvalue pairs {{0, lambda, lambda}}; mu2 = {okg['mu2'].min():.6g} at every "
-        f"placeable lambda (spread {np.ptp(okg['mu2']):.1e}); " + "; ".join(notes) +
-        ". The paper's endpoints -0.7143 = -10*1.5/21 and 0.9286 = 13*1.5/21 lie on a 22-point r-grid.")}
+        f"placeable lambda (spread {np.ptp(okg['mu2']):.1e}); " + "; ".join(notes) + ".")}
     # S0
     s0 = ck["s0"]
     v["s0_mu2_unchanged"] = {"value": "unchanged" if s0["mu2_spread"] <= tol else "changed", "note": (
