@@ -5,25 +5,19 @@
 #   snakemake --cores 2              # everything, default config
 #   snakemake --cores 2 p1           # one paper (p1, p2, p4)
 #   snakemake --report report.html   # browsable report with figure captions
-from pathlib import Path
-
 from snakemake.utils import min_version, validate
 
 min_version("9.0")
 
 
 configfile: "config/config.yaml"
+configfile: "config/p2.yaml"
+configfile: "config/p4.yaml"
 
 
 validate(config, "config/schemas/config.schema.yaml")
-
-# Paper sections with their own parameter files.
-for _part in ("p2", "p4"):
-    if Path(f"config/{_part}.yaml").exists():
-
-        configfile: f"config/{_part}.yaml"
-
-        validate(config[_part], f"config/schemas/{_part}.schema.yaml")
+validate(config["p2"], "config/schemas/p2.schema.yaml")
+validate(config["p4"], "config/schemas/p4.schema.yaml")
 
 # Each rules file appends the values.json its analysis writes; the claims
 # table (claims.smk, included last) needs all of them.
@@ -32,18 +26,8 @@ VALUES_FILES = []
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/p1.smk"
-
-
-if Path("workflow/rules/p2.smk").exists():
-
-    include: "workflow/rules/p2.smk"
-
-
-if Path("workflow/rules/p4.smk").exists():
-
-    include: "workflow/rules/p4.smk"
-
-
+include: "workflow/rules/p2.smk"
+include: "workflow/rules/p4.smk"
 include: "workflow/rules/claims.smk"
 
 
@@ -52,3 +36,5 @@ rule all:
     input:
         rules.claims.output,
         rules.p1.input,
+        rules.p2.input,
+        rules.p4.input,

@@ -684,22 +684,84 @@ def run_all(config: str | Path, out: str | Path) -> dict:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Command line of the P4 steps (one per Snakemake rule of ``workflow/rules/p4.smk``)."""
     ap = argparse.ArgumentParser(prog="python -m eqrec.lmv_study", description=__doc__.splitlines()[0])
-    ap.add_argument("step", choices=["all", "mc", "sweep-eta", "sweep-q"])
-    ap.add_argument("--config", default="config/p4.yaml")
-    ap.add_argument("--out", default="results/p4")
-    ap.add_argument("--example", default="ex1")
-    ap.add_argument("--chunk", type=int, default=0)
+    sub = ap.add_subparsers(dest="step", required=True)
+
+    def add(name: str, help_: str) -> argparse.ArgumentParser:
+        sp = sub.add_parser(name, help=help_)
+        sp.add_argument("--config", default="config/p4.yaml")
+        return sp
+
+    sp = add("all", "the whole chain into one directory (no Snakemake)")
+    sp.add_argument("--out", default="results/p4")
+    sp = add("tracking", "Figs. 1-3: one realisation, filter / predictor / smoother")
+    sp.add_argument("--npz", required=True)
+    sp.add_argument("--figs", nargs=6, required=True, metavar="PDF_OR_PNG",
+                    help="pdf png pairs for filter, predictor, smoother")
+    sp = add("mc", "Monte Carlo validation of one example (P4-THEORY, Figs. 4, 7, 8)")
+    sp.add_argument("--example", required=True)
+    sp.add_argument("--npz", required=True)
+    sp.add_argument("--json", required=True)
+    for name in ("sweep-eta", "sweep-q"):
+        sp = add(name, "one chunk of the steady-state sweep")
+        sp.add_argument("--chunk", type=int, required=True)
+        sp.add_argument("--out", required=True)
+    sp = add("fig4", "Fig. 4: error variances of filter, predictor and smoother")
+    sp.add_argument("--mc", required=True)
+    sp.add_argument("--pdf", required=True)
+    sp.add_argument("--png", required=True)
+    sp = add("fig5", "Fig. 5: variances against the arrival rate")
+    sp.add_argument("--chunks", nargs="+", required=True)
+    sp.add_argument("--merged", required=True)
+    sp.add_argument("--pdf", required=True)
+    sp.add_argument("--png", required=True)
+    sp = add("fig6", "Fig. 6: filter variance against Q_xi, Q_lambda (+ regions figure)")
+    sp.add_argument("--chunks", nargs="+", required=True)
+    sp.add_argument("--merged", required=True)
+    sp.add_argument("--pdf", required=True)
+    sp.add_argument("--png", required=True)
+    sp.add_argument("--regions-pdf", required=True)
+    sp.add_argument("--regions-png", required=True)
+    sp = add("compare", "Figs. 7-8: zero-input vs hold-input filter")
+    sp.add_argument("--example", required=True)
+    sp.add_argument("--number", type=int, required=True)
+    sp.add_argument("--mc", required=True)
+    sp.add_argument("--pdf", required=True)
+    sp.add_argument("--png", required=True)
+    sp = add("values", "our value of every P4 claim")
+    sp.add_argument("--tracking", required=True)
+    sp.add_argument("--mc-json", nargs="+", required=True, metavar="EXAMPLE=FILE")
+    sp.add_argument("--mc-npz", nargs="+", required=True, metavar="EXAMPLE=FILE")
+    sp.add_argument("--eta", required=True)
+    sp.add_argument("--q", required=True)
+    sp.add_argument("--out", required=True)
+    sp.add_argument("--table", required=True)
     a = ap.parse_args(argv)
-    out = Path(a.out)
     if a.step == "all":
-        run_all(a.config, out)
+        run_all(a.config, Path(a.out))
+        return 0
+    cfg = load_config(a.config)
+    if a.step == "tracking":
+        f = a.figs
+        step_tracking(cfg, a.npz, [(f[0], f[1]), (f[2], f[3]), (f[4], f[5])])
     elif a.step == "mc":
-        step_mc(load_config(a.config), a.example, out / f"mc_{a.example}.npz", out / f"mc_{a.example}.json")
+        step_mc(cfg, a.example, a.npz, a.json)
     elif a.step == "sweep-eta":
-        step_sweep_eta(load_config(a.config), a.chunk, out / "sweep_eta" / f"chunk{a.chunk}.npz")
-    else:
-        step_sweep_q(load_config(a.config), a.chunk, out / "sweep_q" / f"chunk{a.chunk}.npz")
+        step_sweep_eta(cfg, a.chunk, a.out)
+    elif a.step == "sweep-q":
+        step_sweep_q(cfg, a.chunk, a.out)
+    elif a.step == "fig4":
+        step_fig4(cfg, a.mc, a.pdf, a.png)
+    elif a.step == "fig5":
+        step_fig5(cfg, a.chunks, a.merged, a.pdf, a.png)
+    elif a.step == "fig6":
+        step_fig6(cfg, a.chunks, a.merged, a.pdf, a.png, a.regions_pdf, a.regions_png)
+    elif a.step == "compare":
+        step_fig_compare(cfg, a.example, a.mc, a.number, a.pdf, a.png)
+    elif a.step == "values":
+        pairs = lambda items: dict(item.split("=", 1) for item in items)  # noqa: E731
+        step_values(cfg, a.tracking, pairs(a.mc_json), pairs(a.mc_npz), a.eta, a.q, a.out, a.table)
     return 0
 
 
