@@ -567,7 +567,7 @@ def fig_variances(d, N: int, eta: float, pdf: str, png: str) -> None:
                     label="Monte Carlo" if key == "filt" else None)
         ax.set_ylabel(rf"error variance of $x_{i + 1}$")
         if i == 0:
-            ax.legend(loc="upper right", fontsize=7)
+            ax.legend(loc="lower right", fontsize=7)
             ax.set_title(rf"Fig. 4: estimation error variances, $\bar\eta = {eta:g}$")
     np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
     save_figure(fig, pdf, png)
@@ -618,14 +618,18 @@ def fig_regions(d: dict, cfg: dict, pdf: str, png: str) -> None:
     from .plotting import save_figure
     plt = _plt()
     exs = list(cfg["examples"])
-    fig, axes = plt.subplots(1, len(exs), figsize=(3.2 * len(exs), 2.8))
+    fig, axes = plt.subplots(1, len(exs), figsize=(3.8 * len(exs), 3.2), layout="constrained")
     for ax, ex in zip(np.atleast_1d(axes), exs):
         ratio = d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1)
-        im = ax.pcolormesh(d["qlam"], d["qxi"], ratio, cmap="RdBu_r", vmin=min(0.8, np.nanmin(ratio)),
-                           vmax=max(1.2, np.nanmax(ratio)), shading="auto")
+        from matplotlib.colors import TwoSlopeNorm
+
+        # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
+        norm = TwoSlopeNorm(vcenter=1.0, vmin=min(0.8, np.nanmin(ratio)), vmax=max(1.2, np.nanmax(ratio)))
+        im = ax.pcolormesh(d["qlam"], d["qxi"], ratio, cmap="RdBu_r", norm=norm, shading="auto")
         ax.contour(d["qlam"], d["qxi"], ratio, levels=[1.0], colors="k", linewidths=1.0)
         ax.set_xlabel(r"$Q_\lambda$")
-        ax.set_ylabel(r"$Q_\xi$")
+        if ax is np.atleast_1d(axes)[0]:
+            ax.set_ylabel(r"$Q_\xi$")
         ax.set_title(cfg["examples"][ex].get("name", ex))
         fig.colorbar(im, ax=ax, label="tr $P_{hold}$ / tr $P_{zero}$ (filter)")
     fig.suptitle(rf"hold-input vs zero-input filter, $\bar\eta = {float(cfg['eta_bar']):g}$ "
@@ -647,7 +651,7 @@ def fig_compare(d, name: str, eta: float, number: int, pdf: str, png: str) -> No
                     label=f"{label} (Monte Carlo)")
         ax.set_ylabel(rf"filter variance of $x_{i + 1}$")
         if i == 0:
-            ax.legend(loc="upper right", fontsize=7, ncol=2)
+            ax.legend(loc="lower right", fontsize=7, ncol=2)
             ax.set_title(rf"Fig. {number}: filtering error variances of the two mechanisms, {name}, "
                          rf"$\bar\eta = {eta:g}$")
     np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
