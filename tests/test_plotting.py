@@ -23,3 +23,13 @@ def test_guarantee_bar_heights():
     guarantee_bars(ax, [1.0, 2.0])
     assert [p.get_height() for p in ax.patches] == [2.0, 4.0]
     plt.close(fig)
+
+
+def test_figures_are_byte_reproducible(tmp_path):
+    import matplotlib.pyplot as plt
+
+    for name in ("a", "b"):
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [1, 0])
+        save_figure(fig, tmp_path / f"{name}.pdf")
+    assert (tmp_path / "a.pdf").read_bytes() == (tmp_path / "b.pdf").read_bytes()

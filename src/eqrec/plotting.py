@@ -32,7 +32,9 @@ def save_figure(fig: plt.Figure, *paths: str | Path) -> None:
     """Save a figure to each path (PDF, PNG, ... by suffix) and close it."""
     for p in paths:
         Path(p).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(p)
+        # no creation date in PDFs: re-running the pipeline leaves unchanged figures byte-identical
+        meta = {"CreationDate": None} if str(p).endswith(".pdf") else None
+        fig.savefig(p, metadata=meta)
     plt.close(fig)
 
 
