@@ -233,6 +233,40 @@ def _masked_L(gains_L: np.ndarray, word: str, runtime: str) -> np.ndarray:
     return effective_L(gains_L, word, "theorem2" if runtime == "theorem2" else "hold")
 
 
+def _innovation_recursion(system: AffineSystem, word: str, Lt: np.ndarray, s0: np.ndarray, injection):
+    r"""Propagate ``s(k) = Sy ỹ + sc`` through eqs. (2)-(3) for an injection rule.
+
+    At each step the innovation ``z(k) = q(k) ỹ(k) - C s(k)`` is affine in the
+    stacked ``ỹ``: ``z = Z ỹ + zc`` (rows of step ``k`` filled here), and
+    ``injection(k, Z, zc)`` returns the time-based gain row ``(F_k, u0_k)`` of
+    ``ue(k) = u0_k + F_k ỹ``.  Shared by both conversion directions.
+
+    Returns ``Z`` (``Tp x Tp``, unit block lower triangular on measured steps) and ``zc``.
+    """
+    T, n, p = len(word), system.n, system.p
+    q = np.array([int(c) for c in word])
+    Sy = np.zeros((n, T * p))
+    sc = np.asarray(s0, float).reshape(n).copy()
+    Z = np.zeros((T * p, T * p))
+    zc = np.zeros(T * p)
+    for k in range(T):
+        C = system.C_at(k)
+        rows = slice(k * p, (k + 1) * p)
+        Z[rows] = -C @ Sy
+        if q[k]:
+            Z[rows, rows] += np.eye(p)
+        zc[rows] = -C @ sc
+        Fk, uk = injection(k, Z, zc)
+        # s(k+1) = A s + ue + L (q ỹ - C s)
+        Ak = system.A_at(k)
+        Sy_next = Ak @ Sy + Fk - Lt[k] @ C @ Sy
+        if q[k]:
+            Sy_next[:, rows] += Lt[k]
+        sc = Ak @ sc + uk - Lt[k] @ C @ sc
+        Sy = Sy_next
+    return Z, zc
+
+
 def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains, runtime: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Time-based gains ``(F, u0)`` producing the same ``x̂`` as the augmented estimator.
 
@@ -258,31 +292,16 @@ def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains, runtime
     n, p = system.n, system.p
     L = _masked_L(as_time_varying_L(gains.L, T, n, p), word, runtime)
     q = np.array([int(c) for c in word])
-    Sy = np.zeros((n, T * p))
-    sc = np.asarray(gains.s0, float).copy()
-    Zy = np.zeros((T * p, T * p))  # z = Zy ỹ + zc
-    zc = np.zeros(T * p)
     F = np.zeros((T * n, T * p))
     u0 = np.zeros(T * n)
-    for k in range(T):
-        C = system.C_at(k)
-        rows = slice(k * p, (k + 1) * p)
-        Zy[rows] = -C @ Sy
-        if q[k]:
-            Zy[rows, rows] += np.eye(p)
-        zc[rows] = -C @ sc
+
+    def injection(k, Z, zc):
         Mk = gains.M[k * n:(k + 1) * n]
-        Fk = Mk @ Zy
-        uk = gains.nu[k * n:(k + 1) * n] + Mk @ zc
-        F[k * n:(k + 1) * n] = Fk
-        u0[k * n:(k + 1) * n] = uk
-        # s(k+1) = A s + ue + L (q ỹ - C s)
-        Ak = system.A_at(k)
-        Sy_next = Ak @ Sy + Fk - L[k] @ C @ Sy
-        if q[k]:
-            Sy_next[:, rows] += L[k]
-        sc = Ak @ sc + uk - L[k] @ C @ sc
-        Sy = Sy_next
+        F[k * n:(k + 1) * n] = Mk @ Z
+        u0[k * n:(k + 1) * n] = gains.nu[k * n:(k + 1) * n] + Mk @ zc
+        return F[k * n:(k + 1) * n], u0[k * n:(k + 1) * n]
+
+    _innovation_recursion(system, word, L, gains.s0, injection)
     F[:, np.repeat(q == 0, p)] = 0.0  # ỹ is zero there: those columns are immaterial
     return F, u0
 
@@ -305,24 +324,8 @@ def time_based_to_augmented(system: AffineSystem, word: str, F: np.ndarray, u0: 
         raise InputError(f"F must be {(T * n, T * p)} and u0 ({T * n},), got {F.shape} and {u0.shape}")
     Lt = _masked_L(as_time_varying_L(L, T, n, p), word, runtime)
     q = np.array([int(c) for c in word])
-    Sy = np.zeros((n, T * p))
-    sc = np.asarray(s0, float).reshape(n).copy()
-    P = np.zeros((T * p, T * p))
-    p0 = np.zeros(T * p)
-    for k in range(T):
-        C = system.C_at(k)
-        rows = slice(k * p, (k + 1) * p)
-        P[rows] = -C @ Sy
-        if q[k]:
-            P[rows, rows] += np.eye(p)
-        p0[rows] = -C @ sc
-        Fk, uk = F[k * n:(k + 1) * n], u0[k * n:(k + 1) * n]
-        Ak = system.A_at(k)
-        Sy_next = Ak @ Sy + Fk - Lt[k] @ C @ Sy
-        if q[k]:
-            Sy_next[:, rows] += Lt[k]
-        sc = Ak @ sc + uk - Lt[k] @ C @ sc
-        Sy = Sy_next
+    P, p0 = _innovation_recursion(system, word, Lt, s0,
+                                  lambda k, Z, zc: (F[k * n:(k + 1) * n], u0[k * n:(k + 1) * n]))
     meas = np.repeat(q == 1, p)
     Pm = P[np.ix_(meas, meas)]
     Mm = sla.solve_triangular(Pm.T, F[:, meas].T, lower=False, unit_diagonal=True).T  # F_m P_m^{-1}

@@ -103,29 +103,26 @@ def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.nd
         raise ValueError(f"unknown robust-counterpart form {form!r} (use 'split', 'abs' or 'dual')")
 
 
-def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
-    R = rows.num_rows
+def _variable_entries(rows: UncertainAffineRows, Gx: sp.csr_matrix, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Entries of ``G`` that depend on ``x``, and per row the worst case ``Σ |G0| b`` of the fixed ones."""
     has_var = np.diff(Gx.indptr) > 0
-    var_entries = np.flatnonzero(has_var)
-    # Entries fixed by the data contribute |G0| b to the worst case directly.
     const_part = np.bincount(rows.entry_row[~has_var], weights=np.abs(rows.G0[~has_var]) * b[~has_var],
-                             minlength=R)
-    aux = builder.add_variables(var_entries.size, lower=0.0)
-    # a_e - Gx_e x >= G0_e  and  a_e + Gx_e x >= -G0_e
-    sub = Gx[var_entries].tocoo()
-    k = var_entries.size
-    for sign in (+1.0, -1.0):
-        r = np.concatenate([np.arange(k), sub.row])
-        c = np.concatenate([aux, sub.col])
-        v = np.concatenate([np.ones(k), -sign * sub.data])
-        builder.add_rows(r, c, v, lower=sign * rows.G0[var_entries], upper=np.inf, count=k)
-    # ±(c0 + cx x) + Σ b_e a_e + const_part <= level_const + level_coef * x[level_col]
-    # (one row suffices when the certain term is identically zero)
+                             minlength=rows.num_rows)
+    return np.flatnonzero(has_var), const_part
+
+
+def _add_level_rows(builder, rows, cx, bound_cols, bound_rows, bound_vals, const_part, level_const, level_col,
+                    level_coef) -> None:
+    """``±(c0 + cx x) + Σ (bound of |G_e|) b_e + const_part <= level_const + level_coef x[level_col]``.
+
+    One row suffices when the certain term is identically zero.
+    """
+    R = rows.num_rows
     signs = (+1.0,) if (cx.nnz == 0 and not np.any(rows.c0)) else (+1.0, -1.0)
     for sign in signs:
-        r = [cx.row, rows.entry_row[var_entries]]
-        c = [cx.col, aux]
-        v = [sign * cx.data, b[var_entries]]
+        r = [cx.row, bound_rows]
+        c = [cx.col, bound_cols]
+        v = [sign * cx.data, bound_vals]
         if level_col is not None:
             r.append(np.arange(R))
             c.append(np.full(R, level_col))
@@ -134,13 +131,24 @@ def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
                          upper=level_const - const_part - sign * rows.c0, count=R)
 
 
+def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
+    var_entries, const_part = _variable_entries(rows, Gx, b)
+    k = var_entries.size
+    aux = builder.add_variables(k, lower=0.0)
+    # a_e - Gx_e x >= G0_e  and  a_e + Gx_e x >= -G0_e
+    sub = Gx[var_entries].tocoo()
+    for sign in (+1.0, -1.0):
+        r = np.concatenate([np.arange(k), sub.row])
+        c = np.concatenate([aux, sub.col])
+        v = np.concatenate([np.ones(k), -sign * sub.data])
+        builder.add_rows(r, c, v, lower=sign * rows.G0[var_entries], upper=np.inf, count=k)
+    _add_level_rows(builder, rows, cx, aux, rows.entry_row[var_entries], b[var_entries], const_part,
+                    level_const, level_col, level_coef)
+
+
 def _add_split_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
     # G_e(x) = p_e - m_e with p, m >= 0; |G_e| <= p_e + m_e (tight at an optimum of the bound).
-    R = rows.num_rows
-    has_var = np.diff(Gx.indptr) > 0
-    var_entries = np.flatnonzero(has_var)
-    const_part = np.bincount(rows.entry_row[~has_var], weights=np.abs(rows.G0[~has_var]) * b[~has_var],
-                             minlength=R)
+    var_entries, const_part = _variable_entries(rows, Gx, b)
     k = var_entries.size
     pos = builder.add_variables(k, lower=0.0)
     neg = builder.add_variables(k, lower=0.0)
@@ -149,17 +157,9 @@ def _add_split_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef
     c = np.concatenate([pos, neg, sub.col])
     v = np.concatenate([np.ones(k), -np.ones(k), -sub.data])
     builder.add_rows(r, c, v, lower=rows.G0[var_entries], upper=rows.G0[var_entries], count=k)
-    signs = (+1.0,) if (cx.nnz == 0 and not np.any(rows.c0)) else (+1.0, -1.0)
-    for sign in signs:
-        rr = [cx.row, rows.entry_row[var_entries], rows.entry_row[var_entries]]
-        cc = [cx.col, pos, neg]
-        vv = [sign * cx.data, b[var_entries], b[var_entries]]
-        if level_col is not None:
-            rr.append(np.arange(R))
-            cc.append(np.full(R, level_col))
-            vv.append(-level_coef)
-        builder.add_rows(np.concatenate(rr), np.concatenate(cc), np.concatenate(vv), lower=-np.inf,
-                         upper=level_const - const_part - sign * rows.c0, count=R)
+    er, bv = rows.entry_row[var_entries], b[var_entries]
+    _add_level_rows(builder, rows, cx, np.concatenate([pos, neg]), np.concatenate([er, er]),
+                    np.concatenate([bv, bv]), const_part, level_const, level_col, level_coef)
 
 
 def _add_dual_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
