@@ -15,11 +15,11 @@ import argparse
 import statistics
 import time
 
-from eqrec.certify import certify_design
-from eqrec.design_prefix import Design, build_prefix_lp, read_schedule
-from eqrec.languages import worst_case_word
-from eqrec.lp import solve_lp
-from eqrec.systems import acc_system
+from eqrec.core.certify import certify_design
+from eqrec.design.prefix import Design, build_prefix_lp, read_schedule
+from eqrec.core.patterns import worst_case_word
+from eqrec.core.lp import solve_lp
+from eqrec.core.systems import acc_system
 
 L1 = ["101111", "110111", "111011", "111101"]
 

@@ -14,9 +14,11 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from eqrec.design_augmented import AugmentedLP, heatmap_poles, place_observer
-from eqrec.p2_study import variant_word
-from eqrec.systems import acc_system
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.observers import place_observer
+from eqrec.studies.p2 import heatmap_poles
+from eqrec.studies.p2 import variant_word
+from eqrec.core.systems import acc_system
 
 GOAL = 60.0
 

@@ -2,12 +2,12 @@
 import numpy as np
 import pytest
 
-from eqrec.augmented import (AugmentedEstimator, AugmentedGains, AugmentedStacking, as_time_varying_L,
+from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, AugmentedStacking, as_time_varying_L,
                              augmented_to_time_based, schedule_from_augmented, time_based_to_augmented)
-from eqrec.certify import closed_loop_maps
+from eqrec.core.certify import closed_loop_maps
 from eqrec.errors import InputError
-from eqrec.simulate import sample_uncertainty, simulate_run
-from eqrec.stacking import UncertaintyLayout
+from eqrec.core.simulate import sample_uncertainty, simulate_run
+from eqrec.core.stacking import UncertaintyLayout
 
 
 def random_gains(rng, word, n=3, p=2, mode="theorem2", time_varying=False):

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from eqrec.certify import certify_design, certify_schedule
-from eqrec.design_prefix import design_prefix
+from eqrec.core.certify import certify_design, certify_schedule
+from eqrec.design.prefix import design_prefix
 from eqrec.errors import CertificationFailure
-from eqrec.simulate import sample_uncertainty, simulate_run
+from eqrec.core.simulate import sample_uncertainty, simulate_run
 
 
 def test_bounds_are_attained_and_never_exceeded(acc, L1_words, rng):
@@ -24,7 +24,7 @@ def test_bounds_are_attained_and_never_exceeded(acc, L1_words, rng):
 
 
 def wc_layout(acc):
-    from eqrec.stacking import UncertaintyLayout
+    from eqrec.core.stacking import UncertaintyLayout
 
     return UncertaintyLayout(6, acc.nw, acc.nv, acc.n)
 

@@ -2,7 +2,7 @@ import json
 
 import pytest
 
-from eqrec.claims import build_claims_table, compare_one, default_atol, write_values
+from eqrec.studies.claims import build_claims_table, compare_one, default_atol, write_values
 
 
 def entry(paper, kind="number", **cmp):

@@ -2,12 +2,15 @@
 import numpy as np
 import pytest
 
-from eqrec.augmented import AugmentedGains, AugmentedStacking, augmented_to_time_based
-from eqrec.design_augmented import (AugmentedLP, design_augmented, heatmap_poles, place_observer,
-                                    solve_free_ipopt)
-from eqrec.design_time import design_time_based
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, augmented_to_time_based
+from eqrec.design.augmented import design_augmented
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.augmented_nlp import solve_free_ipopt
+from eqrec.design.observers import place_observer
+from eqrec.studies.p2 import heatmap_poles
+from eqrec.design.time_based import design_time_based
 from eqrec.errors import InputError
-from eqrec.lp import solve_lp
+from eqrec.core.lp import solve_lp
 
 
 @pytest.fixture(scope="module")

@@ -3,11 +3,11 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from eqrec.design_prefix import build_prefix_lp, design_prefix
-from eqrec.design_time import design_time_based
+from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.design.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign, InputError
-from eqrec.languages import PrefixTree, prefixes
-from eqrec.stacking import Stacking
+from eqrec.core.patterns import PrefixTree, prefixes
+from eqrec.core.stacking import Stacking
 
 
 def paper_copy_per_word_optimum(system, words, M1):
@@ -105,14 +105,14 @@ def test_optimum_is_a_lower_bound(acc, L1_words):
     d = design_prefix(acc, L1_words, 1.0)
     m = build_prefix_lp(acc, PrefixTree(L1_words), 1.0)
     m.lp.col_upper[m.mu2_col] = d.mu2 - 1e-5
-    from eqrec.lp import solve_lp
+    from eqrec.core.lp import solve_lp
 
     assert solve_lp(m.lp, "highs").status == "infeasible"
 
 
 @pytest.mark.parametrize("method", ["prefix", "time"])
 def test_zero_offset_loses_no_optimality(acc, L1_words, method):
-    from eqrec.languages import worst_case_word
+    from eqrec.core.patterns import worst_case_word
 
     words = L1_words if method == "prefix" else [worst_case_word(L1_words)]
     free = design_prefix(acc, words, 1.0, zero_offset=False)
@@ -122,7 +122,7 @@ def test_zero_offset_loses_no_optimality(acc, L1_words, method):
 
 
 def test_time_varying_system_with_constant_data_matches_lti(acc, L1_words):
-    from eqrec.systems import AffineSystem
+    from eqrec.core.systems import AffineSystem
 
     tv = AffineSystem(A=np.stack([acc.A] * 6), C=np.stack([acc.C] * 6), E=np.stack([acc.E] * 6),
                       eta_w=acc.eta_w, eta_v=acc.eta_v)
@@ -130,7 +130,7 @@ def test_time_varying_system_with_constant_data_matches_lti(acc, L1_words):
 
 
 def test_time_varying_system_is_certified(acc):
-    from eqrec.systems import AffineSystem
+    from eqrec.core.systems import AffineSystem
 
     A = np.stack([acc.A * (1 + 0.02 * k) for k in range(5)])
     tv = AffineSystem(A=A, C=acc.C, E=acc.E, eta_w=acc.eta_w, eta_v=acc.eta_v)

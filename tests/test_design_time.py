@@ -1,6 +1,6 @@
 import pytest
 
-from eqrec.design_time import design_time_based
+from eqrec.design.time_based import design_time_based
 from eqrec.errors import InputError
 
 

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from eqrec.design_prefix import design_prefix
+from eqrec.design.prefix import design_prefix
 from eqrec.errors import InputError
-from eqrec.estimator import RecoveryEstimator
-from eqrec.simulate import simulate_run
+from eqrec.core.estimator import RecoveryEstimator
+from eqrec.core.simulate import simulate_run
 
 
 def test_runtime_estimator_follows_the_closed_loop_map(acc, L1_words, rng):

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from eqrec.certify import closed_loop_maps
-from eqrec.gains import GainSchedule, f_to_q, q_to_f, schedule_from_word_gains
-from eqrec.languages import PrefixTree
-from eqrec.stacking import Stacking
+from eqrec.core.certify import closed_loop_maps
+from eqrec.core.gains import GainSchedule, f_to_q, q_to_f, schedule_from_word_gains
+from eqrec.core.patterns import PrefixTree
+from eqrec.core.stacking import Stacking
 
 
 def _random_lower(rng, T, n, p, word):
@@ -45,7 +45,7 @@ def test_inconsistent_prefix_gains_are_rejected(rng):
 
 
 def test_time_based_schedule_ignores_observed_prefix():
-    from eqrec.gains import GainRow
+    from eqrec.core.gains import GainRow
 
     rows = {"1": GainRow(np.ones((1, 1)), np.zeros(1)), "10": GainRow(np.ones((1, 2)), np.ones(1))}
     s = GainSchedule(rows=rows, n=1, p=1, time_based=True, designed_words=("10",))

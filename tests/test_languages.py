@@ -1,7 +1,7 @@
 import pytest
 
 from eqrec.errors import InputError
-from eqrec.languages import PrefixTree, extend_word, prefixes, validate_language, worst_case_word
+from eqrec.core.patterns import PrefixTree, extend_word, prefixes, validate_language, worst_case_word
 
 
 def test_worst_case_word_examples_of_the_papers(L1_words):

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from eqrec.errors import InputError, NotMeanSquareStable
-from eqrec.lmv import (Plant, check_ms_stable, filter_smoother, hold_input_system, lmv_recursion, steady_state,
+from eqrec.lmv.model import (Plant, check_ms_stable, filter_smoother, hold_input_system, lmv_recursion, steady_state,
                        theorem1_as_printed, zero_input_system)
-from eqrec.lmv_sim import compare_moments, run_mc, simulate_plant
-from eqrec.lmv_study import load_config, plant_of
+from eqrec.lmv.simulate import compare_moments, run_mc, simulate_plant
+from eqrec.studies.p4 import load_config, plant_of
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = load_config(ROOT / "config" / "p4.yaml")

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from eqrec.errors import InfeasibleDesign
-from eqrec.lp import LPBuilder, solve_lp
+from eqrec.core.lp import LPBuilder, solve_lp
 
 
 def small_lp(infeasible=False, unbounded=False):

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from eqrec import p2_study
+from eqrec.studies import p2 as p2_study
 from eqrec.errors import InputError
 
 

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import yaml
 
-from eqrec import p1_study
-from eqrec.design_prefix import design_prefix
-from eqrec.design_time import design_time_based
+from eqrec.studies import p1 as p1_study
+from eqrec.design.prefix import design_prefix
+from eqrec.design.time_based import design_time_based
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p1"

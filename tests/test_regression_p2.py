@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec import p2_study
-from eqrec.design_augmented import design_augmented
-from eqrec.design_time import design_time_based
-from eqrec.systems import acc_system
+from eqrec.studies import p2 as p2_study
+from eqrec.design.augmented import design_augmented
+from eqrec.design.time_based import design_time_based
+from eqrec.core.systems import acc_system
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p2"

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from eqrec import lmv_study
-from eqrec.lmv import hold_input_system, steady_state, zero_input_system
+from eqrec.studies import p4 as lmv_study
+from eqrec.lmv.model import hold_input_system, steady_state, zero_input_system
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p4"

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from eqrec.lp import LPBuilder, solve_lp
-from eqrec.robust import UncertainAffineRows, add_robust_rows, worst_case_abs, worst_case_vertex
+from eqrec.core.lp import LPBuilder, solve_lp
+from eqrec.core.robust import UncertainAffineRows, add_robust_rows, worst_case_abs, worst_case_vertex
 
 
 def test_worst_case_matches_vertex_enumeration(rng):

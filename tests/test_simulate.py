@@ -1,8 +1,8 @@
 import numpy as np
 
-from eqrec.design_prefix import design_prefix
-from eqrec.simulate import monte_carlo, sample_uncertainty
-from eqrec.stacking import UncertaintyLayout
+from eqrec.design.prefix import design_prefix
+from eqrec.core.simulate import monte_carlo, sample_uncertainty
+from eqrec.core.stacking import UncertaintyLayout
 
 
 def test_samples_stay_in_the_box(rng):

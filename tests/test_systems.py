@@ -3,7 +3,7 @@ import pytest
 import scipy.linalg as sla
 
 from eqrec.errors import InputError
-from eqrec.systems import ACC_CONSTANTS, AffineSystem, acc_system, load_system, system_from_mapping
+from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system, load_system, system_from_mapping
 
 
 def test_acc_matches_exact_zoh_of_continuous_model():

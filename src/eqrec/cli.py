@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
+from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
 EXIT_INPUT, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3
 
@@ -89,10 +89,10 @@ def _parse_json_array(text: str, field: str) -> np.ndarray:
 
 def run_design(args: argparse.Namespace) -> dict:
     """Design, certify and describe one estimator (the ``design`` subcommand)."""
-    from .design_prefix import design_prefix
-    from .design_time import design_time_based
-    from .languages import validate_language
-    from .systems import load_system
+    from eqrec.design.prefix import design_prefix
+    from eqrec.design.time_based import design_time_based
+    from eqrec.core.patterns import validate_language
+    from eqrec.core.systems import load_system
 
     system, T_file = load_system(args.system)
     words = validate_language([w for w in args.words.split(",") if w.strip()], source="command line",
@@ -109,7 +109,7 @@ def run_design(args: argparse.Namespace) -> dict:
         design = design_time_based(system, words, args.mu1, solver=args.solver)
     else:
         try:
-            from .design_augmented import design_augmented
+            from eqrec.design.augmented import design_augmented
         except ImportError:  # pragma: no cover - depends on the P2 module being present
             raise InputError("the augmented design is not available in this installation",
                              "command line", "--method") from None

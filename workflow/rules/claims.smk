@@ -11,7 +11,7 @@ rule claims:
         csv="results/claims.csv",
         md=report("results/REPRODUCTION.md", caption="../report/claims.rst", category="Claims"),
     params:
-        cmd=f"{PY} -m eqrec.claims",
+        cmd=f"{PY} -m eqrec.studies.claims",
     log:
         "logs/claims.log",
     shell:

@@ -9,7 +9,7 @@ CONFIG_FILE = "config/config.yaml"
 
 # Results depend on the package code: a change to any module re-runs the
 # rules that use it (Snakemake does not track the code behind a shell command).
-PKG_SRC = sorted(str(p) for p in Path("src/eqrec").glob("*.py"))
+PKG_SRC = sorted(str(p) for p in Path("src/eqrec").rglob("*.py"))
 
 
 def study_cmd(module, step):

@@ -11,7 +11,7 @@ rule p1_model:
     output:
         "results/p1/model.json",
     params:
-        step=study_cmd("p1_study", "model"),
+        step=study_cmd("studies.p1", "model"),
     log:
         "logs/p1/model.log",
     shell:
@@ -26,7 +26,7 @@ rule p1_designs:
     output:
         "results/p1/designs.json",
     params:
-        step=study_cmd("p1_study", "designs"),
+        step=study_cmd("studies.p1", "designs"),
     log:
         "logs/p1/designs.log",
     shell:
@@ -41,7 +41,7 @@ rule p1_simulate:
     output:
         "results/p1/simulation.npz",
     params:
-        step=study_cmd("p1_study", "simulate"),
+        step=study_cmd("studies.p1", "simulate"),
     log:
         "logs/p1/simulate.log",
     shell:
@@ -57,7 +57,7 @@ rule p1_figure1:
         pdf=report("results/p1/fig1_trajectories.pdf", caption="../report/p1_fig1.rst", category="P1"),
         png="results/p1/fig1_trajectories.png",
     params:
-        step=study_cmd("p1_study", "figure1"),
+        step=study_cmd("studies.p1", "figure1"),
     log:
         "logs/p1/figure1.log",
     shell:
@@ -72,7 +72,7 @@ rule p1_extensions:
     output:
         "results/p1/extensions.json",
     params:
-        step=study_cmd("p1_study", "extensions"),
+        step=study_cmd("studies.p1", "extensions"),
     log:
         "logs/p1/extensions.log",
     shell:
@@ -88,7 +88,7 @@ rule p1_figure_ext:
         pdf=report("results/p1/fig_ext_M2_vs_M1.pdf", caption="../report/p1_ext.rst", category="P1"),
         png="results/p1/fig_ext_M2_vs_M1.png",
     params:
-        step=study_cmd("p1_study", "figure-ext"),
+        step=study_cmd("studies.p1", "figure-ext"),
     log:
         "logs/p1/figure_ext.log",
     shell:
@@ -106,7 +106,7 @@ rule p1_values:
     output:
         "results/p1/values.json",
     params:
-        step=study_cmd("p1_study", "values"),
+        step=study_cmd("studies.p1", "values"),
     log:
         "logs/p1/values.log",
     shell:

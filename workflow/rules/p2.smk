@@ -18,7 +18,7 @@ rule p2_designs:
         json="results/p2/designs.json",
         npz="results/p2/designs.npz",
     params:
-        step=study_cmd("p2_study", "designs"),
+        step=study_cmd("studies.p2", "designs"),
     log:
         "logs/p2/designs.log",
     shell:
@@ -34,7 +34,7 @@ rule p2_simulate:
     output:
         "results/p2/simulation.npz",
     params:
-        step=study_cmd("p2_study", "simulate"),
+        step=study_cmd("studies.p2", "simulate"),
     log:
         "logs/p2/simulate.log",
     shell:
@@ -49,7 +49,7 @@ rule p2_heatmap_chunk:
     output:
         "results/p2/heatmap/{variant}_{chunk}.csv",
     params:
-        step=study_cmd("p2_study", "heatmap-chunk"),
+        step=study_cmd("studies.p2", "heatmap-chunk"),
     log:
         "logs/p2/heatmap_{variant}_{chunk}.log",
     wildcard_constraints:
@@ -67,7 +67,7 @@ rule p2_heatmap_merge:
     output:
         "results/p2/heatmap.csv",
     params:
-        step=study_cmd("p2_study", "heatmap-merge"),
+        step=study_cmd("studies.p2", "heatmap-merge"),
     log:
         "logs/p2/heatmap_merge.log",
     shell:
@@ -82,7 +82,7 @@ rule p2_realaxis:
     output:
         "results/p2/realaxis.csv",
     params:
-        step=study_cmd("p2_study", "realaxis"),
+        step=study_cmd("studies.p2", "realaxis"),
     log:
         "logs/p2/realaxis.log",
     shell:
@@ -97,7 +97,7 @@ rule p2_checks:
     output:
         "results/p2/checks.json",
     params:
-        step=study_cmd("p2_study", "checks"),
+        step=study_cmd("studies.p2", "checks"),
     log:
         "logs/p2/checks.log",
     shell:
@@ -117,7 +117,7 @@ rule p2_values:
     output:
         "results/p2/values.json",
     params:
-        step=study_cmd("p2_study", "values"),
+        step=study_cmd("studies.p2", "values"),
     log:
         "logs/p2/values.log",
     shell:
@@ -136,7 +136,7 @@ rule p2_figure_trajectories:
         pdf=report("results/p2/{fig}_trajectories.pdf", caption="../report/p2_{fig}.rst", category="P2"),
         png="results/p2/{fig}_trajectories.png",
     params:
-        step=study_cmd("p2_study", "figure-trajectories"),
+        step=study_cmd("studies.p2", "figure-trajectories"),
     log:
         "logs/p2/figure_{fig}.log",
     wildcard_constraints:
@@ -156,7 +156,7 @@ rule p2_figure_heatmap:
         pdf=report("results/p2/f3a_heatmap.pdf", caption="../report/p2_f3a.rst", category="P2"),
         png="results/p2/f3a_heatmap.png",
     params:
-        step=study_cmd("p2_study", "figure-heatmap"),
+        step=study_cmd("studies.p2", "figure-heatmap"),
     log:
         "logs/p2/figure_f3a.log",
     shell:
@@ -174,7 +174,7 @@ rule p2_figure_realaxis:
         pdf=report("results/p2/f3b_realaxis.pdf", caption="../report/p2_f3b.rst", category="P2"),
         png="results/p2/f3b_realaxis.png",
     params:
-        step=study_cmd("p2_study", "figure-realaxis"),
+        step=study_cmd("studies.p2", "figure-realaxis"),
     log:
         "logs/p2/figure_f3b.log",
     shell:

@@ -24,7 +24,7 @@ rule p4_tracking:
         f3=report("results/p4/fig3_smoother.pdf", caption="../report/p4_f3.rst", category="P4"),
         f3png="results/p4/fig3_smoother.png",
     params:
-        step=study_cmd("lmv_study", "tracking"),
+        step=study_cmd("studies.p4", "tracking"),
     log:
         "logs/p4/tracking.log",
     shell:
@@ -41,7 +41,7 @@ rule p4_mc:
         npz="results/p4/mc_{example}.npz",
         json="results/p4/mc_{example}.json",
     params:
-        step=study_cmd("lmv_study", "mc"),
+        step=study_cmd("studies.p4", "mc"),
     log:
         "logs/p4/mc_{example}.log",
     shell:
@@ -57,7 +57,7 @@ rule p4_sweep_eta_chunk:
     output:
         "results/p4/sweep_eta/chunk{chunk}.npz",
     params:
-        step=study_cmd("lmv_study", "sweep-eta"),
+        step=study_cmd("studies.p4", "sweep-eta"),
     log:
         "logs/p4/sweep_eta_{chunk}.log",
     wildcard_constraints:
@@ -74,7 +74,7 @@ rule p4_sweep_q_chunk:
     output:
         "results/p4/sweep_q/chunk{chunk}.npz",
     params:
-        step=study_cmd("lmv_study", "sweep-q"),
+        step=study_cmd("studies.p4", "sweep-q"),
     log:
         "logs/p4/sweep_q_{chunk}.log",
     wildcard_constraints:
@@ -93,7 +93,7 @@ rule p4_fig4:
         pdf=report("results/p4/fig4_variances.pdf", caption="../report/p4_f4.rst", category="P4"),
         png="results/p4/fig4_variances.png",
     params:
-        step=study_cmd("lmv_study", "fig4"),
+        step=study_cmd("studies.p4", "fig4"),
     log:
         "logs/p4/fig4.log",
     shell:
@@ -111,7 +111,7 @@ rule p4_fig5:
         pdf=report("results/p4/fig5_eta.pdf", caption="../report/p4_f5.rst", category="P4"),
         png="results/p4/fig5_eta.png",
     params:
-        step=study_cmd("lmv_study", "fig5"),
+        step=study_cmd("studies.p4", "fig5"),
     log:
         "logs/p4/fig5.log",
     shell:
@@ -132,7 +132,7 @@ rule p4_fig6:
         rpdf=report("results/p4/regions.pdf", caption="../report/p4_regions.rst", category="P4"),
         rpng="results/p4/regions.png",
     params:
-        step=study_cmd("lmv_study", "fig6"),
+        step=study_cmd("studies.p4", "fig6"),
     log:
         "logs/p4/fig6.log",
     shell:
@@ -151,7 +151,7 @@ rule p4_compare:
                    category="P4"),
         png="results/p4/fig{number}_compare_{example}.png",
     params:
-        step=study_cmd("lmv_study", "compare"),
+        step=study_cmd("studies.p4", "compare"),
     log:
         "logs/p4/fig{number}_{example}.log",
     wildcard_constraints:
@@ -175,7 +175,7 @@ rule p4_values:
         values="results/p4/values.json",
         table="results/p4/summary.csv",
     params:
-        step=study_cmd("lmv_study", "values"),
+        step=study_cmd("studies.p4", "values"),
         mc_json=" ".join(f"{ex}=results/p4/mc_{ex}.json" for ex in P4_EXAMPLES),
         mc_npz=" ".join(f"{ex}=results/p4/mc_{ex}.npz" for ex in P4_EXAMPLES),
     log:

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import InfeasibleDesign, SolverFailure
+from eqrec.errors import InfeasibleDesign, SolverFailure
 
 INF = np.inf
 SOLVERS = ("highs", "clarabel", "scipy")

@@ -3,7 +3,7 @@
 Every ``step_*`` function is the body of one Snakemake rule of
 ``workflow/rules/p4.smk``: it reads the ``p4`` config section and its
 declared inputs and writes exactly its declared outputs.  The same steps run
-from the command line (``python -m eqrec.lmv_study <step> ...``; ``all`` runs
+from the command line (``python -m eqrec.studies.p4 <step> ...``; ``all`` runs
 the whole chain into one directory).
 
 Initial conditions (symbolic in the paper): ``x(0) ~ N(0, I)``
@@ -24,11 +24,11 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import yaml
 
-from .claims import write_values
-from .errors import InputError, NotMeanSquareStable
-from .lmv import (Plant, filter_smoother, hold_input_system, lmv_recursion, ms_spectral_radius, steady_state,
+from eqrec.studies.claims import write_values
+from eqrec.errors import InputError, NotMeanSquareStable
+from eqrec.lmv.model import (Plant, filter_smoother, hold_input_system, lmv_recursion, ms_spectral_radius, steady_state,
                   suboptimal_error_cov, theorem1_as_printed, zero_input_system)
-from .lmv_sim import compare_moments, fourth_moment_radius, run_mc, simulate_plant
+from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 
 MECHANISMS = ("zero-input", "hold-input")
 MECH_KEY = {"zero-input": "zero", "hold-input": "hold"}
@@ -199,7 +199,7 @@ def step_mc(cfg: dict, example: str, out_npz: str | Path, out_json: str | Path) 
     zsys = zero_input_system(plant, eta)
     zres = lmv_recursion(zsys, T)
     P_true_printed_gain = suboptimal_error_cov(zsys, printed["L"], zres.q)
-    from .lmv import LMVResult, apply_estimator
+    from eqrec.lmv.model import LMVResult, apply_estimator
     est_p = apply_estimator(LMVResult(zsys, zres.q, printed["P"], printed["L"], printed["Qe"]), sim["y_zero"])
     err_p = sim["x"] - est_p["pred"][:, : T + 1]
     c_printed = compare_moments(err_p, printed["P"][: T + 1], alpha)
@@ -527,7 +527,7 @@ def _ranges(vals: np.ndarray) -> str:
 # --------------------------------------------------------------------------- figures
 
 def _plt():
-    from .plotting import paper_style
+    from eqrec.studies.plotting import paper_style
     import matplotlib.pyplot as plt
     paper_style()
     return plt
@@ -536,7 +536,7 @@ def _plt():
 def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, num: int, pdf: str,
                  png: str) -> None:
     """Figs. 1-3: true state components and their estimate against time."""
-    from .plotting import save_figure
+    from eqrec.studies.plotting import save_figure
     plt = _plt()
     n = x.shape[1]
     fig, axes = plt.subplots(n, 1, figsize=(5.0, 1.8 * n), sharex=True)
@@ -553,7 +553,7 @@ def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: floa
 
 def fig_variances(d, N: int, eta: float, pdf: str, png: str) -> None:
     """Fig. 4: theoretical (lines) and Monte Carlo (markers) error variances, zero-input."""
-    from .plotting import save_figure
+    from eqrec.studies.plotting import save_figure
     plt = _plt()
     n = d["zero/theory_pred"].shape[1]
     fig, axes = plt.subplots(n, 1, figsize=(5.0, 2.0 * n), sharex=True)
@@ -575,7 +575,7 @@ def fig_variances(d, N: int, eta: float, pdf: str, png: str) -> None:
 
 def fig_eta(d: dict, ex: str, N: int, cfg: dict, pdf: str, png: str) -> None:
     """Fig. 5: steady-state variances against eta_bar (zero-input)."""
-    from .plotting import save_figure
+    from eqrec.studies.plotting import save_figure
     plt = _plt()
     etas = d["eta"]
     n = d[f"{ex}/zero/filt"].shape[1]
@@ -596,7 +596,7 @@ def fig_eta(d: dict, ex: str, N: int, cfg: dict, pdf: str, png: str) -> None:
 
 def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
     """Fig. 6: steady filter variance surfaces over (Q_xi, Q_lambda), zero-input."""
-    from .plotting import save_figure
+    from eqrec.studies.plotting import save_figure
     plt = _plt()
     F = d[f"{ex}/zero/filt"]
     n = F.shape[-1]
@@ -615,7 +615,7 @@ def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
 
 def fig_regions(d: dict, cfg: dict, pdf: str, png: str) -> None:
     """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example."""
-    from .plotting import save_figure
+    from eqrec.studies.plotting import save_figure
     plt = _plt()
     exs = list(cfg["examples"])
     fig, axes = plt.subplots(1, len(exs), figsize=(3.8 * len(exs), 3.2), layout="constrained")
@@ -639,7 +639,7 @@ def fig_regions(d: dict, cfg: dict, pdf: str, png: str) -> None:
 
 def fig_compare(d, name: str, eta: float, number: int, pdf: str, png: str) -> None:
     """Figs. 7-8: filter error variances of zero- and hold-input, theory (lines) and Monte Carlo (markers)."""
-    from .plotting import save_figure
+    from eqrec.studies.plotting import save_figure
     plt = _plt()
     n = d["zero/theory_filt"].shape[1]
     fig, axes = plt.subplots(n, 1, figsize=(5.0, 1.9 * n), sharex=True)
@@ -689,7 +689,7 @@ def run_all(config: str | Path, out: str | Path) -> dict:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Command line of the P4 steps (one per Snakemake rule of ``workflow/rules/p4.smk``)."""
-    ap = argparse.ArgumentParser(prog="python -m eqrec.lmv_study", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="python -m eqrec.studies.p4", description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="step", required=True)
 
     def add(name: str, help_: str) -> argparse.ArgumentParser:

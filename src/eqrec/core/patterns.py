@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
-from .errors import InputError
+from eqrec.errors import InputError
 
 ALPHABET = frozenset("01")
 

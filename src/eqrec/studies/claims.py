@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from .errors import InputError
+from eqrec.errors import InputError
 
 STATUSES = ("reproduced", "differs", "not comparable")
 COLUMNS = ["id", "quantity", "paper_value", "our_value", "status", "reason"]

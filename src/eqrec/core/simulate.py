@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .estimator import RecoveryEstimator
-from .gains import GainSchedule
-from .stacking import UncertaintyLayout
-from .systems import AffineSystem
+from eqrec.core.estimator import RecoveryEstimator
+from eqrec.core.gains import GainSchedule
+from eqrec.core.stacking import UncertaintyLayout
+from eqrec.core.systems import AffineSystem
 
 
 @dataclass

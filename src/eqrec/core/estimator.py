@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InputError
-from .gains import GainSchedule
-from .systems import AffineSystem
+from eqrec.errors import InputError
+from eqrec.core.gains import GainSchedule
+from eqrec.core.systems import AffineSystem
 
 
 class RecoveryEstimator:

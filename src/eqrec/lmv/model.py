@@ -64,7 +64,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError, NotMeanSquareStable, SolverFailure
+from eqrec.errors import InputError, NotMeanSquareStable, SolverFailure
 
 __all__ = [
     "Plant", "MultNoiseSystem", "LMVResult", "SmootherResult", "SteadyState",

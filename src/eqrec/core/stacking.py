@@ -25,7 +25,7 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
-from .systems import AffineSystem
+from eqrec.core.systems import AffineSystem
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError
+from eqrec.errors import InputError
 
 
 def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.ndarray:

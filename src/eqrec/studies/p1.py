@@ -2,7 +2,7 @@
 
 Each public ``run_*`` function is one Snakemake rule: it reads the config
 section ``p1``, computes, and writes its declared outputs (and nothing else).
-``python -m eqrec.p1_study --help`` lists them.
+``python -m eqrec.studies.p1 --help`` lists them.
 
 Outputs (under ``results/p1/``)
 -------------------------------
@@ -25,15 +25,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .claims import write_values
-from .design_prefix import Design, build_prefix_lp, design_prefix
-from .design_time import design_time_based
-from .errors import InfeasibleDesign
-from .languages import extend_word, worst_case_word
-from .lp import solve_lp
-from .plotting import paper_style, save_figure, trajectory_panel
-from .simulate import monte_carlo, simulate_run
-from .systems import ACC_CONSTANTS, acc_system
+from eqrec.studies.claims import write_values
+from eqrec.design.prefix import Design, build_prefix_lp, design_prefix
+from eqrec.design.time_based import design_time_based
+from eqrec.errors import InfeasibleDesign
+from eqrec.core.patterns import extend_word, worst_case_word
+from eqrec.core.lp import solve_lp
+from eqrec.studies.plotting import paper_style, save_figure, trajectory_panel
+from eqrec.core.simulate import monte_carlo, simulate_run
+from eqrec.core.systems import ACC_CONSTANTS, acc_system
 
 
 def _write_json(path: str | Path, data: dict) -> None:
@@ -137,7 +137,7 @@ def design_variants(cfg: dict) -> dict:
     * ``identity_noise_gain``: process noise on every state (``E = I``), the
       identity-gain convention of eq. (3) of the prefix-based paper.
     """
-    from .systems import AffineSystem
+    from eqrec.core.systems import AffineSystem
 
     base = system_from_config(cfg)
     L1, M1 = cfg["language"], float(cfg["mu1"])
@@ -386,7 +386,7 @@ def _load_cfg(path: str) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m eqrec.p1_study",
+    parser = argparse.ArgumentParser(prog="python -m eqrec.studies.p1",
                                      description="Pipeline steps of the prefix-based paper (P1).")
     sub = parser.add_subparsers(dest="step", required=True)
     for name in ("model", "designs", "simulate", "extensions"):

@@ -19,12 +19,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import CertificationFailure
-from .gains import GainSchedule
-from .languages import prefixes
-from .robust import worst_case_abs, worst_case_vertex
-from .stacking import UncertaintyLayout
-from .systems import AffineSystem
+from eqrec.errors import CertificationFailure
+from eqrec.core.gains import GainSchedule
+from eqrec.core.patterns import prefixes
+from eqrec.core.robust import worst_case_abs, worst_case_vertex
+from eqrec.core.stacking import UncertaintyLayout
+from eqrec.core.systems import AffineSystem
 
 #: Relative tolerance for accepting an LP optimum (solver feasibility tolerances are ~1e-7..1e-9).
 CERT_RTOL = 1e-6

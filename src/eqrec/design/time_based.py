@@ -9,10 +9,11 @@ single-word special case of :func:`eqrec.design_prefix.design_prefix`.
 
 from __future__ import annotations
 
-from .certify import certify_design
-from .design_prefix import Design, design_prefix
-from .languages import validate_language, worst_case_word
-from .systems import AffineSystem
+from eqrec.core.certify import certify_design
+from eqrec.design.prefix import design_prefix
+from eqrec.design.result import Design
+from eqrec.core.patterns import validate_language, worst_case_word
+from eqrec.core.systems import AffineSystem
 
 
 def design_time_based(system: AffineSystem, words, M1: float, *, solver: str = "highs",

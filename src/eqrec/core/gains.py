@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from .errors import InputError
-from .languages import PrefixTree, prefixes
+from eqrec.errors import InputError
+from eqrec.core.patterns import PrefixTree, prefixes
 
 
 def _solve_unit_lower(Mtx: np.ndarray, rhs: np.ndarray) -> np.ndarray:

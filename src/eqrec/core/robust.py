@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .lp import LPBuilder
+from eqrec.core.lp import LPBuilder
 
 
 @dataclass

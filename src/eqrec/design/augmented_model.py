@@ -58,11 +58,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from .errors import InputError
-from .gains import GainSchedule, schedule_from_word_gains
-from .languages import PrefixTree, validate_word
-from .stacking import Stacking
-from .systems import AffineSystem
+from eqrec.errors import InputError
+from eqrec.core.gains import GainSchedule, schedule_from_word_gains
+from eqrec.core.patterns import PrefixTree, validate_word
+from eqrec.core.stacking import Stacking
+from eqrec.core.systems import AffineSystem
 
 MODES = ("theorem2", "hold", "leak")
 RUNTIME_MODES = ("theorem2", "hold")

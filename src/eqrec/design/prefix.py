@@ -34,18 +34,19 @@ is the special case of a single (worst-case) word.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import InputError
-from .gains import GainSchedule, q_to_f, schedule_from_word_gains
-from .languages import PrefixTree
-from .lp import LinearProgram, LPBuilder, LPSolution, solve_lp
-from .robust import UncertainAffineRows, add_robust_rows
-from .stacking import Stacking
-from .systems import AffineSystem
+from eqrec.errors import InputError
+from eqrec.core.gains import q_to_f, schedule_from_word_gains
+from eqrec.core.patterns import PrefixTree
+from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution, solve_lp
+from eqrec.design.result import Design
+from eqrec.core.robust import UncertainAffineRows, add_robust_rows
+from eqrec.core.stacking import Stacking
+from eqrec.core.systems import AffineSystem
 
 
 @dataclass
@@ -61,27 +62,6 @@ class PrefixLP:
     r_cols: dict[int, np.ndarray]  # node index -> columns of r(t)
     measured: dict[int, list[int]]  # node index -> measured times τ <= t
     build_time: float = 0.0
-
-
-@dataclass
-class Design:
-    """A solved and certified equalized-recovery design."""
-
-    method: str
-    system: AffineSystem
-    words: tuple[str, ...]
-    T: int
-    M1: float
-    mu2: float
-    schedule: GainSchedule
-    solution: LPSolution
-    build_time: float
-    certificate: "object | None" = None
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def solve_time(self) -> float:
-        return self.solution.solve_time
 
 
 def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
@@ -246,7 +226,7 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     design = Design(method=method, system=system, words=model.tree.words, T=model.stacking.T, M1=model.M1,
                     mu2=float(sol.x[model.mu2_col]), schedule=schedule, solution=sol, build_time=model.build_time)
     if certify:
-        from .certify import certify_design
+        from eqrec.core.certify import certify_design
 
         certify_design(design)
     return design

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import norm
 
-from .errors import InputError
-from .lmv import (LMVResult, MultNoiseSystem, Plant, SmootherResult, apply_estimator, filter_smoother, n_step_predictor,
+from eqrec.errors import InputError
+from eqrec.lmv.model import (LMVResult, MultNoiseSystem, Plant, SmootherResult, apply_estimator, filter_smoother, n_step_predictor,
                   hold_input_system, lmv_recursion, zero_input_system)
 
 __all__ = ["fourth_moment_radius", "simulate_plant", "MCComparison", "compare_moments", "bonferroni_z", "run_mc", "MCRun"]

@@ -2,7 +2,7 @@ r"""P2 pipeline: the state-augmented estimator paper (Hassaan, Shen, Yong, ACC 2
 
 One function per Snakemake rule (``workflow/rules/p2.smk``); each reads the
 ``p2:`` section of ``config/p2.yaml`` and writes its declared outputs.  Run as
-``python -m eqrec.p2_study <step> ...``.
+``python -m eqrec.studies.p2 <step> ...``.
 
 Steps
 -----
@@ -32,18 +32,21 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from .augmented import (AugmentedEstimator, AugmentedGains, AugmentedStacking, augmented_to_time_based,
+from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, AugmentedStacking, augmented_to_time_based,
                         schedule_from_augmented)
-from .certify import certify_schedule
-from .claims import write_values
-from .design_augmented import (AugmentedLP, design_augmented, heatmap_poles, place_observer, solve_free_ipopt)
-from .design_time import design_time_based
-from .errors import EqrecError, InputError
-from .gains import GainSchedule, schedule_from_word_gains
-from .languages import PrefixTree, validate_language, worst_case_word
-from .simulate import monte_carlo, simulate_run, sample_uncertainty
-from .stacking import UncertaintyLayout
-from .systems import AffineSystem, acc_system
+from eqrec.core.certify import certify_schedule
+from eqrec.studies.claims import write_values
+from eqrec.design.augmented import design_augmented
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.augmented_nlp import solve_free_ipopt
+from eqrec.design.observers import place_observer
+from eqrec.design.time_based import design_time_based
+from eqrec.errors import EqrecError, InputError
+from eqrec.core.gains import GainSchedule, schedule_from_word_gains
+from eqrec.core.patterns import PrefixTree, validate_language, worst_case_word
+from eqrec.core.simulate import monte_carlo, simulate_run, sample_uncertainty
+from eqrec.core.stacking import UncertaintyLayout
+from eqrec.core.systems import AffineSystem, acc_system
 
 log = logging.getLogger("eqrec.p2")
 
@@ -84,6 +87,14 @@ def load_config(path: str | Path | dict | None) -> dict:
     if cfg["heatmap"]["chunks"] < 1 or cfg["heatmap"]["chunks"] > cfg["heatmap"]["n_theta"]:
         raise InputError("heatmap.chunks must be between 1 and n_theta", field="p2.heatmap.chunks")
     return cfg
+
+
+def heatmap_poles(r: float, theta: float) -> np.ndarray:
+    """Fig. 3a: one eigenvalue at 0 and a pair at ``r e^{±jθ}``."""
+    lam = r * np.exp(1j * theta)
+    if abs(lam.imag) <= 1e-12 * max(r, 1.0):  # θ = 0 or π: a real double eigenvalue, not a rounding-error pair
+        lam = complex(lam.real, 0.0)
+    return np.array([0.0, lam, np.conj(lam)])
 
 
 def one_based_word(word: str) -> str:
@@ -602,7 +613,7 @@ def figure_trajectories(config, designs_json, simulation_npz, fig: str, pdf: str
     """
     import matplotlib.pyplot as plt
 
-    from .plotting import paper_style, save_figure, trajectory_panel
+    from eqrec.studies.plotting import paper_style, save_figure, trajectory_panel
 
     cfg = load_config(config)
     paper_style()
@@ -634,7 +645,7 @@ def figure_heatmap(config, heatmap_csv, pdf: str | Path, png: str | Path) -> Non
     """P2-F3a: optimal μ2 over the eigenvalue pair ``r e^{±jθ}`` per variant; failures marked."""
     import matplotlib.pyplot as plt
 
-    from .plotting import paper_style, save_figure
+    from eqrec.studies.plotting import paper_style, save_figure
 
     paper_style()
     df = pd.read_csv(heatmap_csv)
@@ -675,7 +686,7 @@ def figure_realaxis(config, realaxis_csv, pdf: str | Path, png: str | Path) -> N
     """P2-F3b: optimal μ2 against a real double eigenvalue λ (third eigenvalue at 0)."""
     import matplotlib.pyplot as plt
 
-    from .plotting import paper_style, save_figure
+    from eqrec.studies.plotting import paper_style, save_figure
 
     paper_style()
     df = pd.read_csv(realaxis_csv)
@@ -702,7 +713,7 @@ def figure_realaxis(config, realaxis_csv, pdf: str | Path, png: str | Path) -> N
 # ---------------------------------------------------------------------------
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m eqrec.p2_study", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m eqrec.studies.p2", description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="step", required=True)
 
     def add(name, *args):

@@ -1,0 +1,115 @@
+r"""Design of the state-augmented estimator (Proposition 1 / Theorem 2 of the augmented paper).
+
+* **L and s0 fixed** (Remark 1): the LP of :class:`eqrec.design.augmented_lp.AugmentedLP`.
+* **L and s0 free**: IPOPT through CasADi (:func:`eqrec.design.augmented_nlp.solve_free_ipopt`),
+  started from the LP solution at a pole-placement ``L``.
+
+Every design is certified from its converted time-based gains with
+:func:`eqrec.core.certify.certify_schedule`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.core.certify import CERT_RTOL, certify_schedule
+from eqrec.core.lp import LPSolution
+from eqrec.core.patterns import validate_language, worst_case_word
+from eqrec.core.systems import AffineSystem
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.augmented_model import AugmentedGains, check_mode, schedule_from_augmented
+from eqrec.design.augmented_nlp import solve_free_ipopt
+from eqrec.design.observers import default_poles, place_observer
+from eqrec.design.result import Design
+from eqrec.errors import CertificationFailure, InputError, SolverFailure
+
+
+def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, M1: float, runtime: str | None = None):
+    """Certify the converted time-based schedule of ``gains`` (the estimator as it really runs)."""
+    schedule = schedule_from_augmented(system, gains, runtime)
+    return schedule, certify_schedule(system, schedule, list(words), M1)
+
+
+def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=None, s0=None,
+                     solver: str = "highs", mode: str = "theorem2", certify: bool = True,
+                     ipopt_options: dict | None = None) -> Design:
+    """Design the augmented estimator of the augmented paper for the worst-case word of ``words``.
+
+    Parameters
+    ----------
+    L
+        ``None``: pole placement at ``poles`` (default :func:`eqrec.design.observers.default_poles`), then the LP;
+        an array: the LP with this ``L``;
+        ``"free"``: IPOPT on Proposition 1 with ``L`` and ``s0`` free, started from the
+        LP at the pole-placement ``L``.
+    s0
+        Fixed ``s0`` (default 0; the initial guess when ``L="free"``).
+    solver
+        LP solver (``"highs"``, ``"clarabel"``, ``"scipy"``) or ``"ipopt"`` (the LP solved by IPOPT).
+    mode
+        ``"theorem2"`` (default) or the ``"leak"`` reading; a leak design is certified as
+        the actual (``"hold"``) estimator and its design ``μ2`` is not a guarantee.
+
+    Returns
+    -------
+    Design
+        ``method="augmented"``, ``schedule`` the converted time-based gains,
+        ``certificate`` attached, ``extra`` with ``L, s0, M, nu`` and solver details.
+
+    Raises
+    ------
+    InputError, InfeasibleDesign, SolverFailure, CertificationFailure
+    """
+    check_mode(mode, ("theorem2", "leak"))
+    language = validate_language(words)
+    wc = worst_case_word(language)
+    T, n, p = len(wc), system.n, system.p
+    extra: dict = {"language": language, "worst_case_word": wc, "mode": mode}
+    free = isinstance(L, str)
+    if free and L != "free":
+        raise InputError(f"L must be None, an array or 'free', got {L!r}", field="L")
+    if L is None or free:
+        poles = default_poles(system.n) if poles is None else np.asarray(poles)
+        pp = place_observer(system.A_at(0), system.C_at(0), poles)
+        if not pp.ok:
+            raise InputError(f"pole placement at {poles} failed: {pp.message}", field="poles")
+        L_fixed = pp.L
+        extra["poles"] = [complex(x) for x in poles]
+    else:
+        L_fixed = L
+    s0v = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
+    model = AugmentedLP(system, wc, M1, L_fixed, s0=s0v, mode=mode)
+    lp_solver = "highs" if (free or solver == "ipopt") else solver
+    sol = model.solve(lp_solver).require_optimal(f"augmented design (M1 = {M1:g})")
+    gains = model.gains(sol)
+    mu2 = float(sol.x[model.mu2_col])
+    solution = sol
+    if free or solver == "ipopt":
+        res = solve_free_ipopt(model, gains, mu2, free_L=free, free_s0=free, options=ipopt_options)
+        if not res.success:
+            raise SolverFailure(f"IPOPT stopped with status {res.status} after {res.iterations} iterations")
+        gains, mu2 = res.gains, res.mu2
+        solution = LPSolution("optimal", None, mu2, "ipopt", res.iterations, res.solve_time, {})
+        extra.update(ipopt_status=res.status, ipopt_iterations=res.iterations, initial_mu2=res.initial_mu2,
+                     initial_guess=f"LP ({lp_solver}) at the pole-placement L")
+    extra.update(L=gains.L[0].tolist() if np.allclose(gains.L, gains.L[0]) else gains.L.tolist(),
+                 s0=gains.s0.tolist(), M=gains.M.tolist(), nu=gains.nu.tolist(), gains=gains,
+                 eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
+    runtime = "hold" if mode == "leak" else "theorem2"
+    schedule = schedule_from_augmented(system, gains, runtime)
+    design = Design(method="augmented", system=system, words=(wc,), T=T, M1=float(M1), mu2=mu2,
+                    schedule=schedule, solution=solution, build_time=model.build_time, extra=extra)
+    if certify:
+        cert_words = sorted(set(language) | {wc})
+        cert = certify_schedule(system, schedule, cert_words, M1)
+        design.certificate = cert
+        if mode == "theorem2":
+            tol2 = CERT_RTOL * max(1.0, mu2) + (1e-6 if (free or solver == "ipopt") else 0.0)
+            if cert.mu2 > mu2 + tol2:
+                raise CertificationFailure(f"augmented design: gains give worst-case error {cert.mu2:.9g} "
+                                           f"> optimised M2 = {mu2:.9g}")
+            if cert.terminal > M1 * (1 + CERT_RTOL) + (1e-6 if (free or solver == "ipopt") else 0.0):
+                raise CertificationFailure(f"augmented design: terminal worst-case error {cert.terminal:.9g} > M1")
+        else:
+            extra["certified_runtime"] = runtime
+    return design

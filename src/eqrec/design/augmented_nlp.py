@@ -1,0 +1,163 @@
+"""The nonconvex augmented design with ``L`` and ``s0`` free (Proposition 1 of the augmented paper), by IPOPT through CasADi.
+
+Problem (11) is bilinear in ``M`` and the ``L``-dependent innovation maps
+``Z`` (and ``s0``); IPOPT is started from the LP optimum at a pole-placement ``L``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
+
+
+@dataclass
+class NLPResult:
+    """Outcome of the IPOPT solve of Proposition 1."""
+
+    gains: AugmentedGains
+    mu2: float
+    status: str
+    success: bool
+    iterations: int
+    solve_time: float
+    initial_mu2: float
+    stats: dict = field(default_factory=dict)
+
+
+def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, *, free_L: bool = True,
+                     free_s0: bool = True, time_varying_L: bool = False, options: dict | None = None) -> NLPResult:
+    """Solve the nonconvex problem (11) with IPOPT (CasADi), variables ``M, ν, μ2, L, s0`` and ``a >= |G|``.
+
+    Parameters
+    ----------
+    model
+        An :class:`AugmentedLP` giving the word, mode and structure.
+    init
+        Initial guess (e.g. the LP optimum at a pole-placement ``L``).
+    free_L, free_s0
+        Fix ``L`` / ``s0`` at the initial value when false (then the problem is the LP, solved by IPOPT).
+    time_varying_L
+        One ``L_k`` per step instead of a constant ``L`` (the paper prints one matrix).
+    """
+    import casadi as ca
+
+    sysm, T, n, p, word = model.system, model.T, model.system.n, model.system.p, model.word
+    lay = model.st.layout
+    D = lay.size
+    nL = (T if time_varying_L else 1) * n * p
+    Lsym = ca.SX.sym("L", nL)
+    s0 = ca.SX.sym("s0", n)
+    msyms = {key: ca.SX.sym(f"M_{key[0]}_{key[1]}", n * p) for key in model.m_cols}
+    nu = ca.SX.sym("nu", T * n)
+    mu2 = ca.SX.sym("mu2")
+
+    def Lk(k):
+        if word[k] == "0" and model.mode == "theorem2":
+            return ca.SX.zeros(n, p)
+        off = (k if time_varying_L else 0) * n * p
+        return ca.reshape(Lsym[off:off + n * p], p, n).T  # row-major n x p
+
+    # e(k) = Ge[k] δ + He[k] s0 ; z(k) = C e + V v
+    Ge = ca.SX(np.eye(n, D, k=lay.xi0.start))
+    ec = -s0
+    Z, z0 = [], []
+    for k in range(T):
+        C = sysm.C_at(k)
+        Zk = ca.mtimes(ca.DM(C), Ge)
+        Vsel = np.zeros((p, D))
+        Vsel[:, lay.v(k)] = sysm.V_at(k)
+        Z.append(Zk + ca.DM(Vsel))
+        z0.append(ca.mtimes(ca.DM(C), ec))
+        Ph = ca.DM(sysm.A_at(k)) - ca.mtimes(Lk(k), ca.DM(C))
+        Wsel = np.zeros((n, D))
+        Wsel[:, lay.w(k)] = sysm.E_at(k)
+        Ge = ca.mtimes(Ph, Ge) + ca.DM(Wsel) - ca.mtimes(Lk(k), ca.DM(Vsel))
+        ec = ca.mtimes(Ph, ec)
+    phi = model.st.transition
+    Ol = model.st.open_loop
+    ue_G = [None] * T
+    ue_c = [None] * T
+    for s in range(T):
+        g = ca.SX.zeros(n, D)
+        c = nu[s * n:(s + 1) * n]
+        for (ss, i), sym in msyms.items():
+            if ss != s:
+                continue
+            Mi = ca.reshape(sym, p, n).T
+            g = g + ca.mtimes(Mi, Z[i])
+            c = c + ca.mtimes(Mi, z0[i])
+        ue_G[s], ue_c[s] = g, c
+    a_list, g_list = [], []
+    rows_c, lev = [], []
+    rad = model.radius
+    for t in range(T + 1):
+        G = ca.SX(Ol[t])
+        c = ca.SX.zeros(n, 1)
+        for s in range(t):
+            P = ca.DM(phi[t][s + 1])
+            G = G + ca.mtimes(P, ue_G[s])
+            c = c + ca.mtimes(P, ue_c[s])
+        level = model.M1 if t == T else mu2
+        for a in range(n):
+            key0 = (t * n + a) * D
+            ks = model.entry_keys[(model.entry_keys >= key0) & (model.entry_keys < key0 + D)] - key0
+            aux = ca.SX.sym(f"a_{t}_{a}", ks.size)
+            a_list.append(aux)
+            gvec = ca.vertcat(*[G[a, int(d)] for d in ks])
+            g_list += [aux - gvec, aux + gvec]
+            bsum = ca.dot(ca.DM(rad[ks]), aux)
+            rows_c += [level - c[a] - bsum, level + c[a] - bsum]
+    aux_all = ca.vertcat(*a_list)
+    mvec = ca.vertcat(*[msyms[k] for k in model.m_cols])
+    xvar = ca.vertcat(mu2, mvec, nu, Lsym, s0, aux_all)
+    cons = ca.vertcat(*g_list, *rows_c)
+    nlp = {"x": xvar, "f": mu2, "g": cons}
+    opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9, "ipopt.max_iter": 3000,
+            "ipopt.acceptable_tol": 1e-7}
+    opts.update(options or {})
+    solver = ca.nlpsol("augmented", "ipopt", nlp, opts)
+    # initial point
+    L0 = as_time_varying_L(init.L, T, n, p)
+    Lvec0 = (L0.reshape(T, -1) if time_varying_L else L0[0].reshape(1, -1)).reshape(-1)
+    mvec0 = np.concatenate([init.M[s * n:(s + 1) * n, i * p:(i + 1) * p].reshape(-1) for (s, i) in model.m_cols])
+    aug0 = AugmentedStacking(sysm, word, init.L, model.mode, model.st)
+    G0, _ = aug0.error_map(init.M, init.nu, init.s0)
+    keys = model.entry_keys
+    a0 = np.abs(G0.reshape(-1)[keys]) + 1e-6
+    x0 = np.concatenate([[init_mu2 + 1e-6], mvec0, init.nu, Lvec0, init.s0, a0])
+    nxv = x0.size
+    lbx = np.full(nxv, -np.inf)
+    ubx = np.full(nxv, np.inf)
+    lbx[0] = model.M1
+    off_L = 1 + mvec0.size + T * n
+    if not free_L:
+        lbx[off_L:off_L + nL] = ubx[off_L:off_L + nL] = Lvec0
+    if not free_s0:
+        lbx[off_L + nL:off_L + nL + n] = ubx[off_L + nL:off_L + nL + n] = init.s0
+    lbx[off_L + nL + n:] = 0.0
+    ng = cons.shape[0]
+    t0 = time.perf_counter()
+    sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.zeros(ng), ubg=np.full(ng, np.inf))
+    elapsed = time.perf_counter() - t0
+    st = solver.stats()
+    x = np.asarray(sol["x"]).reshape(-1)
+    M = np.zeros((T * n, T * p))
+    o = 1
+    for (s, i) in model.m_cols:
+        M[s * n:(s + 1) * n, i * p:(i + 1) * p] = x[o:o + n * p].reshape(n, p)
+        o += n * p
+    nuv = x[o:o + T * n]
+    o += T * n
+    Lv = x[o:o + nL]
+    L = Lv.reshape(T, n, p) if time_varying_L else Lv.reshape(n, p)
+    s0v = x[o + nL:o + nL + n]
+    gains = AugmentedGains(word=word, L=as_time_varying_L(L, T, n, p), s0=s0v, M=M, nu=nuv, mode=model.mode)
+    return NLPResult(gains=gains, mu2=float(x[0]), status=str(st.get("return_status")),
+                     success=bool(st.get("success")), iterations=int(st.get("iter_count", -1)),
+                     solve_time=elapsed, initial_mu2=float(init_mu2),
+                     stats={"t_wall_total": float(st.get("t_wall_total", elapsed))})
