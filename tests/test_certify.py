@@ -31,7 +31,7 @@ def wc_layout(acc):
 
 def test_perturbed_gains_fail_certification(acc, L1_words):
     d = design_prefix(acc, L1_words, 1.0)
-    d.schedule.rows["1"].F[:] += 0.5
+    d.schedule.row("1").F[:] += 0.5
     with pytest.raises(CertificationFailure):
         certify_design(d)
 

@@ -48,9 +48,9 @@ def test_time_based_schedule_ignores_observed_prefix():
     from eqrec.core.gains import GainRow
 
     rows = {"1": GainRow(np.ones((1, 1)), np.zeros(1)), "10": GainRow(np.ones((1, 2)), np.ones(1))}
-    s = GainSchedule(rows=rows, n=1, p=1, time_based=True, designed_words=("10",))
-    assert s.row("11") is rows["10"]
-    s2 = GainSchedule(rows=rows, n=1, p=1, time_based=False, designed_words=("10",))
+    s = GainSchedule(rows=rows, n=1, p=1, time_based=True, designed=("10",))
+    assert s.row("11") is s.rows[s.designed[0]]
+    s2 = GainSchedule(rows=rows, n=1, p=1, time_based=False, designed=("10",))
     from eqrec.errors import InputError
 
     with pytest.raises(InputError, match="not a prefix"):

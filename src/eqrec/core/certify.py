@@ -10,7 +10,7 @@ Propagating the affine maps :math:`\xi(t) = G_t\delta + c_t` forward in time
 (no Q-parametrisation, no LP) gives the exact worst case over the noise box
 of every component at every time, :math:`|c_t| + |G_t| b`, attained at a box
 vertex.  A design is accepted only if these bounds confirm the optimiser's
-levels: at most ``M2`` everywhere and at most ``M1`` at each word's end.
+levels: at most ``M2`` everywhere and at most ``M1`` at each pattern's end.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 
 from eqrec.errors import CertificationFailure
 from eqrec.core.gains import GainSchedule
-from eqrec.core.patterns import prefixes
+from eqrec.core.patterns import ArrivalPattern, as_pattern
 from eqrec.core.robust import worst_case_abs, worst_case_vertex
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.systems import AffineSystem
@@ -39,6 +39,7 @@ class WordCertificate:
     c: np.ndarray  # (T+1, n)
     bounds: np.ndarray  # (T+1, n): max over the box of |ξ_i(t)|
     radius: np.ndarray
+    pattern: ArrivalPattern | None = None
 
     def worst_vertex(self, t: int, i: int) -> np.ndarray:
         """A box vertex ``δ*`` at which ``|ξ_i(t)|`` equals its bound."""
@@ -71,23 +72,32 @@ class Certificate:
                 "bounds": {w: wc.bounds.tolist() for w, wc in self.words.items()}}
 
 
-def closed_loop_maps(system: AffineSystem, schedule: GainSchedule, word: str) -> tuple[np.ndarray, np.ndarray, UncertaintyLayout]:
-    """Affine maps ``ξ(t) = G[t] δ + c[t]``, ``t = 0..|word|``, of the causal estimator along ``word``."""
-    T, n = len(word), system.n
+def closed_loop_maps(system: AffineSystem, schedule: GainSchedule,
+                     pattern: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray, UncertaintyLayout]:
+    """Affine maps ``ξ(t) = G[t] δ + c[t]``, ``t = 0..T``, of the causal estimator along ``pattern``.
+
+    At time ``t`` the estimator injects ``u_e(t) = u0 + Σ_{τ ∈ A(t)} F(t, τ) y_ξ(τ)``
+    with ``y_ξ(τ) = C ξ(τ) + V v(τ)`` formed with the error of time ``τ``
+    (for a late measurement, the estimate ``x̂(τ)`` the runtime estimator kept).
+    """
+    pattern = as_pattern(pattern)
+    T, n, p = pattern.T, system.n, system.p
     lay = UncertaintyLayout(T, system.nw, system.nv, n)
     G = np.zeros((T + 1, n, lay.size))
     c = np.zeros((T + 1, n))
     G[0][:, lay.xi0] = np.eye(n)
-    Yg = np.zeros((T, system.p, lay.size))  # y_ξ(τ) = Yg[τ] δ + yc[τ]
-    yc = np.zeros((T, system.p))
-    for t, pre in enumerate(prefixes(word)):
-        if word[t] == "1":
-            C = system.C_at(t)
-            Yg[t] = C @ G[t]
-            Yg[t][:, lay.v(t)] += system.V_at(t)
-            yc[t] = C @ c[t]
+    Yg = np.zeros((T, p, lay.size))  # y_ξ(τ) = Yg[τ] δ + yc[τ] once y(τ) has arrived
+    yc = np.zeros((T, p))
+    avail = np.zeros((T, p))  # 1 on the rows of the measurements available at the current time
+    for t, pre in enumerate(pattern.prefixes()):
+        C = system.C_at(t)
+        Yg[t] = C @ G[t]
+        Yg[t][:, lay.v(t)] += system.V_at(t)
+        yc[t] = C @ c[t]
+        for tau in pattern.arriving_at(t):
+            avail[tau] = 1.0
         g = schedule.row(pre)
-        Fr = g.F  # n x (t+1)p
+        Fr = g.F * avail[: t + 1].reshape(1, -1)  # n x (t+1)p, zero on measurements not yet arrived
         A = system.A_at(t)
         G[t + 1] = A @ G[t] + Fr @ Yg[: t + 1].reshape(-1, lay.size)
         G[t + 1][:, lay.w(t)] += system.E_at(t)
@@ -96,18 +106,22 @@ def closed_loop_maps(system: AffineSystem, schedule: GainSchedule, word: str) ->
 
 
 def certify_schedule(system: AffineSystem, schedule: GainSchedule, words, M1: float) -> Certificate:
-    """Exact worst-case error bounds of ``schedule`` for each word in ``words``."""
+    """Exact worst-case error bounds of ``schedule`` for each pattern (or 0/1 word) in ``words``.
+
+    The certificate is keyed by the patterns' labels.
+    """
     cert = Certificate(M1=float(M1))
     for w in words:
+        w = as_pattern(w)
         G, c, lay = closed_loop_maps(system, schedule, w)
         radius = lay.radius(system.eta_w, system.eta_v, M1)
-        bounds = np.stack([worst_case_abs(G[t], c[t], radius) for t in range(len(w) + 1)])
-        cert.words[w] = WordCertificate(word=w, G=G, c=c, bounds=bounds, radius=radius)
+        bounds = np.stack([worst_case_abs(G[t], c[t], radius) for t in range(w.T + 1)])
+        cert.words[w.label] = WordCertificate(word=w.label, G=G, c=c, bounds=bounds, radius=radius, pattern=w)
     return cert
 
 
 def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
-    """Certify a :class:`eqrec.design_prefix.Design` and attach the certificate.
+    """Certify a :class:`eqrec.design.result.Design` from its gains alone and attach the certificate.
 
     Raises
     ------
@@ -115,7 +129,7 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
         If a bound exceeds the designed ``M2`` (or ``M1`` at a word's end) by
         more than ``rtol`` relative.
     """
-    words = list(design.words if words is None else words)
+    words = list(design.patterns if words is None else words)
     cert = certify_schedule(design.system, design.schedule, words, design.M1)
     tol_2 = rtol * max(1.0, design.mu2)
     tol_1 = rtol * max(1.0, design.M1)

@@ -14,8 +14,11 @@ with inverses :math:`F = (I + Q\bar C S)^{-1} Q` and
 :math:`u_0 = (I + Q\bar C S)^{-1} r` (the proof of Proposition 1).
 
 A :class:`GainSchedule` holds one gain row per prefix-tree node (a
-prefix-based estimator) or per time step (a time-based estimator, which
-ignores the observed prefix).
+prefix-based estimator, keyed by arrival-pattern prefixes) or per time step
+(a time-based estimator, which ignores the observed prefix).  With delayed
+data the same convention holds: ``F(t, τ)`` multiplies ``y_ξ(τ)`` for every
+``τ`` available at ``t`` (late measurements included, with ``y_ξ(τ)`` formed
+with the estimate ``x̂(τ)`` of their own time).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from eqrec.errors import InputError
-from eqrec.core.patterns import PrefixTree, prefixes
+from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
 
 
 def _solve_unit_lower(Mtx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -58,7 +61,11 @@ def f_to_q(F: np.ndarray, u0: np.ndarray, CS: np.ndarray) -> tuple[np.ndarray, n
 
 @dataclass
 class GainRow:
-    """Gains used at time ``t``: ``F(t, 0..t)`` as one ``n x (t+1)p`` block row and ``u0(t)``."""
+    """Gains used at time ``t``: ``F(t, 0..t)`` as one ``n x (t+1)p`` block row and ``u0(t)``.
+
+    Columns of measurements not available at ``t`` are zero (they multiply
+    ``y_ξ(τ) = 0``).
+    """
 
     F: np.ndarray
     u0: np.ndarray
@@ -72,72 +79,85 @@ class GainSchedule:
     ----------
     rows
         ``rows[prefix]`` is the gain row used at time ``len(prefix) - 1``
-        after observing ``prefix``.
+        after observing the pattern prefix ``prefix`` (an :class:`ArrivalPattern`).
     time_based
-        If true the schedule has a single designed word and the gains are
+        If true the schedule has a single designed pattern and the gains are
         chosen by time only; the observed prefix is ignored (so measurements
-        that the designed word does not have get zero gain).
+        that the designed pattern does not have get zero gain).
     n, p
         State and output dimensions.
+    designed
+        The patterns the schedule was designed for.
     """
 
-    rows: dict[str, GainRow]
+    rows: dict[ArrivalPattern, GainRow]
     n: int
     p: int
     time_based: bool = False
-    designed_words: tuple[str, ...] = field(default_factory=tuple)
+    designed: tuple[ArrivalPattern, ...] = field(default_factory=tuple)
+
+    def __post_init__(self) -> None:
+        self.rows = {as_pattern(k): v for k, v in self.rows.items()}
+        self.designed = tuple(as_pattern(w) for w in self.designed)
+
+    @property
+    def designed_words(self) -> tuple[str, ...]:
+        """Labels of the designed patterns."""
+        return tuple(p.label for p in self.designed)
 
     @property
     def horizon(self) -> int:
-        return max(len(k) for k in self.rows)
+        return max(k.T for k in self.rows)
 
-    def row(self, observed_prefix: str) -> GainRow:
-        """Gain row after observing ``observed_prefix`` (length ``t + 1``)."""
+    def row(self, observed_prefix: "ArrivalPattern | str") -> GainRow:
+        """Gain row after observing ``observed_prefix`` (a pattern prefix of length ``t + 1``)."""
+        observed = as_pattern(observed_prefix)
         if self.time_based:
-            key = self.designed_words[0][: len(observed_prefix)]
-            if len(key) < len(observed_prefix):
-                raise InputError(f"time {len(observed_prefix) - 1} is beyond the horizon {self.horizon}")
-            return self.rows[key]
+            if observed.T > self.designed[0].T:
+                raise InputError(f"time {observed.T - 1} is beyond the horizon {self.horizon}")
+            return self.rows[self.designed[0].prefix(observed.T)]
         try:
-            return self.rows[observed_prefix]
+            return self.rows[observed]
         except KeyError:
-            raise InputError(f"observed missing-data prefix {observed_prefix!r} is not a prefix of any word "
+            raise InputError(f"observed arrival prefix {observed.label!r} is not a prefix of any pattern "
                              f"of the design language {list(self.designed_words)}") from None
 
-    def word_matrices(self, word: str) -> tuple[np.ndarray, np.ndarray]:
-        """Stacked ``F (Tn x Tp)`` and ``u0 (Tn)`` used along ``word`` (eq. (9))."""
-        T, n, p = len(word), self.n, self.p
+    def word_matrices(self, pattern: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray]:
+        """Stacked ``F (Tn x Tp)`` and ``u0 (Tn)`` used along ``pattern`` (eq. (9) of the prefix-based paper)."""
+        pattern = as_pattern(pattern)
+        T, n, p = pattern.T, self.n, self.p
         F = np.zeros((T * n, T * p))
         u0 = np.zeros(T * n)
-        for t, pre in enumerate(prefixes(word)):
+        for t, pre in enumerate(pattern.prefixes()):
             g = self.row(pre)
             F[t * n:(t + 1) * n, : (t + 1) * p] = g.F
             u0[t * n:(t + 1) * n] = g.u0
         return F, u0
 
     def to_json(self) -> dict:
-        """Per designed word ``{"F": ..., "u0": ...}`` in the CLI output convention."""
-        return {w: dict(zip(("F", "u0"), (m.tolist() for m in self.word_matrices(w)))) for w in self.designed_words}
+        """Per designed pattern ``{"F": ..., "u0": ...}`` in the CLI output convention, keyed by label."""
+        return {w.label: dict(zip(("F", "u0"), (m.tolist() for m in self.word_matrices(w)))) for w in self.designed}
 
 
-def schedule_from_word_gains(tree: PrefixTree, word_gains: dict[str, tuple[np.ndarray, np.ndarray]], n: int, p: int,
+def schedule_from_word_gains(tree: PrefixTree, word_gains: dict, n: int, p: int,
                              time_based: bool = False, consistency_tol: float = 1e-7) -> GainSchedule:
-    """Assemble a schedule from per-word stacked gains, checking prefix consistency.
+    """Assemble a schedule from per-pattern stacked gains, checking prefix consistency.
 
-    Words sharing a prefix must have the same gain rows on it (Proposition 1
-    of the prefix-based paper); a violation beyond ``consistency_tol``
-    (relative) raises :class:`AssertionError`.
+    ``word_gains`` maps patterns (or 0/1 words) to ``(F, u0)``.  Patterns
+    sharing a prefix must have the same gain rows on it (Proposition 1 of the
+    prefix-based paper); a violation beyond ``consistency_tol`` (relative)
+    raises :class:`AssertionError`.
     """
-    rows: dict[str, GainRow] = {}
+    rows: dict[ArrivalPattern, GainRow] = {}
     for word, (F, u0) in word_gains.items():
-        for t, pre in enumerate(prefixes(word)):
+        for t, pre in enumerate(as_pattern(word).prefixes()):
             row = GainRow(F[t * n:(t + 1) * n, : (t + 1) * p].copy(), u0[t * n:(t + 1) * n].copy())
             if pre in rows:
                 old = rows[pre]
                 scale = 1.0 + max(np.abs(old.F).max(initial=0), np.abs(old.u0).max(initial=0))
                 diff = max(np.abs(old.F - row.F).max(initial=0), np.abs(old.u0 - row.u0).max(initial=0))
                 if diff > consistency_tol * scale:
-                    raise AssertionError(f"gains of prefix {pre!r} differ between words by {diff:.3g}")
+                    raise AssertionError(f"gains of prefix {pre.label!r} differ between patterns by {diff:.3g}")
             else:
                 rows[pre] = row
-    return GainSchedule(rows=rows, n=n, p=p, time_based=time_based, designed_words=tree.words)
+    return GainSchedule(rows=rows, n=n, p=p, time_based=time_based, designed=tree.patterns)

@@ -1,23 +1,174 @@
-"""Missing-data languages: words, worst-case words and prefix trees.
+r"""Arrival patterns: which measurements are available at each time, and their prefix trees.
 
-A word is a string over ``{0, 1}``; character ``t`` (0-based) is ``q(t)``:
-``1`` when the measurement at time ``t`` arrives, ``0`` when it is missing
-(eq. (3) of the prefix-based paper).  A *language* is a finite set of words.
+An *arrival pattern* over a horizon ``T`` gives, for every measurement time
+``τ = 0..T-1``, the time ``a(τ) ∈ {τ, ..., T-1}`` at which the measurement
+``y(τ)`` reaches the estimator, or *never* (within the horizon).  At time
+``t`` the available set is
 
-The prefix-based estimator (eq. (7) of the prefix-based paper) chooses its gain
-at time ``t`` by the observed prefix ``q(0) ... q(t)``; the set of prefixes of
-a language is naturally a tree, which the design uses to share variables.
+.. math:: \mathcal A(t) = \{\tau \le t : a(\tau) \le t\},
+
+which is nested (``A(t) ⊆ A(t+1)``): once arrived, a measurement stays
+available.  Two kinds of words map to patterns:
+
+* a **missing-data word** ``q(0) ... q(T-1)`` over ``{0, 1}`` (eq. (3) of the
+  prefix-based paper): ``a(τ) = τ`` if ``q(τ) = 1``, never otherwise;
+* a **delay word** ``τ(0) ... τ(T-1)`` over ``{0, ..., τ̄}`` (eq. (1) of the
+  delayed-data paper): ``a(i) = i + τ(i)`` if ``i + τ(i) < T`` and never
+  (missing within the horizon) otherwise.
+
+The *event* at time ``t`` (Definition 2 of the delayed-data paper) is the
+availability mask ``d_0 ... d_t`` with ``d_l = 1`` iff ``l ∈ A(t)``; its index
+``j_t`` is eq. (2).  A pattern *is* its event sequence: two delay words with
+the same event sequence (e.g. ``01`` and ``02`` for ``T = 2``) give equal
+patterns, so a set of patterns is the reduced event-based language
+``L^{E'}``.  The estimator at time ``t`` can only know the events ``0..t``,
+i.e. the pattern truncated to horizon ``t + 1`` (its *prefix*); a
+:class:`PrefixTree` has one node per distinct prefix.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Iterable, Sequence
+
+import numpy as np
 
 from eqrec.errors import InputError
 
-ALPHABET = frozenset("01")
+MISSING_ALPHABET = frozenset("01")
+KINDS = ("missing", "delay")
 
+
+@dataclass(frozen=True)
+class ArrivalPattern:
+    """Arrival times of the measurements of times ``0..T-1`` within the horizon ``T``.
+
+    Parameters
+    ----------
+    arrivals
+        ``arrivals[τ]`` is the arrival time ``a(τ)`` (``τ <= a(τ) < T``) or
+        ``None`` when the measurement does not arrive within the horizon.
+    label
+        The word the pattern was made from (not part of equality).
+
+    Equality and hashing use ``arrivals`` only: equal event sequences are
+    equal patterns.
+    """
+
+    arrivals: tuple[int | None, ...]
+    label: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        T = len(self.arrivals)
+        for tau, a in enumerate(self.arrivals):
+            if a is not None and not (tau <= a < T):
+                raise InputError(f"arrival time {a} of the measurement of time {tau} is outside [{tau}, {T - 1}]")
+        if not self.label:
+            object.__setattr__(self, "label", self.canonical_label)
+
+    # -- construction ---------------------------------------------------------
+    @classmethod
+    def from_missing_word(cls, word: str) -> "ArrivalPattern":
+        """Pattern of a missing-data word (``1`` arrives on time, ``0`` never)."""
+        return cls(tuple(t if c == "1" else None for t, c in enumerate(word)), word)
+
+    @classmethod
+    def from_delays(cls, delays: Sequence[int], label: str | None = None) -> "ArrivalPattern":
+        """Pattern of a delay word: ``a(i) = i + τ(i)``, missing when ``i + τ(i) >= T``."""
+        T = len(delays)
+        arr = tuple(i + d if i + d < T else None for i, d in enumerate(delays))
+        return cls(arr, label if label is not None else "".join(str(d) for d in delays))
+
+    # -- basic properties ------------------------------------------------------
+    @property
+    def T(self) -> int:
+        """Horizon (number of measurement times)."""
+        return len(self.arrivals)
+
+    def __len__(self) -> int:
+        return len(self.arrivals)
+
+    def __str__(self) -> str:
+        return self.label
+
+    @property
+    def is_missing_data(self) -> bool:
+        """Every measurement arrives on time or never (a word over ``{0, 1}``)."""
+        return all(a is None or a == t for t, a in enumerate(self.arrivals))
+
+    @property
+    def canonical_label(self) -> str:
+        """``0/1`` word for a missing-data pattern, else the event sequence ``e_0.e_1...``."""
+        if self.is_missing_data:
+            return "".join("0" if a is None else "1" for a in self.arrivals)
+        return ".".join(self.event(t) for t in range(self.T))
+
+    def arrives(self, tau: int) -> bool:
+        """Whether ``y(τ)`` arrives within the horizon (``q(τ)`` of the stacked ``C̄``, ``N``)."""
+        return self.arrivals[tau] is not None
+
+    def available(self, t: int) -> tuple[int, ...]:
+        """``A(t)``: measurement times ``τ <= t`` that have arrived by time ``t``, increasing."""
+        return tuple(tau for tau in range(min(t + 1, self.T)) if (a := self.arrivals[tau]) is not None and a <= t)
+
+    def arriving_at(self, t: int) -> tuple[int, ...]:
+        """Measurement times whose packets arrive exactly at time ``t``."""
+        return tuple(tau for tau, a in enumerate(self.arrivals) if a == t)
+
+    @cached_property
+    def mask(self) -> np.ndarray:
+        """Availability ``mask[t, τ] = τ ∈ A(t)`` (shape ``(T, T)``, lower triangular)."""
+        m = np.zeros((self.T, self.T), bool)
+        for tau, a in enumerate(self.arrivals):
+            if a is not None:
+                m[a:, tau] = True
+        return m
+
+    # -- events (Definitions 2-4, eq. (2) of the delayed-data paper) -------------
+    def event(self, t: int) -> str:
+        """Event ``e_{t, j_t}`` as the digits ``d_0 ... d_t``."""
+        avail = set(self.available(t))
+        return "".join("1" if l in avail else "0" for l in range(t + 1))
+
+    def event_index(self, t: int) -> int:
+        """``j_t = Σ_l 2^l 1[τ(t-l) <= l]`` (eq. (2)): the event read as a binary number."""
+        return int(self.event(t), 2)
+
+    def events(self) -> tuple[str, ...]:
+        """The event sequence ``E = e_{0,j_0} ... e_{T-1,j_{T-1}}`` (Definition 4)."""
+        return tuple(self.event(t) for t in range(self.T))
+
+    # -- prefixes ----------------------------------------------------------------
+    def prefix(self, length: int) -> "ArrivalPattern":
+        """The events ``0..length-1`` as a pattern of horizon ``length`` (Definition 6).
+
+        Measurements arriving at or after ``length`` are not yet available.
+        """
+        if not 0 < length <= self.T:
+            raise InputError(f"prefix length {length} outside 1..{self.T}")
+        arr = tuple(a if a is not None and a < length else None for a in self.arrivals[:length])
+        return ArrivalPattern(arr)
+
+    def prefixes(self) -> list["ArrivalPattern"]:
+        """All non-empty prefixes, shortest first."""
+        return [self.prefix(k) for k in range(1, self.T + 1)]
+
+    def extend(self, length: int) -> "ArrivalPattern":
+        """Append on-time measurements up to ``length`` (the minimum-recovery-time search, Sec. V of P1)."""
+        if length < self.T:
+            raise InputError(f"cannot shorten pattern {self.label!r} to length {length}")
+        arr = self.arrivals + tuple(range(self.T, length))
+        label = self.label + "1" * (length - self.T) if self.is_missing_data else ""
+        return ArrivalPattern(arr, label)
+
+
+Patternish = "ArrivalPattern | str"
+
+
+# ---------------------------------------------------------------------------
+# Parsing and validation
+# ---------------------------------------------------------------------------
 
 def validate_word(word: str, *, field_name: str = "word", source: str | None = None) -> str:
     """Return ``word`` if it is a non-empty string over {0, 1}, else raise :class:`InputError`."""
@@ -26,118 +177,194 @@ def validate_word(word: str, *, field_name: str = "word", source: str | None = N
     word = word.strip()
     if not word:
         raise InputError("empty word", source, field_name)
-    bad = set(word) - ALPHABET
+    bad = set(word) - MISSING_ALPHABET
     if bad:
         raise InputError(f"word {word!r} has letters {sorted(bad)} outside the alphabet {{0, 1}}",
                          source, field_name)
     return word
 
 
-def validate_language(words: Iterable[str], *, fixed_length: bool = True, length: int | None = None,
-                      field_name: str = "words", source: str | None = None) -> tuple[str, ...]:
-    """Validate and de-duplicate a language, keeping the order of first appearance.
+def parse_delay_word(word: str, max_delay: int | None = None, *, field_name: str = "delays",
+                     source: str | None = None) -> ArrivalPattern:
+    """Parse a delay word of digits ``τ(0) ... τ(T-1)`` (eq. (1) of the delayed-data paper).
 
-    Parameters
-    ----------
-    words
-        The words.
-    fixed_length
-        Require all words to have the same length (the fixed-length languages
-        ``L ⊆ B^T`` of Problem 1 of the prefix-based paper).
-    length
-        If given, the required length of every word.
+    Raises :class:`InputError` for a non-digit letter or a delay above ``max_delay``.
     """
-    out: list[str] = []
+    if not isinstance(word, str):
+        raise InputError(f"a delay word must be a string of digits, got {word!r}", source, field_name)
+    word = word.strip()
+    if not word:
+        raise InputError("empty delay word", source, field_name)
+    bad = sorted({c for c in word if not c.isdigit() or not c.isascii()})
+    if bad:
+        raise InputError(f"delay word {word!r} has letters {bad} that are not digits 0-9", source, field_name)
+    delays = [int(c) for c in word]
+    if max_delay is not None:
+        over = [d for d in delays if d > max_delay]
+        if over:
+            raise InputError(f"delay word {word!r} has delays {sorted(set(over))} above the maximum delay "
+                             f"{max_delay}", source, field_name)
+    return ArrivalPattern.from_delays(delays, word)
+
+
+def as_pattern(word: "ArrivalPattern | str", *, kind: str = "missing", max_delay: int | None = None,
+               field_name: str = "word", source: str | None = None) -> ArrivalPattern:
+    """A pattern from a pattern or a word of the given ``kind`` (``"missing"`` or ``"delay"``)."""
+    if isinstance(word, ArrivalPattern):
+        return word
+    if kind == "missing":
+        return ArrivalPattern.from_missing_word(validate_word(word, field_name=field_name, source=source))
+    if kind == "delay":
+        return parse_delay_word(word, max_delay, field_name=field_name, source=source)
+    raise InputError(f"unknown word kind {kind!r}; choose one of {list(KINDS)}", source, "kind")
+
+
+def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str = "missing", max_delay: int | None = None,
+                fixed_length: bool = True, length: int | None = None, field_name: str = "words",
+                source: str | None = None) -> tuple[ArrivalPattern, ...]:
+    """Patterns of a language, reduced to distinct event sequences (``L^{E'}``), first label kept.
+
+    Raises :class:`InputError` for bad letters, an empty language, mixed
+    lengths when ``fixed_length``, or a length other than ``length``.
+    """
+    if isinstance(words, (str, ArrivalPattern)):
+        words = [words]
+    out: dict[ArrivalPattern, ArrivalPattern] = {}
     for w in words:
-        w = validate_word(w, field_name=field_name, source=source)
-        if w not in out:
-            out.append(w)
+        pat = as_pattern(w, kind=kind, max_delay=max_delay, field_name=field_name, source=source)
+        out.setdefault(pat, pat)
     if not out:
         raise InputError("the language is empty", source, field_name)
-    lengths = sorted({len(w) for w in out})
+    pats = tuple(out.values())
+    lengths = sorted({p.T for p in pats})
     if fixed_length and len(lengths) > 1:
-        raise InputError(f"words of mixed lengths {lengths} in a fixed-length language: {out}",
-                         source, field_name)
+        raise InputError(f"words of mixed lengths {lengths} in a fixed-length language: "
+                         f"{[p.label for p in pats]}", source, field_name)
     if length is not None:
-        wrong = [w for w in out if len(w) != length]
+        wrong = [p.label for p in pats if p.T != length]
         if wrong:
             raise InputError(f"words {wrong} do not have the required length {length}", source, field_name)
-    return tuple(out)
+    return pats
+
+
+def validate_language(words: Iterable[str], *, fixed_length: bool = True, length: int | None = None,
+                      field_name: str = "words", source: str | None = None) -> tuple[str, ...]:
+    """Validate and de-duplicate a missing-data language given as 0/1 words (order kept)."""
+    return tuple(p.label for p in as_language(words, fixed_length=fixed_length, length=length,
+                                              field_name=field_name, source=source))
+
+
+def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
+    """All ``(τ̄+1)^T`` delay words of length ``T`` with delays ``0..τ̄``, in lexicographic order."""
+    if T < 1 or max_delay < 0 or max_delay > 9:
+        raise InputError(f"need T >= 1 and 0 <= max delay <= 9, got T = {T}, max delay = {max_delay}")
+    digits = np.indices((max_delay + 1,) * T).reshape(T, -1).T
+    return tuple("".join(map(str, row)) for row in digits)
+
+
+# ---------------------------------------------------------------------------
+# Worst case and helpers on words
+# ---------------------------------------------------------------------------
+
+def worst_case_pattern(patterns: Iterable["ArrivalPattern | str"]) -> ArrivalPattern:
+    """Latest arrival of every measurement over a fixed-length language.
+
+    For missing-data words this is the bitwise AND of Section III of the
+    prefix-based paper: a measurement is kept only if every word has it, so
+    an estimator that works for the worst case works for every word.
+    """
+    pats = as_language(patterns)
+    arr = []
+    for tau in range(pats[0].T):
+        a = [p.arrivals[tau] for p in pats]
+        arr.append(None if any(x is None for x in a) else max(a))
+    return ArrivalPattern(tuple(arr))
 
 
 def worst_case_word(words: Sequence[str]) -> str:
-    """Bitwise AND of a fixed-length language (Section III of the prefix-based paper).
-
-    A measurement is kept only if every word has it, so an estimator that
-    works for the worst-case word works for every word of the language.
-    """
-    words = validate_language(words)
-    return "".join("1" if all(w[t] == "1" for w in words) else "0" for t in range(len(words[0])))
+    """Bitwise AND of a fixed-length missing-data language (Section III of the prefix-based paper)."""
+    return worst_case_pattern(validate_language(words)).label
 
 
 def prefixes(word: str) -> list[str]:
-    """All non-empty prefixes ``Pref(word)``, shortest first."""
+    """All non-empty prefixes ``Pref(word)`` of a string, shortest first."""
     return [word[: i + 1] for i in range(len(word))]
 
 
 def extend_word(word: str, length: int) -> str:
-    """Pad a word with ``1`` (measurements available) up to ``length``.
-
-    Used for the minimum recovery time of Section V of the prefix-based paper,
-    which assumes no missing measurement in the extension.
-    """
+    """Pad a 0/1 word with ``1`` (measurements available) up to ``length`` (Section V of P1)."""
     if length < len(word):
         raise InputError(f"cannot shorten word {word!r} to length {length}")
     return word + "1" * (length - len(word))
 
 
+# ---------------------------------------------------------------------------
+# Prefix tree
+# ---------------------------------------------------------------------------
+
 @dataclass
 class PrefixNode:
-    """A node of the prefix tree: the prefix ``q(0..depth-1)``.
+    """A node of the prefix tree: the pattern prefix of length ``depth`` (events ``0..depth-1``).
 
     The gain row of time ``depth - 1`` (``F(t, ., prefix)`` and ``u0(t, prefix)``
-    of eq. (7)) belongs to this node.
+    of eq. (7) of the prefix-based paper) belongs to this node; it multiplies
+    the measurements ``available`` at that time.
     """
 
     index: int
-    prefix: str
+    prefix: ArrivalPattern
     parent: int | None
     children: list[int] = field(default_factory=list)
-    terminal: bool = False  # a word of the language ends here
+    terminal: bool = False  # a pattern of the language ends here
 
     @property
     def depth(self) -> int:
-        return len(self.prefix)
+        return self.prefix.T
 
     @property
-    def last(self) -> int:
-        """``q(depth - 1)``: whether the measurement of this node's time arrives."""
-        return int(self.prefix[-1])
+    def label(self) -> str:
+        return self.prefix.label
+
+    @property
+    def time(self) -> int:
+        """The time ``t = depth - 1`` whose gain row this node owns."""
+        return self.prefix.T - 1
+
+    @property
+    def available(self) -> tuple[int, ...]:
+        """``A(t)`` of this node: the measurement times its gain row multiplies."""
+        return self.prefix.available(self.prefix.T - 1)
 
 
 class PrefixTree:
-    """The prefix tree of a (finite-length) language.
+    """The prefix tree of a (finite-length) language of arrival patterns.
 
-    Nodes are numbered in breadth-first order (by depth, then
-    lexicographically), so a parent always precedes its children.
+    Nodes are numbered breadth first (by depth, then by label), so a parent
+    always precedes its children.
 
     Parameters
     ----------
     words
-        The language. Words may have different lengths (finite-length
-        languages, Section V of the prefix-based paper); a word that is a
-        prefix of another is allowed and marks an inner node terminal.
+        Patterns, or words of ``kind``.  Patterns may differ in length
+        (finite-length languages, Section V of the prefix-based paper); a
+        pattern that is a prefix of another marks an inner node terminal.
+    kind, max_delay
+        How to read string words (:func:`as_pattern`).
     """
 
-    def __init__(self, words: Iterable[str], *, source: str | None = None):
-        self.words: tuple[str, ...] = validate_language(words, fixed_length=False, source=source)
-        all_prefixes = sorted({p for w in self.words for p in prefixes(w)}, key=lambda s: (len(s), s))
-        self.index_of: dict[str, int] = {}
+    def __init__(self, words: Iterable["ArrivalPattern | str"], *, kind: str = "missing",
+                 max_delay: int | None = None, source: str | None = None):
+        self.patterns: tuple[ArrivalPattern, ...] = as_language(words, kind=kind, max_delay=max_delay,
+                                                                fixed_length=False, source=source)
+        terminal = set(self.patterns)
+        all_prefixes = {q for p in self.patterns for q in p.prefixes()}
+        ordered = sorted(all_prefixes, key=lambda q: (q.T, q.label))
+        self.index_of: dict[ArrivalPattern, int] = {}
         self.nodes: list[PrefixNode] = []
-        for p in all_prefixes:
-            parent = self.index_of[p[:-1]] if len(p) > 1 else None
-            node = PrefixNode(index=len(self.nodes), prefix=p, parent=parent, terminal=p in self.words)
-            self.index_of[p] = node.index
+        for q in ordered:
+            parent = self.index_of[q.prefix(q.T - 1)] if q.T > 1 else None
+            node = PrefixNode(index=len(self.nodes), prefix=q, parent=parent, terminal=q in terminal)
+            self.index_of[q] = node.index
             self.nodes.append(node)
             if parent is not None:
                 self.nodes[parent].children.append(node.index)
@@ -149,20 +376,33 @@ class PrefixTree:
         return iter(self.nodes)
 
     @property
-    def depth(self) -> int:
-        """Length of the longest word."""
-        return max(len(w) for w in self.words)
+    def words(self) -> tuple[str, ...]:
+        """Labels of the language's patterns (the words as given)."""
+        return tuple(p.label for p in self.patterns)
 
-    def node(self, prefix: str) -> PrefixNode:
+    @property
+    def depth(self) -> int:
+        """Length of the longest pattern."""
+        return max(p.T for p in self.patterns)
+
+    def nodes_per_depth(self) -> list[int]:
+        """Number of nodes at depths ``1..depth``."""
+        return np.bincount([n.depth for n in self.nodes], minlength=self.depth + 1)[1:].tolist()
+
+    def _key(self, prefix: "ArrivalPattern | str") -> ArrivalPattern:
+        return prefix if isinstance(prefix, ArrivalPattern) else as_pattern(prefix)
+
+    def node(self, prefix: "ArrivalPattern | str") -> PrefixNode:
+        key = self._key(prefix)
         try:
-            return self.nodes[self.index_of[prefix]]
+            return self.nodes[self.index_of[key]]
         except KeyError:
-            raise InputError(f"prefix {prefix!r} is not a prefix of any word of the language "
+            raise InputError(f"prefix {key.label!r} is not a prefix of any word of the language "
                              f"{list(self.words)}") from None
 
-    def path(self, prefix: str) -> list[PrefixNode]:
-        """Nodes of ``prefix[:1], prefix[:2], ..., prefix``."""
-        return [self.node(p) for p in prefixes(prefix)]
+    def path(self, pattern: "ArrivalPattern | str") -> list[PrefixNode]:
+        """Nodes of the prefixes of length ``1, 2, ..., len(pattern)``."""
+        return [self.node(q) for q in self._key(pattern).prefixes()]
 
-    def contains_prefix(self, prefix: str) -> bool:
-        return prefix in self.index_of
+    def contains_prefix(self, prefix: "ArrivalPattern | str") -> bool:
+        return self._key(prefix) in self.index_of

@@ -25,7 +25,9 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
+from eqrec.core.patterns import ArrivalPattern, as_pattern
 from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
 
 
 @dataclass(frozen=True)
@@ -135,17 +137,32 @@ class Stacking:
         """``blkdiag(E(0), ..., E(T-1))`` (identity in the paper's eq. (13))."""
         return sla.block_diag(*[self.system.E_at(t) for t in range(self.T)])
 
-    def C_bar(self, word: str) -> np.ndarray:
-        """Eq. (10): ``[blkdiag(q(t) C(t)), 0]`` of size ``Tp x (T+1)n``."""
+    def arrival_indicator(self, pattern: "ArrivalPattern | str") -> np.ndarray:
+        """``q(t)`` of eq. (10): 1 if the measurement of time ``t`` arrives within the horizon."""
+        pattern = as_pattern(pattern)
+        if pattern.T != self.T:
+            raise InputError(f"pattern {pattern.label!r} has length {pattern.T}, the stacking has T = {self.T}")
+        return np.array([1.0 if pattern.arrives(t) else 0.0 for t in range(self.T)])
+
+    def C_bar(self, pattern: "ArrivalPattern | str") -> np.ndarray:
+        """Eq. (10): ``[blkdiag(q(t) C(t)), 0]`` of size ``Tp x (T+1)n``.
+
+        For delayed data ``q(t)`` says whether ``y(t)`` arrives at all; *when*
+        it arrives is carried by the causality pattern of the gains (their
+        availability mask), which is nested in time, so the Q-parametrisation
+        keeps that pattern (see :mod:`eqrec.design.prefix`).
+        """
         n = self.system.n
-        blocks = [int(word[t]) * self.system.C_at(t) for t in range(self.T)]
+        q = self.arrival_indicator(pattern)
+        blocks = [int(q[t]) * self.system.C_at(t) for t in range(self.T)]
         return np.hstack([sla.block_diag(*blocks), np.zeros((self.T * self.system.p, n))])
 
-    def N(self, word: str) -> np.ndarray:
+    def N(self, pattern: "ArrivalPattern | str") -> np.ndarray:
         """Eq. (14): ``blkdiag(q(t) V(t))``."""
-        return sla.block_diag(*[int(word[t]) * self.system.V_at(t) for t in range(self.T)])
+        q = self.arrival_indicator(pattern)
+        return sla.block_diag(*[int(q[t]) * self.system.V_at(t) for t in range(self.T)])
 
-    def error_map_from_Q(self, word: str, Q: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def error_map_from_Q(self, word: "ArrivalPattern | str", Q: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eq. (13): ``ξ = G δ + c`` for a block lower-triangular ``Q`` and ``r``.
 
         Returns ``G`` of shape ``((T+1)n, D)`` (columns ordered as ``δ``) and ``c = S r``.

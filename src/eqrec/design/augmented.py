@@ -97,7 +97,7 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
                  eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
     runtime = "hold" if mode == "leak" else "theorem2"
     schedule = schedule_from_augmented(system, gains, runtime)
-    design = Design(method="augmented", system=system, words=(wc,), T=T, M1=float(M1), mu2=mu2,
+    design = Design(method="augmented", system=system, patterns=(wc,), T=T, M1=float(M1), mu2=mu2,
                     schedule=schedule, solution=solution, build_time=model.build_time, extra=extra)
     if certify:
         cert_words = sorted(set(language) | {wc})

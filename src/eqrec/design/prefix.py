@@ -41,7 +41,7 @@ import scipy.sparse as sp
 
 from eqrec.errors import InputError
 from eqrec.core.gains import q_to_f, schedule_from_word_gains
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
 from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution, solve_lp
 from eqrec.design.result import Design
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows
@@ -105,11 +105,11 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     r_cols: dict[int, np.ndarray] = {}
     measured: dict[int, list[int]] = {}
     for node in tree:
-        taus = [tau for tau in range(node.depth) if node.prefix[tau] == "1"]
+        taus = list(node.available)  # A(t): for delays, includes earlier times that arrived late
         measured[node.index] = taus
-        q_cols[node.index] = b.add_variables(n * p * len(taus), name=f"Q[{node.prefix}]")
+        q_cols[node.index] = b.add_variables(n * p * len(taus), name=f"Q[{node.label}]")
         bound = 0.0 if zero_offset else np.inf
-        r_cols[node.index] = b.add_variables(n, lower=-bound, upper=bound, name=f"r[{node.prefix}]")
+        r_cols[node.index] = b.add_variables(n, lower=-bound, upper=bound, name=f"r[{node.label}]")
 
     # Robust rows of ξ(t) for every node of depth t (the error after that prefix).
     entry_row, entry_coord, G0, gx_r, gx_c, gx_v = [], [], [], [], [], []
@@ -174,10 +174,11 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
                     measured=measured, build_time=time.perf_counter() - t_start)
 
 
-def word_Q_r(model: PrefixLP, x: np.ndarray, word: str) -> tuple[np.ndarray, np.ndarray]:
-    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one word from the node variables."""
+def word_Q_r(model: PrefixLP, x: np.ndarray, word: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray]:
+    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one pattern from the node variables."""
     sys = model.stacking.system
-    n, p, T = sys.n, sys.p, len(word)
+    word = as_pattern(word)
+    n, p, T = sys.n, sys.p, word.T
     Q = np.zeros((T * n, T * p))
     r = np.zeros(T * n)
     for node in model.tree.path(word):
@@ -195,10 +196,11 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
     st = model.stacking
     sys = st.system
     word_gains = {}
-    for word in model.tree.words:
-        Tw = len(word)
+    for word in model.tree.patterns:
+        Tw = word.T
         Q, r = word_Q_r(model, solution.x, word)
-        CS = (st.C_bar(word.ljust(st.T, "0")) @ st.S)[: Tw * sys.p, : Tw * sys.n]
+        padded = ArrivalPattern(word.arrivals + (None,) * (st.T - Tw))
+        CS = (st.C_bar(padded) @ st.S)[: Tw * sys.p, : Tw * sys.n]
         word_gains[word] = q_to_f(Q, r, CS)
     return schedule_from_word_gains(model.tree, word_gains, sys.n, sys.p, time_based=time_based)
 
@@ -223,7 +225,7 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset)
     sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {M1:g})")
     schedule = read_schedule(model, sol, time_based=(method == "time"))
-    design = Design(method=method, system=system, words=model.tree.words, T=model.stacking.T, M1=model.M1,
+    design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, M1=model.M1,
                     mu2=float(sol.x[model.mu2_col]), schedule=schedule, solution=sol, build_time=model.build_time)
     if certify:
         from eqrec.core.certify import certify_design
