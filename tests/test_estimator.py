@@ -54,3 +54,27 @@ def test_horizon_over_without_periodic(acc, L1_words):
         est.step(np.zeros(2) if L1_words[0][t] == "1" else None)
     with pytest.raises(InputError, match="horizon"):
         est.step(np.zeros(2))
+
+
+def test_late_packet_uses_the_estimate_of_its_own_time(acc):
+    """A late y(τ) enters as y(τ) - C x̂(τ); the certificate's maps assume exactly that."""
+    from eqrec.core.certify import closed_loop_maps
+    from eqrec.core.estimator import Packet, RecoveryEstimator
+    from eqrec.core.patterns import parse_delay_word
+    from eqrec.core.simulate import simulate_run
+
+    pats = [parse_delay_word(w) for w in ("0100", "0000", "2000")]
+    d = design_prefix(acc, pats, 1.0)
+    rng = np.random.default_rng(3)
+    for pat in pats:
+        G, c, lay = closed_loop_maps(acc, d.schedule, pat)
+        delta = rng.uniform(-1, 1, lay.size) * lay.radius(acc.eta_w, acc.eta_v, 1.0)
+        tr = simulate_run(acc, d.schedule, pat, delta, np.ones(acc.n))
+        np.testing.assert_allclose(tr.error, np.einsum("tnd,d->tn", G, delta) + c, atol=1e-10)
+    est = RecoveryEstimator(acc, d.schedule, np.zeros(acc.n))
+    with pytest.raises(InputError, match="future"):
+        est.step([Packet(1, np.zeros(acc.p))])
+    est = RecoveryEstimator(acc, d.schedule, np.zeros(acc.n))
+    est.step([Packet(0, np.zeros(acc.p))])
+    with pytest.raises(InputError, match="second packet"):
+        est.step([Packet(0, np.zeros(acc.p))])

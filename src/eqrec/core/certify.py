@@ -139,5 +139,12 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
     if cert.terminal > design.M1 + tol_1:
         raise CertificationFailure(f"{design.method} design: terminal worst-case error {cert.terminal:.9g} "
                                    f"> M1 = {design.M1:.9g}")
+    for wc in cert.words.values():  # per-node levels: the bound after each prefix stays below that node's level
+        pattern = wc.pattern
+        for t in range(1, pattern.T):
+            level = design.levels.get(pattern.prefix(t).label)
+            if level is not None and wc.bounds[t].max() > level + rtol * max(1.0, level):
+                raise CertificationFailure(f"{design.method} design: worst-case error {wc.bounds[t].max():.9g} after "
+                                           f"prefix {pattern.prefix(t).label!r} > its level {level:.9g}")
     design.certificate = cert
     return cert

@@ -9,15 +9,13 @@ spends solving them, so we assemble the sparse matrix ourselves:
    coordinate triplets;
 2. :meth:`LPBuilder.build` freezes them into a :class:`LinearProgram`
    (CSC matrix + row and column bounds), independent of any solver;
-3. :func:`solve_lp` passes it to a named solver (``"highs"`` through
-   highspy, ``"clarabel"`` through its Python API, ``"scipy"`` through
-   :func:`scipy.optimize.linprog`) and returns an :class:`LPSolution`;
+3. :func:`eqrec.core.solvers.solve_lp` passes it to a solver of the
+   registry (HiGHS, Clarabel, SciPy, IPOPT) and returns an :class:`LPSolution`;
 4. the caller reads variable blocks with :meth:`LPSolution.block`.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,7 +24,6 @@ import scipy.sparse as sp
 from eqrec.errors import InfeasibleDesign, SolverFailure
 
 INF = np.inf
-SOLVERS = ("highs", "clarabel", "scipy")
 
 
 @dataclass
@@ -40,6 +37,15 @@ class LinearProgram:
     col_lower: np.ndarray
     col_upper: np.ndarray
     blocks: dict[str, np.ndarray] = field(default_factory=dict)
+    tracked: dict[int, np.ndarray] = field(default_factory=dict)
+
+    def positions(self, handle: int) -> np.ndarray:
+        """Positions in ``A.data`` of the entries added with :meth:`LPBuilder.add_entries` (``track=True``).
+
+        Writing ``A.data[positions]`` changes those coefficients in place
+        (the sparsity pattern is fixed), e.g. to update an ``L``-dependent LP.
+        """
+        return self.tracked[handle]
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -68,6 +74,7 @@ class LPBuilder:
         self._row_upper: list[np.ndarray] = []
         self._nrows = 0
         self.blocks: dict[str, np.ndarray] = {}
+        self._tracked: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     @property
     def num_variables(self) -> int:
@@ -118,6 +125,26 @@ class LPBuilder:
         self._nrows += count
         return out
 
+    def add_entries(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, track: bool = False) -> int | None:
+        """Add coefficients to rows that already exist (global row indices).
+
+        With ``track=True`` the entries are kept even when zero, must not
+        coincide with other entries, and the returned handle gives their
+        positions in the built matrix (:meth:`LinearProgram.positions`).
+        """
+        rows = np.asarray(rows, dtype=np.int64).ravel()
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        if rows.size and (rows.max() >= self._nrows or rows.min() < 0):
+            raise ValueError("add_entries: a row index does not exist yet")
+        self._rows.append(rows)
+        self._cols.append(cols)
+        self._vals.append(np.asarray(vals, dtype=float).ravel())
+        if not track:
+            return None
+        handle = len(self._tracked)
+        self._tracked[handle] = (rows, cols)
+        return handle
+
     def build(self) -> LinearProgram:
         """Freeze into a solver-independent :class:`LinearProgram`."""
         c = np.zeros(self._ncols)
@@ -127,12 +154,28 @@ class LPBuilder:
         cols = np.concatenate(self._cols) if self._cols else np.zeros(0, np.int64)
         vals = np.concatenate(self._vals) if self._vals else np.zeros(0)
         keep = vals != 0.0
+        tracked_positions: dict[int, np.ndarray] = {}
+        if self._tracked:
+            # tracked entries stay in the pattern even when their current value is zero
+            nr = self._nrows
+            tkeys = {h: c_ * nr + r_ for h, (r_, c_) in self._tracked.items()}
+            all_t = np.concatenate(list(tkeys.values()))
+            keep |= np.isin(cols * nr + rows, all_t)
         A = sp.csc_matrix((vals[keep], (rows[keep], cols[keep])), shape=(self._nrows, self._ncols))
         A.sum_duplicates()
+        A.sort_indices()
+        if self._tracked:
+            colidx = np.repeat(np.arange(A.shape[1], dtype=np.int64), np.diff(A.indptr))
+            keyA = colidx * self._nrows + A.indices
+            for h, k in tkeys.items():
+                pos = np.searchsorted(keyA, k)
+                if k.size and (pos.max() >= keyA.size or not np.array_equal(keyA[pos], k)):
+                    raise AssertionError("a tracked LP entry is missing from the built matrix")
+                tracked_positions[h] = pos
         cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
         return LinearProgram(c=c, A=A, row_lower=cat(self._row_lower), row_upper=cat(self._row_upper),
                              col_lower=cat(self._col_lower), col_upper=cat(self._col_upper),
-                             blocks=dict(self.blocks))
+                             blocks=dict(self.blocks), tracked=tracked_positions)
 
 
 @dataclass
@@ -168,132 +211,8 @@ class LPSolution:
         return self
 
 
-def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
-    import highspy
-
-    h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
-    for key, val in options.items():
-        h.setOptionValue(key, val)
-    model = highspy.HighsLp()
-    nr, nc = lp.A.shape
-    model.num_col_ = nc
-    model.num_row_ = nr
-    model.col_cost_ = lp.c
-    model.col_lower_ = lp.col_lower
-    model.col_upper_ = lp.col_upper
-    model.row_lower_ = lp.row_lower
-    model.row_upper_ = lp.row_upper
-    model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    model.a_matrix_.start_ = lp.A.indptr
-    model.a_matrix_.index_ = lp.A.indices
-    model.a_matrix_.value_ = lp.A.data
-    model.a_matrix_.num_col_ = nc
-    model.a_matrix_.num_row_ = nr
-    h.passModel(model)
-    t0 = time.perf_counter()
-    h.run()
-    elapsed = time.perf_counter() - t0
-    ms = h.getModelStatus()
-    info = h.getInfo()
-    iters = int(info.simplex_iteration_count) + int(max(info.ipm_iteration_count, 0))
-    if ms == highspy.HighsModelStatus.kOptimal:
-        x = np.asarray(h.getSolution().col_value)
-        return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks)
-    if ms == highspy.HighsModelStatus.kInfeasible:
-        return LPSolution("infeasible", None, INF, "highs", iters, elapsed, lp.blocks)
-    if ms in (highspy.HighsModelStatus.kUnbounded, highspy.HighsModelStatus.kUnboundedOrInfeasible):
-        status = "unbounded" if ms == highspy.HighsModelStatus.kUnbounded else "infeasible"
-        return LPSolution(status, None, -INF, "highs", iters, elapsed, lp.blocks)
-    return LPSolution(h.modelStatusToString(ms), None, np.nan, "highs", iters, elapsed, lp.blocks)
-
-
-def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
-    import clarabel
-
-    A = lp.A.tocsr()
-    nc = A.shape[1]
-    eye = sp.identity(nc, format="csr")
-    eq = np.isfinite(lp.row_lower) & (lp.row_lower == lp.row_upper)
-    up = np.isfinite(lp.row_upper) & ~eq
-    lo = np.isfinite(lp.row_lower) & ~eq
-    cup = np.isfinite(lp.col_upper)
-    clo = np.isfinite(lp.col_lower)
-    # Clarabel form: A_c x + s = b, s in cones; equalities first (zero cone).
-    parts = [A[eq], A[up], -A[lo], eye[cup], -eye[clo]]
-    rhs = [lp.row_upper[eq], lp.row_upper[up], -lp.row_lower[lo], lp.col_upper[cup], -lp.col_lower[clo]]
-    Ac = sp.vstack(parts, format="csc")
-    b = np.concatenate(rhs)
-    n_eq = int(eq.sum())
-    cones = []
-    if n_eq:
-        cones.append(clarabel.ZeroConeT(n_eq))
-    if Ac.shape[0] - n_eq:
-        cones.append(clarabel.NonnegativeConeT(Ac.shape[0] - n_eq))
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    for key, val in options.items():
-        setattr(settings, key, val)
-    P = sp.csc_matrix((nc, nc))
-    t0 = time.perf_counter()
-    solver = clarabel.DefaultSolver(P, lp.c, Ac, b, cones, settings)
-    sol = solver.solve()
-    elapsed = time.perf_counter() - t0
-    status = str(sol.status)
-    if status in ("Solved", "AlmostSolved"):
-        x = np.asarray(sol.x)
-        return LPSolution("optimal", x, float(lp.c @ x), "clarabel", int(sol.iterations), elapsed, lp.blocks)
-    if "PrimalInfeasible" in status:
-        return LPSolution("infeasible", None, INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
-    if "DualInfeasible" in status:
-        return LPSolution("unbounded", None, -INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
-    return LPSolution(status, None, np.nan, "clarabel", int(sol.iterations), elapsed, lp.blocks)
-
-
-def _solve_scipy(lp: LinearProgram, options: dict) -> LPSolution:
-    from scipy.optimize import linprog
-
-    A = lp.A.tocsr()
-    eq = lp.row_lower == lp.row_upper
-    up = np.isfinite(lp.row_upper) & ~eq
-    lo = np.isfinite(lp.row_lower) & ~eq
-    A_ub = sp.vstack([A[up], -A[lo]], format="csr")
-    b_ub = np.concatenate([lp.row_upper[up], -lp.row_lower[lo]])
-    bounds = np.column_stack([np.where(np.isfinite(lp.col_lower), lp.col_lower, None),
-                              np.where(np.isfinite(lp.col_upper), lp.col_upper, None)])
-    t0 = time.perf_counter()
-    res = linprog(lp.c, A_ub=A_ub, b_ub=b_ub, A_eq=A[eq] if eq.any() else None,
-                  b_eq=lp.row_upper[eq] if eq.any() else None, bounds=bounds, method="highs", options=options)
-    elapsed = time.perf_counter() - t0
-    status = {0: "optimal", 2: "infeasible", 3: "unbounded"}.get(res.status, res.message)
-    x = res.x if res.status == 0 else None
-    obj = float(res.fun) if res.status == 0 else np.nan
-    return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks)
-
-
 def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None) -> LPSolution:
-    """Solve a :class:`LinearProgram` with the named solver.
+    """Solve ``lp`` with a solver of the registry :mod:`eqrec.core.solvers` (see :func:`eqrec.core.solvers.solve_lp`)."""
+    from eqrec.core.solvers import solve_lp as _solve
 
-    Parameters
-    ----------
-    lp
-        The problem.
-    solver
-        ``"highs"`` (dual simplex through highspy), ``"clarabel"`` (interior
-        point) or ``"scipy"`` (``scipy.optimize.linprog``).
-    options
-        Passed to the solver (HiGHS option names / Clarabel settings).
-
-    Returns
-    -------
-    LPSolution
-        Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.
-    """
-    options = dict(options or {})
-    if solver == "highs":
-        return _solve_highs(lp, options)
-    if solver == "clarabel":
-        return _solve_clarabel(lp, options)
-    if solver == "scipy":
-        return _solve_scipy(lp, options)
-    raise ValueError(f"unknown solver {solver!r}; choose one of {SOLVERS}")
+    return _solve(lp, solver, options)

@@ -66,10 +66,47 @@ class UncertainAffineRows:
         return self.c0.shape[0]
 
 
+@dataclass
+class RobustRowsIndex:
+    """Where :func:`add_robust_rows` put its rows, auxiliary columns and ``x``-dependent entries.
+
+    Attributes
+    ----------
+    form
+        The robust-counterpart form used.
+    level_rows
+        LP rows of the level constraints, one array per sign of the certain
+        term (``+`` first); entry ``k`` is the row of robust row ``k``.
+    aux_cols
+        The auxiliary columns (``a`` for ``"abs"``; ``p`` then ``m`` for
+        ``"split"``; ``π`` blocks for ``"dual"``).
+    gx_entries, gx_cols
+        For each ``x``-dependent coefficient ``Gx[e, j]`` placed in the LP:
+        the structural entry ``e`` and the variable column ``j``.
+    gx_handles
+        ``(handle, sign)`` pairs: the LP coefficient at
+        ``lp.positions(handle)[i]`` equals ``sign * Gx[gx_entries[i], gx_cols[i]]``.
+        Rewriting these values updates the LP in place when only ``Gx`` changes.
+    """
+
+    form: str
+    level_rows: list[np.ndarray]
+    aux_cols: np.ndarray
+    gx_entries: np.ndarray
+    gx_cols: np.ndarray
+    gx_handles: list[tuple[int, float]]
+
+    def update_gx(self, lp, values: np.ndarray) -> None:
+        """Write new ``Gx`` values (ordered as ``gx_entries, gx_cols``) into a built LP."""
+        for handle, sign in self.gx_handles:
+            lp.A.data[lp.positions(handle)] = sign * values
+
+
 def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.ndarray,
                     level_const: np.ndarray | float, level_col: int | None = None,
-                    level_coef: np.ndarray | float = 1.0, form: str = "split") -> None:
-    """Add ``|e_k(x, δ)| <= level_const_k + level_coef_k * x[level_col]`` for all ``|δ| <= radius``.
+                    level_coef: np.ndarray | float = 1.0, form: str = "split", *,
+                    level_cols: np.ndarray | None = None, track_gx: bool = False) -> RobustRowsIndex:
+    """Add ``|e_k(x, δ)| <= level_const_k + level_coef_k * x[col_k]`` for all ``|δ| <= radius``.
 
     Parameters
     ----------
@@ -79,28 +116,44 @@ def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.nd
         The uncertain affine rows.
     radius
         Box radii ``b`` of the uncertain coordinates (indexed by ``entry_coord``).
-    level_const, level_col, level_coef
-        The bound ``ℓ_k``: a constant, plus optionally a multiple of one
-        decision variable (e.g. the intermediate level ``M2``).
+    level_const, level_coef
+        The bound ``ℓ_k``: a constant plus a multiple of one decision variable.
+    level_col
+        One level variable for every row (e.g. the intermediate level ``M2``).
+    level_cols
+        A level variable per row (``-1``: none), e.g. a level ``μ2,k`` per
+        prefix-tree node and a variable ``μ1`` on the terminal rows; overrides ``level_col``.
     form
         ``"split"`` (default): ``G_e(x) = p_e - m_e``, ``p, m >= 0``;
         ``"abs"``: auxiliary ``a_e >= |G_e(x)|`` (one per variable entry);
         ``"dual"``: the Π multipliers of eq. (16) of the prefix-based paper.
+    track_gx
+        Keep the positions of the ``x``-dependent coefficients in the built
+        LP (:attr:`RobustRowsIndex.gx_handles`) so they can be rewritten in place.
+
+    Returns
+    -------
+    RobustRowsIndex
+        Where the rows, auxiliary columns and tracked coefficients are.
     """
     R = rows.num_rows
     level_const = np.broadcast_to(np.asarray(level_const, float), (R,))
     level_coef = np.broadcast_to(np.asarray(level_coef, float), (R,))
+    if level_cols is None:
+        level_cols = np.full(R, -1 if level_col is None else int(level_col), dtype=np.int64)
+    else:
+        level_cols = np.broadcast_to(np.asarray(level_cols, dtype=np.int64), (R,))
     b = np.asarray(radius, float)[rows.entry_coord]
     Gx = rows.Gx.tocsr()
     cx = rows.cx.tocoo()
+    levels = (level_const, level_cols, level_coef)
     if form == "abs":
-        _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef)
-    elif form == "split":
-        _add_split_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef)
-    elif form == "dual":
-        _add_dual_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef)
-    else:
-        raise ValueError(f"unknown robust-counterpart form {form!r} (use 'split', 'abs' or 'dual')")
+        return _add_abs_form(builder, rows, Gx, cx, b, levels, track_gx)
+    if form == "split":
+        return _add_split_form(builder, rows, Gx, cx, b, levels, track_gx)
+    if form == "dual":
+        return _add_dual_form(builder, rows, Gx, cx, b, levels, track_gx)
+    raise ValueError(f"unknown robust-counterpart form {form!r} (use 'split', 'abs' or 'dual')")
 
 
 def _variable_entries(rows: UncertainAffineRows, Gx: sp.csr_matrix, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,81 +164,97 @@ def _variable_entries(rows: UncertainAffineRows, Gx: sp.csr_matrix, b: np.ndarra
     return np.flatnonzero(has_var), const_part
 
 
-def _add_level_rows(builder, rows, cx, bound_cols, bound_rows, bound_vals, const_part, level_const, level_col,
-                    level_coef) -> None:
+def _level_triplets(levels, R: int) -> tuple[list, list, list]:
+    """Triplets ``-level_coef_k x[col_k]`` of the level rows (rows with a level variable only)."""
+    _, cols, coef = levels
+    has = cols >= 0
+    k = np.flatnonzero(has)
+    return [k], [cols[has]], [-coef[has]]
+
+
+def _add_level_rows(builder, rows, cx, bound_cols, bound_rows, bound_vals, const_part, levels) -> list[np.ndarray]:
     """``±(c0 + cx x) + Σ (bound of |G_e|) b_e + const_part <= level_const + level_coef x[level_col]``.
 
     One row suffices when the certain term is identically zero.
     """
     R = rows.num_rows
+    level_const = levels[0]
     signs = (+1.0,) if (cx.nnz == 0 and not np.any(rows.c0)) else (+1.0, -1.0)
+    out = []
     for sign in signs:
-        r = [cx.row, bound_rows]
-        c = [cx.col, bound_cols]
-        v = [sign * cx.data, bound_vals]
-        if level_col is not None:
-            r.append(np.arange(R))
-            c.append(np.full(R, level_col))
-            v.append(-level_coef)
-        builder.add_rows(np.concatenate(r), np.concatenate(c), np.concatenate(v), lower=-np.inf,
-                         upper=level_const - const_part - sign * rows.c0, count=R)
+        lr, lc, lv = _level_triplets(levels, R)
+        r = [cx.row, bound_rows] + lr
+        c = [cx.col, bound_cols] + lc
+        v = [sign * cx.data, bound_vals] + lv
+        out.append(builder.add_rows(np.concatenate(r), np.concatenate(c), np.concatenate(v), lower=-np.inf,
+                                    upper=level_const - const_part - sign * rows.c0, count=R))
+    return out
 
 
-def _add_abs_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
+def _add_abs_form(builder, rows, Gx, cx, b, levels, track_gx) -> RobustRowsIndex:
     var_entries, const_part = _variable_entries(rows, Gx, b)
     k = var_entries.size
     aux = builder.add_variables(k, lower=0.0)
     # a_e - Gx_e x >= G0_e  and  a_e + Gx_e x >= -G0_e
     sub = Gx[var_entries].tocoo()
+    handles = []
     for sign in (+1.0, -1.0):
-        r = np.concatenate([np.arange(k), sub.row])
-        c = np.concatenate([aux, sub.col])
-        v = np.concatenate([np.ones(k), -sign * sub.data])
-        builder.add_rows(r, c, v, lower=sign * rows.G0[var_entries], upper=np.inf, count=k)
-    _add_level_rows(builder, rows, cx, aux, rows.entry_row[var_entries], b[var_entries], const_part,
-                    level_const, level_col, level_coef)
+        new_rows = builder.add_rows(np.arange(k), aux, np.ones(k), lower=sign * rows.G0[var_entries], upper=np.inf,
+                                    count=k)
+        h = builder.add_entries(new_rows[sub.row], sub.col, -sign * sub.data, track=track_gx)
+        if track_gx:
+            handles.append((h, -sign))
+    level_rows = _add_level_rows(builder, rows, cx, aux, rows.entry_row[var_entries], b[var_entries], const_part,
+                                 levels)
+    return RobustRowsIndex("abs", level_rows, aux, var_entries[sub.row], sub.col, handles)
 
 
-def _add_split_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
+def _add_split_form(builder, rows, Gx, cx, b, levels, track_gx) -> RobustRowsIndex:
     # G_e(x) = p_e - m_e with p, m >= 0; |G_e| <= p_e + m_e (tight at an optimum of the bound).
     var_entries, const_part = _variable_entries(rows, Gx, b)
     k = var_entries.size
     pos = builder.add_variables(k, lower=0.0)
     neg = builder.add_variables(k, lower=0.0)
     sub = Gx[var_entries].tocoo()
-    r = np.concatenate([np.arange(k), np.arange(k), sub.row])
-    c = np.concatenate([pos, neg, sub.col])
-    v = np.concatenate([np.ones(k), -np.ones(k), -sub.data])
-    builder.add_rows(r, c, v, lower=rows.G0[var_entries], upper=rows.G0[var_entries], count=k)
+    r = np.concatenate([np.arange(k), np.arange(k)])
+    c = np.concatenate([pos, neg])
+    v = np.concatenate([np.ones(k), -np.ones(k)])
+    new_rows = builder.add_rows(r, c, v, lower=rows.G0[var_entries], upper=rows.G0[var_entries], count=k)
+    h = builder.add_entries(new_rows[sub.row], sub.col, -sub.data, track=track_gx)
     er, bv = rows.entry_row[var_entries], b[var_entries]
-    _add_level_rows(builder, rows, cx, np.concatenate([pos, neg]), np.concatenate([er, er]),
-                    np.concatenate([bv, bv]), const_part, level_const, level_col, level_coef)
+    level_rows = _add_level_rows(builder, rows, cx, np.concatenate([pos, neg]), np.concatenate([er, er]),
+                                 np.concatenate([bv, bv]), const_part, levels)
+    return RobustRowsIndex("split", level_rows, np.concatenate([pos, neg]), var_entries[sub.row], sub.col,
+                           [(h, -1.0)] if track_gx else [])
 
 
-def _add_dual_form(builder, rows, Gx, cx, b, level_const, level_col, level_coef):
+def _add_dual_form(builder, rows, Gx, cx, b, levels, track_gx) -> RobustRowsIndex:
     # For each row k and sign s: π_s ∈ R^{2E_k} ≥ 0, π_s Ω = s g_k, π_s·[b; b] <= ℓ_k - s c_k,
     # i.e. per entry e: π_{s,e}^+ - π_{s,e}^- = s G_e(x).
     R = rows.num_rows
     E = rows.entry_row.size
     Gc = Gx.tocoo()
+    level_const = levels[0]
+    aux, level_rows, handles = [], [], []
     for sign in (+1.0, -1.0):
         pi_plus = builder.add_variables(E, lower=0.0)
         pi_minus = builder.add_variables(E, lower=0.0)
+        aux += [pi_plus, pi_minus]
         # π+ - π- - s Gx x = s G0
-        r = np.concatenate([np.arange(E), np.arange(E), Gc.row])
-        c = np.concatenate([pi_plus, pi_minus, Gc.col])
-        v = np.concatenate([np.ones(E), -np.ones(E), -sign * Gc.data])
-        builder.add_rows(r, c, v, lower=sign * rows.G0, upper=sign * rows.G0, count=E)
+        new_rows = builder.add_rows(np.concatenate([np.arange(E), np.arange(E)]), np.concatenate([pi_plus, pi_minus]),
+                                    np.concatenate([np.ones(E), -np.ones(E)]), lower=sign * rows.G0,
+                                    upper=sign * rows.G0, count=E)
+        h = builder.add_entries(new_rows[Gc.row], Gc.col, -sign * Gc.data, track=track_gx)
+        if track_gx:
+            handles.append((h, -sign))
         # Σ_e b_e (π+ + π-) + s (c0 + cx x) - level_coef x[level] <= level_const
-        r = [rows.entry_row, rows.entry_row, cx.row]
-        c = [pi_plus, pi_minus, cx.col]
-        v = [b, b, sign * cx.data]
-        if level_col is not None:
-            r.append(np.arange(R))
-            c.append(np.full(R, level_col))
-            v.append(-level_coef)
-        builder.add_rows(np.concatenate(r), np.concatenate(c), np.concatenate(v), lower=-np.inf,
-                         upper=level_const - sign * rows.c0, count=R)
+        lr, lc, lv = _level_triplets(levels, R)
+        r = [rows.entry_row, rows.entry_row, cx.row] + lr
+        c = [pi_plus, pi_minus, cx.col] + lc
+        v = [b, b, sign * cx.data] + lv
+        level_rows.append(builder.add_rows(np.concatenate(r), np.concatenate(c), np.concatenate(v), lower=-np.inf,
+                                           upper=level_const - sign * rows.c0, count=R))
+    return RobustRowsIndex("dual", level_rows, np.concatenate(aux), Gc.row, Gc.col, handles)
 
 
 def worst_case_abs(G: np.ndarray, c: np.ndarray, radius: np.ndarray) -> np.ndarray:

@@ -14,10 +14,11 @@ import numpy as np
 
 from eqrec.core.certify import CERT_RTOL, certify_schedule
 from eqrec.core.lp import LPSolution
-from eqrec.core.patterns import validate_language, worst_case_word
+from eqrec.core.patterns import as_language, worst_case_pattern
+from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import AugmentedGains, check_mode, schedule_from_augmented
+from eqrec.design.augmented_model import AugmentedGains, check_mode, missing_data_pattern, schedule_from_augmented
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import default_poles, place_observer
 from eqrec.design.result import Design
@@ -45,7 +46,8 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
     s0
         Fixed ``s0`` (default 0; the initial guess when ``L="free"``).
     solver
-        LP solver (``"highs"``, ``"clarabel"``, ``"scipy"``) or ``"ipopt"`` (the LP solved by IPOPT).
+        LP solver of the registry :data:`eqrec.core.solvers.SOLVER_NAMES` (with ``L="free"``:
+        the solver of the LP that gives IPOPT its starting point).
     mode
         ``"theorem2"`` (default) or the ``"leak"`` reading; a leak design is certified as
         the actual (``"hold"``) estimator and its design ``μ2`` is not a guarantee.
@@ -61,8 +63,11 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
     InputError, InfeasibleDesign, SolverFailure, CertificationFailure
     """
     check_mode(mode, ("theorem2", "leak"))
-    language = validate_language(words)
-    wc = worst_case_word(language)
+    patterns = as_language(words)
+    wc_pattern = missing_data_pattern(worst_case_pattern(patterns))
+    language = tuple(p.label for p in patterns)
+    wc = wc_pattern.label
+    accuracy = solver_info(solver).accuracy
     T, n, p = len(wc), system.n, system.p
     extra: dict = {"language": language, "worst_case_word": wc, "mode": mode}
     free = isinstance(L, str)
@@ -79,19 +84,19 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
         L_fixed = L
     s0v = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
     model = AugmentedLP(system, wc, M1, L_fixed, s0=s0v, mode=mode)
-    lp_solver = "highs" if (free or solver == "ipopt") else solver
-    sol = model.solve(lp_solver).require_optimal(f"augmented design (M1 = {M1:g})")
+    sol = model.solve(solver).require_optimal(f"augmented design (M1 = {M1:g})")
     gains = model.gains(sol)
     mu2 = float(sol.x[model.mu2_col])
     solution = sol
-    if free or solver == "ipopt":
-        res = solve_free_ipopt(model, gains, mu2, free_L=free, free_s0=free, options=ipopt_options)
+    if free:
+        res = solve_free_ipopt(model, gains, mu2, free_L=True, free_s0=True, options=ipopt_options)
         if not res.success:
             raise SolverFailure(f"IPOPT stopped with status {res.status} after {res.iterations} iterations")
         gains, mu2 = res.gains, res.mu2
         solution = LPSolution("optimal", None, mu2, "ipopt", res.iterations, res.solve_time, {})
         extra.update(ipopt_status=res.status, ipopt_iterations=res.iterations, initial_mu2=res.initial_mu2,
-                     initial_guess=f"LP ({lp_solver}) at the pole-placement L")
+                     initial_guess=f"LP ({solver}) at the pole-placement L")
+        accuracy = max(accuracy, solver_info("ipopt").accuracy)
     extra.update(L=gains.L[0].tolist() if np.allclose(gains.L, gains.L[0]) else gains.L.tolist(),
                  s0=gains.s0.tolist(), M=gains.M.tolist(), nu=gains.nu.tolist(), gains=gains,
                  eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
@@ -104,11 +109,11 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
         cert = certify_schedule(system, schedule, cert_words, M1)
         design.certificate = cert
         if mode == "theorem2":
-            tol2 = CERT_RTOL * max(1.0, mu2) + (1e-6 if (free or solver == "ipopt") else 0.0)
+            tol2 = CERT_RTOL * max(1.0, mu2) + accuracy
             if cert.mu2 > mu2 + tol2:
                 raise CertificationFailure(f"augmented design: gains give worst-case error {cert.mu2:.9g} "
                                            f"> optimised M2 = {mu2:.9g}")
-            if cert.terminal > M1 * (1 + CERT_RTOL) + (1e-6 if (free or solver == "ipopt") else 0.0):
+            if cert.terminal > M1 * (1 + CERT_RTOL) + accuracy:
                 raise CertificationFailure(f"augmented design: terminal worst-case error {cert.terminal:.9g} > M1")
         else:
             extra["certified_runtime"] = runtime

@@ -20,11 +20,14 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution, solve_lp
+from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.solvers import solve_lp
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
-from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L, check_mode
+from eqrec.design.augmented_model import (AugmentedGains, AugmentedStacking, as_time_varying_L, check_mode,
+                                          missing_data_pattern)
 from eqrec.errors import InputError
 
 
@@ -47,13 +50,14 @@ class AugmentedLP:
         Seed of the generic ``L`` that fixes the sparsity pattern.
     """
 
-    def __init__(self, system: AffineSystem, word: str, M1: float, L: np.ndarray, s0: np.ndarray | None = None,
+    def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", M1: float, L: np.ndarray, s0: np.ndarray | None = None,
                  mode: str = "theorem2", strictly_causal: bool = False, pattern_seed: int = 12345):
         t0 = time.perf_counter()
         check_mode(mode, ("theorem2", "leak"))
         M1 = float(M1)
         if not np.isfinite(M1) or M1 <= 0:
             raise InputError(f"the recovery level M1 must be positive, got {M1}", field="mu1")
+        word = missing_data_pattern(word).label
         self.system, self.word, self.M1, self.mode = system, word, M1, mode
         self.strictly_causal = strictly_causal
         self.T = T = len(word)
@@ -129,35 +133,19 @@ class AugmentedLP:
         level_coef[T * n:] = 0.0
         self._rows_meta = dict(entry_row=entry_row, entry_coord=entry_coord, G0=G0, R=R,
                                level_const=level_const, level_coef=level_coef)
-        self._builder_base = b.num_rows
         self.radius = lay.radius(system.eta_w, system.eta_v, M1)
         self._b = b
         self._E = E
         self.L = None
         self.lp = self._build(L)
         self.build_time = time.perf_counter() - t0
-        # positions in the CSC data of the ±Gx entries (the "abs" form: rows base + j and base + k + j)
-        A = self.lp.A
-        nr = A.shape[0]
-        has_var = np.zeros(E, bool)
-        has_var[self._g_ent] = True
-        var_entries = np.flatnonzero(has_var)
-        k = var_entries.size
-        local = np.searchsorted(var_entries, self._g_ent)
-        colidx = np.repeat(np.arange(A.shape[1]), np.diff(A.indptr))
-        keyA = colidx.astype(np.int64) * nr + A.indices
-        if not np.all(np.diff(keyA) > 0):
-            A.sort_indices()
-            keyA = colidx.astype(np.int64) * nr + A.indices
-        rows_plus = self._builder_base + local
-        rows_minus = self._builder_base + k + local
-        self._pos_plus = np.searchsorted(keyA, self._g_col.astype(np.int64) * nr + rows_plus)
-        self._pos_minus = np.searchsorted(keyA, self._g_col.astype(np.int64) * nr + rows_minus)
-        ok = (np.all(self._pos_plus < keyA.size) and np.all(self._pos_minus < keyA.size)
-              and np.array_equal(keyA[self._pos_plus], self._g_col * nr + rows_plus)
-              and np.array_equal(keyA[self._pos_minus], self._g_col * nr + rows_minus))
-        if not ok:  # pragma: no cover - guards against a change of the core's row layout
-            raise AssertionError("robust-row layout of eqrec.robust changed; AugmentedLP cannot update values")
+        # the robust layer says where the L-dependent coefficients are; order them as ours
+        idx = self._robust_index
+        keys_ours = self._g_ent.astype(np.int64) * self._nx + self._g_col
+        keys_lp = idx.gx_entries.astype(np.int64) * self._nx + idx.gx_cols
+        self._gx_order = np.searchsorted(keys_ours, keys_lp)
+        if not np.array_equal(keys_ours[np.minimum(self._gx_order, keys_ours.size - 1)], keys_lp):
+            raise AssertionError("the robust layer placed coefficients AugmentedLP did not create")  # pragma: no cover
         if np.any(self.s0):
             self.lp = self._exact_build(L)  # s0 ≠ 0: the certain part depends on L too
         else:
@@ -180,8 +168,9 @@ class AugmentedLP:
             entry_row=meta["entry_row"], entry_coord=meta["entry_coord"], G0=meta["G0"],
             Gx=sp.csr_matrix((vals, (self._g_ent, self._g_col)), shape=(self._E, self._nx)),
             c0=np.zeros(meta["R"]), cx=sp.csr_matrix((cv, (cr, cc)), shape=(meta["R"], self._nx)))
-        add_robust_rows(self._b, rows, self.radius, level_const=meta["level_const"], level_col=self.mu2_col,
-                        level_coef=meta["level_coef"], form="abs")
+        self._robust_index = add_robust_rows(self._b, rows, self.radius, level_const=meta["level_const"],
+                                             level_col=self.mu2_col, level_coef=meta["level_coef"], form="abs",
+                                             track_gx=True)
         return self._b.build()
 
     def _cx_with_s0(self, aug, cr, cc, cv):
@@ -210,7 +199,6 @@ class AugmentedLP:
         for (s, i), mc in self.m_cols.items():
             b.add_variables(mc.size, name=f"M[{s},{i}]")
         b.add_variables(self.T * self.system.n, name="nu")
-        self._builder_base = b.num_rows
         aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
         meta = self._rows_meta
         cr, cc, cv = self._cx_fixed
@@ -227,8 +215,7 @@ class AugmentedLP:
     def _set_values(self, L, lp):
         aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
         vals = self._gx_values(aug)
-        lp.A.data[self._pos_plus] = -vals
-        lp.A.data[self._pos_minus] = vals
+        self._robust_index.update_gx(lp, vals[self._gx_order])
         self.L = aug.L
         self.aug = aug
 

@@ -60,7 +60,7 @@ import scipy.linalg as sla
 
 from eqrec.errors import InputError
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
-from eqrec.core.patterns import PrefixTree, validate_word
+from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 
@@ -86,6 +86,27 @@ def as_time_varying_L(L: np.ndarray, T: int, n: int, p: int) -> np.ndarray:
     if L.shape == (T, n, p):
         return L.copy()
     raise InputError(f"L must have shape ({n}, {p}) or ({T}, {n}, {p}), got {L.shape}", field="L")
+
+
+def missing_data_pattern(word: "ArrivalPattern | str") -> ArrivalPattern:
+    """The pattern of ``word``, which must be a missing-data pattern (each measurement on time or never).
+
+    The augmented estimator of the augmented paper uses ``ỹ(k)`` at step ``k``
+    only; delayed measurements need the event-based design of the
+    delayed-data paper (``eqrec design --method prefix`` with delay words).
+    """
+    pattern = as_pattern(word)
+    if not pattern.is_missing_data:
+        raise InputError(f"pattern {pattern.label!r} has delayed measurements; the augmented estimator of the "
+                         "augmented paper handles missing data only (use the prefix-based design for delays)",
+                         field="words")
+    return pattern
+
+
+def arrival_indicator(word: "ArrivalPattern | str") -> np.ndarray:
+    """``q(k)`` (1 if the measurement of step ``k`` arrives) of a missing-data pattern."""
+    pattern = missing_data_pattern(word)
+    return np.array([1 if pattern.arrives(k) else 0 for k in range(pattern.T)])
 
 
 def effective_L(L: np.ndarray, word: str, mode: str) -> np.ndarray:
@@ -152,7 +173,7 @@ class AugmentedStacking:
 
     def __init__(self, system: AffineSystem, word: str, L: np.ndarray, mode: str = "theorem2",
                  stacking: Stacking | None = None):
-        word = validate_word(word)
+        word = missing_data_pattern(word).label
         check_mode(mode, ("theorem2", "leak"))
         self.system, self.word, self.mode = system, word, mode
         self.T = T = len(word)
@@ -244,7 +265,7 @@ def _innovation_recursion(system: AffineSystem, word: str, Lt: np.ndarray, s0: n
     Returns ``Z`` (``Tp x Tp``, unit block lower triangular on measured steps) and ``zc``.
     """
     T, n, p = len(word), system.n, system.p
-    q = np.array([int(c) for c in word])
+    q = arrival_indicator(word)
     Sy = np.zeros((n, T * p))
     sc = np.asarray(s0, float).reshape(n).copy()
     Z = np.zeros((T * p, T * p))
@@ -291,7 +312,7 @@ def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains, runtime
     word, T = gains.word, gains.T
     n, p = system.n, system.p
     L = _masked_L(as_time_varying_L(gains.L, T, n, p), word, runtime)
-    q = np.array([int(c) for c in word])
+    q = arrival_indicator(word)
     F = np.zeros((T * n, T * p))
     u0 = np.zeros(T * n)
 
@@ -315,7 +336,7 @@ def time_based_to_augmented(system: AffineSystem, word: str, F: np.ndarray, u0: 
     ``P`` unit block lower triangular.  Hence ``M_m = F_m P^{-1}`` and
     ``ν = u0 - M_m p0`` reproduce ``ue`` exactly.
     """
-    word = validate_word(word)
+    word = missing_data_pattern(word).label
     check_mode(runtime, RUNTIME_MODES)
     T, n, p = len(word), system.n, system.p
     F = np.asarray(F, float)
@@ -323,7 +344,7 @@ def time_based_to_augmented(system: AffineSystem, word: str, F: np.ndarray, u0: 
     if F.shape != (T * n, T * p) or u0.shape != (T * n,):
         raise InputError(f"F must be {(T * n, T * p)} and u0 ({T * n},), got {F.shape} and {u0.shape}")
     Lt = _masked_L(as_time_varying_L(L, T, n, p), word, runtime)
-    q = np.array([int(c) for c in word])
+    q = arrival_indicator(word)
     P, p0 = _innovation_recursion(system, word, Lt, s0,
                                   lambda k, Z, zc: (F[k * n:(k + 1) * n], u0[k * n:(k + 1) * n]))
     meas = np.repeat(q == 1, p)

@@ -34,7 +34,7 @@ is the special case of a single (worst-case) word.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -42,9 +42,10 @@ import scipy.sparse as sp
 from eqrec.errors import InputError
 from eqrec.core.gains import q_to_f, schedule_from_word_gains
 from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
-from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution, solve_lp
+from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
+from eqrec.core.solvers import solve_lp
 from eqrec.design.result import Design
-from eqrec.core.robust import UncertainAffineRows, add_robust_rows
+from eqrec.core.robust import RobustRowsIndex, UncertainAffineRows, add_robust_rows
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 
@@ -60,12 +61,14 @@ class PrefixLP:
     mu2_col: int
     q_cols: dict[int, np.ndarray]  # node index -> columns of Q row (n x k p, row-major)
     r_cols: dict[int, np.ndarray]  # node index -> columns of r(t)
-    measured: dict[int, list[int]]  # node index -> measured times τ <= t
+    measured: dict[int, list[int]]  # node index -> available measurement times A(t)
     build_time: float = 0.0
+    level_cols: dict[int, int] = field(default_factory=dict)  # node index -> its own level μ2 (per-node levels)
+    robust_index: RobustRowsIndex | None = None
 
 
 def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
-                    form: str = "split", zero_offset: bool = True) -> PrefixLP:
+                    form: str = "split", zero_offset: bool = True, levels: str = "common") -> PrefixLP:
     """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
 
     Parameters
@@ -84,6 +87,15 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         ``"abs"`` or the paper's Π-dual ``"dual"``.
     zero_offset
         Fix ``r = 0`` (no loss of optimality, see the module docstring).
+    levels
+        ``"common"``: one intermediate level ``M2`` for every node (the
+        prefix-based paper; minimised).  ``"sum"``: a level ``μ2`` per
+        non-terminal node, ``μ2 >= M1``, minimising ``Σ_node w_node μ2,node`` with
+        ``w_node`` the number of patterns through the node (the cost
+        ``Σ_k Σ_α μ2,k^α`` of the delayed-data paper counts each pattern);
+        ``"max"``: per-node levels and the largest one minimised (same optimum
+        as ``"common"``).  With ``"sum"`` the column ``mu2_col`` is unused (the
+        largest level is read from the node levels).
     """
     t_start = time.perf_counter()
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
@@ -98,9 +110,11 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     lay = st.layout
     phi, Ol, Y = st.transition, st.open_loop, st.output_maps
 
+    if levels not in ("common", "sum", "max"):
+        raise InputError(f"unknown level structure {levels!r}; choose 'common', 'sum' or 'max'", field="levels")
     b = LPBuilder()
     mu2 = int(b.add_variables(1, lower=M1, name="mu2")[0])
-    b.set_cost(mu2, 1.0)
+    b.set_cost(mu2, 1.0 if levels != "sum" else 0.0)
     q_cols: dict[int, np.ndarray] = {}
     r_cols: dict[int, np.ndarray] = {}
     measured: dict[int, list[int]] = {}
@@ -114,7 +128,23 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     # Robust rows of ξ(t) for every node of depth t (the error after that prefix).
     entry_row, entry_coord, G0, gx_r, gx_c, gx_v = [], [], [], [], [], []
     c_r, c_c, c_v = [], [], []
-    level_const, level_coef = [], []
+    level_const, level_coef, row_level_col = [], [], []
+    node_level: dict[int, int] = {}
+    if levels != "common":
+        through = {node.index: 0 for node in tree}
+        for pat in tree.patterns:
+            for anc in tree.path(pat):
+                through[anc.index] += 1
+        for node in tree:
+            if node.terminal:
+                continue  # its rows are bounded by M1
+            col = int(b.add_variables(1, lower=M1, name=f"mu2[{node.label}]")[0])
+            node_level[node.index] = col
+            if levels == "sum":
+                b.set_cost(col, float(through[node.index]))
+            else:  # max: the common mu2 bounds every node level
+                b.add_rows(np.array([0, 0]), np.array([col, mu2]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
+                           count=1)
     row0 = 0
     ent0 = 0
     D = lay.size
@@ -156,6 +186,7 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         else:
             level_const.append(np.zeros(n))
             level_coef.append(np.ones(n))
+        row_level_col.append(np.full(n, mu2 if levels == "common" else node_level.get(node.index, -1)))
         row0 += n
     nx = b.num_variables
     rows = UncertainAffineRows(
@@ -167,10 +198,12 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
                          shape=(row0, nx)),
     )
     radius = lay.radius(system.eta_w, system.eta_v, M1)
-    add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const), level_col=mu2,
-                    level_coef=np.concatenate(level_coef), form=form)
+    robust_index = add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const),
+                                   level_cols=np.concatenate(row_level_col), level_coef=np.concatenate(level_coef),
+                                   form=form)
     lp = b.build()
     return PrefixLP(lp=lp, stacking=st, tree=tree, M1=M1, mu2_col=mu2, q_cols=q_cols, r_cols=r_cols,
+                    level_cols=node_level, robust_index=robust_index,
                     measured=measured, build_time=time.perf_counter() - t_start)
 
 
@@ -207,11 +240,17 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
 
 def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
-                  zero_offset: bool = True) -> Design:
+                  zero_offset: bool = True, levels: str = "common") -> Design:
     """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
+    ``words`` are arrival patterns (:mod:`eqrec.core.patterns`) or 0/1 words;
+    delay patterns give the event-based design of the delayed-data paper
+    (one gain block per event-prefix node).  ``levels`` selects one common
+    ``M2`` or per-node levels (:func:`build_prefix_lp`); with per-node levels
+    :attr:`Design.levels` holds them and ``mu2`` is the largest.
+
     Returns a :class:`Design` whose gains have been certified independently
-    (:func:`eqrec.certify.certify_design`) unless ``certify=False``.
+    (:func:`eqrec.core.certify.certify_design`) unless ``certify=False``.
 
     Raises
     ------
@@ -222,11 +261,13 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     CertificationFailure
         If the recovered gains do not achieve the optimum.
     """
-    model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset)
+    model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset, levels=levels)
     sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {M1:g})")
     schedule = read_schedule(model, sol, time_based=(method == "time"))
+    node_levels = {model.tree.nodes[i].label: float(sol.x[c]) for i, c in model.level_cols.items()}
+    mu2 = max(node_levels.values(), default=model.M1) if levels == "sum" else float(sol.x[model.mu2_col])
     design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, M1=model.M1,
-                    mu2=float(sol.x[model.mu2_col]), schedule=schedule, solution=sol, build_time=model.build_time)
+                    mu2=mu2, schedule=schedule, solution=sol, build_time=model.build_time, levels=node_levels)
     if certify:
         from eqrec.core.certify import certify_design
 

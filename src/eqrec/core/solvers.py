@@ -1,0 +1,222 @@
+"""The LP solver registry: one list of solver names, one entry point.
+
+Every design solves a :class:`eqrec.core.lp.LinearProgram`; the solver is a
+parameter.  :data:`SOLVERS` maps each name to a :class:`SolverInfo`;
+:data:`SOLVER_NAMES` is the list the CLI and the configuration schemas offer
+(a test checks they agree).
+
+``"ipopt"`` is the interior-point NLP solver the augmented paper uses, run
+through CasADi on the LP as a smooth problem with linear constraints; its
+optimum is accurate to its tolerance only, so :attr:`SolverInfo.accuracy`
+widens the certification tolerance for it.  The nonconvex augmented design
+with ``L`` free is a design *method* (:mod:`eqrec.design.augmented_nlp`), not
+an LP solver.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+
+from eqrec.core.lp import INF, LinearProgram, LPSolution
+
+
+def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
+    import highspy
+
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    for key, val in options.items():
+        h.setOptionValue(key, val)
+    model = highspy.HighsLp()
+    nr, nc = lp.A.shape
+    model.num_col_ = nc
+    model.num_row_ = nr
+    model.col_cost_ = lp.c
+    model.col_lower_ = lp.col_lower
+    model.col_upper_ = lp.col_upper
+    model.row_lower_ = lp.row_lower
+    model.row_upper_ = lp.row_upper
+    model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    model.a_matrix_.start_ = lp.A.indptr
+    model.a_matrix_.index_ = lp.A.indices
+    model.a_matrix_.value_ = lp.A.data
+    model.a_matrix_.num_col_ = nc
+    model.a_matrix_.num_row_ = nr
+    h.passModel(model)
+    t0 = time.perf_counter()
+    h.run()
+    elapsed = time.perf_counter() - t0
+    ms = h.getModelStatus()
+    info = h.getInfo()
+    iters = int(info.simplex_iteration_count) + int(max(info.ipm_iteration_count, 0))
+    if ms == highspy.HighsModelStatus.kOptimal:
+        x = np.asarray(h.getSolution().col_value)
+        return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks)
+    if ms == highspy.HighsModelStatus.kInfeasible:
+        return LPSolution("infeasible", None, INF, "highs", iters, elapsed, lp.blocks)
+    if ms in (highspy.HighsModelStatus.kUnbounded, highspy.HighsModelStatus.kUnboundedOrInfeasible):
+        status = "unbounded" if ms == highspy.HighsModelStatus.kUnbounded else "infeasible"
+        return LPSolution(status, None, -INF, "highs", iters, elapsed, lp.blocks)
+    return LPSolution(h.modelStatusToString(ms), None, np.nan, "highs", iters, elapsed, lp.blocks)
+
+
+def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
+    import clarabel
+
+    A = lp.A.tocsr()
+    nc = A.shape[1]
+    eye = sp.identity(nc, format="csr")
+    eq = np.isfinite(lp.row_lower) & (lp.row_lower == lp.row_upper)
+    up = np.isfinite(lp.row_upper) & ~eq
+    lo = np.isfinite(lp.row_lower) & ~eq
+    cup = np.isfinite(lp.col_upper)
+    clo = np.isfinite(lp.col_lower)
+    # Clarabel form: A_c x + s = b, s in cones; equalities first (zero cone).
+    parts = [A[eq], A[up], -A[lo], eye[cup], -eye[clo]]
+    rhs = [lp.row_upper[eq], lp.row_upper[up], -lp.row_lower[lo], lp.col_upper[cup], -lp.col_lower[clo]]
+    Ac = sp.vstack(parts, format="csc")
+    b = np.concatenate(rhs)
+    n_eq = int(eq.sum())
+    cones = []
+    if n_eq:
+        cones.append(clarabel.ZeroConeT(n_eq))
+    if Ac.shape[0] - n_eq:
+        cones.append(clarabel.NonnegativeConeT(Ac.shape[0] - n_eq))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    for key, val in options.items():
+        setattr(settings, key, val)
+    P = sp.csc_matrix((nc, nc))
+    t0 = time.perf_counter()
+    solver = clarabel.DefaultSolver(P, lp.c, Ac, b, cones, settings)
+    sol = solver.solve()
+    elapsed = time.perf_counter() - t0
+    status = str(sol.status)
+    if status in ("Solved", "AlmostSolved"):
+        x = np.asarray(sol.x)
+        return LPSolution("optimal", x, float(lp.c @ x), "clarabel", int(sol.iterations), elapsed, lp.blocks)
+    if "PrimalInfeasible" in status:
+        return LPSolution("infeasible", None, INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
+    if "DualInfeasible" in status:
+        return LPSolution("unbounded", None, -INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
+    return LPSolution(status, None, np.nan, "clarabel", int(sol.iterations), elapsed, lp.blocks)
+
+
+def _solve_scipy(lp: LinearProgram, options: dict) -> LPSolution:
+    from scipy.optimize import linprog
+
+    A = lp.A.tocsr()
+    eq = lp.row_lower == lp.row_upper
+    up = np.isfinite(lp.row_upper) & ~eq
+    lo = np.isfinite(lp.row_lower) & ~eq
+    A_ub = sp.vstack([A[up], -A[lo]], format="csr")
+    b_ub = np.concatenate([lp.row_upper[up], -lp.row_lower[lo]])
+    bounds = np.column_stack([np.where(np.isfinite(lp.col_lower), lp.col_lower, None),
+                              np.where(np.isfinite(lp.col_upper), lp.col_upper, None)])
+    t0 = time.perf_counter()
+    res = linprog(lp.c, A_ub=A_ub, b_ub=b_ub, A_eq=A[eq] if eq.any() else None,
+                  b_eq=lp.row_upper[eq] if eq.any() else None, bounds=bounds, method="highs", options=options)
+    elapsed = time.perf_counter() - t0
+    status = {0: "optimal", 2: "infeasible", 3: "unbounded"}.get(res.status, res.message)
+    x = res.x if res.status == 0 else None
+    obj = float(res.fun) if res.status == 0 else np.nan
+    return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks)
+
+
+def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
+    import casadi as ca
+
+    A = lp.A.tocsc()
+    A.sort_indices()
+    nr, nc = A.shape
+    x = ca.MX.sym("x", nc)
+    Acas = ca.DM(ca.Sparsity(nr, nc, A.indptr.tolist(), A.indices.tolist()), A.data)
+    nlp = {"x": x, "f": ca.dot(ca.DM(lp.c), x), "g": ca.mtimes(Acas, x)}
+    x0 = np.asarray(options.pop("x0", np.zeros(nc)), float)
+    opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9,
+            "ipopt.max_iter": 3000}
+    opts.update({k if "." in k else f"ipopt.{k}": v for k, v in options.items()})
+    solver = ca.nlpsol("lp", "ipopt", nlp, opts)
+    t0 = time.perf_counter()
+    sol = solver(x0=x0, lbx=lp.col_lower, ubx=lp.col_upper, lbg=lp.row_lower, ubg=lp.row_upper)
+    elapsed = time.perf_counter() - t0
+    stats = solver.stats()
+    status = str(stats.get("return_status"))
+    iters = int(stats.get("iter_count", 0))
+    if status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+        xv = np.asarray(sol["x"]).reshape(-1)
+        return LPSolution("optimal", xv, float(lp.c @ xv), "ipopt", iters, elapsed, lp.blocks)
+    if status == "Infeasible_Problem_Detected":
+        return LPSolution("infeasible", None, INF, "ipopt", iters, elapsed, lp.blocks)
+    if status == "Diverging_Iterates":
+        return LPSolution("unbounded", None, -INF, "ipopt", iters, elapsed, lp.blocks)
+    return LPSolution(status, None, np.nan, "ipopt", iters, elapsed, lp.blocks)
+
+
+@dataclass(frozen=True)
+class SolverInfo:
+    """A registered LP solver.
+
+    Attributes
+    ----------
+    name
+        Registry key (what users type).
+    description
+        One line for ``--help`` and the README.
+    solve
+        ``solve(lp, options) -> LPSolution``.
+    accuracy
+        Absolute accuracy of its optimum beyond the feasibility tolerance
+        (added to the certification tolerance).
+    """
+
+    name: str
+    description: str
+    solve: Callable[[LinearProgram, dict], LPSolution]
+    accuracy: float = 0.0
+
+
+SOLVERS: dict[str, SolverInfo] = {
+    "highs": SolverInfo("highs", "HiGHS dual simplex (highspy); exact vertex optimum", _solve_highs),
+    "clarabel": SolverInfo("clarabel", "Clarabel interior point", _solve_clarabel),
+    "scipy": SolverInfo("scipy", "scipy.optimize.linprog (HiGHS inside SciPy)", _solve_scipy),
+    "ipopt": SolverInfo("ipopt", "IPOPT interior point through CasADi (the augmented paper's solver)",
+                        _solve_ipopt, accuracy=1e-6),
+}
+
+#: The solver names offered by the CLI and the configuration schemas.
+SOLVER_NAMES: tuple[str, ...] = tuple(SOLVERS)
+
+
+def solver_info(name: str) -> SolverInfo:
+    """The registry entry of ``name``; :class:`ValueError` naming the choices otherwise."""
+    try:
+        return SOLVERS[name]
+    except KeyError:
+        raise ValueError(f"unknown solver {name!r}; choose one of {list(SOLVER_NAMES)}") from None
+
+
+def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None) -> LPSolution:
+    """Solve a :class:`LinearProgram` with a registered solver.
+
+    Parameters
+    ----------
+    lp
+        The problem.
+    solver
+        A name of :data:`SOLVER_NAMES`.
+    options
+        Passed to the solver (HiGHS option names, Clarabel settings, IPOPT
+        options; ``x0`` is IPOPT's starting point).
+
+    Returns
+    -------
+    LPSolution
+        Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.
+    """
+    return solver_info(solver).solve(lp, dict(options or {}))
