@@ -49,23 +49,30 @@ class ArrivalPattern:
     arrivals
         ``arrivals[τ]`` is the arrival time ``a(τ)`` (``τ <= a(τ) < T``) or
         ``None`` when the measurement does not arrive within the horizon.
-    label
-        The word the pattern was made from (not part of equality).
+    given_label
+        The word the pattern was made from (not part of equality); :attr:`label`
+        falls back to :attr:`canonical_label`.
 
     Equality and hashing use ``arrivals`` only: equal event sequences are
     equal patterns.
     """
 
     arrivals: tuple[int | None, ...]
-    label: str = field(default="", compare=False)
+    given_label: str = field(default="", compare=False, repr=False)
 
     def __post_init__(self) -> None:
         T = len(self.arrivals)
         for tau, a in enumerate(self.arrivals):
             if a is not None and not (tau <= a < T):
                 raise InputError(f"arrival time {a} of the measurement of time {tau} is outside [{tau}, {T - 1}]")
-        if not self.label:
-            object.__setattr__(self, "label", self.canonical_label)
+
+    @cached_property
+    def label(self) -> str:
+        """The word the pattern was made from, else :attr:`canonical_label`."""
+        return self.given_label or self.canonical_label
+
+    def __repr__(self) -> str:
+        return f"ArrivalPattern({self.label!r}, arrivals={self.arrivals})"
 
     # -- construction ---------------------------------------------------------
     @classmethod
@@ -147,12 +154,19 @@ class ArrivalPattern:
         """
         if not 0 < length <= self.T:
             raise InputError(f"prefix length {length} outside 1..{self.T}")
-        arr = tuple(a if a is not None and a < length else None for a in self.arrivals[:length])
-        return ArrivalPattern(arr)
+        return self._prefixes[length - 1]
+
+    @cached_property
+    def _prefixes(self) -> tuple["ArrivalPattern", ...]:
+        out = []
+        for length in range(1, self.T):
+            out.append(ArrivalPattern(tuple(a if a is not None and a < length else None
+                                            for a in self.arrivals[:length])))
+        return tuple(out) + (self if not self.given_label else ArrivalPattern(self.arrivals),)
 
     def prefixes(self) -> list["ArrivalPattern"]:
         """All non-empty prefixes, shortest first."""
-        return [self.prefix(k) for k in range(1, self.T + 1)]
+        return list(self._prefixes)
 
     def extend(self, length: int) -> "ArrivalPattern":
         """Append on-time measurements up to ``length`` (the minimum-recovery-time search, Sec. V of P1)."""

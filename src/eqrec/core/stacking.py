@@ -152,15 +152,23 @@ class Stacking:
         availability mask), which is nested in time, so the Q-parametrisation
         keeps that pattern (see :mod:`eqrec.design.prefix`).
         """
-        n = self.system.n
+        n, p = self.system.n, self.system.p
         q = self.arrival_indicator(pattern)
-        blocks = [int(q[t]) * self.system.C_at(t) for t in range(self.T)]
-        return np.hstack([sla.block_diag(*blocks), np.zeros((self.T * self.system.p, n))])
+        out = np.zeros((self.T * p, (self.T + 1) * n))
+        for t in range(self.T):
+            if q[t]:
+                out[t * p:(t + 1) * p, t * n:(t + 1) * n] = self.system.C_at(t)
+        return out
 
     def N(self, pattern: "ArrivalPattern | str") -> np.ndarray:
         """Eq. (14): ``blkdiag(q(t) V(t))``."""
         q = self.arrival_indicator(pattern)
-        return sla.block_diag(*[int(q[t]) * self.system.V_at(t) for t in range(self.T)])
+        p, nv = self.system.p, self.system.nv
+        out = np.zeros((self.T * p, self.T * nv))
+        for t in range(self.T):
+            if q[t]:
+                out[t * p:(t + 1) * p, t * nv:(t + 1) * nv] = self.system.V_at(t)
+        return out
 
     def error_map_from_Q(self, word: "ArrivalPattern | str", Q: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eq. (13): ``ξ = G δ + c`` for a block lower-triangular ``Q`` and ``r``.

@@ -168,10 +168,11 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         entry_row.append(row0 + idx // D)
         entry_coord.append(idx % D)
         G0.append(const[idx])
-        Ks = sp.coo_matrix(K[idx])
-        gx_r.append(Ks.row + ent0)
-        gx_c.append(cols[Ks.col])
-        gx_v.append(Ks.data)
+        Ki = K[idx]
+        kr, kc = np.nonzero(Ki)  # row-major, the order of a COO conversion
+        gx_r.append(kr + ent0)
+        gx_c.append(cols[kc])
+        gx_v.append(Ki[kr, kc])
         ent0 += idx.size
         # certain part c_t = Σ_s Φ(t, s+1) r(s) (identically zero when r is fixed to zero)
         for s, anc in enumerate(path if not zero_offset else []):
