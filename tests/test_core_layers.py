@@ -107,3 +107,14 @@ def test_delay_design_is_certified_and_causal_runs_attain_the_bounds(acc):
                 tr = simulate_run(acc, d.schedule, cert.pattern, cert.worst_vertex(t, i), np.zeros(acc.n))
                 gap = max(gap, abs(abs(tr.error[t, i]) - cert.bounds[t, i]))
     assert gap < 1e-9
+
+
+def test_mu1_as_a_variable_pinned_to_m1_gives_the_fixed_m1_optimum(acc, L1_words):
+    ref = design_prefix(acc, L1_words, 1.0).mu2
+    m = build_prefix_lp(acc, L1_words, 1.0, mu1_range=(1.0, 1.0), mu1_cost=0.0)
+    assert solve_lp(m.lp).objective == pytest.approx(ref, abs=1e-9)
+    # relaxing the box radius to the interval's lower end gives a lower bound of the cost on the interval
+    lo = build_prefix_lp(acc, L1_words, 0.9, mu1_range=(0.9, 1.0), mu1_cost=0.0)
+    assert solve_lp(lo.lp).objective <= ref + 1e-9
+    with pytest.raises(InputError, match="range of mu1"):
+        build_prefix_lp(acc, L1_words, 1.0, mu1_range=(1.0, 0.5))

@@ -65,10 +65,12 @@ class PrefixLP:
     build_time: float = 0.0
     level_cols: dict[int, int] = field(default_factory=dict)  # node index -> its own level μ2 (per-node levels)
     robust_index: RobustRowsIndex | None = None
+    mu1_col: int | None = None  # the recovery level as a variable (mu1_range)
 
 
 def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
-                    form: str = "split", zero_offset: bool = True, levels: str = "common") -> PrefixLP:
+                    form: str = "split", zero_offset: bool = True, levels: str = "common",
+                    mu1_range: tuple[float, float] | None = None, mu1_cost: float = 1.0) -> PrefixLP:
     """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
 
     Parameters
@@ -96,6 +98,13 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         ``"max"``: per-node levels and the largest one minimised (same optimum
         as ``"common"``).  With ``"sum"`` the column ``mu2_col`` is unused (the
         largest level is read from the node levels).
+    mu1_range
+        Make the recovery level a variable ``μ1 ∈ [lo, hi]`` (cost ``mu1_cost μ1``):
+        terminal rows are bounded by it and every level by ``>= μ1``, while the
+        initial-error box keeps the radius ``M1``.  With ``M1 = lo`` the LP is a
+        relaxation of the bilinear problem (10) of the delayed-data paper over
+        ``μ1 ∈ [lo, hi]`` (``|G_ξ0| μ1 >= |G_ξ0| lo``): its optimum is a lower
+        bound of the cost on that interval.
     """
     t_start = time.perf_counter()
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
@@ -113,8 +122,16 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     if levels not in ("common", "sum", "max"):
         raise InputError(f"unknown level structure {levels!r}; choose 'common', 'sum' or 'max'", field="levels")
     b = LPBuilder()
-    mu2 = int(b.add_variables(1, lower=M1, name="mu2")[0])
+    level_lower = M1 if mu1_range is None else float(mu1_range[0])
+    mu2 = int(b.add_variables(1, lower=level_lower, name="mu2")[0])
     b.set_cost(mu2, 1.0 if levels != "sum" else 0.0)
+    mu1_col = None
+    if mu1_range is not None:
+        lo, hi = map(float, mu1_range)
+        if not (0 < lo <= hi and np.isfinite(hi)):
+            raise InputError(f"the range of mu1 must satisfy 0 < lo <= hi < inf, got {mu1_range}", field="mu1")
+        mu1_col = int(b.add_variables(1, lower=lo, upper=hi, name="mu1")[0])
+        b.set_cost(mu1_col, float(mu1_cost))
     q_cols: dict[int, np.ndarray] = {}
     r_cols: dict[int, np.ndarray] = {}
     measured: dict[int, list[int]] = {}
@@ -138,7 +155,7 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         for node in tree:
             if node.terminal:
                 continue  # its rows are bounded by M1
-            col = int(b.add_variables(1, lower=M1, name=f"mu2[{node.label}]")[0])
+            col = int(b.add_variables(1, lower=level_lower, name=f"mu2[{node.label}]")[0])
             node_level[node.index] = col
             if levels == "sum":
                 b.set_cost(col, float(through[node.index]))
@@ -181,13 +198,16 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
             c_r.append(row0 + rr)
             c_c.append(r_cols[anc.index][cc])
             c_v.append(P[rr, cc])
-        if node.terminal:
+        if node.terminal and mu1_col is None:
             level_const.append(np.full(n, M1))
             level_coef.append(np.zeros(n))
         else:
             level_const.append(np.zeros(n))
             level_coef.append(np.ones(n))
-        row_level_col.append(np.full(n, mu2 if levels == "common" else node_level.get(node.index, -1)))
+        if node.terminal and mu1_col is not None:
+            row_level_col.append(np.full(n, mu1_col))
+        else:
+            row_level_col.append(np.full(n, mu2 if levels == "common" else node_level.get(node.index, -1)))
         row0 += n
     nx = b.num_variables
     rows = UncertainAffineRows(
@@ -198,13 +218,17 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
                           (np.concatenate(c_r or [np.zeros(0, int)]), np.concatenate(c_c or [np.zeros(0, int)]))),
                          shape=(row0, nx)),
     )
+    if mu1_col is not None:  # every level is at least mu1
+        for col in [mu2, *node_level.values()]:
+            b.add_rows(np.array([0, 0]), np.array([mu1_col, col]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
+                       count=1)
     radius = lay.radius(system.eta_w, system.eta_v, M1)
     robust_index = add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const),
                                    level_cols=np.concatenate(row_level_col), level_coef=np.concatenate(level_coef),
                                    form=form)
     lp = b.build()
     return PrefixLP(lp=lp, stacking=st, tree=tree, M1=M1, mu2_col=mu2, q_cols=q_cols, r_cols=r_cols,
-                    level_cols=node_level, robust_index=robust_index,
+                    level_cols=node_level, robust_index=robust_index, mu1_col=mu1_col,
                     measured=measured, build_time=time.perf_counter() - t_start)
 
 
