@@ -110,3 +110,19 @@ def test_bad_inputs(acc):
         AugmentedStacking(acc, "10a111", np.zeros((3, 2)))
     with pytest.raises(InputError):
         time_based_to_augmented(acc, "111111", np.zeros((3, 3)), np.zeros(18), np.zeros((3, 2)), np.zeros(3))
+
+
+def test_masked_gain_reading_is_the_appendix_formula_and_differs_from_the_dynamics(acc, rng):
+    """'masked_gain': Φ_k = A - L C at every step, block-diagonal L zeroed at missing steps (issue 9)."""
+    word = "100111"
+    g = random_gains(rng, word)
+    aug = AugmentedStacking(acc, word, g.L, "masked_gain")
+    G, c = aug.error_map(g.M, g.nu, g.s0)
+    pb = aug.paper_blocks(g.M)
+    assert np.allclose(np.hstack([pb["Theta"], pb["Psi"], pb["Xi"]]), G, atol=1e-12)
+    assert np.allclose(pb["Upsilon"] @ g.s0 + pb["E"] @ g.nu, c, atol=1e-12)
+    # on a word without missing steps every reading is the same model
+    full = AugmentedStacking(acc, "111111", g.L, "masked_gain").error_map(g.M, g.nu, g.s0)[0]
+    assert np.allclose(full, AugmentedStacking(acc, "111111", g.L, "theorem2").error_map(g.M, g.nu, g.s0)[0])
+    # with missing steps it is not the closed loop of any running estimator
+    assert not np.allclose(G, AugmentedStacking(acc, word, g.L, "leak").error_map(g.M, g.nu, g.s0)[0])

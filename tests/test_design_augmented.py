@@ -111,3 +111,21 @@ def test_bad_inputs(acc):
         AugmentedLP(acc, "111111", -1.0, np.zeros((3, 2)))
     with pytest.raises(InputError):
         design_augmented(acc, ["111111"], 1.0, mode="hold")
+
+
+def test_masked_gain_reading_reproduces_fig2_and_the_fig3b_interval(acc):
+    """The Appendix read with Φ = A - LC at every step gives the published 1.05 and [-10/14, 13/14]."""
+    Lp = np.array([[0.76, 0.04], [0.11, 1.97], [0.8, 1.97]])  # printed L of Fig. 2 (input data of the figure)
+    m = AugmentedLP(acc, "100111", 1.0, Lp, mode="masked_gain")
+    assert m.solve().objective == pytest.approx(1.05, abs=1e-7)
+    flat = []
+    for k in range(-12, 16):
+        if k == 0:
+            continue
+        m.set_L(place_observer(acc.A, acc.C, np.array([0.0, k / 14, k / 14])).L)
+        sol = m.solve()
+        if sol.optimal and abs(sol.objective - 1.05) < 1e-6:
+            flat.append(k)
+    assert flat == [k for k in range(-10, 14) if k != 0]
+    d = design_augmented(acc, ["101111", "110111"], 1.0, L=Lp, mode="masked_gain")
+    assert d.extra["certified_runtime"] == "hold" and d.certificate.mu2 > 10  # what the design really guarantees

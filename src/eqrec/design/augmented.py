@@ -18,7 +18,8 @@ from eqrec.core.patterns import as_language, worst_case_pattern
 from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import AugmentedGains, check_mode, missing_data_pattern, schedule_from_augmented
+from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, check_mode, missing_data_pattern,
+                                          schedule_from_augmented)
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import default_poles, place_observer
 from eqrec.design.result import Design
@@ -62,7 +63,7 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
     ------
     InputError, InfeasibleDesign, SolverFailure, CertificationFailure
     """
-    check_mode(mode, ("theorem2", "leak"))
+    check_mode(mode, DESIGN_MODES)
     patterns = as_language(words)
     wc_pattern = missing_data_pattern(worst_case_pattern(patterns))
     language = tuple(p.label for p in patterns)
@@ -100,7 +101,7 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
     extra.update(L=gains.L[0].tolist() if np.allclose(gains.L, gains.L[0]) else gains.L.tolist(),
                  s0=gains.s0.tolist(), M=gains.M.tolist(), nu=gains.nu.tolist(), gains=gains,
                  eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
-    runtime = "hold" if mode == "leak" else "theorem2"
+    runtime = "theorem2" if mode == "theorem2" else "hold"
     schedule = schedule_from_augmented(system, gains, runtime)
     design = Design(method="augmented", system=system, patterns=(wc,), T=T, M1=float(M1), mu2=mu2,
                     schedule=schedule, solution=solution, build_time=model.build_time, extra=extra)

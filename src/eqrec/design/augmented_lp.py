@@ -26,7 +26,7 @@ from eqrec.core.solvers import solve_lp
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
-from eqrec.design.augmented_model import (AugmentedGains, AugmentedStacking, as_time_varying_L, check_mode,
+from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, AugmentedStacking, as_time_varying_L, check_mode,
                                           missing_data_pattern)
 from eqrec.errors import InputError
 
@@ -53,7 +53,7 @@ class AugmentedLP:
     def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", M1: float, L: np.ndarray, s0: np.ndarray | None = None,
                  mode: str = "theorem2", strictly_causal: bool = False, pattern_seed: int = 12345):
         t0 = time.perf_counter()
-        check_mode(mode, ("theorem2", "leak"))
+        check_mode(mode, DESIGN_MODES)
         M1 = float(M1)
         if not np.isfinite(M1) or M1 <= 0:
             raise InputError(f"the recovery level M1 must be positive, got {M1}", field="mu1")
@@ -103,7 +103,10 @@ class AugmentedLP:
         cols = np.concatenate(cols) if cols else np.zeros(0, int)
         phis = np.concatenate(phis) if phis else np.zeros(0)
         zidx = np.concatenate(zidx) if zidx else np.zeros(0, int)
-        Olflat = Ol.reshape(-1)  # index (t*n + a)*D + d
+        # constant part of G: the open-loop map, or (the "masked_gain" reading) the L-dependent literal G0,
+        # whose generic pattern fixes the structure; such LPs are rebuilt at every L
+        self._rebuild = mode == "masked_gain"
+        Olflat = (generic.G0 if self._rebuild else Ol).reshape(-1)  # index (t*n + a)*D + d
         ent_keys = np.union1d(np.flatnonzero(Olflat), keys)
         ent_of = np.searchsorted(ent_keys, keys)
         order = np.lexsort((cols, ent_of))  # canonical CSR order: by entry, then column
@@ -146,8 +149,8 @@ class AugmentedLP:
         self._gx_order = np.searchsorted(keys_ours, keys_lp)
         if not np.array_equal(keys_ours[np.minimum(self._gx_order, keys_ours.size - 1)], keys_lp):
             raise AssertionError("the robust layer placed coefficients AugmentedLP did not create")  # pragma: no cover
-        if np.any(self.s0):
-            self.lp = self._exact_build(L)  # s0 ≠ 0: the certain part depends on L too
+        if np.any(self.s0) or self._rebuild:
+            self.lp = self._exact_build(L)  # s0 ≠ 0 or the literal reading: more than Gx depends on L
         else:
             self._set_values(L, self.lp)
 
@@ -202,10 +205,11 @@ class AugmentedLP:
         aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
         meta = self._rows_meta
         cr, cc, cv = self._cx_fixed
+        G0 = aug.G0.reshape(-1)[self.entry_keys] if self._rebuild else meta["G0"]
         rows = UncertainAffineRows(
-            entry_row=meta["entry_row"], entry_coord=meta["entry_coord"], G0=meta["G0"],
+            entry_row=meta["entry_row"], entry_coord=meta["entry_coord"], G0=G0,
             Gx=sp.csr_matrix((self._gx_values(aug), (self._g_ent, self._g_col)), shape=(self._E, self._nx)),
-            c0=np.zeros(meta["R"]), cx=self._cx_with_s0(aug, cr, cc, cv))
+            c0=aug.Hs @ self.s0, cx=self._cx_with_s0(aug, cr, cc, cv))
         add_robust_rows(b, rows, self.radius, level_const=meta["level_const"], level_col=self.mu2_col,
                         level_coef=meta["level_coef"], form="abs")
         self.L = as_time_varying_L(L, self.T, self.system.n, self.system.p)
@@ -220,7 +224,13 @@ class AugmentedLP:
         self.aug = aug
 
     def set_L(self, L: np.ndarray) -> LinearProgram:
-        """Replace ``L`` by rewriting only the ``L``-dependent matrix values (requires ``s0 = 0``)."""
+        """Replace ``L`` by rewriting only the ``L``-dependent matrix values (requires ``s0 = 0``).
+
+        In the ``"masked_gain"`` reading the constant part depends on ``L`` too: the LP is rebuilt.
+        """
+        if self._rebuild:
+            self.lp = self._exact_build(L)
+            return self.lp
         if np.any(self.s0):
             raise InputError("fast L updates need s0 = 0; build a new AugmentedLP for s0 ≠ 0", field="s0")
         self._set_values(L, self.lp)

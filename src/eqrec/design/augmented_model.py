@@ -38,6 +38,15 @@ Missing data (Theorem 2) and readings of the text
     ``L_k (C e_k + V v_k)`` at a missing step, i.e. the missing measurement.
     Not implementable; its gains run as the actual estimator in ``"hold"``
     (or ``"theorem2"``) mode, where they guarantee what the certificate says.
+``"masked_gain"``
+    The Appendix's stacked matrices read with the transition products
+    ``Φ_i^k``, ``Γ`` built from ``Φ_k = A_k - L C_k`` at *every* step while
+    the gain on the measurement (the block-diagonal ``L`` of the ``Γ L V``
+    and ``(M + L)`` terms) is zeroed at missing steps: ``e(k+1) = (A - L C)
+    e(k) + W w(k)`` there.  What an implementation forming ``Φ`` from the
+    constant ``L`` and masking only the measurement term designs; not the
+    estimator that runs (at a missing step ``s`` has no measurement), so its
+    gains are certified in ``"hold"`` (or ``"theorem2"``) mode.
 
 Equivalence with the time-based estimator
 -----------------------------------------
@@ -64,8 +73,10 @@ from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 
-MODES = ("theorem2", "hold", "leak")
+MODES = ("theorem2", "hold", "leak", "masked_gain")
 RUNTIME_MODES = ("theorem2", "hold")
+#: Readings whose error ``e`` of ``s`` does not depend on ``M`` (an LP for fixed ``L``).
+DESIGN_MODES = ("theorem2", "leak", "masked_gain")
 
 
 def check_mode(mode: str, allowed: tuple[str, ...] = MODES) -> str:
@@ -110,9 +121,9 @@ def arrival_indicator(word: "ArrivalPattern | str") -> np.ndarray:
 
 
 def effective_L(L: np.ndarray, word: str, mode: str) -> np.ndarray:
-    """``L_k`` of the ``e``/``s`` dynamics: zeroed at missing steps in ``"theorem2"`` mode (eq. (12))."""
+    """``L_k`` multiplying the measurement: zeroed at missing steps in ``"theorem2"`` (eq. (12)) and ``"masked_gain"``."""
     L = np.array(L, dtype=float)
-    if mode == "theorem2":
+    if mode in ("theorem2", "masked_gain"):
         for k, q in enumerate(word):
             if q == "0":
                 L[k] = 0.0
@@ -166,7 +177,7 @@ class AugmentedStacking:
     L
         Observer gain, ``n x p`` (constant) or ``T x n x p``.
     mode
-        ``"theorem2"`` or ``"leak"`` (the modes whose ``e`` is independent of ``M``).
+        One of :data:`DESIGN_MODES` (the readings whose ``e`` is independent of ``M``).
     stacking
         Optional core stacking to reuse.
     """
@@ -174,14 +185,16 @@ class AugmentedStacking:
     def __init__(self, system: AffineSystem, word: str, L: np.ndarray, mode: str = "theorem2",
                  stacking: Stacking | None = None):
         word = missing_data_pattern(word).label
-        check_mode(mode, ("theorem2", "leak"))
+        check_mode(mode, DESIGN_MODES)
         self.system, self.word, self.mode = system, word, mode
         self.T = T = len(word)
         self.st = stacking if stacking is not None and stacking.T == T else Stacking(system, T)
         n, p = system.n, system.p
         self.L = as_time_varying_L(L, T, n, p)
         self.L_eff = effective_L(self.L, word, mode)
-        self.Phi = np.stack([system.A_at(k) - self.L_eff[k] @ system.C_at(k) for k in range(T)])
+        # the transition keeps L at every step in the "masked_gain" reading
+        L_phi = self.L if mode == "masked_gain" else self.L_eff
+        self.Phi = np.stack([system.A_at(k) - L_phi[k] @ system.C_at(k) for k in range(T)])
         self._propagate()
 
     def _propagate(self) -> None:
@@ -202,27 +215,31 @@ class AugmentedStacking:
             Z[k][:, lay.v(k)] += sys.V_at(k)
         self.Z = Z  # z(k) = Z[k] δ + Zs[k] s0 (innovation, eq. (9))
         self.Zs = np.einsum("kpn,knm->kpm", np.stack([sys.C_at(k) for k in range(T)]), He[:T])
+        self.G0 = self.st.open_loop.reshape((T + 1) * n, -1)  # constant part of G
+        self.Hs = np.zeros(((T + 1) * n, n))  # constant part of c per unit s0
+        if self.mode == "masked_gain":
+            self._literal_maps()
 
     # -- the error as a function of (M, ν, s0) ---------------------------------
     def error_map(self, M: np.ndarray, nu: np.ndarray, s0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eq. (10): ``ξ = G δ + c`` with ``G`` of shape ``((T+1)n, D)`` in the core δ layout."""
         T, n, p = self.T, self.system.n, self.system.p
+        s0 = np.asarray(s0, float)
         Zst = self.Z.reshape(T * p, -1)
-        z0 = self.Zs.reshape(T * p, n) @ np.asarray(s0, float)
-        Ol = self.st.open_loop.reshape((T + 1) * n, -1)
-        G = Ol + self.st.S @ M @ Zst
-        c = self.st.S @ (nu + M @ z0)
+        z0 = self.Zs.reshape(T * p, n) @ s0
+        G = self.G0 + self.st.S @ M @ Zst
+        c = self.st.S @ (nu + M @ z0) + self.Hs @ s0
         return G, c
 
-    def paper_blocks(self, M: np.ndarray) -> dict[str, np.ndarray]:
-        """Eq. (5) literally: ``Θ, Ψ, Ξ, Υ`` from the Appendix matrices with time-varying ``Φ_k``.
+    def appendix_matrices(self) -> dict[str, np.ndarray]:
+        """The Appendix's stacked matrices with the time-varying ``Φ_k`` of this reading.
 
-        ``C``, ``V`` and ``W`` are unmasked; missing data enters only through
-        ``M Λ_i = 0`` and, in ``"theorem2"`` mode, ``L Λ_i = 0``.
+        ``E`` (``A_i^k`` blocks, the core's ``S``), ``A`` (the core's ``J``),
+        ``Gamma`` (``Φ_{t-1} ... Φ_{s+1}`` blocks), ``Phi`` (``Φ_{k-1} ... Φ_0``),
+        ``C``, ``L`` (block diagonal of the measurement gains ``L_k``, zero at
+        missing steps in ``"theorem2"`` and ``"masked_gain"``), ``W``, ``V``.
         """
         sys, T, n = self.system, self.T, self.system.n
-        Ebig = self.st.S  # "E" of the Appendix: A_i^k blocks
-        Abig = self.st.J  # "A" of the Appendix
         Gam = np.zeros(((T + 1) * n, T * n))
         Phibig = [np.eye(n)]
         for k in range(T):
@@ -232,19 +249,46 @@ class AugmentedStacking:
             for s in range(t - 1, -1, -1):  # block (t, s) = Φ_{t-1} ... Φ_{s+1}
                 Gam[t * n:(t + 1) * n, s * n:(s + 1) * n] = P
                 P = P @ self.Phi[s]
-        Phib = np.vstack(Phibig)
-        Cbig = np.hstack([sla.block_diag(*[sys.C_at(k) for k in range(T)]), np.zeros((T * sys.p, n))])
-        Lbig = sla.block_diag(*self.L_eff)
-        Wbig = self.st.E_blk
-        Vbig = sla.block_diag(*[sys.V_at(k) for k in range(T)])
-        I = np.eye((T + 1) * n)
+        return {"E": self.st.S, "A": self.st.J, "Gamma": Gam, "Phi": np.vstack(Phibig),
+                "C": np.hstack([sla.block_diag(*[sys.C_at(k) for k in range(T)]), np.zeros((T * sys.p, n))]),
+                "L": sla.block_diag(*self.L_eff), "W": self.st.E_blk,
+                "V": sla.block_diag(*[sys.V_at(k) for k in range(T)])}
+
+    def paper_blocks(self, M: np.ndarray) -> dict[str, np.ndarray]:
+        """Eq. (5) literally: ``Θ, Ψ, Ξ, Υ`` from the Appendix matrices with time-varying ``Φ_k``.
+
+        ``C``, ``V`` and ``W`` are unmasked; missing data enters only through
+        ``M Λ_i = 0`` and the block-diagonal ``L`` (zero at missing steps in
+        ``"theorem2"`` and ``"masked_gain"``; the transition ``Φ_k`` keeps ``L``
+        in ``"masked_gain"``).
+        """
+        m = self.appendix_matrices()
+        Ebig, Abig, Gam, Phib, Cbig, Lbig, Wbig, Vbig = (m[k] for k in ("E", "A", "Gamma", "Phi", "C", "L", "W", "V"))
+        I = np.eye(Abig.shape[0])
         ML = M + Lbig
         Theta = (I + Ebig @ ML @ Cbig) @ Gam @ Wbig
-        Psi = (Ebig @ ML @ (np.eye(T * sys.p) - Cbig @ Gam @ Lbig) - Gam @ Lbig) @ Vbig
+        Psi = (Ebig @ ML @ (np.eye(Cbig.shape[0]) - Cbig @ Gam @ Lbig) - Gam @ Lbig) @ Vbig
         Xi = (I + Ebig @ ML @ Cbig) @ Phib
         Ups = Abig - Xi
         return {"Theta": Theta, "Psi": Psi, "Xi": Xi, "Upsilon": Ups, "E": Ebig, "Gamma": Gam, "Phi": Phib}
 
+    def _literal_maps(self) -> None:
+        """``G = G0 + E M Z``, ``c = E ν - E M (CΦ) s0 + H s0`` read off the Appendix blocks (eq. (5)).
+
+        For the consistent readings these equal the dynamics' open-loop and
+        innovation maps (a test checks it); for ``"masked_gain"`` they are the
+        definition of the reading.
+        """
+        m = self.appendix_matrices()
+        Ebig, Abig, Gam, Phib, Cbig, Lbig, Wbig, Vbig = (m[k] for k in ("E", "A", "Gamma", "Phi", "C", "L", "W", "V"))
+        T, n, p = self.T, self.system.n, self.system.p
+        I = np.eye(Abig.shape[0])
+        ELC = Ebig @ Lbig @ Cbig
+        CGL = np.eye(T * p) - Cbig @ Gam @ Lbig
+        self.G0 = np.hstack([(I + ELC) @ Gam @ Wbig, (Ebig @ Lbig @ CGL - Gam @ Lbig) @ Vbig, (I + ELC) @ Phib])
+        self.Z = np.hstack([Cbig @ Gam @ Wbig, CGL @ Vbig, Cbig @ Phib]).reshape(T, p, -1)
+        self.Zs = -(Cbig @ Phib).reshape(T, p, n)
+        self.Hs = Abig - Phib - ELC @ Phib
 
 # ---------------------------------------------------------------------------
 # Conversion between augmented and time-based gains
@@ -307,7 +351,7 @@ def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains, runtime
         Block lower triangular, zero columns at missing steps.
     u0 : ndarray, shape (Tn,)
     """
-    runtime = runtime or ("hold" if gains.mode == "leak" else gains.mode)
+    runtime = runtime or ("theorem2" if gains.mode == "theorem2" else "hold")
     check_mode(runtime, RUNTIME_MODES)
     word, T = gains.word, gains.T
     n, p = system.n, system.p
@@ -386,7 +430,7 @@ class AugmentedEstimator:
     """
 
     def __init__(self, system: AffineSystem, gains: AugmentedGains, xhat0: np.ndarray, runtime: str | None = None):
-        self.runtime = check_mode(runtime or ("hold" if gains.mode == "leak" else gains.mode), RUNTIME_MODES)
+        self.runtime = check_mode(runtime or ("theorem2" if gains.mode == "theorem2" else "hold"), RUNTIME_MODES)
         self.system, self.gains = system, gains
         T, n, p = gains.T, system.n, system.p
         self.L = _masked_L(as_time_varying_L(gains.L, T, n, p), gains.word, self.runtime)

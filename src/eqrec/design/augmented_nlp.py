@@ -13,6 +13,7 @@ import numpy as np
 
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
+from eqrec.errors import InputError
 
 
 @dataclass
@@ -45,6 +46,9 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
         One ``L_k`` per step instead of a constant ``L`` (the paper prints one matrix).
     """
     import casadi as ca
+
+    if model.mode == "masked_gain":
+        raise InputError("the IPOPT design supports the 'theorem2' and 'leak' readings", field="mode")
 
     sysm, T, n, p, word = model.system, model.T, model.system.n, model.system.p, model.word
     lay = model.st.layout
