@@ -129,3 +129,12 @@ def test_masked_gain_reading_reproduces_fig2_and_the_fig3b_interval(acc):
     assert flat == [k for k in range(-10, 14) if k != 0]
     d = design_augmented(acc, ["101111", "110111"], 1.0, L=Lp, mode="masked_gain")
     assert d.extra["certified_runtime"] == "hold" and d.certificate.mu2 > 10  # what the design really guarantees
+
+
+def test_deadbeat_observer_where_place_poles_refuses(acc):
+    from eqrec.design.observers import deadbeat_observer
+
+    assert not place_observer(acc.A, acc.C, np.zeros(3)).ok  # triple pole, rank C = 2
+    d = deadbeat_observer(acc.A, acc.C)
+    assert d.ok
+    assert np.linalg.norm(np.linalg.matrix_power(acc.A - d.L @ acc.C, 3)) < 1e-10

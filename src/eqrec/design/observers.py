@@ -52,3 +52,33 @@ def default_poles(n: int) -> np.ndarray:
     if n == 3:
         return np.array([0.0, 0.5, -0.5])
     return np.linspace(-0.5, 0.5, n)
+
+
+def deadbeat_observer(A: np.ndarray, C: np.ndarray, seed: int = 0, tol: float = 1e-9) -> PolePlacement:
+    r"""An observer gain with ``A - L C`` nilpotent (all eigenvalues at 0), also when ``rank C < n``.
+
+    ``scipy.signal.place_poles`` refuses a pole repeated more often than
+    ``rank C``; a deadbeat observer still exists for an observable pair.
+    Dual construction: pick a nilpotent Jordan block ``F`` and a generic
+    ``G``; the Sylvester equation :math:`A^\top X - X F = C^\top G` gives
+    :math:`A^\top - C^\top G X^{-1} = X F X^{-1}`, so :math:`L = (G X^{-1})^\top`
+    makes ``A - L C`` similar to ``F^T``.  Checked by :math:`\|(A - LC)^n\| \le` ``tol`` (scaled).
+    """
+    import scipy.linalg as sla
+
+    A = np.asarray(A, float)
+    C = np.asarray(C, float)
+    n = A.shape[0]
+    F = np.eye(n, k=1)  # one nilpotent Jordan block
+    G = np.random.default_rng(seed).normal(size=(C.shape[0], n))
+    requested = np.zeros(n, dtype=complex)
+    try:
+        X = sla.solve_sylvester(A.T, -F, C.T @ G)
+        L = np.linalg.solve(X.T, G.T)  # (G X^{-1})^T = X^{-T} G^T
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        return PolePlacement(requested, None, None, False, f"deadbeat construction failed: {exc}")
+    Phi = A - L @ C
+    residual = np.linalg.norm(np.linalg.matrix_power(Phi, n)) / max(1.0, np.linalg.norm(Phi) ** n)
+    if not np.isfinite(residual) or residual > tol:
+        return PolePlacement(requested, None, None, False, f"(A - LC)^n is not zero (relative {residual:.1e})")
+    return PolePlacement(requested, L, np.linalg.eigvals(Phi), True, "nilpotent A - LC (deadbeat observer)")
