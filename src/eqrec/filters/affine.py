@@ -1,0 +1,137 @@
+r"""Exact worst cases of linear filters on a fixed arrival pattern, and sampled runs.
+
+On a fixed pattern, a filter whose gains do not depend on the data (every
+filter of :mod:`eqrec.filters.kalman`) produces estimates that are affine in
+the uncertainty ``δ = [w; v; ξ0]`` (the core's
+:class:`eqrec.core.stacking.UncertaintyLayout`), with a constant part that
+may depend on the true initial state ``x0`` and the inputs (a filter that
+mistakes ``y(τ)`` for a measurement of ``x(t)`` sees ``C (x(τ) − x(t))``).
+:func:`error_maps` runs the filter *once* on affine data — arrays whose
+``1 + D`` columns are the constant and the coefficients of ``δ`` — and
+returns ``e(t) = x(t) − x̂(t) = c_t + G_t δ``; the worst case over the box is
+``|c_t| + |G_t| b`` per component (:func:`eqrec.core.robust.worst_case_abs`),
+attained at the vertex :meth:`ErrorMaps.worst_vertex`.
+
+:func:`simulate_filter` runs the same filter on numbers (the true system
+simulated step by step), which the tests use to check that a vertex attains
+the bound.  The initial estimate is ``x̂(0) = x0 − ξ0`` as in
+:func:`eqrec.core.simulate.simulate_run`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eqrec.core.patterns import ArrivalPattern, as_pattern
+from eqrec.core.robust import worst_case_abs, worst_case_vertex
+from eqrec.core.stacking import UncertaintyLayout
+from eqrec.core.systems import AffineSystem
+
+
+@dataclass
+class ErrorMaps:
+    """``e(t) = c[t] + G[t] δ`` for the prediction ``x̂(t|I_{t-1})`` (``t = 0..T``) and the filter ``x̂(t|I_t)`` (``t < T``)."""
+
+    G: np.ndarray  # (T+1, n, D)
+    c: np.ndarray  # (T+1, n)
+    G_filt: np.ndarray  # (T, n, D)
+    c_filt: np.ndarray  # (T, n)
+    layout: UncertaintyLayout
+    radius: np.ndarray
+    pattern: ArrivalPattern
+    name: str = ""
+
+    def _pick(self, estimate: str):
+        if estimate == "prediction":
+            return self.G, self.c
+        if estimate == "filtered":
+            return self.G_filt, self.c_filt
+        raise ValueError(f"estimate must be 'prediction' or 'filtered', got {estimate!r}")
+
+    def bounds(self, estimate: str = "prediction") -> np.ndarray:
+        """Exact ``max |e_i(t)|`` over the box, shape ``(T+1, n)`` (or ``(T, n)`` filtered)."""
+        G, c = self._pick(estimate)
+        return np.stack([worst_case_abs(G[t], c[t], self.radius) for t in range(G.shape[0])])
+
+    def worst_vertex(self, t: int, i: int, estimate: str = "prediction") -> np.ndarray:
+        """A box vertex at which ``|e_i(t)|`` equals its bound."""
+        G, c = self._pick(estimate)
+        return worst_case_vertex(G[t, i], c[t, i], self.radius)
+
+    def errors(self, deltas: np.ndarray, estimate: str = "prediction") -> np.ndarray:
+        """Errors for samples ``deltas`` (``(N, D)``): shape ``(N, T+1, n)``."""
+        G, c = self._pick(estimate)
+        return np.einsum("tnd,kd->ktn", G, np.atleast_2d(deltas)) + c[None]
+
+
+def _run(filt, system: AffineSystem, pattern: ArrivalPattern, x0: np.ndarray, inputs, delta: np.ndarray | None):
+    """Run ``filt`` on affine (``delta is None``) or numeric data; returns ``(x, pred, filtered)`` arrays."""
+    T, n, p = pattern.T, system.n, system.p
+    lay = UncertaintyLayout(T, system.nw, system.nv, n)
+    D = lay.size
+    if delta is None:  # columns: [1, δ_1..δ_D]
+        K = 1 + D
+        one = np.zeros(K)
+        one[0] = 1.0
+        basis = np.eye(D, K, k=1)  # δ_j -> column j+1
+    else:
+        K = 1
+        one = np.ones(1)
+        basis = np.asarray(delta, float).reshape(D, 1)
+
+    def part(sl):
+        return basis[sl]
+
+    x = np.zeros((T + 1, n, K))
+    x[0] = np.outer(np.asarray(x0, float), one)
+    xhat0 = x[0] - part(lay.xi0)
+    filt.reset(xhat0, one)
+    pred = np.zeros((T + 1, n, K))
+    fil = np.zeros((T, n, K))
+    pred[0] = xhat0
+    y = np.zeros((T, p, K))
+    for t in range(T):
+        u = np.zeros(system.m) if inputs is None else np.asarray(inputs, float)[t]
+        y[t] = system.C_at(t) @ x[t] + system.V_at(t) @ part(lay.v(t))
+        packets = [(tau, y[tau]) for tau in pattern.arriving_at(t)]
+        fil[t], pred[t + 1] = filt.step(t, packets)
+        x[t + 1] = (system.A_at(t) @ x[t] + np.outer(system.B_at(t) @ u + system.f, one)
+                    + system.E_at(t) @ part(lay.w(t)))
+    return x, pred, fil, lay
+
+
+def error_maps(filt, system: AffineSystem, pattern: "ArrivalPattern | str", x0, mu1: float, *,
+               inputs=None) -> ErrorMaps:
+    """Affine error maps of ``filt`` along ``pattern`` (true ``x(0) = x0``, ``‖ξ0‖ <= mu1``).
+
+    ``pattern`` is an arrival pattern or a delay word (digits).
+    """
+    pattern = as_pattern(pattern, kind="delay") if isinstance(pattern, str) else pattern
+    x, pred, fil, lay = _run(filt, system, pattern, x0, inputs, None)
+    e = x - pred
+    ef = x[:-1] - fil
+    return ErrorMaps(G=e[..., 1:], c=e[..., 0], G_filt=ef[..., 1:], c_filt=ef[..., 0], layout=lay,
+                     radius=lay.radius(system.eta_w, system.eta_v, mu1), pattern=pattern,
+                     name=getattr(filt, "name", ""))
+
+
+def simulate_filter(filt, system: AffineSystem, pattern: "ArrivalPattern | str", delta: np.ndarray, x0, *,
+                    inputs=None) -> tuple[np.ndarray, np.ndarray]:
+    """Errors of one numeric run: prediction ``(T+1, n)`` and filtered ``(T, n)``."""
+    pattern = as_pattern(pattern, kind="delay") if isinstance(pattern, str) else pattern
+    x, pred, fil, _ = _run(filt, system, pattern, x0, inputs, np.asarray(delta, float))
+    return (x - pred)[..., 0], (x[:-1] - fil)[..., 0]
+
+
+def truncated_normal_deltas(layout: UncertaintyLayout, radius: np.ndarray, rng: np.random.Generator, size: int,
+                            sigmas: float = 5.0) -> np.ndarray:
+    """``size`` draws of ``δ``: zero-mean normal with ``σ = radius / sigmas``, truncated at ``±radius``.
+
+    Coordinates with zero radius are zero.
+    """
+    from scipy.stats import truncnorm
+
+    z = truncnorm.rvs(-sigmas, sigmas, size=(size, layout.size), random_state=rng)
+    return z * (np.asarray(radius, float) / sigmas)[None, :]

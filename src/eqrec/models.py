@@ -1,0 +1,93 @@
+r"""Example plants of the delayed/missing-data paper (P3) built from first principles.
+
+The batch reactor
+-----------------
+Rosenbrock's unstable batch reactor (the continuous model of Walsh, Ye,
+Bushnell 2002, used by the paper's ref. [20]),
+
+.. math:: \dot x = A_c x + B_c u, \qquad z = C x + V v,
+
+is discretised with a zero-order hold and ``Ts = 0.05`` s (what MATLAB's
+``c2d`` does; here :func:`scipy.signal.cont2discrete`).  Section IV-A of the
+paper uses the output matrix ``C`` printed there (not the ``C`` of the
+networked-control literature), no process noise (``W = ∅``: the system has
+zero noise columns), ``V = I`` and ``ηv = 0.05`` (5 standard deviations of
+``v ~ N(0, 0.01²)``).
+
+The paper prints the discretised ``A``, ``B`` to four decimals; those
+printed values live with the other published numbers (``config/claims.yaml``
+and the tests), never here: :func:`discretisation_gaps` measures how far a
+printed pair is from this discretisation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
+
+#: Continuous-time state matrix of the batch reactor.
+BATCH_REACTOR_AC = np.array([[1.38, -0.2077, 6.715, -5.676],
+                             [-0.5814, -4.29, 0.0, 0.675],
+                             [1.067, 4.273, -6.654, 5.893],
+                             [0.048, 4.273, 1.343, -2.104]])
+#: Continuous-time input matrix of the batch reactor.
+BATCH_REACTOR_BC = np.array([[0.0, 0.0],
+                             [5.679, 0.0],
+                             [1.136, -3.146],
+                             [1.136, 0.0]])
+#: Output matrix used in Section IV-A of the delayed-data paper.
+BATCH_REACTOR_C = np.array([[1.0, 0.0, 1.0, -1.0],
+                            [0.0, 1.0, 0.0, 0.0]])
+#: Sampling time and measurement-noise bound of Section IV-A.
+BATCH_REACTOR_TS = 0.05
+BATCH_REACTOR_ETA_V = 0.05
+
+
+def zoh(Ac: np.ndarray, Bc: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Zero-order-hold discretisation ``(A, B) = (e^{Ac Ts}, ∫_0^Ts e^{Ac s} ds Bc)`` (scipy, as MATLAB ``c2d``)."""
+    from scipy.signal import cont2discrete
+
+    Ac = np.asarray(Ac, float)
+    Bc = np.asarray(Bc, float)
+    if not (np.isfinite(Ts) and Ts > 0):
+        raise InputError(f"the sampling time must be positive, got {Ts}", field="Ts")
+    Ad, Bd, *_ = cont2discrete((Ac, Bc, np.eye(Ac.shape[0]), np.zeros((Ac.shape[0], Bc.shape[1]))), Ts,
+                               method="zoh")
+    return np.asarray(Ad), np.asarray(Bd)
+
+
+def batch_reactor_matrices(Ts: float = BATCH_REACTOR_TS) -> tuple[np.ndarray, np.ndarray]:
+    """Discrete ``(A, B)`` of the batch reactor (ZOH, sampling time ``Ts``)."""
+    return zoh(BATCH_REACTOR_AC, BATCH_REACTOR_BC, Ts)
+
+
+def batch_reactor(Ts: float = BATCH_REACTOR_TS, eta_v: float = BATCH_REACTOR_ETA_V) -> AffineSystem:
+    """The batch reactor of Section IV-A: ZOH at ``Ts``, printed ``C``, ``W = ∅``, ``V = I``, bound ``eta_v``.
+
+    Returns
+    -------
+    AffineSystem
+        ``n = 4``, ``p = 2``, ``m = 2`` and no process-noise columns
+        (``E`` of shape ``(4, 0)``, ``eta_w = 0``).
+    """
+    A, B = batch_reactor_matrices(Ts)
+    return AffineSystem(A=A, B=B, C=BATCH_REACTOR_C.copy(), E=np.zeros((4, 0)), eta_w=0.0, eta_v=eta_v,
+                        V=np.eye(2), name="batch reactor")
+
+
+def discretisation_gaps(printed_A, printed_B, Ts: float = BATCH_REACTOR_TS) -> dict[str, float]:
+    """Largest entrywise gaps between printed ``A``, ``B`` and the ZOH discretisation at ``Ts``.
+
+    Returns ``{"A": max |A_zoh - A_printed|, "B": max |B_zoh - B_printed|,
+    "A_rel_digit": ..., "B_rel_digit": ...}``; the ``*_rel_digit`` values are
+    the gaps in units of the printed rounding step ``5e-5`` (four decimals):
+    a value ``<= 1`` means the printed matrix is the discretisation rounded.
+    """
+    A, B = batch_reactor_matrices(Ts)
+    pa, pb = np.asarray(printed_A, float), np.asarray(printed_B, float)
+    if pa.shape != A.shape or pb.shape != B.shape:
+        raise InputError(f"printed matrices must have shapes {A.shape} and {B.shape}, got {pa.shape}, {pb.shape}")
+    gA, gB = float(np.abs(A - pa).max()), float(np.abs(B - pb).max())
+    return {"A": gA, "B": gB, "A_rel_digit": gA / 5e-5, "B_rel_digit": gB / 5e-5}
