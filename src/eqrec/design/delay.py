@@ -75,7 +75,7 @@ import scipy.sparse as sp
 
 from eqrec.core.certify import certify_design, closed_loop_maps
 from eqrec.core.lp import LinearProgram, LPSolution
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_language, full_delay_language
+from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_language, full_delay_language, parse_delay_word
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.prefix import PrefixLP, build_prefix_lp, read_schedule
@@ -434,6 +434,51 @@ def level_table(design: Design) -> list[dict]:
         rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
                      "sequences": w[node.index]})
     return rows
+
+
+def path_levels(design: Design, pattern) -> np.ndarray:
+    """The guaranteed levels ``μ2,k^α``, ``k = 0..T``, along one pattern (``μ1`` at ``k = 0`` and ``k = T``).
+
+    With per-node levels (cost ``"sum"``) each time's level is that of the
+    prefix node; with one common level (``"max"``) it is ``mu2``.
+    """
+    pat = parse_delay_word(pattern) if isinstance(pattern, str) else pattern
+    T = pat.T
+    out = np.full(T + 1, design.M1)
+    for k in range(1, T):
+        out[k] = design.levels.get(pat.prefix(k).label, design.mu2) if design.levels else design.mu2
+    return out
+
+
+def word_certificate(design: Design, word):
+    """The certificate of the designed sequence equal to ``word`` (a delay word or pattern; any word of its class)."""
+    pat = parse_delay_word(word) if isinstance(word, str) else word
+    for p in design.patterns:
+        if p == pat:
+            return design.certificate.words[p.label]
+    raise InputError(f"{pat.label!r} is not an event sequence of the designed language", field="pattern")
+
+
+def to_json(design: Design, free: "FreeMu1Result | None" = None) -> dict:
+    """What ``eqrec design --method delay`` writes: levels per event prefix and time, ``J``, the gains per sequence.
+
+    ``free`` adds, for ``μ1`` free, the route, the lower bound of ``J`` that
+    certifies it (global route) and the certified smallest ``μ1``.
+    """
+    cert = design.certificate
+    out = {"method": "delay", "cost": design.extra.get("cost"), "mu1": design.M1, "mu2": design.mu2,
+           "J": design.extra.get("J"), "J_certified": design.extra.get("J_certified"),
+           "certified_mu2": None if cert is None else cert.mu2,
+           "certified_terminal": None if cert is None else cert.terminal,
+           "levels": level_table(design) if cert is not None else [],
+           "event_sequences": {p.label: list(p.events()) for p in design.patterns},
+           "gains": design.schedule.to_json()}
+    if free is not None:
+        out["mu1_free"] = {"route": free.route, "J": free.J, "lower_bound": free.lower_bound, "gap": free.gap,
+                           "lps": free.lps, "time": free.time}
+        if free.mu1_min is not None:
+            out["mu1_free"]["mu1_min"] = {"upper": free.mu1_min.upper, "lower": free.mu1_min.lower}
+    return out
 
 
 def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum", solver: str = "highs",

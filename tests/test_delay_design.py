@@ -1,0 +1,157 @@
+"""The delayed-data design (Theorem 1 / Proposition 1 of the delayed-data paper) on the core's prefix LP."""
+import numpy as np
+import pytest
+
+from eqrec.core.patterns import PrefixTree, full_delay_language, parse_delay_word
+from eqrec.core.simulate import simulate_run
+from eqrec.core.solvers import solve_lp
+from eqrec.design.delay import (RadiusFamily, compare_free_routes, cost_weights, delay_language, design_delay,
+                                design_delay_global, design_delay_ipopt, level_table, literal_paper_cost,
+                                min_recovery_level, paper_cost, path_levels, to_json, word_certificate)
+from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.errors import InfeasibleDesign, InputError
+from eqrec.models import batch_reactor
+
+ACC_DELAY = ["060000", "006000", "000600", "000060"]  # Sec. IV-B: delay 6 = beyond the horizon = missing
+
+
+@pytest.fixture(scope="module")
+def reactor():
+    return batch_reactor()
+
+
+@pytest.fixture(scope="module")
+def small_language():
+    return delay_language(max_delay=1, horizon=3)  # 8 words, 7 event sequences
+
+
+def test_delay_language_reduction():
+    assert len(delay_language(max_delay=2, horizon=5)) == 162  # |L| = 243 -> |L^E'| = 162
+    acc = delay_language(ACC_DELAY, max_delay=6)
+    assert [p.canonical_label for p in acc] == ["101111", "110111", "111011", "111101"]
+    with pytest.raises(InputError):
+        delay_language()
+
+
+def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language):
+    tree = PrefixTree(small_language)
+    a, w = cost_weights(tree, "sum")
+    assert a == 1 + 2 * len(tree.patterns)
+    d = design_delay(reactor, tree, 1.0, cost="sum")
+
+    def level_of(pat, k):  # μ2,k^α literally: μ1 at k = 0 and k = T, the prefix node's level in between
+        return d.M1 if k in (0, pat.T) else d.levels[pat.prefix(k).label]
+
+    J_literal = literal_paper_cost(tree, d.M1, level_of)
+    assert d.extra["J"] == pytest.approx(J_literal, rel=1e-12)
+    assert d.extra["J"] == pytest.approx(d.solution.objective + a * d.M1, rel=1e-9)
+    assert d.extra["J_certified"] <= d.extra["J"] * (1 + 1e-6)
+    for pat in tree.patterns:
+        lv = path_levels(d, pat)
+        assert lv[0] == lv[-1] == d.M1 and len(lv) == pat.T + 1
+        assert np.all(word_certificate(d, pat).bounds.max(axis=1) <= lv * (1 + 1e-6))
+
+
+def test_acc_language_with_mu1_1_is_the_p1_prefix_problem(acc):
+    """Sec. IV-B: the missing-data language written as delays, μ1 = 1: the same problem as P1's prefix design."""
+    p1 = design_prefix(acc, ["101111", "110111", "111011", "111101"], 1.0)
+    d_max = design_delay(acc, ACC_DELAY, 1.0, cost="max")
+    d_sum = design_delay(acc, ACC_DELAY, 1.0, cost="sum")
+    assert d_max.mu2 == pytest.approx(p1.mu2, rel=1e-9)
+    assert d_sum.mu2 == pytest.approx(p1.mu2, rel=1e-7)  # the sum cost reaches the same largest level
+    assert round(d_max.mu2, 4) == 1.1498
+    assert min(d_sum.levels.values()) == pytest.approx(1.0)  # time-varying: not always at the maximum
+
+
+def test_family_reproduces_the_direct_lp(reactor, small_language):
+    tree = PrefixTree(small_language)
+    fam = RadiusFamily(reactor, tree, "sum")
+    for mu in (0.8, 1.3):
+        direct = build_prefix_lp(reactor, tree, mu, levels="sum")
+        s1 = solve_lp(direct.lp)
+        s2 = solve_lp(fam.lp(mu, mu, mu))
+        a, _ = cost_weights(tree, "sum")
+        assert s2.objective == pytest.approx(s1.objective + a * mu, rel=1e-9)
+
+
+def test_min_recovery_level_is_bracketed_and_certified(acc):
+    tree = PrefixTree(delay_language(ACC_DELAY, max_delay=6))
+    r = min_recovery_level(acc, tree, rtol=1e-5)
+    assert r.lower < r.upper <= r.lower * (1 + 1.1e-5) and r.lower_margin > 0
+    design_delay(acc, tree, r.upper, cost="max")  # feasible (and certified) at the upper end
+    with pytest.raises(InfeasibleDesign):
+        design_delay(acc, tree, r.lower * (1 - 1e-4), cost="max")
+    # plain bisection on LP feasibility agrees
+    lo, hi = 0.1, 1.0
+    for _ in range(25):
+        mid = 0.5 * (lo + hi)
+        ok = solve_lp(build_prefix_lp(acc, tree, mid).lp).optimal
+        lo, hi = (lo, mid) if ok else (mid, hi)
+    assert hi == pytest.approx(r.upper, rel=1e-5)
+    assert r.lps < 15  # superlinear steps, not a bisection
+
+
+@pytest.mark.parametrize("cost", ["sum", "max"])
+def test_acc_mu1_free_global_and_ipopt(acc, cost):
+    g = design_delay_global(acc, ACC_DELAY, cost=cost, rtol=1e-4)
+    assert g.gap <= 1e-4 and g.design.certificate is not None
+    assert round(g.design.mu2, 4) == 0.3991  # footnote 1 of Sec. IV-B (μ1 free)
+    # the lower bound holds on a grid of μ1 (fixed-μ1 LPs)
+    tree = PrefixTree(delay_language(ACC_DELAY, max_delay=6))
+    for mu in np.linspace(g.mu1, 3 * g.mu1, 7)[1:]:
+        d = design_delay(acc, tree, mu, cost=cost, certify=False)
+        assert d.extra["J"] >= g.lower_bound * (1 - 1e-9)
+    i = design_delay_ipopt(acc, ACC_DELAY, cost=cost)
+    cmp = compare_free_routes(g, i)
+    assert cmp["ipopt_consistent_with_bound"] and cmp["better"] in ("tie", "global")
+    assert i.extra["polished"]["J"] == pytest.approx(g.J, rel=1e-4)
+
+
+def test_relaxation_is_a_lower_bound_on_its_interval(acc):
+    tree = PrefixTree(delay_language(ACC_DELAY, max_delay=6))
+    fam = RadiusFamily(acc, tree, "sum")
+    lo, hi = 0.3, 0.6
+    relax = solve_lp(fam.lp(lo, lo, hi)).objective
+    fixed = [solve_lp(fam.lp(m, m, m)).objective for m in np.linspace(lo, hi, 6)]
+    assert relax <= min(fixed) + 1e-9
+
+
+def test_delay_design_certified_and_worst_vertices_attained(reactor, small_language):
+    d = design_delay(reactor, small_language, 1.0, cost="sum")
+    x0 = np.ones(4)
+    for pat in small_language:
+        wc = word_certificate(d, pat)
+        t, i = np.unravel_index(np.argmax(wc.bounds[1:]), wc.bounds[1:].shape)
+        t += 1
+        run = simulate_run(reactor, d.schedule, pat, wc.worst_vertex(t, i), x0)
+        assert abs(run.error[t, i]) == pytest.approx(wc.bounds[t, i], rel=1e-9)
+    rows = level_table(d)
+    assert rows[0]["k"] == 0 and all(r["certified"] <= r["level"] * (1 + 1e-6) for r in rows)
+    js = to_json(d)
+    assert js["method"] == "delay" and set(js["gains"]) == {p.label for p in small_language}
+
+
+def test_batch_reactor_at_the_printed_mu1(reactor):
+    """P3-BR: all 243 words, sum cost, μ1 = 0.33 (the printed, rounded μ1): largest level 0.6912 as printed."""
+    d = design_delay(reactor, full_delay_language(5, 2), 0.33, cost="sum")
+    assert len(d.patterns) == 162
+    assert round(d.mu2, 4) == 0.6912
+    assert d.certificate.mu2 <= d.mu2 * (1 + 1e-6)
+
+
+def test_batch_reactor_mu1_free_global(reactor):
+    """μ1 free: the optimum is the smallest feasible μ1 (0.32931, printed rounded as 0.33)."""
+    g = design_delay_global(reactor, full_delay_language(5, 2), cost="sum", rtol=1e-4)
+    assert g.gap <= 1e-4
+    assert round(g.mu1, 2) == 0.33 and g.mu1 < 0.33
+    assert g.mu1 == pytest.approx(g.mu1_min.upper, rel=1e-9)
+    assert g.design.mu2 < 0.6912  # max μ2 = ||A^2||_inf μ1 (no data at times 0, 1) is below the printed value
+    A2 = np.linalg.matrix_power(batch_reactor().A, 2)
+    assert g.design.mu2 == pytest.approx(np.abs(A2).sum(axis=1).max() * g.mu1, rel=1e-7)
+
+
+def test_bad_inputs(acc):
+    with pytest.raises(InputError, match="cost"):
+        design_delay(acc, ACC_DELAY, 1.0, cost="mean")
+    with pytest.raises(InputError, match="fixed-length"):
+        design_delay(acc, [parse_delay_word("0600"), parse_delay_word("06000")], 1.0)
