@@ -155,3 +155,56 @@ def test_bad_inputs(acc):
         design_delay(acc, ACC_DELAY, 1.0, cost="mean")
     with pytest.raises(InputError, match="fixed-length"):
         design_delay(acc, [parse_delay_word("0600"), parse_delay_word("06000")], 1.0)
+
+
+# --- the augmented form (4) with fixed L, s0 -----------------------------------------------------------------
+
+def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
+    """Two pole placements and two s0: the LP in (M^α, ν^α) has the prefix design's optimum (both costs)."""
+    from eqrec.design.delay_augmented import augmented_to_prefix, solve_augmented_delay
+    from eqrec.design.observers import place_observer
+    from eqrec.core.certify import certify_schedule
+
+    tree = PrefixTree(delay_language(max_delay=2, horizon=4))
+    mu1 = 0.5
+    ref_sum = design_delay(reactor, tree, mu1, cost="sum")
+    ref_max = design_delay(reactor, tree, mu1, cost="max")
+    for poles in ([0.1, 0.2, 0.3, 0.4], [-0.5, 0.0, 0.5, 0.9]):
+        L = place_observer(reactor.A, reactor.C, poles).L
+        for s0 in (np.zeros(4), np.array([0.1, -0.2, 0.05, 0.3])):
+            g, sol, _ = solve_augmented_delay(reactor, tree, mu1, L, s0, levels="sum")
+            assert sol.objective == pytest.approx(ref_sum.solution.objective, rel=1e-7)
+            cert = certify_schedule(reactor, augmented_to_prefix(reactor, tree, g), tree.patterns, mu1)
+            assert cert.terminal <= mu1 * (1 + 1e-6)
+            if s0.any():
+                _, sol_max, _ = solve_augmented_delay(reactor, tree, mu1, L, s0, levels="common")
+                assert sol_max.objective == pytest.approx(ref_max.mu2, rel=1e-7)
+
+
+def test_augmented_gains_are_a_reparametrisation_of_the_prefix_gains(reactor):
+    from eqrec.core.stacking import UncertaintyLayout
+    from eqrec.design.delay_augmented import (AugmentedDelayEstimator, augmented_to_prefix,
+                                              prefix_to_augmented)
+    from eqrec.design.observers import place_observer
+
+    tree = PrefixTree(delay_language(max_delay=2, horizon=3))
+    d = design_delay(reactor, tree, 0.5, cost="sum")
+    L = place_observer(reactor.A, reactor.C, [0.1, 0.2, 0.3, 0.4]).L
+    s0 = np.array([0.1, -0.2, 0.05, 0.3])
+    aug = prefix_to_augmented(reactor, tree, d.schedule, L, s0)
+    back = augmented_to_prefix(reactor, tree, aug)
+    for pre, row in d.schedule.rows.items():
+        np.testing.assert_allclose(back.row(pre).F, row.F, atol=1e-10)
+        np.testing.assert_allclose(back.row(pre).u0, row.u0, atol=1e-10)
+    # the augmented runtime (x̂, s on time-stamped packets) gives the prefix estimator's x̂
+    rng = np.random.default_rng(0)
+    x0 = np.ones(4)
+    for pat in tree.patterns:
+        lay = UncertaintyLayout(3, 0, 2, 4)
+        delta = rng.uniform(-1, 1, lay.size) * lay.radius(0, 0.05, 0.5)
+        run = simulate_run(reactor, d.schedule, pat, delta, x0)
+        _, v, _ = lay.split(delta)
+        est = AugmentedDelayEstimator(reactor, aug, run.xhat[0])
+        y = [reactor.C @ run.x[t] + v[t] for t in range(3)]
+        xh = [est.step([(tau, y[tau]) for tau in pat.arriving_at(t)]) for t in range(3)]
+        np.testing.assert_allclose(np.array(xh), run.xhat[1:], atol=1e-10)

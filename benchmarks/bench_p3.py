@@ -1,0 +1,174 @@
+"""Benchmark of the P3 (delayed-data) designs on the batch reactor, measured in one run.
+
+    python benchmarks/bench_p3.py                      # parts 1 and 2, scale table up to (6, 2)
+    python benchmarks/bench_p3.py --sizes 5,2 6,2 7,2 8,2 8,3 --time-limit 600 --mem-limit-gb 16
+    python benchmarks/bench_p3.py --only scale --sizes 7,2 --methods ipm
+
+1. ``μ1`` fixed, all 243 words (162 event sequences), sum cost: build, solve,
+   recover, certify (goal: <= 1.5 s end to end on 2 cores).
+2. ``μ1`` free with its global certificate (certified smallest ``μ1`` +
+   interval branch and bound, warm-started HiGHS; goal <= 20 s), the same
+   cold, and the paper's route (IPOPT on problem (10) from the LP at ``μ1 = 1``).
+3. Scale table for the full language ``{0..τ̄}^T``: sequences, reduced
+   sequences, prefix-tree nodes, LP rows / columns / nonzeros, build and
+   solve time and peak memory, one fresh process per (size, method) so the
+   peak memory is that size's (``ru_maxrss`` of the worker).  Methods:
+   ``simplex`` (HiGHS dual simplex), ``ipm`` (HiGHS interior point with
+   crossover off), ``ipm-x`` (interior point + crossover).  A worker that
+   exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
+   ``--mem-limit-gb`` (address-space limit) is reported as such.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+METHODS = {"simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
+           "ipm-x": {"solver": "ipm", "run_crossover": "on"}}
+
+
+def part_fixed(repeats: int) -> None:
+    from eqrec.core.certify import certify_design
+    from eqrec.core.solvers import solve_lp
+    from eqrec.design.delay import _design_from_solution, delay_language, design_delay
+    from eqrec.design.prefix import build_prefix_lp
+    from eqrec.core.patterns import PrefixTree
+    from eqrec.models import batch_reactor
+
+    system = batch_reactor()
+    design_delay(system, delay_language(max_delay=2, horizon=5), 0.33)  # warm-up (imports, caches)
+    rows = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        tree = PrefixTree(delay_language(max_delay=2, horizon=5))
+        model = build_prefix_lp(system, tree, 0.33, levels="sum")
+        t1 = time.perf_counter()
+        sol = solve_lp(model.lp, "highs").require_optimal()
+        t2 = time.perf_counter()
+        d = _design_from_solution(model, tree, system, sol.x, 0.33, "sum", sol, certify=False)
+        t3 = time.perf_counter()
+        certify_design(d)
+        t4 = time.perf_counter()
+        rows.append({"build": t1 - t0, "solve": t2 - t1, "recover": t3 - t2, "certify": t4 - t3, "total": t4 - t0})
+    keys = ("build", "solve", "recover", "certify", "total")
+    print(f"\n1. mu1 = 0.33 fixed, 243 words -> {len(tree.patterns)} sequences, {len(tree)} nodes, "
+          f"LP {model.lp.shape[0]} x {model.lp.shape[1]}, nnz {model.lp.A.nnz}; max mu2 = {d.mu2:.6f}")
+    print("   " + "  ".join(f"{k:>8}" for k in keys) + f"   (s; best | median of {repeats})")
+    print("   " + "  ".join(f"{min(r[k] for r in rows):8.3f}" for k in keys) + "   best")
+    print("   " + "  ".join(f"{statistics.median(r[k] for r in rows):8.3f}" for k in keys) + "   median")
+    print(f"   goal <= 1.5 s end to end: {'met' if statistics.median(r['total'] for r in rows) <= 1.5 else 'NOT met'}")
+
+
+def part_free() -> None:
+    from eqrec.core.patterns import full_delay_language
+    from eqrec.design.delay import compare_free_routes, design_delay_global, design_delay_ipopt
+    from eqrec.models import batch_reactor
+
+    system = batch_reactor()
+    words = full_delay_language(5, 2)
+    print("\n2. mu1 free, sum cost, 243 words")
+    g = design_delay_global(system, words, cost="sum", rtol=1e-4)
+    gc = design_delay_global(system, words, cost="sum", rtol=1e-4, warm_start=False)
+    ip = design_delay_ipopt(system, words, cost="sum", start_mu1=1.0)
+    for label, r in (("global, warm", g), ("global, cold", gc)):
+        mm = r.mu1_min
+        print(f"   {label:13} mu1 = {r.mu1:.8f} (certified smallest in ({mm.lower:.8f}, {mm.upper:.8f}]), "
+              f"J = {r.J:.6f} >= {r.lower_bound:.6f} (gap {r.gap:.1e}), max mu2 = {r.mu2:.6f}, "
+              f"{r.lps} LPs ({mm.lps} for mu1_min), {r.time:.2f} s")
+    pol = ip.extra.get("polished", {})
+    print(f"   {'ipopt (10)':13} mu1 = {ip.mu1:.8f} (its gains reach {ip.extra['mu1_of_gains']:.8f}), "
+          f"J = {ip.J:.6f}, max mu2 = {ip.mu2:.6f}, {ip.extra['iterations']} iterations, "
+          f"IPOPT {ip.extra['ipopt_time']:.2f} s, total {ip.time:.2f} s; LP polish at its mu1: J = {pol.get('J'):.6f}")
+    cmp = compare_free_routes(g, ip)
+    print(f"   better: {cmp['better']} (tolerance {cmp['tolerance']:.1e}); IPOPT consistent with the global bound: "
+          f"{cmp['ipopt_consistent_with_bound']}; goal <= 20 s: {'met' if g.time <= 20 else 'NOT met'}")
+
+
+WORKER = r"""
+import json, resource, sys, time
+T, tb, method, mu1, limit, mem_gb = sys.argv[1:7]
+T, tb, mu1, limit, mem_gb = int(T), int(tb), float(mu1), float(limit), float(mem_gb)
+if mem_gb > 0:
+    resource.setrlimit(resource.RLIMIT_AS, (int(mem_gb * 2**30), int(mem_gb * 2**30)))
+out = {"T": T, "tau": tb, "method": method}
+try:
+    from eqrec.core.patterns import PrefixTree
+    from eqrec.core.solvers import solve_lp
+    from eqrec.design.delay import delay_language
+    from eqrec.design.prefix import build_prefix_lp
+    from eqrec.models import batch_reactor
+    build_prefix_lp(batch_reactor(), PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up
+    t0 = time.perf_counter()
+    pats = delay_language(max_delay=tb, horizon=T)
+    tree = PrefixTree(pats)
+    t1 = time.perf_counter()
+    model = build_prefix_lp(batch_reactor(), tree, mu1, levels="sum")
+    t2 = time.perf_counter()
+    out.update(words=(tb + 1) ** T, sequences=len(pats), nodes=len(tree), rows=model.lp.shape[0],
+               cols=model.lp.shape[1], nnz=int(model.lp.A.nnz), tree_time=t1 - t0, build_time=t2 - t1)
+    opts = dict(json.loads(sys.argv[7]))
+    opts["time_limit"] = limit
+    if method != "none":
+        sol = solve_lp(model.lp, "highs", opts)
+        out.update(status=sol.status, solve_time=sol.solve_time, iterations=sol.iterations,
+                   objective=sol.objective)
+except MemoryError:
+    out["status"] = "memory limit"
+out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps(out))
+"""
+
+
+def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float) -> None:
+    print(f"\n3. scale table, full language {{0..tau}}^T, batch reactor, sum cost, mu1 = {mu1}, split robust form; "
+          f"one process per row; time limit {limit:g} s, memory limit {mem_gb:g} GB")
+    hdr = (f"   {'T':>2} {'tau':>3} {'words':>6} {'seqs':>6} {'nodes':>6} {'rows':>9} {'cols':>9} {'nnz':>10} "
+           f"{'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} {'peak MB':>8}  status")
+    print(hdr)
+    for T, tb in sizes:
+        for method in methods:
+            args = [sys.executable, "-c", WORKER, str(T), str(tb), method, str(mu1), str(limit), str(mem_gb),
+                    json.dumps(METHODS.get(method, {}))]
+            try:
+                p = subprocess.run(args, capture_output=True, text=True, timeout=limit * 1.5 + 300)
+                r = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {
+                    "status": f"crashed ({p.returncode}): {p.stderr.strip().splitlines()[-1:]}"}
+            except subprocess.TimeoutExpired:
+                r = {"status": "wall-clock kill"}
+            g = r.get
+            print(f"   {T:>2} {tb:>3} {g('words', ''):>6} {g('sequences', ''):>6} {g('nodes', ''):>6} "
+                  f"{g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
+                  f"{g('build_time', float('nan')):8.2f} {method:>7} {g('solve_time', float('nan')):8.2f} "
+                  f"{g('iterations', ''):>7} {g('peak_mb', float('nan')):8.0f}  {g('status', '')}", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--only", choices=["fixed", "free", "scale"], action="append")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--sizes", nargs="+", default=["5,2", "6,2"], help="T,tau pairs for the scale table")
+    ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS) + ["none"])
+    ap.add_argument("--mu1", type=float, default=0.5)
+    ap.add_argument("--time-limit", type=float, default=600.0)
+    ap.add_argument("--mem-limit-gb", type=float, default=16.0)
+    a = ap.parse_args()
+    parts = a.only or ["fixed", "free", "scale"]
+    if "fixed" in parts:
+        part_fixed(a.repeats)
+    if "free" in parts:
+        part_free()
+    if "scale" in parts:
+        sizes = [tuple(int(v) for v in s.split(",")) for s in a.sizes]
+        part_scale(sizes, a.methods, a.mu1, a.time_limit, a.mem_limit_gb)
+
+
+if __name__ == "__main__":
+    main()
