@@ -124,3 +124,16 @@ def test_bad_inputs(reactor):
         make_filter("ekf", reactor, gd)
     with pytest.raises(InputError, match="horizon"):
         make_filter("random_delay_lmv", reactor, gd)
+
+
+def test_compare_with_bounds(reactor):
+    from eqrec.filters import compare_with_bounds
+
+    mu1 = 0.33
+    maps = error_maps(_make("unaware", reactor, mu1, 5, 2, X0), reactor, "21210", X0, mu1)
+    worst = maps.bounds()
+    r = compare_with_bounds(maps, worst, worst.max(axis=1), np.zeros((3, maps.layout.size)))
+    assert not r["exceeds"].any() and r["max_ratio"] == pytest.approx(1.0)
+    assert r["sampled_exceed"] == 0 and r["samples"] == 3
+    r2 = compare_with_bounds(maps, 0.5 * worst)
+    assert r2["exceeds"].all() and r2["max_ratio"] == pytest.approx(2.0)

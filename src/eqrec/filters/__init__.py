@@ -6,9 +6,10 @@ fixed arrival pattern its error is affine in ``δ = (w, v, ξ0)``
 (:mod:`eqrec.filters.affine`) and its worst case over the box is exact.
 """
 
-from eqrec.filters.affine import ErrorMaps, error_maps, simulate_filter, truncated_normal_deltas
+from eqrec.filters.affine import (ErrorMaps, compare_with_bounds, error_maps, simulate_filter,
+                                  truncated_normal_deltas)
 from eqrec.filters.kalman import (DelayUnawareKalman, GaussianDesign, RandomDelayLMV, TimestampedKalman,
                                   make_filter, FILTERS)
 
-__all__ = ["ErrorMaps", "error_maps", "simulate_filter", "truncated_normal_deltas", "TimestampedKalman",
+__all__ = ["ErrorMaps", "compare_with_bounds", "error_maps", "simulate_filter", "truncated_normal_deltas", "TimestampedKalman",
            "DelayUnawareKalman", "RandomDelayLMV", "GaussianDesign", "make_filter", "FILTERS"]

@@ -135,3 +135,42 @@ def truncated_normal_deltas(layout: UncertaintyLayout, radius: np.ndarray, rng: 
 
     z = truncnorm.rvs(-sigmas, sigmas, size=(size, layout.size), random_state=rng)
     return z * (np.asarray(radius, float) / sigmas)[None, :]
+
+
+def compare_with_bounds(maps: ErrorMaps, bounds: np.ndarray, levels: np.ndarray | None = None,
+                        deltas: np.ndarray | None = None, estimate: str = "prediction", rtol: float = 1e-9) -> dict:
+    """Does the filter stay within another estimator's guarantees on this pattern?
+
+    Parameters
+    ----------
+    bounds
+        Per time and component guarantees ``(T+1, n)`` (e.g. the proposed
+        estimator's certified worst cases on the same pattern).
+    levels
+        Optional per-time ``∞``-norm levels ``(T+1,)`` (the ``μ2,k`` along the pattern).
+    deltas
+        Optional samples ``(N, D)`` (e.g. :func:`truncated_normal_deltas`).
+
+    Returns
+    -------
+    dict
+        ``worst`` (the filter's exact worst case per time and component),
+        ``exceeds`` (boolean mask, exact), ``max_ratio`` (largest
+        ``worst / bound``), the same against ``levels`` and, with ``deltas``,
+        the number of samples that leave the bounds (``sampled_exceed``) and the
+        largest sampled ``|e| / bound``.
+    """
+    worst = maps.bounds(estimate)
+    ref = np.asarray(bounds, float)[: worst.shape[0]]
+    out = {"worst": worst, "exceeds": worst > ref * (1 + rtol), "max_ratio": float(np.max(worst / ref))}
+    if levels is not None:
+        lv = np.asarray(levels, float)[: worst.shape[0]]
+        wn = worst.max(axis=1)
+        out.update(worst_norm=wn, exceeds_levels=wn > lv * (1 + rtol), max_ratio_levels=float(np.max(wn / lv)))
+    if deltas is not None:
+        errs = np.abs(maps.errors(deltas, estimate))
+        out.update(sampled_exceed=int(np.any(errs > ref[None] * (1 + rtol), axis=(1, 2)).sum()),
+                   sampled_max_ratio=float(np.max(errs / ref[None])), samples=int(errs.shape[0]))
+        if levels is not None:
+            out["sampled_exceed_levels"] = int(np.any(errs.max(axis=2) > lv[None] * (1 + rtol), axis=1).sum())
+    return out
