@@ -16,7 +16,9 @@
    ``simplex`` (HiGHS dual simplex), ``ipm`` (HiGHS interior point with
    crossover off), ``ipm-x`` (interior point + crossover).  A worker that
    exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
-   ``--mem-limit-gb`` (address-space limit) is reported as such.
+   ``--mem-limit-gb`` (address-space limit) is reported as such.  ``--builders
+   core recursive`` also measures the recursive (scenario-tree) form of
+   :mod:`eqrec.design.delay_scale`.
 """
 
 from __future__ import annotations
@@ -94,17 +96,20 @@ def part_free() -> None:
 
 WORKER = r"""
 import json, resource, sys, time
-T, tb, method, mu1, limit, mem_gb = sys.argv[1:7]
+T, tb, method, mu1, limit, mem_gb, builder = sys.argv[1:8]
 T, tb, mu1, limit, mem_gb = int(T), int(tb), float(mu1), float(limit), float(mem_gb)
 if mem_gb > 0:
     resource.setrlimit(resource.RLIMIT_AS, (int(mem_gb * 2**30), int(mem_gb * 2**30)))
-out = {"T": T, "tau": tb, "method": method}
+out = {"T": T, "tau": tb, "method": method, "builder": builder}
 try:
     from eqrec.core.patterns import PrefixTree
     from eqrec.core.solvers import solve_lp
     from eqrec.design.delay import delay_language
     from eqrec.design.prefix import build_prefix_lp
+    from eqrec.design.delay_scale import build_recursive_prefix_lp
     from eqrec.models import batch_reactor
+    if builder == "recursive":
+        build_prefix_lp = build_recursive_prefix_lp
     build_prefix_lp(batch_reactor(), PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up
     t0 = time.perf_counter()
     pats = delay_language(max_delay=tb, horizon=T)
@@ -114,7 +119,7 @@ try:
     t2 = time.perf_counter()
     out.update(words=(tb + 1) ** T, sequences=len(pats), nodes=len(tree), rows=model.lp.shape[0],
                cols=model.lp.shape[1], nnz=int(model.lp.A.nnz), tree_time=t1 - t0, build_time=t2 - t1)
-    opts = dict(json.loads(sys.argv[7]))
+    opts = dict(json.loads(sys.argv[8]))
     opts["time_limit"] = limit
     if method != "none":
         sol = solve_lp(model.lp, "highs", opts)
@@ -127,16 +132,16 @@ print(json.dumps(out))
 """
 
 
-def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float) -> None:
+def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders=("core",)) -> None:
     print(f"\n3. scale table, full language {{0..tau}}^T, batch reactor, sum cost, mu1 = {mu1}, split robust form; "
           f"one process per row; time limit {limit:g} s, memory limit {mem_gb:g} GB")
-    hdr = (f"   {'T':>2} {'tau':>3} {'words':>6} {'seqs':>6} {'nodes':>6} {'rows':>9} {'cols':>9} {'nnz':>10} "
-           f"{'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} {'peak MB':>8}  status")
+    hdr = (f"   {'T':>2} {'tau':>3} {'words':>6} {'seqs':>6} {'nodes':>6} {'builder':>9} {'rows':>9} {'cols':>9} "
+           f"{'nnz':>10} {'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} {'peak MB':>8}  status")
     print(hdr)
     for T, tb in sizes:
-        for method in methods:
+        for builder, method in [(bd, m) for bd in builders for m in methods]:
             args = [sys.executable, "-c", WORKER, str(T), str(tb), method, str(mu1), str(limit), str(mem_gb),
-                    json.dumps(METHODS.get(method, {}))]
+                    builder, json.dumps(METHODS.get(method, {}))]
             try:
                 p = subprocess.run(args, capture_output=True, text=True, timeout=limit * 1.5 + 300)
                 r = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {
@@ -145,7 +150,7 @@ def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float) -> None:
                 r = {"status": "wall-clock kill"}
             g = r.get
             print(f"   {T:>2} {tb:>3} {g('words', ''):>6} {g('sequences', ''):>6} {g('nodes', ''):>6} "
-                  f"{g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
+                  f"{builder:>9} {g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
                   f"{g('build_time', float('nan')):8.2f} {method:>7} {g('solve_time', float('nan')):8.2f} "
                   f"{g('iterations', ''):>7} {g('peak_mb', float('nan')):8.0f}  {g('status', '')}", flush=True)
 
@@ -156,6 +161,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--sizes", nargs="+", default=["5,2", "6,2"], help="T,tau pairs for the scale table")
     ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS) + ["none"])
+    ap.add_argument("--builders", nargs="+", default=["core"], choices=["core", "recursive"],
+                    help="core: eqrec.design.prefix.build_prefix_lp; recursive: eqrec.design.delay_scale")
     ap.add_argument("--mu1", type=float, default=0.5)
     ap.add_argument("--time-limit", type=float, default=600.0)
     ap.add_argument("--mem-limit-gb", type=float, default=16.0)
@@ -167,7 +174,7 @@ def main() -> None:
         part_free()
     if "scale" in parts:
         sizes = [tuple(int(v) for v in s.split(",")) for s in a.sizes]
-        part_scale(sizes, a.methods, a.mu1, a.time_limit, a.mem_limit_gb)
+        part_scale(sizes, a.methods, a.mu1, a.time_limit, a.mem_limit_gb, a.builders)
 
 
 if __name__ == "__main__":
