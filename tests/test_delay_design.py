@@ -227,3 +227,11 @@ def test_recursive_lp_form_has_the_core_optimum(acc, levels):
     assert cert.terminal <= 1.0 + 1e-6
     if levels == "common":
         assert cert.mu2 <= s_rec.objective * (1 + 1e-6)
+
+
+def test_noise_free_system_has_no_smallest_positive_mu1(reactor):
+    from eqrec.core.systems import AffineSystem
+
+    quiet = AffineSystem(A=reactor.A, C=reactor.C, E=reactor.E, eta_w=0.0, eta_v=0.0)
+    with pytest.raises(InputError, match="smallest recovery level is 0"):
+        design_delay_global(quiet, ["000", "010"])

@@ -598,6 +598,9 @@ def min_recovery_level(system: AffineSystem, patterns, *, start: float = 1.0, rt
         nxt = _fixed_point(f, b)
         if not np.isfinite(nxt):
             raise SolverFailure("the terminal LP returned gains that do not contract the initial error")
+        if nxt <= 1e-12 * max(1.0, mu):
+            raise InputError("the smallest recovery level is 0 (no noise reaches the end of the horizon); "
+                             "fix mu1 instead", field="mu1")
         hist.append({"mu": mu, "next": nxt, "step": "dinkelbach"})
         upper = min(upper, nxt)
         if nxt > mu * (1 - rtol / 4):  # stalled: certify the lower end (or continue below)
