@@ -674,8 +674,10 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", rt
         hist.append({"kind": "relaxation", "lo": lo, "hi": hi, "value": val, "at": at})
         return val, at
 
-    incumbent(mm.upper)
-    if not np.isfinite(best["J"]):
+    for k in range(6):  # the LP at the smallest level sits on the feasibility boundary: nudge up if needed
+        if np.isfinite(incumbent(mm.upper * (1 + (0.0 if k == 0 else 10.0 ** (k - 9))))):
+            break
+    else:
         raise SolverFailure(f"the LP at the certified smallest level {mm.upper:g} is infeasible")
     c_min = min_cost_slope(tree, cost)
     top = best["J"] / c_min  # J >= c_min μ1: no better μ1 above
