@@ -129,6 +129,9 @@ def test_delay_design_certified_and_worst_vertices_attained(reactor, small_langu
     assert rows[0]["k"] == 0 and all(r["certified"] <= r["level"] * (1 + 1e-6) for r in rows)
     js = to_json(d)
     assert js["method"] == "delay" and set(js["gains"]) == {p.label for p in small_language}
+    import json
+
+    assert json.loads(json.dumps(js))["mu1"] == d.M1  # serialisable as the CLI writes it
 
 
 def test_batch_reactor_at_the_printed_mu1(reactor):
