@@ -14,7 +14,8 @@
    solve time and peak memory, one fresh process per (size, method) so the
    peak memory is that size's (``ru_maxrss`` of the worker).  Methods:
    ``simplex`` (HiGHS dual simplex), ``ipm`` (HiGHS interior point with
-   crossover off), ``ipm-x`` (interior point + crossover).  A worker that
+   crossover off), ``ipm-x`` (interior point + crossover), ``pdlp`` (HiGHS's
+   first-order PDLP: matrix-vector products only).  A worker that
    exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
    ``--mem-limit-gb`` (address-space limit) is reported as such.  ``--builders
    core recursive`` also measures the recursive (scenario-tree) form of
@@ -34,7 +35,7 @@ import time
 import numpy as np
 
 METHODS = {"simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
-           "ipm-x": {"solver": "ipm", "run_crossover": "on"}}
+           "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"}}
 
 
 def part_fixed(repeats: int) -> None:
@@ -136,7 +137,7 @@ def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders
     print(f"\n3. scale table, full language {{0..tau}}^T, batch reactor, sum cost, mu1 = {mu1}, split robust form; "
           f"one process per row; time limit {limit:g} s, memory limit {mem_gb:g} GB")
     hdr = (f"   {'T':>2} {'tau':>3} {'words':>6} {'seqs':>6} {'nodes':>6} {'builder':>9} {'rows':>9} {'cols':>9} "
-           f"{'nnz':>10} {'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} {'peak MB':>8}  status")
+           f"{'nnz':>10} {'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} {'peak MB':>8} {'objective':>14}  status")
     print(hdr)
     for T, tb in sizes:
         for builder, method in [(bd, m) for bd in builders for m in methods]:
@@ -152,7 +153,8 @@ def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders
             print(f"   {T:>2} {tb:>3} {g('words', ''):>6} {g('sequences', ''):>6} {g('nodes', ''):>6} "
                   f"{builder:>9} {g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
                   f"{g('build_time', float('nan')):8.2f} {method:>7} {g('solve_time', float('nan')):8.2f} "
-                  f"{g('iterations', ''):>7} {g('peak_mb', float('nan')):8.0f}  {g('status', '')}", flush=True)
+                  f"{g('iterations', ''):>7} {g('peak_mb', float('nan')):8.0f} {g('objective', float('nan')):14.6f}  "
+                  f"{g('status', '')}", flush=True)
 
 
 def main() -> None:
