@@ -15,7 +15,7 @@
    peak memory is that size's (``ru_maxrss`` of the worker).  Methods:
    ``simplex`` (HiGHS dual simplex), ``ipm`` (HiGHS interior point with
    crossover off), ``ipm-x`` (interior point + crossover), ``pdlp`` (HiGHS's
-   first-order PDLP: matrix-vector products only).  A worker that
+   first-order PDLP: matrix-vector products only); ``-np``: presolve off.  A worker that
    exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
    ``--mem-limit-gb`` (address-space limit) is reported as such.  ``--builders
    core recursive`` also measures the recursive (scenario-tree) form of
@@ -35,7 +35,9 @@ import time
 import numpy as np
 
 METHODS = {"simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
-           "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"}}
+           "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"},
+           "pdlp-np": {"solver": "pdlp", "presolve": "off"}, "ipm-np": {"solver": "ipm", "run_crossover": "off",
+                                                                       "presolve": "off"}}
 
 
 def part_fixed(repeats: int) -> None:
