@@ -26,13 +26,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import statistics
 import subprocess
 import sys
 import time
-
-import numpy as np
 
 METHODS = {"simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
            "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"},

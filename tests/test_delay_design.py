@@ -44,6 +44,7 @@ def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language):
 
     J_literal = literal_paper_cost(tree, d.M1, level_of)
     assert d.extra["J"] == pytest.approx(J_literal, rel=1e-12)
+    assert paper_cost(tree, d.M1, d.levels) == pytest.approx(J_literal, rel=1e-12)
     assert d.extra["J"] == pytest.approx(d.solution.objective + a * d.M1, rel=1e-9)
     assert d.extra["J_certified"] <= d.extra["J"] * (1 + 1e-6)
     for pat in tree.patterns:
