@@ -1,4 +1,5 @@
 # The comparison table: every published number next to ours.
+CLAIMS_SRC = module_sources("studies.claims")
 
 
 rule claims:
@@ -6,7 +7,7 @@ rule claims:
     input:
         claims="config/claims.yaml",
         values=VALUES_FILES,
-        code=PKG_SRC,
+        code=CLAIMS_SRC,
     output:
         csv="results/claims.csv",
         md=report("results/REPRODUCTION.md", caption="../report/claims.rst", category="Claims"),

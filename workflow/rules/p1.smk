@@ -1,5 +1,6 @@
 # P1: prefix-based estimator (Rutledge, Yong, Ozay, ACC 2019).
 # Each rule runs one step of eqrec.p1_study; see `python -m eqrec.p1_study --help`.
+P1_SRC = module_sources("studies.p1")
 VALUES_FILES.append("results/p1/values.json")
 
 
@@ -7,7 +8,7 @@ rule p1_model:
     """P1-T1: ACC model from the Table I constants."""
     input:
         config=CONFIG_FILE,
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         "results/p1/model.json",
     params:
@@ -22,7 +23,7 @@ rule p1_designs:
     """P1-M2, P1-TIME: prefix- and time-based designs on L1, certified, timed."""
     input:
         config=CONFIG_FILE,
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         "results/p1/designs.json",
     params:
@@ -37,7 +38,7 @@ rule p1_simulate:
     """P1-F1: Monte Carlo runs of both estimators on the same draws."""
     input:
         config=CONFIG_FILE,
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         "results/p1/simulation.npz",
     params:
@@ -52,7 +53,7 @@ rule p1_figure1:
     """P1-F1 figure."""
     input:
         sim="results/p1/simulation.npz",
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         pdf=report("results/p1/fig1_trajectories.pdf", caption="../report/p1_fig1.rst", category="P1"),
         png="results/p1/fig1_trajectories.png",
@@ -68,7 +69,7 @@ rule p1_extensions:
     """P1-EXT: M2*(M1), minimum M1, finite-length language, minimum T."""
     input:
         config=CONFIG_FILE,
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         "results/p1/extensions.json",
     params:
@@ -83,7 +84,7 @@ rule p1_figure_ext:
     """P1-EXT figure."""
     input:
         ext="results/p1/extensions.json",
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         pdf=report("results/p1/fig_ext_M2_vs_M1.pdf", caption="../report/p1_ext.rst", category="P1"),
         png="results/p1/fig_ext_M2_vs_M1.png",
@@ -102,7 +103,7 @@ rule p1_values:
         designs="results/p1/designs.json",
         simulation="results/p1/simulation.npz",
         extensions="results/p1/extensions.json",
-        code=PKG_SRC,
+        code=P1_SRC,
     output:
         "results/p1/values.json",
     params:

@@ -1,10 +1,11 @@
 # P2: state-augmented estimator (Hassaan, Shen, Yong, ACC 2019).
 # Thin rules: each runs one step of eqrec.p2_study; parameters from config["p2"]
 # (config/p2.yaml, schema config/schemas/p2.schema.yaml).
+P2_SRC = module_sources("studies.p2")
 VALUES_FILES.append("results/p2/values.json")
 # config["p2"] is loaded and validated (config/schemas/p2.schema.yaml) by the Snakefile.
 
-P2_CONFIG = "config/p2.yaml"
+P2_CONFIG = resolved("p2")
 P2_VARIANTS = config["p2"]["heatmap"]["variants"]
 P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
 
@@ -13,7 +14,7 @@ rule p2_designs:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
     input:
         config=P2_CONFIG,
-        code=PKG_SRC,
+        code=P2_SRC,
     output:
         json="results/p2/designs.json",
         npz="results/p2/designs.npz",
@@ -28,7 +29,7 @@ rule p2_designs:
 rule p2_simulate:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
     input:
-        code=PKG_SRC,
+        code=P2_SRC,
         config=P2_CONFIG,
         designs="results/p2/designs.npz",
     output:
@@ -45,7 +46,7 @@ rule p2_heatmap_chunk:
     """P2-F3a: one theta-chunk of the eigenvalue sweep (one LP built, L values updated)."""
     input:
         config=P2_CONFIG,
-        code=PKG_SRC,
+        code=P2_SRC,
     output:
         "results/p2/heatmap/{variant}_{chunk}.csv",
     params:
@@ -63,7 +64,7 @@ rule p2_heatmap_merge:
     """P2-F3a: the whole grid."""
     input:
         chunks=expand("results/p2/heatmap/{variant}_{chunk}.csv", variant=P2_VARIANTS, chunk=P2_CHUNKS),
-        code=PKG_SRC,
+        code=P2_SRC,
     output:
         "results/p2/heatmap.csv",
     params:
@@ -78,7 +79,7 @@ rule p2_realaxis:
     """P2-F3b: real double eigenvalue sweep."""
     input:
         config=P2_CONFIG,
-        code=PKG_SRC,
+        code=P2_SRC,
     output:
         "results/p2/realaxis.csv",
     params:
@@ -93,7 +94,7 @@ rule p2_checks:
     """P2-S0, P2-SOLVER."""
     input:
         config=P2_CONFIG,
-        code=PKG_SRC,
+        code=P2_SRC,
     output:
         "results/p2/checks.json",
     params:
@@ -107,7 +108,7 @@ rule p2_checks:
 rule p2_values:
     """Our value of every published P2 number, with evidence."""
     input:
-        code=PKG_SRC,
+        code=P2_SRC,
         config=P2_CONFIG,
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
@@ -128,7 +129,7 @@ rule p2_values:
 rule p2_figure_trajectories:
     """P2-F1 / P2-F2 figures."""
     input:
-        code=PKG_SRC,
+        code=P2_SRC,
         config=P2_CONFIG,
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
@@ -149,7 +150,7 @@ rule p2_figure_trajectories:
 rule p2_figure_heatmap:
     """P2-F3a figure."""
     input:
-        code=PKG_SRC,
+        code=P2_SRC,
         config=P2_CONFIG,
         heatmap="results/p2/heatmap.csv",
     output:
@@ -167,7 +168,7 @@ rule p2_figure_heatmap:
 rule p2_figure_realaxis:
     """P2-F3b figure."""
     input:
-        code=PKG_SRC,
+        code=P2_SRC,
         config=P2_CONFIG,
         realaxis="results/p2/realaxis.csv",
     output:

@@ -1,9 +1,10 @@
 # P4: LMV filter / predictor / smoother with zero- vs hold-input compensation.
 # Each rule runs one step of eqrec.lmv_study; parameters from config["p4"]
 # (config/p4.yaml, validated by the Snakefile).
+P4_SRC = module_sources("studies.p4")
 VALUES_FILES.append("results/p4/values.json")
 
-P4_CONFIG = "config/p4.yaml"
+P4_CONFIG = resolved("p4")
 P4_EXAMPLES = list(config["p4"]["examples"])
 P4_ETA_CHUNKS = list(range(int(config["p4"]["sweep_eta"]["chunks"])))
 P4_Q_CHUNKS = list(range(int(config["p4"]["sweep_q"]["chunks"])))
@@ -14,7 +15,7 @@ rule p4_tracking:
     """P4-F1..F3: one realisation of Example 1 with filter, predictor and smoother."""
     input:
         config=P4_CONFIG,
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         npz="results/p4/tracking.npz",
         f1=report("results/p4/fig1_filter.pdf", caption="../report/p4_f1.rst", category="P4"),
@@ -36,7 +37,7 @@ rule p4_mc:
     """P4-THEORY: theory against Monte Carlo for one example (both mechanisms, same draws)."""
     input:
         config=P4_CONFIG,
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         npz="results/p4/mc_{example}.npz",
         json="results/p4/mc_{example}.json",
@@ -53,7 +54,7 @@ rule p4_sweep_eta_chunk:
     """P4-F5: one chunk of the arrival-rate sweep (steady state)."""
     input:
         config=P4_CONFIG,
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         "results/p4/sweep_eta/chunk{chunk}.npz",
     params:
@@ -70,7 +71,7 @@ rule p4_sweep_q_chunk:
     """P4-F6: one chunk of the (Q_xi, Q_lambda) sweep (steady state)."""
     input:
         config=P4_CONFIG,
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         "results/p4/sweep_q/chunk{chunk}.npz",
     params:
@@ -88,7 +89,7 @@ rule p4_fig4:
     input:
         config=P4_CONFIG,
         mc=f"results/p4/mc_{config['p4']['tracking']['example']}.npz",
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         pdf=report("results/p4/fig4_variances.pdf", caption="../report/p4_f4.rst", category="P4"),
         png="results/p4/fig4_variances.png",
@@ -105,7 +106,7 @@ rule p4_fig5:
     input:
         config=P4_CONFIG,
         chunks=expand("results/p4/sweep_eta/chunk{chunk}.npz", chunk=P4_ETA_CHUNKS),
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         merged="results/p4/sweep_eta.npz",
         pdf=report("results/p4/fig5_eta.pdf", caption="../report/p4_f5.rst", category="P4"),
@@ -124,7 +125,7 @@ rule p4_fig6:
     input:
         config=P4_CONFIG,
         chunks=expand("results/p4/sweep_q/chunk{chunk}.npz", chunk=P4_Q_CHUNKS),
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         merged="results/p4/sweep_q.npz",
         pdf=report("results/p4/fig6_q.pdf", caption="../report/p4_f6.rst", category="P4"),
@@ -145,7 +146,7 @@ rule p4_compare:
     input:
         config=P4_CONFIG,
         mc="results/p4/mc_{example}.npz",
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         pdf=report("results/p4/fig{number}_compare_{example}.pdf", caption="../report/p4_compare.rst",
                    category="P4"),
@@ -170,7 +171,7 @@ rule p4_values:
         mc_npz=expand("results/p4/mc_{example}.npz", example=P4_EXAMPLES),
         eta="results/p4/sweep_eta.npz",
         q="results/p4/sweep_q.npz",
-        code=PKG_SRC,
+        code=P4_SRC,
     output:
         values="results/p4/values.json",
         table="results/p4/summary.csv",
