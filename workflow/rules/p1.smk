@@ -55,8 +55,8 @@ rule p1_figure1:
         sim="results/p1/simulation.npz",
         code=P1_SRC,
     output:
-        pdf=report("results/p1/fig1_trajectories.pdf", caption="../report/p1_fig1.rst", category="P1"),
-        png="results/p1/fig1_trajectories.png",
+        pdf="results/p1/fig1_trajectories.pdf",
+        png=report("results/p1/fig1_trajectories.png", caption="../report/p1_fig1.rst", category="P1"),
     params:
         step=study_cmd("studies.p1", "figure1"),
     log:
@@ -86,8 +86,8 @@ rule p1_figure_ext:
         ext="results/p1/extensions.json",
         code=P1_SRC,
     output:
-        pdf=report("results/p1/fig_ext_M2_vs_M1.pdf", caption="../report/p1_ext.rst", category="P1"),
-        png="results/p1/fig_ext_M2_vs_M1.png",
+        pdf="results/p1/fig_ext_M2_vs_M1.pdf",
+        png=report("results/p1/fig_ext_M2_vs_M1.png", caption="../report/p1_ext.rst", category="P1"),
     params:
         step=study_cmd("studies.p1", "figure-ext"),
     log:

@@ -134,8 +134,8 @@ rule p2_figure_trajectories:
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
     output:
-        pdf=report("results/p2/{fig}_trajectories.pdf", caption="../report/p2_{fig}.rst", category="P2"),
-        png="results/p2/{fig}_trajectories.png",
+        pdf="results/p2/{fig}_trajectories.pdf",
+        png=report("results/p2/{fig}_trajectories.png", caption="../report/p2_trajectories.rst", category="P2"),
     params:
         step=study_cmd("studies.p2", "figure-trajectories"),
     log:
@@ -154,8 +154,8 @@ rule p2_figure_heatmap:
         config=P2_CONFIG,
         heatmap="results/p2/heatmap.csv",
     output:
-        pdf=report("results/p2/f3a_heatmap.pdf", caption="../report/p2_f3a.rst", category="P2"),
-        png="results/p2/f3a_heatmap.png",
+        pdf="results/p2/f3a_heatmap.pdf",
+        png=report("results/p2/f3a_heatmap.png", caption="../report/p2_f3a.rst", category="P2"),
     params:
         step=study_cmd("studies.p2", "figure-heatmap"),
     log:
@@ -172,8 +172,8 @@ rule p2_figure_realaxis:
         config=P2_CONFIG,
         realaxis="results/p2/realaxis.csv",
     output:
-        pdf=report("results/p2/f3b_realaxis.pdf", caption="../report/p2_f3b.rst", category="P2"),
-        png="results/p2/f3b_realaxis.png",
+        pdf="results/p2/f3b_realaxis.pdf",
+        png=report("results/p2/f3b_realaxis.png", caption="../report/p2_f3b.rst", category="P2"),
     params:
         step=study_cmd("studies.p2", "figure-realaxis"),
     log:

@@ -18,12 +18,12 @@ rule p4_tracking:
         code=P4_SRC,
     output:
         npz="results/p4/tracking.npz",
-        f1=report("results/p4/fig1_filter.pdf", caption="../report/p4_f1.rst", category="P4"),
-        f1png="results/p4/fig1_filter.png",
-        f2=report("results/p4/fig2_predictor.pdf", caption="../report/p4_f2.rst", category="P4"),
-        f2png="results/p4/fig2_predictor.png",
-        f3=report("results/p4/fig3_smoother.pdf", caption="../report/p4_f3.rst", category="P4"),
-        f3png="results/p4/fig3_smoother.png",
+        f1="results/p4/fig1_filter.pdf",
+        f1png=report("results/p4/fig1_filter.png", caption="../report/p4_f1.rst", category="P4"),
+        f2="results/p4/fig2_predictor.pdf",
+        f2png=report("results/p4/fig2_predictor.png", caption="../report/p4_f2.rst", category="P4"),
+        f3="results/p4/fig3_smoother.pdf",
+        f3png=report("results/p4/fig3_smoother.png", caption="../report/p4_f3.rst", category="P4"),
     params:
         step=study_cmd("studies.p4", "tracking"),
     log:
@@ -91,8 +91,8 @@ rule p4_fig4:
         mc=f"results/p4/mc_{config['p4']['tracking']['example']}.npz",
         code=P4_SRC,
     output:
-        pdf=report("results/p4/fig4_variances.pdf", caption="../report/p4_f4.rst", category="P4"),
-        png="results/p4/fig4_variances.png",
+        pdf="results/p4/fig4_variances.pdf",
+        png=report("results/p4/fig4_variances.png", caption="../report/p4_f4.rst", category="P4"),
     params:
         step=study_cmd("studies.p4", "fig4"),
     log:
@@ -109,8 +109,8 @@ rule p4_fig5:
         code=P4_SRC,
     output:
         merged="results/p4/sweep_eta.npz",
-        pdf=report("results/p4/fig5_eta.pdf", caption="../report/p4_f5.rst", category="P4"),
-        png="results/p4/fig5_eta.png",
+        pdf="results/p4/fig5_eta.pdf",
+        png=report("results/p4/fig5_eta.png", caption="../report/p4_f5.rst", category="P4"),
     params:
         step=study_cmd("studies.p4", "fig5"),
     log:
@@ -128,10 +128,10 @@ rule p4_fig6:
         code=P4_SRC,
     output:
         merged="results/p4/sweep_q.npz",
-        pdf=report("results/p4/fig6_q.pdf", caption="../report/p4_f6.rst", category="P4"),
-        png="results/p4/fig6_q.png",
-        rpdf=report("results/p4/regions.pdf", caption="../report/p4_regions.rst", category="P4"),
-        rpng="results/p4/regions.png",
+        pdf="results/p4/fig6_q.pdf",
+        png=report("results/p4/fig6_q.png", caption="../report/p4_f6.rst", category="P4"),
+        rpdf="results/p4/regions.pdf",
+        rpng=report("results/p4/regions.png", caption="../report/p4_regions.rst", category="P4"),
     params:
         step=study_cmd("studies.p4", "fig6"),
     log:
@@ -148,9 +148,9 @@ rule p4_compare:
         mc="results/p4/mc_{example}.npz",
         code=P4_SRC,
     output:
-        pdf=report("results/p4/fig{number}_compare_{example}.pdf", caption="../report/p4_compare.rst",
+        pdf="results/p4/fig{number}_compare_{example}.pdf",
+        png=report("results/p4/fig{number}_compare_{example}.png", caption="../report/p4_compare.rst",
                    category="P4"),
-        png="results/p4/fig{number}_compare_{example}.png",
     params:
         step=study_cmd("studies.p4", "compare"),
     log:
