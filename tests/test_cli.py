@@ -33,10 +33,10 @@ def test_time_method_uses_worst_case_word(tmp_path, capsys):
     assert d["worst_case_word"] == "100111" and list(d["gains"]) == ["100111"]
 
 
-def test_infeasible_exits_2_and_writes_nothing(tmp_path, capsys):
+def test_infeasible_exits_3_and_writes_nothing(tmp_path, capsys):
     out = tmp_path / "d.json"
     rc = main(["design", str(SYSTEM), "--words", "101111", "--mu1", "0.05", "--out", str(out)])
-    assert rc == 2 and not out.exists()
+    assert rc == 3 and not out.exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "infeasible" in err[0]
 
@@ -72,3 +72,43 @@ def test_augmented_free_L_prints_clean_json(capsys):
 def test_augmented_options_rejected_for_other_methods(capsys):
     assert main(["design", str(SYSTEM), "--words", "111111", "--L", "free"]) == 1
     assert "augmented only" in capsys.readouterr().err
+
+
+def test_version_and_usage_error_codes(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and "eqrec" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as e:
+        main(["design"])  # usage error: argparse's 2, not the infeasible-design code
+    assert e.value.code == 2
+    with pytest.raises(SystemExit):
+        main(["design", "--help"])
+    assert "3 infeasible" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("target", ["missing_dir/d.json", "."])
+def test_bad_out_path_is_rejected_before_designing(tmp_path, capsys, target):
+    out = tmp_path / target
+    rc = main(["design", str(SYSTEM), "--words", "101111", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 1 and "--out" in err
+    assert not list(tmp_path.rglob("*.tmp"))
+
+
+def test_directory_as_system_file(tmp_path, capsys):
+    rc = main(["design", str(tmp_path), "--words", "101111"])
+    assert rc == 1 and "is a directory" in capsys.readouterr().err
+
+
+def test_augmented_default_poles_follow_the_system_size(tmp_path, capsys):
+    sysfile = tmp_path / "two_state.yaml"
+    sysfile.write_text("A: [[1.0, 0.1], [0.0, 0.9]]\nC: [[1.0, 0.0]]\nE: [[0.0], [0.1]]\neta_w: 0.1\neta_v: 0.05\n")
+    rc = main(["design", str(sysfile), "--words", "1111,1011", "--method", "augmented", "--mu1", "2"])
+    assert rc == 0, capsys.readouterr().err
+    d = json.loads(capsys.readouterr().out)
+    assert d["certified_mu2"] <= d["mu2"] + 1e-6
+
+
+def test_python_dash_m_eqrec():
+    out = subprocess.run([sys.executable, "-m", "eqrec", "--version"], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.startswith("eqrec ")

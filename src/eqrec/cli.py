@@ -9,8 +9,8 @@ Examples
     eqrec design system.yaml --words 101111,110111 --method augmented --L free
 
 Exit status: 0 on success, 1 for malformed input (the message names the file
-and field), 2 for an infeasible or unbounded design (nothing is written),
-3 for a solver or certification failure.
+and field), 2 for a usage error (argparse), 3 for an infeasible or unbounded
+design (nothing is written), 4 for a solver or certification failure.
 """
 
 from __future__ import annotations
@@ -22,9 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from eqrec.core.solvers import SOLVER_NAMES
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
-EXIT_INPUT, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3
+EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
+EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usage error; "
+             "3 infeasible or unbounded design (no file written); 4 solver or certification failure.")
 
 SYSTEM_HELP = """\
 SYSTEM.yaml keys (matrices as nested lists):
@@ -55,13 +58,15 @@ def _parser() -> argparse.ArgumentParser:
         description="Equalized-recovery estimators with missing data: design (LP / IPOPT), certify "
                     "the gains independently, and write them as JSON.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="Exit status: 0 ok, 1 malformed input, 2 infeasible design (no file written), "
-               "3 solver or certification failure.")
+        epilog=EXIT_HELP)
+    from eqrec import __version__
+
+    ap.add_argument("--version", action="version", version=f"eqrec {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
     d = sub.add_parser("design", help="design and certify an estimator for a system file",
                        description="Minimise the intermediate level mu2 for a given recovery level mu1, "
                                    "recover the gains, certify them from the gains alone, write JSON.",
-                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=SYSTEM_HELP)
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=SYSTEM_HELP + "\n" + EXIT_HELP)
     d.add_argument("system", help="system YAML file (keys below)")
     d.add_argument("--words", required=True,
                    help="comma-separated words of the missing-data language, e.g. 101111,110111")
@@ -70,11 +75,13 @@ def _parser() -> argparse.ArgumentParser:
                         "by the observed prefix (prefix-based paper); augmented: state-augmented estimator "
                         "(augmented paper). Default: prefix")
     d.add_argument("--mu1", type=float, default=1.0, help="recovery level M1 (default 1)")
-    d.add_argument("--solver", choices=("highs", "clarabel", "scipy"), default="highs",
-                   help="LP solver (default highs)")
+    d.add_argument("--solver", choices=SOLVER_NAMES, default="highs",
+                   help="LP solver of the registry (default highs; ipopt is an interior-point NLP solver)")
     d.add_argument("--L", dest="L", default=None,
                    help="augmented only: 'free' (IPOPT over L and s0) or a JSON n x p matrix")
-    d.add_argument("--poles", default=None, help="augmented only: comma-separated real poles for A - L C")
+    d.add_argument("--poles", default=None,
+                   help="augmented only: comma-separated poles of A - L C, real or complex in Python "
+                        "notation, e.g. 0,0.3+0.2j,0.3-0.2j (default: n distinct poles in [-0.5, 0.5])")
     d.add_argument("--s0", default=None, help="augmented only: JSON vector s0 (default zeros)")
     d.add_argument("--out", default=None, help="output JSON file (default: print to stdout)")
     return ap
@@ -136,10 +143,36 @@ def run_design(args: argparse.Namespace) -> dict:
     return out
 
 
+def _check_out(out: str | None) -> Path | None:
+    """Check the output path before any design work: its folder exists and it is not a folder."""
+    if out is None:
+        return None
+    path = Path(out)
+    if path.is_dir():
+        raise InputError("is a directory; give a file name for the JSON", str(path), "--out")
+    if not path.parent.is_dir():
+        raise InputError(f"folder {path.parent} does not exist", str(path), "--out")
+    return path
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        tmp.write_text(text)
+        tmp.replace(path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise InputError(f"cannot write ({exc.strerror})", str(path), "--out") from None
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
+        out_path = _check_out(args.out)
         result = run_design(args)
+        text = json.dumps(result, indent=2)
+        if out_path is not None:
+            _write_atomic(out_path, text + "\n")
     except InputError as exc:
         print(f"eqrec: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
@@ -149,13 +182,9 @@ def main(argv: list[str] | None = None) -> int:
     except (SolverFailure, CertificationFailure) as exc:
         print(f"eqrec: failed: {exc}", file=sys.stderr)
         return EXIT_SOLVER
-    text = json.dumps(result, indent=2)
-    if args.out:
-        path = Path(args.out)
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(text + "\n")
-        tmp.replace(path)
-        print(f"mu2 = {result['mu2']:.6g} (certified {result['certified_mu2']:.6g}); wrote {path}", file=sys.stderr)
+    if out_path is not None:
+        print(f"mu2 = {result['mu2']:.6g} (certified {result['certified_mu2']:.6g}); wrote {out_path}",
+              file=sys.stderr)
     else:
         print(text)
     return 0

@@ -264,6 +264,8 @@ def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
     import yaml
 
     path = Path(path)
+    if path.is_dir():
+        raise InputError("is a directory, not a system file", str(path))
     if not path.is_file():
         raise InputError("file not found", str(path))
     try:
