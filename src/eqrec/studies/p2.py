@@ -64,7 +64,7 @@ DEFAULTS: dict[str, Any] = {
 
 #: Heat-map / projection variants: name -> (mode, word reading)
 VARIANTS = {"theorem2": ("theorem2", "zero_based"), "one_based": ("theorem2", "one_based"),
-            "leak": ("leak", "zero_based")}
+            "leak": ("leak", "zero_based"), "masked_gain": ("masked_gain", "zero_based")}
 
 
 def load_config(path: str | Path | dict | None) -> dict:
@@ -375,7 +375,12 @@ def step_realaxis(config, out_csv: str | Path) -> pd.DataFrame:
     """P2-F3b: eigenvalues ``{0, λ, λ}`` for real ``λ`` (the heat map at θ = 0 and π, finer)."""
     cfg = load_config(config)
     system = acc_system()
-    lam = np.linspace(-cfg["realaxis"]["lam_max"], cfg["realaxis"]["lam_max"], int(cfg["realaxis"]["n"]))
+    lam_max = float(cfg["realaxis"]["lam_max"])
+    lam = np.linspace(-lam_max, lam_max, int(cfg["realaxis"]["n"]))
+    den = cfg["realaxis"].get("grid_denominator")
+    if den:  # the grid k / den as well (exact points, e.g. the paper's -10/14 and 13/14)
+        k = np.arange(-int(np.floor(lam_max * den)), int(np.floor(lam_max * den)) + 1)
+        lam = np.unique(np.concatenate([lam, k / den]))
     frames = []
     for variant in cfg["heatmap"]["variants"]:
         mode, word = variant_word(cfg["heatmap"]["word"], variant)
@@ -553,6 +558,14 @@ def step_values(config, designs_json, simulation_npz, heatmap_csv, realaxis_csv,
         f"(r = 0: {len(fails)} points).")}
     v["f3a_mu2_spread"] = float(np.ptp(mu))
     v["f3a_placement_failures"] = int(len(fails))
+    mg = hm[(hm["variant"] == "masked_gain") & (hm["status"] == "optimal")]
+    if len(mg):
+        vmin = float(mg["mu2"].min())
+        at_min = int((mg["mu2"] <= vmin + tol).sum())
+        v["f3a_mu2_region_masked_gain"] = {"value": vmin, "note": (
+            f"'masked_gain' reading: mu2 = {vmin:.6g} on {at_min} of {len(mg)} solved grid points (a region around "
+            f"the origin), up to {mg['mu2'].max():.4g} outside; "
+            f"{int((hm[hm['variant'] == 'masked_gain']['status'] == 'infeasible').sum())} infeasible points")}
     # real axis
     notes = []
     interval = None
@@ -564,6 +577,23 @@ def step_values(config, designs_json, simulation_npz, heatmap_csv, realaxis_csv,
         notes.append(f"{var}: constant on {iv} (placement failed at lambda = {failed})")
         if var == "theorem2":
             interval = iv
+        if var == "masked_gain":
+            # λ = 0 (a triple pole) cannot be placed; it does not break the interval
+            lam_all = g["lam"].to_numpy(float)
+            placed = (g["status"] != "placement_failed").to_numpy()
+            fine = constant_interval(lam_all[placed], mu2[placed], tol)
+            den = cfg["realaxis"].get("grid_denominator")
+            on_grid = placed & (np.abs(lam_all * den - np.round(lam_all * den)) < 1e-9) if den else placed
+            coarse = constant_interval(lam_all[on_grid], mu2[on_grid], tol)
+            v["f3b_interval_masked_gain"] = {"value": coarse, "note": (
+                f"'masked_gain' reading (Appendix with Phi = A - LC at every step, measurement gain zeroed at the "
+                f"missing steps), on the grid lambda = k/{den}: mu2 stays at its minimum {np.nanmin(mu2):.6g} on "
+                f"{coarse}; lambda = 0 (a triple pole that cannot be placed with rank C = 2) is skipped")}
+            v["f3b_interval_masked_gain_fine"] = {"value": fine, "note": (
+                f"same reading on all {int(placed.sum())} placeable real eigenvalues (step "
+                f"{2 * float(cfg['realaxis']['lam_max']) / (int(cfg['realaxis']['n']) - 1):g} plus the k/{den} grid): "
+                f"mu2 = {np.nanmin(mu2):.6g} on {fine}, a slightly wider interval than the one the k/{den} grid "
+                f"can show, so the published endpoints are the grid points next to the true edges")}
     # the interval across the single failure point λ = 0 (triple pole) is the whole axis
     g = ra[ra["variant"] == "theorem2"]
     okg = g[g["status"] == "optimal"]
