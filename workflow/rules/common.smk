@@ -1,10 +1,14 @@
 # Shared helpers of the rules files. Rules stay thin: each runs one step of
 # a package module (python -m eqrec.<module> <step> ...); no mathematics here.
+import os
 import sys
 from pathlib import Path
 
-# The interpreter running Snakemake has the package installed.
-PY = sys.executable
+# The interpreter running Snakemake has the package installed. It reaches the
+# shell commands through the environment, so no absolute path of this machine
+# ends up in params (and in the report).
+os.environ["EQREC_PYTHON"] = sys.executable
+PY = "$EQREC_PYTHON"
 # Every step reads the configuration Snakemake resolved (config files, then
 # --configfile and --config overrides), written by rule resolved_config; its
 # params carry the section, so a changed value re-runs that study's jobs.
