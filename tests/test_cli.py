@@ -112,3 +112,47 @@ def test_augmented_default_poles_follow_the_system_size(tmp_path, capsys):
 def test_python_dash_m_eqrec():
     out = subprocess.run([sys.executable, "-m", "eqrec", "--version"], capture_output=True, text=True)
     assert out.returncode == 0 and out.stdout.startswith("eqrec ")
+
+
+def _acc_with(tmp_path, old, new):
+    text = SYSTEM.read_text()
+    assert old in text
+    f = tmp_path / "sys.yaml"
+    f.write_text(text.replace(old, new))
+    return f
+
+
+@pytest.mark.parametrize("value,msg", [("1e308", "exceeds"), ('"0.1"', "quoted number")])
+def test_noise_bound_errors_name_file_and_field(tmp_path, capsys, value, msg):
+    f = _acc_with(tmp_path, "eta_w: 0.1", f"eta_w: {value}")
+    assert main(["design", str(f), "--words", "101111"]) == 1
+    err = capsys.readouterr().err
+    assert "sys.yaml" in err and "'eta_w'" in err and msg in err and "Not Set" not in err
+
+
+@pytest.mark.parametrize("mu1", ["1e30", "inf"])
+def test_mu1_out_of_lp_range_is_an_input_error(capsys, mu1):
+    assert main(["design", str(SYSTEM), "--words", "101111", "--mu1", mu1]) == 1
+    assert "--mu1" in capsys.readouterr().err
+
+
+def test_out_written_atomically_and_overwritten(tmp_path):
+    out = tmp_path / "d.json"
+    out.write_text("old")
+    assert main(["design", str(SYSTEM), "--words", "111111", "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["method"] == "prefix"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.json"]
+
+
+def test_poles_help_mentions_complex(capsys):
+    with pytest.raises(SystemExit):
+        main(["design", "--help"])
+    out = capsys.readouterr().out
+    assert "complex" in out and "0.3+0.2j" in out
+
+
+def test_explicit_complex_poles(capsys):
+    rc = main(["design", str(SYSTEM), "--words", "111111", "--method", "augmented",
+               "--poles", "0,0.3+0.2j,0.3-0.2j"])
+    assert rc == 0, capsys.readouterr().err
+    assert json.loads(capsys.readouterr().out)["method"] == "augmented"

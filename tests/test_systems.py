@@ -66,3 +66,57 @@ def test_time_varying_access():
     np.testing.assert_allclose(s.A_at(2), 3 * np.eye(2))
     with pytest.raises(InputError, match="horizon"):
         s.check_horizon(5)
+
+
+SMALL = "A: [[1, 0.1], [0, 0.9]]\nC: [[1, 0]]\nE: [[0], [0.1]]\neta_v: 0.05\n"
+
+
+@pytest.mark.parametrize("line", ['eta_w: "0.1"', "eta_w: '0.1'", "eta_w: true", "eta_w: null"])
+def test_quoted_or_non_numeric_noise_bound_is_rejected(tmp_path, line):
+    p = tmp_path / "s.yaml"
+    p.write_text(SMALL + line + "\n")
+    with pytest.raises(InputError, match=r"s\.yaml: field 'eta_w': value must be a number"):
+        load_system(p)
+
+
+def test_quoted_matrix_entry_is_rejected_with_its_position(tmp_path):
+    p = tmp_path / "s.yaml"
+    p.write_text(SMALL.replace("[0, 0.9]", '[0, "0.9"]') + "eta_w: 0.1\n")
+    with pytest.raises(InputError, match=r"field 'A': entry \[1\]\[1\] must be a number, got '0.9' \(a quoted"):
+        load_system(p)
+    with pytest.raises(InputError, match="'C'.*strings"):  # programmatic systems too
+        AffineSystem(A=np.eye(2), C=[["1", "0"]], E=np.ones((2, 1)), eta_w=0.1, eta_v=0.1)
+
+
+@pytest.mark.parametrize("value,msg", [("1e308", "exceeds 1e\\+06 in magnitude"), ("1.0e+308", "exceeds"),
+                                       (".inf", "must be finite"), (".nan", "must be finite"),
+                                       ("1e-12", "below 1e-06")])
+def test_noise_bound_out_of_double_precision_lp_range(tmp_path, value, msg):
+    # eta_w: 1e308 used to reach the solver and stop with status 'Not Set'
+    p = tmp_path / "s.yaml"
+    p.write_text(SMALL + f"eta_w: {value}\n")
+    with pytest.raises(InputError, match=rf"s\.yaml: field 'eta_w': .*{msg}"):
+        load_system(p)
+
+
+def test_huge_matrix_entry_is_rejected(tmp_path):
+    p = tmp_path / "s.yaml"
+    p.write_text(SMALL.replace("0.9]", "1.0e+9]") + "eta_w: 0.1\n")
+    with pytest.raises(InputError, match=r"field 'A': entry \[1\]\[1\] 1e\+09 exceeds"):
+        load_system(p)
+
+
+def test_exponent_without_dot_is_a_number(tmp_path):
+    # YAML 1.1 (PyYAML) reads 5e-2 as a string; the loader reads it as YAML 1.2 does
+    p = tmp_path / "s.yaml"
+    p.write_text(SMALL.replace("eta_v: 0.05", "eta_v: 5e-2") + "eta_w: 1E-1\n")
+    s, _ = load_system(p)
+    assert (s.eta_v, s.eta_w) == (0.05, 0.1)
+    p.write_text(SMALL + "eta_w: 0\n")  # zero noise is allowed
+    assert load_system(p)[0].eta_w == 0.0
+
+
+def test_mapping_with_arrays_still_loads():
+    s, _ = system_from_mapping(dict(A=np.eye(2), C=np.array([[1.0, 0.0]]), E=np.ones((2, 1)),
+                                    eta_w=np.float64(0.1), eta_v=np.int64(0)))
+    assert s.n == 2 and s.eta_v == 0.0

@@ -26,6 +26,8 @@ from eqrec.core.solvers import SOLVER_NAMES
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
+#: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).
+MAX_MU1 = 1e12
 EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usage error; "
              "3 infeasible or unbounded design (no file written); 4 solver or certification failure.")
 
@@ -102,6 +104,9 @@ def run_design(args: argparse.Namespace) -> dict:
     from eqrec.core.systems import load_system
 
     system, T_file = load_system(args.system)
+    if not np.isfinite(args.mu1) or abs(args.mu1) > MAX_MU1:
+        raise InputError(f"must be a finite number of magnitude at most {MAX_MU1:g} (double-precision LP), "
+                         f"got {args.mu1:g}", "command line", "--mu1")
     words = validate_language([w for w in args.words.split(",") if w.strip()], source="command line",
                               field_name="--words")
     T = T_file if T_file is not None else len(words[0])
