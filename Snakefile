@@ -2,11 +2,14 @@
 # papers and the LMV companion study, then compares them with the published
 # values (results/claims.csv, results/REPRODUCTION.md).
 #
-#   snakemake --cores 2              # everything, default config
-#   snakemake --cores 2 p1           # one paper (p1, p2, p4)
-#   snakemake --report report.html   # browsable report with figure captions
+#   snakemake --cores 2                          # everything, default config
+#   snakemake --cores 2 p1                       # one paper (p1, p2, p4)
+#   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
+#   snakemake --report report.html               # browsable report with figure captions
 from snakemake.exceptions import WorkflowError
-from snakemake.utils import min_version, validate
+from snakemake.utils import min_version
+
+from eqrec.studies import harness
 
 min_version("9.0")
 
@@ -16,18 +19,19 @@ configfile: "config/p2.yaml"
 configfile: "config/p4.yaml"
 
 
-def validate_section(section, schema, source):
-    """Validate config[section] (after --configfile/--config overrides) and name the section on failure."""
+# Validate every section once, after the --configfile/--config overrides, with
+# the defaults of its schema filled in (snakemake.utils.validate(...,
+# set_default=True) inside harness.validate_section, plus the cross-field
+# checks of the study); a bad value stops the run here, naming file and field.
+# nested --config values arrive as text: give them the types their schema asks for
+harness.type_cli_config(config, workflow.config_settings.config, root=workflow.basedir)
+for _section in harness.SECTIONS:
     try:
-        validate(config[section] if section else config, schema)
-    except Exception as exc:
-        raise WorkflowError(f"invalid configuration: section '{section or 'p1'}' (from {source} and any "
-                            f"--configfile/--config override) does not satisfy {schema}:\n{exc}")
-
-
-validate_section(None, "config/schemas/config.schema.yaml", "config/config.yaml")
-validate_section("p2", "config/schemas/p2.schema.yaml", "config/p2.yaml")
-validate_section("p4", "config/schemas/p4.schema.yaml", "config/p4.yaml")
+        harness.validate_section(config, _section, root=workflow.basedir,
+                                 configfiles=workflow.config_settings.configfiles,
+                                 overrides=workflow.config_settings.config)
+    except harness.ConfigError as exc:
+        raise WorkflowError(f"invalid configuration: {exc}")
 
 # Each rules file appends the values.json its analysis writes; the claims
 # table (claims.smk, included last) needs all of them.

@@ -88,4 +88,11 @@ pd.DataFrame(checks["solver"]).T
 
 # %%
 pd.DataFrame([{"key": k, "value": v["value"] if not isinstance(v["value"], list) else np.round(v["value"], 4).tolist(),
-               "note": v.get("note", "")} for k, v in values.items()])
+               "evidence": ", ".join(sorted(v.get("evidence", {})))} for k, v in values.items()])
+
+# %% [markdown]
+# The wording of each row (and whether its explanation still holds) comes from `config/claims.yaml`:
+
+# %%
+claims = pd.read_csv(ROOT / "results" / "claims.csv")
+claims[claims["id"].str.startswith("P2")][["id", "paper_value", "our_value", "status", "reason"]]

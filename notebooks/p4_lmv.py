@@ -39,7 +39,8 @@ pd.set_option("display.max_colwidth", 300)
 # %%
 for name in ("fig1_filter", "fig2_predictor", "fig3_smoother", "fig4_variances"):
     display(Image(filename=str(RES / f"{name}.png")))
-print(values["ordering"]["value"], "—", values["ordering"]["note"])
+reason = claims.set_index("id")["reason"]
+print(values["ordering"]["value"], "—", reason["P4-F4:ordering"])
 
 # %% [markdown]
 # ## P4-F5, P4-F6: sweeps over η̄ and (Q_ξ, Q_λ)
@@ -54,8 +55,8 @@ for name in ("fig5_eta", "fig6_q", "regions"):
 # %%
 for name in ("fig7_compare_ex1", "fig8_compare_ex2"):
     display(Image(filename=str(RES / f"{name}.png")))
-for key in ("better_ex1", "better_ex2"):
-    print(key, "=", values[key]["value"], "\n  ", values[key]["note"], "\n")
+for key, cid in (("better_ex1", "P4-F7:better-ex1"), ("better_ex2", "P4-F8:better-ex2")):
+    print(key, "=", values[key]["value"], "\n  ", reason[cid], "\n")
 
 # %% [markdown]
 # ## P4-THEORY: theory against Monte Carlo, and the printed eq. (9)

@@ -1,8 +1,16 @@
+"""The claims table: comparison kinds, the evidence language, and explanations tied to their evidence."""
 import json
+from pathlib import Path
 
+import pandas as pd
 import pytest
 
-from eqrec.studies.claims import build_claims_table, compare_one, default_atol, write_values
+from eqrec.errors import InputError
+from eqrec.studies.claims import (ExpressionError, build_claims_table, compare_one, default_atol, evaluate, holds,
+                                  load_claims, render)
+from eqrec.studies.harness import write_json
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def entry(paper, kind="number", **cmp):
@@ -30,14 +38,101 @@ def test_other_kinds():
     assert compare_one(entry(0.11, "none", why="hardware"), 0.05)[0] == "not comparable"
 
 
-def test_table_and_missing_results(tmp_path):
+EVIDENCE = {"mu2": 1.149819, "probe_status": {"highs": "infeasible", "clarabel": "infeasible"},
+            "solvers": {"highs": {"mu2": 1.5}, "clarabel": {"mu2": 1.25}}, "words": ["101", "110"],
+            "eig": [[-0.052, -0.338], [0.496, 0.0]]}
+
+
+def test_expression_language():
+    assert evaluate("mu2 * 2 > 2 and probe_status.highs == 'infeasible'", EVIDENCE) is True
+    assert evaluate("all_are(probe_status, 'infeasible')", EVIDENCE) is True
+    assert evaluate("probe_status['clarabel']", EVIDENCE) == "infeasible"
+    assert evaluate("words[1]", EVIDENCE) == "110"
+    assert evaluate("'a' if len(words) == 2 else 'b'", EVIDENCE) == "a"
+    assert evaluate("abs(-1) + max(1, 2)", EVIDENCE) == 3
+    assert not holds("missing_key > 1", EVIDENCE)  # missing evidence: the condition does not hold
+    for bad in ("__import__('os')", "mu2.__class__", "[x for x in words]", "open('f')", "lambda: 1", "mu2 ** 2"):
+        with pytest.raises(ExpressionError):
+            evaluate(bad, EVIDENCE)
+
+
+def test_templates():
+    assert render("LP optimum {mu2:.4f}; {join(probe_status)}", EVIDENCE) == \
+        "LP optimum 1.1498; highs: infeasible, clarabel: infeasible"
+    assert render("{each(solvers, '{key}: {mu2:g}')}", EVIDENCE) == "highs: 1.5; clarabel: 1.25"
+    assert render("{{0, {fmtcomplex(eig, '.3f')}}}", EVIDENCE) == "{0, {-0.052-0.338j, 0.496}}"
+    assert render("{fmtlist([1.23456, 2], '.3g')}", {}) == "[1.23, 2]"
+    with pytest.raises(ExpressionError):
+        render("{mu2", EVIDENCE)
+
+
+CLAIMS = """
+- id: P9-A:x
+  quantity: q
+  paper_value: "1.5"
+  source: s
+  compare: {kind: number}
+  value: p9/values.json#x
+  note:
+    - "bound {bound:.2f}"
+    - {when: "proof == 'infeasible'", text: "proven optimal", else: "not proven"}
+  explanation:
+    when: "proof == 'infeasible' and paper < bound"
+    text: "misprint: {paper} is below the proven bound {bound:.2f}"
+"""
+
+
+def _values(tmp_path, value, **evidence):
+    write_json(tmp_path / "p9" / "values.json", {"x": {"value": value, "evidence": evidence}})
+
+
+def test_table_words_evidence_and_withdraws_an_explanation(tmp_path):
     claims = tmp_path / "claims.yaml"
-    claims.write_text("- id: P9-A:x\n  quantity: q\n  paper_value: 1.5\n  source: s\n  compare: {kind: number}\n"
-                      "  value: p9/values.json#x\n  explanation: misprint\n")
+    claims.write_text(CLAIMS)
     with pytest.raises(FileNotFoundError):
         build_claims_table(claims, tmp_path)
-    write_values(tmp_path / "p9" / "values.json", {"x": {"value": 1.7, "note": "bound proves it"}})
-    t = build_claims_table(claims, tmp_path)
-    row = t.iloc[0]
-    assert row["status"] == "differs" and "bound proves it" in row["reason"] and "misprint" in row["reason"]
-    assert json.loads((tmp_path / "p9" / "values.json").read_text())["x"]["value"] == 1.7
+    _values(tmp_path, 1.7, bound=1.69, proof="infeasible")
+    row = build_claims_table(claims, tmp_path).iloc[0]
+    assert row["status"] == "differs"
+    assert row["reason"] == "bound 1.69 proven optimal misprint: 1.5 is below the proven bound 1.69"
+    # the evidence of the explanation disappears: the explanation is withdrawn, and the table says so
+    _values(tmp_path, 1.7, bound=1.69, proof="optimal")
+    row = build_claims_table(claims, [tmp_path / "p9" / "values.json"]).iloc[0]
+    assert row["status"] == "differs" and "misprint" not in row["reason"] and "not proven" in row["reason"]
+    assert "explanation withdrawn" in row["reason"] and "proof == 'infeasible'" in row["reason"]
+    # reproduced: no explanation at all
+    _values(tmp_path, 1.5, bound=1.69, proof="infeasible")
+    row = build_claims_table(claims, tmp_path).iloc[0]
+    assert row["status"] == "reproduced" and row["reason"].startswith("within tolerance") and "misprint" not in row["reason"]
+
+
+def test_claims_file_is_checked(tmp_path):
+    bad = tmp_path / "claims.yaml"
+    bad.write_text(CLAIMS.replace("when: \"proof == 'infeasible' and paper < bound\"\n", ""))
+    with pytest.raises(InputError, match="explanation needs the evidence"):
+        load_claims(bad)
+    bad.write_text(CLAIMS.replace("bound {bound:.2f}", "bound {bound.__class__}"))
+    with pytest.raises(InputError, match="not part of the claims expression language"):
+        load_claims(bad)
+
+
+def test_project_claims_file_loads_and_every_explanation_has_evidence():
+    claims = load_claims(ROOT / "config" / "claims.yaml")
+    assert all("when" in e["explanation"] if isinstance(e["explanation"], dict) else
+               all("when" in p for p in e["explanation"]) for e in claims if "explanation" in e)
+
+
+def test_stored_table_matches_the_stored_values():
+    """results/claims.csv is what the claims step makes of the stored values.json files."""
+    values = sorted(str(p) for p in (ROOT / "results").glob("p*/values.json"))
+    fresh = build_claims_table(ROOT / "config" / "claims.yaml", values)
+    stored = pd.read_csv(ROOT / "results" / "claims.csv", dtype=str, keep_default_na=False)
+    for col in ("id", "quantity", "paper_value", "our_value", "status", "reason"):
+        assert list(fresh[col].astype(str)) == list(stored[col]), col
+    assert not any("explanation withdrawn" in r for r in stored["reason"])
+
+
+def test_values_files_hold_numbers_and_evidence_only():
+    for path in (ROOT / "results").glob("p*/values.json"):
+        for key, item in json.loads(path.read_text()).items():
+            assert set(item) == {"value", "evidence"}, f"{path.parent.name}/{key}: {sorted(item)}"

@@ -1,5 +1,4 @@
 """P2 pipeline steps on a small configuration, and checks of the paper's printed numbers."""
-import itertools
 import json
 
 import numpy as np
@@ -7,30 +6,36 @@ import pandas as pd
 import pytest
 import yaml
 
-from eqrec.studies import p2 as p2_study
 from eqrec.errors import InputError
+from eqrec.studies import harness
+from eqrec.studies.p2_readings import one_based_word, variant_word
+from eqrec.studies.p2_sweeps import constant_interval
 
 
 def test_one_based_word():
-    assert p2_study.one_based_word("100111") == "110011"
-    assert p2_study.one_based_word("111110") == "111111"  # shifted past the horizon
+    assert one_based_word("100111") == "110011"
+    assert one_based_word("111110") == "111111"  # shifted past the horizon
 
 
 def test_constant_interval():
     lam = np.linspace(-1, 1, 5)
-    assert p2_study.constant_interval(lam, np.array([2, 1, 1, 1, 2.0]), 1e-9) == [-0.5, 0.5]
-    assert p2_study.constant_interval(lam, np.array([1, 1, np.nan, 1, 1.0]), 1e-9) in ([-1.0, -0.5], [0.5, 1.0])
+    assert constant_interval(lam, np.array([2, 1, 1, 1, 2.0]), 1e-9) == [-0.5, 0.5]
+    assert constant_interval(lam, np.array([1, 1, np.nan, 1, 1.0]), 1e-9) in ([-1.0, -0.5], [0.5, 1.0])
 
 
 def test_config_errors(tmp_path):
     p = tmp_path / "c.yaml"
     p.write_text("q: 1\n")
+    with pytest.raises(harness.ConfigError, match="section 'p2'"):
+        harness.load_config("p2", p)
+    with pytest.raises(harness.ConfigError, match="p2.heatmap.chunks"):
+        harness.load_config("p2", overrides={"p2": {"heatmap": {"chunks": 0}}})
+    with pytest.raises(harness.ConfigError, match="p2.heatmap.chunks"):  # more chunks than theta values
+        harness.load_config("p2", overrides={"p2": {"heatmap": {"chunks": 40}}})
+    with pytest.raises(harness.ConfigError, match="p2.f2_words"):
+        harness.load_config("p2", overrides={"p2": {"f2_words": ["1011"]}})
     with pytest.raises(InputError):
-        p2_study.load_config(p)
-    with pytest.raises(InputError):
-        p2_study.load_config({"heatmap": {"chunks": 0}})
-    with pytest.raises(InputError):
-        p2_study.variant_word("100111", "nonsense")
+        variant_word("100111", "nonsense")
 
 
 def _claim(cid):
@@ -65,24 +70,29 @@ def test_printed_F2_L_eigenvalues_only_within_rounding(acc):
     assert any(ok(rng.uniform(-0.005, 0.005, 6)) for _ in range(20000))
 
 
+SMALL = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants": ["theorem2", "leak"]},
+         "realaxis": {"n": 7}, "s0_samples": [[1.0, 0.0, -1.0]]}
+
+
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
+    """The P2 steps on a small grid, run through the harness as the rules run them (defaults from the schema)."""
     d = tmp_path_factory.mktemp("p2")
-    cfg = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants": ["theorem2", "leak"]},
-           "realaxis": {"n": 7}, "s0_samples": [[1.0, 0.0, -1.0]]}
-    p2_study.step_designs(cfg, d / "designs.json", d / "designs.npz")
-    p2_study.step_simulate(cfg, d / "designs.npz", d / "simulation.npz")
+    cfg = harness.load_config("p2", "config/p2.yaml", overrides={"p2": SMALL})
+    run = lambda step, ins=None, outs=None, **wc: harness.run_step("p2", step, cfg, ins, outs, wc)  # noqa: E731
+    run("designs", outs={"json": d / "designs.json", "npz": d / "designs.npz"})
+    run("simulate", {"designs": d / "designs.npz"}, {"npz": d / "simulation.npz"})
     chunks = []
     for v in cfg["heatmap"]["variants"]:
         for c in range(2):
-            out = d / f"hm_{v}_{c}.csv"
-            p2_study.step_heatmap_chunk(cfg, v, c, out)
-            chunks.append(str(out))
-    p2_study.step_heatmap_merge(chunks, d / "heatmap.csv")
-    p2_study.step_realaxis(cfg, d / "realaxis.csv")
-    p2_study.step_checks(cfg, d / "checks.json")
-    vals = p2_study.step_values(cfg, d / "designs.json", d / "simulation.npz", d / "heatmap.csv",
-                                d / "realaxis.csv", d / "checks.json", d / "values.json")
+            chunks.append(d / f"hm_{v}_{c}.csv")
+            run("heatmap_chunk", outs={"csv": chunks[-1]}, variant=v, chunk=c)
+    run("heatmap_merge", {"chunks": chunks}, {"csv": d / "heatmap.csv"})
+    run("realaxis", outs={"csv": d / "realaxis.csv"})
+    run("checks", outs={"json": d / "checks.json"})
+    vals = run("values", {"designs": d / "designs.json", "simulation": d / "simulation.npz",
+                          "heatmap": d / "heatmap.csv", "realaxis": d / "realaxis.csv", "checks": d / "checks.json"},
+               {"json": d / "values.json"})
     return d, cfg, vals
 
 
@@ -95,6 +105,7 @@ def test_pipeline_values(small_run, acc):
     assert vals["f2_mu2_one_based_augmented"]["value"] < tb - 0.1
     assert vals["s0_mu2_unchanged"]["value"] == "unchanged"
     assert vals["runtime_equivalence"]["value"] < 1e-9
+    assert vals["f2_mu2_augmented"]["evidence"]["one_based"]["word"] == "110011"
     hm = pd.read_csv(d / "heatmap.csv")
     assert len(hm) == 2 * 16
     assert set(hm[hm["r"] == 0]["status"]) == {"placement_failed"}  # marked, not dropped
@@ -102,11 +113,24 @@ def test_pipeline_values(small_run, acc):
     assert sim["f1/time"].shape == (20, 7, 3)
 
 
+def test_heatmap_merge_rejects_a_partial_or_repeated_grid(small_run, tmp_path):
+    d, cfg, _ = small_run
+    chunks = sorted(d.glob("hm_*.csv"))
+    with pytest.raises(InputError, match="miss 8"):
+        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks[:-1]}, {"csv": tmp_path / "h.csv"})
+    with pytest.raises(InputError, match="repeat"):
+        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks + chunks[:1]}, {"csv": tmp_path / "h.csv"})
+    assert not (tmp_path / "h.csv").exists()
+
+
 def test_figures(small_run, tmp_path):
     d, cfg, _ = small_run
     for fig in ("f1", "f2"):
-        p2_study.figure_trajectories(cfg, d / "designs.json", d / "simulation.npz", fig, tmp_path / f"{fig}.pdf",
-                                     tmp_path / f"{fig}.png")
-    p2_study.figure_heatmap(cfg, d / "heatmap.csv", tmp_path / "h.pdf", tmp_path / "h.png")
-    p2_study.figure_realaxis(cfg, d / "realaxis.csv", tmp_path / "r.pdf", tmp_path / "r.png")
+        harness.run_step("p2", "figure_trajectories", cfg,
+                         {"designs": d / "designs.json", "simulation": d / "simulation.npz"},
+                         {"pdf": tmp_path / f"{fig}.pdf", "png": tmp_path / f"{fig}.png"}, {"fig": fig})
+    harness.run_step("p2", "figure_heatmap", cfg, {"csv": d / "heatmap.csv"},
+                     {"pdf": tmp_path / "h.pdf", "png": tmp_path / "h.png"})
+    harness.run_step("p2", "figure_realaxis", cfg, {"csv": d / "realaxis.csv"},
+                     {"pdf": tmp_path / "r.pdf", "png": tmp_path / "r.png"})
     assert all((tmp_path / f).stat().st_size > 1000 for f in ("f1.png", "f2.png", "h.png", "r.png"))

@@ -8,15 +8,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
-from eqrec.studies import p1 as p1_study
 from eqrec.design.prefix import design_prefix
+from eqrec.design.sweeps import min_feasible_M1
 from eqrec.design.time_based import design_time_based
+from eqrec.studies import harness
+from eqrec.studies import p1 as p1_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p1"
-CFG = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["p1"]
+CFG = harness.load_config("p1", root=ROOT)
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +26,7 @@ def stored():
 
 
 def test_model(stored, tmp_path):
-    fresh = p1_study.run_model(CFG, tmp_path / "m.json")
+    fresh = harness.run_step("p1", "model", CFG, outputs={"json": tmp_path / "m.json"})
     for key in ("A", "B", "f", "E"):
         np.testing.assert_allclose(fresh[key], stored["model"][key], atol=1e-12)
 
@@ -43,7 +44,7 @@ def test_optimal_levels(stored, method, solver):
 
 def test_simulation(tmp_path):
     out = tmp_path / "sim.npz"
-    p1_study.run_simulation(CFG, out)
+    harness.run_step("p1", "simulate", CFG, outputs={"npz": out})
     a, b = np.load(out), np.load(RES / "simulation.npz")
     for key in ("prefix_errors", "time_errors", "prefix_bounds"):
         np.testing.assert_allclose(a[key], b[key], atol=1e-9)
@@ -57,7 +58,7 @@ def test_extensions_curve(stored):
         assert design_prefix(system, CFG["language"], c["M1"][k]).mu2 == pytest.approx(c["prefix"][k], rel=1e-6)
     m1 = stored["extensions"]["min_M1"]["prefix"]
     tol = CFG["extensions"]["M1_tol"]
-    assert p1_study.min_feasible_M1(system, CFG["language"], m1 - 4 * tol, m1 + 4 * tol, tol) == pytest.approx(m1, abs=2 * tol)
+    assert min_feasible_M1(system, CFG["language"], m1 - 4 * tol, m1 + 4 * tol, tol) == pytest.approx(m1, abs=2 * tol)
 
 
 def test_claims_table_is_complete():

@@ -10,14 +10,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.studies import p2 as p2_study
+from eqrec.core.systems import acc_system
 from eqrec.design.augmented import design_augmented
 from eqrec.design.time_based import design_time_based
-from eqrec.core.systems import acc_system
+from eqrec.studies import harness
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p2"
-CFG = p2_study.load_config(ROOT / "config" / "p2.yaml")
+CFG = harness.load_config("p2", root=ROOT)
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +38,7 @@ def test_time_and_augmented_lp_levels(values, fig, words):
 
 def test_heatmap_chunk_matches_stored(tmp_path):
     out = tmp_path / "chunk.csv"
-    p2_study.step_heatmap_chunk(ROOT / "config" / "p2.yaml", "theorem2", 0, out)
+    harness.run_step("p2", "heatmap_chunk", CFG, outputs={"csv": out}, wildcards={"variant": "theorem2", "chunk": 0})
     fresh = pd.read_csv(out)
     stored = pd.read_csv(RES / "heatmap" / "theorem2_0.csv")
     assert list(fresh["status"]) == list(stored["status"])

@@ -8,12 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from eqrec.studies import p4 as lmv_study
 from eqrec.lmv.model import hold_input_system, steady_state, zero_input_system
+from eqrec.studies import harness
+from eqrec.studies import p4 as lmv_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p4"
-CFG = lmv_study.load_config(ROOT / "config" / "p4.yaml")
+CFG = harness.load_config("p4", root=ROOT)
 
 
 @pytest.mark.parametrize("example", ["ex1", "ex2"])
@@ -34,7 +35,7 @@ def test_steady_filter_variances_and_verdicts(example):
 
 def test_sweep_chunk_matches_stored(tmp_path):
     out = tmp_path / "chunk0.npz"
-    lmv_study.step_sweep_q(CFG, 0, out)
+    harness.run_step("p4", "sweep_q_chunk", CFG, outputs={"npz": out}, wildcards={"chunk": 0})
     a, b = np.load(out), np.load(RES / "sweep_q" / "chunk0.npz")
     assert set(a.files) == set(b.files)
     for k in a.files:

@@ -31,17 +31,22 @@ def test_bad_config_is_rejected(tmp_path):
 
 
 def test_report_builds_with_png_items_captions_and_no_machine_paths(tmp_path):
-    """`snakemake --report` (README) builds from the stored results; every item has a caption."""
+    """`snakemake --report` (README) builds from the stored results; every item has a caption (issue 10)."""
     import re
 
     out_file = tmp_path / "report.html"
     out = run(["--report", str(out_file)])
     assert out.returncode == 0, (out.stdout + out.stderr)[-3000:]
     html = out_file.read_text(errors="replace")
-    assert str(ROOT) not in html
+    assert str(ROOT) not in html and "/root/" not in html and "/home/" not in html
+    items = []
     for smk in (ROOT / "workflow" / "rules").glob("*.smk"):
         for item, caption in re.findall(r'report\(\s*"([^"]+)",\s*caption="([^"]+)"', smk.read_text()):
+            items.append(item)
             assert not item.endswith(".pdf"), f"{smk.name}: report item {item} is a PDF (blank in a browser)"
             assert "{" not in caption, f"{smk.name}: caption path {caption} has a wildcard"
             assert (smk.parent / caption).resolve().is_file(), f"{smk.name}: caption {caption} missing"
-    assert "REPRODUCTION.md" in html
+    assert "results/claims.csv" in items and "results/REPRODUCTION.md" in items  # the claims table is an item
+    assert sum(i.endswith(".png") for i in items) >= 10
+    for name in ("claims.csv", "REPRODUCTION.md", "fig1_trajectories.png", "f3a_heatmap.png", "regions.png"):
+        assert name in html

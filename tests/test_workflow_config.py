@@ -1,4 +1,8 @@
-"""Configuration overrides reach the steps; bad overrides fail at once naming section and field (issue 7)."""
+"""Configuration overrides reach the steps; bad values fail at once naming file and field (issue 7).
+
+Snakemake runs in a temporary copy of the workflow (Snakefile, workflow/,
+config/, results/); the package is the installed one.
+"""
 import json
 import shutil
 import subprocess
@@ -6,8 +10,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
-import yaml
+
+from eqrec.studies import harness
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -19,60 +25,113 @@ def run(args, cwd):
 
 @pytest.fixture
 def workdir(tmp_path):
-    for item in ("Snakefile", "workflow", "config", "src"):
+    for item in ("Snakefile", "workflow", "config", "results"):
         src = ROOT / item
         (shutil.copytree if src.is_dir() else shutil.copy)(src, tmp_path / item)
     return tmp_path
 
 
-@pytest.mark.parametrize("override,field", [("T: -1", "T"), ("eta_bar: 1.5", "eta_bar")])
-def test_bad_p4_override_fails_at_once_naming_section_and_field(workdir, override, field):
-    (workdir / "bad.yaml").write_text(f"p4:\n  {override}\n")
-    out = run(["-n", "--configfile", "bad.yaml"], workdir)
-    text = out.stdout + out.stderr
-    assert out.returncode != 0
-    assert "section 'p4'" in text and "config/schemas/p4.schema.yaml" in text
-    assert f"['{field}']" in text
-
-
 def test_p1_override_replans_p1_jobs_and_reaches_the_step(workdir):
-    out = run(["--cores", "1", "results/p1/model.json"], workdir)
+    out = run(["--cores", "1", "results/p1/model.json", "--forcerun", "p1_model"], workdir)
     assert out.returncode == 0, out.stderr[-3000:]
     same = run(["-n", "results/p1/model.json"], workdir)
     assert "p1_model" not in same.stdout + same.stderr  # up to date with the default configuration
     (workdir / "override.yaml").write_text("p1:\n  mu1: 1.5\n  timing_repeats: 1\n  solvers: [highs]\n")
-    plan = run(["-n", "results/p1/model.json", "results/p1/designs.json", "--configfile", "override.yaml"], workdir)
+    plan = run(["-n", "results/p1/model.json", "--configfile", "override.yaml"], workdir)
     text = plan.stdout + plan.stderr
     assert plan.returncode == 0, text[-3000:]
-    assert "resolved_config" in text and "p1_model" in text and "p1_designs" in text
+    assert "rule p1_model" in text and "Params have changed since last execution" in text
+    changes = run(["--list-changes", "params", "--configfile", "override.yaml"], workdir)
+    assert "results/p1/model.json" in changes.stdout
+    (workdir / "results/p1/designs.json").unlink()  # copied without metadata: let the override build it
     out = run(["--cores", "1", "results/p1/designs.json", "--configfile", "override.yaml"], workdir)
-    assert out.returncode == 0, out.stderr[-3000:]
+    assert out.returncode == 0, (out.stdout + out.stderr)[-3000:]
     designs = json.loads((workdir / "results/p1/designs.json").read_text())
-    assert designs["M1"] == 1.5
-    assert yaml.safe_load((workdir / "resolved/p1.yaml").read_text())["p1"]["mu1"] == 1.5
+    assert designs["M1"] == 1.5 and list(designs["designs"]["prefix"]["solvers"]) == ["highs"]
+    assert "[p1] step designs done" in (workdir / "logs/p1/designs.log").read_text()
+    # an edit to code P1 does not import (the LMV model) does not re-plan P1
+    assert not any("/lmv/" in p for p in harness.code_inputs("p1"))
 
 
-@pytest.mark.parametrize("chunks", [1, 2, 4, 8])
-def test_heatmap_chunks_cover_the_whole_grid_for_any_chunk_count(chunks):
-    from eqrec.studies import p2 as p2_study
+def test_config_override_on_the_command_line(workdir):
+    plan = run(["-n", "results/p1/model.json", "--config", "p1={mu1: 2.5, language: ['1011']}"], workdir)
+    assert plan.returncode == 0, (plan.stdout + plan.stderr)[-3000:]
+    bad = run(["-n", "--config", "p1={mu1: abc, language: ['1011']}"], workdir)
+    text = bad.stdout + bad.stderr
+    assert bad.returncode != 0 and "--config" in text and "p1.mu1" in text and "is not of type 'number'" in text
 
-    cfg = p2_study.load_config(ROOT / "config" / "p2.yaml")
-    cfg["heatmap"]["chunks"] = chunks
-    idx = np.concatenate([p2_study.theta_chunk(cfg, k) for k in range(chunks)])
-    assert sorted(idx.tolist()) == list(range(cfg["heatmap"]["n_theta"]))
+
+@pytest.mark.parametrize("old,new,field", [("T: 100 ", "T: -1 ", "p4.T"), ("eta_bar: 0.8", "eta_bar: 1.5", "p4.eta_bar"),
+                                           ("num: 21\n    chunks: 7", "num: 21\n    chunks: 22", "p4.sweep_q.chunks")])
+def test_bad_p4_config_fails_at_once_naming_file_and_field(workdir, old, new, field):
+    cfg = workdir / "config" / "p4.yaml"
+    assert old in cfg.read_text()
+    cfg.write_text(cfg.read_text().replace(old, new))
+    out = run(["-n"], workdir)
+    text = out.stdout + out.stderr
+    assert out.returncode != 0
+    assert f"config/p4.yaml: field '{field}'" in text, text[-2000:]
+    assert "Building DAG" not in text  # stopped before planning any job
+
+
+def test_bad_override_names_the_override_file(workdir):
+    (workdir / "bad.yaml").write_text("p2:\n  mu1: '0.1'\n")
+    out = run(["-n", "--configfile", "bad.yaml"], workdir)
+    text = out.stdout + out.stderr
+    assert out.returncode != 0 and "bad.yaml: field 'p2.mu1'" in text and "is not of type 'number'" in text
 
 
 def test_heatmap_chunks_follow_the_resolved_config(workdir):
     (workdir / "override.yaml").write_text("p2:\n  heatmap:\n    chunks: 4\n")
-    out = run(["-n", "results/p2/heatmap.csv", "--configfile", "override.yaml"], workdir)
+    out = run(["-n", "results/p2/heatmap.csv", "--configfile", "override.yaml", "--forceall"], workdir)
     text = out.stdout + out.stderr
     assert out.returncode == 0, text[-3000:]
-    resolved = run(["--cores", "1", "resolved/p2.yaml", "--configfile", "override.yaml"], workdir)
-    assert resolved.returncode == 0
-    assert yaml.safe_load((workdir / "resolved/p2.yaml").read_text())["p2"]["heatmap"]["chunks"] == 4
-    for k in range(4):
-        assert f"_{k}.csv" in text
-    assert "_4.csv" not in text
+    for variant in harness.load_config("p2", root=ROOT)["heatmap"]["variants"]:
+        for k in range(4):
+            assert f"results/p2/heatmap/{variant}_{k}.csv" in text
+        assert f"{variant}_4.csv" not in text
 
 
+def _heatmap(tmp_path, chunks):
+    """The reduced heat map (4 x 4 grid, a sub-grid of the configured 31 x 31 one) in ``chunks`` jobs."""
+    cfg = harness.load_config("p2", root=ROOT, overrides={"p2": {"heatmap": {"n_r": 4, "n_theta": 4, "chunks": chunks}}})
+    files = []
+    for variant in cfg["heatmap"]["variants"]:
+        for k in range(chunks):
+            files.append(tmp_path / f"{variant}_{k}.csv")
+            harness.run_step("p2", "heatmap_chunk", cfg, outputs={"csv": files[-1]},
+                             wildcards={"variant": variant, "chunk": k})
+    out = tmp_path / f"heatmap_{chunks}.csv"
+    harness.run_step("p2", "heatmap_merge", cfg, inputs={"chunks": files}, outputs={"csv": out})
+    return pd.read_csv(out)
 
+
+def test_heatmap_override_of_chunks_gives_the_same_whole_grid(tmp_path):
+    two, four = _heatmap(tmp_path / "two", 2), _heatmap(tmp_path / "four", 4)
+    cols = ["variant", "word", "r", "theta", "status"]
+    pd.testing.assert_frame_equal(two[cols].reset_index(drop=True), four[cols].reset_index(drop=True))
+    np.testing.assert_allclose(two["mu2"], four["mu2"], rtol=1e-9)
+    assert len(two) == 16 * two["variant"].nunique()
+    # the same points of the stored full-grid heat map have the same status and mu2
+    stored = pd.read_csv(ROOT / "results" / "p2" / "heatmap.csv")
+    for _, row in four.iterrows():
+        hit = stored[(stored["variant"] == row["variant"]) & np.isclose(stored["r"], row["r"])
+                     & np.isclose(stored["theta"], row["theta"])]
+        assert len(hit) == 1 and hit["status"].iloc[0] == row["status"]
+        if row["status"] == "optimal":
+            assert hit["mu2"].iloc[0] == pytest.approx(row["mu2"], rel=1e-6)
+
+
+def test_sweep_merge_checks_the_grid(tmp_path):
+    cfg = harness.load_config("p4", root=ROOT, overrides={"p4": {"sweep_eta": {"num": 4, "chunks": 2}}})
+    files = [tmp_path / f"chunk{k}.npz" for k in range(2)]
+    for k, f in enumerate(files):
+        harness.run_step("p4", "sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
+    from eqrec.errors import InputError
+    from eqrec.studies.p4 import merge_chunks
+
+    with pytest.raises(InputError, match="exactly once"):
+        merge_chunks(files[:1], 4, tmp_path / "m.npz")
+    with pytest.raises(InputError, match="4-point grid"):
+        merge_chunks(files, 5, tmp_path / "m.npz")
+    assert list(merge_chunks(files, 4, tmp_path / "m.npz")["idx"]) == [0, 1, 2, 3]

@@ -1,5 +1,6 @@
-# The comparison table: every published number next to ours.
-CLAIMS_SRC = module_sources("studies.claims")
+# The comparison table: every published number next to ours, worded by the
+# templates of config/claims.yaml from the evidence in the values.json files.
+CLAIMS_CODE = study_code("claims")
 
 
 rule claims:
@@ -7,14 +8,15 @@ rule claims:
     input:
         claims="config/claims.yaml",
         values=VALUES_FILES,
-        code=CLAIMS_SRC,
+        code=CLAIMS_CODE,
     output:
-        csv="results/claims.csv",
-        md=report("results/REPRODUCTION.md", caption="../report/claims.rst", category="Claims"),
+        csv=report("results/claims.csv", caption="../report/claims.rst", category="Claims"),
+        md=report("results/REPRODUCTION.md", caption="../report/reproduction.rst", category="Claims"),
     params:
-        cmd=f"{PY} -m eqrec.studies.claims",
+        study="claims",
+        step="table",
+        cfg={},
     log:
         "logs/claims.log",
-    shell:
-        "{params.cmd} --claims {input.claims} --results results"
-        " --csv {output.csv} --md {output.md} > {log} 2>&1"
+    script:
+        RUN_STEP

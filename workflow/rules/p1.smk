@@ -1,118 +1,128 @@
 # P1: prefix-based estimator (Rutledge, Yong, Ozay, ACC 2019).
-# Each rule runs one step of eqrec.p1_study; see `python -m eqrec.p1_study --help`.
-P1_SRC = module_sources("studies.p1")
+# Each rule runs one step of eqrec.studies.p1 through the harness (common.smk).
+P1_CODE = study_code("p1")
+P1_CFG = study_cfg("p1")
 VALUES_FILES.append("results/p1/values.json")
 
 
 rule p1_model:
     """P1-T1: ACC model from the Table I constants."""
     input:
-        config=CONFIG_FILE,
-        code=P1_SRC,
+        code=P1_CODE,
     output:
-        "results/p1/model.json",
+        json="results/p1/model.json",
     params:
-        step=study_cmd("studies.p1", "model"),
+        study="p1",
+        step="model",
+        cfg=P1_CFG,
     log:
         "logs/p1/model.log",
-    shell:
-        "{params.step} --config {input.config} --out {output} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1_designs:
-    """P1-M2, P1-TIME: prefix- and time-based designs on L1, certified, timed."""
+    """P1-M2, P1-TIME: prefix- and time-based designs on L1, certified, timed, probed."""
     input:
-        config=CONFIG_FILE,
-        code=P1_SRC,
+        code=P1_CODE,
     output:
-        "results/p1/designs.json",
+        json="results/p1/designs.json",
     params:
-        step=study_cmd("studies.p1", "designs"),
+        study="p1",
+        step="designs",
+        cfg=P1_CFG,
     log:
         "logs/p1/designs.log",
-    shell:
-        "{params.step} --config {input.config} --out {output} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1_simulate:
     """P1-F1: Monte Carlo runs of both estimators on the same draws."""
     input:
-        config=CONFIG_FILE,
-        code=P1_SRC,
+        code=P1_CODE,
     output:
-        "results/p1/simulation.npz",
+        npz="results/p1/simulation.npz",
     params:
-        step=study_cmd("studies.p1", "simulate"),
+        study="p1",
+        step="simulate",
+        cfg=P1_CFG,
     log:
         "logs/p1/simulate.log",
-    shell:
-        "{params.step} --config {input.config} --out {output} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1_figure1:
     """P1-F1 figure."""
     input:
-        sim="results/p1/simulation.npz",
-        code=P1_SRC,
+        npz="results/p1/simulation.npz",
+        code=P1_CODE,
     output:
         pdf="results/p1/fig1_trajectories.pdf",
         png=report("results/p1/fig1_trajectories.png", caption="../report/p1_fig1.rst", category="P1"),
     params:
-        step=study_cmd("studies.p1", "figure1"),
+        study="p1",
+        step="figure1",
+        cfg=P1_CFG,
     log:
         "logs/p1/figure1.log",
-    shell:
-        "{params.step} {input.sim} --pdf {output.pdf} --png {output.png} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1_extensions:
     """P1-EXT: M2*(M1), minimum M1, finite-length language, minimum T."""
     input:
-        config=CONFIG_FILE,
-        code=P1_SRC,
+        code=P1_CODE,
     output:
-        "results/p1/extensions.json",
+        json="results/p1/extensions.json",
     params:
-        step=study_cmd("studies.p1", "extensions"),
+        study="p1",
+        step="extensions",
+        cfg=P1_CFG,
     log:
         "logs/p1/extensions.log",
-    shell:
-        "{params.step} --config {input.config} --out {output} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1_figure_ext:
     """P1-EXT figure."""
     input:
-        ext="results/p1/extensions.json",
-        code=P1_SRC,
+        json="results/p1/extensions.json",
+        code=P1_CODE,
     output:
         pdf="results/p1/fig_ext_M2_vs_M1.pdf",
         png=report("results/p1/fig_ext_M2_vs_M1.png", caption="../report/p1_ext.rst", category="P1"),
     params:
-        step=study_cmd("studies.p1", "figure-ext"),
+        study="p1",
+        step="figure_ext",
+        cfg=P1_CFG,
     log:
         "logs/p1/figure_ext.log",
-    shell:
-        "{params.step} {input.ext} --pdf {output.pdf} --png {output.png} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1_values:
-    """Our value of every published P1 number, with evidence."""
+    """Our value of every published P1 number, with its evidence."""
     input:
         model="results/p1/model.json",
         designs="results/p1/designs.json",
         simulation="results/p1/simulation.npz",
         extensions="results/p1/extensions.json",
-        code=P1_SRC,
+        code=P1_CODE,
     output:
-        "results/p1/values.json",
+        json="results/p1/values.json",
     params:
-        step=study_cmd("studies.p1", "values"),
+        study="p1",
+        step="values",
+        cfg=P1_CFG,
     log:
         "logs/p1/values.log",
-    shell:
-        "{params.step} --model {input.model} --designs {input.designs} --simulation {input.simulation}"
-        " --extensions {input.extensions} --out {output} > {log} 2>&1"
+    script:
+        RUN_STEP
 
 
 rule p1:

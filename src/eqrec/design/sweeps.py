@@ -1,0 +1,129 @@
+"""Sweeps over design problems: searches and parameter scans built on the single designs.
+
+* :func:`lower_bound_probe` — the prefix LP with ``M2 <= optimum - gap``
+  must be infeasible (Theorem 3 of the prefix-based paper is necessary and
+  sufficient, so this proves no estimator of the class does better);
+* :func:`min_feasible_M1` — the smallest recovery level by bisection
+  ("an optimal M1 through line search", Section V of the prefix-based paper);
+* :func:`min_recovery_time` — the shortest horizon at which a language,
+  extended by measurements, admits recovery to ``M1``;
+* :func:`M2_curve` — the optimal ``M2`` against ``M1`` (``None`` where infeasible);
+* :func:`fixed_L_sweep` — the augmented LP with ``s0 = 0`` over a list of
+  pole sets (Figs. 3a/3b of the augmented paper): one LP, built once, whose
+  ``L``-dependent entries are rewritten per point.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+
+from eqrec.core.patterns import extend_word
+from eqrec.core.solvers import solve_lp
+from eqrec.core.systems import AffineSystem
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.observers import place_observer
+from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.design.time_based import design_time_based
+from eqrec.errors import InfeasibleDesign
+
+DESIGNS = {"prefix": design_prefix, "time": design_time_based}
+
+
+def lower_bound_probe(system: AffineSystem, words, M1: float, mu2_opt: float, gap: float,
+                      solvers: Sequence[str] = ("highs", "clarabel")) -> dict[str, str]:
+    """Solver status of the prefix LP with the ``M2`` column bounded by ``mu2_opt - gap``, per solver.
+
+    ``infeasible`` from every solver proves that no estimator of the class
+    reaches ``mu2_opt - gap``.
+    """
+    out = {}
+    for s in solvers:
+        model = build_prefix_lp(system, words, M1)
+        model.lp.col_upper[model.mu2_col] = mu2_opt - gap
+        out[s] = solve_lp(model.lp, s).status
+    return out
+
+
+def min_feasible_M1(system: AffineSystem, words, lo: float, hi: float, tol: float, method: str = "prefix",
+                    T: int | None = None) -> float:
+    """Smallest recovery level ``M1`` in ``[lo, hi]`` by bisection (``inf`` if ``hi`` is infeasible).
+
+    Feasibility is monotone in ``M1``: gains recovering from ``M1`` also
+    recover from any ``M1' > M1`` (the terminal constraint reads
+    ``noise <= M1 (1 - ρ)`` with ``ρ < 1`` the gain of the initial error).
+    """
+    def feasible(M1: float) -> bool:
+        try:
+            if method == "prefix":
+                design_prefix(system, words, M1, T=T, certify=False)
+            else:
+                design_time_based(system, words, M1, certify=False)
+            return True
+        except InfeasibleDesign:
+            return False
+
+    if not feasible(hi):
+        return float("inf")
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if feasible(mid) else (mid, hi)
+    return hi
+
+
+def min_recovery_time(system: AffineSystem, words, M1: float, T_max: int) -> int | None:
+    """Minimum horizon ``T`` at which ``words`` (extended by measurements) admit recovery to ``M1``."""
+    for T in range(max(len(w) for w in words), T_max + 1):
+        try:
+            design_prefix(system, [extend_word(w, T) for w in words], M1, certify=False)
+            return T
+        except InfeasibleDesign:
+            continue
+    return None
+
+
+def M2_curve(system: AffineSystem, words, M1_values: Iterable[float], method: str = "prefix",
+             on_point: Callable[[int, float], None] | None = None) -> list[float | None]:
+    """Optimal ``M2`` for each ``M1`` (``None`` where the design is infeasible)."""
+    fn = DESIGNS[method]
+    out: list[float | None] = []
+    for k, M1 in enumerate(M1_values):
+        if on_point is not None:
+            on_point(k, float(M1))
+        try:
+            out.append(fn(system, words, float(M1)).mu2)
+        except InfeasibleDesign:
+            out.append(None)
+    return out
+
+
+def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_list: Iterable[np.ndarray],
+                  solver: str = "highs", on_point: Callable[[], None] | None = None) -> list[dict]:
+    """Optimal ``μ2`` of the augmented LP (``s0 = 0``, ``L`` by pole placement) for each pole set.
+
+    Each record has ``status`` (``optimal``, ``infeasible``, ``placement_failed``
+    or ``solver_failed``), ``mu2`` (``inf`` if infeasible, ``nan`` if not
+    solved), ``message`` and ``time``.
+    """
+    model = None
+    rows = []
+    for poles in poles_list:
+        t0 = time.perf_counter()
+        pp = place_observer(system.A, system.C, poles)
+        rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message}
+        if pp.ok:
+            if model is None:
+                model = AugmentedLP(system, word, M1, pp.L, mode=mode)
+            else:
+                model.set_L(pp.L)
+            sol = model.solve(solver)
+            rec = {"status": sol.status if sol.status in ("optimal", "infeasible") else "solver_failed",
+                   "mu2": float(sol.objective) if sol.optimal else (np.inf if sol.status == "infeasible" else np.nan),
+                   "message": "" if sol.optimal else sol.status}
+        rec["time"] = time.perf_counter() - t0
+        rows.append(rec)
+        if on_point is not None:
+            on_point()
+    return rows

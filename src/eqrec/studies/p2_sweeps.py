@@ -1,0 +1,138 @@
+"""P2 eigenvalue sweeps: the Fig. 3a heat map (in θ-chunks) and the Fig. 3b real axis.
+
+Steps ``heatmap_chunk`` (``wildcards.variant``, ``wildcards.chunk``),
+``heatmap_merge`` (checks that the chunks cover the configured grid of every
+configured variant exactly once) and ``realaxis``.  The LP of each job is
+built once (:func:`eqrec.design.sweeps.fixed_L_sweep`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from eqrec.core.systems import acc_system
+from eqrec.design.sweeps import fixed_L_sweep
+from eqrec.errors import InputError
+from eqrec.studies.harness import Progress, get_logger, write_csv
+from eqrec.studies.p2_readings import heatmap_poles, variant_word
+
+log = get_logger("p2")
+
+
+def heatmap_grid(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
+    """``(r, θ)`` grids of the heat map."""
+    h = cfg["heatmap"]
+    return np.linspace(0.0, float(h["r_max"]), int(h["n_r"])), np.linspace(0.0, np.pi, int(h["n_theta"]))
+
+
+def theta_chunk(cfg: dict, chunk: int) -> np.ndarray:
+    """Indices of θ handled by job ``chunk`` (``heatmap.chunks`` near-equal parts)."""
+    n_chunks = int(cfg["heatmap"]["chunks"])
+    if not 0 <= chunk < n_chunks:
+        raise InputError(f"chunk {chunk} outside 0..{n_chunks - 1}", field="heatmap.chunks")
+    return np.array_split(np.arange(int(cfg["heatmap"]["n_theta"])), n_chunks)[chunk]
+
+
+def realaxis_grid(cfg: dict) -> np.ndarray:
+    """Real double eigenvalues ``λ`` of Fig. 3b: ``n`` points on ``[-lam_max, lam_max]``, plus ``k / grid_denominator``."""
+    ra = cfg["realaxis"]
+    lam_max = float(ra["lam_max"])
+    lam = np.linspace(-lam_max, lam_max, int(ra["n"]))
+    den = ra["grid_denominator"]
+    if den:  # the grid k / den as well (exact points, e.g. the paper's -10/14 and 13/14)
+        k = np.arange(-int(np.floor(lam_max * den)), int(np.floor(lam_max * den)) + 1)
+        lam = np.unique(np.concatenate([lam, k / den]))
+    return lam
+
+
+def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """P2-F3a, one θ-chunk of one variant."""
+    variant, chunk = wildcards["variant"], int(wildcards["chunk"])
+    system = acc_system()
+    mode, word = variant_word(cfg["heatmap"]["word"], variant)
+    r_grid, th_grid = heatmap_grid(cfg)
+    pts = [(r, th_grid[j]) for j in theta_chunk(cfg, chunk) for r in r_grid]
+    prog = Progress(log, len(pts), f"heat map {variant} chunk {chunk}")
+    recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, [heatmap_poles(r, th) for r, th in pts],
+                         cfg["heatmap"]["solver"], on_point=prog.advance)
+    df = pd.DataFrame([{"variant": variant, "word": word, "mode": mode, "r": r, "theta": th, **rec}
+                       for (r, th), rec in zip(pts, recs)])
+    write_csv(outputs.csv, df)
+    return df
+
+
+def _grid_index(values: np.ndarray, grid: np.ndarray, what: str) -> np.ndarray:
+    idx = np.abs(values[:, None] - grid[None, :]).argmin(axis=1)
+    off = np.abs(grid[idx] - values)
+    if len(off) and off.max() > 1e-9 * max(1.0, float(np.abs(grid).max())):
+        raise InputError(f"chunk rows at {what} = {values[off.argmax()]!r}, not a point of the configured grid",
+                         field=f"heatmap.{'n_r' if what == 'r' else 'n_theta'}")
+    return idx
+
+
+def check_heatmap_coverage(cfg: dict, df: pd.DataFrame) -> None:
+    """Every configured variant has every ``(r, θ)`` point of the configured grid exactly once."""
+    r_grid, th_grid = heatmap_grid(cfg)
+    variants = list(cfg["heatmap"]["variants"])
+    extra = sorted(set(df["variant"]) - set(variants))
+    if extra:
+        raise InputError(f"chunks of variants {extra} that the configuration does not list", field="heatmap.variants")
+    for var in variants:
+        g = df[df["variant"] == var]
+        i = _grid_index(g["r"].to_numpy(float), r_grid, "r")
+        j = _grid_index(g["theta"].to_numpy(float), th_grid, "theta")
+        counts = np.zeros((len(th_grid), len(r_grid)), int)
+        np.add.at(counts, (j, i), 1)
+        if not np.all(counts == 1):
+            missing, twice = int((counts == 0).sum()), int((counts > 1).sum())
+            raise InputError(f"variant {var}: the chunks miss {missing} and repeat {twice} of the "
+                             f"{counts.size} grid points (heatmap.chunks = {cfg['heatmap']['chunks']})",
+                             field="heatmap.chunks")
+
+
+def step_heatmap_merge(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """P2-F3a: the whole grid, after checking that the chunks cover it exactly once."""
+    files = list(inputs.chunks)
+    df = pd.concat([pd.read_csv(p, keep_default_na=False, na_values=["nan", "NaN"]) for p in files],
+                   ignore_index=True)
+    check_heatmap_coverage(cfg, df)
+    df = df.sort_values(["variant", "theta", "r"])
+    write_csv(outputs.csv, df)
+    log.info("merged %d chunk files: %d points", len(files), len(df))
+    return df
+
+
+def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """P2-F3b: eigenvalues ``{0, λ, λ}`` for real ``λ`` (the heat map at θ = 0 and π, finer)."""
+    system = acc_system()
+    lam = realaxis_grid(cfg)
+    frames = []
+    for variant in cfg["heatmap"]["variants"]:
+        mode, word = variant_word(cfg["heatmap"]["word"], variant)
+        prog = Progress(log, len(lam), f"real axis {variant}")
+        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, [np.array([0.0, x, x]) for x in lam],
+                             cfg["heatmap"]["solver"], on_point=prog.advance)
+        frames.append(pd.DataFrame([{"variant": variant, "word": word, "lam": x, **rec} for x, rec in zip(lam, recs)]))
+    df = pd.concat(frames, ignore_index=True)
+    write_csv(outputs.csv, df)
+    return df
+
+
+def constant_interval(lam: np.ndarray, mu2: np.ndarray, tol: float) -> list[float] | None:
+    """Largest interval of ``λ`` (grid points, failures breaking it) on which ``μ2`` equals its minimum."""
+    finite = np.isfinite(mu2)
+    if not finite.any():
+        return None
+    best = np.nanmin(np.where(finite, mu2, np.nan))
+    at_min = finite & (np.abs(mu2 - best) <= tol)
+    runs, start = [], None
+    for i, ok in enumerate(at_min):
+        if ok and start is None:
+            start = i
+        if (not ok or i == len(at_min) - 1) and start is not None:
+            end = i if ok else i - 1
+            runs.append((start, end))
+            start = None
+    s, e = max(runs, key=lambda se: lam[se[1]] - lam[se[0]])
+    return [float(lam[s]), float(lam[e])]

@@ -1,0 +1,208 @@
+"""The study harness: registry, configuration with schema defaults, atomic writers, logs and exit status."""
+import ast
+import re
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from snakemake.iocontainers import Namedlist
+
+from eqrec.errors import InputError
+from eqrec.studies import harness
+
+ROOT = Path(__file__).resolve().parents[1]
+RULES = ROOT / "workflow" / "rules"
+
+
+def _rule_steps():
+    """(rule, study, step) of every rule that runs the harness."""
+    out = []
+    for smk in RULES.glob("*.smk"):
+        text = smk.read_text()
+        for rule, body in re.findall(r"^rule (\w+):\n(.*?)(?=^rule |\Z)", text, flags=re.S | re.M):
+            if "RUN_STEP" in body:
+                study = re.search(r'study="(\w+)"', body).group(1)
+                step = re.search(r'step="(\w+)"', body).group(1)
+                out.append((rule, study, step))
+    return out
+
+
+def test_every_rule_runs_a_registered_step_through_the_one_script():
+    steps = _rule_steps()
+    reg = harness.registry()
+    assert len(steps) >= 27
+    for rule, study, step in steps:
+        assert (study, step) in reg, rule
+        assert rule == "claims" or rule == f"{study}_{step}", rule  # rule names follow the steps
+    for smk in RULES.glob("*.smk"):
+        assert "shell:" not in smk.read_text() and "python -m" not in smk.read_text(), smk.name
+    script = (ROOT / "workflow" / "scripts" / "run_step.py").read_text()
+    assert "run_from_snakemake(snakemake)" in script
+
+
+def test_study_modules_have_no_command_line_and_no_defaults_table():
+    for path in (ROOT / "src" / "eqrec" / "studies").glob("*.py"):
+        text = path.read_text()
+        assert "argparse" not in text and "__main__" not in text, path.name
+        assert "DEFAULTS" not in text, path.name
+        tree = ast.parse(text)
+        for node in ast.walk(tree):  # cfg.get("x", 5): a second defaults table in disguise
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get"
+                    and len(node.args) == 2 and "cfg" in ast.unparse(node.func.value)
+                    and isinstance(node.args[1], (ast.Constant, ast.List, ast.Dict, ast.Tuple))):
+                pytest.fail(f"{path.name}: {ast.unparse(node)}")
+
+
+def test_defaults_come_from_the_schemas():
+    cfg = harness.load_config("p2", overrides={"p2": {"runs": 7}}, root=ROOT)
+    schema = yaml.safe_load((ROOT / "config" / "schemas" / "p2.schema.yaml").read_text())
+    assert cfg["runs"] == 7 and cfg["realaxis"]["grid_denominator"] == 14
+    c = {"p1": {"mu1": 2.0, "language": ["1011"]}}
+    harness.validate_section(c, "p1", root=ROOT)
+    assert c["p1"]["timing_repeats"] == 5 and c["p1"]["extensions"]["T_max"] == 14  # filled in by the schema
+    assert schema["properties"]["noise"]["default"] == "uniform"
+
+
+@pytest.mark.parametrize("study,override,field", [
+    ("p4", {"T": -1}, "p4.T"), ("p4", {"eta_bar": 1.5}, "p4.eta_bar"), ("p4", {"eta_bar": "0.8"}, "p4.eta_bar"),
+    ("p4", {"sweep_eta": {"chunks": 0}}, "p4.sweep_eta.chunks"), ("p4", {"mc": {"runs": "10000"}}, "p4.mc.runs"),
+    ("p4", {"tracking": {"example": "ex3"}}, "p4.tracking.example"), ("p1", {"mu1": "1"}, "p1.mu1"),
+    ("p1", {"language": ["101", "11"]}, "p1.language"), ("p2", {"heatmap": {"n_r": 2.5}}, "p2.heatmap.n_r")])
+def test_config_errors_name_file_and_field(tmp_path, study, override, field):
+    over = tmp_path / "over.yaml"
+    over.write_text(yaml.safe_dump({study: override}))
+    default = ROOT / harness.SECTIONS[study].config_file
+    with pytest.raises(harness.ConfigError) as exc:
+        harness.load_config(study, default, over, root=ROOT)
+    assert f"field '{field}'" in str(exc.value) and "over.yaml" in str(exc.value)
+
+
+def test_cli_values_get_the_types_their_schema_wants():
+    config = {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}
+    harness.type_cli_config(config, {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}, ROOT)
+    assert config["p1"] == {"mu1": 1.5, "language": ["1011"], "timing_repeats": 3}
+
+
+def test_code_inputs_follow_the_imports_of_each_study():
+    p1, p4 = harness.code_inputs("p1"), harness.code_inputs("p4")
+    assert "src/eqrec/studies/p1.py" in p1 and "src/eqrec/design/sweeps.py" in p1
+    assert not any("/lmv/" in p for p in p1)  # an LMV edit does not re-run the P1 LPs
+    assert not any("/design/" in p or "/core/" in p for p in p4)
+    assert "src/eqrec/studies/harness.py" in p1 and "src/eqrec/studies/harness.py" in p4
+
+
+# --------------------------------------------------------------------------- atomic writers
+
+@pytest.mark.parametrize("writer,bad", [
+    (lambda p: harness.write_json(p, {"a": object()}), "json"),
+    (lambda p: harness.write_npz(p, a=np.zeros(2), b=_Boom()), "npz"),
+    (lambda p: harness.write_csv(p, _BoomFrame()), "csv"),
+    (lambda p: harness.write_text(p, None), "txt")])
+def test_atomic_writers_leave_no_temp_file_and_keep_the_old_file_on_failure(tmp_path, writer, bad):
+    target = tmp_path / f"out.{bad}"
+    target.write_text("old")
+    with pytest.raises(Exception):
+        writer(target)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+    assert target.read_text() == "old"
+
+
+class _Boom:
+    def __array__(self, *a, **k):
+        raise RuntimeError("cannot")
+
+
+class _BoomFrame:
+    def to_csv(self, path, **kw):
+        Path(path).write_text("half")
+        raise RuntimeError("disk full")
+
+
+def test_figure_writer_is_atomic_too(tmp_path):
+    from eqrec.studies.plotting import pyplot
+
+    fig, ax = pyplot().subplots()
+    ax.plot([0, 1])
+    with pytest.raises(Exception):
+        harness.save_figure(fig, tmp_path / "f.png", tmp_path / "f.unknownformat")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.png"]
+
+
+def test_writers_round_trip(tmp_path):
+    harness.write_json(tmp_path / "a.json", {"x": np.float64(1.5), "n": np.int64(3), "v": np.arange(2)})
+    assert (tmp_path / "a.json").read_text() == '{\n  "x": 1.5,\n  "n": 3,\n  "v": [\n    0,\n    1\n  ]\n}\n'
+    harness.write_npz(tmp_path / "a.npz", v=np.arange(3))
+    assert np.load(tmp_path / "a.npz")["v"].tolist() == [0, 1, 2]
+    harness.write_csv(tmp_path / "a.csv", pd.DataFrame({"a": [1]}))
+    assert (tmp_path / "a.csv").read_text() == "a\n1\n"
+
+
+# --------------------------------------------------------------------------- running steps
+
+def test_files_behave_like_snakemake_namedlists():
+    f = harness.Files(["x"], json="a.json", chunks=["c0", "c1"])
+    assert f.json == "a.json" and f["chunks"] == ["c0", "c1"] and list(f) == ["x", "a.json", "c0", "c1"]
+    nl = Namedlist(fromdict={"json": "a.json"})
+    assert harness.Files.of(nl).json == "a.json"
+    with pytest.raises(AttributeError, match="declared"):
+        f.csv
+
+
+def _smk(tmp_path, study, step, cfg, output, **wildcards):
+    log = Namedlist([str(tmp_path / "logs" / "step.log")])
+    params = Namedlist(fromdict={"study": study, "step": step, "cfg": cfg})
+    return SimpleNamespace(params=params, input=Namedlist([]), output=Namedlist(fromdict=output),
+                           wildcards=Namedlist(fromdict={k: str(v) for k, v in wildcards.items()}), log=log)
+
+
+def test_run_from_snakemake_logs_and_writes(tmp_path):
+    cfg = harness.load_config("p1", root=ROOT)
+    harness.run_from_snakemake(_smk(tmp_path, "p1", "model", cfg, {"json": str(tmp_path / "model.json")}))
+    assert (tmp_path / "model.json").is_file()
+    log = (tmp_path / "logs" / "step.log").read_text().splitlines()
+    assert log[0] == "[p1] step model" and log[-1].startswith("[p1] step model done in")
+
+
+def test_a_failing_step_exits_1_naming_the_config_field(tmp_path, capfd):
+    cfg = harness.load_config("p2", root=ROOT)
+    smk = _smk(tmp_path, "p2", "heatmap_chunk", cfg, {"csv": str(tmp_path / "c.csv")}, variant="theorem2", chunk=9)
+    with pytest.raises(SystemExit) as exc:
+        harness.run_from_snakemake(smk)
+    assert exc.value.code == 1
+    err = capfd.readouterr().err
+    assert "[p2] step heatmap_chunk failed" in err and "p2.heatmap.chunks" in err and "config/p2.yaml" in err
+    assert "Traceback" in (tmp_path / "logs" / "step.log").read_text()
+    assert not (tmp_path / "c.csv").exists()
+
+
+def test_a_step_must_write_its_declared_outputs(tmp_path):
+    cfg = harness.load_config("p1", root=ROOT)
+    with pytest.raises(harness.StepError, match="did not write"):
+        harness.run_step("p1", "model", cfg, outputs={"json": tmp_path / "m.json", "extra": tmp_path / "x.json"})
+
+
+def test_unknown_steps_are_named():
+    with pytest.raises(harness.StepError, match="no step 'nope'"):
+        harness.get_step("p1", "nope")
+    with pytest.raises(harness.StepError, match="unknown study"):
+        harness.get_step("p9", "model")
+
+
+def test_progress_lines(caplog):
+    import logging
+
+    log = harness.get_logger("p2")
+    with caplog.at_level(logging.INFO, logger="eqrec.studies"):
+        prog = harness.Progress(log, 20, "sweep")
+        for _ in range(20):
+            prog.advance()
+    lines = [r.getMessage() for r in caplog.records]
+    assert 2 <= len(lines) <= 12 and lines[-1].startswith("sweep: 20/20 points")
+
+
+def test_input_errors_of_steps_name_the_section_field():
+    msg = harness.failure_message("p4", "fig5", InputError("chunks cover 0..5", field="chunks"))
+    assert "p4.chunks" in msg and "config/p4.yaml" in msg
