@@ -2,15 +2,20 @@
 # Run the workflow on a real, one-node SLURM cluster started on this machine and
 # check that its results equal those of a local run.
 #
-#   sudo workflow/scripts/slurm_local_cluster.sh [--worktree] [--keep] [TARGET ...]
+#   sudo workflow/scripts/slurm_local_cluster.sh [--worktree] [--keep] [--reference=DIR] [TARGET ...]
+#
+#   --worktree        test the working tree (tracked and untracked files) instead of HEAD
+#   --keep            keep the scratch directory (runs, logs, slurm.conf)
+#   --reference=DIR   compare with this results/ tree instead of running the workflow locally
 #
 # What it does (as root):
 #   1. installs Debian's slurm-wlm and munge if missing (apt-get update first);
 #   2. writes a private slurm.conf (one node with this machine's CPUs and memory
 #      from `slurmd -C`, SelectType=select/cons_tres, ProctrackType=proctrack/linuxproc,
 #      no accounting, SlurmctldHost=localhost, MinJobAge=600 so that `squeue`
-#      still lists finished jobs when the executor asks) and a private munge key
-#      and socket, all under a scratch directory, so nothing in /etc is touched;
+#      still lists finished jobs when the executor asks) at /etc/slurm/slurm.conf
+#      (skipped if that file exists already; removed at the end), with state,
+#      logs and a private munge key and socket under a scratch directory;
 #   3. starts munged, slurmctld and slurmd as root (foreground processes of this
 #      script) and waits for the node to be idle;
 #   4. copies the repository (HEAD, or the working tree with --worktree) twice into
@@ -39,12 +44,14 @@ die() { say "FAILED: $*"; exit 1; }
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 SOURCE=head
 KEEP=0
+REFERENCE=""
 TARGETS=()
 for arg in "$@"; do
   case "$arg" in
     --worktree) SOURCE=worktree ;;
     --keep) KEEP=1 ;;
-    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
+    --reference=*) REFERENCE=$(cd "${arg#--reference=}" && pwd) ;;
+    -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
     -*) die "unknown option $arg" ;;
     *) TARGETS+=("$arg") ;;
   esac
@@ -73,6 +80,7 @@ STATE=$(mktemp -d /tmp/eqrec-slurm.XXXXXX)
 chmod 755 "$STATE"
 PIDS=()
 FAILED=1
+CREATED_CONF=0
 cleanup() {
   local rc=$?
   for ((i=${#PIDS[@]}-1; i>=0; i--)); do
@@ -83,6 +91,7 @@ cleanup() {
     kill -9 "$pid" 2>/dev/null || true
   done
   [ ${#PIDS[@]} -gt 0 ] && say "stopped the daemons it started (pids ${PIDS[*]})"
+  [ "$CREATED_CONF" = 1 ] && rm -f /etc/slurm/slurm.conf
   if [ "$KEEP" = 1 ] || [ "$FAILED" = 1 ]; then
     say "scratch directory kept: $STATE"
   else
@@ -101,8 +110,18 @@ SOCK="$STATE/munge/munge.sock"
 NODE=$(hostname -s)
 NODE_LINE=$(slurmd -C | head -1)            # NodeName=<host> CPUs=.. ... RealMemory=..
 CPUS=$(sed -n 's/.*CPUs=\([0-9]*\).*/\1/p' <<<"$NODE_LINE")
-export SLURM_CONF="$STATE/etc/slurm.conf"
+# The configuration must be at the default path: the executor's job step drops
+# SLURM_CONF from the environment of the `srun` it starts inside each job.
+export SLURM_CONF=/etc/slurm/slurm.conf
+MARK="# written by eqrec workflow/scripts/slurm_local_cluster.sh"
+if [ -e "$SLURM_CONF" ] && ! grep -qF "$MARK" "$SLURM_CONF"; then
+  FAILED=0
+  skip "$SLURM_CONF exists: this machine has its own SLURM configuration, which this check does not touch"
+fi
+mkdir -p /etc/slurm
+CREATED_CONF=1
 cat >"$SLURM_CONF" <<EOF
+$MARK (removed when it stops)
 ClusterName=eqrec-local
 SlurmctldHost=localhost
 SlurmctldPort=${SLURMCTLD_PORT:-6817}
@@ -191,14 +210,20 @@ run() {  # run NAME SNAKEMAKE-ARGS...: run the workflow in $STATE/NAME, set SECO
   local var="SECONDS_$name"
   say "$name run done in ${!var} s ($(grep -c '^Finished jobid' "$STATE/log/$name.log") jobs)"
 }
-run local --cores "$CPUS"
+if [ -n "$REFERENCE" ]; then
+  say "local run skipped: comparing with $REFERENCE"
+  SECONDS_local="(not run)"
+else
+  run local --cores "$CPUS"
+  REFERENCE="$STATE/local/results"
+fi
 run slurm --profile workflow/profiles/slurm
 SUBMITTED=$(grep -c "external jobid" "$STATE/log/slurm.log" || true)
 [ "$SUBMITTED" -gt 0 ] || die "no job of the SLURM run went through sbatch"
 say "SLURM run: $SUBMITTED jobs submitted with sbatch"
 
 # --- 5. compare ----------------------------------------------------------------------
-"$PY" "$ROOT/workflow/scripts/slurm_compare.py" "$STATE/local/results" "$STATE/slurm/results" \
+"$PY" "$ROOT/workflow/scripts/slurm_compare.py" "$REFERENCE" "$STATE/slurm/results" \
   || die "the SLURM run's results differ from the local run's"
 FAILED=0
 say "PASSED: SLURM results equal the local results; local ${SECONDS_local} s, SLURM ${SECONDS_slurm} s"
