@@ -149,6 +149,7 @@ JobCompType=jobcomp/none
 SchedulerType=sched/backfill
 MinJobAge=600
 ReturnToService=2
+MailProg=/bin/true
 $NODE_LINE NodeAddr=127.0.0.1 State=UNKNOWN
 PartitionName=local Nodes=$NODE Default=YES MaxTime=INFINITE State=UP
 EOF
@@ -157,7 +158,7 @@ say "slurm.conf: $SLURM_CONF (node: $NODE_LINE)"
 # --- 3. daemons ------------------------------------------------------------------
 munged -F --force --key-file="$STATE/munge/munge.key" --socket="$SOCK" \
   --pid-file="$STATE/munge/munged.pid" --log-file="$STATE/log/munged.log" \
-  --seed-file="$STATE/munge/munged.seed" &
+  --seed-file="$STATE/munge/munged.seed" >"$STATE/log/munged.out" 2>&1 &
 PIDS+=($!)
 for _ in $(seq 50); do [ -S "$SOCK" ] && break; sleep 0.1; done
 [ -S "$SOCK" ] || die "munged did not start (log: $STATE/log/munged.log)"
@@ -218,7 +219,7 @@ else
   REFERENCE="$STATE/local/results"
 fi
 run slurm --profile workflow/profiles/slurm
-SUBMITTED=$(grep -c "external jobid" "$STATE/log/slurm.log" || true)
+SUBMITTED=$(grep -c "has been submitted with SLURM jobid" "$STATE/log/slurm.log" || true)
 [ "$SUBMITTED" -gt 0 ] || die "no job of the SLURM run went through sbatch"
 say "SLURM run: $SUBMITTED jobs submitted with sbatch"
 
