@@ -1,6 +1,6 @@
 # The comparison table: every published number next to ours, worded by the
 # templates of config/claims.yaml from the evidence in the values.json files.
-CLAIMS_CODE = study_code("claims")
+CLAIMS_CODE = code_inputs("claims")
 
 
 rule claims:

@@ -5,21 +5,13 @@
 # resolved it (config files, --configfile, --config; validated by the
 # Snakefile). A changed value therefore re-plans that study's jobs (params
 # rerun trigger) and reaches them. No mathematics here.
+#
+# Each study's rules list as `code` inputs the package modules that study
+# imports, transitively (harness.code_inputs walks the imports with ast), so
+# editing code a study does not import (e.g. eqrec/lmv for P1) does not re-run
+# its jobs. harness.section_params sorts the section's keys, so only a changed
+# value re-plans.
 from eqrec.studies.harness import code_inputs, section_params
 
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"
-
-
-def study_code(study):
-    """The package modules a study's steps import (transitively), as rule inputs.
-
-    Editing code a study does not import (e.g. eqrec/lmv for P1) does not
-    re-run its jobs.
-    """
-    return code_inputs(study)
-
-
-def study_cfg(section):
-    """A configuration section as a rule param (keys sorted: only a changed value re-plans)."""
-    return section_params(config, section)

@@ -1,7 +1,7 @@
 # P1: prefix-based estimator (Rutledge, Yong, Ozay, ACC 2019).
 # Each rule runs one step of eqrec.studies.p1 through the harness (common.smk).
-P1_CODE = study_code("p1")
-P1_CFG = study_cfg("p1")
+P1_CODE = code_inputs("p1")
+P1_CFG = section_params(config, "p1")
 VALUES_FILES.append("results/p1/values.json")
 
 

@@ -2,8 +2,8 @@
 # Each rule runs one step of eqrec.studies.p2 through the harness (common.smk).
 # The heat-map chunks come from the resolved configuration (p2.heatmap.chunks,
 # p2.heatmap.variants); the merge checks that they cover the grid exactly once.
-P2_CODE = study_code("p2")
-P2_CFG = study_cfg("p2")
+P2_CODE = code_inputs("p2")
+P2_CFG = section_params(config, "p2")
 VALUES_FILES.append("results/p2/values.json")
 
 P2_VARIANTS = config["p2"]["heatmap"]["variants"]

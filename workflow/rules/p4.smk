@@ -2,8 +2,8 @@
 # Each rule runs one step of eqrec.studies.p4 through the harness (common.smk).
 # The sweep chunks come from the resolved configuration (p4.sweep_*.chunks);
 # the merging steps (fig5, fig6) check that they cover the grid exactly once.
-P4_CODE = study_code("p4")
-P4_CFG = study_cfg("p4")
+P4_CODE = code_inputs("p4")
+P4_CFG = section_params(config, "p4")
 VALUES_FILES.append("results/p4/values.json")
 
 P4_EXAMPLES = list(config["p4"]["examples"])

@@ -92,7 +92,7 @@ def grid(g: dict) -> np.ndarray:
 def chunk_indices(num: int, chunks: int, k: int) -> np.ndarray:
     """Indices of chunk ``k`` (0-based) of ``num`` items split into ``chunks`` near-equal parts."""
     if not 0 <= k < chunks:
-        raise InputError(f"chunk {k} outside 0..{chunks - 1}", None, "chunk")
+        raise InputError(f"chunk {k} requested, the configuration splits the grid into chunks 0..{chunks - 1}")
     return np.array_split(np.arange(num), chunks)[k]
 
 
@@ -284,7 +284,7 @@ def merge_chunks(files: Iterable[str | Path], num: int, out_npz: str | Path) -> 
         else:
             merged[key] = np.concatenate([p[key] for p in parts], axis=0)
     idx = merged["idx"]
-    if not np.array_equal(np.sort(idx), np.arange(num)) or not np.array_equal(idx, np.arange(num)):
+    if not np.array_equal(idx, np.arange(num)):
         raise InputError(f"chunks cover grid points {sorted(idx.tolist())}, not 0..{num - 1} exactly once",
                          str(out_npz), "chunks")
     merged.pop("num", None)
