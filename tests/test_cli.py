@@ -156,3 +156,105 @@ def test_explicit_complex_poles(capsys):
                "--poles", "0,0.3+0.2j,0.3-0.2j"])
     assert rc == 0, capsys.readouterr().err
     assert json.loads(capsys.readouterr().out)["method"] == "augmented"
+
+
+# --------------------------------------------------------------------------- --method delay
+
+ACC_DELAYS = "060000,006000,000600,000060"
+BATCH_REACTOR = ROOT / "examples" / "batch_reactor.yaml"
+
+
+def test_delay_fixed_mu1_is_the_prefix_design(tmp_path):
+    """Delays past the horizon are missing data: the same problem as the prefix design on L1 (P3-ACC)."""
+    out_d, out_p = tmp_path / "d.json", tmp_path / "p.json"
+    assert main(["design", str(SYSTEM), "--method", "delay", "--delays", ACC_DELAYS, "--cost", "max",
+                 "--out", str(out_d)]) == 0
+    assert main(["design", str(SYSTEM), "--words", "101111,110111,111011,111101", "--out", str(out_p)]) == 0
+    d, p = json.loads(out_d.read_text()), json.loads(out_p.read_text())
+    assert d["method"] == "delay" and d["cost"] == "max"
+    assert d["mu2"] == pytest.approx(p["mu2"], rel=1e-6)
+    assert d["certified_mu2"] == pytest.approx(d["mu2"], rel=1e-6)
+    for key in ("levels", "event_sequences", "J", "gains", "words"):
+        assert key in d
+    assert set(d["gains"]) == set(ACC_DELAYS.split(","))
+    # event sequence of 060000: y(1) never arrives within T = 6
+    assert d["event_sequences"]["060000"][-1] == "101111"
+
+
+def test_delay_mu1_free_reports_its_certificate(tmp_path):
+    out = tmp_path / "d.json"
+    assert main(["design", str(SYSTEM), "--method", "delay", "--delays", ACC_DELAYS, "--mu1", "free",
+                 "--cost", "max", "--out", str(out)]) == 0
+    d = json.loads(out.read_text())
+    free = d["mu1_free"]
+    assert free["route"] == "global"
+    assert free["lower_bound"] <= free["J"] <= free["lower_bound"] * (1 + 1e-4)
+    # the free optimum is below the mu1 = 1 optimum (1.1498) and mu1 is at least the smallest feasible one
+    assert d["mu2"] < 1.0
+    assert d["mu1"] >= free["mu1_min"]["lower"]
+
+
+def test_delay_full_language_with_levels_per_prefix(tmp_path):
+    out = tmp_path / "d.json"
+    assert main(["design", str(BATCH_REACTOR), "--method", "delay", "--max-delay", "1", "--horizon", "3",
+                 "--mu1", "1", "--out", str(out)]) == 0
+    d = json.loads(out.read_text())
+    assert len(d["words"]) <= 2 ** 3 and d["cost"] == "sum"
+    levels = d["levels"]
+    assert all(row["certified"] <= row["level"] * (1 + 1e-6) + 1e-9 for row in levels)
+    assert max(row["level"] for row in levels) == pytest.approx(d["mu2"])
+    # the delayed first measurement: F(0, 0) is zero on sequences where y(0) arrives late
+    F = np.array(d["gains"]["100"]["F"])
+    assert np.all(F[:4, :2] == 0)  # zero pattern (7): y(0) not yet available at t = 0
+
+
+@pytest.mark.parametrize("args, field", [
+    (["--delays", "2x210"], "--delays"),
+    (["--delays", "21210,212"], "--delays"),
+    (["--delays", "210", "--words", "101"], "--words"),
+    (["--max-delay", "2"], "--horizon"),
+    (["--max-delay", "12", "--horizon", "3"], "--max-delay"),
+    (["--max-delay", "1", "--horizon", "0"], "--horizon"),
+    (["--delays", "210", "--max-delay", "1", "--horizon", "3"], "--delays"),
+    (["--delays", "210", "--mu1", "-1"], "--mu1"),
+    (["--delays", "210", "--mu1", "abc"], "--mu1"),
+    (["--delays", "210", "--L", "free"], "--method"),
+    ([], "--delays"),
+])
+def test_delay_bad_input_names_the_field(capsys, args, field):
+    assert main(["design", str(SYSTEM), "--method", "delay", *args]) == 1
+    assert f"'{field}'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, field", [
+    (["--words", "101111", "--mu1", "free"], "--mu1"),
+    (["--words", "101111", "--cost", "sum"], "--cost"),
+    (["--words", "101111", "--delays", "000000"], "--delays"),
+    ([], "--words"),
+])
+def test_delay_options_rejected_for_other_methods(capsys, args, field):
+    assert main(["design", str(SYSTEM), *args]) == 1
+    assert f"'{field}'" in capsys.readouterr().err
+
+
+def test_delay_words_must_match_the_system_horizon(capsys):
+    assert main(["design", str(SYSTEM), "--method", "delay", "--delays", "210"]) == 1
+    assert "field 'T'" in capsys.readouterr().err
+
+
+def test_delay_infeasible_exit_code_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "d.json"
+    assert main(["design", str(BATCH_REACTOR), "--method", "delay", "--delays", "21210", "--mu1", "0.001",
+                 "--out", str(out)]) == 3
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def test_batch_reactor_example_is_the_zoh_model():
+    from eqrec.core.systems import load_system
+    from eqrec.models import batch_reactor
+
+    system, _ = load_system(BATCH_REACTOR)
+    ref = batch_reactor()
+    np.testing.assert_allclose(system.A, ref.A, atol=5e-6)
+    np.testing.assert_array_equal(system.C, ref.C)
+    assert system.eta_v == ref.eta_v and system.eta_w == 0

@@ -7,6 +7,8 @@ Examples
     eqrec design system.yaml --words 101111,110111,111011,111101 --method prefix --mu1 1 --out design.json
     eqrec design system.yaml --words 101111,110111 --method time --solver clarabel
     eqrec design system.yaml --words 101111,110111 --method augmented --L free
+    eqrec design system.yaml --method delay --delays 21210,00000 --mu1 free --out design.json
+    eqrec design system.yaml --method delay --max-delay 2 --horizon 5 --mu1 0.33 --cost max
 
 Exit status: 0 on success, 1 for malformed input (the message names the file
 and field), 2 for a usage error (argparse), 3 for an infeasible or unbounded
@@ -42,15 +44,28 @@ SYSTEM.yaml keys (matrices as nested lists):
   B, f   input matrix and affine term (do not affect the design)
   V      p x nv measurement-noise gain (default identity)
 
-Words are strings over {0,1}: character t is 1 if the measurement of time t
-(0-based) arrives, 0 if it is missing; all words must have length T.
+Words (--words) are strings over {0,1}: character t is 1 if the measurement
+of time t (0-based) arrives, 0 if it is missing; all words must have length T.
+Delay words (--delays, --method delay) are digit strings: character t is the
+delay of the measurement of time t (0 = on time); a delay that reaches past
+the horizon (t + delay >= T) means missing. --max-delay D --horizon T designs
+for all (D+1)^T delay words. Words with equal event sequences are merged.
 
 Output JSON: method, mu1, mu2 (optimum), certified_mu2 (worst case recomputed
 from the gains alone), solver, status, words, gains: for each designed word
 {"F": (T*n x T*p), "u0": (T*n)} in the convention
   ue(t) = u0(t) + sum_{tau<=t} F(t,tau) y_xi(tau),
   xhat(t+1) = A xhat + B u - ue + f,
-  y_xi(tau) = y(tau) - C xhat(tau) if available, else 0.
+  y_xi(tau) = y(tau) - C xhat(tau) if y(tau) has arrived by time t, else 0
+(F(t,tau) is zero wherever y(tau) has not arrived by time t).
+--method delay adds: cost, J (the cost of --cost), levels (one row per event
+prefix and time: designed level, certified worst case, sequences through it;
+a prefix is labelled by its 0/1 word while no measurement has arrived late,
+else by its events e_0.e_1...),
+event_sequences (per designed sequence, for each time t a 0/1 string over
+y(0..t): character tau is 1 if y(tau) is available at time t), and with
+--mu1 free: mu1_free {route, J, lower_bound (a certified lower bound of J
+over every mu1), gap, mu1_min}.
 """
 
 
@@ -70,13 +85,25 @@ def _parser() -> argparse.ArgumentParser:
                                    "recover the gains, certify them from the gains alone, write JSON.",
                        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=SYSTEM_HELP + "\n" + EXIT_HELP)
     d.add_argument("system", help="system YAML file (keys below)")
-    d.add_argument("--words", required=True,
-                   help="comma-separated words of the missing-data language, e.g. 101111,110111")
-    d.add_argument("--method", choices=("time", "prefix", "augmented"), default="prefix",
+    d.add_argument("--words", default=None,
+                   help="comma-separated words of the missing-data language, e.g. 101111,110111 "
+                        "(methods time, prefix, augmented)")
+    d.add_argument("--method", choices=("time", "prefix", "augmented", "delay"), default="prefix",
                    help="time: one gain sequence for the worst-case word (bitwise AND); prefix: gains chosen "
                         "by the observed prefix (prefix-based paper); augmented: state-augmented estimator "
-                        "(augmented paper). Default: prefix")
-    d.add_argument("--mu1", type=float, default=1.0, help="recovery level M1 (default 1)")
+                        "(augmented paper); delay: delayed and missing data, gains per event prefix and a "
+                        "level per prefix and time (delayed-data paper). Default: prefix")
+    d.add_argument("--mu1", default="1",
+                   help="recovery level mu1 (default 1); with --method delay also 'free' (mu1 a decision "
+                        "variable: global branch and bound on LPs, certified lower bound of J)")
+    d.add_argument("--delays", default=None,
+                   help="delay only: comma-separated delay words, e.g. 21210,00000")
+    d.add_argument("--max-delay", type=int, default=None,
+                   help="delay only: with --horizon, design for all delay words with delays 0..D")
+    d.add_argument("--horizon", type=int, default=None, help="delay only: word length T for --max-delay")
+    d.add_argument("--cost", choices=("sum", "max"), default=None,
+                   help="delay only: sum = the paper's J = mu1 + sum_k sum_alpha mu2_k^alpha (default); "
+                        "max = the largest level")
     d.add_argument("--solver", choices=SOLVER_NAMES, default="highs",
                    help="LP solver of the registry (default highs; ipopt is an interior-point NLP solver)")
     d.add_argument("--L", dest="L", default=None,
@@ -104,9 +131,16 @@ def run_design(args: argparse.Namespace) -> dict:
     from eqrec.core.systems import load_system
 
     system, T_file = load_system(args.system)
-    if not np.isfinite(args.mu1) or abs(args.mu1) > MAX_MU1:
-        raise InputError(f"must be a finite number of magnitude at most {MAX_MU1:g} (double-precision LP), "
-                         f"got {args.mu1:g}", "command line", "--mu1")
+    mu1 = _parse_mu1(args.mu1, allow_free=args.method == "delay")
+    if args.method == "delay":
+        return run_delay_design(args, system, T_file, mu1)
+    for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
+                        ("--cost", args.cost)):
+        if value is not None:
+            raise InputError(f"{flag} applies to --method delay only", "command line", flag)
+    if args.words is None:
+        raise InputError(f"--method {args.method} needs --words", "command line", "--words")
+    args.mu1 = mu1
     words = validate_language([w for w in args.words.split(",") if w.strip()], source="command line",
                               field_name="--words")
     T = T_file if T_file is not None else len(words[0])
@@ -145,6 +179,72 @@ def run_design(args: argparse.Namespace) -> dict:
            "gains": design.schedule.to_json(), **extra}
     if args.method == "time":
         out["worst_case_word"] = design.extra["worst_case_word"]
+    return out
+
+
+def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
+    """``--mu1``: a finite number (at most :data:`MAX_MU1` in magnitude) or, for ``--method delay``, ``free``."""
+    if text.strip().lower() == "free":
+        if not allow_free:
+            raise InputError("'free' applies to --method delay only; give a number", "command line", "--mu1")
+        return "free"
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"must be a number{' or free' if allow_free else ''}, got {text!r}",
+                         "command line", "--mu1") from None
+    if not np.isfinite(value) or abs(value) > MAX_MU1:
+        raise InputError(f"must be a finite number of magnitude at most {MAX_MU1:g} (double-precision LP), "
+                         f"got {value:g}", "command line", "--mu1")
+    if value <= 0:
+        raise InputError(f"must be positive, got {value:g}", "command line", "--mu1")
+    return value
+
+
+def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str) -> dict:
+    """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
+    from eqrec.core.patterns import as_language
+    from eqrec.design.delay import delay_language, design_delay, design_delay_global, to_json
+
+    if args.words is not None:
+        raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",
+                         "--words")
+    if args.L or args.poles or args.s0:
+        raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
+    full = args.max_delay is not None or args.horizon is not None
+    if (args.delays is None) == (not full):
+        raise InputError("give either --delays W1,W2,... or both --max-delay and --horizon", "command line",
+                         "--delays")
+    if full:
+        if args.max_delay is None or args.horizon is None:
+            raise InputError("--max-delay and --horizon go together", "command line",
+                             "--horizon" if args.horizon is None else "--max-delay")
+        if not 0 <= args.max_delay <= 9:
+            raise InputError(f"must be 0..9 (one digit per delay), got {args.max_delay}", "command line",
+                             "--max-delay")
+        if args.horizon < 1:
+            raise InputError(f"must be at least 1, got {args.horizon}", "command line", "--horizon")
+        if T_file is not None and T_file != args.horizon:
+            raise InputError(f"T = {T_file} in the system file but --horizon {args.horizon}", args.system, "T")
+        patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, source="command line")
+    else:
+        words = [w.strip() for w in args.delays.split(",") if w.strip()]
+        if not words:
+            raise InputError("no delay words given", "command line", "--delays")
+        patterns = as_language(words, kind="delay", field_name="--delays", source="command line")
+        if T_file is not None and patterns[0].T != T_file:
+            raise InputError(f"T = {T_file} in the system file but the delay words have length {patterns[0].T}",
+                             args.system, "T")
+    cost = args.cost or "sum"
+    if mu1 == "free":
+        free = design_delay_global(system, patterns, cost=cost, solver=args.solver)
+        design = free.design
+    else:
+        free = None
+        design = design_delay(system, patterns, mu1, cost=cost, solver=args.solver)
+    out = to_json(design, free)
+    out.update(solver=design.solution.solver, status=design.solution.status,
+               words=[p.label for p in patterns], designed_words=[p.label for p in design.schedule.designed])
     return out
 
 
