@@ -73,7 +73,7 @@ fi
 PY=${PYTHON:-python}
 "$PY" -c "import snakemake_executor_plugin_slurm" 2>/dev/null \
   || die "the SLURM executor plugin is not installed: pip install -e \".[slurm]\""
-say "$(sinfo --version), $(munged --version 2>&1 | head -1), $("$PY" -m snakemake --version | sed 's/^/snakemake /')"
+say "$(slurmctld -V 2>/dev/null), $(munged --version 2>&1 | head -1), $("$PY" -m snakemake --version | sed 's/^/snakemake /')"
 
 # --- 2. configuration ----------------------------------------------------------
 STATE=$(mktemp -d /tmp/eqrec-slurm.XXXXXX)
