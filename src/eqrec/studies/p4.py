@@ -322,13 +322,27 @@ def step_compare(cfg, inputs, outputs, wildcards) -> None:
 
 # --------------------------------------------------------------------------- values.json
 
+#: Relative tolerance under which two variances count as equal (a tie, e.g. at eta_bar = 1 where no packet is
+#: lost and both compensations are the same filter): counts must not depend on last-digit rounding.
+TIE_RTOL = 1e-9
+
+
+def _ranking(zero: np.ndarray, hold: np.ndarray, rtol: float = TIE_RTOL) -> np.ndarray:
+    """Per point (last axis = components): ``zero-input`` / ``hold-input`` if lower in every component by more
+    than ``rtol`` (relative), ``tie`` if equal within ``rtol`` in every component, else ``mixed``."""
+    zero, hold = np.asarray(zero, float), np.asarray(hold, float)
+    gap = rtol * np.maximum(np.abs(zero), np.abs(hold))
+    out = np.full(zero.shape[:-1], "mixed", dtype=object)
+    out[np.all(np.abs(zero - hold) <= gap, axis=-1)] = "tie"
+    out[np.all(zero < hold - gap, axis=-1)] = "zero-input"
+    out[np.all(hold < zero - gap, axis=-1)] = "hold-input"
+    return out
+
+
 def _better(zero: np.ndarray, hold: np.ndarray) -> str:
-    """``zero-input``/``hold-input`` if one is lower in every component, else ``mixed``."""
-    if np.all(hold < zero):
-        return "hold-input"
-    if np.all(zero < hold):
-        return "zero-input"
-    return "mixed"
+    """``zero-input``/``hold-input`` if one is lower in every component, ``tie`` if equal (within
+    :data:`TIE_RTOL`), else ``mixed``."""
+    return str(_ranking(zero, hold)[()])
 
 
 def _better_t(d, mech: str, T: int) -> np.ndarray:
@@ -456,6 +470,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         verdict = _better(ssz, ssh)
         ez, eh = e[f"{ex}/zero/filt"], e[f"{ex}/hold/filt"]
         Fz, Fh = q[f"{ex}/zero/filt"], q[f"{ex}/hold/filt"]
+        rank_eta, rank_q = _ranking(ez, eh), _ranking(Fz, Fh)  # ties (eta_bar = 1: the same filter) kept apart
         values[key] = {"value": verdict, "evidence": {
             "example": ex, "eta_bar": eta, "T": T, "runs": reports[ex]["runs"],
             "steady_zero": ssz.tolist(), "steady_hold": ssh.tolist(),
@@ -465,11 +480,13 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
             "from_t": {m: _from_t(_better_t(d, m, T)) for m in MECHANISMS},
             "qlam_threshold": qlam_threshold(plant, eta, N, cfg["steady"]),
             "eta_lo": float(etas[0]), "eta_hi": float(etas[-1]),
-            "hold_better_eta": _grid_set(etas[np.all(eh < ez, axis=1)]),
-            "zero_better_eta": _grid_set(etas[np.all(ez < eh, axis=1)]),
+            "hold_better_eta": _grid_set(etas[rank_eta == "hold-input"]),
+            "zero_better_eta": _grid_set(etas[rank_eta == "zero-input"]),
+            "tie_eta": _grid_set(etas[rank_eta == "tie"]), "tie_rtol": TIE_RTOL,
             "q_lo": float(q["qxi"][0]), "q_hi": float(q["qxi"][-1]),
-            "frac_hold": float(np.mean(np.all(Fh < Fz, axis=-1))),
-            "frac_zero": float(np.mean(np.all(Fz < Fh, axis=-1))),
+            "frac_hold": float(np.mean(rank_q == "hold-input")),
+            "frac_zero": float(np.mean(rank_q == "zero-input")),
+            "frac_tie": float(np.mean(rank_q == "tie")),
             "theory_checks_passed": theory[ex]["passed"]}}
         rows.append((f"P4-F{fignum}", key, verdict))
 
