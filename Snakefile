@@ -3,7 +3,7 @@
 # values (results/claims.csv, results/REPRODUCTION.md).
 #
 #   snakemake --cores 2                          # everything, default config
-#   snakemake --cores 2 p1                       # one paper (p1, p2, p4)
+#   snakemake --cores 2 p1                       # one paper (p1, p2, p3, p4)
 #   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
 #   snakemake --report report.html               # browsable report with figure captions
 from snakemake.exceptions import WorkflowError
@@ -16,6 +16,7 @@ min_version("9.0")
 
 configfile: "config/config.yaml"
 configfile: "config/p2.yaml"
+configfile: "config/p3.yaml"
 configfile: "config/p4.yaml"
 
 
@@ -41,6 +42,7 @@ VALUES_FILES = []
 include: "workflow/rules/common.smk"
 include: "workflow/rules/p1.smk"
 include: "workflow/rules/p2.smk"
+include: "workflow/rules/p3.smk"
 include: "workflow/rules/p4.smk"
 include: "workflow/rules/claims.smk"
 
@@ -51,4 +53,5 @@ rule all:
         rules.claims.output,
         rules.p1.input,
         rules.p2.input,
+        rules.p3.input,
         rules.p4.input,

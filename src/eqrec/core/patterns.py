@@ -420,3 +420,42 @@ class PrefixTree:
 
     def contains_prefix(self, prefix: "ArrivalPattern | str") -> bool:
         return self._key(prefix) in self.index_of
+
+
+# ---------------------------------------------------------------------------
+# Event matrices and the zero patterns (7) of the delayed-data paper
+# ---------------------------------------------------------------------------
+
+def event_indices(pattern: ArrivalPattern) -> tuple[int, ...]:
+    """``(j_0, ..., j_{T-1})`` of eq. (2): the event sequence ``e_{0,j_0} ... e_{T-1,j_{T-1}}`` of Definition 4."""
+    return tuple(pattern.event_index(t) for t in range(pattern.T))
+
+
+def event_sequence_label(pattern: ArrivalPattern, upto: int | None = None) -> str:
+    """``e_{0,j_0}e_{1,j_1}...`` as printed in Examples 3-5 (the first ``upto`` events: a prefix, Definition 6)."""
+    idx = event_indices(pattern)[: pattern.T if upto is None else upto]
+    return "".join(f"e_{{{t},{j}}}" for t, j in enumerate(idx))
+
+
+def event_matrix(pattern: ArrivalPattern) -> np.ndarray:
+    """The event matrix ``E_α`` of Section III-B: row ``i`` holds the digits ``d_0 ... d_i`` of the event at time ``i``.
+
+    ``E_α[i, l] = 1`` iff the measurement of time ``l`` is available at time
+    ``i`` (lower triangular, shape ``(T, T)``, integers).
+    """
+    return pattern.mask.astype(int)
+
+
+def gain_zero_pattern(pattern: ArrivalPattern, gain: str = "M") -> list[list[str]]:
+    """Block structure that constraint (7) imposes on ``M^α`` or ``L^α`` (``"*"`` free block, ``"0"`` zero block).
+
+    ``M^α`` (eq. (5)) is block lower triangular; its block ``(k, i)`` is zero
+    where ``E_α[k, i] = 0`` (``y(i)`` not yet available at time ``k``).
+    ``L^α`` is block diagonal (Appendix); its diagonal block ``L_k`` is zero
+    where ``E_α[k, k] = 0`` (``y(k)`` not on time), as Example 5 states.
+    """
+    if gain not in ("M", "L"):
+        raise InputError(f"gain must be 'M' or 'L', got {gain!r}", field="gain")
+    E = event_matrix(pattern)
+    T = pattern.T
+    return [["*" if E[k, i] and (gain == "M" or i == k) else "0" for i in range(T)] for k in range(T)]

@@ -45,7 +45,7 @@ import yaml
 from eqrec.errors import EqrecError, InputError
 
 #: Studies with pipeline steps (``claims`` builds the comparison table).
-STUDIES = ("p1", "p2", "p4", "claims")
+STUDIES = ("p1", "p2", "p3", "p4", "claims")
 
 
 @dataclass(frozen=True)
@@ -61,6 +61,7 @@ class Section:
 SECTIONS: dict[str, Section] = {
     "p1": Section("p1", "config/config.yaml", "config/schemas/p1.schema.yaml"),
     "p2": Section("p2", "config/p2.yaml", "config/schemas/p2.schema.yaml"),
+    "p3": Section("p3", "config/p3.yaml", "config/schemas/p3.schema.yaml"),
     "p4": Section("p4", "config/p4.yaml", "config/schemas/p4.schema.yaml"),
 }
 
