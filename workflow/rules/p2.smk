@@ -111,6 +111,24 @@ rule p2_checks:
         RUN_STEP
 
 
+rule p2_printed:
+    """P2-F2 at the paper's printed L (read from config/claims.yaml): theorem2 and masked_gain LPs, the
+    masked_gain gains certified as the estimator that runs; nilpotent L at r = 0."""
+    input:
+        claims="config/claims.yaml",
+        code=P2_CODE,
+    output:
+        json="results/p2/printed.json",
+    params:
+        study="p2",
+        step="printed",
+        cfg=P2_CFG,
+    log:
+        "logs/p2/printed.log",
+    script:
+        RUN_STEP
+
+
 rule p2_values:
     """Our value of every published P2 number, with its evidence."""
     input:
@@ -119,6 +137,7 @@ rule p2_values:
         heatmap="results/p2/heatmap.csv",
         realaxis="results/p2/realaxis.csv",
         checks="results/p2/checks.json",
+        printed="results/p2/printed.json",
         code=P2_CODE,
     output:
         json="results/p2/values.json",
@@ -157,6 +176,7 @@ rule p2_figure_heatmap:
     """P2-F3a figure."""
     input:
         csv="results/p2/heatmap.csv",
+        printed="results/p2/printed.json",
         code=P2_CODE,
     output:
         pdf="results/p2/f3a_heatmap.pdf",
@@ -175,6 +195,7 @@ rule p2_figure_realaxis:
     """P2-F3b figure."""
     input:
         csv="results/p2/realaxis.csv",
+        printed="results/p2/printed.json",
         code=P2_CODE,
     output:
         pdf="results/p2/f3b_realaxis.pdf",

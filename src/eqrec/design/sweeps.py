@@ -10,7 +10,8 @@
 * :func:`M2_curve` — the optimal ``M2`` against ``M1`` (``None`` where infeasible);
 * :func:`fixed_L_sweep` — the augmented LP with ``s0 = 0`` over a list of
   pole sets (Figs. 3a/3b of the augmented paper): one LP, built once, whose
-  ``L``-dependent entries are rewritten per point.
+  ``L``-dependent entries are rewritten per point; an undecided solve is
+  re-solved by a second solver, an all-zero pole set gets a nilpotent ``L``.
 """
 
 from __future__ import annotations
@@ -20,11 +21,13 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from eqrec.core.certify import certify_schedule
 from eqrec.core.patterns import extend_word
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.observers import place_observer
+from eqrec.design.augmented_model import schedule_from_augmented
+from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign
@@ -99,29 +102,68 @@ def M2_curve(system: AffineSystem, words, M1_values: Iterable[float], method: st
     return out
 
 
+#: LP statuses that settle a point (anything else is re-solved by the second solver).
+DEFINITIVE = ("optimal", "infeasible")
+
+
+def observer_for(system: AffineSystem, poles: np.ndarray, seed: int = 0):
+    """Observer gain for a pole set and how it was made: ``place_poles``, or for an all-zero request
+    (which ``place_poles`` refuses when a pole repeats more than ``rank C`` times) the exact nilpotent
+    ``L`` of :func:`eqrec.design.observers.deadbeat_observer` (``seed`` picks which one: it is not unique)."""
+    pp = place_observer(system.A, system.C, poles)
+    if pp.ok or not np.allclose(np.asarray(poles, complex), 0.0):
+        return pp, "place_poles"
+    return deadbeat_observer(system.A, system.C, seed=seed), "deadbeat"
+
+
 def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_list: Iterable[np.ndarray],
-                  solver: str = "highs", on_point: Callable[[], None] | None = None) -> list[dict]:
+                  solver: str = "highs", on_point: Callable[[], None] | None = None,
+                  second_solver: str | None = "clarabel", certify_runtime: str | None = None,
+                  deadbeat_seed: int = 0) -> list[dict]:
     """Optimal ``μ2`` of the augmented LP (``s0 = 0``, ``L`` by pole placement) for each pole set.
 
     Each record has ``status`` (``optimal``, ``infeasible``, ``placement_failed``
     or ``solver_failed``), ``mu2`` (``inf`` if infeasible, ``nan`` if not
-    solved), ``message`` and ``time``.
+    solved), ``message``, ``observer`` (``place_poles`` / ``deadbeat``, see
+    :func:`observer_for`), ``solver`` (whose answer the status is),
+    ``status_first`` and ``status_second`` (the second solver's status, empty
+    when the first was definitive: ``optimal`` or ``infeasible``) and ``time``.
+    A point the first solver leaves undecided (e.g. HiGHS ``Unknown``) is
+    re-solved with ``second_solver``; ``solver_failed`` means neither decided.
+
+    With ``certify_runtime`` (``"theorem2"`` or ``"hold"``) the optimal gains are
+    also certified as the estimator that runs (:func:`eqrec.core.certify.certify_schedule`
+    on ``word``): ``certified_mu2`` and ``certified_terminal`` (``nan`` when not optimal).
     """
     model = None
     rows = []
     for poles in poles_list:
         t0 = time.perf_counter()
-        pp = place_observer(system.A, system.C, poles)
-        rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message}
+        pp, how = observer_for(system, poles, deadbeat_seed)
+        rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message, "observer": how,
+               "solver": "", "status_first": "", "status_second": ""}
+        if certify_runtime:
+            rec.update(certified_mu2=np.nan, certified_terminal=np.nan)
         if pp.ok:
             if model is None:
                 model = AugmentedLP(system, word, M1, pp.L, mode=mode)
             else:
                 model.set_L(pp.L)
             sol = model.solve(solver)
-            rec = {"status": sol.status if sol.status in ("optimal", "infeasible") else "solver_failed",
-                   "mu2": float(sol.objective) if sol.optimal else (np.inf if sol.status == "infeasible" else np.nan),
-                   "message": "" if sol.optimal else sol.status}
+            rec.update(solver=solver, status_first=sol.status)
+            if sol.status not in DEFINITIVE and second_solver:
+                sol2 = model.solve(second_solver)
+                rec["status_second"] = sol2.status
+                if sol2.status in DEFINITIVE:
+                    sol = sol2
+                    rec["solver"] = second_solver
+            rec.update(status=sol.status if sol.status in DEFINITIVE else "solver_failed",
+                       mu2=float(sol.objective) if sol.optimal else (np.inf if sol.status == "infeasible" else np.nan),
+                       message=pp.message if sol.optimal else sol.status)
+            if certify_runtime and sol.optimal:
+                cert = certify_schedule(system, schedule_from_augmented(system, model.gains(sol), certify_runtime),
+                                        [word], M1)
+                rec.update(certified_mu2=cert.mu2, certified_terminal=cert.terminal)
         rec["time"] = time.perf_counter() - t0
         rows.append(rec)
         if on_point is not None:

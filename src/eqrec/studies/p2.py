@@ -8,6 +8,9 @@ with ``cfg`` the validated ``p2`` section:
                 (``L``, ``s0`` free), and the readings of the text (:mod:`eqrec.studies.p2_readings`).
 ``simulate``    Monte Carlo, every estimator on the same draws (core simulator).
 ``checks``      P2-S0 and P2-SOLVER.
+``printed``     the paper's printed Fig. 2 ``L`` (read from ``config/claims.yaml``, where published numbers
+                live) under ``theorem2`` and ``masked_gain``; the ``masked_gain`` gains certified as the
+                estimator that runs; how ``masked_gain`` at ``r = 0`` depends on which nilpotent ``L``.
 ``heatmap_chunk`` / ``heatmap_merge`` / ``realaxis``   P2-F3a/F3b sweeps (:mod:`eqrec.studies.p2_sweeps`).
 ``values``      our value of every P2 claim with its evidence (:mod:`eqrec.studies.p2_values`).
 ``figure_trajectories`` / ``figure_heatmap`` / ``figure_realaxis``   figures (:mod:`eqrec.studies.p2_figures`).
@@ -16,9 +19,11 @@ with ``cfg`` the validated ``p2`` section:
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from eqrec.core.certify import certify_schedule
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
@@ -31,7 +36,7 @@ from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, AugmentedStacking,
                                           augmented_to_time_based, schedule_from_augmented)
 from eqrec.design.augmented_nlp import solve_free_ipopt
-from eqrec.design.observers import place_observer
+from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import EqrecError, InputError
 from eqrec.studies import p2_figures, p2_sweeps, p2_values
@@ -292,6 +297,63 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
     return out
 
 
+# --------------------------------------------------------------------------- the printed L and the masked_gain reading
+
+def published_value(claims_path: str | Path, claim_id: str) -> Any:
+    """The paper's value of one claim of ``config/claims.yaml`` (the only place published numbers live)."""
+    data = yaml.safe_load(Path(claims_path).read_text())
+    for entry in data:
+        if entry.get("id") == claim_id:
+            return entry["paper_value"]
+    raise InputError(f"{claims_path} has no claim {claim_id!r}", field="printed")
+
+
+def _certified(system, gains, words, M1, runtime) -> dict:
+    cert = certify_schedule(system, schedule_from_augmented(system, gains, runtime), words, M1)
+    return {"mu2": cert.mu2, "terminal": cert.terminal,
+            "per_word": {w: float(c.bounds.max()) for w, c in cert.words.items()}}
+
+
+def step_printed(cfg, inputs, outputs, wildcards) -> dict:
+    """The Fig. 2 design at the paper's printed ``L``: the LP of each reading and the masked_gain gains
+    certified as the estimator that runs (``hold``: the constant ``L`` kept at missing steps; ``theorem2``:
+    ``L`` zeroed there)."""
+    system = acc_system()
+    M1 = float(cfg["mu1"])
+    pc = cfg["printed"]
+    language = validate_language(cfg["f2_words"], length=int(cfg["T"]))
+    wc = worst_case_word(language)
+    words = sorted(set(language) | {wc})
+    L = np.asarray(published_value(inputs.claims, pc["L_claim"]), float)
+    out: dict[str, Any] = {"word": wc, "words": words, "L_claim": pc["L_claim"], "eig_A_minus_LC": _eig(system, L),
+                           "time_mu2": design_time_based(system, language, M1).mu2}
+    for mode in ("theorem2", "masked_gain"):
+        m = AugmentedLP(system, wc, M1, L, mode=mode)
+        sol = m.solve(cfg["heatmap"]["solver"]).require_optimal(f"{mode} LP at the printed L")
+        e: dict[str, Any] = {"mu2": float(sol.objective)}
+        g = m.gains(sol)
+        for runtime in ("hold", "theorem2"):
+            e[f"certified_{runtime}"] = _certified(system, g, words, M1, runtime)
+        out[mode] = e
+        log.info("printed L, %s: LP mu2 = %.9g, certified as run (hold) %.9g", mode, e["mu2"],
+                 e["certified_hold"]["mu2"])
+    # r = 0: the nilpotent L is not unique and the masked_gain value depends on which one
+    r0 = []
+    for seed in pc["deadbeat_seeds"]:
+        d = deadbeat_observer(system.A, system.C, seed=seed)
+        row: dict[str, Any] = {"seed": int(seed), "ok": bool(d.ok)}
+        if d.ok:
+            for mode in ("theorem2", "masked_gain"):
+                sol = AugmentedLP(system, wc, M1, d.L, mode=mode).solve(cfg["heatmap"]["solver"])
+                row[mode] = float(sol.objective) if sol.optimal else sol.status
+        r0.append(row)
+    out["r0_deadbeat"] = r0
+    # for the figures only (not evidence): the published Fig. 3b interval, drawn on the heat map
+    out["published_interval"] = [float(x) for x in published_value(inputs.claims, pc["interval_claim"])]
+    write_json(outputs.json, out)
+    return out
+
+
 STEPS = {
     "designs": step_designs,
     "simulate": step_simulate,
@@ -299,6 +361,7 @@ STEPS = {
     "heatmap_merge": p2_sweeps.step_heatmap_merge,
     "realaxis": p2_sweeps.step_realaxis,
     "checks": step_checks,
+    "printed": step_printed,
     "values": p2_values.step_values,
     "figure_trajectories": p2_figures.step_figure_trajectories,
     "figure_heatmap": p2_figures.step_figure_heatmap,

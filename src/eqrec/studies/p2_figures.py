@@ -51,62 +51,152 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     save_figure(f, outputs.pdf, outputs.png)
 
 
+#: Colours of the non-optimal classes of a sweep point (the optimal ones carry the colour scale).
+CLASS_STYLE = {"infeasible": ("0.82", "LP infeasible"), "solver_failed": ("tab:orange", "solver failure (both solvers)"),
+               "placement_failed": ("black", "placement failure")}
+
+
+def _edges(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    mid = 0.5 * (x[1:] + x[:-1])
+    return np.concatenate([[lo], mid, [hi]])
+
+
+def _polar_grid(g: pd.DataFrame, r_grid: np.ndarray, th_grid: np.ndarray, column: str) -> np.ndarray:
+    """``(n_theta, n_r)`` array of one column of a variant's rows, placed by nearest grid point."""
+    i = np.abs(g["r"].to_numpy(float)[:, None] - r_grid[None, :]).argmin(axis=1)
+    j = np.abs(g["theta"].to_numpy(float)[:, None] - th_grid[None, :]).argmin(axis=1)
+    out = np.full((len(th_grid), len(r_grid)), np.nan if column != "status" else "", dtype=object)
+    out[j, i] = g[column].to_numpy()
+    return out
+
+
+def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=None, interval=None):
+    """One filled polar map in the complex plane: optimal points coloured by ``column``, every other class
+    filled with its own colour; returns the mappable and the legend handles (with counts)."""
+    from matplotlib import patheffects
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    R, TH = np.meshgrid(_edges(r_grid, 0.0, r_grid[-1]), _edges(th_grid, 0.0, np.pi))
+    X, Y = R * np.cos(TH), R * np.sin(TH)
+    status = _polar_grid(g, r_grid, th_grid, "status")
+    val = _polar_grid(g, r_grid, th_grid, column).astype(float)
+    ok = status == "optimal"
+    pm = ax.pcolormesh(X, Y, np.ma.masked_where(~ok, val), cmap=cmap, norm=norm, shading="flat")
+    handles = [Patch(facecolor=cmap(0.6), label=f"optimal: {int(ok.sum())}")]
+    for cls, (color, label) in CLASS_STYLE.items():
+        m = status == cls
+        if m.any():
+            ax.pcolormesh(X, Y, np.ma.masked_where(~m, np.ones(m.shape)), cmap=ListedColormap([color]),
+                          shading="flat")
+        handles.append(Patch(facecolor=color, edgecolor="0.5", label=f"{label}: {int(m.sum())}"))
+    if "observer" in g and (g["observer"] == "deadbeat").any():
+        handles.append(plt.Line2D([], [], marker="*", ls="", color="magenta",
+                                  label=f"r = 0: nilpotent L ({int((g['observer'] == 'deadbeat').sum())} points)"))
+        ax.plot([0], [0], "*", color="magenta", ms=8, zorder=5)
+    if outline_tol is not None and ok.any():
+        at_min = np.ma.masked_where(~ok, np.where(ok, val <= np.nanmin(np.where(ok, val, np.nan)) + outline_tol,
+                                                  False).astype(float))
+        if 0 < at_min.sum() < ok.sum():
+            Rc, THc = np.meshgrid(r_grid, th_grid)
+            halo = [patheffects.withStroke(linewidth=2.4, foreground="black")]
+            cs = ax.contour(Rc * np.cos(THc), Rc * np.sin(THc), at_min, levels=[0.5], colors="white", linewidths=1.2)
+            cs.set(path_effects=halo)
+            handles.append(plt.Line2D([], [], color="white", lw=1.2, label="edge of the region at the minimum",
+                                      path_effects=halo))
+    if interval is not None:
+        ax.plot(interval, [0, 0], color="red", lw=3, solid_capstyle="butt", zorder=6)
+        handles.append(plt.Line2D([], [], color="red", lw=3, label="published Fig. 3b interval"))
+    ax.set_aspect("equal")
+    ax.set_xlim(-r_grid[-1] * 1.02, r_grid[-1] * 1.02)
+    ax.set_ylim(0, r_grid[-1] * 1.02)
+    ax.set_xlabel(r"Re $\lambda$")
+    ax.set_facecolor("white")
+    return pm, handles
+
+
 def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
-    """P2-F3a: optimal μ2 over the eigenvalue pair ``r e^{±jθ}`` per variant; failures marked."""
+    """P2-F3a: filled polar maps of the optimal μ2 over the eigenvalue pair ``r e^{±jθ}`` (third at 0), one per
+    variant on one shared colour scale, every grid point's class in the legend with its count; last panel: the
+    masked_gain gains certified as the estimator that runs (own scale)."""
+    from matplotlib.colors import Normalize
+
+    from eqrec.studies.p2_sweeps import heatmap_grid
+
     paper_style()
     plt = pyplot()
-    df = pd.read_csv(inputs.csv)
-    variants = list(dict.fromkeys(df["variant"]))
-    f, axes = plt.subplots(1, len(variants), figsize=(3.9 * len(variants), 3.2), squeeze=False,
-                           layout="constrained")
-    for ax, var in zip(axes[0], variants):
+    df = pd.read_csv(inputs.csv, keep_default_na=False, na_values=["nan", "NaN", ""])
+    for col in ("status", "observer", "status_second"):
+        if col in df:
+            df[col] = df[col].fillna("").astype(str)
+    printed = json.loads(Path(inputs.printed).read_text())
+    r_grid, th_grid = heatmap_grid(cfg)
+    tol = float(cfg["mu2_tol"])
+    variants = [v for v in cfg["heatmap"]["variants"] if v in set(df["variant"])]
+    ok = df["status"] == "optimal"
+    vmin, vmax = float(df.loc[ok, "mu2"].min()), float(df.loc[ok, "mu2"].max())
+    if vmax - vmin < 1e-6:
+        vmin, vmax = vmin - 0.05, vmax + 0.05
+    norm = Normalize(vmin, vmax)
+    cmap = plt.get_cmap("viridis")
+    extra = "masked_gain" in variants and "certified_mu2" in df
+    ncol = len(variants) + int(extra)
+    f, axes = plt.subplots(1, ncol, figsize=(3.5 * ncol, 4.4), squeeze=False, layout="constrained")
+    axes = axes[0]
+    pm = None
+    for ax, var in zip(axes, variants):
         g = df[df["variant"] == var]
-        x = g["r"] * np.cos(g["theta"])
-        y = g["r"] * np.sin(g["theta"])
-        ok = g["status"] == "optimal"
-        mu = g["mu2"].where(ok)
-        vmin, vmax = np.nanmin(mu), np.nanmax(mu)
-        if vmax - vmin < 1e-6:
-            vmin, vmax = vmin - 0.05, vmax + 0.05
-        sc = ax.scatter(x[ok], y[ok], c=mu[ok], s=9, marker="s", cmap="viridis", vmin=vmin, vmax=vmax)
-        inf = g["status"] == "infeasible"
-        ax.scatter(x[inf], y[inf], s=9, marker="s", color="0.8", label="LP infeasible")
-        fl = g["status"] == "placement_failed"
-        ax.scatter(x[fl], y[fl], s=25, marker="x", color="red", label="placement failed")
-        ax.set_aspect("equal")
-        ax.set_xlabel(r"Re $\lambda$")
-        if ax is axes[0][0]:
-            ax.set_ylabel(r"Im $\lambda$")
-        ax.set_title(f"{var} (word {g['word'].iloc[0]})")
-        f.colorbar(sc, ax=ax, label=r"optimal $\mu_2$", shrink=0.7, location="bottom")
-    handles, labels = [], []
-    for ax in axes[0]:
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-    f.legend(handles, labels, loc="outside upper center", ncol=len(labels))
+        mg = var == "masked_gain"  # the reading with a region: its edge and the published interval drawn
+        pm, handles = _heat_panel(ax, plt, g, r_grid, th_grid, "mu2", norm, cmap, outline_tol=tol if mg else None,
+                                  interval=printed.get("published_interval") if mg else None)
+        ax.set_title(f"{var} (word {g['word'].iloc[0]})\ndesign LP optimum $\\mu_2$", fontsize=8)
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.22), fontsize=6, frameon=False)
+    axes[0].set_ylabel(r"Im $\lambda$")
+    f.colorbar(pm, ax=list(axes[:len(variants)]), label=r"optimal $\mu_2$ (shared scale)", shrink=0.6,
+               location="top")
+    if extra:
+        ax = axes[-1]
+        g = df[df["variant"] == "masked_gain"]
+        c = g.loc[g["status"] == "optimal", "certified_mu2"].astype(float)
+        norm2 = Normalize(float(c.min()), float(np.percentile(c, 95)))
+        pm2, handles = _heat_panel(ax, plt, g, r_grid, th_grid, "certified_mu2", norm2, plt.get_cmap("magma"))
+        ax.set_title("masked_gain gains run as the estimator\n(constant L kept): certified worst case", fontsize=8)
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.22), fontsize=6, frameon=False)
+        f.colorbar(pm2, ax=ax, label="certified worst case (clipped at 95th pct.)", shrink=0.6, location="top",
+                   extend="max")
     save_figure(f, outputs.pdf, outputs.png)
 
 
 def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
-    """P2-F3b: optimal μ2 against a real double eigenvalue λ (third eigenvalue at 0)."""
+    """P2-F3b: optimal μ2 against a real double eigenvalue λ (third at 0), every variant; λ = 0 uses a
+    nilpotent L (starred); infeasible and unsolved points marked; the published interval shaded."""
     paper_style()
     plt = pyplot()
-    df = pd.read_csv(inputs.csv)
-    f, ax = plt.subplots(figsize=(5, 2.8))
+    df = pd.read_csv(inputs.csv, keep_default_na=False, na_values=["nan", "NaN", ""])
+    df["status"] = df["status"].astype(str)
+    printed = json.loads(Path(inputs.printed).read_text())
+    f, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
+    lo, hi = printed["published_interval"]
+    ax.axvspan(lo, hi, color="red", alpha=0.08, label="published interval (Fig. 3b)")
+    finite = df.loc[df["status"] == "optimal", "mu2"].astype(float)
+    top = float(finite.max()) * 1.05
     for i, (var, g) in enumerate(df.groupby("variant", sort=False)):
         g = g.sort_values("lam")
-        mu = np.where(g["status"] == "optimal", g["mu2"], np.nan)
+        mu = np.where(g["status"] == "optimal", g["mu2"].astype(float), np.nan)
         ax.plot(g["lam"], mu, marker=".", ms=2, color=f"C{i}", label=f"{var} ({g['word'].iloc[0]})")
-        inf = g["status"] == "infeasible"
+        inf = (g["status"] == "infeasible").to_numpy()
         if inf.any():
-            ax.plot(g["lam"][inf], np.full(inf.sum(), np.nanmax(df["mu2"].replace(np.inf, np.nan)) * 1.05), "|",
-                    color=f"C{i}", label=f"{var}: LP infeasible")
-        fl = g["status"] == "placement_failed"
-        ax.plot(g["lam"][fl], np.full(fl.sum(), 1.0), "x", color="red",
-                label="placement failed" if i == 0 else None)
+            ax.plot(g["lam"][inf], np.full(inf.sum(), top), "|", color=f"C{i}",
+                    label=f"{var}: LP infeasible ({int(inf.sum())})")
+        bad = g["status"].isin(["solver_failed", "placement_failed"]).to_numpy()
+        if bad.any():
+            ax.plot(g["lam"][bad], np.full(bad.sum(), top * 1.02), "x", color=f"C{i}",
+                    label=f"{var}: not solved ({int(bad.sum())})")
+        if "observer" in g:
+            z = (g["observer"] == "deadbeat").to_numpy() & (g["status"] == "optimal").to_numpy()
+            ax.plot(g["lam"][z], mu[z], "*", color=f"C{i}", ms=7)
+    ax.plot([], [], "*", color="0.3", label=r"$\lambda = 0$: nilpotent $L$ (one of many)")
     ax.set_xlabel(r"real eigenvalue $\lambda$ (double), third at 0")
     ax.set_ylabel(r"optimal $\mu_2$")
-    ax.legend(fontsize=6)
+    ax.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, frameon=False)
     save_figure(f, outputs.pdf, outputs.png)

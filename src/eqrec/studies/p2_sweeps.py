@@ -1,5 +1,11 @@
 """P2 eigenvalue sweeps: the Fig. 3a heat map (in θ-chunks) and the Fig. 3b real axis.
 
+Every point has a class (``optimal``, ``infeasible``, ``solver_failed``,
+``placement_failed``; :func:`eqrec.design.sweeps.fixed_L_sweep` re-solves an
+undecided point with the second solver and gives the all-zero pole set an
+exact nilpotent ``L``) and, when optimal, the certified worst case of its gains
+as the estimator that runs.
+
 Steps ``heatmap_chunk`` (``wildcards.variant``, ``wildcards.chunk``),
 ``heatmap_merge`` (checks that the chunks cover the configured grid of every
 configured variant exactly once) and ``realaxis``.  The LP of each job is
@@ -46,6 +52,14 @@ def realaxis_grid(cfg: dict) -> np.ndarray:
     return lam
 
 
+def _sweep_options(cfg: dict, mode: str) -> dict:
+    """Solvers of the sweeps and the runtime in which each point's gains are certified (the estimator that
+    runs: ``theorem2`` for the text of Theorem 2, ``hold`` - constant ``L`` kept - for the design-only readings)."""
+    h = cfg["heatmap"]
+    return {"solver": h["solver"], "second_solver": h["second_solver"],
+            "certify_runtime": "theorem2" if mode == "theorem2" else "hold"}
+
+
 def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """P2-F3a, one θ-chunk of one variant."""
     variant, chunk = wildcards["variant"], int(wildcards["chunk"])
@@ -55,7 +69,7 @@ def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     pts = [(r, th_grid[j]) for j in theta_chunk(cfg, chunk) for r in r_grid]
     prog = Progress(log, len(pts), f"heat map {variant} chunk {chunk}")
     recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, [heatmap_poles(r, th) for r, th in pts],
-                         cfg["heatmap"]["solver"], on_point=prog.advance)
+                         on_point=prog.advance, **_sweep_options(cfg, mode))
     df = pd.DataFrame([{"variant": variant, "word": word, "mode": mode, "r": r, "theta": th, **rec}
                        for (r, th), rec in zip(pts, recs)])
     write_csv(outputs.csv, df)
@@ -112,7 +126,7 @@ def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
         mode, word = variant_word(cfg["heatmap"]["word"], variant)
         prog = Progress(log, len(lam), f"real axis {variant}")
         recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, [np.array([0.0, x, x]) for x in lam],
-                             cfg["heatmap"]["solver"], on_point=prog.advance)
+                             on_point=prog.advance, **_sweep_options(cfg, mode))
         frames.append(pd.DataFrame([{"variant": variant, "word": word, "lam": x, **rec} for x, rec in zip(lam, recs)]))
     df = pd.concat(frames, ignore_index=True)
     write_csv(outputs.csv, df)

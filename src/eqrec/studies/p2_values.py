@@ -17,12 +17,44 @@ from eqrec.studies.harness import write_json
 from eqrec.studies.p2_sweeps import constant_interval
 
 
-def _mu2_range(g: pd.DataFrame) -> dict:
-    ok = g[g["status"] == "optimal"]["mu2"]
-    return {"word": str(g["word"].iloc[0]), "min": float(ok.min()) if len(ok) else None,
-            "max": float(ok.max()) if len(ok) else None, "optimal": int(len(ok)),
-            "infeasible": int((g["status"] == "infeasible").sum()),
-            "placement_failed": int((g["status"] == "placement_failed").sum())}
+#: Classes of a sweep point; every point has exactly one (the counts add up to the grid size).
+CLASSES = ("optimal", "infeasible", "solver_failed", "placement_failed")
+
+
+def class_counts(g: pd.DataFrame) -> dict:
+    """Points per class, how many the second solver decided and how many got a nilpotent ``L``.
+
+    Raises if a status is outside :data:`CLASSES` (the counts must add up to the grid size).
+    """
+    unknown = sorted(set(g["status"]) - set(CLASSES))
+    if unknown:
+        raise ValueError(f"sweep points with statuses {unknown} outside {CLASSES}")
+    out = {c: int((g["status"] == c).sum()) for c in CLASSES}
+    out["points"] = int(len(g))
+    second = g["status_second"].fillna("").astype(str) if "status_second" in g else pd.Series([], dtype=str)
+    out["second_solver_decided"] = int(((second != "") & g["status"].isin(["optimal", "infeasible"])).sum())
+    out["second_solver_tried"] = int((second != "").sum())
+    out["deadbeat"] = int((g["observer"] == "deadbeat").sum()) if "observer" in g else 0
+    return out
+
+
+def _mu2_range(g: pd.DataFrame, tol: float) -> dict:
+    ok = g[g["status"] == "optimal"]
+    mu = ok["mu2"].to_numpy(float)
+    out = {"word": str(g["word"].iloc[0]), "min": float(mu.min()) if len(mu) else None,
+           "max": float(mu.max()) if len(mu) else None, **class_counts(g)}
+    if len(mu):
+        at_min = ok[mu <= mu.min() + tol]  # ties at the minimum counted with the tolerance, not by last digits
+        out["at_min"] = int(len(at_min))
+        out["at_min_r_max"] = float(at_min["r"].max()) if "r" in at_min else None
+        if "certified_mu2" in ok:
+            cm = ok["certified_mu2"].to_numpy(float)
+            out["certified_min"] = float(np.nanmin(cm))
+            out["certified_max"] = float(np.nanmax(cm))
+            out["certified_at_min"] = [float(np.nanmin(at_min["certified_mu2"])),
+                                       float(np.nanmax(at_min["certified_mu2"]))]
+            out["certified_terminal_min"] = float(np.nanmin(ok["certified_terminal"].to_numpy(float)))
+    return out
 
 
 def step_values(cfg, inputs, outputs, wildcards) -> dict:
@@ -33,6 +65,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     hm = pd.read_csv(inputs.heatmap)
     ra = pd.read_csv(inputs.realaxis)
     ck = json.loads(Path(inputs.checks).read_text())
+    pr = json.loads(Path(inputs.printed).read_text())
+    masked = {"mu2": pr["masked_gain"]["mu2"], "hold": pr["masked_gain"]["certified_hold"]["mu2"]}
     f1, f2 = d["f1"], d["f2"]
     a1, a2 = f1["augmented_free"], f2["augmented_free"]
     ob, leak = f2["one_based"], f2["leak"]
@@ -62,63 +96,85 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                    else {"status": e["status"]}) for k, e in leak.items()}
     v["f2_mu2_augmented"] = {"value": a2["certified_mu2"], "evidence": {
         "time_mu2": f2["time"]["certified_mu2"], "worst_case_word": wc, "one_based": one_based, "leak": leak_ev,
-        "mu2_tol": tol}}
+        "masked_gain": masked, "mu2_tol": tol}}
     v["f2_mu2_time"] = {"value": f2["time"]["certified_mu2"], "evidence": {"solver": "highs"}}
     v["f2_mu2_one_based_augmented"] = {"value": one_based["augmented_mu2"], "evidence": {}}
     v["f2_mu2_one_based_time"] = {"value": one_based["time_mu2"], "evidence": {}}
     t2, aug2 = f2["time"]["certified_mu2"], a2["certified_mu2"]
     rel = "larger" if t2 > aug2 + tol else "equal" if abs(t2 - aug2) <= 1e-5 else "smaller"
     v["f2_time_vs_augmented"] = {"value": rel, "evidence": {
-        "time_mu2": t2, "augmented_mu2": aug2, "worst_case_word": wc, "one_based": one_based}}
+        "time_mu2": t2, "augmented_mu2": aug2, "worst_case_word": wc, "one_based": one_based,
+        "masked_gain": masked}}
     v["f2_L"] = {"value": a2["L"], "evidence": {"eig": a2["eig_A_minus_LC"], "heatmap_spread": spread,
                                                  "mu2_tol": tol}}
 
-    variants = {var: _mu2_range(g) for var, g in hm.groupby("variant")}
+    variants = {var: _mu2_range(g, tol) for var, g in hm.groupby("variant")}
+    for var, c in variants.items():
+        if sum(c[k] for k in CLASSES) != c["points"]:
+            raise ValueError(f"heat map {var}: class counts do not add up to the {c['points']} grid points")
+    grid = int(cfg["heatmap"]["n_r"]) * int(cfg["heatmap"]["n_theta"])
     v["f3a_mu2_region"] = {"value": float(np.min(mu)), "evidence": {
-        "points": int(len(main)), "r_max": cfg["heatmap"]["r_max"], "spread": spread, "variants": variants,
-        "placement_failures": int((main["status"] == "placement_failed").sum()),
+        "points": grid, "r_max": cfg["heatmap"]["r_max"], "spread": spread, "variants": variants,
         "time_mu2": t2, "worst_case_word": wc, "mu2_tol": tol}}
     v["f3a_mu2_spread"] = {"value": spread, "evidence": {}}
     v["f3a_placement_failures"] = {"value": variants["theorem2"]["placement_failed"], "evidence": {}}
-    mg_all = hm[hm["variant"] == "masked_gain"]
-    mg = mg_all[mg_all["status"] == "optimal"]
-    if len(mg):
-        vmin = float(mg["mu2"].min())
-        at_min = mg[mg["mu2"] <= vmin + tol]
-        v["f3a_mu2_region_masked_gain"] = {"value": vmin, "evidence": {
-            "at_min": int(len(at_min)), "solved": int(len(mg)), "max": float(mg["mu2"].max()),
-            "at_min_r_max": float(at_min["r"].max()), "r_max": cfg["heatmap"]["r_max"],
-            "infeasible": int((mg_all["status"] == "infeasible").sum())}}
+    r0 = [r["masked_gain"] for r in pr["r0_deadbeat"] if isinstance(r.get("masked_gain"), float)]
+    r0_ev = {"seeds": [r["seed"] for r in pr["r0_deadbeat"]], "min": float(min(r0)) if r0 else None,
+             "max": float(max(r0)) if r0 else None}
+    if "masked_gain" in variants:
+        mgv = variants["masked_gain"]
+        v["f3a_mu2_region_masked_gain"] = {"value": mgv["min"], "evidence": {
+            **mgv, "r_max": cfg["heatmap"]["r_max"], "grid": grid, "time_mu2": t2, "r0_deadbeat": r0_ev,
+            "mu2_tol": tol}}
 
-    # real axis (P2-F3b)
+    # Fig. 2 at the paper's printed L: the masked_gain reading, and its gains as the estimator that runs
+    mgp, thp = pr["masked_gain"], pr["theorem2"]
+    printed_ev = {"word": pr["word"], "eig": pr["eig_A_minus_LC"], "theorem2_mu2": thp["mu2"], "time_mu2": t2,
+                  "masked_gain_mu2": mgp["mu2"], "hold": mgp["certified_hold"]["mu2"],
+                  "hold_terminal": mgp["certified_hold"]["terminal"],
+                  "theorem2_runtime": mgp["certified_theorem2"]["mu2"],
+                  "theorem2_runtime_terminal": mgp["certified_theorem2"]["terminal"], "words": pr["words"],
+                  "M1": float(cfg["mu1"]), "mu2_tol": tol}
+    v["f2_mu2_masked_gain"] = {"value": mgp["mu2"], "evidence": printed_ev}
+    v["f2_masked_gain_certified"] = {"value": mgp["certified_hold"]["mu2"], "evidence": {
+        **printed_ev, "heatmap": {k: variants["masked_gain"].get(k) for k in
+                                  ("certified_min", "certified_max", "certified_at_min", "certified_terminal_min",
+                                   "at_min", "optimal")} if "masked_gain" in variants else {}}}
+    rel_mg = "larger" if t2 > mgp["mu2"] + tol else "equal" if abs(t2 - mgp["mu2"]) <= tol else "smaller"
+    v["f2_time_vs_masked_gain"] = {"value": rel_mg, "evidence": printed_ev}
+
+    # real axis (P2-F3b): the interval over place_poles points; lambda = 0 (nilpotent L) reported apart
     axis: dict[str, dict] = {}
     den = cfg["realaxis"]["grid_denominator"]
     for var, g in ra.groupby("variant"):
         g = g.sort_values("lam")
+        lam_all = g["lam"].to_numpy(float)
         mu2 = np.where(g["status"] == "optimal", g["mu2"].to_numpy(float), np.nan)
-        axis[var] = {"interval": constant_interval(g["lam"].to_numpy(float), mu2, tol),
-                     "failed": g[g["status"] == "placement_failed"]["lam"].tolist()}
-        if var == "masked_gain":
-            # λ = 0 (a triple pole) cannot be placed; it does not break the interval
-            lam_all = g["lam"].to_numpy(float)
-            placed = (g["status"] != "placement_failed").to_numpy()
-            fine = constant_interval(lam_all[placed], mu2[placed], tol)
-            on_grid = placed & (np.abs(lam_all * den - np.round(lam_all * den)) < 1e-9) if den else placed
-            coarse = constant_interval(lam_all[on_grid], mu2[on_grid], tol)
-            v["f3b_interval_masked_gain"] = {"value": coarse, "evidence": {
-                "grid_denominator": den, "min_mu2": float(np.nanmin(mu2))}}
-            v["f3b_interval_masked_gain_fine"] = {"value": fine, "evidence": {
-                "placed": int(placed.sum()), "grid_denominator": den, "min_mu2": float(np.nanmin(mu2)),
-                "step": 2 * float(cfg["realaxis"]["lam_max"]) / (int(cfg["realaxis"]["n"]) - 1),
-                "grid_interval": coarse}}
+        placed = (g["observer"] == "place_poles").to_numpy() & (g["status"] != "placement_failed").to_numpy()
+        on_grid = placed & (np.abs(lam_all * den - np.round(lam_all * den)) < 1e-9) if den else placed
+        zero = g[g["observer"] == "deadbeat"]
+        axis[var] = {"interval": constant_interval(lam_all[placed], mu2[placed], tol),
+                     "grid_interval": constant_interval(lam_all[on_grid], mu2[on_grid], tol),
+                     "min_mu2": float(np.nanmin(mu2)), "counts": class_counts(g),
+                     "at_zero": float(zero["mu2"].iloc[0]) if len(zero) and zero["status"].iloc[0] == "optimal"
+                     else (str(zero["status"].iloc[0]) if len(zero) else None)}
+    if "masked_gain" in axis:
+        a = axis["masked_gain"]
+        v["f3b_interval_masked_gain"] = {"value": a["grid_interval"], "evidence": {
+            "grid_denominator": den, "min_mu2": a["min_mu2"], "at_zero": a["at_zero"], "r0_deadbeat": r0_ev}}
+        v["f3b_interval_masked_gain_fine"] = {"value": a["interval"], "evidence": {
+            "placed": int(a["counts"]["points"] - a["counts"]["deadbeat"]), "grid_denominator": den,
+            "min_mu2": a["min_mu2"], "step": 2 * float(cfg["realaxis"]["lam_max"]) / (int(cfg["realaxis"]["n"]) - 1),
+            "grid_interval": a["grid_interval"]}}
     g = ra[ra["variant"] == "theorem2"]
     okg = g[g["status"] == "optimal"]
     ra_spread = float(np.ptp(okg["mu2"]))
-    # the interval across the single failure point λ = 0 (triple pole) is the whole axis
-    whole = [float(okg["lam"].min()), float(okg["lam"].max())] if ra_spread <= tol else axis["theorem2"]["interval"]
+    whole = [float(g["lam"].min()), float(g["lam"].max())] if (ra_spread <= tol and len(okg) == len(g)) \
+        else axis["theorem2"]["interval"]
     v["f3b_interval"] = {"value": whole, "evidence": {
-        "n": cfg["realaxis"]["n"], "min_mu2": float(okg["mu2"].min()), "spread": ra_spread, "variants": axis,
-        "mu2_tol": tol, "masked_gain_interval": v.get("f3b_interval_masked_gain", {}).get("value")}}
+        "n": int(len(g)), "min_mu2": float(okg["mu2"].min()), "spread": ra_spread, "variants": axis,
+        "all_solved": bool(len(okg) == len(g)), "mu2_tol": tol,
+        "masked_gain_interval": axis.get("masked_gain", {}).get("grid_interval")}}
 
     # P2-S0
     v["s0_mu2_unchanged"] = {"value": "unchanged" if s0["mu2_spread"] <= tol else "changed", "evidence": {
