@@ -104,7 +104,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     rel = "larger" if t2 > aug2 + tol else "equal" if abs(t2 - aug2) <= 1e-5 else "smaller"
     v["f2_time_vs_augmented"] = {"value": rel, "evidence": {
         "time_mu2": t2, "augmented_mu2": aug2, "worst_case_word": wc, "one_based": one_based,
-        "masked_gain": masked}}
+        "masked_gain": masked, "mu2_tol": tol}}
     v["f2_L"] = {"value": a2["L"], "evidence": {"eig": a2["eig_A_minus_LC"], "heatmap_spread": spread,
                                                  "mu2_tol": tol}}
 
