@@ -70,7 +70,7 @@ def test_printed_F2_L_eigenvalues_only_within_rounding(acc):
     assert any(ok(rng.uniform(-0.005, 0.005, 6)) for _ in range(20000))
 
 
-SMALL = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants": ["theorem2", "leak"]},
+SMALL = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants": ["theorem2", "leak", "masked_gain"]},
          "realaxis": {"n": 7}, "s0_samples": [[1.0, 0.0, -1.0]]}
 
 
@@ -90,8 +90,10 @@ def small_run(tmp_path_factory):
     run("heatmap_merge", {"chunks": chunks}, {"csv": d / "heatmap.csv"})
     run("realaxis", outs={"csv": d / "realaxis.csv"})
     run("checks", outs={"json": d / "checks.json"})
+    run("printed", {"claims": "config/claims.yaml"}, {"json": d / "printed.json"})
     vals = run("values", {"designs": d / "designs.json", "simulation": d / "simulation.npz",
-                          "heatmap": d / "heatmap.csv", "realaxis": d / "realaxis.csv", "checks": d / "checks.json"},
+                          "heatmap": d / "heatmap.csv", "realaxis": d / "realaxis.csv", "checks": d / "checks.json",
+                          "printed": d / "printed.json"},
                {"json": d / "values.json"})
     return d, cfg, vals
 
@@ -107,8 +109,23 @@ def test_pipeline_values(small_run, acc):
     assert vals["runtime_equivalence"]["value"] < 1e-9
     assert vals["f2_mu2_augmented"]["evidence"]["one_based"]["word"] == "110011"
     hm = pd.read_csv(d / "heatmap.csv")
-    assert len(hm) == 2 * 16
-    assert set(hm[hm["r"] == 0]["status"]) == {"placement_failed"}  # marked, not dropped
+    assert len(hm) == 3 * 16
+    r0 = hm[hm["r"] == 0]
+    assert set(r0["observer"]) == {"deadbeat"}  # an exact nilpotent L, not a placement failure
+    assert set(r0[r0["variant"] == "theorem2"]["status"]) == {"optimal"}
+    variants = vals["f3a_mu2_region"]["evidence"]["variants"]
+    for c in variants.values():  # every grid point has exactly one class
+        assert c["optimal"] + c["infeasible"] + c["solver_failed"] + c["placement_failed"] == c["points"] == 16
+        assert c["deadbeat"] == 4
+    for c in vals["f3b_interval"]["evidence"]["variants"].values():
+        assert sum(c["counts"][k] for k in ("optimal", "infeasible", "solver_failed", "placement_failed")) \
+            == c["counts"]["points"] == 43  # 7 points, all on the k/14 grid
+    # the printed Fig. 2 L: the masked_gain design LP and its gains as the estimator that runs
+    mg = vals["f2_mu2_masked_gain"]
+    assert mg["evidence"]["theorem2_mu2"] == pytest.approx(tb, rel=1e-6)
+    assert mg["value"] < tb - 0.1 and vals["f2_time_vs_masked_gain"]["value"] == "larger"
+    cert = vals["f2_masked_gain_certified"]
+    assert cert["value"] > tb and cert["evidence"]["hold_terminal"] > 1.0  # worse than a runnable design
     sim = np.load(d / "simulation.npz")
     assert sim["f1/time"].shape == (20, 7, 3)
 
@@ -129,8 +146,8 @@ def test_figures(small_run, tmp_path):
         harness.run_step("p2", "figure_trajectories", cfg,
                          {"designs": d / "designs.json", "simulation": d / "simulation.npz"},
                          {"pdf": tmp_path / f"{fig}.pdf", "png": tmp_path / f"{fig}.png"}, {"fig": fig})
-    harness.run_step("p2", "figure_heatmap", cfg, {"csv": d / "heatmap.csv"},
+    harness.run_step("p2", "figure_heatmap", cfg, {"csv": d / "heatmap.csv", "printed": d / "printed.json"},
                      {"pdf": tmp_path / "h.pdf", "png": tmp_path / "h.png"})
-    harness.run_step("p2", "figure_realaxis", cfg, {"csv": d / "realaxis.csv"},
+    harness.run_step("p2", "figure_realaxis", cfg, {"csv": d / "realaxis.csv", "printed": d / "printed.json"},
                      {"pdf": tmp_path / "r.pdf", "png": tmp_path / "r.png"})
     assert all((tmp_path / f).stat().st_size > 1000 for f in ("f1.png", "f2.png", "h.png", "r.png"))

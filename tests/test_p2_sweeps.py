@@ -1,0 +1,69 @@
+"""P2 sweeps: every point classified (second solver for undecided solves, nilpotent L at r = 0), counts add up."""
+import numpy as np
+import pandas as pd
+import pytest
+
+from eqrec.core.lp import LPSolution
+from eqrec.design import sweeps
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.sweeps import fixed_L_sweep, observer_for
+from eqrec.studies.p2_readings import heatmap_poles
+from eqrec.studies.p2_values import CLASSES, class_counts
+
+
+def test_r0_gets_an_exact_nilpotent_L(acc):
+    pp, how = observer_for(acc, heatmap_poles(0.0, 0.7))
+    assert how == "deadbeat" and pp.ok
+    assert np.linalg.norm(np.linalg.matrix_power(acc.A - pp.L @ acc.C, 3)) < 1e-10
+    assert observer_for(acc, heatmap_poles(0.5, 0.7))[1] == "place_poles"
+    rec, = fixed_L_sweep(acc, "100111", 1.0, "theorem2", [heatmap_poles(0.0, 0.0)], certify_runtime="theorem2")
+    assert rec["status"] == "optimal" and rec["observer"] == "deadbeat"
+    assert rec["certified_mu2"] == pytest.approx(rec["mu2"], rel=1e-6)  # Theorem 2: the design is what runs
+
+
+@pytest.fixture
+def undecided_highs(monkeypatch):
+    """HiGHS stops with status 'Unknown' (as on some machines); other solvers run for real."""
+    real = AugmentedLP.solve
+
+    def solve(self, solver="highs", options=None):
+        if solver == "highs":
+            return LPSolution("Unknown", None, float("nan"), "highs", 0, 0.0)
+        return real(self, solver, options)
+    monkeypatch.setattr(AugmentedLP, "solve", solve)
+
+
+@pytest.mark.parametrize("mode,expected", [("theorem2", "optimal"), ("leak", "infeasible")])
+def test_undecided_point_is_classified_by_the_second_solver(acc, undecided_highs, mode, expected):
+    poles = [heatmap_poles(0.5, 2.5)]  # leak is infeasible on the left half of the map
+    rec, = fixed_L_sweep(acc, "100111", 1.0, mode, poles, "highs", second_solver="clarabel")
+    assert rec["status_first"] == "Unknown" and rec["status_second"] == expected
+    assert rec["status"] == expected and rec["solver"] == "clarabel"
+    if expected == "optimal":
+        assert rec["mu2"] == pytest.approx(1.7370933, rel=1e-6)  # the time-based optimum on 100111
+    rec, = fixed_L_sweep(acc, "100111", 1.0, mode, poles, "highs", second_solver=None)
+    assert rec["status"] == "solver_failed" and rec["status_second"] == "" and np.isnan(rec["mu2"])
+
+
+def test_second_solver_only_for_undecided_points(acc, monkeypatch):
+    calls = []
+    real = AugmentedLP.solve
+    monkeypatch.setattr(AugmentedLP, "solve", lambda self, solver="highs", options=None:
+                        calls.append(solver) or real(self, solver, options))
+    fixed_L_sweep(acc, "100111", 1.0, "theorem2", [heatmap_poles(0.5, 1.0)], second_solver="clarabel")
+    assert calls == ["highs"]
+
+
+def test_class_counts_add_up_and_reject_unknown_statuses():
+    g = pd.DataFrame({"status": ["optimal", "infeasible", "infeasible", "solver_failed", "placement_failed"],
+                      "status_second": ["", "infeasible", "", "Unknown", ""],
+                      "observer": ["deadbeat", "place_poles", "place_poles", "place_poles", "place_poles"]})
+    c = class_counts(g)
+    assert sum(c[k] for k in CLASSES) == c["points"] == 5
+    assert c["second_solver_tried"] == 2 and c["second_solver_decided"] == 1 and c["deadbeat"] == 1
+    with pytest.raises(ValueError, match="outside"):
+        class_counts(g.assign(status=["optimal", "Unknown", "optimal", "optimal", "optimal"]))
+
+
+def test_definitive_statuses():
+    assert sweeps.DEFINITIVE == ("optimal", "infeasible")
