@@ -179,16 +179,23 @@ fi
 say "cluster up: node $NODE idle ($CPUS CPUs), munged/slurmctld/slurmd pids ${PIDS[*]}"
 
 # --- 4. the two runs ---------------------------------------------------------------
-copy_repo() {  # copy_repo DEST: the repository without results, logs, .snakemake
+# Both runs start from one snapshot of the source, taken once (HEAD's commit, or the
+# working tree), so that a commit or an edit made while the local run goes on cannot
+# make the two runs differ.
+SNAPSHOT="$STATE/source.tar"
+if ! git -C "$ROOT" rev-parse --git-dir >/dev/null 2>&1; then  # not a git checkout: the tree
+  tar -C "$ROOT" --exclude=./.venv --exclude=./results --exclude=./.snakemake -cf "$SNAPSHOT" .
+elif [ "$SOURCE" = head ]; then
+  HEAD_SHA=$(git -C "$ROOT" rev-parse HEAD)
+  git -C "$ROOT" archive -o "$SNAPSHOT" "$HEAD_SHA"
+  say "source: commit $HEAD_SHA"
+else
+  (cd "$ROOT" && git ls-files -z --cached --others --exclude-standard \
+    | tar --null --ignore-failed-read -T - -cf "$SNAPSHOT" 2>/dev/null)
+fi
+copy_repo() {  # copy_repo DEST: the snapshot without results, logs, .snakemake
   mkdir -p "$1"
-  if ! git -C "$ROOT" rev-parse --git-dir >/dev/null 2>&1; then  # not a git checkout: copy the tree
-    tar -C "$ROOT" --exclude=./.venv --exclude=./results --exclude=./.snakemake -cf - . | tar -x -C "$1"
-  elif [ "$SOURCE" = head ]; then
-    git -C "$ROOT" archive HEAD | tar -x -C "$1"
-  else
-    (cd "$ROOT" && git ls-files -z --cached --others --exclude-standard \
-      | tar --null --ignore-failed-read -T - -cf - 2>/dev/null) | tar -x -C "$1"
-  fi
+  tar -x -C "$1" -f "$SNAPSHOT"
   rm -rf "$1/results" "$1/logs" "$1/resolved" "$1/.snakemake"
 }
 run() {  # run NAME SNAKEMAKE-ARGS...: run the workflow in $STATE/NAME, set SECONDS_<NAME>
