@@ -367,6 +367,8 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
                           "max_ratio_levels": cmp["max_ratio_levels"], "max_ratio_bounds": cmp["max_ratio"],
                           "sampled_exceed_levels": cmp["sampled_exceed_levels"],
                           "sampled_exceed_bounds": cmp["sampled_exceed"], "samples": cmp["samples"],
+                          "sampled_max_ratio_levels": float(np.max(np.abs(maps.errors(deltas, est)).max(axis=2)
+                                                                   / levels[None, :n_t])),
                           "verdict": "outside" if exceed_t else "inside"}
             # the worst-case vertex of the largest excess attains the exact bound
             wn = np.asarray(cmp["worst_norm"]) / levels[:n_t]

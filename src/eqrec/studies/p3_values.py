@@ -128,6 +128,13 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
             "filtered_max_ratio": f["max_ratio_levels"], "filtered_sampled_exceed": f["sampled_exceed_levels"],
             "pattern": kal["true_pattern"]}}
 
+    sampled = {n: e["prediction"]["sampled_exceed_levels"] for n, e in kal["filters"].items()}
+    v["f1_kalman_sampled"] = {"value": "outside" if any(sampled.values()) else "inside", "evidence": {
+        "sampled_exceed": sampled, "samples": kal["runs"], "sigmas": kal["sigmas"],
+        "exact_outside": all(e["prediction"]["verdict"] == "outside" for e in kal["filters"].values()),
+        "sampled_max_ratio": {n: e["prediction"]["sampled_max_ratio_levels"] for n, e in kal["filters"].items()},
+        "exact_max_ratio": {n: e["prediction"]["max_ratio_levels"] for n, e in kal["filters"].items()}}}
+
     # P3-ACC
     fs, fm = acc["fixed"]["sum"], acc["fixed"]["max"]
     p1_mu2 = acc["p1_prefix"]["mu2"]
