@@ -30,13 +30,12 @@ the filters :mod:`eqrec.filters`.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from eqrec.core.certify import certify_schedule
-from eqrec.core.patterns import (ArrivalPattern, PrefixTree, event_indices, event_matrix, event_sequence_label,
+from eqrec.core.patterns import (PrefixTree, event_indices, event_matrix, event_sequence_label,
                                  full_delay_language, gain_zero_pattern, parse_delay_word)
 from eqrec.core.simulate import sample_uncertainty, simulate_run
 from eqrec.core.stacking import UncertaintyLayout
