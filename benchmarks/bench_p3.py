@@ -19,22 +19,18 @@
    exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
    ``--mem-limit-gb`` (address-space limit) is reported as such.  ``--builders
    core recursive`` also measures the recursive (scenario-tree) form of
-   :mod:`eqrec.design.delay_scale`.
+   :mod:`eqrec.design.delay_scale`.  The worker is
+   :func:`eqrec.design.scale_sweep.run_size` (shared with the P3 scale steps
+   of the pipeline).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
-import subprocess
-import sys
 import time
 
-METHODS = {"simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
-           "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"},
-           "pdlp-np": {"solver": "pdlp", "presolve": "off"}, "ipm-np": {"solver": "ipm", "run_crossover": "off",
-                                                                       "presolve": "off"}}
+from eqrec.design.scale_sweep import METHODS, run_size
 
 
 def part_fixed(repeats: int) -> None:
@@ -94,44 +90,6 @@ def part_free() -> None:
           f"{cmp['ipopt_consistent_with_bound']}; goal <= 20 s: {'met' if g.time <= 20 else 'NOT met'}")
 
 
-WORKER = r"""
-import json, resource, sys, time
-T, tb, method, mu1, limit, mem_gb, builder = sys.argv[1:8]
-T, tb, mu1, limit, mem_gb = int(T), int(tb), float(mu1), float(limit), float(mem_gb)
-if mem_gb > 0:
-    resource.setrlimit(resource.RLIMIT_AS, (int(mem_gb * 2**30), int(mem_gb * 2**30)))
-out = {"T": T, "tau": tb, "method": method, "builder": builder}
-try:
-    from eqrec.core.patterns import PrefixTree
-    from eqrec.core.solvers import solve_lp
-    from eqrec.design.delay import delay_language
-    from eqrec.design.prefix import build_prefix_lp
-    from eqrec.design.delay_scale import build_recursive_prefix_lp
-    from eqrec.models import batch_reactor
-    if builder == "recursive":
-        build_prefix_lp = build_recursive_prefix_lp
-    build_prefix_lp(batch_reactor(), PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up
-    t0 = time.perf_counter()
-    pats = delay_language(max_delay=tb, horizon=T)
-    tree = PrefixTree(pats)
-    t1 = time.perf_counter()
-    model = build_prefix_lp(batch_reactor(), tree, mu1, levels="sum")
-    t2 = time.perf_counter()
-    out.update(words=(tb + 1) ** T, sequences=len(pats), nodes=len(tree), rows=model.lp.shape[0],
-               cols=model.lp.shape[1], nnz=int(model.lp.A.nnz), tree_time=t1 - t0, build_time=t2 - t1)
-    opts = dict(json.loads(sys.argv[8]))
-    opts["time_limit"] = limit
-    if method != "none":
-        sol = solve_lp(model.lp, "highs", opts)
-        out.update(status=sol.status, solve_time=sol.solve_time, iterations=sol.iterations,
-                   objective=sol.objective)
-except MemoryError:
-    out["status"] = "memory limit"
-out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-print(json.dumps(out))
-"""
-
-
 def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders=("core",)) -> None:
     print(f"\n3. scale table, full language {{0..tau}}^T, batch reactor, sum cost, mu1 = {mu1}, split robust form; "
           f"one process per row; time limit {limit:g} s, memory limit {mem_gb:g} GB")
@@ -140,14 +98,7 @@ def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders
     print(hdr)
     for T, tb in sizes:
         for builder, method in [(bd, m) for bd in builders for m in methods]:
-            args = [sys.executable, "-c", WORKER, str(T), str(tb), method, str(mu1), str(limit), str(mem_gb),
-                    builder, json.dumps(METHODS.get(method, {}))]
-            try:
-                p = subprocess.run(args, capture_output=True, text=True, timeout=limit * 1.5 + 300)
-                r = json.loads(p.stdout.strip().splitlines()[-1]) if p.stdout.strip() else {
-                    "status": f"crashed ({p.returncode}): {p.stderr.strip().splitlines()[-1:]}"}
-            except subprocess.TimeoutExpired:
-                r = {"status": "wall-clock kill"}
+            r = run_size(T, tb, method, mu1, limit, mem_gb, builder)
             g = r.get
             print(f"   {T:>2} {tb:>3} {g('words', ''):>6} {g('sequences', ''):>6} {g('nodes', ''):>6} "
                   f"{builder:>9} {g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
@@ -161,7 +112,7 @@ def main() -> None:
     ap.add_argument("--only", choices=["fixed", "free", "scale"], action="append")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--sizes", nargs="+", default=["5,2", "6,2"], help="T,tau pairs for the scale table")
-    ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS) + ["none"])
+    ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS))
     ap.add_argument("--builders", nargs="+", default=["core"], choices=["core", "recursive"],
                     help="core: eqrec.design.prefix.build_prefix_lp; recursive: eqrec.design.delay_scale")
     ap.add_argument("--mu1", type=float, default=0.5)
