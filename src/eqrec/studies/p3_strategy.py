@@ -1,0 +1,425 @@
+r"""P3-IMPL and the P3 scale table: steps of the delayed/missing-data study (P3).
+
+P3-IMPL is Section III-B3 of the delayed-data paper ("Implementation
+Strategy"), run as long simulations:
+
+* **periodic reuse** (step ``strategy``): the gains of one design are reused
+  every ``T`` steps (:func:`eqrec.core.simulate.long_run_periodic`), a delay
+  word drawn uniformly from the design language for every period, noise and
+  ``ξ(0)`` drawn in the box (uniform and at vertices).  Two designs: the
+  batch reactor of Section IV-A (full language ``{0..τ̄}^T``, ``T = 5``,
+  ``τ̄ = 2``, ``μ1 = 0.33``, sum cost) and the ACC of Section IV-B (the
+  missing-data language ``{060000, 006000, 000600, 000060}``, ``μ1 = 1``).
+  At every time the error must stay within the level of the node of the
+  observed prefix (``μ1`` at period boundaries).  A packet whose delay
+  reaches past the period's end is delivered in the next period, where the
+  estimator drops it (stamped before the period); the language counts it
+  as missing.  :func:`eqrec.core.simulate.periodic_model_gap` checks that
+  every period follows the design model of its word exactly.
+* **switching** (also step ``strategy``): the equalized-performance
+  estimator (equalized recovery with period 1: ``‖ξ(t)‖ <= μ1`` implies
+  ``‖ξ(t+1)‖ <= μ1`` when ``y(t)`` is on time) until a measurement is late,
+  then the recovery estimator for ``T`` steps, designed on the words of
+  ``{0..τ̄}^T`` whose first delay is at least 1, then back
+  (:class:`eqrec.core.estimator.SwitchingEstimator`,
+  :func:`eqrec.core.simulate.long_run_switching`); i.i.d. delays.  On the
+  batch reactor a period-1 design is infeasible at ``μ1 = 0.33`` (2 outputs,
+  4 states: no one-step contraction of the ∞-norm box): the step records the
+  LP's status there, the certified smallest period-1 level
+  (:func:`eqrec.design.delay.min_recovery_level`), the smallest on-time period
+  that recovers at ``μ1``, and runs the scheme at the smallest period-1
+  level rounded up (``switching.mu1``).
+
+The batch reactor is open-loop unstable: the runs apply ``u = −K x̂`` (LQR,
+``Q = I``, ``R = I``) so that the states stay bounded over ``10⁴`` steps;
+the estimator knows ``u``, so the error does not depend on it.  The ACC runs
+with the constant input ``input_force``.
+
+The scale table (steps ``scale_size`` per ``(T, τ̄)``, ``scale_table``): the
+batch reactor's full-language LP (sum cost, ``μ1`` fixed) built and solved
+by one HiGHS method in a fresh process with time and memory limits
+(:func:`eqrec.design.scale_sweep.run_size`).
+
+Configuration (``cfg`` is the ``p3`` section; defaults are the schema's)
+------------------------------------------------------------------------
+``strategy``:
+
+=========================  ===========================  ==================================================
+key                        default                      meaning
+=========================  ===========================  ==================================================
+``steps``                  ``10000``                    length of every long run (steps)
+``seed``                   ``3``                        seed of the random draws (one stream per run)
+``noise``                  ``[uniform, vertex]``        noise kinds, one run of each
+``cost``                   ``sum``                      cost of the designs (``sum`` or ``max``)
+``reactor.horizon``        ``5``                        ``T`` of the batch-reactor designs
+``reactor.max_delay``      ``2``                        ``τ̄``
+``reactor.mu1``            ``0.33``                     ``μ1`` of the periodic design (the paper's)
+``reactor.x0``             ``[1, 1, 1, 1]``             initial state
+``acc.words``              ``[060000, ..., 000060]``    the ACC language (delay words; 6 = missing)
+``acc.mu1``                ``1.0``                      ``μ1`` of the ACC design
+``acc.x0``                 ``[20, 40, 20]``             initial state [m/s, m, m/s]
+``acc.input_force``        ``206.4``                    constant input [N]
+``switching.mu1``          ``null``                     common level; ``null``: the reactor's ``μ1`` if a
+                                                        period-1 design is feasible there, else the
+                                                        smallest period-1 level rounded up to ``decimals``
+``switching.decimals``     ``2``                        rounding of the automatic level
+``switching.p_on_time``    ``0.8``                      probability that a measurement is on time (else
+                                                        delay uniform on ``1..τ̄``)
+``switching.max_period``   ``5``                        longest on-time period tried at ``reactor.mu1``
+``figure.window``          ``100``                      steps shown in the figure
+=========================  ===========================  ==================================================
+
+``scale``:
+
+=========================  ======================================  ========================================
+key                        default                                 meaning
+=========================  ======================================  ========================================
+``sizes``                  ``[[5,2],[6,2],[7,2],[8,2],[8,3]]``     ``(T, τ̄)`` of the ``p3_scale`` target
+``method``                 ``ipm``                                 HiGHS method (``scale_sweep.METHODS``)
+``builder``                ``core``                                ``core`` or ``recursive``
+``mu1``                    ``0.5``                                 fixed ``μ1``
+``time_limit``             ``600``                                 HiGHS time limit per size [s]
+``mem_limit_gb``           ``16``                                  address-space limit per size [GB]
+=========================  ======================================  ========================================
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.linalg as sla
+
+from eqrec.core.patterns import ArrivalPattern, PrefixTree, full_delay_language
+from eqrec.core.simulate import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
+from eqrec.core.solvers import solve_lp
+from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
+from eqrec.design.delay import design_delay, level_table, min_recovery_level, path_levels
+from eqrec.design.prefix import build_prefix_lp
+from eqrec.design.result import Design
+from eqrec.design.scale_sweep import FIELDS, run_size
+from eqrec.models import BATCH_REACTOR_TS, batch_reactor
+from eqrec.studies.harness import get_logger, save_figure, write_csv, write_json, write_npz, write_text
+from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot
+
+log = get_logger("p3")
+
+#: Tolerance of "inside the guarantees": error / guarantee <= 1 + RATIO_TOL.
+RATIO_TOL = 1e-9
+
+
+# --------------------------------------------------------------------------- helpers
+
+def lqr_gain(system: AffineSystem) -> np.ndarray:
+    """State-feedback gain ``K`` of the discrete LQR with ``Q = I``, ``R = I`` (``u = −K x``)."""
+    A, B = system.A, system.B
+    P = sla.solve_discrete_are(A, B, np.eye(system.n), np.eye(system.m))
+    return np.linalg.solve(np.eye(system.m) + B.T @ P @ B, B.T @ P @ A)
+
+
+def lp_status(system: AffineSystem, words, mu1: float, cost: str = "sum") -> str:
+    """HiGHS's status of the delayed-data design LP (Theorem 1 / Proposition 1) at ``μ1`` fixed."""
+    tree = PrefixTree(words, kind="delay")
+    model = build_prefix_lp(system, tree, float(mu1), levels="sum" if cost == "sum" else "common")
+    return solve_lp(model.lp, "highs").status
+
+
+def certificate_excess(design: Design) -> float:
+    """Largest certified worst case minus the designed level over the nodes (``<= 0`` up to rounding)."""
+    return float(max(r["certified"] - r["level"] for r in level_table(design)))
+
+
+def _ratio_evidence(runs: dict[str, LongRun], T: int | None) -> dict:
+    ev: dict = {}
+    for kind, r in runs.items():
+        ev[f"max_ratio_{kind}"] = r.max_ratio
+        ev[f"max_ratio_after_start_{kind}"] = float(r.ratio[1:].max())
+        if T:
+            ev[f"max_ratio_boundary_{kind}"] = float(r.ratio[::T].max())
+    ev["max_ratio"] = max(r.max_ratio for r in runs.values())
+    ev["steps"] = int(min(r.delays.size for r in runs.values()))
+    ev["tol"] = RATIO_TOL
+    return ev
+
+
+def _within(ratio: float) -> str:
+    return "inside" if ratio <= 1.0 + RATIO_TOL else "outside"
+
+
+def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset: int, x0, **drive) -> dict:
+    T = design.T
+    periods = math.ceil(int(st["steps"]) / T)
+    runs: dict[str, LongRun] = {}
+    gaps, dropped, timing = [], 0, []
+    for j, kind in enumerate(st["noise"]):
+        rng = np.random.default_rng([int(st["seed"]), seed_offset, j])
+        t0 = time.perf_counter()
+        r = long_run_periodic(system, design.schedule, list(words), periods, rng, M1=design.M1,
+                              path_levels=partial(path_levels, design), kind=kind, x0=x0, **drive)
+        timing.append(time.perf_counter() - t0)
+        gaps.append(periodic_model_gap(r, system, design.schedule))
+        dropped += len(r.dropped)
+        runs[kind] = r
+        log.info("periodic %s, %s noise: %d steps in %.2f s, max error/guarantee %.6f, %d packets dropped "
+                 "after their period", system.name, kind, r.delays.size, timing[-1], r.max_ratio, len(r.dropped))
+    ev = _ratio_evidence(runs, T)
+    ev.update(T=T, periods=periods, mu1=design.M1, max_mu2=design.mu2, words=len(words),
+              sequences=len(design.patterns), model_gap=max(gaps), dropped_late=dropped,
+              certificate_excess=certificate_excess(design), run_time_s=max(timing))
+    return {"runs": runs, "evidence": ev}
+
+
+# --------------------------------------------------------------------------- P3-IMPL
+
+def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
+    """P3-IMPL: periodic reuse (batch reactor, ACC) and the switching scheme, long runs inside the guarantees.
+
+    Writes ``outputs.npz`` (errors, guarantees and switching instants of
+    every run) and ``outputs.values`` (claims format: numbers and statuses).
+    """
+    st = cfg["strategy"]
+    rc, ac, sw = st["reactor"], st["acc"], st["switching"]
+    cost = st["cost"]
+    t_start = time.perf_counter()
+    arrays: dict = {}
+    values: dict = {}
+
+    # --- batch reactor, periodic reuse
+    reactor = batch_reactor()
+    K = lqr_gain(reactor)
+    T, tb, mu1 = int(rc["horizon"]), int(rc["max_delay"]), float(rc["mu1"])
+    words = full_delay_language(T, tb)
+    log.info("batch reactor: design on {0..%d}^%d (%d words) at mu1 = %g", tb, T, len(words), mu1)
+    d_r = design_delay(reactor, words, mu1, cost=cost)
+    x0_r = np.asarray(rc["x0"], float)
+    controller = lambda xh: -K @ xh  # noqa: E731
+    per_r = _periodic(reactor, d_r, words, st, 0, x0_r, controller=controller)
+
+    # --- ACC, periodic reuse (missing-data language as delay words)
+    acc = acc_system()
+    d_a = design_delay(acc, list(ac["words"]), float(ac["mu1"]), cost=cost)
+    log.info("ACC: design on %s at mu1 = %g, max mu2 = %.6f", list(ac["words"]), float(ac["mu1"]), d_a.mu2)
+    per_a = _periodic(acc, d_a, ac["words"], st, 1, np.asarray(ac["x0"], float),
+                      inputs=np.array([float(ac["input_force"])]))
+
+    # --- switching scheme: is a period-1 (equalized-performance) design feasible at the reactor's μ1?
+    on_time = ["0"]
+    status_at_mu1 = lp_status(reactor, on_time, mu1, cost)
+    mm = min_recovery_level(reactor, on_time)
+    periods_min = []
+    for P in range(1, int(sw["max_period"]) + 1):
+        periods_min.append(min_recovery_level(reactor, ["0" * P]).upper)
+    smallest_period = next((P for P, m in enumerate(periods_min, 1) if m <= mu1), None)
+    if sw["mu1"] is not None:
+        mu1_s, rule = float(sw["mu1"]), "configured"
+    elif status_at_mu1 == "optimal":
+        mu1_s, rule = mu1, "reactor mu1"
+    else:
+        scale = 10.0 ** int(sw["decimals"])
+        mu1_s, rule = math.ceil(mm.upper * scale - 1e-9) / scale, "smallest period-1 level rounded up"
+    log.info("period-1 design at mu1 = %g: %s; smallest period-1 level %.6f (certified > %.6f); smallest on-time "
+             "period recovering to %g: %s; switching at mu1 = %g", mu1, status_at_mu1, mm.upper, mm.lower, mu1,
+             smallest_period, mu1_s)
+    d_p = design_delay(reactor, on_time, mu1_s, cost=cost)
+    rec_words = [w for w in words if w[0] != "0"]
+    d_s = design_delay(reactor, rec_words, mu1_s, cost=cost)
+
+    def rec_level(prefix: ArrivalPattern) -> float:
+        return float(d_s.levels.get(prefix.label, d_s.mu2)) if d_s.levels else d_s.mu2
+
+    sw_runs: dict[str, LongRun] = {}
+    timing = []
+    for j, kind in enumerate(st["noise"]):
+        rng = np.random.default_rng([int(st["seed"]), 2, j])
+        t0 = time.perf_counter()
+        r = long_run_switching(reactor, d_p.schedule, d_s.schedule, int(st["steps"]), rng, M1=mu1_s,
+                               recovery_level=rec_level, max_delay=tb, p_on_time=float(sw["p_on_time"]), kind=kind,
+                               x0=x0_r, controller=controller)
+        timing.append(time.perf_counter() - t0)
+        sw_runs[kind] = r
+        log.info("switching, %s noise: %d steps in %.2f s, %d switches, max error/guarantee %.6f", kind,
+                 r.delays.size, timing[-1], len(r.switch_times), r.max_ratio)
+    sw_ev = _ratio_evidence(sw_runs, None)
+    perf = [float(r.ratio[1:][~r.recovering].max()) for r in sw_runs.values() if (~r.recovering).any()]
+    rec = [float(r.ratio[1:][r.recovering].max()) for r in sw_runs.values() if r.recovering.any()]
+    sw_ev.update(mu1=mu1_s, performance_mu2=d_p.mu2, recovery_max_mu2=d_s.mu2, recovery_words=len(rec_words),
+                 recovery_sequences=len(d_s.patterns), T=T, p_on_time=float(sw["p_on_time"]),
+                 switches=int(sum(len(r.switch_times) for r in sw_runs.values())),
+                 reverts=int(sum(len(r.revert_times) for r in sw_runs.values())),
+                 recovery_fraction=float(np.mean([r.recovering.mean() for r in sw_runs.values()])),
+                 max_ratio_performance=max(perf, default=0.0), max_ratio_recovery=max(rec, default=0.0),
+                 dropped_late=int(sum(len(r.dropped) for r in sw_runs.values())),
+                 certificate_excess=max(certificate_excess(d_s), float(d_p.certificate.terminal - mu1_s)),
+                 run_time_s=max(timing))
+
+    # --- values
+    ev_r, ev_a = per_r["evidence"], per_a["evidence"]
+    values["periodic_reactor_within"] = {"value": _within(ev_r["max_ratio"]), "evidence": ev_r}
+    values["periodic_reactor_max_ratio"] = {"value": ev_r["max_ratio"], "evidence": {
+        k: ev_r[k] for k in ("steps", "tol", "max_ratio_after_start_uniform", "model_gap") if k in ev_r}}
+    values["periodic_acc_within"] = {"value": _within(ev_a["max_ratio"]), "evidence": ev_a}
+    values["periodic_acc_max_ratio"] = {"value": ev_a["max_ratio"], "evidence": {
+        k: ev_a[k] for k in ("steps", "tol", "model_gap") if k in ev_a}}
+    values["switching_within"] = {"value": _within(sw_ev["max_ratio"]), "evidence": sw_ev}
+    values["switching_max_ratio"] = {"value": sw_ev["max_ratio"], "evidence": {
+        k: sw_ev[k] for k in ("steps", "tol", "max_ratio_performance", "max_ratio_recovery")}}
+    values["performance_period1_status"] = {"value": status_at_mu1, "evidence": {
+        "mu1": mu1, "lp_status": status_at_mu1, "mu1_min": mm.upper, "mu1_min_lower": mm.lower,
+        "smallest_period": smallest_period, "max_period": int(sw["max_period"]), "period_mu1_min": periods_min,
+        "switching_mu1": mu1_s}}
+    values["switching_mu1"] = {"value": mu1_s, "evidence": {
+        "rule": rule, "mu1_min": mm.upper, "mu1_min_lower": mm.lower, "decimals": int(sw["decimals"]),
+        "lp_status": lp_status(reactor, on_time, mu1_s, cost), "reactor_mu1": mu1,
+        "status_at_reactor_mu1": status_at_mu1}}
+    values["strategy_time_s"] = {"value": time.perf_counter() - t_start, "evidence": {"steps": int(st["steps"])}}
+
+    # --- arrays for the figure
+    for label, runs, Ts, T_ in (("reactor_periodic", per_r["runs"], BATCH_REACTOR_TS, T),
+                                ("acc_periodic", per_a["runs"], float(ACC_CONSTANTS["Ts"]), d_a.T),
+                                ("reactor_switching", sw_runs, BATCH_REACTOR_TS, T)):
+        for kind, r in runs.items():
+            key = f"{label}_{kind}"
+            arrays[f"{key}_error"] = r.error
+            arrays[f"{key}_level"] = r.level
+            arrays[f"{key}_recovering"] = r.recovering
+            arrays[f"{key}_switch"] = np.asarray(r.switch_times, int)
+            arrays[f"{key}_revert"] = np.asarray(r.revert_times, int)
+        arrays[f"{label}_T"] = T_
+        arrays[f"{label}_Ts"] = Ts
+    write_npz(outputs.npz, compressed=True, noise=np.array(list(st["noise"])), reactor_mu1=mu1, acc_mu1=d_a.M1,
+              switching_mu1=mu1_s, **arrays)
+    write_json(outputs.values, values)
+    log.info("P3-IMPL done in %.1f s", time.perf_counter() - t_start)
+    return values
+
+
+def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
+    """P3-IMPL figure: errors per state with the per-time guarantees over a window of each long run.
+
+    Columns: periodic reuse on the batch reactor, on the ACC, and the
+    switching scheme on the batch reactor (recovery phases shaded, switching
+    instants marked).  The run with the first noise kind is shown.
+    """
+    paper_style()
+    plt = pyplot()
+    data = np.load(inputs.npz)
+    kind = str(data["noise"][0])
+    window = int(cfg["strategy"]["figure"]["window"])
+    cols = (("reactor_periodic", "Batch reactor, gains reused every T", [rf"$\xi_{i}$" for i in range(1, 5)]),
+            ("acc_periodic", "ACC, gains reused every T", list(STATE_LABELS_ACC)),
+            ("reactor_switching", "Batch reactor, switching scheme", [rf"$\xi_{i}$" for i in range(1, 5)]))
+    fig, axes = plt.subplots(4, 3, figsize=(10.0, 7.5), sharex="col")
+    for c, (label, title, ylabels) in enumerate(cols):
+        key = f"{label}_{kind}"
+        err, lev = data[f"{key}_error"], data[f"{key}_level"]
+        T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
+        N = min(window, err.shape[0] - 1)
+        t = np.arange(N + 1)
+        n = err.shape[1]
+        for i in range(4):
+            ax = axes[i, c]
+            if i >= n:
+                ax.axis("off")
+                continue
+            ax.fill_between(t, -lev[: N + 1], lev[: N + 1], step="mid", color="0.85", label="guarantee")
+            ax.plot(t, err[: N + 1, i], "C0.-", ms=2.5, label="estimation error")
+            if label == "reactor_switching":
+                sw, rv = data[f"{key}_switch"], data[f"{key}_revert"]
+                for j, s in enumerate(sw[sw <= N]):
+                    ax.axvline(s, color="C3", ls="--", lw=0.7, label="switch to recovery" if j == 0 else None)
+                for j, s in enumerate(rv[rv <= N]):
+                    ax.axvline(s, color="C2", ls=":", lw=0.9, label="back to performance" if j == 0 else None)
+            else:
+                for j, s in enumerate(range(T, N + 1, T)):
+                    ax.axvline(s, color="0.5", ls=":", lw=0.6, label="period boundary" if j == 0 else None)
+            ax.set_ylabel(ylabels[i])
+            lim = 1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max()))
+            ax.set_ylim(-lim, lim)
+            if i == 0:
+                ax.set_title(title)
+        last = axes[min(n, 4) - 1, c]
+        last.set_xlabel(f"time step k (Ts = {Ts:g} s)")
+        last.tick_params(labelbottom=True)
+        handles, labels = axes[0, c].get_legend_handles_labels()
+        axes[0, c].legend(handles, labels, loc="upper right", fontsize=6, ncol=1)
+    fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees ({kind} noise, first "
+                 f"{window} steps; $\\mu_1$ = {float(data['reactor_mu1']):g} / {float(data['acc_mu1']):g} / "
+                 f"{float(data['switching_mu1']):g})")
+    fig.tight_layout()
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+# --------------------------------------------------------------------------- scale table
+
+def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
+    """One row of the scale table: the full language ``{0..τ̄}^T`` (wildcards ``T``, ``tau``) in a fresh process.
+
+    A size that hits the time or memory limit is recorded with that status (the step succeeds).
+    """
+    sc = cfg["scale"]
+    T, tau = int(wildcards.T), int(wildcards.tau)
+    log.info("scale (T, tau) = (%d, %d): %s, builder %s, mu1 = %g, limits %g s / %g GB", T, tau, sc["method"],
+             sc["builder"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]))
+    r = run_size(T, tau, sc["method"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]),
+                 sc["builder"])
+    log.info("scale (%d, %d): %s; %s columns, build %.2f s, solve %.2f s, peak %.0f MB", T, tau, r.get("status"),
+             r.get("cols"), r.get("build_time", float("nan")), r.get("solve_time", float("nan")),
+             r.get("peak_mb", float("nan")))
+    write_json(outputs.json, r)
+    return r
+
+
+def scale_frame(rows: list[dict]) -> pd.DataFrame:
+    """The scale table as a frame (columns :data:`eqrec.design.scale_sweep.FIELDS`, sorted by ``(T, τ̄)``)."""
+    frame = pd.DataFrame(rows).reindex(columns=list(FIELDS))
+    return frame.sort_values(["T", "tau", "method"], kind="stable").reset_index(drop=True)
+
+
+def _md_cell(v) -> str:
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return ""
+    if isinstance(v, float):
+        return f"{v:.2f}" if abs(v) < 1e6 else f"{v:.4g}"
+    return str(v)
+
+
+def scale_markdown(frame: pd.DataFrame) -> str:
+    """The scale table in Markdown (sizes, LP dimensions, times in s, peak memory in MB, status)."""
+    cols = ["T", "tau", "words", "sequences", "nodes", "rows", "cols", "nnz", "build_time", "method", "solve_time",
+            "iterations", "peak_mb", "status"]
+    head = ["T", "τ̄", "words", "sequences (L^E')", "nodes", "LP rows", "LP cols", "nonzeros", "build [s]",
+            "HiGHS method", "solve [s]", "iterations", "peak [MB]", "status"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for _, row in frame.iterrows():
+        lines.append("| " + " | ".join(_md_cell(row[c].item() if hasattr(row[c], "item") else row[c])
+                                       for c in cols) + " |")
+    meta = frame.iloc[0] if len(frame) else None
+    note = ""
+    if meta is not None:
+        note = (f"\nBatch reactor, full delay language, sum cost, mu1 = {meta['mu1']:g} fixed, builder "
+                f"{meta['builder']}; one fresh process per size; HiGHS time limit {meta['time_limit']:g} s, "
+                f"address-space limit {meta['mem_limit_gb']:g} GB.\n")
+    return "# P3 scale table\n" + note + "\n" + "\n".join(lines) + "\n"
+
+
+def step_scale_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """Merge the per-size JSONs (all inputs ending in ``.json``) into ``outputs.csv`` and ``outputs.md``."""
+    rows = [json.loads(Path(p).read_text()) for p in inputs if str(p).endswith(".json")]
+    frame = scale_frame(rows)
+    write_csv(outputs.csv, frame)
+    write_text(outputs.md, scale_markdown(frame))
+    log.info("scale table: %d sizes", len(frame))
+    return frame
+
+
+STEPS = {
+    "strategy": step_strategy,
+    "strategy_figure": step_strategy_figure,
+    "scale_size": step_scale_size,
+    "scale_table": step_scale_table,
+}
