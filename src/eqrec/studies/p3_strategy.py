@@ -66,7 +66,7 @@ key                        default                      meaning
 ``switching.p_on_time``    ``0.8``                      probability that a measurement is on time (else
                                                         delay uniform on ``1..τ̄``)
 ``switching.max_period``   ``5``                        longest on-time period tried at ``reactor.mu1``
-``figure.window``          ``100``                      steps shown in the figure
+``figure.window``          ``60``                       steps shown in the figure
 =========================  ===========================  ==================================================
 
 ``scale``:
@@ -143,7 +143,7 @@ def _ratio_evidence(runs: dict[str, LongRun], T: int | None) -> dict:
             ev[f"max_ratio_boundary_{kind}"] = float(r.ratio[::T].max())
     ev["max_ratio"] = max(r.max_ratio for r in runs.values())
     ev["steps"] = int(min(r.delays.size for r in runs.values()))
-    ev["tol"] = RATIO_TOL
+    ev["ratio_tol"] = RATIO_TOL
     return ev
 
 
@@ -261,13 +261,13 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     ev_r, ev_a = per_r["evidence"], per_a["evidence"]
     values["periodic_reactor_within"] = {"value": _within(ev_r["max_ratio"]), "evidence": ev_r}
     values["periodic_reactor_max_ratio"] = {"value": ev_r["max_ratio"], "evidence": {
-        k: ev_r[k] for k in ("steps", "tol", "max_ratio_after_start_uniform", "model_gap") if k in ev_r}}
+        k: ev_r[k] for k in ("steps", "ratio_tol", "max_ratio_after_start_uniform", "model_gap") if k in ev_r}}
     values["periodic_acc_within"] = {"value": _within(ev_a["max_ratio"]), "evidence": ev_a}
     values["periodic_acc_max_ratio"] = {"value": ev_a["max_ratio"], "evidence": {
-        k: ev_a[k] for k in ("steps", "tol", "model_gap") if k in ev_a}}
+        k: ev_a[k] for k in ("steps", "ratio_tol", "model_gap") if k in ev_a}}
     values["switching_within"] = {"value": _within(sw_ev["max_ratio"]), "evidence": sw_ev}
     values["switching_max_ratio"] = {"value": sw_ev["max_ratio"], "evidence": {
-        k: sw_ev[k] for k in ("steps", "tol", "max_ratio_performance", "max_ratio_recovery")}}
+        k: sw_ev[k] for k in ("steps", "ratio_tol", "max_ratio_performance", "max_ratio_recovery")}}
     values["performance_period1_status"] = {"value": status_at_mu1, "evidence": {
         "mu1": mu1, "lp_status": status_at_mu1, "mu1_min": mm.upper, "mu1_min_lower": mm.lower,
         "smallest_period": smallest_period, "max_period": int(sw["max_period"]), "period_mu1_min": periods_min,
@@ -380,10 +380,12 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
     return frame.sort_values(["T", "tau", "method"], kind="stable").reset_index(drop=True)
 
 
-def _md_cell(v) -> str:
+def _md_cell(v, col: str = "") -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
     if isinstance(v, float):
+        if col == "peak_mb" or v.is_integer():
+            return f"{v:.0f}"
         return f"{v:.2f}" if abs(v) < 1e6 else f"{v:.4g}"
     return str(v)
 
@@ -396,7 +398,7 @@ def scale_markdown(frame: pd.DataFrame) -> str:
             "HiGHS method", "solve [s]", "iterations", "peak [MB]", "status"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, row in frame.iterrows():
-        lines.append("| " + " | ".join(_md_cell(row[c].item() if hasattr(row[c], "item") else row[c])
+        lines.append("| " + " | ".join(_md_cell(row[c].item() if hasattr(row[c], "item") else row[c], c)
                                        for c in cols) + " |")
     meta = frame.iloc[0] if len(frame) else None
     note = ""
