@@ -31,6 +31,7 @@ import statistics
 import time
 
 from eqrec.design.scale_sweep import METHODS, run_size
+from eqrec.models import batch_reactor
 
 
 def part_fixed(repeats: int) -> None:
@@ -98,7 +99,7 @@ def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders
     print(hdr)
     for T, tb in sizes:
         for builder, method in [(bd, m) for bd in builders for m in methods]:
-            r = run_size(T, tb, method, mu1, limit, mem_gb, builder)
+            r = run_size(batch_reactor(), T, tb, method, mu1, limit, mem_gb, builder)
             g = r.get
             print(f"   {T:>2} {tb:>3} {g('words', ''):>6} {g('sequences', ''):>6} {g('nodes', ''):>6} "
                   f"{builder:>9} {g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "

@@ -220,6 +220,7 @@ def test_scale_steps(tmp_path):
     assert "| 4 | 2 | 81 | 54 |" in Path(out["md"]).read_text()
 
 
-def test_scale_limits_are_reported_not_crashes():
-    assert run_size(4, 2, "ipm", time_limit=1e-4, mem_limit_gb=4)["status"] == "time limit"
-    assert run_size(4, 2, "ipm", time_limit=60, mem_limit_gb=0.25, wall_margin=60)["status"] == "memory limit"
+def test_scale_limits_are_reported_not_crashes(reactor):
+    assert run_size(reactor, 4, 2, "ipm", time_limit=1e-4, mem_limit_gb=4)["status"] == "time limit"
+    r = run_size(reactor, 6, 2, "ipm", time_limit=60, mem_limit_gb=0.25, wall_margin=60)
+    assert r["status"] == "memory limit" and r["words"] == 729 and r["nodes"] == 728  # sizes kept

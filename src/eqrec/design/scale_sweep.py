@@ -1,8 +1,8 @@
 r"""The scale table of the delayed-data design: one size of the full delay language per fresh process.
 
-For the full language ``{0..τ̄}^T`` on the batch reactor (Section IV-A of the
-delayed-data paper; sum cost of Theorem 1 / Proposition 1, ``μ1`` fixed, so
-an LP), :func:`measure_size` builds the node-per-prefix LP and solves it
+For the full language ``{0..τ̄}^T`` on a system (the scale table uses the
+batch reactor of Section IV-A of the delayed-data paper; sum cost of
+Theorem 1 / Proposition 1, ``μ1`` fixed, so an LP), :func:`measure_size` builds the node-per-prefix LP and solves it
 with one HiGHS method, recording
 
 * ``words`` ``(τ̄+1)^T``, ``sequences`` (the reduced event language
@@ -13,7 +13,8 @@ with one HiGHS method, recording
 * ``peak_mb``: the peak resident memory of the process (``ru_maxrss``).
 
 :func:`run_size` runs it in a fresh Python process (``python -m
-eqrec.design.scale_sweep``) so that ``peak_mb`` is that size's alone, with
+eqrec.design.scale_sweep``; the system travels as
+:meth:`eqrec.core.systems.AffineSystem.to_dict`) so that ``peak_mb`` is that size's alone, with
 an address-space limit (``RLIMIT_AS``; an allocation beyond it is reported
 as ``"memory limit"``), HiGHS's ``time_limit`` (reported as ``"time
 limit"``) and a wall-clock kill (``"wall-clock kill"``); a process that
@@ -37,6 +38,8 @@ import subprocess
 import sys
 import time
 
+from eqrec.core.systems import AffineSystem, system_from_mapping
+
 #: HiGHS options of each method name.
 METHODS: dict[str, dict] = {
     "simplex": {"solver": "simplex"},
@@ -52,7 +55,7 @@ BUILDERS = ("core", "recursive")
 #: Fields of a result, in table order.
 FIELDS = ("T", "tau", "words", "sequences", "nodes", "builder", "rows", "cols", "nnz", "tree_time", "build_time",
           "method", "solve_time", "iterations", "objective", "peak_mb", "status", "mu1", "time_limit",
-          "mem_limit_gb", "wall_time")
+          "mem_limit_gb", "wall_time", "detail")
 
 _MEMORY_MARKERS = ("MemoryError", "bad_alloc", "Cannot allocate memory", "out of memory", "failed to map segment")
 
@@ -78,12 +81,15 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def measure_size(T: int, tau: int, method: str = "ipm", mu1: float = 0.5, time_limit: float = 600.0,
-                 builder: str = "core", options: dict | None = None) -> dict:
+def measure_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: float = 0.5,
+                 time_limit: float = 600.0, builder: str = "core", options: dict | None = None,
+                 out: dict | None = None) -> dict:
     """Build and solve the full-language LP of one size ``(T, τ̄)`` in this process.
 
     Parameters
     ----------
+    system
+        The plant (time-invariant, or time-varying over at least ``T`` steps).
     T, tau
         Horizon and largest delay: the language ``{0..τ̄}^T``.
     method
@@ -96,6 +102,9 @@ def measure_size(T: int, tau: int, method: str = "ipm", mu1: float = 0.5, time_l
         ``"core"`` or ``"recursive"``.
     options
         Extra HiGHS options (override the method's).
+    out
+        A dict filled in as the measurement proceeds (so that the sizes and
+        build time survive a later failure); a new one by default.
 
     Returns
     -------
@@ -108,21 +117,21 @@ def measure_size(T: int, tau: int, method: str = "ipm", mu1: float = 0.5, time_l
     from eqrec.design.delay import delay_language
     from eqrec.design.delay_scale import build_recursive_prefix_lp
     from eqrec.design.prefix import build_prefix_lp
-    from eqrec.models import batch_reactor
 
     build = build_recursive_prefix_lp if builder == "recursive" else build_prefix_lp
-    system = batch_reactor()
-    out: dict = {"T": int(T), "tau": int(tau), "method": method, "builder": builder, "mu1": float(mu1),
-                 "time_limit": float(time_limit)}
+    out = {} if out is None else out
+    out.update({"T": int(T), "tau": int(tau), "method": method, "builder": builder, "mu1": float(mu1),
+                "time_limit": float(time_limit)})
     build(system, PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up (imports)
     t0 = time.perf_counter()
     pats = delay_language(max_delay=int(tau), horizon=int(T))
     tree = PrefixTree(pats)
     t1 = time.perf_counter()
+    out.update(words=(int(tau) + 1) ** int(T), sequences=len(pats), nodes=len(tree), tree_time=t1 - t0)
     model = build(system, tree, float(mu1), levels="sum")
     t2 = time.perf_counter()
-    out.update(words=(int(tau) + 1) ** int(T), sequences=len(pats), nodes=len(tree), rows=int(model.lp.shape[0]),
-               cols=int(model.lp.shape[1]), nnz=int(model.lp.A.nnz), tree_time=t1 - t0, build_time=t2 - t1)
+    out.update(rows=int(model.lp.shape[0]), cols=int(model.lp.shape[1]), nnz=int(model.lp.A.nnz),
+               build_time=t2 - t1)
     if method == "none":
         out["status"] = "built"
         return out
@@ -143,19 +152,19 @@ def _import_all() -> None:
     from eqrec.design.delay import delay_language  # noqa: F401
     from eqrec.design.delay_scale import build_recursive_prefix_lp  # noqa: F401
     from eqrec.design.prefix import build_prefix_lp  # noqa: F401
-    from eqrec.models import batch_reactor  # noqa: F401
 
 
 def _worker(args: dict) -> dict:
     _import_all()
+    system, _ = system_from_mapping(args["system"], "scale worker")
     mem_gb = float(args.get("mem_limit_gb", 0.0))
     if mem_gb > 0:
         lim = int(mem_gb * 2**30)
         resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
     out = {"T": args["T"], "tau": args["tau"], "method": args["method"], "builder": args["builder"]}
     try:
-        out = measure_size(args["T"], args["tau"], args["method"], args["mu1"], args["time_limit"],
-                           args["builder"], args.get("options"))
+        measure_size(system, args["T"], args["tau"], args["method"], args["mu1"], args["time_limit"],
+                     args["builder"], args.get("options"), out=out)
     except MemoryError as exc:
         out.update(status="memory limit", detail=f"MemoryError: {exc}")
     except Exception as exc:  # noqa: BLE001 - reported, never raised: the table records every size
@@ -165,9 +174,9 @@ def _worker(args: dict) -> dict:
     return out
 
 
-def run_size(T: int, tau: int, method: str = "ipm", mu1: float = 0.5, time_limit: float = 600.0,
-             mem_limit_gb: float = 16.0, builder: str = "core", options: dict | None = None,
-             wall_margin: float = 300.0) -> dict:
+def run_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: float = 0.5,
+             time_limit: float = 600.0, mem_limit_gb: float = 16.0, builder: str = "core",
+             options: dict | None = None, wall_margin: float = 300.0) -> dict:
     """:func:`measure_size` in a fresh process with memory and time limits; never raises for a size that fails.
 
     Parameters
@@ -185,7 +194,7 @@ def run_size(T: int, tau: int, method: str = "ipm", mu1: float = 0.5, time_limit
         status, or ``"crashed (...)"``.
     """
     _check(method, builder)
-    args = {"T": int(T), "tau": int(tau), "method": method, "mu1": float(mu1), "time_limit": float(time_limit),
+    args = {"system": system.to_dict(), "T": int(T), "tau": int(tau), "method": method, "mu1": float(mu1), "time_limit": float(time_limit),
             "mem_limit_gb": float(mem_limit_gb), "builder": builder, "options": dict(options or {})}
     base = {"T": int(T), "tau": int(tau), "method": method, "builder": builder, "mu1": float(mu1),
             "time_limit": float(time_limit), "mem_limit_gb": float(mem_limit_gb)}
@@ -212,7 +221,7 @@ def run_size(T: int, tau: int, method: str = "ipm", mu1: float = 0.5, time_limit
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Worker entry: ``python -m eqrec.design.scale_sweep '{"T": 5, "tau": 2, ...}'``; prints one JSON line."""
+    """Worker entry: ``python -m eqrec.design.scale_sweep '{"system": {...}, "T": 5, "tau": 2, ...}'``; prints one JSON line."""
     argv = sys.argv[1:] if argv is None else argv
     print(json.dumps(_worker(json.loads(argv[0]))), flush=True)
     sys.stderr.flush()

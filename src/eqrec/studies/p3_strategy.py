@@ -365,8 +365,8 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     T, tau = int(wildcards.T), int(wildcards.tau)
     log.info("scale (T, tau) = (%d, %d): %s, builder %s, mu1 = %g, limits %g s / %g GB", T, tau, sc["method"],
              sc["builder"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]))
-    r = run_size(T, tau, sc["method"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]),
-                 sc["builder"])
+    r = run_size(batch_reactor(), T, tau, sc["method"], float(sc["mu1"]), float(sc["time_limit"]),
+                 float(sc["mem_limit_gb"]), sc["builder"])
     log.info("scale (%d, %d): %s; %s columns, build %.2f s, solve %.2f s, peak %.0f MB", T, tau, r.get("status"),
              r.get("cols"), r.get("build_time", float("nan")), r.get("solve_time", float("nan")),
              r.get("peak_mb", float("nan")))
