@@ -75,7 +75,7 @@ key                        default                      meaning
 key                        default                                 meaning
 =========================  ======================================  ========================================
 ``sizes``                  ``[[5,2],[6,2],[7,2],[8,2],[8,3]]``     ``(T, τ̄)`` of the ``p3_scale`` target
-``method``                 ``ipm``                                 HiGHS method (``scale_sweep.METHODS``)
+``method``                 ``simplex``                             HiGHS method (``scale_sweep.METHODS``)
 ``builder``                ``core``                                ``core`` or ``recursive``
 ``mu1``                    ``0.5``                                 fixed ``μ1``
 ``time_limit``             ``600``                                 HiGHS time limit per size [s]
