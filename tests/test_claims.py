@@ -124,7 +124,7 @@ def test_project_claims_file_loads_and_every_explanation_has_evidence():
 
 def test_stored_table_matches_the_stored_values():
     """results/claims.csv is what the claims step makes of the stored values.json files."""
-    values = sorted(str(p) for p in (ROOT / "results").glob("p*/values.json"))
+    values = sorted(str(p) for p in (ROOT / "results").glob("p*/*values.json"))
     fresh = build_claims_table(ROOT / "config" / "claims.yaml", values)
     stored = pd.read_csv(ROOT / "results" / "claims.csv", dtype=str, keep_default_na=False)
     for col in ("id", "quantity", "paper_value", "our_value", "status", "reason"):
@@ -133,6 +133,6 @@ def test_stored_table_matches_the_stored_values():
 
 
 def test_values_files_hold_numbers_and_evidence_only():
-    for path in (ROOT / "results").glob("p*/values.json"):
+    for path in (ROOT / "results").glob("p*/*values.json"):
         for key, item in json.loads(path.read_text()).items():
             assert set(item) == {"value", "evidence"}, f"{path.parent.name}/{key}: {sorted(item)}"

@@ -192,10 +192,17 @@ def test_bad_config_names_file_and_field(override, field):
     assert field in str(err.value) and "config/p3.yaml" in str(err.value).replace("--config", "config/p3.yaml")
 
 
-def test_schema_allows_further_p3_sections():
-    """Other P3 parts (strategy, scale) add their own top-level keys to the section."""
-    cfg = harness.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 10}, "scale": {}}})
-    assert cfg["strategy"] == {"steps": 10}
+def test_strategy_and_scale_sections_are_validated_with_defaults():
+    """strategy (P3-IMPL) and scale sections: defaults filled in, a misspelt top-level key names itself."""
+    cfg = harness.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 10}}})
+    assert cfg["strategy"]["steps"] == 10 and cfg["strategy"]["switching"]["p_on_time"] == 0.8
+    assert cfg["scale"]["method"] == "simplex"
+    with pytest.raises(harness.ConfigError) as err:
+        harness.load_config("p3", root=ROOT, overrides={"p3": {"stratgy": {"steps": 10}}})
+    assert "stratgy" in str(err.value)
+    with pytest.raises(harness.ConfigError) as err:
+        harness.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 0}}})
+    assert "strategy.steps" in str(err.value)
 
 
 def test_compare_bounds():

@@ -49,7 +49,7 @@ from eqrec.design.result import Design
 from eqrec.errors import InputError
 from eqrec.filters import GaussianDesign, compare_with_bounds, error_maps, make_filter, truncated_normal_deltas
 from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
-from eqrec.studies import p3_figures, p3_values
+from eqrec.studies import p3_figures, p3_strategy, p3_values
 from eqrec.studies.harness import Progress, get_logger, write_csv, write_json, write_npz, write_text
 
 log = get_logger("p3")
@@ -460,4 +460,6 @@ STEPS = {
     "acc_simulate": step_acc_simulate,
     "figure2": p3_figures.step_figure2,
     "values": p3_values.step_values,
+    # P3-IMPL (Sec. III-B3) and the scale table (target p3_scale, outside `all`)
+    **p3_strategy.STEPS,
 }
