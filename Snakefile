@@ -4,6 +4,7 @@
 #
 #   snakemake --cores 2                          # everything, default config
 #   snakemake --cores 2 p1                       # one paper (p1, p2, p3, p4)
+#   snakemake --cores 2 p3_scale                 # the P3 scale table (slow, up to 16 GB; not in `all`)
 #   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
 #   snakemake --report report.html               # browsable report with figure captions
 from snakemake.exceptions import WorkflowError
