@@ -138,3 +138,74 @@ def test_deadbeat_observer_where_place_poles_refuses(acc):
     d = deadbeat_observer(acc.A, acc.C)
     assert d.ok
     assert np.linalg.norm(np.linalg.matrix_power(acc.A - d.L @ acc.C, 3)) < 1e-10
+
+
+# --------------------------------------------------------------------------- best guarantee among the LP's optima
+
+@pytest.fixture(scope="module")
+def printed_L():
+    from pathlib import Path
+
+    from eqrec.studies.p2 import published_value
+
+    return np.asarray(published_value(Path(__file__).resolve().parents[1] / "config" / "claims.yaml", "P2-F2:L"),
+                      float)
+
+
+def test_runtimes_agree_until(acc, printed_L):
+    """The hold and theorem2 runtimes have the same error up to t = 3 on 100111 for any gains, not after."""
+    from eqrec.core.certify import closed_loop_maps
+    from eqrec.design.augmented_lp import runtimes_agree_until
+    from eqrec.design.augmented_model import schedule_from_augmented
+
+    assert runtimes_agree_until("100111") == 3 and runtimes_agree_until("111111") == 6
+    assert runtimes_agree_until("111100") == 6
+    m = AugmentedLP(acc, "100111", 1.0, printed_L, mode="masked_gain")
+    g = m.gains_from_x(np.random.default_rng(1).normal(size=m.lp.shape[1]))
+    maps = {rt: closed_loop_maps(acc, schedule_from_augmented(acc, g, rt), "100111")[:2] for rt in ("hold", "theorem2")}
+    for k in range(2):
+        assert np.allclose(maps["hold"][k][:4], maps["theorem2"][k][:4], atol=1e-10)
+        assert not np.allclose(maps["hold"][k][4:], maps["theorem2"][k][4:], atol=1e-6)
+
+
+@pytest.mark.parametrize("runtime", ["theorem2", "hold"])
+def test_best_guarantee_among_optima(acc, printed_L, runtime):
+    """γ* over the masked_gain optima at the printed L: ≤ every solver's pick as run, = certify() of its own
+    gains, which are optimal for the masked_gain LP; HiGHS and Clarabel agree."""
+    from eqrec.core.robust import worst_case_abs
+    from eqrec.design.augmented import certify_augmented
+    from eqrec.design.augmented_lp import best_guarantee_among_optima
+
+    words = ["100111", "101111", "110111"]
+    m = AugmentedLP(acc, "100111", 1.0, printed_L, mode="masked_gain")
+    res = {}
+    for solver in ("highs", "clarabel"):
+        r = best_guarantee_among_optima(acc, "100111", 1.0, printed_L, runtime=runtime, solver=solver)
+        assert r.exact and r.lower <= r.upper * (1 + 1e-9) + 1e-9
+        cert = certify_augmented(acc, r.gains, words, 1.0, runtime)[1]
+        assert cert.mu2 == pytest.approx(r.value, rel=1e-6)
+        # the gains are optimal for the masked_gain design LP (within its stated tolerance)
+        G, c = AugmentedStacking(acc, "100111", printed_L, "masked_gain").error_map(r.gains.M, r.gains.nu, r.gains.s0)
+        wc = worst_case_abs(G, c, m.radius).reshape(7, 3)
+        assert wc[:-1].max() <= r.optimum_bound * (1 + 1e-8) and wc[-1].max() <= 1.0 + 1e-8
+        assert r.optimum_bound == pytest.approx(r.design_optimum * (1 + 1e-7) + 1e-9, rel=1e-12)
+        # the solver's own pick is one optimum: its certified worst case as run is at least γ*
+        pick = certify_augmented(acc, m.gains(m.solve(solver).require_optimal()), words, 1.0, runtime)[1]
+        assert r.value <= pick.mu2 * (1 + 1e-6)
+        res[solver] = r.value
+    assert res["highs"] == pytest.approx(res["clarabel"], rel=1e-6)
+
+
+def test_best_terminal_among_optima_and_inputs(acc, printed_L):
+    from eqrec.design.augmented import certify_augmented
+    from eqrec.design.augmented_lp import best_guarantee_among_optima
+
+    r = best_guarantee_among_optima(acc, "100111", 1.0, printed_L, bound="terminal")
+    cert = certify_augmented(acc, r.gains, ["100111"], 1.0, "theorem2")[1]
+    assert r.exact and cert.terminal == pytest.approx(r.value, rel=1e-6)
+    rec = best_guarantee_among_optima(acc, "100111", 1.0, printed_L, recover=True)
+    assert certify_augmented(acc, rec.gains, ["100111"], 1.0, "theorem2")[1].terminal <= 1.0 + 1e-6
+    with pytest.raises(InputError):
+        best_guarantee_among_optima(acc, "100111", 1.0, printed_L, bound="middle")
+    with pytest.raises(InputError):
+        best_guarantee_among_optima(acc, "100111", 1.0, printed_L, runtime="leak")
