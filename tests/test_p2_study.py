@@ -126,6 +126,8 @@ def test_pipeline_values(small_run, acc):
     assert mg["value"] < tb - 0.1 and vals["f2_time_vs_masked_gain"]["value"] == "larger"
     cert = vals["f2_masked_gain_certified"]
     assert cert["value"] > tb and cert["evidence"]["hold_terminal"] > 1.0  # worse than a runnable design
+    ao = cert["evidence"]["among_optima"]  # the best any optimum gives as run: at most each solver's pick
+    assert ao["agree"] and all(cert["value"] <= b["hold"] * (1 + 1e-6) for b in cert["evidence"]["by_solver"].values())
     sim = np.load(d / "simulation.npz")
     assert sim["f1/time"].shape == (20, 7, 3)
 

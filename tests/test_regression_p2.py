@@ -60,6 +60,29 @@ def test_printed_L_step_matches_stored(tmp_path):
                                                                          rel=1e-6)
     assert [r.get("masked_gain") for r in fresh["r0_deadbeat"]] == pytest.approx(
         [r.get("masked_gain") for r in stored["r0_deadbeat"]], rel=1e-6)
+    # the best guarantee among the masked_gain optima as run: solver-independent, so it matches per solver
+    fa, sa = fresh["masked_gain"]["among_optima"], stored["masked_gain"]["among_optima"]
+    for rt in ("hold", "theorem2"):
+        for solver, e in sa["runtimes"][rt].items():
+            assert fa["runtimes"][rt][solver]["upper"] == pytest.approx(e["upper"], rel=1e-6)
+            assert fa["runtimes"][rt][solver]["certified"]["mu2"] == pytest.approx(e["upper"], rel=1e-6)
+    for solver, e in sa["terminal_theorem2"].items():
+        assert fa["terminal_theorem2"][solver]["upper"] == pytest.approx(e["upper"], rel=1e-6)
+
+
+def test_stored_best_guarantee_among_optima(values):
+    """P2-F2:certified-masked-gain: γ* agrees across solvers and runtimes, certify() confirms it, and it is at
+    most the certified guarantee of every solver's own pick."""
+    ev = values["f2_masked_gain_certified"]["evidence"]
+    ao = ev["among_optima"]
+    assert ao["agree"]
+    gamma = values["f2_masked_gain_certified"]["value"]
+    for rt, r in ao["runtimes"].items():
+        assert r["exact"] and r["design_optimal"] and r["solver_spread"] <= 1e-6 and r["certify_difference"] <= 1e-6
+        assert all(v == pytest.approx(gamma, rel=1e-6) for v in r["by_solver"].values())
+    for pick in ev["by_solver"].values():
+        assert gamma <= pick["hold"] * (1 + 1e-6) and gamma <= pick["theorem2_runtime"] * (1 + 1e-6)
+    assert gamma > ev["time_mu2"]
 
 
 def test_stored_counts_add_up_to_the_grid(values):
