@@ -817,6 +817,6 @@ def compare_free_routes(global_result: FreeMu1Result, ipopt_result: FreeMu1Resul
             "mu1_of_ipopt_gains": ipopt_result.extra.get("mu1_of_gains", np.nan),
             "lower_bound": lb, "tolerance": rtol,
             "better": "global" if Jg < Ji - rtol * abs(Jg) else ("ipopt" if Ji < Jg - rtol * abs(Jg) else "tie"),
-            "time_global": global_result.time, "time_ipopt": ipopt_result.time,
+            "global_s": global_result.time, "ipopt_s": ipopt_result.time,
             "ipopt_gap_to_bound": (Ji - lb) / abs(Ji) if np.isfinite(lb) else np.nan,
             "ipopt_consistent_with_bound": bool(Ji >= lb * (1 - 1e-6))}
