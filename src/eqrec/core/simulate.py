@@ -48,6 +48,11 @@ def sample_uncertainty(layout: UncertaintyLayout, radius: np.ndarray, rng: np.ra
                        kind: str = "uniform", size: int | None = None) -> np.ndarray:
     """Draw ``δ = (w, v, ξ0)`` in the box: ``"uniform"`` inside it or ``"vertex"`` at random corners."""
     shape = (layout.size,) if size is None else (size, layout.size)
+    return draw_box(rng, radius, shape, kind)
+
+
+def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tuple[int, ...], kind: str) -> np.ndarray:
+    """Draws in ``[-radius, radius]``: ``"uniform"`` inside the box or ``"vertex"`` at its corners."""
     if kind == "uniform":
         return rng.uniform(-1.0, 1.0, shape) * radius
     if kind == "vertex":
@@ -183,15 +188,6 @@ def arrival_schedule(delays: np.ndarray) -> list[list[int]]:
         if d != NEVER and tau + d < N:
             out[tau + d].append(tau)
     return out
-
-
-def draw_box(rng: np.random.Generator, radius: float, shape: tuple[int, ...], kind: str) -> np.ndarray:
-    """Draws in ``[-radius, radius]``: ``"uniform"`` inside the box or ``"vertex"`` at its corners."""
-    if kind == "uniform":
-        return rng.uniform(-1.0, 1.0, shape) * radius
-    if kind == "vertex":
-        return rng.choice([-1.0, 1.0], shape) * radius
-    raise ValueError(f"unknown noise kind {kind!r} (uniform or vertex)")
 
 
 def _inputs(system: AffineSystem, controller, inputs, t: int, xhat: np.ndarray) -> np.ndarray:
