@@ -60,6 +60,54 @@ def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tupl
     raise ValueError(f"unknown noise kind {kind!r} (uniform or vertex)")
 
 
+def closed_loop(system: AffineSystem, est: "RecoveryEstimator | SwitchingEstimator",
+                arrive: Sequence[Sequence[int]], x0: np.ndarray, xi0: np.ndarray, w: np.ndarray, v: np.ndarray,
+                u_at: Callable[[int, np.ndarray], np.ndarray], after_step: Callable[[int], None] | None = None
+                ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
+    """Step the true system (eq. (3) of the prefix-based paper) and a causal estimator on time-stamped packets.
+
+    Parameters
+    ----------
+    est
+        The estimator, started at ``x̂(0) = x0 - ξ0`` (its :meth:`step` takes the packets and ``u``).
+    arrive
+        ``arrive[t]``: the measurement times whose packets reach the estimator at ``t``;
+        ``N = len(arrive)`` steps.
+    x0, xi0
+        Initial state and initial error.
+    w, v
+        Noise, shapes ``(N, nw)`` and ``(N, nv)``.
+    u_at
+        ``(t, x̂(t)) -> u(t)``.
+    after_step
+        Called with ``t`` after each step.
+
+    Returns
+    -------
+    x, xhat : ndarray, shape (N+1, n)
+    dropped : list of (stamp, arrival)
+        Packets that arrived stamped before the estimator's current period.
+    """
+    N = len(arrive)
+    n = system.n
+    x = np.zeros((N + 1, n))
+    xhat = np.zeros((N + 1, n))
+    x[0] = x0
+    xhat[0] = x0 - xi0
+    y = np.zeros((N, system.p))
+    dropped = []
+    for t in range(N):
+        u = u_at(t, xhat[t])
+        y[t] = system.C_at(t) @ x[t] + system.V_at(t) @ v[t]
+        packets = [Packet(tau, y[tau]) for tau in arrive[t]]
+        xhat[t + 1] = est.step(packets, u)
+        dropped += [(tau, t) for tau in arrive[t] if tau < est.period_start]  # stamped before this period
+        x[t + 1] = system.A_at(t) @ x[t] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[t]
+        if after_step is not None:
+            after_step(t)
+    return x, xhat, dropped
+
+
 def simulate_run(system: AffineSystem, schedule: GainSchedule, word: "ArrivalPattern | str", delta: np.ndarray,
                  x0: np.ndarray, inputs: np.ndarray | None = None, periodic: bool = False) -> Trajectory:
     """Run the true system and the causal estimator along an arrival pattern for uncertainty ``δ``.
@@ -72,18 +120,10 @@ def simulate_run(system: AffineSystem, schedule: GainSchedule, word: "ArrivalPat
     T = pattern.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
     w, v, xi0 = lay.split(np.asarray(delta, float))
-    x = np.zeros((T + 1, system.n))
-    xhat = np.zeros((T + 1, system.n))
-    x[0] = x0
-    xhat[0] = x0 - xi0
-    est = RecoveryEstimator(system, schedule, xhat[0], periodic=periodic)
-    y = np.zeros((T, system.p))
-    for t in range(T):
-        u = np.zeros(system.m) if inputs is None else inputs[t]
-        y[t] = system.C_at(t) @ x[t] + system.V_at(t) @ v[t]
-        packets = [Packet(tau, y[tau]) for tau in pattern.arriving_at(t)]
-        xhat[t + 1] = est.step(packets, u)
-        x[t + 1] = system.A_at(t) @ x[t] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[t]
+    est = RecoveryEstimator(system, schedule, x0 - xi0, periodic=periodic)
+    arrive = [pattern.arriving_at(t) for t in range(T)]
+    x, xhat, _ = closed_loop(system, est, arrive, x0, xi0, w, v,
+                             lambda t, _xhat: np.zeros(system.m) if inputs is None else inputs[t])
     return Trajectory(word=pattern.label, x=x, xhat=xhat)
 
 
@@ -203,24 +243,10 @@ def _drive(system: AffineSystem, est, delays: np.ndarray, x0: np.ndarray, xi0: n
            rng: np.random.Generator, controller, inputs, after_step: Callable[[int], None]
            ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]], np.ndarray, np.ndarray]:
     N = len(delays)
-    n = system.n
     v = draw_box(rng, system.eta_v, (N, system.nv), kind)
     w = draw_box(rng, system.eta_w, (N, system.nw), kind)
-    x = np.zeros((N + 1, n))
-    xhat = np.zeros((N + 1, n))
-    x[0] = x0
-    xhat[0] = x0 - xi0
-    y = np.zeros((N, system.p))
-    arrive = arrival_schedule(delays)
-    dropped = []
-    for t in range(N):
-        u = _inputs(system, controller, inputs, t, xhat[t])
-        y[t] = system.C_at(t) @ x[t] + system.V_at(t) @ v[t]
-        packets = [Packet(tau, y[tau]) for tau in arrive[t]]
-        xhat[t + 1] = est.step(packets, u)
-        dropped += [(tau, t) for tau in arrive[t] if tau < est.period_start]  # stamped before this period
-        x[t + 1] = system.A_at(t) @ x[t] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[t]
-        after_step(t)
+    x, xhat, dropped = closed_loop(system, est, arrival_schedule(delays), x0, xi0, w, v,
+                                   lambda t, xh: _inputs(system, controller, inputs, t, xh), after_step)
     return x, xhat, dropped, w, v
 
 
