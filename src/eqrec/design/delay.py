@@ -446,8 +446,17 @@ def path_levels(design: Design, pattern) -> np.ndarray:
     T = pat.T
     out = np.full(T + 1, design.M1)
     for k in range(1, T):
-        out[k] = design.levels.get(pat.prefix(k).label, design.mu2) if design.levels else design.mu2
+        out[k] = node_level(design, pat.prefix(k))
     return out
+
+
+def node_level(design: Design, prefix: ArrivalPattern) -> float:
+    """The guaranteed level ``μ2,k^α`` on ``ξ(k)`` after the event prefix of length ``k`` (``0 < k < T``).
+
+    With per-node levels (cost ``"sum"``) that of the prefix's node; with one
+    common level (``"max"``) ``mu2`` (module docstring, "The cost").
+    """
+    return float(design.levels.get(prefix.label, design.mu2)) if design.levels else float(design.mu2)
 
 
 def word_certificate(design: Design, word):

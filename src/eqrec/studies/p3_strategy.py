@@ -95,11 +95,11 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, full_delay_language
+from eqrec.core.patterns import PrefixTree, full_delay_language
 from eqrec.core.simulate import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
-from eqrec.design.delay import design_delay, level_table, min_recovery_level, path_levels
+from eqrec.design.delay import design_delay, level_table, min_recovery_level, node_level, path_levels
 from eqrec.design.prefix import build_prefix_lp
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import FIELDS, run_size
@@ -228,17 +228,13 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     d_p = design_delay(reactor, on_time, mu1_s, cost=cost)
     rec_words = [w for w in words if w[0] != "0"]
     d_s = design_delay(reactor, rec_words, mu1_s, cost=cost)
-
-    def rec_level(prefix: ArrivalPattern) -> float:
-        return float(d_s.levels.get(prefix.label, d_s.mu2)) if d_s.levels else d_s.mu2
-
     sw_runs: dict[str, LongRun] = {}
     timing = []
     for j, kind in enumerate(st["noise"]):
         rng = np.random.default_rng([int(st["seed"]), 2, j])
         t0 = time.perf_counter()
         r = long_run_switching(reactor, d_p.schedule, d_s.schedule, int(st["steps"]), rng, M1=mu1_s,
-                               recovery_level=rec_level, max_delay=tb, p_on_time=float(sw["p_on_time"]), kind=kind,
+                               recovery_level=partial(node_level, d_s), max_delay=tb, p_on_time=float(sw["p_on_time"]), kind=kind,
                                x0=x0_r, controller=controller)
         timing.append(time.perf_counter() - t0)
         sw_runs[kind] = r
