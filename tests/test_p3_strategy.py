@@ -15,7 +15,7 @@ from eqrec.core.certify import closed_loop_maps
 from eqrec.core.estimator import Packet, RecoveryEstimator, SwitchingEstimator
 from eqrec.core.patterns import full_delay_language, parse_delay_word
 from eqrec.core.simulate import NEVER, arrival_schedule, long_run_periodic, long_run_switching, periodic_model_gap
-from eqrec.design.delay import design_delay, path_levels
+from eqrec.design.delay import design_delay, design_lp_status, path_levels
 from eqrec.design.scale_sweep import run_size
 from eqrec.errors import InputError
 from eqrec.models import batch_reactor
@@ -72,8 +72,8 @@ def _run(step, cfg, inputs=None, outputs=None, wildcards=None):
 
 def test_performance_design_is_infeasible_at_the_papers_mu1(reactor):
     """2 outputs, 4 states: no period-1 design at mu1 = 0.33; the smallest period-1 level is about 0.3553."""
-    assert p3_strategy.lp_status(reactor, ["0"], 0.33) == "infeasible"
-    assert p3_strategy.lp_status(reactor, ["0"], MU1_SWITCH) == "optimal"
+    assert design_lp_status(reactor, ["0"], 0.33) == "infeasible"
+    assert design_lp_status(reactor, ["0"], MU1_SWITCH) == "optimal"
 
 
 def test_switches_at_a_late_packet_and_reverts_after_T(reactor, switching_designs):

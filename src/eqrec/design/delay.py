@@ -490,6 +490,21 @@ def to_json(design: Design, free: "FreeMu1Result | None" = None) -> dict:
     return out
 
 
+def _fixed_mu1_lp(system: AffineSystem, tree: PrefixTree, mu1: float, cost: str, form: str = "split") -> PrefixLP:
+    # Theorem 1 / Proposition 1 at μ1 fixed: a level per node ("sum") or one common level ("max")
+    return build_prefix_lp(system, tree, float(mu1), levels="sum" if cost == "sum" else "common", form=form)
+
+
+def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs") -> str:
+    """The solver's status of the LP :func:`design_delay` solves (Theorem 1 / Proposition 1, ``μ1`` fixed).
+
+    ``"optimal"`` or ``"infeasible"`` (no estimator recovers to ``mu1``), or
+    another status of the solver; never raises for an infeasible design.
+    """
+    _check_cost(cost)
+    return solve_lp(_fixed_mu1_lp(system, _tree(patterns), mu1, cost).lp, solver).status
+
+
 def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum", solver: str = "highs",
                  form: str = "split", certify: bool = True, solver_options: dict | None = None) -> Design:
     """The delayed-data design with ``μ1`` fixed (an LP).
@@ -519,7 +534,7 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     _check_cost(cost)
     tree = _tree(patterns)
     mu1 = float(mu1)
-    model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
+    model = _fixed_mu1_lp(system, tree, mu1, cost, form)
     sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
     rtol = 1e-6 + solver_info(solver).accuracy
     return _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,

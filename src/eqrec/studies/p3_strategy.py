@@ -95,12 +95,10 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from eqrec.core.patterns import PrefixTree, full_delay_language
+from eqrec.core.patterns import full_delay_language
 from eqrec.core.simulate import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
-from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
-from eqrec.design.delay import design_delay, level_table, min_recovery_level, node_level, path_levels
-from eqrec.design.prefix import build_prefix_lp
+from eqrec.design.delay import design_delay, design_lp_status, level_table, min_recovery_level, node_level, path_levels
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import FIELDS, run_size
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
@@ -120,13 +118,6 @@ def lqr_gain(system: AffineSystem) -> np.ndarray:
     A, B = system.A, system.B
     P = sla.solve_discrete_are(A, B, np.eye(system.n), np.eye(system.m))
     return np.linalg.solve(np.eye(system.m) + B.T @ P @ B, B.T @ P @ A)
-
-
-def lp_status(system: AffineSystem, words, mu1: float, cost: str = "sum") -> str:
-    """HiGHS's status of the delayed-data design LP (Theorem 1 / Proposition 1) at ``μ1`` fixed."""
-    tree = PrefixTree(words, kind="delay")
-    model = build_prefix_lp(system, tree, float(mu1), levels="sum" if cost == "sum" else "common")
-    return solve_lp(model.lp, "highs").status
 
 
 def certificate_excess(design: Design) -> float:
@@ -209,7 +200,7 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
 
     # --- switching scheme: is a period-1 (equalized-performance) design feasible at the reactor's μ1?
     on_time = ["0"]
-    status_at_mu1 = lp_status(reactor, on_time, mu1, cost)
+    status_at_mu1 = design_lp_status(reactor, on_time, mu1, cost)
     mm = min_recovery_level(reactor, on_time)
     periods_min = []
     for P in range(1, int(sw["max_period"]) + 1):
@@ -234,8 +225,8 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
         rng = np.random.default_rng([int(st["seed"]), 2, j])
         t0 = time.perf_counter()
         r = long_run_switching(reactor, d_p.schedule, d_s.schedule, int(st["steps"]), rng, M1=mu1_s,
-                               recovery_level=partial(node_level, d_s), max_delay=tb, p_on_time=float(sw["p_on_time"]), kind=kind,
-                               x0=x0_r, controller=controller)
+                               recovery_level=partial(node_level, d_s), max_delay=tb,
+                               p_on_time=float(sw["p_on_time"]), kind=kind, x0=x0_r, controller=controller)
         timing.append(time.perf_counter() - t0)
         sw_runs[kind] = r
         log.info("switching, %s noise: %d steps in %.2f s, %d switches, max error/guarantee %.6f", kind,
@@ -270,7 +261,7 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
         "switching_mu1": mu1_s}}
     values["switching_mu1"] = {"value": mu1_s, "evidence": {
         "rule": rule, "mu1_min": mm.upper, "mu1_min_lower": mm.lower, "decimals": int(sw["decimals"]),
-        "lp_status": lp_status(reactor, on_time, mu1_s, cost), "reactor_mu1": mu1,
+        "lp_status": design_lp_status(reactor, on_time, mu1_s, cost), "reactor_mu1": mu1,
         "status_at_reactor_mu1": status_at_mu1}}
     values["strategy_time_s"] = {"value": time.perf_counter() - t_start, "evidence": {"steps": int(st["steps"])}}
 
