@@ -23,7 +23,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from eqrec.core.certify import certify_schedule
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
@@ -40,6 +39,7 @@ from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import EqrecError, InputError
 from eqrec.studies import p2_figures, p2_sweeps, p2_values
+from eqrec.studies.claims import load_claims
 from eqrec.studies.harness import get_logger, write_json, write_npz
 from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
 
@@ -301,9 +301,8 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
 
 def published_value(claims_path: str | Path, claim_id: str) -> Any:
     """The paper's value of one claim of ``config/claims.yaml`` (the only place published numbers live)."""
-    data = yaml.safe_load(Path(claims_path).read_text())
-    for entry in data:
-        if entry.get("id") == claim_id:
+    for entry in load_claims(claims_path):
+        if entry["id"] == claim_id:
             return entry["paper_value"]
     raise InputError(f"{claims_path} has no claim {claim_id!r}", field="printed")
 
