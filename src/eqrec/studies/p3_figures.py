@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from eqrec.studies.harness import save_figure
-from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajectory_panel
+from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajectory_panel, worst_case_lines
 
 STATE_LABELS_REACTOR = tuple(rf"$\tilde x_{i}$" for i in range(1, 5))
 FILTER_TITLES = {"timestamped": "Time-stamped Kalman (re-filtering)", "unaware": "Delay-unaware Kalman",
@@ -37,10 +37,8 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
         trajectory_panel(axes[:, c], errs, levels, title + verdict, state_labels=STATE_LABELS_REACTOR,
                          color=color, ylabels=(c == 0))
         worst = data["proposed_bounds"] if name == "proposed" else data[f"{name}_prediction_worst"]
-        t = np.arange(worst.shape[0])
+        worst_case_lines(axes[:, c], worst, "exact worst case")
         for i, ax in enumerate(axes[:, c]):
-            ax.plot(t, worst[:, i], "k--", lw=0.7, label="exact worst case" if i == 0 else None)
-            ax.plot(t, -worst[:, i], "k--", lw=0.7)
             lim = 1.15 * max(np.max(levels), np.max(worst[:, i]), np.max(np.abs(errs[:, :, i])))
             ax.set_ylim(-lim, lim)
     handles, labels = axes[0, 0].get_legend_handles_labels()
@@ -65,10 +63,7 @@ def step_figure2(cfg, inputs, outputs, wildcards) -> None:
                          f"{title}\nmax level {float(data[f'{name}_mu2']):.4f}", state_labels=STATE_LABELS_ACC,
                          ylabels=(col == 0))
         worst = data[f"{name}_bounds"]
-        t = np.arange(worst.shape[0])
-        for i, ax in enumerate(axes[:, col]):
-            ax.plot(t, worst[:, i], "k--", lw=0.7, label="certified worst case" if i == 0 else None)
-            ax.plot(t, -worst[:, i], "k--", lw=0.7)
+        worst_case_lines(axes[:, col], worst, "certified worst case")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=3, bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"ACC, true pattern {pattern} (missing data at k = 1), {data['proposed_errors'].shape[0]} runs, "

@@ -1,6 +1,6 @@
 """Figures in the style of the papers: error trajectories with guarantee bars.
 
-Shared by the figure modules of every study (``p1_figures``, ``p2_figures``,
+Shared by the figure modules of every study (``p1_figures``, ``p2_figures``, ``p3_figures``,
 ``p4_figures``); figures are written by :func:`eqrec.studies.harness.save_figure`
 (atomic, PDF without a creation date).  Matplotlib is imported on first use
 (non-interactive ``Agg`` backend), so importing a study stays cheap.
@@ -84,3 +84,21 @@ def trajectory_panel(axes_column, errors: np.ndarray, levels: Sequence[float],
         if i == 0:
             ax.set_title(title)
     axes_column[-1].set_xlabel("time step $t$")
+
+
+def worst_case_lines(axes_column, worst: np.ndarray, label: str = "exact worst case") -> None:
+    """Dashed ``±worst[t, i]`` on the subplot of each state ``i``: the exact worst case per time and component.
+
+    Parameters
+    ----------
+    axes_column
+        One axis per state component.
+    worst
+        Array ``(T+1, n)`` (e.g. the certified bounds of :mod:`eqrec.core.certify`).
+    label
+        Legend entry (on the first axis only).
+    """
+    t = np.arange(worst.shape[0])
+    for i, ax in enumerate(axes_column):
+        ax.plot(t, worst[:, i], "k--", lw=0.7, label=label if i == 0 else None)
+        ax.plot(t, -worst[:, i], "k--", lw=0.7)
