@@ -307,28 +307,28 @@ def published_value(claims_path: str | Path, claim_id: str) -> Any:
     raise InputError(f"{claims_path} has no claim {claim_id!r}", field="printed")
 
 
-def _certified(system, gains, words, M1, runtime) -> dict:
+def _certified(system, gains, words, M1, runtime, per_time: bool = False) -> dict:
     cert = certify_schedule(system, schedule_from_augmented(system, gains, runtime), words, M1)
-    return {"mu2": cert.mu2, "terminal": cert.terminal,
-            "per_word": {w: float(c.bounds.max()) for w, c in cert.words.items()}}
+    out = {"mu2": cert.mu2, "terminal": cert.terminal,
+           "per_word": {w: float(c.bounds.max()) for w, c in cert.words.items()}}
+    if per_time:
+        pt = cert.per_time()
+        out.update(per_time=[float(x) for x in pt], worst_time=int(np.argmax(pt)))
+    return out
 
 
 def _among_optima(system, res, words, M1) -> dict:
     """A :func:`best_guarantee_among_optima` result with its gains certified as run and checked optimal."""
     from eqrec.core.robust import worst_case_abs
 
-    cert = certify_schedule(system, schedule_from_augmented(system, res.gains, res.runtime), words, M1)
     G, c = AugmentedStacking(system, res.gains.word, res.gains.L, res.design_mode).error_map(
         res.gains.M, res.gains.nu, res.gains.s0)
     lay = UncertaintyLayout(len(res.gains.word), system.nw, system.nv, system.n)
     design_wc = worst_case_abs(G, c, lay.radius(system.eta_w, system.eta_v, M1)).reshape(-1, system.n).max(axis=1)
-    per_time = cert.per_time()
     return {"lower": res.lower, "upper": res.upper, "exact": res.exact, "agree_until": res.agree_until,
             "design_optimum": res.design_optimum, "optimum_bound": res.optimum_bound, "design_mu2": res.design_mu2,
             "design_check": {"mu2": float(design_wc[:-1].max()), "terminal": float(design_wc[-1])},
-            "certified": {"mu2": cert.mu2, "terminal": cert.terminal,
-                          "per_word": {w: float(cw.bounds.max()) for w, cw in cert.words.items()},
-                          "per_time": [float(x) for x in per_time], "worst_time": int(np.argmax(per_time))}}
+            "certified": _certified(system, res.gains, words, M1, res.runtime, per_time=True)}
 
 
 def step_printed(cfg, inputs, outputs, wildcards) -> dict:
