@@ -13,5 +13,13 @@
 # value re-plans.
 from eqrec.studies.harness import code_inputs, section_params
 
+# The paper's value of one claim (config/claims.yaml, the only place published
+# numbers live), for rules that evaluate the paper's own design or draw a published
+# value for comparison (P2: the printed gain L, the Fig. 3b interval). As a param,
+# the rule reruns when that value changes, not on other edits of claims.yaml.
+from eqrec.studies.p2 import published_value
+
+CLAIMS_FILE = "config/claims.yaml"
+
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"

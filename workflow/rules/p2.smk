@@ -9,12 +9,6 @@ VALUES_FILES.append("results/p2/values.json")
 P2_VARIANTS = config["p2"]["heatmap"]["variants"]
 
 
-def p2_published(claim_id):
-    """A published value of config/claims.yaml (rule p2_printed reruns when it changes, not on other edits)."""
-    import yaml
-
-    with open("config/claims.yaml") as fh:
-        return next((e["paper_value"] for e in yaml.safe_load(fh) if e.get("id") == claim_id), None)
 P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
 
 
@@ -131,7 +125,7 @@ rule p2_printed:
         study="p2",
         step="printed",
         cfg=P2_CFG,
-        published=[p2_published(config["p2"]["printed"][k]) for k in ("L_claim", "interval_claim")],
+        published=[published_value(CLAIMS_FILE, config["p2"]["printed"][k]) for k in ("L_claim", "interval_claim")],
     log:
         "logs/p2/printed.log",
     script:
