@@ -41,3 +41,22 @@ def test_certificate_json(acc, L1_words):
     js = certify_schedule(acc, d.schedule, L1_words, 1.0).to_json()
     assert set(js["bounds"]) == set(L1_words)
     assert js["certified_terminal"] <= 1 + 1e-6
+
+
+def test_error_maps_equal_the_causal_runs(acc, L1_words, rng):
+    """WordCertificate.errors (G δ + c) is what the causal estimator produces for the same δ."""
+    d = design_prefix(acc, L1_words, 1.0)
+    x0 = np.array([20.0, 40.0, 20.0])
+    u = np.full((6, 1), 206.0)
+    wc = d.certificate.words[L1_words[0]]
+    deltas = np.stack([sample_uncertainty(wc_layout(acc), wc.radius, rng, "uniform") for _ in range(5)])
+    runs = np.stack([simulate_run(acc, d.schedule, L1_words[0], dl, x0, u).error for dl in deltas])
+    assert np.allclose(wc.errors(deltas), runs, atol=1e-9)
+
+
+def test_no_data_growth_is_the_infinity_norm_of_the_matrix_power(acc):
+    from eqrec.core.certify import no_data_growth
+
+    A2 = acc.A @ acc.A
+    assert no_data_growth(acc, 2) == pytest.approx(np.abs(A2).sum(axis=1).max(), rel=1e-14)
+    assert no_data_growth(acc, 0) == pytest.approx(1.0)

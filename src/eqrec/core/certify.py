@@ -45,6 +45,10 @@ class WordCertificate:
         """A box vertex ``δ*`` at which ``|ξ_i(t)|`` equals its bound."""
         return worst_case_vertex(self.G[t, i], self.c[t, i], self.radius)
 
+    def errors(self, deltas: np.ndarray) -> np.ndarray:
+        """Errors ``ξ(t) = G_t δ + c_t`` for samples ``deltas`` (``(N, D)``): shape ``(N, T+1, n)``."""
+        return np.einsum("tnd,kd->ktn", self.G, np.atleast_2d(deltas)) + self.c[None]
+
 
 @dataclass
 class Certificate:
@@ -148,3 +152,15 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
                                            f"prefix {pattern.prefix(t).label!r} > its level {level:.9g}")
     design.certificate = cert
     return cert
+
+
+def no_data_growth(system: AffineSystem, steps: int) -> float:
+    r"""The factor :math:`\|A^k\|_\infty` by which an initial error box grows over ``k`` steps with no data.
+
+    Along a pattern whose first ``k`` measurements are all late or missing, no
+    estimator has data before time ``k`` and (without process noise)
+    :math:`\xi(k) = A^k \xi(0)`, so every level of that prefix is at least
+    :math:`\|A^k\|_\infty \mu_1` (the lower bound used to explain the batch
+    reactor's max μ2 in the delayed-data paper, Sec. IV-A).
+    """
+    return float(np.abs(np.linalg.matrix_power(np.asarray(system.A, float), int(steps))).sum(axis=1).max())
