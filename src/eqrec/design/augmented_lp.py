@@ -498,6 +498,7 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
     rows_all = np.arange((T + 1) * n)
     rows_bound = rows_all if bound == "all" else rows_all[T * n:]
     agree = runtimes_agree_until(design.word)
+    rows_d, _ = design.robust_rows(L)  # the design reading's rows, shared by every LP below
 
     def optima_lp(extra_rows, fixed: dict | None = None, recover_rows=None):
         # the design LP's columns and robust rows, mu2 at most `level`, plus rows bounded by gamma (minimised)
@@ -510,7 +511,6 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
             cols = np.fromiter(fixed, dtype=np.int64)
             vals = np.array([fixed[c] for c in cols])
             b.add_rows(np.arange(cols.size), cols, np.ones(cols.size), lower=vals, upper=vals, count=cols.size)
-        rows_d, _ = design.robust_rows(L)
         meta = design._rows_meta
         add_robust_rows(b, rows_d, design.radius, level_const=meta["level_const"], level_col=mu2,
                         level_coef=meta["level_coef"], form="abs")
