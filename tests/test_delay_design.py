@@ -5,7 +5,7 @@ import pytest
 from eqrec.core.patterns import PrefixTree, full_delay_language, parse_delay_word
 from eqrec.core.simulate import simulate_run
 from eqrec.core.solvers import solve_lp
-from eqrec.design.delay import (RadiusFamily, compare_free_routes, cost_weights, delay_language, design_delay,
+from eqrec.design.delay import (bilinear_problem, compare_free_routes, cost_weights, delay_language, design_delay,
                                 design_delay_global, design_delay_ipopt, level_table, literal_paper_cost,
                                 min_recovery_level, paper_cost, path_levels, to_json, word_certificate)
 from eqrec.design.prefix import build_prefix_lp, design_prefix
@@ -33,11 +33,12 @@ def test_delay_language_reduction():
         delay_language()
 
 
-def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language):
+@pytest.mark.parametrize("engine", ["classes", "tree"])
+def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language, engine):
     tree = PrefixTree(small_language)
     a, w = cost_weights(tree, "sum")
     assert a == 1 + 2 * len(tree.patterns)
-    d = design_delay(reactor, tree, 1.0, cost="sum")
+    d = design_delay(reactor, tree, 1.0, cost="sum", engine=engine)
 
     def level_of(pat, k):  # μ2,k^α literally: μ1 at k = 0 and k = T, the prefix node's level in between
         return d.M1 if k in (0, pat.T) else d.levels[pat.prefix(k).label]
@@ -45,7 +46,8 @@ def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language):
     J_literal = literal_paper_cost(tree, d.M1, level_of)
     assert d.extra["J"] == pytest.approx(J_literal, rel=1e-12)
     assert paper_cost(tree, d.M1, d.levels) == pytest.approx(J_literal, rel=1e-12)
-    assert d.extra["J"] == pytest.approx(d.solution.objective + a * d.M1, rel=1e-9)
+    if engine == "tree":  # the tree LP's objective is J without its μ1 term
+        assert d.extra["J"] == pytest.approx(d.solution.objective + a * d.M1, rel=1e-9)
     assert d.extra["J_certified"] <= d.extra["J"] * (1 + 1e-6)
     for pat in tree.patterns:
         lv = path_levels(d, pat)
@@ -64,24 +66,32 @@ def test_acc_language_with_mu1_1_is_the_p1_prefix_problem(acc):
     assert min(d_sum.levels.values()) == pytest.approx(1.0)  # time-varying: not always at the maximum
 
 
-def test_family_reproduces_the_direct_lp(reactor, small_language):
+def test_bilinear_problem_at_fixed_mu1_is_the_tree_lp(reactor, small_language):
+    """Problem (10) as data (IPOPT's route): at μ1 fixed it is the tree LP at that μ1."""
+    from eqrec.core.lp import LinearProgram
+
     tree = PrefixTree(small_language)
-    fam = RadiusFamily(reactor, tree, "sum")
+    bl = bilinear_problem(reactor, tree, "sum")
+    a, _ = cost_weights(tree, "sum")
     for mu in (0.8, 1.3):
-        direct = build_prefix_lp(reactor, tree, mu, levels="sum")
-        s1 = solve_lp(direct.lp)
-        s2 = solve_lp(fam.lp(mu, mu, mu))
-        a, _ = cost_weights(tree, "sum")
-        assert s2.objective == pytest.approx(s1.objective + a * mu, rel=1e-9)
+        direct = solve_lp(build_prefix_lp(reactor, tree, mu, levels="sum").lp)
+        lo, hi = bl["base"].col_lower.copy(), bl["base"].col_upper.copy()
+        lo[bl["mu1_col"]] = hi[bl["mu1_col"]] = mu
+        lo[bl["level_cols"]] = mu
+        lp = LinearProgram(c=bl["base"].c, A=bl["A0"] + mu * bl["dA"], row_lower=bl["L0"] + mu * bl["dL"],
+                           row_upper=bl["U0"] + mu * bl["dU"], col_lower=lo, col_upper=hi)
+        assert solve_lp(lp).objective == pytest.approx(direct.objective + a * mu, rel=1e-9)
 
 
 def test_min_recovery_level_is_bracketed_and_certified(acc):
     tree = PrefixTree(delay_language(ACC_DELAY, max_delay=6))
     r = min_recovery_level(acc, tree, rtol=1e-5)
     assert r.lower < r.upper <= r.lower * (1 + 1.1e-5) and r.lower_margin > 0
-    design_delay(acc, tree, r.upper, cost="max")  # feasible (and certified) at the upper end
-    with pytest.raises(InfeasibleDesign):
-        design_delay(acc, tree, r.lower * (1 - 1e-4), cost="max")
+    assert r.binding["time"] == 6 and 0 <= r.binding["row"] < acc.n
+    for engine in ("classes", "tree"):
+        design_delay(acc, tree, r.upper, cost="max", engine=engine)  # feasible (and certified) at the upper end
+        with pytest.raises(InfeasibleDesign):
+            design_delay(acc, tree, r.lower * (1 - 1e-4), cost="max", engine=engine)
     # plain bisection on LP feasibility agrees
     lo, hi = 0.1, 1.0
     for _ in range(25):
@@ -89,7 +99,7 @@ def test_min_recovery_level_is_bracketed_and_certified(acc):
         ok = solve_lp(build_prefix_lp(acc, tree, mid).lp).optimal
         lo, hi = (lo, mid) if ok else (mid, hi)
     assert hi == pytest.approx(r.upper, rel=1e-5)
-    assert r.lps < 15  # superlinear steps, not a bisection
+    assert r.lps == 2  # one Charnes-Cooper LP and one dual LP: no search
 
 
 @pytest.mark.parametrize("cost", ["sum", "max"])
@@ -106,15 +116,6 @@ def test_acc_mu1_free_global_and_ipopt(acc, cost):
     cmp = compare_free_routes(g, i)
     assert cmp["ipopt_consistent_with_bound"] and cmp["better"] in ("tie", "global")
     assert i.extra["polished"]["J"] == pytest.approx(g.J, rel=1e-4)
-
-
-def test_relaxation_is_a_lower_bound_on_its_interval(acc):
-    tree = PrefixTree(delay_language(ACC_DELAY, max_delay=6))
-    fam = RadiusFamily(acc, tree, "sum")
-    lo, hi = 0.3, 0.6
-    relax = solve_lp(fam.lp(lo, lo, hi)).objective
-    fixed = [solve_lp(fam.lp(m, m, m)).objective for m in np.linspace(lo, hi, 6)]
-    assert relax <= min(fixed) + 1e-9
 
 
 def test_delay_design_certified_and_worst_vertices_attained(reactor, small_language):
@@ -171,8 +172,8 @@ def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
 
     tree = PrefixTree(delay_language(max_delay=2, horizon=4))
     mu1 = 0.5
-    ref_sum = design_delay(reactor, tree, mu1, cost="sum")
-    ref_max = design_delay(reactor, tree, mu1, cost="max")
+    ref_sum = design_delay(reactor, tree, mu1, cost="sum", engine="tree")
+    ref_max = design_delay(reactor, tree, mu1, cost="max", engine="tree")
     for poles in ([0.1, 0.2, 0.3, 0.4], [-0.5, 0.0, 0.5, 0.9]):
         L = place_observer(reactor.A, reactor.C, poles).L
         for s0 in (np.zeros(4), np.array([0.1, -0.2, 0.05, 0.3])):

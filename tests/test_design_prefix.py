@@ -52,7 +52,7 @@ def test_node_shared_form_equals_paper_copy_per_word_form(acc, words):
 @pytest.mark.parametrize("solver", ["highs", "clarabel"])
 def test_solvers_and_robust_forms_agree(acc, L1_words, solver, form):
     ref = design_prefix(acc, L1_words, 1.0).mu2
-    d = design_prefix(acc, L1_words, 1.0, solver=solver, form=form)
+    d = design_prefix(acc, L1_words, 1.0, solver=solver, form=form, engine="tree")
     assert d.mu2 == pytest.approx(ref, rel=1e-6)
     assert d.certificate.mu2 <= d.mu2 * (1 + 1e-6)
 
@@ -92,12 +92,16 @@ def test_finite_length_language(acc):
 def test_infeasible_and_bad_inputs(acc, L1_words):
     with pytest.raises(InfeasibleDesign):
         design_prefix(acc, L1_words, 0.1)
-    with pytest.raises(InputError, match="M1"):
+    with pytest.raises(InputError, match="mu1"):
         design_prefix(acc, L1_words, -1.0)
     with pytest.raises(InputError, match="exceed the horizon"):
         build_prefix_lp(acc, L1_words, 1.0, T=4)
     with pytest.raises(InputError, match="alphabet"):
         design_prefix(acc, ["10x111"], 1.0)
+    with pytest.raises(InputError, match="engine"):
+        design_prefix(acc, L1_words, 1.0, engine="nodes")
+    with pytest.raises(InputError, match="tree LP"):
+        design_prefix(acc, L1_words, 1.0, form="dual")
 
 
 def test_optimum_is_a_lower_bound(acc, L1_words):
@@ -115,8 +119,8 @@ def test_zero_offset_loses_no_optimality(acc, L1_words, method):
     from eqrec.core.patterns import worst_case_word
 
     words = L1_words if method == "prefix" else [worst_case_word(L1_words)]
-    free = design_prefix(acc, words, 1.0, zero_offset=False)
-    fixed = design_prefix(acc, words, 1.0)
+    free = design_prefix(acc, words, 1.0, zero_offset=False, engine="tree")
+    fixed = design_prefix(acc, words, 1.0, engine="tree")
     assert fixed.mu2 == pytest.approx(free.mu2, rel=1e-7)
     assert np.all(fixed.schedule.word_matrices(words[0])[1] == 0)
 

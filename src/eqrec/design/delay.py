@@ -4,10 +4,22 @@ The delayed-data paper ("P3") designs, for a language of delay words, one gain
 triplet per event sequence of the reduced event language ``L^{E'}``, shared
 along common event prefixes (constraint (6)), zero on data not yet available
 (constraint (7)), with a level ``μ2,k^α`` per sequence and time and the
-recovery level ``μ1`` as a decision variable.  Here that problem is the
-core's node-per-prefix LP (:func:`eqrec.design.prefix.build_prefix_lp`): one
-gain row per event-prefix node over the measurements available at its time
-(late ones included), one level per non-terminal node.
+recovery level ``μ1`` as a decision variable.
+
+Engines
+-------
+* ``engine="classes"`` (default): the class engine of
+  :mod:`eqrec.design.classes`.  The problem separates exactly into one small
+  LP per (time, available data) class and state row (the separation theorem
+  proved there); nodes of one class share their level.  Full languages
+  ``{0..τ̄}^T`` are handled from the window rule without enumerating words
+  (:func:`delay_classes`), so ``(30, 4)`` (9.3·10²⁰ words, 446 classes) is
+  one LP of a few hundred thousand columns.
+* ``engine="tree"``: the core's node-per-prefix LP
+  (:func:`eqrec.design.prefix.build_prefix_lp`), one gain row per event-prefix
+  node over the measurements available at its time (late ones included), one
+  level per non-terminal node.  It stays as the independent cross-check (the
+  tests compare the two node by node) and for the paper-comparison rows.
 
 The cost (what exactly is counted)
 ----------------------------------
@@ -32,41 +44,27 @@ The cost (what exactly is counted)
 ``cost="max"``: the largest level ``max_{k,α} μ2,k^α`` (one common level, the
 prefix-based paper's ``M2``), and ``J = μ1 + max μ2`` when ``μ1`` is free.
 
-``μ1`` fixed: :func:`design_delay` (an LP).
+``μ1`` fixed: :func:`design_delay`.
 
-``μ1`` free: the problem is bilinear (the ``|G_ξ0| μ1`` terms of (10)).  Two routes:
+``μ1`` free: the problem (10) is bilinear (the ``|G_ξ0| μ1`` terms).  Two routes:
 
+* :func:`design_delay_global` — the global optimum by the μ1-free theorem of
+  :mod:`eqrec.design.classes`: every class level is nondecreasing in ``μ1``,
+  so ``J`` is, and the optimum is the smallest feasible ``μ1``, one
+  Charnes–Cooper LP (:func:`eqrec.design.classes.min_recovery_level`),
+  certified by the ratio recomputed from the gains (upper end) and a dual
+  point (lower end);
 * :func:`design_delay_ipopt` — the paper's: IPOPT through CasADi on (10) in
-  the split robust form, started from an LP solution (a local method);
-* :func:`design_delay_global` — global within a stated tolerance:
+  the split robust form of the tree LP, started from an LP solution (a local
+  method), kept for the comparison row.
 
-  1. the smallest feasible ``μ1`` (:func:`min_recovery_level`): feasibility
-     only involves the terminal rows ``f_i(x) + μ1 b_i(x) <= μ1`` (``f`` the
-     noise part, ``b = |G_ξ0| 1``), i.e. ``μ1_min = min_x max_i f_i/(1 - b_i)``,
-     a convex generalized fractional program.  Dinkelbach steps (LP at the
-     current ``μ``, then ``μ <- max_i f_i/(1 - b_i)`` evaluated on the certified
-     gains) decrease ``μ`` monotonically through feasible values; an LP at
-     ``μ (1 - rtol)`` whose terminal rows cannot be met certifies the lower
-     end (bisection is the fallback when a step stalls);
-  2. branch and bound on intervals ``[lo, hi]`` of ``μ1``: the LP with the
-     ξ0 box at radius ``lo`` and ``μ1 ∈ [lo, hi]`` elsewhere relaxes
-     ``|G_ξ0| μ1 >= |G_ξ0| lo``, so its optimum is a lower bound of ``J`` on
-     the interval (``mu1_range`` of the core); fixed-``μ1`` LPs give upper
-     bounds; ``J >= c_min μ1`` (every level is at least ``μ1``) caps the
-     search at ``UB / c_min``.  Intervals whose bound is within ``rtol`` of
-     the incumbent are discarded; the result states the remaining gap.
-
-  All LPs of one design share their sparsity pattern: the matrix is affine in
-  the ξ0 radius (:class:`RadiusFamily`), so each is a vector update, and
-  HiGHS is warm-started from the previous basis.
-
-Every returned design is certified from its gains alone
-(:func:`eqrec.core.certify.certify_design`).
+Every returned design is certified from its gains alone: the class
+certificate (worst case of ``E_d − K Z_S``) and, where node gains are derived,
+:func:`eqrec.core.certify.certify_design` on every sequence.
 """
 
 from __future__ import annotations
 
-import heapq
 import time
 from dataclasses import dataclass, field
 
@@ -74,15 +72,19 @@ import numpy as np
 import scipy.sparse as sp
 
 from eqrec.core.certify import certify_design, closed_loop_maps
-from eqrec.core.lp import LinearProgram, LPSolution
+from eqrec.core.classes import ClassSet, classes_of_full_language, classes_of_tree
+from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_language, full_delay_language, parse_delay_word
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
+from eqrec.design.classes import (MU1_LOWER_RTOL, MinRecoveryLevel, class_design, solve_classes)
+from eqrec.design.classes import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 COSTS = ("sum", "max")
+ENGINES = ("classes", "tree")
 
 
 # ---------------------------------------------------------------------------
@@ -104,10 +106,21 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
     return as_language(words, kind="delay", max_delay=max_delay, length=horizon, source=source)
 
 
+def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
+    """The classes of the full language ``{0..τ̄}^T`` from the window rule (no word enumerated)."""
+    return classes_of_full_language(int(horizon), int(max_delay))
+
+
 def _check_cost(cost: str) -> str:
     if cost not in COSTS:
         raise InputError(f"unknown cost {cost!r}; choose one of {list(COSTS)}", field="cost")
     return cost
+
+
+def _check_engine(engine: str) -> str:
+    if engine not in ENGINES:
+        raise InputError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}", field="engine")
+    return engine
 
 
 def _tree(patterns) -> PrefixTree:
@@ -116,6 +129,13 @@ def _tree(patterns) -> PrefixTree:
     if len({p.T for p in tree.patterns}) != 1:
         raise InputError("the delayed-data design needs a fixed-length language", field="delays")
     return tree
+
+
+def _classes(patterns) -> ClassSet:
+    """Classes of a language given as words, patterns, a tree or already as classes."""
+    if isinstance(patterns, ClassSet):
+        return patterns
+    return classes_of_tree(_tree(patterns))
 
 
 def node_weights(tree: PrefixTree) -> dict[int, int]:
@@ -141,12 +161,6 @@ def cost_weights(tree: PrefixTree, cost: str = "sum") -> tuple[float, dict[int, 
     return 1.0 + 2.0 * len(tree.patterns), {i: float(c) for i, c in w.items() if not tree.nodes[i].terminal}
 
 
-def min_cost_slope(tree: PrefixTree, cost: str = "sum") -> float:
-    """``c_min`` with ``J >= c_min μ1`` (every level is at least ``μ1``)."""
-    a, w = cost_weights(tree, cost)
-    return a + (sum(w.values()) if cost == "sum" else 1.0)
-
-
 def paper_cost(tree: PrefixTree, mu1: float, levels: dict[str, float], cost: str = "sum") -> float:
     """``J`` from node levels (keyed by node label; missing nodes count as ``μ1``)."""
     a, w = cost_weights(tree, cost)
@@ -166,29 +180,13 @@ def literal_paper_cost(tree: PrefixTree, mu1: float, level_of) -> float:
 # ---------------------------------------------------------------------------
 
 @dataclass
-class MinRecoveryLevel:
-    """The smallest feasible recovery level: ``lower < μ1_min <= upper``.
-
-    ``upper`` is attained by certified gains; ``lower`` is a level at which
-    an LP shows the terminal rows cannot be met (``lower_margin`` > 0 is that
-    LP's smallest violation).
-    """
-
-    upper: float
-    lower: float
-    lower_margin: float
-    iterations: list[dict] = field(default_factory=list)
-    lps: int = 0
-    time: float = 0.0
-
-    @property
-    def value(self) -> float:
-        return self.upper
-
-
-@dataclass
 class FreeMu1Result:
-    """A design with ``μ1`` free, and what certifies it."""
+    """A design with ``μ1`` free, and what certifies it.
+
+    ``lower_bound`` (global route): ``J`` at the level ``mu1_min.lower``
+    proven infeasible, with every class at its optimal level there; ``J`` is
+    nondecreasing in ``μ1``, so no feasible ``μ1`` does better.
+    """
 
     design: Design
     route: str  # "global" or "ipopt"
@@ -213,169 +211,6 @@ class FreeMu1Result:
 
 
 # ---------------------------------------------------------------------------
-# The LP family (matrix affine in the ξ0 radius) and warm-started HiGHS
-# ---------------------------------------------------------------------------
-
-class RadiusFamily:
-    r"""The design LPs of one language and cost, as functions of the ξ0 radius ``r`` and the range of ``μ1``.
-
-    Built twice by :func:`build_prefix_lp` (radii ``r_a``, ``r_b``, with
-    ``μ1`` a column): the coefficients and row bounds are affine in ``r``
-    (the radius multiplies the ξ0 entries of the robust rows), so
-    ``A(r) = A0 + r dA`` with one sparsity pattern.  :meth:`lp` returns
-
-    * ``lp(μ, μ, μ)``: the design LP at ``μ1 = μ`` fixed;
-    * ``lp(lo, lo, hi)``: the relaxation of the bilinear problem on ``[lo, hi]``;
-    * ``lp(μ, 0, inf, objective="terminal")``: ``min`` of the largest terminal
-      worst case at radius ``μ`` (the Dinkelbach subproblem).
-
-    :meth:`bilinear` gives ``A0, dA, ...`` for the IPOPT route.
-    """
-
-    def __init__(self, system: AffineSystem, tree: PrefixTree, cost: str = "sum", *, form: str = "split",
-                 r_a: float = 1.0, r_b: float = 2.0):
-        _check_cost(cost)
-        self.system, self.tree, self.cost = system, tree, cost
-        t0 = time.perf_counter()
-        levels = "sum" if cost == "sum" else "common"
-        mu1_cost, _ = cost_weights(tree, cost)
-        kw = dict(levels=levels, mu1_range=(1.0, 1.0), mu1_cost=mu1_cost, form=form)
-        ma = build_prefix_lp(system, tree, r_a, **kw)
-        mb = build_prefix_lp(system, tree, r_b, **kw)
-        Aa, Ab = ma.lp.A, mb.lp.A
-        if not (np.array_equal(Aa.indptr, Ab.indptr) and np.array_equal(Aa.indices, Ab.indices)):
-            raise AssertionError("the design LP's sparsity pattern depends on the radius")
-        self.model: PrefixLP = ma
-        self.base = ma.lp
-        dr = r_b - r_a
-        self.dA = (Ab.data - Aa.data) / dr
-        self.A0 = Aa.data - r_a * self.dA
-        self.dU, self.U0 = self._affine(ma.lp.row_upper, mb.lp.row_upper, r_a, dr)
-        self.dL, self.L0 = self._affine(ma.lp.row_lower, mb.lp.row_lower, r_a, dr)
-        self.mu1_col = ma.mu1_col
-        self.level_cols = np.array([ma.mu2_col, *ma.level_cols.values()], dtype=np.int64)
-        # terminal level rows (pattern order x component) and the positions of their μ1 coefficient
-        n = system.n
-        lr = ma.robust_index.level_rows
-        k = np.concatenate([tree.node(p).index * n + np.arange(n) for p in tree.patterns])
-        self.terminal_rows = np.stack([rows[k] for rows in lr])  # (signs, patterns * n)
-        A = ma.lp.A
-        lo, hi = A.indptr[self.mu1_col], A.indptr[self.mu1_col + 1]
-        where = dict(zip(A.indices[lo:hi].tolist(), range(lo, hi)))
-        self.terminal_pos = np.vectorize(where.__getitem__, otypes=[np.int64])(self.terminal_rows)
-        self.build_time = time.perf_counter() - t0
-        self.lps = 0
-
-    @staticmethod
-    def _affine(a: np.ndarray, b: np.ndarray, r_a: float, dr: float) -> tuple[np.ndarray, np.ndarray]:
-        fin = np.isfinite(a)
-        if not np.array_equal(fin, np.isfinite(b)):
-            raise AssertionError("row bounds change finiteness with the radius")
-        d = np.zeros_like(a)
-        d[fin] = (b[fin] - a[fin]) / dr
-        base = a.copy()
-        base[fin] = a[fin] - r_a * d[fin]
-        return d, base
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.base.shape
-
-    def lp(self, radius: float, lo: float, hi: float, objective: str = "cost",
-           terminal_scale: np.ndarray | None = None) -> LinearProgram:
-        """The LP at ξ0 radius ``radius`` with ``μ1 ∈ [lo, hi]`` (see the class docstring).
-
-        ``terminal_scale`` (with ``objective="terminal"``): the terminal rows
-        become ``worst_i <= radius + t g_i`` with the column ``t`` in place of
-        ``μ1`` (the scaled Dinkelbach subproblem).
-        """
-        b = self.base
-        data = self.A0 + radius * self.dA
-        row_upper = self.U0 + radius * self.dU
-        if terminal_scale is not None:
-            g = np.broadcast_to(np.asarray(terminal_scale, float), self.terminal_pos.shape[1:])
-            for s in range(self.terminal_pos.shape[0]):
-                data[self.terminal_pos[s]] = -g
-                row_upper[self.terminal_rows[s]] += radius
-        A = sp.csc_matrix((data, b.A.indices, b.A.indptr), shape=b.A.shape)
-        col_lower = b.col_lower.copy()
-        col_upper = b.col_upper.copy()
-        col_lower[self.mu1_col], col_upper[self.mu1_col] = lo, hi
-        col_lower[self.level_cols] = lo
-        c = b.c
-        if objective == "terminal":
-            c = np.zeros_like(b.c)
-            c[self.mu1_col] = 1.0
-        elif objective != "cost":
-            raise ValueError(objective)
-        return LinearProgram(c=c, A=A, row_lower=self.L0 + radius * self.dL, row_upper=row_upper,
-                             col_lower=col_lower, col_upper=col_upper, blocks=b.blocks)
-
-    def bilinear(self) -> dict:
-        """Data of problem (10): ``L0 + μ dL <= (A0 + μ dA) x <= U0 + μ dU`` with ``μ = x[mu1_col]``."""
-        both = np.isfinite(self.L0) & np.isfinite(self.U0)
-        if np.any(both & (self.dL != self.dU) & (self.L0 != self.U0)):
-            raise AssertionError("a ranged row's bounds move differently with the radius")
-        return dict(A0=sp.csc_matrix((self.A0, self.base.A.indices, self.base.A.indptr), shape=self.base.A.shape),
-                    dA=sp.csc_matrix((self.dA, self.base.A.indices, self.base.A.indptr), shape=self.base.A.shape),
-                    L0=self.L0, U0=self.U0, dL=self.dL, dU=self.dU)
-
-
-class WarmSolver:
-    """Solve a sequence of LPs of one sparsity pattern, HiGHS warm-started from the previous optimal basis.
-
-    Other solvers of the registry are called cold.  ``warm=False`` disables
-    the warm start (for the benchmark's comparison).
-    """
-
-    def __init__(self, solver: str = "highs", options: dict | None = None, warm: bool = True):
-        solver_info(solver)
-        self.solver, self.options, self.warm = solver, dict(options or {}), warm
-        self._basis = None
-        self.count = 0
-        self.time = 0.0
-
-    def solve(self, lp: LinearProgram) -> LPSolution:
-        self.count += 1
-        if self.solver != "highs":
-            sol = solve_lp(lp, self.solver, self.options)
-            self.time += sol.solve_time
-            return sol
-        import highspy
-
-        h = highspy.Highs()
-        h.setOptionValue("output_flag", False)
-        for key, val in self.options.items():
-            h.setOptionValue(key, val)
-        model = highspy.HighsLp()
-        nr, nc = lp.A.shape
-        model.num_col_, model.num_row_ = nc, nr
-        model.col_cost_, model.col_lower_, model.col_upper_ = lp.c, lp.col_lower, lp.col_upper
-        model.row_lower_, model.row_upper_ = lp.row_lower, lp.row_upper
-        model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        model.a_matrix_.start_, model.a_matrix_.index_, model.a_matrix_.value_ = lp.A.indptr, lp.A.indices, lp.A.data
-        model.a_matrix_.num_col_, model.a_matrix_.num_row_ = nc, nr
-        h.passModel(model)
-        if self.warm and self._basis is not None:
-            h.setBasis(self._basis)
-        t0 = time.perf_counter()
-        h.run()
-        elapsed = time.perf_counter() - t0
-        self.time += elapsed
-        ms = h.getModelStatus()
-        info = h.getInfo()
-        iters = int(info.simplex_iteration_count) + int(max(info.ipm_iteration_count, 0))
-        if ms == highspy.HighsModelStatus.kOptimal:
-            x = np.asarray(h.getSolution().col_value)
-            if self.warm:
-                self._basis = h.getBasis()
-            return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks)
-        if ms in (highspy.HighsModelStatus.kInfeasible, highspy.HighsModelStatus.kUnboundedOrInfeasible):
-            return LPSolution("infeasible", None, np.inf, "highs", iters, elapsed, lp.blocks)
-        return LPSolution(h.modelStatusToString(ms), None, np.nan, "highs", iters, elapsed, lp.blocks)
-
-
-# ---------------------------------------------------------------------------
 # Designs from LP solutions
 # ---------------------------------------------------------------------------
 
@@ -391,7 +226,8 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
         mu2 = float(max(x[model.mu2_col], mu1))
     design = Design(method=method, system=system, patterns=tree.patterns, T=model.stacking.T, M1=float(mu1),
                     mu2=mu2, schedule=schedule, solution=sol, build_time=build_time, levels=levels)
-    design.extra.update(cost=cost, J=paper_cost(tree, mu1, levels if cost == "sum" else {"*": mu2}, cost),
+    design.extra.update(engine="tree", cost=cost,
+                        J=paper_cost(tree, mu1, levels if cost == "sum" else {"*": mu2}, cost),
                         sequences=len(tree.patterns), nodes=len(tree))
     if certify:
         cert = certify_design(design, rtol=rtol)
@@ -468,56 +304,91 @@ def word_certificate(design: Design, word):
     raise InputError(f"{pat.label!r} is not an event sequence of the designed language", field="pattern")
 
 
-def to_json(design: Design, free: "FreeMu1Result | None" = None) -> dict:
-    """What ``eqrec design --method delay`` writes: levels per event prefix and time, ``J``, the gains per sequence.
+#: Largest reduced language (sequences) whose node gains ``to_json`` writes unless asked.
+JSON_NODE_GAINS_LIMIT = 200
 
-    ``free`` adds, for ``μ1`` free, the route, the lower bound of ``J`` that
-    certifies it (global route) and the certified smallest ``μ1``.
+
+def class_table(design: Design) -> list[dict]:
+    """Per (time, available data) class: its level, certified worst case, sum-cost weight and gain ``K``."""
+    cc = design.class_certificate
+    gains = design.class_gains
+    levels = design.extra.get("class_levels")
+    rows = []
+    for i, cls in enumerate(gains.classes.classes):
+        rows.append({"class": cls.label, "k": cls.depth, "data": list(cls.available), "terminal": cls.terminal,
+                     "sequences": int(cls.weight), "nodes": int(cls.nodes),
+                     "level": float(max(design.M1, levels[i])) if cls.inner else float(levels[i]),
+                     "certified": float(cc.levels[i]), "K": gains.K[i].tolist()})
+    return rows
+
+
+def to_json(design: Design, free: "FreeMu1Result | None" = None, node_gains: bool | None = None) -> dict:
+    """What ``eqrec design --method delay`` writes.
+
+    Always: ``μ1``, ``μ2``, ``J`` and the certified values; for the class
+    engine the classes (level, certified worst case, ``K``).  Node gains,
+    levels per event prefix and the event sequences: with ``node_gains``
+    (default: when the reduced language has at most
+    :data:`JSON_NODE_GAINS_LIMIT` sequences and node gains exist).  ``free``
+    adds, for ``μ1`` free, the route, the lower bound of ``J`` that certifies
+    it (global route) and the certified smallest ``μ1``.
     """
     cert = design.certificate
-    out = {"method": "delay", "cost": design.extra.get("cost"), "mu1": design.M1, "mu2": design.mu2,
-           "J": design.extra.get("J"), "J_certified": design.extra.get("J_certified"),
-           "certified_mu2": None if cert is None else cert.mu2,
-           "certified_terminal": None if cert is None else cert.terminal,
-           "levels": level_table(design) if cert is not None else [],
-           "event_sequences": {p.label: list(p.events()) for p in design.patterns},
-           "gains": design.schedule.to_json()}
+    ccert = design.class_certificate
+    if node_gains is None:
+        node_gains = design.schedule is not None and len(design.patterns) <= JSON_NODE_GAINS_LIMIT
+    if node_gains and design.schedule is None:
+        raise InputError("node gains were asked for but the design has none (a language too large for its prefix "
+                         "tree: use the class gains K)", field="node-gains")
+    certified = cert if cert is not None else ccert
+    out = {"method": "delay", "engine": design.extra.get("engine", "tree"), "cost": design.extra.get("cost"),
+           "mu1": design.M1, "mu2": design.mu2, "J": design.extra.get("J"),
+           "J_certified": design.extra.get("J_certified"),
+           "certified_mu2": None if certified is None else certified.mu2,
+           "certified_terminal": None if certified is None else certified.terminal,
+           "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes")}
+    if design.class_gains is not None:
+        out["classes"] = class_table(design)
+    if node_gains:
+        out["levels"] = level_table(design) if cert is not None else []
+        out["event_sequences"] = {p.label: list(p.events()) for p in design.patterns}
+        out["gains"] = design.schedule.to_json()
     if free is not None:
         out["mu1_free"] = {"route": free.route, "J": free.J, "lower_bound": free.lower_bound, "gap": free.gap,
                            "lps": free.lps, "time": free.time}
         if free.mu1_min is not None:
-            out["mu1_free"]["mu1_min"] = {"upper": free.mu1_min.upper, "lower": free.mu1_min.lower}
+            out["mu1_free"]["mu1_min"] = {"upper": free.mu1_min.upper, "lower": free.mu1_min.lower,
+                                          "binding": free.mu1_min.binding}
     return out
 
 
-def _fixed_mu1_lp(system: AffineSystem, tree: PrefixTree, mu1: float, cost: str, form: str = "split") -> PrefixLP:
-    # Theorem 1 / Proposition 1 at μ1 fixed: a level per node ("sum") or one common level ("max")
-    return build_prefix_lp(system, tree, float(mu1), levels="sum" if cost == "sum" else "common", form=form)
-
-
-def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs") -> str:
-    """The solver's status of the LP :func:`design_delay` solves (Theorem 1 / Proposition 1, ``μ1`` fixed).
-
-    ``"optimal"`` or ``"infeasible"`` (no estimator recovers to ``mu1``), or
-    another status of the solver; never raises for an infeasible design.
-    """
-    _check_cost(cost)
-    return solve_lp(_fixed_mu1_lp(system, _tree(patterns), mu1, cost).lp, solver).status
-
+# ---------------------------------------------------------------------------
+# μ1 fixed
+# ---------------------------------------------------------------------------
 
 def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum", solver: str = "highs",
-                 form: str = "split", certify: bool = True, solver_options: dict | None = None) -> Design:
-    """The delayed-data design with ``μ1`` fixed (an LP).
+                 form: str = "split", certify: bool = True, solver_options: dict | None = None,
+                 engine: str = "classes", node_gains: bool | None = None) -> Design:
+    """The delayed-data design with ``μ1`` fixed.
 
     Parameters
     ----------
-    patterns
-        Arrival patterns, delay words (digit strings) or a :class:`PrefixTree`;
-        reduced to ``L^{E'}``.
-    mu1
+    system : AffineSystem
+    patterns : words, patterns, PrefixTree or ClassSet
+        Delay words (digit strings), arrival patterns or their tree (reduced
+        to ``L^{E'}``), or the classes of a full language
+        (:func:`delay_classes`, class engine only).
+    mu1 : float
         Recovery level ``μ1``.
-    cost
-        ``"sum"`` (the paper's ``J``, module docstring) or ``"max"`` (largest level).
+    cost : {"sum", "max"}
+        The paper's ``J`` (module docstring) or the largest level.
+    engine : {"classes", "tree"}
+        The class engine (default) or the tree LP (module docstring).
+    form : str
+        Robust counterpart of the tree LP (``engine="tree"`` only).
+    node_gains : bool or None
+        Class engine: derive node gains (default: small trees, see
+        :func:`eqrec.design.classes.class_design`).
 
     Returns
     -------
@@ -532,18 +403,138 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
         If no estimator recovers to ``mu1``.
     """
     _check_cost(cost)
-    tree = _tree(patterns)
+    _check_engine(engine)
     mu1 = float(mu1)
+    rtol = 1e-6 + solver_info(solver).accuracy
+    if engine == "classes":
+        classes = _classes(patterns)
+        design = class_design(system, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
+                              solver=solver, solver_options=solver_options, method="delay", certify=certify,
+                              node_gains=node_gains, rtol=rtol)
+        if design.certificate is not None and classes.tree is not None:
+            design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
+        return design
+    tree = _tree(patterns)
     model = _fixed_mu1_lp(system, tree, mu1, cost, form)
     sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
-    rtol = 1e-6 + solver_info(solver).accuracy
     return _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
                                  certify=certify, rtol=rtol)
 
 
+def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs") -> str:
+    """Whether a design at ``μ1`` exists: ``"optimal"``, or ``"infeasible"`` (no estimator recovers to ``mu1``).
+
+    By the separation theorem, the design exists iff every terminal class
+    reaches ``μ1`` (:func:`eqrec.design.classes.check_terminal`); never
+    raises for an infeasible design.
+    """
+    _check_cost(cost)
+    classes = _classes(patterns)
+    sol = solve_classes(system, classes, float(mu1), solver=solver)
+    term = [lv for c, lv in zip(classes.classes, sol.levels) if c.terminal]
+    return "optimal" if max(term, default=0.0) <= float(mu1) * (1 + 1e-6) else "infeasible"
+
+
+def _fixed_mu1_lp(system: AffineSystem, tree: PrefixTree, mu1: float, cost: str, form: str = "split") -> PrefixLP:
+    # the tree LP at μ1 fixed: a level per node ("sum") or one common level ("max")
+    return build_prefix_lp(system, tree, float(mu1), levels="sum" if cost == "sum" else "common", form=form)
+
+
 # ---------------------------------------------------------------------------
-# The smallest feasible μ1
+# μ1 free: the global optimum (the μ1-free theorem of eqrec.design.classes)
 # ---------------------------------------------------------------------------
+
+def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
+                       rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
+    """The smallest ``μ1`` for which some estimator recovers (``‖ξ(T)‖ <= μ1`` for all ``‖ξ0‖ <= μ1``).
+
+    See :func:`eqrec.design.classes.min_recovery_level`: ``upper`` is
+    attained by certified gains, ``lower = upper (1 - rtol)`` is proven
+    infeasible by a dual point.
+    """
+    return _class_min_recovery_level(system, _classes(patterns), solver=solver, lower_rtol=rtol)
+
+
+def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", solver: str = "highs",
+                        rtol: float = MU1_LOWER_RTOL, certify: bool = True,
+                        node_gains: bool | None = None) -> FreeMu1Result:
+    """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
+
+    By the μ1-free theorem (:mod:`eqrec.design.classes`) ``J`` is
+    nondecreasing on the feasible set ``[μ1,min, ∞)``; ``μ1,min`` comes from
+    one Charnes–Cooper LP.  ``rtol`` places the certified infeasible level
+    ``lower = μ1,min (1 - rtol)``; ``lower_bound`` is ``J`` with every
+    class at its optimum there (no feasible ``μ1`` gives less).
+
+    Returns
+    -------
+    FreeMu1Result
+        ``design`` at ``μ1,min`` (certified), ``lower_bound`` and ``gap``,
+        ``mu1_min`` (bracket, binding terminal class and row).
+    """
+    _check_cost(cost)
+    t_start = time.perf_counter()
+    classes = _classes(patterns)
+    mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)
+    design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
+                          node_gains=node_gains)
+    lower_bound = np.nan
+    if np.isfinite(mm.lower):
+        low = solve_classes(system, classes, mm.lower, solver=solver)
+        from eqrec.design.classes import class_cost
+
+        lower_bound = class_cost(classes, mm.lower, low.levels, cost)
+    J = float(design.extra["J"])
+    design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,
+                        mu1_binding=mm.binding)
+    return FreeMu1Result(design=design, route="global", cost=cost, mu1=mm.upper, J=J, lower_bound=float(lower_bound),
+                         lps=mm.lps + 2, time=time.perf_counter() - t_start, mu1_min=mm,
+                         extra={"binding": mm.binding, "lower_margin": mm.lower_margin})
+
+
+# ---------------------------------------------------------------------------
+# μ1 free: the paper's route (IPOPT on the bilinear problem (10))
+# ---------------------------------------------------------------------------
+
+def bilinear_problem(system: AffineSystem, tree: PrefixTree, cost: str = "sum", *, form: str = "split",
+                     r_a: float = 1.0, r_b: float = 2.0) -> dict:
+    r"""Problem (10) as data: ``L0 + μ dL <= (A0 + μ dA) x <= U0 + μ dU`` with ``μ = x[mu1_col]``.
+
+    The tree LP is built at two ξ0 radii ``r_a, r_b`` with ``μ1`` a column:
+    coefficients and row bounds are affine in the radius (it multiplies the
+    ξ0 entries of the robust rows), with one sparsity pattern.
+    """
+    levels = "sum" if cost == "sum" else "common"
+    mu1_cost, _ = cost_weights(tree, cost)
+    kw = dict(levels=levels, mu1_range=(1.0, 1.0), mu1_cost=mu1_cost, form=form)
+    ma = build_prefix_lp(system, tree, r_a, **kw)
+    mb = build_prefix_lp(system, tree, r_b, **kw)
+    Aa, Ab = ma.lp.A, mb.lp.A
+    if not (np.array_equal(Aa.indptr, Ab.indptr) and np.array_equal(Aa.indices, Ab.indices)):
+        raise AssertionError("the design LP's sparsity pattern depends on the radius")
+    dr = r_b - r_a
+
+    def affine(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        fin = np.isfinite(a)
+        if not np.array_equal(fin, np.isfinite(b)):
+            raise AssertionError("row bounds change finiteness with the radius")
+        d = np.zeros_like(a)
+        d[fin] = (b[fin] - a[fin]) / dr
+        base = a.copy()
+        base[fin] = a[fin] - r_a * d[fin]
+        return d, base
+
+    dA = (Ab.data - Aa.data) / dr
+    A0 = Aa.data - r_a * dA
+    dU, U0 = affine(ma.lp.row_upper, mb.lp.row_upper)
+    dL, L0 = affine(ma.lp.row_lower, mb.lp.row_lower)
+    both = np.isfinite(L0) & np.isfinite(U0)
+    if np.any(both & (dL != dU) & (L0 != U0)):
+        raise AssertionError("a ranged row's bounds move differently with the radius")
+    mat = lambda data: sp.csc_matrix((data, Aa.indices, Aa.indptr), shape=Aa.shape)  # noqa: E731
+    return dict(A0=mat(A0), dA=mat(dA), L0=L0, U0=U0, dL=dL, dU=dU, model=ma, base=ma.lp, mu1_col=ma.mu1_col,
+                level_cols=np.array([ma.mu2_col, *ma.level_cols.values()], dtype=np.int64))
+
 
 def terminal_ratios(system: AffineSystem, schedule, tree: PrefixTree) -> tuple[np.ndarray, np.ndarray]:
     """``f_i`` (noise and offset part) and ``b_i`` (``|G_ξ0| 1``) of every terminal error component, from the gains.
@@ -569,194 +560,18 @@ def _fixed_point(f: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(f / (1.0 - b)))
 
 
-def min_recovery_level(system: AffineSystem, patterns, *, start: float = 1.0, rtol: float = 1e-5,
-                       max_iter: int = 50, solver: str = "highs", family: RadiusFamily | None = None,
-                       warm: WarmSolver | None = None) -> MinRecoveryLevel:
-    """The smallest ``μ1`` for which some estimator recovers (``‖ξ(T)‖ <= μ1`` for all ``‖ξ0‖ <= μ1``).
-
-    ``μ1_min = min_x max_i f_i(x) / g_i(x)`` with ``f_i`` the terminal noise
-    part and ``g_i = 1 - |G_ξ0,i| 1`` (convex over concave): the
-    Dinkelbach-type method of Crouzeix, Ferland and Schaible (1985, the
-    scaled variant, superlinear) — at ``θ_k`` solve the LP
-    ``min_x max_i (f_i(x) - θ_k g_i(x)) / g_i(x_{k-1})`` and set
-    ``θ_{k+1} = max_i f_i(x_k) / g_i(x_k)`` from the certified gains (a
-    feasible level, decreasing).  The lower end is certified by an LP at
-    ``upper (1 - rtol)`` whose terminal rows cannot be met.
-
-    Parameters
-    ----------
-    start
-        First level tried; doubled until feasible.
-    rtol
-        Relative width of the certified bracket ``(lower, upper]``.
-    """
-    t_start = time.perf_counter()
-    tree = _tree(patterns)
-    fam = family or RadiusFamily(system, tree, "max")
-    ws = warm or WarmSolver(solver)
-    n0 = ws.count
-    hist: list[dict] = []
-
-    def terminal_lp(mu, scale=None):
-        sol = ws.solve(fam.lp(mu, -np.inf if scale is not None else 0.0, np.inf, objective="terminal",
-                              terminal_scale=scale))
-        if not sol.optimal:
-            raise SolverFailure(f"terminal LP at mu1 = {mu:g}: {sol.status}")
-        return sol, float(sol.x[fam.mu1_col])
-
-    mu = float(start)
-    lower, margin = 0.0, np.nan
-    for _ in range(60):  # find a feasible level
-        sol, t = terminal_lp(mu)
-        hist.append({"mu": mu, "value": t - mu, "step": "probe"})
-        if t <= mu:
-            break
-        lower, margin = mu, t - mu
-        mu *= 2.0
-    else:
-        raise InfeasibleDesign("no recovery level up to 2^60 is feasible")
-    upper = np.inf
-    for _ in range(max_iter):
-        f, b = terminal_ratios(system, read_schedule(fam.model, sol), tree)
-        g = 1.0 - b
-        nxt = _fixed_point(f, b)
-        if not np.isfinite(nxt):
-            raise SolverFailure("the terminal LP returned gains that do not contract the initial error")
-        if nxt <= 1e-12 * max(1.0, mu):
-            raise InputError("the smallest recovery level is 0 (no noise reaches the end of the horizon); "
-                             "fix mu1 instead", field="mu1")
-        hist.append({"mu": mu, "next": nxt, "step": "dinkelbach"})
-        upper = min(upper, nxt)
-        if nxt > mu * (1 - rtol / 4):  # stalled: certify the lower end (or continue below)
-            probe = max(lower, upper * (1 - rtol))
-            sol_p, t = terminal_lp(probe)
-            hist.append({"mu": probe, "value": t - probe, "step": "certify"})
-            if t > probe:
-                lower, margin = probe, t - probe
-                break
-            mu, sol = probe, sol_p  # still feasible below: continue from there
-            continue
-        mu = upper
-        sol, _ = terminal_lp(mu, scale=g)
-    else:
-        raise SolverFailure(f"the smallest recovery level did not converge in {max_iter} steps "
-                            f"(bracket {lower:g} .. {upper:g})")
-    return MinRecoveryLevel(upper=float(upper), lower=float(lower), lower_margin=float(margin), iterations=hist,
-                            lps=ws.count - n0, time=time.perf_counter() - t_start)
-
-
-# ---------------------------------------------------------------------------
-# μ1 free: global route (branch and bound on intervals of μ1)
-# ---------------------------------------------------------------------------
-
-def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", rtol: float = 1e-4,
-                        mu1_rtol: float = 1e-5, solver: str = "highs", solver_options: dict | None = None,
-                        form: str = "split", warm_start: bool = True, max_lps: int = 400,
-                        certify: bool = True) -> FreeMu1Result:
-    """Globally minimise ``J`` over ``μ1`` and the gains, within relative tolerance ``rtol``.
-
-    Steps (module docstring): the smallest feasible ``μ1`` by certified
-    Dinkelbach steps; the LP at that ``μ1`` as first incumbent; then branch
-    and bound on ``[μ1_lower, UB / c_min]`` with relaxation LPs (lower
-    bounds) and fixed-``μ1`` LPs (incumbents), until every interval's bound
-    is within ``rtol`` of the incumbent.
-
-    Returns
-    -------
-    FreeMu1Result
-        ``design`` certified at the best ``μ1``; ``lower_bound`` a valid lower
-        bound of ``J`` over every ``μ1 > 0`` (up to LP tolerances), so
-        ``gap <= rtol``; ``history`` lists every LP (kind, interval, value).
-    """
-    _check_cost(cost)
-    t_start = time.perf_counter()
-    tree = _tree(patterns)
-    fam = RadiusFamily(system, tree, cost, form=form)
-    ws = WarmSolver(solver, solver_options, warm=warm_start)
-    # the smallest μ1 (its family: common level, any cost works for the terminal LP)
-    mm = min_recovery_level(system, tree, rtol=mu1_rtol, family=fam, warm=WarmSolver(solver, solver_options,
-                                                                                        warm=warm_start))
-    hist: list[dict] = []
-    best = {"J": np.inf, "mu1": np.nan, "sol": None}
-
-    def incumbent(mu: float) -> float:
-        sol = ws.solve(fam.lp(mu, mu, mu))
-        val = sol.objective if sol.optimal else np.inf
-        hist.append({"kind": "fixed", "lo": mu, "hi": mu, "value": val})
-        if val < best["J"]:
-            best.update(J=val, mu1=mu, sol=sol)
-        return val
-
-    def relaxation(lo: float, hi: float) -> tuple[float, float]:
-        sol = ws.solve(fam.lp(lo, lo, hi))
-        if sol.status == "infeasible":
-            val, at = np.inf, np.nan
-        elif not sol.optimal:
-            raise SolverFailure(f"relaxation LP on [{lo:g}, {hi:g}]: {sol.status}")
-        else:
-            val, at = sol.objective, float(sol.x[fam.mu1_col])
-        hist.append({"kind": "relaxation", "lo": lo, "hi": hi, "value": val, "at": at})
-        return val, at
-
-    for k in range(6):  # the LP at the smallest level sits on the feasibility boundary: nudge up if needed
-        if np.isfinite(incumbent(mm.upper * (1 + (0.0 if k == 0 else 10.0 ** (k - 9))))):
-            break
-    else:
-        raise SolverFailure(f"the LP at the certified smallest level {mm.upper:g} is infeasible")
-    c_min = min_cost_slope(tree, cost)
-    top = best["J"] / c_min  # J >= c_min μ1: no better μ1 above
-    heap: list[tuple[float, float, float]] = []  # (bound, lo, hi)
-    if top > mm.lower:
-        heapq.heappush(heap, (-np.inf, mm.lower, top))
-    done_bound = np.inf  # smallest bound of the discarded intervals
-    while heap:
-        if ws.count >= max_lps:
-            break
-        parent_bound, lo, hi = heapq.heappop(heap)
-        if parent_bound >= best["J"] * (1 - rtol):
-            done_bound = min(done_bound, parent_bound)
-            continue
-        val, at = relaxation(lo, hi)
-        if val >= best["J"] * (1 - rtol):
-            done_bound = min(done_bound, val)
-            continue
-        # incumbent candidate: where the relaxation put μ1 (inside the feasible range)
-        cand = min(max(at if np.isfinite(at) else 0.5 * (lo + hi), mm.upper), hi)
-        if cand > lo and not any(h["kind"] == "fixed" and h["lo"] == cand for h in hist):
-            incumbent(cand)
-        mid = 0.5 * (lo + hi)
-        if np.isfinite(at) and lo + 0.1 * (hi - lo) < at < hi - 0.1 * (hi - lo):
-            mid = at
-        heapq.heappush(heap, (val, lo, mid))
-        heapq.heappush(heap, (val, mid, hi))
-    open_bound = min((b for b, _, _ in heap), default=np.inf)  # -inf if an interval was never bounded
-    lower_bound = float(min(done_bound, open_bound, best["J"]))
-    mu1 = float(best["mu1"])
-    design = _design_from_solution(fam.model, tree, system, best["sol"].x, mu1, cost, best["sol"],
-                                   build_time=fam.build_time, certify=certify)
-    design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower)
-    return FreeMu1Result(design=design, route="global", cost=cost, mu1=mu1, J=float(best["J"]),
-                         lower_bound=lower_bound, lps=ws.count + mm.lps, time=time.perf_counter() - t_start,
-                         mu1_min=mm, history=hist, extra={"interval_top": top, "c_min": c_min,
-                                                          "open_intervals": len(heap)})
-
-
-# ---------------------------------------------------------------------------
-# μ1 free: the paper's route (IPOPT on the bilinear problem (10))
-# ---------------------------------------------------------------------------
-
 def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", start_mu1: float = 1.0,
                        form: str = "split", options: dict | None = None, polish: bool = True,
                        certify: bool = True, solver: str = "highs") -> FreeMu1Result:
     """Problem (10) with ``μ1`` a variable, by IPOPT through CasADi, started from the LP at ``start_mu1``.
 
     The robust rows at ξ0 radius ``μ1`` are ``(A0 + μ1 dA) x`` within bounds
-    affine in ``μ1`` (:meth:`RadiusFamily.bilinear`): exactly the bilinear
+    affine in ``μ1`` (:func:`bilinear_problem`): exactly the bilinear
     ``|G_ξ0| μ1`` terms of (10) (in the split form ``G = p - m``; the paper's
     Π-dual form has the same feasible gains).  ``start_mu1`` is doubled until
     the start LP is feasible.  IPOPT is a local method: its point is certified
-    as is (tolerance widened by IPOPT's accuracy) and, with ``polish``, the LP
-    at IPOPT's ``μ1`` gives the exact optimum for that ``μ1``
+    as is (tolerance widened by IPOPT's accuracy) and, with ``polish``, the
+    design at IPOPT's ``μ1`` gives the exact optimum for that ``μ1``
     (``extra["polished"]``).
     """
     import casadi as ca
@@ -764,21 +579,33 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
     _check_cost(cost)
     t_start = time.perf_counter()
     tree = _tree(patterns)
-    fam = RadiusFamily(system, tree, cost, form=form)
-    ws = WarmSolver(solver)
+    t_build = time.perf_counter()
+    bl = bilinear_problem(system, tree, cost, form=form)
+    build_time = time.perf_counter() - t_build
+    base, mu1_col = bl["base"], bl["mu1_col"]
+    lps = 0
+
+    def fixed_lp(mu: float):
+        col_lower, col_upper = base.col_lower.copy(), base.col_upper.copy()
+        col_lower[mu1_col] = col_upper[mu1_col] = mu
+        col_lower[bl["level_cols"]] = mu
+        from eqrec.core.lp import LinearProgram
+
+        return LinearProgram(c=base.c, A=bl["A0"] + mu * bl["dA"], row_lower=bl["L0"] + mu * bl["dL"],
+                             row_upper=bl["U0"] + mu * bl["dU"], col_lower=col_lower, col_upper=col_upper)
+
     mu0 = float(start_mu1)
     for _ in range(40):
-        sol0 = ws.solve(fam.lp(mu0, mu0, mu0))
+        sol0 = solve_lp(fixed_lp(mu0), solver)
+        lps += 1
         if sol0.optimal:
             break
         mu0 *= 2.0
     else:
         raise InfeasibleDesign("no feasible starting level for IPOPT")
-    bl = fam.bilinear()
-    nr, nc = fam.shape
-    A0, dA = bl["A0"], bl["dA"]
+    nc = base.shape[1]
     x = ca.MX.sym("x", nc)
-    mu = x[fam.mu1_col]
+    mu = x[mu1_col]
 
     def dm(M):
         M = M.tocsc()
@@ -787,19 +614,19 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
 
     # rows: A0 x + μ (dA x - dU) within [L0, U0] (lower bounds move only where they are finite: dL == dU there)
     shift = np.where(np.isfinite(bl["U0"]), bl["dU"], bl["dL"])
-    g = ca.mtimes(dm(A0), x) + mu * (ca.mtimes(dm(dA), x) - ca.DM(shift))
-    lbg = np.where(np.isfinite(bl["L0"]), bl["L0"] + (bl["dL"] - shift) * 0.0, -np.inf)
+    g = ca.mtimes(dm(bl["A0"]), x) + mu * (ca.mtimes(dm(bl["dA"]), x) - ca.DM(shift))
+    lbg = np.where(np.isfinite(bl["L0"]), bl["L0"], -np.inf)
     ubg = bl["U0"]
-    c = fam.base.c
+    c = base.c
     nlp = {"x": x, "f": ca.dot(ca.DM(c), x), "g": g}
     opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9,
             "ipopt.acceptable_tol": 1e-7, "ipopt.max_iter": 3000}
     opts.update({k if "." in k else f"ipopt.{k}": v for k, v in (options or {}).items()})
     nlpsol = ca.nlpsol("delay10", "ipopt", nlp, opts)
-    lbx = fam.base.col_lower.copy()
-    ubx = fam.base.col_upper.copy()
-    lbx[fam.mu1_col], ubx[fam.mu1_col] = 1e-9, np.inf
-    lbx[fam.level_cols] = 0.0
+    lbx = base.col_lower.copy()
+    ubx = base.col_upper.copy()
+    lbx[mu1_col], ubx[mu1_col] = 1e-9, np.inf
+    lbx[bl["level_cols"]] = 0.0
     t0 = time.perf_counter()
     out = nlpsol(x0=sol0.x, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
     t_ip = time.perf_counter() - t0
@@ -808,26 +635,25 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
     xv = np.asarray(out["x"]).reshape(-1)
     if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
         raise SolverFailure(f"IPOPT on problem (10) stopped with status {status}")
-    mu1 = float(xv[fam.mu1_col])
-    sol = LPSolution("optimal", xv, float(c @ xv), "ipopt", int(stats.get("iter_count", 0)), t_ip, fam.base.blocks)
+    mu1 = float(xv[mu1_col])
+    sol = LPSolution("optimal", xv, float(c @ xv), "ipopt", int(stats.get("iter_count", 0)), t_ip, base.blocks)
     rtol = 1e-6 + solver_info("ipopt").accuracy
-    design = _design_from_solution(fam.model, tree, system, xv, mu1, cost, sol, build_time=fam.build_time,
+    design = _design_from_solution(bl["model"], tree, system, xv, mu1, cost, sol, build_time=build_time,
                                    certify=certify, rtol=rtol)
     extra = {"status": status, "iterations": sol.iterations, "ipopt_time": t_ip, "start_mu1": mu0,
              "start_J": float(sol0.objective), "J_ipopt": float(c @ xv)}
     f, b = terminal_ratios(system, design.schedule, tree)
     extra["mu1_of_gains"] = _fixed_point(f, b)  # the smallest level IPOPT's gains recover to
-    if polish:  # the exact LP optimum at a level IPOPT's gains certainly reach
+    if polish:  # the exact optimum at a level IPOPT's gains certainly reach
         mu_p = max(mu1, extra["mu1_of_gains"])
-        pol = ws.solve(fam.lp(mu_p, mu_p, mu_p))
-        if pol.optimal:
-            extra["polished"] = {"mu1": mu_p, "J": float(pol.objective), "design": _design_from_solution(
-                fam.model, tree, system, pol.x, mu_p, cost, pol, build_time=fam.build_time, certify=certify)}
-        else:
-            extra["polished"] = {"mu1": mu_p, "J": np.nan, "status": pol.status}
+        try:
+            pol = design_delay(system, tree, mu_p, cost=cost, solver=solver, certify=certify)
+            extra["polished"] = {"mu1": mu_p, "J": float(pol.extra["J"]), "design": pol}
+        except InfeasibleDesign:
+            extra["polished"] = {"mu1": mu_p, "J": np.nan, "status": "infeasible"}
     design.extra.update(mu1_free="ipopt")
     return FreeMu1Result(design=design, route="ipopt", cost=cost, mu1=mu1, J=float(c @ xv), lower_bound=np.nan,
-                         lps=ws.count, time=time.perf_counter() - t_start, history=[], extra=extra)
+                         lps=lps, time=time.perf_counter() - t_start, history=[], extra=extra)
 
 
 def compare_free_routes(global_result: FreeMu1Result, ipopt_result: FreeMu1Result) -> dict:

@@ -265,17 +265,33 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
 
 def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
-                  zero_offset: bool = True, levels: str = "common") -> Design:
+                  zero_offset: bool = True, levels: str = "common", engine: str = "classes") -> Design:
     """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
-    ``words`` are arrival patterns (:mod:`eqrec.core.patterns`) or 0/1 words;
-    delay patterns give the event-based design of the delayed-data paper
-    (one gain block per event-prefix node).  ``levels`` selects one common
-    ``M2`` or per-node levels (:func:`build_prefix_lp`); with per-node levels
-    :attr:`Design.levels` holds them and ``mu2`` is the largest.
+    Parameters
+    ----------
+    system : AffineSystem
+    words : sequence of str or ArrivalPattern, or PrefixTree
+        Arrival patterns or 0/1 words; delay patterns give the event-based
+        design of the delayed-data paper (one gain block per event-prefix node).
+    M1 : float
+        Recovery level ``μ1``.
+    levels : {"common", "sum", "max"}
+        One common ``M2`` or per-node levels (:func:`build_prefix_lp`); with
+        per-node levels :attr:`Design.levels` holds them and ``mu2`` is the largest.
+    engine : {"classes", "tree"}
+        The class engine (:mod:`eqrec.design.classes`: one LP per (time,
+        available data) class and row; default) or this module's tree LP.
+    T, form, zero_offset
+        Tree LP only: horizon of the stacking, robust counterpart and free
+        offsets ``r`` (the class engine has no offsets: they are not needed,
+        see the module docstring).
 
-    Returns a :class:`Design` whose gains have been certified independently
-    (:func:`eqrec.core.certify.certify_design`) unless ``certify=False``.
+    Returns
+    -------
+    Design
+        Its gains certified independently (:func:`eqrec.core.certify.certify_design`)
+        unless ``certify=False``.
 
     Raises
     ------
@@ -286,6 +302,21 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     CertificationFailure
         If the recovered gains do not achieve the optimum.
     """
+    if engine == "classes":
+        from eqrec.core.classes import classes_of_tree
+        from eqrec.design.classes import class_design
+
+        tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
+        if T is not None and T != tree.depth:
+            raise InputError(f"the class engine designs on the words' own horizon {tree.depth}, got T = {T}",
+                             field="T")
+        if form != "split" or not zero_offset:
+            raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
+                             field="engine")
+        return class_design(system, classes_of_tree(tree), M1, levels=levels, solver=solver, method=method,
+                            certify=certify, node_gains=True, time_based=(method == "time"))
+    if engine != "tree":
+        raise InputError(f"unknown engine {engine!r}; choose 'classes' or 'tree'", field="engine")
     model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset, levels=levels)
     sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {M1:g})")
     schedule = read_schedule(model, sol, time_based=(method == "time"))
@@ -293,6 +324,7 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     mu2 = max(node_levels.values(), default=model.M1) if levels == "sum" else float(sol.x[model.mu2_col])
     design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, M1=model.M1,
                     mu2=mu2, schedule=schedule, solution=sol, build_time=model.build_time, levels=node_levels)
+    design.extra["engine"] = "tree"
     if certify:
         from eqrec.core.certify import certify_design
 

@@ -35,6 +35,14 @@ class Design:
         Optional per-node levels ``μ2`` keyed by the node's prefix label.
     certificate
         The independent worst-case certificate (:class:`eqrec.core.certify.Certificate`).
+    class_gains
+        Class engine: one gain ``K`` per (time, available data) class
+        (:class:`eqrec.core.classes.ClassGains`), the estimator in class form.
+        ``schedule`` (node gains) is then derived from them, or ``None`` for a
+        language too large to enumerate.
+    class_certificate
+        Class engine: the worst case of every class recomputed from the gains ``K``
+        (:class:`eqrec.design.classes.ClassCertificate`).
     """
 
     method: str
@@ -43,12 +51,14 @@ class Design:
     T: int
     M1: float
     mu2: float
-    schedule: GainSchedule
+    schedule: GainSchedule | None
     solution: LPSolution
     build_time: float
     certificate: "object | None" = None
     extra: dict = field(default_factory=dict)
     levels: dict[str, float] = field(default_factory=dict)
+    class_gains: "object | None" = None
+    class_certificate: "object | None" = None
 
     def __post_init__(self) -> None:
         self.patterns = tuple(as_pattern(p) for p in self.patterns)

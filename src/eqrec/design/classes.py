@@ -1,0 +1,671 @@
+r"""The class engine: every prefix-tree design as independent LPs per (time, available data) class.
+
+Setting
+-------
+The prefix-based paper (Theorem 3) and the delayed-data paper (Theorem 1,
+Proposition 1) design one gain row per node of the prefix tree of a
+language.  With :math:`\delta = (w, v, \xi_0)` in the box of radii
+:math:`\beta = (\eta_w, \eta_v, \mu_1)`, the error after the prefix of a node
+of depth ``d`` is, in the Q-parametrisation (eq. (13) of the prefix-based
+paper restricted to the prefix),
+
+.. math:: \xi(d) = \Big(E_d + \sum_{s<d} \Phi(d, s{+}1)\, Q_s Z_{S_s}\Big)\delta,
+
+where :math:`E_d` is the open-loop error map, :math:`Z_S` stacks the output
+maps of the measurements in ``S``, :math:`S_s = \mathcal A(s)` is the data
+available at time ``s`` along the prefix (nested: :math:`S_s \subseteq
+S_{d-1} =: S`) and :math:`Q_s` the gain row of the ancestor of depth ``s+1``.
+The pair ``(d, S)`` is the node's class (:mod:`eqrec.core.classes`).
+
+Theorem (separation)
+--------------------
+*The set of error maps a node can attain is* :math:`\{E_d - K Z_S : K \in
+\mathbb R^{n \times |S|p}\}`, *whatever its ancestors' gains.  Hence, for*
+``μ1`` *fixed:*
+
+1. *the smallest level of a node is that of its class,*
+
+   .. math:: \ell(d, S) = \max_r \min_{k} \sum_c \beta_c\, \big|E_d[r, c] - (k^\top Z_S)[c]\big|,
+
+   *one weighted least-absolute-deviations LP per (class, state row* ``r``\ *);*
+2. *the tree LP's optimum is* :math:`\max(\mu_1, \max_{\text{inner}} \ell)`
+   *(common level, the prefix-based paper's* ``M2``\ *) or*
+   :math:`(1 + 2|\mathcal L^{E'}|)\mu_1 + \sum_{\text{inner}} w\,\max(\mu_1,
+   \ell)` *(the delayed-data paper's sum, weights* ``w`` *the sequences
+   through the class), and the design is feasible iff* :math:`\ell(T, S) \le
+   \mu_1` *for every terminal class.*
+
+*Proof.* The node's own gain :math:`Q_{d-1}` multiplies :math:`Z_{S}` and
+each ancestor's :math:`Z_{S_s}` is a sub-block of rows of :math:`Z_S`, so
+the sum is :math:`-K Z_S` for :math:`-K = Q_{d-1} + \sum_{s<d-1}\Phi(d,
+s{+}1) Q_s P_s` (:math:`P_s` embedding ``S_s`` in ``S``).  For any ancestor
+gains, every ``K`` is reached by :math:`Q_{d-1} = -K - \sum_{s<d-1}\dots`,
+and every choice gives some ``K``.  The worst case of row ``r`` over the box
+is :math:`\sum_c \beta_c |(E_d - K Z_S)[r, c]|` (a symmetric box, attained
+at a vertex); rows of ``K`` are free independently, nodes independently
+(each node's ``Q_{d-1}`` is its own variable).  Two nodes of one class have
+the same :math:`E_d, Z_S`, hence the same minimum.  The tree LP's
+constraints couple nodes only through the common level or the cost, both
+monotone in each node's level, so the optimum takes each node at its
+minimum.  ∎
+
+Gains.  The **class-form estimator** :math:`\hat x(d) = \bar x(d) +
+K_{(d,S)}(y_S - \bar y_S)` (:class:`eqrec.core.estimator.ClassEstimator`)
+has error :math:`(E_d - K Z_S)\delta` exactly, so it attains every class
+level with one ``K`` per class and no prefix tree at run time; no causal
+affine estimator does better (its error has this form).  Node gains for the
+recursive estimator follow from the ``K``\ s (:func:`node_schedule`):
+:math:`Q_{d-1} = -K_{(d,S)} + A(d-1)\,K_{(d-1,S')}P`, and then ``(F, u0)`` by
+eqs. (1)-(2) of the prefix-based paper.
+
+Theorem (μ1 free)
+-----------------
+Each class level is a minimum of functions affine and nondecreasing in
+:math:`\beta`, hence concave and nondecreasing in :math:`\mu_1`; so are
+both costs.  For one terminal (class, row) and a fixed ``k``, write
+:math:`a(k) = \sum_{c \in \xi_0} |\cdot|` and :math:`b(k) = \sum_{c \in w,
+v} \beta_c |\cdot|`: the row meets :math:`\ell \le \mu` iff some ``k`` has
+:math:`b(k) \le \mu(1 - a(k))`, i.e. iff
+:math:`\mu \ge m_r = \min_k b(k) / (1 - a(k))` (``a(k) < 1``).  The
+feasible set of ``μ1`` is therefore :math:`[\mu_{1,\min}, \infty)` with
+:math:`\mu_{1,\min} = \max_{\text{terminal } (c, r)} m_r`, and since the cost
+is nondecreasing on it, **the global optimum over μ1 and the gains is
+μ1 = μ1,min**, without search.  Each :math:`m_r` is a linear-fractional
+program, one LP after the Charnes–Cooper change of variables
+:math:`(y, t) = (k, 1)/(1 - a(k))`:
+
+.. math:: m_r = \min_{y,\ t \ge 0} b(y, t) \quad\text{s.t.}\quad t - a(y, t) \ge 1,
+
+with ``a, b`` evaluated on :math:`tE - y^\top Z` (:func:`min_recovery_level`).
+No ``μ1`` is feasible iff :math:`\min_k a(k) \ge 1` for some terminal row
+(the LP is then infeasible).  What certifies ``μ1,min``: the ratio
+recomputed from the recovered ``k`` (upper end, attained), and a dual point
+:math:`\lambda` (:math:`Z_S\lambda = 0`, :math:`|\lambda_c| \le \beta_c`) at
+:math:`\mu_{lo} = (1 - 10^{-6})\mu_{1,\min}` with
+:math:`E_d[r]\lambda > \mu_{lo}`: by LP duality the row's level exceeds
+:math:`\mu_{lo}` there, so :math:`\mu_{lo}` is infeasible (lower end).
+
+Which designs separate.  Prefix-tree designs only: a **time-based** design
+shares one gain row among all words at a time, and an **augmented** one
+shares ``L`` and its gains across words and times, so a gain there is not the
+last to act on one node alone and the node-by-node argument fails.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from eqrec.core.certify import CERT_RTOL
+from eqrec.core.classes import ClassGains, ClassSet, DataClass, class_maps, classes_of_tree
+from eqrec.core.gains import q_to_f, schedule_from_word_gains, GainSchedule
+from eqrec.core.lp import LinearProgram, LPSolution
+from eqrec.core.patterns import ArrivalPattern, PrefixTree
+from eqrec.core.solvers import solve_lp, solver_info
+from eqrec.core.stacking import Stacking
+from eqrec.core.systems import AffineSystem
+from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
+
+COSTS = ("sum", "max")
+
+#: Relative distance below ``μ1,min`` at which the dual certificate shows infeasibility.
+MU1_LOWER_RTOL = 1e-6
+
+
+# ---------------------------------------------------------------------------
+# The class LPs (build / solve / read)
+# ---------------------------------------------------------------------------
+
+@dataclass
+class ClassLP:
+    """One block LP holding the LAD LP of every (class, state row), and where its variables are.
+
+    Block ``b`` is (class ``block_class[b]``, row ``block_row[b]``); its gain
+    row ``k`` sits in columns ``k_cols[b]``.  ``kind`` is ``"level"`` (the
+    LAD LP at fixed ``μ1``) or ``"ratio"`` (the Charnes–Cooper LP of
+    :func:`min_recovery_level`, whose ``t`` column is ``t_col[b]``).
+    """
+
+    lp: LinearProgram
+    kind: str
+    block_class: np.ndarray
+    block_row: np.ndarray
+    k_cols: list[np.ndarray]
+    block_cols: np.ndarray  # (blocks + 1,) column ranges of each block
+    t_col: np.ndarray | None = None
+    build_time: float = 0.0
+
+    @property
+    def blocks(self) -> int:
+        return int(self.block_class.size)
+
+
+def _radius(stacking: Stacking, mu1: float) -> np.ndarray:
+    sys = stacking.system
+    return stacking.layout.radius(sys.eta_w, sys.eta_v, mu1)
+
+
+def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float | None, *, kind: str = "level",
+                   which: list[int] | None = None, stacking: Stacking | None = None) -> ClassLP:
+    r"""Assemble the LPs of the classes ``which`` (default all) and every state row as one block-diagonal LP.
+
+    ``kind="level"`` (``μ1`` given): per block
+    :math:`\min \sum_c \beta_c (s^+_c + s^-_c)` s.t.
+    :math:`Z_S^\top k + s^+ - s^- = E_d[r]` on the columns ``c`` that ``E_d[r]``
+    or ``Z_S`` touch (the others add nothing).
+
+    ``kind="ratio"`` (``μ1`` not used): the Charnes–Cooper LP of the module
+    docstring, :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0`,
+    :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`, cost the noise
+    columns' radii.
+    """
+    t0 = time.perf_counter()
+    st = stacking or Stacking(system, classes.horizon)
+    n = system.n
+    lay = st.layout
+    xi0 = np.zeros(lay.size, bool)
+    xi0[lay.xi0] = True
+    beta = _radius(st, 1.0 if mu1 is None else float(mu1))
+    which = list(range(len(classes))) if which is None else list(which)
+    rows_i, cols_i, vals = [], [], []
+    rhs, rlo, rhi = [], [], []
+    cost, clo, chi = [], [], []
+    k_cols, bcls, brow, tcols, bstart = [], [], [], [], [0]
+    nrow = ncol = 0
+    for ci in which:
+        E, Z = class_maps(st, classes.classes[ci])
+        m = Z.shape[0]
+        act = np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
+        C = act.size
+        ZT = Z[:, act].T  # (C, m)
+        zr, zc = np.nonzero(ZT)
+        zv = ZT[zr, zc]
+        b_act = beta[act]
+        x_act = xi0[act]
+        for r in range(n):
+            e = E[r, act]
+            kc = np.arange(ncol, ncol + m)
+            if kind == "level":
+                sp_ = ncol + m + np.arange(C)
+                sm_ = sp_ + C
+                # Z^T k + s+ - s- = e
+                rows_i += [nrow + zr, nrow + np.arange(C), nrow + np.arange(C)]
+                cols_i += [kc[zc], sp_, sm_]
+                vals += [zv, np.ones(C), -np.ones(C)]
+                rlo.append(e)
+                rhi.append(e)
+                cost += [np.zeros(m), b_act, b_act]
+                clo += [np.full(m, -np.inf), np.zeros(2 * C)]
+                chi += [np.full(m, np.inf), np.full(2 * C, np.inf)]
+                ncol += m + 2 * C
+                nrow += C
+            elif kind == "ratio":
+                tc = ncol + m
+                sp_ = tc + 1 + np.arange(C)
+                sm_ = sp_ + C
+                ez = np.flatnonzero(e)
+                rows_i += [nrow + zr, nrow + ez, nrow + np.arange(C), nrow + np.arange(C)]
+                cols_i += [kc[zc], np.full(ez.size, tc), sp_, sm_]
+                vals += [zv, -e[ez], np.ones(C), -np.ones(C)]
+                rlo.append(np.zeros(C))
+                rhi.append(np.zeros(C))
+                # Σ_{ξ0} (s+ + s-) - t <= -1
+                xa = np.flatnonzero(x_act)
+                rows_i += [np.full(2 * xa.size + 1, nrow + C)]
+                cols_i += [np.concatenate([sp_[xa], sm_[xa], [tc]])]
+                vals += [np.concatenate([np.ones(2 * xa.size), [-1.0]])]
+                rlo.append(np.array([-np.inf]))
+                rhi.append(np.array([-1.0]))
+                noise_cost = np.where(x_act, 0.0, b_act)
+                cost += [np.zeros(m), [0.0], noise_cost, noise_cost]
+                clo += [np.full(m, -np.inf), [0.0], np.zeros(2 * C)]
+                chi += [np.full(m, np.inf), [np.inf], np.full(2 * C, np.inf)]
+                tcols.append(tc)
+                ncol += m + 1 + 2 * C
+                nrow += C + 1
+            else:
+                raise ValueError(f"unknown class LP kind {kind!r}")
+            k_cols.append(kc)
+            bcls.append(ci)
+            brow.append(r)
+            bstart.append(ncol)
+    cat = lambda parts, dt=float: np.concatenate([np.asarray(q, dt) for q in parts]) if parts else np.zeros(0, dt)  # noqa: E731
+    A = sp.csc_matrix((cat(vals), (cat(rows_i, np.int64), cat(cols_i, np.int64))), shape=(nrow, ncol))
+    lp = LinearProgram(c=cat(cost), A=A, row_lower=cat(rlo), row_upper=cat(rhi), col_lower=cat(clo),
+                       col_upper=cat(chi))
+    return ClassLP(lp=lp, kind=kind, block_class=np.asarray(bcls, np.int64), block_row=np.asarray(brow, np.int64),
+                   k_cols=k_cols, block_cols=np.asarray(bstart, np.int64),
+                   t_col=np.asarray(tcols, np.int64) if kind == "ratio" else None,
+                   build_time=time.perf_counter() - t0)
+
+
+def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, solution: LPSolution) -> ClassGains:
+    """The gains ``K`` per class from an optimal ``"level"`` (``k``) or ``"ratio"`` (``y / t``) solution."""
+    n, p = system.n, system.p
+    K = [np.zeros((n, len(c.available) * p)) for c in classes.classes]
+    x = solution.x
+    for b in range(model.blocks):
+        k = x[model.k_cols[b]]
+        if model.kind == "ratio":
+            k = k / x[model.t_col[b]]
+        K[model.block_class[b]][model.block_row[b]] = k
+    return ClassGains(classes=classes, K=K, n=n, p=p)
+
+
+def block_objectives(model: ClassLP, solution: LPSolution) -> np.ndarray:
+    """The optimum of each block (its level, or its ratio ``m_r``)."""
+    cx = model.lp.c * solution.x
+    return np.add.reduceat(cx, model.block_cols[:-1]) if model.blocks else np.zeros(0)
+
+
+# ---------------------------------------------------------------------------
+# Certificate from the gains alone
+# ---------------------------------------------------------------------------
+
+@dataclass
+class ClassCertificate:
+    """Worst case of every state row of every class, recomputed from the ``K``\\ s alone.
+
+    ``bounds[i, r] = Σ_c β_c |(E_d - K Z_S)[r, c]|`` is the exact worst case of
+    :math:`\\xi_r(d)` for the class-form estimator (and for the node gains
+    derived from it) over the box at ``mu1``.
+    """
+
+    mu1: float
+    classes: ClassSet
+    bounds: np.ndarray  # (classes, n)
+
+    @property
+    def levels(self) -> np.ndarray:
+        """Certified level of each class (largest row)."""
+        return self.bounds.max(axis=1) if self.bounds.size else np.zeros(0)
+
+    @property
+    def terminal(self) -> float:
+        """Largest certified level of a terminal class (at most ``μ1`` for a valid design)."""
+        lv = [lv for lv, c in zip(self.levels, self.classes) if c.terminal]
+        return float(max(lv, default=0.0))
+
+    @property
+    def mu2(self) -> float:
+        """Largest certified level of an inner class, at least ``μ1``."""
+        return float(max([self.mu1, *(lv for lv, c in zip(self.levels, self.classes) if c.inner)]))
+
+    def to_json(self) -> dict:
+        return {"mu1": self.mu1, "certified_mu2": self.mu2, "certified_terminal": self.terminal,
+                "levels": {c.label: float(v) for c, v in zip(self.classes, self.levels)}}
+
+
+def certify_classes(system: AffineSystem, gains: ClassGains, mu1: float,
+                    stacking: Stacking | None = None) -> ClassCertificate:
+    """Exact worst case of every class row from the gains ``K`` alone (no LP, no solver)."""
+    classes = gains.classes
+    st = stacking or Stacking(system, classes.horizon)
+    beta = _radius(st, mu1)
+    bounds = np.zeros((len(classes), system.n))
+    for i, (cls, K) in enumerate(zip(classes.classes, gains.K)):
+        E, Z = class_maps(st, cls)
+        bounds[i] = np.abs(E - K @ Z) @ beta
+    return ClassCertificate(mu1=float(mu1), classes=classes, bounds=bounds)
+
+
+# ---------------------------------------------------------------------------
+# Costs
+# ---------------------------------------------------------------------------
+
+def _check_cost(cost: str) -> str:
+    if cost not in COSTS:
+        raise InputError(f"unknown cost {cost!r}; choose one of {list(COSTS)}", field="cost")
+    return cost
+
+
+def class_cost(classes: ClassSet, mu1: float, levels: np.ndarray, cost: str = "sum") -> float:
+    r"""``J`` from class levels: :math:`(1 + 2|\mathcal L^{E'}|)\mu_1 + \sum_{\text{inner}} w \max(\mu_1, \ell)`
+    (``"sum"``, :mod:`eqrec.design.delay`) or :math:`\mu_1 + \max(\mu_1, \max_{\text{inner}}\ell)` (``"max"``)."""
+    _check_cost(cost)
+    inner = [(c.weight, float(lv)) for c, lv in zip(classes.classes, levels) if c.inner]
+    if cost == "max":
+        return mu1 + max([mu1, *(lv for _, lv in inner)])
+    return (1.0 + 2.0 * classes.sequences) * mu1 + sum(float(w) * max(mu1, lv) for w, lv in inner)
+
+
+# ---------------------------------------------------------------------------
+# Node gains from class gains
+# ---------------------------------------------------------------------------
+
+def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | None = None,
+                  time_based: bool = False) -> GainSchedule:
+    r"""Node gains ``(F, u0 = 0)`` per prefix of ``tree`` that realise the class-form errors.
+
+    Along a word, the gain row of time ``d-1`` in the Q-parametrisation is
+    :math:`Q_{d-1} = -K_{(d,S)} + A(d-1) K_{(d-1,S')}` (``S' ⊆ S`` embedded;
+    ``K = 0`` before any data), so that
+    :math:`\sum_{s<d}\Phi(d, s{+}1) Q_s Z_{S_s} = -K_{(d,S)} Z_S`; then
+    ``F`` by eq. (2) of the prefix-based paper.  Tested equal in effect (same
+    estimates) to the class form.
+    """
+    classes = gains.classes
+    tree = tree or classes.tree
+    if tree is None:
+        raise InputError("node gains need the prefix tree of the language (a small language); this class set "
+                         "was built from the window rule")
+    n, p = system.n, system.p
+    st = Stacking(system, tree.depth)
+    word_gains = {}
+    for word in tree.patterns:
+        Tw = word.T
+        Q = np.zeros((Tw * n, Tw * p))
+        prev = np.zeros((n, Tw * p))  # K of the parent class, embedded over all times
+        for node in tree.path(word):
+            t = node.depth - 1
+            K = gains.K[classes.node_class[node.index]]
+            cur = np.zeros((n, Tw * p))
+            for j, tau in enumerate(node.available):
+                cur[:, tau * p:(tau + 1) * p] = K[:, j * p:(j + 1) * p]
+            Q[t * n:(t + 1) * n] = -cur + system.A_at(t) @ prev
+            prev = cur
+        padded = ArrivalPattern(word.arrivals + (None,) * (st.T - Tw))
+        CS = (st.C_bar(padded) @ st.S)[: Tw * p, : Tw * n]
+        word_gains[word] = q_to_f(Q, np.zeros(Tw * n), CS)
+    return schedule_from_word_gains(tree, word_gains, n, p, time_based=time_based)
+
+
+# ---------------------------------------------------------------------------
+# Fixed μ1
+# ---------------------------------------------------------------------------
+
+@dataclass
+class ClassSolution:
+    """The class engine's answer at one ``μ1``: gains, the LP's levels and the certificate."""
+
+    mu1: float
+    gains: ClassGains
+    lp_levels: np.ndarray  # (classes, n): each block's LP optimum
+    certificate: ClassCertificate
+    solution: LPSolution | None
+    model_shape: tuple[int, int]
+    nonzeros: int
+    build_time: float
+    solve_time: float
+
+    @property
+    def levels(self) -> np.ndarray:
+        """Level of each class (its largest row, as the LPs found it)."""
+        return self.lp_levels.max(axis=1) if self.lp_levels.size else np.zeros(0)
+
+
+def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver: str = "highs",
+                  solver_options: dict | None = None, rtol: float | None = None) -> ClassSolution:
+    """Solve the LAD LP of every (class, row) at ``μ1`` and certify the gains from themselves.
+
+    Raises
+    ------
+    SolverFailure
+        If the block LP has no optimum (it is always feasible and bounded).
+    CertificationFailure
+        If a recomputed worst case exceeds the LP's level by more than ``rtol``.
+    """
+    mu1 = float(mu1)
+    if not np.isfinite(mu1) or mu1 <= 0:
+        raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
+    st = Stacking(system, classes.horizon)
+    model = build_class_lp(system, classes, mu1, stacking=st)
+    t0 = time.perf_counter()
+    sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"class LPs (mu1 = {mu1:g})")
+    solve_time = time.perf_counter() - t0
+    gains = read_class_gains(system, classes, model, sol)
+    lp_levels = np.zeros((len(classes), system.n))
+    lp_levels[model.block_class, model.block_row] = block_objectives(model, sol)
+    cert = certify_classes(system, gains, mu1, st)
+    rtol = CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol
+    excess = cert.bounds - lp_levels
+    scale = np.maximum(1.0, np.abs(lp_levels))
+    if np.any(excess > rtol * scale):
+        i, r = np.unravel_index(np.argmax(excess / scale), excess.shape)
+        raise CertificationFailure(f"class {classes.classes[i].label} row {r}: the gains give worst case "
+                                   f"{cert.bounds[i, r]:.9g} > the LP's level {lp_levels[i, r]:.9g}")
+    # the certified value is the level: never below what the gains really give
+    return ClassSolution(mu1=mu1, gains=gains, lp_levels=np.maximum(lp_levels, cert.bounds), certificate=cert,
+                         solution=sol, model_shape=model.lp.shape, nonzeros=int(model.lp.A.nnz),
+                         build_time=model.build_time, solve_time=solve_time)
+
+
+def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTOL) -> None:
+    """:class:`InfeasibleDesign` naming the class and row if a terminal class's level exceeds ``μ1``."""
+    mu1 = sol.mu1
+    for i, cls in enumerate(classes.classes):
+        if cls.terminal and sol.levels[i] > mu1 * (1 + rtol):
+            r = int(np.argmax(sol.lp_levels[i]))
+            raise InfeasibleDesign(f"no estimator recovers to mu1 = {mu1:g}: terminal class {cls.label} "
+                                   f"(time {cls.depth}, data {list(cls.available)}) row {r} has smallest worst "
+                                   f"case {sol.levels[i]:.9g}")
+
+
+# ---------------------------------------------------------------------------
+# μ1 free: μ1,min in closed form (Charnes–Cooper), certified
+# ---------------------------------------------------------------------------
+
+@dataclass
+class MinRecoveryLevel:
+    """The smallest feasible recovery level: ``lower < μ1_min <= upper``.
+
+    Attributes
+    ----------
+    upper : float
+        ``μ1,min`` as attained by the recovered gains (the largest terminal
+        ratio ``b(k) / (1 - a(k))`` recomputed from them).
+    lower : float
+        A level proven infeasible by a dual point (module docstring).
+    lower_margin : float
+        ``E_d[r] λ - lower > 0`` of that dual point (``nan`` if not certified).
+    binding : dict
+        The terminal class (label, time, data) and row that set ``μ1,min``.
+    ratios : ndarray
+        ``m_r`` of every terminal (class, row) block, as the LP found them.
+    """
+
+    upper: float
+    lower: float
+    lower_margin: float
+    binding: dict
+    ratios: np.ndarray
+    gains: ClassGains | None = None
+    lps: int = 0
+    time: float = 0.0
+
+    @property
+    def value(self) -> float:
+        return self.upper
+
+
+def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, solver: str) -> float:
+    r"""``E_row λ`` for a ``λ`` with ``Z λ = 0`` and ``|λ| <= β`` (a lower bound of the row's level), or ``nan``.
+
+    The LP :math:`\max E\lambda` s.t. :math:`Z\lambda = 0`, :math:`|\lambda| \le \beta`
+    (the dual of the LAD LP) is solved, its point projected exactly onto
+    :math:`\ker Z` and scaled back into the box, so the bound holds for the
+    returned point whatever the solver's tolerances.
+    """
+    D = E_row.size
+    A = sp.csc_matrix(Z) if Z.size else sp.csc_matrix((0, D))
+    lp = LinearProgram(c=-E_row, A=A, row_lower=np.zeros(A.shape[0]), row_upper=np.zeros(A.shape[0]),
+                       col_lower=-beta, col_upper=beta)
+    sol = solve_lp(lp, solver)
+    if not sol.optimal:
+        return np.nan
+    lam = sol.x
+    if Z.size:
+        lam = lam - Z.T @ np.linalg.lstsq(Z @ Z.T, Z @ lam, rcond=None)[0]
+    big = np.abs(lam) > beta
+    if np.any(big):
+        lam = lam * np.min(beta[big] / np.abs(lam[big]))
+    return float(E_row @ lam)
+
+
+def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str = "highs",
+                       lower_rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
+    """``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
+
+    One block LP (the Charnes–Cooper LP of every terminal class and row), the
+    ratio recomputed from the gains, and a dual certificate of the lower end.
+
+    Raises
+    ------
+    InfeasibleDesign
+        No ``μ1`` is feasible (some terminal row has ``min_k a(k) >= 1``),
+        naming the class and row.
+    InputError
+        ``μ1,min = 0`` (no noise reaches the end of the horizon): fix ``μ1``.
+    """
+    t_start = time.perf_counter()
+    st = Stacking(system, classes.horizon)
+    term = [i for i, c in enumerate(classes.classes) if c.terminal]
+    model = build_class_lp(system, classes, None, kind="ratio", which=term, stacking=st)
+    sol = solve_lp(model.lp, solver)
+    lps = 1
+    if sol.status == "infeasible":
+        for i in term:  # name a terminal class and row that no gain contracts
+            for r in range(system.n):
+                one = build_class_lp(system, classes, None, kind="ratio", which=[i], stacking=st)
+                lps += 1
+                if solve_lp(one.lp, solver).status == "infeasible":
+                    cls = classes.classes[i]
+                    raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
+                                           f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
+                                           "initial error contract (min_k a(k) >= 1)")
+        raise InfeasibleDesign("no recovery level is feasible (the terminal ratio LP is infeasible)")
+    sol.require_optimal("the smallest recovery level (Charnes-Cooper LP)")
+    gains = read_class_gains(system, classes, model, sol)
+    ratios = block_objectives(model, sol)
+    # recompute each block's ratio from its k alone
+    xi0 = np.zeros(st.layout.size, bool)
+    xi0[st.layout.xi0] = True
+    noise_beta = np.where(xi0, 0.0, _radius(st, 1.0))
+    recomputed = np.zeros(model.blocks)
+    for b in range(model.blocks):
+        i, r = model.block_class[b], model.block_row[b]
+        E, Z = class_maps(st, classes.classes[i])
+        resid = np.abs(E[r] - gains.K[i][r] @ Z)
+        a = resid[xi0].sum()
+        recomputed[b] = resid @ noise_beta / (1.0 - a) if a < 1 else np.inf
+    if not np.all(np.isfinite(recomputed)):
+        raise SolverFailure("the ratio LP returned gains that do not contract the initial error")
+    bmax = int(np.argmax(recomputed))
+    upper = float(recomputed[bmax])
+    scale = max(1.0, float(np.max(np.abs(_radius(st, 1.0)))))
+    if upper <= 1e-12 * scale:
+        raise InputError("the smallest recovery level is 0 (no noise reaches the end of the horizon); "
+                         "fix mu1 instead", field="mu1")
+    i, r = int(model.block_class[bmax]), int(model.block_row[bmax])
+    cls = classes.classes[i]
+    lower = upper * (1.0 - lower_rtol)
+    E, Z = class_maps(st, cls)
+    dual = _dual_lower_certificate(E[r], Z, _radius(st, lower), solver)
+    lps += 1
+    margin = dual - lower
+    if not (margin > 0):
+        lower, margin = np.nan, np.nan
+    binding = {"class": cls.label, "time": cls.depth, "data": list(cls.available), "row": r}
+    return MinRecoveryLevel(upper=upper, lower=float(lower), lower_margin=float(margin), binding=binding,
+                            ratios=ratios, gains=gains, lps=lps, time=time.perf_counter() - t_start)
+
+
+def cost_along_mu1(system: AffineSystem, classes: ClassSet, grid, cost: str = "sum",
+                   solver: str = "highs") -> np.ndarray:
+    """``J(μ1)`` on a grid of feasible levels (the monotonicity the μ1-free theorem rests on, for tests and figures)."""
+    out = []
+    for mu in grid:
+        s = solve_classes(system, classes, float(mu), solver=solver)
+        out.append(class_cost(classes, float(mu), s.levels, cost))
+    return np.asarray(out)
+
+
+#: Largest prefix tree (nodes) for which node gains are derived by default.
+NODE_GAINS_LIMIT = 20000
+
+LEVELS = ("common", "max", "sum")
+
+
+def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "common", cost: str | None = None,
+                 solver: str = "highs", solver_options: dict | None = None, method: str = "prefix",
+                 certify: bool = True, node_gains: bool | None = None, time_based: bool = False,
+                 rtol: float | None = None):
+    """A prefix-tree design at ``μ1`` by the class engine, as a :class:`eqrec.design.result.Design`.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    language : PrefixTree or ClassSet
+        The language's prefix tree, or its classes (a full language from the
+        window rule: then no node gains, no words).
+    mu1 : float
+        Recovery level ``μ1``.
+    levels : {"common", "max", "sum"}
+        As :func:`eqrec.design.prefix.build_prefix_lp`: one ``μ2`` (``common``),
+        or per-node levels (``max``, ``sum``; node ``levels`` filled).
+    cost : {"sum", "max"} or None
+        The delayed-data paper's ``J`` in ``extra["J"]`` (``None``: not computed).
+    node_gains : bool or None
+        Derive node gains ``(F, u0)`` (``schedule``) and certify them by the
+        independent recursion of :mod:`eqrec.core.certify`; default: when the
+        tree has at most :data:`NODE_GAINS_LIMIT` nodes.
+
+    Raises
+    ------
+    InfeasibleDesign
+        A terminal class cannot reach ``μ1`` (named).
+    CertificationFailure
+        The gains do not give the levels.
+    """
+    from eqrec.design.result import Design
+
+    if levels not in LEVELS:
+        raise InputError(f"unknown level structure {levels!r}; choose one of {list(LEVELS)}", field="levels")
+    t0 = time.perf_counter()
+    classes = as_class_set(language)
+    tree = classes.tree
+    sol = solve_classes(system, classes, mu1, solver=solver, solver_options=solver_options, rtol=rtol)
+    check_terminal(classes, sol)
+    mu1 = sol.mu1
+    inner = np.array([c.inner for c in classes.classes], bool)
+    mu2 = float(max(mu1, sol.levels[inner].max(initial=mu1)))
+    node_levels: dict[str, float] = {}
+    if levels != "common" and tree is not None:
+        node_levels = {node.label: float(max(mu1, sol.levels[classes.node_class[node.index]]))
+                       for node in tree if not node.terminal}
+    if node_gains is None:
+        node_gains = tree is not None and classes.nodes <= NODE_GAINS_LIMIT
+    schedule = node_schedule(system, sol.gains, tree, time_based=time_based) if node_gains else None
+    patterns = tree.patterns if tree is not None else ()
+    design = Design(method=method, system=system, patterns=patterns, T=classes.horizon, M1=mu1, mu2=mu2,
+                    schedule=schedule, solution=sol.solution, build_time=sol.build_time, levels=node_levels,
+                    class_gains=sol.gains, class_certificate=sol.certificate)
+    design.extra.update(engine="classes", classes=len(classes), sequences=classes.sequences, nodes=classes.nodes,
+                        lp_rows=sol.model_shape[0], lp_cols=sol.model_shape[1], lp_nonzeros=sol.nonzeros,
+                        class_levels=sol.levels)
+    if cost is not None:
+        design.extra.update(cost=cost, J=class_cost(classes, mu1, sol.levels, cost))
+    if certify and schedule is not None:
+        from eqrec.core.certify import certify_design
+
+        certify_design(design, rtol=CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol)
+    design.extra["total_time"] = time.perf_counter() - t0
+    return design
+
+
+def as_class_set(language) -> ClassSet:
+    """A :class:`ClassSet` from a class set or a prefix tree."""
+    if isinstance(language, ClassSet):
+        return language
+    if isinstance(language, PrefixTree):
+        return classes_of_tree(language)
+    raise TypeError(f"expected a ClassSet or a PrefixTree, got {type(language).__name__}")
+
+
+__all__ = ["ClassLP", "ClassCertificate", "ClassSolution", "MinRecoveryLevel", "DataClass", "build_class_lp",
+           "read_class_gains", "certify_classes", "class_cost", "node_schedule", "solve_classes", "check_terminal",
+           "min_recovery_level", "cost_along_mu1", "as_class_set",
+           "class_design"]
