@@ -221,12 +221,14 @@ def classes_of_full_language(T: int, max_delay: int) -> ClassSet:
             for chosen in combinations(window, r):
                 S = tuple(sorted(always + chosen))
                 inner = d < T
+                s = set(S)
+                # nodes: per i < d, an arrival time <= k if i ∈ S, else 'not yet' (the window makes it possible)
+                nodes = prod(_arrived_by(i, k, D) if i in s else 1 for i in range(d))
                 weight = 0
                 if inner:
-                    s = set(S)
                     weight = tail * prod(_arrived_by(i, k, D) if i in s
                                          else _arrival_values(i, T, D) - _arrived_by(i, k, D) for i in range(d))
-                classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight, nodes=1))
+                classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight, nodes=nodes))
     return ClassSet(classes=_ordered({c.key: c for c in classes}), horizon=T, source="window", **counts)
 
 

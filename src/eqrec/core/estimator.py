@@ -26,6 +26,16 @@ delayed-data paper), so dropping it is exactly what the guarantee assumes.
 of the delayed-data paper: an equalized-performance estimator (equalized
 recovery with period 1) while every measurement arrives on time, switching
 to a recovery estimator for ``T`` steps when one is late or missing.
+
+:class:`ClassEstimator` runs the same estimator in **class form**
+(:mod:`eqrec.design.classes`): one gain ``K`` per (time, available data)
+class instead of one gain row per prefix-tree node,
+
+.. math:: \hat x(d) = \bar x(d) + K_{(d, S)}\,(y_S - \bar y_S),
+
+with :math:`\bar x` the noise-free prediction from the period's first
+estimate.  Both take the same packets and raise the same errors;
+:func:`make_estimator` picks one from the kind of gains.
 """
 
 from __future__ import annotations
@@ -35,6 +45,7 @@ from typing import Iterable
 
 import numpy as np
 
+from eqrec.core.classes import ClassGains
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.systems import AffineSystem
@@ -49,38 +60,28 @@ class Packet:
     y: np.ndarray
 
 
-class RecoveryEstimator:
-    """Causal estimator of eqs. (5)-(7) on time-stamped packets.
+class _StampedEstimator:
+    """Packet intake shared by :class:`RecoveryEstimator` and :class:`ClassEstimator`.
 
-    Parameters
-    ----------
-    system
-        The model (``A, B, C, f``) used by the estimator.
-    schedule
-        Prefix-based or time-based gains.
-    xhat0
-        Initial estimate ``x̂(0)``.
-    periodic
-        Restart the horizon every ``T`` steps instead of stopping.
-    t0
-        Absolute time of the first step (the time stamp of the first
-        measurement; ``0`` by default).  Packets stamped before ``t0`` are
-        dropped like packets of an earlier period.
+    Keeps the period clock, the observed arrivals of the current period, a
+    *reference* state per period time (the state whose predicted output a
+    measurement is compared with) and the residuals
+    ``y(τ) − C(τ) ref(τ)`` of the packets received in the period.
     """
 
-    def __init__(self, system: AffineSystem, schedule: GainSchedule, xhat0: np.ndarray, periodic: bool = False,
-                 t0: int = 0):
+    T: int
+
+    def __init__(self, system: AffineSystem, horizon: int, xhat0: np.ndarray, periodic: bool, t0: int):
         self.system = system
-        self.schedule = schedule
-        self.T = schedule.horizon
+        self.T = int(horizon)
         self.periodic = periodic
         self.xhat = np.asarray(xhat0, float).reshape(system.n).copy()
         self._t = 0  # time since the start of the current period
         self._k = int(t0)  # absolute time (for time-varying models)
         self._start = int(t0)  # absolute time of the current period's start
         self._arrivals: list[int | None] = []  # per period time τ: arrival time (period time) or None
-        self._history: list[np.ndarray] = []  # x̂ at the period times 0..t
-        self._yxi: dict[int, np.ndarray] = {}  # period time τ -> y(τ) - C x̂(τ)
+        self._history: list[np.ndarray] = []  # reference state at the period times 0..t
+        self._yxi: dict[int, np.ndarray] = {}  # period time τ -> y(τ) - C ref(τ)
 
     @property
     def observed_prefix(self) -> ArrivalPattern:
@@ -111,20 +112,29 @@ class RecoveryEstimator:
             return [Packet(self._k, np.asarray(y, float))]
         return list(y)
 
-    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
-        """Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
+    def _reference(self) -> np.ndarray:
+        """The state of the current time whose predicted output the measurements of this time are compared with."""
+        raise NotImplementedError
 
-        ``y`` is ``None`` (nothing arrives), an array (``y(t)`` arriving on
-        time) or :class:`Packet` objects stamped with their own (absolute)
-        times ``τ <= t``.  Returns the prediction ``x̂(t+1)``.
+    def _restart(self) -> None:
+        """Start a new period (``periodic=True``) at the current time."""
+        self._t, self._start, self._arrivals, self._history, self._yxi = 0, self._k, [], [], {}
+
+    def _intake(self, y) -> tuple[int, int]:
+        """Open the step of the current time and receive its packets; returns ``(k, t)`` (absolute, period time).
+
+        Raises :class:`InputError` when the horizon is over (not periodic), for
+        a packet from the future, a second packet with one stamp, or a
+        measurement of the wrong length.  Packets stamped before the current
+        period are dropped.
         """
         sys = self.system
         if self._t == self.T:
             if not self.periodic:
                 raise InputError(f"the estimator's horizon T = {self.T} is over (use periodic=True to restart)")
-            self._t, self._start, self._arrivals, self._history, self._yxi = 0, self._k, [], [], {}
+            self._restart()
         k, t = self._k, self._t
-        self._history.append(self.xhat.copy())
+        self._history.append(self._reference().copy())
         self._arrivals.append(None)
         for pk in self._packets(y):
             tau_abs = int(pk.time)
@@ -140,6 +150,45 @@ class RecoveryEstimator:
                 raise InputError(f"measurement of time {tau_abs} has {yv.size} entries, expected p = {sys.p}")
             self._arrivals[tau] = t
             self._yxi[tau] = yv - sys.C_at(tau_abs) @ self._history[tau]
+        return k, t
+
+
+class RecoveryEstimator(_StampedEstimator):
+    """Causal estimator of eqs. (5)-(7) on time-stamped packets.
+
+    Parameters
+    ----------
+    system
+        The model (``A, B, C, f``) used by the estimator.
+    schedule
+        Prefix-based or time-based gains.
+    xhat0
+        Initial estimate ``x̂(0)``.
+    periodic
+        Restart the horizon every ``T`` steps instead of stopping.
+    t0
+        Absolute time of the first step (the time stamp of the first
+        measurement; ``0`` by default).  Packets stamped before ``t0`` are
+        dropped like packets of an earlier period.
+    """
+
+    def __init__(self, system: AffineSystem, schedule: GainSchedule, xhat0: np.ndarray, periodic: bool = False,
+                 t0: int = 0):
+        super().__init__(system, schedule.horizon, xhat0, periodic, t0)
+        self.schedule = schedule
+
+    def _reference(self) -> np.ndarray:
+        return self.xhat  # y_ξ(τ) = y(τ) − C x̂(τ), with the estimate of the packet's own time
+
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+        """Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
+
+        ``y`` is ``None`` (nothing arrives), an array (``y(t)`` arriving on
+        time) or :class:`Packet` objects stamped with their own (absolute)
+        times ``τ <= t``.  Returns the prediction ``x̂(t+1)``.
+        """
+        sys = self.system
+        k, t = self._intake(y)
         gain = self.schedule.row(self.observed_prefix)
         yxi = np.zeros((t + 1, sys.p))
         for tau, v in self._yxi.items():
@@ -152,6 +201,154 @@ class RecoveryEstimator:
         return self.xhat.copy()
 
 
+class ClassEstimator(_StampedEstimator):
+    r"""The equalized-recovery estimator in class form: one gain per (time, available data) class.
+
+    The class form of the delayed-data paper's estimator (its eqs. (5)-(7)
+    with the gains of Theorem 1, rewritten by the separation theorem of
+    :mod:`eqrec.design.classes`): at period time ``t`` the estimator has
+    received the measurements of the times ``S = A(t)`` (a packet stamped
+    ``τ`` of the current period that arrived at or before ``t``) and predicts
+
+    .. math::
+        \hat x(t+1) = \bar x(t+1) + K_{(t+1,\,S)}\,(y_S - \bar y_S),
+
+    where :math:`\bar x` is the noise-free prediction from the period's first
+    estimate :math:`\hat x(0)`,
+
+    .. math::
+        \bar x(0) = \hat x(0), \qquad \bar x(s+1) = A(s)\,\bar x(s) + B(s)\,u(s) + f,
+        \qquad \bar y(\tau) = C(\tau)\,\bar x(\tau),
+
+    (inputs and ``f`` included, so they cancel in the error), and
+    :math:`y_S - \bar y_S` stacks :math:`y(\tau) - \bar y(\tau)` over
+    :math:`\tau \in S` in increasing time (the column order of ``K``).  With
+    :math:`\delta = (w, v, \xi_0)` of the period, :math:`x(d) - \bar x(d) =
+    E_d\delta` and :math:`y_S - \bar y_S = Z_S\delta`
+    (:func:`eqrec.core.classes.class_maps`), so the error is exactly
+
+    .. math:: \xi(t+1) = x(t+1) - \hat x(t+1) = (E_{t+1} - K_{(t+1,S)} Z_S)\,\delta,
+
+    whose worst case over the box is the class's certified level.  Unlike
+    :class:`RecoveryEstimator` it needs no prefix tree and no history of
+    estimates, only the ``K`` of the current class (looked up by
+    ``(t+1, S)``); any arrival prefix whose classes are in the design gets
+    their guarantees, whether or not the prefix itself is one of the design's.
+
+    Packet handling, periodic restart and errors are those of
+    :class:`RecoveryEstimator`.  With ``periodic=True`` the horizon restarts
+    every ``T`` steps and :math:`\bar x` is re-anchored at the estimate reached
+    at the period's end (``‖ξ‖ <= μ1`` there, so the same gains apply again);
+    packets stamped before the current period are dropped (the language counts
+    a delay past the period's end as a missing measurement).
+
+    Parameters
+    ----------
+    system
+        The model (``A, B, C, f``) used by the estimator (time-varying
+        matrices are read at absolute times, as in :class:`RecoveryEstimator`).
+    gains
+        One ``K`` per class (:class:`eqrec.core.classes.ClassGains`, e.g.
+        ``design.class_gains`` of the class engine).
+    xhat0
+        Initial estimate ``x̂(0)``.
+    periodic
+        Restart the horizon every ``T`` steps instead of stopping.
+    t0
+        Absolute time of the first step; packets stamped before it are dropped.
+
+    Raises
+    ------
+    InputError
+        Gains whose shapes do not fit the system; in :meth:`step`, the
+        errors of :meth:`RecoveryEstimator.step`, or observed data whose class
+        ``(t+1, S)`` the gains do not have.
+    """
+
+    def __init__(self, system: AffineSystem, gains: ClassGains, xhat0: np.ndarray, periodic: bool = False,
+                 t0: int = 0):
+        if (gains.n, gains.p) != (system.n, system.p):
+            raise InputError(f"class gains for n = {gains.n}, p = {gains.p} do not fit the system "
+                             f"(n = {system.n}, p = {system.p})")
+        for cls, K in zip(gains.classes.classes, gains.K):
+            if np.shape(K) != (system.n, len(cls.available) * system.p):
+                raise InputError(f"the gain of class {cls.label} has shape {np.shape(K)}, expected "
+                                 f"{(system.n, len(cls.available) * system.p)}")
+        super().__init__(system, gains.horizon, xhat0, periodic, t0)
+        self.gains = gains
+        self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
+
+    @property
+    def prediction(self) -> np.ndarray:
+        """``x̄`` of the current time: the noise-free prediction from the period's first estimate."""
+        return self._xbar.copy()
+
+    def _reference(self) -> np.ndarray:
+        return self.xhat
+
+    def _restart(self) -> None:
+        super()._restart()
+        self._xbar = self.xhat.copy()  # re-anchor x̄ at the estimate reached at the period's end
+
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+        r"""Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
+
+        ``y`` as in :meth:`RecoveryEstimator.step`.  Returns
+        :math:`\hat x(t+1) = \bar x(t+1) + K_{(t+1,S)}(y_S - \bar y_S)`.
+        """
+        sys = self.system
+        k, t = self._intake(y)
+        S = tuple(sorted(self._yxi))
+        try:
+            K = self.gains.K[self.gains.classes.index(t + 1, S)]
+        except InputError:
+            raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
+                             f"{self._start}, arrival prefix {self.observed_prefix.label!r}) the measurements of "
+                             f"times {[self._start + tau for tau in S]} have arrived; the gains have no class "
+                             f"({t + 1}, {list(S)})") from None
+        u = np.zeros(sys.m) if u is None else np.asarray(u, float).reshape(-1)
+        self._xbar = sys.A_at(k) @ self._xbar + sys.B_at(k) @ u + sys.f
+        resid = np.concatenate([self._yxi[tau] for tau in S]) if S else np.zeros(0)
+        self.xhat = self._xbar + K @ resid
+        self._t += 1
+        self._k += 1
+        return self.xhat.copy()
+
+
+def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: np.ndarray,
+                   periodic: bool = False, t0: int = 0) -> "RecoveryEstimator | ClassEstimator":
+    """The runtime estimator of a design's gains.
+
+    Parameters
+    ----------
+    gains
+        Node gains (:class:`eqrec.core.gains.GainSchedule`: a
+        :class:`RecoveryEstimator`, eqs. (5)-(7)) or class gains
+        (:class:`eqrec.core.classes.ClassGains`: a :class:`ClassEstimator`,
+        the class form).
+    xhat0, periodic, t0
+        As :class:`RecoveryEstimator`.
+
+    Raises
+    ------
+    TypeError
+        For gains of any other kind.
+    """
+    if isinstance(gains, GainSchedule):
+        return RecoveryEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
+    if isinstance(gains, ClassGains):
+        return ClassEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
+    raise TypeError(f"expected a GainSchedule or ClassGains, got {type(gains).__name__}")
+
+
+def _has_class(gains: ClassGains, depth: int, available: tuple[int, ...]) -> bool:
+    try:
+        gains.classes.index(depth, available)
+    except InputError:
+        return False
+    return True
+
+
 class SwitchingEstimator:
     r"""Equalized performance until a measurement is late or missing, then equalized recovery for ``T`` steps.
 
@@ -160,11 +357,12 @@ class SwitchingEstimator:
     * *Performance mode*: the equalized-performance estimator, i.e. an
       equalized-recovery design of period 1 on the one-letter language
       "``y(t)`` arrives on time": ``‖ξ(t)‖ <= μ1`` implies ``‖ξ(t+1)‖ <= μ1``.
-      It runs as a :class:`RecoveryEstimator` with ``periodic=True`` and
+      It runs as a :class:`RecoveryEstimator` (node gains) or a
+      :class:`ClassEstimator` (class gains) with ``periodic=True`` and
       ``T = 1`` (packets stamped before the current step are dropped).
     * At a time ``k`` at which ``y(k)`` has not arrived (late or missing), the
-      estimator switches: a :class:`RecoveryEstimator` on the ``recovery``
-      gains starts at ``k`` from the current estimate (``‖ξ(k)‖ <= μ1``).
+      estimator switches: an estimator on the ``recovery`` gains
+      (:func:`make_estimator`) starts at ``k`` from the current estimate (``‖ξ(k)‖ <= μ1``).
       Its language has words whose first measurement is delayed or missing,
       so its first event, "``y(0)`` not (yet) arrived", is what was observed.
     * After ``T`` steps (``‖ξ(k+T)‖ <= μ1``) it reverts to performance mode;
@@ -180,10 +378,12 @@ class SwitchingEstimator:
         The model used by both estimators.
     performance
         Gains of the period-1 design: a schedule of horizon 1 with the row of
-        the on-time prefix.
+        the on-time prefix, or class gains of horizon 1 with the on-time
+        class ``(1, (0,))``.
     recovery
-        Gains of the recovery design (horizon ``T``) on a language whose words
-        all have their first measurement late or missing.
+        Gains of the recovery design (horizon ``T``, ``.horizon``) on a
+        language whose words all have their first measurement late or
+        missing: a schedule, or class gains without the class ``(1, (0,))``.
     xhat0
         Initial estimate (``‖ξ(t0)‖ <= μ1`` for the guarantees to hold).
     t0
@@ -198,17 +398,28 @@ class SwitchingEstimator:
         performance mode resumed.
     """
 
-    def __init__(self, system: AffineSystem, performance: GainSchedule, recovery: GainSchedule,
-                 xhat0: np.ndarray, t0: int = 0):
+    def __init__(self, system: AffineSystem, performance: "GainSchedule | ClassGains",
+                 recovery: "GainSchedule | ClassGains", xhat0: np.ndarray, t0: int = 0):
+        for name, g in (("performance", performance), ("recovery", recovery)):
+            if not isinstance(g, (GainSchedule, ClassGains)):
+                raise TypeError(f"the {name} gains must be a GainSchedule or ClassGains, got {type(g).__name__}")
         on_time = ArrivalPattern((0,))
-        if performance.horizon != 1 or performance.time_based and performance.designed[0] != on_time:
-            raise InputError(f"the equalized-performance gains must have horizon 1 (got {performance.horizon}) "
-                             "and be designed for an on-time measurement")
-        performance.row(on_time)  # raises if there is no on-time row
-        bad = [p.label for p in recovery.designed if p.arrivals[0] == 0]
-        if bad:
-            raise InputError(f"the recovery language must have its first measurement late or missing; "
-                             f"words {bad[:5]} have it on time")
+        perf_msg = (f"the equalized-performance gains must have horizon 1 (got {performance.horizon}) "
+                    "and be designed for an on-time measurement")
+        if isinstance(performance, GainSchedule):
+            if performance.horizon != 1 or performance.time_based and performance.designed[0] != on_time:
+                raise InputError(perf_msg)
+            performance.row(on_time)  # raises if there is no on-time row
+        elif performance.horizon != 1 or not _has_class(performance, 1, (0,)):
+            raise InputError(perf_msg + " (the class (1, (0,)))")
+        if isinstance(recovery, GainSchedule):
+            bad = [p.label for p in recovery.designed if p.arrivals[0] == 0]
+            if bad:
+                raise InputError(f"the recovery language must have its first measurement late or missing; "
+                                 f"words {bad[:5]} have it on time")
+        elif _has_class(recovery, 1, (0,)):
+            raise InputError("the recovery language must have its first measurement late or missing; its "
+                             "classes include (1, (0,)): y(0) on time")
         self.system = system
         self.performance = performance
         self.recovery = recovery
@@ -216,7 +427,7 @@ class SwitchingEstimator:
         self.mode = "performance"
         self.switch_times: list[int] = []
         self.revert_times: list[int] = []
-        self._est = RecoveryEstimator(system, performance, xhat0, periodic=True, t0=t0)
+        self._est = make_estimator(system, performance, xhat0, periodic=True, t0=t0)
 
     @property
     def xhat(self) -> np.ndarray:
@@ -254,9 +465,9 @@ class SwitchingEstimator:
         if self.mode == "recovery" and est.period_time == self.T:
             self.mode = "performance"
             self.revert_times.append(k)
-            est = self._est = RecoveryEstimator(self.system, self.performance, est.xhat, periodic=True, t0=k)
+            est = self._est = make_estimator(self.system, self.performance, est.xhat, periodic=True, t0=k)
         if self.mode == "performance" and not any(int(pk.time) == k for pk in packets):
             self.mode = "recovery"
             self.switch_times.append(k)
-            est = self._est = RecoveryEstimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
+            est = self._est = make_estimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
         return est.step(packets, u)

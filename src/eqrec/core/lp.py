@@ -180,7 +180,13 @@ class LPBuilder:
 
 @dataclass
 class LPSolution:
-    """What a solver returned, in solver-independent form."""
+    """What a solver returned, in solver-independent form.
+
+    ``row_dual`` (optimal solutions of the registry's solvers): multipliers
+    ``y`` of the rows in one convention for every solver, ``c - Aᵀy`` = the
+    reduced costs (nonnegative at a column's lower bound, nonpositive at its
+    upper bound), as HiGHS reports them.
+    """
 
     status: str  # "optimal", "infeasible", "unbounded", or a solver message
     x: np.ndarray | None
@@ -189,6 +195,7 @@ class LPSolution:
     iterations: int
     solve_time: float  # seconds spent inside the solver call
     blocks: dict[str, np.ndarray] = field(default_factory=dict)
+    row_dual: np.ndarray | None = None
 
     @property
     def optimal(self) -> bool:

@@ -14,6 +14,12 @@ of the observed prefix, ``μ1`` at period boundaries and in performance mode).
 Every packet is delivered at its true arrival time, also when that is past
 the end of its period: the estimator drops it there, which is what the
 design language assumes (a delay past the horizon means missing).
+
+Gains are node gains (:class:`eqrec.core.gains.GainSchedule`, run by
+:class:`eqrec.core.estimator.RecoveryEstimator`) or class gains
+(:class:`eqrec.core.classes.ClassGains`, run by the class-form
+:class:`eqrec.core.estimator.ClassEstimator`); every function taking gains
+accepts both (:func:`eqrec.core.estimator.make_estimator`).
 """
 
 from __future__ import annotations
@@ -23,7 +29,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from eqrec.core.estimator import Packet, RecoveryEstimator, SwitchingEstimator
+from eqrec.core.classes import ClassGains, class_maps
+from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, SwitchingEstimator, make_estimator
 from eqrec.core.patterns import ArrivalPattern, as_pattern
 from eqrec.core.gains import GainSchedule
 from eqrec.core.stacking import UncertaintyLayout
@@ -60,7 +67,7 @@ def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tupl
     raise ValueError(f"unknown noise kind {kind!r} (uniform or vertex)")
 
 
-def closed_loop(system: AffineSystem, est: "RecoveryEstimator | SwitchingEstimator",
+def closed_loop(system: AffineSystem, est: "RecoveryEstimator | ClassEstimator | SwitchingEstimator",
                 arrive: Sequence[Sequence[int]], x0: np.ndarray, xi0: np.ndarray, w: np.ndarray, v: np.ndarray,
                 u_at: Callable[[int, np.ndarray], np.ndarray], after_step: Callable[[int], None] | None = None
                 ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
@@ -108,10 +115,12 @@ def closed_loop(system: AffineSystem, est: "RecoveryEstimator | SwitchingEstimat
     return x, xhat, dropped
 
 
-def simulate_run(system: AffineSystem, schedule: GainSchedule, word: "ArrivalPattern | str", delta: np.ndarray,
-                 x0: np.ndarray, inputs: np.ndarray | None = None, periodic: bool = False) -> Trajectory:
+def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", word: "ArrivalPattern | str",
+                 delta: np.ndarray, x0: np.ndarray, inputs: np.ndarray | None = None,
+                 periodic: bool = False) -> Trajectory:
     """Run the true system and the causal estimator along an arrival pattern for uncertainty ``δ``.
 
+    ``schedule`` is node gains or class gains (:func:`eqrec.core.estimator.make_estimator`).
     The initial estimate is ``x̂(0) = x0 - ξ0``; the output ``y(τ) = C x(τ) + V v(τ)``
     is sent in a packet stamped ``τ`` that reaches the estimator at the
     pattern's arrival time (or never).
@@ -120,17 +129,19 @@ def simulate_run(system: AffineSystem, schedule: GainSchedule, word: "ArrivalPat
     T = pattern.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
     w, v, xi0 = lay.split(np.asarray(delta, float))
-    est = RecoveryEstimator(system, schedule, x0 - xi0, periodic=periodic)
+    est = make_estimator(system, schedule, x0 - xi0, periodic=periodic)
     arrive = [pattern.arriving_at(t) for t in range(T)]
     x, xhat, _ = closed_loop(system, est, arrive, x0, xi0, w, v,
                              lambda t, _xhat: np.zeros(system.m) if inputs is None else inputs[t])
     return Trajectory(word=pattern.label, x=x, xhat=xhat)
 
 
-def monte_carlo(system: AffineSystem, schedule: GainSchedule, words, M1: float, runs: int, seed: int,
+def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", words, M1: float, runs: int, seed: int,
                 kind: str = "uniform", x0: np.ndarray | None = None, inputs: np.ndarray | None = None,
                 word_choice: str = "random") -> tuple[np.ndarray, list[str]]:
     """Errors of ``runs`` simulations with random patterns (or 0/1 words) of the language.
+
+    ``schedule`` is node gains or class gains (as :func:`simulate_run`).
 
     Returns
     -------
@@ -250,7 +261,7 @@ def _drive(system: AffineSystem, est, delays: np.ndarray, x0: np.ndarray, xi0: n
     return x, xhat, dropped, w, v
 
 
-def long_run_periodic(system: AffineSystem, schedule: GainSchedule, words: Sequence[str], periods: int,
+def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains", words: Sequence[str], periods: int,
                       rng: np.random.Generator, *, M1: float, path_levels: Callable[[str], np.ndarray],
                       kind: str = "uniform", x0: np.ndarray | None = None, controller=None,
                       inputs: np.ndarray | None = None, sequence: Sequence[str] | None = None) -> LongRun:
@@ -259,7 +270,9 @@ def long_run_periodic(system: AffineSystem, schedule: GainSchedule, words: Seque
     Parameters
     ----------
     schedule
-        Gains of a design of horizon ``T`` (run with ``periodic=True``).
+        Gains of a design of horizon ``T`` (run with ``periodic=True``): node
+        gains, or class gains (the class-form estimator, re-anchored at every
+        period's start).
     words
         The design language as delay words (digit strings; a delay reaching
         past the period's end means missing).  Each period draws one word
@@ -303,7 +316,7 @@ def long_run_periodic(system: AffineSystem, schedule: GainSchedule, words: Seque
     level[N] = M1
     xi0 = draw_box(rng, M1, (system.n,), kind)
     x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
-    est = RecoveryEstimator(system, schedule, x0 - xi0, periodic=True)
+    est = make_estimator(system, schedule, x0 - xi0, periodic=True)
     x, xhat, dropped, w, v = _drive(system, est, delays, x0, xi0, kind, rng, controller, inputs, lambda t: None)
     return LongRun(x=x, xhat=xhat, level=level, delays=delays, recovering=np.zeros(N, bool), words=sequence,
                    dropped=dropped, w=w, v=v)
@@ -317,7 +330,8 @@ def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time:
     return d
 
 
-def long_run_switching(system: AffineSystem, performance: GainSchedule, recovery: GainSchedule, steps: int,
+def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassGains",
+                       recovery: "GainSchedule | ClassGains", steps: int,
                        rng: np.random.Generator, *, M1: float, recovery_level: Callable[[ArrivalPattern], float],
                        max_delay: int, p_on_time: float, kind: str = "uniform", x0: np.ndarray | None = None,
                        controller=None, inputs: np.ndarray | None = None,
@@ -328,7 +342,8 @@ def long_run_switching(system: AffineSystem, performance: GainSchedule, recovery
     ----------
     performance, recovery
         Gains of the period-1 (equalized-performance) design and of the
-        recovery design on the words whose first measurement is late.
+        recovery design on the words whose first measurement is late (node
+        gains or class gains, either kind for each).
     steps
         Length ``N`` of the run.
     M1
@@ -368,13 +383,39 @@ def long_run_switching(system: AffineSystem, performance: GainSchedule, recovery
                    w=w, v=v)
 
 
-def periodic_model_gap(run: LongRun, system: AffineSystem, schedule: GainSchedule) -> float:
+def class_closed_loop_maps(system: AffineSystem, gains: ClassGains, pattern: "ArrivalPattern | str"
+                           ) -> tuple[np.ndarray, np.ndarray, UncertaintyLayout]:
+    r"""Maps ``ξ(d) = G[d] δ + c[d]``, ``d = 0..T``, of the class-form estimator along ``pattern``.
+
+    :math:`G[0]` picks :math:`\xi_0`; :math:`G[d] = E_d - K_{(d,S)} Z_S` with
+    ``S`` the data available at ``d - 1`` along the pattern
+    (:func:`eqrec.core.classes.class_maps`); ``c = 0`` (the class form has no
+    offsets).  Raises :class:`InputError` if a class of the pattern is not in
+    the gains.
+    """
+    from eqrec.core.stacking import Stacking
+
+    pattern = as_pattern(pattern)
+    T, n = pattern.T, system.n
+    st = Stacking(system, T)
+    lay = st.layout
+    G = np.zeros((T + 1, n, lay.size))
+    G[0][:, lay.xi0] = np.eye(n)
+    for d in range(1, T + 1):
+        i = gains.classes.index(d, pattern.available(d - 1))
+        E, Z = class_maps(st, gains.classes.classes[i])
+        G[d] = E - gains.K[i] @ Z
+    return G, np.zeros((T + 1, n)), lay
+
+
+def periodic_model_gap(run: LongRun, system: AffineSystem, schedule: "GainSchedule | ClassGains") -> float:
     """Largest gap between a periodic run's errors and the design model of each period's word.
 
     Each period ``k`` of :func:`long_run_periodic` must follow the affine
     closed-loop map of its word's pattern,
     ``ξ(kT + j) = G_j δ_k + c_j`` with ``δ_k = (w, v of the period, ξ(kT))``
-    (:func:`eqrec.core.certify.closed_loop_maps`), where the pattern reads a
+    (:func:`eqrec.core.certify.closed_loop_maps` for node gains,
+    :func:`class_closed_loop_maps` for class gains), where the pattern reads a
     delay reaching past the period's end as *missing*.  The run delivers
     such packets in the next period, where the estimator drops them; a gap
     at rounding level shows that the runtime handling and the language agree.
@@ -382,13 +423,14 @@ def periodic_model_gap(run: LongRun, system: AffineSystem, schedule: GainSchedul
     from eqrec.core.certify import closed_loop_maps
     from eqrec.core.patterns import parse_delay_word
 
+    maps_of = class_closed_loop_maps if isinstance(schedule, ClassGains) else closed_loop_maps
     T = schedule.horizon
     err = run.error
     maps: dict[str, tuple[np.ndarray, np.ndarray, UncertaintyLayout]] = {}
     gap = 0.0
     for k, word in enumerate(run.words):
         if word not in maps:
-            maps[word] = closed_loop_maps(system, schedule, parse_delay_word(word))
+            maps[word] = maps_of(system, schedule, parse_delay_word(word))
         G, c, lay = maps[word]
         delta = np.zeros(lay.size)
         for j in range(T):

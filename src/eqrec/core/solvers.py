@@ -55,8 +55,10 @@ def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
     info = h.getInfo()
     iters = int(info.simplex_iteration_count) + int(max(info.ipm_iteration_count, 0))
     if ms == highspy.HighsModelStatus.kOptimal:
-        x = np.asarray(h.getSolution().col_value)
-        return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks)
+        hs = h.getSolution()
+        x = np.asarray(hs.col_value)
+        return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks,
+                          row_dual=np.asarray(hs.row_dual) if hs.dual_valid else None)
     if ms == highspy.HighsModelStatus.kInfeasible:
         return LPSolution("infeasible", None, INF, "highs", iters, elapsed, lp.blocks)
     if ms in (highspy.HighsModelStatus.kUnbounded, highspy.HighsModelStatus.kUnboundedOrInfeasible):
@@ -99,7 +101,16 @@ def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
     status = str(sol.status)
     if status in ("Solved", "AlmostSolved"):
         x = np.asarray(sol.x)
-        return LPSolution("optimal", x, float(lp.c @ x), "clarabel", int(sol.iterations), elapsed, lp.blocks)
+        # KKT of Clarabel: c + A_cᵀ z = 0, so y = -z on equality and upper rows, +z on (negated) lower rows
+        z = np.asarray(sol.z)
+        y = np.zeros(A.shape[0])
+        k = 0
+        for mask, sign in ((eq, -1.0), (up, -1.0), (lo, 1.0)):
+            cnt = int(mask.sum())
+            y[mask] += sign * z[k:k + cnt]
+            k += cnt
+        return LPSolution("optimal", x, float(lp.c @ x), "clarabel", int(sol.iterations), elapsed, lp.blocks,
+                          row_dual=y)
     if "PrimalInfeasible" in status:
         return LPSolution("infeasible", None, INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
     if "DualInfeasible" in status:
@@ -125,7 +136,15 @@ def _solve_scipy(lp: LinearProgram, options: dict) -> LPSolution:
     status = {0: "optimal", 2: "infeasible", 3: "unbounded"}.get(res.status, res.message)
     x = res.x if res.status == 0 else None
     obj = float(res.fun) if res.status == 0 else np.nan
-    return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks)
+    y = None
+    if res.status == 0:  # marginals are d(objective)/d(rhs): y on equality and upper rows, minus on lower rows
+        y = np.zeros(A.shape[0])
+        if eq.any():
+            y[eq] = res.eqlin.marginals
+        m_ub = np.asarray(res.ineqlin.marginals) if A_ub.shape[0] else np.zeros(0)
+        y[up] += m_ub[: int(up.sum())]
+        y[lo] -= m_ub[int(up.sum()):]
+    return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks, row_dual=y)
 
 
 def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
@@ -150,7 +169,9 @@ def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
     iters = int(stats.get("iter_count", 0))
     if status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
         xv = np.asarray(sol["x"]).reshape(-1)
-        return LPSolution("optimal", xv, float(lp.c @ xv), "ipopt", iters, elapsed, lp.blocks)
+        # stationarity of c x + lam_gᵀ (A x) + lam_xᵀ x: y = -lam_g
+        return LPSolution("optimal", xv, float(lp.c @ xv), "ipopt", iters, elapsed, lp.blocks,
+                          row_dual=-np.asarray(sol["lam_g"]).reshape(-1))
     if status == "Infeasible_Problem_Detected":
         return LPSolution("infeasible", None, INF, "ipopt", iters, elapsed, lp.blocks)
     if status == "Diverging_Iterates":
