@@ -258,3 +258,136 @@ def test_batch_reactor_example_is_the_zoh_model():
     np.testing.assert_allclose(system.A, ref.A, atol=5e-6)
     np.testing.assert_array_equal(system.C, ref.C)
     assert system.eta_v == ref.eta_v and system.eta_w == 0
+
+
+# --------------------------------------------------------------------------- --engine, --node-gains, big languages
+
+ACC_WORDS = "101111,110111,111011,111101"
+
+
+def _run_json(capsys, argv):
+    assert main(argv) == 0, capsys.readouterr().err
+    return json.loads(capsys.readouterr().out)
+
+
+def test_prefix_engines_agree_on_acc(capsys):
+    base = ["design", str(SYSTEM), "--words", ACC_WORDS, "--method", "prefix", "--mu1", "1"]
+    d = _run_json(capsys, base)
+    t = _run_json(capsys, [*base, "--engine", "tree"])
+    assert d["engine"] == "classes" and t["engine"] == "tree"
+    assert d["mu2"] == pytest.approx(t["mu2"], rel=1e-6)
+    assert d["mu2"] == pytest.approx(1.1498, abs=1e-4)
+    # every earlier key stays; the class engine adds its class table, the tree engine has none
+    for key in ("method", "mu1", "mu2", "certified_mu2", "certified_terminal", "solver", "status", "words",
+                "designed_words", "gains"):
+        assert key in d and key in t
+    assert "classes" not in t
+    rows = d["classes"]
+    assert max(r["level"] for r in rows if not r["terminal"]) == pytest.approx(d["mu2"], rel=1e-6)
+    assert all(r["certified"] <= 1.0 * (1 + 1e-6) for r in rows if r["terminal"])
+    label = rows[-1]["class"]  # "d:S": time d, then a 0/1 string over the times 0..d-1
+    depth, data = label.split(":")
+    assert int(depth) == rows[-1]["k"] == len(data)
+    assert [i for i, c in enumerate(data) if c == "1"] == rows[-1]["data"]
+    assert np.asarray(rows[-1]["K"]).shape == (3, 2 * len(rows[-1]["data"]))
+
+
+def test_time_method_reports_its_engine(capsys):
+    d = _run_json(capsys, ["design", str(SYSTEM), "--words", "101111,110111", "--method", "time"])
+    assert d["engine"] == "classes" and d["worst_case_word"] == "100111" and d["classes"]
+
+
+def test_delay_engines_agree_on_the_batch_reactor(capsys):
+    base = ["design", str(BATCH_REACTOR), "--method", "delay", "--max-delay", "2", "--horizon", "5", "--mu1", "0.5"]
+    d = _run_json(capsys, base)
+    t = _run_json(capsys, [*base, "--engine", "tree"])
+    assert d["engine"] == "classes" and t["engine"] == "tree"
+    assert d["mu2"] == pytest.approx(t["mu2"], rel=1e-6)
+    assert d["J"] == pytest.approx(t["J"], rel=1e-6)
+    assert len(d["classes"]) == 18
+    # 162 event sequences: small enough that the node gains are written by default, with the word lists
+    assert len(d["words"]) == len(t["words"]) == 162 and len(d["gains"]) == 162 and "designed_words" in d
+
+
+def test_delay_mu1_free_engines_agree(capsys):
+    base = ["design", str(SYSTEM), "--method", "delay", "--delays", ACC_DELAYS, "--mu1", "free"]
+    d = _run_json(capsys, base)
+    t = _run_json(capsys, [*base, "--engine", "tree"])
+    assert t["engine"] == "tree" and t["mu1"] == d["mu1"]
+    assert t["J"] == pytest.approx(d["J"], rel=1e-6) and t["mu2"] == pytest.approx(d["mu2"], rel=1e-6)
+    assert t["mu1_free"]["lower_bound"] <= t["J"] <= t["mu1_free"]["lower_bound"] * (1 + 1e-4)
+
+
+def test_delay_30_4_free_runs_from_the_classes(tmp_path, capsys):
+    """{0..4}^30 (9.3e20 words) is designed from its 446 classes, never enumerating a word."""
+    out = tmp_path / "d.json"
+    assert main(["design", str(BATCH_REACTOR), "--method", "delay", "--max-delay", "4", "--horizon", "30",
+                 "--mu1", "free", "--out", str(out)]) == 0, capsys.readouterr().err
+    assert out.stat().st_size < 3_000_000
+    d = json.loads(out.read_text())
+    assert d["engine"] == "classes" and len(d["classes"]) == 446
+    assert "gains" not in d and "levels" not in d and "designed_words" not in d
+    assert d["words"] == 5 ** 30 and d["max_delay"] == 4 and d["horizon"] == 30
+    assert d["certified_mu2"] <= d["mu2"] * (1 + 1e-6)
+    assert d["J_certified"] <= d["J"] * (1 + 1e-6)
+    free = d["mu1_free"]
+    assert free["route"] == "global" and free["lower_bound"] <= free["J"]
+
+
+def test_medium_language_writes_counts_unless_node_gains_asked(capsys):
+    """{0..2}^6: 486 event sequences, over the default node-gain limit; --node-gains enumerates the words."""
+    base = ["design", str(BATCH_REACTOR), "--method", "delay", "--max-delay", "2", "--horizon", "6", "--mu1", "1"]
+    d = _run_json(capsys, base)
+    assert d["words"] == 3 ** 6 and "gains" not in d and "designed_words" not in d
+    g = _run_json(capsys, [*base, "--node-gains"])
+    assert len(g["words"]) == 486 and len(g["gains"]) == 486 and g["designed_words"] and g["levels"]
+    assert g["mu2"] == pytest.approx(d["mu2"], rel=1e-9) and len(g["classes"]) == len(d["classes"])
+
+
+@pytest.mark.parametrize("args, field", [(["--node-gains"], "--node-gains"), (["--engine", "tree"], "--engine")])
+def test_big_language_refuses_what_needs_the_words(tmp_path, capsys, args, field):
+    out = tmp_path / "d.json"
+    assert main(["design", str(BATCH_REACTOR), "--method", "delay", "--max-delay", "4", "--horizon", "30",
+                 "--mu1", "free", *args, "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"'{field}'" in err and "9.31e+20 words" in err
+    assert not out.exists()
+
+
+def test_delay_classes_infeasible_fixed_mu1_exits_3(tmp_path, capsys):
+    out = tmp_path / "d.json"
+    assert main(["design", str(BATCH_REACTOR), "--method", "delay", "--max-delay", "2", "--horizon", "5",
+                 "--mu1", "0.01", "--out", str(out)]) == 3
+    assert "infeasible" in capsys.readouterr().err
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def test_unknown_engine_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["design", str(SYSTEM), "--words", ACC_WORDS, "--engine", "bogus"])
+    assert e.value.code == 2 and "--engine" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, field", [
+    (["--method", "time", "--engine", "tree"], "--engine"),
+    (["--method", "augmented", "--engine", "classes"], "--engine"),
+    (["--node-gains"], "--node-gains"),
+])
+def test_engine_and_node_gains_rejected_where_they_do_not_apply(capsys, args, field):
+    assert main(["design", str(SYSTEM), "--words", "111111", *args]) == 1
+    assert f"'{field}'" in capsys.readouterr().err
+
+
+def test_help_describes_engines_and_classes(capsys):
+    with pytest.raises(SystemExit):
+        main(["design", "--help"])
+    out = capsys.readouterr().out
+    for text in ("--engine", "--node-gains", '"d:S"', "K (y_S - ybar_S)", "T = 30"):
+        assert text in out
+
+
+def test_help_states_the_node_gains_limit_of_to_json():
+    from eqrec.cli import JSON_NODE_GAINS_SEQUENCES
+    from eqrec.design.delay import JSON_NODE_GAINS_LIMIT
+
+    assert JSON_NODE_GAINS_SEQUENCES == JSON_NODE_GAINS_LIMIT

@@ -9,6 +9,8 @@ Examples
     eqrec design system.yaml --words 101111,110111 --method augmented --L free
     eqrec design system.yaml --method delay --delays 21210,00000 --mu1 free --out design.json
     eqrec design system.yaml --method delay --max-delay 2 --horizon 5 --mu1 0.33 --cost max
+    eqrec design system.yaml --method delay --max-delay 4 --horizon 30 --mu1 free --out design.json
+    eqrec design system.yaml --method delay --max-delay 2 --horizon 5 --engine tree --node-gains
 
 Exit status: 0 on success, 1 for malformed input (the message names the file
 and field), 2 for a usage error (argparse), 3 for an infeasible or unbounded
@@ -30,6 +32,12 @@ from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, Sol
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
 #: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).
 MAX_MU1 = 1e12
+#: Largest full delay language ``{0..D}^T`` (words) that ``--node-gains`` or ``--engine tree`` enumerate.
+MAX_ENUMERATED_WORDS = 20_000
+ENGINES = ("classes", "tree")
+#: ``eqrec.design.delay.JSON_NODE_GAINS_LIMIT``, for the help text without importing the design modules (a test
+#: checks they agree).
+JSON_NODE_GAINS_SEQUENCES = 200
 EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usage error; "
              "3 infeasible or unbounded design (no file written); 4 solver or certification failure.")
 
@@ -58,15 +66,51 @@ from the gains alone), solver, status, words, gains: for each designed word
   xhat(t+1) = A xhat + B u - ue + f,
   y_xi(tau) = y(tau) - C xhat(tau) if y(tau) has arrived by time t, else 0
 (F(t,tau) is zero wherever y(tau) has not arrived by time t).
---method delay adds: cost, J (the cost of --cost), levels (one row per event
-prefix and time: designed level, certified worst case, sequences through it;
-a prefix is labelled by its 0/1 word while no measurement has arrived late,
-else by its events e_0.e_1...),
-event_sequences (per designed sequence, for each time t a 0/1 string over
-y(0..t): character tau is 1 if y(tau) is available at time t), and with
---mu1 free: mu1_free {route, J, lower_bound (a certified lower bound of J
-over every mu1), gap, mu1_min}.
+--method prefix and time add engine (classes or tree) and, for the class
+engine, classes (below).
+
+Engines (--engine, methods prefix and delay; default classes): the class
+engine solves one small LP per (time d, available data S) class and state
+row (nodes of the prefix tree that see the same data at the same time share
+their level) and derives the node gains from the class gains K; the tree
+engine solves one LP with a gain row per prefix-tree node (the independent
+cross-check).  Both give the same optimum.  For --max-delay D --horizon T the
+class engine builds the classes from the window rule without enumerating the
+(D+1)^T words: D = 4, T = 30 (9.3e20 words, 446 classes) takes seconds and
+writes about 1 MB.  --engine tree and --node-gains need the words enumerated
+and are refused above %(limit)d words.
+
+Class keys (class engine): classes, one row per class {class, k, data,
+terminal, sequences, nodes, level, certified, K}.  The label "d:S" is the
+time d and, as a 0/1 string over the times 0..d-1, the measurements received
+by time d-1 (1: received; data lists their times).  The class-form estimator
+  xhat(d) = xbar(d) + K (y_S - ybar_S)
+(xbar, ybar the noise-free prediction from xhat(0), inputs and f included;
+y_S stacks y(tau) for tau in S, by time then output; K is n x |S|p) has the
+worst case "certified" (recomputed from K alone) at time d along every
+sequence of the class; "level" is the designed level, at most mu1 for a
+terminal class (where words end), "sequences" the class's weight in the sum
+cost.
+
+--method delay adds: engine, cost, J (the cost of --cost), J_certified,
+sequences and nodes (of the reduced event language and its prefix tree),
+classes (class engine), and with --mu1 free: mu1_free {route, J, lower_bound
+(a certified lower bound of J over every mu1), gap, mu1_min}.  With node
+gains (--node-gains; by default when the reduced language has at most %(seq)d
+sequences) it also writes gains, levels (one row per event prefix and time:
+designed level, certified worst case, sequences through it; a prefix is
+labelled by its 0/1 word while no measurement has arrived late, else by its
+events e_0.e_1...) and event_sequences (per designed sequence, for each time
+t a 0/1 string over y(0..t): character tau is 1 if y(tau) is available at
+time t).  words lists the delay words (designed_words the designed ones),
+except for a --max-delay language left unenumerated: then words is the
+number of words and designed_words is omitted (max_delay and horizon name
+the language).
 """
+
+
+def _system_help() -> str:
+    return SYSTEM_HELP % {"limit": MAX_ENUMERATED_WORDS, "seq": JSON_NODE_GAINS_SEQUENCES}
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -83,7 +127,7 @@ def _parser() -> argparse.ArgumentParser:
     d = sub.add_parser("design", help="design and certify an estimator for a system file",
                        description="Minimise the intermediate level mu2 for a given recovery level mu1, "
                                    "recover the gains, certify them from the gains alone, write JSON.",
-                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=SYSTEM_HELP + "\n" + EXIT_HELP)
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=_system_help() + "\n" + EXIT_HELP)
     d.add_argument("system", help="system YAML file (keys below)")
     d.add_argument("--words", default=None,
                    help="comma-separated words of the missing-data language, e.g. 101111,110111 "
@@ -101,6 +145,14 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--max-delay", type=int, default=None,
                    help="delay only: with --horizon, design for all delay words with delays 0..D")
     d.add_argument("--horizon", type=int, default=None, help="delay only: word length T for --max-delay")
+    d.add_argument("--engine", choices=ENGINES, default=None,
+                   help="prefix and delay only: classes = one small LP per (time, available data) class "
+                        "(default; --max-delay languages without enumerating words); tree = one LP over the "
+                        "prefix tree (the cross-check; needs the words)")
+    d.add_argument("--node-gains", action="store_true",
+                   help="delay only: write node gains, levels per event prefix and event sequences (default: "
+                        "only for small languages); needs the words enumerated (refused above "
+                        f"{MAX_ENUMERATED_WORDS} words)")
     d.add_argument("--cost", choices=("sum", "max"), default=None,
                    help="delay only: sum = the paper's J = mu1 + sum_k sum_alpha mu2_k^alpha (default); "
                         "max = the largest level")
@@ -135,9 +187,14 @@ def run_design(args: argparse.Namespace) -> dict:
     if args.method == "delay":
         return run_delay_design(args, system, T_file, mu1)
     for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
-                        ("--cost", args.cost)):
+                        ("--cost", args.cost), ("--node-gains", args.node_gains or None)):
         if value is not None:
-            raise InputError(f"{flag} applies to --method delay only", "command line", flag)
+            raise InputError(f"{flag} applies to --method delay only" +
+                             (" (the other methods always write their gains)" if flag == "--node-gains" else ""),
+                             "command line", flag)
+    if args.engine is not None and args.method not in ("prefix", "delay"):
+        raise InputError(f"--engine applies to --method prefix and delay only, not {args.method}", "command line",
+                         "--engine")
     if args.words is None:
         raise InputError(f"--method {args.method} needs --words", "command line", "--words")
     args.mu1 = mu1
@@ -150,7 +207,7 @@ def run_design(args: argparse.Namespace) -> dict:
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
     extra = {}
     if args.method == "prefix":
-        design = design_prefix(system, words, args.mu1, solver=args.solver)
+        design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes")
     elif args.method == "time":
         design = design_time_based(system, words, args.mu1, solver=args.solver)
     else:
@@ -179,6 +236,12 @@ def run_design(args: argparse.Namespace) -> dict:
            "gains": design.schedule.to_json(), **extra}
     if args.method == "time":
         out["worst_case_word"] = design.extra["worst_case_word"]
+    if args.method in ("prefix", "time"):
+        out["engine"] = design.extra.get("engine", "tree")
+        if design.class_gains is not None:
+            from eqrec.design.delay import class_table
+
+            out["classes"] = class_table(design)
     return out
 
 
@@ -203,14 +266,22 @@ def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
 
 def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str) -> dict:
     """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
+    import dataclasses
+    import time
+    from decimal import Decimal
+
+    from eqrec.core.classes import ClassSet, full_language_counts
     from eqrec.core.patterns import as_language
-    from eqrec.design.delay import delay_language, design_delay, design_delay_global, to_json
+    from eqrec.design.classes import class_cost
+    from eqrec.design.delay import (JSON_NODE_GAINS_LIMIT, delay_classes, delay_language, design_delay,
+                                    design_delay_global, to_json)
 
     if args.words is not None:
         raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",
                          "--words")
     if args.L or args.poles or args.s0:
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
+    engine = args.engine or "classes"
     full = args.max_delay is not None or args.horizon is not None
     if (args.delays is None) == (not full):
         raise InputError("give either --delays W1,W2,... or both --max-delay and --horizon", "command line",
@@ -226,7 +297,24 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
             raise InputError(f"must be at least 1, got {args.horizon}", "command line", "--horizon")
         if T_file is not None and T_file != args.horizon:
             raise InputError(f"T = {T_file} in the system file but --horizon {args.horizon}", args.system, "T")
-        patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, source="command line")
+        n_words = (args.max_delay + 1) ** args.horizon
+        size = (f"{{0..{args.max_delay}}}^{args.horizon} has {Decimal(n_words):.3g} words, more than the "
+                f"{MAX_ENUMERATED_WORDS} that can be enumerated")
+        if args.node_gains and n_words > MAX_ENUMERATED_WORDS:
+            raise InputError(f"node gains need the prefix tree of every word: {size}; drop --node-gains (the "
+                             "JSON holds the class gains K)", "command line", "--node-gains")
+        if engine == "tree" and n_words > MAX_ENUMERATED_WORDS:
+            raise InputError(f"the tree engine needs every word: {size}; use --engine classes", "command line",
+                             "--engine")
+        # the words are enumerated for the tree engine, node gains, or a language small enough that its node
+        # gains are written by default (to_json); otherwise the classes come from the window rule
+        enumerate_words = (args.node_gains or engine == "tree" or (
+            n_words <= MAX_ENUMERATED_WORDS
+            and full_language_counts(args.horizon, args.max_delay)["sequences"] <= JSON_NODE_GAINS_LIMIT))
+        if enumerate_words:
+            patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, source="command line")
+        else:
+            patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon)
     else:
         words = [w.strip() for w in args.delays.split(",") if w.strip()]
         if not words:
@@ -236,15 +324,38 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
             raise InputError(f"T = {T_file} in the system file but the delay words have length {patterns[0].T}",
                              args.system, "T")
     cost = args.cost or "sum"
+    node_gains = True if args.node_gains else None
     if mu1 == "free":
-        free = design_delay_global(system, patterns, cost=cost, solver=args.solver)
+        # the global route (class LPs: mu1_min and the certified lower bound of J); the tree engine then
+        # designs at that mu1, which the class gains attain
+        free = design_delay_global(system, patterns, cost=cost, solver=args.solver,
+                                   node_gains=node_gains if engine == "classes" else False)
+        if engine == "tree":
+            t_tree = time.perf_counter()
+            tree_design = design_delay(system, patterns, free.mu1, cost=cost, solver=args.solver, engine="tree")
+            tree_design.extra.update({k: v for k, v in free.design.extra.items()
+                                      if k in ("mu1_free", "lower_bound", "mu1_min", "mu1_min_lower",
+                                               "mu1_binding")})
+            free = dataclasses.replace(free, design=tree_design, J=float(tree_design.extra["J"]), lps=free.lps + 1,
+                                       time=free.time + time.perf_counter() - t_tree)
         design = free.design
     else:
         free = None
-        design = design_delay(system, patterns, mu1, cost=cost, solver=args.solver)
-    out = to_json(design, free)
-    out.update(solver=design.solution.solver, status=design.solution.status,
-               words=[p.label for p in patterns], designed_words=[p.label for p in design.schedule.designed])
+        design = design_delay(system, patterns, mu1, cost=cost, solver=args.solver, engine=engine,
+                              node_gains=node_gains)
+    out = to_json(design, free, node_gains=node_gains)
+    ccert = design.class_certificate
+    if out.get("J_certified") is None and ccert is not None:  # J from the class certificate (worst cases of K)
+        out["J_certified"] = class_cost(design.class_gains.classes, design.M1, ccert.levels, cost)
+    out.update(solver=design.solution.solver, status=design.solution.status)
+    if full:
+        out.update(max_delay=args.max_delay, horizon=args.horizon)
+    if isinstance(patterns, ClassSet):  # classes from the window rule: no word enumerated
+        out["words"] = int(patterns.words)
+    else:
+        out["words"] = [p.label for p in patterns]
+        if design.schedule is not None:
+            out["designed_words"] = [p.label for p in design.schedule.designed]
     return out
 
 

@@ -284,7 +284,7 @@ class ClassEstimator(_StampedEstimator):
         return self._xbar.copy()
 
     def _reference(self) -> np.ndarray:
-        return self.xhat
+        return self._xbar  # residuals y(τ) − C(τ) x̄(τ)
 
     def _restart(self) -> None:
         super()._restart()

@@ -77,7 +77,7 @@ from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_language, full_delay_language, parse_delay_word
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import (MU1_LOWER_RTOL, MinRecoveryLevel, class_design, solve_classes)
+from eqrec.design.classes import MU1_LOWER_RTOL, MinRecoveryLevel, class_cost, class_design, solve_classes
 from eqrec.design.classes import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
@@ -413,6 +413,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
                               node_gains=node_gains, rtol=rtol)
         if design.certificate is not None and classes.tree is not None:
             design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
+        elif design.class_certificate is not None:
+            design.extra["J_certified"] = class_cost(classes, mu1, design.class_certificate.levels, cost)
         return design
     tree = _tree(patterns)
     model = _fixed_mu1_lp(system, tree, mu1, cost, form)
@@ -481,8 +483,6 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
     lower_bound = np.nan
     if np.isfinite(mm.lower):
         low = solve_classes(system, classes, mm.lower, solver=solver)
-        from eqrec.design.classes import class_cost
-
         lower_bound = class_cost(classes, mm.lower, low.levels, cost)
     J = float(design.extra["J"])
     design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,

@@ -18,15 +18,19 @@ from eqrec.design.result import Design
 
 
 def design_time_based(system: AffineSystem, words, M1: float, *, solver: str = "highs",
-                      certify: bool = True, form: str = "split") -> Design:
+                      certify: bool = True, form: str = "split", engine: str = "classes") -> Design:
     """Minimise ``M2`` of a time-based estimator for the worst-case pattern of ``words``.
 
-    ``words`` are arrival patterns or 0/1 words.  The certificate covers
-    every pattern of the language and the worst case.
+    ``words`` are arrival patterns or 0/1 words.  The design is the
+    single-word prefix design on the worst-case pattern (one word: its
+    classes are its nodes, so the class engine applies; ``engine="tree"``
+    uses the tree LP).  The certificate covers every pattern of the
+    language and the worst case.
     """
     language = as_language(words)
     wc = worst_case_pattern(language)
-    design = design_prefix(system, [wc], M1, solver=solver, form=form, certify=False, method="time")
+    design = design_prefix(system, [wc], M1, solver=solver, form=form, certify=False, method="time",
+                           engine=engine)
     design.extra["language"] = tuple(p.label for p in language)
     design.extra["worst_case_word"] = wc.label
     if certify:

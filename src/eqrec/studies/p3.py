@@ -227,7 +227,7 @@ def _design_summary(design: Design) -> dict:
     top = max(inner, key=lambda r: r["level"]) if inner else None
     return {"mu1": design.M1, "mu2": design.mu2, "J": design.extra.get("J"), "cost": design.extra.get("cost"),
             "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes"),
-            "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
+            "classes": design.extra.get("classes"), "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
             "argmax_prefix": None if top is None else top["prefix"], "argmax_depth": None if top is None else top["k"],
             **_certificate_summary(design)}
 
@@ -236,7 +236,8 @@ def _free_summary(res: FreeMu1Result) -> dict:
     out = {"route": res.route, "mu1": res.mu1, "J": res.J, "lower_bound": res.lower_bound, "gap": res.gap,
            "lps": res.lps, "time_s": res.time, **_design_summary(res.design)}
     if res.mu1_min is not None:
-        out["mu1_min"] = {"upper": res.mu1_min.upper, "lower": res.mu1_min.lower}
+        out["mu1_min"] = {"upper": res.mu1_min.upper, "lower": res.mu1_min.lower,
+                          "lower_margin": res.mu1_min.lower_margin, "binding": res.mu1_min.binding}
     if res.route == "ipopt":
         pol = res.extra.get("polished", {})
         out.update(status=res.extra["status"], iterations=res.extra["iterations"],
@@ -398,7 +399,7 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
     ac = cfg["acc"]
     missing = [p.canonical_label for p in delay_language(words)]
     log.info("ACC: delay language %s = missing-data language %s, mu1 = %g", words, missing, mu1)
-    p1 = design_prefix(system, missing, mu1)
+    p1 = design_prefix(system, missing, mu1, engine="tree")  # P1's estimator: the gains of P1's LP
     out: dict = {"language": words, "missing_data_language": missing, "mu1": mu1,
                  "p1_prefix": {"mu2": p1.mu2, "certified_mu2": p1.certificate.mu2}, "fixed": {}, "free": {}}
     for cost in ("sum", "max"):
@@ -426,7 +427,7 @@ def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
     sim = ac["simulation"]
     missing = [p.canonical_label for p in delay_language(words)]
     proposed = design_delay(system, words, mu1, cost=ac["cost"])
-    prefix = design_prefix(system, missing, mu1)
+    prefix = design_prefix(system, missing, mu1, engine="tree")  # P1's estimator: the gains of P1's LP
     pat = parse_delay_word(ac["true_pattern"])
     T = pat.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)

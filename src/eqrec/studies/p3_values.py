@@ -65,6 +65,9 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                                                     + "]", "sequence": s["event_sequence"]}}
     counts = {f"{c['T']},{c['max_delay']}": c for c in lang["counts"]}
     T_br, tb_br = cfg["batch_reactor"]["horizon"], cfg["batch_reactor"]["max_delay"]
+    v["br_classes"] = {"value": br["global"]["classes"], "evidence": {
+        "words": br["words"], "sequences": br["global"]["sequences"], "nodes": br["global"]["nodes"],
+        "T": T_br, "max_delay": tb_br}}
     v["br_words"] = {"value": br["words"], "evidence": {
         "sequences": br["global"]["sequences"], "nodes": br["global"]["nodes"], "T": T_br, "max_delay": tb_br,
         "counts": {k: {"words": c["words"], "sequences": c["sequences"], "nodes": c["nodes"]}
@@ -81,7 +84,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     A2 = br["A2_inf_norm"]
     design_ev = {
         "J": g["J"], "lower_bound": g["lower_bound"], "gap": g["gap"], "mu1_min_lower": g["mu1_min"]["lower"],
-        "mu1_min_upper": g["mu1_min"]["upper"], "ipopt_mu1": ip["mu1"], "ipopt_J": ip["J"], "ipopt_mu2": ip["mu2"],
+        "mu1_min_upper": g["mu1_min"]["upper"], "binding_class": g["mu1_min"]["binding"]["class"],
+        "binding_row": g["mu1_min"]["binding"]["row"], "classes": g["classes"], "ipopt_mu1": ip["mu1"], "ipopt_J": ip["J"], "ipopt_mu2": ip["mu2"],
         "ipopt_status": ip["status"], "better": cmp["better"], "tolerance": cmp["tolerance"],
         "certified_mu2": g["certified_mu2"], "certified_terminal": g["certified_terminal"],
         "max_certified_over_level": g["max_certified_over_level"], "nodes": g["nodes"],
