@@ -3,14 +3,18 @@
     python benchmarks/bench_p3.py                      # parts 1 and 2, scale table up to (6, 2)
     python benchmarks/bench_p3.py --sizes 5,2 6,2 7,2 8,2 8,3 --time-limit 600 --mem-limit-gb 16
     python benchmarks/bench_p3.py --only scale --sizes 7,2 --methods ipm
+    python benchmarks/bench_p3.py --only scale --engines classes --sizes 20,4 30,4 --methods simplex
 
-1. ``μ1`` fixed, all 243 words (162 event sequences), sum cost: build, solve,
-   recover, certify (goal: <= 1.5 s end to end on 2 cores).
-2. ``μ1`` free with its global certificate (certified smallest ``μ1`` +
-   interval branch and bound, warm-started HiGHS; goal <= 20 s), the same
-   cold, and the paper's route (IPOPT on problem (10) from the LP at ``μ1 = 1``).
-3. Scale table for the full language ``{0..τ̄}^T``: sequences, reduced
-   sequences, prefix-tree nodes, LP rows / columns / nonzeros, build and
+1. ``μ1`` fixed, all 243 words (162 event sequences), sum cost: the tree LP's
+   build, solve, recover, certify (goal: <= 1.5 s end to end on 2 cores), and
+   the class engine's ``design_delay`` end to end beside it.
+2. ``μ1`` free with its global certificate: ``design_delay_global`` (the
+   smallest feasible ``μ1`` by one Charnes–Cooper LP, certified; the μ1-free
+   theorem of :mod:`eqrec.design.classes`; goal <= 20 s) and the paper's
+   route (``design_delay_ipopt``: IPOPT on problem (10) from the LP at ``μ1 = 1``).
+3. Scale table for the full language ``{0..τ̄}^T`` (``--engines tree classes``):
+   words, reduced sequences, prefix-tree nodes, classes, LP rows / columns /
+   nonzeros, build and
    solve time and peak memory, one fresh process per (size, method) so the
    peak memory is that size's (``ru_maxrss`` of the worker).  Methods:
    ``simplex`` (HiGHS dual simplex), ``ipm`` (HiGHS interior point with
@@ -19,7 +23,8 @@
    exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
    ``--mem-limit-gb`` (address-space limit) is reported as such.  ``--builders
    core recursive`` also measures the recursive (scenario-tree) form of
-   :mod:`eqrec.design.delay_scale`.  The worker is
+   :mod:`eqrec.design.delay_scale`; ``--engines classes`` the class engine
+   (``benchmarks/bench_classes.py`` has its targets).  The worker is
    :func:`eqrec.design.scale_sweep.run_size` (shared with the P3 scale steps
    of the pipeline).
 """
@@ -30,7 +35,7 @@ import argparse
 import statistics
 import time
 
-from eqrec.design.scale_sweep import METHODS, run_size
+from eqrec.design.scale_sweep import ENGINES, METHODS, run_size
 from eqrec.models import batch_reactor
 
 
@@ -64,6 +69,15 @@ def part_fixed(repeats: int) -> None:
     print("   " + "  ".join(f"{min(r[k] for r in rows):8.3f}" for k in keys) + "   best")
     print("   " + "  ".join(f"{statistics.median(r[k] for r in rows):8.3f}" for k in keys) + "   median")
     print(f"   goal <= 1.5 s end to end: {'met' if statistics.median(r['total'] for r in rows) <= 1.5 else 'NOT met'}")
+    words = delay_language(max_delay=2, horizon=5)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        dc = design_delay(system, words, 0.33, engine="classes")
+        times.append(time.perf_counter() - t0)
+    print(f"   class engine, design_delay end to end (classes, LPs, node gains, certificate): "
+          f"{statistics.median(times):.3f} s median, {min(times):.3f} s best; max mu2 = {dc.mu2:.6f} "
+          f"(tree {d.mu2:.6f})")
 
 
 def part_free() -> None:
@@ -74,14 +88,12 @@ def part_free() -> None:
     system = batch_reactor()
     words = full_delay_language(5, 2)
     print("\n2. mu1 free, sum cost, 243 words")
-    g = design_delay_global(system, words, cost="sum", rtol=1e-4)
-    gc = design_delay_global(system, words, cost="sum", rtol=1e-4, warm_start=False)
+    g = design_delay_global(system, words, cost="sum")
     ip = design_delay_ipopt(system, words, cost="sum", start_mu1=1.0)
-    for label, r in (("global, warm", g), ("global, cold", gc)):
-        mm = r.mu1_min
-        print(f"   {label:13} mu1 = {r.mu1:.8f} (certified smallest in ({mm.lower:.8f}, {mm.upper:.8f}]), "
-              f"J = {r.J:.6f} >= {r.lower_bound:.6f} (gap {r.gap:.1e}), max mu2 = {r.mu2:.6f}, "
-              f"{r.lps} LPs ({mm.lps} for mu1_min), {r.time:.2f} s")
+    mm = g.mu1_min
+    print(f"   {'global':13} mu1 = {g.mu1:.8f} (certified smallest in ({mm.lower:.8f}, {mm.upper:.8f}]), "
+          f"J = {g.J:.6f} >= {g.lower_bound:.6f} (gap {g.gap:.1e}), max mu2 = {g.mu2:.6f}, "
+          f"{g.lps} LPs ({mm.lps} for mu1_min), {g.time:.3f} s")
     pol = ip.extra.get("polished", {})
     print(f"   {'ipopt (10)':13} mu1 = {ip.mu1:.8f} (its gains reach {ip.extra['mu1_of_gains']:.8f}), "
           f"J = {ip.J:.6f}, max mu2 = {ip.mu2:.6f}, {ip.extra['iterations']} iterations, "
@@ -91,20 +103,26 @@ def part_free() -> None:
           f"{cmp['ipopt_consistent_with_bound']}; goal <= 20 s: {'met' if g.time <= 20 else 'NOT met'}")
 
 
-def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders=("core",)) -> None:
+def part_scale(sizes, methods, mu1: float, limit: float, mem_gb: float, builders=("core",),
+               engines=("tree",)) -> None:
     print(f"\n3. scale table, full language {{0..tau}}^T, batch reactor, sum cost, mu1 = {mu1}, split robust form; "
           f"one process per row; time limit {limit:g} s, memory limit {mem_gb:g} GB")
-    hdr = (f"   {'T':>2} {'tau':>3} {'words':>6} {'seqs':>6} {'nodes':>6} {'builder':>9} {'rows':>9} {'cols':>9} "
-           f"{'nnz':>10} {'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} {'peak MB':>8} {'objective':>14}  status")
+    hdr = (f"   {'T':>2} {'tau':>3} {'words':>9} {'seqs':>9} {'nodes':>9} {'classes':>7} {'engine':>7} {'builder':>9} "
+           f"{'rows':>9} {'cols':>9} {'nnz':>10} {'build s':>8} {'method':>7} {'solve s':>8} {'iters':>7} "
+           f"{'peak MB':>8} {'J':>14}  status")
     print(hdr)
+    runs = [(e, bd) for e in engines for bd in (builders if e == "tree" else ("core",))]
     for T, tb in sizes:
-        for builder, method in [(bd, m) for bd in builders for m in methods]:
-            r = run_size(batch_reactor(), T, tb, method, mu1, limit, mem_gb, builder)
+        for (engine, builder), method in [(eb, m) for eb in runs for m in methods]:
+            if engine == "classes" and method == "none":
+                continue
+            r = run_size(batch_reactor(), T, tb, method, mu1, limit, mem_gb, builder, engine=engine)
             g = r.get
-            print(f"   {T:>2} {tb:>3} {g('words', ''):>6} {g('sequences', ''):>6} {g('nodes', ''):>6} "
-                  f"{builder:>9} {g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
+            big = lambda k: f"{g(k):.3g}" if isinstance(g(k), int) and g(k) >= 10**9 else g(k, "")  # noqa: E731
+            print(f"   {T:>2} {tb:>3} {big('words'):>9} {big('sequences'):>9} {big('nodes'):>9} {g('classes', ''):>7} "
+                  f"{engine:>7} {g('builder', ''):>9} {g('rows', ''):>9} {g('cols', ''):>9} {g('nnz', ''):>10} "
                   f"{g('build_time', float('nan')):8.2f} {method:>7} {g('solve_time', float('nan')):8.2f} "
-                  f"{g('iterations', ''):>7} {g('peak_mb', float('nan')):8.0f} {g('objective', float('nan')):14.6f}  "
+                  f"{g('iterations', ''):>7} {g('peak_mb', float('nan')):8.0f} {g('J', float('nan')):14.6g}  "
                   f"{g('status', '')}", flush=True)
 
 
@@ -116,6 +134,8 @@ def main() -> None:
     ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS))
     ap.add_argument("--builders", nargs="+", default=["core"], choices=["core", "recursive"],
                     help="core: eqrec.design.prefix.build_prefix_lp; recursive: eqrec.design.delay_scale")
+    ap.add_argument("--engines", nargs="+", default=["tree", "classes"], choices=list(ENGINES),
+                    help="tree: the node-per-prefix LP; classes: the class engine")
     ap.add_argument("--mu1", type=float, default=0.5)
     ap.add_argument("--time-limit", type=float, default=600.0)
     ap.add_argument("--mem-limit-gb", type=float, default=16.0)
@@ -127,7 +147,7 @@ def main() -> None:
         part_free()
     if "scale" in parts:
         sizes = [tuple(int(v) for v in s.split(",")) for s in a.sizes]
-        part_scale(sizes, a.methods, a.mu1, a.time_limit, a.mem_limit_gb, a.builders)
+        part_scale(sizes, a.methods, a.mu1, a.time_limit, a.mem_limit_gb, a.builders, tuple(a.engines))
 
 
 if __name__ == "__main__":

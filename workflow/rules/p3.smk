@@ -183,7 +183,11 @@ rule p3_values:
 
 # --- P3-IMPL (Section III-B3) and the scale table: steps of eqrec.studies.p3_strategy ----------------
 VALUES_FILES.append("results/p3/strategy_values.json")
-P3_SCALE_SIZES = [(int(T), int(tau)) for T, tau in config["p3"]["scale"]["sizes"]]
+# Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
+# the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
+P3_SCALE_TREE = [f"results/p3/scale/T{T}_tau{tau}.json" for T, tau in config["p3"]["scale"]["tree_sizes"]]
+P3_SCALE_TREE_SLOW = [f"results/p3/scale/T{T}_tau{tau}.json" for T, tau in config["p3"]["scale"]["tree_slow_sizes"]]
+P3_SCALE_CLASSES = [f"results/p3/scale/classes_T{T}_tau{tau}.json" for T, tau in config["p3"]["scale"]["class_sizes"]]
 
 
 rule p3_strategy:
@@ -222,7 +226,7 @@ rule p3_strategy_figure:
 
 
 rule p3_scale_size:
-    """Scale table, one size: the full language {0..tau}^T built and solved in a fresh process with limits."""
+    """Scale table, one size of the tree LP: {0..tau}^T enumerated, node-per-prefix LP, fresh process with limits."""
     input:
         code=P3_CODE,
     output:
@@ -240,10 +244,30 @@ rule p3_scale_size:
         RUN_STEP
 
 
-rule p3_scale_table:
-    """Scale table: the per-size rows merged (CSV and Markdown)."""
+rule p3_scale_class_size:
+    """Scale table, one size of the class engine: the classes of {0..tau}^T by the window rule, fresh process."""
     input:
-        sizes=[f"results/p3/scale/T{T}_tau{tau}.json" for T, tau in P3_SCALE_SIZES],
+        code=P3_CODE,
+    output:
+        json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
+    params:
+        study="p3",
+        step="scale_size",
+        cfg=P3_CFG,
+    log:
+        "logs/p3/scale_{engine}_T{T}_tau{tau}.log",
+    wildcard_constraints:
+        engine="classes",
+        T=r"\d+",
+        tau=r"\d+",
+    script:
+        RUN_STEP
+
+
+rule p3_scale_table:
+    """Scale table of the default run: the tree LP at the fast sizes next to the class engine (CSV and Markdown)."""
+    input:
+        sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES)),
         code=P3_CODE,
     output:
         csv="results/p3/scale_table.csv",
@@ -258,14 +282,32 @@ rule p3_scale_table:
         RUN_STEP
 
 
-rule p3_scale:
-    """The P3 scale table (outside `all`; slow): snakemake --cores 2 p3_scale."""
+rule p3_scale_table_full:
+    """Full scale table: the default run's rows and the slow tree sizes (CSV and Markdown)."""
     input:
-        rules.p3_scale_table.output,
+        sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)),
+        code=P3_CODE,
+    output:
+        csv="results/p3/scale_table_full.csv",
+        md="results/p3/scale_table_full.md",
+    params:
+        study="p3",
+        step="scale_table",
+        cfg=P3_CFG,
+    log:
+        "logs/p3/scale_table_full.log",
+    script:
+        RUN_STEP
+
+
+rule p3_scale:
+    """Full P3 scale table with the slow tree sizes (outside `all`; up to 16 GB): snakemake --cores 2 p3_scale."""
+    input:
+        rules.p3_scale_table_full.output,
 
 
 rule p3:
-    """All P3 outputs of the default run (the scale table is the separate target p3_scale)."""
+    """All P3 outputs of the default run, the scale table of the fast sizes included (slow tree sizes: p3_scale)."""
     input:
         rules.p3_values.output,
         rules.p3_languages.output,
@@ -273,3 +315,4 @@ rule p3:
         rules.p3_figure2.output,
         rules.p3_strategy.output,
         rules.p3_strategy_figure.output,
+        rules.p3_scale_table.output,

@@ -265,7 +265,8 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
 
 def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
-                  zero_offset: bool = True, levels: str = "common", engine: str = "classes") -> Design:
+                  zero_offset: bool = True, levels: str = "common", engine: str = "classes",
+                  node_gains: bool = True) -> Design:
     """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
     Parameters
@@ -282,6 +283,11 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
     engine : {"classes", "tree"}
         The class engine (:mod:`eqrec.design.classes`: one LP per (time,
         available data) class and row; default) or this module's tree LP.
+    node_gains : bool
+        Class engine: also derive the node gains ``(F, u0)`` (``schedule``)
+        and certify them by the independent recursion; without them the
+        design holds the class gains ``K`` and their certificate (the
+        estimator in class form).
     T, form, zero_offset
         Tree LP only: horizon of the stacking, robust counterpart and free
         offsets ``r`` (the class engine has no offsets: they are not needed,
@@ -314,7 +320,7 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
             raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
                              field="engine")
         return class_design(system, classes_of_tree(tree), M1, levels=levels, solver=solver, method=method,
-                            certify=certify, node_gains=True, time_based=(method == "time"))
+                            certify=certify, node_gains=node_gains, time_based=(method == "time"))
     if engine != "tree":
         raise InputError(f"unknown engine {engine!r}; choose 'classes' or 'tree'", field="engine")
     model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset, levels=levels)

@@ -35,10 +35,20 @@ The batch reactor is open-loop unstable: the runs apply ``u = −K x̂`` (LQR,
 the estimator knows ``u``, so the error does not depend on it.  The ACC runs
 with the constant input ``input_force``.
 
-The scale table (steps ``scale_size`` per ``(T, τ̄)``, ``scale_table``): the
-batch reactor's full-language LP (sum cost, ``μ1`` fixed) built and solved
-by one HiGHS method in a fresh process with time and memory limits
-(:func:`eqrec.design.scale_sweep.run_size`).
+The scale table (steps ``scale_size`` per ``(T, τ̄)`` and engine, ``scale_table``): the
+batch reactor's full-language design (sum cost, ``μ1`` fixed) solved by one
+HiGHS method in a fresh process with time and memory limits
+(:func:`eqrec.design.scale_sweep.run_size`), by two engines side by side:
+the tree LP (node per event prefix, the language enumerated) and the class
+engine (one LP per (time, available data) class and state row, the classes
+from the window rule, no word enumerated; :mod:`eqrec.design.classes`).  The
+default run writes ``results/p3/scale_table.{csv,md}`` from
+``scale.tree_sizes`` (the tree LP where it takes seconds) and
+``scale.class_sizes``; the target ``p3_scale`` (outside the default run)
+writes ``results/p3/scale_table_full.{csv,md}``, adding the tree LP at
+``scale.tree_slow_sizes`` (minutes and up to the memory limit each).  Per-size
+JSONs: ``results/p3/scale/T{T}_tau{τ̄}.json`` (tree) and
+``results/p3/scale/classes_T{T}_tau{τ̄}.json``.
 
 Configuration (``cfg`` is the ``p3`` section; defaults are the schema's)
 ------------------------------------------------------------------------
@@ -74,9 +84,15 @@ key                        default                      meaning
 =========================  ======================================  ========================================
 key                        default                                 meaning
 =========================  ======================================  ========================================
-``sizes``                  ``[[5,2],[6,2],[7,2],[8,2],[8,3]]``     ``(T, τ̄)`` of the ``p3_scale`` target
-``method``                 ``simplex``                             HiGHS method (``scale_sweep.METHODS``)
-``builder``                ``core``                                ``core`` or ``recursive``
+``tree_sizes``             ``[[5,2],[6,2]]``                       ``(T, τ̄)`` of the tree LP in the default
+                                                                   run (seconds each)
+``tree_slow_sizes``        ``[[7,2],[8,2],[8,3]]``                 ``(T, τ̄)`` of the tree LP in the
+                                                                   ``p3_scale`` target only
+``class_sizes``            ``[[5,2],[6,2],[7,2],[8,2],[8,3],``     ``(T, τ̄)`` of the class engine (default
+                           ``[20,4],[30,4],[40,4],[30,5]]``        run)
+``method``                 ``simplex``                             HiGHS method (``scale_sweep.METHODS``),
+                                                                   both engines
+``builder``                ``core``                                tree LP: ``core`` or ``recursive``
 ``mu1``                    ``0.5``                                 fixed ``μ1``
 ``time_limit``             ``600``                                 HiGHS time limit per size [s]
 ``mem_limit_gb``           ``16``                                  address-space limit per size [GB]
@@ -100,7 +116,7 @@ from eqrec.core.simulate import LongRun, long_run_periodic, long_run_switching, 
 from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
 from eqrec.design.delay import design_delay, design_lp_status, level_table, min_recovery_level, node_level, path_levels
 from eqrec.design.result import Design
-from eqrec.design.scale_sweep import FIELDS, run_size
+from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
 from eqrec.studies.harness import get_logger, save_figure, write_csv, write_json, write_npz, write_text
 from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot
@@ -346,63 +362,170 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
 def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     """One row of the scale table: the full language ``{0..τ̄}^T`` (wildcards ``T``, ``tau``) in a fresh process.
 
-    A size that hits the time or memory limit is recorded with that status (the step succeeds).
+    The wildcard ``engine`` (``tree`` when absent) picks the tree LP or the
+    class engine (:data:`eqrec.design.scale_sweep.ENGINES`).  A size that hits
+    the time or memory limit is recorded with that status (the step succeeds).
     """
     sc = cfg["scale"]
     T, tau = int(wildcards.T), int(wildcards.tau)
-    log.info("scale (T, tau) = (%d, %d): %s, builder %s, mu1 = %g, limits %g s / %g GB", T, tau, sc["method"],
-             sc["builder"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]))
+    engine = wildcards.get("engine", "tree")
+    log.info("scale (T, tau) = (%d, %d), %s engine: %s, builder %s, mu1 = %g, limits %g s / %g GB", T, tau, engine,
+             sc["method"], sc["builder"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]))
     r = run_size(batch_reactor(), T, tau, sc["method"], float(sc["mu1"]), float(sc["time_limit"]),
-                 float(sc["mem_limit_gb"]), sc["builder"])
-    log.info("scale (%d, %d): %s; %s columns, build %.2f s, solve %.2f s, peak %.0f MB", T, tau, r.get("status"),
-             r.get("cols"), r.get("build_time", float("nan")), r.get("solve_time", float("nan")),
-             r.get("peak_mb", float("nan")))
+                 float(sc["mem_limit_gb"]), sc["builder"], engine=engine)
+    log.info("scale (%d, %d), %s: %s; %s classes, %s columns, build %.2f s, solve %.2f s, peak %.0f MB, J = %s", T,
+             tau, engine, r.get("status"), r.get("classes"), r.get("cols"), r.get("build_time", float("nan")),
+             r.get("solve_time", float("nan")), r.get("peak_mb", float("nan")), r.get("J"))
     write_json(outputs.json, r)
     return r
 
 
 def scale_frame(rows: list[dict]) -> pd.DataFrame:
-    """The scale table as a frame (columns :data:`eqrec.design.scale_sweep.FIELDS`, sorted by ``(T, τ̄)``)."""
+    """The scale table as a frame (columns :data:`eqrec.design.scale_sweep.FIELDS`), sorted by ``(T, τ̄)``, the
+    tree LP before the class engine.
+
+    Rows written before the engine dimension (the tracked tree sizes) read as
+    ``engine = "tree"``; their ``classes`` (closed form) and ``J`` (the LP's
+    objective plus the constant ``(1 + 2|L^{E'}|) μ1`` it leaves out) are
+    filled in.
+    """
+    rows = [dict(r) for r in rows]
+    for r in rows:
+        r.setdefault("engine", "tree")
+        if r.get("classes") is None and "T" in r and "tau" in r:
+            r["classes"] = class_count(r["T"], r["tau"])
+        if (r["engine"] == "tree" and r.get("J") is None and r.get("status") == "optimal"
+                and r.get("objective") is not None and r.get("sequences") is not None):
+            r["J"] = float(r["objective"]) + (1.0 + 2.0 * int(r["sequences"])) * float(r["mu1"])
     frame = pd.DataFrame(rows).reindex(columns=list(FIELDS))
-    return frame.sort_values(["T", "tau", "method"], kind="stable").reset_index(drop=True)
+    order = {e: i for i, e in enumerate(ENGINES)}
+    frame = frame.assign(_e=frame["engine"].map(order).fillna(len(order)))
+    frame = frame.sort_values(["T", "tau", "_e", "method"], kind="stable").drop(columns="_e")
+    return frame.reset_index(drop=True)
 
 
 def _md_cell(v, col: str = "") -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
+    if isinstance(v, bool):
+        return str(v)
+    if isinstance(v, int):
+        return f"{v:.3e}" if abs(v) >= 10**10 else str(v)  # (τ̄+1)^T: 9.313e+20 words at (30, 4)
     if isinstance(v, float):
+        if col in ("max_level", "terminal_level"):
+            return f"{v:.6f}"
+        if col == "J":
+            return f"{v:.6g}" if abs(v) >= 1e6 else f"{v:.4f}"
         if col == "peak_mb" or v.is_integer():
-            return f"{v:.0f}"
+            return f"{v:.0f}" if abs(v) < 1e10 else f"{v:.3e}"
         return f"{v:.2f}" if abs(v) < 1e6 else f"{v:.4g}"
     return str(v)
 
 
-def scale_markdown(frame: pd.DataFrame) -> str:
-    """The scale table in Markdown (sizes, LP dimensions, times in s, peak memory in MB, status)."""
-    cols = ["T", "tau", "words", "sequences", "nodes", "rows", "cols", "nnz", "build_time", "method", "solve_time",
-            "iterations", "peak_mb", "status"]
-    head = ["T", "τ̄", "words", "sequences (L^E')", "nodes", "LP rows", "LP cols", "nonzeros", "build [s]",
-            "HiGHS method", "solve [s]", "iterations", "peak [MB]", "status"]
+def _value(v):
+    return v.item() if hasattr(v, "item") else v
+
+
+def _size_list(sizes) -> str:
+    return ", ".join(f"({int(T)}, {int(tau)})" for T, tau in sizes)
+
+
+def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None) -> str:
+    """The scale table in Markdown: a note (setting, why the class engine scales), one row per (size, engine),
+    then the two engines side by side on the sizes both ran.
+
+    ``missing_tree``: tree sizes left out of this table (the slow ones of the
+    ``p3_scale`` target), named in the note.
+    """
+    cols = ["T", "tau", "words", "sequences", "nodes", "classes", "engine", "rows", "cols", "nnz", "tree_time",
+            "classes_time", "build_time", "method", "solve_time", "iterations", "J", "max_level", "peak_mb", "status"]
+    head = ["T", "τ̄", "words", "sequences (L^E')", "nodes", "classes (d, S)", "engine", "LP rows", "LP cols",
+            "nonzeros", "tree [s]", "classes [s]", "build [s]", "HiGHS method", "solve [s]", "iterations", "J",
+            "max μ2", "peak [MB]", "status"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, row in frame.iterrows():
-        lines.append("| " + " | ".join(_md_cell(row[c].item() if hasattr(row[c], "item") else row[c], c)
-                                       for c in cols) + " |")
-    meta = frame.iloc[0] if len(frame) else None
-    note = ""
-    if meta is not None:
-        note = (f"\nBatch reactor, full delay language, sum cost, mu1 = {meta['mu1']:g} fixed, builder "
-                f"{meta['builder']}; one fresh process per size; HiGHS time limit {meta['time_limit']:g} s, "
-                f"address-space limit {meta['mem_limit_gb']:g} GB.\n")
-    return "# P3 scale table\n" + note + "\n" + "\n".join(lines) + "\n"
+        lines.append("| " + " | ".join(_md_cell(_value(row[c]), c) for c in cols) + " |")
+    parts = ["# P3 scale table\n"]
+    if len(frame):
+        meta = frame.iloc[0]
+        tree = frame[frame["engine"] == "tree"]
+        builder = tree["builder"].iloc[0] if len(tree) else "core"
+        parts.append(
+            f"Batch reactor (Section IV-A of the delayed-data paper), full delay language {{0..τ̄}}^T, sum cost J of "
+            f"Theorem 1 / Proposition 1, mu1 = {_value(meta['mu1']):g} fixed; one fresh process per size and engine, "
+            f"HiGHS {meta['method']}, time limit {_value(meta['time_limit']):g} s, address-space limit "
+            f"{_value(meta['mem_limit_gb']):g} GB. Engine `tree`: the node-per-prefix LP on the enumerated prefix tree "
+            f"(builder {builder}); engine `classes`: one LP per (time, available data) class and state row, the "
+            f"classes built by the window rule without enumerating a word (`eqrec.design.classes`).\n")
+        parts.append(
+            "Why the class engine scales: by the separation theorem of `eqrec.design.classes`, every node of a "
+            "class (d, S) attains the same optimal level whatever its ancestors' gains, so the tree LP's optimum is "
+            "the class levels weighted by their sequence counts and one small LP per class and state row gives it. "
+            "The classes number Σ_{d=1..T} 2^min(τ̄, d) ≈ T·2^τ̄ (446 at (30, 4)), while the sequences and prefix-tree "
+            "nodes the tree LP carries grow like (τ̄+1)^T (1.8e+20 sequences at (30, 4)).\n")
+        parts.append(
+            "Columns: `tree [s]` enumerates the language and builds its prefix tree, `classes [s]` builds the class "
+            "set, `build [s]` assembles the LP, `solve [s]` is HiGHS (`total [s]` below: their sum); `peak [MB]` is "
+            "the worker's peak resident memory (timings and memory are measurements: they change from run to run). "
+            "`J` is the paper's sum cost (the same for both engines); `max μ2` the largest level (class engine: "
+            "certified from the gains; tree: the LP's).\n")
+        if missing_tree:
+            parts.append(
+                f"Tree LP at {_size_list(missing_tree)}: `results/p3/scale_table_full.md` (target `p3_scale`, "
+                f"outside the default run: minutes and up to the memory limit per size).\n")
+    parts.append("\n".join(lines) + "\n")
+    side = _side_by_side(frame)
+    if side:
+        parts.append("## Side by side (sizes both engines ran)\n\n" + side)
+    return "\n".join(parts)
+
+
+def _side_by_side(frame: pd.DataFrame) -> str:
+    """Per size run by both engines: LP sizes, total times (language + build + solve), peak memory and J of each."""
+    if not len(frame):
+        return ""
+    by = {(int(_value(r["T"])), int(_value(r["tau"])), r["engine"]): r for _, r in frame.iterrows()}
+    sizes = sorted({(T, tau) for T, tau, e in by if (T, tau, "tree") in by and (T, tau, "classes") in by})
+    if not sizes:
+        return ""
+    head = ["T", "τ̄", "sequences", "nodes", "classes", "tree LP cols", "class LP cols", "tree total [s]",
+            "classes total [s]", "tree peak [MB]", "classes peak [MB]", "tree status", "classes status",
+            "J (tree)", "J (classes)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+
+    def total(r):  # a size that did not solve has no total (its build time is in the table above)
+        if r["status"] != "optimal":
+            return None
+        vals = [_value(r[c]) for c in ("tree_time", "classes_time", "build_time", "solve_time")]
+        vals = [v for v in vals if v is not None and not (isinstance(v, float) and math.isnan(v))]
+        return float(sum(vals)) if vals else float("nan")
+
+    for T, tau in sizes:
+        t, c = by[(T, tau, "tree")], by[(T, tau, "classes")]
+        cells = [T, tau, _value(c["sequences"]), _value(c["nodes"]), _value(c["classes"]), _value(t["cols"]),
+                 _value(c["cols"]), total(t), total(c), _value(t["peak_mb"]), _value(c["peak_mb"]), t["status"],
+                 c["status"], _value(t["J"]), _value(c["J"])]
+        names = ["T", "tau", "sequences", "nodes", "classes", "cols", "cols", "", "", "peak_mb", "peak_mb",
+                 "status", "status", "J", "J"]
+        lines.append("| " + " | ".join(_md_cell(v, n) for v, n in zip(cells, names)) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def step_scale_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
-    """Merge the per-size JSONs (all inputs ending in ``.json``) into ``outputs.csv`` and ``outputs.md``."""
+    """Merge the per-size JSONs (all inputs ending in ``.json``) into ``outputs.csv`` and ``outputs.md``.
+
+    The Markdown note names the ``scale.tree_slow_sizes`` whose tree row is
+    not among the inputs (the default run's table leaves them to ``p3_scale``).
+    """
     rows = [json.loads(Path(p).read_text()) for p in inputs if str(p).endswith(".json")]
     frame = scale_frame(rows)
+    have = {(int(r["T"]), int(r["tau"])) for r in rows if r.get("engine", "tree") == "tree"}
+    slow = cfg.get("scale", {}).get("tree_slow_sizes", [])
+    missing = [(int(T), int(tau)) for T, tau in slow if (int(T), int(tau)) not in have]
     write_csv(outputs.csv, frame)
-    write_text(outputs.md, scale_markdown(frame))
-    log.info("scale table: %d sizes", len(frame))
+    write_text(outputs.md, scale_markdown(frame, missing))
+    log.info("scale table: %d rows (%d tree, %d classes)", len(frame), int((frame["engine"] == "tree").sum()),
+             int((frame["engine"] == "classes").sum()))
     return frame
 
 

@@ -1,0 +1,175 @@
+"""Benchmark of the class engine against the tree LP, measured side by side in one run (figures, not tests).
+
+    python benchmarks/bench_classes.py                 # all parts
+    python benchmarks/bench_classes.py --only a --repeats 50
+    python benchmarks/bench_classes.py --only c --sizes 8,3 20,4 30,4 40,4 30,5
+
+a. The prefix-based paper's design end to end (build, solve, gains,
+   certificate) on the ACC language L1 (``101111, 110111, 111011, 111101``,
+   ``μ1 = 1``): :func:`eqrec.design.prefix.design_prefix` with
+   ``engine="classes"`` in class form (gains ``K``, certificate from them),
+   with node gains derived and certified by the recursion, and
+   ``engine="tree"``.  Targets (class form): <= 5 ms and <= 0.3x the tree.
+b. The batch reactor's ``{0..2}^5`` with ``μ1`` free and its certificate:
+   :func:`eqrec.design.delay.design_delay_global` in class form (class gains,
+   class certificate, the μ1 bracket; target <= 100 ms; with node gains
+   printed beside it) against
+   the paper's route, IPOPT on problem (10)
+   (:func:`eqrec.design.delay.design_delay_ipopt`).  The previous global
+   route (Dinkelbach + interval branch and bound on the tree LP, removed in
+   commit b2da9c6) is quoted from git history, not measured: 2.5 s
+   (``results/p3/reactor_designs.json``, ``global.time_s`` = 2.497 s at commit
+   52958df; 1.65 to 3.0 s in the regenerated results up to 3973e51).
+c. Full languages ``{0..τ̄}^T`` on the batch reactor (sum cost, ``μ1 = 0.5``
+   fixed) by the class engine, one fresh process per run through
+   :func:`eqrec.design.scale_sweep.run_size` so that the peak memory is that
+   size's.  The time is the design's: class set + LP build + HiGHS solve
+   (+ the certificate inside ``solve_classes``), measured in the worker;
+   the worker's wall time (interpreter start and imports included) is printed
+   beside it.  Targets: (8, 3) <= 1 s, (20, 4) <= 5 s, (30, 4) <= 10 s and
+   <= 1 GB peak.
+
+Medians over ``--repeats`` (part c: ``--size-repeats`` fresh processes per
+size, peak memory the largest).  The last table lists every target with
+PASS or MISS.  Timings depend on the machine's load (2 shared cores here).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+ACC_L1 = ["101111", "110111", "111011", "111101"]
+HISTORICAL_GLOBAL_S = 2.497  # results/p3/reactor_designs.json global.time_s at commit 52958df (old global route)
+
+#: (label, target seconds, target peak MB or None) of part c.
+SIZE_TARGETS = {(8, 3): (1.0, None), (20, 4): (5.0, None), (30, 4): (10.0, 1024.0)}
+
+
+def _median_time(fn, repeats: int) -> tuple[float, float, object]:
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), min(times), out
+
+
+def part_a(repeats: int, verdicts: list) -> None:
+    from eqrec.core.systems import acc_system
+    from eqrec.design.prefix import design_prefix
+
+    system = acc_system()
+    print(f"\na. P1 prefix design end to end (build, solve, gains, certificate), ACC L1 = {ACC_L1}, mu1 = 1; "
+          f"median | best of {repeats}")
+    res = {}
+    variants = {"classes": dict(engine="classes", node_gains=False),
+                "classes+nodes": dict(engine="classes", node_gains=True), "tree": dict(engine="tree")}
+    for name, kw in variants.items():
+        design_prefix(system, ACC_L1, 1.0, **kw)  # warm-up (imports, caches)
+        med, best, d = _median_time(lambda: design_prefix(system, ACC_L1, 1.0, **kw), repeats)
+        res[name] = (med, best, d)
+        what = ("class gains K + class certificate" if name == "classes" else
+                "+ node gains (F, u0) and their certificate by the recursion" if name == "classes+nodes" else
+                "tree LP, node gains, certificate")
+        print(f"   {name:14} {1e3 * med:9.2f} ms | {1e3 * best:8.2f} ms   M2 = {d.mu2:.9f}  ({what})")
+    (mc, _, dc), (mn, _, _), (mt, _, dt) = res["classes"], res["classes+nodes"], res["tree"]
+    ratio = mc / mt
+    print(f"   ratio classes / tree = {ratio:.3f}  ({mt / mc:.1f}x faster); with node gains {mn / mt:.3f}; "
+          f"|M2 difference| = {abs(dc.mu2 - dt.mu2):.2e}")
+    verdicts.append(("a", "ACC L1 design_prefix, class form", f"{1e3 * mc:.2f} ms", "<= 5 ms", mc <= 5e-3))
+    verdicts.append(("a", "ACC L1 class form / tree", f"{ratio:.3f}x", "<= 0.3x", ratio <= 0.3))
+    verdicts.append(("a", "ACC L1 with node gains / tree (no target)", f"{mn / mt:.3f}x", "-", True))
+
+
+def part_b(repeats: int, ipopt_repeats: int, verdicts: list) -> None:
+    from eqrec.core.patterns import full_delay_language
+    from eqrec.design.delay import compare_free_routes, design_delay_global, design_delay_ipopt
+    from eqrec.models import batch_reactor
+
+    system = batch_reactor()
+    words = full_delay_language(5, 2)
+    print(f"\nb. batch reactor {{0..2}}^5 (243 words, 162 sequences), mu1 free, sum cost, with certificate; "
+          f"median | best of {repeats} (IPOPT: {ipopt_repeats})")
+    design_delay_global(system, words, node_gains=False)  # warm-up
+    mg, bg, g = _median_time(lambda: design_delay_global(system, words, node_gains=False), repeats)
+    mn, bn, _ = _median_time(lambda: design_delay_global(system, words), repeats)
+    print(f"   with node gains for the 162 sequences and their certificate by the recursion: {1e3 * mn:.1f} ms | "
+          f"{1e3 * bn:.1f} ms")
+    mm = g.mu1_min
+    print(f"   design_delay_global  {1e3 * mg:9.1f} ms | {1e3 * bg:8.1f} ms   mu1 = {g.mu1:.8f} (certified smallest "
+          f"in ({mm.lower:.8f}, {mm.upper:.8f}]), J = {g.J:.6f} >= {g.lower_bound:.6f} (gap {g.gap:.1e}), "
+          f"max mu2 = {g.mu2:.6f}, {g.lps} LPs")
+    mi, bi, ip = _median_time(lambda: design_delay_ipopt(system, words, start_mu1=1.0), ipopt_repeats)
+    print(f"   design_delay_ipopt   {1e3 * mi:9.1f} ms | {1e3 * bi:8.1f} ms   mu1 = {ip.mu1:.8f} (its gains reach "
+          f"{ip.extra['mu1_of_gains']:.8f}), J = {ip.J:.6f}, {ip.extra['iterations']} IPOPT iterations")
+    cmp = compare_free_routes(g, ip)
+    print(f"   better: {cmp['better']}; IPOPT / global time = {mi / mg:.0f}x; old global route (Dinkelbach + "
+          f"branch and bound, git history, not measured): {HISTORICAL_GLOBAL_S:.1f} s = "
+          f"{HISTORICAL_GLOBAL_S / mg:.0f}x the new one")
+    verdicts.append(("b", "reactor (5,2) mu1 free, global", f"{1e3 * mg:.1f} ms", "<= 100 ms", mg <= 0.1))
+
+
+def part_c(sizes, size_repeats: int, mem_limit_gb: float, time_limit: float, verdicts: list) -> None:
+    from eqrec.design.scale_sweep import run_size
+    from eqrec.models import batch_reactor
+
+    system = batch_reactor()
+    print(f"\nc. full languages {{0..tau}}^T, batch reactor, class engine, sum cost, mu1 = 0.5, HiGHS simplex; "
+          f"{size_repeats} fresh process(es) per size (run_size), memory limit {mem_limit_gb:g} GB; "
+          f"design = classes + build + solve (median), peak = largest")
+    print(f"   {'T':>3} {'tau':>3} {'words':>10} {'sequences':>10} {'classes':>7} {'LP rows':>8} {'LP cols':>8} "
+          f"{'nnz':>9} {'classes s':>9} {'build s':>8} {'solve s':>8} {'design s':>8} {'wall s':>7} {'peak MB':>8}"
+          f"  {'J':>12}  status")
+    for T, tau in sizes:
+        runs = [run_size(system, T, tau, "simplex", 0.5, time_limit, mem_limit_gb, engine="classes", wall_margin=60)
+                for _ in range(size_repeats)]
+        ok = [r for r in runs if r.get("status") == "optimal"]
+        r = ok[0] if ok else runs[0]
+        med = lambda k: statistics.median(x.get(k, float("nan")) for x in (ok or runs))  # noqa: E731
+        design = statistics.median(x.get("classes_time", 0) + x.get("build_time", 0) + x.get("solve_time", 0)
+                                   for x in (ok or runs))
+        peak = max(x.get("peak_mb", float("nan")) for x in runs)
+        status = r.get("status") if len(ok) == len(runs) else f"{len(ok)}/{len(runs)} optimal: {runs[-1].get('status')}"
+        print(f"   {T:>3} {tau:>3} {r.get('words', 0):>10.3g} {r.get('sequences', 0):>10.3g} {r.get('classes', ''):>7} "
+              f"{r.get('rows', ''):>8} {r.get('cols', ''):>8} {r.get('nnz', ''):>9} {med('classes_time'):9.3f} "
+              f"{med('build_time'):8.3f} {med('solve_time'):8.3f} {design:8.3f} {med('wall_time'):7.2f} {peak:8.0f}"
+              f"  {r.get('J', float('nan')):12.6g}  {status}", flush=True)
+        target = SIZE_TARGETS.get((T, tau))
+        if target:
+            limit_s, limit_mb = target
+            verdicts.append(("c", f"({T},{tau}) class engine, design time", f"{design:.2f} s", f"<= {limit_s:g} s",
+                             bool(ok) and design <= limit_s))
+            if limit_mb:
+                verdicts.append(("c", f"({T},{tau}) class engine, peak memory", f"{peak:.0f} MB",
+                                 f"<= {limit_mb / 1024:g} GB", bool(ok) and peak <= limit_mb))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--only", choices=["a", "b", "c"], action="append")
+    ap.add_argument("--repeats", type=int, default=20, help="repeats of parts a and b")
+    ap.add_argument("--ipopt-repeats", type=int, default=3)
+    ap.add_argument("--sizes", nargs="+", default=["8,3", "20,4", "30,4", "40,4", "30,5"], help="T,tau pairs (part c)")
+    ap.add_argument("--size-repeats", type=int, default=3, help="fresh processes per size (part c)")
+    ap.add_argument("--mem-limit-gb", type=float, default=4.0)
+    ap.add_argument("--time-limit", type=float, default=300.0)
+    a = ap.parse_args()
+    parts = a.only or ["a", "b", "c"]
+    verdicts: list = []
+    if "a" in parts:
+        part_a(a.repeats, verdicts)
+    if "b" in parts:
+        part_b(a.repeats, a.ipopt_repeats, verdicts)
+    if "c" in parts:
+        sizes = [tuple(int(v) for v in s.split(",")) for s in a.sizes]
+        part_c(sizes, a.size_repeats, a.mem_limit_gb, a.time_limit, verdicts)
+    print("\nTargets")
+    print(f"   {'part':4} {'case':42} {'measured':>12} {'target':>10}  verdict")
+    for part, case, measured, target, ok in verdicts:
+        print(f"   {part:4} {case:42} {measured:>12} {target:>10}  {'PASS' if ok else 'MISS'}")
+
+
+if __name__ == "__main__":
+    main()
