@@ -49,7 +49,7 @@ def _cfg(steps=300, max_period=3, window=40):
                 "input_force": 206.4},
         "switching": {"mu1": None, "decimals": 2, "p_on_time": 0.8, "max_period": max_period},
         "figure": {"window": window}},
-        "scale": {"sizes": [[3, 1], [4, 2]], "method": "ipm", "builder": "core", "mu1": 0.5, "time_limit": 60,
+        "scale": {"tree_sizes": [[3, 1], [4, 2]], "tree_slow_sizes": [[5, 2]], "class_sizes": [[4, 2]], "method": "ipm", "builder": "core", "mu1": 0.5, "time_limit": 60,
                   "mem_limit_gb": 4}}
 
 
@@ -203,7 +203,7 @@ def test_strategy_steps(tmp_path):
 def test_scale_steps(tmp_path):
     cfg = _cfg()
     files = []
-    for T, tau in cfg["scale"]["sizes"]:
+    for T, tau in cfg["scale"]["tree_sizes"]:
         f = str(tmp_path / f"T{T}_tau{tau}.json")
         _run("scale_size", cfg, outputs={"json": f}, wildcards={"T": T, "tau": tau})
         files.append(f)
@@ -217,7 +217,8 @@ def test_scale_steps(tmp_path):
 
     frame = pd.read_csv(out["csv"])
     assert frame["T"].tolist() == [3, 4] and frame["status"].tolist() == ["optimal", "optimal"]
-    assert "| 4 | 2 | 81 | 54 |" in Path(out["md"]).read_text()
+    md = Path(out["md"]).read_text()
+    assert "| 4 | 2 | 81 | 54 |" in md and "(5, 2)" in md  # the slow size without a row is named
 
 
 def test_scale_limits_are_reported_not_crashes(reactor):

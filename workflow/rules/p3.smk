@@ -252,7 +252,7 @@ rule p3_scale_class_size:
         json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
     params:
         study="p3",
-        step="scale_size",
+        step="scale_class_size",
         cfg=P3_CFG,
     log:
         "logs/p3/scale_{engine}_T{T}_tau{tau}.log",
@@ -292,7 +292,7 @@ rule p3_scale_table_full:
         md="results/p3/scale_table_full.md",
     params:
         study="p3",
-        step="scale_table",
+        step="scale_table_full",
         cfg=P3_CFG,
     log:
         "logs/p3/scale_table_full.log",

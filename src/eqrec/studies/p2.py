@@ -112,7 +112,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         language = validate_language(cfg[key], length=int(cfg["T"]))
         wc = worst_case_word(language)
         res: dict[str, Any] = {"language": list(language), "worst_case_word": wc}
-        tb = design_time_based(system, language, M1)
+        tb = design_time_based(system, language, M1, engine="tree")  # the paper-comparison row: the papers' LP
         F, u0 = tb.schedule.word_matrices(wc)
         arrays.update(_schedule_npz(f"{fig}/time", wc, F, u0))
         res["time"] = {"mu2": tb.mu2, "certified_mu2": tb.certificate.mu2, "solve_time": tb.solve_time,
