@@ -271,7 +271,7 @@ rule p3_scale_table:
         code=P3_CODE,
     output:
         csv="results/p3/scale_table.csv",
-        md="results/p3/scale_table.md",
+        md=report("results/p3/scale_table.md", caption="../report/p3_scale.rst", category="P3"),
     params:
         study="p3",
         step="scale_table",
