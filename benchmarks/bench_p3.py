@@ -21,9 +21,8 @@
    crossover off), ``ipm-x`` (interior point + crossover), ``pdlp`` (HiGHS's
    first-order PDLP: matrix-vector products only); ``-np``: presolve off.  A worker that
    exceeds ``--time-limit`` (HiGHS time limit, plus a wall-clock kill) or
-   ``--mem-limit-gb`` (address-space limit) is reported as such.  ``--builders
-   core recursive`` also measures the recursive (scenario-tree) form of
-   :mod:`eqrec.design.delay_scale`; ``--engines classes`` the class engine
+   ``--mem-limit-gb`` (address-space limit) is reported as such.
+   ``--engines classes`` measures the class engine
    (``benchmarks/bench_classes.py`` has its targets).  The worker is
    :func:`eqrec.design.scale_sweep.run_size` (shared with the P3 scale steps
    of the pipeline).
@@ -132,8 +131,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--sizes", nargs="+", default=["5,2", "6,2"], help="T,tau pairs for the scale table")
     ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS))
-    ap.add_argument("--builders", nargs="+", default=["core"], choices=["core", "recursive"],
-                    help="core: eqrec.design.prefix.build_prefix_lp; recursive: eqrec.design.delay_scale")
+    ap.add_argument("--builders", nargs="+", default=["core"], choices=["core"],
+                    help="core: eqrec.design.prefix.build_prefix_lp")
     ap.add_argument("--engines", nargs="+", default=["tree", "classes"], choices=list(ENGINES),
                     help="tree: the node-per-prefix LP; classes: the class engine")
     ap.add_argument("--mu1", type=float, default=0.5)

@@ -215,25 +215,6 @@ def test_augmented_gains_are_a_reparametrisation_of_the_prefix_gains(reactor):
         np.testing.assert_allclose(np.array(xh), run.xhat[1:], atol=1e-10)
 
 
-# --- the recursive (scenario-tree) LP form ---------------------------------------------------------------------
-
-@pytest.mark.parametrize("levels", ["sum", "common"])
-def test_recursive_lp_form_has_the_core_optimum(acc, levels):
-    from eqrec.core.certify import certify_schedule
-    from eqrec.design.delay_scale import build_recursive_prefix_lp
-    from eqrec.design.prefix import read_schedule
-
-    tree = PrefixTree(delay_language(max_delay=1, horizon=4))  # ACC: process noise and delays
-    core = build_prefix_lp(acc, tree, 1.0, levels=levels)
-    rec = build_recursive_prefix_lp(acc, tree, 1.0, levels=levels)
-    s_core, s_rec = solve_lp(core.lp).require_optimal(), solve_lp(rec.lp).require_optimal()
-    assert s_rec.objective == pytest.approx(s_core.objective, rel=1e-8)
-    cert = certify_schedule(acc, read_schedule(rec, s_rec), tree.patterns, 1.0)
-    assert cert.terminal <= 1.0 + 1e-6
-    if levels == "common":
-        assert cert.mu2 <= s_rec.objective * (1 + 1e-6)
-
-
 def test_noise_free_system_has_no_smallest_positive_mu1(reactor):
     from eqrec.core.systems import AffineSystem
 

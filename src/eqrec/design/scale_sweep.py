@@ -6,10 +6,9 @@ Theorem 1 / Proposition 1, ``μ1`` fixed, so an LP), :func:`measure_size`
 solves the design with one of two engines (:data:`ENGINES`) and one HiGHS
 method:
 
-* ``engine="tree"``: the node-per-prefix LP (builders ``core``,
-  :func:`eqrec.design.prefix.build_prefix_lp`, or ``recursive``,
-  :func:`eqrec.design.delay_scale.build_recursive_prefix_lp`) on the prefix
-  tree of the enumerated event sequences;
+* ``engine="tree"``: the node-per-prefix LP
+  (:func:`eqrec.design.prefix.build_prefix_lp`, builder ``core``) on the
+  prefix tree of the enumerated event sequences;
 * ``engine="classes"``: the class engine (:func:`eqrec.design.classes.solve_classes`)
   on the (time, available data) classes of the language built by the window
   rule (:func:`eqrec.core.classes.classes_of_full_language`): no word, sequence
@@ -48,9 +47,10 @@ HiGHS methods (:data:`METHODS`): ``simplex`` (dual simplex), ``ipm``
 (interior point, crossover off), ``ipm-x`` (interior point + crossover),
 ``pdlp`` (first-order PDLP); ``-np``: presolve off; ``auto``: HiGHS's
 choice; ``none``: build only (tree engine only).
-Builders (tree engine): ``core`` (:func:`eqrec.design.prefix.build_prefix_lp`) or
-``recursive`` (:func:`eqrec.design.delay_scale.build_recursive_prefix_lp`);
-the class engine records ``builder = "classes"``.
+Builder (tree engine): ``core`` (:func:`eqrec.design.prefix.build_prefix_lp`;
+the scenario-tree form that preceded the class engine is gone: the tree LP
+separates, :mod:`eqrec.design.classes`); the class engine records
+``builder = "classes"``.
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ METHODS: dict[str, dict] = {
     "auto": {},
     "none": {},
 }
-BUILDERS = ("core", "recursive")
+BUILDERS = ("core",)
 #: ``tree``: the node-per-prefix LP; ``classes``: the class engine (module docstring).
 ENGINES = ("tree", "classes")
 
@@ -132,10 +132,9 @@ def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: floa
     from eqrec.core.patterns import PrefixTree
     from eqrec.core.solvers import solve_lp
     from eqrec.design.delay import delay_language
-    from eqrec.design.delay_scale import build_recursive_prefix_lp
     from eqrec.design.prefix import build_prefix_lp
 
-    build = build_recursive_prefix_lp if builder == "recursive" else build_prefix_lp
+    build = build_prefix_lp
     build(system, PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up (imports)
     t0 = time.perf_counter()
     pats = delay_language(max_delay=int(tau), horizon=int(T))
@@ -211,7 +210,7 @@ def measure_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu
     time_limit
         HiGHS's time limit in seconds.
     builder
-        Tree engine: ``"core"`` or ``"recursive"`` (recorded as ``"classes"`` for the class engine).
+        Tree engine: ``"core"`` (recorded as ``"classes"`` for the class engine).
     options
         Extra HiGHS options (override the method's).
     out
@@ -247,7 +246,6 @@ def _import_all() -> None:
     from eqrec.core.solvers import solve_lp  # noqa: F401
     from eqrec.design.classes import solve_classes  # noqa: F401
     from eqrec.design.delay import delay_language  # noqa: F401
-    from eqrec.design.delay_scale import build_recursive_prefix_lp  # noqa: F401
     from eqrec.design.prefix import build_prefix_lp  # noqa: F401
 
 

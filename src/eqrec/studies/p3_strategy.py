@@ -92,7 +92,7 @@ key                        default                                 meaning
                            ``[20,4],[30,4],[40,4],[30,5]]``        run)
 ``method``                 ``simplex``                             HiGHS method (``scale_sweep.METHODS``),
                                                                    both engines
-``builder``                ``core``                                tree LP: ``core`` or ``recursive``
+``builder``                ``core``                                tree LP builder (``core``)
 ``mu1``                    ``0.5``                                 fixed ``μ1``
 ``time_limit``             ``600``                                 HiGHS time limit per size [s]
 ``mem_limit_gb``           ``16``                                  address-space limit per size [GB]
