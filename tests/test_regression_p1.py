@@ -11,6 +11,7 @@ import pytest
 
 from eqrec.design.prefix import design_prefix
 from eqrec.design.sweeps import min_feasible_M1
+from eqrec.errors import InfeasibleDesign
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import harness
 from eqrec.studies import p1 as p1_study
@@ -57,8 +58,12 @@ def test_extensions_curve(stored):
     for k in (0, len(c["M1"]) // 2, -1):
         assert design_prefix(system, CFG["language"], c["M1"][k]).mu2 == pytest.approx(c["prefix"][k], rel=1e-6)
     m1 = stored["extensions"]["min_M1"]["prefix"]
-    tol = CFG["extensions"]["M1_tol"]
-    assert min_feasible_M1(system, CFG["language"], m1 - 4 * tol, m1 + 4 * tol, tol) == pytest.approx(m1, abs=2 * tol)
+    assert min_feasible_M1(system, CFG["language"]).upper == pytest.approx(m1, rel=1e-9)
+    design_prefix(system, CFG["language"], m1)  # feasible at the smallest level, by both engines
+    design_prefix(system, CFG["language"], m1 * (1 + 1e-6), engine="tree")
+    for engine in ("classes", "tree"):  # and infeasible just below it
+        with pytest.raises(InfeasibleDesign):
+            design_prefix(system, CFG["language"], m1 * (1 - 1e-4), engine=engine)
 
 
 def test_claims_table_is_complete():

@@ -3,8 +3,10 @@
 * :func:`lower_bound_probe` — the prefix LP with ``M2 <= optimum - gap``
   must be infeasible (Theorem 3 of the prefix-based paper is necessary and
   sufficient, so this proves no estimator of the class does better);
-* :func:`min_feasible_M1` — the smallest recovery level by bisection
-  ("an optimal M1 through line search", Section V of the prefix-based paper);
+* :func:`min_feasible_M1` — the smallest recovery level, exactly (the
+  μ1-free theorem of :mod:`eqrec.design.classes`: one Charnes–Cooper LP),
+  where the paper suggests "an optimal M1 through line search" (Section V of
+  the prefix-based paper);
 * :func:`min_recovery_time` — the shortest horizon at which a language,
   extended by measurements, admits recovery to ``M1``;
 * :func:`M2_curve` — the optimal ``M2`` against ``M1`` (``None`` where infeasible);
@@ -22,11 +24,13 @@ from typing import Callable, Iterable, Sequence
 import numpy as np
 
 from eqrec.core.certify import certify_schedule
-from eqrec.core.patterns import extend_word
+from eqrec.core.classes import classes_of_tree
+from eqrec.core.patterns import PrefixTree, as_language, extend_word, worst_case_pattern
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import schedule_from_augmented
+from eqrec.design.classes import MinRecoveryLevel, min_recovery_level
 from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.design.time_based import design_time_based
@@ -50,30 +54,27 @@ def lower_bound_probe(system: AffineSystem, words, M1: float, mu2_opt: float, ga
     return out
 
 
-def min_feasible_M1(system: AffineSystem, words, lo: float, hi: float, tol: float, method: str = "prefix",
-                    T: int | None = None) -> float:
-    """Smallest recovery level ``M1`` in ``[lo, hi]`` by bisection (``inf`` if ``hi`` is infeasible).
+def min_feasible_M1(system: AffineSystem, words, method: str = "prefix") -> MinRecoveryLevel:
+    """The smallest recovery level ``M1`` of a prefix- or time-based estimator on ``words``, with its bracket.
 
-    Feasibility is monotone in ``M1``: gains recovering from ``M1`` also
-    recover from any ``M1' > M1`` (the terminal constraint reads
-    ``noise <= M1 (1 - ρ)`` with ``ρ < 1`` the gain of the initial error).
+    Feasibility is monotone in ``M1`` (gains recovering from ``M1`` recover
+    from any larger level) and, by the separation theorem, a prefix design is
+    feasible iff every terminal class reaches ``M1``: the smallest level is
+    :func:`eqrec.design.classes.min_recovery_level` on the language's classes.
+    The time-based design is the prefix design on the worst-case word alone.
+
+    Returns
+    -------
+    MinRecoveryLevel
+        ``upper`` attained by certified gains, ``lower`` proven infeasible,
+        the binding terminal class and row.
     """
-    def feasible(M1: float) -> bool:
-        try:
-            if method == "prefix":
-                design_prefix(system, words, M1, T=T, certify=False)
-            else:
-                design_time_based(system, words, M1, certify=False)
-            return True
-        except InfeasibleDesign:
-            return False
-
-    if not feasible(hi):
-        return float("inf")
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if feasible(mid) else (mid, hi)
-    return hi
+    if method not in DESIGNS:
+        raise ValueError(f"unknown method {method!r}; choose one of {list(DESIGNS)}")
+    language = as_language(words)
+    if method == "time":
+        language = [worst_case_pattern(language)]
+    return min_recovery_level(system, classes_of_tree(PrefixTree(language)))
 
 
 def min_recovery_time(system: AffineSystem, words, M1: float, T_max: int) -> int | None:

@@ -44,8 +44,6 @@ def check_config(cfg: dict) -> None:
     except InputError as exc:
         raise InputError(str(exc), field="language") from None
     ext = cfg["extensions"]
-    if not ext["M1_search_min"] < ext["M1_max"]:
-        raise InputError("must be below extensions.M1_max", field="extensions.M1_search_min")
     if not ext["M1_min_plot"] < ext["M1_max"]:
         raise InputError("must be below extensions.M1_max", field="extensions.M1_min_plot")
 
@@ -179,9 +177,11 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     L1 = cfg["language"]
     ext = cfg["extensions"]
     res: dict = {}
-    log.info("smallest feasible M1 (bisection)")
-    res["min_M1"] = {m: min_feasible_M1(system, L1, float(ext["M1_search_min"]), float(ext["M1_max"]),
-                                        float(ext["M1_tol"]), m) for m in METHODS}
+    log.info("smallest feasible M1 (exact: the class engine's Charnes-Cooper LP)")
+    smallest = {m: min_feasible_M1(system, L1, m) for m in METHODS}
+    res["min_M1"] = {m: r.upper for m, r in smallest.items()}
+    res["min_M1_bracket"] = {m: {"lower": r.lower, "upper": r.upper, "binding": r.binding}
+                             for m, r in smallest.items()}
     grid = np.linspace(float(ext["M1_min_plot"]), float(ext["M1_max"]), int(ext["M1_points"]))
     curve: dict = {"M1": grid.tolist()}
     for m in METHODS:
@@ -252,7 +252,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "fig1_prefix_lower": {"value": "prefix" if p["mu2"] < t["mu2"] else "time",
                               "evidence": {"prefix_mu2": p["mu2"], "time_mu2": t["mu2"],
                                            "ratio": p["mu2"] / t["mu2"]}},
-        "min_M1_prefix": {"value": ext["min_M1"]["prefix"], "evidence": {"tol": cfg["extensions"]["M1_tol"]}},
+        "min_M1_prefix": {"value": ext["min_M1"]["prefix"], "evidence": ext["min_M1_bracket"]["prefix"]},
         "finite_language_mu2": {"value": ext["finite_language"]["mu2"],
                                 "evidence": {"words": ext["finite_language"]["words"]}},
     }
