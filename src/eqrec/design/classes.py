@@ -195,15 +195,14 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float | None, *
             off = np.arange(n)[:, None]
             tri_r.append((nrow + off * m + zr).ravel())
             tri_c.append((ncol + off * C + zc).ravel())
-            tri_v.append(np.tile(zv, n))
-            cost.append(-E[:, act].reshape(-1))
-            clo.append(np.tile(-b_act, n))
-            chi.append(np.tile(b_act, n))
-            rlo.append(np.zeros(n * m))
-            rhi.append(np.zeros(n * m))
-            for r in range(n):
-                gain_index.append(nrow + r * m + np.arange(m))
-                bstart.append(ncol + (r + 1) * C)
+            tri_v.append(np.broadcast_to(zv, (n, zv.size)).ravel())
+            cost.append(-E[:, act].ravel())
+            box = np.broadcast_to(b_act, (n, C)).ravel()
+            clo.append(-box)
+            chi.append(box)
+            rows = nrow + np.arange(n * m).reshape(n, m)
+            gain_index.extend(rows)
+            bstart.extend((ncol + C * np.arange(1, n + 1)).tolist())
             bcls += [ci] * n
             brow += list(range(n))
             nrow += n * m
@@ -240,7 +239,9 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float | None, *
             raise ValueError(f"unknown class LP kind {kind!r}")
     cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
     A = sp.csc_matrix((cat(tri_v), (cat(tri_r).astype(np.int64), cat(tri_c).astype(np.int64))), shape=(nrow, ncol))
-    lp = LinearProgram(c=cat(cost), A=A, row_lower=cat(rlo), row_upper=cat(rhi), col_lower=cat(clo),
+    row_lower = cat(rlo) if kind == "ratio" else np.zeros(nrow)  # the level LP's rows are Z_S λ = 0
+    row_upper = cat(rhi) if kind == "ratio" else np.zeros(nrow)
+    lp = LinearProgram(c=cat(cost), A=A, row_lower=row_lower, row_upper=row_upper, col_lower=cat(clo),
                        col_upper=cat(chi))
     return ClassLP(lp=lp, kind=kind, block_class=np.asarray(bcls, np.int64), block_row=np.asarray(brow, np.int64),
                    gain_index=gain_index, block_cols=np.asarray(bstart, np.int64),
