@@ -124,3 +124,25 @@ def test_compare_reports_differences(tmp_path, change, where):
     diffs = slurm_compare.compare_trees(a, b)
     assert diffs and any(where in d for d in diffs), diffs
     assert slurm_compare.main([str(a), str(b)]) == 1
+
+
+def _scale(base: Path, build=0.07, peak=200, cols=59112, worst_time=3) -> Path:
+    """A scale-table row as JSON, CSV and Markdown: measurements (times, peak memory) and sizes."""
+    (base / "p3").mkdir(parents=True)
+    (base / "p3" / "row.json").write_text(json.dumps(
+        {"cols": cols, "build_time": build, "classes_time": build, "peak_mb": peak, "worst_time": worst_time}))
+    (base / "p3" / "table.csv").write_text(f"T,cols,build_time,peak_mb\n30,{cols},{build},{peak}\n")
+    (base / "p3" / "table.md").write_text(
+        "# scale\n\n| T | LP cols | build [s] | peak [MB] | status |\n|---|---|---|---|---|\n"
+        f"| 30 | {cols} | {build} | {peak} | optimal |\n\nafter the table: {cols}\n")
+    return base
+
+
+def test_compare_ignores_measured_columns_of_the_scale_table(tmp_path):
+    a = _scale(tmp_path / "a")
+    assert slurm_compare.compare_trees(a, _scale(tmp_path / "b", build=0.11, peak=260)) == []
+    diffs = slurm_compare.compare_trees(a, _scale(tmp_path / "c", cols=59113))
+    assert len(diffs) == 3 and all(any(d.startswith(f) for d in diffs)
+                                   for f in ("p3/row.json", "p3/table.csv", "p3/table.md")), diffs
+    # a time index is a value, not a timing
+    assert slurm_compare.compare_trees(a, _scale(tmp_path / "d", worst_time=4))

@@ -10,11 +10,13 @@ Both trees must hold the same files. Numbers must agree within
 same code and inputs on the same kind of machine, so they are expected to agree
 to the last digits); everything else must be equal, except
 
-* timing fields: JSON keys ``solve_time``, ``wall_time``, ``*_s`` (``build_s``,
-  ``solve_s``, ``elapsed_s``, ...), ``*_seconds``; CSV columns ``time``,
-  ``solve_time``, ``wall_time``, ``elapsed_s``; numbers followed by a unit ``s`` or ``ms`` in
-  text ("build 4.0 ms", "0.48 s"); the ``our_value`` of claims whose quantity is
-  measured in seconds (``... [s]``);
+* timing and memory fields: JSON keys and CSV columns ``time``, ``solve_time``,
+  ``build_time``, ``tree_time``, ``classes_time``, ``wall_time``, ``*_s`` (``build_s``,
+  ``solve_s``, ``elapsed_s``, ...), ``*_seconds``, ``peak_mb``; numbers followed
+  by a unit ``s`` or ``ms`` in text ("build 4.0 ms", "0.48 s"); Markdown table
+  columns whose header names a unit ``[s]`` or ``[MB]`` (the scale table's
+  measurements); the ``our_value`` of claims whose quantity is measured in
+  seconds (``... [s]``);
 * figures (``.pdf``, ``.png``, ``.svg``): only their presence is compared (their
   bytes hold creation dates).
 
@@ -33,8 +35,8 @@ import re
 import sys
 from pathlib import Path
 
-TIMING_KEY = re.compile(r"^(solve_time|wall_time|elapsed|seconds|.*_s|.*_seconds)$")  # *_s: build_s, solve_s, ...
-TIMING_COLUMNS = {"time", "solve_time", "wall_time", "elapsed_s"}
+TIMING_KEY = re.compile(r"^(time|(solve|build|tree|classes|wall)_time|elapsed|seconds|.*_s|.*_seconds|peak_mb)$")
+TIMING_HEADER = re.compile(r"\[(s|ms|MB)\]")  # a Markdown table column of measurements
 FIGURES = {".pdf", ".png", ".svg"}
 # a number, optionally followed by a time unit (then it is a timing and ignored)
 NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?(?P<unit>\s?(?:ms|s)\b)?")
@@ -97,7 +99,7 @@ def compare_csv(pa: Path, pb: Path, where: str, rtol: float, atol: float) -> Non
     if not ra or not rb or ra[0] != rb[0] or len(ra) != len(rb):
         raise Diff(f"{where}: header or row count differs ({len(ra)} vs {len(rb)} rows)")
     header = ra[0]
-    skip = {j for j, h in enumerate(header) if h in TIMING_COLUMNS}
+    skip = {j for j, h in enumerate(header) if TIMING_KEY.match(h)}
     quantity = header.index("quantity") if "quantity" in header else None
     for i, (xa, xb) in enumerate(zip(ra[1:], rb[1:]), start=2):
         if len(xa) != len(xb):
@@ -109,11 +111,24 @@ def compare_csv(pa: Path, pb: Path, where: str, rtol: float, atol: float) -> Non
             compare_text(ca, cb, f"{where}:{i}:{header[j]}", rtol, atol)
 
 
+def _cells(line: str) -> list[str]:
+    return [c.strip() for c in line.strip().strip("|").split("|")]
+
+
 def compare_markdown(pa: Path, pb: Path, where: str, rtol: float, atol: float) -> None:
     la, lb = pa.read_text().splitlines(), pb.read_text().splitlines()
     if len(la) != len(lb):
         raise Diff(f"{where}: {len(la)} vs {len(lb)} lines")
+    skip: set[int] = set()  # measured columns of the current table
     for i, (xa, xb) in enumerate(zip(la, lb), start=1):
+        if not xa.startswith("|"):
+            skip = set()
+        elif i < len(la) and la[i].startswith("|") and set(la[i].replace("|", "").strip()) <= {"-", ":", " "}:
+            skip = {j for j, h in enumerate(_cells(xa)) if TIMING_HEADER.search(h)}  # a header row
+        elif skip:
+            ca, cb = _cells(xa), _cells(xb)
+            xa = " | ".join(c for j, c in enumerate(ca) if j not in skip)
+            xb = " | ".join(c for j, c in enumerate(cb) if j not in skip)
         if "[s] |" in xa and xa.startswith("|"):  # a table row of a quantity in seconds: drop its values
             ca, cb = xa.split(" | "), xb.split(" | ")
             xa, xb = " | ".join(ca[:2] + ca[4:]), " | ".join(cb[:2] + cb[4:])
