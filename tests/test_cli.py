@@ -391,3 +391,16 @@ def test_help_states_the_node_gains_limit_of_to_json():
     from eqrec.design.delay import JSON_NODE_GAINS_LIMIT
 
     assert JSON_NODE_GAINS_SEQUENCES == JSON_NODE_GAINS_LIMIT
+
+
+def test_mu1_free_on_a_language_no_estimator_recovers_exits_3(tmp_path, capsys):
+    """An unstable state never measured within the horizon: infeasible for every mu1 (the theorem's test), exit 3."""
+    system = tmp_path / "unstable.yaml"
+    system.write_text("A: [[2.0]]\nC: [[1.0]]\nE: [[0.0]]\neta_w: 0.0\neta_v: 0.1\n")
+    out = tmp_path / "d.json"
+    for engine in ("classes", "tree"):
+        rc = main(["design", str(system), "--method", "delay", "--delays", "333", "--mu1", "free",
+                   "--engine", engine, "--out", str(out)])
+        assert rc == 3 and not out.exists()
+        err = capsys.readouterr().err
+        assert "infeasible" in err and "terminal class" in err
