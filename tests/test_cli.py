@@ -404,3 +404,21 @@ def test_mu1_free_on_a_language_no_estimator_recovers_exits_3(tmp_path, capsys):
         assert rc == 3 and not out.exists()
         err = capsys.readouterr().err
         assert "infeasible" in err and "terminal class" in err
+
+
+@pytest.mark.parametrize("extra,msg", [(["--s0", "[1,2]"], "s0 must be a vector of n = 3"),
+                                       (["--L", "[[1,2]]"], "L must be an n x p = 3 x 2"),
+                                       (["--poles", "0,0.5"], "give n = 3 poles")])
+def test_augmented_shapes_are_validated(extra, msg, capsys):
+    rc = main(["design", str(SYSTEM), "--words", "101111", "--method", "augmented", "--mu1", "1", *extra])
+    err = capsys.readouterr().err
+    assert rc == 1 and msg in err and "Traceback" not in err
+
+
+def test_augmented_on_an_unobservable_system_is_infeasible_and_says_observability(tmp_path, capsys):
+    system = tmp_path / "unobservable.yaml"
+    system.write_text("A: [[1.0, 0.1, 0], [0, 1.0, 0], [0, 0, 0.9]]\nC: [[1.0, 0, 0]]\nE: [[0], [0], [0]]\n"
+                      "eta_w: 0.0\neta_v: 0.1\n")
+    rc = main(["design", str(system), "--words", "1111", "--method", "augmented", "--mu1", "1"])
+    err = capsys.readouterr().err
+    assert rc == 3 and "not observable" in err and "controllab" not in err

@@ -21,9 +21,9 @@ from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, check_mode, missing_data_pattern,
                                           schedule_from_augmented)
 from eqrec.design.augmented_nlp import solve_free_ipopt
-from eqrec.design.observers import default_poles, place_observer
+from eqrec.design.observers import default_poles, observability_rank, place_observer
 from eqrec.design.result import Design
-from eqrec.errors import CertificationFailure, InputError, SolverFailure
+from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
 
 def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, M1: float, runtime: str | None = None):
@@ -74,15 +74,28 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
     free = isinstance(L, str)
     if free and L != "free":
         raise InputError(f"L must be None, an array or 'free', got {L!r}", field="L")
+    if s0 is not None and np.shape(s0) != (n,):
+        raise InputError(f"s0 must be a vector of n = {n} entries (the state dimension), got shape "
+                         f"{np.shape(s0)}", field="s0")
     if L is None or free:
+        rank = observability_rank(system.A_at(0), system.C_at(0))
+        if rank < n:
+            raise InfeasibleDesign(f"(A, C) is not observable (rank {rank} of the observability matrix, n = {n}): "
+                                   "no observer gain L places the eigenvalues of A - L C, so no augmented "
+                                   "design with L by pole placement exists; give L explicitly (--L)")
         poles = default_poles(system.n) if poles is None else np.asarray(poles)
+        if poles.shape != (n,):
+            raise InputError(f"give n = {n} poles, got {poles.size}", field="poles")
         pp = place_observer(system.A_at(0), system.C_at(0), poles)
         if not pp.ok:
             raise InputError(f"pole placement at {poles} failed: {pp.message}", field="poles")
         L_fixed = pp.L
         extra["poles"] = [complex(x) for x in poles]
     else:
-        L_fixed = L
+        L_fixed = np.asarray(L, float)
+        if L_fixed.shape not in ((n, p), (T, n, p)):
+            raise InputError(f"L must be an n x p = {n} x {p} matrix (or T x n x p), got shape {L_fixed.shape}",
+                             field="L")
     s0v = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
     model = AugmentedLP(system, wc, M1, L_fixed, s0=s0v, mode=mode)
     sol = model.solve(solver).require_optimal(f"augmented design (M1 = {M1:g})")

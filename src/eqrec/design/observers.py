@@ -18,6 +18,17 @@ class PolePlacement:
     message: str = ""
 
 
+def observability_rank(A: np.ndarray, C: np.ndarray, tol: float | None = None) -> int:
+    """Rank of the observability matrix ``[C; C A; ...; C A^{n-1}]`` (``n`` when ``(A, C)`` is observable)."""
+    A = np.asarray(A, float)
+    C = np.asarray(C, float)
+    blocks, M = [], C
+    for _ in range(A.shape[0]):
+        blocks.append(M)
+        M = M @ A
+    return int(np.linalg.matrix_rank(np.vstack(blocks), tol=tol))
+
+
 def place_observer(A: np.ndarray, C: np.ndarray, poles, tol: float = 1e-6) -> PolePlacement:
     """Observer gain ``L`` with ``eig(A - L C) = poles`` (dual of state feedback, Yang-Tits method).
 
@@ -28,6 +39,10 @@ def place_observer(A: np.ndarray, C: np.ndarray, poles, tol: float = 1e-6) -> Po
     from scipy.signal import place_poles
 
     poles = np.asarray(poles, dtype=complex)
+    rank = observability_rank(A, C)
+    if rank < np.asarray(A).shape[0]:  # scipy, placing the dual's poles, would speak of controllability
+        return PolePlacement(poles, None, None, False, f"(A, C) is not observable (rank {rank} of the "
+                             f"observability matrix < n = {np.asarray(A).shape[0]})")
     try:
         res = place_poles(np.asarray(A).T, np.asarray(C).T, poles)
     except (ValueError, np.linalg.LinAlgError) as exc:
