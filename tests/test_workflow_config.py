@@ -81,6 +81,26 @@ def test_bad_override_names_the_override_file(workdir):
     assert out.returncode != 0 and "bad.yaml: field 'p2.mu1'" in text and "is not of type 'number'" in text
 
 
+@pytest.mark.parametrize("how", ["config", "configfile"])
+def test_unknown_section_is_refused_naming_it(workdir, how):
+    if how == "config":
+        out = run(["-n", "--config", "p5={x: 1}"], workdir)
+        where = "--config: field 'p5'"
+    else:
+        (workdir / "typo.yaml").write_text("p2x:\n  mu1: 2\n")
+        out = run(["-n", "--configfile", "typo.yaml"], workdir)
+        where = "typo.yaml: field 'p2x'"
+    text = out.stdout + out.stderr
+    assert out.returncode != 0 and where in text and "unknown configuration section" in text
+    assert "Building DAG" not in text
+
+
+def test_check_sections_accepts_the_four_sections():
+    harness.check_sections({"p1": {}, "p2": {}, "p3": {}, "p4": {}})
+    with pytest.raises(harness.ConfigError, match="'p5'"):
+        harness.check_sections({"p1": {}, "p5": {}})
+
+
 def test_heatmap_chunks_follow_the_resolved_config(workdir):
     (workdir / "override.yaml").write_text("p2:\n  heatmap:\n    chunks: 4\n")
     out = run(["-n", "results/p2/heatmap.csv", "--configfile", "override.yaml", "--forceall"], workdir)

@@ -484,9 +484,35 @@ def validate_section(config: dict, section: str, root: str | Path = ".", configf
     return data
 
 
+def check_sections(config: Mapping, configfiles: Sequence[str | Path] = (), overrides: Mapping | None = None) -> None:
+    """Refuse a top-level configuration key that is not a section (``p1`` .. ``p4``), naming where it came from.
+
+    Snakemake merges every ``--configfile`` and ``--config`` into one
+    mapping; a misspelt section (``p2x:``) or an unknown one (``--config
+    p5=...``) would otherwise be ignored silently.
+    """
+    unknown = sorted(set(config) - set(SECTIONS), key=str)
+    if not unknown:
+        return
+    key = unknown[0]
+    source = "--config" if overrides and key in overrides else "the configuration"
+    if source != "--config":
+        for f in configfiles:
+            try:
+                data = yaml.safe_load(Path(f).read_text()) or {}
+            except (OSError, yaml.YAMLError):
+                continue
+            if isinstance(data, Mapping) and key in data:
+                source = _display(f)
+    more = f" (and {', '.join(map(repr, unknown[1:]))})" if len(unknown) > 1 else ""
+    raise ConfigError(f"unknown configuration section {key!r}{more}; the sections are {list(SECTIONS)}",
+                      source, str(key))
+
+
 def validate_config(config: dict, root: str | Path = ".", configfiles: Sequence[str | Path] = (),
                     overrides: Mapping | None = None, sections: Iterable[str] = tuple(SECTIONS)) -> dict:
-    """Validate every section of a resolved configuration (in place, defaults filled in)."""
+    """Validate every section of a resolved configuration (in place, defaults filled in); no unknown section."""
+    check_sections(config, configfiles, overrides)
     for s in sections:
         validate_section(config, s, root, configfiles, overrides)
     return config

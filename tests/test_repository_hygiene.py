@@ -1,0 +1,22 @@
+"""Defects a new user met: what the repository's own files promise must exist."""
+import re
+import subprocess
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_config_files_name_existing_schemas():
+    for cfg in sorted((ROOT / "config").glob("*.yaml")):
+        for ref in re.findall(r"config/schemas/[\w.]+\.yaml", cfg.read_text()):
+            assert (ROOT / ref).is_file(), f"{cfg.name} names {ref}, which does not exist"
+
+
+def test_report_is_ignored_by_git():
+    out = subprocess.run(["git", "check-ignore", "-q", "report.html"], cwd=ROOT)
+    assert out.returncode == 0, "report.html (snakemake --report) is not ignored by git"
+
+
+def test_readme_says_how_to_recover_from_a_stale_lock():
+    text = (ROOT / "README.md").read_text()
+    assert "LockException" in text and "snakemake --unlock" in text
