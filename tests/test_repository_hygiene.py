@@ -20,3 +20,14 @@ def test_report_is_ignored_by_git():
 def test_readme_says_how_to_recover_from_a_stale_lock():
     text = (ROOT / "README.md").read_text()
     assert "LockException" in text and "snakemake --unlock" in text
+
+
+def test_config_readme_names_every_section_and_top_level_key():
+    import yaml
+
+    text = (ROOT / "config" / "README.md").read_text()
+    for section in ("p1", "p2", "p3", "p4"):
+        schema = yaml.safe_load((ROOT / "config" / "schemas" / f"{section}.schema.yaml").read_text())
+        assert f"`{section}`" in text
+        for key in schema["properties"]:
+            assert f"`{key}`" in text, f"config/README.md does not describe {section}.{key}"
