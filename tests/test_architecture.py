@@ -13,6 +13,7 @@ ALLOWED = {
     "lmv": {"lmv", "errors"},
     "filters": {"core", "filters", "lmv", "errors"},
     "studies": {"core", "design", "lmv", "filters", "studies", "errors", "models"},
+    "interop": {"core", "design", "interop", "errors"},
 }
 
 

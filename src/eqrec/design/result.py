@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 
 from eqrec.core.gains import GainSchedule
 from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern, as_pattern
 from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
+
+if TYPE_CHECKING:
+    from eqrec.core.runtime import GuaranteedEstimator
 
 
 @dataclass
@@ -72,3 +77,39 @@ class Design:
     @property
     def solve_time(self) -> float:
         return self.solution.solve_time
+
+    def estimator(self, periodic: bool = True) -> "GuaranteedEstimator":
+        """The designed estimator, ready to run: ``reset(x̂0)``, then ``step(y, u) -> (x̂, bound)``.
+
+        Class-engine designs run in class form (:class:`eqrec.core.estimator.ClassEstimator`,
+        one gain per (time, available data) class, no prefix tree) with the
+        certified level of the class as the bound; other designs run their
+        node gains (:class:`eqrec.core.estimator.RecoveryEstimator`) with the
+        node's (or the common) level.  ``μ1`` at each period end.
+
+        Parameters
+        ----------
+        periodic : bool
+            Reuse the gains every ``T`` steps (the default) or stop after ``T``.
+
+        Returns
+        -------
+        GuaranteedEstimator
+        """
+        from eqrec.core.runtime import GuaranteedEstimator
+
+        if self.class_gains is not None:
+            gains, cert = self.class_gains, self.class_certificate
+            classes = gains.classes
+
+            def bound_of(prefix):
+                depth = prefix.T
+                return float(cert.levels[classes.index(depth, prefix.available(depth - 1))])
+        else:
+            if self.schedule is None:
+                raise InputError("this design has no gains to run")
+            gains = self.schedule
+
+            def bound_of(prefix):
+                return float(self.levels.get(prefix.label, self.mu2)) if self.levels else float(self.mu2)
+        return GuaranteedEstimator(self.system, gains, bound_of, self.M1, periodic=periodic)

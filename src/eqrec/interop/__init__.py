@@ -1,0 +1,1 @@
+"""Bridges to other control libraries (optional extras): :mod:`eqrec.interop.python_control`."""

@@ -1,0 +1,145 @@
+r"""python-control interop: a ``control.StateSpace`` in, the designed estimator out as an I/O system.
+
+Requires the optional extra ``pip install -e ".[control]"`` (python-control).
+
+* :func:`system_from_statespace` turns a discrete-time ``control.StateSpace``
+  ``x(t+1) = A x + B u``, ``y = C x`` with the noise gains and bounds of the
+  papers' model (``+ E w``, ``+ V v``, ``|w|∞ <= η_w``, ``|v|∞ <= η_v``) into an
+  :class:`eqrec.core.systems.AffineSystem`.
+* :func:`estimator_iosys` turns a class-engine design into a discrete-time
+  ``control.NonlinearIOSystem`` usable with ``control.input_output_response``:
+  inputs ``u`` (m), ``y`` (p) and ``arrived`` (1: the measurement of this
+  time arrived, 0: lost), outputs the estimate ``xhat`` (n) and its guarantee
+  ``bound`` (1).  Its state is everything the class-form estimator
+  :math:`\hat x(d) = \bar x(d) + K_{(d,S)}(y_S - \bar y_S)` keeps within a
+  period: the noise-free prediction :math:`\bar x` (n), the innovations
+  :math:`y(\tau) - C\bar x(\tau)` of the period (T·p), which measurements
+  arrived (T) and the time in the period (1); every ``T`` steps it restarts
+  from its estimate (periodic reuse).  A signal carries one ``y`` per time,
+  so this form covers missing-data languages (on time or lost); late
+  packets need :meth:`eqrec.design.result.Design.estimator`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
+
+
+def _control():
+    try:
+        import control
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise InputError('python-control is not installed: pip install -e ".[control]"') from exc
+    return control
+
+
+def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=None,
+                           name: str | None = None) -> AffineSystem:
+    """An :class:`AffineSystem` from a discrete-time ``control.StateSpace`` and the noise bounds.
+
+    Parameters
+    ----------
+    ss : control.StateSpace
+        Discrete time (``ss.dt`` true or positive), ``D = 0`` (the papers'
+        output ``y = C x + V v`` has no feedthrough of ``u``).
+    eta_w, eta_v : float
+        Bounds of the process and measurement noise (infinity norm).
+    E, V : array_like, optional
+        Noise gains (default: ``E = I_n``, ``V = I_p``).
+    f : array_like, optional
+        Constant affine term of the state equation.
+
+    Raises
+    ------
+    InputError
+        A continuous-time system (discretise it first, e.g. ``control.c2d``)
+        or a nonzero ``D``.
+    """
+    control = _control()
+    if not isinstance(ss, control.StateSpace):
+        raise InputError(f"expected a control.StateSpace, got {type(ss).__name__}", field="ss")
+    if ss.dt is None or ss.dt is False or (not isinstance(ss.dt, bool) and ss.dt == 0):
+        raise InputError("the StateSpace is continuous-time (dt = 0 or None): discretise it first, "
+                         "e.g. control.c2d(sys, Ts)", field="dt")
+    A, B, C, D = (np.asarray(m, float) for m in (ss.A, ss.B, ss.C, ss.D))
+    if np.any(D != 0):
+        raise InputError("D must be zero: the model y = C x + V v has no feedthrough of u", field="D")
+    n, p = A.shape[0], C.shape[0]
+    return AffineSystem(A=A, B=B, C=C, E=np.eye(n) if E is None else np.asarray(E, float), eta_w=float(eta_w),
+                        eta_v=float(eta_v), V=np.eye(p) if V is None else np.asarray(V, float),
+                        f=np.zeros(n) if f is None else np.asarray(f, float), name=name or "python-control system")
+
+
+def estimator_iosys(design, *, name: str = "eqrec_estimator"):
+    """The class-form estimator of a class-engine design as a discrete-time ``control.NonlinearIOSystem``.
+
+    Parameters
+    ----------
+    design : eqrec.design.result.Design
+        A design of the class engine (``design.class_gains`` set).
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        Inputs ``u[i]``, ``y[j]``, ``arrived``; outputs ``xhat[k]``, ``bound``;
+        the initial state for an initial estimate ``x̂(0)`` is
+        ``sys.initial_state(xhat0)`` (an attribute set on the returned system).
+    """
+    control = _control()
+    gains = design.class_gains
+    if gains is None:
+        raise InputError("estimator_iosys needs a class-engine design (design_prefix or design_delay); "
+                         "for other designs use design.estimator()", field="design")
+    system, cert = design.system, design.class_certificate
+    classes = gains.classes
+    n, p, m, T = system.n, system.p, system.m, classes.horizon
+    ix_bar, ix_inn = slice(0, n), slice(n, n + T * p)
+    ix_arr, ix_t = slice(n + T * p, n + T * p + T), n + T * p + T
+
+    def unpack(x):
+        t = int(round(x[ix_t]))
+        return x[ix_bar], x[ix_inn].reshape(T, p), x[ix_arr] > 0.5, t
+
+    def estimate(xbar, innov, arrived, t):
+        """x̂(t) and its bound from the state at the start of step t."""
+        if t == 0:
+            return xbar.copy(), design.M1
+        S = tuple(int(i) for i in np.flatnonzero(arrived[:t]))
+        try:
+            i = classes.index(t, S)
+        except InputError:
+            raise InputError(f"the measurements {list(S)} of the first {t} steps of a period are not an arrival "
+                             "pattern of the design's language", field="arrived") from None
+        xhat = xbar + gains.K[i] @ innov[list(S)].reshape(-1) if S else xbar.copy()
+        return xhat, float(cert.levels[i])
+
+    def update(_t, x, u, _params):
+        xbar, innov, arrived, t = unpack(np.asarray(x, float))
+        innov, arrived = innov.copy(), arrived.copy()
+        uu, y, got = u[:m], u[m:m + p], bool(u[m + p] > 0.5)
+        if got:
+            innov[t] = y - system.C_at(t) @ xbar
+            arrived[t] = True
+        nxt = system.A_at(t) @ xbar + system.B_at(t) @ uu + system.f
+        if t + 1 == T:  # period end: restart from the estimate of time T
+            xhat_T, _ = estimate(nxt, innov, arrived, T)
+            return initial_state(xhat_T)
+        return np.concatenate([nxt, innov.reshape(-1), arrived.astype(float), [t + 1]])
+
+    def output(_t, x, _u, _params):
+        xhat, bound = estimate(*unpack(np.asarray(x, float)))
+        return np.concatenate([xhat, [bound]])
+
+    def initial_state(xhat0):
+        xhat0 = np.asarray(xhat0, float).reshape(n)
+        return np.concatenate([xhat0, np.zeros(T * p + T), [0.0]])
+
+    sys_io = control.nlsys(update, output, dt=True, name=name,
+                           inputs=[f"u[{i}]" for i in range(m)] + [f"y[{j}]" for j in range(p)] + ["arrived"],
+                           outputs=[f"xhat[{k}]" for k in range(n)] + ["bound"],
+                           states=n + T * p + T + 1)
+    sys_io.initial_state = initial_state
+    return sys_io
