@@ -28,14 +28,20 @@ configfile: "config/p4.yaml"
 # nested --config values arrive as text: give them the types their schema asks for
 harness.type_cli_config(config, workflow.config_settings.config, root=workflow.basedir)
 try:  # a misspelt or unknown top-level section would otherwise be ignored
-    harness.check_sections(config, workflow.config_settings.configfiles, workflow.config_settings.config)
+    harness.check_sections(
+        config, workflow.config_settings.configfiles, workflow.config_settings.config
+    )
 except harness.ConfigError as exc:
     raise WorkflowError(f"invalid configuration: {exc}")
 for _section in harness.SECTIONS:
     try:
-        harness.validate_section(config, _section, root=workflow.basedir,
-                                 configfiles=workflow.config_settings.configfiles,
-                                 overrides=workflow.config_settings.config)
+        harness.validate_section(
+            config,
+            _section,
+            root=workflow.basedir,
+            configfiles=workflow.config_settings.configfiles,
+            overrides=workflow.config_settings.config,
+        )
     except harness.ConfigError as exc:
         raise WorkflowError(f"invalid configuration: {exc}")
 

@@ -10,13 +10,19 @@ rule claims:
         values=VALUES_FILES,
         code=CLAIMS_CODE,
     output:
-        csv=report("results/claims.csv", caption="../report/claims.rst", category="Claims"),
-        md=report("results/REPRODUCTION.md", caption="../report/reproduction.rst", category="Claims"),
+        csv=report(
+            "results/claims.csv", caption="../report/claims.rst", category="Claims"
+        ),
+        md=report(
+            "results/REPRODUCTION.md",
+            caption="../report/reproduction.rst",
+            category="Claims",
+        ),
+    log:
+        "logs/claims.log",
     params:
         study="claims",
         step="table",
         cfg={},
-    log:
-        "logs/claims.log",
     script:
         RUN_STEP

@@ -11,12 +11,12 @@ rule p1_model:
         code=P1_CODE,
     output:
         json="results/p1/model.json",
+    log:
+        "logs/p1/model.log",
     params:
         study="p1",
         step="model",
         cfg=P1_CFG,
-    log:
-        "logs/p1/model.log",
     script:
         RUN_STEP
 
@@ -27,12 +27,12 @@ rule p1_designs:
         code=P1_CODE,
     output:
         json="results/p1/designs.json",
+    log:
+        "logs/p1/designs.log",
     params:
         study="p1",
         step="designs",
         cfg=P1_CFG,
-    log:
-        "logs/p1/designs.log",
     script:
         RUN_STEP
 
@@ -43,12 +43,12 @@ rule p1_simulate:
         code=P1_CODE,
     output:
         npz="results/p1/simulation.npz",
+    log:
+        "logs/p1/simulate.log",
     params:
         study="p1",
         step="simulate",
         cfg=P1_CFG,
-    log:
-        "logs/p1/simulate.log",
     script:
         RUN_STEP
 
@@ -60,13 +60,17 @@ rule p1_figure1:
         code=P1_CODE,
     output:
         pdf="results/p1/fig1_trajectories.pdf",
-        png=report("results/p1/fig1_trajectories.png", caption="../report/p1_fig1.rst", category="P1"),
+        png=report(
+            "results/p1/fig1_trajectories.png",
+            caption="../report/p1_fig1.rst",
+            category="P1",
+        ),
+    log:
+        "logs/p1/figure1.log",
     params:
         study="p1",
         step="figure1",
         cfg=P1_CFG,
-    log:
-        "logs/p1/figure1.log",
     script:
         RUN_STEP
 
@@ -77,12 +81,12 @@ rule p1_extensions:
         code=P1_CODE,
     output:
         json="results/p1/extensions.json",
+    log:
+        "logs/p1/extensions.log",
     params:
         study="p1",
         step="extensions",
         cfg=P1_CFG,
-    log:
-        "logs/p1/extensions.log",
     script:
         RUN_STEP
 
@@ -94,13 +98,17 @@ rule p1_figure_ext:
         code=P1_CODE,
     output:
         pdf="results/p1/fig_ext_M2_vs_M1.pdf",
-        png=report("results/p1/fig_ext_M2_vs_M1.png", caption="../report/p1_ext.rst", category="P1"),
+        png=report(
+            "results/p1/fig_ext_M2_vs_M1.png",
+            caption="../report/p1_ext.rst",
+            category="P1",
+        ),
+    log:
+        "logs/p1/figure_ext.log",
     params:
         study="p1",
         step="figure_ext",
         cfg=P1_CFG,
-    log:
-        "logs/p1/figure_ext.log",
     script:
         RUN_STEP
 
@@ -115,12 +123,12 @@ rule p1_values:
         code=P1_CODE,
     output:
         json="results/p1/values.json",
+    log:
+        "logs/p1/values.log",
     params:
         study="p1",
         step="values",
         cfg=P1_CFG,
-    log:
-        "logs/p1/values.log",
     script:
         RUN_STEP
 

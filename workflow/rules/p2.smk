@@ -19,12 +19,12 @@ rule p2_designs:
     output:
         json="results/p2/designs.json",
         npz="results/p2/designs.npz",
+    log:
+        "logs/p2/designs.log",
     params:
         study="p2",
         step="designs",
         cfg=P2_CFG,
-    log:
-        "logs/p2/designs.log",
     script:
         RUN_STEP
 
@@ -36,12 +36,12 @@ rule p2_simulate:
         code=P2_CODE,
     output:
         npz="results/p2/simulation.npz",
+    log:
+        "logs/p2/simulate.log",
     params:
         study="p2",
         step="simulate",
         cfg=P2_CFG,
-    log:
-        "logs/p2/simulate.log",
     script:
         RUN_STEP
 
@@ -52,14 +52,14 @@ rule p2_heatmap_chunk:
         code=P2_CODE,
     output:
         csv="results/p2/heatmap/{variant}_{chunk}.csv",
-    params:
-        study="p2",
-        step="heatmap_chunk",
-        cfg=P2_CFG,
     log:
         "logs/p2/heatmap_{variant}_{chunk}.log",
     wildcard_constraints:
         chunk=r"\d+",
+    params:
+        study="p2",
+        step="heatmap_chunk",
+        cfg=P2_CFG,
     script:
         RUN_STEP
 
@@ -67,16 +67,20 @@ rule p2_heatmap_chunk:
 rule p2_heatmap_merge:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
-        chunks=expand("results/p2/heatmap/{variant}_{chunk}.csv", variant=P2_VARIANTS, chunk=P2_CHUNKS),
+        chunks=expand(
+            "results/p2/heatmap/{variant}_{chunk}.csv",
+            variant=P2_VARIANTS,
+            chunk=P2_CHUNKS,
+        ),
         code=P2_CODE,
     output:
         csv="results/p2/heatmap.csv",
+    log:
+        "logs/p2/heatmap_merge.log",
     params:
         study="p2",
         step="heatmap_merge",
         cfg=P2_CFG,
-    log:
-        "logs/p2/heatmap_merge.log",
     script:
         RUN_STEP
 
@@ -87,12 +91,12 @@ rule p2_realaxis:
         code=P2_CODE,
     output:
         csv="results/p2/realaxis.csv",
+    log:
+        "logs/p2/realaxis.log",
     params:
         study="p2",
         step="realaxis",
         cfg=P2_CFG,
-    log:
-        "logs/p2/realaxis.log",
     script:
         RUN_STEP
 
@@ -103,12 +107,12 @@ rule p2_checks:
         code=P2_CODE,
     output:
         json="results/p2/checks.json",
+    log:
+        "logs/p2/checks.log",
     params:
         study="p2",
         step="checks",
         cfg=P2_CFG,
-    log:
-        "logs/p2/checks.log",
     script:
         RUN_STEP
 
@@ -121,13 +125,16 @@ rule p2_printed:
         code=P2_CODE,
     output:
         json="results/p2/printed.json",
+    log:
+        "logs/p2/printed.log",
     params:
         study="p2",
         step="printed",
         cfg=P2_CFG,
-        published=[published_value(CLAIMS_FILE, config["p2"]["printed"][k]) for k in ("L_claim", "interval_claim")],
-    log:
-        "logs/p2/printed.log",
+        published=[
+            published_value(CLAIMS_FILE, config["p2"]["printed"][k])
+            for k in ("L_claim", "interval_claim")
+        ],
     script:
         RUN_STEP
 
@@ -144,12 +151,12 @@ rule p2_values:
         code=P2_CODE,
     output:
         json="results/p2/values.json",
+    log:
+        "logs/p2/values.log",
     params:
         study="p2",
         step="values",
         cfg=P2_CFG,
-    log:
-        "logs/p2/values.log",
     script:
         RUN_STEP
 
@@ -162,15 +169,19 @@ rule p2_figure_trajectories:
         code=P2_CODE,
     output:
         pdf="results/p2/{fig}_trajectories.pdf",
-        png=report("results/p2/{fig}_trajectories.png", caption="../report/p2_trajectories.rst", category="P2"),
-    params:
-        study="p2",
-        step="figure_trajectories",
-        cfg=P2_CFG,
+        png=report(
+            "results/p2/{fig}_trajectories.png",
+            caption="../report/p2_trajectories.rst",
+            category="P2",
+        ),
     log:
         "logs/p2/figure_{fig}.log",
     wildcard_constraints:
         fig="f1|f2",
+    params:
+        study="p2",
+        step="figure_trajectories",
+        cfg=P2_CFG,
     script:
         RUN_STEP
 
@@ -183,13 +194,15 @@ rule p2_figure_heatmap:
         code=P2_CODE,
     output:
         pdf="results/p2/f3a_heatmap.pdf",
-        png=report("results/p2/f3a_heatmap.png", caption="../report/p2_f3a.rst", category="P2"),
+        png=report(
+            "results/p2/f3a_heatmap.png", caption="../report/p2_f3a.rst", category="P2"
+        ),
+    log:
+        "logs/p2/figure_f3a.log",
     params:
         study="p2",
         step="figure_heatmap",
         cfg=P2_CFG,
-    log:
-        "logs/p2/figure_f3a.log",
     script:
         RUN_STEP
 
@@ -202,13 +215,17 @@ rule p2_figure_realaxis:
         code=P2_CODE,
     output:
         pdf="results/p2/f3b_realaxis.pdf",
-        png=report("results/p2/f3b_realaxis.png", caption="../report/p2_f3b.rst", category="P2"),
+        png=report(
+            "results/p2/f3b_realaxis.png",
+            caption="../report/p2_f3b.rst",
+            category="P2",
+        ),
+    log:
+        "logs/p2/figure_f3b.log",
     params:
         study="p2",
         step="figure_realaxis",
         cfg=P2_CFG,
-    log:
-        "logs/p2/figure_f3b.log",
     script:
         RUN_STEP
 

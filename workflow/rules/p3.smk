@@ -14,12 +14,12 @@ rule p3_languages:
         csv="results/p3/examples.csv",
         md="results/p3/examples.md",
         counts="results/p3/language_counts.csv",
+    log:
+        "logs/p3/languages.log",
     params:
         study="p3",
         step="languages",
         cfg=P3_CFG,
-    log:
-        "logs/p3/languages.log",
     script:
         RUN_STEP
 
@@ -30,12 +30,12 @@ rule p3_reactor_model:
         code=P3_CODE,
     output:
         json="results/p3/reactor_model.json",
+    log:
+        "logs/p3/reactor_model.log",
     params:
         study="p3",
         step="reactor_model",
         cfg=P3_CFG,
-    log:
-        "logs/p3/reactor_model.log",
     script:
         RUN_STEP
 
@@ -46,12 +46,12 @@ rule p3_reactor_designs:
         code=P3_CODE,
     output:
         json="results/p3/reactor_designs.json",
+    log:
+        "logs/p3/reactor_designs.log",
     params:
         study="p3",
         step="reactor_designs",
         cfg=P3_CFG,
-    log:
-        "logs/p3/reactor_designs.log",
     script:
         RUN_STEP
 
@@ -62,12 +62,12 @@ rule p3_augmented:
         code=P3_CODE,
     output:
         json="results/p3/augmented.json",
+    log:
+        "logs/p3/augmented.log",
     params:
         study="p3",
         step="augmented",
         cfg=P3_CFG,
-    log:
-        "logs/p3/augmented.log",
     script:
         RUN_STEP
 
@@ -79,12 +79,12 @@ rule p3_kalman:
     output:
         json="results/p3/kalman.json",
         npz="results/p3/kalman.npz",
+    log:
+        "logs/p3/kalman.log",
     params:
         study="p3",
         step="kalman",
         cfg=P3_CFG,
-    log:
-        "logs/p3/kalman.log",
     script:
         RUN_STEP
 
@@ -97,13 +97,17 @@ rule p3_figure1:
         code=P3_CODE,
     output:
         pdf="results/p3/fig1_kalman.pdf",
-        png=report("results/p3/fig1_kalman.png", caption="../report/p3_fig1.rst", category="P3"),
+        png=report(
+            "results/p3/fig1_kalman.png",
+            caption="../report/p3_fig1.rst",
+            category="P3",
+        ),
+    log:
+        "logs/p3/figure1.log",
     params:
         study="p3",
         step="figure1",
         cfg=P3_CFG,
-    log:
-        "logs/p3/figure1.log",
     script:
         RUN_STEP
 
@@ -114,12 +118,12 @@ rule p3_acc:
         code=P3_CODE,
     output:
         json="results/p3/acc.json",
+    log:
+        "logs/p3/acc.log",
     params:
         study="p3",
         step="acc",
         cfg=P3_CFG,
-    log:
-        "logs/p3/acc.log",
     script:
         RUN_STEP
 
@@ -130,12 +134,12 @@ rule p3_acc_simulate:
         code=P3_CODE,
     output:
         npz="results/p3/acc_simulation.npz",
+    log:
+        "logs/p3/acc_simulate.log",
     params:
         study="p3",
         step="acc_simulate",
         cfg=P3_CFG,
-    log:
-        "logs/p3/acc_simulate.log",
     script:
         RUN_STEP
 
@@ -147,13 +151,15 @@ rule p3_figure2:
         code=P3_CODE,
     output:
         pdf="results/p3/fig2_acc.pdf",
-        png=report("results/p3/fig2_acc.png", caption="../report/p3_fig2.rst", category="P3"),
+        png=report(
+            "results/p3/fig2_acc.png", caption="../report/p3_fig2.rst", category="P3"
+        ),
+    log:
+        "logs/p3/figure2.log",
     params:
         study="p3",
         step="figure2",
         cfg=P3_CFG,
-    log:
-        "logs/p3/figure2.log",
     script:
         RUN_STEP
 
@@ -171,12 +177,12 @@ rule p3_values:
         code=P3_CODE,
     output:
         json="results/p3/values.json",
+    log:
+        "logs/p3/values.log",
     params:
         study="p3",
         step="values",
         cfg=P3_CFG,
-    log:
-        "logs/p3/values.log",
     script:
         RUN_STEP
 
@@ -185,9 +191,18 @@ rule p3_values:
 VALUES_FILES.append("results/p3/strategy_values.json")
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
-P3_SCALE_TREE = [f"results/p3/scale/T{T}_tau{tau}.json" for T, tau in config["p3"]["scale"]["tree_sizes"]]
-P3_SCALE_TREE_SLOW = [f"results/p3/scale/T{T}_tau{tau}.json" for T, tau in config["p3"]["scale"]["tree_slow_sizes"]]
-P3_SCALE_CLASSES = [f"results/p3/scale/classes_T{T}_tau{tau}.json" for T, tau in config["p3"]["scale"]["class_sizes"]]
+P3_SCALE_TREE = [
+    f"results/p3/scale/T{T}_tau{tau}.json"
+    for T, tau in config["p3"]["scale"]["tree_sizes"]
+]
+P3_SCALE_TREE_SLOW = [
+    f"results/p3/scale/T{T}_tau{tau}.json"
+    for T, tau in config["p3"]["scale"]["tree_slow_sizes"]
+]
+P3_SCALE_CLASSES = [
+    f"results/p3/scale/classes_T{T}_tau{tau}.json"
+    for T, tau in config["p3"]["scale"]["class_sizes"]
+]
 
 
 rule p3_strategy:
@@ -197,12 +212,12 @@ rule p3_strategy:
     output:
         npz="results/p3/strategy.npz",
         values="results/p3/strategy_values.json",
+    log:
+        "logs/p3/strategy.log",
     params:
         study="p3",
         step="strategy",
         cfg=P3_CFG,
-    log:
-        "logs/p3/strategy.log",
     script:
         RUN_STEP
 
@@ -214,13 +229,17 @@ rule p3_strategy_figure:
         code=P3_CODE,
     output:
         pdf="results/p3/fig_strategy.pdf",
-        png=report("results/p3/fig_strategy.png", caption="../report/p3_strategy.rst", category="P3"),
+        png=report(
+            "results/p3/fig_strategy.png",
+            caption="../report/p3_strategy.rst",
+            category="P3",
+        ),
+    log:
+        "logs/p3/strategy_figure.log",
     params:
         study="p3",
         step="strategy_figure",
         cfg=P3_CFG,
-    log:
-        "logs/p3/strategy_figure.log",
     script:
         RUN_STEP
 
@@ -231,15 +250,15 @@ rule p3_scale_size:
         code=P3_CODE,
     output:
         json="results/p3/scale/T{T}_tau{tau}.json",
-    params:
-        study="p3",
-        step="scale_size",
-        cfg=P3_CFG,
     log:
         "logs/p3/scale_T{T}_tau{tau}.log",
     wildcard_constraints:
         T=r"\d+",
         tau=r"\d+",
+    params:
+        study="p3",
+        step="scale_size",
+        cfg=P3_CFG,
     script:
         RUN_STEP
 
@@ -250,16 +269,16 @@ rule p3_scale_class_size:
         code=P3_CODE,
     output:
         json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
-    params:
-        study="p3",
-        step="scale_class_size",
-        cfg=P3_CFG,
     log:
         "logs/p3/scale_{engine}_T{T}_tau{tau}.log",
     wildcard_constraints:
         engine="classes",
         T=r"\d+",
         tau=r"\d+",
+    params:
+        study="p3",
+        step="scale_class_size",
+        cfg=P3_CFG,
     script:
         RUN_STEP
 
@@ -271,13 +290,17 @@ rule p3_scale_table:
         code=P3_CODE,
     output:
         csv="results/p3/scale_table.csv",
-        md=report("results/p3/scale_table.md", caption="../report/p3_scale.rst", category="P3"),
+        md=report(
+            "results/p3/scale_table.md",
+            caption="../report/p3_scale.rst",
+            category="P3",
+        ),
+    log:
+        "logs/p3/scale_table.log",
     params:
         study="p3",
         step="scale_table",
         cfg=P3_CFG,
-    log:
-        "logs/p3/scale_table.log",
     script:
         RUN_STEP
 
@@ -290,12 +313,12 @@ rule p3_scale_table_full:
     output:
         csv="results/p3/scale_table_full.csv",
         md="results/p3/scale_table_full.md",
+    log:
+        "logs/p3/scale_table_full.log",
     params:
         study="p3",
         step="scale_table_full",
         cfg=P3_CFG,
-    log:
-        "logs/p3/scale_table_full.log",
     script:
         RUN_STEP
 

@@ -18,17 +18,27 @@ rule p4_tracking:
     output:
         npz="results/p4/tracking.npz",
         f1="results/p4/fig1_filter.pdf",
-        f1png=report("results/p4/fig1_filter.png", caption="../report/p4_f1.rst", category="P4"),
+        f1png=report(
+            "results/p4/fig1_filter.png", caption="../report/p4_f1.rst", category="P4"
+        ),
         f2="results/p4/fig2_predictor.pdf",
-        f2png=report("results/p4/fig2_predictor.png", caption="../report/p4_f2.rst", category="P4"),
+        f2png=report(
+            "results/p4/fig2_predictor.png",
+            caption="../report/p4_f2.rst",
+            category="P4",
+        ),
         f3="results/p4/fig3_smoother.pdf",
-        f3png=report("results/p4/fig3_smoother.png", caption="../report/p4_f3.rst", category="P4"),
+        f3png=report(
+            "results/p4/fig3_smoother.png",
+            caption="../report/p4_f3.rst",
+            category="P4",
+        ),
+    log:
+        "logs/p4/tracking.log",
     params:
         study="p4",
         step="tracking",
         cfg=P4_CFG,
-    log:
-        "logs/p4/tracking.log",
     script:
         RUN_STEP
 
@@ -40,12 +50,12 @@ rule p4_mc:
     output:
         npz="results/p4/mc_{example}.npz",
         json="results/p4/mc_{example}.json",
+    log:
+        "logs/p4/mc_{example}.log",
     params:
         study="p4",
         step="mc",
         cfg=P4_CFG,
-    log:
-        "logs/p4/mc_{example}.log",
     script:
         RUN_STEP
 
@@ -56,14 +66,14 @@ rule p4_sweep_eta_chunk:
         code=P4_CODE,
     output:
         npz="results/p4/sweep_eta/chunk{chunk}.npz",
-    params:
-        study="p4",
-        step="sweep_eta_chunk",
-        cfg=P4_CFG,
     log:
         "logs/p4/sweep_eta_{chunk}.log",
     wildcard_constraints:
         chunk=r"\d+",
+    params:
+        study="p4",
+        step="sweep_eta_chunk",
+        cfg=P4_CFG,
     script:
         RUN_STEP
 
@@ -74,14 +84,14 @@ rule p4_sweep_q_chunk:
         code=P4_CODE,
     output:
         npz="results/p4/sweep_q/chunk{chunk}.npz",
-    params:
-        study="p4",
-        step="sweep_q_chunk",
-        cfg=P4_CFG,
     log:
         "logs/p4/sweep_q_{chunk}.log",
     wildcard_constraints:
         chunk=r"\d+",
+    params:
+        study="p4",
+        step="sweep_q_chunk",
+        cfg=P4_CFG,
     script:
         RUN_STEP
 
@@ -93,13 +103,17 @@ rule p4_fig4:
         code=P4_CODE,
     output:
         pdf="results/p4/fig4_variances.pdf",
-        png=report("results/p4/fig4_variances.png", caption="../report/p4_f4.rst", category="P4"),
+        png=report(
+            "results/p4/fig4_variances.png",
+            caption="../report/p4_f4.rst",
+            category="P4",
+        ),
+    log:
+        "logs/p4/fig4.log",
     params:
         study="p4",
         step="fig4",
         cfg=P4_CFG,
-    log:
-        "logs/p4/fig4.log",
     script:
         RUN_STEP
 
@@ -112,13 +126,15 @@ rule p4_fig5:
     output:
         merged="results/p4/sweep_eta.npz",
         pdf="results/p4/fig5_eta.pdf",
-        png=report("results/p4/fig5_eta.png", caption="../report/p4_f5.rst", category="P4"),
+        png=report(
+            "results/p4/fig5_eta.png", caption="../report/p4_f5.rst", category="P4"
+        ),
+    log:
+        "logs/p4/fig5.log",
     params:
         study="p4",
         step="fig5",
         cfg=P4_CFG,
-    log:
-        "logs/p4/fig5.log",
     script:
         RUN_STEP
 
@@ -131,15 +147,19 @@ rule p4_fig6:
     output:
         merged="results/p4/sweep_q.npz",
         pdf="results/p4/fig6_q.pdf",
-        png=report("results/p4/fig6_q.png", caption="../report/p4_f6.rst", category="P4"),
+        png=report(
+            "results/p4/fig6_q.png", caption="../report/p4_f6.rst", category="P4"
+        ),
         rpdf="results/p4/regions.pdf",
-        rpng=report("results/p4/regions.png", caption="../report/p4_regions.rst", category="P4"),
+        rpng=report(
+            "results/p4/regions.png", caption="../report/p4_regions.rst", category="P4"
+        ),
+    log:
+        "logs/p4/fig6.log",
     params:
         study="p4",
         step="fig6",
         cfg=P4_CFG,
-    log:
-        "logs/p4/fig6.log",
     script:
         RUN_STEP
 
@@ -151,16 +171,19 @@ rule p4_compare:
         code=P4_CODE,
     output:
         pdf="results/p4/fig{number}_compare_{example}.pdf",
-        png=report("results/p4/fig{number}_compare_{example}.png", caption="../report/p4_compare.rst",
-                   category="P4"),
-    params:
-        study="p4",
-        step="compare",
-        cfg=P4_CFG,
+        png=report(
+            "results/p4/fig{number}_compare_{example}.png",
+            caption="../report/p4_compare.rst",
+            category="P4",
+        ),
     log:
         "logs/p4/fig{number}_{example}.log",
     wildcard_constraints:
         number=r"\d+",
+    params:
+        study="p4",
+        step="compare",
+        cfg=P4_CFG,
     script:
         RUN_STEP
 
@@ -177,12 +200,12 @@ rule p4_values:
     output:
         values="results/p4/values.json",
         table="results/p4/summary.csv",
+    log:
+        "logs/p4/values.log",
     params:
         study="p4",
         step="values",
         cfg=P4_CFG,
-    log:
-        "logs/p4/values.log",
     script:
         RUN_STEP
 
