@@ -15,7 +15,8 @@ import numpy as np
 from eqrec.studies.harness import save_figure
 from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajectory_panel, worst_case_lines
 
-STATE_LABELS_REACTOR = tuple(rf"$\tilde x_{i}$" for i in range(1, 5))
+# the linearised batch reactor's states are dimensionless deviations (Sec. IV-A of the delayed-data paper)
+STATE_LABELS_REACTOR = tuple(rf"$\tilde x_{i}$ [–]" for i in range(1, 5))
 FILTER_TITLES = {"timestamped": "Time-stamped Kalman (re-filtering)", "unaware": "Delay-unaware Kalman",
                  "random_delay_lmv": "Random-delay LMV (ref. [9])"}
 
@@ -38,11 +39,19 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
                          color=color, ylabels=(c == 0))
         worst = data["proposed_bounds"] if name == "proposed" else data[f"{name}_prediction_worst"]
         worst_case_lines(axes[:, c], worst, "exact worst case")
-        for i, ax in enumerate(axes[:, c]):
-            lim = 1.15 * max(np.max(levels), np.max(worst[:, i]), np.max(np.abs(errs[:, :, i])))
+    # one scale per state across the estimators: the same quantity, compared
+    for i in range(axes.shape[0]):
+        lim = 1.15 * max(max(np.max(levels), np.max((data["proposed_bounds"] if n == "proposed" else
+                                                     data[f"{n}_prediction_worst"])[:, i]),
+                             np.max(np.abs(e[:, :, i]))) for n, _, e, _ in cols)
+        for ax in axes[i]:
             ax.set_ylim(-lim, lim)
     handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=3, bbox_to_anchor=(0.5, -0.02))
+    labels = ["proposed estimator: error" if lab == "estimation error" else lab for lab in labels]
+    if len(cols) > 1:  # the Kalman-type filters' traces, drawn in their own colour
+        handles.insert(1, plt.Line2D([], [], color=cols[1][3], alpha=0.6, lw=1.0))
+        labels.insert(1, "Kalman-type filter: error")
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs "
                  f"(truncated normal, bound = {res['sigmas']:g} sigma): errors and the guarantees "
                  rf"$\mu_{{2,k}}$ ($\mu_1$ = {res['mu1']:.4f})")

@@ -313,10 +313,19 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
     data = np.load(inputs.npz)
     kind = str(data["noise"][0])
     window = int(cfg["strategy"]["figure"]["window"])
-    cols = (("reactor_periodic", "Batch reactor, gains reused every T", [rf"$\xi_{i}$" for i in range(1, 5)]),
+    reactor_labels = [rf"$\xi_{i}$ [–]" for i in range(1, 5)]  # the linearised reactor's states are dimensionless
+    cols = (("reactor_periodic", "Batch reactor, gains reused every T", reactor_labels),
             ("acc_periodic", "ACC, gains reused every T", list(STATE_LABELS_ACC)),
-            ("reactor_switching", "Batch reactor, switching scheme", [rf"$\xi_{i}$" for i in range(1, 5)]))
-    fig, axes = plt.subplots(4, 3, figsize=(10.0, 7.5), sharex="col")
+            ("reactor_switching", "Batch reactor, switching scheme", reactor_labels))
+    fig, axes = plt.subplots(4, 3, figsize=(10.0, 8.2), sharex="col")
+    # one scale per reactor state across the two reactor columns (the same quantity)
+    reactor_lim = {}
+    for label in ("reactor_periodic", "reactor_switching"):
+        key = f"{label}_{kind}"
+        N = min(window, data[f"{key}_error"].shape[0] - 1)
+        for i in range(data[f"{key}_error"].shape[1]):
+            reactor_lim[i] = max(reactor_lim.get(i, 0.0), 1.15 * max(float(data[f"{key}_level"][: N + 1].max()),
+                                                                  float(np.abs(data[f"{key}_error"][: N + 1, i]).max())))
     for c, (label, title, ylabels) in enumerate(cols):
         key = f"{label}_{kind}"
         err, lev = data[f"{key}_error"], data[f"{key}_level"]
@@ -341,19 +350,24 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
                 for j, s in enumerate(range(T, N + 1, T)):
                     ax.axvline(s, color="0.5", ls=":", lw=0.6, label="period boundary" if j == 0 else None)
             ax.set_ylabel(ylabels[i])
-            lim = 1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max()))
+            lim = reactor_lim[i] if label.startswith("reactor") else (
+                1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max())))
             ax.set_ylim(-lim, lim)
             if i == 0:
                 ax.set_title(title)
         last = axes[min(n, 4) - 1, c]
         last.set_xlabel(f"time step k (Ts = {Ts:g} s)")
         last.tick_params(labelbottom=True)
-        handles, labels = axes[0, c].get_legend_handles_labels()
-        axes[0, c].legend(handles, labels, loc="upper right", fontsize=6, ncol=1)
+    # one legend under the figure (inside an axis it covers the bands)
+    seen: dict[str, object] = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(lab, h)
+    fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=len(seen), bbox_to_anchor=(0.5, 0.0))
     fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees ({kind} noise, first "
                  f"{window} steps; $\\mu_1$ = {float(data['reactor_mu1']):g} / {float(data['acc_mu1']):g} / "
                  f"{float(data['switching_mu1']):g})")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
     save_figure(fig, outputs.pdf, outputs.png)
 
 
