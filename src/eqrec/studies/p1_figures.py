@@ -42,11 +42,14 @@ def step_figure_ext(cfg, inputs, outputs, wildcards) -> None:
         M1 = [a for a, b in zip(c["M1"], c[m]) if b is not None]
         M2 = [b for b in c[m] if b is not None]
         ax1.plot(M1, M2, style, marker=".", label=f"{m}-based")
-        ax1.axvline(res["min_M1"][m], color=style[:2], lw=0.6, ls=":")
+        ax1.axvline(res["min_M1"][m], color=style[:2], lw=0.8, ls=":",
+                    label=f"smallest $M_1$: {res['min_M1'][m]:.4f}")
+    ax1.set_xlim(0.0, 1.03 * max(c["M1"]))  # the smallest levels stand clear of the y axis
+    ax1.set_ylim(0.0, None)
     ax1.set_xlabel("recovery level $M_1$")
     ax1.set_ylabel("optimal intermediate level $M_2^*$")
     ax1.set_title("$M_2^*(M_1)$ on $L_1$ (dotted: smallest feasible $M_1$)")
-    ax1.legend()
+    ax1.legend(fontsize=7, loc="upper left")
     near = [r for r in res["min_T"] if r["M1"] <= 1.05 * res["min_M1"]["prefix"]]  # where T grows
     far = [r for r in res["min_T"] if r not in near]
     ok = [(r["M1"], r["T"]) for r in near if r["T"] is not None]
@@ -57,10 +60,14 @@ def step_figure_ext(cfg, inputs, outputs, wildcards) -> None:
         if r["T"] is None:
             ax2.plot(r["M1"], t_max + 1, "C3x", label="none up to $T_{max}$")
     ax2.axvline(res["min_M1"]["prefix"], color="0.5", ls=":", lw=0.8, label="smallest $M_1$ at $T = 6$")
-    if far:
-        ax2.text(0.98, 0.05, "; ".join(f"$M_1$ = {r['M1']:g}: $T$ = {r['T']}" for r in far),
-                 transform=ax2.transAxes, ha="right", fontsize=7)
-    ax2.legend(fontsize=7)
+    if far:  # levels far from the smallest one: a note where no marker is (top right)
+        ax2.text(0.98, 0.96, "; ".join(f"$M_1$ = {r['M1']:g}: $T$ = {r['T']}" for r in far),
+                 transform=ax2.transAxes, ha="right", va="top", fontsize=7)
+    xs = [r["M1"] for r in near] + [res["min_M1"]["prefix"]]
+    pad = 0.06 * (max(xs) - min(xs))
+    ax2.set_xlim(min(xs) - pad, max(xs) + pad)  # no marker on the frame
+    ax2.set_ylim(min([b for _, b in ok] + [6]) - 0.8, t_max + 1.8)
+    ax2.legend(fontsize=7, loc="lower left")
     ax2.set_xlabel("recovery level $M_1$")
     ax2.set_ylabel("minimum recovery time $T$")
     ax2.set_title("Minimum $T$ for $L_1$ (words extended by 1s)")
