@@ -93,23 +93,27 @@ def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
 
 
 def fig_regions(d: dict, names: dict, eta_bar: float, pdf: str, png: str) -> None:
-    """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example."""
+    """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example.
+
+    One colour scale for every panel (the same quantity) and one colour bar.
+    """
+    from matplotlib.colors import TwoSlopeNorm
+
     plt = _plt()
     exs = list(names)
-    fig, axes = plt.subplots(1, len(exs), figsize=(3.8 * len(exs), 3.2), layout="constrained")
-    for ax, ex in zip(np.atleast_1d(axes), exs):
-        ratio = d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1)
-        from matplotlib.colors import TwoSlopeNorm
-
-        # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
-        norm = TwoSlopeNorm(vcenter=1.0, vmin=min(0.8, np.nanmin(ratio)), vmax=max(1.2, np.nanmax(ratio)))
-        im = ax.pcolormesh(d["qlam"], d["qxi"], ratio, cmap="RdBu_r", norm=norm, shading="auto")
-        ax.contour(d["qlam"], d["qxi"], ratio, levels=[1.0], colors="k", linewidths=1.0)
+    ratios = {ex: d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1) for ex in exs}
+    lo = min(0.8, *(float(np.nanmin(r)) for r in ratios.values()))
+    hi = max(1.2, *(float(np.nanmax(r)) for r in ratios.values()))
+    # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
+    norm = TwoSlopeNorm(vcenter=1.0, vmin=lo, vmax=hi)
+    fig, axes = plt.subplots(1, len(exs), figsize=(3.6 * len(exs) + 0.8, 3.2), layout="constrained", squeeze=False)
+    for ax, ex in zip(axes[0], exs):
+        im = ax.pcolormesh(d["qlam"], d["qxi"], ratios[ex], cmap="RdBu_r", norm=norm, shading="auto")
+        ax.contour(d["qlam"], d["qxi"], ratios[ex], levels=[1.0], colors="k", linewidths=1.0)
         ax.set_xlabel(r"$Q_\lambda$")
-        if ax is np.atleast_1d(axes)[0]:
-            ax.set_ylabel(r"$Q_\xi$")
+        ax.set_ylabel(r"$Q_\xi$")
         ax.set_title(names[ex])
-        fig.colorbar(im, ax=ax, label="tr $P_{hold}$ / tr $P_{zero}$ (filter)")
+    fig.colorbar(im, ax=list(axes[0]), label="tr $P_{hold}$ / tr $P_{zero}$ (filter)")
     fig.suptitle(rf"hold-input vs zero-input filter, $\bar\eta = {eta_bar:g}$ "
                  "(< 1: hold-input better; black: equal)", fontsize=9)
     save_figure(fig, pdf, png)
