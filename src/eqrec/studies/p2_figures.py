@@ -72,7 +72,7 @@ def _polar_grid(g: pd.DataFrame, r_grid: np.ndarray, th_grid: np.ndarray, column
 
 def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=None, interval=None):
     """One filled polar map in the complex plane: optimal points coloured by ``column``, every other class
-    filled with its own colour; returns the mappable and the legend handles (with counts)."""
+    filled with its own colour; returns the mappable, the legend handles and the counts per class (text)."""
     from matplotlib import patheffects
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
@@ -83,13 +83,15 @@ def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=Non
     val = _polar_grid(g, r_grid, th_grid, column).astype(float)
     ok = status == "optimal"
     pm = ax.pcolormesh(X, Y, np.ma.masked_where(~ok, val), cmap=cmap, norm=norm, shading="flat")
-    handles = [Patch(facecolor=cmap(0.6), label=f"optimal: {int(ok.sum())}")]
+    handles = []  # the optimal points' colours are on the colour bar
+    counts = [f"optimal {int(ok.sum())}"]
     for cls, (color, label) in CLASS_STYLE.items():
         m = status == cls
         if m.any():
             ax.pcolormesh(X, Y, np.ma.masked_where(~m, np.ones(m.shape)), cmap=ListedColormap([color]),
                           shading="flat")
-        handles.append(Patch(facecolor=color, edgecolor="0.5", label=f"{label}: {int(m.sum())}"))
+            counts.append(f"{label} {int(m.sum())}")
+        handles.append(Patch(facecolor=color, edgecolor="0.5", label=label))
     if "observer" in g and (g["observer"] == "deadbeat").any():
         handles.append(plt.Line2D([], [], marker="*", ls="", color="magenta",
                                   label=f"r = 0: nilpotent L ({int((g['observer'] == 'deadbeat').sum())} points)"))
@@ -111,8 +113,9 @@ def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=Non
     ax.set_xlim(-r_grid[-1] * 1.02, r_grid[-1] * 1.02)
     ax.set_ylim(0, r_grid[-1] * 1.02)
     ax.set_xlabel(r"Re $\lambda$")
+    ax.set_ylabel(r"Im $\lambda$")
     ax.set_facecolor("white")
-    return pm, handles
+    return pm, handles, ", ".join(counts)
 
 
 def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
@@ -140,30 +143,38 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     norm = Normalize(vmin, vmax)
     cmap = plt.get_cmap("viridis")
     extra = "masked_gain" in variants and "certified_mu2" in df
-    ncol = len(variants) + int(extra)
-    f, axes = plt.subplots(1, ncol, figsize=(3.5 * ncol, 4.4), squeeze=False, layout="constrained")
-    axes = axes[0]
+    npanel = len(variants) + int(extra)
+    ncols = 2
+    nrows = (npanel + 1 + ncols - 1) // ncols  # one more cell for the legend
+    f, axes = plt.subplots(nrows, ncols, figsize=(7.4, 2.0 * nrows + 0.3), squeeze=False, layout="constrained")
+    axes = axes.ravel()
     pm = None
+    legend: dict[str, object] = {}
+    lp_axes = []
     for ax, var in zip(axes, variants):
         g = df[df["variant"] == var]
         mg = var == "masked_gain"  # the reading with a region: its edge and the published interval drawn
-        pm, handles = _heat_panel(ax, plt, g, r_grid, th_grid, "mu2", norm, cmap, outline_tol=tol if mg else None,
-                                  interval=printed.get("published_interval") if mg else None)
-        ax.set_title(f"{var} (word {g['word'].iloc[0]})\ndesign LP optimum $\\mu_2$", fontsize=8)
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.22), fontsize=6, frameon=False)
-    axes[0].set_ylabel(r"Im $\lambda$")
-    f.colorbar(pm, ax=list(axes[:len(variants)]), label=r"optimal $\mu_2$ (shared scale)", shrink=0.6,
-               location="top")
+        pm, handles, counts = _heat_panel(ax, plt, g, r_grid, th_grid, "mu2", norm, cmap,
+                                          outline_tol=tol if mg else None,
+                                          interval=printed.get("published_interval") if mg else None)
+        ax.set_title(f"{var}, word {g['word'].iloc[0]}\n{counts}", fontsize=8)
+        legend.update({h.get_label(): h for h in handles})
+        lp_axes.append(ax)
+    f.colorbar(pm, ax=lp_axes, label=r"design LP optimum $\mu_2$ (one scale)", shrink=0.8)
     if extra:
-        ax = axes[-1]
+        ax = axes[len(variants)]
         g = df[df["variant"] == "masked_gain"]
         c = g.loc[g["status"] == "optimal", "certified_mu2"].astype(float)
         norm2 = Normalize(float(c.min()), float(np.percentile(c, 95)))
-        pm2, handles = _heat_panel(ax, plt, g, r_grid, th_grid, "certified_mu2", norm2, plt.get_cmap("magma"))
-        ax.set_title("masked_gain gains run as the estimator\n(constant L kept): certified worst case", fontsize=8)
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.22), fontsize=6, frameon=False)
-        f.colorbar(pm2, ax=ax, label="certified worst case (clipped at 95th pct.)", shrink=0.6, location="top",
-                   extend="max")
+        pm2, handles, counts = _heat_panel(ax, plt, g, r_grid, th_grid, "certified_mu2", norm2,
+                                           plt.get_cmap("magma"))
+        ax.set_title(f"masked_gain gains as run (L kept)\n{counts}", fontsize=8)
+        legend.update({h.get_label(): h for h in handles})
+        f.colorbar(pm2, ax=ax, label="certified worst case\n(clipped at 95th pct.)", extend="max", shrink=0.9)
+    for ax in axes[npanel:]:
+        ax.axis("off")
+    axes[npanel].legend(handles=list(legend.values()), loc="center", fontsize=8, frameon=False,
+                        title="grid points (counts in each title)", title_fontsize=8)
     save_figure(f, outputs.pdf, outputs.png)
 
 
