@@ -44,8 +44,15 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     for j, (name, title, mu2, color) in enumerate(cols):
         trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, M1, mu2), title, color=color,
                          ylabels=(j == 0))
-    handles, labels = axes[0, 0].get_legend_handles_labels()
-    f.legend(handles, ["estimation error", "certified guarantee"], loc="outside lower center", ncol=2)
+    for i in range(axes.shape[0]):  # one scale per state across the estimators (the same quantity)
+        lim = max(abs(v) for ax in axes[i] for v in ax.get_ylim())
+        for ax in axes[i]:
+            ax.set_ylim(-lim, lim)
+    # one legend entry per estimator, in its own colour, and the bars
+    handles = [plt.Line2D([], [], color=color, lw=1.2) for _, _, _, color in cols]
+    labels = [f"error: {title.split(',')[0].split(' (')[0]}" for _, title, _, _ in cols]
+    bars = axes[0, 0].get_legend_handles_labels()[0][-1]
+    f.legend(handles + [bars], labels + ["certified guarantee"], loc="outside lower center", ncol=len(cols) + 1)
     f.suptitle(f"{'no missing data' if fig == 'f1' else 'language ' + str(d['language'])}: "
                f"{errs0.shape[0]} runs, same draws for every estimator")
     save_figure(f, outputs.pdf, outputs.png)
