@@ -15,6 +15,9 @@ from eqrec.studies import harness
 min_version("9.0")
 
 
+report: "workflow/report/workflow.rst"
+
+
 configfile: "config/config.yaml"
 configfile: "config/p2.yaml"
 configfile: "config/p3.yaml"

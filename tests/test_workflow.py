@@ -50,3 +50,8 @@ def test_report_builds_with_png_items_captions_and_no_machine_paths(tmp_path):
     assert sum(i.endswith(".png") for i in items) >= 10
     for name in ("claims.csv", "REPRODUCTION.md", "fig1_trajectories.png", "f3a_heatmap.png", "regions.png"):
         assert name in html
+    assert "The replication pipeline of the equalized-recovery" in html  # the workflow description
+    assert "{% if" not in html  # the captions' templates were rendered per item
+    for caption in ("P2-F1 (augmented paper, Fig. 1)", "P2-F2 (augmented paper, Fig. 2)", "P4-F7 (Fig. 7)",
+                    "P4-F8 (Fig. 8)"):  # one caption per figure, also where one rule draws two
+        assert caption in html, caption
