@@ -266,13 +266,10 @@ def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
 
 def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str) -> dict:
     """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
-    import dataclasses
-    import time
     from decimal import Decimal
 
     from eqrec.core.classes import ClassSet, full_language_counts
     from eqrec.core.patterns import as_language
-    from eqrec.design.classes import class_cost
     from eqrec.design.delay import (JSON_NODE_GAINS_LIMIT, delay_classes, delay_language, design_delay,
                                     design_delay_global, to_json)
 
@@ -326,27 +323,14 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     cost = args.cost or "sum"
     node_gains = True if args.node_gains else None
     if mu1 == "free":
-        # the global route (class LPs: mu1_min and the certified lower bound of J); the tree engine then
-        # designs at that mu1, which the class gains attain
-        free = design_delay_global(system, patterns, cost=cost, solver=args.solver,
-                                   node_gains=node_gains if engine == "classes" else False)
-        if engine == "tree":
-            t_tree = time.perf_counter()
-            tree_design = design_delay(system, patterns, free.mu1, cost=cost, solver=args.solver, engine="tree")
-            tree_design.extra.update({k: v for k, v in free.design.extra.items()
-                                      if k in ("mu1_free", "lower_bound", "mu1_min", "mu1_min_lower",
-                                               "mu1_binding")})
-            free = dataclasses.replace(free, design=tree_design, J=float(tree_design.extra["J"]), lps=free.lps + 1,
-                                       time=free.time + time.perf_counter() - t_tree)
+        free = design_delay_global(system, patterns, cost=cost, solver=args.solver, node_gains=node_gains,
+                                   engine=engine)
         design = free.design
     else:
         free = None
         design = design_delay(system, patterns, mu1, cost=cost, solver=args.solver, engine=engine,
                               node_gains=node_gains)
     out = to_json(design, free, node_gains=node_gains)
-    ccert = design.class_certificate
-    if out.get("J_certified") is None and ccert is not None:  # J from the class certificate (worst cases of K)
-        out["J_certified"] = class_cost(design.class_gains.classes, design.M1, ccert.levels, cost)
     out.update(solver=design.solution.solver, status=design.solution.status)
     if full:
         out.update(max_delay=args.max_delay, horizon=args.horizon)

@@ -149,10 +149,7 @@ def classes_of_tree(tree: PrefixTree) -> ClassSet:
     The weight of a class is the number of the tree's patterns (sequences of
     the reduced language) through its inner nodes.
     """
-    through = {node.index: 0 for node in tree}
-    for pat in tree.patterns:
-        for anc in tree.path(pat):
-            through[anc.index] += 1
+    through = tree.sequences_through()
     acc: dict[tuple, dict] = {}
     of_node: dict[int, tuple] = {}
     for node in tree:
@@ -277,6 +274,17 @@ class ClassGains:
     def gain(self, depth: int, available) -> np.ndarray:
         """``K`` of the class ``(depth, available)``."""
         return self.K[self.classes.index(depth, available)]
+
+    def estimate(self, depth: int, available, xbar: np.ndarray, residuals) -> np.ndarray:
+        r"""The class form :math:`\hat x(d) = \bar x(d) + K_{(d,S)}(y_S - \bar y_S)`.
+
+        ``residuals``: the :math:`y(\tau) - C(\tau)\bar x(\tau)` of the times in
+        ``available`` (increasing), each of length ``p``.  :class:`InputError` if
+        the language has no class ``(depth, available)``.
+        """
+        S = tuple(available)
+        K = self.gain(depth, S)
+        return xbar + K @ np.concatenate([np.asarray(r, float) for r in residuals]) if S else np.array(xbar, float)
 
     def to_json(self) -> dict:
         """``{"d:S": K}`` (``S`` as a 0/1 string over times ``0..d-1``)."""

@@ -299,17 +299,16 @@ class ClassEstimator(_StampedEstimator):
         sys = self.system
         k, t = self._intake(y)
         S = tuple(sorted(self._yxi))
+        u = np.zeros(sys.m) if u is None else np.asarray(u, float).reshape(-1)
+        xbar = sys.A_at(k) @ self._xbar + sys.B_at(k) @ u + sys.f
         try:
-            K = self.gains.K[self.gains.classes.index(t + 1, S)]
+            self.xhat = self.gains.estimate(t + 1, S, xbar, [self._yxi[tau] for tau in S])
         except InputError:
             raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
                              f"{self._start}, arrival prefix {self.observed_prefix.label!r}) the measurements of "
                              f"times {[self._start + tau for tau in S]} have arrived; the gains have no class "
                              f"({t + 1}, {list(S)})") from None
-        u = np.zeros(sys.m) if u is None else np.asarray(u, float).reshape(-1)
-        self._xbar = sys.A_at(k) @ self._xbar + sys.B_at(k) @ u + sys.f
-        resid = np.concatenate([self._yxi[tau] for tau in S]) if S else np.zeros(0)
-        self.xhat = self._xbar + K @ resid
+        self._xbar = xbar
         self._t += 1
         self._k += 1
         return self.xhat.copy()

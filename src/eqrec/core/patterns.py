@@ -421,6 +421,15 @@ class PrefixTree:
     def contains_prefix(self, prefix: "ArrivalPattern | str") -> bool:
         return self._key(prefix) in self.index_of
 
+    def sequences_through(self) -> dict[int, int]:
+        """Number of the language's patterns through each node (node index -> count): the weight of a node's
+        level in the delayed-data paper's sum cost."""
+        through = {node.index: 0 for node in self.nodes}
+        for pat in self.patterns:
+            for anc in self.path(pat):
+                through[anc.index] += 1
+        return through
+
 
 # ---------------------------------------------------------------------------
 # Event matrices and the zero patterns (7) of the delayed-data paper

@@ -160,6 +160,14 @@ class Stacking:
                 out[t * p:(t + 1) * p, t * n:(t + 1) * n] = self.system.C_at(t)
         return out
 
+    def word_CS(self, pattern: "ArrivalPattern | str") -> np.ndarray:
+        """``C̄ S`` of eqs. (1)-(2) for a pattern of length ``T_w <= T`` (padded with missing measurements),
+        restricted to its ``T_w p x T_w n`` block: what :func:`eqrec.core.gains.q_to_f` needs."""
+        pattern = as_pattern(pattern)
+        Tw, n, p = pattern.T, self.system.n, self.system.p
+        padded = ArrivalPattern(pattern.arrivals + (None,) * (self.T - Tw))
+        return (self.C_bar(padded) @ self.S)[: Tw * p, : Tw * n]
+
     def N(self, pattern: "ArrivalPattern | str") -> np.ndarray:
         """Eq. (14): ``blkdiag(q(t) V(t))``."""
         q = self.arrival_indicator(pattern)

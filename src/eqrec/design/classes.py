@@ -103,7 +103,7 @@ from eqrec.core.certify import CERT_RTOL
 from eqrec.core.classes import ClassGains, ClassSet, DataClass, class_maps, classes_of_tree
 from eqrec.core.gains import q_to_f, schedule_from_word_gains, GainSchedule
 from eqrec.core.lp import LinearProgram, LPSolution
-from eqrec.core.patterns import ArrivalPattern, PrefixTree
+from eqrec.core.patterns import PrefixTree
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
@@ -382,9 +382,7 @@ def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | No
                 cur[:, tau * p:(tau + 1) * p] = K[:, j * p:(j + 1) * p]
             Q[t * n:(t + 1) * n] = -cur + system.A_at(t) @ prev
             prev = cur
-        padded = ArrivalPattern(word.arrivals + (None,) * (st.T - Tw))
-        CS = (st.C_bar(padded) @ st.S)[: Tw * p, : Tw * n]
-        word_gains[word] = q_to_f(Q, np.zeros(Tw * n), CS)
+        word_gains[word] = q_to_f(Q, np.zeros(Tw * n), st.word_CS(word))
     return schedule_from_word_gains(tree, word_gains, n, p, time_based=time_based)
 
 
@@ -548,15 +546,14 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     sol = solve_lp(model.lp, solver, _default_options(solver))
     lps = 1
     if sol.status == "infeasible":
-        for i in term:  # name a terminal class and row that no gain contracts
-            for r in range(system.n):
-                one = build_class_lp(system, classes, None, kind="ratio", which=[i], stacking=st)
-                lps += 1
-                if solve_lp(one.lp, solver).status == "infeasible":
-                    cls = classes.classes[i]
-                    raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
-                                           f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
-                                           "initial error contract (min_k a(k) >= 1)")
+        for i in term:  # name a terminal class that no gain contracts (its LP holds all its rows)
+            one = build_class_lp(system, classes, None, kind="ratio", which=[i], stacking=st)
+            lps += 1
+            if solve_lp(one.lp, solver, _default_options(solver)).status == "infeasible":
+                cls = classes.classes[i]
+                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
+                                       f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
+                                       "initial error contract (min_k a(k) >= 1)")
         raise InfeasibleDesign("no recovery level is feasible (the terminal ratio LP is infeasible)")
     sol.require_optimal("the smallest recovery level (Charnes-Cooper LP)")
     gains = read_class_gains(system, classes, model, sol)

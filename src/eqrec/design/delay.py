@@ -77,13 +77,13 @@ from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_language, full_delay_language, parse_delay_word
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import MU1_LOWER_RTOL, MinRecoveryLevel, class_cost, class_design, solve_classes
+from eqrec.design.classes import (COSTS, MU1_LOWER_RTOL, MinRecoveryLevel, _check_cost, check_terminal, class_cost,
+                                  class_design, solve_classes)
 from eqrec.design.classes import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
-COSTS = ("sum", "max")
 ENGINES = ("classes", "tree")
 
 
@@ -111,12 +111,6 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     return classes_of_full_language(int(horizon), int(max_delay))
 
 
-def _check_cost(cost: str) -> str:
-    if cost not in COSTS:
-        raise InputError(f"unknown cost {cost!r}; choose one of {list(COSTS)}", field="cost")
-    return cost
-
-
 def _check_engine(engine: str) -> str:
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}", field="engine")
@@ -140,11 +134,7 @@ def _classes(patterns) -> ClassSet:
 
 def node_weights(tree: PrefixTree) -> dict[int, int]:
     """Number of sequences of the (reduced) language through each node."""
-    through = {node.index: 0 for node in tree}
-    for pat in tree.patterns:
-        for anc in tree.path(pat):
-            through[anc.index] += 1
-    return through
+    return tree.sequences_through()
 
 
 def cost_weights(tree: PrefixTree, cost: str = "sum") -> tuple[float, dict[int, float]]:
@@ -431,9 +421,11 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
     """
     _check_cost(cost)
     classes = _classes(patterns)
-    sol = solve_classes(system, classes, float(mu1), solver=solver)
-    term = [lv for c, lv in zip(classes.classes, sol.levels) if c.terminal]
-    return "optimal" if max(term, default=0.0) <= float(mu1) * (1 + 1e-6) else "infeasible"
+    try:
+        check_terminal(classes, solve_classes(system, classes, float(mu1), solver=solver))
+    except InfeasibleDesign:
+        return "infeasible"
+    return "optimal"
 
 
 def _fixed_mu1_lp(system: AffineSystem, tree: PrefixTree, mu1: float, cost: str, form: str = "split") -> PrefixLP:
@@ -458,14 +450,17 @@ def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
 
 def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", solver: str = "highs",
                         rtol: float = MU1_LOWER_RTOL, certify: bool = True,
-                        node_gains: bool | None = None) -> FreeMu1Result:
+                        node_gains: bool | None = None, engine: str = "classes") -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
 
     By the μ1-free theorem (:mod:`eqrec.design.classes`) ``J`` is
     nondecreasing on the feasible set ``[μ1,min, ∞)``; ``μ1,min`` comes from
     one Charnes–Cooper LP.  ``rtol`` places the certified infeasible level
     ``lower = μ1,min (1 - rtol)``; ``lower_bound`` is ``J`` with every
-    class at its optimum there (no feasible ``μ1`` gives less).
+    class at its optimum there (no feasible ``μ1`` gives less).  ``engine``
+    designs at ``μ1,min`` with the class engine or the tree LP (same optimum,
+    possibly other optimal gains; ``μ1,min`` and the bound always come from
+    the classes).
 
     Returns
     -------
@@ -475,10 +470,17 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
     """
     _check_cost(cost)
     t_start = time.perf_counter()
+    _check_engine(engine)
     classes = _classes(patterns)
     mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)
-    design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
-                          node_gains=node_gains)
+    if engine == "tree":
+        if classes.tree is None:
+            raise InputError("the tree engine needs the language's words (a prefix tree)", field="engine")
+        design = design_delay(system, classes.tree, mm.upper, cost=cost, solver=solver, certify=certify,
+                              engine="tree")
+    else:
+        design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
+                              node_gains=node_gains)
     lower_bound = np.nan
     if np.isfinite(mm.lower):
         low = solve_classes(system, classes, mm.lower, solver=solver)

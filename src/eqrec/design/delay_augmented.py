@@ -231,10 +231,7 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
         measured[node.index] = taus
         m_cols[node.index] = b.add_variables(n * p * len(taus), name=f"M[{node.label}]")
         nu_cols[node.index] = b.add_variables(n, name=f"nu[{node.label}]")
-    through = {node.index: 0 for node in tree}
-    for pat in tree.patterns:
-        for anc in tree.path(pat):
-            through[anc.index] += 1
+    through = tree.sequences_through()
     level_cols = {}
     for node in tree:
         if not node.terminal and levels == "sum":

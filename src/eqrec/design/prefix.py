@@ -148,10 +148,7 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     level_const, level_coef, row_level_col = [], [], []
     node_level: dict[int, int] = {}
     if levels != "common":
-        through = {node.index: 0 for node in tree}
-        for pat in tree.patterns:
-            for anc in tree.path(pat):
-                through[anc.index] += 1
+        through = tree.sequences_through()
         for node in tree:
             if node.terminal:
                 continue  # its rows are bounded by M1
@@ -255,11 +252,8 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
     sys = st.system
     word_gains = {}
     for word in model.tree.patterns:
-        Tw = word.T
         Q, r = word_Q_r(model, solution.x, word)
-        padded = ArrivalPattern(word.arrivals + (None,) * (st.T - Tw))
-        CS = (st.C_bar(padded) @ st.S)[: Tw * sys.p, : Tw * sys.n]
-        word_gains[word] = q_to_f(Q, r, CS)
+        word_gains[word] = q_to_f(Q, r, st.word_CS(word))
     return schedule_from_word_gains(model.tree, word_gains, sys.n, sys.p, time_based=time_based)
 
 

@@ -123,8 +123,10 @@ def peak_memory_mb() -> float:
 
 
 def class_count(T: int, tau: int) -> int:
-    """Classes of ``{0..τ̄}^T``: ``Σ_{d=1}^{T} 2^min(τ̄, d)`` (window rule, :mod:`eqrec.core.classes`)."""
-    return sum(2 ** min(int(tau), d) for d in range(1, int(T) + 1))
+    """Classes of ``{0..τ̄}^T`` (``Σ_{d=1}^{T} 2^min(τ̄, d)``), from the window rule of :mod:`eqrec.core.classes`."""
+    from eqrec.core.classes import classes_of_full_language
+
+    return len(classes_of_full_language(int(T), int(tau)))
 
 
 def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: float, time_limit: float,

@@ -109,12 +109,11 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
             return xbar.copy(), design.M1
         S = tuple(int(i) for i in np.flatnonzero(arrived[:t]))
         try:
-            i = classes.index(t, S)
+            xhat = gains.estimate(t, S, xbar, innov[list(S)])
         except InputError:
             raise InputError(f"the measurements {list(S)} of the first {t} steps of a period are not an arrival "
                              "pattern of the design's language", field="arrived") from None
-        xhat = xbar + gains.K[i] @ innov[list(S)].reshape(-1) if S else xbar.copy()
-        return xhat, float(cert.levels[i])
+        return xhat, float(cert.levels[classes.index(t, S)])
 
     def update(_t, x, u, _params):
         xbar, innov, arrived, t = unpack(np.asarray(x, float))
