@@ -51,6 +51,8 @@ for _section in harness.SECTIONS:
 # Each rules file appends the values.json its analysis writes; the claims
 # table (claims.smk, included last) needs all of them.
 VALUES_FILES = []
+# ... and the values files of its timings (results/timings/), for the timing claims.
+TIMING_VALUES_FILES = []
 
 
 include: "workflow/rules/common.smk"

@@ -146,7 +146,7 @@ def test_deadbeat_observer_where_place_poles_refuses(acc):
 def printed_L():
     from pathlib import Path
 
-    from eqrec.studies.p2 import published_value
+    from eqrec.studies.claims import published_value
 
     return np.asarray(published_value(Path(__file__).resolve().parents[1] / "config" / "claims.yaml", "P2-F2:L"),
                       float)

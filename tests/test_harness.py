@@ -1,5 +1,7 @@
 """The study harness: registry, configuration with schema defaults, atomic writers, logs and exit status."""
 import ast
+import copy
+import json
 import re
 from pathlib import Path
 from types import SimpleNamespace
@@ -84,6 +86,39 @@ def test_cli_values_get_the_types_their_schema_wants():
     config = {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}
     harness.type_cli_config(config, {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}, ROOT)
     assert config["p1"] == {"mu1": 1.5, "language": ["1011"], "timing_repeats": 3}
+
+
+def test_cli_values_under_a_ref_with_own_properties_get_their_types():
+    """p4.sweep_eta is ``$ref: grid`` plus its own ``properties`` (lo, hi): chunks keeps the grid's integer type
+    (the SLURM profile sets it with --config)."""
+    config = {"p4": {"sweep_eta": {"lo": "0.2", "chunks": "3"}, "sweep_q": {"chunks": "7"}}}
+    harness.type_cli_config(config, copy.deepcopy(config), ROOT)
+    assert config["p4"] == {"sweep_eta": {"lo": 0.2, "chunks": 3}, "sweep_q": {"chunks": 7}}
+
+
+# --------------------------------------------------------------------------- timings
+
+def test_write_json_puts_timings_in_their_own_file_and_read_json_puts_them_back(tmp_path):
+    data = {"mu2": 1.5, "timing": {"solve_s": 0.01, "iterations": 17}, "rows": [{"wall_time": 2.0, "J": 3.0}, {"J": 4.0}],
+            "worst_time": 3}  # worst_time is a time index, a result
+    out, timed = tmp_path / "r.json", tmp_path / "timings" / "r.json"
+    harness.write_json(out, data, timings=timed)
+    assert json.loads(out.read_text()) == {"mu2": 1.5, "timing": {"iterations": 17}, "rows": [{"J": 3.0}, {"J": 4.0}],
+                                           "worst_time": 3}
+    assert json.loads(timed.read_text()) == {"timing": {"solve_s": 0.01}, "rows": [{"wall_time": 2.0}, None]}
+    assert harness.read_json(out, timings=timed) == data
+
+
+def test_a_step_cannot_write_a_timing_next_to_the_results(tmp_path):
+    with pytest.raises(harness.StepError, match="solve_time"):
+        harness.write_json(tmp_path / "r.json", {"a": {"solve_time": 0.1}})
+    assert not (tmp_path / "r.json").exists()
+    frame = pd.DataFrame({"r": [0.0, 1.0], "mu2": [1.0, 2.0], "solve_time": [0.1, 0.2]})
+    with pytest.raises(harness.StepError, match="solve_time"):
+        harness.write_csv(tmp_path / "t.csv", frame)
+    harness.write_csv(tmp_path / "t.csv", frame, timings=tmp_path / "tt.csv", keys=["r"])
+    assert (tmp_path / "t.csv").read_text() == "r,mu2\n0.0,1.0\n1.0,2.0\n"
+    assert (tmp_path / "tt.csv").read_text() == "r,solve_time\n0.0,0.1\n1.0,0.2\n"
 
 
 def test_code_inputs_follow_the_imports_of_each_study():

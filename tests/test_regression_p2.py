@@ -4,6 +4,7 @@ Tolerances: optimal levels 1e-6 relative (LP / IPOPT optimum); heat-map rows 1e-
 certified worst case of a point's gains, which amplifies the LP's last digits),
 status identical.
 """
+import copy
 import json
 from pathlib import Path
 
@@ -37,14 +38,29 @@ def test_time_and_augmented_lp_levels(values, fig, words):
     assert a.certificate.mu2 <= a.mu2 * (1 + 1e-6)
 
 
-def test_heatmap_chunk_matches_stored(tmp_path):
+def _theta_zero_chunk(tmp_path) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The heat map's first θ (θ = 0: one chunk of ``n_theta`` chunks), every variant, recomputed, and the
+    stored rows of ``heatmap.csv`` at that θ, in the same order."""
+    cfg = copy.deepcopy(CFG)
+    cfg["heatmap"]["chunks"] = cfg["heatmap"]["n_theta"]
     out = tmp_path / "chunk.csv"
-    harness.run_step("p2", "heatmap_chunk", CFG, outputs={"csv": out}, wildcards={"variant": "theorem2", "chunk": 0})
-    fresh = pd.read_csv(out)
-    stored = pd.read_csv(RES / "heatmap" / "theorem2_0.csv")
-    assert list(fresh["status"]) == list(stored["status"])
+    harness.run_step("p2", "heatmap_chunk", cfg, outputs={"csv": out}, wildcards={"chunk": 0})
+    fresh = pd.read_csv(out).sort_values(["variant", "r"], kind="stable").reset_index(drop=True)
+    stored = pd.read_csv(RES / "heatmap.csv")
+    stored = stored[stored["theta"] == 0.0].sort_values(["variant", "r"], kind="stable").reset_index(drop=True)
+    return fresh, stored
+
+
+def test_heatmap_chunk_matches_stored(tmp_path):
+    """Every variant at θ = 0: the same classes, observers, optima and certified worst cases as stored."""
+    fresh, stored = _theta_zero_chunk(tmp_path)
+    assert len(fresh) == len(stored) == CFG["heatmap"]["n_r"] * len(CFG["heatmap"]["variants"])
+    for col in ("variant", "status", "observer"):
+        assert list(fresh[col]) == list(stored[col]), col
     ok = fresh["status"] == "optimal"
+    assert ok.any()
     np.testing.assert_allclose(fresh.loc[ok, "mu2"], stored.loc[ok, "mu2"], rtol=1e-6)
+    np.testing.assert_allclose(fresh.loc[ok, "certified_mu2"], stored.loc[ok, "certified_mu2"], rtol=1e-5)
 
 
 def test_printed_L_step_matches_stored(tmp_path):
@@ -96,12 +112,3 @@ def test_stored_counts_add_up_to_the_grid(values):
     assert len(hm) == grid * len(variants)
 
 
-def test_heatmap_chunk_certified_matches_stored(tmp_path):
-    out = tmp_path / "chunk.csv"
-    harness.run_step("p2", "heatmap_chunk", CFG, outputs={"csv": out}, wildcards={"variant": "masked_gain", "chunk": 0})
-    fresh = pd.read_csv(out)
-    stored = pd.read_csv(RES / "heatmap" / "masked_gain_0.csv")
-    assert list(fresh["status"]) == list(stored["status"]) and list(fresh["observer"]) == list(stored["observer"])
-    ok = fresh["status"] == "optimal"
-    np.testing.assert_allclose(fresh.loc[ok, "mu2"], stored.loc[ok, "mu2"], rtol=1e-6)
-    np.testing.assert_allclose(fresh.loc[ok, "certified_mu2"], stored.loc[ok, "certified_mu2"], rtol=1e-5)

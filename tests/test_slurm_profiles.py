@@ -87,36 +87,35 @@ slurm_compare = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(slurm_compare)
 
 
-def _tree(base: Path, mu2=1.149819, solve_s=0.01, cell="1.7370933", claim_s="0.0183", reason="build 4.0 ms",
-          png=b"a", npz=1.0, extra=False) -> Path:
+def _tree(base: Path, mu2=1.149819, solve_s=0.01, png=b"a", npz=1.0, extra=False, extra_timing=False) -> Path:
+    """A results tree: numbers, a table, a figure, arrays, and the measured values under timings/."""
     (base / "p1").mkdir(parents=True)
-    (base / "p1" / "designs.json").write_text(json.dumps(
-        {"prefix": {"mu2": mu2, "solve_s": solve_s, "status": "optimal", "words": ["101111"]}}))
-    (base / "p1" / "sweep.csv").write_text(f"variant,mu2,time\nleak,{cell},{solve_s}\n")
-    (base / "claims.csv").write_text(
-        "id,quantity,paper_value,our_value,status,reason\n"
-        f"P1-M2,optimal M2,1.1490,{mu2},differs,LP optimum {mu2}\n"
-        f"P1-TIME,solve time [s],0.11,{claim_s},not comparable,\"HiGHS; {reason}\"\n")
-    (base / "REPRODUCTION.md").write_text(f"| P1-TIME | solve time [s] | 0.11 | {claim_s} | x |\n| M2 | {mu2} |\n")
+    (base / "timings" / "p1").mkdir(parents=True)
+    (base / "p1" / "designs.json").write_text(json.dumps({"prefix": {"mu2": mu2, "words": ["101111"]}}))
+    (base / "timings" / "p1" / "designs.json").write_text(json.dumps({"prefix": {"solve_s": solve_s}}))
+    (base / "claims.csv").write_text(f"id,our_value\nP1-M2,{mu2}\n")
     (base / "p1" / "fig.png").write_bytes(png)
     np.savez(base / "p1" / "sim.npz", e=np.array([0.5, npz]))
     if extra:
         (base / "p1" / "extra.json").write_text("{}")
+    if extra_timing:
+        (base / "timings" / "p1" / "extra.json").write_text("{}")
     return base
 
 
-def test_compare_ignores_timings_and_figure_bytes(tmp_path):
+def test_compare_ignores_only_the_values_under_timings(tmp_path):
     a = _tree(tmp_path / "a")
-    b = _tree(tmp_path / "b", solve_s=0.5, claim_s="0.0291", reason="build 7.5 ms", png=b"b", npz=1.0 + 1e-13)
+    b = _tree(tmp_path / "b", solve_s=0.5)
     assert slurm_compare.compare_trees(a, b) == []
     assert slurm_compare.main([str(a), str(b)]) == 0
 
 
 @pytest.mark.parametrize("change,where", [
-    (dict(mu2=1.149820), "designs.json"),
-    (dict(cell="1.7370934"), "sweep.csv"),
-    (dict(npz=1.001), "sim.npz"),
+    (dict(mu2=1.149820), "p1/designs.json: line 1"),
+    (dict(npz=1.0 + 1e-13), "p1/sim.npz: bytes differ"),  # byte for byte: no tolerance
+    (dict(png=b"b"), "p1/fig.png"),                       # figures too (fixed metadata)
     (dict(extra=True), "only in"),
+    (dict(extra_timing=True), "timings/p1/extra.json: only in"),  # the same timing files
 ])
 def test_compare_reports_differences(tmp_path, change, where):
     a = _tree(tmp_path / "a")
@@ -126,23 +125,9 @@ def test_compare_reports_differences(tmp_path, change, where):
     assert slurm_compare.main([str(a), str(b)]) == 1
 
 
-def _scale(base: Path, build=0.07, peak=200, cols=59112, worst_time=3) -> Path:
-    """A scale-table row as JSON, CSV and Markdown: measurements (times, peak memory) and sizes."""
-    (base / "p3").mkdir(parents=True)
-    (base / "p3" / "row.json").write_text(json.dumps(
-        {"cols": cols, "build_time": build, "classes_time": build, "peak_mb": peak, "worst_time": worst_time}))
-    (base / "p3" / "table.csv").write_text(f"T,cols,build_time,peak_mb\n30,{cols},{build},{peak}\n")
-    (base / "p3" / "table.md").write_text(
-        "# scale\n\n| T | LP cols | build [s] | peak [MB] | status |\n|---|---|---|---|---|\n"
-        f"| 30 | {cols} | {build} | {peak} | optimal |\n\nafter the table: {cols}\n")
-    return base
-
-
-def test_compare_ignores_measured_columns_of_the_scale_table(tmp_path):
-    a = _scale(tmp_path / "a")
-    assert slurm_compare.compare_trees(a, _scale(tmp_path / "b", build=0.11, peak=260)) == []
-    diffs = slurm_compare.compare_trees(a, _scale(tmp_path / "c", cols=59113))
-    assert len(diffs) == 3 and all(any(d.startswith(f) for d in diffs)
-                                   for f in ("p3/row.json", "p3/table.csv", "p3/table.md")), diffs
-    # a time index is a value, not a timing
-    assert slurm_compare.compare_trees(a, _scale(tmp_path / "d", worst_time=4))
+def test_compare_subset_allows_extra_reference_files(tmp_path):
+    a = _tree(tmp_path / "a", extra=True)  # e.g. a committed target outside the run
+    b = _tree(tmp_path / "b")
+    assert slurm_compare.compare_trees(a, b) and slurm_compare.compare_trees(a, b, subset=True) == []
+    assert slurm_compare.main([str(a), str(b), "--subset"]) == 0
+    assert slurm_compare.compare_trees(b, a, subset=True)  # but not files the reference lacks

@@ -8,6 +8,7 @@ rule claims:
     input:
         claims="config/claims.yaml",
         values=VALUES_FILES,
+        timings=TIMING_VALUES_FILES,
         code=CLAIMS_CODE,
     output:
         csv=report(
@@ -18,6 +19,7 @@ rule claims:
             caption="../report/reproduction.rst",
             category="Claims",
         ),
+        timings="results/timings/claims.csv",
     log:
         "logs/claims.log",
     params:

@@ -17,9 +17,14 @@ from eqrec.studies.harness import code_inputs, section_params
 # numbers live), for rules that evaluate the paper's own design or draw a published
 # value for comparison (P2: the printed gain L, the Fig. 3b interval). As a param,
 # the rule reruns when that value changes, not on other edits of claims.yaml.
-from eqrec.studies.p2 import published_value
+from eqrec.studies.claims import published_value
 
 CLAIMS_FILE = "config/claims.yaml"
+
+
+def timings_of(paths):
+    """The timings file (under results/timings/) a step writes beside each of its results files."""
+    return [p.replace("results/", "results/timings/", 1) for p in paths]
 
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"

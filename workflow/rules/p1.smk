@@ -3,6 +3,7 @@
 P1_CODE = code_inputs("p1")
 P1_CFG = section_params(config, "p1")
 VALUES_FILES.append("results/p1/values.json")
+TIMING_VALUES_FILES.append("results/timings/p1/values.json")
 
 
 rule p1_model:
@@ -27,6 +28,7 @@ rule p1_designs:
         code=P1_CODE,
     output:
         json="results/p1/designs.json",
+        timings="results/timings/p1/designs.json",
     log:
         "logs/p1/designs.log",
     params:
@@ -118,11 +120,13 @@ rule p1_values:
     input:
         model="results/p1/model.json",
         designs="results/p1/designs.json",
+        designs_timings="results/timings/p1/designs.json",
         simulation="results/p1/simulation.npz",
         extensions="results/p1/extensions.json",
         code=P1_CODE,
     output:
         json="results/p1/values.json",
+        timings="results/timings/p1/values.json",
     log:
         "logs/p1/values.log",
     params:

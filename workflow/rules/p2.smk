@@ -6,8 +6,6 @@ P2_CODE = code_inputs("p2")
 P2_CFG = section_params(config, "p2")
 VALUES_FILES.append("results/p2/values.json")
 
-P2_VARIANTS = config["p2"]["heatmap"]["variants"]
-
 
 P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
 
@@ -18,6 +16,7 @@ rule p2_designs:
         code=P2_CODE,
     output:
         json="results/p2/designs.json",
+        timings="results/timings/p2/designs.json",
         npz="results/p2/designs.npz",
     log:
         "logs/p2/designs.log",
@@ -47,13 +46,13 @@ rule p2_simulate:
 
 
 rule p2_heatmap_chunk:
-    """P2-F3a: one theta-chunk of the eigenvalue sweep of one variant (one LP built, L values updated)."""
+    """P2-F3a: one theta-chunk of the eigenvalue sweep, every variant (one LP per variant, L values updated)."""
     input:
         code=P2_CODE,
     output:
-        csv="results/p2/heatmap/{variant}_{chunk}.csv",
+        csv=temp("results/p2/heatmap/chunk_{chunk}.csv"),
     log:
-        "logs/p2/heatmap_{variant}_{chunk}.log",
+        "logs/p2/heatmap_chunk_{chunk}.log",
     wildcard_constraints:
         chunk=r"\d+",
     params:
@@ -67,14 +66,11 @@ rule p2_heatmap_chunk:
 rule p2_heatmap_merge:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
-        chunks=expand(
-            "results/p2/heatmap/{variant}_{chunk}.csv",
-            variant=P2_VARIANTS,
-            chunk=P2_CHUNKS,
-        ),
+        chunks=expand("results/p2/heatmap/chunk_{chunk}.csv", chunk=P2_CHUNKS),
         code=P2_CODE,
     output:
         csv="results/p2/heatmap.csv",
+        timings="results/timings/p2/heatmap.csv",
     log:
         "logs/p2/heatmap_merge.log",
     params:
@@ -91,6 +87,7 @@ rule p2_realaxis:
         code=P2_CODE,
     output:
         csv="results/p2/realaxis.csv",
+        timings="results/timings/p2/realaxis.csv",
     log:
         "logs/p2/realaxis.log",
     params:
@@ -107,6 +104,7 @@ rule p2_checks:
         code=P2_CODE,
     output:
         json="results/p2/checks.json",
+        timings="results/timings/p2/checks.json",
     log:
         "logs/p2/checks.log",
     params:

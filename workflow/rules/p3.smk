@@ -46,6 +46,7 @@ rule p3_reactor_designs:
         code=P3_CODE,
     output:
         json="results/p3/reactor_designs.json",
+        timings="results/timings/p3/reactor_designs.json",
     log:
         "logs/p3/reactor_designs.log",
     params:
@@ -118,6 +119,7 @@ rule p3_acc:
         code=P3_CODE,
     output:
         json="results/p3/acc.json",
+        timings="results/timings/p3/acc.json",
     log:
         "logs/p3/acc.log",
     params:
@@ -212,6 +214,7 @@ rule p3_strategy:
     output:
         npz="results/p3/strategy.npz",
         values="results/p3/strategy_values.json",
+        timings="results/timings/p3/strategy_values.json",
     log:
         "logs/p3/strategy.log",
     params:
@@ -250,6 +253,7 @@ rule p3_scale_size:
         code=P3_CODE,
     output:
         json="results/p3/scale/T{T}_tau{tau}.json",
+        timings="results/timings/p3/scale/T{T}_tau{tau}.json",
     log:
         "logs/p3/scale_T{T}_tau{tau}.log",
     wildcard_constraints:
@@ -269,6 +273,7 @@ rule p3_scale_class_size:
         code=P3_CODE,
     output:
         json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
+        timings="results/timings/p3/scale/{engine}_T{T}_tau{tau}.json",
     log:
         "logs/p3/scale_{engine}_T{T}_tau{tau}.log",
     wildcard_constraints:
@@ -287,9 +292,12 @@ rule p3_scale_table:
     """Scale table of the default run: the tree LP at the fast sizes next to the class engine (CSV and Markdown)."""
     input:
         sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES)),
+        timings=timings_of(list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))),
         code=P3_CODE,
     output:
         csv="results/p3/scale_table.csv",
+        timings_csv="results/timings/p3/scale_table.csv",
+        timings_md="results/timings/p3/scale_table.md",
         md=report(
             "results/p3/scale_table.md",
             caption="../report/p3_scale.rst",
@@ -309,10 +317,15 @@ rule p3_scale_table_full:
     """Full scale table: the default run's rows and the slow tree sizes (CSV and Markdown)."""
     input:
         sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)),
+        timings=timings_of(
+            list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES))
+        ),
         code=P3_CODE,
     output:
         csv="results/p3/scale_table_full.csv",
         md="results/p3/scale_table_full.md",
+        timings_csv="results/timings/p3/scale_table_full.csv",
+        timings_md="results/timings/p3/scale_table_full.md",
     log:
         "logs/p3/scale_table_full.log",
     params:

@@ -50,6 +50,7 @@ rule p4_mc:
     output:
         npz="results/p4/mc_{example}.npz",
         json="results/p4/mc_{example}.json",
+        timings="results/timings/p4/mc_{example}.json",
     log:
         "logs/p4/mc_{example}.log",
     params:
@@ -65,7 +66,7 @@ rule p4_sweep_eta_chunk:
     input:
         code=P4_CODE,
     output:
-        npz="results/p4/sweep_eta/chunk{chunk}.npz",
+        npz=temp("results/p4/sweep_eta/chunk{chunk}.npz"),
     log:
         "logs/p4/sweep_eta_{chunk}.log",
     wildcard_constraints:
@@ -83,7 +84,7 @@ rule p4_sweep_q_chunk:
     input:
         code=P4_CODE,
     output:
-        npz="results/p4/sweep_q/chunk{chunk}.npz",
+        npz=temp("results/p4/sweep_q/chunk{chunk}.npz"),
     log:
         "logs/p4/sweep_q_{chunk}.log",
     wildcard_constraints:

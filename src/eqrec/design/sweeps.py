@@ -31,7 +31,7 @@ from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import schedule_from_augmented
 from eqrec.design.classes import MinRecoveryLevel, min_recovery_level
-from eqrec.design.observers import deadbeat_observer, place_observer
+from eqrec.design.observers import PolePlacement, deadbeat_observer, place_observer
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign
@@ -120,7 +120,7 @@ def observer_for(system: AffineSystem, poles: np.ndarray, seed: int = 0):
 def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_list: Iterable[np.ndarray],
                   solver: str = "highs", on_point: Callable[[], None] | None = None,
                   second_solver: str | None = "clarabel", certify_runtime: str | None = None,
-                  deadbeat_seed: int = 0) -> list[dict]:
+                  deadbeat_seed: int = 0, observers: Sequence[tuple[PolePlacement, str]] | None = None) -> list[dict]:
     """Optimal ``μ2`` of the augmented LP (``s0 = 0``, ``L`` by pole placement) for each pole set.
 
     Each record has ``status`` (``optimal``, ``infeasible``, ``placement_failed``
@@ -128,19 +128,27 @@ def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_l
     solved), ``message``, ``observer`` (``place_poles`` / ``deadbeat``, see
     :func:`observer_for`), ``solver`` (whose answer the status is),
     ``status_first`` and ``status_second`` (the second solver's status, empty
-    when the first was definitive: ``optimal`` or ``infeasible``) and ``time``.
+    when the first was definitive: ``optimal`` or ``infeasible``) and ``solve_time`` (seconds: LP and certificate).
     A point the first solver leaves undecided (e.g. HiGHS ``Unknown``) is
     re-solved with ``second_solver``; ``solver_failed`` means neither decided.
 
     With ``certify_runtime`` (``"theorem2"`` or ``"hold"``) the optimal gains are
     also certified as the estimator that runs (:func:`eqrec.core.certify.certify_schedule`
     on ``word``): ``certified_mu2`` and ``certified_terminal`` (``nan`` when not optimal).
+
+    ``observers``: the :func:`observer_for` result of each pole set, when the
+    caller has them already (a sweep of several words or readings over the same
+    pole sets places each ``L`` once).
     """
     model = None
     rows = []
-    for poles in poles_list:
+    poles_list = list(poles_list)
+    if observers is None:
+        observers = [observer_for(system, poles, deadbeat_seed) for poles in poles_list]
+    if len(observers) != len(poles_list):
+        raise ValueError(f"{len(observers)} observers for {len(poles_list)} pole sets")
+    for poles, (pp, how) in zip(poles_list, observers):
         t0 = time.perf_counter()
-        pp, how = observer_for(system, poles, deadbeat_seed)
         rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message, "observer": how,
                "solver": "", "status_first": "", "status_second": ""}
         if certify_runtime:
@@ -165,7 +173,7 @@ def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_l
                 cert = certify_schedule(system, schedule_from_augmented(system, model.gains(sol), certify_runtime),
                                         [word], M1)
                 rec.update(certified_mu2=cert.mu2, certified_terminal=cert.terminal)
-        rec["time"] = time.perf_counter() - t0
+        rec["solve_time"] = time.perf_counter() - t0
         rows.append(rec)
         if on_point is not None:
             on_point()

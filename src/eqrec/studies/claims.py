@@ -41,24 +41,33 @@ renders it for reading.  Comparison kinds:
 ``array``     nested lists compared entry-wise with ``atol``.
 ``text``      exact (case-insensitive) match, e.g. "hold-input".
 ``none``      not comparable (e.g. solve times on other hardware); ``why`` says why.
+
+A claim whose ``value`` starts with ``timings/`` (a measured time, under
+``results/timings/``) changes from run to run: ``claims.csv`` and
+``REPRODUCTION.md`` give, in its place, where it is, and the row in full goes
+to ``results/timings/claims.csv``.
 """
 
 from __future__ import annotations
 
 import ast
+import copy
+import functools
 import json
 import math
 import operator
 from decimal import Decimal
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
 import numpy as np
-import pandas as pd
 import yaml
 
 from eqrec.errors import InputError
 from eqrec.studies.harness import get_logger, write_csv, write_text
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 log = get_logger("claims")
 
@@ -332,6 +341,20 @@ def load_claims(path: str | Path) -> list[dict]:
     return data
 
 
+def published_value(claims_path: str | Path, claim_id: str) -> Any:
+    """The paper's value of one claim of ``config/claims.yaml`` (the only place published numbers live)."""
+    path = Path(claims_path)
+    for entry in _loaded_claims(path, path.stat().st_mtime_ns):
+        if entry["id"] == claim_id:
+            return copy.deepcopy(entry["paper_value"])
+    raise InputError(f"{claims_path} has no claim {claim_id!r}", field="printed")
+
+
+@functools.lru_cache(maxsize=4)
+def _loaded_claims(path: Path, mtime_ns: int) -> list[dict]:
+    return load_claims(path)
+
+
 def default_atol(paper_value: Any) -> float:
     """Half a unit in the last printed digit of a published number."""
     d = Decimal(str(paper_value))
@@ -437,8 +460,10 @@ def _values_file(values: Mapping[str, str | Path] | str | Path, ref_file: str) -
         if not path.is_file():
             raise FileNotFoundError(f"results file {path} needed by a claim does not exist")
         return path
-    for p in values:
-        if Path(p).as_posix().endswith("/" + ref_file) or Path(p).as_posix() == ref_file:
+    for p in values:  # ``p1/values.json`` is results/p1/values.json, not results/timings/p1/values.json
+        pos = Path(p).as_posix()
+        if pos == ref_file or (pos.endswith("/" + ref_file)
+                               and not pos[: -len(ref_file)].endswith("/" + TIMINGS_PREFIX)):
             return Path(p)
     raise FileNotFoundError(f"values file {ref_file} needed by a claim is not among the inputs {list(values)}")
 
@@ -455,6 +480,17 @@ def _lookup_value(values, ref: str, cache: dict) -> tuple[Any, dict]:
     if isinstance(item, dict) and "value" in item:
         return item["value"], dict(item.get("evidence") or {})
     return item, {}
+
+
+#: A claim whose value lives under ``results/timings/`` (``value: timings/p1/values.json#...``) is a
+#: measurement that changes from run to run: ``claims.csv`` and ``REPRODUCTION.md`` name where it is,
+#: and the row in full goes to ``results/timings/claims.csv``.
+TIMINGS_PREFIX = "timings/"
+
+
+def is_timing_claim(entry: Mapping[str, Any]) -> bool:
+    """Whether the claim's value is a timing (its value file is under ``results/timings/``)."""
+    return str(entry["value"]).startswith(TIMINGS_PREFIX)
 
 
 def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | str | Path) -> pd.DataFrame:
@@ -482,8 +518,21 @@ def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | s
             parts.extend(p for p in (tol, note) if p)
         shown = render(str(entry["shown_as"]), ctx) if entry.get("shown_as") else _format(ours)
         rows.append({"id": entry["id"], "quantity": entry["quantity"], "paper_value": _format(entry["paper_value"]),
-                     "our_value": shown, "status": status, "reason": " ".join(parts), "source": entry["source"]})
+                     "our_value": shown, "status": status, "reason": " ".join(parts), "source": entry["source"],
+                     "timing": is_timing_claim(entry), "fixed_reason": tol})
+    import pandas as pd  # here, not at the top: the Snakefile reads published values at every start
+
     return pd.DataFrame(rows)
+
+
+def without_timings(table: pd.DataFrame) -> pd.DataFrame:
+    """The table with every timing row's value and reason replaced by where they are (``results/timings/claims.csv``),
+    so that the table is the same from run to run."""
+    out = table.copy()
+    timing = out["timing"].astype(bool)
+    out.loc[timing, "our_value"] = "measured each run: results/timings/claims.csv"
+    out.loc[timing, "reason"] = out.loc[timing, "fixed_reason"]  # the comparison's text, without the measured note
+    return out
 
 
 def render_markdown(table: pd.DataFrame) -> str:
@@ -507,17 +556,22 @@ def render_markdown(table: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
-def write_claims(claims_path: str | Path, values, csv_out: str | Path, md_out: str | Path) -> pd.DataFrame:
-    """Write ``claims.csv`` and ``REPRODUCTION.md`` (atomically)."""
+def write_claims(claims_path: str | Path, values, csv_out: str | Path, md_out: str | Path,
+                 timings_out: str | Path | None = None) -> pd.DataFrame:
+    """Write ``claims.csv`` and ``REPRODUCTION.md`` (atomically), and the timing rows in full to ``timings_out``."""
     table = build_claims_table(claims_path, values)
-    write_csv(csv_out, table[COLUMNS])
-    write_text(md_out, render_markdown(table))
+    fixed = without_timings(table)
+    write_csv(csv_out, fixed[COLUMNS])
+    write_text(md_out, render_markdown(fixed))
+    if timings_out is not None:
+        write_csv(timings_out, table.loc[table["timing"].astype(bool), COLUMNS])
     return table
 
 
 def step_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """The claims table from ``config/claims.yaml`` and the studies' declared ``values.json`` files."""
-    table = write_claims(inputs.claims, list(inputs["values"]), outputs.csv, outputs.md)
+    table = write_claims(inputs.claims, [*inputs["values"], *inputs["timings"]], outputs.csv, outputs.md,
+                         outputs.timings)
     for status, n in table["status"].value_counts().items():
         log.info("%s: %d", status, n)
     return table

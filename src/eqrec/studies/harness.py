@@ -19,7 +19,10 @@ in its study module's ``STEPS`` table; :func:`registry` maps
 The harness owns what every step shares: the log (``[p1] message`` lines in
 the rule's log file, progress lines on long sweeps), atomic writers (JSON,
 NPZ, CSV, text, figures: a temporary file in the target's directory, then
-``os.replace``; the temporary file is removed on failure), and the exit
+``os.replace``; the temporary file is removed on failure; timing and memory
+fields go to the step's ``timings`` output under ``results/timings/``, see
+:data:`TIMING_KEYS`, so that everything else is byte-identical from run to
+run), and the exit
 status (a failing step exits 1 with one line naming the step and, for a
 configuration problem, the file and field).
 """
@@ -29,6 +32,7 @@ from __future__ import annotations
 import ast
 import contextlib
 import copy
+import functools
 import importlib
 import json
 import logging
@@ -338,12 +342,20 @@ def deep_merge(base: dict, update: Mapping) -> dict:
     return base
 
 
+def _resolve_ref(schema: Mapping, root: Mapping) -> dict:
+    """A schema with ``$ref`` (to ``#/$defs/...``) merged with its own keywords; ``properties`` merged per key."""
+    base = dict(root.get("$defs", {}).get(schema["$ref"].split("/")[-1], {}))
+    own = {k: v for k, v in schema.items() if k != "$ref"}
+    props = {**base.get("properties", {})}
+    for key, sub in own.get("properties", {}).items():
+        props[key] = {**props.get(key, {}), **sub}
+    return {**base, **own, **({"properties": props} if props else {})}
+
+
 def _schema_types(schema: Mapping, root: Mapping) -> set[str]:
     """JSON types a (sub)schema admits (through ``$ref`` and ``anyOf``/``oneOf``)."""
     if "$ref" in schema:
-        ref = schema["$ref"].split("/")[-1]
-        return _schema_types({**root.get("$defs", {}).get(ref, {}), **{k: v for k, v in schema.items() if k != "$ref"}},
-                             root)
+        return _schema_types(_resolve_ref(schema, root), root)
     types = schema.get("type", [])
     out = set([types] if isinstance(types, str) else types)
     for alt in schema.get("anyOf", []) + schema.get("oneOf", []):
@@ -353,8 +365,7 @@ def _schema_types(schema: Mapping, root: Mapping) -> set[str]:
 
 def _subschema(schema: Mapping, root: Mapping, key: Any) -> Mapping:
     if "$ref" in schema:
-        ref = schema["$ref"].split("/")[-1]
-        schema = {**root.get("$defs", {}).get(ref, {}), **{k: v for k, v in schema.items() if k != "$ref"}}
+        schema = _resolve_ref(schema, root)
     if isinstance(key, int):
         return schema.get("items", {}) if isinstance(schema.get("items"), Mapping) else {}
     props = schema.get("properties", {})
@@ -469,7 +480,9 @@ def validate_section(config: dict, section: str, root: str | Path = ".", configf
         field = ".".join([section, *map(str, path)])
         where = field_source(section, path, configfiles, overrides)
         raise ConfigError(f"{err.message} (schema {sec.schema})", where, field) from None
-    check = getattr(_study_module(section), "check_config", None)
+    from eqrec.studies.config_checks import CHECKS  # light imports: the Snakefile runs this at every job start
+
+    check = CHECKS.get(section)
     if check is not None:
         try:
             check(data)
@@ -592,13 +605,21 @@ def code_inputs(study: str) -> list[str]:
         parent = name.rpartition(".")[0]
         if parent:
             todo.append(parent)
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("eqrec"):
-                todo.append(node.module)
-                todo += [f"{node.module}.{a.name}" for a in node.names]
-            elif isinstance(node, ast.Import):
-                todo += [a.name for a in node.names if a.name.startswith("eqrec")]
+        todo += _eqrec_imports(path, path.stat().st_mtime_ns)
     return sorted(str(p) for p in seen)
+
+
+@functools.lru_cache(maxsize=None)
+def _eqrec_imports(path: Path, mtime_ns: int) -> list[str]:
+    """The ``eqrec`` modules (and imported names) one source file imports; parsed once per file version."""
+    out: list[str] = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("eqrec"):
+            out.append(node.module)
+            out += [f"{node.module}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            out += [a.name for a in node.names if a.name.startswith("eqrec")]
+    return out
 
 
 # --------------------------------------------------------------------------- atomic writers
@@ -640,15 +661,110 @@ def _json_default(obj: Any) -> Any:
     raise TypeError(f"cannot write {type(obj).__name__} as JSON")
 
 
+# --------------------------------------------------------------------------- timings
+
+#: Keys of the values that change from run to run (wall-clock times, memory peaks).  A step
+#: writes them to its ``timings`` output (under ``results/timings/``), never next to the
+#: results, so that two runs give byte-identical ``results/`` outside ``results/timings/``.
+TIMING_KEYS = frozenset({
+    "build_s", "solve_s", "total_s", "time_s", "global_s", "ipopt_s", "run_time_s", "elapsed_s",
+    "prefix_time_s", "time_time_s", "strategy_time_s",
+    "build_time", "solve_time", "tree_time", "classes_time", "wall_time", "peak_mb",
+})
+
+
+#: ``write_csv(..., timings=INTERMEDIATE)``: a temporary output (a sweep chunk) keeps its timing columns;
+#: the step that merges the chunks splits them off.
+INTERMEDIATE = "intermediate"
+
+
+def split_timings(data: Any) -> tuple[Any, Any]:
+    """Split nested JSON-like ``data`` into ``(rest, timings)``.
+
+    A mapping entry whose key is in :data:`TIMING_KEYS` goes, whole, to
+    ``timings``, at the same place in the nesting (lists keep their length,
+    with ``None`` where an item has no timing).  ``timings`` is ``None`` when
+    ``data`` holds none.  :func:`merge_timings` undoes the split.
+    """
+    if isinstance(data, Mapping):
+        rest, timed = {}, {}
+        for key, val in data.items():
+            if key in TIMING_KEYS:
+                timed[key] = val
+                continue
+            rest[key], sub = split_timings(val)
+            if sub is not None:
+                timed[key] = sub
+        return rest, (timed or None)
+    if isinstance(data, (list, tuple)):
+        parts = [split_timings(v) for v in data]
+        timed_items = [t for _, t in parts]
+        return [r for r, _ in parts], (timed_items if any(t is not None for t in timed_items) else None)
+    return data, None
+
+
+def merge_timings(data: Any, timings: Any) -> Any:
+    """Put the ``timings`` written by :func:`split_timings` back into ``data`` (in place; returns ``data``)."""
+    if timings is None:
+        return data
+    if isinstance(timings, Mapping) and isinstance(data, dict):
+        for key, val in timings.items():
+            if key in TIMING_KEYS or key not in data:
+                data[key] = val
+            else:
+                data[key] = merge_timings(data[key], val)
+        return data
+    if isinstance(timings, list) and isinstance(data, list) and len(timings) == len(data):
+        return [merge_timings(d, t) for d, t in zip(data, timings)]
+    raise StepError("timings file does not match its results file (run the workflow again)")
+
+
+def split_timing_columns(frame, keys: Sequence[str]):
+    """``(rest, timings)`` of a table: the :data:`TIMING_KEYS` columns go to ``timings``, with the ``keys`` columns
+    that identify a row."""
+    timed = [c for c in frame.columns if c in TIMING_KEYS]
+    return frame.drop(columns=timed), frame[[*keys, *timed]]
+
+
 def write_text(path: str | Path, text: str) -> None:
     with atomic_path(path) as tmp:
         tmp.write_text(text)
 
 
-def write_json(path: str | Path, data: Any) -> None:
-    """JSON with two-space indent and a final newline; numpy scalars and arrays as numbers and lists."""
-    text = json.dumps(data, indent=2, default=_json_default) + "\n"
-    write_text(path, text)
+def _json_text(data: Any) -> str:
+    return json.dumps(data, indent=2, default=_json_default) + "\n"
+
+
+def write_json(path: str | Path, data: Any, timings: str | Path | None = None) -> None:
+    """JSON with two-space indent and a final newline; numpy scalars and arrays as numbers and lists.
+
+    Timing and memory entries (:data:`TIMING_KEYS`) go to the file ``timings``
+    (the step's ``timings`` output, under ``results/timings/``), the rest to
+    ``path``; a step that records timings without declaring where is an error.
+    """
+    rest, timed = split_timings(json.loads(_json_text(data)))
+    if timed is not None and timings is None:
+        keys = sorted(_timing_keys_in(timed))
+        raise StepError(f"{path}: timing fields {keys} need a timings output (results/timings/...)")
+    if timings is not None:
+        write_text(timings, _json_text(timed if timed is not None else {}))
+    write_text(path, _json_text(rest))
+
+
+def _timing_keys_in(timed: Any) -> set[str]:
+    if isinstance(timed, Mapping):
+        return {k for k in timed if k in TIMING_KEYS} | {x for v in timed.values() for x in _timing_keys_in(v)}
+    if isinstance(timed, list):
+        return {x for v in timed for x in _timing_keys_in(v)}
+    return set()
+
+
+def read_json(path: str | Path, timings: str | Path | None = None) -> Any:
+    """A results JSON file, with its timings (the file written by :func:`write_json`) put back when given."""
+    data = json.loads(Path(path).read_text())
+    if timings is not None:
+        data = merge_timings(data, json.loads(Path(timings).read_text()))
+    return data
 
 
 def write_npz(path: str | Path, compressed: bool = False, **arrays: Any) -> None:
@@ -659,11 +775,29 @@ def write_npz(path: str | Path, compressed: bool = False, **arrays: Any) -> None
             (np.savez_compressed if compressed else np.savez)(fh, **arrays)
 
 
-def write_csv(path: str | Path, frame, **kwargs: Any) -> None:
-    """A pandas frame as CSV (``index=False`` unless given)."""
+def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: Sequence[str] = (),
+              **kwargs: Any) -> None:
+    """A pandas frame as CSV (``index=False`` unless given).
+
+    Timing and memory columns (:data:`TIMING_KEYS`) go to the CSV ``timings``
+    with the ``keys`` columns that identify a row; the rest to ``path``.
+    """
     kwargs.setdefault("index", False)
+    if timings == INTERMEDIATE:
+        with atomic_path(path) as tmp:
+            frame.to_csv(tmp, **kwargs)
+        return
+    rest, timed = split_timing_columns(frame, keys)
+    if timed.shape[1] > len(keys):
+        if timings is None:
+            raise StepError(f"{path}: timing columns {list(timed.columns[len(keys):])} need a timings output")
+        with atomic_path(timings) as tmp:
+            timed.to_csv(tmp, **kwargs)
+    elif timings is not None:
+        with atomic_path(timings) as tmp:
+            timed.to_csv(tmp, **kwargs)
     with atomic_path(path) as tmp:
-        frame.to_csv(tmp, **kwargs)
+        rest.to_csv(tmp, **kwargs)
 
 
 def save_figure(fig, *paths: str | Path) -> None:

@@ -21,31 +21,19 @@ from pathlib import Path
 
 import numpy as np
 
-from eqrec.core.patterns import validate_language, worst_case_word
+from eqrec.core.patterns import worst_case_word
 from eqrec.core.simulate import monte_carlo, simulate_run
 from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
 from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
 from eqrec.design.sweeps import M2_curve, lower_bound_probe, min_feasible_M1, min_recovery_time
 from eqrec.design.time_based import design_time_based
-from eqrec.errors import InputError
 from eqrec.studies import p1_figures
-from eqrec.studies.harness import Progress, get_logger, write_json, write_npz
+from eqrec.studies.harness import Progress, get_logger, read_json, write_json, write_npz
 
 log = get_logger("p1")
 
 METHODS = {"prefix": design_prefix, "time": design_time_based}
-
-
-def check_config(cfg: dict) -> None:
-    """What the schema cannot say: one word length in L1, ordered M1 ranges."""
-    try:
-        validate_language(cfg["language"])
-    except InputError as exc:
-        raise InputError(str(exc), field="language") from None
-    ext = cfg["extensions"]
-    if not ext["M1_min_plot"] < ext["M1_max"]:
-        raise InputError("must be below extensions.M1_max", field="extensions.M1_min_plot")
 
 
 def system_from_config(cfg: dict) -> AffineSystem:
@@ -111,7 +99,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         entry["solver_spread"] = float(max(mus) - min(mus))
         result["designs"][method] = entry
     result["variants"] = design_variants(cfg)
-    write_json(outputs.json, result)
+    write_json(outputs.json, result, timings=outputs.timings)
     return result
 
 
@@ -220,7 +208,7 @@ def _sim_evidence(sim, m: str) -> dict:
 def step_values(cfg, inputs, outputs, wildcards) -> dict:
     """Our value of every published P1 number, with the evidence behind it (numbers only)."""
     model = json.loads(Path(inputs.model).read_text())
-    des = json.loads(Path(inputs.designs).read_text())
+    des = read_json(inputs.designs, timings=inputs.designs_timings)
     ext = json.loads(Path(inputs.extensions).read_text())
     sim = np.load(inputs.simulation)
     p, t = des["designs"]["prefix"], des["designs"]["time"]
@@ -256,7 +244,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "finite_language_mu2": {"value": ext["finite_language"]["mu2"],
                                 "evidence": {"words": ext["finite_language"]["words"]}},
     }
-    write_json(outputs.json, values)
+    write_json(outputs.json, values, timings=outputs.timings)
     return values
 
 

@@ -19,7 +19,6 @@ with ``cfg`` the validated ``p2`` section:
 from __future__ import annotations
 
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -37,28 +36,13 @@ from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, Au
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.time_based import design_time_based
-from eqrec.errors import EqrecError, InputError
+from eqrec.errors import EqrecError
 from eqrec.studies import p2_figures, p2_sweeps, p2_values
-from eqrec.studies.claims import load_claims
+from eqrec.studies.claims import published_value
 from eqrec.studies.harness import get_logger, write_json, write_npz
 from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
 
 log = get_logger("p2")
-
-
-def check_config(cfg: dict) -> None:
-    """What the schema cannot say: words of length T, at most one heat-map chunk per θ."""
-    T = int(cfg["T"])
-    for key in ("f1_words", "f2_words"):
-        try:
-            validate_language(cfg[key], length=T)
-        except InputError as exc:
-            raise InputError(str(exc), field=key) from None
-    if len(cfg["heatmap"]["word"]) != T:
-        raise InputError(f"word length {len(cfg['heatmap']['word'])}, expected T = {T}", field="heatmap.word")
-    if int(cfg["heatmap"]["chunks"]) > int(cfg["heatmap"]["n_theta"]):
-        raise InputError(f"{cfg['heatmap']['chunks']} chunks for {cfg['heatmap']['n_theta']} values of theta",
-                         field="heatmap.chunks")
 
 
 def _eig(system: AffineSystem, L: np.ndarray) -> list[list[float]]:
@@ -165,7 +149,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
                                 eta_w=system.eta_w, eta_v=system.eta_v, name="ACC, W = I")
             res["process_noise_identity_mu2"] = design_time_based(sysI, language, M1).mu2
         out[fig] = res
-    write_json(outputs.json, out)
+    write_json(outputs.json, out, timings=outputs.timings)
     write_npz(outputs.npz, **arrays)
     return out
 
@@ -293,19 +277,11 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
                       "M_difference_to_first": float(np.abs(g.M - sols[cfg["solvers"][0]][0].M).max()),
                       "F_difference_to_first": float(np.abs(F - ref_F).max())}
     out["solver"] = rows
-    write_json(outputs.json, out)
+    write_json(outputs.json, out, timings=outputs.timings)
     return out
 
 
 # --------------------------------------------------------------------------- the printed L and the masked_gain reading
-
-def published_value(claims_path: str | Path, claim_id: str) -> Any:
-    """The paper's value of one claim of ``config/claims.yaml`` (the only place published numbers live)."""
-    for entry in load_claims(claims_path):
-        if entry["id"] == claim_id:
-            return entry["paper_value"]
-    raise InputError(f"{claims_path} has no claim {claim_id!r}", field="printed")
-
 
 def _certified(system, gains, words, M1, runtime, per_time: bool = False) -> dict:
     cert = certify_schedule(system, schedule_from_augmented(system, gains, runtime), words, M1)

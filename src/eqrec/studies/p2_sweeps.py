@@ -6,10 +6,12 @@ undecided point with the second solver and gives the all-zero pole set an
 exact nilpotent ``L``) and, when optimal, the certified worst case of its gains
 as the estimator that runs.
 
-Steps ``heatmap_chunk`` (``wildcards.variant``, ``wildcards.chunk``),
+Steps ``heatmap_chunk`` (``wildcards.chunk``: a θ-chunk of every variant),
 ``heatmap_merge`` (checks that the chunks cover the configured grid of every
-configured variant exactly once) and ``realaxis``.  The LP of each job is
-built once (:func:`eqrec.design.sweeps.fixed_L_sweep`).
+configured variant exactly once) and ``realaxis``.  In each job the LP of
+each variant is built once and only its ``L``-dependent coefficients change
+from point to point (:func:`eqrec.design.sweeps.fixed_L_sweep`), and each
+observer gain is placed once for all variants.
 """
 
 from __future__ import annotations
@@ -18,9 +20,9 @@ import numpy as np
 import pandas as pd
 
 from eqrec.core.systems import acc_system
-from eqrec.design.sweeps import fixed_L_sweep
+from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
-from eqrec.studies.harness import Progress, get_logger, write_csv
+from eqrec.studies.harness import INTERMEDIATE, Progress, get_logger, write_csv
 from eqrec.studies.p2_readings import heatmap_poles, variant_word
 
 log = get_logger("p2")
@@ -60,19 +62,33 @@ def _sweep_options(cfg: dict, mode: str) -> dict:
             "certify_runtime": "theorem2" if mode == "theorem2" else "hold"}
 
 
+def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> list[tuple[str, str, str, list[dict]]]:
+    """Every configured variant over the same pole sets: ``(variant, mode, word, records)``.
+
+    The observer gain of a pole set does not depend on the variant, so each
+    ``L`` is placed once (:func:`eqrec.design.sweeps.observer_for`) and
+    shared by the variants' LPs.
+    """
+    observers = [observer_for(system, p) for p in poles]
+    out = []
+    for variant in cfg["heatmap"]["variants"]:
+        mode, word = variant_word(cfg["heatmap"]["word"], variant)
+        prog = Progress(log, len(poles), f"{what} {variant}")
+        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, poles, on_point=prog.advance,
+                             observers=observers, **_sweep_options(cfg, mode))
+        out.append((variant, mode, word, recs))
+    return out
+
+
 def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
-    """P2-F3a, one θ-chunk of one variant."""
-    variant, chunk = wildcards["variant"], int(wildcards["chunk"])
-    system = acc_system()
-    mode, word = variant_word(cfg["heatmap"]["word"], variant)
+    """P2-F3a, one θ-chunk of every variant."""
+    chunk = int(wildcards["chunk"])
     r_grid, th_grid = heatmap_grid(cfg)
     pts = [(r, th_grid[j]) for j in theta_chunk(cfg, chunk) for r in r_grid]
-    prog = Progress(log, len(pts), f"heat map {variant} chunk {chunk}")
-    recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, [heatmap_poles(r, th) for r, th in pts],
-                         on_point=prog.advance, **_sweep_options(cfg, mode))
+    swept = _sweep_variants(cfg, acc_system(), [heatmap_poles(r, th) for r, th in pts], f"heat map chunk {chunk}:")
     df = pd.DataFrame([{"variant": variant, "word": word, "mode": mode, "r": r, "theta": th, **rec}
-                       for (r, th), rec in zip(pts, recs)])
-    write_csv(outputs.csv, df)
+                       for variant, mode, word, recs in swept for (r, th), rec in zip(pts, recs)])
+    write_csv(outputs.csv, df, timings=INTERMEDIATE)  # a temporary chunk: the merge splits the timings off
     return df
 
 
@@ -112,24 +128,18 @@ def step_heatmap_merge(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
                    ignore_index=True)
     check_heatmap_coverage(cfg, df)
     df = df.sort_values(["variant", "theta", "r"])
-    write_csv(outputs.csv, df)
+    write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "r", "theta"])
     log.info("merged %d chunk files: %d points", len(files), len(df))
     return df
 
 
 def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """P2-F3b: eigenvalues ``{0, λ, λ}`` for real ``λ`` (the heat map at θ = 0 and π, finer)."""
-    system = acc_system()
     lam = realaxis_grid(cfg)
-    frames = []
-    for variant in cfg["heatmap"]["variants"]:
-        mode, word = variant_word(cfg["heatmap"]["word"], variant)
-        prog = Progress(log, len(lam), f"real axis {variant}")
-        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, [np.array([0.0, x, x]) for x in lam],
-                             on_point=prog.advance, **_sweep_options(cfg, mode))
-        frames.append(pd.DataFrame([{"variant": variant, "word": word, "lam": x, **rec} for x, rec in zip(lam, recs)]))
-    df = pd.concat(frames, ignore_index=True)
-    write_csv(outputs.csv, df)
+    swept = _sweep_variants(cfg, acc_system(), [np.array([0.0, x, x]) for x in lam], "real axis")
+    df = pd.DataFrame([{"variant": variant, "word": word, "lam": x, **rec}
+                       for variant, _, word, recs in swept for x, rec in zip(lam, recs)])
+    write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "lam"])
     return df
 
 

@@ -46,7 +46,6 @@ from eqrec.design.delay_augmented import augmented_to_prefix, solve_augmented_de
 from eqrec.design.observers import place_observer
 from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
-from eqrec.errors import InputError
 from eqrec.filters import GaussianDesign, compare_with_bounds, error_maps, make_filter, truncated_normal_deltas
 from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
 from eqrec.studies import p3_figures, p3_strategy, p3_values
@@ -56,28 +55,6 @@ log = get_logger("p3")
 
 
 # --------------------------------------------------------------------------- configuration
-
-def check_config(cfg: dict) -> None:
-    """What the schema cannot say: word lengths equal to the horizon, delays within the bound."""
-    br = cfg["batch_reactor"]
-    f1 = cfg["kalman"]
-    if len(f1["true_pattern"]) != br["horizon"]:
-        raise InputError(f"has length {len(f1['true_pattern'])}, not the horizon batch_reactor.horizon = "
-                         f"{br['horizon']}", field="kalman.true_pattern")
-    if any(int(c) > br["max_delay"] for c in f1["true_pattern"]):
-        raise InputError(f"has a delay above batch_reactor.max_delay = {br['max_delay']}",
-                         field="kalman.true_pattern")
-    acc = cfg["acc"]
-    lengths = {len(w) for w in acc["language"]}
-    if len(lengths) != 1:
-        raise InputError(f"words of mixed lengths {sorted(lengths)}", field="acc.language")
-    if len(acc["true_pattern"]) not in lengths:
-        raise InputError("must have the length of the words of acc.language", field="acc.true_pattern")
-    if parse_delay_word(acc["true_pattern"]) not in set(map(parse_delay_word, acc["language"])):
-        raise InputError("is not a word of acc.language (up to its event sequence)", field="acc.true_pattern")
-    for k, poles in enumerate(cfg["augmented"]["poles"]):
-        if len(poles) != 4:
-            raise InputError("needs 4 poles (the batch reactor has n = 4)", field=f"augmented.poles.{k}")
 
 
 def reactor_from_config(cfg: dict) -> AffineSystem:
@@ -275,7 +252,7 @@ def step_reactor_designs(cfg, inputs, outputs, wildcards) -> dict:
     # no data at times 0 and 1 (a word starting with delays >= 2, >= 1): ξ(2) = A² ξ0 for every estimator
     res["no_data_prefix"] = {"exists": any(parse_delay_word(w).available(1) == () for w in words),
                              "bound_over_mu1": A2_norm, "global_mu2_over_mu1": g.mu2 / g.mu1}
-    write_json(outputs.json, res)
+    write_json(outputs.json, res, timings=outputs.timings)
     return res
 
 
@@ -416,7 +393,7 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
         ip = design_delay_ipopt(system, words, cost=cost)
         out["free"][cost] = {"global": _free_summary(g), "ipopt": _free_summary(ip),
                              "compare": compare_free_routes(g, ip)}
-    write_json(outputs.json, out)
+    write_json(outputs.json, out, timings=outputs.timings)
     return out
 
 

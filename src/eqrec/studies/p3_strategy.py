@@ -101,11 +101,9 @@ key                        default                                 meaning
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -118,7 +116,7 @@ from eqrec.design.delay import design_delay, design_lp_status, level_table, min_
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
-from eqrec.studies.harness import get_logger, save_figure, write_csv, write_json, write_npz, write_text
+from eqrec.studies.harness import TIMING_KEYS, get_logger, read_json, save_figure, write_csv, write_json, write_npz, write_text
 from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot
 
 log = get_logger("p3")
@@ -296,7 +294,7 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
         arrays[f"{label}_Ts"] = Ts
     write_npz(outputs.npz, compressed=True, noise=np.array(list(st["noise"])), reactor_mu1=mu1, acc_mu1=d_a.M1,
               switching_mu1=mu1_s, **arrays)
-    write_json(outputs.values, values)
+    write_json(outputs.values, values, timings=outputs.timings)
     log.info("P3-IMPL done in %.1f s", time.perf_counter() - t_start)
     return values
 
@@ -390,7 +388,7 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     log.info("scale (%d, %d), %s: %s; %s classes, %s columns, build %.2f s, solve %.2f s, peak %.0f MB, J = %s", T,
              tau, engine, r.get("status"), r.get("classes"), r.get("cols"), r.get("build_time", float("nan")),
              r.get("solve_time", float("nan")), r.get("peak_mb", float("nan")), r.get("J"))
-    write_json(outputs.json, r)
+    write_json(outputs.json, r, timings=outputs.timings)
     return r
 
 
@@ -444,18 +442,23 @@ def _size_list(sizes) -> str:
     return ", ".join(f"({int(T)}, {int(tau)})" for T, tau in sizes)
 
 
-def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None) -> str:
+def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None, timings: bool = True) -> str:
     """The scale table in Markdown: a note (setting, why the class engine scales), one row per (size, engine),
     then the two engines side by side on the sizes both ran.
 
     ``missing_tree``: tree sizes left out of this table (the slow ones of the
-    ``p3_scale`` target), named in the note.
+    ``p3_scale`` target), named in the note.  ``timings=False``: without the
+    measured columns (times, memory), which change from run to run; the
+    table with them is written under ``results/timings/``.
     """
-    cols = ["T", "tau", "words", "sequences", "nodes", "classes", "engine", "rows", "cols", "nnz", "tree_time",
-            "classes_time", "build_time", "method", "solve_time", "iterations", "J", "max_level", "peak_mb", "status"]
-    head = ["T", "τ̄", "words", "sequences (L^E')", "nodes", "classes (d, S)", "engine", "LP rows", "LP cols",
-            "nonzeros", "tree [s]", "classes [s]", "build [s]", "HiGHS method", "solve [s]", "iterations", "J",
-            "max μ2", "peak [MB]", "status"]
+    columns = [("T", "T"), ("tau", "τ̄"), ("words", "words"), ("sequences", "sequences (L^E')"), ("nodes", "nodes"),
+               ("classes", "classes (d, S)"), ("engine", "engine"), ("rows", "LP rows"), ("cols", "LP cols"),
+               ("nnz", "nonzeros"), ("tree_time", "tree [s]"), ("classes_time", "classes [s]"),
+               ("build_time", "build [s]"), ("method", "HiGHS method"), ("solve_time", "solve [s]"),
+               ("iterations", "iterations"), ("J", "J"), ("max_level", "max μ2"), ("peak_mb", "peak [MB]"),
+               ("status", "status")]
+    columns = [(c, h) for c, h in columns if timings or c not in TIMING_KEYS]
+    cols, head = [c for c, _ in columns], [h for _, h in columns]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, row in frame.iterrows():
         lines.append("| " + " | ".join(_md_cell(_value(row[c]), c) for c in cols) + " |")
@@ -477,25 +480,33 @@ def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None) -> str
             "the class levels weighted by their sequence counts and one small LP per class and state row gives it. "
             "The classes number Σ_{d=1..T} 2^min(τ̄, d) ≈ T·2^τ̄ (446 at (30, 4)), while the sequences and prefix-tree "
             "nodes the tree LP carries grow like (τ̄+1)^T (1.8e+20 sequences at (30, 4)).\n")
-        parts.append(
-            "Columns: `tree [s]` enumerates the language and builds its prefix tree, `classes [s]` builds the class "
-            "set, `build [s]` assembles the LP, `solve [s]` is HiGHS (`total [s]` below: their sum); `peak [MB]` is "
-            "the worker's peak resident memory (timings and memory are measurements: they change from run to run). "
-            "`J` is the paper's sum cost (the same for both engines); `max μ2` the largest level (class engine: "
-            "certified from the gains; tree: the LP's).\n")
+        if timings:
+            parts.append(
+                "Columns: `tree [s]` enumerates the language and builds its prefix tree, `classes [s]` builds the "
+                "class set, `build [s]` assembles the LP, `solve [s]` is HiGHS (`total [s]` below: their sum); "
+                "`peak [MB]` is the worker's peak resident memory (timings and memory are measurements: they change "
+                "from run to run). `J` is the paper's sum cost (the same for both engines); `max μ2` the largest "
+                "level (class engine: certified from the gains; tree: the LP's).\n")
+        else:
+            parts.append(
+                "Columns: the language and LP sizes, `J` the paper's sum cost (the same for both engines) and "
+                "`max μ2` the largest level (class engine: certified from the gains; tree: the LP's). The times and "
+                "peak memory of each size are measurements that change from run to run: they are in "
+                "`results/timings/p3/` (the same table with them, `scale_table.md` there).\n")
         if missing_tree:
             parts.append(
                 f"Tree LP at {_size_list(missing_tree)}: `results/p3/scale_table_full.md` (target `p3_scale`, "
                 f"outside the default run: minutes and up to the memory limit per size).\n")
     parts.append("\n".join(lines) + "\n")
-    side = _side_by_side(frame)
+    side = _side_by_side(frame, timings)
     if side:
         parts.append("## Side by side (sizes both engines ran)\n\n" + side)
     return "\n".join(parts)
 
 
-def _side_by_side(frame: pd.DataFrame) -> str:
-    """Per size run by both engines: LP sizes, total times (language + build + solve), peak memory and J of each."""
+def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
+    """Per size run by both engines: LP sizes, total times (language + build + solve), peak memory and J of each
+    (without times and memory when ``timings`` is false)."""
     if not len(frame):
         return ""
     by = {(int(_value(r["T"])), int(_value(r["tau"])), r["engine"]): r for _, r in frame.iterrows()}
@@ -505,6 +516,8 @@ def _side_by_side(frame: pd.DataFrame) -> str:
     head = ["T", "τ̄", "sequences", "nodes", "classes", "tree LP cols", "class LP cols", "tree total [s]",
             "classes total [s]", "tree peak [MB]", "classes peak [MB]", "tree status", "classes status",
             "J (tree)", "J (classes)"]
+    if not timings:
+        head = head[:7] + head[11:]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
     def total(r):  # a size that did not solve has no total (its build time is in the table above)
@@ -521,6 +534,8 @@ def _side_by_side(frame: pd.DataFrame) -> str:
                  c["status"], _value(t["J"]), _value(c["J"])]
         names = ["T", "tau", "sequences", "nodes", "classes", "cols", "cols", "", "", "peak_mb", "peak_mb",
                  "status", "status", "J", "J"]
+        if not timings:
+            cells, names = cells[:7] + cells[11:], names[:7] + names[11:]
         lines.append("| " + " | ".join(_md_cell(v, n) for v, n in zip(cells, names)) + " |")
     return "\n".join(lines) + "\n"
 
@@ -531,13 +546,14 @@ def step_scale_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     The Markdown note names the ``scale.tree_slow_sizes`` whose tree row is
     not among the inputs (the default run's table leaves them to ``p3_scale``).
     """
-    rows = [json.loads(Path(p).read_text()) for p in inputs if str(p).endswith(".json")]
+    rows = [read_json(p, timings=t) for p, t in zip(inputs.sizes, inputs.timings, strict=True)]
     frame = scale_frame(rows)
     have = {(int(r["T"]), int(r["tau"])) for r in rows if r.get("engine", "tree") == "tree"}
     slow = cfg["scale"]["tree_slow_sizes"]  # validated config: the schema fills the default
     missing = [(int(T), int(tau)) for T, tau in slow if (int(T), int(tau)) not in have]
-    write_csv(outputs.csv, frame)
-    write_text(outputs.md, scale_markdown(frame, missing))
+    write_csv(outputs.csv, frame, timings=outputs.timings_csv, keys=["engine", "T", "tau"])
+    write_text(outputs.md, scale_markdown(frame, missing, timings=False))
+    write_text(outputs.timings_md, scale_markdown(frame, missing, timings=True))
     log.info("scale table: %d rows (%d tree, %d classes)", len(frame), int((frame["engine"] == "tree").sum()),
              int((frame["engine"] == "classes").sum()))
     return frame

@@ -33,6 +33,7 @@ from eqrec.lmv.model import (LMVResult, Plant, apply_estimator, hold_input_syste
                              zero_input_system)
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies import harness, p4_figures
+from eqrec.studies.config_checks import plant_of
 from eqrec.studies.harness import Progress, get_logger, write_csv, write_json, write_npz
 
 log = get_logger("p4")
@@ -43,38 +44,10 @@ MECH_KEY = {"zero-input": "zero", "hold-input": "hold"}
 
 # --------------------------------------------------------------------------- configuration
 
-def check_config(cfg: dict) -> None:
-    """What the schema cannot say: plants build, the tracking example exists, grids and chunks fit."""
-    for name in cfg["examples"]:
-        try:
-            plant_of(cfg, name)
-        except InputError as exc:
-            raise InputError(str(exc), field=f"examples.{name}") from None
-    if cfg["tracking"]["example"] not in cfg["examples"]:
-        raise InputError(f"unknown example {cfg['tracking']['example']!r} (examples: {list(cfg['examples'])})",
-                         field="tracking.example")
-    if not int(cfg["smoother_lag"]) < int(cfg["T"]):
-        raise InputError(f"smoother lag {cfg['smoother_lag']} must be below T = {cfg['T']}", field="smoother_lag")
-    for g in ("sweep_eta", "sweep_q"):
-        grid_ = cfg[g]
-        if int(grid_["chunks"]) > int(grid_["num"]):
-            raise InputError(f"{grid_['chunks']} chunks for {grid_['num']} grid points", field=f"{g}.chunks")
-        if not grid_["lo"] <= grid_["hi"]:
-            raise InputError("need lo <= hi", field=f"{g}.lo")
-
 
 def load_config(*files: str | Path, overrides=None) -> dict:
     """The validated ``p4`` section (default ``config/p4.yaml``); see :func:`eqrec.studies.harness.load_config`."""
     return harness.load_config("p4", *files, overrides=overrides)
-
-
-def plant_of(cfg: dict, example: str) -> Plant:
-    """The :class:`~eqrec.lmv.model.Plant` of an example of the config."""
-    if example not in cfg["examples"]:
-        raise InputError(f"unknown example {example!r}", None, "examples")
-    d = {k: v for k, v in cfg["examples"][example].items() if k != "mc_mult_dist"}
-    d.setdefault("name", example)
-    return Plant.from_dict(d, f"examples.{example}")
 
 
 def system_of(plant: Plant, mechanism: str, eta_bar: float):
@@ -203,7 +176,7 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     arrays["printed/mc_pred"] = _diag(c_printed.emp)
     report["elapsed_s"] = time.perf_counter() - t0
     write_npz(outputs.npz, **arrays)
-    write_json(outputs.json, report)
+    write_json(outputs.json, report, timings=outputs.timings)
     return report
 
 

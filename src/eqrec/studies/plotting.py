@@ -52,11 +52,16 @@ def guarantee_bars(ax, levels: Sequence[float], label: str | None = "guarantee")
 
 def error_trajectories(ax, errors: np.ndarray, color: str = "C0", alpha: float = 0.35,
                        label: str | None = None) -> None:
-    """Plot many error trajectories ``errors[run, t]`` of one state component."""
-    T1 = errors.shape[1]
-    t = np.arange(T1)
-    for i, e in enumerate(errors):
-        ax.plot(t, e, color=color, alpha=alpha, label=label if i == 0 else None)
+    """Plot many error trajectories ``errors[run, t]`` of one state component (one line collection: hundreds of
+    runs draw in one artist)."""
+    from matplotlib import rcParams
+    from matplotlib.collections import LineCollection
+
+    t = np.arange(errors.shape[1], dtype=float)
+    segments = np.stack([np.broadcast_to(t, errors.shape), errors], axis=-1)
+    ax.add_collection(LineCollection(segments, colors=color, alpha=alpha, linewidths=rcParams["lines.linewidth"],
+                                    label=label))
+    ax.autoscale_view()
 
 
 def trajectory_panel(axes_column, errors: np.ndarray, levels: Sequence[float],
