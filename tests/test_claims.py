@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from eqrec.errors import InputError
-from eqrec.studies.claims import (ExpressionError, build_claims_table, compare_one, default_atol, evaluate, holds,
+from eqrec.studies.claims import (ExpressionError, build_claims_table, without_timings, compare_one, default_atol, evaluate, holds,
                                   load_claims, render)
 from eqrec.studies.harness import write_json
 
@@ -123,13 +123,22 @@ def test_project_claims_file_loads_and_every_explanation_has_evidence():
 
 
 def test_stored_table_matches_the_stored_values():
-    """results/claims.csv is what the claims step makes of the stored values.json files."""
+    """results/claims.csv is what the claims step makes of the stored values.json files; the timing rows in full
+    are in results/timings/claims.csv, and claims.csv names that file in their place."""
     values = sorted(str(p) for p in (ROOT / "results").glob("p*/*values.json"))
+    values += sorted(str(p) for p in (ROOT / "results" / "timings").glob("p*/*values.json"))
     fresh = build_claims_table(ROOT / "config" / "claims.yaml", values)
     stored = pd.read_csv(ROOT / "results" / "claims.csv", dtype=str, keep_default_na=False)
+    fixed = without_timings(fresh)
     for col in ("id", "quantity", "paper_value", "our_value", "status", "reason"):
-        assert list(fresh[col].astype(str)) == list(stored[col]), col
+        assert list(fixed[col].astype(str)) == list(stored[col]), col
     assert not any("explanation withdrawn" in r for r in stored["reason"])
+    timing = fresh[fresh["timing"]]
+    assert set(timing["id"]) == {"P1-TIME:prefix-seconds", "P1-TIME:time-seconds"}
+    assert (stored.set_index("id").loc[list(timing["id"]), "our_value"]
+            == "measured each run: results/timings/claims.csv").all()
+    stored_timings = pd.read_csv(ROOT / "results" / "timings" / "claims.csv", dtype=str, keep_default_na=False)
+    assert list(stored_timings["id"]) == list(timing["id"]) and all(float(v) > 0 for v in stored_timings["our_value"])
 
 
 def test_values_files_hold_numbers_and_evidence_only():

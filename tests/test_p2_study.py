@@ -80,15 +80,16 @@ def small_run(tmp_path_factory):
     d = tmp_path_factory.mktemp("p2")
     cfg = harness.load_config("p2", "config/p2.yaml", overrides={"p2": SMALL})
     run = lambda step, ins=None, outs=None, **wc: harness.run_step("p2", step, cfg, ins, outs, wc)  # noqa: E731
-    run("designs", outs={"json": d / "designs.json", "npz": d / "designs.npz"})
+    t = d / "timings"
+    run("designs", outs={"json": d / "designs.json", "npz": d / "designs.npz", "timings": t / "designs.json"})
     run("simulate", {"designs": d / "designs.npz"}, {"npz": d / "simulation.npz"})
     chunks = []
     for c in range(2):
         chunks.append(d / f"hm_{c}.csv")
         run("heatmap_chunk", outs={"csv": chunks[-1]}, chunk=c)
-    run("heatmap_merge", {"chunks": chunks}, {"csv": d / "heatmap.csv"})
-    run("realaxis", outs={"csv": d / "realaxis.csv"})
-    run("checks", outs={"json": d / "checks.json"})
+    run("heatmap_merge", {"chunks": chunks}, {"csv": d / "heatmap.csv", "timings": t / "heatmap.csv"})
+    run("realaxis", outs={"csv": d / "realaxis.csv", "timings": t / "realaxis.csv"})
+    run("checks", outs={"json": d / "checks.json", "timings": t / "checks.json"})
     run("printed", {"claims": "config/claims.yaml"}, {"json": d / "printed.json"})
     vals = run("values", {"designs": d / "designs.json", "simulation": d / "simulation.npz",
                           "heatmap": d / "heatmap.csv", "realaxis": d / "realaxis.csv", "checks": d / "checks.json",
@@ -135,9 +136,11 @@ def test_heatmap_merge_rejects_a_partial_or_repeated_grid(small_run, tmp_path):
     d, cfg, _ = small_run
     chunks = sorted(d.glob("hm_*.csv"))
     with pytest.raises(InputError, match="miss 8"):
-        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks[:-1]}, {"csv": tmp_path / "h.csv"})
+        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks[:-1]},
+                         {"csv": tmp_path / "h.csv", "timings": tmp_path / "t.csv"})
     with pytest.raises(InputError, match="repeat"):
-        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks + chunks[:1]}, {"csv": tmp_path / "h.csv"})
+        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks + chunks[:1]},
+                         {"csv": tmp_path / "h.csv", "timings": tmp_path / "t.csv"})
     assert not (tmp_path / "h.csv").exists()
 
 

@@ -181,7 +181,8 @@ def test_never_delivered_packets(reactor):
 
 def test_strategy_steps(tmp_path):
     cfg = _cfg()
-    out = {"npz": str(tmp_path / "strategy.npz"), "values": str(tmp_path / "strategy_values.json")}
+    out = {"npz": str(tmp_path / "strategy.npz"), "values": str(tmp_path / "strategy_values.json"),
+           "timings": str(tmp_path / "timings" / "strategy_values.json")}
     _run("strategy", cfg, outputs=out)
     vals = json.loads(Path(out["values"]).read_text())
     for key in ("periodic_reactor_within", "periodic_acc_within", "switching_within"):
@@ -202,17 +203,19 @@ def test_strategy_steps(tmp_path):
 
 def test_scale_steps(tmp_path):
     cfg = _cfg()
-    files = []
+    files, timings = [], []
     for T, tau in cfg["scale"]["tree_sizes"]:
-        f = str(tmp_path / f"T{T}_tau{tau}.json")
-        _run("scale_size", cfg, outputs={"json": f}, wildcards={"T": T, "tau": tau})
+        f, t = str(tmp_path / f"T{T}_tau{tau}.json"), str(tmp_path / "timings" / f"T{T}_tau{tau}.json")
+        _run("scale_size", cfg, outputs={"json": f, "timings": t}, wildcards={"T": T, "tau": tau})
         files.append(f)
-    rows = [json.loads(Path(f).read_text()) for f in files]
+        timings.append(t)
+    rows = [harness.read_json(f, timings=t) for f, t in zip(files, timings)]
     assert [(r["T"], r["tau"], r["words"], r["sequences"], r["status"]) for r in rows] == [
         (3, 1, 8, 8, "optimal"), (4, 2, 81, 54, "optimal")]
     assert all(r["cols"] > 0 and r["nnz"] > 0 and r["peak_mb"] > 0 for r in rows)
-    out = {"csv": str(tmp_path / "scale.csv"), "md": str(tmp_path / "scale.md")}
-    _run("scale_table", cfg, inputs={"sizes": files[::-1]}, outputs=out)
+    out = {"csv": str(tmp_path / "scale.csv"), "md": str(tmp_path / "scale.md"),
+           "timings_csv": str(tmp_path / "timings" / "scale.csv"), "timings_md": str(tmp_path / "timings" / "scale.md")}
+    _run("scale_table", cfg, inputs={"sizes": files[::-1], "timings": timings[::-1]}, outputs=out)
     import pandas as pd
 
     frame = pd.read_csv(out["csv"])

@@ -154,7 +154,8 @@ def test_steps_run_through_the_harness(cfg, tmp_path):
                                                         "counts": o["counts"]})
     assert "e_{0,1}e_{1,3}" in o["md"].read_text() and len(pd.read_csv(o["counts"])) == 2
     harness.run_step("p3", "reactor_model", small, outputs={"json": o["model"]})
-    des = harness.run_step("p3", "reactor_designs", small, outputs={"json": o["designs"]})
+    des = harness.run_step("p3", "reactor_designs", small, outputs={"json": o["designs"],
+                                                                    "timings": tmp_path / "t_designs.json"})
     assert des["global"]["vertex_attainment"]["max_gap"] < 1e-9
     assert des["global"]["certified_mu2"] <= des["global"]["mu2"] * (1 + 1e-6)
     assert des["compare"]["ipopt_consistent_with_bound"]
@@ -164,7 +165,7 @@ def test_steps_run_through_the_harness(cfg, tmp_path):
     assert kal["proposed"]["max_ratio_levels"] <= 1 + 1e-9 and kal["proposed"]["runtime_vs_maps"] < 1e-9
     for e in kal["filters"].values():
         assert e["prediction"]["vertex"]["attain_gap"] < 1e-9
-    harness.run_step("p3", "acc", small, outputs={"json": o["acc"]})
+    harness.run_step("p3", "acc", small, outputs={"json": o["acc"], "timings": tmp_path / "t_acc.json"})
     harness.run_step("p3", "acc_simulate", small, outputs={"npz": o["acc_npz"]})
     harness.run_step("p3", "figure1", small, inputs={"json": o["kalman"], "npz": o["kalman_npz"]},
                      outputs={"pdf": tmp_path / "f1.pdf", "png": tmp_path / "f1.png"})

@@ -125,14 +125,17 @@ def test_table_reads_old_tree_rows_and_names_the_slow_sizes(tmp_path):
            "time_limit": 600.0, "mem_limit_gb": 16.0, "words": 6561, "sequences": 4374, "nodes": 6560,
            "classes": 30, "rows": 5, "cols": 6, "nnz": 7, "build_time": 0.1, "solve_time": 0.2, "J": 4474.5,
            "status": "optimal", "peak_mb": 2.0}
-    files = []
+    files, timings = [], []
     for i, row in enumerate((new, old)):
-        f = tmp_path / f"{i}.json"
-        f.write_text(json.dumps(row))
-        files.append(str(f))
-    out = {"csv": str(tmp_path / "t.csv"), "md": str(tmp_path / "t.md")}
-    frame = p3_strategy.step_scale_table({"scale": {"tree_slow_sizes": [[8, 2], [8, 3]]}}, harness.Files(files),
-                                         harness.Files(**out), harness.Wildcards())
+        files.append(str(tmp_path / f"{i}.json"))
+        timings.append(str(tmp_path / "timings" / f"{i}.json"))
+        harness.write_json(files[-1], row, timings=timings[-1])
+    assert "peak_mb" not in Path(files[0]).read_text() and "peak_mb" in Path(timings[0]).read_text()
+    out = {"csv": str(tmp_path / "t.csv"), "md": str(tmp_path / "t.md"),
+           "timings_csv": str(tmp_path / "timings" / "t.csv"), "timings_md": str(tmp_path / "timings" / "t.md")}
+    frame = p3_strategy.step_scale_table({"scale": {"tree_slow_sizes": [[8, 2], [8, 3]]}},
+                                         harness.Files(sizes=files, timings=timings), harness.Files(**out),
+                                         harness.Wildcards())
     assert frame["engine"].tolist() == ["tree", "classes"] and list(frame.columns) == list(FIELDS)
     assert frame["classes"].tolist() == [30, 30]  # the closed form for the old row
     assert frame["J"].tolist() == [100.0 + (1 + 2 * 4374) * 0.5, 4474.5]
@@ -140,3 +143,9 @@ def test_table_reads_old_tree_rows_and_names_the_slow_sizes(tmp_path):
     assert "T·2^τ̄" in md and "(τ̄+1)^T" in md and "separation theorem" in md
     assert "Tree LP at (8, 3)" in md and "scale_table_full.md" in md  # (8, 2) is here; (8, 3) is not
     assert "## Side by side" in md
+    # measurements only in the timings table (they change from run to run)
+    assert "[s]" not in md and "[MB]" not in md and "results/timings/p3/" in md
+    timed_md = Path(out["timings_md"]).read_text()
+    assert "solve [s]" in timed_md and "peak [MB]" in timed_md and "classes total [s]" in timed_md
+    assert "peak_mb" not in Path(out["csv"]).read_text().splitlines()[0]
+    assert Path(out["timings_csv"]).read_text().splitlines()[0].startswith("engine,T,tau,")

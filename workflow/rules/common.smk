@@ -21,10 +21,8 @@ from eqrec.studies.claims import published_value
 
 CLAIMS_FILE = "config/claims.yaml"
 
-
-def timings_of(paths):
-    """The timings file (under results/timings/) a step writes beside each of its results files."""
-    return [p.replace("results/", "results/timings/", 1) for p in paths]
+# The timings file (under results/timings/) a step writes beside each results file.
+from eqrec.studies.harness import timings_of
 
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"

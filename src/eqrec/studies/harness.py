@@ -573,6 +573,11 @@ def _package_root() -> Path:
     return local if local.is_dir() else Path(__file__).resolve().parents[1]
 
 
+#: Modules the harness runs when the workflow is planned (configuration checks), never inside a step: not code
+#: inputs of any rule (a changed check re-validates the configuration at the next start).
+PLANNING_ONLY = frozenset({"eqrec.studies.config_checks"})
+
+
 def code_inputs(study: str) -> list[str]:
     """Source files of ``eqrec.studies.<study>`` and of every ``eqrec`` module it imports, transitively,
     plus the harness that runs it.
@@ -597,6 +602,8 @@ def code_inputs(study: str) -> list[str]:
     todo = [f"eqrec.studies.{study}", "eqrec.studies.harness"]
     while todo:
         name = todo.pop()
+        if name in PLANNING_ONLY:
+            continue
         path = path_of(name)
         if path is None or path in seen:
             continue
@@ -676,6 +683,11 @@ TIMING_KEYS = frozenset({
 #: ``write_csv(..., timings=INTERMEDIATE)``: a temporary output (a sweep chunk) keeps its timing columns;
 #: the step that merges the chunks splits them off.
 INTERMEDIATE = "intermediate"
+
+
+def timings_of(paths: Iterable[str]) -> list[str]:
+    """The timings file a step writes beside each of its results files: ``results/x`` -> ``results/timings/x``."""
+    return [str(p).replace("results/", "results/timings/", 1) for p in paths]
 
 
 def split_timings(data: Any) -> tuple[Any, Any]:
