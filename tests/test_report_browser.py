@@ -131,6 +131,12 @@ window.addEventListener('load', async () => {
   pre.id = 'eqrec-check'; pre.style.display = 'none';
   document.body.appendChild(pre);
   const save = () => { pre.textContent = JSON.stringify(out); };
+  // every iframe the app inserts gets a load listener before it can load (the notebooks are data: documents,
+  // opaque to this page, so their load event is the only sign that they rendered)
+  new MutationObserver(ms => ms.forEach(m => m.addedNodes.forEach(n => {
+    const frames = n.tagName === 'IFRAME' ? [n] : (n.querySelectorAll ? Array.from(n.querySelectorAll('iframe')) : []);
+    frames.forEach(f => f.addEventListener('load', () => { f.dataset.eqrecLoaded = '1'; }));
+  }))).observe(app, {childList: true, subtree: true});
   async function waitFor(f, tries = 40) { for (let i = 0; i < tries; i++) { const v = f(); if (v) return v; await sleep(100); } return null; }
   async function home() {
     const h = app.querySelector('nav ol li a');
@@ -160,7 +166,11 @@ window.addEventListener('load', async () => {
       const ok = !!(await waitFor(() => img.complete && img.naturalWidth > 0));
       rec.img = {decoded: ok, complete: img.complete, w: img.naturalWidth, h: img.naturalHeight};
     }
-    if (frame) { await sleep(300); const b = frame.getBoundingClientRect(); rec.frame = {w: b.width, h: b.height}; }
+    if (frame) {
+      const loaded = !!(await waitFor(() => frame.dataset.eqrecLoaded, 100));
+      const b = frame.getBoundingClientRect();
+      rec.frame = {loaded: loaded, w: b.width, h: b.height};
+    }
     rec.text = app.innerText.length;
     return rec;
   }
@@ -272,7 +282,7 @@ def test_the_app_renders_and_every_item_opens_with_its_images_loaded(report):
         if mime.startswith("image/"):
             assert rec["img"] and rec["img"]["decoded"] and rec["img"]["w"] > 0 and rec["img"]["h"] > 0, rec
         elif mime == "text/html":  # the notebooks, in an iframe
-            assert rec["iframe"] and rec["frame"]["w"] > 100 and rec["frame"]["h"] > 100, rec
+            assert rec["iframe"] and rec["frame"]["loaded"] and rec["frame"]["w"] > 100 and rec["frame"]["h"] > 100, rec
         assert rec["text"] > 0
 
 
@@ -295,7 +305,11 @@ def _screenshot(report, name: str, plan: dict) -> Path:
     page = report["tmp"] / f"shot-{name}.html"
     page.write_text(_with_script(report["text"], DRIVER.replace("__PLAN__", json.dumps(plan))), encoding="utf-8")
     shot = report["tmp"] / f"report-{name}.png"
-    _browser(report["exe"], report["tmp"] / f"profile-shot-{name}", page, f"--screenshot={shot}")
+    res = _result(_browser(report["exe"], report["tmp"] / f"profile-shot-{name}", page, "--dump-dom",
+                           f"--screenshot={shot}"))
+    assert res["done"] and not res["errors"], res  # the view the screenshot shows was reached, and loaded:
+    for rec in res["items"]:
+        assert (rec["img"] or {}).get("decoded") or (rec.get("frame") or {}).get("loaded"), rec
     data = shot.read_bytes()
     assert _png_problem(data) is None
     raw = zlib.decompress(b"".join(
