@@ -4,6 +4,7 @@
 #
 #   snakemake --cores 2                          # everything, default config
 #   snakemake --cores 2 p1                       # one paper (p1, p2, p3, p4)
+#   snakemake --cores 2 notebooks                # the executed notebooks (results/notebooks/)
 #   snakemake --cores 2 p3_scale                 # the P3 scale table (slow, up to 16 GB; not in `all`)
 #   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
 #   snakemake --report report.html               # browsable report with figure captions
@@ -60,6 +61,7 @@ include: "workflow/rules/p1.smk"
 include: "workflow/rules/p2.smk"
 include: "workflow/rules/p3.smk"
 include: "workflow/rules/p4.smk"
+include: "workflow/rules/notebooks.smk"
 include: "workflow/rules/claims.smk"
 
 
@@ -71,3 +73,4 @@ rule all:
         rules.p2.input,
         rules.p3.input,
         rules.p4.input,
+        rules.notebooks.input,

@@ -33,13 +33,20 @@ from IPython.display import Image, Markdown, display
 
 ROOT = Path.cwd() if (Path.cwd() / "results").exists() else Path.cwd().parent
 RES = ROOT / "results" / "p3"
+
+def untimed(x):
+    """x without timing or memory values (the pipeline keeps those in results/timings/)."""
+    if isinstance(x, dict):
+        return {k: untimed(v) for k, v in x.items() if not str(k).endswith(("_s", "_ms", "_time", "peak_mb"))}
+    return [untimed(v) for v in x] if isinstance(x, list) else x
+
 lang = json.loads((RES / "languages.json").read_text())
 model = json.loads((RES / "reactor_model.json").read_text())
-br = json.loads((RES / "reactor_designs.json").read_text())
-aug = json.loads((RES / "augmented.json").read_text())
-kal = json.loads((RES / "kalman.json").read_text())
-acc = json.loads((RES / "acc.json").read_text())
-values = json.loads((RES / "values.json").read_text())
+br = untimed(json.loads((RES / "reactor_designs.json").read_text()))
+aug = untimed(json.loads((RES / "augmented.json").read_text()))
+kal = untimed(json.loads((RES / "kalman.json").read_text()))
+acc = untimed(json.loads((RES / "acc.json").read_text()))
+values = untimed(json.loads((RES / "values.json").read_text()))
 
 # %% [markdown]
 # ## P3-LANG: Examples 1–5 ($T = 2$, $\bar\tau = 2$)
@@ -66,10 +73,10 @@ print("B =\n", pd.DataFrame(model["B"]).round(4).to_string(index=False, header=F
 # %% [markdown]
 # $\mu_1$ free, cost $J = \mu_1 + \sum_k \sum_\alpha \mu_{2,k}^\alpha$ over all 243 words: the certified
 # global route and IPOPT on the bilinear problem (10) (the paper's route), and the LP at the configured
-# reading of $\mu_1$.
+# reading of $\mu_1$. (Their solve times are in `results/timings/`.)
 
 # %%
-keys = ["mu1", "J", "mu2", "certified_mu2", "certified_terminal", "argmax_prefix", "time_s"]
+keys = ["mu1", "J", "mu2", "certified_mu2", "certified_terminal", "argmax_prefix"]
 rows = [{"design": r, **{k: br[r].get(k) for k in keys}} for r in ("global", "ipopt")]
 rows += [{"design": f"mu1 = {r['mu1']:g} fixed", **{k: r.get(k) for k in keys}} for r in br["readings"]]
 display(pd.DataFrame(rows))
@@ -124,7 +131,8 @@ display(Image(filename=str(RES / "fig2_acc.png")))
 # their level, and the estimator needs one $K$ per class (`eqrec.design.classes`, proofs in its docstring).
 # With $\mu_1$ free, every class level is nondecreasing in $\mu_1$, so the optimum is the smallest feasible
 # $\mu_1$, one Charnes-Cooper LP. The scale table puts the paper's tree LP and the class engine side by side on
-# the batch reactor's full languages $\{0..\bar\tau\}^T$ (sum cost, $\mu_1 = 0.5$).
+# the batch reactor's full languages $\{0..\bar\tau\}^T$ (sum cost, $\mu_1 = 0.5$); their build and solve
+# times and peak memory are in `results/timings/`.
 
 # %%
 print("batch reactor: mu1 free binding terminal class", br["global"]["mu1_min"]["binding"],

@@ -48,8 +48,8 @@ import yaml
 
 from eqrec.errors import EqrecError, InputError
 
-#: Studies with pipeline steps (``claims`` builds the comparison table).
-STUDIES = ("p1", "p2", "p3", "p4", "claims")
+#: Studies with pipeline steps (``claims`` builds the comparison table, ``notebooks`` executes the notebooks).
+STUDIES = ("p1", "p2", "p3", "p4", "claims", "notebooks")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,42 @@
+# The notebooks (notebooks/<name>.py, jupytext) executed against results/:
+# results/notebooks/<name>.ipynb with outputs and figures embedded (readable on
+# GitHub without running anything) and its HTML rendering (in the report).
+# Each runs after the result files it reads (eqrec.studies.notebooks.READS;
+# rule_inputs gives the notebook's source and those files); the step
+# eqrec.studies.notebooks.execute writes byte-identical files for unchanged
+# inputs.
+from eqrec.studies.notebooks import READS as NOTEBOOK_READS
+from eqrec.studies.notebooks import rule_inputs as notebook_inputs
+
+NOTEBOOKS_CODE = code_inputs("notebooks")
+NOTEBOOKS = sorted(NOTEBOOK_READS)
+
+
+rule notebooks_execute:
+    """One notebook executed: .ipynb with its outputs, and its HTML rendering."""
+    input:
+        unpack(notebook_inputs),
+        code=NOTEBOOKS_CODE,
+    output:
+        ipynb="results/notebooks/{name}.ipynb",
+        html=report(
+            "results/notebooks/{name}.html",
+            caption="../report/notebooks.rst",
+            category="Notebooks",
+        ),
+    log:
+        "logs/notebooks/{name}.log",
+    wildcard_constraints:
+        name="|".join(NOTEBOOKS),
+    params:
+        study="notebooks",
+        step="execute",
+        cfg={},
+    script:
+        RUN_STEP
+
+
+rule notebooks:
+    """All executed notebooks."""
+    input:
+        expand(rules.notebooks_execute.output, name=NOTEBOOKS),
