@@ -31,15 +31,9 @@ import pandas as pd
 ROOT = Path.cwd() if (Path.cwd() / "results").exists() else Path.cwd().parent
 RES = ROOT / "results" / "p2"
 
-def untimed(x):
-    """x without timing or memory values (the pipeline keeps those in results/timings/)."""
-    if isinstance(x, dict):
-        return {k: untimed(v) for k, v in x.items() if not str(k).endswith(("_s", "_ms", "_time", "peak_mb"))}
-    return [untimed(v) for v in x] if isinstance(x, list) else x
-
-values = untimed(json.loads((RES / "values.json").read_text()))
-designs = untimed(json.loads((RES / "designs.json").read_text()))
-checks = untimed(json.loads((RES / "checks.json").read_text()))
+values = json.loads((RES / "values.json").read_text())
+designs = json.loads((RES / "designs.json").read_text())
+checks = json.loads((RES / "checks.json").read_text())
 heat = pd.read_csv(RES / "heatmap.csv")
 real = pd.read_csv(RES / "realaxis.csv")
 

@@ -34,19 +34,14 @@ from IPython.display import Image, Markdown, display
 ROOT = Path.cwd() if (Path.cwd() / "results").exists() else Path.cwd().parent
 RES = ROOT / "results" / "p3"
 
-def untimed(x):
-    """x without timing or memory values (the pipeline keeps those in results/timings/)."""
-    if isinstance(x, dict):
-        return {k: untimed(v) for k, v in x.items() if not str(k).endswith(("_s", "_ms", "_time", "peak_mb"))}
-    return [untimed(v) for v in x] if isinstance(x, list) else x
 
 lang = json.loads((RES / "languages.json").read_text())
 model = json.loads((RES / "reactor_model.json").read_text())
-br = untimed(json.loads((RES / "reactor_designs.json").read_text()))
-aug = untimed(json.loads((RES / "augmented.json").read_text()))
-kal = untimed(json.loads((RES / "kalman.json").read_text()))
-acc = untimed(json.loads((RES / "acc.json").read_text()))
-values = untimed(json.loads((RES / "values.json").read_text()))
+br = json.loads((RES / "reactor_designs.json").read_text())
+aug = json.loads((RES / "augmented.json").read_text())
+kal = json.loads((RES / "kalman.json").read_text())
+acc = json.loads((RES / "acc.json").read_text())
+values = json.loads((RES / "values.json").read_text())
 
 # %% [markdown]
 # ## P3-LANG: Examples 1–5 ($T = 2$, $\bar\tau = 2$)
