@@ -11,7 +11,7 @@
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import min_version
 
-from eqrec.studies import harness
+from eqrec.studies import configuration
 
 min_version("9.0")
 
@@ -27,26 +27,28 @@ configfile: "config/p4.yaml"
 
 # Validate every section once, after the --configfile/--config overrides, with
 # the defaults of its schema filled in (snakemake.utils.validate(...,
-# set_default=True) inside harness.validate_section, plus the cross-field
+# set_default=True) inside configuration.validate_section, plus the cross-field
 # checks of the study); a bad value stops the run here, naming file and field.
 # nested --config values arrive as text: give them the types their schema asks for
-harness.type_cli_config(config, workflow.config_settings.config, root=workflow.basedir)
+configuration.type_cli_config(
+    config, workflow.config_settings.config, root=workflow.basedir
+)
 try:  # a misspelt or unknown top-level section would otherwise be ignored
-    harness.check_sections(
+    configuration.check_sections(
         config, workflow.config_settings.configfiles, workflow.config_settings.config
     )
-except harness.ConfigError as exc:
+except configuration.ConfigError as exc:
     raise WorkflowError(f"invalid configuration: {exc}")
-for _section in harness.SECTIONS:
+for _section in configuration.SECTIONS:
     try:
-        harness.validate_section(
+        configuration.validate_section(
             config,
             _section,
             root=workflow.basedir,
             configfiles=workflow.config_settings.configfiles,
             overrides=workflow.config_settings.config,
         )
-    except harness.ConfigError as exc:
+    except configuration.ConfigError as exc:
         raise WorkflowError(f"invalid configuration: {exc}")
 
 # Each rules file appends the values.json its analysis writes; the claims

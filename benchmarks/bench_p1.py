@@ -42,7 +42,7 @@ def one(system, words, solver, method):
     sol = solve_lp(model.lp, solver).require_optimal()
     t2 = time.perf_counter()
     sched = read_schedule(model, sol, time_based=(method == "time"))
-    design = Design(method=method, system=system, patterns=model.tree.patterns, T=6, M1=1.0,
+    design = Design(method=method, system=system, patterns=model.tree.patterns, T=6, mu1=1.0,
                     mu2=float(sol.x[model.mu2_col]),
                     schedule=sched, solution=sol, build_time=t1 - t0)
     certify_design(design)

@@ -206,7 +206,7 @@ def test_periodic_reuse_matches_the_schedule_and_stays_within_the_levels(cases, 
     K = _lqr(reactor)
     T = design.T
     for kind in ("uniform", "vertex"):
-        runs = [long_run_periodic(system, g, words, 60, np.random.default_rng(9), M1=mu1,
+        runs = [long_run_periodic(system, g, words, 60, np.random.default_rng(9), mu1=mu1,
                                   path_levels=partial(path_levels, design), kind=kind, x0=np.ones(4),
                                   controller=lambda xh: -K @ xh)
                 for g in (design.schedule, design.class_gains)]
@@ -222,7 +222,7 @@ def test_periodic_reuse_on_the_acc_with_a_constant_input(cases):
     system, design, mu1 = cases["acc_L1"]
     words = ["060000", "006000", "000600", "000060"]  # L1 as delay words (6: missing)
     assert {parse_delay_word(w) for w in words} == set(design.patterns)
-    runs = [long_run_periodic(system, g, words, 40, np.random.default_rng(4), M1=mu1,
+    runs = [long_run_periodic(system, g, words, 40, np.random.default_rng(4), mu1=mu1,
                               path_levels=lambda w: _acc_levels(design, w), kind="vertex",
                               x0=np.array([20.0, 40.0, 20.0]), inputs=np.array([206.4]))
             for g in (design.schedule, design.class_gains)]
@@ -234,7 +234,7 @@ def test_periodic_reuse_on_the_acc_with_a_constant_input(cases):
 def _acc_levels(design, word):
     pat = parse_delay_word(word)
     lv = design.class_certificate.levels
-    out = np.full(pat.T + 1, design.M1)
+    out = np.full(pat.T + 1, design.mu1)
     for d in range(1, pat.T):
         out[d] = lv[_class_of_pattern(design, pat, d)]
     return out
@@ -279,7 +279,7 @@ def test_switching_with_class_gains_gives_the_schedule_run(reactor, switching):
     pairs = [(perf.schedule, rec.schedule), (perf.class_gains, rec.class_gains), (perf.schedule, rec.class_gains),
              (perf.class_gains, rec.schedule)]
     for kind in ("uniform", "vertex"):
-        runs = [long_run_switching(reactor, p, r, 800, np.random.default_rng(6), M1=mu1,
+        runs = [long_run_switching(reactor, p, r, 800, np.random.default_rng(6), mu1=mu1,
                                    recovery_level=partial(node_level, rec), max_delay=2, p_on_time=0.7, kind=kind,
                                    x0=np.ones(4), controller=lambda xh: -K @ xh) for p, r in pairs]
         ref = runs[0]

@@ -223,7 +223,7 @@ def test_full_language_30_4_without_enumeration(reactor):
     mm = min_recovery_level(reactor, classes)
     d = design_delay(reactor, classes, mm.upper * 1.01, cost="sum")
     assert d.schedule is None and d.patterns == ()
-    assert d.class_certificate.terminal <= d.M1 * (1 + 1e-6)
+    assert d.class_certificate.terminal <= d.mu1 * (1 + 1e-6)
     assert d.class_certificate.mu2 <= d.mu2 * (1 + 1e-6)
     assert np.isfinite(d.extra["J"])
 

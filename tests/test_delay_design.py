@@ -41,17 +41,17 @@ def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language, engi
     d = design_delay(reactor, tree, 1.0, cost="sum", engine=engine)
 
     def level_of(pat, k):  # μ2,k^α literally: μ1 at k = 0 and k = T, the prefix node's level in between
-        return d.M1 if k in (0, pat.T) else d.levels[pat.prefix(k).label]
+        return d.mu1 if k in (0, pat.T) else d.levels[pat.prefix(k).label]
 
-    J_literal = literal_paper_cost(tree, d.M1, level_of)
+    J_literal = literal_paper_cost(tree, d.mu1, level_of)
     assert d.extra["J"] == pytest.approx(J_literal, rel=1e-12)
-    assert paper_cost(tree, d.M1, d.levels) == pytest.approx(J_literal, rel=1e-12)
+    assert paper_cost(tree, d.mu1, d.levels) == pytest.approx(J_literal, rel=1e-12)
     if engine == "tree":  # the tree LP's objective is J without its μ1 term
-        assert d.extra["J"] == pytest.approx(d.solution.objective + a * d.M1, rel=1e-9)
+        assert d.extra["J"] == pytest.approx(d.solution.objective + a * d.mu1, rel=1e-9)
     assert d.extra["J_certified"] <= d.extra["J"] * (1 + 1e-6)
     for pat in tree.patterns:
         lv = path_levels(d, pat)
-        assert lv[0] == lv[-1] == d.M1 and len(lv) == pat.T + 1
+        assert lv[0] == lv[-1] == d.mu1 and len(lv) == pat.T + 1
         assert np.all(word_certificate(d, pat).bounds.max(axis=1) <= lv * (1 + 1e-6))
 
 
@@ -133,7 +133,7 @@ def test_delay_design_certified_and_worst_vertices_attained(reactor, small_langu
     assert js["method"] == "delay" and set(js["gains"]) == {p.label for p in small_language}
     import json
 
-    assert json.loads(json.dumps(js))["mu1"] == d.M1  # serialisable as the CLI writes it
+    assert json.loads(json.dumps(js))["mu1"] == d.mu1  # serialisable as the CLI writes it
 
 
 def test_batch_reactor_at_the_printed_mu1(reactor):

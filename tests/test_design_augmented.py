@@ -10,7 +10,7 @@ from eqrec.design.observers import place_observer
 from eqrec.studies.p2 import heatmap_poles
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InputError
-from eqrec.core.lp import solve_lp
+from eqrec.core.solvers import solve_lp
 
 
 @pytest.fixture(scope="module")

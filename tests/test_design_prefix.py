@@ -10,17 +10,17 @@ from eqrec.core.patterns import PrefixTree, prefixes
 from eqrec.core.stacking import Stacking
 
 
-def paper_copy_per_word_optimum(system, words, M1):
+def paper_copy_per_word_optimum(system, words, mu1):
     """The paper's form: one (Q(i), r(i)) per word, equality constraints BM_|p| on shared prefixes (eq. (11)),
     error from eq. (13) with the paper's stacked matrices, robust counterpart by |.| (cvxpy)."""
     T = len(words[0])
     st = Stacking(system, T)
     n, p = system.n, system.p
-    radius = st.layout.radius(system.eta_w, system.eta_v, M1)
+    radius = st.layout.radius(system.eta_w, system.eta_v, mu1)
     mu2 = cp.Variable()
     Qs = {w: cp.Variable((T * n, T * p)) for w in words}
     rs = {w: cp.Variable(T * n) for w in words}
-    cons = [mu2 >= M1]
+    cons = [mu2 >= mu1]
     mask = np.kron(np.tril(np.ones((T, T))), np.ones((n, p)))  # block lower triangular
     for w in words:
         cons.append(cp.multiply(1 - mask, Qs[w]) == 0)
@@ -29,7 +29,7 @@ def paper_copy_per_word_optimum(system, words, M1):
         G = cp.hstack([(S + S @ Qs[w] @ Cb @ S) @ st.E_blk, S @ Qs[w] @ N, (I + S @ Qs[w] @ Cb) @ J])
         c = S @ rs[w]
         worst = cp.abs(c) + cp.abs(G) @ radius
-        cons += [worst[: T * n] <= mu2, worst[T * n:] <= M1]
+        cons += [worst[: T * n] <= mu2, worst[T * n:] <= mu1]
     for a in words:
         for b in words:
             if a < b:
@@ -109,7 +109,7 @@ def test_optimum_is_a_lower_bound(acc, L1_words):
     d = design_prefix(acc, L1_words, 1.0)
     m = build_prefix_lp(acc, PrefixTree(L1_words), 1.0)
     m.lp.col_upper[m.mu2_col] = d.mu2 - 1e-5
-    from eqrec.core.lp import solve_lp
+    from eqrec.core.solvers import solve_lp
 
     assert solve_lp(m.lp, "highs").status == "infeasible"
 

@@ -14,6 +14,9 @@ from snakemake.iocontainers import Namedlist
 
 from eqrec.errors import InputError
 from eqrec.studies import harness
+from eqrec.studies import outputs
+from eqrec import errors
+from eqrec.studies import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 RULES = ROOT / "workflow" / "rules"
@@ -59,11 +62,11 @@ def test_study_modules_have_no_command_line_and_no_defaults_table():
 
 
 def test_defaults_come_from_the_schemas():
-    cfg = harness.load_config("p2", overrides={"p2": {"runs": 7}}, root=ROOT)
+    cfg = configuration.load_config("p2", overrides={"p2": {"runs": 7}}, root=ROOT)
     schema = yaml.safe_load((ROOT / "config" / "schemas" / "p2.schema.yaml").read_text())
     assert cfg["runs"] == 7 and cfg["realaxis"]["grid_denominator"] == 14
     c = {"p1": {"mu1": 2.0, "language": ["1011"]}}
-    harness.validate_section(c, "p1", root=ROOT)
+    configuration.validate_section(c, "p1", root=ROOT)
     assert c["p1"]["timing_repeats"] == 5 and c["p1"]["extensions"]["T_max"] == 14  # filled in by the schema
     assert schema["properties"]["noise"]["default"] == "uniform"
 
@@ -76,15 +79,15 @@ def test_defaults_come_from_the_schemas():
 def test_config_errors_name_file_and_field(tmp_path, study, override, field):
     over = tmp_path / "over.yaml"
     over.write_text(yaml.safe_dump({study: override}))
-    default = ROOT / harness.SECTIONS[study].config_file
-    with pytest.raises(harness.ConfigError) as exc:
-        harness.load_config(study, default, over, root=ROOT)
+    default = ROOT / configuration.SECTIONS[study].config_file
+    with pytest.raises(configuration.ConfigError) as exc:
+        configuration.load_config(study, default, over, root=ROOT)
     assert f"field '{field}'" in str(exc.value) and "over.yaml" in str(exc.value)
 
 
 def test_cli_values_get_the_types_their_schema_wants():
     config = {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}
-    harness.type_cli_config(config, {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}, ROOT)
+    configuration.type_cli_config(config, {"p1": {"mu1": "1.5", "language": ["1011"], "timing_repeats": "3"}}, ROOT)
     assert config["p1"] == {"mu1": 1.5, "language": ["1011"], "timing_repeats": 3}
 
 
@@ -92,7 +95,7 @@ def test_cli_values_under_a_ref_with_own_properties_get_their_types():
     """p4.sweep_eta is ``$ref: grid`` plus its own ``properties`` (lo, hi): chunks keeps the grid's integer type
     (the SLURM profile sets it with --config)."""
     config = {"p4": {"sweep_eta": {"lo": "0.2", "chunks": "3"}, "sweep_q": {"chunks": "7"}}}
-    harness.type_cli_config(config, copy.deepcopy(config), ROOT)
+    configuration.type_cli_config(config, copy.deepcopy(config), ROOT)
     assert config["p4"] == {"sweep_eta": {"lo": 0.2, "chunks": 3}, "sweep_q": {"chunks": 7}}
 
 
@@ -102,21 +105,21 @@ def test_write_json_puts_timings_in_their_own_file_and_read_json_puts_them_back(
     data = {"mu2": 1.5, "timing": {"solve_s": 0.01, "iterations": 17}, "rows": [{"wall_time": 2.0, "J": 3.0}, {"J": 4.0}],
             "worst_time": 3}  # worst_time is a time index, a result
     out, timed = tmp_path / "r.json", tmp_path / "timings" / "r.json"
-    harness.write_json(out, data, timings=timed)
+    outputs.write_json(out, data, timings=timed)
     assert json.loads(out.read_text()) == {"mu2": 1.5, "timing": {"iterations": 17}, "rows": [{"J": 3.0}, {"J": 4.0}],
                                            "worst_time": 3}
     assert json.loads(timed.read_text()) == {"timing": {"solve_s": 0.01}, "rows": [{"wall_time": 2.0}, None]}
-    assert harness.read_json(out, timings=timed) == data
+    assert outputs.read_json(out, timings=timed) == data
 
 
 def test_a_step_cannot_write_a_timing_next_to_the_results(tmp_path):
-    with pytest.raises(harness.StepError, match="solve_time"):
-        harness.write_json(tmp_path / "r.json", {"a": {"solve_time": 0.1}})
+    with pytest.raises(errors.StepError, match="solve_time"):
+        outputs.write_json(tmp_path / "r.json", {"a": {"solve_time": 0.1}})
     assert not (tmp_path / "r.json").exists()
     frame = pd.DataFrame({"r": [0.0, 1.0], "mu2": [1.0, 2.0], "solve_time": [0.1, 0.2]})
-    with pytest.raises(harness.StepError, match="solve_time"):
-        harness.write_csv(tmp_path / "t.csv", frame)
-    harness.write_csv(tmp_path / "t.csv", frame, timings=tmp_path / "tt.csv", keys=["r"])
+    with pytest.raises(errors.StepError, match="solve_time"):
+        outputs.write_csv(tmp_path / "t.csv", frame)
+    outputs.write_csv(tmp_path / "t.csv", frame, timings=tmp_path / "tt.csv", keys=["r"])
     assert (tmp_path / "t.csv").read_text() == "r,mu2\n0.0,1.0\n1.0,2.0\n"
     assert (tmp_path / "tt.csv").read_text() == "r,solve_time\n0.0,0.1\n1.0,0.2\n"
 
@@ -132,10 +135,10 @@ def test_code_inputs_follow_the_imports_of_each_study():
 # --------------------------------------------------------------------------- atomic writers
 
 @pytest.mark.parametrize("writer,bad", [
-    (lambda p: harness.write_json(p, {"a": object()}), "json"),
-    (lambda p: harness.write_npz(p, a=np.zeros(2), b=_Boom()), "npz"),
-    (lambda p: harness.write_csv(p, _BoomFrame()), "csv"),
-    (lambda p: harness.write_text(p, None), "txt")])
+    (lambda p: outputs.write_json(p, {"a": object()}), "json"),
+    (lambda p: outputs.write_npz(p, a=np.zeros(2), b=_Boom()), "npz"),
+    (lambda p: outputs.write_csv(p, _BoomFrame()), "csv"),
+    (lambda p: outputs.write_text(p, None), "txt")])
 def test_atomic_writers_leave_no_temp_file_and_keep_the_old_file_on_failure(tmp_path, writer, bad):
     target = tmp_path / f"out.{bad}"
     target.write_text("old")
@@ -162,16 +165,16 @@ def test_figure_writer_is_atomic_too(tmp_path):
     fig, ax = pyplot().subplots()
     ax.plot([0, 1])
     with pytest.raises(Exception):
-        harness.save_figure(fig, tmp_path / "f.png", tmp_path / "f.unknownformat")
+        outputs.save_figure(fig, tmp_path / "f.png", tmp_path / "f.unknownformat")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.png"]
 
 
 def test_writers_round_trip(tmp_path):
-    harness.write_json(tmp_path / "a.json", {"x": np.float64(1.5), "n": np.int64(3), "v": np.arange(2)})
+    outputs.write_json(tmp_path / "a.json", {"x": np.float64(1.5), "n": np.int64(3), "v": np.arange(2)})
     assert (tmp_path / "a.json").read_text() == '{\n  "x": 1.5,\n  "n": 3,\n  "v": [\n    0,\n    1\n  ]\n}\n'
-    harness.write_npz(tmp_path / "a.npz", v=np.arange(3))
+    outputs.write_npz(tmp_path / "a.npz", v=np.arange(3))
     assert np.load(tmp_path / "a.npz")["v"].tolist() == [0, 1, 2]
-    harness.write_csv(tmp_path / "a.csv", pd.DataFrame({"a": [1]}))
+    outputs.write_csv(tmp_path / "a.csv", pd.DataFrame({"a": [1]}))
     assert (tmp_path / "a.csv").read_text() == "a\n1\n"
 
 
@@ -194,7 +197,7 @@ def _smk(tmp_path, study, step, cfg, output, **wildcards):
 
 
 def test_run_from_snakemake_logs_and_writes(tmp_path):
-    cfg = harness.load_config("p1", root=ROOT)
+    cfg = configuration.load_config("p1", root=ROOT)
     harness.run_from_snakemake(_smk(tmp_path, "p1", "model", cfg, {"json": str(tmp_path / "model.json")}))
     assert (tmp_path / "model.json").is_file()
     log = (tmp_path / "logs" / "step.log").read_text().splitlines()
@@ -202,7 +205,7 @@ def test_run_from_snakemake_logs_and_writes(tmp_path):
 
 
 def test_a_failing_step_exits_1_naming_the_config_field(tmp_path, capfd):
-    cfg = harness.load_config("p2", root=ROOT)
+    cfg = configuration.load_config("p2", root=ROOT)
     smk = _smk(tmp_path, "p2", "heatmap_chunk", cfg, {"csv": str(tmp_path / "c.csv")}, variant="theorem2", chunk=9)
     with pytest.raises(SystemExit) as exc:
         harness.run_from_snakemake(smk)
@@ -214,15 +217,15 @@ def test_a_failing_step_exits_1_naming_the_config_field(tmp_path, capfd):
 
 
 def test_a_step_must_write_its_declared_outputs(tmp_path):
-    cfg = harness.load_config("p1", root=ROOT)
-    with pytest.raises(harness.StepError, match="did not write"):
+    cfg = configuration.load_config("p1", root=ROOT)
+    with pytest.raises(errors.StepError, match="did not write"):
         harness.run_step("p1", "model", cfg, outputs={"json": tmp_path / "m.json", "extra": tmp_path / "x.json"})
 
 
 def test_unknown_steps_are_named():
-    with pytest.raises(harness.StepError, match="no step 'nope'"):
+    with pytest.raises(errors.StepError, match="no step 'nope'"):
         harness.get_step("p1", "nope")
-    with pytest.raises(harness.StepError, match="unknown study"):
+    with pytest.raises(errors.StepError, match="unknown study"):
         harness.get_step("p9", "model")
 
 

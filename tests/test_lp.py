@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from eqrec.errors import InfeasibleDesign
-from eqrec.core.lp import LPBuilder, solve_lp
+from eqrec.core.lp import LPBuilder
+from eqrec.core.solvers import solve_lp
 
 
 def small_lp(infeasible=False, unbounded=False):

@@ -12,6 +12,7 @@ import pytest
 from snakemake.iocontainers import Namedlist
 
 from eqrec.studies import harness
+from eqrec.studies import outputs
 from eqrec.studies import notebooks as nbstudy
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -19,7 +20,8 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.py"))
 EXECUTED = ROOT / "results" / "notebooks"
 
 # what a timing or memory value would look like in a notebook's outputs (they live in results/timings/)
-TIMING = re.compile(r"\b\w*(_s|_ms|_time|peak_mb)\b|time \[s\]|IPOPT time|\bwall\b", re.I)
+# a timing or memory field by name (outputs.TIMING_KEYS: results/ holds none of them, results/timings/ all)
+TIMING = re.compile(r"\b(" + "|".join(sorted(outputs.TIMING_KEYS)) + r")\b")
 
 SMALL = '''# %% [markdown]
 # # A small notebook

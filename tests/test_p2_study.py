@@ -8,6 +8,7 @@ import yaml
 
 from eqrec.errors import InputError
 from eqrec.studies import harness
+from eqrec.studies import configuration
 from eqrec.studies.p2_readings import one_based_word, variant_word
 from eqrec.studies.p2_sweeps import constant_interval
 
@@ -26,14 +27,14 @@ def test_constant_interval():
 def test_config_errors(tmp_path):
     p = tmp_path / "c.yaml"
     p.write_text("q: 1\n")
-    with pytest.raises(harness.ConfigError, match="section 'p2'"):
-        harness.load_config("p2", p)
-    with pytest.raises(harness.ConfigError, match="p2.heatmap.chunks"):
-        harness.load_config("p2", overrides={"p2": {"heatmap": {"chunks": 0}}})
-    with pytest.raises(harness.ConfigError, match="p2.heatmap.chunks"):  # more chunks than theta values
-        harness.load_config("p2", overrides={"p2": {"heatmap": {"chunks": 40}}})
-    with pytest.raises(harness.ConfigError, match="p2.f2_words"):
-        harness.load_config("p2", overrides={"p2": {"f2_words": ["1011"]}})
+    with pytest.raises(configuration.ConfigError, match="section 'p2'"):
+        configuration.load_config("p2", p)
+    with pytest.raises(configuration.ConfigError, match="p2.heatmap.chunks"):
+        configuration.load_config("p2", overrides={"p2": {"heatmap": {"chunks": 0}}})
+    with pytest.raises(configuration.ConfigError, match="p2.heatmap.chunks"):  # more chunks than theta values
+        configuration.load_config("p2", overrides={"p2": {"heatmap": {"chunks": 40}}})
+    with pytest.raises(configuration.ConfigError, match="p2.f2_words"):
+        configuration.load_config("p2", overrides={"p2": {"f2_words": ["1011"]}})
     with pytest.raises(InputError):
         variant_word("100111", "nonsense")
 
@@ -78,7 +79,7 @@ SMALL = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants"
 def small_run(tmp_path_factory):
     """The P2 steps on a small grid, run through the harness as the rules run them (defaults from the schema)."""
     d = tmp_path_factory.mktemp("p2")
-    cfg = harness.load_config("p2", "config/p2.yaml", overrides={"p2": SMALL})
+    cfg = configuration.load_config("p2", "config/p2.yaml", overrides={"p2": SMALL})
     run = lambda step, ins=None, outs=None, **wc: harness.run_step("p2", step, cfg, ins, outs, wc)  # noqa: E731
     t = d / "timings"
     run("designs", outs={"json": d / "designs.json", "npz": d / "designs.npz", "timings": t / "designs.json"})

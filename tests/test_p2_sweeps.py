@@ -63,7 +63,3 @@ def test_class_counts_add_up_and_reject_unknown_statuses():
     assert c["second_solver_tried"] == 2 and c["second_solver_decided"] == 1 and c["deadbeat"] == 1
     with pytest.raises(ValueError, match="outside"):
         class_counts(g.assign(status=["optimal", "Unknown", "optimal", "optimal", "optimal"]))
-
-
-def test_definitive_statuses():
-    assert sweeps.DEFINITIVE == ("optimal", "infeasible")

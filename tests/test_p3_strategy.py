@@ -20,6 +20,8 @@ from eqrec.design.scale_sweep import run_size
 from eqrec.errors import InputError
 from eqrec.models import batch_reactor
 from eqrec.studies import harness, p3_strategy
+from eqrec.studies import outputs
+from eqrec import errors
 
 MU1_SWITCH = 0.36  # the smallest period-1 level of the batch reactor (0.3553), rounded up
 
@@ -57,7 +59,7 @@ def _run(step, cfg, inputs=None, outputs=None, wildcards=None):
     """Through the harness once the "p3" study registers the step; directly before that."""
     try:
         harness.get_step("p3", step)
-    except (harness.StepError, ImportError):
+    except (errors.StepError, ImportError):
         outs = harness.Files.of(outputs)
         for p in outs:
             Path(p).parent.mkdir(parents=True, exist_ok=True)
@@ -124,7 +126,7 @@ def test_switching_long_run_inside_the_guarantees(reactor, switching_designs):
     perf, rec = switching_designs
     K = p3_strategy.lqr_gain(reactor)
     for kind in ("uniform", "vertex"):
-        r = long_run_switching(reactor, perf.schedule, rec.schedule, 2000, np.random.default_rng(1), M1=MU1_SWITCH,
+        r = long_run_switching(reactor, perf.schedule, rec.schedule, 2000, np.random.default_rng(1), mu1=MU1_SWITCH,
                                recovery_level=lambda p: rec.levels[p.label], max_delay=2, p_on_time=0.7, kind=kind,
                                x0=np.ones(4), controller=lambda xh: -K @ xh)
         assert r.max_ratio <= 1 + 1e-9
@@ -142,7 +144,7 @@ def test_periodic_long_run_inside_the_guarantees(reactor, periodic_design):
     words = full_delay_language(5, 2)
     K = p3_strategy.lqr_gain(reactor)
     for kind in ("uniform", "vertex"):
-        r = long_run_periodic(reactor, d.schedule, words, 400, np.random.default_rng(2), M1=0.33,
+        r = long_run_periodic(reactor, d.schedule, words, 400, np.random.default_rng(2), mu1=0.33,
                               path_levels=lambda w: path_levels(d, w), kind=kind, x0=np.ones(4),
                               controller=lambda xh: -K @ xh)
         assert r.delays.size == 2000 and r.max_ratio <= 1 + 1e-9
@@ -164,7 +166,7 @@ def test_late_across_a_period_boundary_counts_as_missing(reactor, periodic_desig
         late = [Packet(4, ys[4])] if t == 6 else []
         on = [] if t == 4 else [Packet(t, ys[t])]
         np.testing.assert_array_equal(with_late.step(on + late), without.step(on))
-    r = long_run_periodic(reactor, d.schedule, [], 0, np.random.default_rng(3), M1=0.33,
+    r = long_run_periodic(reactor, d.schedule, [], 0, np.random.default_rng(3), mu1=0.33,
                           path_levels=lambda w: path_levels(d, w), kind="vertex", sequence=["00002", "00000", "22222", "00000"])
     assert sorted(r.dropped) == [(4, 6), (13, 15), (14, 16)]  # y(12) arrives at 14, inside its period
     assert periodic_model_gap(r, reactor, d.schedule) < 1e-12
@@ -209,7 +211,7 @@ def test_scale_steps(tmp_path):
         _run("scale_size", cfg, outputs={"json": f, "timings": t}, wildcards={"T": T, "tau": tau})
         files.append(f)
         timings.append(t)
-    rows = [harness.read_json(f, timings=t) for f, t in zip(files, timings)]
+    rows = [outputs.read_json(f, timings=t) for f, t in zip(files, timings)]
     assert [(r["T"], r["tau"], r["words"], r["sequences"], r["status"]) for r in rows] == [
         (3, 1, 8, 8, "optimal"), (4, 2, 81, 54, "optimal")]
     assert all(r["cols"] > 0 and r["nnz"] > 0 and r["peak_mb"] > 0 for r in rows)

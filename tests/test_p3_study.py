@@ -16,6 +16,7 @@ from eqrec.errors import InputError
 from eqrec.filters import GaussianDesign, error_maps, make_filter, simulate_filter
 from eqrec.models import batch_reactor
 from eqrec.studies import harness
+from eqrec.studies import configuration
 from eqrec.studies.p3 import language_counts, language_examples
 from eqrec.studies.p3_values import _compare_bounds
 
@@ -24,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def cfg():
-    return harness.load_config("p3", root=ROOT)
+    return configuration.load_config("p3", root=ROOT)
 
 
 # --------------------------------------------------------------------------- languages vs brute force
@@ -140,7 +141,7 @@ def test_kalman_exact_worst_case_attained_and_exceeds_levels(name):
 
 def test_steps_run_through_the_harness(cfg, tmp_path):
     """Every P3 step, with a small configuration, into tmp_path; values.json holds numbers and evidence only."""
-    small = harness.load_config("p3", root=ROOT, overrides={"p3": {
+    small = configuration.load_config("p3", root=ROOT, overrides={"p3": {
         "languages": {"count_sizes": [[2, 2], [3, 2]]},
         "batch_reactor": {"horizon": 3, "mu1_readings": [0.5]},
         "augmented": {"mu1": 0.5, "poles": [[0.1, 0.2, 0.3, 0.4]], "s0": [[0, 0, 0, 0], [0.1, 0, 0, 0]]},
@@ -188,21 +189,21 @@ def test_steps_run_through_the_harness(cfg, tmp_path):
     ({"batch_reactor": {"cost": "mean"}}, "p3.batch_reactor.cost"),
     ({"augmented": {"poles": [[0.1, 0.2]]}}, "p3.augmented.poles.0")])
 def test_bad_config_names_file_and_field(override, field):
-    with pytest.raises(harness.ConfigError) as err:
-        harness.load_config("p3", root=ROOT, overrides={"p3": override})
+    with pytest.raises(configuration.ConfigError) as err:
+        configuration.load_config("p3", root=ROOT, overrides={"p3": override})
     assert field in str(err.value) and "config/p3.yaml" in str(err.value).replace("--config", "config/p3.yaml")
 
 
 def test_strategy_and_scale_sections_are_validated_with_defaults():
     """strategy (P3-IMPL) and scale sections: defaults filled in, a misspelt top-level key names itself."""
-    cfg = harness.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 10}}})
+    cfg = configuration.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 10}}})
     assert cfg["strategy"]["steps"] == 10 and cfg["strategy"]["switching"]["p_on_time"] == 0.8
     assert cfg["scale"]["method"] == "simplex"
-    with pytest.raises(harness.ConfigError) as err:
-        harness.load_config("p3", root=ROOT, overrides={"p3": {"stratgy": {"steps": 10}}})
+    with pytest.raises(configuration.ConfigError) as err:
+        configuration.load_config("p3", root=ROOT, overrides={"p3": {"stratgy": {"steps": 10}}})
     assert "stratgy" in str(err.value)
-    with pytest.raises(harness.ConfigError) as err:
-        harness.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 0}}})
+    with pytest.raises(configuration.ConfigError) as err:
+        configuration.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 0}}})
     assert "strategy.steps" in str(err.value)
 
 

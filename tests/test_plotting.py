@@ -1,6 +1,7 @@
 import numpy as np
 
-from eqrec.studies.plotting import guarantee_bars, paper_style, save_figure, trajectory_panel
+from eqrec.studies.outputs import save_figure
+from eqrec.studies.plotting import guarantee_bars, paper_style, trajectory_panel
 
 
 def test_trajectory_panel_writes_pdf_and_png(tmp_path):

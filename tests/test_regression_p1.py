@@ -14,11 +14,12 @@ from eqrec.design.sweeps import min_feasible_M1
 from eqrec.errors import InfeasibleDesign
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import harness
+from eqrec.studies import configuration
 from eqrec.studies import p1 as p1_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p1"
-CFG = harness.load_config("p1", root=ROOT)
+CFG = configuration.load_config("p1", root=ROOT)
 
 
 @pytest.fixture(scope="module")

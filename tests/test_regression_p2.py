@@ -16,10 +16,11 @@ from eqrec.core.systems import acc_system
 from eqrec.design.augmented import design_augmented
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import harness
+from eqrec.studies import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p2"
-CFG = harness.load_config("p2", root=ROOT)
+CFG = configuration.load_config("p2", root=ROOT)
 
 
 @pytest.fixture(scope="module")

@@ -15,11 +15,12 @@ from eqrec.core.systems import acc_system
 from eqrec.design.delay import delay_language, design_delay
 from eqrec.errors import InfeasibleDesign
 from eqrec.studies import harness
+from eqrec.studies import configuration
 from eqrec.studies import p3 as p3_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p3"
-CFG = harness.load_config("p3", root=ROOT)
+CFG = configuration.load_config("p3", root=ROOT)
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +72,7 @@ def test_acc_designs(stored):
 
 def test_kalman_worst_cases(stored, tmp_path):
     k = stored["kalman"]
-    cfg = harness.load_config("p3", root=ROOT, overrides={"p3": {"kalman": {"mu1": k["mu1"]}}})
+    cfg = configuration.load_config("p3", root=ROOT, overrides={"p3": {"kalman": {"mu1": k["mu1"]}}})
     fresh = harness.run_step("p3", "kalman", cfg, outputs={"json": tmp_path / "k.json", "npz": tmp_path / "k.npz"})
     np.testing.assert_allclose(fresh["levels"], k["levels"], rtol=1e-6)
     for name, e in k["filters"].items():

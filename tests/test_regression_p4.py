@@ -11,11 +11,12 @@ import pytest
 
 from eqrec.lmv.model import hold_input_system, steady_state, zero_input_system
 from eqrec.studies import harness
+from eqrec.studies import configuration
 from eqrec.studies import p4 as lmv_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p4"
-CFG = harness.load_config("p4", root=ROOT)
+CFG = configuration.load_config("p4", root=ROOT)
 
 
 @pytest.mark.parametrize("example", ["ex1", "ex2"])

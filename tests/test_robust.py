@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from eqrec.core.lp import LPBuilder, solve_lp
+from eqrec.core.lp import LPBuilder
+from eqrec.core.solvers import solve_lp
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows, worst_case_abs, worst_case_vertex
 
 

@@ -21,7 +21,7 @@ def run_loop(plant, design, rng, steps=300, vertex=False):
     """The README's loop: one lost packet at most per period, inputs, noise in the box; worst error / bound."""
     est = design.estimator().reset(np.zeros(2))
     draw = (lambda r: rng.choice([-r, r], 2)) if vertex else (lambda r: rng.uniform(-r, r, 2))
-    x = draw(design.M1)
+    x = draw(design.mu1)
     worst, lost = 0.0, 3
     for k in range(steps):
         if k % 3 == 0:
@@ -50,7 +50,7 @@ def test_bounds_are_the_class_levels_and_mu1_at_period_ends(plant):
     _, b2 = est.step(None)
     assert b2 == pytest.approx(cert.levels[classes.index(2, (0,))])
     _, b3 = est.step(np.zeros(1))
-    assert b3 == design.M1 and est.time == 3
+    assert b3 == design.mu1 and est.time == 3
     _, b4 = est.step(None)  # next period
     assert b4 == pytest.approx(cert.levels[classes.index(1, ())])
 
@@ -112,7 +112,7 @@ def test_statespace_in_estimator_out_input_output_response(plant):
     arrived = np.ones(N)
     arrived[[1, 5, 9, 14]] = 0  # one loss at most per period of 3
     x = np.zeros((2, N + 1))
-    x[:, 0] = rng.uniform(-design.M1, design.M1, 2)
+    x[:, 0] = rng.uniform(-design.mu1, design.mu1, 2)
     y = np.zeros((1, N))
     for k in range(N):
         y[:, k] = plant.C @ x[:, k] + rng.uniform(-0.05, 0.05)

@@ -15,6 +15,8 @@ import pytest
 from eqrec.design.scale_sweep import FIELDS, class_count, measure_size, run_size
 from eqrec.models import batch_reactor
 from eqrec.studies import harness, p3_strategy
+from eqrec.studies import outputs
+from eqrec.studies import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -27,7 +29,7 @@ def reactor():
 
 @pytest.fixture(scope="module")
 def cfg():
-    return harness.load_config("p3", root=ROOT)
+    return configuration.load_config("p3", root=ROOT)
 
 
 def _planned(target: str) -> str:
@@ -48,7 +50,7 @@ def test_scale_config_validates_with_its_defaults(cfg):
     assert [8, 3] in sc["tree_slow_sizes"]
     assert [30, 4] in sc["class_sizes"] and [5, 2] in sc["class_sizes"]
     # every key has a schema default: an empty scale section gets the same values
-    bare = harness.load_config("p3", root=ROOT, overrides={"p3": {"scale": {"method": sc["method"]}}})
+    bare = configuration.load_config("p3", root=ROOT, overrides={"p3": {"scale": {"method": sc["method"]}}})
     assert bare["scale"] == sc
 
 
@@ -56,8 +58,8 @@ def test_scale_config_validates_with_its_defaults(cfg):
                                             ({"class_sizes": [[5]]}, "p3.scale.class_sizes.0"),
                                             ({"method": "barrier"}, "p3.scale.method")])
 def test_bad_scale_config_names_the_field(override, field):
-    with pytest.raises(harness.ConfigError) as err:
-        harness.load_config("p3", root=ROOT, overrides={"p3": {"scale": override}})
+    with pytest.raises(configuration.ConfigError) as err:
+        configuration.load_config("p3", root=ROOT, overrides={"p3": {"scale": override}})
     assert field in str(err.value)
 
 
@@ -129,7 +131,7 @@ def test_table_reads_old_tree_rows_and_names_the_slow_sizes(tmp_path):
     for i, row in enumerate((new, old)):
         files.append(str(tmp_path / f"{i}.json"))
         timings.append(str(tmp_path / "timings" / f"{i}.json"))
-        harness.write_json(files[-1], row, timings=timings[-1])
+        outputs.write_json(files[-1], row, timings=timings[-1])
     assert "peak_mb" not in Path(files[0]).read_text() and "peak_mb" in Path(timings[0]).read_text()
     out = {"csv": str(tmp_path / "t.csv"), "md": str(tmp_path / "t.md"),
            "timings_csv": str(tmp_path / "timings" / "t.csv"), "timings_md": str(tmp_path / "timings" / "t.md")}

@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from eqrec.studies import harness
+from eqrec.studies import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -96,9 +97,9 @@ def test_unknown_section_is_refused_naming_it(workdir, how):
 
 
 def test_check_sections_accepts_the_four_sections():
-    harness.check_sections({"p1": {}, "p2": {}, "p3": {}, "p4": {}})
-    with pytest.raises(harness.ConfigError, match="'p5'"):
-        harness.check_sections({"p1": {}, "p5": {}})
+    configuration.check_sections({"p1": {}, "p2": {}, "p3": {}, "p4": {}})
+    with pytest.raises(configuration.ConfigError, match="'p5'"):
+        configuration.check_sections({"p1": {}, "p5": {}})
 
 
 def test_heatmap_chunks_follow_the_resolved_config(workdir):
@@ -113,7 +114,7 @@ def test_heatmap_chunks_follow_the_resolved_config(workdir):
 
 def _heatmap(tmp_path, chunks):
     """The reduced heat map (4 x 4 grid, a sub-grid of the configured 31 x 31 one) in ``chunks`` jobs."""
-    cfg = harness.load_config("p2", root=ROOT, overrides={"p2": {"heatmap": {"n_r": 4, "n_theta": 4, "chunks": chunks}}})
+    cfg = configuration.load_config("p2", root=ROOT, overrides={"p2": {"heatmap": {"n_r": 4, "n_theta": 4, "chunks": chunks}}})
     files = []
     for k in range(chunks):
         files.append(tmp_path / f"chunk_{k}.csv")
@@ -143,7 +144,7 @@ def test_heatmap_override_of_chunks_gives_the_same_whole_grid(tmp_path):
 
 
 def test_sweep_merge_checks_the_grid(tmp_path):
-    cfg = harness.load_config("p4", root=ROOT, overrides={"p4": {"sweep_eta": {"num": 4, "chunks": 2}}})
+    cfg = configuration.load_config("p4", root=ROOT, overrides={"p4": {"sweep_eta": {"num": 4, "chunks": 2}}})
     files = [tmp_path / f"chunk{k}.npz" for k in range(2)]
     for k, f in enumerate(files):
         harness.run_step("p4", "sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})

@@ -1,4 +1,4 @@
-"""eqrec: equalized-recovery estimators with missing and delayed data.
+"""eqrec: equalized-recovery bounded-error estimators with missing and delayed data.
 
 Reference replication of
 
@@ -7,13 +7,96 @@ Reference replication of
 * S. M. Hassaan, Q. Shen, S. Z. Yong, "Bounded-error estimator design with
   missing data patterns via state augmentation", ACC 2019 (the *augmented
   paper*);
+* S. M. Hassaan, Q. Shen, S. Z. Yong, "Equalized recovery state estimators
+  for linear systems with delayed and missing observations" (the
+  *delayed-data paper*);
 * the companion LMV study of packet dropouts with zero-input compensation.
 
-One module per concept: :mod:`eqrec.systems`, :mod:`eqrec.languages`,
-:mod:`eqrec.stacking`, :mod:`eqrec.robust`, :mod:`eqrec.lp`,
-:mod:`eqrec.design_prefix`, :mod:`eqrec.gains`, :mod:`eqrec.certify`,
-:mod:`eqrec.estimator`, :mod:`eqrec.simulate`, :mod:`eqrec.plotting`,
-:mod:`eqrec.claims`.
+The user-facing functions are in this namespace, as in python-control's
+``control``::
+
+    import eqrec
+    system = eqrec.acc_system()
+    design = eqrec.design_prefix(system, ["101111", "110111"], mu1=1.0)
+    estimator = design.estimator()
+
+Systems
+    :class:`AffineSystem`, :func:`acc_system`, :func:`batch_reactor`, :func:`load_system`
+Arrival patterns (languages)
+    :func:`as_language`, :func:`validate_language`, :func:`parse_delay_word`,
+    :func:`full_delay_language`, :class:`PrefixTree`
+Designs (each returns a certified :class:`Design`)
+    :func:`design_time_based`, :func:`design_prefix`, :func:`design_delay`,
+    :func:`design_delay_global`, :func:`design_augmented`, :func:`min_recovery_level`
+Certificates
+    :func:`certify_schedule`
+Estimators and simulation
+    :class:`GuaranteedEstimator` (``Design.estimator()``), :class:`ClassEstimator`,
+    :func:`simulate_run`, :func:`monte_carlo`
+Errors
+    :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
+    :class:`SolverFailure`, :class:`CertificationFailure`
+
+The layers (:mod:`eqrec.core`, :mod:`eqrec.design`, :mod:`eqrec.filters`,
+:mod:`eqrec.lmv`, :mod:`eqrec.studies`) are importable as usual.  The names
+above load on first use (PEP 562), so ``import eqrec`` itself imports no
+solver.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 __version__ = "0.1.0"
+
+#: Public name -> the module that defines it.
+_PUBLIC: dict[str, str] = {
+    # systems
+    "AffineSystem": "eqrec.core.systems",
+    "acc_system": "eqrec.core.systems",
+    "load_system": "eqrec.core.systems",
+    "batch_reactor": "eqrec.models",
+    # arrival patterns
+    "as_language": "eqrec.core.patterns",
+    "validate_language": "eqrec.core.patterns",
+    "parse_delay_word": "eqrec.core.patterns",
+    "full_delay_language": "eqrec.core.patterns",
+    "PrefixTree": "eqrec.core.patterns",
+    # designs
+    "Design": "eqrec.design.result",
+    "design_time_based": "eqrec.design.time_based",
+    "design_prefix": "eqrec.design.prefix",
+    "design_delay": "eqrec.design.delay",
+    "design_delay_global": "eqrec.design.delay",
+    "design_augmented": "eqrec.design.augmented",
+    "min_recovery_level": "eqrec.design.classes",
+    # certificates
+    "certify_schedule": "eqrec.core.certify",
+    # estimators and simulation
+    "GuaranteedEstimator": "eqrec.core.runtime",
+    "ClassEstimator": "eqrec.core.estimator",
+    "simulate_run": "eqrec.core.simulate",
+    "monte_carlo": "eqrec.core.simulate",
+    # errors
+    "EqrecError": "eqrec.errors",
+    "InputError": "eqrec.errors",
+    "InfeasibleDesign": "eqrec.errors",
+    "SolverFailure": "eqrec.errors",
+    "CertificationFailure": "eqrec.errors",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name: str) -> Any:
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'eqrec' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

@@ -28,6 +28,7 @@ import numpy as np
 
 from eqrec.core.solvers import SOLVER_NAMES
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
+from eqrec.io import write_text
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
 #: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).
@@ -230,7 +231,7 @@ def run_design(args: argparse.Namespace) -> dict:
         extra = {k: (np.asarray(v).tolist() if v is not None else None) for k, v in design.extra.items()
                  if k in ("L", "s0", "M", "nu")}
     cert = design.certificate
-    out = {"method": args.method, "mu1": design.M1, "mu2": design.mu2, "certified_mu2": cert.mu2,
+    out = {"method": args.method, "mu1": design.mu1, "mu2": design.mu2, "certified_mu2": cert.mu2,
            "certified_terminal": cert.terminal, "solver": design.solution.solver, "status": design.solution.status,
            "words": list(words), "designed_words": list(design.schedule.designed_words),
            "gains": design.schedule.to_json(), **extra}
@@ -356,12 +357,9 @@ def _check_out(out: str | None) -> Path | None:
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
     try:
-        tmp.write_text(text)
-        tmp.replace(path)
+        write_text(path, text)  # a temporary file beside it, then os.replace; removed on failure
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
         raise InputError(f"cannot write ({exc.strerror})", str(path), "--out") from None
 
 

@@ -4,20 +4,50 @@ from __future__ import annotations
 
 
 class EqrecError(Exception):
-    """Base class of all errors raised on purpose by :mod:`eqrec`."""
+    """Base class of all errors raised on purpose by :mod:`eqrec`.
+
+    Catch it to handle every deliberate failure of a design (bad input,
+    infeasible problem, solver or certification failure) in one place.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> issubclass(eqrec.InfeasibleDesign, eqrec.EqrecError)
+    True
+    """
 
 
 class InputError(EqrecError, ValueError):
     """Malformed user input (matrix shapes, words, config fields).
 
+    Also a :class:`ValueError`.  The message is prefixed with the source and
+    the field when known (``"<source>: field '<field>': <message>"``); the
+    command line reports it with exit status 1.
+
     Parameters
     ----------
-    message
+    message : str
         What is wrong.
-    source
+    source : str or None, optional
         File (or other origin) the value came from, if known.
-    field
+    field : str or None, optional
         Name of the offending field, if known.
+
+    Attributes
+    ----------
+    source : str or None
+        As given.
+    field : str or None
+        As given.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> try:
+    ...     eqrec.validate_language(["1012"], source="language.yaml")
+    ... except eqrec.InputError as exc:
+    ...     print(exc.field, "|", exc)
+    words | language.yaml: field 'words': word '1012' has letters ['2'] outside the alphabet {0, 1}
     """
 
     def __init__(self, message: str, source: str | None = None, field: str | None = None):
@@ -34,16 +64,37 @@ class InputError(EqrecError, ValueError):
 
 
 class InfeasibleDesign(EqrecError):
-    """The design problem has no solution (e.g. the recovery level is too small)."""
+    """The design problem has no solution (e.g. the recovery level is too small).
+
+    Raised when the design LP is infeasible: no estimator of the chosen
+    structure achieves equalized recovery at the requested level ``μ1``
+    (exit status 3 on the command line).  The message names the terminal
+    class that cannot reach ``μ1`` where the class engine knows it.
+    """
 
 
 class SolverFailure(EqrecError):
-    """The solver stopped without a usable optimum (numerical trouble, limits)."""
+    """The solver stopped without a usable optimum (numerical trouble, limits).
+
+    Exit status 4 on the command line.
+    """
 
 
 class CertificationFailure(EqrecError):
-    """Recovered gains do not achieve what the optimiser reported."""
+    """Recovered gains do not achieve what the optimiser reported.
+
+    Raised by the independent certification
+    (:func:`eqrec.core.certify.certify_design`) when the exact worst case of
+    the recovered gains exceeds the optimised ``μ2`` (or ``μ1`` at a
+    pattern's end) by more than the tolerance; exit status 4 on the command
+    line.
+    """
 
 
 class NotMeanSquareStable(EqrecError):
     """A stochastic system whose second moments diverge."""
+
+
+class StepError(EqrecError):
+    """A pipeline step that did not do what its rule declares (an output not written, a timing without a
+    timings output)."""

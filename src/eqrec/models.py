@@ -64,13 +64,43 @@ def batch_reactor_matrices(Ts: float = BATCH_REACTOR_TS) -> tuple[np.ndarray, np
 
 
 def batch_reactor(Ts: float = BATCH_REACTOR_TS, eta_v: float = BATCH_REACTOR_ETA_V) -> AffineSystem:
-    """The batch reactor of Section IV-A: ZOH at ``Ts``, printed ``C``, ``W = ∅``, ``V = I``, bound ``eta_v``.
+    r"""The batch reactor of Section IV-A: ZOH at ``Ts``, printed ``C``, ``W = ∅``, ``V = I``, bound ``eta_v``.
+
+    Rosenbrock's unstable batch reactor :math:`\dot x = A_c x + B_c u`
+    (:data:`BATCH_REACTOR_AC`, :data:`BATCH_REACTOR_BC`) discretised with a
+    zero-order hold, :math:`A = e^{A_c T_s}`,
+    :math:`B = \int_0^{T_s} e^{A_c s}\,ds\,B_c` (as MATLAB's ``c2d``), with
+    the output matrix :data:`BATCH_REACTOR_C` printed in Section IV-A of the
+    delayed-data paper (Hassaan, Shen, Yong), no process noise and
+    measurement noise :math:`V = I`, :math:`\|v\|_\infty \le \eta_v`.
+
+    Parameters
+    ----------
+    Ts : float, optional
+        Sampling time [s] (Section IV-A: 0.05).
+    eta_v : float, optional
+        Measurement-noise bound (Section IV-A: 0.05, five standard
+        deviations of ``v ~ N(0, 0.01²)``).
 
     Returns
     -------
     AffineSystem
         ``n = 4``, ``p = 2``, ``m = 2`` and no process-noise columns
         (``E`` of shape ``(4, 0)``, ``eta_w = 0``).
+
+    Raises
+    ------
+    InputError
+        If ``Ts`` is not a positive number.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> reactor = eqrec.batch_reactor()
+    >>> reactor.n, reactor.p, reactor.m, reactor.E.shape, reactor.eta_w
+    (4, 2, 2, (4, 0), 0.0)
+    >>> round(float(reactor.A[0, 0]), 4)  # the paper prints 1.0795
+    1.0795
     """
     A, B = batch_reactor_matrices(Ts)
     return AffineSystem(A=A, B=B, C=BATCH_REACTOR_C.copy(), E=np.zeros((4, 0)), eta_w=0.0, eta_v=eta_v,

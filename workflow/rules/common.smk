@@ -9,9 +9,10 @@
 # Each study's rules list as `code` inputs the package modules that study
 # imports, transitively (harness.code_inputs walks the imports with ast), so
 # editing code a study does not import (e.g. eqrec/lmv for P1) does not re-run
-# its jobs. harness.section_params sorts the section's keys, so only a changed
+# its jobs. configuration.section_params sorts the section's keys, so only a changed
 # value re-plans.
-from eqrec.studies.harness import code_inputs, section_params
+from eqrec.studies.configuration import section_params
+from eqrec.studies.harness import code_inputs
 
 # The paper's value of one claim (config/claims.yaml, the only place published
 # numbers live), for rules that evaluate the paper's own design or draw a published
@@ -22,7 +23,7 @@ from eqrec.studies.claims import published_value
 CLAIMS_FILE = "config/claims.yaml"
 
 # The timings file (under results/timings/) a step writes beside each results file.
-from eqrec.studies.harness import timings_of
+from eqrec.studies.outputs import timings_of
 
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"

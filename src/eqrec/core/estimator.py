@@ -244,18 +244,32 @@ class ClassEstimator(_StampedEstimator):
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The model (``A, B, C, f``) used by the estimator (time-varying
         matrices are read at absolute times, as in :class:`RecoveryEstimator`).
-    gains
+    gains : ClassGains
         One ``K`` per class (:class:`eqrec.core.classes.ClassGains`, e.g.
         ``design.class_gains`` of the class engine).
-    xhat0
+    xhat0 : array_like, shape (n,)
         Initial estimate ``x̂(0)``.
-    periodic
-        Restart the horizon every ``T`` steps instead of stopping.
-    t0
+    periodic : bool, optional
+        Restart the horizon every ``T`` steps instead of stopping (default
+        ``False``).
+    t0 : int, optional
         Absolute time of the first step; packets stamped before it are dropped.
+
+    Attributes
+    ----------
+    xhat : ndarray, shape (n,)
+        The current estimate (of time :attr:`time`).
+    time : int
+        Absolute time of the next step.
+    period_time : int
+        Steps taken in the current period (``0..T``).
+    observed_prefix : ArrivalPattern
+        The arrival prefix observed so far in the current period.
+    prediction : ndarray, shape (n,)
+        ``x̄`` of the current time.
 
     Raises
     ------
@@ -263,6 +277,22 @@ class ClassEstimator(_StampedEstimator):
         Gains whose shapes do not fit the system; in :meth:`step`, the
         errors of :meth:`RecoveryEstimator.step`, or observed data whose class
         ``(t+1, S)`` the gains do not have.
+
+    See Also
+    --------
+    GuaranteedEstimator : the same estimator with its per-step guarantee
+        (what :meth:`Design.estimator` returns).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> acc = eqrec.acc_system()
+    >>> design = eqrec.design_prefix(acc, ["101111", "110111", "111011", "111101"], mu1=1.0)
+    >>> estimator = eqrec.ClassEstimator(acc, design.class_gains, np.zeros(3))
+    >>> xhat = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives on time
+    >>> xhat.shape, estimator.time, estimator.observed_prefix.label
+    ((3,), 1, '1')
     """
 
     def __init__(self, system: AffineSystem, gains: ClassGains, xhat0: np.ndarray, periodic: bool = False,
@@ -293,8 +323,32 @@ class ClassEstimator(_StampedEstimator):
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
         r"""Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
 
-        ``y`` as in :meth:`RecoveryEstimator.step`.  Returns
-        :math:`\hat x(t+1) = \bar x(t+1) + K_{(t+1,S)}(y_S - \bar y_S)`.
+        Advances the noise-free prediction
+        :math:`\bar x(t+1) = A\bar x(t) + B u(t) + f` and returns
+        :math:`\hat x(t+1) = \bar x(t+1) + K_{(t+1,S)}(y_S - \bar y_S)`,
+        with ``S`` the measurement times of the period received so far.
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            As in :meth:`RecoveryEstimator.step`: ``None`` (nothing arrives),
+            an array (``y(t)`` arriving on time) or :class:`Packet` objects
+            stamped with their own (absolute) times ``τ <= t``.
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)`` (a copy).
+
+        Raises
+        ------
+        InputError
+            When the horizon is over (not periodic), for a packet from the
+            future, a second packet with one stamp, a measurement of the
+            wrong length, or observed data whose class ``(t+1, S)`` the
+            gains do not have.
         """
         sys = self.system
         k, t = self._intake(y)

@@ -216,10 +216,3 @@ class LPSolution:
         if not self.optimal:
             raise SolverFailure(f"{what}: solver {self.solver} stopped with status '{self.status}'")
         return self
-
-
-def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None) -> LPSolution:
-    """Solve ``lp`` with a solver of the registry :mod:`eqrec.core.solvers` (see :func:`eqrec.core.solvers.solve_lp`)."""
-    from eqrec.core.solvers import solve_lp as _solve
-
-    return _solve(lp, solver, options)

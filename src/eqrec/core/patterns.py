@@ -202,7 +202,43 @@ def parse_delay_word(word: str, max_delay: int | None = None, *, field_name: str
                      source: str | None = None) -> ArrivalPattern:
     """Parse a delay word of digits ``τ(0) ... τ(T-1)`` (eq. (1) of the delayed-data paper).
 
-    Raises :class:`InputError` for a non-digit letter or a delay above ``max_delay``.
+    The measurement of time ``i`` arrives at ``a(i) = i + τ(i)`` if
+    ``i + τ(i) < T`` and never (missing within the horizon) otherwise, so
+    a missing-data word is the special case where every delay is ``0`` or
+    at least ``T``.  The word's event sequence (Definitions 2-4, eq. (2) of
+    the delayed-data paper) is :meth:`ArrivalPattern.events`.
+
+    Parameters
+    ----------
+    word : str
+        Digits ``0-9``, one delay per measurement time (surrounding
+        whitespace is ignored).
+    max_delay : int or None, optional
+        The largest allowed delay ``τ̄``; ``None``: no limit.
+    field_name : str, optional
+        Field named in the error message.
+    source : str or None, optional
+        File (or other origin) named in the error message.
+
+    Returns
+    -------
+    ArrivalPattern
+        The word's arrival pattern, labelled with ``word``.
+
+    Raises
+    ------
+    InputError
+        For a non-string or empty word, a non-digit letter, or a delay above
+        ``max_delay``.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> pattern = eqrec.parse_delay_word("0120")
+    >>> pattern
+    ArrivalPattern('0120', arrivals=(0, 2, None, 3))
+    >>> pattern.events()
+    ('1', '10', '110', '1101')
     """
     if not isinstance(word, str):
         raise InputError(f"a delay word must be a string of digits, got {word!r}", source, field_name)
@@ -238,8 +274,47 @@ def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str = "missing
                 source: str | None = None) -> tuple[ArrivalPattern, ...]:
     """Patterns of a language, reduced to distinct event sequences (``L^{E'}``), first label kept.
 
-    Raises :class:`InputError` for bad letters, an empty language, mixed
-    lengths when ``fixed_length``, or a length other than ``length``.
+    Words whose event sequences agree (e.g. the delay words ``0120`` and
+    ``0130``: both lose ``y(2)`` within the horizon) are one pattern: the
+    reduced event-based language ``L^{E'}`` of Section III-A of the
+    delayed-data paper.  Order is kept (first occurrence).
+
+    Parameters
+    ----------
+    words : iterable of str or ArrivalPattern
+        The language: patterns, or words of ``kind``; a single word or
+        pattern is a one-word language.
+    kind : {"missing", "delay"}, optional
+        How to read string words: 0/1 missing-data words (eq. (3) of the
+        prefix-based paper) or delay words (:func:`parse_delay_word`).
+    max_delay : int or None, optional
+        Largest allowed delay of a delay word (``None``: no limit).
+    fixed_length : bool, optional
+        Require all words to have the same length (default).
+    length : int or None, optional
+        Required length of every word (``None``: any).
+    field_name : str, optional
+        Field named in error messages.
+    source : str or None, optional
+        File (or other origin) named in error messages.
+
+    Returns
+    -------
+    tuple of ArrivalPattern
+        The distinct patterns, in the order of their first occurrence.
+
+    Raises
+    ------
+    InputError
+        For bad letters, an empty language, mixed lengths when
+        ``fixed_length``, a length other than ``length``, or an unknown
+        ``kind``.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> eqrec.as_language(["0120", "0130", "0000"], kind="delay")
+    (ArrivalPattern('0120', arrivals=(0, 2, None, 3)), ArrivalPattern('0000', arrivals=(0, 1, 2, 3)))
     """
     if isinstance(words, (str, ArrivalPattern)):
         words = [words]
@@ -263,13 +338,81 @@ def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str = "missing
 
 def validate_language(words: Iterable[str], *, fixed_length: bool = True, length: int | None = None,
                       field_name: str = "words", source: str | None = None) -> tuple[str, ...]:
-    """Validate and de-duplicate a missing-data language given as 0/1 words (order kept)."""
+    """Validate and de-duplicate a missing-data language given as 0/1 words (order kept).
+
+    The string form of :func:`as_language` for missing-data words
+    ``q(0) ... q(T-1)`` (eq. (3) of the prefix-based paper: ``1`` the
+    measurement is available, ``0`` missing).
+
+    Parameters
+    ----------
+    words : iterable of str
+        Words over ``{0, 1}`` (surrounding whitespace is ignored); a single
+        string is a one-word language.
+    fixed_length : bool, optional
+        Require all words to have the same length (default).
+    length : int or None, optional
+        Required length of every word (``None``: any).
+    field_name : str, optional
+        Field named in error messages.
+    source : str or None, optional
+        File (or other origin) named in error messages.
+
+    Returns
+    -------
+    tuple of str
+        The distinct words, in the order of their first occurrence.
+
+    Raises
+    ------
+    InputError
+        For letters other than ``0`` and ``1``, an empty language, mixed
+        lengths when ``fixed_length``, or a length other than ``length``.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> eqrec.validate_language(["101111", "110111", "101111"])
+    ('101111', '110111')
+    """
     return tuple(p.label for p in as_language(words, fixed_length=fixed_length, length=length,
                                               field_name=field_name, source=source))
 
 
 def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
-    """All ``(τ̄+1)^T`` delay words of length ``T`` with delays ``0..τ̄``, in lexicographic order."""
+    """All ``(τ̄+1)^T`` delay words of length ``T`` with delays ``0..τ̄``, in lexicographic order.
+
+    The full delayed-data language ``{0, ..., τ̄}^T`` of the delayed-data
+    paper (Example 1: ``T = 2``, ``τ̄ = 2``, nine words; Section IV-A:
+    ``T = 5``, ``τ̄ = 2``, 243 words).  The words are not reduced to
+    distinct event sequences (:func:`as_language` does that: six for
+    Example 1, as in Example 3; 162 for Section IV-A).
+
+    Parameters
+    ----------
+    T : int
+        Word length (horizon), at least 1.
+    max_delay : int
+        Largest delay ``τ̄``, ``0..9`` (one digit per delay).
+
+    Returns
+    -------
+    tuple of str
+        The ``(max_delay + 1) ** T`` words.
+
+    Raises
+    ------
+    InputError
+        If ``T < 1`` or ``max_delay`` is outside ``0..9``.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> eqrec.full_delay_language(2, 2)
+    ('00', '01', '02', '10', '11', '12', '20', '21', '22')
+    >>> len(eqrec.as_language(eqrec.full_delay_language(2, 2), kind="delay"))
+    6
+    """
     if T < 1 or max_delay < 0 or max_delay > 9:
         raise InputError(f"need T >= 1 and 0 <= max delay <= 9, got T = {T}, max delay = {max_delay}")
     digits = np.indices((max_delay + 1,) * T).reshape(T, -1).T
@@ -353,17 +496,56 @@ class PrefixNode:
 class PrefixTree:
     """The prefix tree of a (finite-length) language of arrival patterns.
 
+    One node per distinct non-empty prefix ``Pref(λ)`` of the language's
+    patterns (for delay words: per prefix of the event sequence,
+    Definition 6 of the delayed-data paper).  The node of a prefix of length
+    ``t + 1`` owns the gain row of time ``t``, ``F(t, ·, q_{0:t})`` and
+    ``u0(t, q_{0:t})`` of eq. (7) of the prefix-based paper: the words
+    sharing a prefix share these gains, which is the set ``Q(L)`` of
+    Theorem 1 / eq. (11) there (constraint (6) of the delayed-data paper).
+    For ``{1011, 1101}`` the nodes are ``1, 10, 11, 101, 110, 1011, 1101``
+    (Section III of the prefix-based paper).
+
     Nodes are numbered breadth first (by depth, then by label), so a parent
     always precedes its children.
 
     Parameters
     ----------
-    words
-        Patterns, or words of ``kind``.  Patterns may differ in length
-        (finite-length languages, Section V of the prefix-based paper); a
-        pattern that is a prefix of another marks an inner node terminal.
-    kind, max_delay
-        How to read string words (:func:`as_pattern`).
+    words : iterable of str or ArrivalPattern
+        Patterns, or words of ``kind`` (reduced to distinct event
+        sequences).  Patterns may differ in length (finite-length languages,
+        Section V of the prefix-based paper); a pattern that is a prefix of
+        another marks an inner node terminal.
+    kind : {"missing", "delay"}, optional
+        How to read string words (:func:`as_pattern`): 0/1 missing-data
+        words (default) or delay words.
+    max_delay : int or None, optional
+        Largest allowed delay of a delay word (``None``: no limit).
+    source : str or None, optional
+        File (or other origin) named in error messages.
+
+    Attributes
+    ----------
+    patterns : tuple of ArrivalPattern
+        The language's distinct patterns (:func:`as_language`).
+    nodes : list of PrefixNode
+        The nodes, breadth first.
+    index_of : dict
+        Node index of each prefix (an :class:`ArrivalPattern`).
+
+    Raises
+    ------
+    InputError
+        For bad words or an empty language.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> tree = eqrec.PrefixTree(["1011", "1101"])
+    >>> len(tree), tree.depth, tree.nodes_per_depth()
+    (7, 4, [1, 2, 2, 2])
+    >>> [node.label for node in tree]
+    ['1', '10', '11', '101', '110', '1011', '1101']
     """
 
     def __init__(self, words: Iterable["ArrivalPattern | str"], *, kind: str = "missing",
@@ -400,13 +582,45 @@ class PrefixTree:
         return max(p.T for p in self.patterns)
 
     def nodes_per_depth(self) -> list[int]:
-        """Number of nodes at depths ``1..depth``."""
+        """Number of nodes at depths ``1..depth``.
+
+        Returns
+        -------
+        list of int
+            Entry ``k`` counts the prefixes of length ``k + 1``.
+        """
         return np.bincount([n.depth for n in self.nodes], minlength=self.depth + 1)[1:].tolist()
 
     def _key(self, prefix: "ArrivalPattern | str") -> ArrivalPattern:
         return prefix if isinstance(prefix, ArrivalPattern) else as_pattern(prefix)
 
     def node(self, prefix: "ArrivalPattern | str") -> PrefixNode:
+        """The node of a prefix.
+
+        Parameters
+        ----------
+        prefix : ArrivalPattern or str
+            A prefix of one of the language's patterns (a 0/1 word is read as
+            a missing-data pattern).
+
+        Returns
+        -------
+        PrefixNode
+            Its node (index, parent, children, terminal flag).
+
+        Raises
+        ------
+        InputError
+            If ``prefix`` is not a prefix of any pattern of the language.
+
+        Examples
+        --------
+        >>> import eqrec
+        >>> tree = eqrec.PrefixTree(["1011", "1101"])
+        >>> node = tree.node("10")
+        >>> node.index, node.parent, node.children, node.terminal
+        (1, 0, [3], False)
+        """
         key = self._key(prefix)
         try:
             return self.nodes[self.index_of[key]]
@@ -415,15 +629,54 @@ class PrefixTree:
                              f"{list(self.words)}") from None
 
     def path(self, pattern: "ArrivalPattern | str") -> list[PrefixNode]:
-        """Nodes of the prefixes of length ``1, 2, ..., len(pattern)``."""
+        """Nodes of the prefixes of length ``1, 2, ..., len(pattern)``.
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            A pattern (or 0/1 word) all of whose prefixes are in the tree,
+            e.g. one of the language's patterns or a prefix of one.
+
+        Returns
+        -------
+        list of PrefixNode
+            Root first; the node of length ``t + 1`` owns the gain row of
+            time ``t`` along ``pattern``.
+
+        Raises
+        ------
+        InputError
+            If a prefix of ``pattern`` is not in the tree.
+        """
         return [self.node(q) for q in self._key(pattern).prefixes()]
 
     def contains_prefix(self, prefix: "ArrivalPattern | str") -> bool:
+        """Whether ``prefix`` is a prefix of a pattern of the language (a node of the tree).
+
+        Parameters
+        ----------
+        prefix : ArrivalPattern or str
+            The prefix (a 0/1 word is read as a missing-data pattern).
+
+        Returns
+        -------
+        bool
+        """
         return self._key(prefix) in self.index_of
 
     def sequences_through(self) -> dict[int, int]:
-        """Number of the language's patterns through each node (node index -> count): the weight of a node's
-        level in the delayed-data paper's sum cost."""
+        """Number of the language's patterns through each node: the weight of a node's level in the sum cost.
+
+        In the delayed-data paper's cost
+        ``J = μ1 + Σ_k Σ_α μ2,k^α`` (Section IV-A, with the problem of
+        Proposition 1 / eq. (10)), the level of a node is paid once by every
+        event sequence through it.
+
+        Returns
+        -------
+        dict of int to int
+            Node index -> number of patterns having that node's prefix.
+        """
         through = {node.index: 0 for node in self.nodes}
         for pat in self.patterns:
             for anc in self.path(pat):

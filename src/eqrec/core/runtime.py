@@ -39,7 +39,21 @@ BoundRule = Callable[[ArrivalPattern], float]
 
 
 class GuaranteedEstimator:
-    """A design's causal estimator with its per-step guarantee (module docstring).
+    r"""A design's causal estimator with its per-step guarantee (module docstring).
+
+    Runs the estimator of a design (usually made by :meth:`Design.estimator`,
+    not by hand) in the convention of python-control's discrete-time systems
+    and of filterpy's filters: :meth:`reset` from ``x̂(0)``, then one
+    :meth:`step` per time with what arrived.  Each step returns the
+    prediction ``x̂(t+1)`` and its guarantee ``b(t+1)``,
+
+    .. math:: \|x(t+1) - \hat x(t+1)\|_\infty \le b(t+1),
+
+    valid for every noise in the design's box and every arrival pattern of
+    its language provided :math:`\|x(0) - \hat x(0)\|_\infty \le \mu_1`
+    (equalized recovery, Definition 2 of the prefix-based paper): the
+    certified level of the observed prefix (or of its class), and ``μ1`` at
+    the end of each period.
 
     Parameters
     ----------
@@ -51,16 +65,34 @@ class GuaranteedEstimator:
         ``bound_of(prefix) -> float``, the guarantee after an observed prefix.
     mu1 : float
         The recovery level (the guarantee at ``t = 0`` and at each period end).
-    periodic : bool
+    periodic : bool, optional
         Restart the horizon every ``T`` steps (Section V of the prefix-based
-        paper): the gains are reused for ever.
+        paper): the gains are reused for ever (default).
 
     Attributes
     ----------
     x : ndarray
         The current estimate (of time :attr:`time`).
     bound : float
-        Its guarantee on the infinity norm of the error.
+        Its guarantee on the infinity norm of the error (``nan`` before
+        :meth:`reset`).
+    time : int
+        Absolute time of the current estimate.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
+    >>> estimator = design.estimator().reset(np.zeros(3))
+    >>> estimator.time, estimator.bound
+    (0, 1.0)
+    >>> xhat, bound = estimator.step([1.0, 2.0])  # y(0) arrives on time
+    >>> estimator.time, bound
+    (1, 1.05)
+    >>> xhat, bound = estimator.step(None)  # y(1) is lost
+    >>> round(bound, 4)
+    1.1498
     """
 
     def __init__(self, system: AffineSystem, gains: "GainSchedule | ClassGains", bound_of: BoundRule, mu1: float,
@@ -74,7 +106,29 @@ class GuaranteedEstimator:
         self.bound = np.nan
 
     def reset(self, xhat0, t0: int = 0) -> "GuaranteedEstimator":
-        """Start from ``x̂(t0) = xhat0`` (shape ``(n,)``); the guarantee assumes its error is within ``μ1``."""
+        """Start from ``x̂(t0) = xhat0`` (shape ``(n,)``); the guarantee assumes its error is within ``μ1``.
+
+        Starts a new period at ``t0`` (discarding any run in progress) and
+        sets :attr:`bound` to ``μ1``.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            Initial estimate ``x̂(t0)``, with ``‖x(t0) − x̂(t0)‖∞ <= μ1``.
+        t0 : int, optional
+            Absolute time of the first step (the time stamp of the first
+            measurement; default 0).  Packets stamped before ``t0`` are dropped.
+
+        Returns
+        -------
+        GuaranteedEstimator
+            ``self``, so that ``design.estimator().reset(x0)`` chains.
+
+        Raises
+        ------
+        InputError
+            If ``xhat0`` does not have ``n`` entries.
+        """
         x0 = np.asarray(xhat0, float)
         if x0.shape != (self.system.n,):
             raise InputError(f"the initial estimate must have n = {self.system.n} entries, got shape {x0.shape}",
@@ -85,6 +139,7 @@ class GuaranteedEstimator:
 
     @property
     def x(self) -> np.ndarray:
+        """A copy of the current estimate ``x̂`` (of time :attr:`time`)."""
         return self._running().xhat.copy()
 
     @property
@@ -100,12 +155,36 @@ class GuaranteedEstimator:
     def step(self, y: "np.ndarray | Packet | Iterable | None" = None, u=None) -> tuple[np.ndarray, float]:
         """Process time ``t``: what arrived (``y(t)``, ``None``, or packets ``(τ, y(τ))``) and ``u(t)``.
 
+        Forms ``x̂(t+1) = A x̂(t) + B u(t) − u_e(t) + f`` with the gains of
+        the observed arrival prefix (eqs. (5), (7) of the prefix-based paper)
+        or of its class (:class:`ClassEstimator`), and updates :attr:`bound`.
+
+        Parameters
+        ----------
+        y : array_like, Packet, sequence of packets, or None, optional
+            What arrived at time ``t``: ``y(t)`` itself (an array of ``p``
+            numbers, on time); ``None`` when nothing arrived (a lost or late
+            packet, filterpy's ``update(None)``); or time-stamped packets,
+            a :class:`~eqrec.core.estimator.Packet` or a pair
+            ``(τ, y(τ))`` with ``τ <= t`` the absolute time stamp, or a
+            list of them (late measurements).
+        u : array_like, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
         Returns
         -------
         xhat : ndarray, shape (n,)
             The prediction ``x̂(t+1)``.
         bound : float
             Its guarantee: ``‖x(t+1) − x̂(t+1)‖∞ <= bound``.
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`; for a packet from the future, a second
+            packet with one stamp, a measurement of the wrong length, an
+            arrival prefix outside the design, or a step past the horizon of
+            a non-periodic estimator.
         """
         est = self._running()
         packets = _as_packets(y, est.time)
@@ -115,7 +194,27 @@ class GuaranteedEstimator:
         return xhat, self.bound
 
     def update(self, y=None, u=None) -> np.ndarray:
-        """filterpy's spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate."""
+        """filterpy's spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.
+
+        The same as :meth:`step` without the bound (read :attr:`bound`).
+
+        Parameters
+        ----------
+        y : array_like, Packet, sequence of packets, or None, optional
+            What arrived at the current time, as in :meth:`step`.
+        u : array_like, shape (m,), or None, optional
+            The input (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)``.
+
+        Raises
+        ------
+        InputError
+            As :meth:`step`.
+        """
         return self.step(y, u)[0]
 
 

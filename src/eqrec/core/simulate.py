@@ -120,10 +120,57 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
                  periodic: bool = False) -> Trajectory:
     """Run the true system and the causal estimator along an arrival pattern for uncertainty ``δ``.
 
+    The system (eq. (3) of the prefix-based paper with noise gains),
+    ``x(t+1) = A x(t) + B u(t) + f + E w(t)``, is driven for ``T`` steps
+    with the estimator of eqs. (5), (7) in the loop.
     ``schedule`` is node gains or class gains (:func:`eqrec.core.estimator.make_estimator`).
     The initial estimate is ``x̂(0) = x0 - ξ0``; the output ``y(τ) = C x(τ) + V v(τ)``
     is sent in a packet stamped ``τ`` that reaches the estimator at the
     pattern's arrival time (or never).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The true system (also the estimator's model).
+    schedule : GainSchedule or ClassGains
+        The design's gains (``design.schedule`` or ``design.class_gains``).
+    word : ArrivalPattern or str
+        The arrival pattern (a 0/1 word is a missing-data pattern) of length ``T``.
+    delta : ndarray, shape (T*(nw+nv) + n,)
+        The uncertainty ``δ = [w(0..T-1); v(0..T-1); ξ0]``
+        (:class:`eqrec.core.stacking.UncertaintyLayout`), e.g. a vertex of
+        the box from a certificate or a draw of
+        :func:`sample_uncertainty`.
+    x0 : ndarray, shape (n,)
+        The true initial state.
+    inputs : ndarray, shape (T, m), or None, optional
+        Inputs ``u(0..T-1)`` (``None``: zero).
+    periodic : bool, optional
+        Run the estimator in periodic mode (no effect within one horizon;
+        default ``False``).
+
+    Returns
+    -------
+    Trajectory
+        ``x`` and ``xhat`` of shape ``(T+1, n)`` and the error
+        ``ξ = x − x̂`` (``error``).
+
+    Raises
+    ------
+    InputError
+        Malformed word, or an arrival prefix the gains do not cover.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> acc = eqrec.acc_system()
+    >>> design = eqrec.design_prefix(acc, ["101111", "110111", "111011", "111101"], mu1=1.0)
+    >>> delta = np.zeros(6 * (acc.nw + acc.nv) + acc.n)
+    >>> delta[-3:] = [1.0, -1.0, 1.0]  # ξ(0) at a vertex of the μ1 box, no noise
+    >>> run = eqrec.simulate_run(acc, design.schedule, "101111", delta, np.zeros(3))
+    >>> run.error.shape, bool(np.abs(run.error).max() <= design.mu2 + 1e-9)
+    ((7, 3), True)
     """
     pattern = as_pattern(word)
     T = pattern.T
@@ -136,23 +183,72 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     return Trajectory(word=pattern.label, x=x, xhat=xhat)
 
 
-def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", words, M1: float, runs: int, seed: int,
+def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", words, mu1: float, runs: int, seed: int,
                 kind: str = "uniform", x0: np.ndarray | None = None, inputs: np.ndarray | None = None,
                 word_choice: str = "random") -> tuple[np.ndarray, list[str]]:
     """Errors of ``runs`` simulations with random patterns (or 0/1 words) of the language.
 
+    Each run draws the uncertainty ``δ = (w, v, ξ0)`` in the box of radii
+    ``(η_w, η_v, μ1)`` (:func:`sample_uncertainty`) and a pattern of the
+    language, and runs :func:`simulate_run` from ``x0``; within the
+    guarantee every error stays below the design's levels (the Monte Carlo
+    runs of Fig. 1 of the prefix-based paper).
     ``schedule`` is node gains or class gains (as :func:`simulate_run`).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The true system.
+    schedule : GainSchedule or ClassGains
+        The design's gains.
+    words : str, ArrivalPattern or sequence of them
+        The language (patterns or 0/1 words, of one length ``T``).
+    mu1 : float
+        Recovery level: the radius of the initial-error box.
+    runs : int
+        Number of simulations.
+    seed : int
+        Seed of :func:`numpy.random.default_rng` (the runs are reproducible).
+    kind : {"uniform", "vertex"}, optional
+        Draw ``δ`` uniformly in the box (default) or at random vertices.
+    x0 : ndarray, shape (n,), or None, optional
+        The true initial state (``None``: zero).
+    inputs : ndarray, shape (T, m), or None, optional
+        Inputs ``u(0..T-1)`` of every run (``None``: zero).
+    word_choice : {"random", "cycle"}, optional
+        Draw each run's pattern at random (default) or cycle through the
+        language in order (any value other than ``"random"`` cycles).
 
     Returns
     -------
     errors : ndarray, shape (runs, T+1, n)
+        The errors ``ξ(t) = x(t) − x̂(t)`` of every run.
     words_used : list of str
+        The label of each run's pattern.
+
+    Raises
+    ------
+    InputError
+        Malformed words.
+    ValueError
+        An unknown ``kind``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> acc = eqrec.acc_system()
+    >>> L1 = ["101111", "110111", "111011", "111101"]
+    >>> design = eqrec.design_prefix(acc, L1, mu1=1.0)
+    >>> errors, used = eqrec.monte_carlo(acc, design.schedule, L1, mu1=1.0, runs=20, seed=0)
+    >>> errors.shape, bool(np.abs(errors).max() <= design.mu2 + 1e-9)
+    ((20, 7, 3), True)
     """
     rng = np.random.default_rng(seed)
     words = [as_pattern(w) for w in ([words] if isinstance(words, (str, ArrivalPattern)) else words)]
     T = words[0].T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
-    radius = lay.radius(system.eta_w, system.eta_v, M1)
+    radius = lay.radius(system.eta_w, system.eta_v, mu1)
     x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
     errs = np.zeros((runs, T + 1, system.n))
     used = []
@@ -262,7 +358,7 @@ def _drive(system: AffineSystem, est, delays: np.ndarray, x0: np.ndarray, xi0: n
 
 
 def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains", words: Sequence[str], periods: int,
-                      rng: np.random.Generator, *, M1: float, path_levels: Callable[[str], np.ndarray],
+                      rng: np.random.Generator, *, mu1: float, path_levels: Callable[[str], np.ndarray],
                       kind: str = "uniform", x0: np.ndarray | None = None, controller=None,
                       inputs: np.ndarray | None = None, sequence: Sequence[str] | None = None) -> LongRun:
     """The gains of one design reused every ``T`` steps, a delay word drawn per period (Section III-B3 of P3).
@@ -313,8 +409,8 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
         if w not in cache:
             cache[w] = np.asarray(path_levels(w), float)
         level[k * T:(k + 1) * T] = cache[w][:T]
-    level[N] = M1
-    xi0 = draw_box(rng, M1, (system.n,), kind)
+    level[N] = mu1
+    xi0 = draw_box(rng, mu1, (system.n,), kind)
     x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
     est = make_estimator(system, schedule, x0 - xi0, periodic=True)
     x, xhat, dropped, w, v = _drive(system, est, delays, x0, xi0, kind, rng, controller, inputs, lambda t: None)
@@ -332,7 +428,7 @@ def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time:
 
 def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassGains",
                        recovery: "GainSchedule | ClassGains", steps: int,
-                       rng: np.random.Generator, *, M1: float, recovery_level: Callable[[ArrivalPattern], float],
+                       rng: np.random.Generator, *, mu1: float, recovery_level: Callable[[ArrivalPattern], float],
                        max_delay: int, p_on_time: float, kind: str = "uniform", x0: np.ndarray | None = None,
                        controller=None, inputs: np.ndarray | None = None,
                        delays: np.ndarray | None = None) -> LongRun:
@@ -364,10 +460,10 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
         delays = draw_delays(rng, int(steps), int(max_delay), float(p_on_time))
     delays = np.asarray(delays, int)
     N = delays.size
-    xi0 = draw_box(rng, M1, (system.n,), kind)
+    xi0 = draw_box(rng, mu1, (system.n,), kind)
     x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
     est = SwitchingEstimator(system, performance, recovery, x0 - xi0)
-    level = np.full(N + 1, float(M1))
+    level = np.full(N + 1, float(mu1))
     recovering = np.zeros(N, bool)
     T = recovery.horizon
 

@@ -147,6 +147,36 @@ def _solve_scipy(lp: LinearProgram, options: dict) -> LPSolution:
     return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks, row_dual=y)
 
 
+#: The IPOPT settings of every nonlinear solve (CasADi ``nlpsol`` options): quiet, tolerance 1e-9, at most 3000
+#: iterations.  :func:`ipopt_options` adds the caller's settings.
+IPOPT_OPTIONS: dict = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9,
+                       "ipopt.max_iter": 3000}
+
+
+def ipopt_options(options: dict | None = None, *, prefix: bool = True, **defaults) -> dict:
+    """CasADi ``nlpsol`` options for IPOPT: :data:`IPOPT_OPTIONS`, then ``defaults``, then ``options``.
+
+    Parameters
+    ----------
+    options : dict or None
+        The caller's settings; with ``prefix``, a name without a dot is an IPOPT option (``tol`` ->
+        ``ipopt.tol``).
+    prefix : bool
+        Whether to add ``ipopt.`` to the names of ``options`` without a dot.
+    **defaults
+        Settings of one use (e.g. ``{"ipopt.acceptable_tol": 1e-7}``), overridden by ``options``.
+
+    Returns
+    -------
+    dict
+        The options to pass to ``casadi.nlpsol(..., "ipopt", ...)``.
+    """
+    out = {**IPOPT_OPTIONS, **defaults}
+    for key, val in (options or {}).items():
+        out[key if not prefix or "." in key else f"ipopt.{key}"] = val
+    return out
+
+
 def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
     import casadi as ca
 
@@ -157,10 +187,7 @@ def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
     Acas = ca.DM(ca.Sparsity(nr, nc, A.indptr.tolist(), A.indices.tolist()), A.data)
     nlp = {"x": x, "f": ca.dot(ca.DM(lp.c), x), "g": ca.mtimes(Acas, x)}
     x0 = np.asarray(options.pop("x0", np.zeros(nc)), float)
-    opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9,
-            "ipopt.max_iter": 3000}
-    opts.update({k if "." in k else f"ipopt.{k}": v for k, v in options.items()})
-    solver = ca.nlpsol("lp", "ipopt", nlp, opts)
+    solver = ca.nlpsol("lp", "ipopt", nlp, ipopt_options(options))
     t0 = time.perf_counter()
     sol = solver(x0=x0, lbx=lp.col_lower, ubx=lp.col_upper, lbg=lp.row_lower, ubg=lp.row_upper)
     elapsed = time.perf_counter() - t0

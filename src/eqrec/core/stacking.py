@@ -55,10 +55,10 @@ class UncertaintyLayout:
         o = self.T * (self.nw + self.nv)
         return slice(o, o + self.n)
 
-    def radius(self, eta_w: float, eta_v: float, M1: float) -> np.ndarray:
+    def radius(self, eta_w: float, eta_v: float, mu1: float) -> np.ndarray:
         """Box radii ``b`` of ``δ``."""
         return np.concatenate([np.full(self.T * self.nw, eta_w), np.full(self.T * self.nv, eta_v),
-                               np.full(self.n, M1)])
+                               np.full(self.n, mu1)])
 
     def split(self, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``δ`` (or ``δ`` batches along the last axis) into ``w (T, nw)``, ``v (T, nv)``, ``ξ0 (n,)``."""

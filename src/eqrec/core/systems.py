@@ -43,26 +43,69 @@ def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.
 
 @dataclass(frozen=True)
 class AffineSystem:
-    """Affine (possibly time-varying) system with box-bounded noise.
+    r"""Affine (possibly time-varying) discrete-time system with box-bounded noise.
+
+    The plant of eq. (3) of the prefix-based paper (Rutledge, Yong, Ozay,
+    ACC 2019) with the noise gains of its Remark 1 and of eq. (1) of the
+    augmented paper (Hassaan, Shen, Yong, ACC 2019):
+
+    .. math::
+        x(t+1) &= A(t)\,x(t) + B(t)\,u(t) + f + E(t)\,w(t),
+        \qquad \|w(t)\|_\infty \le \eta_w, \\
+        y(t) &= C(t)\,x(t) + V(t)\,v(t) \ \text{if } y(t) \text{ arrives},
+        \qquad \|v(t)\|_\infty \le \eta_v.
+
+    Time-varying matrices are given as arrays with a leading time axis;
+    matrices are converted to float arrays and validated on construction
+    (a 1-D ``B`` or ``E`` is read as a column, any other 1-D matrix as a
+    row).  Instances are frozen; matrices are read at a time ``t`` with
+    :meth:`A_at`, :meth:`C_at`, ... .
 
     Parameters
     ----------
-    A : ndarray, shape (n, n) or (T, n, n)
+    A : array_like, shape (n, n) or (T, n, n)
         State matrix (a leading axis makes it time-varying).
-    C : ndarray, shape (p, n) or (T, p, n)
+    C : array_like, shape (p, n) or (T, p, n)
         Output matrix.
-    E : ndarray, shape (n, nw) or (T, n, nw)
-        Process-noise gain (``W_k`` in the augmented paper).
+    E : array_like, shape (n, nw) or (T, n, nw)
+        Process-noise gain (``W_k`` in the augmented paper); ``nw = 0``
+        columns for a system without process noise.
     eta_w, eta_v : float
-        Infinity-norm bounds of ``w`` and ``v``.
-    B : ndarray, shape (n, m), optional
-        Input matrix (does not enter the error dynamics).
-    f : ndarray, shape (n,), optional
-        Affine term (does not enter the error dynamics).
-    V : ndarray, shape (p, nv), optional
+        Infinity-norm bounds of ``w`` and ``v`` (finite, non-negative).
+    B : array_like, shape (n, m) or (T, n, m), optional
+        Input matrix (does not enter the error dynamics); ``None``: no input.
+    f : array_like, shape (n,), optional
+        Affine term (does not enter the error dynamics); zero by default.
+    V : array_like, shape (p, nv) or (T, p, nv), optional
         Measurement-noise gain, identity by default.
-    name : str
-        Label used in reports.
+    name : str, optional
+        Label used in reports (default ``"system"``).
+    source : str or None, optional
+        File (or other origin) of the data, named in the errors; not part of
+        equality.
+
+    Attributes
+    ----------
+    n, p, m, nw, nv : int
+        State, output, input, process-noise and measurement-noise dimensions.
+    horizon_limit : int or None
+        Length of the time-varying data, ``None`` if time-invariant.
+
+    Raises
+    ------
+    InputError
+        Non-numeric, non-finite or wrongly shaped matrices, negative noise
+        bounds, or time-varying matrices of different lengths.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> plant = eqrec.AffineSystem(A=[[1.0, 0.5], [0.0, 1.0]], C=[[1.0, 0.0]], E=[[0.0], [1.0]],
+    ...                            eta_w=0.1, eta_v=0.05)
+    >>> plant.n, plant.p, plant.nw, plant.nv, plant.m
+    (2, 1, 1, 1, 0)
+    >>> plant.V
+    array([[1.]])
     """
 
     A: np.ndarray
@@ -149,6 +192,7 @@ class AffineSystem:
 
     @property
     def is_time_varying(self) -> bool:
+        """Whether any of ``A, C, E, V`` has a leading time axis."""
         return self.horizon_limit is not None
 
     # -- time-indexed access ---------------------------------------------
@@ -157,30 +201,110 @@ class AffineSystem:
         return arr[t] if arr.ndim == 3 else arr
 
     def A_at(self, t: int) -> np.ndarray:
+        """State matrix ``A(t)`` at time ``t``.
+
+        Parameters
+        ----------
+        t : int
+            Time index (ignored by a time-invariant matrix).
+
+        Returns
+        -------
+        ndarray, shape (n, n)
+            ``A[t]`` if ``A`` is time-varying, else ``A`` itself (not a copy).
+        """
         return self._at(self.A, t)
 
     def C_at(self, t: int) -> np.ndarray:
+        """Output matrix ``C(t)`` at time ``t``.
+
+        Parameters
+        ----------
+        t : int
+            Time index (ignored by a time-invariant matrix).
+
+        Returns
+        -------
+        ndarray, shape (p, n)
+            ``C[t]`` if ``C`` is time-varying, else ``C`` itself (not a copy).
+        """
         return self._at(self.C, t)
 
     def E_at(self, t: int) -> np.ndarray:
+        """Process-noise gain ``E(t)`` at time ``t``.
+
+        Parameters
+        ----------
+        t : int
+            Time index (ignored by a time-invariant matrix).
+
+        Returns
+        -------
+        ndarray, shape (n, nw)
+            ``E[t]`` if ``E`` is time-varying, else ``E`` itself (not a copy).
+        """
         return self._at(self.E, t)
 
     def V_at(self, t: int) -> np.ndarray:
+        """Measurement-noise gain ``V(t)`` at time ``t``.
+
+        Parameters
+        ----------
+        t : int
+            Time index (ignored by a time-invariant matrix).
+
+        Returns
+        -------
+        ndarray, shape (p, nv)
+            ``V[t]`` if ``V`` is time-varying, else ``V`` itself (not a copy).
+        """
         return self._at(self.V, t)
 
     def B_at(self, t: int) -> np.ndarray:
+        """Input matrix ``B(t)`` at time ``t``.
+
+        Parameters
+        ----------
+        t : int
+            Time index (ignored by a time-invariant matrix).
+
+        Returns
+        -------
+        ndarray, shape (n, m)
+            ``B[t]`` if ``B`` is time-varying, else ``B``; an ``(n, 0)``
+            array of zeros for a system without input.
+        """
         if self.B is None:
             return np.zeros((self.n, 0))
         return self._at(self.B, t)
 
     def check_horizon(self, T: int) -> None:
-        """Raise if a time-varying system is shorter than the horizon ``T``."""
+        """Raise if a time-varying system is shorter than the horizon ``T``.
+
+        Parameters
+        ----------
+        T : int
+            Horizon (number of steps) a design or simulation needs.
+
+        Raises
+        ------
+        InputError
+            If the time-varying data covers fewer than ``T`` steps.
+        """
         lim = self.horizon_limit
         if lim is not None and lim < T:
             raise InputError(f"time-varying data covers {lim} steps, horizon needs {T}", self.source)
 
     def to_dict(self) -> dict:
-        """JSON-serialisable description (matrices as nested lists)."""
+        """JSON-serialisable description (matrices as nested lists).
+
+        Returns
+        -------
+        dict
+            Keys ``name, A, C, E, V, f, eta_w, eta_v`` and ``B`` when the
+            system has an input; the keys of a system file
+            (:func:`load_system`), without ``source``.
+        """
         out = {
             "name": self.name,
             "A": self.A.tolist(),
@@ -207,17 +331,52 @@ ACC_CONSTANTS = {"m": 1370.0, "k0": 7.58, "k1": 9.9407, "Ts": 0.5, "eta_w": 0.1,
 def acc_system(m: float = ACC_CONSTANTS["m"], k0: float = ACC_CONSTANTS["k0"],
                k1: float = ACC_CONSTANTS["k1"], Ts: float = ACC_CONSTANTS["Ts"],
                eta_w: float = ACC_CONSTANTS["eta_w"], eta_v: float = ACC_CONSTANTS["eta_v"]) -> AffineSystem:
-    """Discrete adaptive-cruise-control model of Section VI of the prefix-based paper.
+    r"""Discrete adaptive-cruise-control model of Section VI of the prefix-based paper.
 
     Exact zero-order-hold discretisation of ``m dv_e/dt = u - k0 - k1 v_e``,
     ``dh/dt = v_L - v_e``, ``dv_L/dt = w`` (lead acceleration), with state
-    ``x = [v_e, h, v_L]`` and outputs ``[v_e, h]``; built from the Table I
-    constants, not from rounded matrices.
+    ``x = [v_e, h, v_L]`` (ego speed, headway, lead speed) and outputs
+    ``[v_e, h]``; built from the Table I constants, not from rounded
+    matrices.  With :math:`\kappa = k_1/m` and :math:`a = e^{-\kappa T_s}`,
+
+    .. math::
+        A = \begin{bmatrix} a & 0 & 0 \\ (a-1)/\kappa & 1 & T_s \\ 0 & 0 & 1 \end{bmatrix},
+        \quad
+        B = \frac{1}{k_1^2}\begin{bmatrix} (1-a)\,k_1 \\ m(1-a) - k_1 T_s \\ 0 \end{bmatrix},
+        \quad
+        f = -k_0 B,
+        \quad
+        E = \begin{bmatrix} 0 \\ T_s^2/2 \\ T_s \end{bmatrix}.
+
+    Parameters
+    ----------
+    m : float
+        Vehicle mass [kg] (Table I: 1370).
+    k0 : float
+        Friction coefficient ``k̄0`` [N] (Table I: 7.58).
+    k1 : float
+        Drag coefficient ``k̄1`` [N s/m] (Table I: 9.9407).
+    Ts : float
+        Sampling time [s] (Table I: 0.5).
+    eta_w : float
+        Bound on the lead vehicle's acceleration ``|w|`` (Table I: 0.1).
+    eta_v : float
+        Bound on the measurement noise ``‖v‖∞`` (Table I: 0.05).
 
     Returns
     -------
     AffineSystem
-        With ``E = [0, Ts^2/2, Ts]^T`` and ``V = I``.
+        Named ``"ACC"``, with ``n = 3``, ``p = 2``, ``m = 1``,
+        ``E = [0, Ts^2/2, Ts]^T`` and ``V = I``.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> acc = eqrec.acc_system()
+    >>> acc.A.shape, acc.C.shape, acc.E.shape
+    ((3, 3), (2, 3), (3, 1))
+    >>> acc.eta_w, acc.eta_v
+    (0.1, 0.05)
     """
     kappa = k1 / m
     a = np.exp(-kappa * Ts)
@@ -311,9 +470,32 @@ def system_from_mapping(data: Any, source: str = "<mapping>") -> tuple[AffineSys
 def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
     """Read a system YAML file (keys ``A, C, E, eta_w, eta_v`` and optional ``T, B, f, V``).
 
-    Unquoted numbers in exponent notation without a dot (``1e-3``, ``5E2``) are read as
-    numbers, as YAML 1.2 does (PyYAML's YAML 1.1 rules would make them strings);
-    quoted numbers stay strings and are rejected naming the field.
+    The keys are the parameters of :class:`AffineSystem` (plus ``name``,
+    default the file's stem) and an optional horizon ``T``.  Unquoted
+    numbers in exponent notation without a dot (``1e-3``, ``5E2``) are read
+    as numbers, as YAML 1.2 does (PyYAML's YAML 1.1 rules would make them
+    strings); quoted numbers stay strings and are rejected naming the field.
+    Entries larger than :data:`MAX_DATA_MAGNITUDE` in magnitude and nonzero
+    noise bounds below :data:`MIN_NOISE_BOUND` are rejected (rescale the
+    units instead).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The YAML file.
+
+    Returns
+    -------
+    system : AffineSystem
+        The system, with ``source`` the file's path.
+    T : int or None
+        The file's horizon ``T``, ``None`` if it has none.
+
+    Raises
+    ------
+    InputError
+        A missing file or directory, invalid YAML, a missing, unknown or
+        malformed field (the message names the file and the field).
     """
     import re
 

@@ -26,32 +26,64 @@ from eqrec.design.result import Design
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
 
-def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, M1: float, runtime: str | None = None):
+def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, mu1: float, runtime: str | None = None):
     """Certify the converted time-based schedule of ``gains`` (the estimator as it really runs)."""
     schedule = schedule_from_augmented(system, gains, runtime)
-    return schedule, certify_schedule(system, schedule, list(words), M1)
+    return schedule, certify_schedule(system, schedule, list(words), mu1)
 
 
-def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=None, s0=None,
+def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=None, s0=None,
                      solver: str = "highs", mode: str = "theorem2", certify: bool = True,
                      ipopt_options: dict | None = None) -> Design:
-    """Design the augmented estimator of the augmented paper for the worst-case word of ``words``.
+    r"""Design the augmented estimator of the augmented paper for the worst-case word of ``words``.
+
+    The state-augmented estimator of eqs. (2), (3) of the augmented paper
+    (Hassaan, Shen, Yong, ACC 2019) carries the estimate ``x̂`` and an
+    auxiliary state ``s``, a Luenberger-like estimate of the error, with
+    gains ``L_k``, ``M(k, i)``, ``ν_k`` and initial ``s0``
+    (:mod:`eqrec.design.augmented_model`).  For a language of 0/1 words
+    it is designed on the worst-case word (bitwise AND, Section III-C) by
+    Theorem 2 / eq. (12): minimise ``μ2`` subject to equalized recovery
+    with zero gains on the missing measurements.  With ``L`` and ``s0``
+    fixed the robust problem (Proposition 1 / eq. (11) with the constraints
+    of Theorem 2) is a linear program (Remark 1); with ``L="free"`` it is
+    bilinear and solved locally by IPOPT.  The design is certified from its
+    converted time-based gains (:func:`eqrec.core.certify.certify_schedule`),
+    i.e. the estimator as it really runs, on every word of the language and
+    the worst case.
 
     Parameters
     ----------
-    L
+    system : AffineSystem
+        The system (``W_k`` of the paper is ``system.E``).
+    words : sequence of str or ArrivalPattern
+        The language: 0/1 words (or missing-data patterns) of one length.
+    mu1 : float
+        Recovery level ``μ1``, positive.
+    L : None, array_like or "free", optional
         ``None``: pole placement at ``poles`` (default :func:`eqrec.design.observers.default_poles`), then the LP;
-        an array: the LP with this ``L``;
+        an array of shape ``(n, p)`` or ``(T, n, p)``: the LP with this ``L``;
         ``"free"``: IPOPT on Proposition 1 with ``L`` and ``s0`` free, started from the
         LP at the pole-placement ``L``.
-    s0
-        Fixed ``s0`` (default 0; the initial guess when ``L="free"``).
-    solver
+    poles : array_like or None, optional
+        ``n`` eigenvalues of ``A - L C`` for the pole placement (``L`` not
+        an array); default :func:`eqrec.design.observers.default_poles`
+        (``{0, 0.5, -0.5}`` for ``n = 3``).
+    s0 : array_like or None, optional
+        Fixed ``s0``, shape ``(n,)`` (default 0; the initial guess when ``L="free"``).
+    solver : str, optional
         LP solver of the registry :data:`eqrec.core.solvers.SOLVER_NAMES` (with ``L="free"``:
         the solver of the LP that gives IPOPT its starting point).
-    mode
-        ``"theorem2"`` (default) or the ``"leak"`` reading; a leak design is certified as
-        the actual (``"hold"``) estimator and its design ``μ2`` is not a guarantee.
+    mode : {"theorem2", "leak", "masked_gain"}, optional
+        ``"theorem2"`` (default: the text of Theorem 2, ``L_k = 0`` at a
+        missing step) or another reading of the missing steps
+        (:mod:`eqrec.design.augmented_model`); a ``"leak"`` or
+        ``"masked_gain"`` design is certified as the actual (``"hold"``)
+        estimator and its design ``μ2`` is not a guarantee.
+    certify : bool, optional
+        Certify the converted gains and attach the certificate (default).
+    ipopt_options : dict or None, optional
+        Options passed to IPOPT (``L="free"`` only).
 
     Returns
     -------
@@ -61,7 +93,27 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
 
     Raises
     ------
-    InputError, InfeasibleDesign, SolverFailure, CertificationFailure
+    InputError
+        Malformed words, ``L``, ``s0`` or ``poles`` of the wrong shape, an
+        unknown ``mode``, or a failed pole placement.
+    InfeasibleDesign
+        If ``(A, C)`` is not observable (no pole placement) or no estimator
+        recovers to ``mu1``.
+    SolverFailure
+        If the LP solver or IPOPT stops without an optimum.
+    CertificationFailure
+        If (mode ``"theorem2"``) the converted gains do not achieve the
+        optimised ``μ2`` or ``μ1``.
+
+    Examples
+    --------
+    The language ``{101111, 110111}`` of Section IV-B of the augmented paper
+    (worst case ``100111``), ``μ1 = 1``, ``L`` by pole placement:
+
+    >>> import eqrec
+    >>> design = eqrec.design_augmented(eqrec.acc_system(), ["101111", "110111"], mu1=1.0)
+    >>> design.extra["worst_case_word"], round(design.mu2, 4)
+    ('100111', 1.7371)
     """
     check_mode(mode, DESIGN_MODES)
     patterns = as_language(words)
@@ -97,8 +149,8 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
             raise InputError(f"L must be an n x p = {n} x {p} matrix (or T x n x p), got shape {L_fixed.shape}",
                              field="L")
     s0v = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
-    model = AugmentedLP(system, wc, M1, L_fixed, s0=s0v, mode=mode)
-    sol = model.solve(solver).require_optimal(f"augmented design (M1 = {M1:g})")
+    model = AugmentedLP(system, wc, mu1, L_fixed, s0=s0v, mode=mode)
+    sol = model.solve(solver).require_optimal(f"augmented design (M1 = {mu1:g})")
     gains = model.gains(sol)
     mu2 = float(sol.x[model.mu2_col])
     solution = sol
@@ -116,18 +168,18 @@ def design_augmented(system: AffineSystem, words, M1: float, *, L=None, poles=No
                  eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
     runtime = "theorem2" if mode == "theorem2" else "hold"
     schedule = schedule_from_augmented(system, gains, runtime)
-    design = Design(method="augmented", system=system, patterns=(wc,), T=T, M1=float(M1), mu2=mu2,
+    design = Design(method="augmented", system=system, patterns=(wc,), T=T, mu1=float(mu1), mu2=mu2,
                     schedule=schedule, solution=solution, build_time=model.build_time, extra=extra)
     if certify:
         cert_words = sorted(set(language) | {wc})
-        cert = certify_schedule(system, schedule, cert_words, M1)
+        cert = certify_schedule(system, schedule, cert_words, mu1)
         design.certificate = cert
         if mode == "theorem2":
             tol2 = CERT_RTOL * max(1.0, mu2) + accuracy
             if cert.mu2 > mu2 + tol2:
                 raise CertificationFailure(f"augmented design: gains give worst-case error {cert.mu2:.9g} "
                                            f"> optimised M2 = {mu2:.9g}")
-            if cert.terminal > M1 * (1 + CERT_RTOL) + accuracy:
+            if cert.terminal > mu1 * (1 + CERT_RTOL) + accuracy:
                 raise CertificationFailure(f"augmented design: terminal worst-case error {cert.terminal:.9g} > M1")
         else:
             extra["certified_runtime"] = runtime

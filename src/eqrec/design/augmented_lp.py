@@ -51,15 +51,15 @@ class AugmentedLP:
         Seed of the generic ``L`` that fixes the sparsity pattern.
     """
 
-    def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", M1: float, L: np.ndarray, s0: np.ndarray | None = None,
+    def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray, s0: np.ndarray | None = None,
                  mode: str = "theorem2", strictly_causal: bool = False, pattern_seed: int = 12345):
         t0 = time.perf_counter()
         check_mode(mode, DESIGN_MODES)
-        M1 = float(M1)
-        if not np.isfinite(M1) or M1 <= 0:
-            raise InputError(f"the recovery level M1 must be positive, got {M1}", field="mu1")
+        mu1 = float(mu1)
+        if not np.isfinite(mu1) or mu1 <= 0:
+            raise InputError(f"the recovery level M1 must be positive, got {mu1}", field="mu1")
         word = missing_data_pattern(word).label
-        self.system, self.word, self.M1, self.mode = system, word, M1, mode
+        self.system, self.word, self.mu1, self.mode = system, word, mu1, mode
         self.strictly_causal = strictly_causal
         self.T = T = len(word)
         n, p = system.n, system.p
@@ -74,7 +74,7 @@ class AugmentedLP:
         zpat = generic.Z != 0  # (T, p, D)
 
         b = LPBuilder()
-        self.mu2_col = int(b.add_variables(1, lower=M1, name="mu2")[0])
+        self.mu2_col = int(b.add_variables(1, lower=mu1, name="mu2")[0])
         b.set_cost(self.mu2_col, 1.0)
         # M(s, i) blocks (n x p, row-major) for measured i <= s
         self.m_cols: dict[tuple[int, int], np.ndarray] = {}
@@ -133,11 +133,11 @@ class AugmentedLP:
         R = (T + 1) * n
         level_const = np.zeros(R)
         level_coef = np.ones(R)
-        level_const[T * n:] = M1
+        level_const[T * n:] = mu1
         level_coef[T * n:] = 0.0
         self._rows_meta = dict(entry_row=entry_row, entry_coord=entry_coord, G0=G0, R=R,
                                level_const=level_const, level_coef=level_coef)
-        self.radius = lay.radius(system.eta_w, system.eta_v, M1)
+        self.radius = lay.radius(system.eta_w, system.eta_v, mu1)
         self._b = b
         self._E = E
         self.L = None
@@ -203,7 +203,7 @@ class AugmentedLP:
         """
         if b.num_variables:
             raise ValueError("add_decision_variables needs an empty builder")
-        mu2 = int(b.add_variables(1, lower=self.M1, name="mu2")[0])
+        mu2 = int(b.add_variables(1, lower=self.mu1, name="mu2")[0])
         if cost:
             b.set_cost(mu2, 1.0)
         for (s, i), mc in self.m_cols.items():
@@ -416,7 +416,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     return UncertainAffineRows(entry_row=er, entry_coord=ed, G0=G0[er, ed], Gx=Gx, c0=c0, cx=cx)
 
 
-def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPattern", M1: float, L: np.ndarray, *,
+def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray, *,
                                 s0: np.ndarray | None = None, design_mode: str = "masked_gain",
                                 runtime: str = "theorem2", bound: str = "all", solver: str = "highs",
                                 recover: bool = False, rel_tol: float = OPTIMUM_RTOL,
@@ -491,7 +491,7 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
     check_mode(runtime, RUNTIME_MODES)
     if bound not in ("all", "terminal"):
         raise InputError(f"bound must be 'all' or 'terminal', got {bound!r}", field="bound")
-    design = AugmentedLP(system, word, M1, L, s0=s0, mode=design_mode)
+    design = AugmentedLP(system, word, mu1, L, s0=s0, mode=design_mode)
     opt = float(design.solve(solver, options).require_optimal(f"{design_mode} design LP ({solver})").objective)
     level = opt * (1.0 + rel_tol) + abs_tol
     n, T = system.n, design.T
@@ -518,14 +518,14 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
             add_robust_rows(b, extra_rows, design.radius, level_const=0.0, level_col=gamma, level_coef=1.0,
                             form="abs")
         if recover_rows is not None:
-            add_robust_rows(b, recover_rows, design.radius, level_const=design.M1, form="abs")
+            add_robust_rows(b, recover_rows, design.radius, level_const=design.mu1, form="abs")
         lp = b.build()
         what = f"best {bound} guarantee ({runtime} runtime) among the {design_mode} optima ({solver})"
         sol = solve_lp(lp, solver, options).require_optimal(what)
         return sol, float(sol.x[gamma]), float(sol.x[mu2]), lp.shape
 
     # the theorem2 running error: affine in (M, nu); for "hold" only its rows up to `agree` are the same
-    run = AugmentedLP(system, design.word, M1, L, s0=design.s0, mode="theorem2")
+    run = AugmentedLP(system, design.word, mu1, L, s0=design.s0, mode="theorem2")
     if run.m_cols.keys() != design.m_cols.keys() or not np.array_equal(run.nu_cols, design.nu_cols):
         raise AssertionError("design and runtime LPs do not share their columns")  # pragma: no cover
     rows_t2, _ = run.robust_rows(L)

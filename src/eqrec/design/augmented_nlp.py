@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from eqrec.core.solvers import ipopt_options
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
 from eqrec.errors import InputError
@@ -106,7 +107,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
             P = ca.DM(phi[t][s + 1])
             G = G + ca.mtimes(P, ue_G[s])
             c = c + ca.mtimes(P, ue_c[s])
-        level = model.M1 if t == T else mu2
+        level = model.mu1 if t == T else mu2
         for a in range(n):
             key0 = (t * n + a) * D
             ks = model.entry_keys[(model.entry_keys >= key0) & (model.entry_keys < key0 + D)] - key0
@@ -121,10 +122,8 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
     xvar = ca.vertcat(mu2, mvec, nu, Lsym, s0, aux_all)
     cons = ca.vertcat(*g_list, *rows_c)
     nlp = {"x": xvar, "f": mu2, "g": cons}
-    opts = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9, "ipopt.max_iter": 3000,
-            "ipopt.acceptable_tol": 1e-7}
-    opts.update(options or {})
-    solver = ca.nlpsol("augmented", "ipopt", nlp, opts)
+    solver = ca.nlpsol("augmented", "ipopt", nlp,
+                       ipopt_options(options, prefix=False, **{"ipopt.acceptable_tol": 1e-7}))
     # initial point
     L0 = as_time_varying_L(init.L, T, n, p)
     Lvec0 = (L0.reshape(T, -1) if time_varying_L else L0[0].reshape(1, -1)).reshape(-1)
@@ -137,7 +136,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
     nxv = x0.size
     lbx = np.full(nxv, -np.inf)
     ubx = np.full(nxv, np.inf)
-    lbx[0] = model.M1
+    lbx[0] = model.mu1
     off_L = 1 + mvec0.size + T * n
     if not free_L:
         lbx[off_L:off_L + nL] = ubx[off_L:off_L + nL] = Lvec0

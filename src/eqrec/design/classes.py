@@ -526,10 +526,44 @@ def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, 
 
 def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str = "highs",
                        lower_rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
-    """``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
+    r"""``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
 
+    The smallest ``μ1`` for which some prefix-tree estimator recovers,
+    ``‖ξ(T)‖∞ <= μ1`` for all ``‖ξ(0)‖∞ <= μ1`` and noise in the box, along
+    every sequence of the language: the lower end of the feasible set
+    ``[μ1,min, ∞)`` of the delayed-data paper's problem with ``μ1`` a
+    decision variable (Theorem 1 / Proposition 1).  By the μ1-free theorem
+    of this module,
+
+    .. math:: \mu_{1,\min} = \max_{\text{terminal } (c, r)}\ \min_k \frac{b(k)}{1 - a(k)},
+
+    with ``a(k)`` the row's initial-error gain and ``b(k)`` its noise part.
     One block LP (the Charnes–Cooper LP of every terminal class and row), the
     ratio recomputed from the gains, and a dual certificate of the lower end.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    classes : ClassSet
+        The language's (time, available data) classes:
+        :func:`eqrec.core.classes.classes_of_tree` of its
+        :class:`~eqrec.core.patterns.PrefixTree`, or
+        :func:`eqrec.design.delay.delay_classes` for a full delay language.
+        (:func:`eqrec.design.delay.min_recovery_level` takes the words.)
+    solver : str, optional
+        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
+        (default ``"highs"``).
+    lower_rtol : float, optional
+        Relative distance below ``μ1,min`` of the level to prove infeasible
+        by a dual point (default :data:`MU1_LOWER_RTOL`).
+
+    Returns
+    -------
+    MinRecoveryLevel
+        ``upper`` (``μ1,min`` attained by the recovered gains, also
+        ``value``), ``lower`` (proven infeasible, ``nan`` if not certified),
+        the binding terminal class and row, and the class gains.
 
     Raises
     ------
@@ -538,6 +572,17 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
         naming the class and row.
     InputError
         ``μ1,min = 0`` (no noise reaches the end of the horizon): fix ``μ1``.
+    SolverFailure
+        If the LP has no optimum or its gains do not contract the initial error.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> from eqrec.core.classes import classes_of_tree
+    >>> tree = eqrec.PrefixTree(["060000", "006000", "000600", "000060"], kind="delay")
+    >>> level = eqrec.min_recovery_level(eqrec.acc_system(), classes_of_tree(tree))
+    >>> round(level.upper, 4), level.lower < level.upper
+    (0.2493, True)
     """
     t_start = time.perf_counter()
     st = Stacking(system, classes.horizon)
@@ -658,7 +703,7 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
         node_gains = tree is not None and classes.nodes <= NODE_GAINS_LIMIT
     schedule = node_schedule(system, sol.gains, tree, time_based=time_based) if node_gains else None
     patterns = tree.patterns if tree is not None else ()
-    design = Design(method=method, system=system, patterns=patterns, T=classes.horizon, M1=mu1, mu2=mu2,
+    design = Design(method=method, system=system, patterns=patterns, T=classes.horizon, mu1=mu1, mu2=mu2,
                     schedule=schedule, solution=sol.solution, build_time=sol.build_time, levels=node_levels,
                     class_gains=sol.gains, class_certificate=sol.certificate)
     design.extra.update(engine="classes", classes=len(classes), sequences=classes.sequences, nodes=classes.nodes,

@@ -213,7 +213,7 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
     else:
         levels = {}
         mu2 = float(max(x[model.mu2_col], mu1))
-    design = Design(method=method, system=system, patterns=tree.patterns, T=model.stacking.T, M1=float(mu1),
+    design = Design(method=method, system=system, patterns=tree.patterns, T=model.stacking.T, mu1=float(mu1),
                     mu2=mu2, schedule=schedule, solution=sol, build_time=build_time, levels=levels)
     design.extra.update(engine="tree", cost=cost,
                         J=paper_cost(tree, mu1, levels if cost == "sum" else {"*": mu2}, cost),
@@ -227,7 +227,7 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
 def certified_cost(design: Design, tree: PrefixTree, cost: str, cert=None) -> float:
     """``J`` recomputed from the certificate: each node's level replaced by its worst case (at least ``μ1``)."""
     cert = cert or design.certificate
-    mu1 = design.M1
+    mu1 = design.mu1
     node_bound: dict[str, float] = {}
     for wc in cert.words.values():
         pat = wc.pattern
@@ -253,9 +253,9 @@ def level_table(design: Design) -> list[dict]:
         for t in range(1, wc.pattern.T + 1):
             lab = wc.pattern.prefix(t).label
             bound[lab] = max(bound.get(lab, 0.0), float(wc.bounds[t].max()))
-    rows = [{"prefix": "", "k": 0, "level": design.M1, "certified": design.M1, "sequences": len(tree.patterns)}]
+    rows = [{"prefix": "", "k": 0, "level": design.mu1, "certified": design.mu1, "sequences": len(tree.patterns)}]
     for node in tree:
-        lvl = design.M1 if node.terminal else design.levels.get(node.label, design.mu2)
+        lvl = design.mu1 if node.terminal else design.levels.get(node.label, design.mu2)
         rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
                      "sequences": w[node.index]})
     return rows
@@ -269,7 +269,7 @@ def path_levels(design: Design, pattern) -> np.ndarray:
     """
     pat = parse_delay_word(pattern) if isinstance(pattern, str) else pattern
     T = pat.T
-    out = np.full(T + 1, design.M1)
+    out = np.full(T + 1, design.mu1)
     for k in range(1, T):
         out[k] = node_level(design, pat.prefix(k))
     return out
@@ -306,7 +306,7 @@ def class_table(design: Design) -> list[dict]:
     for i, cls in enumerate(gains.classes.classes):
         rows.append({"class": cls.label, "k": cls.depth, "data": list(cls.available), "terminal": cls.terminal,
                      "sequences": int(cls.weight), "nodes": int(cls.nodes),
-                     "level": float(max(design.M1, levels[i])) if cls.inner else float(levels[i]),
+                     "level": float(max(design.mu1, levels[i])) if cls.inner else float(levels[i]),
                      "certified": float(cc.levels[i]), "K": gains.K[i].tolist()})
     return rows
 
@@ -331,7 +331,7 @@ def to_json(design: Design, free: "FreeMu1Result | None" = None, node_gains: boo
                          "tree: use the class gains K)", field="node-gains")
     certified = cert if cert is not None else ccert
     out = {"method": "delay", "engine": design.extra.get("engine", "tree"), "cost": design.extra.get("cost"),
-           "mu1": design.M1, "mu2": design.mu2, "J": design.extra.get("J"),
+           "mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"),
            "J_certified": design.extra.get("J_certified"),
            "certified_mu2": None if certified is None else certified.mu2,
            "certified_terminal": None if certified is None else certified.terminal,
@@ -358,24 +358,50 @@ def to_json(design: Design, free: "FreeMu1Result | None" = None, node_gains: boo
 def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum", solver: str = "highs",
                  form: str = "split", certify: bool = True, solver_options: dict | None = None,
                  engine: str = "classes", node_gains: bool | None = None) -> Design:
-    """The delayed-data design with ``μ1`` fixed.
+    r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
+
+    For a language of delay words (eq. (1) of the delayed-data paper,
+    Hassaan, Shen, Yong), reduced to its distinct event sequences
+    ``L^{E'}`` (Definitions 2-4, eq. (2)), one gain block per event-prefix
+    node: gains shared along common event prefixes (constraint (6)), zero on
+    data not yet available (constraint (7)), with a level ``μ2,k^α`` per
+    sequence and time.  With the recovery level ``μ1`` fixed, as in
+    Section IV-B of the paper, the problem (8) of Theorem 1, robustified in
+    Proposition 1 / eq. (10), is a linear program; it minimises
+
+    .. math:: J = \mu_1 + \sum_{k=0}^{T} \sum_{\alpha=1}^{|L^{E'}|} \mu_{2,k}^\alpha
+
+    (``cost="sum"``, the paper's cost, counted as in the module docstring)
+    or the largest level :math:`\max_{k,\alpha} \mu_{2,k}^\alpha`
+    (``cost="max"``, the prefix-based paper's common ``M2``).  For ``μ1``
+    free see :func:`design_delay_global`.
 
     Parameters
     ----------
     system : AffineSystem
-    patterns : words, patterns, PrefixTree or ClassSet
+        The system.
+    patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
         Delay words (digit strings), arrival patterns or their tree (reduced
         to ``L^{E'}``), or the classes of a full language
-        (:func:`delay_classes`, class engine only).
+        (:func:`delay_classes`, class engine only).  The language must have
+        a fixed length.
     mu1 : float
-        Recovery level ``μ1``.
-    cost : {"sum", "max"}
-        The paper's ``J`` (module docstring) or the largest level.
-    engine : {"classes", "tree"}
+        Recovery level ``μ1``, positive.
+    cost : {"sum", "max"}, optional
+        The paper's ``J`` (module docstring; default) or the largest level.
+    solver : str, optional
+        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
+        (default ``"highs"``).
+    form : str, optional
+        Robust counterpart of the tree LP (``engine="tree"`` only):
+        ``"split"`` (default), ``"abs"`` or the Π-dual ``"dual"``.
+    certify : bool, optional
+        Certify the gains independently (default).
+    solver_options : dict or None, optional
+        Options passed to the LP solver (``None``: the engine's defaults).
+    engine : {"classes", "tree"}, optional
         The class engine (default) or the tree LP (module docstring).
-    form : str
-        Robust counterpart of the tree LP (``engine="tree"`` only).
-    node_gains : bool or None
+    node_gains : bool or None, optional
         Class engine: derive node gains (default: small trees, see
         :func:`eqrec.design.classes.class_design`).
 
@@ -388,8 +414,26 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
 
     Raises
     ------
+    InputError
+        Malformed words, a language of mixed lengths, a non-positive
+        ``mu1``, or an unknown ``cost`` or ``engine``.
     InfeasibleDesign
         If no estimator recovers to ``mu1``.
+    SolverFailure
+        If the solver stops without an optimum.
+    CertificationFailure
+        If the recovered gains do not achieve the optimal levels.
+
+    Examples
+    --------
+    The adaptive-cruise-control comparison of Section IV-B (the missing-data
+    language ``L1`` written as delay words, ``6`` = beyond the horizon),
+    ``μ1 = 1``; the paper reports ``max μ2 = 1.1498``:
+
+    >>> import eqrec
+    >>> design = eqrec.design_delay(eqrec.acc_system(), ["060000", "006000", "000600", "000060"], mu1=1.0)
+    >>> round(design.mu2, 4)
+    1.1498
     """
     _check_cost(cost)
     _check_engine(engine)
@@ -453,20 +497,72 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
                         node_gains: bool | None = None, engine: str = "classes") -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
 
-    By the μ1-free theorem (:mod:`eqrec.design.classes`) ``J`` is
-    nondecreasing on the feasible set ``[μ1,min, ∞)``; ``μ1,min`` comes from
-    one Charnes–Cooper LP.  ``rtol`` places the certified infeasible level
-    ``lower = μ1,min (1 - rtol)``; ``lower_bound`` is ``J`` with every
-    class at its optimum there (no feasible ``μ1`` gives less).  ``engine``
-    designs at ``μ1,min`` with the class engine or the tree LP (same optimum,
-    possibly other optimal gains; ``μ1,min`` and the bound always come from
-    the classes).
+    The delayed-data paper's problem with ``μ1`` a decision variable
+    (Theorem 1 / Proposition 1, eq. (10)), which is bilinear and which the
+    paper solves locally with IPOPT.  By the μ1-free theorem
+    (:mod:`eqrec.design.classes`) ``J`` is nondecreasing on the feasible set
+    ``[μ1,min, ∞)``, so the global optimum is the design at ``μ1,min``,
+    which comes from one Charnes–Cooper LP
+    (:func:`eqrec.design.classes.min_recovery_level`).  ``rtol`` places the
+    certified infeasible level ``lower = μ1,min (1 - rtol)``;
+    ``lower_bound`` is ``J`` with every class at its optimum there (no
+    feasible ``μ1`` gives less).  ``engine`` designs at ``μ1,min`` with the
+    class engine or the tree LP (same optimum, possibly other optimal gains;
+    ``μ1,min`` and the bound always come from the classes).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
+        The language, as for :func:`design_delay`.
+    cost : {"sum", "max"}, optional
+        The paper's ``J`` (default) or ``μ1`` plus the largest level.
+    solver : str, optional
+        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
+        (default ``"highs"``).
+    rtol : float, optional
+        Relative distance below ``μ1,min`` of the level proven infeasible
+        (default :data:`eqrec.design.classes.MU1_LOWER_RTOL`).
+    certify : bool, optional
+        Certify the design's gains independently (default).
+    node_gains : bool or None, optional
+        Class engine: derive node gains (default: small trees).
+    engine : {"classes", "tree"}, optional
+        Engine of the design at ``μ1,min`` (default the class engine; the
+        tree LP needs the language's words).
 
     Returns
     -------
     FreeMu1Result
-        ``design`` at ``μ1,min`` (certified), ``lower_bound`` and ``gap``,
-        ``mu1_min`` (bracket, binding terminal class and row).
+        ``design`` at ``μ1,min`` (certified), ``mu1`` (``= μ1,min``), ``J``,
+        ``lower_bound`` and ``gap``, ``mu1_min`` (bracket, binding terminal
+        class and row).  Not a :class:`Design` itself: the design is its
+        ``design`` attribute.
+
+    Raises
+    ------
+    InputError
+        Malformed words, an unknown ``cost`` or ``engine``, or
+        ``μ1,min = 0`` (no noise reaches the end of the horizon).
+    InfeasibleDesign
+        If no recovery level is feasible.
+    SolverFailure
+        If a solver stops without an optimum.
+    CertificationFailure
+        If the recovered gains do not achieve the optimal levels.
+
+    Examples
+    --------
+    The batch reactor of Section IV-A (``T = 5``, delays up to 2); the paper
+    reports ``μ1 = 0.33`` and ``max μ2 = 0.6912`` (IPOPT, a local method):
+
+    >>> import eqrec
+    >>> result = eqrec.design_delay_global(eqrec.batch_reactor(), eqrec.full_delay_language(5, 2))
+    >>> round(result.mu1, 4), round(result.mu2, 4)
+    (0.3293, 0.6897)
+    >>> result.design.mu1 == result.mu1
+    True
     """
     _check_cost(cost)
     t_start = time.perf_counter()

@@ -57,7 +57,7 @@ class PrefixLP:
     lp: LinearProgram
     stacking: Stacking
     tree: PrefixTree
-    M1: float
+    mu1: float
     mu2_col: int
     q_cols: dict[int, np.ndarray]  # node index -> columns of Q row (n x k p, row-major)
     r_cols: dict[int, np.ndarray]  # node index -> columns of r(t)
@@ -68,7 +68,7 @@ class PrefixLP:
     mu1_col: int | None = None  # the recovery level as a variable (mu1_range)
 
 
-def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = None,
+def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = None,
                     form: str = "split", zero_offset: bool = True, levels: str = "common",
                     mu1_range: tuple[float, float] | None = None, mu1_cost: float = 1.0) -> PrefixLP:
     """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
@@ -111,9 +111,9 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     T = tree.depth if T is None else T
     if tree.depth > T:
         raise InputError(f"words of length {tree.depth} exceed the horizon T = {T}")
-    M1 = float(M1)
-    if not np.isfinite(M1) or M1 <= 0:
-        raise InputError(f"the recovery level M1 must be positive, got {M1}", field="mu1")
+    mu1 = float(mu1)
+    if not np.isfinite(mu1) or mu1 <= 0:
+        raise InputError(f"the recovery level M1 must be positive, got {mu1}", field="mu1")
     st = Stacking(system, T)
     n, p = system.n, system.p
     lay = st.layout
@@ -122,7 +122,7 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
     if levels not in ("common", "sum", "max"):
         raise InputError(f"unknown level structure {levels!r}; choose 'common', 'sum' or 'max'", field="levels")
     b = LPBuilder()
-    level_lower = M1 if mu1_range is None else float(mu1_range[0])
+    level_lower = mu1 if mu1_range is None else float(mu1_range[0])
     mu2 = int(b.add_variables(1, lower=level_lower, name="mu2")[0])
     b.set_cost(mu2, 1.0 if levels != "sum" else 0.0)
     mu1_col = None
@@ -196,7 +196,7 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
             c_c.append(r_cols[anc.index][cc])
             c_v.append(P[rr, cc])
         if node.terminal and mu1_col is None:
-            level_const.append(np.full(n, M1))
+            level_const.append(np.full(n, mu1))
             level_coef.append(np.zeros(n))
         else:
             level_const.append(np.zeros(n))
@@ -219,12 +219,12 @@ def build_prefix_lp(system: AffineSystem, words, M1: float, *, T: int | None = N
         for col in [mu2, *node_level.values()]:
             b.add_rows(np.array([0, 0]), np.array([mu1_col, col]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
                        count=1)
-    radius = lay.radius(system.eta_w, system.eta_v, M1)
+    radius = lay.radius(system.eta_w, system.eta_v, mu1)
     robust_index = add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const),
                                    level_cols=np.concatenate(row_level_col), level_coef=np.concatenate(level_coef),
                                    form=form)
     lp = b.build()
-    return PrefixLP(lp=lp, stacking=st, tree=tree, M1=M1, mu2_col=mu2, q_cols=q_cols, r_cols=r_cols,
+    return PrefixLP(lp=lp, stacking=st, tree=tree, mu1=mu1, mu2_col=mu2, q_cols=q_cols, r_cols=r_cols,
                     level_cols=node_level, robust_index=robust_index, mu1_col=mu1_col,
                     measured=measured, build_time=time.perf_counter() - t_start)
 
@@ -257,50 +257,101 @@ def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = F
     return schedule_from_word_gains(model.tree, word_gains, sys.n, sys.p, time_based=time_based)
 
 
-def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "highs", T: int | None = None,
+def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
                   zero_offset: bool = True, levels: str = "common", engine: str = "classes",
                   node_gains: bool = True) -> Design:
-    """Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
+    r"""Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
+
+    The estimator (5) with the prefix-based output injection (7) of the
+    prefix-based paper (Rutledge, Yong, Ozay, ACC 2019),
+
+    .. math:: u_e(t) = u_0(t, q_{0:t}) + \sum_{\tau \le t} F(t, \tau, q_{0:t})\, y_\xi(\tau),
+
+    has one gain row per prefix of the language, shared by the words through
+    it (the set :math:`\mathcal Q(\mathcal L)` of Theorem 1 / eq. (11)).
+    For a given recovery level ``M1 = mu1`` the design minimises the
+    intermediate level ``M2`` subject to equalized recovery (eq. (12b)):
+    ``‖ξ(t)‖∞ <= M2`` along every word and ``‖ξ(end)‖∞ <= M1``, for every
+    ``‖ξ(0)‖∞ <= M1`` and noise in the box.  This is the LP of Remark 2 /
+    Theorem 3 (eq. (16)), built per prefix-tree node instead of per word
+    (the tree LP, :func:`build_prefix_lp`), or the equivalent class
+    engine (:mod:`eqrec.design.classes`).  Words may differ in length
+    (Section V): ``M1`` is imposed at each word's end.
 
     Parameters
     ----------
     system : AffineSystem
+        The system.
     words : sequence of str or ArrivalPattern, or PrefixTree
         Arrival patterns or 0/1 words; delay patterns give the event-based
         design of the delayed-data paper (one gain block per event-prefix node).
-    M1 : float
-        Recovery level ``μ1``.
-    levels : {"common", "sum", "max"}
-        One common ``M2`` or per-node levels (:func:`build_prefix_lp`); with
-        per-node levels :attr:`Design.levels` holds them and ``mu2`` is the largest.
-    engine : {"classes", "tree"}
+    mu1 : float
+        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive.
+    solver : str, optional
+        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
+        (default ``"highs"``).
+    T : int or None, optional
+        Tree LP only: horizon of the stacking (default: the longest word).
+        The class engine designs on the words' own horizon and accepts only
+        ``None`` or that horizon.
+    form : str, optional
+        Tree LP only: robust counterpart, ``"split"`` (default), ``"abs"`` or
+        the paper's Π-dual ``"dual"`` of eq. (16).
+    certify : bool, optional
+        Certify the gains independently (:func:`eqrec.core.certify.certify_design`;
+        default).
+    method : str, optional
+        Label stored in :attr:`Design.method` (default ``"prefix"``);
+        ``"time"`` also makes the node gains time-based (as
+        :func:`design_time_based` uses it).
+    zero_offset : bool, optional
+        Tree LP only: fix the offsets ``r`` (hence ``u0``) to zero (default;
+        no loss of optimality, see the module docstring); ``False`` keeps
+        the paper's free ``r``.  The class engine has no offsets.
+    levels : {"common", "sum", "max"}, optional
+        One common ``M2`` (default) or per-node levels (:func:`build_prefix_lp`);
+        with per-node levels :attr:`Design.levels` holds them and ``mu2`` is
+        the largest.
+    engine : {"classes", "tree"}, optional
         The class engine (:mod:`eqrec.design.classes`: one LP per (time,
         available data) class and row; default) or this module's tree LP.
-    node_gains : bool
+    node_gains : bool, optional
         Class engine: also derive the node gains ``(F, u0)`` (``schedule``)
-        and certify them by the independent recursion; without them the
-        design holds the class gains ``K`` and their certificate (the
-        estimator in class form).
-    T, form, zero_offset
-        Tree LP only: horizon of the stacking, robust counterpart and free
-        offsets ``r`` (the class engine has no offsets: they are not needed,
-        see the module docstring).
+        and certify them by the independent recursion (default); without
+        them the design holds the class gains ``K`` and their certificate
+        (the estimator in class form).
 
     Returns
     -------
     Design
-        Its gains certified independently (:func:`eqrec.core.certify.certify_design`)
-        unless ``certify=False``.
+        ``mu2`` the optimal ``M2``; its gains certified independently
+        (:func:`eqrec.core.certify.certify_design`) unless ``certify=False``.
 
     Raises
     ------
+    InputError
+        Malformed words, a non-positive ``mu1``, an unknown ``engine``, or
+        tree-LP options (``T``, ``form``, ``zero_offset``) with the class engine.
     InfeasibleDesign
-        If no prefix-based estimator achieves recovery level ``M1``.
+        If no prefix-based estimator achieves recovery level ``mu1``.
     SolverFailure
         If the solver stops without an optimum.
     CertificationFailure
         If the recovered gains do not achieve the optimum.
+
+    Examples
+    --------
+    The language ``L1`` of Section VI of the prefix-based paper (one missing
+    measurement among times 1-4), ``M1 = 1``; Section VI prints
+    ``M2* = 1.1490``, Section IV-B of the delayed-data paper ``1.1498``:
+
+    >>> import eqrec
+    >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
+    >>> round(design.mu2, 4)
+    1.1498
+    >>> design.certificate.terminal <= 1.0 + 1e-6
+    True
     """
     if engine == "classes":
         from eqrec.core.classes import classes_of_tree
@@ -313,16 +364,16 @@ def design_prefix(system: AffineSystem, words, M1: float, *, solver: str = "high
         if form != "split" or not zero_offset:
             raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
                              field="engine")
-        return class_design(system, classes_of_tree(tree), M1, levels=levels, solver=solver, method=method,
+        return class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
                             certify=certify, node_gains=node_gains, time_based=(method == "time"))
     if engine != "tree":
         raise InputError(f"unknown engine {engine!r}; choose 'classes' or 'tree'", field="engine")
-    model = build_prefix_lp(system, words, M1, T=T, form=form, zero_offset=zero_offset, levels=levels)
-    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {M1:g})")
+    model = build_prefix_lp(system, words, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
+    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {mu1:g})")
     schedule = read_schedule(model, sol, time_based=(method == "time"))
     node_levels = {model.tree.nodes[i].label: float(sol.x[c]) for i, c in model.level_cols.items()}
-    mu2 = max(node_levels.values(), default=model.M1) if levels == "sum" else float(sol.x[model.mu2_col])
-    design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, M1=model.M1,
+    mu2 = max(node_levels.values(), default=model.mu1) if levels == "sum" else float(sol.x[model.mu2_col])
+    design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, mu1=model.mu1,
                     mu2=mu2, schedule=schedule, solution=sol, build_time=model.build_time, levels=node_levels)
     design.extra["engine"] = "tree"
     if certify:

@@ -20,41 +20,77 @@ if TYPE_CHECKING:
 class Design:
     """A solved (and, once :func:`eqrec.core.certify.certify_design` ran, certified) design.
 
-    Attributes
+    What every design function returns (:func:`eqrec.design_prefix`,
+    :func:`eqrec.design_time_based`, :func:`eqrec.design_delay`,
+    :func:`eqrec.design_augmented`; :func:`eqrec.design_delay_global`
+    wraps one): an estimator achieving equalized recovery (Definition 2 of
+    the prefix-based paper, Definition 1 of the delayed-data paper) with
+    recovery level ``μ1`` (``M1``) and intermediate level(s) ``μ2``
+    (``M2``) over the horizon ``T``: for every ``‖ξ(0)‖∞ <= μ1`` and noise
+    in the box, ``‖ξ(t)‖∞ <= μ2`` for ``t = 0..T`` and ``‖ξ(T)‖∞ <= μ1``.
+    Designs are built by the design functions, not by hand; run one with
+    :meth:`estimator`.
+
+    Parameters
     ----------
-    method
-        ``"prefix"``, ``"time"``, ``"augmented"``, ...
-    patterns
+    method : str
+        ``"prefix"``, ``"time"``, ``"delay"``, ``"augmented"``, ...
+    system : AffineSystem
+        The system designed for.
+    patterns : tuple of ArrivalPattern or str
         The designed arrival patterns (0/1 words are converted).
-    T
+    T : int
         Horizon.
-    M1
+    mu1 : float
         Recovery level ``μ1``.
-    mu2
+    mu2 : float
         Largest intermediate level (the LP optimum).
-    schedule
-        The gains ``(F, u0)`` per pattern prefix.
-    solution
-        The solver's record.
-    levels
+    schedule : GainSchedule or None
+        The gains ``(F, u0)`` per pattern prefix (node gains), or ``None``
+        for a class-engine design of a language too large to enumerate.
+    solution : LPSolution
+        The solver's record (status, objective, iterations, solve time).
+    build_time : float
+        Seconds spent building the optimisation problem.
+    certificate : Certificate or None, optional
+        The independent worst-case certificate of the node gains
+        (:class:`eqrec.core.certify.Certificate`), attached by certification.
+    extra : dict, optional
+        Method-specific details (engine, problem sizes, cost ``J``, worst-case
+        word, ...).
+    levels : dict of str to float, optional
         Optional per-node levels ``μ2`` keyed by the node's prefix label.
-    certificate
-        The independent worst-case certificate (:class:`eqrec.core.certify.Certificate`).
-    class_gains
+    class_gains : ClassGains or None, optional
         Class engine: one gain ``K`` per (time, available data) class
         (:class:`eqrec.core.classes.ClassGains`), the estimator in class form.
         ``schedule`` (node gains) is then derived from them, or ``None`` for a
         language too large to enumerate.
-    class_certificate
+    class_certificate : ClassCertificate or None, optional
         Class engine: the worst case of every class recomputed from the gains ``K``
         (:class:`eqrec.design.classes.ClassCertificate`).
+
+    Attributes
+    ----------
+    words : tuple of str
+        Labels of the designed patterns.
+    solve_time : float
+        Seconds spent inside the solver.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
+    >>> design.method, design.T, design.mu1, round(design.mu2, 4)
+    ('prefix', 6, 1.0, 1.1498)
+    >>> design.words
+    ('101111', '110111', '111011', '111101')
     """
 
     method: str
     system: AffineSystem
     patterns: tuple[ArrivalPattern, ...]
     T: int
-    M1: float
+    mu1: float
     mu2: float
     schedule: GainSchedule | None
     solution: LPSolution
@@ -76,6 +112,7 @@ class Design:
 
     @property
     def solve_time(self) -> float:
+        """Seconds spent inside the solver call (``solution.solve_time``)."""
         return self.solution.solve_time
 
     def estimator(self, periodic: bool = True) -> "GuaranteedEstimator":
@@ -84,17 +121,40 @@ class Design:
         Class-engine designs run in class form (:class:`eqrec.core.estimator.ClassEstimator`,
         one gain per (time, available data) class, no prefix tree) with the
         certified level of the class as the bound; other designs run their
-        node gains (:class:`eqrec.core.estimator.RecoveryEstimator`) with the
-        node's (or the common) level.  ``μ1`` at each period end.
+        node gains (:class:`eqrec.core.estimator.RecoveryEstimator`, eqs.
+        (5), (7) of the prefix-based paper) with the node's (or the common)
+        level.  ``μ1`` at each period end.  With ``periodic=True`` the
+        estimator restarts its horizon every ``T`` steps (Section V of the
+        prefix-based paper): the error is back within ``μ1`` at each period
+        end, so the same gains apply again.
 
         Parameters
         ----------
-        periodic : bool
+        periodic : bool, optional
             Reuse the gains every ``T`` steps (the default) or stop after ``T``.
 
         Returns
         -------
         GuaranteedEstimator
+            Not yet started: call :meth:`GuaranteedEstimator.reset` first.
+
+        Raises
+        ------
+        InputError
+            If the design holds no gains to run.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> import eqrec
+        >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
+        >>> estimator = design.estimator().reset(np.zeros(3))
+        >>> xhat, bound = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives
+        >>> xhat.shape, bound
+        ((3,), 1.05)
+        >>> xhat = estimator.update(None)  # y(1) is lost
+        >>> round(estimator.bound, 4)
+        1.1498
         """
         from eqrec.core.runtime import GuaranteedEstimator
 
@@ -112,4 +172,4 @@ class Design:
 
             def bound_of(prefix):
                 return float(self.levels.get(prefix.label, self.mu2)) if self.levels else float(self.mu2)
-        return GuaranteedEstimator(self.system, gains, bound_of, self.M1, periodic=periodic)
+        return GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic)

@@ -39,7 +39,7 @@ from eqrec.errors import InfeasibleDesign
 DESIGNS = {"prefix": design_prefix, "time": design_time_based}
 
 
-def lower_bound_probe(system: AffineSystem, words, M1: float, mu2_opt: float, gap: float,
+def lower_bound_probe(system: AffineSystem, words, mu1: float, mu2_opt: float, gap: float,
                       solvers: Sequence[str] = ("highs", "clarabel")) -> dict[str, str]:
     """Solver status of the prefix LP with the ``M2`` column bounded by ``mu2_opt - gap``, per solver.
 
@@ -48,7 +48,7 @@ def lower_bound_probe(system: AffineSystem, words, M1: float, mu2_opt: float, ga
     """
     out = {}
     for s in solvers:
-        model = build_prefix_lp(system, words, M1)
+        model = build_prefix_lp(system, words, mu1)
         model.lp.col_upper[model.mu2_col] = mu2_opt - gap
         out[s] = solve_lp(model.lp, s).status
     return out
@@ -77,11 +77,11 @@ def min_feasible_M1(system: AffineSystem, words, method: str = "prefix") -> MinR
     return min_recovery_level(system, classes_of_tree(PrefixTree(language)))
 
 
-def min_recovery_time(system: AffineSystem, words, M1: float, T_max: int) -> int | None:
+def min_recovery_time(system: AffineSystem, words, mu1: float, T_max: int) -> int | None:
     """Minimum horizon ``T`` at which ``words`` (extended by measurements) admit recovery to ``M1``."""
     for T in range(max(len(w) for w in words), T_max + 1):
         try:
-            design_prefix(system, [extend_word(w, T) for w in words], M1, certify=False)
+            design_prefix(system, [extend_word(w, T) for w in words], mu1, certify=False)
             return T
         except InfeasibleDesign:
             continue
@@ -93,11 +93,11 @@ def M2_curve(system: AffineSystem, words, M1_values: Iterable[float], method: st
     """Optimal ``M2`` for each ``M1`` (``None`` where the design is infeasible)."""
     fn = DESIGNS[method]
     out: list[float | None] = []
-    for k, M1 in enumerate(M1_values):
+    for k, mu1 in enumerate(M1_values):
         if on_point is not None:
-            on_point(k, float(M1))
+            on_point(k, float(mu1))
         try:
-            out.append(fn(system, words, float(M1)).mu2)
+            out.append(fn(system, words, float(mu1)).mu2)
         except InfeasibleDesign:
             out.append(None)
     return out
@@ -117,7 +117,7 @@ def observer_for(system: AffineSystem, poles: np.ndarray, seed: int = 0):
     return deadbeat_observer(system.A, system.C, seed=seed), "deadbeat"
 
 
-def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_list: Iterable[np.ndarray],
+def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_list: Iterable[np.ndarray],
                   solver: str = "highs", on_point: Callable[[], None] | None = None,
                   second_solver: str | None = "clarabel", certify_runtime: str | None = None,
                   deadbeat_seed: int = 0, observers: Sequence[tuple[PolePlacement, str]] | None = None) -> list[dict]:
@@ -155,7 +155,7 @@ def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_l
             rec.update(certified_mu2=np.nan, certified_terminal=np.nan)
         if pp.ok:
             if model is None:
-                model = AugmentedLP(system, word, M1, pp.L, mode=mode)
+                model = AugmentedLP(system, word, mu1, pp.L, mode=mode)
             else:
                 model.set_L(pp.L)
             sol = model.solve(solver)
@@ -171,7 +171,7 @@ def fixed_L_sweep(system: AffineSystem, word: str, M1: float, mode: str, poles_l
                        message=pp.message if sol.optimal else sol.status)
             if certify_runtime and sol.optimal:
                 cert = certify_schedule(system, schedule_from_augmented(system, model.gains(sol), certify_runtime),
-                                        [word], M1)
+                                        [word], mu1)
                 rec.update(certified_mu2=cert.mu2, certified_terminal=cert.terminal)
         rec["solve_time"] = time.perf_counter() - t0
         rows.append(rec)

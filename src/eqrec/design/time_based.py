@@ -17,19 +17,73 @@ from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
 
 
-def design_time_based(system: AffineSystem, words, M1: float, *, solver: str = "highs",
+def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = "highs",
                       certify: bool = True, form: str = "split", engine: str = "classes") -> Design:
     """Minimise ``M2`` of a time-based estimator for the worst-case pattern of ``words``.
 
-    ``words`` are arrival patterns or 0/1 words.  The design is the
-    single-word prefix design on the worst-case pattern (one word: its
-    classes are its nodes, so the class engine applies; ``engine="tree"``
-    uses the tree LP).  The certificate covers every pattern of the
-    language and the worst case.
+    The time-based estimator (eqs. (5), (6) of the prefix-based paper, the
+    authors' earlier work, ref. [10] there) has gains ``F(t, τ)``, ``u0(t)``
+    that depend on time only.  It is designed for the worst-case pattern of
+    the language (each measurement at its latest arrival; for missing-data
+    words the bitwise AND, Section III of the prefix-based paper), with zero
+    gain on the measurements the worst case lacks, so it works for every
+    word of the language.  The design is the single-word prefix design
+    (:func:`design_prefix`, Remark 2 / Theorem 3 of the prefix-based paper)
+    on the worst-case pattern (one word: its classes are its nodes, so the
+    class engine applies; ``engine="tree"`` uses the tree LP).  The
+    certificate covers every pattern of the language and the worst case.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    words : sequence of str or ArrivalPattern
+        The language: arrival patterns or 0/1 words of one length.
+    mu1 : float
+        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive.
+    solver : str, optional
+        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
+        (default ``"highs"``).
+    certify : bool, optional
+        Certify the gains independently (:func:`eqrec.core.certify.certify_design`)
+        on every word of the language and the worst case (default).
+    form : str, optional
+        Robust counterpart of the tree LP (``"split"``, ``"abs"`` or the
+        paper's Π-dual ``"dual"``); ``engine="tree"`` only.
+    engine : {"classes", "tree"}, optional
+        The class engine (default) or the tree LP of :mod:`eqrec.design.prefix`.
+
+    Returns
+    -------
+    Design
+        ``method="time"``, one pattern (the worst case), ``mu2`` the
+        optimal ``M2``; ``extra["language"]`` and ``extra["worst_case_word"]``.
+
+    Raises
+    ------
+    InputError
+        Malformed words, words of mixed lengths, a non-positive ``mu1`` or an
+        unknown engine.
+    InfeasibleDesign
+        If no time-based estimator recovers to ``mu1``.
+    SolverFailure
+        If the solver stops without an optimum.
+    CertificationFailure
+        If the recovered gains do not achieve the optimum on some word.
+
+    Examples
+    --------
+    The language ``L1`` of Section VI of the prefix-based paper, whose
+    worst case is ``L1* = {100001}``; Section VI recalls ``M2* = 2.9864``:
+
+    >>> import eqrec
+    >>> design = eqrec.design_time_based(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
+    >>> design.extra["worst_case_word"], round(design.mu2, 4)
+    ('100001', 2.9864)
     """
     language = as_language(words)
     wc = worst_case_pattern(language)
-    design = design_prefix(system, [wc], M1, solver=solver, form=form, certify=False, method="time",
+    design = design_prefix(system, [wc], mu1, solver=solver, form=form, certify=False, method="time",
                            engine=engine)
     design.extra["language"] = tuple(p.label for p in language)
     design.extra["worst_case_word"] = wc.label

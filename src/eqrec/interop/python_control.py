@@ -106,7 +106,7 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
     def estimate(xbar, innov, arrived, t):
         """x̂(t) and its bound from the state at the start of step t."""
         if t == 0:
-            return xbar.copy(), design.M1
+            return xbar.copy(), design.mu1
         S = tuple(int(i) for i in np.flatnonzero(arrived[:t]))
         try:
             xhat = gains.estimate(t, S, xbar, innov[list(S)])

@@ -64,7 +64,8 @@ import numpy as np
 import yaml
 
 from eqrec.errors import InputError
-from eqrec.studies.harness import get_logger, write_csv, write_text
+from eqrec.studies.harness import get_logger
+from eqrec.studies.outputs import write_csv, write_text
 
 if TYPE_CHECKING:
     import pandas as pd

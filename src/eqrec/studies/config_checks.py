@@ -1,6 +1,6 @@
 """What the configuration schemas cannot say: the cross-field checks of each study's section.
 
-:func:`eqrec.studies.harness.validate_section` runs ``CHECKS[section]`` after
+:func:`eqrec.studies.configuration.validate_section` runs ``CHECKS[section]`` after
 the schema (``config/schemas/<section>.schema.yaml``).  This module imports
 only light modules (no solver, no SciPy statistics): the Snakefile validates
 the configuration at every start, and Snakemake starts once per job.

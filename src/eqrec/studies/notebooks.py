@@ -29,7 +29,9 @@ import tempfile
 from pathlib import Path
 from typing import Iterator
 
-from eqrec.studies.harness import StepError, get_logger, write_text
+from eqrec.errors import StepError
+from eqrec.studies.harness import get_logger
+from eqrec.studies.outputs import write_text
 
 log = get_logger("notebooks")
 

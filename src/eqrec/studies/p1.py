@@ -29,7 +29,8 @@ from eqrec.design.result import Design
 from eqrec.design.sweeps import M2_curve, lower_bound_probe, min_feasible_M1, min_recovery_time
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import p1_figures
-from eqrec.studies.harness import Progress, get_logger, read_json, write_json, write_npz
+from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.outputs import read_json, write_json, write_npz
 
 log = get_logger("p1")
 
@@ -72,15 +73,15 @@ def _timed_design(fn, repeats: int) -> tuple[Design, dict]:
 def step_designs(cfg, inputs, outputs, wildcards) -> dict:
     """P1-M2 / P1-TIME: optimal M2 of the prefix- and time-based estimators on L1, per solver."""
     system = system_from_config(cfg)
-    L1, M1 = cfg["language"], float(cfg["mu1"])
+    L1, mu1 = cfg["language"], float(cfg["mu1"])
     gap = float(cfg["probe_gap"])
-    result: dict = {"language": L1, "worst_case_word": worst_case_word(L1), "M1": M1, "designs": {}}
+    result: dict = {"language": L1, "worst_case_word": worst_case_word(L1), "M1": mu1, "designs": {}}
     for method, fn in METHODS.items():
         entry: dict = {"solvers": {}}
         for solver in cfg["solvers"]:
             log.info("%s-based design with %s", method, solver)
             # the paper-comparison rows (values, iterations, times) keep the paper's form: the tree LP
-            d, timing = _timed_design(lambda: fn(system, L1, M1, solver=solver, engine="tree"),
+            d, timing = _timed_design(lambda: fn(system, L1, mu1, solver=solver, engine="tree"),
                                       int(cfg["timing_repeats"]) if solver == "highs" else 1)
             entry["solvers"][solver] = {"mu2": d.mu2, "certified_mu2": d.certificate.mu2,
                                         "certified_terminal": d.certificate.terminal, **timing}
@@ -90,9 +91,9 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
                              per_time_bound=d.certificate.per_time().tolist())
                 log.info("%s-based: probing M2 <= %.6f - %g", method, d.mu2, gap)
                 entry["lower_bound_probe"] = {"gap": gap, "status": lower_bound_probe(
-                    system, d.words, M1, d.mu2, gap, cfg["probe_solvers"])}
+                    system, d.words, mu1, d.mu2, gap, cfg["probe_solvers"])}
                 # the class engine on the same problem (eqrec.design.classes): same optimum, one LP per class
-                dc, timing_c = _timed_design(lambda: fn(system, L1, M1, solver=solver), int(cfg["timing_repeats"]))
+                dc, timing_c = _timed_design(lambda: fn(system, L1, mu1, solver=solver), int(cfg["timing_repeats"]))
                 entry["class_engine"] = {"mu2": dc.mu2, "certified_mu2": dc.certificate.mu2,
                                          "classes": dc.extra.get("classes"), **timing_c}
         mus = [v["mu2"] for v in entry["solvers"].values()]
@@ -111,14 +112,14 @@ def design_variants(cfg: dict) -> dict:
       identity-gain convention of eq. (3) of the prefix-based paper.
     """
     base = system_from_config(cfg)
-    L1, M1 = cfg["language"], float(cfg["mu1"])
+    L1, mu1 = cfg["language"], float(cfg["mu1"])
     rounded = AffineSystem(A=np.round(base.A, 4), C=base.C, E=np.round(base.E, 4), eta_w=base.eta_w,
                            eta_v=base.eta_v, name="ACC rounded")
     eye = AffineSystem(A=base.A, C=base.C, E=np.eye(3), eta_w=base.eta_w, eta_v=base.eta_v, name="ACC E=I")
     out = {}
     for name, s in (("rounded_matrices", rounded), ("identity_noise_gain", eye)):
         log.info("reading %s", name)
-        out[name] = {m: fn(s, L1, M1).mu2 for m, fn in METHODS.items()}
+        out[name] = {m: fn(s, L1, mu1).mu2 for m, fn in METHODS.items()}
     return out
 
 
@@ -127,18 +128,18 @@ def design_variants(cfg: dict) -> dict:
 def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
     """P1-F1: Monte Carlo error trajectories of both estimators (same draws) and worst-vertex checks."""
     system = system_from_config(cfg)
-    L1, M1 = cfg["language"], float(cfg["mu1"])
+    L1, mu1 = cfg["language"], float(cfg["mu1"])
     sim = cfg["simulation"]
     T = len(L1[0])
     x0 = np.asarray(sim["x0"], float)
     u = np.full((T, 1), float(sim["input_force"]))
     arrays: dict = {}
     for method, fn in METHODS.items():
-        d = fn(system, L1, M1, engine="tree")  # the gains of designs.json (the paper's LP)
+        d = fn(system, L1, mu1, engine="tree")  # the gains of designs.json (the paper's LP)
         log.info("simulating %d runs of the %s-based estimator", sim["runs"], method)
-        errs, words = monte_carlo(system, d.schedule, L1, M1, int(sim["runs"]), int(sim["seed"]),
+        errs, words = monte_carlo(system, d.schedule, L1, mu1, int(sim["runs"]), int(sim["seed"]),
                                   kind="uniform", x0=x0, inputs=u)
-        verrs, _ = monte_carlo(system, d.schedule, L1, M1, int(sim["runs"]), int(sim["seed"]) + 1,
+        verrs, _ = monte_carlo(system, d.schedule, L1, mu1, int(sim["runs"]), int(sim["seed"]) + 1,
                                kind="vertex", x0=x0, inputs=u)
         cert = d.certificate
         bound = np.stack([cert.words[w].bounds for w in words])
@@ -153,7 +154,7 @@ def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
         arrays.update({f"{method}_errors": errs, f"{method}_vertex_errors": verrs, f"{method}_bounds": bound,
                        f"{method}_words": np.array(words), f"{method}_mu2": d.mu2,
                        f"{method}_attain_gap": float(max(attain))})
-    write_npz(outputs.npz, compressed=True, M1=M1, **arrays)
+    write_npz(outputs.npz, compressed=True, M1=mu1, **arrays)  # the stored key keeps its name
     return arrays
 
 
@@ -174,7 +175,7 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     curve: dict = {"M1": grid.tolist()}
     for m in METHODS:
         prog = Progress(log, grid.size, f"M2*(M1) curve, {m}-based", "levels")
-        curve[m] = M2_curve(system, L1, grid, m, on_point=lambda k, M1: prog.advance())
+        curve[m] = M2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
     res["curve"] = curve
     fin = ext["finite_language"]
     d = design_prefix(system, fin, float(cfg["mu1"]))
@@ -183,8 +184,8 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
                               "per_word_terminal": {w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}
     res["min_T"] = []
     prog = Progress(log, len(ext["min_T_levels"]), "minimum recovery time", "levels")
-    for M1 in ext["min_T_levels"]:
-        res["min_T"].append({"M1": float(M1), "T": min_recovery_time(system, L1, float(M1), int(ext["T_max"]))})
+    for mu1 in ext["min_T_levels"]:
+        res["min_T"].append({"M1": float(mu1), "T": min_recovery_time(system, L1, float(mu1), int(ext["T_max"]))})
         prog.advance()
     write_json(outputs.json, res)
     return res
@@ -192,10 +193,10 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
 
 # --------------------------------------------------------------------------- values.json
 
-def _design_evidence(entry: dict, M1: float) -> dict:
+def _design_evidence(entry: dict, mu1: float) -> dict:
     probe = entry["lower_bound_probe"]
     return {"mu2": entry["mu2"], "certified_mu2": entry["certified_mu2"],
-            "certified_terminal": entry["certified_terminal"], "M1": M1, "solver_spread": entry["solver_spread"],
+            "certified_terminal": entry["certified_terminal"], "M1": mu1, "solver_spread": entry["solver_spread"],
             "probe_gap": probe["gap"], "probe_status": probe["status"]}
 
 
@@ -203,6 +204,26 @@ def _sim_evidence(sim, m: str) -> dict:
     errs, bounds = sim[f"{m}_errors"], sim[f"{m}_bounds"]
     return {"runs": int(errs.shape[0]), "max_ratio": float(np.max(np.abs(errs) / np.maximum(bounds, 1e-300))),
             "attain_gap": float(sim[f"{m}_attain_gap"]), "vertex_runs": int(sim[f"{m}_vertex_errors"].shape[0])}
+
+
+def _finite_language_value(fin: dict, mu1: float) -> dict:
+    """P1-EXT (Section V): "yes" when the design on the finite-length language is certified from its gains alone
+    (largest level within the LP's optimum, every word's terminal error within ``mu1`` at its own end)."""
+    ok = (fin["certified_mu2"] <= fin["mu2"] * (1 + 1e-9)
+          and fin["certified_terminal"] <= mu1 * (1 + 1e-9))
+    return {"value": "yes" if ok else "no",
+            "evidence": {"words": fin["words"], "mu2": fin["mu2"], "certified_mu2": fin["certified_mu2"],
+                         "certified_terminal": fin["certified_terminal"], "mu1": mu1}}
+
+
+def _min_T_value(min_T: list[dict], language: list[str]) -> dict:
+    """P1-EXT (Section V): "yes" when the minimum recovery time was found for some level, and the longest word
+    length (the paper: T "can be longer than the longest word")."""
+    found = [r for r in min_T if r["T"] is not None]
+    longest = max(len(w) for w in language)
+    return {"value": "yes" if found else "no",
+            "evidence": {"levels": min_T, "longest_word": longest,
+                         "longer_than_words": sum(1 for r in found if r["T"] > longest)}}
 
 
 def step_values(cfg, inputs, outputs, wildcards) -> dict:
@@ -213,7 +234,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     sim = np.load(inputs.simulation)
     p, t = des["designs"]["prefix"], des["designs"]["time"]
     var = des["variants"]
-    M1 = float(des["M1"])
+    mu1 = float(des["M1"])
     A, B, f, E = (np.asarray(model[k]) for k in ("A", "B", "f", "E"))
 
     def within(m):
@@ -228,9 +249,9 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "f": {"value": f.round(4).tolist(), "evidence": {"decimals": 4}},
         "E": {"value": E[:, 0].round(4).tolist(), "evidence": {"Ts": model["constants"]["Ts"]}},
         "prefix_L1_mu2": {"value": p["mu2"], "evidence": {
-            **_design_evidence(p, M1), "rounded_matrices_mu2": var["rounded_matrices"]["prefix"],
+            **_design_evidence(p, mu1), "rounded_matrices_mu2": var["rounded_matrices"]["prefix"],
             "identity_noise_gain_mu2": var["identity_noise_gain"]["prefix"]}},
-        "time_L1_mu2": {"value": t["mu2"], "evidence": _design_evidence(t, M1)},
+        "time_L1_mu2": {"value": t["mu2"], "evidence": _design_evidence(t, mu1)},
         "prefix_time_s": {"value": p["timing"]["total_s"], "evidence": timing(p)},
         "prefix_iterations": {"value": p["timing"]["iterations"], "evidence": {"solver": p["timing"]["solver"]}},
         "time_time_s": {"value": t["timing"]["total_s"], "evidence": timing(t)},
@@ -243,6 +264,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "min_M1_prefix": {"value": ext["min_M1"]["prefix"], "evidence": ext["min_M1_bracket"]["prefix"]},
         "finite_language_mu2": {"value": ext["finite_language"]["mu2"],
                                 "evidence": {"words": ext["finite_language"]["words"]}},
+        "ext_finite_language": _finite_language_value(ext["finite_language"], mu1),
+        "ext_min_T": _min_T_value(ext["min_T"], des["language"]),
     }
     write_json(outputs.json, values, timings=outputs.timings)
     return values

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from eqrec.studies.harness import save_figure
+from eqrec.studies.outputs import save_figure
 from eqrec.studies.plotting import paper_style, pyplot, trajectory_panel
 
 
@@ -16,15 +16,15 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     paper_style()
     plt = pyplot()
     data = np.load(inputs.npz)
-    M1 = float(data["M1"])
+    mu1 = float(data["M1"])
     fig, axes = plt.subplots(3, 2, figsize=(7.0, 6.0), sharex=True)
     for col, method, name in ((0, "prefix", "Prefix-based"), (1, "time", "Time-based")):
         errs = data[f"{method}_errors"]
         mu2 = float(data[f"{method}_mu2"])
         T = errs.shape[1] - 1
-        levels = [M1] + [mu2] * (T - 1) + [M1]
+        levels = [mu1] + [mu2] * (T - 1) + [mu1]
         trajectory_panel(axes[:, col], errs, levels,
-                         f"{name} estimator ($M_1$ = {M1:g}, $M_2^*$ = {mu2:.4f})", ylabels=(col == 0))
+                         f"{name} estimator ($M_1$ = {mu1:g}, $M_2^*$ = {mu2:.4f})", ylabels=(col == 0))
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=2, bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"ACC, $L_1$, {errs.shape[0]} runs: estimation errors and guarantees")
@@ -39,9 +39,9 @@ def step_figure_ext(cfg, inputs, outputs, wildcards) -> None:
     c = res["curve"]
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(7.0, 2.8))
     for m, style in (("prefix", "C0-"), ("time", "C3--")):
-        M1 = [a for a, b in zip(c["M1"], c[m]) if b is not None]
+        mu1 = [a for a, b in zip(c["M1"], c[m]) if b is not None]
         M2 = [b for b in c[m] if b is not None]
-        ax1.plot(M1, M2, style, marker=".", label=f"{m}-based")
+        ax1.plot(mu1, M2, style, marker=".", label=f"{m}-based")
         ax1.axvline(res["min_M1"][m], color=style[:2], lw=0.8, ls=":",
                     label=f"smallest $M_1$: {res['min_M1'][m]:.4f}")
     ax1.set_xlim(0.0, 1.03 * max(c["M1"]))  # the smallest levels stand clear of the y axis

@@ -39,7 +39,8 @@ from eqrec.design.time_based import design_time_based
 from eqrec.errors import EqrecError
 from eqrec.studies import p2_figures, p2_sweeps, p2_values
 from eqrec.studies.claims import published_value
-from eqrec.studies.harness import get_logger, write_json, write_npz
+from eqrec.studies.harness import get_logger
+from eqrec.studies.outputs import write_json, write_npz
 from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
 
 log = get_logger("p2")
@@ -89,14 +90,14 @@ def _augmented_entry(system, d, language) -> dict:
 def step_designs(cfg, inputs, outputs, wildcards) -> dict:
     """P2-F1, P2-F2 and the readings: every design certified from its time-based form."""
     system = acc_system()
-    M1, poles = float(cfg["mu1"]), np.asarray(cfg["init_poles"], float)
-    out: dict[str, Any] = {"system": system.to_dict(), "mu1": M1, "init_poles": poles.tolist()}
+    mu1, poles = float(cfg["mu1"]), np.asarray(cfg["init_poles"], float)
+    out: dict[str, Any] = {"system": system.to_dict(), "mu1": mu1, "init_poles": poles.tolist()}
     arrays: dict[str, np.ndarray] = {}
     for fig, key in (("f1", "f1_words"), ("f2", "f2_words")):
         language = validate_language(cfg[key], length=int(cfg["T"]))
         wc = worst_case_word(language)
         res: dict[str, Any] = {"language": list(language), "worst_case_word": wc}
-        tb = design_time_based(system, language, M1, engine="tree")  # the paper-comparison row: the papers' LP
+        tb = design_time_based(system, language, mu1, engine="tree")  # the paper-comparison row: the papers' LP
         F, u0 = tb.schedule.word_matrices(wc)
         arrays.update(_schedule_npz(f"{fig}/time", wc, F, u0))
         res["time"] = {"mu2": tb.mu2, "certified_mu2": tb.certificate.mu2, "solve_time": tb.solve_time,
@@ -104,7 +105,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         for name, kwargs in (("augmented_lp", {"L": None, "poles": poles}),
                              ("augmented_free", {"L": "free", "poles": poles})):
             t0 = time.perf_counter()
-            d = design_augmented(system, language, M1, **kwargs)
+            d = design_augmented(system, language, mu1, **kwargs)
             entry = _augmented_entry(system, d, language)
             entry["wall_time"] = time.perf_counter() - t0
             res[name] = entry
@@ -114,25 +115,25 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         if fig == "f2":
             # Reading 1: word positions read as 1-based time indices (caption: k = 2 and 3).
             w1 = one_based_word(wc)
-            tb1 = design_time_based(system, [w1], M1)
-            d1 = design_augmented(system, [w1], M1, L="free", poles=poles)
+            tb1 = design_time_based(system, [w1], mu1)
+            d1 = design_augmented(system, [w1], mu1, L="free", poles=poles)
             res["one_based"] = {"word": w1, "time_mu2": tb1.mu2, "augmented_free": _augmented_entry(system, d1, [w1])}
             g1 = d1.extra["gains"]
             arrays.update(_gains_npz("f2/one_based", g1, *augmented_to_time_based(system, g1)))
             # What the 1-based design really guarantees on the true worst-case word.
             sch1 = schedule_from_augmented(system, g1)
             res["one_based"]["certified_on_true_words"] = {
-                w: float(certify_schedule(system, retarget(sch1, w1, wc), [w], M1).words[w].bounds.max())
+                w: float(certify_schedule(system, retarget(sch1, w1, wc), [w], mu1).words[w].bounds.max())
                 for w in [wc]}
             # Reading 2: constant L kept at the missing steps with the measurement in the s-dynamics (leak).
             leak = {}
             for name, Lspec in (("leak_lp", None), ("leak_free", "free")):
                 try:
-                    dl = design_augmented(system, language, M1, L=Lspec, poles=poles, mode="leak")
+                    dl = design_augmented(system, language, mu1, L=Lspec, poles=poles, mode="leak")
                     e = _augmented_entry(system, dl, language)
                     gl = dl.extra["gains"]
                     e["certified_mu2_theorem2_runtime"] = certify_schedule(
-                        system, schedule_from_augmented(system, gl, "theorem2"), [wc], M1).mu2
+                        system, schedule_from_augmented(system, gl, "theorem2"), [wc], mu1).mu2
                     arrays.update(_gains_npz(f"f2/{name}", gl, *augmented_to_time_based(system, gl, "hold")))
                     leak[name] = e
                 except EqrecError as exc:
@@ -141,13 +142,13 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         if fig == "f1":
             # Reading 3: injection without the current measurement (M(k, k) = 0).
             pp = place_observer(system.A, system.C, poles)
-            m = AugmentedLP(system, wc, M1, pp.L, strictly_causal=True)
+            m = AugmentedLP(system, wc, mu1, pp.L, strictly_causal=True)
             s = m.solve().require_optimal("strictly causal augmented design")
             res["strictly_causal_mu2"] = float(s.objective)
             # Reading 4: process noise entering every state (W = I_n) instead of E = [0, Ts^2/2, Ts]^T.
             sysI = AffineSystem(A=system.A, B=system.B, f=system.f, C=system.C, E=np.eye(system.n),
                                 eta_w=system.eta_w, eta_v=system.eta_v, name="ACC, W = I")
-            res["process_noise_identity_mu2"] = design_time_based(sysI, language, M1).mu2
+            res["process_noise_identity_mu2"] = design_time_based(sysI, language, mu1).mu2
         out[fig] = res
     write_json(outputs.json, out, timings=outputs.timings)
     write_npz(outputs.npz, **arrays)
@@ -159,7 +160,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
 def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
     """P2-F1/F2 Monte Carlo: every estimator on the same draws (same seed, same words)."""
     system = acc_system()
-    M1, runs, seed = float(cfg["mu1"]), int(cfg["runs"]), int(cfg["seed"])
+    mu1, runs, seed = float(cfg["mu1"]), int(cfg["runs"]), int(cfg["seed"])
     x0 = np.asarray(cfg["x0"], float)
     npz = np.load(inputs.designs)
     out: dict[str, np.ndarray] = {}
@@ -174,23 +175,23 @@ def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
             designed = str(npz[f"{fig}/{name}/word"])
             if designed != worst_case_word(language):  # reading variants run on the true data
                 sch = retarget(sch, designed, worst_case_word(language))
-            errs, used = monte_carlo(system, sch, language, M1, runs, seed, kind=cfg["noise"], x0=x0)
+            errs, used = monte_carlo(system, sch, language, mu1, runs, seed, kind=cfg["noise"], x0=x0)
             out[f"{fig}/{name}"] = errs
             summary[f"{fig}/{name}"] = float(np.abs(errs).max())
         out[f"{fig}/words"] = np.array(used)
         # the runtime augmented estimator reproduces the converted one on the first runs
         g = _gains_from(npz, f"{fig}/augmented_free")
-        out[f"{fig}/runtime_max_diff"] = np.array(_runtime_check(system, g, language, M1, seed, cfg["noise"], x0, 20))
+        out[f"{fig}/runtime_max_diff"] = np.array(_runtime_check(system, g, language, mu1, seed, cfg["noise"], x0, 20))
     write_npz(outputs.npz, **out)
     return summary
 
 
-def _runtime_check(system, gains, language, M1, seed, kind, x0, runs) -> float:
+def _runtime_check(system, gains, language, mu1, seed, kind, x0, runs) -> float:
     sch = schedule_from_augmented(system, gains)
     rng = np.random.default_rng(seed)
     T = gains.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
-    rad = lay.radius(system.eta_w, system.eta_v, M1)
+    rad = lay.radius(system.eta_w, system.eta_v, mu1)
     worst = 0.0
     for _ in range(runs):
         word = language[rng.integers(len(language))]
@@ -212,11 +213,11 @@ def _runtime_check(system, gains, language, M1, seed, kind, x0, runs) -> float:
 def step_checks(cfg, inputs, outputs, wildcards) -> dict:
     """P2-S0 and P2-SOLVER on the F2 worst-case word with the pole-placement ``L``."""
     system = acc_system()
-    M1 = float(cfg["mu1"])
+    mu1 = float(cfg["mu1"])
     wc = worst_case_word(validate_language(cfg["f2_words"]))
     pp = place_observer(system.A, system.C, np.asarray(cfg["init_poles"], float))
     lay = UncertaintyLayout(len(wc), system.nw, system.nv, system.n)
-    rad = lay.radius(system.eta_w, system.eta_v, M1)
+    rad = lay.radius(system.eta_w, system.eta_v, mu1)
     rng = np.random.default_rng(int(cfg["seed"]))
     deltas = sample_uncertainty(lay, rad, rng, cfg["noise"], size=int(cfg["runs"]))
     x0 = np.asarray(cfg["x0"], float)
@@ -226,14 +227,14 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
 
     out: dict[str, Any] = {"word": wc, "L": pp.L.tolist(), "poles": cfg["init_poles"]}
     # --- P2-S0: optimal μ2 and error for several s0 (LP with HiGHS)
-    base = AugmentedLP(system, wc, M1, pp.L)
+    base = AugmentedLP(system, wc, mu1, pp.L)
     sol0 = base.solve().require_optimal("s0 = 0")
     g0 = base.gains(sol0)
     err0 = errors(schedule_from_augmented(system, g0))
     s0_rows = []
     for s0 in cfg["s0_samples"]:
         s0 = np.asarray(s0, float)
-        m = AugmentedLP(system, wc, M1, pp.L, s0=s0)
+        m = AugmentedLP(system, wc, mu1, pp.L, s0=s0)
         sol = m.solve().require_optimal(f"s0 = {s0}")
         g = m.gains(sol)
         err = errors(schedule_from_augmented(system, g))
@@ -244,7 +245,7 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
         F0, u00 = augmented_to_time_based(system, g0)
         Fm, u0m = augmented_to_time_based(system, gm)
         s0_rows.append({"s0": s0.tolist(), "mu2": float(sol.objective),
-                        "certified_mu2": certify_schedule(system, schedule_from_augmented(system, g), [wc], M1).mu2,
+                        "certified_mu2": certify_schedule(system, schedule_from_augmented(system, g), [wc], mu1).mu2,
                         "max_error_difference_solver_pick": float(np.abs(err - err0).max()),
                         "max_gain_difference_M": float(np.abs(g.M - g0.M).max()),
                         "mapped_solution_F_difference": float(max(np.abs(Fm - F0).max(), np.abs(u0m - u00).max()))})
@@ -271,7 +272,7 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
         F, _ = sch.word_matrices(wc)
         err = errors(sch)
         ref_F = F if ref_F is None else ref_F
-        rows[name] = {"mu2": mu2, "certified_mu2": certify_schedule(system, sch, [wc], M1).mu2,
+        rows[name] = {"mu2": mu2, "certified_mu2": certify_schedule(system, sch, [wc], mu1).mu2,
                       "iterations": it, "solve_time": tt, "max_abs_error": float(np.abs(err).max()),
                       "rms_error": float(np.sqrt(np.mean(err ** 2))),
                       "M_difference_to_first": float(np.abs(g.M - sols[cfg["solvers"][0]][0].M).max()),
@@ -283,8 +284,8 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
 
 # --------------------------------------------------------------------------- the printed L and the masked_gain reading
 
-def _certified(system, gains, words, M1, runtime, per_time: bool = False) -> dict:
-    cert = certify_schedule(system, schedule_from_augmented(system, gains, runtime), words, M1)
+def _certified(system, gains, words, mu1, runtime, per_time: bool = False) -> dict:
+    cert = certify_schedule(system, schedule_from_augmented(system, gains, runtime), words, mu1)
     out = {"mu2": cert.mu2, "terminal": cert.terminal,
            "per_word": {w: float(c.bounds.max()) for w, c in cert.words.items()}}
     if per_time:
@@ -293,18 +294,18 @@ def _certified(system, gains, words, M1, runtime, per_time: bool = False) -> dic
     return out
 
 
-def _among_optima(system, res, words, M1) -> dict:
+def _among_optima(system, res, words, mu1) -> dict:
     """A :func:`best_guarantee_among_optima` result with its gains certified as run and checked optimal."""
     from eqrec.core.robust import worst_case_abs
 
     G, c = AugmentedStacking(system, res.gains.word, res.gains.L, res.design_mode).error_map(
         res.gains.M, res.gains.nu, res.gains.s0)
     lay = UncertaintyLayout(len(res.gains.word), system.nw, system.nv, system.n)
-    design_wc = worst_case_abs(G, c, lay.radius(system.eta_w, system.eta_v, M1)).reshape(-1, system.n).max(axis=1)
+    design_wc = worst_case_abs(G, c, lay.radius(system.eta_w, system.eta_v, mu1)).reshape(-1, system.n).max(axis=1)
     return {"lower": res.lower, "upper": res.upper, "exact": res.exact, "agree_until": res.agree_until,
             "design_optimum": res.design_optimum, "optimum_bound": res.optimum_bound, "design_mu2": res.design_mu2,
             "design_check": {"mu2": float(design_wc[:-1].max()), "terminal": float(design_wc[-1])},
-            "certified": _certified(system, res.gains, words, M1, res.runtime, per_time=True)}
+            "certified": _certified(system, res.gains, words, mu1, res.runtime, per_time=True)}
 
 
 def step_printed(cfg, inputs, outputs, wildcards) -> dict:
@@ -312,25 +313,25 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
     certified as the estimator that runs (``hold``: the constant ``L`` kept at missing steps; ``theorem2``:
     ``L`` zeroed there)."""
     system = acc_system()
-    M1 = float(cfg["mu1"])
+    mu1 = float(cfg["mu1"])
     pc = cfg["printed"]
     language = validate_language(cfg["f2_words"], length=int(cfg["T"]))
     wc = worst_case_word(language)
     words = sorted(set(language) | {wc})
     L = np.asarray(published_value(inputs.claims, pc["L_claim"]), float)
     out: dict[str, Any] = {"word": wc, "words": words, "L_claim": pc["L_claim"], "eig_A_minus_LC": _eig(system, L),
-                           "time_mu2": design_time_based(system, language, M1).mu2}
+                           "time_mu2": design_time_based(system, language, mu1).mu2}
     # the LP's optimal gains are not unique: certify the optimum each LP solver returns
     lp_solvers = [cfg["heatmap"]["solver"]] + [s for s in cfg["solvers"] if s in ("highs", "clarabel", "scipy")
                                                and s != cfg["heatmap"]["solver"]]
     for mode in ("theorem2", "masked_gain"):
-        m = AugmentedLP(system, wc, M1, L, mode=mode)
+        m = AugmentedLP(system, wc, mu1, L, mode=mode)
         by_solver = {}
         for solver in lp_solvers:
             sol = m.solve(solver).require_optimal(f"{mode} LP at the printed L ({solver})")
             g = m.gains(sol)
             by_solver[solver] = {"mu2": float(sol.objective),
-                                 **{f"certified_{rt}": _certified(system, g, words, M1, rt) for rt in ("hold", "theorem2")}}
+                                 **{f"certified_{rt}": _certified(system, g, words, mu1, rt) for rt in ("hold", "theorem2")}}
         e: dict[str, Any] = {**by_solver[lp_solvers[0]], "solver": lp_solvers[0], "by_solver": by_solver}
         out[mode] = e
         log.info("printed L, %s: LP mu2 = %.9g, certified as run (hold) %s", mode, e["mu2"],
@@ -340,14 +341,14 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
     among: dict[str, Any] = {"rel_tol": OPTIMUM_RTOL, "abs_tol": OPTIMUM_ATOL, "runtimes": {}}
     for rt in ("hold", "theorem2"):
         among["runtimes"][rt] = {
-            solver: _among_optima(system, best_guarantee_among_optima(system, wc, M1, L, runtime=rt, solver=solver),
-                                  words, M1) for solver in lp_solvers}
+            solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, runtime=rt, solver=solver),
+                                  words, mu1) for solver in lp_solvers}
     among["terminal_theorem2"] = {
-        solver: _among_optima(system, best_guarantee_among_optima(system, wc, M1, L, bound="terminal", solver=solver),
-                              words, M1) for solver in lp_solvers}
+        solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, bound="terminal", solver=solver),
+                              words, mu1) for solver in lp_solvers}
     among["recover_theorem2"] = {
-        solver: _among_optima(system, best_guarantee_among_optima(system, wc, M1, L, recover=True, solver=solver),
-                              words, M1) for solver in lp_solvers}
+        solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, recover=True, solver=solver),
+                              words, mu1) for solver in lp_solvers}
     out["masked_gain"]["among_optima"] = among
     log.info("printed L, masked_gain: best guarantee among the optima as run %s",
              {rt: {k: round(e["upper"], 9) for k, e in per.items()} for rt, per in among["runtimes"].items()})
@@ -358,7 +359,7 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
         row: dict[str, Any] = {"seed": int(seed), "ok": bool(d.ok)}
         if d.ok:
             for mode in ("theorem2", "masked_gain"):
-                sol = AugmentedLP(system, wc, M1, d.L, mode=mode).solve(cfg["heatmap"]["solver"])
+                sol = AugmentedLP(system, wc, mu1, d.L, mode=mode).solve(cfg["heatmap"]["solver"])
                 row[mode] = float(sol.objective) if sol.optimal else sol.status
         r0.append(row)
     out["r0_deadbeat"] = r0

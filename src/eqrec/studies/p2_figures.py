@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from eqrec.studies.harness import save_figure
+from eqrec.studies.outputs import save_figure
 from eqrec.studies.plotting import paper_style, pyplot, trajectory_panel
 
 
-def _levels(T: int, M1: float, mu2: float) -> np.ndarray:
+def _levels(T: int, mu1: float, mu2: float) -> np.ndarray:
     lev = np.full(T + 1, mu2)
-    lev[0] = lev[-1] = M1
+    lev[0] = lev[-1] = mu1
     return lev
 
 
@@ -29,7 +29,7 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     plt = pyplot()
     d = json.loads(Path(inputs.designs).read_text())[fig]
     sim = np.load(inputs.simulation)
-    M1 = float(cfg["mu1"])
+    mu1 = float(cfg["mu1"])
     cols = [("augmented_free", f"augmented (IPOPT), $\\mu_2$ = {d['augmented_free']['certified_mu2']:.4g}",
              d["augmented_free"]["certified_mu2"], "C0"),
             ("time", f"time-based, $\\mu_2$ = {d['time']['certified_mu2']:.4g}", d["time"]["certified_mu2"], "C1")]
@@ -42,7 +42,7 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     f, axes = plt.subplots(3, len(cols), figsize=(3.3 * len(cols), 6.0), sharex=True, squeeze=False,
                            layout="constrained")
     for j, (name, title, mu2, color) in enumerate(cols):
-        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, M1, mu2), title, color=color,
+        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, mu1, mu2), title, color=color,
                          ylabels=(j == 0))
     for i in range(axes.shape[0]):  # one scale per state across the estimators (the same quantity)
         lim = max(abs(v) for ax in axes[i] for v in ax.get_ylim())

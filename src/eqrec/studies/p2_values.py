@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from eqrec.studies.harness import write_json
+from eqrec.studies.outputs import write_json
 from eqrec.studies.p2_sweeps import constant_interval
 
 
@@ -62,7 +62,7 @@ def _rel(a: float, b: float) -> float:
     return abs(a - b) / max(abs(a), abs(b), 1e-300)
 
 
-def among_optima_summary(ao: dict, solver: str, M1: float, rtol: float = 1e-6) -> dict:
+def among_optima_summary(ao: dict, solver: str, mu1: float, rtol: float = 1e-6) -> dict:
     """The best guarantee among the masked_gain optima (``printed.json``), per runtime, with its checks.
 
     ``value`` is the ``"hold"`` runtime's (constant ``L`` kept at missing steps) from ``solver``;
@@ -78,7 +78,7 @@ def among_optima_summary(ao: dict, solver: str, M1: float, rtol: float = 1e-6) -
         spread = _rel(max(vals), min(vals))
         cert_diff = max(_rel(e["certified"]["mu2"], e["upper"]) for e in per.values())
         design_ok = all(e["design_check"]["mu2"] <= e["optimum_bound"] * (1 + rtol)
-                        and e["design_check"]["terminal"] <= M1 * (1 + rtol) for e in per.values())
+                        and e["design_check"]["terminal"] <= mu1 * (1 + rtol) for e in per.values())
         exact = all(e["exact"] for e in per.values())
         runtimes[rt] = {"value": per[solver]["upper"], "by_solver": {k: e["upper"] for k, e in per.items()},
                         "lower": {k: e["lower"] for k, e in per.items()}, "solver_spread": spread,

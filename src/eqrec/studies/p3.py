@@ -49,7 +49,8 @@ from eqrec.design.result import Design
 from eqrec.filters import GaussianDesign, compare_with_bounds, error_maps, make_filter, truncated_normal_deltas
 from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
 from eqrec.studies import p3_figures, p3_strategy, p3_values
-from eqrec.studies.harness import Progress, get_logger, write_csv, write_json, write_npz, write_text
+from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.outputs import write_csv, write_json, write_npz, write_text
 
 log = get_logger("p3")
 
@@ -202,7 +203,7 @@ def _design_summary(design: Design) -> dict:
     """Levels and certificate of a design; ``argmax_*``: the event prefix whose level is the largest."""
     inner = [r for r in level_table(design) if 0 < r["k"] < design.T]
     top = max(inner, key=lambda r: r["level"]) if inner else None
-    return {"mu1": design.M1, "mu2": design.mu2, "J": design.extra.get("J"), "cost": design.extra.get("cost"),
+    return {"mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"), "cost": design.extra.get("cost"),
             "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes"),
             "classes": design.extra.get("classes"), "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
             "argmax_prefix": None if top is None else top["prefix"], "argmax_depth": None if top is None else top["k"],
@@ -310,7 +311,7 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
     f1 = cfg["kalman"]
     system = reactor_from_config(cfg)
     design = design_for_f1(cfg, system)
-    mu1 = design.M1
+    mu1 = design.mu1
     pat = parse_delay_word(f1["true_pattern"])
     T = pat.T
     x0 = np.asarray(f1["x0"], float)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from eqrec.studies.harness import save_figure
+from eqrec.studies.outputs import save_figure
 from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajectory_panel, worst_case_lines
 
 # the linearised batch reactor's states are dimensionless deviations (Sec. IV-A of the delayed-data paper)

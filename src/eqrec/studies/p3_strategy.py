@@ -116,7 +116,8 @@ from eqrec.design.delay import design_delay, design_lp_status, level_table, min_
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
-from eqrec.studies.harness import TIMING_KEYS, get_logger, read_json, save_figure, write_csv, write_json, write_npz, write_text
+from eqrec.studies.harness import get_logger
+from eqrec.studies.outputs import TIMING_KEYS, read_json, save_figure, write_csv, write_json, write_npz, write_text
 from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot
 
 log = get_logger("p3")
@@ -164,7 +165,7 @@ def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset
     for j, kind in enumerate(st["noise"]):
         rng = np.random.default_rng([int(st["seed"]), seed_offset, j])
         t0 = time.perf_counter()
-        r = long_run_periodic(system, design.schedule, list(words), periods, rng, M1=design.M1,
+        r = long_run_periodic(system, design.schedule, list(words), periods, rng, mu1=design.mu1,
                               path_levels=partial(path_levels, design), kind=kind, x0=x0, **drive)
         timing.append(time.perf_counter() - t0)
         gaps.append(periodic_model_gap(r, system, design.schedule))
@@ -173,7 +174,7 @@ def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset
         log.info("periodic %s, %s noise: %d steps in %.2f s, max error/guarantee %.6f, %d packets dropped "
                  "after their period", system.name, kind, r.delays.size, timing[-1], r.max_ratio, len(r.dropped))
     ev = _ratio_evidence(runs, T)
-    ev.update(T=T, periods=periods, mu1=design.M1, max_mu2=design.mu2, words=len(words),
+    ev.update(T=T, periods=periods, mu1=design.mu1, max_mu2=design.mu2, words=len(words),
               sequences=len(design.patterns), model_gap=max(gaps), dropped_late=dropped,
               certificate_excess=certificate_excess(design), run_time_s=max(timing))
     return {"runs": runs, "evidence": ev}
@@ -238,7 +239,7 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     for j, kind in enumerate(st["noise"]):
         rng = np.random.default_rng([int(st["seed"]), 2, j])
         t0 = time.perf_counter()
-        r = long_run_switching(reactor, d_p.schedule, d_s.schedule, int(st["steps"]), rng, M1=mu1_s,
+        r = long_run_switching(reactor, d_p.schedule, d_s.schedule, int(st["steps"]), rng, mu1=mu1_s,
                                recovery_level=partial(node_level, d_s), max_delay=tb,
                                p_on_time=float(sw["p_on_time"]), kind=kind, x0=x0_r, controller=controller)
         timing.append(time.perf_counter() - t0)
@@ -292,7 +293,7 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
             arrays[f"{key}_revert"] = np.asarray(r.revert_times, int)
         arrays[f"{label}_T"] = T_
         arrays[f"{label}_Ts"] = Ts
-    write_npz(outputs.npz, compressed=True, noise=np.array(list(st["noise"])), reactor_mu1=mu1, acc_mu1=d_a.M1,
+    write_npz(outputs.npz, compressed=True, noise=np.array(list(st["noise"])), reactor_mu1=mu1, acc_mu1=d_a.mu1,
               switching_mu1=mu1_s, **arrays)
     write_json(outputs.values, values, timings=outputs.timings)
     log.info("P3-IMPL done in %.1f s", time.perf_counter() - t_start)

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.studies.harness import write_json
+from eqrec.studies.outputs import write_json
 
 #: Relative tolerance for "the same optimum" and for comparing certified bounds.
 SAME_RTOL = 1e-6

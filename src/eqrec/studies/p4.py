@@ -32,9 +32,10 @@ from eqrec.lmv.model import (LMVResult, Plant, apply_estimator, hold_input_syste
                              ms_spectral_radius, steady_state, suboptimal_error_cov, theorem1_as_printed,
                              zero_input_system)
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
-from eqrec.studies import harness, p4_figures
+from eqrec.studies import configuration, p4_figures
 from eqrec.studies.config_checks import plant_of
-from eqrec.studies.harness import Progress, get_logger, write_csv, write_json, write_npz
+from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.outputs import write_csv, write_json, write_npz
 
 log = get_logger("p4")
 
@@ -46,8 +47,8 @@ MECH_KEY = {"zero-input": "zero", "hold-input": "hold"}
 
 
 def load_config(*files: str | Path, overrides=None) -> dict:
-    """The validated ``p4`` section (default ``config/p4.yaml``); see :func:`eqrec.studies.harness.load_config`."""
-    return harness.load_config("p4", *files, overrides=overrides)
+    """The validated ``p4`` section (default ``config/p4.yaml``); see :func:`eqrec.studies.configuration.load_config`."""
+    return configuration.load_config("p4", *files, overrides=overrides)
 
 
 def system_of(plant: Plant, mechanism: str, eta_bar: float):

@@ -1,14 +1,14 @@
 """P4 figures: Figs. 1-8 of the LMV paper and the zero- vs hold-input regions (plotting only).
 
 Called by the steps of :mod:`eqrec.studies.p4`; every figure is written as
-PDF and PNG by :func:`eqrec.studies.harness.save_figure`.
+PDF and PNG by :func:`eqrec.studies.outputs.save_figure`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from eqrec.studies.harness import save_figure
+from eqrec.studies.outputs import save_figure
 from eqrec.studies.plotting import paper_style, pyplot
 
 

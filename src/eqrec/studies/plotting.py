@@ -1,7 +1,7 @@
 """Figures in the style of the papers: error trajectories with guarantee bars.
 
 Shared by the figure modules of every study (``p1_figures``, ``p2_figures``, ``p3_figures``,
-``p4_figures``); figures are written by :func:`eqrec.studies.harness.save_figure`
+``p4_figures``); figures are written by :func:`eqrec.studies.outputs.save_figure`
 (atomic, PDF without a creation date).  Matplotlib is imported on first use
 (non-interactive ``Agg`` backend), so importing a study stays cheap.
 """
@@ -12,7 +12,6 @@ from typing import Sequence
 
 import numpy as np
 
-from eqrec.studies.harness import save_figure  # noqa: F401  (the figure writer of the studies)
 
 STATE_LABELS_ACC = (r"$\xi_1$: ego speed error [m/s]", r"$\xi_2$: headway error [m]",
                     r"$\xi_3$: lead speed error [m/s]")
