@@ -15,7 +15,7 @@ b. The batch reactor's ``{0..2}^5`` with ``μ1`` free and its certificate:
    class certificate, the μ1 bracket; target <= 100 ms; with node gains
    printed beside it) against
    the paper's route, IPOPT on problem (10)
-   (:func:`eqrec.design.delay.design_delay_ipopt`).  The previous global
+   (:func:`eqrec.design.delay_ipopt.design_delay_ipopt`).  The previous global
    route (Dinkelbach + interval branch and bound on the tree LP, removed in
    commit b2da9c6) is quoted from git history, not measured: 2.5 s
    (``results/p3/reactor_designs.json``, ``global.time_s`` = 2.497 s at commit
@@ -85,7 +85,8 @@ def part_a(repeats: int, verdicts: list) -> None:
 
 def part_b(repeats: int, ipopt_repeats: int, verdicts: list) -> None:
     from eqrec.core.patterns import full_delay_language
-    from eqrec.design.delay import compare_free_routes, design_delay_global, design_delay_ipopt
+    from eqrec.design.delay import design_delay_global
+    from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
     from eqrec.models import batch_reactor
 
     system = batch_reactor()

@@ -81,7 +81,8 @@ def part_fixed(repeats: int) -> None:
 
 def part_free() -> None:
     from eqrec.core.patterns import full_delay_language
-    from eqrec.design.delay import compare_free_routes, design_delay_global, design_delay_ipopt
+    from eqrec.design.delay import design_delay_global
+    from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
     from eqrec.models import batch_reactor
 
     system = batch_reactor()

@@ -13,7 +13,8 @@ import pytest
 import scipy.linalg as sla
 
 from eqrec.core.classes import ClassGains, class_maps, classes_of_tree
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, SwitchingEstimator, make_estimator
+from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
+from eqrec.core.switching import SwitchingEstimator
 from eqrec.core.patterns import PrefixTree, parse_delay_word
 from eqrec.core.robust import worst_case_vertex
 from eqrec.core.simulate import (class_closed_loop_maps, long_run_periodic, long_run_switching, monte_carlo,

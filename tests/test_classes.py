@@ -11,9 +11,9 @@ from eqrec.core.lp import LinearProgram
 from eqrec.core.patterns import ArrivalPattern, PrefixTree, full_delay_language
 from eqrec.core.solvers import SOLVER_NAMES, solve_lp
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import (build_class_lp, class_cost, class_design, min_recovery_level, node_schedule,
-                                  solve_classes)
+from eqrec.design.classes import build_class_lp, class_cost, class_design, node_schedule, solve_classes
 from eqrec.design.delay import delay_language, design_delay, design_delay_global
+from eqrec.design.mu1_min import min_recovery_level
 from eqrec.design.prefix import design_prefix
 from eqrec.errors import InfeasibleDesign
 from eqrec.models import batch_reactor
@@ -195,7 +195,7 @@ def test_dual_certificate_is_a_true_lower_bound(reactor):
     """The dual point behind ``lower`` is feasible for the LAD dual: Z λ = 0, |λ| <= β (checked here again)."""
     from eqrec.core.classes import class_maps
     from eqrec.core.stacking import Stacking
-    from eqrec.design.classes import _dual_lower_certificate
+    from eqrec.design.mu1_min import _dual_lower_certificate
 
     classes = classes_of_full_language(5, 2)
     st = Stacking(reactor, 5)

@@ -70,7 +70,7 @@ _PUBLIC: dict[str, str] = {
     "design_delay": "eqrec.design.delay",
     "design_delay_global": "eqrec.design.delay",
     "design_augmented": "eqrec.design.augmented",
-    "min_recovery_level": "eqrec.design.classes",
+    "min_recovery_level": "eqrec.design.mu1_min",
     # certificates
     "certify_schedule": "eqrec.core.certify",
     # estimators and simulation

@@ -8,7 +8,7 @@ vertices, or at the worst-case vertex of a certified bound; the estimator of
 Long runs (Section III-B3 of the delayed-data paper, "Implementation
 Strategy"): :func:`long_run_periodic` reuses one design's gains every ``T``
 steps on delay words drawn per period; :func:`long_run_switching` runs the
-:class:`eqrec.core.estimator.SwitchingEstimator` on i.i.d. delays.  Both
+:class:`eqrec.core.switching.SwitchingEstimator` on i.i.d. delays.  Both
 record, for every time, the guarantee on ``‖ξ(t)‖∞`` (the level of the node
 of the observed prefix, ``μ1`` at period boundaries and in performance mode).
 Every packet is delivered at its true arrival time, also when that is past
@@ -30,7 +30,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from eqrec.core.classes import ClassGains, class_maps
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, SwitchingEstimator, make_estimator
+from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
+from eqrec.core.switching import SwitchingEstimator
 from eqrec.core.patterns import ArrivalPattern, as_pattern
 from eqrec.core.gains import GainSchedule
 from eqrec.core.stacking import UncertaintyLayout
@@ -375,7 +376,7 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
         uniformly, independently.
     periods
         Number of periods; the run has ``N = periods * T`` steps.
-    M1
+    mu1
         Recovery level: ``ξ(0)`` is drawn in the box of radius ``M1``.
     path_levels
         ``word -> levels (T+1,)``: the guarantee along the word's path
@@ -442,7 +443,7 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
         gains or class gains, either kind for each).
     steps
         Length ``N`` of the run.
-    M1
+    mu1
         The common level of both designs (``ξ(0)`` drawn in its box; the
         guarantee in performance mode and at the end of each recovery phase).
     recovery_level

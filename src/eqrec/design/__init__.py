@@ -1,1 +1,26 @@
-"""design"""
+"""Design methods, built on :mod:`eqrec.core`: each builds an LP (or NLP), solves it with a solver of the
+registry, reads the gains and certifies them from the gains alone.
+
+:mod:`~eqrec.design.time_based`
+    One gain per time step (the prefix-based paper's comparison estimator).
+:mod:`~eqrec.design.prefix`
+    The prefix-tree LP of Theorem 3 of the prefix-based paper (engine ``"tree"``).
+:mod:`~eqrec.design.classes`
+    The class engine: one small LP per (time, available data) class, with the separation theorem.
+:mod:`~eqrec.design.mu1_min`
+    μ1 free: the smallest feasible μ1 in closed form (Charnes–Cooper), certified.
+:mod:`~eqrec.design.delay`
+    The delayed-data paper's designs (Theorem 1 / Proposition 1), μ1 fixed or free.
+:mod:`~eqrec.design.delay_ipopt`
+    The delayed-data paper's own μ1-free route: IPOPT on the bilinear problem (10).
+:mod:`~eqrec.design.augmented_model`, :mod:`~eqrec.design.augmented_lp`, :mod:`~eqrec.design.augmented_nlp`, :mod:`~eqrec.design.augmented`
+    The state-augmented estimator (Theorem 2 of the augmented paper): model, fixed-``L`` LP, IPOPT, design.
+:mod:`~eqrec.design.delay_augmented`
+    The delayed-data paper's augmented form (4).
+:mod:`~eqrec.design.observers`
+    Observer gains by pole placement.
+:mod:`~eqrec.design.sweeps`, :mod:`~eqrec.design.scale_sweep`
+    Sweeps over levels, poles and language sizes.
+:mod:`~eqrec.design.result`
+    :class:`~eqrec.design.result.Design`, what every design returns.
+"""

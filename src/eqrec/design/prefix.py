@@ -80,7 +80,7 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
     words
         The language (words may differ in length: Section V extension; the
         recovery level ``M1`` is then imposed at each word's end).
-    M1
+    mu1
         Equalized recovery level.
     T
         Horizon for the stacked matrices (default: the longest word).

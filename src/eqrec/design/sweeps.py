@@ -30,7 +30,7 @@ from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_model import schedule_from_augmented
-from eqrec.design.classes import MinRecoveryLevel, min_recovery_level
+from eqrec.design.mu1_min import MinRecoveryLevel, min_recovery_level
 from eqrec.design.observers import PolePlacement, deadbeat_observer, place_observer
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.design.time_based import design_time_based
@@ -60,7 +60,7 @@ def min_feasible_M1(system: AffineSystem, words, method: str = "prefix") -> MinR
     Feasibility is monotone in ``M1`` (gains recovering from ``M1`` recover
     from any larger level) and, by the separation theorem, a prefix design is
     feasible iff every terminal class reaches ``M1``: the smallest level is
-    :func:`eqrec.design.classes.min_recovery_level` on the language's classes.
+    :func:`eqrec.design.mu1_min.min_recovery_level` on the language's classes.
     The time-based design is the prefix design on the worst-case word alone.
 
     Returns

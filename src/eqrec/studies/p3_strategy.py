@@ -21,7 +21,7 @@ Strategy"), run as long simulations:
   ``‖ξ(t+1)‖ <= μ1`` when ``y(t)`` is on time) until a measurement is late,
   then the recovery estimator for ``T`` steps, designed on the words of
   ``{0..τ̄}^T`` whose first delay is at least 1, then back
-  (:class:`eqrec.core.estimator.SwitchingEstimator`,
+  (:class:`eqrec.core.switching.SwitchingEstimator`,
   :func:`eqrec.core.simulate.long_run_switching`); i.i.d. delays.  On the
   batch reactor a period-1 design is infeasible at ``μ1 = 0.33`` (2 outputs,
   4 states: no one-step contraction of the ∞-norm box): the step records the

@@ -1,0 +1,144 @@
+"""The switching implementation strategy of the delayed-data paper (Section III-B3).
+
+Equalized performance (a period-1 design) runs while measurements arrive on
+time; when one is late or missing, an equalized-recovery estimator takes over
+for ``T`` steps, then performance resumes.  Built on the estimators of
+:mod:`eqrec.core.estimator`.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+import numpy as np
+
+from eqrec.core.classes import ClassGains
+from eqrec.core.estimator import Packet, _has_class, make_estimator
+from eqrec.core.gains import GainSchedule
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
+
+
+class SwitchingEstimator:
+    r"""Equalized performance until a measurement is late or missing, then equalized recovery for ``T`` steps.
+
+    The implementation strategy of Section III-B3 of the delayed-data paper.
+
+    * *Performance mode*: the equalized-performance estimator, i.e. an
+      equalized-recovery design of period 1 on the one-letter language
+      "``y(t)`` arrives on time": ``‖ξ(t)‖ <= μ1`` implies ``‖ξ(t+1)‖ <= μ1``.
+      It runs as a :class:`~eqrec.core.estimator.RecoveryEstimator` (node gains) or a
+      :class:`~eqrec.core.estimator.ClassEstimator` (class gains) with ``periodic=True`` and
+      ``T = 1`` (packets stamped before the current step are dropped).
+    * At a time ``k`` at which ``y(k)`` has not arrived (late or missing), the
+      estimator switches: an estimator on the ``recovery`` gains
+      (:func:`make_estimator`) starts at ``k`` from the current estimate (``‖ξ(k)‖ <= μ1``).
+      Its language has words whose first measurement is delayed or missing,
+      so its first event, "``y(0)`` not (yet) arrived", is what was observed.
+    * After ``T`` steps (``‖ξ(k+T)‖ <= μ1``) it reverts to performance mode;
+      if ``y(k+T)`` is late too it switches again at once.
+
+    Packets stamped before the current phase (a recovery phase's
+    measurements that arrive after it ended) are dropped, as in the
+    language where a delay past the horizon means missing.
+
+    Parameters
+    ----------
+    system
+        The model used by both estimators.
+    performance
+        Gains of the period-1 design: a schedule of horizon 1 with the row of
+        the on-time prefix, or class gains of horizon 1 with the on-time
+        class ``(1, (0,))``.
+    recovery
+        Gains of the recovery design (horizon ``T``, ``.horizon``) on a
+        language whose words all have their first measurement late or
+        missing: a schedule, or class gains without the class ``(1, (0,))``.
+    xhat0
+        Initial estimate (``‖ξ(t0)‖ <= μ1`` for the guarantees to hold).
+    t0
+        Absolute time of the first step.
+
+    Attributes
+    ----------
+    mode
+        ``"performance"`` or ``"recovery"`` (the mode of the last step).
+    switch_times, revert_times
+        Absolute times at which recovery phases started, and at which
+        performance mode resumed.
+    """
+
+    def __init__(self, system: AffineSystem, performance: "GainSchedule | ClassGains",
+                 recovery: "GainSchedule | ClassGains", xhat0: np.ndarray, t0: int = 0):
+        for name, g in (("performance", performance), ("recovery", recovery)):
+            if not isinstance(g, (GainSchedule, ClassGains)):
+                raise TypeError(f"the {name} gains must be a GainSchedule or ClassGains, got {type(g).__name__}")
+        on_time = ArrivalPattern((0,))
+        perf_msg = (f"the equalized-performance gains must have horizon 1 (got {performance.horizon}) "
+                    "and be designed for an on-time measurement")
+        if isinstance(performance, GainSchedule):
+            if performance.horizon != 1 or performance.time_based and performance.designed[0] != on_time:
+                raise InputError(perf_msg)
+            performance.row(on_time)  # raises if there is no on-time row
+        elif performance.horizon != 1 or not _has_class(performance, 1, (0,)):
+            raise InputError(perf_msg + " (the class (1, (0,)))")
+        if isinstance(recovery, GainSchedule):
+            bad = [p.label for p in recovery.designed if p.arrivals[0] == 0]
+            if bad:
+                raise InputError(f"the recovery language must have its first measurement late or missing; "
+                                 f"words {bad[:5]} have it on time")
+        elif _has_class(recovery, 1, (0,)):
+            raise InputError("the recovery language must have its first measurement late or missing; its "
+                             "classes include (1, (0,)): y(0) on time")
+        self.system = system
+        self.performance = performance
+        self.recovery = recovery
+        self.T = recovery.horizon
+        self.mode = "performance"
+        self.switch_times: list[int] = []
+        self.revert_times: list[int] = []
+        self._est = make_estimator(system, performance, xhat0, periodic=True, t0=t0)
+
+    @property
+    def xhat(self) -> np.ndarray:
+        """The current estimate (of time :attr:`time`)."""
+        return self._est.xhat
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the next step."""
+        return self._est.time
+
+    @property
+    def period_start(self) -> int:
+        """Absolute time at which the current phase (a performance step or a recovery phase) started."""
+        return self._est.period_start
+
+    @property
+    def recovery_prefix(self) -> ArrivalPattern | None:
+        """In recovery mode, the arrival prefix observed since the switch (events ``0..j``); else ``None``."""
+        return self._est.observed_prefix if self.mode == "recovery" else None
+
+    @property
+    def recovery_step(self) -> int | None:
+        """In recovery mode, the steps taken since the switch (``1..T``); else ``None``."""
+        return self._est.period_time if self.mode == "recovery" else None
+
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+        """Process time ``k``: the packets arriving at ``k`` (see :meth:`RecoveryEstimator.step`) and ``u(k)``.
+
+        Returns the prediction ``x̂(k+1)``.
+        """
+        est = self._est
+        k = est.time
+        packets = est._packets(y)
+        if self.mode == "recovery" and est.period_time == self.T:
+            self.mode = "performance"
+            self.revert_times.append(k)
+            est = self._est = make_estimator(self.system, self.performance, est.xhat, periodic=True, t0=k)
+        if self.mode == "performance" and not any(int(pk.time) == k for pk in packets):
+            self.mode = "recovery"
+            self.switch_times.append(k)
+            est = self._est = make_estimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
+        return est.step(packets, u)
