@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from eqrec.design.prefix import design_prefix
-from eqrec.design.sweeps import min_feasible_M1
+from eqrec.design.sweeps import min_feasible_mu1
 from eqrec.errors import InfeasibleDesign
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import harness
@@ -59,7 +59,7 @@ def test_extensions_curve(stored):
     for k in (0, len(c["M1"]) // 2, -1):
         assert design_prefix(system, CFG["language"], c["M1"][k]).mu2 == pytest.approx(c["prefix"][k], rel=1e-6)
     m1 = stored["extensions"]["min_M1"]["prefix"]
-    assert min_feasible_M1(system, CFG["language"]).upper == pytest.approx(m1, rel=1e-9)
+    assert min_feasible_mu1(system, CFG["language"]).upper == pytest.approx(m1, rel=1e-9)
     design_prefix(system, CFG["language"], m1)  # feasible at the smallest level, by both engines
     design_prefix(system, CFG["language"], m1 * (1 + 1e-6), engine="tree")
     for engine in ("classes", "tree"):  # and infeasible just below it

@@ -157,8 +157,8 @@ def certify_schedule(system: AffineSystem, schedule: GainSchedule, words, mu1: f
     >>> acc = eqrec.acc_system()
     >>> design = eqrec.design_prefix(acc, ["101111", "110111", "111011", "111101"], mu1=1.0)
     >>> cert = eqrec.certify_schedule(acc, design.schedule, ["101111", "110111"], mu1=1.0)
-    >>> sorted(cert.words), round(cert.mu2, 4), cert.terminal <= 1.0 + 1e-6
-    (['101111', '110111'], 1.1498, True)
+    >>> sorted(cert.words), cert.mu2 <= design.mu2 * (1 + 1e-9), cert.terminal <= 1.0 + 1e-6
+    (['101111', '110111'], True, True)
     """
     cert = Certificate(mu1=float(mu1))
     for w in words:

@@ -80,8 +80,8 @@ class Design:
     --------
     >>> import eqrec
     >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
-    >>> design.method, design.T, design.mu1, round(design.mu2, 4)
-    ('prefix', 6, 1.0, 1.1498)
+    >>> design.method, design.T, design.mu1, design.certificate.mu2 <= design.mu2 * (1 + 1e-9)
+    ('prefix', 6, 1.0, True)
     >>> design.words
     ('101111', '110111', '111011', '111101')
     """
@@ -152,9 +152,9 @@ class Design:
         >>> xhat, bound = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives
         >>> xhat.shape, bound
         ((3,), 1.05)
-        >>> xhat = estimator.update(None)  # y(1) is lost
-        >>> round(estimator.bound, 4)
-        1.1498
+        >>> xhat = estimator.update(None)  # y(1) is lost: the intermediate level
+        >>> abs(estimator.bound - design.mu2) < 1e-9
+        True
         """
         from eqrec.core.runtime import GuaranteedEstimator
 

@@ -3,13 +3,13 @@
 * :func:`lower_bound_probe` — the prefix LP with ``M2 <= optimum - gap``
   must be infeasible (Theorem 3 of the prefix-based paper is necessary and
   sufficient, so this proves no estimator of the class does better);
-* :func:`min_feasible_M1` — the smallest recovery level, exactly (the
+* :func:`min_feasible_mu1` — the smallest recovery level, exactly (the
   μ1-free theorem of :mod:`eqrec.design.classes`: one Charnes–Cooper LP),
   where the paper suggests "an optimal M1 through line search" (Section V of
   the prefix-based paper);
 * :func:`min_recovery_time` — the shortest horizon at which a language,
   extended by measurements, admits recovery to ``M1``;
-* :func:`M2_curve` — the optimal ``M2`` against ``M1`` (``None`` where infeasible);
+* :func:`mu2_curve` — the optimal ``M2`` against ``M1`` (μ2 against μ1) (``None`` where infeasible);
 * :func:`fixed_L_sweep` — the augmented LP with ``s0 = 0`` over a list of
   pole sets (Figs. 3a/3b of the augmented paper): one LP, built once, whose
   ``L``-dependent entries are rewritten per point; an undecided solve is
@@ -54,7 +54,7 @@ def lower_bound_probe(system: AffineSystem, words, mu1: float, mu2_opt: float, g
     return out
 
 
-def min_feasible_M1(system: AffineSystem, words, method: str = "prefix") -> MinRecoveryLevel:
+def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> MinRecoveryLevel:
     """The smallest recovery level ``M1`` of a prefix- or time-based estimator on ``words``, with its bracket.
 
     Feasibility is monotone in ``M1`` (gains recovering from ``M1`` recover
@@ -88,12 +88,12 @@ def min_recovery_time(system: AffineSystem, words, mu1: float, T_max: int) -> in
     return None
 
 
-def M2_curve(system: AffineSystem, words, M1_values: Iterable[float], method: str = "prefix",
+def mu2_curve(system: AffineSystem, words, mu1_values: Iterable[float], method: str = "prefix",
              on_point: Callable[[int, float], None] | None = None) -> list[float | None]:
     """Optimal ``M2`` for each ``M1`` (``None`` where the design is infeasible)."""
     fn = DESIGNS[method]
     out: list[float | None] = []
-    for k, mu1 in enumerate(M1_values):
+    for k, mu1 in enumerate(mu1_values):
         if on_point is not None:
             on_point(k, float(mu1))
         try:

@@ -142,8 +142,6 @@ def execute(source: str | Path, workdir: str | Path | None = None, timeout: int 
     workdir = Path(workdir or Path.cwd()).resolve()
     nb = jupytext.read(source)
     nb.metadata["kernelspec"] = dict(KERNELSPEC)
-    for i, cell in enumerate(nb.cells):
-        cell["id"] = f"cell-{i}"
     client = NotebookClient(nb, timeout=timeout, kernel_name="python3", record_timing=False,
                             resources={"metadata": {"path": str(workdir)}})
     # the kernel inherits this environment

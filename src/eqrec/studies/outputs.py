@@ -113,7 +113,7 @@ def write_json(path: str | Path, data: Any, timings: str | Path | None = None) -
     (the step's ``timings`` output, under ``results/timings/``), the rest to
     ``path``; a step that records timings without declaring where is an error.
     """
-    rest, timed = split_timings(json.loads(_json_text(data)))
+    rest, timed = split_timings(data)
     if timed is not None and timings is None:
         keys = sorted(_timing_keys_in(timed))
         raise StepError(f"{path}: timing fields {keys} need a timings output (results/timings/...)")
@@ -159,12 +159,9 @@ def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: 
             frame.to_csv(tmp, **kwargs)
         return
     rest, timed = split_timing_columns(frame, keys)
-    if timed.shape[1] > len(keys):
-        if timings is None:
-            raise StepError(f"{path}: timing columns {list(timed.columns[len(keys):])} need a timings output")
-        with atomic_path(timings) as tmp:
-            timed.to_csv(tmp, **kwargs)
-    elif timings is not None:
+    if timings is None and timed.shape[1] > len(keys):
+        raise StepError(f"{path}: timing columns {list(timed.columns[len(keys):])} need a timings output")
+    if timings is not None:
         with atomic_path(timings) as tmp:
             timed.to_csv(tmp, **kwargs)
     with atomic_path(path) as tmp:

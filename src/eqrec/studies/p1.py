@@ -26,7 +26,7 @@ from eqrec.core.simulate import monte_carlo, simulate_run
 from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
 from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
-from eqrec.design.sweeps import M2_curve, lower_bound_probe, min_feasible_M1, min_recovery_time
+from eqrec.design.sweeps import mu2_curve, lower_bound_probe, min_feasible_mu1, min_recovery_time
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import p1_figures
 from eqrec.studies.harness import Progress, get_logger
@@ -167,7 +167,7 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     ext = cfg["extensions"]
     res: dict = {}
     log.info("smallest feasible M1 (exact: the class engine's Charnes-Cooper LP)")
-    smallest = {m: min_feasible_M1(system, L1, m) for m in METHODS}
+    smallest = {m: min_feasible_mu1(system, L1, m) for m in METHODS}
     res["min_M1"] = {m: r.upper for m, r in smallest.items()}
     res["min_M1_bracket"] = {m: {"lower": r.lower, "upper": r.upper, "binding": r.binding}
                              for m, r in smallest.items()}
@@ -175,7 +175,7 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     curve: dict = {"M1": grid.tolist()}
     for m in METHODS:
         prog = Progress(log, grid.size, f"M2*(M1) curve, {m}-based", "levels")
-        curve[m] = M2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
+        curve[m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
     res["curve"] = curve
     fin = ext["finite_language"]
     d = design_prefix(system, fin, float(cfg["mu1"]))

@@ -514,12 +514,6 @@ def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
     sizes = sorted({(T, tau) for T, tau, e in by if (T, tau, "tree") in by and (T, tau, "classes") in by})
     if not sizes:
         return ""
-    head = ["T", "τ̄", "sequences", "nodes", "classes", "tree LP cols", "class LP cols", "tree total [s]",
-            "classes total [s]", "tree peak [MB]", "classes peak [MB]", "tree status", "classes status",
-            "J (tree)", "J (classes)"]
-    if not timings:
-        head = head[:7] + head[11:]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
     def total(r):  # a size that did not solve has no total (its build time is in the table above)
         if r["status"] != "optimal":
@@ -528,21 +522,35 @@ def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
         vals = [v for v in vals if v is not None and not (isinstance(v, float) and math.isnan(v))]
         return float(sum(vals)) if vals else float("nan")
 
+    # (header, cell of (T, τ̄, tree row, class row), format of _md_cell, a measurement?)
+    columns = [
+        ("T", lambda T, tau, t, c: T, "T", False),
+        ("τ̄", lambda T, tau, t, c: tau, "tau", False),
+        ("sequences", lambda T, tau, t, c: _value(c["sequences"]), "sequences", False),
+        ("nodes", lambda T, tau, t, c: _value(c["nodes"]), "nodes", False),
+        ("classes", lambda T, tau, t, c: _value(c["classes"]), "classes", False),
+        ("tree LP cols", lambda T, tau, t, c: _value(t["cols"]), "cols", False),
+        ("class LP cols", lambda T, tau, t, c: _value(c["cols"]), "cols", False),
+        ("tree total [s]", lambda T, tau, t, c: total(t), "", True),
+        ("classes total [s]", lambda T, tau, t, c: total(c), "", True),
+        ("tree peak [MB]", lambda T, tau, t, c: _value(t["peak_mb"]), "peak_mb", True),
+        ("classes peak [MB]", lambda T, tau, t, c: _value(c["peak_mb"]), "peak_mb", True),
+        ("tree status", lambda T, tau, t, c: t["status"], "status", False),
+        ("classes status", lambda T, tau, t, c: c["status"], "status", False),
+        ("J (tree)", lambda T, tau, t, c: _value(t["J"]), "J", False),
+        ("J (classes)", lambda T, tau, t, c: _value(c["J"]), "J", False),
+    ]
+    columns = [col for col in columns if timings or not col[3]]
+    lines = ["| " + " | ".join(h for h, *_ in columns) + " |", "|" + "---|" * len(columns)]
     for T, tau in sizes:
         t, c = by[(T, tau, "tree")], by[(T, tau, "classes")]
-        cells = [T, tau, _value(c["sequences"]), _value(c["nodes"]), _value(c["classes"]), _value(t["cols"]),
-                 _value(c["cols"]), total(t), total(c), _value(t["peak_mb"]), _value(c["peak_mb"]), t["status"],
-                 c["status"], _value(t["J"]), _value(c["J"])]
-        names = ["T", "tau", "sequences", "nodes", "classes", "cols", "cols", "", "", "peak_mb", "peak_mb",
-                 "status", "status", "J", "J"]
-        if not timings:
-            cells, names = cells[:7] + cells[11:], names[:7] + names[11:]
-        lines.append("| " + " | ".join(_md_cell(v, n) for v, n in zip(cells, names)) + " |")
+        lines.append("| " + " | ".join(_md_cell(cell(T, tau, t, c), fmt) for _, cell, fmt, _ in columns) + " |")
     return "\n".join(lines) + "\n"
 
 
 def step_scale_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
-    """Merge the per-size JSONs (all inputs ending in ``.json``) into ``outputs.csv`` and ``outputs.md``.
+    """Merge the per-size JSONs (``inputs.sizes``, with their ``inputs.timings``) into the scale table: ``outputs.csv``
+    and ``outputs.md`` without the measured columns, ``outputs.timings_csv`` and ``outputs.timings_md`` with them.
 
     The Markdown note names the ``scale.tree_slow_sizes`` whose tree row is
     not among the inputs (the default run's table leaves them to ``p3_scale``).
