@@ -9,28 +9,27 @@ The papers' values and all wording live in one file, ``config/claims.yaml``
       source: prefix-based paper, Sec. VI
       compare: {kind: number}                 # number / interval / array / text / none (with why:)
       value: p1/values.json#prefix_L1_mu2     # where our value and its evidence are, under results/
-      shown_as: "..."                         # optional: template for our value in the table
-      note:                                   # the evidence, in words: templates, each shown
-        - "LP optimum {mu2:.6f} ..."          #   always, or only while its `when` holds
-        - {when: "all_are(probe_status, 'infeasible')", text: "...", else: "..."}
-      explanation:                            # why it differs: shown only while `when` holds;
-        when: "paper < value - probe_gap"     #   otherwise the table says it was withdrawn
-        text: "..."
+      shown_as: "{value:.4g}"                 # optional: our value in the table
+      note:                                   # the evidence in words: one text, or named texts
+        optimum: "LP optimum {mu2:.6f} ..."   #   of which the claim's reason function picks
+        proven: "So no estimator ..."         #   the ones to show, in order
+        not_proven: "So the optimum ..."
+      explanation:                            # why it differs: each named text shown while its
+        misprint: "..."                       #   evidence holds, otherwise reported as withdrawn
+
+Every text is a ``str.format`` template with plain named fields and a format
+spec (``{mu2:.6f}``, ``{{``/``}}`` for braces): no expressions, no conditions.
+The fields are the evidence's keys, ``value`` (ours), ``paper`` (the published
+value, a number where it reads as one) and ``tol`` (the comparison tolerance),
+plus what the claim's reason function adds.  The reason functions (one per
+claim id, or shared by ids of one shape) are in :mod:`eqrec.studies.p1_claims`
+... :mod:`eqrec.studies.p4_claims`, registered by id (see
+:mod:`eqrec.studies.claim_reasons`); a claim with named texts or an
+explanation must have one, and a claim without one is its single ``note``
+filled from the evidence.
 
 The pipeline's ``values`` steps write ``values.json`` files mapping keys to
 ``{"value": v, "evidence": {...numbers, statuses, words...}}`` and no prose.
-Templates and conditions see the evidence's keys plus ``value`` (ours),
-``paper`` (the published value, a number where it reads as one) and ``tol``
-(the comparison tolerance of ``number`` claims).
-
-Templates: ``{expression}`` or ``{expression:format}`` (Python format spec),
-``{{``/``}}`` for braces.  Conditions and template fields use a small
-expression language (a subset of Python syntax, evaluated here without
-``eval``): literals, evidence names, ``a.b`` / ``a['b']`` / ``a[0]`` lookups,
-``+ - * /``, comparisons, ``and``/``or``/``not``, ``x if c else y`` and the
-functions of :data:`FUNCTIONS`.  A condition that names evidence which is
-missing is false.
-
 The table ``results/claims.csv`` has the columns ``id, quantity,
 paper_value, our_value, status, reason``; ``results/REPRODUCTION.md``
 renders it for reading.  Comparison kinds:
@@ -50,12 +49,12 @@ to ``results/timings/claims.csv``.
 
 from __future__ import annotations
 
-import ast
 import copy
 import functools
 import json
 import math
-import operator
+import re
+import string
 from decimal import Decimal
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
@@ -64,6 +63,8 @@ import numpy as np
 import yaml
 
 from eqrec.errors import InputError
+from eqrec.studies import p1_claims, p2_claims, p3_claims, p4_claims
+from eqrec.studies.claim_reasons import Reason
 from eqrec.studies.harness import get_logger
 from eqrec.studies.outputs import write_csv, write_text
 
@@ -75,240 +76,84 @@ log = get_logger("claims")
 STATUSES = ("reproduced", "differs", "not comparable")
 COLUMNS = ["id", "quantity", "paper_value", "our_value", "status", "reason"]
 KINDS = ("number", "interval", "array", "text", "none")
+KEYS = ("id", "quantity", "paper_value", "source", "compare", "value", "shown_as", "note", "explanation")
 
 
-# --------------------------------------------------------------------------- the expression language
-
-class MissingEvidence(KeyError):
-    """An expression names evidence that the values file does not have."""
-
-
-class ExpressionError(InputError):
-    """An expression or template outside the language."""
-
-
-def _fmt_list(xs, spec: str = ".4g") -> str:
-    """``[a, b, c]`` with every number formatted by ``spec`` (nested lists too)."""
-    if isinstance(xs, (list, tuple)):
-        return "[" + ", ".join(_fmt_list(x, spec) for x in xs) + "]"
-    if isinstance(xs, (int, float)) and not isinstance(xs, bool):
-        return format(xs, spec)
-    return str(xs)
-
-
-def _fmt_complex(pairs, spec: str = ".3f") -> str:
-    """``{a+bj, c}`` from ``[[re, im], ...]`` (the imaginary part shown only when nonzero)."""
-    return "{" + ", ".join(format(a, spec) + (format(b, "+" + spec) + "j" if abs(b) > 1e-9 else "")
-                           for a, b in pairs) + "}"
-
-
-def _join(x, sep: str = ", ") -> str:
-    """A mapping as ``k: v, k: v``; a list as ``a, b``."""
-    if isinstance(x, Mapping):
-        return sep.join(f"{k}: {v}" for k, v in x.items())
-    return sep.join(str(v) for v in x)
-
-
-def _all_are(x, value) -> bool:
-    """Every entry (of a list, or value of a mapping) equals ``value``; false if empty."""
-    items = list(x.values()) if isinstance(x, Mapping) else list(x)
-    return bool(items) and all(i == value for i in items)
-
-
-def _count(x, value) -> int:
-    items = list(x.values()) if isinstance(x, Mapping) else list(x)
-    return sum(1 for i in items if i == value)
-
-
-def _each(x, template: str, sep: str = "; ") -> str:
-    """Render ``template`` for every item: mapping items see the item's keys (if a mapping), ``key`` and ``item``."""
-    parts = []
-    pairs = x.items() if isinstance(x, Mapping) else enumerate(x)
-    for k, v in pairs:
-        ctx = {**(v if isinstance(v, Mapping) else {}), "key": k, "item": v}
-        parts.append(render(template, ctx))
-    return sep.join(parts)
-
-
-#: Functions available in conditions and templates.
-FUNCTIONS: dict[str, Callable] = {
-    "abs": abs, "min": min, "max": max, "len": len, "round": round, "sum": sum, "any": any, "all": all,
-    "sorted": sorted, "keys": lambda d: list(d.keys()), "values": lambda d: list(d.values()),
-    "all_are": _all_are, "count": _count, "join": _join, "fmtlist": _fmt_list, "fmtcomplex": _fmt_complex, "each": _each,
-    "percent": lambda x: 100.0 * x, "fmt": format,
-    "sub": lambda template, context: render(template, context),
-}
-
-_BINOPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv}
-_CMPOPS = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt, ast.LtE: operator.le,
-           ast.Gt: operator.gt, ast.GtE: operator.ge, ast.In: lambda a, b: a in b,
-           ast.NotIn: lambda a, b: a not in b, ast.Is: operator.is_, ast.IsNot: operator.is_not}
-
-
-def _parse(expr: str) -> ast.Expression:
-    try:
-        tree = ast.parse(expr.strip(), mode="eval")
-    except SyntaxError as exc:
-        raise ExpressionError(f"cannot parse {expr!r}: {exc.msg}") from None
-    for node in ast.walk(tree):
-        ok = isinstance(node, (ast.Expression, ast.BoolOp, ast.And, ast.Or, ast.UnaryOp, ast.Not, ast.USub,
-                               ast.UAdd, ast.BinOp, ast.Compare, ast.Constant, ast.Name, ast.Load,
-                               ast.Attribute, ast.Subscript, ast.List, ast.Tuple, ast.Call, ast.IfExp,
-                               *_BINOPS, *_CMPOPS))
-        if isinstance(node, ast.Call) and not (isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS
-                                               and not node.keywords):
-            ok = False
-        if isinstance(node, ast.Attribute) and node.attr.startswith("_"):
-            ok = False
-        if not ok:
-            raise ExpressionError(f"{expr!r}: {type(node).__name__} is not part of the claims expression language")
-    return tree
-
-
-def _lookup(container: Any, key: Any, expr: str) -> Any:
-    try:
-        if isinstance(container, Mapping):
-            return container[key]
-        if isinstance(container, (list, tuple)) and isinstance(key, int):
-            return container[key]
-    except (KeyError, IndexError):
-        pass
-    raise MissingEvidence(f"{expr!r}: no evidence {key!r}")
-
-
-def _eval(node: ast.AST, ctx: Mapping[str, Any], expr: str) -> Any:
-    if isinstance(node, ast.Expression):
-        return _eval(node.body, ctx, expr)
-    if isinstance(node, ast.Constant):
-        return node.value
-    if isinstance(node, ast.Name):
-        if node.id in ctx:
-            return ctx[node.id]
-        raise MissingEvidence(f"{expr!r}: no evidence {node.id!r}")
-    if isinstance(node, ast.Attribute):
-        return _lookup(_eval(node.value, ctx, expr), node.attr, expr)
-    if isinstance(node, ast.Subscript):
-        return _lookup(_eval(node.value, ctx, expr), _eval(node.slice, ctx, expr), expr)
-    if isinstance(node, (ast.List, ast.Tuple)):
-        return [_eval(e, ctx, expr) for e in node.elts]
-    if isinstance(node, ast.BoolOp):
-        if isinstance(node.op, ast.And):
-            return all(_eval(v, ctx, expr) for v in node.values)
-        return any(_eval(v, ctx, expr) for v in node.values)
-    if isinstance(node, ast.UnaryOp):
-        v = _eval(node.operand, ctx, expr)
-        return (not v) if isinstance(node.op, ast.Not) else (-v if isinstance(node.op, ast.USub) else +v)
-    if isinstance(node, ast.BinOp):
-        return _BINOPS[type(node.op)](_eval(node.left, ctx, expr), _eval(node.right, ctx, expr))
-    if isinstance(node, ast.Compare):
-        left = _eval(node.left, ctx, expr)
-        for op, comp in zip(node.ops, node.comparators):
-            right = _eval(comp, ctx, expr)
-            if not _CMPOPS[type(op)](left, right):
-                return False
-            left = right
-        return True
-    if isinstance(node, ast.IfExp):
-        return _eval(node.body if _eval(node.test, ctx, expr) else node.orelse, ctx, expr)
-    if isinstance(node, ast.Call):
-        return FUNCTIONS[node.func.id](*(_eval(a, ctx, expr) for a in node.args))
-    raise ExpressionError(f"{expr!r}: unsupported {type(node).__name__}")  # pragma: no cover (parse checks)
-
-
-def evaluate(expr: str, context: Mapping[str, Any]) -> Any:
-    """Value of an expression of the claims language on ``context`` (no ``eval``)."""
-    return _eval(_parse(expr), context, expr)
-
-
-def holds(condition: str, context: Mapping[str, Any]) -> bool:
-    """Truth of a condition; false when it names missing evidence."""
-    try:
-        return bool(evaluate(condition, context))
-    except MissingEvidence:
-        return False
-
-
-def _fields(template: str) -> list[tuple[str, str, str]]:
-    """Split a template into ``(literal, expression, format_spec)`` triples (expression empty at the end)."""
-    out, lit, i, n = [], [], 0, len(template)
-    while i < n:
-        c = template[i]
-        if c in "{}" and i + 1 < n and template[i + 1] == c:
-            lit.append(c)
-            i += 2
-            continue
-        if c == "}":
-            raise ExpressionError(f"template {template!r}: single '}}' (write '}}}}')")
-        if c != "{":
-            lit.append(c)
-            i += 1
-            continue
-        depth, quote, j, colon = 0, None, i + 1, None
-        while j < n:
-            ch = template[j]
-            if quote:
-                if ch == quote:
-                    quote = None
-            elif ch in "'\"":
-                quote = ch
-            elif ch in "([{":
-                depth += 1
-            elif ch in ")]":
-                depth -= 1
-            elif ch == "}":
-                if depth == 0:
-                    break
-                depth -= 1
-            elif ch == ":" and depth == 0:
-                colon = j
-            j += 1
-        if j >= n:
-            raise ExpressionError(f"template {template!r}: unclosed '{{'")
-        body = template[i + 1:j]
-        expr, spec = (body[: colon - i - 1], body[colon - i:]) if colon is not None else (body, "")
-        out.append(("".join(lit), expr, spec))
-        lit = []
-        i = j + 1
-    out.append(("".join(lit), "", ""))
+def _merged(*tables: Mapping[str, Callable]) -> dict[str, Callable]:
+    out: dict[str, Callable] = {}
+    for table in tables:
+        if set(out) & set(table):
+            raise ValueError(f"claims with two reason functions: {sorted(set(out) & set(table))}")
+        out.update(table)
     return out
 
 
-def render(template: str, context: Mapping[str, Any]) -> str:
-    """Fill a template's ``{expression:format}`` fields from ``context``."""
-    parts = []
-    for lit, expr, spec in _fields(template):
-        parts.append(lit)
-        if expr:
-            parts.append(format(evaluate(expr, context), spec))
-    return "".join(parts)
-
-
-def check_template(template: str) -> None:
-    """Parse every field of a template (raises :class:`ExpressionError`)."""
-    for _, expr, _ in _fields(template):
-        if expr:
-            _parse(expr)
+#: The reason functions of every study by claim id (see :mod:`eqrec.studies.claim_reasons`).
+REASONS: dict[str, Callable] = _merged(p1_claims.REASONS, p2_claims.REASONS, p3_claims.REASONS, p4_claims.REASONS)
 
 
 # --------------------------------------------------------------------------- claims file
 
-def _pieces(spec: Any) -> list[dict]:
-    """A note or explanation as a list of ``{text, when?, else?}``."""
+_FIELD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def check_template(template: Any, where: str) -> None:
+    """Refuse a template that is not ``str.format`` with plain named fields and format specs.
+
+    Parameters
+    ----------
+    template : Any
+        The text of the claims file.
+    where : str
+        The claim id and key, for the message.
+    """
+    if not isinstance(template, str):
+        raise InputError(f"{where}: a text must be a string, not {type(template).__name__}")
+    try:
+        parsed = list(string.Formatter().parse(template))
+    except ValueError as exc:
+        raise InputError(f"{where}: {exc} in {template!r}") from None
+    for _, name, spec, conversion in parsed:
+        if name is None:
+            continue
+        if not _FIELD.fullmatch(name) or conversion or "{" in (spec or ""):
+            field = name + (f"!{conversion}" if conversion else "") + (f":{spec}" if spec else "")
+            raise InputError(f"{where}: field {{{field}}} is not a plain name with a format spec; "
+                             "derive it in the claim's reason function (eqrec.studies.p*_claims)")
+
+
+def _texts(entry: dict, key: str, cid: str) -> dict[str, str]:
+    """The named texts under ``key`` (a single ``note`` is named ``note``)."""
+    spec = entry.get(key)
     if spec is None:
-        return []
-    items = spec if isinstance(spec, list) else [spec]
-    out: list[dict] = []
-    for it in items:
-        if isinstance(it, list):  # a YAML alias of a shared list of pieces
-            out += _pieces(it)
-        else:
-            out.append({"text": it} if isinstance(it, str) else dict(it))
-    return out
+        return {}
+    if isinstance(spec, str) and key != "explanation":
+        return {key: spec}
+    if key == "shown_as" or not isinstance(spec, Mapping) or not spec:
+        raise InputError(f"claim {cid}: '{key}' must be " + {"note": "a text or a mapping of named texts",
+                                                            "shown_as": "a text"}.get(key, "a mapping of named texts"),
+                         field=key)
+    return {str(k): v for k, v in spec.items()}
 
 
-def load_claims(path: str | Path) -> list[dict]:
-    """Read and check the claims file (keys, kinds, and the syntax of every template and condition)."""
+def load_claims(path: str | Path, reasons: Mapping[str, Callable] | None = None) -> list[dict]:
+    """Read and check the claims file.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``config/claims.yaml``.
+    reasons : Mapping[str, callable], optional
+        Reason functions by claim id (default: :data:`REASONS`, those of the studies).
+
+    Returns
+    -------
+    list of dict
+        The entries, checked: keys, comparison kinds, every text a plain template, and a reason
+        function for every claim whose wording needs one (named texts or an explanation).
+    """
     path = Path(path)
+    reasons = REASONS if reasons is None else reasons
     data = yaml.safe_load(path.read_text())
     if not isinstance(data, list):
         raise InputError("must be a list of claim entries", str(path))
@@ -318,27 +163,22 @@ def load_claims(path: str | Path) -> list[dict]:
         for key in ("id", "quantity", "paper_value", "source", "compare", "value"):
             if key not in entry:
                 raise InputError(f"{cid} lacks '{key}'", str(path), key)
+        if set(entry) - set(KEYS):
+            raise InputError(f"claim {cid}: unknown keys {sorted(set(entry) - set(KEYS))} (the keys are {KEYS}; "
+                             "conditions are the claim's reason function's)", str(path), "id")
         if entry["id"] in seen:
             raise InputError(f"duplicate claim id {entry['id']}", str(path), "id")
         seen.add(entry["id"])
         kind = entry["compare"].get("kind")
         if kind not in KINDS:
             raise InputError(f"claim {cid}: unknown compare kind {kind!r}", str(path), "compare")
-        for key in ("note", "explanation"):
-            for piece in _pieces(entry.get(key)):
-                if "text" not in piece or set(piece) - {"text", "when", "else"}:
-                    raise InputError(f"claim {cid}: each {key} is a text or {{when, text, else}}", str(path), key)
-                try:
-                    for t in (piece["text"], piece.get("else")):
-                        if t is not None:
-                            check_template(str(t))
-                    if "when" in piece:
-                        _parse(str(piece["when"]))
-                except ExpressionError as exc:
-                    raise InputError(f"claim {cid}: {exc}", str(path), key) from None
-        if any("when" not in p for p in _pieces(entry.get("explanation"))):
-            raise InputError(f"claim {cid}: an explanation needs the evidence it rests on ('when')",
-                             str(path), "explanation")
+        for key in ("shown_as", "note", "explanation"):
+            for name, text in _texts(entry, key, cid).items():
+                check_template(text, f"claim {cid}, {key}" + (f".{name}" if name != key else ""))
+        needs = isinstance(entry.get("note"), Mapping) or "explanation" in entry
+        if needs and entry["id"] not in reasons:
+            raise InputError(f"claim {cid}: named texts and explanations are chosen by a reason function, "
+                             "and none is registered for this id (eqrec.studies.p*_claims)", str(path), "id")
     return data
 
 
@@ -419,17 +259,11 @@ def _number(x: Any) -> Any:
         return x
 
 
-def _render_pieces(pieces: list[dict], ctx: Mapping[str, Any], cid: str) -> str:
-    out = []
-    for p in pieces:
-        text = p["text"] if "when" not in p or holds(str(p["when"]), ctx) else p.get("else")
-        if text is None:
-            continue
-        try:
-            out.append(render(str(text), ctx).strip())
-        except MissingEvidence as exc:
-            raise InputError(f"claim {cid}: template names evidence the values file lacks: {exc.args[0]}") from None
-    return _join_pieces(out)
+def _fill(template: str, fields: Mapping[str, Any], cid: str) -> str:
+    try:
+        return template.format_map(fields).strip()
+    except KeyError as exc:
+        raise InputError(f"claim {cid}: a text names evidence the values file lacks: {exc.args[0]!r}") from None
 
 
 def _join_pieces(texts: list[str]) -> str:
@@ -442,16 +276,31 @@ def _join_pieces(texts: list[str]) -> str:
     return joined
 
 
-def explain(entry: dict, ctx: Mapping[str, Any]) -> str:
-    """The explanation while its evidence holds; otherwise a line saying it was withdrawn and why."""
-    shown, withdrawn = [], []
-    for p in _pieces(entry.get("explanation")):
-        (shown if holds(str(p["when"]), ctx) else withdrawn).append(p)
-    text = _render_pieces(shown, ctx, entry["id"])
+def _reason(entry: dict, ctx: Mapping[str, Any], reasons: Mapping[str, Callable]) -> tuple[dict, str, str]:
+    """The fields, the note and the explanation (or the line saying it was withdrawn) of one claim."""
+    cid = entry["id"]
+    notes, explanations = _texts(entry, "note", cid), _texts(entry, "explanation", cid)
+    chosen = Reason()
+    if cid in reasons:
+        try:
+            chosen = reasons[cid](ctx, notes)
+        except KeyError as exc:
+            raise InputError(f"claim {cid}: its reason function needs evidence the values file lacks: "
+                             f"{exc.args[0]!r}") from None
+    fields = {**ctx, **chosen.fields}
+    names = chosen.note if chosen.note is not None else list(notes)
+    if isinstance(entry.get("note"), Mapping) and chosen.note is None:
+        raise InputError(f"claim {cid}: its reason function must choose among the named notes {list(notes)}")
+    if set(names) - set(notes) or set(chosen.explanation) != set(explanations):
+        raise InputError(f"claim {cid}: its reason function chose notes {list(names)} of {list(notes)} and "
+                         f"judged explanations {list(chosen.explanation)} of {list(explanations)}")
+    note = _join_pieces([_fill(notes[n], fields, cid) for n in names])
+    text = _join_pieces([_fill(t, fields, cid) for n, t in explanations.items() if chosen.explanation[n]])
+    withdrawn = [n for n in explanations if not chosen.explanation[n]]
     if withdrawn:
-        conds = "; ".join(str(p["when"]) for p in withdrawn)
-        text = (text + " " if text else "") + (f"[explanation withdrawn: its evidence no longer holds ({conds})]")
-    return text
+        text = (text + " " if text else "") + (f"[explanation withdrawn: its evidence no longer holds "
+                                               f"({'; '.join(withdrawn)})]")
+    return fields, note, text
 
 
 def _values_file(values: Mapping[str, str | Path] | str | Path, ref_file: str) -> Path:
@@ -494,30 +343,47 @@ def is_timing_claim(entry: Mapping[str, Any]) -> bool:
     return str(entry["value"]).startswith(TIMINGS_PREFIX)
 
 
-def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | str | Path) -> pd.DataFrame:
+def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | str | Path,
+                       reasons: Mapping[str, Callable] | None = None) -> pd.DataFrame:
     """Compare every claim with the pipeline's values.
 
-    ``values``: the ``values.json`` files (or the results folder holding
-    ``p1/values.json`` ...).  Raises if a referenced result is missing: a table
-    with holes would be a partial result presented as whole.
+    Parameters
+    ----------
+    claims_path : str or Path
+        ``config/claims.yaml``.
+    values : sequence of str or Path, or str or Path
+        The ``values.json`` files (or the results folder holding ``p1/values.json`` ...).
+    reasons : Mapping[str, callable], optional
+        Reason functions by claim id (default: :data:`REASONS`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per claim: the columns of ``claims.csv`` plus ``source``, ``timing`` and
+        ``fixed_reason``.  Raises if a referenced result is missing: a table with holes would be a
+        partial result presented as whole.
     """
+    reasons = REASONS if reasons is None else reasons
     rows = []
     cache: dict = {}
-    for entry in load_claims(claims_path):
+    claims = load_claims(claims_path, reasons)
+    published = {e["id"]: _number(e["paper_value"]) for e in claims}  # for a reason that cites another claim's
+    for entry in claims:
         ours, evidence = _lookup_value(values, entry["value"], cache)
         status, tol = compare_one(entry, ours)
-        ctx = {**evidence, "value": ours, "paper": _number(entry["paper_value"]), "tol": _tolerance(entry)}
-        note = _render_pieces(_pieces(entry.get("note")), ctx, entry["id"])
+        ctx = {**evidence, "value": ours, "paper": _number(entry["paper_value"]), "tol": _tolerance(entry),
+               "published": published}
+        fields, note, explanation = _reason(entry, ctx, reasons)
         parts = []
         if status == "differs":
-            parts += [t for t in (note, explain(entry, ctx)) if t]
+            parts += [t for t in (note, explanation) if t]
             if not parts:
                 parts.append("unexplained")
         elif status == "reproduced":
             parts.append(("within " if tol != "exact match" else "") + tol + (f"; {note}" if note else ""))
         else:
             parts.extend(p for p in (tol, note) if p)
-        shown = render(str(entry["shown_as"]), ctx) if entry.get("shown_as") else _format(ours)
+        shown = _fill(entry["shown_as"], fields, entry["id"]) if entry.get("shown_as") else _format(ours)
         rows.append({"id": entry["id"], "quantity": entry["quantity"], "paper_value": _format(entry["paper_value"]),
                      "our_value": shown, "status": status, "reason": " ".join(parts), "source": entry["source"],
                      "timing": is_timing_claim(entry), "fixed_reason": tol})
