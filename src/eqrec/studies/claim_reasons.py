@@ -16,9 +16,11 @@ id::
 
 ``ev`` is the claim's evidence (the ``evidence`` of its ``values.json`` entry)
 plus ``value`` (ours), ``paper`` (the published value, a number where it reads
-as one) and ``tol`` (the tolerance of ``number`` and ``interval`` claims);
-``texts`` maps the names of the claim's ``note`` texts to their templates (for
-wording repeated per item of a list).
+as one), ``tol`` (the tolerance of ``number`` and ``interval`` claims) and
+``published`` (every claim's published value by id, for a reason that cites
+another claim's); ``texts`` maps the names of the claim's ``note`` texts to
+their templates (for wording repeated per item of a list).  The chosen texts
+are filled from ``ev`` and the returned fields.
 """
 
 from __future__ import annotations
@@ -72,6 +74,26 @@ def registry() -> tuple[dict[str, ReasonFunction], Callable[..., Callable[[Reaso
         return register
 
     return table, reason
+
+
+def merged(*tables: Mapping[str, ReasonFunction]) -> dict[str, ReasonFunction]:
+    """The studies' tables of reason functions in one, refusing an id registered twice.
+
+    Parameters
+    ----------
+    *tables : Mapping[str, callable]
+        Claim id -> reason function, one table per study.
+
+    Returns
+    -------
+    dict[str, callable]
+    """
+    out: dict[str, ReasonFunction] = {}
+    for table in tables:
+        if set(out) & set(table):
+            raise ValueError(f"claims with two reason functions: {sorted(set(out) & set(table))}")
+        out.update(table)
+    return out
 
 
 def fmtlist(xs: Any, spec: str = ".4g") -> str:

@@ -64,7 +64,7 @@ import yaml
 
 from eqrec.errors import InputError
 from eqrec.studies import p1_claims, p2_claims, p3_claims, p4_claims
-from eqrec.studies.claim_reasons import Reason
+from eqrec.studies.claim_reasons import Reason, merged
 from eqrec.studies.harness import get_logger
 from eqrec.studies.outputs import write_csv, write_text
 
@@ -79,17 +79,8 @@ KINDS = ("number", "interval", "array", "text", "none")
 KEYS = ("id", "quantity", "paper_value", "source", "compare", "value", "shown_as", "note", "explanation")
 
 
-def _merged(*tables: Mapping[str, Callable]) -> dict[str, Callable]:
-    out: dict[str, Callable] = {}
-    for table in tables:
-        if set(out) & set(table):
-            raise ValueError(f"claims with two reason functions: {sorted(set(out) & set(table))}")
-        out.update(table)
-    return out
-
-
 #: The reason functions of every study by claim id (see :mod:`eqrec.studies.claim_reasons`).
-REASONS: dict[str, Callable] = _merged(p1_claims.REASONS, p2_claims.REASONS, p3_claims.REASONS, p4_claims.REASONS)
+REASONS: dict[str, Callable] = merged(p1_claims.REASONS, p2_claims.REASONS, p3_claims.REASONS, p4_claims.REASONS)
 
 
 # --------------------------------------------------------------------------- claims file
@@ -130,9 +121,8 @@ def _texts(entry: dict, key: str, cid: str) -> dict[str, str]:
     if isinstance(spec, str) and key != "explanation":
         return {key: spec}
     if key == "shown_as" or not isinstance(spec, Mapping) or not spec:
-        raise InputError(f"claim {cid}: '{key}' must be " + {"note": "a text or a mapping of named texts",
-                                                            "shown_as": "a text"}.get(key, "a mapping of named texts"),
-                         field=key)
+        raise InputError(f"claim {cid}: '{key}' has the wrong form (note: a text or named texts; shown_as: a "
+                         "text; explanation: named texts)", field=key)
     return {str(k): v for k, v in spec.items()}
 
 
@@ -285,8 +275,8 @@ def _reason(entry: dict, ctx: Mapping[str, Any], reasons: Mapping[str, Callable]
         try:
             chosen = reasons[cid](ctx, notes)
         except KeyError as exc:
-            raise InputError(f"claim {cid}: its reason function needs evidence the values file lacks: "
-                             f"{exc.args[0]!r}") from None
+            raise InputError(f"claim {cid}: its reason function reads {exc.args[0]!r}, which neither the evidence "
+                             "nor the claim's texts have") from None
     fields = {**ctx, **chosen.fields}
     names = chosen.note if chosen.note is not None else list(notes)
     if isinstance(entry.get("note"), Mapping) and chosen.note is None:
