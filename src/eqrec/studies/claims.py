@@ -1,7 +1,7 @@
 """The claims table: published numbers next to ours, with wording tied to the evidence.
 
 The papers' values and all wording live in one file, ``config/claims.yaml``
-(a list of entries)::
+(read and checked by :mod:`eqrec.studies.claims_file`), a list of entries::
 
     - id: P1-M2:prefix-L1                    # starts with the target ID of TARGETS.md
       quantity: optimal M2, prefix-based estimator on L1 (M1 = 1)
@@ -18,14 +18,14 @@ The papers' values and all wording live in one file, ``config/claims.yaml``
         misprint: "..."                       #   evidence holds, otherwise reported as withdrawn
 
 Every text is a ``str.format`` template with plain named fields and a format
-spec (``{mu2:.6f}``, ``{{``/``}}`` for braces): no expressions, no conditions.
-The fields are the evidence's keys, ``value`` (ours), ``paper`` (the published
-value, a number where it reads as one) and ``tol`` (the comparison tolerance),
-plus what the claim's reason function adds.  The reason functions (one per
-claim id, or shared by ids of one shape) are in :mod:`eqrec.studies.p1_claims`
-... :mod:`eqrec.studies.p4_claims`, registered by id (see
+spec (``{mu2:.6f}``): no expressions, no conditions.  The fields are the
+evidence's keys, ``value`` (ours), ``paper`` (the published value, a number
+where it reads as one) and ``tol`` (the comparison tolerance), plus what the
+claim's reason function adds.  The reason functions (one per claim id, or
+shared by ids of one shape) are in :mod:`eqrec.studies.p1_claims` ...
+:mod:`eqrec.studies.p4_claims`, registered by id (the contract is in
 :mod:`eqrec.studies.claim_reasons`); a claim with named texts or an
-explanation must have one, and a claim without one is its single ``note``
+explanation must have one, and a claim without one shows its single ``note``
 filled from the evidence.
 
 The pipeline's ``values`` steps write ``values.json`` files mapping keys to
@@ -49,22 +49,19 @@ to ``results/timings/claims.csv``.
 
 from __future__ import annotations
 
-import copy
-import functools
 import json
 import math
-import re
-import string
 from decimal import Decimal
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
 import numpy as np
-import yaml
 
 from eqrec.errors import InputError
 from eqrec.studies import p1_claims, p2_claims, p3_claims, p4_claims
 from eqrec.studies.claim_reasons import Reason, merged
+from eqrec.studies.claims_file import named_texts, read_claims
+from eqrec.studies.claims_file import published_value  # noqa: F401 (re-exported: the Snakefile imports it here)
 from eqrec.studies.harness import get_logger
 from eqrec.studies.outputs import write_csv, write_text
 
@@ -75,8 +72,6 @@ log = get_logger("claims")
 
 STATUSES = ("reproduced", "differs", "not comparable")
 COLUMNS = ["id", "quantity", "paper_value", "our_value", "status", "reason"]
-KINDS = ("number", "interval", "array", "text", "none")
-KEYS = ("id", "quantity", "paper_value", "source", "compare", "value", "shown_as", "note", "explanation")
 
 
 #: The reason functions of every study by claim id (see :mod:`eqrec.studies.claim_reasons`).
@@ -85,49 +80,8 @@ REASONS: dict[str, Callable] = merged(p1_claims.REASONS, p2_claims.REASONS, p3_c
 
 # --------------------------------------------------------------------------- claims file
 
-_FIELD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-
-
-def check_template(template: Any, where: str) -> None:
-    """Refuse a template that is not ``str.format`` with plain named fields and format specs.
-
-    Parameters
-    ----------
-    template : Any
-        The text of the claims file.
-    where : str
-        The claim id and key, for the message.
-    """
-    if not isinstance(template, str):
-        raise InputError(f"{where}: a text must be a string, not {type(template).__name__}")
-    try:
-        parsed = list(string.Formatter().parse(template))
-    except ValueError as exc:
-        raise InputError(f"{where}: {exc} in {template!r}") from None
-    for _, name, spec, conversion in parsed:
-        if name is None:
-            continue
-        if not _FIELD.fullmatch(name) or conversion or "{" in (spec or ""):
-            field = name + (f"!{conversion}" if conversion else "") + (f":{spec}" if spec else "")
-            raise InputError(f"{where}: field {{{field}}} is not a plain name with a format spec; "
-                             "derive it in the claim's reason function (eqrec.studies.p*_claims)")
-
-
-def _texts(entry: dict, key: str, cid: str) -> dict[str, str]:
-    """The named texts under ``key`` (a single ``note`` is named ``note``)."""
-    spec = entry.get(key)
-    if spec is None:
-        return {}
-    if isinstance(spec, str) and key != "explanation":
-        return {key: spec}
-    if key == "shown_as" or not isinstance(spec, Mapping) or not spec:
-        raise InputError(f"claim {cid}: '{key}' has the wrong form (note: a text or named texts; shown_as: a "
-                         "text; explanation: named texts)", field=key)
-    return {str(k): v for k, v in spec.items()}
-
-
 def load_claims(path: str | Path, reasons: Mapping[str, Callable] | None = None) -> list[dict]:
-    """Read and check the claims file.
+    """Read and check the claims file, and that every claim whose wording needs a choice has its function.
 
     Parameters
     ----------
@@ -139,51 +93,16 @@ def load_claims(path: str | Path, reasons: Mapping[str, Callable] | None = None)
     Returns
     -------
     list of dict
-        The entries, checked: keys, comparison kinds, every text a plain template, and a reason
-        function for every claim whose wording needs one (named texts or an explanation).
+        The entries, checked by :func:`~eqrec.studies.claims_file.read_claims`, and a reason function
+        for every claim with named notes or an explanation.
     """
-    path = Path(path)
     reasons = REASONS if reasons is None else reasons
-    data = yaml.safe_load(path.read_text())
-    if not isinstance(data, list):
-        raise InputError("must be a list of claim entries", str(path))
-    seen = set()
-    for i, entry in enumerate(data):
-        cid = entry.get("id", f"entry {i}")
-        for key in ("id", "quantity", "paper_value", "source", "compare", "value"):
-            if key not in entry:
-                raise InputError(f"{cid} lacks '{key}'", str(path), key)
-        if set(entry) - set(KEYS):
-            raise InputError(f"claim {cid}: unknown keys {sorted(set(entry) - set(KEYS))} (the keys are {KEYS}; "
-                             "conditions are the claim's reason function's)", str(path), "id")
-        if entry["id"] in seen:
-            raise InputError(f"duplicate claim id {entry['id']}", str(path), "id")
-        seen.add(entry["id"])
-        kind = entry["compare"].get("kind")
-        if kind not in KINDS:
-            raise InputError(f"claim {cid}: unknown compare kind {kind!r}", str(path), "compare")
-        for key in ("shown_as", "note", "explanation"):
-            for name, text in _texts(entry, key, cid).items():
-                check_template(text, f"claim {cid}, {key}" + (f".{name}" if name != key else ""))
-        needs = isinstance(entry.get("note"), Mapping) or "explanation" in entry
-        if needs and entry["id"] not in reasons:
-            raise InputError(f"claim {cid}: named texts and explanations are chosen by a reason function, "
+    data = read_claims(path)
+    for entry in data:
+        if (isinstance(entry.get("note"), Mapping) or "explanation" in entry) and entry["id"] not in reasons:
+            raise InputError(f"claim {entry['id']}: named texts and explanations are chosen by a reason function, "
                              "and none is registered for this id (eqrec.studies.p*_claims)", str(path), "id")
     return data
-
-
-def published_value(claims_path: str | Path, claim_id: str) -> Any:
-    """The paper's value of one claim of ``config/claims.yaml`` (the only place published numbers live)."""
-    path = Path(claims_path)
-    for entry in _loaded_claims(path, path.stat().st_mtime_ns):
-        if entry["id"] == claim_id:
-            return copy.deepcopy(entry["paper_value"])
-    raise InputError(f"{claims_path} has no claim {claim_id!r}", field="printed")
-
-
-@functools.lru_cache(maxsize=4)
-def _loaded_claims(path: Path, mtime_ns: int) -> list[dict]:
-    return load_claims(path)
 
 
 def default_atol(paper_value: Any) -> float:
@@ -269,7 +188,7 @@ def _join_pieces(texts: list[str]) -> str:
 def _reason(entry: dict, ctx: Mapping[str, Any], reasons: Mapping[str, Callable]) -> tuple[dict, str, str]:
     """The fields, the note and the explanation (or the line saying it was withdrawn) of one claim."""
     cid = entry["id"]
-    notes, explanations = _texts(entry, "note", cid), _texts(entry, "explanation", cid)
+    notes, explanations = named_texts(entry, "note", cid), named_texts(entry, "explanation", cid)
     chosen = Reason()
     if cid in reasons:
         try:

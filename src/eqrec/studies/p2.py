@@ -38,7 +38,7 @@ from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import EqrecError
 from eqrec.studies import p2_figures, p2_sweeps, p2_values
-from eqrec.studies.claims import published_value
+from eqrec.studies.claims_file import published_value
 from eqrec.studies.harness import get_logger
 from eqrec.studies.outputs import write_json, write_npz
 from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
