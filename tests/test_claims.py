@@ -100,7 +100,8 @@ def test_table_words_evidence_and_withdraws_an_explanation(tmp_path):
     # reproduced: no explanation at all
     _values(tmp_path, 1.5, bound=1.69, proof="infeasible")
     row = build_claims_table(claims, tmp_path, REASONS_P9).iloc[0]
-    assert row["status"] == "reproduced" and row["reason"] == "within tolerance 0.05 + 0|paper|; bound 1.69 proven optimal"
+    assert row["status"] == "reproduced"
+    assert row["reason"] == "within tolerance 0.05 + 0|paper|; bound 1.69 proven optimal"
     # evidence a text needs is missing: the claim is named
     _values(tmp_path, 1.7, proof="infeasible")
     with pytest.raises(InputError, match="P9-A:x.*'bound'"):
@@ -148,7 +149,7 @@ def test_loader_refuses_conditions_and_logic_without_a_reason_function(tmp_path)
     path.write_text(CLAIMS)
     with pytest.raises(InputError, match="P9-A:x: named texts and explanations are chosen by a reason function"):
         load_claims(path, {})
-    path.write_text(CLAIMS.replace('misprint: "misprint: {paper} is below the proven bound {bound:.2f}"', "misprint: 3"))
+    path.write_text(CLAIMS.replace('"misprint: {paper} is below the proven bound {bound:.2f}"', "3"))
     with pytest.raises(InputError, match="P9-A:x, explanation.misprint: a text must be a string"):
         load_claims(path, REASONS_P9)
 

@@ -117,6 +117,23 @@ def fmtlist(xs: Any, spec: str = ".4g") -> str:
     return str(xs)
 
 
+def fmtlists(ev: Mapping[str, Any], *keys: str) -> dict[str, str]:
+    """Fields ``<key>_list``: the lists ``ev[key]`` formatted by :func:`fmtlist` (``.4g``).
+
+    Parameters
+    ----------
+    ev : Mapping[str, Any]
+        Evidence (or one item of it).
+    *keys : str
+        The keys of the lists.
+
+    Returns
+    -------
+    dict[str, str]
+    """
+    return {f"{k}_list": fmtlist(ev[k]) for k in keys}
+
+
 def fmtcomplex(pairs: Sequence[Sequence[float]], spec: str = ".3f") -> str:
     """``{a+bj, c}`` from ``[[re, im], ...]`` (the imaginary part shown only when nonzero).
 

@@ -10,17 +10,12 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from eqrec.studies.claim_reasons import Reason, each, fmtlist, join, registry
+from eqrec.studies.claim_reasons import Reason, each, fmtlist, fmtlists, join, registry
 
 REASONS, reason = registry()
 
 #: A causal run at a worst-case vertex attains a bound when it is within this gap.
 VERTEX_GAP = 1e-9
-
-
-def _lists(ev: Mapping[str, Any], *keys: str) -> dict[str, str]:
-    """``<key>_list``: the evidence's list ``key`` formatted by :func:`fmtlist`."""
-    return {f"{k}_list": fmtlist(ev[k]) for k in keys}
 
 
 def _vertex(ev: Mapping[str, Any]) -> str:
@@ -80,7 +75,7 @@ def augmented_l_s0(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
 @reason("P3-F1:proposed-inside")
 def f1_proposed(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """The levels and the exact worst case along the pattern."""
-    return Reason(fields=_lists(ev, "levels", "certified_norm"))
+    return Reason(fields=fmtlists(ev, "levels", "certified_norm"))
 
 
 @reason("P3-F1:kalman-timestamped", "P3-F1:kalman-unaware", "P3-F1:kalman-random-delay-lmv")
@@ -88,7 +83,7 @@ def f1_kalman(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """The exact worst case against the levels (whether a box vertex attains it), and how many sampled runs
     leave the bars."""
     vertex = texts["vertex_attained" if ev["attain_gap"] <= VERTEX_GAP else "vertex_missed"].format_map(ev)
-    fields = {**_lists(ev, "worst_norm", "levels"), "time_list": join(ev["times"]),
+    fields = {**fmtlists(ev, "worst_norm", "levels"), "time_list": join(ev["times"]),
               "filtered_time_list": join(ev["filtered_times"]), "vertex": vertex}
     return Reason(fields=fields, note=["worst_case", "none_sampled" if ev["sampled_exceed"] == 0 else "some_sampled"])
 
@@ -115,7 +110,7 @@ def acc_mu1_free(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
 @reason("P3-F2:better-levels")
 def f2_levels(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """Both estimators' levels along the pattern."""
-    return Reason(fields=_lists(ev, "proposed_levels", "prefix_levels"))
+    return Reason(fields=fmtlists(ev, "proposed_levels", "prefix_levels"))
 
 
 @reason("P3-F2:better-mean-error")
@@ -130,7 +125,7 @@ def f2_worst_case(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     differs on the worst case only."""
     holds = (ev["value"] != ev["paper"] and ev["levels_verdict"] == ev["paper"]
              and ev["mean_error_proposed"] < ev["mean_error_prefix"])
-    return Reason(fields=_lists(ev, "proposed_bound", "prefix_bound"), explanation={"levels_and_mean": holds})
+    return Reason(fields=fmtlists(ev, "proposed_bound", "prefix_bound"), explanation={"levels_and_mean": holds})
 
 
 @reason("P3-F1:kalman-sampled")
@@ -160,4 +155,4 @@ def period1(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
         note.append("shortest_period")
     if ev["lp_status"] == "infeasible":
         note.append("infeasible")
-    return Reason(fields=_lists(ev, "period_mu1_min"), note=note)
+    return Reason(fields=fmtlists(ev, "period_mu1_min"), note=note)

@@ -9,20 +9,15 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from eqrec.studies.claim_reasons import Reason, each, fmtlist, registry
+from eqrec.studies.claim_reasons import Reason, each, fmtlist, fmtlists, registry
 
 REASONS, reason = registry()
-
-
-def _lists(ev: Mapping[str, Any], *keys: str) -> dict[str, str]:
-    """``<key>_list``: the evidence's list ``key`` formatted by :func:`fmtlist`."""
-    return {f"{k}_list": fmtlist(ev[k]) for k in keys}
 
 
 @reason("P4-F1:tracking")
 def tracking(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """Our value shown as one line per estimator (relative rms error and correlation per component)."""
-    estimators = "; ".join(texts["estimator"].format(key=k, **_lists(v, "rel_rms", "corr"))
+    estimators = "; ".join(texts["estimator"].format(key=k, **fmtlists(v, "rel_rms", "corr"))
                            for k, v in ev["value"].items())
     return Reason(fields={"estimator_list": estimators}, note=["realisation"])
 
@@ -38,13 +33,13 @@ def ordering(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
 def eta_trend(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """Monotonicity per estimator and the filter variances at three arrival rates."""
     return Reason(fields={**{f"decreasing_{est}": ev["decreasing"][est] for est in ("pred", "filt", "smooth")},
-                          **_lists(ev, "filt_lo", "filt_mid", "filt_hi")})
+                          **fmtlists(ev, "filt_lo", "filt_mid", "filt_hi")})
 
 
 @reason("P4-F6:q-trend")
 def q_trend(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """The filter variances at the corners of the (Q_xi, Q_lambda) grid."""
-    return Reason(fields=_lists(ev, "filt_lo", "filt_hi"))
+    return Reason(fields=fmtlists(ev, "filt_lo", "filt_hi"))
 
 
 def _eta_range(texts: Mapping[str, str], cells: Mapping[str, Any], single: bool = False) -> str:
@@ -57,7 +52,7 @@ def _eta_range(texts: Mapping[str, str], cells: Mapping[str, Any], single: bool 
 def _compensation(ev: Mapping[str, Any], texts: Mapping[str, str]) -> tuple[dict[str, Any], list[str]]:
     """Fields and note of the compensation comparison (zero-input vs hold-input)."""
     threshold = ev["qlam_threshold"]
-    fields = {**_lists(ev, "steady_zero", "steady_hold", "theory_zero_T", "theory_hold_T", "mc_zero_T", "mc_hold_T"),
+    fields = {**fmtlists(ev, "steady_zero", "steady_hold", "theory_zero_T", "theory_hold_T", "mc_zero_T", "mc_hold_T"),
               "zero_from_t": ev["from_t"]["zero-input"], "hold_from_t": ev["from_t"]["hold-input"],
               **{f"threshold_{k}": threshold[k] for k in ("Qxi", "root", "below", "above", "lo", "hi")},
               "hold_better": _eta_range(texts, ev["hold_better_eta"]),
@@ -94,8 +89,8 @@ def theory_recursion(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
 @reason("P4-THEORY:eq9")
 def eq9(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """One line per example; the correction explains the difference while it passes and the printed form fails."""
-    examples = "; ".join(texts["example"].format_map({**v, "key": k, **_lists(v, "P_printed_T", "P_corrected_T",
-                                                                                "P_true_T", "mc_T", "se_T")})
+    lists = ("P_printed_T", "P_corrected_T", "P_true_T", "mc_T", "se_T")
+    examples = "; ".join(texts["example"].format_map({**v, "key": k, **fmtlists(v, *lists)})
                          for k, v in ev["examples"].items())
     return Reason(fields={"example_list": examples}, note=["printed"],
                   explanation={"corrected": ev["corrected_passed"] and not ev["printed_passed"]})
