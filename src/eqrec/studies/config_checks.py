@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from eqrec.core.patterns import parse_delay_word, validate_language
+from eqrec.core.words import parse_delay_word, validate_language
 from eqrec.errors import InputError
 from eqrec.lmv.model import Plant
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.errors import InputError
 
 #: Heat-map / projection variants: name -> (mode of the augmented model, word reading)
