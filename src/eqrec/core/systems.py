@@ -42,11 +42,14 @@ def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.
     return arr
 
 
-def _time_indexed(name: str, what: str, shape: str):
-    """The method ``<name>_at(t)`` of :class:`AffineSystem`: matrix ``name`` at time ``t`` (A, C, E and V alike)."""
+def _time_indexed(name: str, what: str, shape: str, absent: str = ""):
+    """The method ``<name>_at(t)`` of :class:`AffineSystem`: matrix ``name`` at time ``t`` (A, B, C, E, V alike)."""
 
     def at(self, t: int) -> np.ndarray:
-        return self._at(getattr(self, name), t)
+        arr = getattr(self, name)
+        if arr is None:  # only B may be absent
+            return np.zeros((self.n, 0))
+        return self._at(arr, t)
 
     at.__name__ = f"{name}_at"
     at.__qualname__ = f"AffineSystem.{name}_at"
@@ -60,7 +63,7 @@ def _time_indexed(name: str, what: str, shape: str):
         Returns
         -------
         ndarray, shape {shape}
-            ``{name}[t]`` if ``{name}`` is time-varying, else ``{name}`` itself (not a copy).
+            ``{name}[t]`` if ``{name}`` is time-varying, else ``{name}`` itself (not a copy){absent}.
         """
     return at
 
@@ -180,26 +183,11 @@ class AffineSystem:
         for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f).items():
             object.__setattr__(self, key, val)
 
-    # -- dimensions -------------------------------------------------------
-    @property
-    def n(self) -> int:
-        """State dimension."""
-        return self.A.shape[-1]
-
-    @property
-    def p(self) -> int:
-        """Output dimension."""
-        return self.C.shape[-2]
-
-    @property
-    def nw(self) -> int:
-        """Process-noise dimension."""
-        return self.E.shape[-1]
-
-    @property
-    def nv(self) -> int:
-        """Measurement-noise dimension."""
-        return self.V.shape[-1]
+    # -- dimensions (read from the matrices) -------------------------------
+    n = property(lambda self: self.A.shape[-1], doc="State dimension (int).")
+    p = property(lambda self: self.C.shape[-2], doc="Output dimension (int).")
+    nw = property(lambda self: self.E.shape[-1], doc="Process-noise dimension (int).")
+    nv = property(lambda self: self.V.shape[-1], doc="Measurement-noise dimension (int).")
 
     @property
     def m(self) -> int:
@@ -228,24 +216,7 @@ class AffineSystem:
     C_at = _time_indexed("C", "Output matrix", "(p, n)")
     E_at = _time_indexed("E", "Process-noise gain", "(n, nw)")
     V_at = _time_indexed("V", "Measurement-noise gain", "(p, nv)")
-
-    def B_at(self, t: int) -> np.ndarray:
-        """Input matrix ``B(t)`` at time ``t``.
-
-        Parameters
-        ----------
-        t : int
-            Time index (ignored by a time-invariant matrix).
-
-        Returns
-        -------
-        ndarray, shape (n, m)
-            ``B[t]`` if ``B`` is time-varying, else ``B``; an ``(n, 0)``
-            array of zeros for a system without input.
-        """
-        if self.B is None:
-            return np.zeros((self.n, 0))
-        return self._at(self.B, t)
+    B_at = _time_indexed("B", "Input matrix", "(n, m)", "; an ``(n, 0)`` array of zeros for a system without input")
 
     def check_horizon(self, T: int) -> None:
         """Raise if a time-varying system is shorter than the horizon ``T``.
