@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from eqrec.core.systems import acc_system
+from eqrec.core.acc import acc_system
 
 L1 = ["101111", "110111", "111011", "111101"]
 

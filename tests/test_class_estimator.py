@@ -15,10 +15,11 @@ import scipy.linalg as sla
 from eqrec.core.classes import ClassGains, class_maps, classes_of_tree
 from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
 from eqrec.core.switching import SwitchingEstimator
-from eqrec.core.patterns import PrefixTree, parse_delay_word
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import parse_delay_word
 from eqrec.core.robust import worst_case_vertex
-from eqrec.core.simulate import (class_closed_loop_maps, long_run_periodic, long_run_switching, monte_carlo,
-                                 periodic_model_gap, simulate_run)
+from eqrec.core.long_runs import class_closed_loop_maps, long_run_periodic, long_run_switching, periodic_model_gap
+from eqrec.core.simulate import monte_carlo, simulate_run
 from eqrec.core.stacking import Stacking, UncertaintyLayout
 from eqrec.core.systems import AffineSystem
 from eqrec.design.delay import (delay_classes, delay_language, design_delay, min_recovery_level, node_level,

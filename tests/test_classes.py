@@ -8,7 +8,9 @@ import scipy.sparse as sp
 from eqrec.core.certify import certify_schedule
 from eqrec.core.classes import classes_of_full_language, classes_of_tree, full_language_counts
 from eqrec.core.lp import LinearProgram
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, full_delay_language
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import full_delay_language
 from eqrec.core.solvers import SOLVER_NAMES, solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import build_class_lp, class_cost, class_design, node_schedule, solve_classes

@@ -250,7 +250,7 @@ def test_delay_infeasible_exit_code_writes_nothing(tmp_path, capsys):
 
 
 def test_batch_reactor_example_is_the_zoh_model():
-    from eqrec.core.systems import load_system
+    from eqrec.core.system_files import load_system
     from eqrec.models import batch_reactor
 
     system, _ = load_system(BATCH_REACTOR)

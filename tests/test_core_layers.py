@@ -5,7 +5,7 @@ import yaml
 from pathlib import Path
 
 from eqrec.core.lp import LPBuilder
-from eqrec.core.patterns import full_delay_language, parse_delay_word
+from eqrec.core.words import full_delay_language, parse_delay_word
 from eqrec.core.solvers import SOLVER_NAMES, solve_lp, solver_info
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.errors import InputError

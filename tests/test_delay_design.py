@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from eqrec.core.patterns import PrefixTree, full_delay_language, parse_delay_word
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import full_delay_language, parse_delay_word
 from eqrec.core.simulate import simulate_run
 from eqrec.core.solvers import solve_lp
 from eqrec.design.delay import (cost_weights, delay_language, design_delay, design_delay_global, level_table,

@@ -6,7 +6,8 @@ import pytest
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign, InputError
-from eqrec.core.patterns import PrefixTree, prefixes
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import prefixes
 from eqrec.core.stacking import Stacking
 
 
@@ -116,7 +117,7 @@ def test_optimum_is_a_lower_bound(acc, L1_words):
 
 @pytest.mark.parametrize("method", ["prefix", "time"])
 def test_zero_offset_loses_no_optimality(acc, L1_words, method):
-    from eqrec.core.patterns import worst_case_word
+    from eqrec.core.words import worst_case_word
 
     words = L1_words if method == "prefix" else [worst_case_word(L1_words)]
     free = design_prefix(acc, words, 1.0, zero_offset=False, engine="tree")

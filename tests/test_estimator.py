@@ -60,7 +60,7 @@ def test_late_packet_uses_the_estimate_of_its_own_time(acc):
     """A late y(τ) enters as y(τ) - C x̂(τ); the certificate's maps assume exactly that."""
     from eqrec.core.certify import closed_loop_maps
     from eqrec.core.estimator import Packet, RecoveryEstimator
-    from eqrec.core.patterns import parse_delay_word
+    from eqrec.core.words import parse_delay_word
     from eqrec.core.simulate import simulate_run
 
     pats = [parse_delay_word(w) for w in ("0100", "0000", "2000")]

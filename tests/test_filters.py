@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from eqrec.core.patterns import parse_delay_word
+from eqrec.core.words import parse_delay_word
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.errors import InputError
 from eqrec.filters import (FILTERS, DelayUnawareKalman, GaussianDesign, TimestampedKalman, error_maps, make_filter,

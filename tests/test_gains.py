@@ -3,7 +3,7 @@ import pytest
 
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.gains import GainSchedule, f_to_q, q_to_f, schedule_from_word_gains
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.stacking import Stacking
 
 

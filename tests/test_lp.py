@@ -37,3 +37,48 @@ def test_infeasible_and_unbounded(solver):
 def test_unknown_solver():
     with pytest.raises(ValueError, match="unknown solver"):
         solve_lp(small_lp(), "gurobi")
+
+
+# -- one HiGHS status table for both HiGHS drivers (highspy and SciPy's linprog) ----------------------------------
+
+@pytest.mark.parametrize("presolve", [True, False])
+@pytest.mark.parametrize("kind,status,objective", [("optimal", "optimal", -8.0), ("infeasible", "infeasible", np.inf),
+                                                   ("unbounded", "unbounded", -np.inf)])
+def test_highs_drivers_agree(kind, status, objective, presolve):
+    """highspy and SciPy's linprog (HiGHS inside) give the same status and objective on the same small LPs."""
+    lp = lambda: small_lp(infeasible=kind == "infeasible", unbounded=kind == "unbounded")  # noqa: E731
+    direct = solve_lp(lp(), "highs", {} if presolve else {"presolve": "off"})
+    scipy = solve_lp(lp(), "scipy", {} if presolve else {"presolve": False})
+    assert (direct.status, scipy.status) == (status, status)
+    assert direct.objective == pytest.approx(objective) and scipy.objective == pytest.approx(objective)
+    assert (direct.x is None, scipy.x is None) == (kind != "optimal",) * 2
+
+
+@pytest.mark.parametrize("highs_options,scipy_options,status", [
+    ({"simplex_iteration_limit": 0}, {"maxiter": 0}, "Iteration limit reached"),
+    ({"time_limit": 0.0}, {"time_limit": 0.0}, "Time limit reached")])
+def test_highs_drivers_agree_on_limits(highs_options, scipy_options, status):
+    """A limit reads the same through both drivers (SciPy's own message used to be the status)."""
+    direct = solve_lp(small_lp(), "highs", {"presolve": "off", **highs_options})
+    scipy = solve_lp(small_lp(), "scipy", {"presolve": False, **scipy_options})
+    assert (direct.status, scipy.status) == (status, status)
+    assert np.isnan(direct.objective) and np.isnan(scipy.objective) and direct.x is None and scipy.x is None
+
+
+def test_highs_status_table():
+    """Every HiGHS model status is in the table; the non-definitive ones in HiGHS's own words."""
+    highspy = pytest.importorskip("highspy")
+    from eqrec.core.solvers import HIGHS_STATUS, highs_status
+
+    h = highspy.Highs()
+    members = {int(getattr(highspy.HighsModelStatus, name)): getattr(highspy.HighsModelStatus, name)
+               for name in dir(highspy.HighsModelStatus) if name.startswith("k")}
+    assert set(members) == set(HIGHS_STATUS)
+    definitive = {"kOptimal": "optimal", "kInfeasible": "infeasible", "kUnboundedOrInfeasible": "infeasible",
+                  "kUnbounded": "unbounded"}
+    for code, member in members.items():
+        assert HIGHS_STATUS[code] == definitive.get(member.name, h.modelStatusToString(member)), member.name
+    assert highs_status(9) == ("infeasible", np.inf) and highs_status(10) == ("unbounded", -np.inf)
+    status, objective = highs_status(15)
+    assert status == "Unknown" and np.isnan(objective)
+    assert highs_status(99, "odd")[0] == "odd" and highs_status(99)[0] == "HiGHS model status 99"

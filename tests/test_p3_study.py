@@ -8,8 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.core.patterns import (PrefixTree, event_indices, event_matrix, full_delay_language, gain_zero_pattern,
-                                 parse_delay_word)
+from eqrec.core.patterns import event_indices, event_matrix, gain_zero_pattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import full_delay_language, parse_delay_word
 from eqrec.design.delay import delay_language, design_delay
 from eqrec.design.prefix import design_prefix
 from eqrec.errors import InputError
@@ -98,7 +99,7 @@ def test_zero_pattern_matches_the_designed_gains():
 # --------------------------------------------------------------------------- ACC: the same problem as P1
 
 def test_acc_delay_design_equals_p1_prefix_optimum(cfg):
-    from eqrec.core.systems import acc_system
+    from eqrec.core.acc import acc_system
 
     acc = acc_system()
     words = cfg["acc"]["language"]

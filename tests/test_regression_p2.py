@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.core.systems import acc_system
+from eqrec.core.acc import acc_system
 from eqrec.design.augmented import design_augmented
 from eqrec.design.time_based import design_time_based
 from eqrec.studies import harness

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from eqrec.core.systems import acc_system
+from eqrec.core.acc import acc_system
 from eqrec.design.delay import delay_language, design_delay
 from eqrec.errors import InfeasibleDesign
 from eqrec.studies import harness

@@ -137,7 +137,7 @@ def test_statespace_checks():
     with pytest.raises(InputError, match="D must be zero"):
         system_from_statespace(control.ss([[0.5]], [[1.0]], [[1.0]], [[1.0]], True), eta_w=0.1, eta_v=0.1)
     from eqrec.design.time_based import design_time_based
-    from eqrec.core.systems import acc_system
+    from eqrec.core.acc import acc_system
 
     with pytest.raises(InputError, match="class-engine design"):
         estimator_iosys(design_time_based(acc_system(), ["101111"], 1.0, engine="tree"))

@@ -54,15 +54,15 @@ __version__ = "0.1.0"
 _PUBLIC: dict[str, str] = {
     # systems
     "AffineSystem": "eqrec.core.systems",
-    "acc_system": "eqrec.core.systems",
-    "load_system": "eqrec.core.systems",
+    "acc_system": "eqrec.core.acc",
+    "load_system": "eqrec.core.system_files",
     "batch_reactor": "eqrec.models",
     # arrival patterns
-    "as_language": "eqrec.core.patterns",
-    "validate_language": "eqrec.core.patterns",
-    "parse_delay_word": "eqrec.core.patterns",
-    "full_delay_language": "eqrec.core.patterns",
-    "PrefixTree": "eqrec.core.patterns",
+    "as_language": "eqrec.core.words",
+    "validate_language": "eqrec.core.words",
+    "parse_delay_word": "eqrec.core.words",
+    "full_delay_language": "eqrec.core.words",
+    "PrefixTree": "eqrec.core.prefix_tree",
     # designs
     "Design": "eqrec.design.result",
     "design_time_based": "eqrec.design.time_based",

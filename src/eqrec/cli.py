@@ -180,8 +180,8 @@ def run_design(args: argparse.Namespace) -> dict:
     """Design, certify and describe one estimator (the ``design`` subcommand)."""
     from eqrec.design.prefix import design_prefix
     from eqrec.design.time_based import design_time_based
-    from eqrec.core.patterns import validate_language
-    from eqrec.core.systems import load_system
+    from eqrec.core.words import validate_language
+    from eqrec.core.system_files import load_system
 
     system, T_file = load_system(args.system)
     mu1 = _parse_mu1(args.mu1, allow_free=args.method == "delay")
@@ -270,7 +270,7 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     from decimal import Decimal
 
     from eqrec.core.classes import ClassSet, full_language_counts
-    from eqrec.core.patterns import as_language
+    from eqrec.core.words import as_language
     from eqrec.design.delay import (JSON_NODE_GAINS_LIMIT, delay_classes, delay_language, design_delay,
                                     design_delay_global, to_json)
 

@@ -21,7 +21,8 @@ import numpy as np
 
 from eqrec.errors import CertificationFailure
 from eqrec.core.gains import GainSchedule
-from eqrec.core.patterns import ArrivalPattern, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.words import as_pattern
 from eqrec.core.robust import worst_case_abs, worst_case_vertex
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.systems import AffineSystem

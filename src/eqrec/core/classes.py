@@ -40,7 +40,7 @@ from math import prod
 
 import numpy as np
 
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.stacking import Stacking
 from eqrec.errors import InputError
 

@@ -288,8 +288,8 @@ class ClassEstimator(_StampedEstimator):
     >>> import numpy as np
     >>> import eqrec
     >>> acc = eqrec.acc_system()
-    >>> design = eqrec.design_prefix(acc, ["101111", "110111", "111011", "111101"], mu1=1.0)
-    >>> estimator = eqrec.ClassEstimator(acc, design.class_gains, np.zeros(3))
+    >>> words = ["101111", "110111", "111011", "111101"]  # the prefix-based paper's L1
+    >>> estimator = eqrec.ClassEstimator(acc, eqrec.design_prefix(acc, words, mu1=1.0).class_gains, np.zeros(3))
     >>> xhat = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives on time
     >>> xhat.shape, estimator.time, estimator.observed_prefix.label
     ((3,), 1, '1')

@@ -29,7 +29,9 @@ import numpy as np
 import scipy.linalg as sla
 
 from eqrec.errors import InputError
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import as_pattern
 
 
 def _solve_unit_lower(Mtx: np.ndarray, rhs: np.ndarray) -> np.ndarray:

@@ -84,8 +84,8 @@ class GuaranteedEstimator:
     >>> import numpy as np
     >>> import eqrec
     >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
-    >>> estimator = design.estimator().reset(np.zeros(3))
-    >>> estimator.time, estimator.bound
+    >>> estimator = design.estimator()
+    >>> estimator.reset(np.zeros(3)).time, estimator.bound  # reset returns the estimator
     (0, 1.0)
     >>> xhat, bound = estimator.step([1.0, 2.0])  # y(0) arrives on time
     >>> estimator.time, bound

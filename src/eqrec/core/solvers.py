@@ -15,6 +15,7 @@ an LP solver.
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -23,6 +24,45 @@ import numpy as np
 import scipy.sparse as sp
 
 from eqrec.core.lp import INF, LinearProgram, LPSolution
+
+
+#: HiGHS model status (``highspy.HighsModelStatus`` number) -> our status, for both HiGHS drivers (highspy and
+#: SciPy's ``linprog``).  The definitive outcomes in our words ("unbounded or infeasible", which HiGHS's presolve
+#: reports for an infeasible design LP, reads as infeasible: the design LPs bound their objective below); every
+#: other status in HiGHS's own words (``Highs.modelStatusToString``; stored sweep results hold "Unknown", "Not Set"
+#: and "Solve error").
+HIGHS_STATUS: dict[int, str] = {
+    0: "Not Set", 1: "Load error", 2: "Model error", 3: "Presolve error", 4: "Solve error", 5: "Postsolve error",
+    6: "Empty", 7: "optimal", 8: "infeasible", 9: "infeasible", 10: "unbounded", 11: "Bound on objective reached",
+    12: "Target for objective reached", 13: "Time limit reached", 14: "Iteration limit reached", 15: "Unknown",
+    16: "Solution limit reached", 17: "Interrupted by user", 18: "Memory limit reached", 19: "Interrupted by HiGHS",
+}
+
+#: SciPy ``linprog`` status -> HiGHS model status, when SciPy's message does not carry HiGHS's own (SciPy's checks
+#: before calling HiGHS): 0 optimal, 2 infeasible, 3 unbounded; 1 (a limit) and 4 (numerical) name no outcome.
+_SCIPY_TO_HIGHS = {0: 7, 2: 8, 3: 10}
+
+
+def highs_status(code: int, fallback: str = "") -> tuple[str, float]:
+    """Our status of a HiGHS model status and the objective value that goes with it (:data:`HIGHS_STATUS`).
+
+    Parameters
+    ----------
+    code : int
+        The ``highspy.HighsModelStatus`` number.
+    fallback : str
+        The status of a number outside the table (default ``"HiGHS model status <code>"``).
+
+    Returns
+    -------
+    status : str
+        ``"optimal"``, ``"infeasible"``, ``"unbounded"`` or HiGHS's words for any other status.
+    objective : float
+        ``+inf`` for an infeasible LP, ``-inf`` for an unbounded one, ``nan`` otherwise (the optimal value is the
+        caller's).
+    """
+    status = HIGHS_STATUS.get(int(code), fallback or f"HiGHS model status {int(code)}")
+    return status, {"infeasible": INF, "unbounded": -INF}.get(status, np.nan)
 
 
 def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
@@ -54,17 +94,13 @@ def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
     ms = h.getModelStatus()
     info = h.getInfo()
     iters = int(info.simplex_iteration_count) + int(max(info.ipm_iteration_count, 0))
-    if ms == highspy.HighsModelStatus.kOptimal:
+    status, objective = highs_status(int(ms), h.modelStatusToString(ms))
+    if status == "optimal":
         hs = h.getSolution()
         x = np.asarray(hs.col_value)
         return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks,
                           row_dual=np.asarray(hs.row_dual) if hs.dual_valid else None)
-    if ms == highspy.HighsModelStatus.kInfeasible:
-        return LPSolution("infeasible", None, INF, "highs", iters, elapsed, lp.blocks)
-    if ms in (highspy.HighsModelStatus.kUnbounded, highspy.HighsModelStatus.kUnboundedOrInfeasible):
-        status = "unbounded" if ms == highspy.HighsModelStatus.kUnbounded else "infeasible"
-        return LPSolution(status, None, -INF, "highs", iters, elapsed, lp.blocks)
-    return LPSolution(h.modelStatusToString(ms), None, np.nan, "highs", iters, elapsed, lp.blocks)
+    return LPSolution(status, None, objective, "highs", iters, elapsed, lp.blocks)
 
 
 def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
@@ -133,17 +169,18 @@ def _solve_scipy(lp: LinearProgram, options: dict) -> LPSolution:
     res = linprog(lp.c, A_ub=A_ub, b_ub=b_ub, A_eq=A[eq] if eq.any() else None,
                   b_eq=lp.row_upper[eq] if eq.any() else None, bounds=bounds, method="highs", options=options)
     elapsed = time.perf_counter() - t0
-    status = {0: "optimal", 2: "infeasible", 3: "unbounded"}.get(res.status, res.message)
-    x = res.x if res.status == 0 else None
-    obj = float(res.fun) if res.status == 0 else np.nan
+    code = re.search(r"HiGHS Status (\d+)", str(res.message))  # SciPy's message names HiGHS's model status
+    status, obj = highs_status(int(code.group(1)) if code else _SCIPY_TO_HIGHS.get(res.status, -1), str(res.message))
+    x = res.x if status == "optimal" else None
     y = None
-    if res.status == 0:  # marginals are d(objective)/d(rhs): y on equality and upper rows, minus on lower rows
+    if status == "optimal":  # marginals are d(objective)/d(rhs): y on equality and upper rows, minus on lower rows
         y = np.zeros(A.shape[0])
         if eq.any():
             y[eq] = res.eqlin.marginals
         m_ub = np.asarray(res.ineqlin.marginals) if A_ub.shape[0] else np.zeros(0)
         y[up] += m_ub[: int(up.sum())]
         y[lo] -= m_ub[int(up.sum()):]
+        obj = float(res.fun)
     return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks, row_dual=y)
 
 

@@ -25,7 +25,8 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg as sla
 
-from eqrec.core.patterns import ArrivalPattern, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.words import as_pattern
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 

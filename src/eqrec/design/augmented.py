@@ -14,7 +14,7 @@ import numpy as np
 
 from eqrec.core.certify import CERT_RTOL, certify_schedule
 from eqrec.core.lp import LPSolution
-from eqrec.core.patterns import as_language, worst_case_pattern
+from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP

@@ -69,7 +69,9 @@ import scipy.linalg as sla
 
 from eqrec.errors import InputError
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import as_pattern
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 

@@ -103,7 +103,7 @@ from eqrec.core.certify import CERT_RTOL
 from eqrec.core.classes import ClassGains, ClassSet, DataClass, class_maps, classes_of_tree
 from eqrec.core.gains import q_to_f, schedule_from_word_gains, GainSchedule
 from eqrec.core.lp import LinearProgram, LPSolution
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem

@@ -73,7 +73,9 @@ import numpy as np
 from eqrec.core.certify import certify_design
 from eqrec.core.classes import ClassSet, classes_of_full_language, classes_of_tree
 from eqrec.core.lp import LPSolution
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_language, full_delay_language, parse_delay_word
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import as_language, full_delay_language, parse_delay_word
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import (MU1_LOWER_RTOL, _check_cost, check_terminal, class_cost,

@@ -42,7 +42,8 @@ import scipy.sparse as sp
 
 from eqrec.core.gains import GainRow, GainSchedule
 from eqrec.core.lp import LPBuilder, LPSolution
-from eqrec.core.patterns import ArrivalPattern, PrefixTree
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking, UncertaintyLayout

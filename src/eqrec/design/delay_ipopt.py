@@ -20,7 +20,7 @@ import scipy.sparse as sp
 
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.lp import LinearProgram, LPSolution
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import ipopt_options, solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import _check_cost

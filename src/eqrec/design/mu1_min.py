@@ -108,7 +108,7 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     classes : ClassSet
         The language's (time, available data) classes:
         :func:`eqrec.core.classes.classes_of_tree` of its
-        :class:`~eqrec.core.patterns.PrefixTree`, or
+        :class:`~eqrec.core.prefix_tree.PrefixTree`, or
         :func:`eqrec.design.delay.delay_classes` for a full delay language.
         (:func:`eqrec.design.delay.min_recovery_level` takes the words.)
     solver : str, optional

@@ -41,7 +41,9 @@ import scipy.sparse as sp
 
 from eqrec.errors import InputError
 from eqrec.core.gains import q_to_f, schedule_from_word_gains
-from eqrec.core.patterns import ArrivalPattern, PrefixTree, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import as_pattern
 from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
 from eqrec.core.solvers import solve_lp
 from eqrec.design.result import Design

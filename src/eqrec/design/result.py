@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING
 
 from eqrec.core.gains import GainSchedule
 from eqrec.core.lp import LPSolution
-from eqrec.core.patterns import ArrivalPattern, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.words import as_pattern
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 

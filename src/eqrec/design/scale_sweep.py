@@ -64,7 +64,8 @@ import subprocess
 import sys
 import time
 
-from eqrec.core.systems import AffineSystem, system_from_mapping
+from eqrec.core.system_files import system_from_mapping
+from eqrec.core.systems import AffineSystem
 
 #: HiGHS options of each method name.
 METHODS: dict[str, dict] = {
@@ -131,7 +132,7 @@ def class_count(T: int, tau: int) -> int:
 
 def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: float, time_limit: float,
                   builder: str, options: dict | None, out: dict) -> dict:
-    from eqrec.core.patterns import PrefixTree
+    from eqrec.core.prefix_tree import PrefixTree
     from eqrec.core.solvers import solve_lp
     from eqrec.design.delay import delay_language
     from eqrec.design.prefix import build_prefix_lp

@@ -25,7 +25,8 @@ import numpy as np
 
 from eqrec.core.certify import certify_schedule
 from eqrec.core.classes import classes_of_tree
-from eqrec.core.patterns import PrefixTree, as_language, extend_word, worst_case_pattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import as_language, extend_word, worst_case_pattern
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP

@@ -11,7 +11,7 @@ single-pattern special case of :func:`eqrec.design.prefix.design_prefix`.
 from __future__ import annotations
 
 from eqrec.core.certify import certify_design
-from eqrec.core.patterns import as_language, worst_case_pattern
+from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.systems import AffineSystem
 from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design

@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eqrec.core.patterns import ArrivalPattern, as_pattern
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.words import as_pattern
 from eqrec.core.robust import worst_case_abs, worst_case_vertex
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.systems import AffineSystem

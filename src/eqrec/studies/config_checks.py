@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from eqrec.core.patterns import parse_delay_word, validate_language
+from eqrec.core.words import parse_delay_word, parse_delays, validate_language
 from eqrec.errors import InputError
 from eqrec.lmv.model import Plant
 
@@ -50,9 +50,7 @@ def check_p3(cfg: dict) -> None:
     if len(f1["true_pattern"]) != br["horizon"]:
         raise InputError(f"has length {len(f1['true_pattern'])}, not the horizon batch_reactor.horizon = "
                          f"{br['horizon']}", field="kalman.true_pattern")
-    if any(int(c) > br["max_delay"] for c in f1["true_pattern"]):
-        raise InputError(f"has a delay above batch_reactor.max_delay = {br['max_delay']}",
-                         field="kalman.true_pattern")
+    parse_delays(f1["true_pattern"], br["max_delay"], field_name="kalman.true_pattern")
     acc = cfg["acc"]
     lengths = {len(w) for w in acc["language"]}
     if len(lengths) != 1:

@@ -21,9 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from eqrec.core.patterns import worst_case_word
+from eqrec.core.words import worst_case_word
 from eqrec.core.simulate import monte_carlo, simulate_run
-from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
+from eqrec.core.acc import ACC_CONSTANTS, acc_system
+from eqrec.core.systems import AffineSystem
 from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
 from eqrec.design.sweeps import mu2_curve, lower_bound_probe, min_feasible_mu1, min_recovery_time

@@ -25,10 +25,12 @@ import numpy as np
 
 from eqrec.core.certify import certify_schedule
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
-from eqrec.core.patterns import PrefixTree, validate_language, worst_case_word
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import validate_language, worst_case_word
 from eqrec.core.simulate import monte_carlo, sample_uncertainty, simulate_run
 from eqrec.core.stacking import UncertaintyLayout
-from eqrec.core.systems import AffineSystem, acc_system
+from eqrec.core.acc import acc_system
+from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented import design_augmented
 from eqrec.design.augmented_lp import OPTIMUM_ATOL, OPTIMUM_RTOL, AugmentedLP, best_guarantee_among_optima
 from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, AugmentedStacking,

@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
-from eqrec.core.patterns import PrefixTree
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import as_pattern
 from eqrec.errors import InputError
 
 #: Heat-map / projection variants: name -> (mode of the augmented model, word reading)
@@ -61,7 +62,7 @@ def retarget(schedule: GainSchedule, designed: str, actual: str) -> GainSchedule
     """
     F, u0 = schedule.word_matrices(designed)
     p = schedule.p
-    q = np.repeat(np.array([int(c) for c in actual]) == 0, p)
+    q = np.repeat(~as_pattern(actual).mask.diagonal(), p)  # the measurements ``actual`` lacks
     F = F.copy()
     F[:, q] = 0.0
     return schedule_from_word_gains(PrefixTree([actual]), {actual: (F, u0)}, schedule.n, p, time_based=True)

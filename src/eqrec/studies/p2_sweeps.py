@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from eqrec.core.systems import acc_system
+from eqrec.core.acc import acc_system
 from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
 from eqrec.studies.harness import Progress, get_logger

@@ -35,11 +35,13 @@ import numpy as np
 import pandas as pd
 
 from eqrec.core.certify import certify_schedule, no_data_growth
-from eqrec.core.patterns import (PrefixTree, event_indices, event_matrix, event_sequence_label,
-                                 full_delay_language, gain_zero_pattern, parse_delay_word)
+from eqrec.core.patterns import event_indices, event_matrix, event_sequence_label, gain_zero_pattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import full_delay_language, parse_delay_word
 from eqrec.core.simulate import sample_uncertainty, simulate_run
 from eqrec.core.stacking import UncertaintyLayout
-from eqrec.core.systems import AffineSystem, acc_system
+from eqrec.core.acc import acc_system
+from eqrec.core.systems import AffineSystem
 from eqrec.design.delay import (FreeMu1Result, cost_weights, delay_language, design_delay, design_delay_global,
                                 level_table, path_levels, word_certificate)
 from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt

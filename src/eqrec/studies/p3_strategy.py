@@ -4,7 +4,7 @@ P3-IMPL is Section III-B3 of the delayed-data paper ("Implementation
 Strategy"), run as long simulations:
 
 * **periodic reuse** (step ``strategy``): the gains of one design are reused
-  every ``T`` steps (:func:`eqrec.core.simulate.long_run_periodic`), a delay
+  every ``T`` steps (:func:`eqrec.core.long_runs.long_run_periodic`), a delay
   word drawn uniformly from the design language for every period, noise and
   ``ξ(0)`` drawn in the box (uniform and at vertices).  Two designs: the
   batch reactor of Section IV-A (full language ``{0..τ̄}^T``, ``T = 5``,
@@ -14,7 +14,7 @@ Strategy"), run as long simulations:
   observed prefix (``μ1`` at period boundaries).  A packet whose delay
   reaches past the period's end is delivered in the next period, where the
   estimator drops it (stamped before the period); the language counts it
-  as missing.  :func:`eqrec.core.simulate.periodic_model_gap` checks that
+  as missing.  :func:`eqrec.core.long_runs.periodic_model_gap` checks that
   every period follows the design model of its word exactly.
 * **switching** (also step ``strategy``): the equalized-performance
   estimator (equalized recovery with period 1: ``‖ξ(t)‖ <= μ1`` implies
@@ -22,7 +22,7 @@ Strategy"), run as long simulations:
   then the recovery estimator for ``T`` steps, designed on the words of
   ``{0..τ̄}^T`` whose first delay is at least 1, then back
   (:class:`eqrec.core.switching.SwitchingEstimator`,
-  :func:`eqrec.core.simulate.long_run_switching`); i.i.d. delays.  On the
+  :func:`eqrec.core.long_runs.long_run_switching`); i.i.d. delays.  On the
   batch reactor a period-1 design is infeasible at ``μ1 = 0.33`` (2 outputs,
   4 states: no one-step contraction of the ∞-norm box): the step records the
   LP's status there, the certified smallest period-1 level
@@ -109,9 +109,10 @@ import numpy as np
 import pandas as pd
 import scipy.linalg as sla
 
-from eqrec.core.patterns import full_delay_language
-from eqrec.core.simulate import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
-from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
+from eqrec.core.words import full_delay_language
+from eqrec.core.long_runs import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
+from eqrec.core.acc import ACC_CONSTANTS, acc_system
+from eqrec.core.systems import AffineSystem
 from eqrec.design.delay import design_delay, design_lp_status, level_table, min_recovery_level, node_level, path_levels
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
