@@ -22,7 +22,7 @@ import pandas as pd
 from eqrec.core.systems import acc_system
 from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
-from eqrec.studies.chunks import check_coverage, chunk_indices, read_csv_chunks
+from eqrec.studies.chunks import check_coverage, chunk_indices
 from eqrec.studies.harness import Progress, get_logger
 from eqrec.studies.outputs import INTERMEDIATE, write_csv
 from eqrec.studies.p2_readings import heatmap_poles, variant_word
@@ -119,7 +119,8 @@ def check_heatmap_coverage(cfg: dict, df: pd.DataFrame) -> None:
 def step_heatmap_merge(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """P2-F3a: the whole grid, after checking that the chunks cover it exactly once."""
     files = list(inputs.chunks)
-    df = read_csv_chunks(files)
+    df = pd.concat([pd.read_csv(p, keep_default_na=False, na_values=["nan", "NaN"]) for p in files],
+                   ignore_index=True)
     check_heatmap_coverage(cfg, df)
     df = df.sort_values(["variant", "theta", "r"])
     write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "r", "theta"])
