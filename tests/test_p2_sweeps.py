@@ -63,3 +63,19 @@ def test_class_counts_add_up_and_reject_unknown_statuses():
     assert c["second_solver_tried"] == 2 and c["second_solver_decided"] == 1 and c["deadbeat"] == 1
     with pytest.raises(ValueError, match="outside"):
         class_counts(g.assign(status=["optimal", "Unknown", "optimal", "optimal", "optimal"]))
+
+
+def test_chunks_partition_the_grid_and_the_merge_checks_coverage():
+    from eqrec.errors import InputError
+    from eqrec.studies.chunks import check_coverage, chunk_indices
+
+    for num, chunks in ((31, 1), (31, 4), (5, 5)):
+        parts = [chunk_indices(num, chunks, k) for k in range(chunks)]
+        assert all(len(p) for p in parts) and np.array_equal(np.concatenate(parts), np.arange(num))
+    with pytest.raises(InputError, match="chunks 0..3"):
+        chunk_indices(31, 4, 4)
+    check_coverage(np.arange(6)[::-1], 6)  # every point once, in any order
+    with pytest.raises(InputError, match="miss 1 and repeat 1 of the 4"):
+        check_coverage(np.array([0, 1, 1, 3]), 4)
+    with pytest.raises(InputError, match="1 rows outside"):
+        check_coverage(np.arange(5), 4)

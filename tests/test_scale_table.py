@@ -14,7 +14,7 @@ import pytest
 
 from eqrec.design.scale_sweep import FIELDS, class_count, measure_size, run_size
 from eqrec.models import batch_reactor
-from eqrec.studies import harness, p3_strategy
+from eqrec.studies import harness, p3_scale
 from eqrec.studies import outputs
 from eqrec.studies import configuration
 
@@ -135,7 +135,7 @@ def test_table_reads_old_tree_rows_and_names_the_slow_sizes(tmp_path):
     assert "peak_mb" not in Path(files[0]).read_text() and "peak_mb" in Path(timings[0]).read_text()
     out = {"csv": str(tmp_path / "t.csv"), "md": str(tmp_path / "t.md"),
            "timings_csv": str(tmp_path / "timings" / "t.csv"), "timings_md": str(tmp_path / "timings" / "t.md")}
-    frame = p3_strategy.step_scale_table({"scale": {"tree_slow_sizes": [[8, 2], [8, 3]]}},
+    frame = p3_scale.step_scale_table({"scale": {"tree_slow_sizes": [[8, 2], [8, 3]]}},
                                          harness.Files(sizes=files, timings=timings), harness.Files(**out),
                                          harness.Wildcards())
     assert frame["engine"].tolist() == ["tree", "classes"] and list(frame.columns) == list(FIELDS)

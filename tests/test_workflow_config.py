@@ -149,7 +149,7 @@ def test_sweep_merge_checks_the_grid(tmp_path):
     for k, f in enumerate(files):
         harness.run_step("p4", "sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
     from eqrec.errors import InputError
-    from eqrec.studies.p4 import merge_chunks
+    from eqrec.studies.chunks import merge_npz as merge_chunks
 
     with pytest.raises(InputError, match="exactly once"):
         merge_chunks(files[:1], 4, tmp_path / "m.npz")

@@ -153,7 +153,8 @@ class RandomDelayLMV(_Base):
     def __init__(self, system: AffineSystem, design: GaussianDesign, horizon: int, max_delay: int,
                  x0_mean: np.ndarray, inputs: np.ndarray | None = None, probabilities=None):
         super().__init__(system, design, inputs)
-        from eqrec.lmv.model import MultNoiseSystem, filter_smoother, lmv_recursion
+        from eqrec.lmv.model import MultNoiseSystem
+        from eqrec.lmv.recursion import filter_smoother, lmv_recursion
 
         if system.is_time_varying:
             raise InputError("the random-delay LMV estimator needs a time-invariant system")

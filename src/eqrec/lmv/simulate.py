@@ -35,8 +35,10 @@ import numpy as np
 from scipy.stats import norm
 
 from eqrec.errors import InputError
-from eqrec.lmv.model import (LMVResult, MultNoiseSystem, Plant, SmootherResult, apply_estimator, filter_smoother, n_step_predictor,
-                  hold_input_system, lmv_recursion, zero_input_system)
+from eqrec.lmv.model import MultNoiseSystem, system_of
+from eqrec.lmv.plant import Plant
+from eqrec.lmv.recursion import (LMVResult, SmootherResult, apply_estimator, filter_smoother, lmv_recursion,
+                                 n_step_predictor)
 
 __all__ = ["fourth_moment_radius", "simulate_plant", "MCComparison", "compare_moments", "bonferroni_z", "run_mc", "MCRun"]
 
@@ -212,14 +214,8 @@ def run_mc(plant: Plant, eta_bar: float, mechanism: str, T: int, runs: int, N_sm
     ``sim`` (from :func:`simulate_plant`) may be passed to evaluate both
     mechanisms on the same realisations.
     """
-    if mechanism == "zero-input":
-        sys = zero_input_system(plant, eta_bar)
-        key = "y_zero"
-    elif mechanism == "hold-input":
-        sys = hold_input_system(plant, eta_bar)
-        key = "y_hold"
-    else:
-        raise InputError(f"unknown mechanism {mechanism!r} (zero-input or hold-input)", None, "mechanism")
+    sys = system_of(plant, mechanism, eta_bar)
+    key = {"zero-input": "y_zero", "hold-input": "y_hold"}[mechanism]
     res = lmv_recursion(sys, T)
     sm = filter_smoother(res, N_smooth)
     if sim is None:

@@ -14,7 +14,7 @@ from typing import Callable
 
 from eqrec.core.words import parse_delay_word, parse_delays, validate_language
 from eqrec.errors import InputError
-from eqrec.lmv.model import Plant
+from eqrec.lmv.plant import plant_of
 
 
 def check_p1(cfg: dict) -> None:
@@ -62,16 +62,6 @@ def check_p3(cfg: dict) -> None:
     for k, poles in enumerate(cfg["augmented"]["poles"]):
         if len(poles) != 4:
             raise InputError("needs 4 poles (the batch reactor has n = 4)", field=f"augmented.poles.{k}")
-
-
-def plant_of(cfg: dict, example: str) -> Plant:
-    """The :class:`~eqrec.lmv.model.Plant` of an example of the P4 configuration."""
-    if example not in cfg["examples"]:
-        raise InputError(f"unknown example {example!r}", None, "examples")
-    d = {k: v for k, v in cfg["examples"][example].items() if k != "mc_mult_dist"}
-    d.setdefault("name", example)
-    return Plant.from_dict(d, f"examples.{example}")
-
 
 
 def check_p4(cfg: dict) -> None:

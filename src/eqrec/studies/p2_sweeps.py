@@ -22,6 +22,7 @@ import pandas as pd
 from eqrec.core.acc import acc_system
 from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
+from eqrec.studies.chunks import check_coverage, chunk_indices
 from eqrec.studies.harness import Progress, get_logger
 from eqrec.studies.outputs import INTERMEDIATE, write_csv
 from eqrec.studies.p2_readings import heatmap_poles, variant_word
@@ -37,10 +38,8 @@ def heatmap_grid(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
 
 def theta_chunk(cfg: dict, chunk: int) -> np.ndarray:
     """Indices of θ handled by job ``chunk`` (``heatmap.chunks`` near-equal parts)."""
-    n_chunks = int(cfg["heatmap"]["chunks"])
-    if not 0 <= chunk < n_chunks:
-        raise InputError(f"chunk {chunk} outside 0..{n_chunks - 1}", field="heatmap.chunks")
-    return np.array_split(np.arange(int(cfg["heatmap"]["n_theta"])), n_chunks)[chunk]
+    h = cfg["heatmap"]
+    return chunk_indices(int(h["n_theta"]), int(h["chunks"]), chunk, field="heatmap.chunks")
 
 
 def realaxis_grid(cfg: dict) -> np.ndarray:
@@ -113,13 +112,8 @@ def check_heatmap_coverage(cfg: dict, df: pd.DataFrame) -> None:
         g = df[df["variant"] == var]
         i = _grid_index(g["r"].to_numpy(float), r_grid, "r")
         j = _grid_index(g["theta"].to_numpy(float), th_grid, "theta")
-        counts = np.zeros((len(th_grid), len(r_grid)), int)
-        np.add.at(counts, (j, i), 1)
-        if not np.all(counts == 1):
-            missing, twice = int((counts == 0).sum()), int((counts > 1).sum())
-            raise InputError(f"variant {var}: the chunks miss {missing} and repeat {twice} of the "
-                             f"{counts.size} grid points (heatmap.chunks = {cfg['heatmap']['chunks']})",
-                             field="heatmap.chunks")
+        check_coverage(j * len(r_grid) + i, len(th_grid) * len(r_grid), field="heatmap.chunks",
+                       what=f"variant {var} (heatmap.chunks = {cfg['heatmap']['chunks']})")
 
 
 def step_heatmap_merge(cfg, inputs, outputs, wildcards) -> pd.DataFrame:

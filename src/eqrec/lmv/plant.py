@@ -1,0 +1,166 @@
+"""The plant of the LMV companion study, eqs. (1)-(2) of the paper, and its loading from a mapping.
+
+:class:`Plant` holds the matrices and variances; :meth:`Plant.from_dict`
+builds it from a configuration mapping (``config/p4.yaml``; :func:`plant_of` picks
+a named example) and checks shapes, finiteness and positive semidefiniteness.  The mathematics on the plant (its
+two compensated systems, the recursion) is in :mod:`eqrec.lmv.model` and
+:mod:`eqrec.lmv.recursion`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from eqrec.errors import InputError
+
+__all__ = ["Plant", "check_psd", "plant_of"]
+
+
+def _mat(value: Any, name: str, shape: tuple[int | None, int | None] | None = None,
+         source: str | None = None) -> np.ndarray:
+    """A finite 2-D float array (scalars -> 1x1, vectors -> columns for gains)."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"not a numeric matrix ({exc})", source, name) from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1, 1)
+    elif arr.ndim == 1:
+        arr = arr.reshape(-1, 1) if name in ("Gamma", "sigma0") else arr.reshape(1, -1)
+    if arr.ndim != 2:
+        raise InputError(f"expected a matrix, got {arr.ndim} dimensions", source, name)
+    if not np.all(np.isfinite(arr)):
+        raise InputError("contains NaN or infinite entries", source, name)
+    if shape is not None:
+        for got, want in zip(arr.shape, shape):
+            if want is not None and got != want:
+                raise InputError(f"shape {arr.shape} does not fit, expected {shape}", source, name)
+    return arr
+
+
+def check_psd(M: np.ndarray, name: str, source: str | None) -> None:
+    """Raise :class:`~eqrec.errors.InputError` unless ``M`` is a symmetric positive semidefinite covariance.
+
+    Parameters
+    ----------
+    M : numpy.ndarray
+        Square matrix.
+    name : str
+        Field named in the error.
+    source : str or None
+        Where ``M`` came from (a file, a system name), named in the error.
+    """
+    if not np.allclose(M, M.T, atol=1e-12 * max(1.0, np.abs(M).max())):
+        raise InputError("covariance matrix is not symmetric", source, name)
+    if np.linalg.eigvalsh(M).min() < -1e-10 * max(1.0, np.abs(M).max()):
+        raise InputError("covariance matrix is not positive semidefinite", source, name)
+
+
+@dataclass(frozen=True)
+class Plant:
+    """The plant of eqs. (1)-(2) of the paper.
+
+    ``x(t+1) = (Phi + xi(t) Phi1) x(t) + Gamma w(t)``,
+    ``y(t) = (H + lambda(t) H1) x(t) + v(t)``, with scalar white ``xi``,
+    ``lambda`` of variances ``Qxi``, ``Qlam``; ``E[w w^T] = Qw``,
+    ``E[v v^T] = Qv``, ``E[w v^T] = S``; ``x(0)`` has mean ``sigma0`` and
+    covariance ``Sigma0``.
+    """
+
+    Phi: np.ndarray
+    Phi1: np.ndarray
+    Gamma: np.ndarray
+    H: np.ndarray
+    H1: np.ndarray
+    Qw: np.ndarray
+    Qv: np.ndarray
+    S: np.ndarray
+    Qxi: float
+    Qlam: float
+    sigma0: np.ndarray
+    Sigma0: np.ndarray
+    name: str = "plant"
+
+    @classmethod
+    def from_dict(cls, d: dict, source: str | None = None) -> "Plant":
+        """Build and check a plant from a config mapping.
+
+        Keys: ``Phi, Phi1, Gamma, H, H1, Qxi, Qlam, sigma0, Sigma0`` and either
+        ``Qw, Qv, S`` or the paper's construction ``v = c w + zeta``
+        (``Qw, c, Qzeta``: ``Qv = c^2 Qw + Qzeta``, ``S = c Qw``; scalar w, v).
+        """
+        try:
+            Phi = _mat(d["Phi"], "Phi", source=source)
+            n = Phi.shape[0]
+            Phi = _mat(d["Phi"], "Phi", (n, n), source)
+            Phi1 = _mat(d["Phi1"], "Phi1", (n, n), source)
+            Gamma = _mat(d["Gamma"], "Gamma", (n, None), source)
+            r = Gamma.shape[1]
+            H = _mat(d["H"], "H", (None, n), source)
+            m = H.shape[0]
+            H1 = _mat(d["H1"], "H1", (m, n), source)
+            Qw = _mat(d["Qw"], "Qw", (r, r), source)
+            if "c" in d:
+                c = float(d["c"])
+                if r != 1 or m != 1:
+                    raise InputError("the v = c w + zeta construction needs scalar w and v", source, "c")
+                Qzeta = _mat(d.get("Qzeta", 1.0), "Qzeta", (1, 1), source)
+                Qv = c * c * Qw + Qzeta
+                S = c * Qw
+            else:
+                Qv = _mat(d["Qv"], "Qv", (m, m), source)
+                S = _mat(d["S"], "S", (r, m), source)
+            sigma0 = _mat(d.get("sigma0", np.zeros(n)), "sigma0", (n, 1), source).ravel()
+            Sigma0 = _mat(d.get("Sigma0", np.eye(n)), "Sigma0", (n, n), source)
+            Qxi, Qlam = float(d["Qxi"]), float(d["Qlam"])
+        except KeyError as exc:
+            raise InputError("missing key", source, str(exc.args[0])) from None
+        for name, val in (("Qxi", Qxi), ("Qlam", Qlam)):
+            if not np.isfinite(val) or val < 0:
+                raise InputError(f"variance must be finite and >= 0, got {val}", source, name)
+        for name, M in (("Qw", Qw), ("Qv", Qv), ("Sigma0", Sigma0)):
+            check_psd(M, name, source)
+        joint = np.block([[Qw, S], [S.T, Qv]])
+        check_psd(joint, "S", source)
+        return cls(Phi, Phi1, Gamma, H, H1, Qw, Qv, S, Qxi, Qlam, sigma0, Sigma0, d.get("name", "plant"))
+
+    def with_(self, **changes: Any) -> "Plant":
+        """Copy with some fields replaced (e.g. ``Qxi``, ``Qlam``)."""
+        fields = {k: getattr(self, k) for k in self.__dataclass_fields__}
+        fields.update(changes)
+        return Plant(**fields)
+
+    @property
+    def n(self) -> int:
+        return self.Phi.shape[0]
+
+    @property
+    def m(self) -> int:
+        return self.H.shape[0]
+
+
+def plant_of(cfg: dict, example: str) -> Plant:
+    """The plant of a named example of a configuration section (``cfg["examples"][example]``, as in
+    ``config/p4.yaml``).
+
+    Parameters
+    ----------
+    cfg : dict
+        A section with an ``examples`` mapping of plant mappings (:meth:`Plant.from_dict`; keys that are not
+        plant fields, such as ``mc_mult_dist``, are ignored).
+    example : str
+        The example's key; also the plant's name unless the mapping gives one.
+
+    Returns
+    -------
+    Plant
+        The checked plant.
+    """
+    if example not in cfg["examples"]:
+        raise InputError(f"unknown example {example!r}", None, "examples")
+    d = {k: v for k, v in cfg["examples"][example].items() if k != "mc_mult_dist"}
+    d.setdefault("name", example)
+    return Plant.from_dict(d, f"examples.{example}")

@@ -1,0 +1,434 @@
+r"""Linear minimum-variance (LMV) estimation for systems with multiplicative noises: the recursion.
+
+It runs on the common description :class:`~eqrec.lmv.model.MultNoiseSystem` (see
+:mod:`eqrec.lmv.model` for the model and the two compensation mechanisms).
+
+The recursion (general form of Theorem 1, eqs. (4)-(9))::
+
+    q(t+1)   = A q A^T + sum_kl W_kl A_k q A_l^T + Qu                     (8)
+    Qe(t)    = C P C^T + sum_kl W_kl C_k q C_l^T + R                       (7)
+    L(t)     = (A P C^T + sum_kl W_kl A_k q C_l^T + S) Qe^{-1}             (6)
+    xh(t+1|t)= A xh(t|t-1) + L(t) (y(t) - C xh(t|t-1))                     (4),(5)
+    P(t+1|t) = A P A^T + sum_kl W_kl A_k q A_l^T + Qu - L Qe L^T           (9)
+
+with ``P = P(t|t-1)``, ``q = q(t) = E[x(t) x(t)^T]`` (raw second moment: the
+multiplicative terms see the whole state, not the error).  The N-step
+predictor (Theorem 2) is ``xh(t+N|t) = A xh(t+N-1|t)``,
+``P(t+N|t) = A P(t+N-1|t) A^T + sum W_kl A_k q(t+N-1) A_l^T + Qu``.  The
+filter and N-step smoother (Theorem 3, eqs. (17)-(20))::
+
+    xh(t|t+j) = xh(t|t+j-1) + K(t,j) e(t+j),   K(t,j) = M(t,j) C^T Qe(t+j)^{-1}
+    M(t,0)    = P(t|t-1),   M(t,j+1) = M(t,j) (A - L(t+j) C)^T
+    P(t|t+j)  = P(t|t+j-1) - K(t,j) Qe(t+j) K(t,j)^T
+
+Findings about the printed formulas (checked by Monte Carlo in the tests and
+in ``results/p4/``):
+
+* eq. (9) as printed carries the factor ``eta_bar (1 - eta_bar) Q_lambda`` in
+  front of ``L H_1 q H_1^T L^T``; the term comes from ``eta(t) lambda(t)``, whose
+  variance is ``E[eta^2] Q_lambda = eta_bar Q_lambda`` (as eq. (7) correctly
+  has).  The printed factor under-states the prediction error variance;
+  :func:`theorem1_as_printed` reproduces the printed recursion so that the
+  discrepancy can be measured.
+* eq. (14) (and (23)) print ``+ eta lambda L H x`` where ``- eta lambda L H_1 x``
+  is meant, and ``+ (eta - eta_bar) L H x`` for ``- (eta - eta_bar) L H x``:
+  sign/index misprints that do not change second moments.
+* eq. (15) prints ``Phi xh(t+N|t-1)``; the predictor is
+  ``xh(t+N|t) = Phi xh(t+N-1|t)`` (index misprint).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eqrec.errors import InputError, NotMeanSquareStable, SolverFailure
+from eqrec.lmv.plant import Plant
+from eqrec.lmv.model import MultNoiseSystem, check_eta, check_ms_stable, second_moment_operator, system_of
+
+__all__ = [
+    "LMVResult", "SmootherResult", "SteadyState", "lmv_recursion", "filter_smoother", "n_step_predictor",
+    "suboptimal_error_cov", "theorem1_as_printed", "steady_state", "steady_variances", "qlam_threshold",
+    "apply_estimator", "lmv_step",
+]
+
+
+# --------------------------------------------------------------------------- one step
+
+def _sym(X: np.ndarray) -> np.ndarray:
+    return 0.5 * (X + np.swapaxes(X, -1, -2))
+
+
+def _propagate(sys: MultNoiseSystem, X: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``A X A^T + sum_kl W_kl A_k q A_l^T + Qu``: eq. (8) with ``X = q``, eq. (16) with ``X = P(t+N-1|t)``,
+    eq. (9) before its gain term (not symmetrised)."""
+    return sys.A @ X @ sys.A.T + sys.mult_A(q) + sys.Qu
+
+
+def lmv_step(sys: MultNoiseSystem, P: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One step of the Riccati-like recursion of Theorem 1 (general form), shared by
+    :func:`lmv_recursion` and :func:`steady_state`.
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system in the common description.
+    P : numpy.ndarray
+        ``P(t|t-1)``, shape ``(n, n)``.
+    q : numpy.ndarray
+        ``q(t) = E[x(t) x(t)^T]``, shape ``(n, n)``.
+
+    Returns
+    -------
+    Qe : numpy.ndarray
+        Innovation covariance ``Qe(t)``, eq. (7), shape ``(m, m)``.
+    L : numpy.ndarray
+        Gain ``L(t)``, eq. (6), shape ``(n, m)``.
+    P_next : numpy.ndarray
+        ``P(t+1|t)``, eq. (9) (with the derived factor ``eta_bar Q_lambda``), shape ``(n, n)``.
+    """
+    Qe = _sym(sys.C @ P @ sys.C.T + sys.mult_C(q) + sys.R)                                     # (7)
+    L = np.linalg.solve(Qe.T, (sys.A @ P @ sys.C.T + sys.mult_AC(q) + sys.S).T).T              # (6)
+    return Qe, L, _sym(_propagate(sys, P, q) - L @ Qe @ L.T)                                    # (9)
+
+
+def _moment_step(sys: MultNoiseSystem, q: np.ndarray) -> np.ndarray:
+    """``q(t+1)`` from ``q(t)``, eq. (8)."""
+    return _sym(_propagate(sys, q, q))
+
+
+def _smoother_step(sys: MultNoiseSystem, M: np.ndarray, Pj: np.ndarray, Qe: np.ndarray,
+                   F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One lag of Theorem 3, eqs. (17)-(20): the gain ``K(t,j)``, ``P(t|t+j)`` from ``P(t|t+j-1)``, and
+    ``M(t,j+1) = M(t,j) F^T`` with ``F = A - L(t+j) C`` and ``Qe = Qe(t+j)``."""
+    K = np.linalg.solve(Qe.T, (M @ sys.C.T).T).T
+    return K, _sym(Pj - K @ Qe @ K.T), M @ F.T
+
+
+# --------------------------------------------------------------------------- recursion
+
+@dataclass
+class LMVResult:
+    """Output of :func:`lmv_recursion` over ``t = 0..T`` (``T+1`` instants).
+
+    ``q[t] = E[x(t) x(t)^T]``; ``P_pred[t] = P(t|t-1)``; ``L[t]``, ``Qe[t]``
+    gain and innovation covariance at time ``t`` (``t = 0..T``);
+    ``q``/``P_pred`` have ``T+2`` entries (the last is ``t = T+1``).
+    """
+
+    sys: MultNoiseSystem
+    q: np.ndarray
+    P_pred: np.ndarray
+    L: np.ndarray
+    Qe: np.ndarray
+
+    @property
+    def T(self) -> int:
+        return self.L.shape[0] - 1
+
+
+def lmv_recursion(sys: MultNoiseSystem, T: int, check_stability: bool = True) -> LMVResult:
+    """One-step LMV predictor, general form of Theorem 1 (eqs. (4)-(9)).
+
+    Parameters
+    ----------
+    sys
+        The system in the common description.
+    T
+        Last measurement time; gains for ``t = 0..T``.
+    check_stability
+        Raise :class:`NotMeanSquareStable` if the system is not mean-square
+        stable (the recursion itself is finite on a finite horizon).
+
+    Initial values ``xh(0|-1) = E[x(0)]``, ``P(0|-1) = Cov x(0)``,
+    ``q(0) = E x(0) E x(0)^T + Cov x(0)`` as in Theorem 1.
+    """
+    if int(T) != T or T < 0:
+        raise InputError(f"horizon must be a non-negative integer, got {T}", None, "T")
+    T = int(T)
+    if check_stability:
+        check_ms_stable(sys)
+    n, m = sys.n, sys.m
+    q = np.empty((T + 2, n, n))
+    P = np.empty((T + 2, n, n))
+    L = np.empty((T + 1, n, m))
+    Qe = np.empty((T + 1, m, m))
+    q[0] = np.outer(sys.x0_mean, sys.x0_mean) + sys.x0_cov
+    P[0] = sys.x0_cov
+    for t in range(T + 1):
+        Qe[t], L[t], P[t + 1] = lmv_step(sys, P[t], q[t])
+        q[t + 1] = _moment_step(sys, q[t])
+    return LMVResult(sys, q, P, L, Qe)
+
+
+@dataclass
+class SmootherResult:
+    """Filter (``j = 0``) and fixed-lag smoothers ``j = 1..N`` (Theorem 3).
+
+    ``K[t, j]`` gain of ``e(t+j)`` in ``xh(t|t+j)``; ``P[t, j] = P(t|t+j)``;
+    entries with ``t + j > T`` are NaN.
+    """
+
+    K: np.ndarray
+    P: np.ndarray
+
+    @property
+    def P_filt(self) -> np.ndarray:
+        return self.P[:, 0]
+
+
+def filter_smoother(res: LMVResult, N: int) -> SmootherResult:
+    """Filter and ``N``-step smoother, Theorem 3, eqs. (17)-(20), general form."""
+    if int(N) != N or N < 0:
+        raise InputError(f"smoothing lag must be a non-negative integer, got {N}", None, "N")
+    sys, T = res.sys, res.T
+    n, m = sys.n, sys.m
+    K = np.full((T + 1, N + 1, n, m), np.nan)
+    P = np.full((T + 1, N + 1, n, n), np.nan)
+    for t in range(T + 1):
+        M = res.P_pred[t].copy()
+        Pj = res.P_pred[t].copy()
+        for j in range(min(N, T - t) + 1):
+            s = t + j
+            K[t, j], Pj, M = _smoother_step(sys, M, Pj, res.Qe[s], sys.A - res.L[s] @ sys.C)
+            P[t, j] = Pj
+    return SmootherResult(K, P)
+
+
+def n_step_predictor(res: LMVResult, N: int) -> np.ndarray:
+    """Covariances ``P(t+N|t)`` for ``t = 0..T`` (Theorem 2, eq. (16), general form).
+
+    Returned array ``Pn[t] = P(t+N|t)``, shape ``(T+1, n, n)``.  ``N = 1`` is
+    the one-step predictor.  Needs ``q`` up to ``t+N-1``, which is extended
+    here beyond the horizon of ``res`` by eq. (8).
+    """
+    if int(N) != N or N < 1:
+        raise InputError(f"prediction horizon must be an integer >= 1, got {N}", None, "N")
+    sys, T = res.sys, res.T
+    q = list(res.q)
+    while len(q) < T + N + 1:
+        q.append(_moment_step(sys, q[-1]))
+    out = np.empty((T + 1, sys.n, sys.n))
+    for t in range(T + 1):
+        Pk = res.P_pred[t + 1]
+        for k in range(2, N + 1):
+            Pk = _sym(_propagate(sys, Pk, q[t + k - 1]))
+        out[t] = Pk
+    return out
+
+
+def suboptimal_error_cov(sys: MultNoiseSystem, L: np.ndarray, q: np.ndarray) -> np.ndarray:
+    r"""True one-step prediction error covariance of ``xh(t+1) = A xh + L(t)(y - C xh)`` for *any* gains.
+
+    Joseph form: with ``xt = x - xh``,
+    ``xt(t+1) = (A - L C) xt + sum_k a_k (A_k - L C_k) x + u - L r``, so::
+
+        P(t+1) = (A - LC) P (A - LC)^T + sum W_kl (A_k - L C_k) q (A_l - L C_l)^T
+                 + Qu - L S^T - S L^T + L R L^T.
+
+    Used to measure what an estimator with the gains of the *printed*
+    Theorem 1 really achieves.  ``q`` must hold ``E[x x^T]`` for ``t = 0..T``.
+    """
+    T = L.shape[0] - 1
+    P = np.empty((T + 2, sys.n, sys.n))
+    P[0] = sys.x0_cov
+    for t in range(T + 1):
+        Lt = L[t]
+        F = sys.A - Lt @ sys.C
+        Bk = sys.Ak - np.einsum("ij,kjh->kih", Lt, sys.Ck)
+        mult = np.einsum("kl,kij,jh,lgh->ig", sys.W, Bk, q[t], Bk)
+        P[t + 1] = _sym(F @ P[t] @ F.T + mult + sys.Qu - Lt @ sys.S.T - sys.S @ Lt.T + Lt @ sys.R @ Lt.T)
+    return P
+
+
+def theorem1_as_printed(plant: Plant, eta_bar: float, T: int) -> dict[str, np.ndarray]:
+    """Theorem 1 exactly as printed, eqs. (6)-(9), including the factor of eq. (9).
+
+    Returns ``{"q", "P", "L", "Qe"}`` (``P[t] = P_z(t|t-1)`` as the paper
+    would report it).  The only difference from the zero-input instance of
+    :func:`lmv_recursion` is the factor ``eta_bar (1 - eta_bar) Q_lambda``
+    (printed) instead of ``eta_bar Q_lambda`` (derived) in eq. (9).
+
+    Written out term by term as printed, not through :func:`lmv_step` and the
+    Joseph form of :func:`suboptimal_error_cov` (which give the same numbers up to
+    rounding): the stored P4 results of the printed theorem come from this
+    arithmetic, to the last bit.
+    """
+    eb = check_eta(eta_bar)
+    Phi, Phi1, G, H, H1 = plant.Phi, plant.Phi1, plant.Gamma, plant.H, plant.H1
+    n, m = plant.n, plant.m
+    q = np.empty((T + 2, n, n))
+    P = np.empty((T + 2, n, n))
+    L = np.empty((T + 1, n, m))
+    Qe = np.empty((T + 1, m, m))
+    q[0] = np.outer(plant.sigma0, plant.sigma0) + plant.Sigma0
+    P[0] = plant.Sigma0
+    GQG = G @ plant.Qw @ G.T
+    for t in range(T + 1):
+        qt, Pt = q[t], P[t]
+        Qe[t] = (eb * (1 - eb) * H @ qt @ H.T + eb * plant.Qv + eb ** 2 * H @ Pt @ H.T
+                 + eb * plant.Qlam * H1 @ qt @ H1.T)                                          # (7)
+        Lt = eb * (Phi @ Pt @ H.T + G @ plant.S) @ np.linalg.inv(Qe[t])                        # (6)
+        q[t + 1] = Phi @ qt @ Phi.T + plant.Qxi * Phi1 @ qt @ Phi1.T + GQG                      # (8)
+        F = Phi - eb * Lt @ H
+        P[t + 1] = (F @ Pt @ F.T + plant.Qxi * Phi1 @ qt @ Phi1.T                               # (9)
+                    + eb * (1 - eb) * Lt @ H @ qt @ H.T @ Lt.T
+                    + eb * (1 - eb) * plant.Qlam * Lt @ H1 @ qt @ H1.T @ Lt.T
+                    + eb * Lt @ plant.Qv @ Lt.T + GQG
+                    - eb * Lt @ plant.S.T @ G.T - eb * G @ plant.S @ Lt.T)
+        L[t] = Lt
+    return {"q": q, "P": P, "L": L, "Qe": Qe}
+
+
+# --------------------------------------------------------------------------- steady state
+
+@dataclass
+class SteadyState:
+    """Limits of the recursion: ``q``, ``P(t+1|t)``, ``P(t|t)``, ``P(t|t+j)`` (``j = 1..N``), gains."""
+
+    q: np.ndarray
+    P_pred: np.ndarray
+    P_filt: np.ndarray
+    P_smooth: np.ndarray
+    L: np.ndarray
+    Qe: np.ndarray
+    iterations: int
+    rho: float
+
+
+def steady_state(sys: MultNoiseSystem, N_smooth: int = 1, tol: float = 1e-12,
+                 max_iter: int = 100_000) -> SteadyState:
+    """Iterate the Riccati-like recursion (8)-(9) to convergence.
+
+    Raises :class:`NotMeanSquareStable` if ``q`` cannot converge and
+    :class:`~eqrec.errors.SolverFailure` if ``P`` has not converged (relative
+    change ``< tol``) within ``max_iter`` iterations.  Filter and smoother
+    limits follow from Theorem 3 with the limiting ``P``, ``L``, ``Qe``.
+    """
+    rho = check_ms_stable(sys)
+    # q converges geometrically; its limit solves a linear (Lyapunov-like) equation.
+    n = sys.n
+    Top = second_moment_operator(sys)
+    q = np.linalg.solve(np.eye(n * n) - Top, sys.Qu.reshape(-1, order="F")).reshape(n, n, order="F")
+    q = _sym(q)
+    P = sys.x0_cov.copy()
+    for it in range(1, max_iter + 1):
+        Pn = lmv_step(sys, P, q)[2]
+        done = np.max(np.abs(Pn - P)) <= tol * max(1.0, np.max(np.abs(Pn)))
+        P = Pn
+        if done:
+            break
+    else:
+        raise SolverFailure(f"{sys.name}: P(t+1|t) did not converge in {max_iter} iterations")
+    Qe, L, _ = lmv_step(sys, P, q)
+    M, Pj, Ps = P.copy(), P.copy(), []
+    F = sys.A - L @ sys.C
+    for _ in range(N_smooth + 1):
+        _, Pj, M = _smoother_step(sys, M, Pj, Qe, F)
+        Ps.append(Pj)
+    return SteadyState(q, P, Ps[0], np.array(Ps[1:]).reshape(N_smooth, n, n), L, Qe, it, rho)
+
+
+def steady_variances(plant: Plant, mechanism: str, eta_bar: float, N: int, tol: float,
+                     max_iter: int) -> dict[str, np.ndarray]:
+    """Steady-state error variances of the plant state under one compensation mechanism (Figs. 5-6).
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eqs. (1)-(2).
+    mechanism : str
+        ``"zero-input"`` or ``"hold-input"`` (:func:`~eqrec.lmv.model.system_of`).
+    eta_bar : float
+        Arrival probability.
+    N : int
+        Smoothing lag (``N >= 1``) of the ``smooth`` entry.
+    tol, max_iter : float, int
+        Convergence of :func:`steady_state`.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``pred``, ``filt``, ``smooth``: the diagonals of the limits of ``P(t+1|t)``, ``P(t|t)`` (Theorem 3,
+        eq. (20) with ``j = 0``) and ``P(t|t+N)`` on the plant's ``n`` components (NaN when the system is not
+        mean-square stable); ``stable``: a boolean 0-d array.
+    """
+    nan = np.full(plant.n, np.nan)
+    try:
+        ss = steady_state(system_of(plant, mechanism, eta_bar), N, tol, max_iter)
+    except NotMeanSquareStable:
+        return {"pred": nan, "filt": nan, "smooth": nan, "stable": np.array(False)}
+    n = plant.n
+    return {"pred": np.diag(ss.P_pred)[:n], "filt": np.diag(ss.P_filt)[:n],
+            "smooth": np.diag(ss.P_smooth[N - 1])[:n], "stable": np.array(True)}
+
+
+def qlam_threshold(plant: Plant, eta_bar: float, N: int, tol: float, max_iter: int) -> dict:
+    """``Q_lambda`` at which the steady filter-variance traces of both mechanisms are equal (at the plant's
+    ``Q_xi``), by Brent's method on ``[0, max(2 Q_lambda, 4)]`` (the crossing in Fig. 6).
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant; its ``Qlam`` is varied, ``Qxi`` kept.
+    eta_bar : float
+        Arrival probability.
+    N : int
+        Smoothing lag passed to :func:`steady_variances`.
+    tol, max_iter : float, int
+        Convergence of :func:`steady_state`.
+
+    Returns
+    -------
+    dict
+        ``Qxi``; the bracket ``lo``, ``hi``; ``root`` (``None`` when one mechanism is lower on the whole
+        bracket); ``below``, the mechanism with the lower trace at ``Q_lambda = lo``, and ``above`` the other
+        (lower beyond the root).
+    """
+    from scipy.optimize import brentq
+
+    def diff(ql: float) -> float:
+        p = plant.with_(Qlam=ql)
+        return float(steady_variances(p, "hold-input", eta_bar, N, tol, max_iter)["filt"].sum()
+                     - steady_variances(p, "zero-input", eta_bar, N, tol, max_iter)["filt"].sum())
+    lo, hi = 0.0, max(2.0 * plant.Qlam, 4.0)
+    dlo, dhi = diff(lo), diff(hi)
+    below = "hold-input" if dlo < 0 else "zero-input"
+    above = "zero-input" if below == "hold-input" else "hold-input"
+    root = None if np.sign(dlo) == np.sign(dhi) else float(brentq(diff, lo, hi, xtol=1e-6))
+    return {"Qxi": plant.Qxi, "lo": lo, "hi": hi, "root": root, "below": below, "above": above}
+
+
+# --------------------------------------------------------------------------- estimator
+
+def apply_estimator(res: LMVResult, y: np.ndarray, sm: SmootherResult | None = None) -> dict[str, np.ndarray]:
+    """Run the estimator on measurements ``y[..., t, :]`` (``t = 0..T``), vectorised over leading axes.
+
+    Returns ``pred[..., t, :] = xh(t|t-1)`` (``t = 0..T+1``), the innovations
+    ``eps[..., t, :]`` and, if ``sm`` is given, ``smooth[..., t, j, :] =
+    xh(t|t+j)`` (NaN where ``t + j > T``; ``j = 0`` is the filter).
+    """
+    sys, T = res.sys, res.T
+    y = np.asarray(y, float)
+    if y.shape[-2:] != (T + 1, sys.m):
+        raise InputError(f"measurements have shape {y.shape}, expected (..., {T + 1}, {sys.m})", None, "y")
+    lead = y.shape[:-2]
+    pred = np.empty(lead + (T + 2, sys.n))
+    eps = np.empty(lead + (T + 1, sys.m))
+    pred[..., 0, :] = sys.x0_mean
+    for t in range(T + 1):
+        eps[..., t, :] = y[..., t, :] - pred[..., t, :] @ sys.C.T
+        pred[..., t + 1, :] = pred[..., t, :] @ sys.A.T + eps[..., t, :] @ res.L[t].T
+    out = {"pred": pred, "eps": eps}
+    if sm is not None:
+        N = sm.K.shape[1] - 1
+        smooth = np.full(lead + (T + 1, N + 1, sys.n), np.nan)
+        acc = pred[..., : T + 1, :].copy()
+        for j in range(N + 1):
+            valid = T + 1 - j
+            acc[..., :valid, :] = acc[..., :valid, :] + np.einsum(
+                "tij,...tj->...ti", sm.K[:valid, j], eps[..., j: j + valid, :])
+            smooth[..., :valid, j, :] = acc[..., :valid, :]
+        out["smooth"] = smooth
+    return out
