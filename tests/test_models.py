@@ -5,20 +5,9 @@ import pytest
 from eqrec.errors import InputError
 from eqrec.models import BATCH_REACTOR_C, batch_reactor, batch_reactor_matrices, discretisation_gaps, zoh
 
-# Printed in Section IV-A of the delayed-data paper (four decimals); published values stay in the tests and
-# config/claims.yaml, never in src/.
-PRINTED_A = [[1.0795, -0.0045, 0.2896, -0.2367],
-             [-0.0272, 0.8101, -0.0032, 0.0323],
-             [0.0447, 0.1886, 0.7317, 0.2354],
-             [0.0010, 0.1888, 0.0545, 0.9115]]
-PRINTED_B = [[0.0006, -0.0239],
-             [0.2567, 0.0002],
-             [0.0837, -0.1346],
-             [0.0837, -0.0046]]
-
-
-def test_zoh_discretisation_reproduces_the_printed_matrices_to_rounding():
-    gaps = discretisation_gaps(PRINTED_A, PRINTED_B)
+def test_zoh_discretisation_reproduces_the_printed_matrices_to_rounding(published):
+    # printed in Section IV-A of the delayed-data paper (four decimals): claims P3-BR:A, P3-BR:B
+    gaps = discretisation_gaps(published("P3-BR:A"), published("P3-BR:B"))
     assert gaps["A"] <= 5e-5 + 1e-12 and gaps["B"] <= 5e-5 + 1e-12  # printed = ZOH rounded to 4 decimals
     assert gaps["A_rel_digit"] <= 1.0 and gaps["B_rel_digit"] <= 1.0
 
@@ -50,4 +39,4 @@ def test_bad_inputs():
     with pytest.raises(InputError, match="sampling time"):
         zoh(np.eye(2), np.ones((2, 1)), -1.0)
     with pytest.raises(InputError, match="shapes"):
-        discretisation_gaps(np.eye(3), PRINTED_B)
+        discretisation_gaps(np.eye(3), np.ones((4, 2)))
