@@ -5,9 +5,9 @@ import pytest
 from eqrec.core.patterns import PrefixTree, full_delay_language, parse_delay_word
 from eqrec.core.simulate import simulate_run
 from eqrec.core.solvers import solve_lp
-from eqrec.design.delay import (cost_weights, delay_language, design_delay, design_delay_global, level_table,
-                                literal_paper_cost, min_recovery_level, paper_cost, path_levels, to_json,
-                                word_certificate)
+from eqrec.design.cost import cost_weights, literal_paper_cost, paper_cost
+from eqrec.design.delay import delay_language, design_delay, design_delay_global, min_recovery_level
+from eqrec.design.report import level_table, path_levels, to_json, word_certificate
 from eqrec.design.delay_ipopt import bilinear_problem, compare_free_routes, design_delay_ipopt
 from eqrec.design.prefix import build_prefix_lp, design_prefix
 from eqrec.errors import InfeasibleDesign, InputError

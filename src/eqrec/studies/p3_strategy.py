@@ -112,7 +112,8 @@ import scipy.linalg as sla
 from eqrec.core.patterns import full_delay_language
 from eqrec.core.simulate import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
 from eqrec.core.systems import ACC_CONSTANTS, AffineSystem, acc_system
-from eqrec.design.delay import design_delay, design_lp_status, level_table, min_recovery_level, node_level, path_levels
+from eqrec.design.delay import design_delay, design_lp_status, min_recovery_level
+from eqrec.design.report import level_table, node_level, path_levels
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
