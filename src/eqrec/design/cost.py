@@ -18,7 +18,7 @@ What exactly is counted
 
   :func:`cost_weights` returns this coefficient of ``μ1`` and the node
   weights; :func:`paper_cost` evaluates ``J`` from node levels (a test checks
-  it against the literal double sum, :func:`literal_paper_cost`), and
+  it against the literal double sum), and
   :func:`class_cost` from class levels (nodes of one class share their level,
   :mod:`eqrec.design.classes`).
 
@@ -64,12 +64,6 @@ def paper_cost(tree: PrefixTree, mu1: float, levels: dict[str, float], cost: str
     if cost == "max":
         return mu1 + max([mu1, *levels.values()])
     return a * mu1 + sum(wi * max(mu1, levels.get(tree.nodes[i].label, mu1)) for i, wi in w.items())
-
-
-def literal_paper_cost(tree: PrefixTree, mu1: float, level_of) -> float:
-    """``μ1 + Σ_{k=0}^{T} Σ_α μ2,k^α`` literally, with ``level_of(α, k)`` the level of sequence ``α`` at time ``k``."""
-    T = tree.depth
-    return mu1 + sum(level_of(pat, k) for pat in tree.patterns for k in range(T + 1))
 
 
 def class_cost(classes: ClassSet, mu1: float, levels: np.ndarray, cost: str = "sum") -> float:
