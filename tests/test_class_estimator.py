@@ -22,8 +22,8 @@ from eqrec.core.long_runs import class_closed_loop_maps, long_run_periodic, long
 from eqrec.core.simulate import monte_carlo, simulate_run
 from eqrec.core.stacking import Stacking, UncertaintyLayout
 from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import (delay_classes, delay_language, design_delay, min_recovery_level, node_level,
-                                path_levels)
+from eqrec.design.delay import delay_classes, delay_language, design_delay, min_recovery_level
+from eqrec.design.report import node_level, path_levels
 from eqrec.design.prefix import design_prefix
 from eqrec.errors import InputError
 from eqrec.models import batch_reactor

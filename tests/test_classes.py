@@ -13,7 +13,9 @@ from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.words import full_delay_language
 from eqrec.core.solvers import SOLVER_NAMES, solve_lp
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import build_class_lp, class_cost, class_design, node_schedule, solve_classes
+from eqrec.design.class_gains import node_schedule
+from eqrec.design.classes import build_class_lp, class_design, solve_classes
+from eqrec.design.cost import class_cost
 from eqrec.design.delay import delay_language, design_delay, design_delay_global
 from eqrec.design.mu1_min import min_recovery_level
 from eqrec.design.prefix import design_prefix

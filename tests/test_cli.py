@@ -388,7 +388,7 @@ def test_help_describes_engines_and_classes(capsys):
 
 def test_help_states_the_node_gains_limit_of_to_json():
     from eqrec.cli import JSON_NODE_GAINS_SEQUENCES
-    from eqrec.design.delay import JSON_NODE_GAINS_LIMIT
+    from eqrec.design.report import JSON_NODE_GAINS_LIMIT
 
     assert JSON_NODE_GAINS_SEQUENCES == JSON_NODE_GAINS_LIMIT
 

@@ -16,7 +16,8 @@ from eqrec.core.estimator import Packet, RecoveryEstimator
 from eqrec.core.switching import SwitchingEstimator
 from eqrec.core.words import full_delay_language, parse_delay_word
 from eqrec.core.long_runs import NEVER, arrival_schedule, long_run_periodic, long_run_switching, periodic_model_gap
-from eqrec.design.delay import design_delay, design_lp_status, path_levels
+from eqrec.design.delay import design_delay, design_lp_status
+from eqrec.design.report import path_levels
 from eqrec.design.scale_sweep import run_size
 from eqrec.errors import InputError
 from eqrec.models import batch_reactor

@@ -123,7 +123,7 @@ def test_kalman_exact_worst_case_attained_and_exceeds_levels(name):
     reactor = batch_reactor()
     mu1, x0 = 0.33, np.ones(4)
     d = design_delay(reactor, full_delay_language(5, 2), mu1)
-    from eqrec.design.delay import path_levels
+    from eqrec.design.report import path_levels
 
     levels = path_levels(d, "21210")
 

@@ -240,7 +240,7 @@ def run_design(args: argparse.Namespace) -> dict:
     if args.method in ("prefix", "time"):
         out["engine"] = design.extra.get("engine", "tree")
         if design.class_gains is not None:
-            from eqrec.design.delay import class_table
+            from eqrec.design.report import class_table
 
             out["classes"] = class_table(design)
     return out
@@ -271,8 +271,8 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
 
     from eqrec.core.classes import ClassSet, full_language_counts
     from eqrec.core.words import as_language
-    from eqrec.design.delay import (JSON_NODE_GAINS_LIMIT, delay_classes, delay_language, design_delay,
-                                    design_delay_global, to_json)
+    from eqrec.design.delay import delay_classes, delay_language, design_delay, design_delay_global
+    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, to_json
 
     if args.words is not None:
         raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",

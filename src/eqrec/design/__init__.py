@@ -5,10 +5,13 @@ registry, reads the gains and certifies them from the gains alone.
     One gain per time step (the prefix-based paper's comparison estimator).
 :mod:`~eqrec.design.prefix`
     The prefix-tree LP of Theorem 3 of the prefix-based paper (engine ``"tree"``).
-:mod:`~eqrec.design.classes`
-    The class engine: one small LP per (time, available data) class, with the separation theorem.
+:mod:`~eqrec.design.classes`, :mod:`~eqrec.design.class_gains`
+    The class engine: one small LP per (time, available data) class, with the separation theorem;
+    what its gains ``K`` give (certificate, node gains).
 :mod:`~eqrec.design.mu1_min`
-    μ1 free: the smallest feasible μ1 in closed form (Charnes–Cooper), certified.
+    μ1 free: the μ1-free theorem, the smallest feasible μ1 in closed form (Charnes–Cooper), certified.
+:mod:`~eqrec.design.cost`
+    The delayed-data paper's cost ``J``, from node levels, class levels or a certificate.
 :mod:`~eqrec.design.delay`
     The delayed-data paper's designs (Theorem 1 / Proposition 1), μ1 fixed or free.
 :mod:`~eqrec.design.delay_ipopt`
@@ -21,6 +24,6 @@ registry, reads the gains and certifies them from the gains alone.
     Observer gains by pole placement.
 :mod:`~eqrec.design.sweeps`, :mod:`~eqrec.design.scale_sweep`
     Sweeps over levels, poles and language sizes.
-:mod:`~eqrec.design.result`
-    :class:`~eqrec.design.result.Design`, what every design returns.
+:mod:`~eqrec.design.result`, :mod:`~eqrec.design.report`
+    :class:`~eqrec.design.result.Design`, what every design returns, and how to read it (tables, JSON).
 """

@@ -58,32 +58,9 @@ recursive estimator follow from the ``K``\ s (:func:`node_schedule`):
 :math:`Q_{d-1} = -K_{(d,S)} + A(d-1)\,K_{(d-1,S')}P`, and then ``(F, u0)`` by
 eqs. (1)-(2) of the prefix-based paper.
 
-Theorem (μ1 free)
------------------
-Each class level is a minimum of functions affine and nondecreasing in
-:math:`\beta`, hence concave and nondecreasing in :math:`\mu_1`; so are
-both costs.  For one terminal (class, row) and a fixed ``k``, write
-:math:`a(k) = \sum_{c \in \xi_0} |\cdot|` and :math:`b(k) = \sum_{c \in w,
-v} \beta_c |\cdot|`: the row meets :math:`\ell \le \mu` iff some ``k`` has
-:math:`b(k) \le \mu(1 - a(k))`, i.e. iff
-:math:`\mu \ge m_r = \min_k b(k) / (1 - a(k))` (``a(k) < 1``).  The
-feasible set of ``μ1`` is therefore :math:`[\mu_{1,\min}, \infty)` with
-:math:`\mu_{1,\min} = \max_{\text{terminal } (c, r)} m_r`, and since the cost
-is nondecreasing on it, **the global optimum over μ1 and the gains is
-μ1 = μ1,min**, without search.  Each :math:`m_r` is a linear-fractional
-program, one LP after the Charnes–Cooper change of variables
-:math:`(y, t) = (k, 1)/(1 - a(k))`:
-
-.. math:: m_r = \min_{y,\ t \ge 0} b(y, t) \quad\text{s.t.}\quad t - a(y, t) \ge 1,
-
-with ``a, b`` evaluated on :math:`tE - y^\top Z` (:func:`min_recovery_level`).
-No ``μ1`` is feasible iff :math:`\min_k a(k) \ge 1` for some terminal row
-(the LP is then infeasible).  What certifies ``μ1,min``: the ratio
-recomputed from the recovered ``k`` (upper end, attained), and a dual point
-:math:`\lambda` (:math:`Z_S\lambda = 0`, :math:`|\lambda_c| \le \beta_c`) at
-:math:`\mu_{lo} = (1 - 10^{-6})\mu_{1,\min}` with
-:math:`E_d[r]\lambda > \mu_{lo}`: by LP duality the row's level exceeds
-:math:`\mu_{lo}` there, so :math:`\mu_{lo}` is infeasible (lower end).
+μ1 free.  Every class level is nondecreasing in ``μ1``, so the global optimum
+over ``μ1`` and the gains is the smallest feasible ``μ1``: the μ1-free theorem
+and its Charnes–Cooper LP are in :mod:`eqrec.design.mu1_min`.
 
 Which designs separate.  Prefix-tree designs only: a **time-based** design
 shares one gain row among all words at a time, and an **augmented** one
@@ -99,20 +76,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from eqrec.core.certify import CERT_RTOL
-from eqrec.core.classes import ClassGains, ClassSet, DataClass, class_maps, classes_of_tree
-from eqrec.core.gains import q_to_f, schedule_from_word_gains, GainSchedule
+from eqrec.core.certify import CERT_RTOL, certify_design
+from eqrec.core.classes import ClassGains, ClassSet, class_maps, classes_of_tree
 from eqrec.core.lp import LinearProgram, LPSolution
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
+from eqrec.design.class_gains import ClassCertificate, box_radius, certify_classes, node_schedule
+from eqrec.design.cost import class_cost
+from eqrec.design.result import Design
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
-
-COSTS = ("sum", "max")
-
-#: Relative distance below ``μ1,min`` at which the dual certificate shows infeasibility.
-MU1_LOWER_RTOL = 1e-6
 
 
 # ---------------------------------------------------------------------------
@@ -133,7 +107,7 @@ class ClassLP:
       :math:`\min_k \sum_c \beta_c|E_d[r,c] - (k^\top Z_S)[c]|`).  It has
       ``|S| p`` rows per block, where the LAD LP has one per uncertain
       coordinate: about twice as fast with HiGHS on the papers' systems.
-    * ``"ratio"``: the Charnes–Cooper LP of :func:`min_recovery_level`; the
+    * ``"ratio"``: the Charnes–Cooper LP of :func:`eqrec.design.mu1_min.build_ratio_lp`; the
       gain row is ``y / t`` with ``y`` in columns ``gain_index[b]`` and ``t``
       in ``t_col[b]``.
     """
@@ -152,101 +126,73 @@ class ClassLP:
         return int(self.block_class.size)
 
 
-def _radius(stacking: Stacking, mu1: float) -> np.ndarray:
-    sys = stacking.system
-    return stacking.layout.radius(sys.eta_w, sys.eta_v, mu1)
+def active_maps(stacking: Stacking, cls) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``E_d`` and ``Z_S`` of a class on the uncertain coordinates either touches, and those coordinates.
+
+    The other coordinates add nothing to any row's worst case.
+    """
+    E, Z = class_maps(stacking, cls)
+    act = np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
+    return E[:, act], Z[:, act], act
 
 
-def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float | None, *, kind: str = "level",
-                   which: list[int] | None = None, stacking: Stacking | None = None) -> ClassLP:
-    r"""Assemble the LPs of the classes ``which`` (default all) and every state row as one block-diagonal LP.
+class ClassBlocks:
+    """The coordinate triplets, costs and bounds of a block-diagonal LP, one block per (class, row), in order."""
 
-    Only the uncertain coordinates ``c`` that ``E_d`` or ``Z_S`` touch enter
-    (the others add nothing to any row).  ``kind="level"`` (``μ1`` given):
-    the dual LAD LP of :class:`ClassLP`.  ``kind="ratio"`` (``μ1`` not used):
-    the Charnes–Cooper LP of the module docstring,
-    :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0`,
-    :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`, cost the noise
-    coordinates' radii times :math:`s^+ + s^-`.
+    def __init__(self):
+        self.tri_r, self.tri_c, self.tri_v, self.cost, self.clo, self.chi, self.rlo, self.rhi = ([] for _ in range(8))
+        self.gain_index, self.bcls, self.brow, self.tcols, self.bstart = [], [], [], [], [0]
+        self.nrow = self.ncol = 0
+
+    def model(self, kind: str, t0: float) -> ClassLP:
+        """The :class:`ClassLP` of the blocks added (``t0``: when the build started)."""
+        cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
+        A = sp.csc_matrix((cat(self.tri_v), (cat(self.tri_r).astype(np.int64), cat(self.tri_c).astype(np.int64))),
+                          shape=(self.nrow, self.ncol))
+        lp = LinearProgram(c=cat(self.cost), A=A, row_lower=cat(self.rlo), row_upper=cat(self.rhi),
+                           col_lower=cat(self.clo), col_upper=cat(self.chi))
+        return ClassLP(lp=lp, kind=kind, block_class=np.asarray(self.bcls, np.int64),
+                       block_row=np.asarray(self.brow, np.int64), gain_index=self.gain_index,
+                       block_cols=np.asarray(self.bstart, np.int64),
+                       t_col=np.asarray(self.tcols, np.int64) if kind == "ratio" else None,
+                       build_time=time.perf_counter() - t0)
+
+
+def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which: list[int] | None = None,
+                   stacking: Stacking | None = None) -> ClassLP:
+    r"""Assemble the level LPs of the classes ``which`` (default all) and every state row as one block-diagonal LP.
+
+    The dual LAD LP of :class:`ClassLP` (``kind="level"``) at ``μ1``, over the
+    uncertain coordinates ``c`` that ``E_d`` or ``Z_S`` touch
+    (:func:`active_maps`): per class, ``n`` blocks sharing ``Z_S`` (rows: data,
+    columns: coordinates), costs ``-E_d[r]`` per row ``r``, ``|λ_c| <= β_c``.
     """
     t0 = time.perf_counter()
     st = stacking or Stacking(system, classes.horizon)
     n = system.n
-    lay = st.layout
-    xi0 = np.zeros(lay.size, bool)
-    xi0[lay.xi0] = True
-    beta = _radius(st, 1.0 if mu1 is None else float(mu1))
-    which = list(range(len(classes))) if which is None else list(which)
-    tri_r, tri_c, tri_v = [], [], []  # coordinate triplets of the block-diagonal matrix
-    cost, clo, chi, rlo, rhi = [], [], [], [], []
-    gain_index, bcls, brow, tcols, bstart = [], [], [], [], [0]
-    nrow = ncol = 0
-    for ci in which:
-        E, Z = class_maps(st, classes.classes[ci])
-        m = Z.shape[0]
-        act = np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
-        C = act.size
-        Za = Z[:, act]
-        zr, zc = np.nonzero(Za)
-        zv = Za[zr, zc]
-        b_act = beta[act]
-        if kind == "level":
-            # n blocks sharing Z_S (rows: data, columns: coordinates), costs -E_d[r] per row r
-            off = np.arange(n)[:, None]
-            tri_r.append((nrow + off * m + zr).ravel())
-            tri_c.append((ncol + off * C + zc).ravel())
-            tri_v.append(np.broadcast_to(zv, (n, zv.size)).ravel())
-            cost.append(-E[:, act].ravel())
-            box = np.broadcast_to(b_act, (n, C)).ravel()
-            clo.append(-box)
-            chi.append(box)
-            rows = nrow + np.arange(n * m).reshape(n, m)
-            gain_index.extend(rows)
-            bstart.extend((ncol + C * np.arange(1, n + 1)).tolist())
-            bcls += [ci] * n
-            brow += list(range(n))
-            nrow += n * m
-            ncol += n * C
-        elif kind == "ratio":
-            x_act = xi0[act]
-            xa = np.flatnonzero(x_act)
-            noise_cost = np.where(x_act, 0.0, b_act)
-            eye = np.arange(C)
-            for r in range(n):
-                e = E[r, act]
-                ez = np.flatnonzero(e)
-                # columns y (m), t, s+ (C), s- (C); rows: C equalities Z^T y - t e + s+ - s- = 0, then the x̃0 row
-                t_c, sp_c, sm_c = ncol + m, ncol + m + 1, ncol + m + 1 + C
-                tri_r += [nrow + zc, nrow + ez, nrow + eye, nrow + eye,
-                          np.full(2 * xa.size + 1, nrow + C)]
-                tri_c += [ncol + zr, np.full(ez.size, t_c), sp_c + eye, sm_c + eye,
-                          np.concatenate([sp_c + xa, sm_c + xa, [t_c]])]
-                tri_v += [zv, -e[ez], np.ones(C), -np.ones(C),
-                          np.concatenate([np.ones(2 * xa.size), [-1.0]])]
-                rlo.append(np.concatenate([np.zeros(C), [-np.inf]]))
-                rhi.append(np.concatenate([np.zeros(C), [-1.0]]))
-                cost.append(np.concatenate([np.zeros(m + 1), noise_cost, noise_cost]))
-                clo.append(np.concatenate([np.full(m, -np.inf), np.zeros(1 + 2 * C)]))
-                chi.append(np.full(m + 1 + 2 * C, np.inf))
-                gain_index.append(ncol + np.arange(m))
-                tcols.append(t_c)
-                ncol += m + 1 + 2 * C
-                nrow += C + 1
-                bstart.append(ncol)
-                bcls.append(ci)
-                brow.append(r)
-        else:
-            raise ValueError(f"unknown class LP kind {kind!r}")
-    cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
-    A = sp.csc_matrix((cat(tri_v), (cat(tri_r).astype(np.int64), cat(tri_c).astype(np.int64))), shape=(nrow, ncol))
-    row_lower = cat(rlo) if kind == "ratio" else np.zeros(nrow)  # the level LP's rows are Z_S λ = 0
-    row_upper = cat(rhi) if kind == "ratio" else np.zeros(nrow)
-    lp = LinearProgram(c=cat(cost), A=A, row_lower=row_lower, row_upper=row_upper, col_lower=cat(clo),
-                       col_upper=cat(chi))
-    return ClassLP(lp=lp, kind=kind, block_class=np.asarray(bcls, np.int64), block_row=np.asarray(brow, np.int64),
-                   gain_index=gain_index, block_cols=np.asarray(bstart, np.int64),
-                   t_col=np.asarray(tcols, np.int64) if kind == "ratio" else None,
-                   build_time=time.perf_counter() - t0)
+    beta = box_radius(st, float(mu1))
+    bl = ClassBlocks()
+    for ci in range(len(classes)) if which is None else which:
+        E, Z, act = active_maps(st, classes.classes[ci])
+        m, C = Z.shape
+        zr, zc = np.nonzero(Z)
+        off = np.arange(n)[:, None]
+        bl.tri_r.append((bl.nrow + off * m + zr).ravel())
+        bl.tri_c.append((bl.ncol + off * C + zc).ravel())
+        bl.tri_v.append(np.broadcast_to(Z[zr, zc], (n, zr.size)).ravel())
+        bl.cost.append(-E.ravel())
+        box = np.broadcast_to(beta[act], (n, C)).ravel()
+        bl.clo.append(-box)
+        bl.chi.append(box)
+        bl.rlo.append(np.zeros(n * m))  # Z_S λ = 0
+        bl.rhi.append(np.zeros(n * m))
+        bl.gain_index.extend(bl.nrow + np.arange(n * m).reshape(n, m))
+        bl.bstart.extend((bl.ncol + C * np.arange(1, n + 1)).tolist())
+        bl.bcls += [ci] * n
+        bl.brow += list(range(n))
+        bl.nrow += n * m
+        bl.ncol += n * C
+    return bl.model("level", t0)
 
 
 def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, solution: LPSolution) -> ClassGains:
@@ -274,116 +220,6 @@ def block_objectives(model: ClassLP, solution: LPSolution) -> np.ndarray:
     sums = np.add.reduceat(cx, model.block_cols[:-1])
     sums[np.diff(model.block_cols) == 0] = 0.0  # a block with no uncertain coordinate
     return -sums if model.kind == "level" else sums
-
-
-# ---------------------------------------------------------------------------
-# Certificate from the gains alone
-# ---------------------------------------------------------------------------
-
-@dataclass
-class ClassCertificate:
-    """Worst case of every state row of every class, recomputed from the ``K``\\ s alone.
-
-    ``bounds[i, r] = Σ_c β_c |(E_d - K Z_S)[r, c]|`` is the exact worst case of
-    :math:`\\xi_r(d)` for the class-form estimator (and for the node gains
-    derived from it) over the box at ``mu1``.
-    """
-
-    mu1: float
-    classes: ClassSet
-    bounds: np.ndarray  # (classes, n)
-
-    @property
-    def levels(self) -> np.ndarray:
-        """Certified level of each class (largest row)."""
-        return self.bounds.max(axis=1) if self.bounds.size else np.zeros(0)
-
-    @property
-    def terminal(self) -> float:
-        """Largest certified level of a terminal class (at most ``μ1`` for a valid design)."""
-        lv = [lv for lv, c in zip(self.levels, self.classes) if c.terminal]
-        return float(max(lv, default=0.0))
-
-    @property
-    def mu2(self) -> float:
-        """Largest certified level of an inner class, at least ``μ1``."""
-        return float(max([self.mu1, *(lv for lv, c in zip(self.levels, self.classes) if c.inner)]))
-
-    def to_json(self) -> dict:
-        return {"mu1": self.mu1, "certified_mu2": self.mu2, "certified_terminal": self.terminal,
-                "levels": {c.label: float(v) for c, v in zip(self.classes, self.levels)}}
-
-
-def certify_classes(system: AffineSystem, gains: ClassGains, mu1: float,
-                    stacking: Stacking | None = None) -> ClassCertificate:
-    """Exact worst case of every class row from the gains ``K`` alone (no LP, no solver)."""
-    classes = gains.classes
-    st = stacking or Stacking(system, classes.horizon)
-    beta = _radius(st, mu1)
-    bounds = np.zeros((len(classes), system.n))
-    for i, (cls, K) in enumerate(zip(classes.classes, gains.K)):
-        E, Z = class_maps(st, cls)
-        bounds[i] = np.abs(E - K @ Z) @ beta
-    return ClassCertificate(mu1=float(mu1), classes=classes, bounds=bounds)
-
-
-# ---------------------------------------------------------------------------
-# Costs
-# ---------------------------------------------------------------------------
-
-def _check_cost(cost: str) -> str:
-    if cost not in COSTS:
-        raise InputError(f"unknown cost {cost!r}; choose one of {list(COSTS)}", field="cost")
-    return cost
-
-
-def class_cost(classes: ClassSet, mu1: float, levels: np.ndarray, cost: str = "sum") -> float:
-    r"""``J`` from class levels: :math:`(1 + 2|\mathcal L^{E'}|)\mu_1 + \sum_{\text{inner}} w \max(\mu_1, \ell)`
-    (``"sum"``, :mod:`eqrec.design.delay`) or :math:`\mu_1 + \max(\mu_1, \max_{\text{inner}}\ell)` (``"max"``)."""
-    _check_cost(cost)
-    inner = [(c.weight, float(lv)) for c, lv in zip(classes.classes, levels) if c.inner]
-    if cost == "max":
-        return mu1 + max([mu1, *(lv for _, lv in inner)])
-    return (1.0 + 2.0 * classes.sequences) * mu1 + sum(float(w) * max(mu1, lv) for w, lv in inner)
-
-
-# ---------------------------------------------------------------------------
-# Node gains from class gains
-# ---------------------------------------------------------------------------
-
-def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | None = None,
-                  time_based: bool = False) -> GainSchedule:
-    r"""Node gains ``(F, u0 = 0)`` per prefix of ``tree`` that realise the class-form errors.
-
-    Along a word, the gain row of time ``d-1`` in the Q-parametrisation is
-    :math:`Q_{d-1} = -K_{(d,S)} + A(d-1) K_{(d-1,S')}` (``S' ⊆ S`` embedded;
-    ``K = 0`` before any data), so that
-    :math:`\sum_{s<d}\Phi(d, s{+}1) Q_s Z_{S_s} = -K_{(d,S)} Z_S`; then
-    ``F`` by eq. (2) of the prefix-based paper.  Tested equal in effect (same
-    estimates) to the class form.
-    """
-    classes = gains.classes
-    tree = tree or classes.tree
-    if tree is None:
-        raise InputError("node gains need the prefix tree of the language (a small language); this class set "
-                         "was built from the window rule")
-    n, p = system.n, system.p
-    st = Stacking(system, tree.depth)
-    word_gains = {}
-    for word in tree.patterns:
-        Tw = word.T
-        Q = np.zeros((Tw * n, Tw * p))
-        prev = np.zeros((n, Tw * p))  # K of the parent class, embedded over all times
-        for node in tree.path(word):
-            t = node.depth - 1
-            K = gains.K[classes.node_class[node.index]]
-            cur = np.zeros((n, Tw * p))
-            for j, tau in enumerate(node.available):
-                cur[:, tau * p:(tau + 1) * p] = K[:, j * p:(j + 1) * p]
-            Q[t * n:(t + 1) * n] = -cur + system.A_at(t) @ prev
-            prev = cur
-        word_gains[word] = q_to_f(Q, np.zeros(Tw * n), st.word_CS(word))
-    return schedule_from_word_gains(tree, word_gains, n, p, time_based=time_based)
 
 
 # ---------------------------------------------------------------------------
@@ -500,8 +336,6 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     CertificationFailure
         The gains do not give the levels.
     """
-    from eqrec.design.result import Design
-
     if levels not in LEVELS:
         raise InputError(f"unknown level structure {levels!r}; choose one of {list(LEVELS)}", field="levels")
     t0 = time.perf_counter()
@@ -529,8 +363,6 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     if cost is not None:
         design.extra.update(cost=cost, J=class_cost(classes, mu1, sol.levels, cost))
     if certify and schedule is not None:
-        from eqrec.core.certify import certify_design
-
         certify_design(design, rtol=CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol)
     design.extra["total_time"] = time.perf_counter() - t0
     return design
@@ -543,8 +375,3 @@ def as_class_set(language) -> ClassSet:
     if isinstance(language, PrefixTree):
         return classes_of_tree(language)
     raise TypeError(f"expected a ClassSet or a PrefixTree, got {type(language).__name__}")
-
-
-__all__ = ["ClassLP", "ClassCertificate", "ClassSolution", "DataClass", "build_class_lp", "read_class_gains",
-           "certify_classes", "class_cost", "node_schedule", "solve_classes", "check_terminal", "as_class_set",
-           "class_design"]

@@ -7,7 +7,7 @@ affine in it, one sparsity pattern); :func:`design_delay_ipopt` solves it with
 IPOPT from an LP solution (a local method: its point is certified as is and,
 polished, at the level its gains reach); :func:`compare_free_routes` judges it
 against the global optimum of :func:`eqrec.design.delay.design_delay_global`
-(the μ1-free theorem of :mod:`eqrec.design.classes`).  Kept for the
+(the μ1-free theorem of :mod:`eqrec.design.mu1_min`).  Kept for the
 comparison row of the batch-reactor example (P3-BR).
 """
 
@@ -23,8 +23,8 @@ from eqrec.core.lp import LinearProgram, LPSolution
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import ipopt_options, solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import _check_cost
-from eqrec.design.delay import FreeMu1Result, _design_from_solution, _tree, cost_weights, design_delay
+from eqrec.design.cost import check_cost, cost_weights
+from eqrec.design.delay import FreeMu1Result, _design_from_solution, _tree, design_delay
 from eqrec.design.prefix import build_prefix_lp
 from eqrec.errors import InfeasibleDesign, SolverFailure
 
@@ -109,7 +109,7 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
     """
     import casadi as ca
 
-    _check_cost(cost)
+    check_cost(cost)
     t_start = time.perf_counter()
     tree = _tree(patterns)
     t_build = time.perf_counter()

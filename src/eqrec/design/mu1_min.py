@@ -1,12 +1,36 @@
-"""μ1 free: the smallest feasible recovery level μ1,min in closed form, certified (the μ1-free theorem).
+r"""μ1 free: the smallest feasible recovery level μ1,min in closed form, certified.
 
-The μ1-free theorem of :mod:`eqrec.design.classes` says that the cost of a
-prefix-tree design increases with μ1, so the global optimum with μ1 free is
-at the smallest μ1 for which every terminal class can recover.  Each terminal
-class and state row gives that level as a linear-fractional program, turned
-into one LP by the Charnes–Cooper transformation; :func:`min_recovery_level`
-solves them, recomputes the ratio from the gains (the upper end) and proves
-``(1 - rtol) μ1,min`` infeasible by a dual point (the lower end).
+The class engine (:mod:`eqrec.design.classes`) separates a prefix-tree design
+at fixed ``μ1`` into one LP per (time, available data) class and state row,
+whose optimum is the class level :math:`\ell(d, S)`, with ``δ`` in the box
+of radii :math:`\beta = (\eta_w, \eta_v, \mu_1)`.
+
+Theorem (μ1 free)
+-----------------
+Each class level is a minimum of functions affine and nondecreasing in
+:math:`\beta`, hence concave and nondecreasing in :math:`\mu_1`; so are
+both costs.  For one terminal (class, row) and a fixed ``k``, write
+:math:`a(k) = \sum_{c \in \xi_0} |\cdot|` and :math:`b(k) = \sum_{c \in w,
+v} \beta_c |\cdot|`: the row meets :math:`\ell \le \mu` iff some ``k`` has
+:math:`b(k) \le \mu(1 - a(k))`, i.e. iff
+:math:`\mu \ge m_r = \min_k b(k) / (1 - a(k))` (``a(k) < 1``).  The
+feasible set of ``μ1`` is therefore :math:`[\mu_{1,\min}, \infty)` with
+:math:`\mu_{1,\min} = \max_{\text{terminal } (c, r)} m_r`, and since the cost
+is nondecreasing on it, **the global optimum over μ1 and the gains is
+μ1 = μ1,min**, without search.  Each :math:`m_r` is a linear-fractional
+program, one LP after the Charnes–Cooper change of variables
+:math:`(y, t) = (k, 1)/(1 - a(k))`:
+
+.. math:: m_r = \min_{y,\ t \ge 0} b(y, t) \quad\text{s.t.}\quad t - a(y, t) \ge 1,
+
+with ``a, b`` evaluated on :math:`tE - y^\top Z` (:func:`build_ratio_lp`, :func:`min_recovery_level`).
+No ``μ1`` is feasible iff :math:`\min_k a(k) \ge 1` for some terminal row
+(the LP is then infeasible).  What certifies ``μ1,min``: the ratio
+recomputed from the recovered ``k`` (upper end, attained), and a dual point
+:math:`\lambda` (:math:`Z_S\lambda = 0`, :math:`|\lambda_c| \le \beta_c`) at
+:math:`\mu_{lo} = (1 - 10^{-6})\mu_{1,\min}` with
+:math:`E_d[r]\lambda > \mu_{lo}`: by LP duality the row's level exceeds
+:math:`\mu_{lo}` there, so :math:`\mu_{lo}` is infeasible (lower end).
 """
 
 from __future__ import annotations
@@ -22,9 +46,13 @@ from eqrec.core.lp import LinearProgram
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import (MU1_LOWER_RTOL, _default_options, _radius, block_objectives, build_class_lp,
-                                  class_cost, read_class_gains, solve_classes)
+from eqrec.design.class_gains import box_radius
+from eqrec.design.classes import (ClassBlocks, ClassLP, _default_options, active_maps, block_objectives,
+                                  read_class_gains)
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
+
+#: Relative distance below ``μ1,min`` at which the dual certificate shows infeasibility.
+MU1_LOWER_RTOL = 1e-6
 
 
 @dataclass
@@ -55,9 +83,54 @@ class MinRecoveryLevel:
     lps: int = 0
     time: float = 0.0
 
-    @property
-    def value(self) -> float:
-        return self.upper
+
+def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], stacking: Stacking) -> ClassLP:
+    r"""The Charnes–Cooper LPs of the classes ``which`` and every state row, as one block-diagonal LP.
+
+    Per (class, row ``r``), over the coordinates of :func:`eqrec.design.classes.active_maps`:
+    columns ``y`` (``|S| p``), ``t``, ``s^+``, ``s^-``; rows
+    :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0` and
+    :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`; cost the noise
+    coordinates' radii times :math:`s^+ + s^-` (module docstring).  The
+    optimum of a block is its ratio ``m_r``, its gain row ``y / t``.
+    """
+    t0 = time.perf_counter()
+    xi0 = np.zeros(stacking.layout.size, bool)
+    xi0[stacking.layout.xi0] = True
+    beta = box_radius(stacking, 1.0)
+    bl = ClassBlocks()
+    for ci in which:
+        E, Z, act = active_maps(stacking, classes.classes[ci])
+        m, C = Z.shape
+        zr, zc = np.nonzero(Z)
+        zv = Z[zr, zc]
+        x_act = xi0[act]
+        xa = np.flatnonzero(x_act)
+        noise_cost = np.where(x_act, 0.0, beta[act])
+        eye = np.arange(C)
+        for r in range(system.n):
+            e = E[r]
+            ez = np.flatnonzero(e)
+            # columns y (m), t, s+ (C), s- (C); rows: C equalities Z^T y - t e + s+ - s- = 0, then the x̃0 row
+            t_c, sp_c, sm_c = bl.ncol + m, bl.ncol + m + 1, bl.ncol + m + 1 + C
+            nrow = bl.nrow
+            bl.tri_r += [nrow + zc, nrow + ez, nrow + eye, nrow + eye, np.full(2 * xa.size + 1, nrow + C)]
+            bl.tri_c += [bl.ncol + zr, np.full(ez.size, t_c), sp_c + eye, sm_c + eye,
+                         np.concatenate([sp_c + xa, sm_c + xa, [t_c]])]
+            bl.tri_v += [zv, -e[ez], np.ones(C), -np.ones(C), np.concatenate([np.ones(2 * xa.size), [-1.0]])]
+            bl.rlo.append(np.concatenate([np.zeros(C), [-np.inf]]))
+            bl.rhi.append(np.concatenate([np.zeros(C), [-1.0]]))
+            bl.cost.append(np.concatenate([np.zeros(m + 1), noise_cost, noise_cost]))
+            bl.clo.append(np.concatenate([np.full(m, -np.inf), np.zeros(1 + 2 * C)]))
+            bl.chi.append(np.full(m + 1 + 2 * C, np.inf))
+            bl.gain_index.append(bl.ncol + np.arange(m))
+            bl.tcols.append(t_c)
+            bl.ncol += m + 1 + 2 * C
+            bl.nrow += C + 1
+            bl.bstart.append(bl.ncol)
+            bl.bcls.append(ci)
+            bl.brow.append(r)
+    return bl.model("ratio", t0)
 
 
 def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, solver: str) -> float:
@@ -121,8 +194,7 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     Returns
     -------
     MinRecoveryLevel
-        ``upper`` (``μ1,min`` attained by the recovered gains, also
-        ``value``), ``lower`` (proven infeasible, ``nan`` if not certified),
+        ``upper`` (``μ1,min`` attained by the recovered gains), ``lower`` (proven infeasible, ``nan`` if not certified),
         the binding terminal class and row, and the class gains.
 
     Raises
@@ -147,12 +219,12 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     t_start = time.perf_counter()
     st = Stacking(system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
-    model = build_class_lp(system, classes, None, kind="ratio", which=term, stacking=st)
+    model = build_ratio_lp(system, classes, term, st)
     sol = solve_lp(model.lp, solver, _default_options(solver))
     lps = 1
     if sol.status == "infeasible":
         for i in term:  # name a terminal class that no gain contracts (its LP holds all its rows)
-            one = build_class_lp(system, classes, None, kind="ratio", which=[i], stacking=st)
+            one = build_ratio_lp(system, classes, [i], st)
             lps += 1
             if solve_lp(one.lp, solver, _default_options(solver)).status == "infeasible":
                 cls = classes.classes[i]
@@ -166,7 +238,7 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     # recompute each block's ratio from its k alone
     xi0 = np.zeros(st.layout.size, bool)
     xi0[st.layout.xi0] = True
-    noise_beta = np.where(xi0, 0.0, _radius(st, 1.0))
+    noise_beta = np.where(xi0, 0.0, box_radius(st, 1.0))
     recomputed = np.zeros(model.blocks)
     for b in range(model.blocks):
         i, r = model.block_class[b], model.block_row[b]
@@ -178,7 +250,7 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
         raise SolverFailure("the ratio LP returned gains that do not contract the initial error")
     bmax = int(np.argmax(recomputed))
     upper = float(recomputed[bmax])
-    scale = max(1.0, float(np.max(np.abs(_radius(st, 1.0)))))
+    scale = max(1.0, float(np.max(np.abs(box_radius(st, 1.0)))))
     if upper <= 1e-12 * scale:
         raise InputError("the smallest recovery level is 0 (no noise reaches the end of the horizon); "
                          "fix mu1 instead", field="mu1")
@@ -186,7 +258,7 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     cls = classes.classes[i]
     lower = upper * (1.0 - lower_rtol)
     E, Z = class_maps(st, cls)
-    dual = _dual_lower_certificate(E[r], Z, _radius(st, lower), solver)
+    dual = _dual_lower_certificate(E[r], Z, box_radius(st, lower), solver)
     lps += 1
     margin = dual - lower
     if not (margin > 0):
@@ -194,13 +266,3 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     binding = {"class": cls.label, "time": cls.depth, "data": list(cls.available), "row": r}
     return MinRecoveryLevel(upper=upper, lower=float(lower), lower_margin=float(margin), binding=binding,
                             ratios=ratios, gains=gains, lps=lps, time=time.perf_counter() - t_start)
-
-
-def cost_along_mu1(system: AffineSystem, classes: ClassSet, grid, cost: str = "sum",
-                   solver: str = "highs") -> np.ndarray:
-    """``J(μ1)`` on a grid of feasible levels (the monotonicity the μ1-free theorem rests on, for tests and figures)."""
-    out = []
-    for mu in grid:
-        s = solve_classes(system, classes, float(mu), solver=solver)
-        out.append(class_cost(classes, float(mu), s.levels, cost))
-    return np.asarray(out)

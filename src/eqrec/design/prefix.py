@@ -39,17 +39,20 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from eqrec.errors import InputError
-from eqrec.core.gains import q_to_f, schedule_from_word_gains
+from eqrec.core.certify import certify_design
+from eqrec.core.classes import classes_of_tree
+from eqrec.core.gains import GainSchedule, q_to_f, schedule_from_word_gains
+from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.words import as_pattern
-from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
-from eqrec.core.solvers import solve_lp
-from eqrec.design.result import Design
 from eqrec.core.robust import RobustRowsIndex, UncertainAffineRows, add_robust_rows
+from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
+from eqrec.design.classes import class_design
+from eqrec.design.result import Design
+from eqrec.errors import InputError
 
 
 @dataclass
@@ -68,6 +71,72 @@ class PrefixLP:
     level_cols: dict[int, int] = field(default_factory=dict)  # node index -> its own level μ2 (per-node levels)
     robust_index: RobustRowsIndex | None = None
     mu1_col: int | None = None  # the recovery level as a variable (mu1_range)
+    levels: str = "common"  # the level structure (build_prefix_lp)
+
+
+#: The class engine (:mod:`eqrec.design.classes`) or this module's tree LP.
+ENGINES = ("classes", "tree")
+
+
+def check_engine(engine: str) -> str:
+    """``engine`` if it is one of :data:`ENGINES`, else :class:`~eqrec.errors.InputError`."""
+    if engine not in ENGINES:
+        raise InputError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}", field="engine")
+    return engine
+
+
+class NodeRows:
+    r"""The uncertain affine rows of the node-per-prefix LPs, assembled node by node.
+
+    Each node adds ``n`` rows :math:`\xi(t) = (G_0 + G_x x)\,\delta + c_x x`
+    (:class:`eqrec.core.robust.UncertainAffineRows`): ``G_0`` the open-loop
+    map of its depth, ``G_x`` the blocks of its ancestors' gain columns, ``c_x``
+    their offsets.  Only the structural entries of ``G`` are kept (those that a
+    constant or a column touches).
+    """
+
+    def __init__(self, coords: int):
+        self.D = coords
+        self.rows = self.entries = 0
+        self.er, self.ec, self.G0, self.gr, self.gc, self.gv = [], [], [], [], [], []
+        self.cr, self.cc, self.cv = [], [], []
+
+    def add_uncertain(self, const: np.ndarray, blocks: list, n: int) -> int:
+        """Add ``n`` rows of ``G`` (``const`` = vec ``G_0``, ``blocks`` = (columns, vec coefficients)); their first row."""
+        D = self.D
+        K = np.hstack([blk for _, blk in blocks]) if blocks else np.zeros((n * D, 0))
+        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
+        idx = np.flatnonzero((const != 0) | np.any(K != 0, axis=1))
+        row0 = self.rows
+        self.er.append(row0 + idx // D)
+        self.ec.append(idx % D)
+        self.G0.append(const[idx])
+        Ki = K[idx]
+        kr, kc = np.nonzero(Ki)  # row-major, the order of a COO conversion
+        self.gr.append(kr + self.entries)
+        self.gc.append(cols[kc])
+        self.gv.append(Ki[kr, kc])
+        self.entries += idx.size
+        self.rows += n
+        return row0
+
+    def add_certain(self, row0: int, P: np.ndarray, cols: np.ndarray) -> None:
+        """Add ``P`` times the columns ``cols`` to the certain part of the rows from ``row0``."""
+        rr, cc = np.nonzero(P)
+        self.cr.append(row0 + rr)
+        self.cc.append(cols[cc])
+        self.cv.append(P[rr, cc])
+
+    def build(self, nx: int) -> UncertainAffineRows:
+        """The rows over ``nx`` decision variables."""
+        cat = np.concatenate
+        return UncertainAffineRows(
+            entry_row=cat(self.er), entry_coord=cat(self.ec), G0=cat(self.G0),
+            Gx=sp.csr_matrix((cat(self.gv), (cat(self.gr), cat(self.gc))), shape=(self.entries, nx)),
+            c0=np.zeros(self.rows),
+            cx=sp.csr_matrix((cat(self.cv or [np.zeros(0)]), (cat(self.cr or [np.zeros(0, int)]),
+                                                              cat(self.cc or [np.zeros(0, int)]))),
+                             shape=(self.rows, nx)))
 
 
 def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = None,
@@ -115,7 +184,7 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
         raise InputError(f"words of length {tree.depth} exceed the horizon T = {T}")
     mu1 = float(mu1)
     if not np.isfinite(mu1) or mu1 <= 0:
-        raise InputError(f"the recovery level M1 must be positive, got {mu1}", field="mu1")
+        raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
     st = Stacking(system, T)
     n, p = system.n, system.p
     lay = st.layout
@@ -145,8 +214,8 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
         r_cols[node.index] = b.add_variables(n, lower=-bound, upper=bound, name=f"r[{node.label}]")
 
     # Robust rows of ξ(t) for every node of depth t (the error after that prefix).
-    entry_row, entry_coord, G0, gx_r, gx_c, gx_v = [], [], [], [], [], []
-    c_r, c_c, c_v = [], [], []
+    D = lay.size
+    rows = NodeRows(D)
     level_const, level_coef, row_level_col = [], [], []
     node_level: dict[int, int] = {}
     if levels != "common":
@@ -161,9 +230,6 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
             else:  # max: the common mu2 bounds every node level
                 b.add_rows(np.array([0, 0]), np.array([col, mu2]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
                            count=1)
-    row0 = 0
-    ent0 = 0
-    D = lay.size
     for node in tree:
         t = node.depth
         path = tree.path(node.prefix)  # ancestors at depths 1..t (times 0..t-1)
@@ -176,58 +242,28 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
                 P = phi[t][s + 1]
                 blocks.append((q_cols[anc.index],
                                (P[:, None, :, None] * Ys.T[None, :, None, :]).reshape(n * D, n * Ys.shape[0])))
-        const = Ol[t].reshape(-1)
-        K = np.hstack([blk for _, blk in blocks]) if blocks else np.zeros((n * D, 0))
-        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
-        structural = (const != 0) | np.any(K != 0, axis=1)
-        idx = np.flatnonzero(structural)
-        entry_row.append(row0 + idx // D)
-        entry_coord.append(idx % D)
-        G0.append(const[idx])
-        Ki = K[idx]
-        kr, kc = np.nonzero(Ki)  # row-major, the order of a COO conversion
-        gx_r.append(kr + ent0)
-        gx_c.append(cols[kc])
-        gx_v.append(Ki[kr, kc])
-        ent0 += idx.size
+        row0 = rows.add_uncertain(Ol[t].reshape(-1), blocks, n)
         # certain part c_t = Σ_s Φ(t, s+1) r(s) (identically zero when r is fixed to zero)
         for s, anc in enumerate(path if not zero_offset else []):
-            P = phi[t][s + 1]
-            rr, cc = np.nonzero(P)
-            c_r.append(row0 + rr)
-            c_c.append(r_cols[anc.index][cc])
-            c_v.append(P[rr, cc])
-        if node.terminal and mu1_col is None:
-            level_const.append(np.full(n, mu1))
-            level_coef.append(np.zeros(n))
-        else:
-            level_const.append(np.zeros(n))
-            level_coef.append(np.ones(n))
+            rows.add_certain(row0, phi[t][s + 1], r_cols[anc.index])
+        fixed = node.terminal and mu1_col is None  # a terminal row bounded by the constant mu1
+        level_const.append(np.full(n, mu1 if fixed else 0.0))
+        level_coef.append(np.full(n, 0.0 if fixed else 1.0))
         if node.terminal and mu1_col is not None:
             row_level_col.append(np.full(n, mu1_col))
         else:
             row_level_col.append(np.full(n, mu2 if levels == "common" else node_level.get(node.index, -1)))
-        row0 += n
-    nx = b.num_variables
-    rows = UncertainAffineRows(
-        entry_row=np.concatenate(entry_row), entry_coord=np.concatenate(entry_coord), G0=np.concatenate(G0),
-        Gx=sp.csr_matrix((np.concatenate(gx_v), (np.concatenate(gx_r), np.concatenate(gx_c))), shape=(ent0, nx)),
-        c0=np.zeros(row0),
-        cx=sp.csr_matrix((np.concatenate(c_v or [np.zeros(0)]),
-                          (np.concatenate(c_r or [np.zeros(0, int)]), np.concatenate(c_c or [np.zeros(0, int)]))),
-                         shape=(row0, nx)),
-    )
     if mu1_col is not None:  # every level is at least mu1
         for col in [mu2, *node_level.values()]:
             b.add_rows(np.array([0, 0]), np.array([mu1_col, col]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
                        count=1)
     radius = lay.radius(system.eta_w, system.eta_v, mu1)
-    robust_index = add_robust_rows(b, rows, radius, level_const=np.concatenate(level_const),
+    robust_index = add_robust_rows(b, rows.build(b.num_variables), radius, level_const=np.concatenate(level_const),
                                    level_cols=np.concatenate(row_level_col), level_coef=np.concatenate(level_coef),
                                    form=form)
     lp = b.build()
     return PrefixLP(lp=lp, stacking=st, tree=tree, mu1=mu1, mu2_col=mu2, q_cols=q_cols, r_cols=r_cols,
-                    level_cols=node_level, robust_index=robust_index, mu1_col=mu1_col,
+                    level_cols=node_level, robust_index=robust_index, mu1_col=mu1_col, levels=levels,
                     measured=measured, build_time=time.perf_counter() - t_start)
 
 
@@ -248,15 +284,33 @@ def word_Q_r(model: PrefixLP, x: np.ndarray, word: "ArrivalPattern | str") -> tu
     return Q, r
 
 
-def read_schedule(model: PrefixLP, solution: LPSolution, *, time_based: bool = False) -> GainSchedule:
-    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution (eqs. (1), (2))."""
+def read_schedule(model: PrefixLP, solution, *, time_based: bool = False) -> GainSchedule:
+    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution or its point (eqs. (1), (2))."""
     st = model.stacking
     sys = st.system
+    x = getattr(solution, "x", solution)
     word_gains = {}
     for word in model.tree.patterns:
-        Q, r = word_Q_r(model, solution.x, word)
+        Q, r = word_Q_r(model, x, word)
         word_gains[word] = q_to_f(Q, r, st.word_CS(word))
     return schedule_from_word_gains(model.tree, word_gains, sys.n, sys.p, time_based=time_based)
+
+
+def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: LPSolution, *, mu1: float,
+                method: str, floor: bool = False, build_time: float | None = None) -> Design:
+    """The :class:`Design` of a tree-LP point ``x``: node gains, node levels and the largest level ``mu2``.
+
+    ``floor``: levels at least ``mu1`` (the delayed-data paper's ``μ2 >= μ1``,
+    exact where the LP's bound is met only to the solver's tolerance).
+    """
+    lv = (lambda v: float(max(v, mu1))) if floor else float
+    levels = {model.tree.nodes[i].label: lv(x[c]) for i, c in model.level_cols.items()}
+    mu2 = max(levels.values(), default=mu1) if model.levels == "sum" else lv(x[model.mu2_col])
+    design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, mu1=float(mu1),
+                    mu2=mu2, schedule=read_schedule(model, x, time_based=(method == "time")), solution=solution,
+                    build_time=model.build_time if build_time is None else build_time, levels=levels)
+    design.extra["engine"] = "tree"
+    return design
 
 
 def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "highs", T: int | None = None,
@@ -355,10 +409,7 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     >>> design.certificate.terminal <= 1.0 + 1e-6
     True
     """
-    if engine == "classes":
-        from eqrec.core.classes import classes_of_tree
-        from eqrec.design.classes import class_design
-
+    if check_engine(engine) == "classes":
         tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
         if T is not None and T != tree.depth:
             raise InputError(f"the class engine designs on the words' own horizon {tree.depth}, got T = {T}",
@@ -368,18 +419,9 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
                              field="engine")
         return class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
                             certify=certify, node_gains=node_gains, time_based=(method == "time"))
-    if engine != "tree":
-        raise InputError(f"unknown engine {engine!r}; choose 'classes' or 'tree'", field="engine")
     model = build_prefix_lp(system, words, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
-    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (M1 = {mu1:g})")
-    schedule = read_schedule(model, sol, time_based=(method == "time"))
-    node_levels = {model.tree.nodes[i].label: float(sol.x[c]) for i, c in model.level_cols.items()}
-    mu2 = max(node_levels.values(), default=model.mu1) if levels == "sum" else float(sol.x[model.mu2_col])
-    design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, mu1=model.mu1,
-                    mu2=mu2, schedule=schedule, solution=sol, build_time=model.build_time, levels=node_levels)
-    design.extra["engine"] = "tree"
+    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
+    design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
     if certify:
-        from eqrec.core.certify import certify_design
-
         certify_design(design)
     return design

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING
-
 
 from eqrec.core.gains import GainSchedule
 from eqrec.core.lp import LPSolution
@@ -68,7 +68,7 @@ class Design:
         language too large to enumerate.
     class_certificate : ClassCertificate or None, optional
         Class engine: the worst case of every class recomputed from the gains ``K``
-        (:class:`eqrec.design.classes.ClassCertificate`).
+        (:class:`eqrec.design.class_gains.ClassCertificate`).
 
     Attributes
     ----------
@@ -170,7 +170,15 @@ class Design:
             if self.schedule is None:
                 raise InputError("this design has no gains to run")
             gains = self.schedule
-
-            def bound_of(prefix):
-                return float(self.levels.get(prefix.label, self.mu2)) if self.levels else float(self.mu2)
+            bound_of = partial(node_level, self)
         return GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic)
+
+
+def node_level(design: Design, prefix: ArrivalPattern) -> float:
+    """The guaranteed level ``μ2,k^α`` on ``ξ(k)`` after the event prefix of length ``k`` (``0 < k < T``).
+
+    With per-node levels (the delayed-data paper's sum cost, Theorem 1 /
+    Proposition 1, :mod:`eqrec.design.cost`) that of the prefix's node; with
+    one common level (the prefix-based paper's ``M2``) ``mu2``.
+    """
+    return float(design.levels.get(prefix.label, design.mu2)) if design.levels else float(design.mu2)

@@ -29,7 +29,7 @@ Recorded (:data:`FIELDS`, in table order):
   (class, row) LAD optima); ``J``: the paper's sum cost (the same for both
   engines at the optimum, by the separation theorem of :mod:`eqrec.design.classes`);
   ``max_level``: the largest level ``max μ2`` (classes: certified from the
-  gains, :class:`eqrec.design.classes.ClassCertificate`; tree: the LP's);
+  gains, :class:`eqrec.design.class_gains.ClassCertificate`; tree: the LP's);
   ``terminal_level`` (classes: largest certified terminal level, ``<= μ1``);
 * ``status`` (``"optimal"``, ``"infeasible"``, ``"time limit"``, ``"memory limit"``, ...),
 * ``peak_mb``: the peak resident memory of the process (``ru_maxrss``).
@@ -87,9 +87,6 @@ FIELDS = ("engine", "T", "tau", "words", "sequences", "nodes", "classes", "build
           "tree_time", "classes_time", "build_time", "method", "solve_time", "iterations", "objective", "J",
           "max_level", "terminal_level", "peak_mb", "status", "mu1", "time_limit", "mem_limit_gb", "wall_time",
           "detail")
-
-#: Timing and memory fields (measurements: they change from run to run).
-MEASURED = ("tree_time", "classes_time", "build_time", "solve_time", "peak_mb", "wall_time")
 
 _MEMORY_MARKERS = ("MemoryError", "bad_alloc", "Cannot allocate memory", "out of memory", "failed to map segment")
 
@@ -166,7 +163,8 @@ def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: floa
 def _measure_classes(system: AffineSystem, T: int, tau: int, method: str, mu1: float, time_limit: float,
                      options: dict | None, out: dict) -> dict:
     from eqrec.core.classes import classes_of_full_language, full_language_counts
-    from eqrec.design.classes import class_cost, solve_classes
+    from eqrec.design.classes import solve_classes
+    from eqrec.design.cost import class_cost
     from eqrec.errors import SolverFailure
 
     opts = {**METHODS[method], **(options or {}), "time_limit": float(time_limit)}

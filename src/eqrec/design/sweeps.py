@@ -4,7 +4,7 @@
   must be infeasible (Theorem 3 of the prefix-based paper is necessary and
   sufficient, so this proves no estimator of the class does better);
 * :func:`min_feasible_mu1` — the smallest recovery level, exactly (the
-  μ1-free theorem of :mod:`eqrec.design.classes`: one Charnes–Cooper LP),
+  μ1-free theorem of :mod:`eqrec.design.mu1_min`: one Charnes–Cooper LP),
   where the paper suggests "an optimal M1 through line search" (Section V of
   the prefix-based paper);
 * :func:`min_recovery_time` — the shortest horizon at which a language,

@@ -40,10 +40,9 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     words : sequence of str or ArrivalPattern
         The language: arrival patterns or 0/1 words of one length.
     mu1 : float
-        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive.
+        Recovery level ``μ1`` (the prefix-based paper's ``M1``), positive.
     solver : str, optional
-        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
-        (default ``"highs"``).
+        LP solver (default ``"highs"``), as for :func:`design_prefix`.
     certify : bool, optional
         Certify the gains independently (:func:`eqrec.core.certify.certify_design`)
         on every word of the language and the worst case (default).

@@ -42,8 +42,9 @@ from eqrec.core.simulate import sample_uncertainty, simulate_run
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.acc import acc_system
 from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import (FreeMu1Result, cost_weights, delay_language, design_delay, design_delay_global,
-                                level_table, path_levels, word_certificate)
+from eqrec.design.cost import cost_weights
+from eqrec.design.delay import FreeMu1Result, delay_language, design_delay, design_delay_global
+from eqrec.design.report import level_table, path_levels, word_certificate
 from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
 from eqrec.design.delay_augmented import augmented_to_prefix, solve_augmented_delay
 from eqrec.design.observers import place_observer

@@ -80,7 +80,8 @@ from eqrec.core.words import full_delay_language
 from eqrec.core.long_runs import LongRun, long_run_periodic, long_run_switching, periodic_model_gap
 from eqrec.core.acc import ACC_CONSTANTS, acc_system
 from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import design_delay, design_lp_status, level_table, min_recovery_level, node_level, path_levels
+from eqrec.design.delay import design_delay, design_lp_status, min_recovery_level
+from eqrec.design.report import level_table, node_level, path_levels
 from eqrec.design.result import Design
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
 from eqrec.studies.harness import get_logger

@@ -1,0 +1,116 @@
+"""Reading a design: levels per event prefix and time, certificates per word, class tables, the CLI's JSON.
+
+Nothing here designs or solves: every function reads a
+:class:`~eqrec.design.result.Design` (and its certificates) as the design
+functions returned it.  The levels are the guaranteed ``μ2,k^α`` of the
+delayed-data paper's cost (Theorem 1 / Proposition 1, :mod:`eqrec.design.cost`)
+or the prefix-based paper's common ``M2``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.words import parse_delay_word
+from eqrec.design.cost import node_bounds
+from eqrec.design.result import Design, node_level
+from eqrec.errors import InputError
+
+#: Largest reduced language (sequences) whose node gains ``to_json`` writes unless asked.
+JSON_NODE_GAINS_LIMIT = 200
+
+
+def level_table(design: Design) -> list[dict]:
+    """Per event prefix and time: designed level, certified worst case, number of sequences through it.
+
+    Rows for ``k = 0`` (level ``μ1``), every non-terminal node (``k = 1..T-1``)
+    and every sequence's end (``k = T``, level ``μ1``).
+    """
+    tree = PrefixTree(design.patterns, kind="delay")
+    w = tree.sequences_through()
+    bound = node_bounds(design.certificate)
+    rows = [{"prefix": "", "k": 0, "level": design.mu1, "certified": design.mu1, "sequences": len(tree.patterns)}]
+    for node in tree:
+        lvl = design.mu1 if node.terminal else design.levels.get(node.label, design.mu2)
+        rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
+                     "sequences": w[node.index]})
+    return rows
+
+
+def path_levels(design: Design, pattern) -> np.ndarray:
+    """The guaranteed levels ``μ2,k^α``, ``k = 0..T``, along one pattern (``μ1`` at ``k = 0`` and ``k = T``).
+
+    With per-node levels (cost ``"sum"``) each time's level is that of the
+    prefix node; with one common level (``"max"``) it is ``mu2``.
+    """
+    pat = parse_delay_word(pattern) if isinstance(pattern, str) else pattern
+    T = pat.T
+    out = np.full(T + 1, design.mu1)
+    for k in range(1, T):
+        out[k] = node_level(design, pat.prefix(k))
+    return out
+
+
+def word_certificate(design: Design, word):
+    """The certificate of the designed sequence equal to ``word`` (a delay word or pattern; any word of its class)."""
+    pat = parse_delay_word(word) if isinstance(word, str) else word
+    for p in design.patterns:
+        if p == pat:
+            return design.certificate.words[p.label]
+    raise InputError(f"{pat.label!r} is not an event sequence of the designed language", field="pattern")
+
+
+def class_table(design: Design) -> list[dict]:
+    """Per (time, available data) class: its level, certified worst case, sum-cost weight and gain ``K``."""
+    cc = design.class_certificate
+    gains = design.class_gains
+    levels = design.extra.get("class_levels")
+    rows = []
+    for i, cls in enumerate(gains.classes.classes):
+        rows.append({"class": cls.label, "k": cls.depth, "data": list(cls.available), "terminal": cls.terminal,
+                     "sequences": int(cls.weight), "nodes": int(cls.nodes),
+                     "level": float(max(design.mu1, levels[i])) if cls.inner else float(levels[i]),
+                     "certified": float(cc.levels[i]), "K": gains.K[i].tolist()})
+    return rows
+
+
+def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
+    """What ``eqrec design --method delay`` writes.
+
+    Always: ``μ1``, ``μ2``, ``J`` and the certified values; for the class
+    engine the classes (level, certified worst case, ``K``).  Node gains,
+    levels per event prefix and the event sequences: with ``node_gains``
+    (default: when the reduced language has at most
+    :data:`JSON_NODE_GAINS_LIMIT` sequences and node gains exist).  ``free``
+    (a :class:`eqrec.design.delay.FreeMu1Result`) adds, for ``μ1`` free, the
+    route, the lower bound of ``J`` that certifies it (global route) and the
+    certified smallest ``μ1``.
+    """
+    cert = design.certificate
+    ccert = design.class_certificate
+    if node_gains is None:
+        node_gains = design.schedule is not None and len(design.patterns) <= JSON_NODE_GAINS_LIMIT
+    if node_gains and design.schedule is None:
+        raise InputError("node gains were asked for but the design has none (a language too large for its prefix "
+                         "tree: use the class gains K)", field="node-gains")
+    certified = cert if cert is not None else ccert
+    out = {"method": "delay", "engine": design.extra.get("engine", "tree"), "cost": design.extra.get("cost"),
+           "mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"),
+           "J_certified": design.extra.get("J_certified"),
+           "certified_mu2": None if certified is None else certified.mu2,
+           "certified_terminal": None if certified is None else certified.terminal,
+           "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes")}
+    if design.class_gains is not None:
+        out["classes"] = class_table(design)
+    if node_gains:
+        out["levels"] = level_table(design) if cert is not None else []
+        out["event_sequences"] = {p.label: list(p.events()) for p in design.patterns}
+        out["gains"] = design.schedule.to_json()
+    if free is not None:
+        out["mu1_free"] = {"route": free.route, "J": free.J, "lower_bound": free.lower_bound, "gap": free.gap,
+                           "lps": free.lps, "time": free.time}
+        if free.mu1_min is not None:
+            out["mu1_free"]["mu1_min"] = {"upper": free.mu1_min.upper, "lower": free.mu1_min.lower,
+                                          "binding": free.mu1_min.binding}
+    return out
