@@ -2,8 +2,11 @@
 import numpy as np
 import pytest
 
-from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, AugmentedStacking, as_time_varying_L,
-                             augmented_to_time_based, schedule_from_augmented, time_based_to_augmented)
+from eqrec.core.gains import schedule_from_word_gains
+from eqrec.core.patterns import PrefixTree, as_pattern
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
+from eqrec.design.augmented_runtime import (AugmentedEstimator, augmented_to_prefix, augmented_to_time_based,
+                                            prefix_to_augmented, schedule_from_augmented)
 from eqrec.core.certify import closed_loop_maps
 from eqrec.errors import InputError
 from eqrec.core.simulate import sample_uncertainty, simulate_run
@@ -45,15 +48,27 @@ def test_forward_conversion_reproduces_error_map(acc, rng, word):
     assert np.allclose(cc.reshape(-1), c, atol=1e-12)
 
 
+def time_based_to_augmented(system, word, F, u0, L, s0, runtime):
+    """One word's time-based gains as augmented prefix gains (:func:`prefix_to_augmented` on a one-word tree)."""
+    tree = PrefixTree([word])
+    sch = schedule_from_word_gains(tree, {word: (F, u0)}, system.n, system.p, time_based=True)
+    return prefix_to_augmented(system, tree, sch, L, s0, runtime)
+
+
 @pytest.mark.parametrize("runtime", ["theorem2", "hold"])
 @pytest.mark.parametrize("word", ["111111", "100111"])
 def test_round_trip_both_directions(acc, rng, word, runtime):
+    T, n, p = 6, 3, 2
+    pattern = as_pattern(word)
     g = random_gains(rng, word, mode=runtime)
     F, u0 = augmented_to_time_based(acc, g, runtime)
     g2 = time_based_to_augmented(acc, word, F, u0, g.L, g.s0, runtime)
-    assert np.allclose(g2.M, g.M, atol=1e-10) and np.allclose(g2.nu, g.nu, atol=1e-10)
+    for k in range(T):  # M(k, i) over the measurements available at k: M's columns there
+        cols = np.concatenate([np.arange(i * p, (i + 1) * p) for i in pattern.prefix(k + 1).available(k)])
+        M, nu = g2.rows[pattern.prefix(k + 1)]
+        assert np.allclose(M, g.M[k * n:(k + 1) * n, cols], atol=1e-10)
+        assert np.allclose(nu, g.nu[k * n:(k + 1) * n], atol=1e-10)
     # time-based -> augmented -> time-based for random (F, u0), another L and s0
-    T, n, p = 6, 3, 2
     F = np.zeros((T * n, T * p))
     for k in range(T):
         for i in range(k + 1):
@@ -61,12 +76,10 @@ def test_round_trip_both_directions(acc, rng, word, runtime):
                 F[k * n:(k + 1) * n, i * p:(i + 1) * p] = rng.normal(size=(n, p))
     u0 = rng.normal(size=T * n)
     ga = time_based_to_augmented(acc, word, F, u0, rng.normal(size=(n, p)), rng.normal(size=n), runtime)
-    F2, u02 = augmented_to_time_based(acc, ga, runtime)
+    F2, u02 = augmented_to_prefix(acc, PrefixTree([word]), ga, runtime).word_matrices(word)
     assert np.allclose(F2, F, atol=1e-9) and np.allclose(u02, u0, atol=1e-9)
-    # M is block lower triangular with zero columns at missing steps
-    miss = np.repeat(np.array([c == "0" for c in word]), p)
-    assert np.all(ga.M[:, miss] == 0)
-    assert np.allclose(np.triu(ga.M, 1)[np.kron(np.tri(T, T, -1).T, np.ones((n, p))) > 0], 0)
+    # M has a column block per available measurement only (zero gains on missing steps by construction)
+    assert all(M.shape == (n, p * len(pre.available(pre.T - 1))) for pre, (M, _) in ga.rows.items())
 
 
 @pytest.mark.parametrize("runtime", ["theorem2", "hold"])
@@ -109,7 +122,8 @@ def test_bad_inputs(acc):
     with pytest.raises(InputError):
         AugmentedStacking(acc, "10a111", np.zeros((3, 2)))
     with pytest.raises(InputError):
-        time_based_to_augmented(acc, "111111", np.zeros((3, 3)), np.zeros(18), np.zeros((3, 2)), np.zeros(3))
+        augmented_to_time_based(acc, AugmentedGains("111111", np.zeros((6, 3, 2)), np.zeros(3), np.zeros((18, 12)),
+                                                    np.zeros(18)), "leak")
 
 
 def test_masked_gain_reading_is_the_appendix_formula_and_differs_from_the_dynamics(acc, rng):
