@@ -13,6 +13,21 @@ from eqrec.core.simulate import sample_uncertainty, simulate_run
 from eqrec.core.stacking import UncertaintyLayout
 
 
+def paper_blocks(aug, M):
+    """Eq. (5) of the augmented paper literally: ``Θ, Ψ, Ξ, Υ`` from the Appendix matrices (time-varying ``Φ_k``).
+
+    ``C``, ``V`` and ``W`` unmasked; missing data enters only through ``M Λ_i = 0`` and the
+    block-diagonal ``L`` (zero at missing steps in "theorem2" and "masked_gain").
+    """
+    m = aug.appendix_matrices()
+    E, A, Gam, Phi, C, L, W, V = (m[k] for k in ("E", "A", "Gamma", "Phi", "C", "L", "W", "V"))
+    I = np.eye(A.shape[0])
+    ML = M + L
+    Xi = (I + E @ ML @ C) @ Phi
+    return {"Theta": (I + E @ ML @ C) @ Gam @ W, "Psi": (E @ ML @ (np.eye(C.shape[0]) - C @ Gam @ L) - Gam @ L) @ V,
+            "Xi": Xi, "Upsilon": A - Xi, "E": E}
+
+
 def random_gains(rng, word, n=3, p=2, mode="theorem2", time_varying=False):
     T = len(word)
     L = rng.normal(size=(T, n, p)) * 0.5 if time_varying else rng.normal(size=(n, p)) * 0.5
@@ -31,7 +46,7 @@ def test_paper_formulas_match_propagation(acc, rng, word, mode):
     g = random_gains(rng, word, time_varying=True)
     aug = AugmentedStacking(acc, word, g.L, mode)
     G, c = aug.error_map(g.M, g.nu, g.s0)
-    pb = aug.paper_blocks(g.M)
+    pb = paper_blocks(aug, g.M)
     Gp = np.hstack([pb["Theta"], pb["Psi"], pb["Xi"]])
     assert np.allclose(Gp, G, atol=1e-12)
     assert np.allclose(pb["Upsilon"] @ g.s0 + pb["E"] @ g.nu, c, atol=1e-12)
@@ -132,7 +147,7 @@ def test_masked_gain_reading_is_the_appendix_formula_and_differs_from_the_dynami
     g = random_gains(rng, word)
     aug = AugmentedStacking(acc, word, g.L, "masked_gain")
     G, c = aug.error_map(g.M, g.nu, g.s0)
-    pb = aug.paper_blocks(g.M)
+    pb = paper_blocks(aug, g.M)
     assert np.allclose(np.hstack([pb["Theta"], pb["Psi"], pb["Xi"]]), G, atol=1e-12)
     assert np.allclose(pb["Upsilon"] @ g.s0 + pb["E"] @ g.nu, c, atol=1e-12)
     # on a word without missing steps every reading is the same model
@@ -140,3 +155,32 @@ def test_masked_gain_reading_is_the_appendix_formula_and_differs_from_the_dynami
     assert np.allclose(full, AugmentedStacking(acc, "111111", g.L, "theorem2").error_map(g.M, g.nu, g.s0)[0])
     # with missing steps it is not the closed loop of any running estimator
     assert not np.allclose(G, AugmentedStacking(acc, word, g.L, "leak").error_map(g.M, g.nu, g.s0)[0])
+
+
+@pytest.mark.parametrize("runtime", ["theorem2", "hold"])
+def test_runtime_on_packets_equals_the_converted_prefix_schedule(acc, rng, runtime):
+    """Delay words (P3 form (4)): the estimator on time-stamped packets gives the x̂ of its prefix-based schedule,
+    late measurements entering through M with the stored x̂(τ), s(τ)."""
+    from eqrec.core.patterns import full_delay_language
+    from eqrec.design.augmented_model import AugmentedPrefixGains
+
+    n, p, T = 3, 2, 4
+    tree = PrefixTree(full_delay_language(T, 1), kind="delay")
+    rows = {node.prefix: (rng.normal(size=(n, p * len(node.available))) * 0.3, rng.normal(size=n) * 0.1)
+            for node in tree}
+    gains = AugmentedPrefixGains(rows, as_time_varying_L(rng.normal(size=(n, p)) * 0.5, T, n, p), rng.normal(size=n))
+    sch = augmented_to_prefix(acc, tree, gains, runtime)
+    lay = UncertaintyLayout(T, acc.nw, acc.nv, acc.n)
+    rad = lay.radius(acc.eta_w, acc.eta_v, 1.0)
+    x0 = np.array([20.0, 40.0, 20.0])
+    late = 0
+    for pat in tree.patterns:
+        late += any(a is not None and a > t for t, a in enumerate(pat.arrivals))
+        delta = sample_uncertainty(lay, rad, rng)
+        tr = simulate_run(acc, sch, pat, delta, x0)
+        _, v, xi0 = lay.split(delta)
+        est = AugmentedEstimator(acc, gains, x0 - xi0, runtime)
+        y = [acc.C @ tr.x[t] + v[t] for t in range(T)]
+        xh = [est.step([(tau, y[tau]) for tau in pat.arriving_at(t)]) for t in range(T)]
+        assert np.allclose(np.array(xh), tr.xhat[1:], atol=1e-9)
+    assert late > 0

@@ -5,7 +5,13 @@ study), not a design method: the design LP of a reading (:class:`AugmentedLP`)
 has many optimal gains, and the estimator that runs with them has different
 worst cases; :func:`best_guarantee_among_optima` computes the solver-independent
 best one.  Built on the public interface of :class:`AugmentedLP` (its columns,
-robust rows and levels) and :mod:`eqrec.design.augmented_model`.
+robust rows and levels) and :mod:`eqrec.design.augmented_runtime`.
+
+With the ``"hold"`` runtime the running error is affine in the later gains only
+once the earlier ones are fixed; its coefficients are read off the certified maps
+(:func:`eqrec.core.certify.closed_loop_maps`) by unit steps, checked affine at a
+random point.  A closed form of these coefficients would differ from them in the
+last bits, and the LP solvers' optima (stored in ``results/p2/printed.json``) with them.
 """
 
 from __future__ import annotations
@@ -26,8 +32,6 @@ from eqrec.design.augmented_model import DESIGN_MODES, RUNTIME_MODES, AugmentedG
 from eqrec.design.augmented_runtime import schedule_from_augmented
 from eqrec.errors import InputError
 
-#: Runtime readings whose error is affine in ``(M, ν)`` for fixed ``L`` and ``s0`` (one LP gives the value).
-AFFINE_RUNTIMES = ("theorem2",)
 #: Default tolerance of "optimal for the design LP": ``μ2 <= μ2* (1 + rel) + abs``.
 OPTIMUM_RTOL, OPTIMUM_ATOL = 1e-7, 1e-9
 #: Lower and upper bounds closer than this (relative) make the value exact.

@@ -4,7 +4,7 @@ The estimator carries ``x̂`` and an auxiliary state ``s`` (a Luenberger-like
 estimate of the error :math:`\xi = x - \hat x`)::
 
     x̂(k+1) = A x̂(k) + B u(k) - ue(k) + f
-    s(k+1)  = A s(k) + ue(k) + L_k (ỹ(k) - C s(k))              (P2 eq. (7); P3 eq. (4))
+    s(k+1)  = A s(k) + ue(k) + L_k (ỹ(k) - C s(k))              (P2 eq. (7), its eq. (2) misprints ŷ; P3 eq. (4))
     ue(k)   = ν_k + Σ_{i ∈ A(k)} M(k, i) z(i),   z(i) = ỹ(i) - C s(i)   (P2 eq. (3); P3 eq. (5))
 
 with :math:`\tilde y = y - C\hat x` and ``A(k)`` the measurements available at
@@ -189,7 +189,7 @@ class AugmentedPrefixGains:
 
 
 class AugmentedStacking:
-    """Stacked matrices of the augmented estimator on one word, built on :class:`eqrec.stacking.Stacking`.
+    """Stacked matrices of a P2 reading on one word (eqs. (9)-(10), Appendix), on :class:`eqrec.core.stacking.Stacking`.
 
     Parameters
     ----------
@@ -259,29 +259,11 @@ class AugmentedStacking:
                 "L": sla.block_diag(*self.L_eff), "W": self.st.E_blk,
                 "V": sla.block_diag(*[sys.V_at(k) for k in range(T)])}
 
-    def paper_blocks(self, M: np.ndarray) -> dict[str, np.ndarray]:
-        """Eq. (5) literally: ``Θ, Ψ, Ξ, Υ`` from the Appendix matrices with time-varying ``Φ_k``.
-
-        ``C``, ``V`` and ``W`` are unmasked; missing data enters only through
-        ``M Λ_i = 0`` and the block-diagonal ``L`` (zero at missing steps in
-        ``"theorem2"`` and ``"masked_gain"``; the transition ``Φ_k`` keeps ``L``
-        in ``"masked_gain"``).
-        """
-        m = self.appendix_matrices()
-        Ebig, Abig, Gam, Phib, Cbig, Lbig, Wbig, Vbig = (m[k] for k in ("E", "A", "Gamma", "Phi", "C", "L", "W", "V"))
-        I = np.eye(Abig.shape[0])
-        ML = M + Lbig
-        Theta = (I + Ebig @ ML @ Cbig) @ Gam @ Wbig
-        Psi = (Ebig @ ML @ (np.eye(Cbig.shape[0]) - Cbig @ Gam @ Lbig) - Gam @ Lbig) @ Vbig
-        Xi = (I + Ebig @ ML @ Cbig) @ Phib
-        Ups = Abig - Xi
-        return {"Theta": Theta, "Psi": Psi, "Xi": Xi, "Upsilon": Ups, "E": Ebig, "Gamma": Gam, "Phi": Phib}
-
     def _literal_maps(self) -> None:
         """``G = G0 + E M Z``, ``c = E ν - E M (CΦ) s0 + H s0`` read off the Appendix blocks (eq. (5)).
 
         For the consistent readings these equal the dynamics' open-loop and
-        innovation maps (a test checks it); for ``"masked_gain"`` they are the
+        innovation maps (tests/test_augmented.py checks eq. (5) literally); for ``"masked_gain"`` they are the
         definition of the reading.
         """
         m = self.appendix_matrices()

@@ -45,7 +45,8 @@ def _innovation_recursion(system: AffineSystem, pattern: ArrivalPattern, L: np.n
             Z[rows, rows] += np.eye(p)
         zc[rows] = -C @ sc
         Fk, uk = injection(k, Z, zc)
-        Sy = system.A_at(k) @ Sy + Fk + L[k] @ Z[rows]
+        zk = Z[rows] if pattern.arrivals[k] in (k, None) else -C @ Sy  # ỹ(k) not there yet: 0 at time k
+        Sy = system.A_at(k) @ Sy + Fk + L[k] @ zk
         sc = system.A_at(k) @ sc + uk + L[k] @ zc[rows]
 
 
