@@ -354,7 +354,7 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
         if key not in zmaps:  # the prefix padded to the horizon (later arrivals unknown: not used here)
             pattern = ArrivalPattern(key.arrivals + (None,) * (T - t))
             Lm = effective_L(as_time_varying_L(L, T, n, p), pattern, "theorem2")
-            zmaps[key] = innovation_maps(system, transitions(system, Lm), Lm, -np.asarray(s0, float).reshape(n))
+            zmaps[key] = tuple(map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, -np.asarray(s0, float).reshape(n))))
         Z, z0 = zmaps[key]
         blocks, cblocks = [], []
         for s, anc in enumerate(tree.path(node.prefix)):

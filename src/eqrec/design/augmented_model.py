@@ -101,43 +101,40 @@ def arrival_indicator(word: "ArrivalPattern | str") -> np.ndarray:
     return np.array([1 if pattern.arrives(k) else 0 for k in range(pattern.T)])
 
 
-def innovation_maps(system: AffineSystem, Phi: np.ndarray, L_meas: np.ndarray,
-                    h0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def innovation_maps(system: AffineSystem, Phi, L_meas, h0, const=np.asarray) -> tuple[list, list]:
     r"""The innovations ``z(k) = Z[k] δ + Zh[k]`` of the error ``e = ξ - s`` (P2 eq. (9)), ``k = 0..T-1``.
 
     Parameters
     ----------
     system : AffineSystem
         The model (time-varying allowed).
-    Phi : ndarray, shape (T, n, n)
+    Phi : sequence of T matrices (n, n)
         Transitions ``Φ_k`` of ``e`` (``A_k - L_k C_k`` with the reading's ``L_k``).
-    L_meas : ndarray, shape (T, n, p)
+    L_meas : sequence of T matrices (n, p)
         Gains on the measurement noise: ``e(k+1) = Φ_k e(k) + E w(k) - L_meas[k] V v(k)``.
-    h0 : ndarray, shape (n,) or (n, m)
+    h0 : array_like, shape (n,) or (n, m)
         ``e(0) - ξ0``: ``-s0``, or ``-I`` for the maps per unit ``s0``.
+    const : callable, optional
+        Wraps the system's constant matrices (``casadi.SX`` to build the maps of a symbolic ``L``, ``s0``).
 
     Returns
     -------
-    Z : ndarray, shape (T, p, D)
+    Z : list of T matrices (p, D)
         Linear part in the uncertainty ``δ`` (core layout).
-    Zh : ndarray, shape (T, p) or (T, p, m)
+    Zh : list of T matrices (p,) or (p, m)
         Part from ``h0``.
     """
-    T, n, p = Phi.shape[0], system.n, system.p
+    T, n, p = len(Phi), system.n, system.p
     lay = UncertaintyLayout(T, system.nw, system.nv, n)
-    Ge = np.zeros((n, lay.size))
-    Ge[:, lay.xi0] = np.eye(n)
-    h = np.asarray(h0, float)
-    Z = np.zeros((T, p, lay.size))
-    Zh = np.zeros((T, p) + h.shape[1:])
+    Ge, h = const(np.eye(n, lay.size, k=lay.xi0.start)), h0
+    Z, Zh = [], []
     for k in range(T):
-        C = system.C_at(k)
-        Z[k] = C @ Ge
-        Z[k][:, lay.v(k)] += system.V_at(k)
-        Zh[k] = C @ h
-        Ge = Phi[k] @ Ge
-        Ge[:, lay.w(k)] += system.E_at(k)
-        Ge[:, lay.v(k)] -= L_meas[k] @ system.V_at(k)
+        C, Vsel, Wsel = const(system.C_at(k)), np.zeros((p, lay.size)), np.zeros((n, lay.size))
+        Vsel[:, lay.v(k)] = system.V_at(k)
+        Wsel[:, lay.w(k)] = system.E_at(k)
+        Z.append(C @ Ge + const(Vsel))
+        Zh.append(C @ h)
+        Ge = Phi[k] @ Ge + const(Wsel) - L_meas[k] @ const(Vsel)
         h = Phi[k] @ h
     return Z, Zh
 
@@ -219,7 +216,7 @@ class AugmentedStacking:
         L_phi = self.L if mode == "masked_gain" else self.L_eff
         self.Phi = transitions(system, L_phi)
         # z(k) = Z[k] δ + Zs[k] s0 (innovation, eq. (9))
-        self.Z, self.Zs = innovation_maps(system, self.Phi, self.L_eff, -np.eye(n))
+        self.Z, self.Zs = map(np.stack, innovation_maps(system, self.Phi, self.L_eff, -np.eye(n)))
         self.G0 = self.st.open_loop.reshape((T + 1) * n, -1)  # constant part of G
         self.Hs = np.zeros(((T + 1) * n, n))  # constant part of c per unit s0
         if mode == "masked_gain":

@@ -13,7 +13,7 @@ import numpy as np
 
 from eqrec.core.solvers import ipopt_options
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L, innovation_maps
 from eqrec.errors import InputError
 
 
@@ -35,8 +35,8 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
                      free_s0: bool = True, options: dict | None = None) -> NLPResult:
     """Solve the nonconvex problem (11) with IPOPT (CasADi), variables ``M, ν, μ2, L, s0`` and ``a >= |G|``.
 
-    The innovation maps are those of :func:`eqrec.design.augmented_model.innovation_maps`, built here
-    as CasADi expressions of the symbolic ``L`` and ``s0`` (their numerical twin cannot take symbols).
+    The innovation maps are :func:`eqrec.design.augmented_model.innovation_maps` on CasADi expressions of
+    the symbolic ``L`` and ``s0``.
 
     Parameters
     ----------
@@ -76,22 +76,10 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
             return ca.SX.zeros(n, p)
         return ca.reshape(Lsym[0:n * p], p, n).T  # row-major n x p
 
-    # e(k) = Ge[k] δ + He[k] s0 ; z(k) = C e + V v
-    Ge = ca.SX(np.eye(n, D, k=lay.xi0.start))
-    ec = -s0
-    Z, z0 = [], []
-    for k in range(T):
-        C = sysm.C_at(k)
-        Zk = ca.mtimes(ca.DM(C), Ge)
-        Vsel = np.zeros((p, D))
-        Vsel[:, lay.v(k)] = sysm.V_at(k)
-        Z.append(Zk + ca.DM(Vsel))
-        z0.append(ca.mtimes(ca.DM(C), ec))
-        Ph = ca.DM(sysm.A_at(k)) - ca.mtimes(Lk(k), ca.DM(C))
-        Wsel = np.zeros((n, D))
-        Wsel[:, lay.w(k)] = sysm.E_at(k)
-        Ge = ca.mtimes(Ph, Ge) + ca.DM(Wsel) - ca.mtimes(Lk(k), ca.DM(Vsel))
-        ec = ca.mtimes(Ph, ec)
+    # z(k) = Z[k] δ + z0[k] (eq. (9)) as expressions of the symbolic L and s0
+    Ls = [Lk(k) for k in range(T)]
+    Phi = [ca.DM(sysm.A_at(k)) - ca.mtimes(Ls[k], ca.DM(sysm.C_at(k))) for k in range(T)]
+    Z, z0 = innovation_maps(sysm, Phi, Ls, -s0, const=ca.DM)
     phi = model.st.transition
     Ol = model.st.open_loop
     ue_G = [None] * T
