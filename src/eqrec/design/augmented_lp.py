@@ -329,10 +329,11 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
     lay = st.layout
     D = lay.size
     phi, Ol = st.transition, st.open_loop
+    Lt, h0 = as_time_varying_L(L, T, n, p), -np.asarray(s0, float).reshape(n)
     b = LPBuilder()
     mu2 = int(b.add_variables(1, lower=mu1, name="mu2")[0])
     b.set_cost(mu2, 1.0 if levels == "common" else 0.0)
-    m_cols, nu_cols, measured, zmaps = {}, {}, {}, {}
+    m_cols, nu_cols, measured = {}, {}, {}
     for node in tree:
         taus = list(node.available)
         measured[node.index] = taus
@@ -349,13 +350,9 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
     row0 = ent0 = 0
     for node in tree:
         t = node.depth
-        # innovation maps along this node's prefix (determined by the events 0..t-1)
-        key = node.prefix
-        if key not in zmaps:  # the prefix padded to the horizon (later arrivals unknown: not used here)
-            pattern = ArrivalPattern(key.arrivals + (None,) * (T - t))
-            Lm = effective_L(as_time_varying_L(L, T, n, p), pattern, "theorem2")
-            zmaps[key] = tuple(map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, -np.asarray(s0, float).reshape(n))))
-        Z, z0 = zmaps[key]
+        # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here)
+        Lm = effective_L(Lt, ArrivalPattern(node.prefix.arrivals + (None,) * (T - t)), "theorem2")
+        Z, z0 = map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, h0))
         blocks, cblocks = [], []
         for s, anc in enumerate(tree.path(node.prefix)):
             taus = measured[anc.index]
@@ -444,5 +441,6 @@ def solve_augmented_delay(system: AffineSystem, patterns, mu1: float, L, s0, *, 
     for node in tree:
         k = len(node.available)
         rows[node.prefix] = (sol.x[model.m_cols[node.index]].reshape(n, k * p), sol.x[model.nu_cols[node.index]])
-    gains = AugmentedPrefixGains(rows=rows, L=as_time_varying_L(L, tree.depth, n, p), s0=np.asarray(s0, float).reshape(n))
+    gains = AugmentedPrefixGains(rows=rows, L=as_time_varying_L(L, tree.depth, n, p),
+                                 s0=np.asarray(s0, float).reshape(n))
     return gains, sol, model

@@ -115,7 +115,7 @@ def innovation_maps(system: AffineSystem, Phi, L_meas, h0, const=np.asarray) -> 
     h0 : array_like, shape (n,) or (n, m)
         ``e(0) - ξ0``: ``-s0``, or ``-I`` for the maps per unit ``s0``.
     const : callable, optional
-        Wraps the system's constant matrices (``casadi.SX`` to build the maps of a symbolic ``L``, ``s0``).
+        Wraps the system's constant matrices (``casadi.DM`` to build the maps of a symbolic ``L``, ``s0``).
 
     Returns
     -------
