@@ -168,7 +168,8 @@ def test_bad_inputs(acc):
 
 def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
     """Two pole placements and two s0: the LP in (M^α, ν^α) has the prefix design's optimum (both costs)."""
-    from eqrec.design.delay_augmented import augmented_to_prefix, solve_augmented_delay
+    from eqrec.design.augmented_lp import solve_augmented_delay
+    from eqrec.design.augmented_runtime import augmented_to_prefix
     from eqrec.design.observers import place_observer
     from eqrec.core.certify import certify_schedule
 
@@ -190,8 +191,7 @@ def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
 
 def test_augmented_gains_are_a_reparametrisation_of_the_prefix_gains(reactor):
     from eqrec.core.stacking import UncertaintyLayout
-    from eqrec.design.delay_augmented import (AugmentedDelayEstimator, augmented_to_prefix,
-                                              prefix_to_augmented)
+    from eqrec.design.augmented_runtime import AugmentedEstimator, augmented_to_prefix, prefix_to_augmented
     from eqrec.design.observers import place_observer
 
     tree = PrefixTree(delay_language(max_delay=2, horizon=3))
@@ -211,7 +211,7 @@ def test_augmented_gains_are_a_reparametrisation_of_the_prefix_gains(reactor):
         delta = rng.uniform(-1, 1, lay.size) * lay.radius(0, 0.05, 0.5)
         run = simulate_run(reactor, d.schedule, pat, delta, x0)
         _, v, _ = lay.split(delta)
-        est = AugmentedDelayEstimator(reactor, aug, run.xhat[0])
+        est = AugmentedEstimator(reactor, aug, run.xhat[0])
         y = [reactor.C @ run.x[t] + v[t] for t in range(3)]
         xh = [est.step([(tau, y[tau]) for tau in pat.arriving_at(t)]) for t in range(3)]
         np.testing.assert_allclose(np.array(xh), run.xhat[1:], atol=1e-10)

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, augmented_to_time_based
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking
+from eqrec.design.augmented_runtime import augmented_to_time_based
 from eqrec.design.augmented import design_augmented
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_nlp import solve_free_ipopt
@@ -155,8 +156,8 @@ def printed_L():
 def test_runtimes_agree_until(acc, printed_L):
     """The hold and theorem2 runtimes have the same error up to t = 3 on 100111 for any gains, not after."""
     from eqrec.core.certify import closed_loop_maps
-    from eqrec.design.augmented_lp import runtimes_agree_until
-    from eqrec.design.augmented_model import schedule_from_augmented
+    from eqrec.design.augmented_guarantee import runtimes_agree_until
+    from eqrec.design.augmented_runtime import schedule_from_augmented
 
     assert runtimes_agree_until("100111") == 3 and runtimes_agree_until("111111") == 6
     assert runtimes_agree_until("111100") == 6
@@ -174,7 +175,7 @@ def test_best_guarantee_among_optima(acc, printed_L, runtime):
     gains, which are optimal for the masked_gain LP; HiGHS and Clarabel agree."""
     from eqrec.core.robust import worst_case_abs
     from eqrec.design.augmented import certify_augmented
-    from eqrec.design.augmented_lp import best_guarantee_among_optima
+    from eqrec.design.augmented_guarantee import best_guarantee_among_optima
 
     words = ["100111", "101111", "110111"]
     m = AugmentedLP(acc, "100111", 1.0, printed_L, mode="masked_gain")
@@ -198,7 +199,7 @@ def test_best_guarantee_among_optima(acc, printed_L, runtime):
 
 def test_best_terminal_among_optima_and_inputs(acc, printed_L):
     from eqrec.design.augmented import certify_augmented
-    from eqrec.design.augmented_lp import best_guarantee_among_optima
+    from eqrec.design.augmented_guarantee import best_guarantee_among_optima
 
     r = best_guarantee_among_optima(acc, "100111", 1.0, printed_L, bound="terminal")
     cert = certify_augmented(acc, r.gains, ["100111"], 1.0, "theorem2")[1]

@@ -16,10 +16,11 @@ registry, reads the gains and certifies them from the gains alone.
     The delayed-data paper's designs (Theorem 1 / Proposition 1), μ1 fixed or free.
 :mod:`~eqrec.design.delay_ipopt`
     The delayed-data paper's own μ1-free route: IPOPT on the bilinear problem (10).
-:mod:`~eqrec.design.augmented_model`, :mod:`~eqrec.design.augmented_lp`, :mod:`~eqrec.design.augmented_nlp`, :mod:`~eqrec.design.augmented`
-    The state-augmented estimator (Theorem 2 of the augmented paper): model, fixed-``L`` LP, IPOPT, design.
-:mod:`~eqrec.design.delay_augmented`
-    The delayed-data paper's augmented form (4).
+:mod:`~eqrec.design.augmented_model`, :mod:`~eqrec.design.augmented_runtime`, :mod:`~eqrec.design.augmented_lp`, :mod:`~eqrec.design.augmented_nlp`, :mod:`~eqrec.design.augmented`
+    The state-augmented estimator, one model for the augmented paper (Theorem 2) and the delayed-data
+    paper's form (4): model, what runs (conversions, runtime), fixed-``L`` LPs, IPOPT, design.
+:mod:`~eqrec.design.augmented_guarantee`
+    A P2 reading analysis: the best guarantee as run among a design reading's optima.
 :mod:`~eqrec.design.observers`
     Observer gains by pole placement.
 :mod:`~eqrec.design.sweeps`, :mod:`~eqrec.design.scale_sweep`

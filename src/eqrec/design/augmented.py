@@ -18,8 +18,8 @@ from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, check_mode, missing_data_pattern,
-                                          schedule_from_augmented)
+from eqrec.design.augmented_model import DESIGN_MODES, AugmentedGains, check_mode, missing_data_pattern
+from eqrec.design.augmented_runtime import schedule_from_augmented
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import default_poles, observability_rank, place_observer
 from eqrec.design.result import Design

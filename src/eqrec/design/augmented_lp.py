@@ -1,16 +1,20 @@
-r"""LP of the state-augmented estimator for fixed ``L`` and ``s0`` (Remark 1 / Theorem 2 of the augmented paper).
+r"""The LPs of the augmented estimator for fixed ``L`` and ``s0`` (P2 Remark 1 / Theorem 2; P3 form (4)).
 
-The robust problem (11) is an LP in ``(M, ν, μ2)``.  :class:`AugmentedLP`
-builds it once through the core layers (:class:`eqrec.core.lp.LPBuilder`,
-:func:`eqrec.core.robust.add_robust_rows`, ``form="abs"``) with a generic
-sparsity pattern, and :meth:`AugmentedLP.set_L` rewrites only the matrix
-values that depend on ``L`` (the heat map of Fig. 3 changes nothing else).
-The uncertain rows are
+For fixed ``L`` and ``s0`` the innovation does not depend on the gains
+(:func:`eqrec.design.augmented_model.innovation_maps`), so the robust problem is
+an LP in ``(M, ν, μ2)``, assembled through :class:`eqrec.core.lp.LPBuilder` and
+:func:`eqrec.core.robust.add_robust_rows`.  Its uncertain rows are
 
 .. math:: \xi(t) = \mathrm{Ol}_t\delta + \sum_{s<t}\Phi(t,s{+}1)\Big(\nu_s
-          + \sum_{i\le s,\ q_i = 1} M(s,i)\,(Z_i\delta + z^0_i)\Big),
+          + \sum_{i \in A(s)} M(s,i)\,(Z_i\delta + z^0_i)\Big).
 
-with the innovation maps ``Z_i`` of :class:`eqrec.design.augmented_model.AugmentedStacking`.
+* :class:`AugmentedLP`: one missing-data word and a reading of its missing steps
+  (P2), ``form="abs"``, with in-place ``L`` updates for the sweeps of Fig. 3.
+* :func:`build_augmented_delay_lp`: gains per event prefix of a delay language
+  (P3 Proposition 1), ``form="split"``, levels per node.
+
+The two keep their own column and row orders (the stored results of each study
+come from them; an LP solver may pick another optimal vertex of a reordered LP).
 """
 
 from __future__ import annotations
@@ -23,41 +27,59 @@ import scipy.sparse as sp
 
 from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
 from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.solvers import solve_lp
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows
+from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
-from eqrec.design.augmented_model import (DESIGN_MODES, RUNTIME_MODES, AugmentedGains, AugmentedStacking,
-                                          arrival_indicator, as_time_varying_L, check_mode, missing_data_pattern)
+from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, AugmentedPrefixGains, AugmentedStacking,
+                                          as_time_varying_L, check_mode, effective_L, innovation_maps,
+                                          missing_data_pattern, transitions)
 from eqrec.errors import InputError
 
 
 class AugmentedLP:
-    """LP of Proposition 1 / Theorem 2 for fixed ``L`` and ``s0`` on one word, with value updates.
+    """LP of P2 Proposition 1 / Theorem 2 for fixed ``L`` and ``s0`` on one word, with ``L`` updates.
 
     Parameters
     ----------
-    system, word, M1
-        Problem data (``word`` is the worst-case word).
-    L
-        Observer gain (``n x p`` or ``T x n x p``).
-    s0
-        Initial auxiliary state (default 0).  :meth:`set_L` requires ``s0 = 0``.
-    mode
-        ``"theorem2"`` or ``"leak"`` (see :mod:`eqrec.augmented`).
-    strictly_causal
+    system : AffineSystem
+        The model.
+    word : str or ArrivalPattern
+        The worst-case missing-data word.
+    mu1 : float
+        Recovery level ``μ1``, positive.
+    L : array_like, shape (n, p) or (T, n, p)
+        Observer gain.
+    s0 : array_like or None, optional
+        Initial auxiliary state (default 0).  :meth:`set_L` updates in place only for ``s0 = 0``.
+    mode : {"theorem2", "leak", "masked_gain"}, optional
+        Reading of the missing steps (:mod:`eqrec.design.augmented_model`).
+    strictly_causal : bool, optional
         Reading check: ``M(k, k) = 0`` (injection without the current measurement).
-    pattern_seed
-        Seed of the generic ``L`` that fixes the sparsity pattern.
+    pattern_seed : int, optional
+        Seed of the random ``L`` whose nonzeros fix the sparsity pattern (valid for every ``L``).
+
+    Attributes
+    ----------
+    mu2_col, m_cols, nu_cols
+        Columns of ``μ2``, of the blocks ``M(s, i)`` (row-major ``n x p``) and of ``ν``.
+    num_columns : int
+        Number of decision columns (``μ2, M, ν``; the LP adds auxiliary ones).
+    level_const, level_coef : ndarray, shape ((T+1)n,)
+        Level of the robust rows ``ξ(t)``: ``level_const + level_coef μ2`` (``μ1`` at ``t = T``).
+    radius : ndarray
+        Radii of the uncertainty box.
     """
 
-    def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray, s0: np.ndarray | None = None,
-                 mode: str = "theorem2", strictly_causal: bool = False, pattern_seed: int = 12345):
+    def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray,
+                 s0: np.ndarray | None = None, mode: str = "theorem2", strictly_causal: bool = False,
+                 pattern_seed: int = 12345):
         t0 = time.perf_counter()
         check_mode(mode, DESIGN_MODES)
         mu1 = float(mu1)
         if not np.isfinite(mu1) or mu1 <= 0:
-            raise InputError(f"the recovery level M1 must be positive, got {mu1}", field="mu1")
+            raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
         word = missing_data_pattern(word).label
         self.system, self.word, self.mu1, self.mode = system, word, mu1, mode
         self.strictly_causal = strictly_causal
@@ -66,25 +88,25 @@ class AugmentedLP:
         self.st = Stacking(system, T)
         self.s0 = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
         lay = self.st.layout
-        D = self.D = lay.size
+        D = lay.size
         phi = self.st.transition
-        Ol = self.st.open_loop
+        # The sparsity pattern must hold for every L (set_L rewrites values only): take that of a random L.  A
+        # structural (boolean) propagation would also count entries that cancel in the products of A, so it may
+        # differ from the pattern the stored results were computed with.
         rng = np.random.default_rng(pattern_seed)
         generic = AugmentedStacking(system, word, rng.normal(size=(T, n, p)), mode, self.st)
         zpat = generic.Z != 0  # (T, p, D)
-
-        b = LPBuilder()
-        self.mu2_col = int(b.add_variables(1, lower=mu1, name="mu2")[0])
-        b.set_cost(self.mu2_col, 1.0)
-        # M(s, i) blocks (n x p, row-major) for measured i <= s
+        self.mu2_col = 0
         self.m_cols: dict[tuple[int, int], np.ndarray] = {}
-        for s in range(T):
+        col = 1
+        for s in range(T):  # M(s, i) blocks (n x p, row-major) for measured i <= s
             for i in range(s + 1):
                 if word[i] == "1" and not (strictly_causal and i == s):
-                    self.m_cols[(s, i)] = b.add_variables(n * p, name=f"M[{s},{i}]")
-        self.nu_cols = b.add_variables(T * n, name="nu")
-
-        # Structural entries of G: key = (t*n + a)*D + d.
+                    self.m_cols[(s, i)] = np.arange(col, col + n * p)
+                    col += n * p
+        self.nu_cols = np.arange(col, col + T * n)
+        self.num_columns = nx = col + T * n
+        # structural entries of G: key = (t*n + a)*D + d; entry (a, d), variable (bb, pi): Φ(t,s+1)[a, bb] Z_i[pi, d]
         keys, cols, phis, zidx = [], [], [], []
         ar_n, ar_p, ar_D = np.arange(n), np.arange(p), np.arange(D)
         for t in range(T + 1):
@@ -92,7 +114,6 @@ class AugmentedLP:
                 if s >= t:
                     continue
                 P = phi[t][s + 1]
-                # entry (a, d), variable (bb, pi): P[a, bb] * Z_i[pi, d]
                 a, bb, pi, d = np.meshgrid(ar_n, ar_n, ar_p, ar_D, indexing="ij")
                 mask = (P[a, bb] != 0) & zpat[i][pi, d]
                 a, bb, pi, d = a[mask], bb[mask], pi[mask], d[mask]
@@ -107,19 +128,14 @@ class AugmentedLP:
         # constant part of G: the open-loop map, or (the "masked_gain" reading) the L-dependent literal G0,
         # whose generic pattern fixes the structure; such LPs are rebuilt at every L
         self._rebuild = mode == "masked_gain"
-        Olflat = (generic.G0 if self._rebuild else Ol).reshape(-1)  # index (t*n + a)*D + d
+        Olflat = (generic.G0 if self._rebuild else self.st.open_loop).reshape(-1)  # index (t*n + a)*D + d
         ent_keys = np.union1d(np.flatnonzero(Olflat), keys)
         ent_of = np.searchsorted(ent_keys, keys)
         order = np.lexsort((cols, ent_of))  # canonical CSR order: by entry, then column
         self._g_ent, self._g_col = ent_of[order], cols[order]
         self._g_phi, self._g_zidx = phis[order], zidx[order]
-        E = ent_keys.size
         self.entry_keys = ent_keys
-        entry_row = ent_keys // D
-        entry_coord = ent_keys % D
-        G0 = Olflat[ent_keys]
-        nx = b.num_variables
-        self._nx = nx
+        self._G0 = Olflat[ent_keys]
         # certain part: c_t = Σ_s Φ(t,s+1) (ν_s + Σ_i M(s,i) z0_i)
         c_r, c_c, c_v = [], [], []
         for t in range(1, T + 1):
@@ -131,75 +147,50 @@ class AugmentedLP:
                 c_v.append(P[rr, cc])
         self._cx_fixed = (np.concatenate(c_r), np.concatenate(c_c), np.concatenate(c_v))
         R = (T + 1) * n
-        level_const = np.zeros(R)
-        level_coef = np.ones(R)
-        level_const[T * n:] = mu1
-        level_coef[T * n:] = 0.0
-        self._rows_meta = dict(entry_row=entry_row, entry_coord=entry_coord, G0=G0, R=R,
-                               level_const=level_const, level_coef=level_coef)
+        self.level_const = np.zeros(R)
+        self.level_coef = np.ones(R)
+        self.level_const[T * n:] = mu1
+        self.level_coef[T * n:] = 0.0
         self.radius = lay.radius(system.eta_w, system.eta_v, mu1)
-        self._b = b
-        self._E = E
-        self.L = None
-        self.lp = self._build(L)
+        # in-place L updates when only the coefficients Gx depend on L (s0 = 0, not the literal reading)
+        self.updatable = not (np.any(self.s0) or self._rebuild)
+        self.lp = self._assemble(L)
         self.build_time = time.perf_counter() - t0
-        # the robust layer says where the L-dependent coefficients are; order them as ours
-        idx = self._robust_index
-        keys_ours = self._g_ent.astype(np.int64) * self._nx + self._g_col
-        keys_lp = idx.gx_entries.astype(np.int64) * self._nx + idx.gx_cols
-        self._gx_order = np.searchsorted(keys_ours, keys_lp)
-        if not np.array_equal(keys_ours[np.minimum(self._gx_order, keys_ours.size - 1)], keys_lp):
-            raise AssertionError("the robust layer placed coefficients AugmentedLP did not create")  # pragma: no cover
-        if np.any(self.s0) or self._rebuild:
-            self.lp = self._exact_build(L)  # s0 ≠ 0 or the literal reading: more than Gx depends on L
-        else:
-            self._set_values(L, self.lp)
 
     def _gx_values(self, aug: AugmentedStacking) -> np.ndarray:
         return self._g_phi * aug.Z.reshape(-1)[self._g_zidx]
 
-    def _build(self, L: np.ndarray) -> LinearProgram:
-        """Build the template with a generic ``L`` (so no structural zero is lost); values set later."""
-        sysm, T, n, p = self.system, self.T, self.system.n, self.system.p
-        rng = np.random.default_rng(99)
-        aug = AugmentedStacking(sysm, self.word, rng.normal(size=(T, n, p)), self.mode, self.st)
-        meta = self._rows_meta
-        vals = self._gx_values(aug)
-        if np.any(vals == 0):  # pragma: no cover
-            raise AssertionError("generic pattern produced an exact zero")
-        cr, cc, cv = self._cx_fixed
-        rows = UncertainAffineRows(
-            entry_row=meta["entry_row"], entry_coord=meta["entry_coord"], G0=meta["G0"],
-            Gx=sp.csr_matrix((vals, (self._g_ent, self._g_col)), shape=(self._E, self._nx)),
-            c0=np.zeros(meta["R"]), cx=sp.csr_matrix((cv, (cr, cc)), shape=(meta["R"], self._nx)))
-        self._robust_index = add_robust_rows(self._b, rows, self.radius, level_const=meta["level_const"],
-                                             level_col=self.mu2_col, level_coef=meta["level_coef"], form="abs",
-                                             track_gx=True)
-        return self._b.build()
-
-    def _cx_with_s0(self, aug, cr, cc, cv):
-        n, p, T = self.system.n, self.system.p, self.T
-        phi = self.st.transition
-        z0 = aug.Zs.reshape(T * p, n) @ self.s0
-        r_, c_, v_ = [cr], [cc], [cv]
-        for t in range(1, T + 1):
-            for (s, i), mc in self.m_cols.items():
-                if s >= t:
-                    continue
-                P = phi[t][s + 1]
-                coef = np.kron(P, z0[i * p:(i + 1) * p][None, :])  # (n, n p): P[a,b] z0[pi]
-                rr, kk = np.nonzero(coef)
-                r_.append(t * n + rr)
-                c_.append(mc[kk])
-                v_.append(coef[rr, kk])
-        return sp.csr_matrix((np.concatenate(v_), (np.concatenate(r_), np.concatenate(c_))),
-                             shape=(self._rows_meta["R"], self._nx))
+    def _assemble(self, L: np.ndarray) -> LinearProgram:
+        b = LPBuilder()
+        self.add_decision_variables(b)
+        rows, self.aug = self.robust_rows(L)
+        index = add_robust_rows(b, rows, self.radius, level_const=self.level_const, level_col=self.mu2_col,
+                                level_coef=self.level_coef, form="abs", track_gx=self.updatable)
+        self.L = self.aug.L
+        if self.updatable:  # where the robust layer put the L-dependent coefficients, in our order
+            keys_ours = self._g_ent.astype(np.int64) * self.num_columns + self._g_col
+            keys_lp = index.gx_entries.astype(np.int64) * self.num_columns + index.gx_cols
+            self._gx_order = np.searchsorted(keys_ours, keys_lp)
+            if not np.array_equal(keys_ours[np.minimum(self._gx_order, keys_ours.size - 1)], keys_lp):
+                raise AssertionError("the robust layer placed coefficients AugmentedLP did not create")  # pragma: no cover
+            self._robust_index = index
+        return b.build()
 
     def add_decision_variables(self, b: LPBuilder, cost: bool = True) -> int:
-        """Add ``(μ2, M, ν)`` to an empty builder in this LP's column order; returns the ``μ2`` column.
+        """Add ``(μ2, M, ν)`` to an empty builder in this LP's column order.
 
-        Two :class:`AugmentedLP` on the same word (any modes) then share their columns, so
-        the rows of both can be stacked in one LP (:func:`best_guarantee_among_optima`).
+        Parameters
+        ----------
+        b : LPBuilder
+            An empty builder.
+        cost : bool, optional
+            Minimise ``μ2`` (default).
+
+        Returns
+        -------
+        int
+            The ``μ2`` column.  Two :class:`AugmentedLP` on the same word (any modes) share these
+            columns, so the rows of both can be stacked in one LP.
         """
         if b.num_variables:
             raise ValueError("add_decision_variables needs an empty builder")
@@ -212,59 +203,75 @@ class AugmentedLP:
         return mu2
 
     def robust_rows(self, L: np.ndarray) -> tuple[UncertainAffineRows, AugmentedStacking]:
-        """The uncertain rows ``ξ(t) = G(M) δ + c(M, ν)`` of this reading at ``L`` (exact values, any ``s0``).
+        """The uncertain rows ``ξ(t) = G(M) δ + c(M, ν)`` of this reading at ``L`` (any ``s0``).
 
-        Row ``t n + a`` is component ``a`` of ``ξ(t)``; the level of the rows is
-        ``_rows_meta["level_const"] + _rows_meta["level_coef"] μ2`` (``M1`` at ``t = T``).
+        Parameters
+        ----------
+        L : array_like, shape (n, p) or (T, n, p)
+            Observer gain.
+
+        Returns
+        -------
+        rows : UncertainAffineRows
+            Row ``t n + a`` is component ``a`` of ``ξ(t)``, in this LP's columns; its level is
+            ``level_const + level_coef μ2``.
+        aug : AugmentedStacking
+            The stacked maps at ``L``.
         """
         aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
-        meta = self._rows_meta
+        n, p, T = self.system.n, self.system.p, self.T
+        R = (T + 1) * n
         cr, cc, cv = self._cx_fixed
-        G0 = aug.G0.reshape(-1)[self.entry_keys] if self._rebuild else meta["G0"]
+        z0 = aug.Zs.reshape(T * p, n) @ self.s0
+        r_, c_, v_ = [cr], [cc], [cv]
+        for t in range(1, T + 1):
+            for (s, i), mc in self.m_cols.items():
+                if s >= t:
+                    continue
+                coef = np.kron(self.st.transition[t][s + 1], z0[i * p:(i + 1) * p][None, :])  # P[a,b] z0[pi]
+                rr, kk = np.nonzero(coef)
+                r_.append(t * n + rr)
+                c_.append(mc[kk])
+                v_.append(coef[rr, kk])
+        cx = sp.csr_matrix((np.concatenate(v_), (np.concatenate(r_), np.concatenate(c_))), shape=(R, self.num_columns))
+        G0 = aug.G0.reshape(-1)[self.entry_keys] if self._rebuild else self._G0
+        D = self.st.layout.size
         rows = UncertainAffineRows(
-            entry_row=meta["entry_row"], entry_coord=meta["entry_coord"], G0=G0,
-            Gx=sp.csr_matrix((self._gx_values(aug), (self._g_ent, self._g_col)), shape=(self._E, self._nx)),
-            c0=aug.Hs @ self.s0, cx=self._cx_with_s0(aug, cr, cc, cv))
+            entry_row=self.entry_keys // D, entry_coord=self.entry_keys % D, G0=G0,
+            Gx=sp.csr_matrix((self._gx_values(aug), (self._g_ent, self._g_col)),
+                             shape=(self.entry_keys.size, self.num_columns)),
+            c0=aug.Hs @ self.s0, cx=cx)
         return rows, aug
 
-    def _exact_build(self, L):
-        # Rebuild the LP from scratch at L (used when s0 ≠ 0).
-        b = LPBuilder()
-        self.add_decision_variables(b)
-        rows, aug = self.robust_rows(L)
-        meta = self._rows_meta
-        add_robust_rows(b, rows, self.radius, level_const=meta["level_const"], level_col=self.mu2_col,
-                        level_coef=meta["level_coef"], form="abs")
-        self.L = as_time_varying_L(L, self.T, self.system.n, self.system.p)
-        self.aug = aug
-        return b.build()
-
-    def _set_values(self, L, lp):
-        aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
-        vals = self._gx_values(aug)
-        self._robust_index.update_gx(lp, vals[self._gx_order])
-        self.L = aug.L
-        self.aug = aug
-
     def set_L(self, L: np.ndarray) -> LinearProgram:
-        """Replace ``L`` by rewriting only the ``L``-dependent matrix values (requires ``s0 = 0``).
+        """Replace ``L`` (P2 Fig. 3): the ``L``-dependent values are rewritten in place when ``s0 = 0``.
 
-        In the ``"masked_gain"`` reading the constant part depends on ``L`` too: the LP is rebuilt.
+        Parameters
+        ----------
+        L : array_like, shape (n, p) or (T, n, p)
+            The new observer gain.
+
+        Returns
+        -------
+        LinearProgram
+            The LP at ``L`` (rebuilt in the ``"masked_gain"`` reading, whose constant part depends on ``L``).
         """
         if self._rebuild:
-            self.lp = self._exact_build(L)
+            self.lp = self._assemble(L)
             return self.lp
-        if np.any(self.s0):
+        if not self.updatable:
             raise InputError("fast L updates need s0 = 0; build a new AugmentedLP for s0 ≠ 0", field="s0")
-        self._set_values(L, self.lp)
+        self.aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
+        self._robust_index.update_gx(self.lp, self._gx_values(self.aug)[self._gx_order])
+        self.L = self.aug.L
         return self.lp
 
     def gains(self, solution: LPSolution) -> AugmentedGains:
-        """Read ``(M, ν)`` from an optimal solution."""
+        """``(M, ν)`` of an optimal solution (:meth:`gains_from_x`)."""
         return self.gains_from_x(solution.x)
 
     def gains_from_x(self, x: np.ndarray) -> AugmentedGains:
-        """``(M, ν)`` of a vector in this LP's columns."""
+        """``(M, ν)`` of a vector ``x`` in this LP's columns (the first :attr:`num_columns` entries are read)."""
         n, p, T = self.system.n, self.system.p, self.T
         M = np.zeros((T * n, T * p))
         for (s, i), mc in self.m_cols.items():
@@ -273,281 +280,168 @@ class AugmentedLP:
                               nu=np.asarray(x)[self.nu_cols].copy(), mode=self.mode)
 
     def solve(self, solver: str = "highs", options: dict | None = None) -> LPSolution:
+        """Solve the LP with a solver of the registry (:func:`eqrec.core.solvers.solve_lp`)."""
         return solve_lp(self.lp, solver, options)
 
 
-
-# ---------------------------------------------------------------------------
-# The best guarantee, as the estimator that runs, among the optima of a design reading
-# ---------------------------------------------------------------------------
-
-#: Runtime readings whose error is affine in ``(M, ν)`` for fixed ``L`` and ``s0`` (one LP gives the value).
-AFFINE_RUNTIMES = ("theorem2",)
-#: Default tolerance of "optimal for the design LP": ``μ2 <= μ2* (1 + rel) + abs``.
-OPTIMUM_RTOL, OPTIMUM_ATOL = 1e-7, 1e-9
-#: Lower and upper bounds closer than this (relative) make the value exact.
-BOUNDS_RTOL = 1e-6
-
-
 @dataclass
-class GuaranteeAmongOptima:
-    """Result of :func:`best_guarantee_among_optima`.
+class AugmentedDelayLP:
+    """The LP of :func:`build_augmented_delay_lp` and where its columns are (per prefix-tree node index)."""
 
-    Attributes
-    ----------
-    lower, upper
-        Bounds of the smallest worst case of the running estimator over the design LP's
-        optimal gains (equal for an affine runtime: ``lower`` is then the LP value and
-        ``upper`` the same LP's solution).
-    exact
-        ``upper <= lower (1 + BOUNDS_RTOL) + 1e-9``: the value is known.
-    gains
-        Gains ``(M, ν)`` (mode: the design reading) attaining ``upper``; certify them independently.
-    design_optimum
-        The design LP's optimum ``μ2*`` (solved first, with the same solver).
-    optimum_bound
-        ``μ2* (1 + rel_tol) + abs_tol``: the design level every admitted gain attains.
-    design_mu2
-        The design ``μ2`` of ``gains`` (at most ``optimum_bound``).
-    agree_until
-        Last time ``t`` up to which the ``"hold"`` and ``"theorem2"`` running errors coincide
-        for every gain (:func:`runtimes_agree_until`).
-    lp_shapes
-        Shapes of the LPs solved after the design LP (one for an affine runtime, two otherwise).
-    """
-
-    lower: float
-    upper: float
-    bound: str
-    runtime: str
-    design_mode: str
-    design_optimum: float
-    optimum_bound: float
-    gains: AugmentedGains
-    design_mu2: float
-    agree_until: int
-    lp_shapes: list
-    solver: str
-
-    @property
-    def exact(self) -> bool:
-        return bool(self.upper <= self.lower * (1.0 + BOUNDS_RTOL) + 1e-9)
-
-    @property
-    def value(self) -> float | None:
-        """The best guarantee when :attr:`exact` (``upper``), else ``None``."""
-        return self.upper if self.exact else None
+    lp: object
+    tree: PrefixTree
+    m_cols: dict[int, np.ndarray]
+    nu_cols: dict[int, np.ndarray]
+    mu2_col: int
+    level_cols: dict[int, int]
+    build_time: float
 
 
-def runtimes_agree_until(word: "str | ArrivalPattern") -> int:
-    """Last time ``t`` such that ``ξ(0..t)`` is the same in the ``"hold"`` and ``"theorem2"`` runtimes for all gains.
-
-    The two runtimes first differ in ``s(k0 + 1)`` (``k0`` the first missing step), hence in
-    the innovation of the first measured step ``k1 > k0``, in ``ue(k1)`` and in ``ξ(k1 + 1)``;
-    so ``t = k1`` (``T`` when no measured step follows a missing one).
-    """
-    q = arrival_indicator(word)
-    T = q.size
-    missing = np.flatnonzero(q == 0)
-    if missing.size == 0:
-        return T
-    after = [k for k in range(int(missing[0]) + 1, T) if q[k]]
-    return after[0] if after else T
-
-
-def _select_rows(rows: UncertainAffineRows, keep: np.ndarray) -> UncertainAffineRows:
-    """The rows ``keep`` (sorted row indices) of ``rows``, renumbered from 0."""
-    new_index = np.full(rows.num_rows, -1, dtype=np.int64)
-    new_index[keep] = np.arange(keep.size)
-    ent = np.flatnonzero(new_index[rows.entry_row] >= 0)
-    return UncertainAffineRows(entry_row=new_index[rows.entry_row[ent]], entry_coord=rows.entry_coord[ent],
-                               G0=rows.G0[ent], Gx=rows.Gx.tocsr()[ent], c0=rows.c0[keep],
-                               cx=rows.cx.tocsr()[keep])
-
-
-def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray, cols: np.ndarray, runtime: str,
-                  keep: np.ndarray) -> UncertainAffineRows:
-    """Rows of the running error (the maps :func:`eqrec.core.certify.closed_loop_maps` of the converted gains)
-    as an affine function of the columns ``cols``, the others fixed at ``x_base``.
-
-    Valid only where that function is affine (checked at a random point): its coefficients are
-    read off the certified maps by unit steps in each column.
-    """
-    from eqrec.core.certify import closed_loop_maps
-    from eqrec.design.augmented_model import schedule_from_augmented
-
-    def maps(x):
-        G, c, _ = closed_loop_maps(system, schedule_from_augmented(system, design.gains_from_x(x), runtime),
-                                   design.word)
-        return G.reshape(-1, G.shape[-1])[keep], c.reshape(-1)[keep]
-
-    G0, c0 = maps(x_base)
-    dG, dc = [], []
-    for j in cols:
-        x = x_base.copy()
-        x[j] += 1.0
-        Gj, cj = maps(x)
-        dG.append(Gj - G0)
-        dc.append(cj - c0)
-    dG = np.stack(dG, axis=-1) if dG else np.zeros(G0.shape + (0,))
-    dc = np.stack(dc, axis=-1) if dc else np.zeros(c0.shape + (0,))
-    scale = max(1.0, float(np.abs(G0).max()), float(np.abs(dG).max(initial=0.0)))
-    dG[np.abs(dG) <= 1e-13 * scale] = 0.0
-    dc[np.abs(dc) <= 1e-13 * scale] = 0.0
-    rng = np.random.default_rng(0)
-    step = rng.normal(size=len(cols))
-    x = x_base.copy()
-    x[cols] += step
-    Gr, cr = maps(x)
-    err = max(float(np.abs(Gr - G0 - dG @ step).max()), float(np.abs(cr - c0 - dc @ step).max()))
-    if err > 1e-9 * scale * max(1.0, float(np.abs(step).sum())):
-        raise AssertionError(f"the {runtime} running error is not affine in the free gains (error {err:.3g})")
-    # G(x) = G0 + dG (x - x_base)[cols]: constant parts at x = 0 in the free columns
-    xb = x_base[np.asarray(cols, dtype=np.int64)]
-    struct = (G0 != 0) | np.any(dG != 0, axis=-1)
-    G0 = G0 - dG @ xb
-    c0 = c0 - dc @ xb
-    er, ed = np.nonzero(struct)
-    Gx = sp.csr_matrix(dG[er, ed].reshape(er.size, -1))
-    Gx = sp.csr_matrix((Gx.tocoo().data, (Gx.tocoo().row, np.asarray(cols)[Gx.tocoo().col])),
-                       shape=(er.size, x_base.size))
-    cxc = sp.coo_matrix(dc)
-    cx = sp.csr_matrix((cxc.data, (cxc.row, np.asarray(cols)[cxc.col])), shape=(keep.size, x_base.size))
-    return UncertainAffineRows(entry_row=er, entry_coord=ed, G0=G0[er, ed], Gx=Gx, c0=c0, cx=cx)
-
-
-def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray, *,
-                                s0: np.ndarray | None = None, design_mode: str = "masked_gain",
-                                runtime: str = "theorem2", bound: str = "all", solver: str = "highs",
-                                recover: bool = False, rel_tol: float = OPTIMUM_RTOL,
-                                abs_tol: float = OPTIMUM_ATOL, options: dict | None = None) -> GuaranteeAmongOptima:
-    r"""The best guarantee any optimum of a design reading gives as the estimator that runs.
-
-    The design LP of ``design_mode`` (:class:`AugmentedLP`) at fixed ``L`` and ``s0``
-    usually has many optimal gains ``(M, ν)``, and the worst case of the estimator that
-    actually runs with them (``runtime``) differs between them, so certifying the optimum
-    a solver returns gives a solver-dependent number.  This function bounds the
-    solver-independent
-
-    .. math:: \gamma^* = \min\Big\{\max_{t,\,|\delta| \le b} |\xi^{\rm run}_t(M, \nu, \delta)| :
-              (M, \nu, \mu_2) \text{ feasible for the design LP},\
-              \mu_2 \le \mu_2^*(1 + \epsilon_r) + \epsilon_a\Big\}
-
-    (``t = 0..T``, or ``t = T`` only with ``bound="terminal"``).  The design LP is built
-    and solved first (its optimum ``μ2*``).  Then an LP is built on the design LP's columns
-    (:meth:`AugmentedLP.add_decision_variables`) with its robust rows (level ``μ2``, ``M1``
-    at the end, ``μ2`` bounded as above) and the running error's robust rows bounded by a
-    new variable ``γ``, minimised; all rows go through :func:`eqrec.core.robust.add_robust_rows`
-    (``form="abs"``), so ``γ`` is the exact worst case that
-    :func:`eqrec.core.certify.certify_schedule` computes from the converted gains.
-
-    * ``runtime="theorem2"`` (``L`` zeroed at missing steps): the error of ``s`` does not
-      depend on the gains, so the running error is affine in ``(M, ν)`` with the innovation
-      maps of the ``"theorem2"`` reading (:meth:`AugmentedLP.robust_rows` of an
-      :class:`AugmentedLP` in that mode, same columns).  One LP: ``lower = upper = γ*``.
-    * ``runtime="hold"`` (the constant ``L`` kept at missing steps): ``s`` then receives
-      ``-L C s`` at a missing step, the later innovations depend on earlier injections and the
-      running error has products of gains (not an LP).  Two LPs bound ``γ*``: *lower*, the
-      ``"theorem2"`` LP restricted to the times ``t <= runtimes_agree_until(word)``, where the
-      two runtimes have the same error for every gain; *upper*, the gains of the injections
-      before the last missing step fixed at that solution (then the running error is affine
-      in the others, its coefficients read off the certified maps) and ``γ`` minimised over
-      all times.  When they meet (:attr:`GuaranteeAmongOptima.exact`) the value is known.
+def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float, L, s0, *,
+                             levels: str = "common", form: str = "split") -> AugmentedDelayLP:
+    """The LP of P3 Theorem 1 / Proposition 1 in ``(M^α, ν^α)`` per prefix node, for fixed ``L`` and ``s0``.
 
     Parameters
     ----------
-    system, word, M1, L, s0
-        As for :class:`AugmentedLP` (``word`` the designed worst-case word; the running
-        estimator ignores measurements the word lacks, so its error is the same on every
-        word with at least the designed word's measurements).
-    design_mode
-        The design reading whose optima are searched (default ``"masked_gain"``).
-    runtime
-        ``"theorem2"`` or ``"hold"`` (:data:`eqrec.design.augmented_model.RUNTIME_MODES`).
-    bound
-        ``"all"``: every time (the certified ``μ2``); ``"terminal"``: the end of the horizon only.
-    recover
-        Also require the running error to recover: its worst case at ``t = T`` at most ``M1``
-        (imposed where the running error is affine: the ``"theorem2"`` LP, the ``"hold"`` upper
-        LP; the lower LP of ``"hold"`` stays a relaxation, and the upper LP can be infeasible for
-        the injections it fixes even when a recovering optimum exists).
-    solver, options
-        LP solver of the registry and its options (every LP).
-    rel_tol, abs_tol
-        Tolerance of "optimal for the design LP".
+    system : AffineSystem
+        The model.
+    tree : PrefixTree
+        The delay language's prefix tree.
+    mu1 : float
+        Recovery level ``μ1``.
+    L : array_like, shape (n, p) or (T, n, p)
+        Observer gain ``L^α`` (used at steps whose measurement arrives on time, pattern (7)).
+    s0 : array_like, shape (n,)
+        Initial auxiliary state.
+    levels : {"common", "sum"}, optional
+        Minimise the largest level, or the paper's ``Σ_k Σ_α μ2,k^α`` (node levels
+        weighted by the sequences through them).
+    form : str, optional
+        Robust-counterpart form of :func:`eqrec.core.robust.add_robust_rows`.
 
     Returns
     -------
-    GuaranteeAmongOptima
-
-    Raises
-    ------
-    InputError
-        Unknown ``runtime`` or ``bound``.
-    InfeasibleDesign, SolverFailure
-        If an LP has no optimum.
+    AugmentedDelayLP
     """
-    check_mode(design_mode, DESIGN_MODES)
-    check_mode(runtime, RUNTIME_MODES)
-    if bound not in ("all", "terminal"):
-        raise InputError(f"bound must be 'all' or 'terminal', got {bound!r}", field="bound")
-    design = AugmentedLP(system, word, mu1, L, s0=s0, mode=design_mode)
-    opt = float(design.solve(solver, options).require_optimal(f"{design_mode} design LP ({solver})").objective)
-    level = opt * (1.0 + rel_tol) + abs_tol
-    n, T = system.n, design.T
-    rows_all = np.arange((T + 1) * n)
-    rows_bound = rows_all if bound == "all" else rows_all[T * n:]
-    agree = runtimes_agree_until(design.word)
-    rows_d, _ = design.robust_rows(L)  # the design reading's rows, shared by every LP below
+    t0 = time.perf_counter()
+    T = tree.depth
+    st = Stacking(system, T)
+    n, p = system.n, system.p
+    lay = st.layout
+    D = lay.size
+    phi, Ol = st.transition, st.open_loop
+    Lt, h0 = as_time_varying_L(L, T, n, p), -np.asarray(s0, float).reshape(n)
+    b = LPBuilder()
+    mu2 = int(b.add_variables(1, lower=mu1, name="mu2")[0])
+    b.set_cost(mu2, 1.0 if levels == "common" else 0.0)
+    m_cols, nu_cols, measured = {}, {}, {}
+    for node in tree:
+        taus = list(node.available)
+        measured[node.index] = taus
+        m_cols[node.index] = b.add_variables(n * p * len(taus), name=f"M[{node.label}]")
+        nu_cols[node.index] = b.add_variables(n, name=f"nu[{node.label}]")
+    through = tree.sequences_through()
+    level_cols = {}
+    for node in tree:
+        if not node.terminal and levels == "sum":
+            col = int(b.add_variables(1, lower=mu1)[0])
+            level_cols[node.index] = col
+            b.set_cost(col, float(through[node.index]))
+    er, ec, G0, gr, gc, gv, cr, cc, cv, lconst, lcol = [], [], [], [], [], [], [], [], [], [], []
+    row0 = ent0 = 0
+    for node in tree:
+        t = node.depth
+        # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here)
+        Lm = effective_L(Lt, ArrivalPattern(node.prefix.arrivals + (None,) * (T - t)), "theorem2")
+        Z, z0 = map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, h0))
+        blocks, cblocks = [], []
+        for s, anc in enumerate(tree.path(node.prefix)):
+            taus = measured[anc.index]
+            P = phi[t][s + 1]
+            if taus:
+                Zs = Z[taus].reshape(len(taus) * p, D)
+                blocks.append((m_cols[anc.index],
+                               (P[:, None, :, None] * Zs.T[None, :, None, :]).reshape(n * D, n * Zs.shape[0])))
+                zs = z0[taus].reshape(-1)
+                cblocks.append((m_cols[anc.index], (P[:, :, None] * zs[None, None, :]).reshape(n, -1)))
+            cblocks.append((nu_cols[anc.index], P))
+        const = Ol[t].reshape(-1)
+        K = np.hstack([k for _, k in blocks]) if blocks else np.zeros((n * D, 0))
+        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
+        idx = np.flatnonzero((const != 0) | np.any(K != 0, axis=1))
+        er.append(row0 + idx // D)
+        ec.append(idx % D)
+        G0.append(const[idx])
+        Ki = K[idx]
+        kr, kc = np.nonzero(Ki)
+        gr.append(kr + ent0)
+        gc.append(cols[kc])
+        gv.append(Ki[kr, kc])
+        ent0 += idx.size
+        Kc = np.hstack([k for _, k in cblocks])
+        ccols = np.concatenate([c for c, _ in cblocks])
+        rr, ccx = np.nonzero(Kc)
+        cr.append(row0 + rr)
+        cc.append(ccols[ccx])
+        cv.append(Kc[rr, ccx])
+        if node.terminal:
+            lconst.append(np.full(n, float(mu1)))
+            lcol.append(np.full(n, -1))
+        else:
+            lconst.append(np.zeros(n))
+            lcol.append(np.full(n, level_cols.get(node.index, mu2)))
+        row0 += n
+    nx = b.num_variables
+    rows = UncertainAffineRows(
+        entry_row=np.concatenate(er), entry_coord=np.concatenate(ec), G0=np.concatenate(G0),
+        Gx=sp.csr_matrix((np.concatenate(gv), (np.concatenate(gr), np.concatenate(gc))), shape=(ent0, nx)),
+        c0=np.zeros(row0),
+        cx=sp.csr_matrix((np.concatenate(cv), (np.concatenate(cr), np.concatenate(cc))), shape=(row0, nx)))
+    add_robust_rows(b, rows, lay.radius(system.eta_w, system.eta_v, mu1), level_const=np.concatenate(lconst),
+                    level_cols=np.concatenate(lcol), level_coef=1.0, form=form)
+    if levels == "sum":
+        for col in level_cols.values():  # the largest level is reported through mu2
+            b.add_rows(np.array([0, 0]), np.array([col, mu2]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
+                       count=1)
+    return AugmentedDelayLP(lp=b.build(), tree=tree, m_cols=m_cols, nu_cols=nu_cols, mu2_col=mu2,
+                            level_cols=level_cols, build_time=time.perf_counter() - t0)
 
-    def optima_lp(extra_rows, fixed: dict | None = None, recover_rows=None):
-        # the design LP's columns and robust rows, mu2 at most `level`, plus rows bounded by gamma (minimised)
-        b = LPBuilder()
-        mu2 = design.add_decision_variables(b, cost=False)
-        gamma = int(b.add_variables(1, lower=0.0, name="gamma")[0])
-        b.set_cost(gamma, 1.0)
-        b.add_rows(np.array([0]), np.array([mu2]), np.array([1.0]), lower=-np.inf, upper=level, count=1)
-        if fixed:
-            cols = np.fromiter(fixed, dtype=np.int64)
-            vals = np.array([fixed[c] for c in cols])
-            b.add_rows(np.arange(cols.size), cols, np.ones(cols.size), lower=vals, upper=vals, count=cols.size)
-        meta = design._rows_meta
-        add_robust_rows(b, rows_d, design.radius, level_const=meta["level_const"], level_col=mu2,
-                        level_coef=meta["level_coef"], form="abs")
-        if extra_rows.num_rows:
-            add_robust_rows(b, extra_rows, design.radius, level_const=0.0, level_col=gamma, level_coef=1.0,
-                            form="abs")
-        if recover_rows is not None:
-            add_robust_rows(b, recover_rows, design.radius, level_const=design.mu1, form="abs")
-        lp = b.build()
-        what = f"best {bound} guarantee ({runtime} runtime) among the {design_mode} optima ({solver})"
-        sol = solve_lp(lp, solver, options).require_optimal(what)
-        return sol, float(sol.x[gamma]), float(sol.x[mu2]), lp.shape
 
-    # the theorem2 running error: affine in (M, nu); for "hold" only its rows up to `agree` are the same
-    run = AugmentedLP(system, design.word, mu1, L, s0=design.s0, mode="theorem2")
-    if run.m_cols.keys() != design.m_cols.keys() or not np.array_equal(run.nu_cols, design.nu_cols):
-        raise AssertionError("design and runtime LPs do not share their columns")  # pragma: no cover
-    rows_t2, _ = run.robust_rows(L)
-    keep = rows_bound if runtime == "theorem2" else rows_bound[rows_bound < (agree + 1) * n]
-    terminal = rows_all[T * n:]
-    rec_t2 = _select_rows(rows_t2, terminal) if (recover and runtime == "theorem2") else None
-    sol, lower, mu2v, shape = optima_lp(_select_rows(rows_t2, keep), recover_rows=rec_t2)
-    shapes = [shape]
-    x = sol.x[: design._nx]
-    upper = lower
-    if runtime == "hold":
-        # gains of the injections ue(j), j < last missing step, fixed: the hold error is affine in the rest
-        q = arrival_indicator(design.word)
-        k_last = int(np.flatnonzero(q == 0).max()) if np.any(q == 0) else 0
-        early = [mc for (s_, _), mc in design.m_cols.items() if s_ < k_last] + [design.nu_cols[: k_last * n]]
-        early = np.concatenate(early) if early else np.zeros(0, np.int64)
-        free = np.setdiff1d(np.arange(1, design._nx), early)
-        rows_h = _running_rows(system, design, x.copy(), free, "hold", rows_bound)
-        rec_h = _running_rows(system, design, x.copy(), free, "hold", terminal) if recover else None
-        sol2, upper, mu2v, shape2 = optima_lp(rows_h, fixed={int(c): float(x[c]) for c in early}, recover_rows=rec_h)
-        shapes.append(shape2)
-        x = sol2.x[: design._nx]
-    return GuaranteeAmongOptima(lower=lower, upper=upper, bound=bound, runtime=runtime, design_mode=design_mode,
-                                design_optimum=opt, optimum_bound=level, gains=design.gains_from_x(x),
-                                design_mu2=mu2v, agree_until=agree, lp_shapes=shapes, solver=solver)
+def solve_augmented_delay(system: AffineSystem, patterns, mu1: float, L, s0, *, levels: str = "common",
+                          solver: str = "highs") -> tuple[AugmentedPrefixGains, LPSolution, AugmentedDelayLP]:
+    """Solve :func:`build_augmented_delay_lp` and read the gains per prefix node.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    patterns : PrefixTree or sequence of str or ArrivalPattern
+        The delay language.
+    mu1 : float
+        Recovery level ``μ1``.
+    L : array_like, shape (n, p) or (T, n, p)
+        Observer gain.
+    s0 : array_like, shape (n,)
+        Initial auxiliary state.
+    levels : {"common", "sum"}, optional
+        Cost of :func:`build_augmented_delay_lp`.
+    solver : str, optional
+        LP solver of the registry.
+
+    Returns
+    -------
+    gains : AugmentedPrefixGains
+    solution : LPSolution
+    model : AugmentedDelayLP
+    """
+    tree = patterns if isinstance(patterns, PrefixTree) else PrefixTree(patterns, kind="delay")
+    model = build_augmented_delay_lp(system, tree, mu1, L, s0, levels=levels)
+    sol = solve_lp(model.lp, solver).require_optimal("augmented delay design")
+    n, p = system.n, system.p
+    rows = {}
+    for node in tree:
+        k = len(node.available)
+        rows[node.prefix] = (sol.x[model.m_cols[node.index]].reshape(n, k * p), sol.x[model.nu_cols[node.index]])
+    gains = AugmentedPrefixGains(rows=rows, L=as_time_varying_L(L, tree.depth, n, p),
+                                 s0=np.asarray(s0, float).reshape(n))
+    return gains, sol, model

@@ -1,63 +1,35 @@
-r"""State-augmented equalized-recovery estimator (the *augmented paper*, eqs. (2)-(3), (9)-(10)).
+r"""The state-augmented estimator: one model for the augmented paper (P2) and form (4) of the delayed-data paper (P3).
 
 The estimator carries ``x̂`` and an auxiliary state ``s`` (a Luenberger-like
 estimate of the error :math:`\xi = x - \hat x`)::
 
     x̂(k+1) = A x̂(k) + B u(k) - ue(k) + f
-    s(k+1)  = A s(k) + ue(k) + L_k (ỹ(k) - C s(k))              (eq. (7); eq. (2) prints ŷ, a misprint)
-    ue(k)   = ν_k + Σ_{i<=k} M(k,i) (ỹ(i) - C s(i))             (eq. (3))
+    s(k+1)  = A s(k) + ue(k) + L_k (ỹ(k) - C s(k))              (P2 eq. (7), its eq. (2) misprints ŷ; P3 eq. (4))
+    ue(k)   = ν_k + Σ_{i ∈ A(k)} M(k, i) z(i),   z(i) = ỹ(i) - C s(i)   (P2 eq. (3); P3 eq. (5))
 
-with :math:`\tilde y = y - C\hat x` (the core's :math:`y_\xi`).  With
-:math:`e = \xi - s` the error of ``s``, :math:`\Phi_k = A_k - L_k C_k` and
-:math:`z_k = \tilde y_k - C s_k = C e_k + V v_k` (eq. (9)):
+with :math:`\tilde y = y - C\hat x` and ``A(k)`` the measurements available at
+``k``.  A missing-data word is a delay word whose measurements arrive on time or
+never, so one model serves both papers; gains are per event prefix (a word's
+gains are its path, :class:`AugmentedGains`).  With :math:`e = \xi - s`,
+:math:`\Phi_k = A_k - L_k C_k` and :math:`z_k = C e_k + V v_k` (P2 eq. (9)):
 
 .. math:: e_{k+1} = \Phi_k e_k + W w_k - L_k V v_k, \qquad
           \xi = \mathrm{Ol}\,\delta + S(\nu + M z),
 
-so for fixed ``L`` and ``s0`` the error is affine in ``(M, ν)`` with
-``z`` independent of them: a Q-parametrisation in which the innovation
-``z`` plays the role of the open-loop output (Theorem 1).
+so for fixed ``L`` and ``s0`` the error is affine in ``(M, ν)``
+(:func:`innovation_maps`; the LPs of :mod:`eqrec.design.augmented_lp`).  What runs, and its
+equivalence with the prefix-based estimator: :mod:`eqrec.design.augmented_runtime`.
 
-Missing data (Theorem 2) and readings of the text
---------------------------------------------------
-``mode`` selects how a step ``k`` whose measurement is missing is treated:
-
-``"theorem2"``
-    The text of Theorem 2: ``M(., k) = 0`` and ``L_k = 0`` (so
-    :math:`\Phi_k = A_k` and ``s(k+1) = A s(k) + ue(k)``).  Implementable;
-    the runtime sets ``ỹ(k) = 0``.
-``"hold"``
-    A *constant* ``L`` kept at missing steps with ``ỹ(k) = 0``:
-    ``s(k+1) = (A - L C) s(k) + ue(k)``.  Implementable (this is what a
-    single printed ``L`` implies at run time); ``e`` is then no longer
-    independent of ``M`` so it has no LP of its own, but its gains are
-    reachable through :func:`time_based_to_augmented`.
-``"leak"``
-    The stacked formulas (5) with only ``M Λ_i = 0`` imposed and a constant
-    ``L`` at the missing steps: the design's ``s`` receives
-    ``L_k (C e_k + V v_k)`` at a missing step, i.e. the missing measurement.
-    Not implementable; its gains run as the actual estimator in ``"hold"``
-    (or ``"theorem2"``) mode, where they guarantee what the certificate says.
-``"masked_gain"``
-    The Appendix's stacked matrices read with the transition products
-    ``Φ_i^k``, ``Γ`` built from ``Φ_k = A_k - L C_k`` at *every* step while
-    the gain on the measurement (the block-diagonal ``L`` of the ``Γ L V``
-    and ``(M + L)`` terms) is zeroed at missing steps: ``e(k+1) = (A - L C)
-    e(k) + W w(k)`` there.  What an implementation forming ``Φ`` from the
-    constant ``L`` and masking only the measurement term designs; not the
-    estimator that runs (at a missing step ``s`` has no measurement), so its
-    gains are certified in ``"hold"`` (or ``"theorem2"``) mode.
-
-Equivalence with the time-based estimator
------------------------------------------
-``s`` is a causal affine function of past ``ỹ`` and ``s0``, hence so is
-``ue``: every augmented estimator (implementable modes) *is* a time-based
-estimator ``ue = u0 + F ỹ`` (:func:`augmented_to_time_based`).  Conversely,
-for given ``L`` and ``s0`` the map ``ỹ -> z`` is affine with unit block
-lower-triangular linear part, so every time-based ``(F, u0)`` has a unique
-``(M, ν)`` (:func:`time_based_to_augmented`).  Consequently, for every ``L``
-and ``s0``, the optimal ``μ2`` of the augmented estimator equals the
-time-based optimum on the same word.
+Readings of a missing step (``mode``)
+-------------------------------------
+``"theorem2"``: P2's Theorem 2 and P3's pattern (7): ``L_k = 0`` unless ``y(k)``
+arrives at ``k`` (implementable).  ``"hold"``: a constant ``L`` kept at missing
+steps with ``ỹ(k) = 0`` (implementable; ``e`` then depends on ``M``, no LP of its
+own).  ``"leak"``: the stacked formulas (5) with only ``M Λ_i = 0`` and a constant
+``L``: ``s`` receives the missing measurement (design only; its gains run in
+``"hold"``).  ``"masked_gain"``: the Appendix's matrices with ``Φ_k = A - L C_k`` at
+every step and the measurement gain zeroed at missing steps (design only; its gains
+run in ``"hold"`` or ``"theorem2"``).
 """
 
 from __future__ import annotations
@@ -67,13 +39,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from eqrec.errors import InputError
-from eqrec.core.gains import GainSchedule, schedule_from_word_gains
 from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.words import as_pattern
-from eqrec.core.stacking import Stacking
+from eqrec.core.stacking import Stacking, UncertaintyLayout
 from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
 
 MODES = ("theorem2", "hold", "leak", "masked_gain")
 RUNTIME_MODES = ("theorem2", "hold")
@@ -101,12 +71,22 @@ def as_time_varying_L(L: np.ndarray, T: int, n: int, p: int) -> np.ndarray:
     raise InputError(f"L must have shape ({n}, {p}) or ({T}, {n}, {p}), got {L.shape}", field="L")
 
 
+def effective_L(L: np.ndarray, word: "ArrivalPattern | str", mode: str) -> np.ndarray:
+    """``L_k`` multiplying the measurement: zero unless ``y(k)`` arrives at ``k`` in ``"theorem2"``
+    (P2 eq. (12), P3 pattern (7)) and ``"masked_gain"``; ``L`` (shape ``(T, n, p)``) kept otherwise."""
+    L = np.array(L, dtype=float)
+    if mode in ("theorem2", "masked_gain"):
+        for k, a in enumerate(as_pattern(word).arrivals):
+            if a != k:
+                L[k] = 0.0
+    return L
+
+
 def missing_data_pattern(word: "ArrivalPattern | str") -> ArrivalPattern:
     """The pattern of ``word``, which must be a missing-data pattern (each measurement on time or never).
 
-    The augmented estimator of the augmented paper uses ``ỹ(k)`` at step ``k``
-    only; delayed measurements need the event-based design of the
-    delayed-data paper (``eqrec design --method prefix`` with delay words).
+    The readings of the augmented paper (P2) concern missing data; delay words
+    go through the prefix gains of :func:`eqrec.design.augmented_lp.solve_augmented_delay`.
     """
     pattern = as_pattern(word)
     if not pattern.is_missing_data:
@@ -122,23 +102,56 @@ def arrival_indicator(word: "ArrivalPattern | str") -> np.ndarray:
     return np.array([1 if pattern.arrives(k) else 0 for k in range(pattern.T)])
 
 
-def effective_L(L: np.ndarray, word: str, mode: str) -> np.ndarray:
-    """``L_k`` multiplying the measurement: zeroed at missing steps in ``"theorem2"`` (eq. (12)) and ``"masked_gain"``."""
-    L = np.array(L, dtype=float)
-    if mode in ("theorem2", "masked_gain"):
-        for k, q in enumerate(word):
-            if q == "0":
-                L[k] = 0.0
-    return L
+def innovation_maps(system: AffineSystem, Phi, L_meas, h0, const=np.asarray) -> tuple[list, list]:
+    r"""The innovations ``z(k) = Z[k] δ + Zh[k]`` of the error ``e = ξ - s`` (P2 eq. (9)), ``k = 0..T-1``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model (time-varying allowed).
+    Phi : sequence of T matrices (n, n)
+        Transitions ``Φ_k`` of ``e`` (``A_k - L_k C_k`` with the reading's ``L_k``).
+    L_meas : sequence of T matrices (n, p)
+        Gains on the measurement noise: ``e(k+1) = Φ_k e(k) + E w(k) - L_meas[k] V v(k)``.
+    h0 : array_like, shape (n,) or (n, m)
+        ``e(0) - ξ0``: ``-s0``, or ``-I`` for the maps per unit ``s0``.
+    const : callable, optional
+        Wraps the system's constant matrices (``casadi.DM`` to build the maps of a symbolic ``L``, ``s0``).
+
+    Returns
+    -------
+    Z : list of T matrices (p, D)
+        Linear part in the uncertainty ``δ`` (core layout).
+    Zh : list of T matrices (p,) or (p, m)
+        Part from ``h0``.
+    """
+    T, n, p = len(Phi), system.n, system.p
+    lay = UncertaintyLayout(T, system.nw, system.nv, n)
+    Ge, h = const(np.eye(n, lay.size, k=lay.xi0.start)), h0
+    Z, Zh = [], []
+    for k in range(T):
+        C, Vsel, Wsel = const(system.C_at(k)), np.zeros((p, lay.size)), np.zeros((n, lay.size))
+        Vsel[:, lay.v(k)] = system.V_at(k)
+        Wsel[:, lay.w(k)] = system.E_at(k)
+        Z.append(C @ Ge + const(Vsel))
+        Zh.append(C @ h)
+        Ge = Phi[k] @ Ge + const(Wsel) - L_meas[k] @ const(Vsel)
+        h = Phi[k] @ h
+    return Z, Zh
+
+
+def transitions(system: AffineSystem, L: np.ndarray) -> np.ndarray:
+    """``Φ_k = A_k - L_k C_k`` for an ``L`` sequence of shape ``(T, n, p)``."""
+    return np.stack([system.A_at(k) - L[k] @ system.C_at(k) for k in range(L.shape[0])])
 
 
 @dataclass
 class AugmentedGains:
-    """Gains ``(M, ν, L, s0)`` of the augmented estimator along one word (eq. (3)).
+    """Gains ``(M, ν, L, s0)`` of the augmented estimator along one word (P2 eq. (3)).
 
     Attributes
     ----------
-    word
+    word : str
         The designed (worst-case) word; ``M`` has zero columns at its missing steps.
     L : ndarray, shape (T, n, p)
         Observer gains ``L_k``.
@@ -146,7 +159,7 @@ class AugmentedGains:
     M : ndarray, shape (Tn, Tp)
         Block lower-triangular injection gains ``M(k, i)``.
     nu : ndarray, shape (Tn,)
-    mode
+    mode : str
         Missing-step reading used by the design.
     """
 
@@ -163,12 +176,18 @@ class AugmentedGains:
         return len(self.word)
 
 
-# ---------------------------------------------------------------------------
-# Stacked maps (eqs. (9)-(10) and Appendix)
-# ---------------------------------------------------------------------------
+@dataclass
+class AugmentedPrefixGains:
+    """``(M, ν)`` per event prefix (``M`` over the measurements available at the prefix's time), ``L``, ``s0``
+    (P3 eq. (5), constraint (6))."""
+
+    rows: dict[ArrivalPattern, tuple[np.ndarray, np.ndarray]]
+    L: np.ndarray  # (T, n, p)
+    s0: np.ndarray
+
 
 class AugmentedStacking:
-    """Stacked matrices of the augmented estimator on one word, built on :class:`eqrec.stacking.Stacking`.
+    """Stacked matrices of a P2 reading on one word (eqs. (9)-(10), Appendix), on :class:`eqrec.core.stacking.Stacking`.
 
     Parameters
     ----------
@@ -196,30 +215,12 @@ class AugmentedStacking:
         self.L_eff = effective_L(self.L, word, mode)
         # the transition keeps L at every step in the "masked_gain" reading
         L_phi = self.L if mode == "masked_gain" else self.L_eff
-        self.Phi = np.stack([system.A_at(k) - L_phi[k] @ system.C_at(k) for k in range(T)])
-        self._propagate()
-
-    def _propagate(self) -> None:
-        sys, lay, T, n = self.system, self.st.layout, self.T, self.system.n
-        D = lay.size
-        Ge = np.zeros((T + 1, n, D))
-        He = np.zeros((T + 1, n, n))  # e(k) = Ge[k] δ + He[k] s0
-        Ge[0][:, lay.xi0] = np.eye(n)
-        He[0] = -np.eye(n)
-        for k in range(T):
-            Ge[k + 1] = self.Phi[k] @ Ge[k]
-            Ge[k + 1][:, lay.w(k)] += sys.E_at(k)
-            Ge[k + 1][:, lay.v(k)] -= self.L_eff[k] @ sys.V_at(k)
-            He[k + 1] = self.Phi[k] @ He[k]
-        self.Ge, self.He = Ge, He
-        Z = np.einsum("kpn,knd->kpd", np.stack([sys.C_at(k) for k in range(T)]), Ge[:T])
-        for k in range(T):
-            Z[k][:, lay.v(k)] += sys.V_at(k)
-        self.Z = Z  # z(k) = Z[k] δ + Zs[k] s0 (innovation, eq. (9))
-        self.Zs = np.einsum("kpn,knm->kpm", np.stack([sys.C_at(k) for k in range(T)]), He[:T])
+        self.Phi = transitions(system, L_phi)
+        # z(k) = Z[k] δ + Zs[k] s0 (innovation, eq. (9))
+        self.Z, self.Zs = map(np.stack, innovation_maps(system, self.Phi, self.L_eff, -np.eye(n)))
         self.G0 = self.st.open_loop.reshape((T + 1) * n, -1)  # constant part of G
         self.Hs = np.zeros(((T + 1) * n, n))  # constant part of c per unit s0
-        if self.mode == "masked_gain":
+        if mode == "masked_gain":
             self._literal_maps()
 
     # -- the error as a function of (M, ν, s0) ---------------------------------
@@ -256,29 +257,11 @@ class AugmentedStacking:
                 "L": sla.block_diag(*self.L_eff), "W": self.st.E_blk,
                 "V": sla.block_diag(*[sys.V_at(k) for k in range(T)])}
 
-    def paper_blocks(self, M: np.ndarray) -> dict[str, np.ndarray]:
-        """Eq. (5) literally: ``Θ, Ψ, Ξ, Υ`` from the Appendix matrices with time-varying ``Φ_k``.
-
-        ``C``, ``V`` and ``W`` are unmasked; missing data enters only through
-        ``M Λ_i = 0`` and the block-diagonal ``L`` (zero at missing steps in
-        ``"theorem2"`` and ``"masked_gain"``; the transition ``Φ_k`` keeps ``L``
-        in ``"masked_gain"``).
-        """
-        m = self.appendix_matrices()
-        Ebig, Abig, Gam, Phib, Cbig, Lbig, Wbig, Vbig = (m[k] for k in ("E", "A", "Gamma", "Phi", "C", "L", "W", "V"))
-        I = np.eye(Abig.shape[0])
-        ML = M + Lbig
-        Theta = (I + Ebig @ ML @ Cbig) @ Gam @ Wbig
-        Psi = (Ebig @ ML @ (np.eye(Cbig.shape[0]) - Cbig @ Gam @ Lbig) - Gam @ Lbig) @ Vbig
-        Xi = (I + Ebig @ ML @ Cbig) @ Phib
-        Ups = Abig - Xi
-        return {"Theta": Theta, "Psi": Psi, "Xi": Xi, "Upsilon": Ups, "E": Ebig, "Gamma": Gam, "Phi": Phib}
-
     def _literal_maps(self) -> None:
         """``G = G0 + E M Z``, ``c = E ν - E M (CΦ) s0 + H s0`` read off the Appendix blocks (eq. (5)).
 
         For the consistent readings these equal the dynamics' open-loop and
-        innovation maps (a test checks it); for ``"masked_gain"`` they are the
+        innovation maps (tests/test_augmented.py checks eq. (5) literally); for ``"masked_gain"`` they are the
         definition of the reading.
         """
         m = self.appendix_matrices()
@@ -291,170 +274,3 @@ class AugmentedStacking:
         self.Z = np.hstack([Cbig @ Gam @ Wbig, CGL @ Vbig, Cbig @ Phib]).reshape(T, p, -1)
         self.Zs = -(Cbig @ Phib).reshape(T, p, n)
         self.Hs = Abig - Phib - ELC @ Phib
-
-# ---------------------------------------------------------------------------
-# Conversion between augmented and time-based gains
-# ---------------------------------------------------------------------------
-
-def _masked_L(gains_L: np.ndarray, word: str, runtime: str) -> np.ndarray:
-    return effective_L(gains_L, word, "theorem2" if runtime == "theorem2" else "hold")
-
-
-def _innovation_recursion(system: AffineSystem, word: str, Lt: np.ndarray, s0: np.ndarray, injection):
-    r"""Propagate ``s(k) = Sy ỹ + sc`` through eqs. (2)-(3) for an injection rule.
-
-    At each step the innovation ``z(k) = q(k) ỹ(k) - C s(k)`` is affine in the
-    stacked ``ỹ``: ``z = Z ỹ + zc`` (rows of step ``k`` filled here), and
-    ``injection(k, Z, zc)`` returns the time-based gain row ``(F_k, u0_k)`` of
-    ``ue(k) = u0_k + F_k ỹ``.  Shared by both conversion directions.
-
-    Returns ``Z`` (``Tp x Tp``, unit block lower triangular on measured steps) and ``zc``.
-    """
-    T, n, p = len(word), system.n, system.p
-    q = arrival_indicator(word)
-    Sy = np.zeros((n, T * p))
-    sc = np.asarray(s0, float).reshape(n).copy()
-    Z = np.zeros((T * p, T * p))
-    zc = np.zeros(T * p)
-    for k in range(T):
-        C = system.C_at(k)
-        rows = slice(k * p, (k + 1) * p)
-        Z[rows] = -C @ Sy
-        if q[k]:
-            Z[rows, rows] += np.eye(p)
-        zc[rows] = -C @ sc
-        Fk, uk = injection(k, Z, zc)
-        # s(k+1) = A s + ue + L (q ỹ - C s)
-        Ak = system.A_at(k)
-        Sy_next = Ak @ Sy + Fk - Lt[k] @ C @ Sy
-        if q[k]:
-            Sy_next[:, rows] += Lt[k]
-        sc = Ak @ sc + uk - Lt[k] @ C @ sc
-        Sy = Sy_next
-    return Z, zc
-
-
-def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains, runtime: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Time-based gains ``(F, u0)`` producing the same ``x̂`` as the augmented estimator.
-
-    Propagates ``s(k) = Sy[k] ỹ + sc[k]`` (affine in the stacked ``ỹ``) through
-    eqs. (2)-(3) with ``ỹ(k) = 0`` at missing steps, and reads
-    ``ue = u0 + F ỹ``.
-
-    Parameters
-    ----------
-    runtime
-        ``"theorem2"`` or ``"hold"``: how the running estimator treats a
-        missing step (default: the design mode, ``"hold"`` for ``"leak"``).
-
-    Returns
-    -------
-    F : ndarray, shape (Tn, Tp)
-        Block lower triangular, zero columns at missing steps.
-    u0 : ndarray, shape (Tn,)
-    """
-    runtime = runtime or ("theorem2" if gains.mode == "theorem2" else "hold")
-    check_mode(runtime, RUNTIME_MODES)
-    word, T = gains.word, gains.T
-    n, p = system.n, system.p
-    L = _masked_L(as_time_varying_L(gains.L, T, n, p), word, runtime)
-    q = arrival_indicator(word)
-    F = np.zeros((T * n, T * p))
-    u0 = np.zeros(T * n)
-
-    def injection(k, Z, zc):
-        Mk = gains.M[k * n:(k + 1) * n]
-        F[k * n:(k + 1) * n] = Mk @ Z
-        u0[k * n:(k + 1) * n] = gains.nu[k * n:(k + 1) * n] + Mk @ zc
-        return F[k * n:(k + 1) * n], u0[k * n:(k + 1) * n]
-
-    _innovation_recursion(system, word, L, gains.s0, injection)
-    F[:, np.repeat(q == 0, p)] = 0.0  # ỹ is zero there: those columns are immaterial
-    return F, u0
-
-
-def time_based_to_augmented(system: AffineSystem, word: str, F: np.ndarray, u0: np.ndarray, L: np.ndarray,
-                            s0: np.ndarray, runtime: str = "theorem2") -> AugmentedGains:
-    """Inverse of :func:`augmented_to_time_based` for given ``L`` and ``s0``.
-
-    With ``ue = u0 + F ỹ`` fixed, ``s`` and the innovation ``z = ỹ - C s``
-    are affine in ``ỹ``: ``z_m = P ỹ_m + p0`` on the measured steps, with
-    ``P`` unit block lower triangular.  Hence ``M_m = F_m P^{-1}`` and
-    ``ν = u0 - M_m p0`` reproduce ``ue`` exactly.
-    """
-    word = missing_data_pattern(word).label
-    check_mode(runtime, RUNTIME_MODES)
-    T, n, p = len(word), system.n, system.p
-    F = np.asarray(F, float)
-    u0 = np.asarray(u0, float)
-    if F.shape != (T * n, T * p) or u0.shape != (T * n,):
-        raise InputError(f"F must be {(T * n, T * p)} and u0 ({T * n},), got {F.shape} and {u0.shape}")
-    Lt = _masked_L(as_time_varying_L(L, T, n, p), word, runtime)
-    q = arrival_indicator(word)
-    P, p0 = _innovation_recursion(system, word, Lt, s0,
-                                  lambda k, Z, zc: (F[k * n:(k + 1) * n], u0[k * n:(k + 1) * n]))
-    meas = np.repeat(q == 1, p)
-    Pm = P[np.ix_(meas, meas)]
-    Mm = sla.solve_triangular(Pm.T, F[:, meas].T, lower=False, unit_diagonal=True).T  # F_m P_m^{-1}
-    M = np.zeros((T * n, T * p))
-    M[:, meas] = Mm
-    nu = u0 - Mm @ p0[meas]
-    return AugmentedGains(word=word, L=as_time_varying_L(L, T, n, p), s0=np.asarray(s0, float).reshape(n).copy(),
-                          M=M, nu=nu, mode=runtime)
-
-
-def schedule_from_augmented(system: AffineSystem, gains: AugmentedGains, runtime: str | None = None) -> GainSchedule:
-    """The converted time-based :class:`GainSchedule` (``time_based=True``) of an augmented design."""
-    F, u0 = augmented_to_time_based(system, gains, runtime)
-    tree = PrefixTree([gains.word])
-    return schedule_from_word_gains(tree, {gains.word: (F, u0)}, system.n, system.p, time_based=True)
-
-
-# ---------------------------------------------------------------------------
-# Runtime estimator
-# ---------------------------------------------------------------------------
-
-class AugmentedEstimator:
-    """Causal augmented estimator running both recursions of eqs. (2)-(3).
-
-    Parameters
-    ----------
-    system
-        The model.
-    gains
-        Designed gains (the designed word fixes which measurements are used:
-        like the time-based estimator it ignores measurements the designed
-        word lacks).
-    xhat0
-        Initial estimate.
-    runtime
-        ``"theorem2"`` or ``"hold"`` treatment of missing steps.
-    """
-
-    def __init__(self, system: AffineSystem, gains: AugmentedGains, xhat0: np.ndarray, runtime: str | None = None):
-        self.runtime = check_mode(runtime or ("theorem2" if gains.mode == "theorem2" else "hold"), RUNTIME_MODES)
-        self.system, self.gains = system, gains
-        T, n, p = gains.T, system.n, system.p
-        self.L = _masked_L(as_time_varying_L(gains.L, T, n, p), gains.word, self.runtime)
-        self.xhat = np.asarray(xhat0, float).reshape(n).copy()
-        self.s = np.asarray(gains.s0, float).reshape(n).copy()
-        self._k = 0
-        self._z: list[np.ndarray] = []
-
-    def step(self, y: np.ndarray | None, u: np.ndarray | None = None) -> np.ndarray:
-        """Process time ``k`` (``y=None`` if missing); returns ``x̂(k+1)``."""
-        sys, g, k = self.system, self.gains, self._k
-        n, p = sys.n, sys.p
-        if k >= g.T:
-            raise InputError(f"the estimator's horizon T = {g.T} is over")
-        C = sys.C_at(k)
-        used = y is not None and g.word[k] == "1"
-        ytil = (np.asarray(y, float).reshape(p) - C @ self.xhat) if used else np.zeros(p)
-        self._z.append(ytil - C @ self.s)
-        Mrow = g.M[k * n:(k + 1) * n, : (k + 1) * p]
-        ue = g.nu[k * n:(k + 1) * n] + Mrow @ np.concatenate(self._z)
-        u = np.zeros(sys.m) if u is None else np.asarray(u, float).reshape(-1)
-        self.s = sys.A_at(k) @ self.s + ue + self.L[k] @ (ytil - C @ self.s)
-        self.xhat = sys.A_at(k) @ self.xhat + sys.B_at(k) @ u - ue + sys.f
-        self._k += 1
-        return self.xhat.copy()

@@ -13,7 +13,7 @@ import numpy as np
 
 from eqrec.core.solvers import ipopt_options
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L, innovation_maps
 from eqrec.errors import InputError
 
 
@@ -32,19 +32,29 @@ class NLPResult:
 
 
 def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, *, free_L: bool = True,
-                     free_s0: bool = True, time_varying_L: bool = False, options: dict | None = None) -> NLPResult:
+                     free_s0: bool = True, options: dict | None = None) -> NLPResult:
     """Solve the nonconvex problem (11) with IPOPT (CasADi), variables ``M, ν, μ2, L, s0`` and ``a >= |G|``.
+
+    The innovation maps are :func:`eqrec.design.augmented_model.innovation_maps` on CasADi expressions of
+    the symbolic ``L`` and ``s0``.
 
     Parameters
     ----------
-    model
-        An :class:`AugmentedLP` giving the word, mode and structure.
-    init
+    model : AugmentedLP
+        Gives the word, mode, columns and structure.
+    init : AugmentedGains
         Initial guess (e.g. the LP optimum at a pole-placement ``L``).
-    free_L, free_s0
+    init_mu2 : float
+        ``μ2`` of the initial guess.
+    free_L, free_s0 : bool, optional
         Fix ``L`` / ``s0`` at the initial value when false (then the problem is the LP, solved by IPOPT).
-    time_varying_L
-        One ``L_k`` per step instead of a constant ``L`` (the paper prints one matrix).
+    options : dict or None, optional
+        IPOPT options (:func:`eqrec.core.solvers.ipopt_options`).
+
+    Returns
+    -------
+    NLPResult
+        Gains with one constant ``L`` (the paper prints one matrix), ``μ2``, IPOPT status and statistics.
     """
     import casadi as ca
 
@@ -54,7 +64,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
     sysm, T, n, p, word = model.system, model.T, model.system.n, model.system.p, model.word
     lay = model.st.layout
     D = lay.size
-    nL = (T if time_varying_L else 1) * n * p
+    nL = n * p  # one constant L (the paper prints one matrix)
     Lsym = ca.SX.sym("L", nL)
     s0 = ca.SX.sym("s0", n)
     msyms = {key: ca.SX.sym(f"M_{key[0]}_{key[1]}", n * p) for key in model.m_cols}
@@ -64,25 +74,12 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
     def Lk(k):
         if word[k] == "0" and model.mode == "theorem2":
             return ca.SX.zeros(n, p)
-        off = (k if time_varying_L else 0) * n * p
-        return ca.reshape(Lsym[off:off + n * p], p, n).T  # row-major n x p
+        return ca.reshape(Lsym[0:n * p], p, n).T  # row-major n x p
 
-    # e(k) = Ge[k] δ + He[k] s0 ; z(k) = C e + V v
-    Ge = ca.SX(np.eye(n, D, k=lay.xi0.start))
-    ec = -s0
-    Z, z0 = [], []
-    for k in range(T):
-        C = sysm.C_at(k)
-        Zk = ca.mtimes(ca.DM(C), Ge)
-        Vsel = np.zeros((p, D))
-        Vsel[:, lay.v(k)] = sysm.V_at(k)
-        Z.append(Zk + ca.DM(Vsel))
-        z0.append(ca.mtimes(ca.DM(C), ec))
-        Ph = ca.DM(sysm.A_at(k)) - ca.mtimes(Lk(k), ca.DM(C))
-        Wsel = np.zeros((n, D))
-        Wsel[:, lay.w(k)] = sysm.E_at(k)
-        Ge = ca.mtimes(Ph, Ge) + ca.DM(Wsel) - ca.mtimes(Lk(k), ca.DM(Vsel))
-        ec = ca.mtimes(Ph, ec)
+    # z(k) = Z[k] δ + z0[k] (eq. (9)) as expressions of the symbolic L and s0
+    Ls = [Lk(k) for k in range(T)]
+    Phi = [ca.DM(sysm.A_at(k)) - ca.mtimes(Ls[k], ca.DM(sysm.C_at(k))) for k in range(T)]
+    Z, z0 = innovation_maps(sysm, Phi, Ls, -s0, const=ca.DM)
     phi = model.st.transition
     Ol = model.st.open_loop
     ue_G = [None] * T
@@ -126,7 +123,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
                        ipopt_options(options, prefix=False, **{"ipopt.acceptable_tol": 1e-7}))
     # initial point
     L0 = as_time_varying_L(init.L, T, n, p)
-    Lvec0 = (L0.reshape(T, -1) if time_varying_L else L0[0].reshape(1, -1)).reshape(-1)
+    Lvec0 = L0[0].reshape(-1)
     mvec0 = np.concatenate([init.M[s * n:(s + 1) * n, i * p:(i + 1) * p].reshape(-1) for (s, i) in model.m_cols])
     aug0 = AugmentedStacking(sysm, word, init.L, model.mode, model.st)
     G0, _ = aug0.error_map(init.M, init.nu, init.s0)
@@ -157,7 +154,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
     nuv = x[o:o + T * n]
     o += T * n
     Lv = x[o:o + nL]
-    L = Lv.reshape(T, n, p) if time_varying_L else Lv.reshape(n, p)
+    L = Lv.reshape(n, p)
     s0v = x[o + nL:o + nL + n]
     gains = AugmentedGains(word=word, L=as_time_varying_L(L, T, n, p), s0=s0v, M=M, nu=nuv, mode=model.mode)
     return NLPResult(gains=gains, mu2=float(x[0]), status=str(st.get("return_status")),

@@ -30,7 +30,7 @@ from eqrec.core.words import as_language, extend_word, worst_case_pattern
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import schedule_from_augmented
+from eqrec.design.augmented_runtime import schedule_from_augmented
 from eqrec.design.mu1_min import MinRecoveryLevel, min_recovery_level
 from eqrec.design.observers import PolePlacement, deadbeat_observer, place_observer
 from eqrec.design.prefix import build_prefix_lp, design_prefix

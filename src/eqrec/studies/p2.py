@@ -32,9 +32,10 @@ from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.acc import acc_system
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented import design_augmented
-from eqrec.design.augmented_lp import OPTIMUM_ATOL, OPTIMUM_RTOL, AugmentedLP, best_guarantee_among_optima
-from eqrec.design.augmented_model import (AugmentedEstimator, AugmentedGains, AugmentedStacking,
-                                          augmented_to_time_based, schedule_from_augmented)
+from eqrec.design.augmented_guarantee import OPTIMUM_ATOL, OPTIMUM_RTOL, best_guarantee_among_optima
+from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking
+from eqrec.design.augmented_runtime import AugmentedEstimator, augmented_to_time_based, schedule_from_augmented
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.time_based import design_time_based

@@ -23,7 +23,7 @@ with ``cfg`` the validated ``p3`` section:
 ``values``      our value of every published P3 number with its evidence (:mod:`eqrec.studies.p3_values`).
 
 No mathematics here: the designs are :mod:`eqrec.design.delay` and
-:mod:`eqrec.design.delay_augmented`, the languages :mod:`eqrec.core.patterns`,
+:mod:`eqrec.design.augmented_lp`, the languages :mod:`eqrec.core.patterns`,
 the filters :mod:`eqrec.filters`.
 """
 
@@ -46,7 +46,8 @@ from eqrec.design.cost import cost_weights
 from eqrec.design.delay import FreeMu1Result, delay_language, design_delay, design_delay_global
 from eqrec.design.report import level_table, path_levels, word_certificate
 from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
-from eqrec.design.delay_augmented import augmented_to_prefix, solve_augmented_delay
+from eqrec.design.augmented_lp import solve_augmented_delay
+from eqrec.design.augmented_runtime import augmented_to_prefix
 from eqrec.design.observers import place_observer
 from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
