@@ -57,14 +57,14 @@ def test_cost_counts_k0_and_kT_as_mu1_per_sequence(reactor, small_language, engi
         assert np.all(word_certificate(d, pat).bounds.max(axis=1) <= lv * (1 + 1e-6))
 
 
-def test_acc_language_with_mu1_1_is_the_p1_prefix_problem(acc):
+def test_acc_language_with_mu1_1_is_the_p1_prefix_problem(acc, published):
     """Sec. IV-B: the missing-data language written as delays, μ1 = 1: the same problem as P1's prefix design."""
     p1 = design_prefix(acc, ["101111", "110111", "111011", "111101"], 1.0)
     d_max = design_delay(acc, ACC_DELAY, 1.0, cost="max")
     d_sum = design_delay(acc, ACC_DELAY, 1.0, cost="sum")
     assert d_max.mu2 == pytest.approx(p1.mu2, rel=1e-9)
     assert d_sum.mu2 == pytest.approx(p1.mu2, rel=1e-7)  # the sum cost reaches the same largest level
-    assert round(d_max.mu2, 4) == 1.1498
+    assert round(d_max.mu2, 4) == published("P3-ACC:mu2")
     assert min(d_sum.levels.values()) == pytest.approx(1.0)  # time-varying: not always at the maximum
 
 
@@ -105,10 +105,10 @@ def test_min_recovery_level_is_bracketed_and_certified(acc):
 
 
 @pytest.mark.parametrize("cost", ["sum", "max"])
-def test_acc_mu1_free_global_and_ipopt(acc, cost):
+def test_acc_mu1_free_global_and_ipopt(acc, cost, published):
     g = design_delay_global(acc, ACC_DELAY, cost=cost, rtol=1e-4)
     assert g.gap <= 1e-4 and g.design.certificate is not None
-    assert round(g.design.mu2, 4) == 0.3991  # footnote 1 of Sec. IV-B (μ1 free)
+    assert round(g.design.mu2, 4) == published("P3-ACC:footnote-mu1-free")  # footnote 1 of Sec. IV-B (μ1 free)
     # the lower bound holds on a grid of μ1 (fixed-μ1 LPs)
     tree = PrefixTree(delay_language(ACC_DELAY, max_delay=6))
     for mu in np.linspace(g.mu1, 3 * g.mu1, 7)[1:]:
@@ -138,21 +138,21 @@ def test_delay_design_certified_and_worst_vertices_attained(reactor, small_langu
     assert json.loads(json.dumps(js))["mu1"] == d.mu1  # serialisable as the CLI writes it
 
 
-def test_batch_reactor_at_the_printed_mu1(reactor):
-    """P3-BR: all 243 words, sum cost, μ1 = 0.33 (the printed, rounded μ1): largest level 0.6912 as printed."""
+def test_batch_reactor_at_the_printed_mu1(reactor, published):
+    """P3-BR: all 243 words, sum cost, μ1 = 0.33 (the printed, rounded μ1): the largest level as printed (P3-BR:max-mu2)."""
     d = design_delay(reactor, full_delay_language(5, 2), 0.33, cost="sum")
     assert len(d.patterns) == 162
-    assert round(d.mu2, 4) == 0.6912
+    assert round(d.mu2, 4) == published("P3-BR:max-mu2")
     assert d.certificate.mu2 <= d.mu2 * (1 + 1e-6)
 
 
-def test_batch_reactor_mu1_free_global(reactor):
-    """μ1 free: the optimum is the smallest feasible μ1 (0.32931, printed rounded as 0.33)."""
+def test_batch_reactor_mu1_free_global(reactor, published):
+    """μ1 free: the optimum is the smallest feasible μ1 (0.32931; the paper prints it rounded, P3-BR:mu1)."""
     g = design_delay_global(reactor, full_delay_language(5, 2), cost="sum", rtol=1e-4)
     assert g.gap <= 1e-4
-    assert round(g.mu1, 2) == 0.33 and g.mu1 < 0.33
+    assert round(g.mu1, 2) == published("P3-BR:mu1") and g.mu1 < published("P3-BR:mu1")
     assert g.mu1 == pytest.approx(g.mu1_min.upper, rel=1e-9)
-    assert g.design.mu2 < 0.6912  # max μ2 = ||A^2||_inf μ1 (no data at times 0, 1) is below the printed value
+    assert g.design.mu2 < published("P3-BR:max-mu2")  # max μ2 = ||A^2||_inf μ1 (no data at times 0, 1) is below the printed value
     A2 = np.linalg.matrix_power(batch_reactor().A, 2)
     assert g.design.mu2 == pytest.approx(np.abs(A2).sum(axis=1).max() * g.mu1, rel=1e-7)
 

@@ -73,7 +73,7 @@ def test_s0_invariance(acc, L0, tb_100111):
     assert np.abs(augmented_to_time_based(acc, g_bad)[1] - u00).max() > 1e-3
 
 
-def test_design_augmented_certified(acc, tb_100111):
+def test_design_augmented_certified(acc, tb_100111, published):
     d = design_augmented(acc, ["101111", "110111"], 1.0)
     assert d.method == "augmented" and d.words == ("100111",)
     assert d.schedule.time_based
@@ -81,7 +81,7 @@ def test_design_augmented_certified(acc, tb_100111):
     assert d.certificate.terminal <= 1.0 + 1e-7
     assert set(d.extra) >= {"L", "s0", "M", "nu"}
     d2 = design_augmented(acc, ["111111"], 1.0, L=np.zeros((3, 2)), solver="clarabel")
-    assert d2.certificate.mu2 == pytest.approx(1.05, abs=1e-6)
+    assert d2.certificate.mu2 == pytest.approx(published("P2-F1:mu2-time"), abs=1e-6)  # no missing data
 
 
 def test_ipopt_free_design(acc, tb_100111):
@@ -98,9 +98,9 @@ def test_ipopt_solves_the_lp(acc, L0, tb_100111):
     assert np.allclose(res.gains.L, m.L)
 
 
-def test_strictly_causal_reading_is_worse(acc, L0):
+def test_strictly_causal_reading_is_worse(acc, L0, published):
     m = AugmentedLP(acc, "111111", 1.0, L0, strictly_causal=True)
-    assert m.solve().objective > 1.05 + 1e-3
+    assert m.solve().objective > published("P2-F1:mu2-time") + 1e-3
 
 
 def test_bad_inputs(acc):
@@ -114,18 +114,19 @@ def test_bad_inputs(acc):
         design_augmented(acc, ["111111"], 1.0, mode="hold")
 
 
-def test_masked_gain_reading_reproduces_fig2_and_the_fig3b_interval(acc):
-    """The Appendix read with Φ = A - LC at every step gives the published 1.05 and [-10/14, 13/14]."""
-    Lp = np.array([[0.76, 0.04], [0.11, 1.97], [0.8, 1.97]])  # printed L of Fig. 2 (input data of the figure)
+def test_masked_gain_reading_reproduces_fig2_and_the_fig3b_interval(acc, published):
+    """The Appendix read with Φ = A - LC at every step gives the published μ2 (P2-F2:mu2-masked-gain) and [-10/14, 13/14]."""
+    Lp = published("P2-F2:L")  # printed L of Fig. 2 (input data of the figure)
+    mu2 = published("P2-F2:mu2-masked-gain")
     m = AugmentedLP(acc, "100111", 1.0, Lp, mode="masked_gain")
-    assert m.solve().objective == pytest.approx(1.05, abs=1e-7)
+    assert m.solve().objective == pytest.approx(mu2, abs=1e-7)
     flat = []
     for k in range(-12, 16):
         if k == 0:
             continue
         m.set_L(place_observer(acc.A, acc.C, np.array([0.0, k / 14, k / 14])).L)
         sol = m.solve()
-        if sol.optimal and abs(sol.objective - 1.05) < 1e-6:
+        if sol.optimal and abs(sol.objective - mu2) < 1e-6:
             flat.append(k)
     assert flat == [k for k in range(-10, 14) if k != 0]
     d = design_augmented(acc, ["101111", "110111"], 1.0, L=Lp, mode="masked_gain")
@@ -144,13 +145,8 @@ def test_deadbeat_observer_where_place_poles_refuses(acc):
 # --------------------------------------------------------------------------- best guarantee among the LP's optima
 
 @pytest.fixture(scope="module")
-def printed_L():
-    from pathlib import Path
-
-    from eqrec.studies.claims import published_value
-
-    return np.asarray(published_value(Path(__file__).resolve().parents[1] / "config" / "claims.yaml", "P2-F2:L"),
-                      float)
+def printed_L(published):
+    return published("P2-F2:L")
 
 
 def test_runtimes_agree_until(acc, printed_L):
