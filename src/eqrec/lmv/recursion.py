@@ -108,6 +108,16 @@ def _smoother_step(sys: MultNoiseSystem, M: np.ndarray, Pj: np.ndarray, Qe: np.n
 
 # --------------------------------------------------------------------------- recursion
 
+def _histories(T: int, n: int, m: int, x0_mean: np.ndarray,
+               x0_cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The arrays of Theorem 1 over ``t = 0..T`` with its initial values: ``q`` and ``P`` (``T+2`` entries,
+    ``q(0) = E x(0) E x(0)^T + Cov x(0)``, ``P(0|-1) = Cov x(0)``), ``L`` and ``Qe`` (``T+1``, to fill)."""
+    q = np.empty((T + 2, n, n))
+    P = np.empty((T + 2, n, n))
+    q[0] = np.outer(x0_mean, x0_mean) + x0_cov
+    P[0] = x0_cov
+    return q, P, np.empty((T + 1, n, m)), np.empty((T + 1, m, m))
+
 @dataclass
 class LMVResult:
     """Output of :func:`lmv_recursion` over ``t = 0..T`` (``T+1`` instants).
@@ -149,13 +159,7 @@ def lmv_recursion(sys: MultNoiseSystem, T: int, check_stability: bool = True) ->
     T = int(T)
     if check_stability:
         check_ms_stable(sys)
-    n, m = sys.n, sys.m
-    q = np.empty((T + 2, n, n))
-    P = np.empty((T + 2, n, n))
-    L = np.empty((T + 1, n, m))
-    Qe = np.empty((T + 1, m, m))
-    q[0] = np.outer(sys.x0_mean, sys.x0_mean) + sys.x0_cov
-    P[0] = sys.x0_cov
+    q, P, L, Qe = _histories(T, sys.n, sys.m, sys.x0_mean, sys.x0_cov)
     for t in range(T + 1):
         Qe[t], L[t], P[t + 1] = lmv_step(sys, P[t], q[t])
         q[t + 1] = _moment_step(sys, q[t])
@@ -257,13 +261,7 @@ def theorem1_as_printed(plant: Plant, eta_bar: float, T: int) -> dict[str, np.nd
     """
     eb = check_eta(eta_bar)
     Phi, Phi1, G, H, H1 = plant.Phi, plant.Phi1, plant.Gamma, plant.H, plant.H1
-    n, m = plant.n, plant.m
-    q = np.empty((T + 2, n, n))
-    P = np.empty((T + 2, n, n))
-    L = np.empty((T + 1, n, m))
-    Qe = np.empty((T + 1, m, m))
-    q[0] = np.outer(plant.sigma0, plant.sigma0) + plant.Sigma0
-    P[0] = plant.Sigma0
+    q, P, L, Qe = _histories(T, plant.n, plant.m, plant.sigma0, plant.Sigma0)
     GQG = G @ plant.Qw @ G.T
     for t in range(T + 1):
         qt, Pt = q[t], P[t]
