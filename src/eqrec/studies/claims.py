@@ -64,7 +64,7 @@ import numpy as np
 import yaml
 
 from eqrec.errors import InputError
-from eqrec.studies.harness import get_logger
+from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import write_csv, write_text
 
 if TYPE_CHECKING:

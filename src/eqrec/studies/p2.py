@@ -39,7 +39,7 @@ from eqrec.design.time_based import design_time_based
 from eqrec.errors import EqrecError
 from eqrec.studies import p2_figures, p2_sweeps, p2_values
 from eqrec.studies.claims import published_value
-from eqrec.studies.harness import get_logger
+from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import write_json, write_npz
 from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
 

@@ -22,7 +22,7 @@ import pandas as pd
 from eqrec.core.systems import acc_system
 from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import INTERMEDIATE, write_csv
 from eqrec.studies.p2_readings import heatmap_poles, variant_word
 

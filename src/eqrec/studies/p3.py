@@ -50,7 +50,7 @@ from eqrec.design.result import Design
 from eqrec.filters import GaussianDesign, compare_with_bounds, error_maps, make_filter, truncated_normal_deltas
 from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
 from eqrec.studies import p3_figures, p3_strategy, p3_values
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import write_csv, write_json, write_npz, write_text
 
 log = get_logger("p3")

@@ -116,7 +116,7 @@ from eqrec.design.delay import design_delay, design_lp_status, level_table, min_
 from eqrec.design.result import Design
 from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
-from eqrec.studies.harness import get_logger
+from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import TIMING_KEYS, read_json, save_figure, write_csv, write_json, write_npz, write_text
 from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot
 

@@ -34,7 +34,7 @@ from eqrec.lmv.model import (LMVResult, Plant, apply_estimator, hold_input_syste
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies import configuration, p4_figures
 from eqrec.studies.config_checks import plant_of
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import write_csv, write_json, write_npz
 
 log = get_logger("p4")
