@@ -119,7 +119,7 @@ class Wildcards(dict):
 
 def get_step(study: str, step: str) -> Step:
     """The function of one step, from the step registry (:mod:`eqrec.studies.steps`)."""
-    from eqrec.studies.steps import get_step as lookup  # imports every study module: not at planning time
+    from eqrec.studies.steps import get_step as lookup  # imports the study's modules: not at planning time
 
     return lookup(study, step)
 

@@ -5,8 +5,10 @@ step's function and of every ``eqrec`` module that imports, transitively, plus
 the harness that runs it (:func:`code_inputs`), so editing code a step does
 not import (a figure's rule does not import the LP modules) does not re-run
 its job.  The step's module is read from the step registry's tables
-(:func:`step_module`: ``STUDIES`` of :mod:`eqrec.studies.steps`, then the
-study's ``STEPS``), without importing them: the Snakefile asks at planning
+(:func:`step_module`: the import of each study's table in
+:func:`eqrec.studies.steps.steps_of`, then the study's ``STEPS``, whose entries
+name functions as ``step_x`` or ``module.step_x``, and ``**module.STEPS``),
+without importing them: the Snakefile asks at planning
 time, and importing the study modules there would cost seconds.
 
 :func:`eqrec_imports` is the package's one import walker (also used by the
@@ -34,7 +36,7 @@ def _package_root() -> Path:
 NOT_FOLLOWED = frozenset({("eqrec.studies.configuration", "eqrec.studies.config_checks"),
                           ("eqrec.studies.harness", "eqrec.studies.steps")})
 
-#: The module whose ``STUDIES`` table maps each study to its ``STEPS`` table.
+#: The step registry: its ``steps_of`` imports each study's ``STEPS`` table.
 REGISTRY = "eqrec.studies.steps"
 
 
@@ -205,12 +207,24 @@ def _step_modules(module: str, table: str) -> dict[str, str]:
     return out
 
 
+def _study_tables() -> dict[str, tuple[str, str]]:
+    """``study -> (module, table name)`` from the registry's ``steps_of``: each ``if study == "p1":`` branch
+    imports one table (``from eqrec.studies.p1 import STEPS``)."""
+    out: dict[str, tuple[str, str]] = {}
+    for node in ast.walk(_tree(module_path(REGISTRY))):
+        if (isinstance(node, ast.If) and isinstance(node.test, ast.Compare)
+                and isinstance(node.test.comparators[0], ast.Constant)):
+            for stmt in node.body:
+                if isinstance(stmt, ast.ImportFrom):
+                    out[node.test.comparators[0].value] = (stmt.module, stmt.names[0].name)
+    return out
+
+
 def step_module(study: str, step: str) -> str:
-    """The module defining the function of step ``(study, step)``, read from the step registry's tables with
-    :mod:`ast` (the registry's ``STUDIES`` and the study's ``STEPS``; nothing imported, so the Snakefile can ask)."""
-    studies = {}
-    for key, value in zip((t := _table(REGISTRY, "STUDIES")).keys, t.values):
-        studies[key.value] = _refers_to(REGISTRY, value)
+    """The module defining the function of step ``(study, step)``, read with :mod:`ast` from the step registry
+    (:func:`eqrec.studies.steps.steps_of`) and the study's ``STEPS`` table; nothing is imported, so the
+    Snakefile can ask."""
+    studies = _study_tables()
     if study not in studies:
         raise StepError(f"unknown study {study!r}; choose from {list(studies)}")
     steps = _step_modules(*studies[study])
