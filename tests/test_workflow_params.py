@@ -73,7 +73,10 @@ def test_figure_rules_do_not_list_the_design_modules_as_code(default_rules):
         code = [f for f in inputs if f.startswith("src/")]
         assert "src/eqrec/studies/plotting.py" in code and "src/eqrec/studies/harness.py" in code, rule
         assert not any("/design/" in f or f.endswith(("core/lp.py", "core/solvers.py")) for f in code), rule
-    # the LP steps do list them, and no P4 rule lists them
+    # and an edit to a figures module does not re-run the LPs: their rules do not list it
+    assert not any(f.endswith("_figures.py") for rule in ("p1_designs", "p2_designs", "p3_acc", "p3_reactor_designs")
+                   for f in default_rules[rule][1])
+    # the LP steps do list the design modules, and no P4 rule lists them
     assert "src/eqrec/design/classes.py" in default_rules["p3_strategy"][1]
     assert "src/eqrec/design/prefix.py" in default_rules["p1_designs"][1]
     for rule, (p, inputs) in default_rules.items():

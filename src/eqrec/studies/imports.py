@@ -5,9 +5,10 @@ step's function and of every ``eqrec`` module that imports, transitively, plus
 the harness that runs it (:func:`code_inputs`), so editing code a step does
 not import (a figure's rule does not import the LP modules) does not re-run
 its job.  The step's module is read from the step registry's tables
-(:func:`step_module`: the import of each study's table in
-:func:`eqrec.studies.steps.steps_of`, then the study's ``STEPS``, whose entries
-name functions as ``step_x`` or ``module.step_x``, and ``**module.STEPS``),
+(:func:`step_module`: the tables each study's branch of
+:func:`eqrec.studies.steps.steps_of` imports, then those ``STEPS`` tables,
+whose entries name functions as ``step_x`` or ``module.step_x``, and
+``**module.STEPS``),
 without importing them: the Snakefile asks at planning
 time, and importing the study modules there would cost seconds.
 
@@ -207,16 +208,21 @@ def _step_modules(module: str, table: str) -> dict[str, str]:
     return out
 
 
-def _study_tables() -> dict[str, tuple[str, str]]:
-    """``study -> (module, table name)`` from the registry's ``steps_of``: each ``if study == "p1":`` branch
-    imports one table (``from eqrec.studies.p1 import STEPS``)."""
-    out: dict[str, tuple[str, str]] = {}
+def _study_tables() -> dict[str, list[tuple[str, str]]]:
+    """``study -> [(module, "STEPS"), ...]`` from the registry's ``steps_of``: each ``if study == "p1":`` branch
+    imports the study's modules (``from eqrec.studies import p1, p1_figures``) and lists their tables
+    (``tables = p1.STEPS, p1_figures.STEPS``)."""
+    out: dict[str, list[tuple[str, str]]] = {}
     for node in ast.walk(_tree(module_path(REGISTRY))):
-        if (isinstance(node, ast.If) and isinstance(node.test, ast.Compare)
+        if not (isinstance(node, ast.If) and isinstance(node.test, ast.Compare)
                 and isinstance(node.test.comparators[0], ast.Constant)):
-            for stmt in node.body:
-                if isinstance(stmt, ast.ImportFrom):
-                    out[node.test.comparators[0].value] = (stmt.module, stmt.names[0].name)
+            continue
+        local = {a.asname or a.name: f"{stmt.module}.{a.name}" for stmt in node.body
+                 if isinstance(stmt, ast.ImportFrom) for a in stmt.names}
+        tables = [v for stmt in node.body if isinstance(stmt, ast.Assign)
+                  for v in (stmt.value.elts if isinstance(stmt.value, ast.Tuple) else [stmt.value])]
+        out[node.test.comparators[0].value] = [(local[t.value.id], t.attr) for t in tables
+                                               if isinstance(t, ast.Attribute) and isinstance(t.value, ast.Name)]
     return out
 
 
@@ -227,7 +233,7 @@ def step_module(study: str, step: str) -> str:
     studies = _study_tables()
     if study not in studies:
         raise StepError(f"unknown study {study!r}; choose from {list(studies)}")
-    steps = _step_modules(*studies[study])
+    steps = {name: module for table in studies[study] for name, module in _step_modules(*table).items()}
     if step not in steps:
         raise StepError(f"study {study!r} has no step {step!r}; steps: {sorted(steps)}")
     return steps[step]

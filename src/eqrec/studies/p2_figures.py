@@ -218,3 +218,7 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
     ax.set_ylabel(r"optimal $\mu_2$")
     ax.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, frameon=False)
     save_figure(f, outputs.pdf, outputs.png)
+
+
+STEPS = {"figure_trajectories": step_figure_trajectories, "figure_heatmap": step_figure_heatmap,
+         "figure_realaxis": step_figure_realaxis}

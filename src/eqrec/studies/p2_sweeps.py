@@ -161,3 +161,6 @@ def constant_interval(lam: np.ndarray, mu2: np.ndarray, tol: float) -> list[floa
             start = None
     s, e = max(runs, key=lambda se: lam[se[1]] - lam[se[0]])
     return [float(lam[s]), float(lam[e])]
+
+
+STEPS = {"heatmap_chunk": step_heatmap_chunk, "heatmap_merge": step_heatmap_merge, "realaxis": step_realaxis}

@@ -49,7 +49,6 @@ from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
 from eqrec.filters import GaussianDesign, compare_with_bounds, error_maps, make_filter, truncated_normal_deltas
 from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
-from eqrec.studies import p3_figures, p3_strategy, p3_values
 from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import write_csv, write_json, write_npz, write_text
 
@@ -436,11 +435,6 @@ STEPS = {
     "reactor_designs": step_reactor_designs,
     "augmented": step_augmented,
     "kalman": step_kalman,
-    "figure1": p3_figures.step_figure1,
     "acc": step_acc,
     "acc_simulate": step_acc_simulate,
-    "figure2": p3_figures.step_figure2,
-    "values": p3_values.step_values,
-    # P3-IMPL (Sec. III-B3) and the scale table (target p3_scale, outside `all`)
-    **p3_strategy.STEPS,
 }

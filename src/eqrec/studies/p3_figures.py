@@ -78,3 +78,6 @@ def step_figure2(cfg, inputs, outputs, wildcards) -> None:
     fig.suptitle(f"ACC, true pattern {pattern} (missing data at k = 1), {data['proposed_errors'].shape[0]} runs, "
                  rf"$\mu_1$ = {float(data['mu1']):g}")
     save_figure(fig, outputs.pdf, outputs.png)
+
+
+STEPS = {"figure1": step_figure1, "figure2": step_figure2}
