@@ -9,7 +9,7 @@ in the study's section, validated once by the Snakefile,
 :class:`MissingConfigKey` naming it.
 
 A step is a plain function ``step(cfg, inputs, outputs, wildcards)`` listed
-in its study module's ``STEPS`` table; the step registry
+in the ``STEPS`` table of the module that defines it; the step registry
 (:mod:`eqrec.studies.steps`) maps ``(study, step)`` to it.  Outside Snakemake::
 
     from eqrec.studies import configuration, harness

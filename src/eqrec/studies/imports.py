@@ -32,12 +32,12 @@ def _package_root() -> Path:
 
 #: Imports the code-input walk does not follow: the configuration checks run when the workflow is planned, never
 #: inside a step through the harness (a changed check re-validates the configuration at the next start; a step
-#: that imports them itself lists them); the step registry imports every study module, and a step's code is its
-#: own module and what that imports.
+#: that imports them itself lists them); the step registry imports the modules of every study, and a step's code
+#: is its own module and what that imports.
 NOT_FOLLOWED = frozenset({("eqrec.studies.configuration", "eqrec.studies.config_checks"),
                           ("eqrec.studies.harness", "eqrec.studies.steps")})
 
-#: The step registry: its ``steps_of`` imports each study's ``STEPS`` table.
+#: The step registry: its ``steps_of`` imports the ``STEPS`` tables of each study.
 REGISTRY = "eqrec.studies.steps"
 
 
