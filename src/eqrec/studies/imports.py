@@ -58,13 +58,9 @@ def _module_path(name: str, pkg: Path) -> Path | None:
     return None
 
 
-@functools.lru_cache(maxsize=None)
-def _parsed(path: Path, mtime_ns: int) -> ast.Module:
-    return ast.parse(path.read_text())
-
-
 def _tree(path: Path) -> ast.Module:
-    return _parsed(path, path.stat().st_mtime_ns)
+    """A source file's syntax tree (not kept: the caches hold what is read from it, freeing a tree costs time)."""
+    return ast.parse(path.read_text())
 
 
 def eqrec_imports(path: str | Path) -> list[str]:
@@ -84,7 +80,7 @@ def eqrec_imports(path: str | Path) -> list[str]:
 def _imports_of(path: Path, mtime_ns: int) -> tuple[str, ...]:
     """:func:`eqrec_imports`, walked once per file version."""
     out: list[str] = []
-    for node in ast.walk(_parsed(path, mtime_ns)):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "eqrec":
             out.append(node.module)
             out += [f"{node.module}.{a.name}" for a in node.names]
@@ -136,7 +132,7 @@ def _bindings(module: str) -> dict[str, tuple[str, str | None]]:
 @functools.lru_cache(maxsize=None)
 def _bindings_of(module: str, path: Path, mtime_ns: int) -> dict[str, tuple[str, str | None]]:
     out: dict[str, tuple[str, str | None]] = {}
-    for node in _parsed(path, mtime_ns).body:
+    for node in _tree(path).body:
         if isinstance(node, ast.ImportFrom) and node.module:
             for a in node.names:
                 out[a.asname or a.name] = (node.module, a.name)
@@ -196,6 +192,12 @@ def _refers_to(module: str, expr: ast.expr) -> tuple[str, str]:
 
 def _step_modules(module: str, table: str) -> dict[str, str]:
     """``step -> module defining its function`` of one ``STEPS`` table (``**other.STEPS`` entries included)."""
+    path = module_path(module)
+    return dict(_step_modules_of(module, table, path.stat().st_mtime_ns if path else 0))
+
+
+@functools.lru_cache(maxsize=None)
+def _step_modules_of(module: str, table: str, mtime_ns: int) -> tuple[tuple[str, str], ...]:
     out: dict[str, str] = {}
     node = _table(module, table)
     for key, value in zip(node.keys, node.values):
@@ -205,15 +207,21 @@ def _step_modules(module: str, table: str) -> dict[str, str]:
             out[key.value] = _defining_module(*_refers_to(module, value))
         else:
             raise StepError(f"{module}.{table}: keys are step names")
-    return out
+    return tuple(out.items())
 
 
 def _study_tables() -> dict[str, list[tuple[str, str]]]:
     """``study -> [(module, "STEPS"), ...]`` from the registry's ``steps_of``: each ``if study == "p1":`` branch
     imports the study's modules (``from eqrec.studies import p1, p1_figures``) and lists their tables
     (``tables = p1.STEPS, p1_figures.STEPS``)."""
+    path = module_path(REGISTRY)
+    return _study_tables_of(path, path.stat().st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=None)
+def _study_tables_of(path: Path, mtime_ns: int) -> dict[str, list[tuple[str, str]]]:
     out: dict[str, list[tuple[str, str]]] = {}
-    for node in ast.walk(_tree(module_path(REGISTRY))):
+    for node in ast.walk(_tree(path)):
         if not (isinstance(node, ast.If) and isinstance(node.test, ast.Compare)
                 and isinstance(node.test.comparators[0], ast.Constant)):
             continue
