@@ -1,9 +1,10 @@
 """The import graph of ``src/eqrec``: every module in a layer (core <- design <- studies; lmv on its own; the CLI
 and the package namespace on top), imports only downwards, and no circle between modules."""
-import ast
 from pathlib import Path
 
 import pytest
+
+from eqrec.studies.imports import eqrec_imports
 
 PKG = Path(__file__).resolve().parents[1] / "src" / "eqrec"
 
@@ -39,27 +40,18 @@ MODULES = {_module_name(f): f for f in sorted(PKG.rglob("*.py"))}
 
 
 def _module_imports(path: Path) -> set[str]:
-    """The ``eqrec`` modules a file imports (also inside functions: a lazy import is still a dependency)."""
-    out = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "eqrec":
-            out |= {f"{node.module}.{a.name}" for a in node.names if f"{node.module}.{a.name}" in MODULES}
-            if node.module in MODULES:
-                out.add(node.module)
-        elif isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name in MODULES}
-    return out - {_module_name(path)}
+    """The ``eqrec`` modules a file imports (also inside functions: a lazy import is still a dependency), read by
+    the package's one import walker."""
+    return {name for name in eqrec_imports(path) if name in MODULES} - {_module_name(path)}
 
 
 def _imports(path: Path):
-    tree = ast.parse(path.read_text())
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("eqrec."):
-            yield node.module.split(".")[1]
-        elif isinstance(node, ast.Import):
-            for alias in node.names:
-                if alias.name.startswith("eqrec."):
-                    yield alias.name.split(".")[1]
+    """The subpackages (or top-level modules) of ``eqrec`` a file imports from (``__init__`` for a name of the
+    package itself, such as ``from eqrec import __version__``)."""
+    for name in eqrec_imports(path):
+        parts = name.split(".")
+        if len(parts) > 1:
+            yield parts[1] if f"eqrec.{parts[1]}" in MODULES else "__init__"
 
 
 @pytest.mark.parametrize("sub", sorted(k for k in ALLOWED if (PKG / k).is_dir()))
@@ -124,3 +116,21 @@ def test_no_import_circle_between_modules():
     graph = {name: _module_imports(f) for name, f in MODULES.items()}
     assert len(graph) > 50 and "eqrec.cli" in graph and "eqrec.models" in graph
     assert not _circles(graph), f"import circles: {_circles(graph)}"
+
+
+def test_the_step_registry_imports_every_table_of_steps_and_nothing_loads_a_module_by_name():
+    """The steps the workflow runs are edges of the graph: the registry imports each module with a STEPS table,
+    and no study module imports another one only to list its steps (a figures module is not an edge of the
+    study module, so a figure's rule does not list the LP code as its code)."""
+    with_steps = {name for name, f in MODULES.items() if name.startswith("eqrec.studies.")
+                  and any(line.startswith("STEPS = ") for line in f.read_text().splitlines())}
+    registry = _module_imports(MODULES["eqrec.studies.steps"])
+    studies = {"eqrec.studies." + s for s in ("p1", "p2", "p3", "p4", "claims", "notebooks")}
+    assert studies <= with_steps and with_steps <= registry
+    for name in ("p1_figures", "p3_figures", "p3_strategy"):
+        assert "eqrec.studies." + name in with_steps
+    for study in ("p1", "p3"):
+        assert not any(m.startswith(f"eqrec.studies.{study}_") for m in _module_imports(MODULES["eqrec.studies." + study]))
+    for name, f in MODULES.items():
+        if name.startswith("eqrec.studies"):
+            assert "importlib" not in f.read_text() and "__import__" not in f.read_text(), name

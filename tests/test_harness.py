@@ -1,4 +1,4 @@
-"""The study harness: registry, configuration with schema defaults, atomic writers, logs and exit status."""
+"""The study harness: step registry, configuration with schema defaults, atomic writers, logs and exit status."""
 import ast
 import copy
 import json
@@ -13,7 +13,7 @@ import yaml
 from snakemake.iocontainers import Namedlist
 
 from eqrec.errors import InputError
-from eqrec.studies import harness
+from eqrec.studies import harness, imports, logs, steps
 from eqrec.studies import outputs
 from eqrec import errors
 from eqrec.studies import configuration
@@ -23,7 +23,7 @@ RULES = ROOT / "workflow" / "rules"
 
 
 def _rule_steps():
-    """(rule, study, step) of every rule that runs the harness."""
+    """(rule, study, step, body) of every rule that runs the harness."""
     out = []
     for smk in RULES.glob("*.smk"):
         text = smk.read_text()
@@ -31,17 +31,22 @@ def _rule_steps():
             if "RUN_STEP" in body:
                 study = re.search(r'study="(\w+)"', body).group(1)
                 step = re.search(r'step="(\w+)"', body).group(1)
-                out.append((rule, study, step))
+                out.append((rule, study, step, body))
     return out
 
 
 def test_every_rule_runs_a_registered_step_through_the_one_script():
-    steps = _rule_steps()
-    reg = harness.registry()
-    assert len(steps) >= 27
-    for rule, study, step in steps:
+    rules = _rule_steps()
+    reg = steps.registry()
+    assert len(rules) >= 27
+    for rule, study, step, body in rules:
         assert (study, step) in reg, rule
         assert rule == "claims" or rule == f"{study}_{step}", rule  # rule names follow the steps
+        # its code inputs are those of its own step, its configuration keys of its own section
+        assert f'code=code_inputs("{study}", "{step}")' in body, rule
+        cfg = re.search(r"cfg=(.*?),\n    script:", body, flags=re.S).group(1)
+        assert cfg == "{}" or cfg.startswith(f'step_config(\n            "{study}",') or \
+            cfg.startswith(f'step_config("{study}",'), (rule, cfg)
     for smk in RULES.glob("*.smk"):
         assert "shell:" not in smk.read_text() and "python -m" not in smk.read_text(), smk.name
     script = (ROOT / "workflow" / "scripts" / "run_step.py").read_text()
@@ -124,12 +129,34 @@ def test_a_step_cannot_write_a_timing_next_to_the_results(tmp_path):
     assert (tmp_path / "tt.csv").read_text() == "r,solve_time\n0.0,0.1\n1.0,0.2\n"
 
 
-def test_code_inputs_follow_the_imports_of_each_study():
-    p1, p4 = harness.code_inputs("p1"), harness.code_inputs("p4")
-    assert "src/eqrec/studies/p1.py" in p1 and "src/eqrec/design/sweeps.py" in p1
-    assert not any("/lmv/" in p for p in p1)  # an LMV edit does not re-run the P1 LPs
-    assert not any("/design/" in p or "/core/" in p for p in p4)
-    assert "src/eqrec/studies/harness.py" in p1 and "src/eqrec/studies/harness.py" in p4
+def test_code_inputs_follow_the_imports_of_each_step():
+    designs, model4 = imports.code_inputs("p1", "designs"), imports.code_inputs("p4", "mc")
+    assert "src/eqrec/studies/p1.py" in designs and "src/eqrec/design/sweeps.py" in designs
+    assert not any("/lmv/" in p for p in designs)  # an LMV edit does not re-run the P1 LPs
+    # P4 runs no LP (it lists core/patterns.py: config_checks, which its steps import, parses delay words)
+    assert not any("/design/" in p or p.endswith(("core/lp.py", "core/solvers.py")) for p in model4)
+    assert "src/eqrec/studies/config_checks.py" in model4  # imported by the step, not only at planning
+    assert "src/eqrec/studies/config_checks.py" not in designs  # P1 steps do not import it
+    for files in (designs, model4):  # the harness that runs the step, not the registry of every study
+        assert "src/eqrec/studies/harness.py" in files and "src/eqrec/studies/steps.py" not in files
+    # a figure's step imports its figures module, not the study's LP modules
+    fig = imports.code_inputs("p1", "figure1")
+    assert "src/eqrec/studies/p1_figures.py" in fig and "src/eqrec/studies/p1.py" not in fig
+    assert not any("/design/" in p for p in fig)
+
+
+def test_step_modules_read_with_ast_are_those_of_the_registered_functions():
+    """The Snakefile reads a step's module from the tables without importing them: the same as importing."""
+    for (study, step), fn in steps.registry().items():
+        assert imports.step_module(study, step) == fn.__module__, (study, step)
+    with pytest.raises(errors.StepError, match="no step 'nope'"):
+        imports.step_module("p1", "nope")
+
+
+def test_the_import_walker_sees_lazy_imports(tmp_path):
+    src = tmp_path / "m.py"
+    src.write_text("import os\nfrom eqrec.core import lp\n\ndef f():\n    import eqrec.design.delay\n")
+    assert imports.eqrec_imports(src) == ["eqrec.core", "eqrec.core.lp", "eqrec.design.delay"]
 
 
 # --------------------------------------------------------------------------- atomic writers
@@ -232,9 +259,9 @@ def test_unknown_steps_are_named():
 def test_progress_lines(caplog):
     import logging
 
-    log = harness.get_logger("p2")
+    log = logs.get_logger("p2")
     with caplog.at_level(logging.INFO, logger="eqrec.studies"):
-        prog = harness.Progress(log, 20, "sweep")
+        prog = logs.Progress(log, 20, "sweep")
         for _ in range(20):
             prog.advance()
     lines = [r.getMessage() for r in caplog.records]

@@ -10,7 +10,7 @@ from eqrec.errors import InputError
 from eqrec.studies import harness
 from eqrec.studies import configuration
 from eqrec.studies.p2_readings import one_based_word, variant_word
-from eqrec.studies.p2_sweeps import constant_interval
+from eqrec.studies.p2_grids import constant_interval
 
 
 def test_one_based_word():

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.studies import harness
+from eqrec.studies import harness, imports
 from eqrec.studies import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,7 +32,7 @@ def workdir(tmp_path):
     return tmp_path
 
 
-def test_p1_override_replans_p1_jobs_and_reaches_the_step(workdir):
+def test_p1_override_replans_the_jobs_that_read_it_and_reaches_the_step(workdir):
     out = run(["--cores", "1", "results/p1/model.json", "--forcerun", "p1_model"], workdir)
     assert out.returncode == 0, out.stderr[-3000:]
     same = run(["-n", "results/p1/model.json"], workdir)
@@ -41,8 +41,13 @@ def test_p1_override_replans_p1_jobs_and_reaches_the_step(workdir):
     plan = run(["-n", "results/p1/model.json", "--configfile", "override.yaml"], workdir)
     text = plan.stdout + plan.stderr
     assert plan.returncode == 0, text[-3000:]
+    assert "p1_model" not in text  # the model's step does not read mu1 or the solvers: not re-planned
+    (workdir / "model.yaml").write_text("p1:\n  acc_constants: {Ts: 0.2}\n")
+    plan = run(["-n", "results/p1/model.json", "--configfile", "model.yaml"], workdir)
+    text = plan.stdout + plan.stderr
+    assert plan.returncode == 0, text[-3000:]
     assert "rule p1_model" in text and "Params have changed since last execution" in text
-    changes = run(["--list-changes", "params", "--configfile", "override.yaml"], workdir)
+    changes = run(["--list-changes", "params", "--configfile", "model.yaml"], workdir)
     assert "results/p1/model.json" in changes.stdout
     (workdir / "results/p1/designs.json").unlink()  # copied without metadata: let the override build it
     out = run(["--cores", "1", "results/p1/designs.json", "--configfile", "override.yaml"], workdir)
@@ -51,7 +56,7 @@ def test_p1_override_replans_p1_jobs_and_reaches_the_step(workdir):
     assert designs["M1"] == 1.5 and list(designs["designs"]["prefix"]["solvers"]) == ["highs"]
     assert "[p1] step designs done" in (workdir / "logs/p1/designs.log").read_text()
     # an edit to code P1 does not import (the LMV model) does not re-plan P1
-    assert not any("/lmv/" in p for p in harness.code_inputs("p1"))
+    assert not any("/lmv/" in p for step in ("model", "designs") for p in imports.code_inputs("p1", step))
 
 
 def test_config_override_on_the_command_line(workdir):

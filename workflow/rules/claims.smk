@@ -1,6 +1,5 @@
 # The comparison table: every published number next to ours, worded by the
 # templates of config/claims.yaml from the evidence in the values.json files.
-CLAIMS_CODE = code_inputs("claims")
 
 
 rule claims:
@@ -9,7 +8,7 @@ rule claims:
         claims="config/claims.yaml",
         values=VALUES_FILES,
         timings=TIMING_VALUES_FILES,
-        code=CLAIMS_CODE,
+        code=code_inputs("claims", "table"),
     output:
         csv=report(
             "results/claims.csv", caption="../report/claims.rst", category="Claims"

@@ -1,18 +1,26 @@
 # Shared by the rules files. Every rule is thin: it runs the one generic
 # script, workflow/scripts/run_step.py, which calls
 # eqrec.studies.harness.run_from_snakemake; the rule's params name the step
-# (study, step) and carry cfg, the study's configuration section as Snakemake
-# resolved it (config files, --configfile, --config; validated by the
-# Snakefile). A changed value therefore re-plans that study's jobs (params
-# rerun trigger) and reaches them. No mathematics here.
+# (study, step) and carry cfg, the configuration keys that step reads (no
+# more), as Snakemake resolved them (config files, --configfile, --config;
+# validated by the Snakefile), nested as in the study's section. A changed
+# value therefore re-plans the jobs whose step reads it (params rerun trigger),
+# and only those: a figure's parameter re-plans that figure. A step reading a
+# key its rule does not give fails naming the key (harness.StepConfig).
 #
-# Each study's rules list as `code` inputs the package modules that study
-# imports, transitively (harness.code_inputs walks the imports with ast), so
-# editing code a study does not import (e.g. eqrec/lmv for P1) does not re-run
-# its jobs. configuration.section_params sorts the section's keys, so only a changed
-# value re-plans.
-from eqrec.studies.configuration import section_params
-from eqrec.studies.harness import code_inputs
+# Each rule lists as `code` inputs the package modules its step imports,
+# transitively (the module defining the step function, found in the step
+# registry's tables, and what it imports; eqrec.studies.imports reads them
+# with ast), so editing code a step does not import (the LP modules for a
+# figure, eqrec/lmv for P1) does not re-run its job. No mathematics here.
+from functools import partial
+
+from eqrec.studies.configuration import step_params
+from eqrec.studies.imports import code_inputs
+
+# A rule's cfg param: step_config("p3", "strategy.figure", ...), the keys its
+# step reads of config["p3"] ("mu1", "heatmap.solver", or a whole subtree).
+step_config = partial(step_params, config)
 
 # The paper's value of one claim (config/claims.yaml, the only place published
 # numbers live), for rules that evaluate the paper's own design or draw a published

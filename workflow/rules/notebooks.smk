@@ -8,7 +8,6 @@
 from eqrec.studies.notebooks import READS as NOTEBOOK_READS
 from eqrec.studies.notebooks import rule_inputs as notebook_inputs
 
-NOTEBOOKS_CODE = code_inputs("notebooks")
 NOTEBOOKS = sorted(NOTEBOOK_READS)
 
 
@@ -16,7 +15,7 @@ rule notebooks_execute:
     """One notebook executed: .ipynb with its outputs, and its HTML rendering."""
     input:
         unpack(notebook_inputs),
-        code=NOTEBOOKS_CODE,
+        code=code_inputs("notebooks", "execute"),
     output:
         ipynb="results/notebooks/{name}.ipynb",
         html=report(

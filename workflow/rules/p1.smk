@@ -1,7 +1,5 @@
 # P1: prefix-based estimator (Rutledge, Yong, Ozay, ACC 2019).
 # Each rule runs one step of eqrec.studies.p1 through the harness (common.smk).
-P1_CODE = code_inputs("p1")
-P1_CFG = section_params(config, "p1")
 VALUES_FILES.append("results/p1/values.json")
 TIMING_VALUES_FILES.append("results/timings/p1/values.json")
 
@@ -9,7 +7,7 @@ TIMING_VALUES_FILES.append("results/timings/p1/values.json")
 rule p1_model:
     """P1-T1: ACC model from the Table I constants."""
     input:
-        code=P1_CODE,
+        code=code_inputs("p1", "model"),
     output:
         json="results/p1/model.json",
     log:
@@ -17,7 +15,7 @@ rule p1_model:
     params:
         study="p1",
         step="model",
-        cfg=P1_CFG,
+        cfg=step_config("p1", "acc_constants"),
     script:
         RUN_STEP
 
@@ -25,7 +23,7 @@ rule p1_model:
 rule p1_designs:
     """P1-M2, P1-TIME: prefix- and time-based designs on L1, certified, timed, probed."""
     input:
-        code=P1_CODE,
+        code=code_inputs("p1", "designs"),
     output:
         json="results/p1/designs.json",
         timings="results/timings/p1/designs.json",
@@ -34,7 +32,16 @@ rule p1_designs:
     params:
         study="p1",
         step="designs",
-        cfg=P1_CFG,
+        cfg=step_config(
+            "p1",
+            "acc_constants",
+            "language",
+            "mu1",
+            "probe_gap",
+            "probe_solvers",
+            "solvers",
+            "timing_repeats",
+        ),
     script:
         RUN_STEP
 
@@ -42,7 +49,7 @@ rule p1_designs:
 rule p1_simulate:
     """P1-F1: Monte Carlo runs of both estimators on the same draws."""
     input:
-        code=P1_CODE,
+        code=code_inputs("p1", "simulate"),
     output:
         npz="results/p1/simulation.npz",
     log:
@@ -50,7 +57,7 @@ rule p1_simulate:
     params:
         study="p1",
         step="simulate",
-        cfg=P1_CFG,
+        cfg=step_config("p1", "acc_constants", "language", "mu1", "simulation"),
     script:
         RUN_STEP
 
@@ -59,7 +66,7 @@ rule p1_figure1:
     """P1-F1 figure."""
     input:
         npz="results/p1/simulation.npz",
-        code=P1_CODE,
+        code=code_inputs("p1", "figure1"),
     output:
         pdf="results/p1/fig1_trajectories.pdf",
         png=report(
@@ -72,7 +79,7 @@ rule p1_figure1:
     params:
         study="p1",
         step="figure1",
-        cfg=P1_CFG,
+        cfg={},
     script:
         RUN_STEP
 
@@ -80,7 +87,7 @@ rule p1_figure1:
 rule p1_extensions:
     """P1-EXT: M2*(M1), minimum M1, finite-length language, minimum T."""
     input:
-        code=P1_CODE,
+        code=code_inputs("p1", "extensions"),
     output:
         json="results/p1/extensions.json",
     log:
@@ -88,7 +95,7 @@ rule p1_extensions:
     params:
         study="p1",
         step="extensions",
-        cfg=P1_CFG,
+        cfg=step_config("p1", "acc_constants", "extensions", "language", "mu1"),
     script:
         RUN_STEP
 
@@ -97,7 +104,7 @@ rule p1_figure_ext:
     """P1-EXT figure."""
     input:
         json="results/p1/extensions.json",
-        code=P1_CODE,
+        code=code_inputs("p1", "figure_ext"),
     output:
         pdf="results/p1/fig_ext_M2_vs_M1.pdf",
         png=report(
@@ -110,7 +117,7 @@ rule p1_figure_ext:
     params:
         study="p1",
         step="figure_ext",
-        cfg=P1_CFG,
+        cfg={},
     script:
         RUN_STEP
 
@@ -123,7 +130,7 @@ rule p1_values:
         designs_timings="results/timings/p1/designs.json",
         simulation="results/p1/simulation.npz",
         extensions="results/p1/extensions.json",
-        code=P1_CODE,
+        code=code_inputs("p1", "values"),
     output:
         json="results/p1/values.json",
         timings="results/timings/p1/values.json",
@@ -132,7 +139,7 @@ rule p1_values:
     params:
         study="p1",
         step="values",
-        cfg=P1_CFG,
+        cfg={},
     script:
         RUN_STEP
 

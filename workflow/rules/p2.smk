@@ -2,8 +2,6 @@
 # Each rule runs one step of eqrec.studies.p2 through the harness (common.smk).
 # The heat-map chunks come from the resolved configuration (p2.heatmap.chunks,
 # p2.heatmap.variants); the merge checks that they cover the grid exactly once.
-P2_CODE = code_inputs("p2")
-P2_CFG = section_params(config, "p2")
 VALUES_FILES.append("results/p2/values.json")
 
 
@@ -13,7 +11,7 @@ P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
 rule p2_designs:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
     input:
-        code=P2_CODE,
+        code=code_inputs("p2", "designs"),
     output:
         json="results/p2/designs.json",
         timings="results/timings/p2/designs.json",
@@ -23,7 +21,7 @@ rule p2_designs:
     params:
         study="p2",
         step="designs",
-        cfg=P2_CFG,
+        cfg=step_config("p2", "T", "f1_words", "f2_words", "init_poles", "mu1"),
     script:
         RUN_STEP
 
@@ -32,7 +30,7 @@ rule p2_simulate:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
     input:
         designs="results/p2/designs.npz",
-        code=P2_CODE,
+        code=code_inputs("p2", "simulate"),
     output:
         npz="results/p2/simulation.npz",
     log:
@@ -40,7 +38,9 @@ rule p2_simulate:
     params:
         study="p2",
         step="simulate",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2", "f1_words", "f2_words", "mu1", "noise", "runs", "seed", "x0"
+        ),
     script:
         RUN_STEP
 
@@ -48,7 +48,7 @@ rule p2_simulate:
 rule p2_heatmap_chunk:
     """P2-F3a: one theta-chunk of the eigenvalue sweep, every variant (one LP per variant, L values updated)."""
     input:
-        code=P2_CODE,
+        code=code_inputs("p2", "heatmap_chunk"),
     output:
         csv=temp("results/p2/heatmap/chunk_{chunk}.csv"),
     log:
@@ -58,7 +58,7 @@ rule p2_heatmap_chunk:
     params:
         study="p2",
         step="heatmap_chunk",
-        cfg=P2_CFG,
+        cfg=step_config("p2", "heatmap", "mu1"),
     script:
         RUN_STEP
 
@@ -67,7 +67,7 @@ rule p2_heatmap_merge:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
         chunks=expand("results/p2/heatmap/chunk_{chunk}.csv", chunk=P2_CHUNKS),
-        code=P2_CODE,
+        code=code_inputs("p2", "heatmap_merge"),
     output:
         csv="results/p2/heatmap.csv",
         timings="results/timings/p2/heatmap.csv",
@@ -76,7 +76,14 @@ rule p2_heatmap_merge:
     params:
         study="p2",
         step="heatmap_merge",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2",
+            "heatmap.chunks",
+            "heatmap.n_r",
+            "heatmap.n_theta",
+            "heatmap.r_max",
+            "heatmap.variants",
+        ),
     script:
         RUN_STEP
 
@@ -84,7 +91,7 @@ rule p2_heatmap_merge:
 rule p2_realaxis:
     """P2-F3b: real double eigenvalue sweep."""
     input:
-        code=P2_CODE,
+        code=code_inputs("p2", "realaxis"),
     output:
         csv="results/p2/realaxis.csv",
         timings="results/timings/p2/realaxis.csv",
@@ -93,7 +100,15 @@ rule p2_realaxis:
     params:
         study="p2",
         step="realaxis",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2",
+            "heatmap.second_solver",
+            "heatmap.solver",
+            "heatmap.variants",
+            "heatmap.word",
+            "mu1",
+            "realaxis",
+        ),
     script:
         RUN_STEP
 
@@ -101,7 +116,7 @@ rule p2_realaxis:
 rule p2_checks:
     """P2-S0, P2-SOLVER."""
     input:
-        code=P2_CODE,
+        code=code_inputs("p2", "checks"),
     output:
         json="results/p2/checks.json",
         timings="results/timings/p2/checks.json",
@@ -110,7 +125,18 @@ rule p2_checks:
     params:
         study="p2",
         step="checks",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2",
+            "f2_words",
+            "init_poles",
+            "mu1",
+            "noise",
+            "runs",
+            "s0_samples",
+            "seed",
+            "solvers",
+            "x0",
+        ),
     script:
         RUN_STEP
 
@@ -120,7 +146,7 @@ rule p2_printed:
     masked_gain gains certified as the estimator that runs; nilpotent L at r = 0."""
     input:
         claims=ancient("config/claims.yaml"),
-        code=P2_CODE,
+        code=code_inputs("p2", "printed"),
     output:
         json="results/p2/printed.json",
     log:
@@ -128,7 +154,9 @@ rule p2_printed:
     params:
         study="p2",
         step="printed",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2", "T", "f2_words", "heatmap.solver", "mu1", "printed", "solvers"
+        ),
         published=[
             published_value(CLAIMS_FILE, config["p2"]["printed"][k])
             for k in ("L_claim", "interval_claim")
@@ -146,7 +174,7 @@ rule p2_values:
         realaxis="results/p2/realaxis.csv",
         checks="results/p2/checks.json",
         printed="results/p2/printed.json",
-        code=P2_CODE,
+        code=code_inputs("p2", "values"),
     output:
         json="results/p2/values.json",
     log:
@@ -154,7 +182,16 @@ rule p2_values:
     params:
         study="p2",
         step="values",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2",
+            "heatmap.n_r",
+            "heatmap.n_theta",
+            "heatmap.r_max",
+            "init_poles",
+            "mu1",
+            "mu2_tol",
+            "realaxis",
+        ),
     script:
         RUN_STEP
 
@@ -164,7 +201,7 @@ rule p2_figure_trajectories:
     input:
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
-        code=P2_CODE,
+        code=code_inputs("p2", "figure_trajectories"),
     output:
         pdf="results/p2/{fig}_trajectories.pdf",
         png=report(
@@ -179,7 +216,7 @@ rule p2_figure_trajectories:
     params:
         study="p2",
         step="figure_trajectories",
-        cfg=P2_CFG,
+        cfg=step_config("p2", "mu1"),
     script:
         RUN_STEP
 
@@ -189,7 +226,7 @@ rule p2_figure_heatmap:
     input:
         csv="results/p2/heatmap.csv",
         printed="results/p2/printed.json",
-        code=P2_CODE,
+        code=code_inputs("p2", "figure_heatmap"),
     output:
         pdf="results/p2/f3a_heatmap.pdf",
         png=report(
@@ -200,7 +237,14 @@ rule p2_figure_heatmap:
     params:
         study="p2",
         step="figure_heatmap",
-        cfg=P2_CFG,
+        cfg=step_config(
+            "p2",
+            "heatmap.n_r",
+            "heatmap.n_theta",
+            "heatmap.r_max",
+            "heatmap.variants",
+            "mu2_tol",
+        ),
     script:
         RUN_STEP
 
@@ -210,7 +254,7 @@ rule p2_figure_realaxis:
     input:
         csv="results/p2/realaxis.csv",
         printed="results/p2/printed.json",
-        code=P2_CODE,
+        code=code_inputs("p2", "figure_realaxis"),
     output:
         pdf="results/p2/f3b_realaxis.pdf",
         png=report(
@@ -223,7 +267,7 @@ rule p2_figure_realaxis:
     params:
         study="p2",
         step="figure_realaxis",
-        cfg=P2_CFG,
+        cfg={},
     script:
         RUN_STEP
 

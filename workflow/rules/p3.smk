@@ -1,14 +1,12 @@
 # P3: delayed/missing-data paper (Hassaan, Shen, Yong; equalized recovery with delayed and missing observations).
 # Each rule runs one step of eqrec.studies.p3 through the harness (common.smk).
-P3_CODE = code_inputs("p3")
-P3_CFG = section_params(config, "p3")
 VALUES_FILES.append("results/p3/values.json")
 
 
 rule p3_languages:
     """P3-LANG: Examples 1-5 and the language counts of {0..max delay}^T."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "languages"),
     output:
         json="results/p3/languages.json",
         csv="results/p3/examples.csv",
@@ -19,7 +17,7 @@ rule p3_languages:
     params:
         study="p3",
         step="languages",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "languages"),
     script:
         RUN_STEP
 
@@ -27,7 +25,7 @@ rule p3_languages:
 rule p3_reactor_model:
     """P3-BR: ZOH discretisation of the batch reactor."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "reactor_model"),
     output:
         json="results/p3/reactor_model.json",
     log:
@@ -35,7 +33,7 @@ rule p3_reactor_model:
     params:
         study="p3",
         step="reactor_model",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "batch_reactor.Ts", "batch_reactor.eta_v"),
     script:
         RUN_STEP
 
@@ -43,7 +41,7 @@ rule p3_reactor_model:
 rule p3_reactor_designs:
     """P3-BR: mu1 free (certified global route and IPOPT on (10)) and at the configured readings of mu1."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "reactor_designs"),
     output:
         json="results/p3/reactor_designs.json",
         timings="results/timings/p3/reactor_designs.json",
@@ -52,7 +50,7 @@ rule p3_reactor_designs:
     params:
         study="p3",
         step="reactor_designs",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "batch_reactor", "kalman.x0"),
     script:
         RUN_STEP
 
@@ -60,7 +58,7 @@ rule p3_reactor_designs:
 rule p3_augmented:
     """The augmented form (4) with fixed L and s0: optimum against pole placements and s0."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "augmented"),
     output:
         json="results/p3/augmented.json",
     log:
@@ -68,7 +66,15 @@ rule p3_augmented:
     params:
         study="p3",
         step="augmented",
-        cfg=P3_CFG,
+        cfg=step_config(
+            "p3",
+            "augmented",
+            "batch_reactor.Ts",
+            "batch_reactor.cost",
+            "batch_reactor.eta_v",
+            "batch_reactor.horizon",
+            "batch_reactor.max_delay",
+        ),
     script:
         RUN_STEP
 
@@ -76,7 +82,7 @@ rule p3_augmented:
 rule p3_kalman:
     """P3-F1: proposed estimator vs Kalman-type filters on the true pattern (exact worst cases, runs)."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "kalman"),
     output:
         json="results/p3/kalman.json",
         npz="results/p3/kalman.npz",
@@ -85,7 +91,15 @@ rule p3_kalman:
     params:
         study="p3",
         step="kalman",
-        cfg=P3_CFG,
+        cfg=step_config(
+            "p3",
+            "batch_reactor.Ts",
+            "batch_reactor.cost",
+            "batch_reactor.eta_v",
+            "batch_reactor.horizon",
+            "batch_reactor.max_delay",
+            "kalman",
+        ),
     script:
         RUN_STEP
 
@@ -95,7 +109,7 @@ rule p3_figure1:
     input:
         json="results/p3/kalman.json",
         npz="results/p3/kalman.npz",
-        code=P3_CODE,
+        code=code_inputs("p3", "figure1"),
     output:
         pdf="results/p3/fig1_kalman.pdf",
         png=report(
@@ -108,7 +122,7 @@ rule p3_figure1:
     params:
         study="p3",
         step="figure1",
-        cfg=P3_CFG,
+        cfg={},
     script:
         RUN_STEP
 
@@ -116,7 +130,7 @@ rule p3_figure1:
 rule p3_acc:
     """P3-ACC: the ACC language with mu1 = 1 vs P1's prefix design; mu1 free (footnote 1)."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "acc"),
     output:
         json="results/p3/acc.json",
         timings="results/timings/p3/acc.json",
@@ -125,7 +139,7 @@ rule p3_acc:
     params:
         study="p3",
         step="acc",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "acc.free_costs", "acc.language", "acc.mu1"),
     script:
         RUN_STEP
 
@@ -133,7 +147,7 @@ rule p3_acc:
 rule p3_acc_simulate:
     """P3-F2: proposed vs P1 prefix-based estimator on the true pattern, same draws."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "acc_simulate"),
     output:
         npz="results/p3/acc_simulation.npz",
     log:
@@ -141,7 +155,14 @@ rule p3_acc_simulate:
     params:
         study="p3",
         step="acc_simulate",
-        cfg=P3_CFG,
+        cfg=step_config(
+            "p3",
+            "acc.cost",
+            "acc.language",
+            "acc.mu1",
+            "acc.simulation",
+            "acc.true_pattern",
+        ),
     script:
         RUN_STEP
 
@@ -150,7 +171,7 @@ rule p3_figure2:
     """P3-F2 figure."""
     input:
         npz="results/p3/acc_simulation.npz",
-        code=P3_CODE,
+        code=code_inputs("p3", "figure2"),
     output:
         pdf="results/p3/fig2_acc.pdf",
         png=report(
@@ -161,7 +182,7 @@ rule p3_figure2:
     params:
         study="p3",
         step="figure2",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "acc.true_pattern"),
     script:
         RUN_STEP
 
@@ -176,7 +197,7 @@ rule p3_values:
         kalman="results/p3/kalman.json",
         acc="results/p3/acc.json",
         acc_npz="results/p3/acc_simulation.npz",
-        code=P3_CODE,
+        code=code_inputs("p3", "values"),
     output:
         json="results/p3/values.json",
     log:
@@ -184,7 +205,7 @@ rule p3_values:
     params:
         study="p3",
         step="values",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "batch_reactor.horizon", "batch_reactor.max_delay"),
     script:
         RUN_STEP
 
@@ -210,7 +231,7 @@ P3_SCALE_CLASSES = [
 rule p3_strategy:
     """P3-IMPL: gains reused every T (batch reactor, ACC) and the switching scheme; 10^4-step runs vs the guarantees."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "strategy"),
     output:
         npz="results/p3/strategy.npz",
         values="results/p3/strategy_values.json",
@@ -220,7 +241,16 @@ rule p3_strategy:
     params:
         study="p3",
         step="strategy",
-        cfg=P3_CFG,
+        cfg=step_config(
+            "p3",
+            "strategy.acc",
+            "strategy.cost",
+            "strategy.noise",
+            "strategy.reactor",
+            "strategy.seed",
+            "strategy.steps",
+            "strategy.switching",
+        ),
     script:
         RUN_STEP
 
@@ -229,7 +259,7 @@ rule p3_strategy_figure:
     """P3-IMPL figure: errors per state with the per-time guarantees, period boundaries and switching instants."""
     input:
         npz="results/p3/strategy.npz",
-        code=P3_CODE,
+        code=code_inputs("p3", "strategy_figure"),
     output:
         pdf="results/p3/fig_strategy.pdf",
         png=report(
@@ -242,7 +272,7 @@ rule p3_strategy_figure:
     params:
         study="p3",
         step="strategy_figure",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "strategy.figure"),
     script:
         RUN_STEP
 
@@ -250,7 +280,7 @@ rule p3_strategy_figure:
 rule p3_scale_size:
     """Scale table, one size of the tree LP: {0..tau}^T enumerated, node-per-prefix LP, fresh process with limits."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "scale_size"),
     output:
         json="results/p3/scale/T{T}_tau{tau}.json",
         timings="results/timings/p3/scale/T{T}_tau{tau}.json",
@@ -262,7 +292,14 @@ rule p3_scale_size:
     params:
         study="p3",
         step="scale_size",
-        cfg=P3_CFG,
+        cfg=step_config(
+            "p3",
+            "scale.builder",
+            "scale.mem_limit_gb",
+            "scale.method",
+            "scale.mu1",
+            "scale.time_limit",
+        ),
     script:
         RUN_STEP
 
@@ -270,7 +307,7 @@ rule p3_scale_size:
 rule p3_scale_class_size:
     """Scale table, one size of the class engine: the classes of {0..tau}^T by the window rule, fresh process."""
     input:
-        code=P3_CODE,
+        code=code_inputs("p3", "scale_class_size"),
     output:
         json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
         timings="results/timings/p3/scale/{engine}_T{T}_tau{tau}.json",
@@ -283,7 +320,14 @@ rule p3_scale_class_size:
     params:
         study="p3",
         step="scale_class_size",
-        cfg=P3_CFG,
+        cfg=step_config(
+            "p3",
+            "scale.builder",
+            "scale.mem_limit_gb",
+            "scale.method",
+            "scale.mu1",
+            "scale.time_limit",
+        ),
     script:
         RUN_STEP
 
@@ -293,7 +337,7 @@ rule p3_scale_table:
     input:
         sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES)),
         timings=timings_of(list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))),
-        code=P3_CODE,
+        code=code_inputs("p3", "scale_table"),
     output:
         csv="results/p3/scale_table.csv",
         timings_csv="results/timings/p3/scale_table.csv",
@@ -308,7 +352,7 @@ rule p3_scale_table:
     params:
         study="p3",
         step="scale_table",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "scale.tree_slow_sizes"),
     script:
         RUN_STEP
 
@@ -320,7 +364,7 @@ rule p3_scale_table_full:
         timings=timings_of(
             list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES))
         ),
-        code=P3_CODE,
+        code=code_inputs("p3", "scale_table_full"),
     output:
         csv="results/p3/scale_table_full.csv",
         md="results/p3/scale_table_full.md",
@@ -331,7 +375,7 @@ rule p3_scale_table_full:
     params:
         study="p3",
         step="scale_table_full",
-        cfg=P3_CFG,
+        cfg=step_config("p3", "scale.tree_slow_sizes"),
     script:
         RUN_STEP
 

@@ -2,8 +2,6 @@
 # Each rule runs one step of eqrec.studies.p4 through the harness (common.smk).
 # The sweep chunks come from the resolved configuration (p4.sweep_*.chunks);
 # the merging steps (fig5, fig6) check that they cover the grid exactly once.
-P4_CODE = code_inputs("p4")
-P4_CFG = section_params(config, "p4")
 VALUES_FILES.append("results/p4/values.json")
 
 P4_EXAMPLES = list(config["p4"]["examples"])
@@ -14,7 +12,7 @@ P4_Q_CHUNKS = list(range(config["p4"]["sweep_q"]["chunks"]))
 rule p4_tracking:
     """P4-F1..F3: one realisation of the tracking example with filter, predictor and smoother."""
     input:
-        code=P4_CODE,
+        code=code_inputs("p4", "tracking"),
     output:
         npz="results/p4/tracking.npz",
         f1="results/p4/fig1_filter.pdf",
@@ -38,7 +36,9 @@ rule p4_tracking:
     params:
         study="p4",
         step="tracking",
-        cfg=P4_CFG,
+        cfg=step_config(
+            "p4", "T", "eta_bar", "examples", "pred_steps", "smoother_lag", "tracking"
+        ),
     script:
         RUN_STEP
 
@@ -46,7 +46,7 @@ rule p4_tracking:
 rule p4_mc:
     """P4-THEORY: theory against Monte Carlo for one example (both mechanisms, same draws)."""
     input:
-        code=P4_CODE,
+        code=code_inputs("p4", "mc"),
     output:
         npz="results/p4/mc_{example}.npz",
         json="results/p4/mc_{example}.json",
@@ -56,7 +56,9 @@ rule p4_mc:
     params:
         study="p4",
         step="mc",
-        cfg=P4_CFG,
+        cfg=step_config(
+            "p4", "T", "eta_bar", "examples", "mc", "pred_steps", "smoother_lag"
+        ),
     script:
         RUN_STEP
 
@@ -64,7 +66,7 @@ rule p4_mc:
 rule p4_sweep_eta_chunk:
     """P4-F5: one chunk of the arrival-rate sweep (steady state)."""
     input:
-        code=P4_CODE,
+        code=code_inputs("p4", "sweep_eta_chunk"),
     output:
         npz=temp("results/p4/sweep_eta/chunk{chunk}.npz"),
     log:
@@ -74,7 +76,7 @@ rule p4_sweep_eta_chunk:
     params:
         study="p4",
         step="sweep_eta_chunk",
-        cfg=P4_CFG,
+        cfg=step_config("p4", "examples", "smoother_lag", "steady", "sweep_eta"),
     script:
         RUN_STEP
 
@@ -82,7 +84,7 @@ rule p4_sweep_eta_chunk:
 rule p4_sweep_q_chunk:
     """P4-F6: one chunk of the (Q_xi, Q_lambda) sweep (steady state)."""
     input:
-        code=P4_CODE,
+        code=code_inputs("p4", "sweep_q_chunk"),
     output:
         npz=temp("results/p4/sweep_q/chunk{chunk}.npz"),
     log:
@@ -92,7 +94,9 @@ rule p4_sweep_q_chunk:
     params:
         study="p4",
         step="sweep_q_chunk",
-        cfg=P4_CFG,
+        cfg=step_config(
+            "p4", "eta_bar", "examples", "smoother_lag", "steady", "sweep_q"
+        ),
     script:
         RUN_STEP
 
@@ -101,7 +105,7 @@ rule p4_fig4:
     """P4-F4: error variances of predictor, filter, smoother."""
     input:
         mc=f"results/p4/mc_{config['p4']['tracking']['example']}.npz",
-        code=P4_CODE,
+        code=code_inputs("p4", "fig4"),
     output:
         pdf="results/p4/fig4_variances.pdf",
         png=report(
@@ -114,7 +118,7 @@ rule p4_fig4:
     params:
         study="p4",
         step="fig4",
-        cfg=P4_CFG,
+        cfg=step_config("p4", "eta_bar", "smoother_lag"),
     script:
         RUN_STEP
 
@@ -123,7 +127,7 @@ rule p4_fig5:
     """P4-F5: merge the arrival-rate chunks; error variances against the arrival rate."""
     input:
         chunks=expand("results/p4/sweep_eta/chunk{chunk}.npz", chunk=P4_ETA_CHUNKS),
-        code=P4_CODE,
+        code=code_inputs("p4", "fig5"),
     output:
         merged="results/p4/sweep_eta.npz",
         pdf="results/p4/fig5_eta.pdf",
@@ -135,7 +139,9 @@ rule p4_fig5:
     params:
         study="p4",
         step="fig5",
-        cfg=P4_CFG,
+        cfg=step_config(
+            "p4", "examples", "smoother_lag", "sweep_eta.num", "tracking.example"
+        ),
     script:
         RUN_STEP
 
@@ -144,7 +150,7 @@ rule p4_fig6:
     """P4-F6: merge the Q chunks; filter variance against Q_xi and Q_lambda, and where each mechanism wins."""
     input:
         chunks=expand("results/p4/sweep_q/chunk{chunk}.npz", chunk=P4_Q_CHUNKS),
-        code=P4_CODE,
+        code=code_inputs("p4", "fig6"),
     output:
         merged="results/p4/sweep_q.npz",
         pdf="results/p4/fig6_q.pdf",
@@ -160,7 +166,7 @@ rule p4_fig6:
     params:
         study="p4",
         step="fig6",
-        cfg=P4_CFG,
+        cfg=step_config("p4", "eta_bar", "examples", "sweep_q.num", "tracking.example"),
     script:
         RUN_STEP
 
@@ -169,7 +175,7 @@ rule p4_compare:
     """P4-F7 (Example 1) / P4-F8 (Example 2): zero-input vs hold-input filter."""
     input:
         mc="results/p4/mc_{example}.npz",
-        code=P4_CODE,
+        code=code_inputs("p4", "compare"),
     output:
         pdf="results/p4/fig{number}_compare_{example}.pdf",
         png=report(
@@ -184,7 +190,7 @@ rule p4_compare:
     params:
         study="p4",
         step="compare",
-        cfg=P4_CFG,
+        cfg=step_config("p4", "eta_bar", "examples"),
     script:
         RUN_STEP
 
@@ -197,7 +203,7 @@ rule p4_values:
         mc_npz=expand("results/p4/mc_{example}.npz", example=P4_EXAMPLES),
         eta="results/p4/sweep_eta.npz",
         q="results/p4/sweep_q.npz",
-        code=P4_CODE,
+        code=code_inputs("p4", "values"),
     output:
         values="results/p4/values.json",
         table="results/p4/summary.csv",
@@ -206,7 +212,16 @@ rule p4_values:
     params:
         study="p4",
         step="values",
-        cfg=P4_CFG,
+        cfg=step_config(
+            "p4",
+            "T",
+            "eta_bar",
+            "examples",
+            "mc.alpha",
+            "smoother_lag",
+            "steady",
+            "tracking",
+        ),
     script:
         RUN_STEP
 

@@ -269,12 +269,33 @@ def load_config(study: str, *files: str | Path, overrides: Mapping | None = None
     return merged[study]
 
 
-def section_params(config: Mapping, section: str) -> dict:
-    """A section as a rule param: keys sorted recursively, so that only a changed value re-plans jobs."""
+def step_params(config: Mapping, section: str, *keys: str) -> dict:
+    """The configuration keys one step reads, as its rule's ``cfg`` param.
+
+    ``keys`` name values of ``config[section]`` by their dotted path (``"mu1"``,
+    ``"heatmap.solver"``, or a whole subtree such as ``"strategy.figure"``); the
+    result keeps the section's nesting (the step reads ``cfg["strategy"]["figure"]``
+    as before) with keys sorted recursively, so that a job is re-planned only
+    when a value its step reads changes.  A key the section does not have
+    raises :class:`ConfigError` (a misspelt key in a rule).  The rules call it
+    as ``step_config(section, *keys)`` (``workflow/rules/common.smk``).
+    """
     def canon(x):
         if isinstance(x, Mapping):
             return {k: canon(x[k]) for k in sorted(x)}
         if isinstance(x, list):
             return [canon(v) for v in x]
         return x
-    return canon(config[section])
+
+    out: dict = {}
+    for key in keys:
+        src, dst, path = config[section], out, key.split(".")
+        for i, part in enumerate(path):
+            if not isinstance(src, Mapping) or part not in src:
+                raise ConfigError(f"a rule asks for configuration key '{section}.{key}', which the section has not",
+                                  SECTIONS[section].config_file, f"{section}.{key}")
+            src = src[part]
+            if i < len(path) - 1:
+                dst = dst.setdefault(part, {})
+        dst[path[-1]] = src
+    return canon(out)

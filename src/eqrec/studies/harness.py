@@ -1,32 +1,33 @@
-"""The study harness: one entry point for every pipeline step, and nothing else.
+"""The study harness: runs one pipeline step, and nothing else.
 
 Every Snakemake rule runs ``workflow/scripts/run_step.py``, which calls
 :func:`run_from_snakemake`; the rule's ``params`` name the step (``study``,
-``step``) and carry ``cfg``, the study's configuration section as Snakemake
-resolved it (validated once by the Snakefile, :mod:`eqrec.studies.configuration`).
+``step``) and carry ``cfg``, the configuration keys that step reads (nested as
+in the study's section, validated once by the Snakefile,
+:mod:`eqrec.studies.configuration`; picked by ``step_config`` in
+``workflow/rules/common.smk``).  A key the rule does not give raises
+:class:`MissingConfigKey` naming it.
 
 A step is a plain function ``step(cfg, inputs, outputs, wildcards)`` listed
-in its study module's ``STEPS`` table; :func:`registry` maps ``(study, step)``
-to it.  Outside Snakemake::
+in the ``STEPS`` table of the module that defines it; the step registry
+(:mod:`eqrec.studies.steps`) maps ``(study, step)`` to it.  Outside Snakemake::
 
     from eqrec.studies import configuration, harness
     cfg = configuration.load_config("p1", "config/config.yaml")
     harness.run_step("p1", "designs", cfg, outputs={"json": "designs.json", "timings": "t.json"})
 
 The harness owns what every step shares: the log (``[p1] message`` lines in
-the rule's log file, progress lines on long sweeps), the check that every
-declared output was written, and the exit status (a failing step exits 1 with
-one line naming the step and, for a configuration problem, the file and
-field).  The writers a step uses are in :mod:`eqrec.studies.outputs`; the
-package modules a rule lists as code inputs come from :func:`code_inputs`.
+the rule's log file; the loggers and progress lines are in
+:mod:`eqrec.studies.logs`), the check that every declared output was written,
+and the exit status (a failing step exits 1 with one line naming the step and,
+for a configuration problem, the file and field).  The writers a step uses are
+in :mod:`eqrec.studies.outputs`.  The modules a rule lists as code inputs come
+from :mod:`eqrec.studies.imports`.
 """
 
 from __future__ import annotations
 
-import ast
 import contextlib
-import functools
-import importlib
 import logging
 import os
 import sys
@@ -36,10 +37,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 from eqrec.errors import InputError, StepError
 from eqrec.studies.configuration import SECTIONS, ConfigError
-
-#: Studies with pipeline steps (``claims`` builds the comparison table, ``notebooks`` executes the notebooks).
-STUDIES = ("p1", "p2", "p3", "p4", "claims", "notebooks")
-
+from eqrec.studies.logs import get_logger
 
 Step = Callable[[dict, "Files", "Files", "Wildcards"], Any]
 
@@ -117,24 +115,39 @@ class Wildcards(dict):
             raise AttributeError(f"no wildcard {name!r} (have: {sorted(self)})") from None
 
 
-# --------------------------------------------------------------------------- registry
-
-def _study_module(study: str):
-    if study not in STUDIES:
-        raise StepError(f"unknown study {study!r}; choose from {list(STUDIES)}")
-    return importlib.import_module(f"eqrec.studies.{study}")
-
-
-def registry(studies: Iterable[str] = STUDIES) -> dict[tuple[str, str], Step]:
-    """``(study, step) -> function`` for every step of the given studies."""
-    return {(s, name): fn for s in studies for name, fn in _study_module(s).STEPS.items()}
-
+# --------------------------------------------------------------------------- the step and its configuration
 
 def get_step(study: str, step: str) -> Step:
-    steps = _study_module(study).STEPS
-    if step not in steps:
-        raise StepError(f"study {study!r} has no step {step!r}; steps: {sorted(steps)}")
-    return steps[step]
+    """The function of one step, from the step registry (:mod:`eqrec.studies.steps`)."""
+    from eqrec.studies.steps import get_step as lookup  # imports the study's modules: not at planning time
+
+    return lookup(study, step)
+
+
+class MissingConfigKey(KeyError):
+    """A step read a configuration key its rule does not give it."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class StepConfig(dict):
+    """The configuration a rule gives its step: the keys the step reads, nested as in the study's section.
+
+    Reading a key that is not there raises :class:`MissingConfigKey` naming
+    the full key (``p3.strategy.figure.window``) and where a rule lists the
+    keys of its step, rather than a bare ``KeyError``.
+    """
+
+    def __init__(self, data: Mapping[str, Any] = (), where: str = "", path: tuple = ()):
+        super().__init__((k, StepConfig(v, where, (*path, k)) if isinstance(v, Mapping) else v)
+                         for k, v in dict(data).items())
+        self._where, self._path = where, path
+
+    def __missing__(self, key):
+        name = ".".join(map(str, (*self._path, key)))
+        raise MissingConfigKey(f"configuration key '{name}' is not among the keys the rule of step {self._where} "
+                               f"gives it: add it to its params cfg=step_config(...) (workflow/rules/*.smk)")
 
 
 # --------------------------------------------------------------------------- logging
@@ -147,31 +160,6 @@ class _StudyFormatter(logging.Formatter):
         if record.exc_info:
             msg += "\n" + self.formatException(record.exc_info)
         return f"[{study}] {msg}"
-
-
-def get_logger(study: str) -> logging.Logger:
-    """The logger of a study's steps; the harness prints its records as ``[study] message``."""
-    return logging.getLogger(f"eqrec.studies.{study}")
-
-
-class Progress:
-    """Progress lines for a long sweep: ``[p2] heat map theorem2 chunk 0: 31/124 points (2.1 s)``.
-
-    Logs at every tenth of the work (and at the end).
-    """
-
-    def __init__(self, log: logging.Logger, total: int, what: str, unit: str = "points"):
-        self.log, self.total, self.what, self.unit = log, max(int(total), 0), what, unit
-        self.done, self.t0 = 0, time.perf_counter()
-        self._next = 1 if self.total else 0
-        self._stride = max(1, self.total // 10)
-
-    def advance(self, n: int = 1) -> None:
-        self.done += n
-        if self.done >= self._next or self.done >= self.total:
-            self._next = self.done + self._stride
-            self.log.info("%s: %d/%d %s (%.1f s)", self.what, self.done, self.total, self.unit,
-                          time.perf_counter() - self.t0)
 
 
 @contextlib.contextmanager
@@ -248,7 +236,8 @@ def run_step(study: str, step: str, cfg: Mapping[str, Any] | None = None, inputs
     with _fds_to(log) as _, _log_handler(sys.stderr):
         t0 = time.perf_counter()
         log_.info("step %s%s", step, "".join(f" {k}={v}" for k, v in wc.items()))
-        result = fn(dict(cfg or {}), ins, outs, wc)
+        given = StepConfig(cfg or {}, f"{study}.{step}", (study,) if study in SECTIONS else ())
+        result = fn(given, ins, outs, wc)
         missing = [p for p in outs if not Path(p).exists()]
         if missing:
             raise StepError(f"step {study}.{step} did not write its declared outputs {missing}")
@@ -292,67 +281,3 @@ def run_from_snakemake(smk) -> None:
             failed = False
     if failed:
         raise SystemExit(1)
-
-
-
-# --------------------------------------------------------------------------- code inputs
-
-def _package_root() -> Path:
-    local = Path("src") / "eqrec"
-    return local if local.is_dir() else Path(__file__).resolve().parents[1]
-
-
-#: Modules the harness runs when the workflow is planned (configuration checks), never inside a step: not code
-#: inputs of any rule (a changed check re-validates the configuration at the next start).
-PLANNING_ONLY = frozenset({"eqrec.studies.config_checks"})
-
-
-def code_inputs(study: str) -> list[str]:
-    """Source files of ``eqrec.studies.<study>`` and of every ``eqrec`` module it imports, transitively,
-    plus the harness that runs it.
-
-    A rule lists these as inputs, so editing code a study does not import (e.g.
-    the LMV code for P1) does not re-run its jobs.  Imports are read with
-    :mod:`ast` (nothing is imported).
-    """
-    pkg = _package_root()
-
-    def path_of(name: str) -> Path | None:
-        parts = name.split(".")
-        if parts[0] != "eqrec":
-            return None
-        base = pkg.joinpath(*parts[1:])
-        for cand in (base.with_suffix(".py"), base / "__init__.py"):
-            if cand.is_file():
-                return cand
-        return None
-
-    seen: set[Path] = set()
-    todo = [f"eqrec.studies.{study}", "eqrec.studies.harness"]
-    while todo:
-        name = todo.pop()
-        if name in PLANNING_ONLY:
-            continue
-        path = path_of(name)
-        if path is None or path in seen:
-            continue
-        seen.add(path)
-        # a package's modules import their package's __init__ first
-        parent = name.rpartition(".")[0]
-        if parent:
-            todo.append(parent)
-        todo += _eqrec_imports(path, path.stat().st_mtime_ns)
-    return sorted(str(p) for p in seen)
-
-
-@functools.lru_cache(maxsize=None)
-def _eqrec_imports(path: Path, mtime_ns: int) -> list[str]:
-    """The ``eqrec`` modules (and imported names) one source file imports; parsed once per file version."""
-    out: list[str] = []
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("eqrec"):
-            out.append(node.module)
-            out += [f"{node.module}.{a.name}" for a in node.names]
-        elif isinstance(node, ast.Import):
-            out += [a.name for a in node.names if a.name.startswith("eqrec")]
-    return out

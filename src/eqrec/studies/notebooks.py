@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Iterator
 
 from eqrec.errors import StepError
-from eqrec.studies.harness import get_logger
+from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import write_text
 
 log = get_logger("notebooks")

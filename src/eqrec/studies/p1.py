@@ -29,8 +29,7 @@ from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
 from eqrec.design.sweeps import mu2_curve, lower_bound_probe, min_feasible_mu1, min_recovery_time
 from eqrec.design.time_based import design_time_based
-from eqrec.studies import p1_figures
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import read_json, write_json, write_npz
 
 log = get_logger("p1")
@@ -276,8 +275,6 @@ STEPS = {
     "model": step_model,
     "designs": step_designs,
     "simulate": step_simulate,
-    "figure1": p1_figures.step_figure1,
     "extensions": step_extensions,
-    "figure_ext": p1_figures.step_figure_ext,
     "values": step_values,
 }

@@ -72,3 +72,6 @@ def step_figure_ext(cfg, inputs, outputs, wildcards) -> None:
     ax2.set_ylabel("minimum recovery time $T$")
     ax2.set_title("Minimum $T$ for $L_1$ (words extended by 1s)")
     save_figure(fig, outputs.pdf, outputs.png)
+
+
+STEPS = {"figure1": step_figure1, "figure_ext": step_figure_ext}

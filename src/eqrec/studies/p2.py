@@ -40,9 +40,8 @@ from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import EqrecError
-from eqrec.studies import p2_figures, p2_sweeps, p2_values
 from eqrec.studies.claims_file import published_value
-from eqrec.studies.harness import get_logger
+from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import write_json, write_npz
 from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
 
@@ -375,13 +374,6 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
 STEPS = {
     "designs": step_designs,
     "simulate": step_simulate,
-    "heatmap_chunk": p2_sweeps.step_heatmap_chunk,
-    "heatmap_merge": p2_sweeps.step_heatmap_merge,
-    "realaxis": p2_sweeps.step_realaxis,
     "checks": step_checks,
     "printed": step_printed,
-    "values": p2_values.step_values,
-    "figure_trajectories": p2_figures.step_figure_trajectories,
-    "figure_heatmap": p2_figures.step_figure_heatmap,
-    "figure_realaxis": p2_figures.step_figure_realaxis,
 }

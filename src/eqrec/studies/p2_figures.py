@@ -131,7 +131,7 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     masked_gain gains certified as the estimator that runs (own scale)."""
     from matplotlib.colors import Normalize
 
-    from eqrec.studies.p2_sweeps import heatmap_grid
+    from eqrec.studies.p2_grids import heatmap_grid
 
     paper_style()
     plt = pyplot()
@@ -218,3 +218,7 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
     ax.set_ylabel(r"optimal $\mu_2$")
     ax.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, frameon=False)
     save_figure(f, outputs.pdf, outputs.png)
+
+
+STEPS = {"figure_trajectories": step_figure_trajectories, "figure_heatmap": step_figure_heatmap,
+         "figure_realaxis": step_figure_realaxis}

@@ -23,35 +23,18 @@ from eqrec.core.acc import acc_system
 from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
 from eqrec.studies.chunks import check_coverage, chunk_indices
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import INTERMEDIATE, write_csv
 from eqrec.studies.p2_readings import heatmap_poles, variant_word
+from eqrec.studies.p2_grids import heatmap_grid, realaxis_grid
 
 log = get_logger("p2")
-
-
-def heatmap_grid(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
-    """``(r, θ)`` grids of the heat map."""
-    h = cfg["heatmap"]
-    return np.linspace(0.0, float(h["r_max"]), int(h["n_r"])), np.linspace(0.0, np.pi, int(h["n_theta"]))
 
 
 def theta_chunk(cfg: dict, chunk: int) -> np.ndarray:
     """Indices of θ handled by job ``chunk`` (``heatmap.chunks`` near-equal parts)."""
     h = cfg["heatmap"]
     return chunk_indices(int(h["n_theta"]), int(h["chunks"]), chunk, field="heatmap.chunks")
-
-
-def realaxis_grid(cfg: dict) -> np.ndarray:
-    """Real double eigenvalues ``λ`` of Fig. 3b: ``n`` points on ``[-lam_max, lam_max]``, plus ``k / grid_denominator``."""
-    ra = cfg["realaxis"]
-    lam_max = float(ra["lam_max"])
-    lam = np.linspace(-lam_max, lam_max, int(ra["n"]))
-    den = ra["grid_denominator"]
-    if den:  # the grid k / den as well (exact points, e.g. the paper's -10/14 and 13/14)
-        k = np.arange(-int(np.floor(lam_max * den)), int(np.floor(lam_max * den)) + 1)
-        lam = np.unique(np.concatenate([lam, k / den]))
-    return lam
 
 
 def _sweep_options(cfg: dict, mode: str) -> dict:
@@ -138,20 +121,4 @@ def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     return df
 
 
-def constant_interval(lam: np.ndarray, mu2: np.ndarray, tol: float) -> list[float] | None:
-    """Largest interval of ``λ`` (grid points, failures breaking it) on which ``μ2`` equals its minimum."""
-    finite = np.isfinite(mu2)
-    if not finite.any():
-        return None
-    best = np.nanmin(np.where(finite, mu2, np.nan))
-    at_min = finite & (np.abs(mu2 - best) <= tol)
-    runs, start = [], None
-    for i, ok in enumerate(at_min):
-        if ok and start is None:
-            start = i
-        if (not ok or i == len(at_min) - 1) and start is not None:
-            end = i if ok else i - 1
-            runs.append((start, end))
-            start = None
-    s, e = max(runs, key=lambda se: lam[se[1]] - lam[se[0]])
-    return [float(lam[s]), float(lam[e])]
+STEPS = {"heatmap_chunk": step_heatmap_chunk, "heatmap_merge": step_heatmap_merge, "realaxis": step_realaxis}

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from eqrec.studies.outputs import write_json
-from eqrec.studies.p2_sweeps import constant_interval
+from eqrec.studies.p2_grids import constant_interval
 
 
 #: Classes of a sweep point; every point has exactly one (the counts add up to the grid size).
@@ -248,3 +248,6 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                                 "evidence": {"runs": 20}}
     write_json(outputs.json, v)
     return v
+
+
+STEPS = {"values": step_values}

@@ -19,7 +19,7 @@ with ``cfg`` the validated ``p3`` section:
 ``acc``         P3-ACC: the ACC language with ``μ1 = 1`` (sum and max costs) vs P1's prefix design on the
                 missing-data language, and ``μ1`` free (footnote 1) (``acc.json``).
 ``acc_simulate``  P3-F2: true pattern ``060000``, proposed vs P1 prefix-based estimator, same draws (``acc.npz``).
-``figure1``, ``figure2``  figures (:mod:`eqrec.studies.p3_figures`).
+``figure1``, ``figure2``, ``strategy_figure``  figures (:mod:`eqrec.studies.p3_figures`).
 ``values``      our value of every published P3 number with its evidence (:mod:`eqrec.studies.p3_values`).
 
 No mathematics here: the designs are :mod:`eqrec.design.delay` and
@@ -53,8 +53,7 @@ from eqrec.design.prefix import design_prefix
 from eqrec.design.result import Design
 from eqrec.filters import GaussianDesign, compare_with_bounds, error_maps, make_filter, truncated_normal_deltas
 from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
-from eqrec.studies import p3_figures, p3_scale, p3_strategy, p3_values
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import write_csv, write_json, write_npz, write_text
 
 log = get_logger("p3")
@@ -440,12 +439,6 @@ STEPS = {
     "reactor_designs": step_reactor_designs,
     "augmented": step_augmented,
     "kalman": step_kalman,
-    "figure1": p3_figures.step_figure1,
     "acc": step_acc,
     "acc_simulate": step_acc_simulate,
-    "figure2": p3_figures.step_figure2,
-    "values": p3_values.step_values,
-    # P3-IMPL (Sec. III-B3) and the scale table (target p3_scale, outside `all`)
-    **p3_strategy.STEPS,
-    **p3_scale.STEPS,
 }

@@ -1,8 +1,10 @@
-"""P3 figures: Fig. 1 (batch reactor, proposed vs Kalman-type filters) and Fig. 2 (ACC, proposed vs P1 prefix-based).
+"""P3 figures: Fig. 1 (batch reactor, proposed vs Kalman-type filters), Fig. 2 (ACC, proposed vs P1
+prefix-based) and the implementation-strategy figure (P3-IMPL, long runs of :mod:`eqrec.studies.p3_strategy`).
 
-Steps ``figure1`` and ``figure2``; errors per state with the per-time
+Steps ``figure1`` and ``figure2``: errors per state with the per-time
 guarantee levels ``μ2,k`` along the true pattern's path (clear bars), as in
-the paper's figures.
+the paper's figures; ``strategy_figure``: a window of each long run with its
+per-time guarantees.  Drawing only: no design is computed here.
 """
 
 from __future__ import annotations
@@ -78,3 +80,76 @@ def step_figure2(cfg, inputs, outputs, wildcards) -> None:
     fig.suptitle(f"ACC, true pattern {pattern} (missing data at k = 1), {data['proposed_errors'].shape[0]} runs, "
                  rf"$\mu_1$ = {float(data['mu1']):g}")
     save_figure(fig, outputs.pdf, outputs.png)
+
+
+def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
+    """P3-IMPL figure: errors per state with the per-time guarantees over a window of each long run.
+
+    Columns: periodic reuse on the batch reactor, on the ACC, and the
+    switching scheme on the batch reactor (recovery phases shaded, switching
+    instants marked).  The run with the first noise kind is shown.
+    """
+    paper_style()
+    plt = pyplot()
+    data = np.load(inputs.npz)
+    kind = str(data["noise"][0])
+    window = int(cfg["strategy"]["figure"]["window"])
+    reactor_labels = [rf"$\xi_{i}$ [–]" for i in range(1, 5)]  # the linearised reactor's states are dimensionless
+    cols = (("reactor_periodic", "Batch reactor, gains reused every T", reactor_labels),
+            ("acc_periodic", "ACC, gains reused every T", list(STATE_LABELS_ACC)),
+            ("reactor_switching", "Batch reactor, switching scheme", reactor_labels))
+    fig, axes = plt.subplots(4, 3, figsize=(10.0, 8.2), sharex="col")
+    # one scale per reactor state across the two reactor columns (the same quantity)
+    reactor_lim = {}
+    for label in ("reactor_periodic", "reactor_switching"):
+        key = f"{label}_{kind}"
+        N = min(window, data[f"{key}_error"].shape[0] - 1)
+        for i in range(data[f"{key}_error"].shape[1]):
+            reactor_lim[i] = max(reactor_lim.get(i, 0.0), 1.15 * max(float(data[f"{key}_level"][: N + 1].max()),
+                                                                  float(np.abs(data[f"{key}_error"][: N + 1, i]).max())))
+    for c, (label, title, ylabels) in enumerate(cols):
+        key = f"{label}_{kind}"
+        err, lev = data[f"{key}_error"], data[f"{key}_level"]
+        T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
+        N = min(window, err.shape[0] - 1)
+        t = np.arange(N + 1)
+        n = err.shape[1]
+        for i in range(4):
+            ax = axes[i, c]
+            if i >= n:
+                ax.axis("off")
+                continue
+            ax.fill_between(t, -lev[: N + 1], lev[: N + 1], step="mid", color="0.85", label="guarantee")
+            ax.plot(t, err[: N + 1, i], "C0.-", ms=2.5, label="estimation error")
+            if label == "reactor_switching":
+                sw, rv = data[f"{key}_switch"], data[f"{key}_revert"]
+                for j, s in enumerate(sw[sw <= N]):
+                    ax.axvline(s, color="C3", ls="--", lw=0.7, label="switch to recovery" if j == 0 else None)
+                for j, s in enumerate(rv[rv <= N]):
+                    ax.axvline(s, color="C2", ls=":", lw=0.9, label="back to performance" if j == 0 else None)
+            else:
+                for j, s in enumerate(range(T, N + 1, T)):
+                    ax.axvline(s, color="0.5", ls=":", lw=0.6, label="period boundary" if j == 0 else None)
+            ax.set_ylabel(ylabels[i])
+            lim = reactor_lim[i] if label.startswith("reactor") else (
+                1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max())))
+            ax.set_ylim(-lim, lim)
+            if i == 0:
+                ax.set_title(title)
+        last = axes[min(n, 4) - 1, c]
+        last.set_xlabel(f"time step k (Ts = {Ts:g} s)")
+        last.tick_params(labelbottom=True)
+    # one legend under the figure (inside an axis it covers the bands)
+    seen: dict[str, object] = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(lab, h)
+    fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=len(seen), bbox_to_anchor=(0.5, 0.0))
+    fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees ({kind} noise, first "
+                 f"{window} steps; $\\mu_1$ = {float(data['reactor_mu1']):g} / {float(data['acc_mu1']):g} / "
+                 f"{float(data['switching_mu1']):g})")
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+STEPS = {"figure1": step_figure1, "figure2": step_figure2, "strategy_figure": step_strategy_figure}

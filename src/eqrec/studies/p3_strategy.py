@@ -64,7 +64,8 @@ key                        default                      meaning
 ``figure.window``          ``60``                       steps shown in the figure
 =========================  ===========================  ==================================================
 
-The scale table is :mod:`eqrec.studies.p3_scale`.
+The figure is drawn by :func:`eqrec.studies.p3_figures.step_strategy_figure`; the scale table is
+:mod:`eqrec.studies.p3_scale`.
 """
 
 from __future__ import annotations
@@ -84,9 +85,8 @@ from eqrec.design.delay import design_delay, design_lp_status, min_recovery_leve
 from eqrec.design.report import level_table, node_level, path_levels
 from eqrec.design.result import Design
 from eqrec.models import BATCH_REACTOR_TS, batch_reactor
-from eqrec.studies.harness import get_logger
-from eqrec.studies.outputs import save_figure, write_json, write_npz
-from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot
+from eqrec.studies.logs import get_logger
+from eqrec.studies.outputs import write_json, write_npz
 
 log = get_logger("p3")
 
@@ -268,77 +268,4 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     return values
 
 
-def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
-    """P3-IMPL figure: errors per state with the per-time guarantees over a window of each long run.
-
-    Columns: periodic reuse on the batch reactor, on the ACC, and the
-    switching scheme on the batch reactor (recovery phases shaded, switching
-    instants marked).  The run with the first noise kind is shown.
-    """
-    paper_style()
-    plt = pyplot()
-    data = np.load(inputs.npz)
-    kind = str(data["noise"][0])
-    window = int(cfg["strategy"]["figure"]["window"])
-    reactor_labels = [rf"$\xi_{i}$ [–]" for i in range(1, 5)]  # the linearised reactor's states are dimensionless
-    cols = (("reactor_periodic", "Batch reactor, gains reused every T", reactor_labels),
-            ("acc_periodic", "ACC, gains reused every T", list(STATE_LABELS_ACC)),
-            ("reactor_switching", "Batch reactor, switching scheme", reactor_labels))
-    fig, axes = plt.subplots(4, 3, figsize=(10.0, 8.2), sharex="col")
-    # one scale per reactor state across the two reactor columns (the same quantity)
-    reactor_lim = {}
-    for label in ("reactor_periodic", "reactor_switching"):
-        key = f"{label}_{kind}"
-        N = min(window, data[f"{key}_error"].shape[0] - 1)
-        for i in range(data[f"{key}_error"].shape[1]):
-            reactor_lim[i] = max(reactor_lim.get(i, 0.0), 1.15 * max(float(data[f"{key}_level"][: N + 1].max()),
-                                                                  float(np.abs(data[f"{key}_error"][: N + 1, i]).max())))
-    for c, (label, title, ylabels) in enumerate(cols):
-        key = f"{label}_{kind}"
-        err, lev = data[f"{key}_error"], data[f"{key}_level"]
-        T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
-        N = min(window, err.shape[0] - 1)
-        t = np.arange(N + 1)
-        n = err.shape[1]
-        for i in range(4):
-            ax = axes[i, c]
-            if i >= n:
-                ax.axis("off")
-                continue
-            ax.fill_between(t, -lev[: N + 1], lev[: N + 1], step="mid", color="0.85", label="guarantee")
-            ax.plot(t, err[: N + 1, i], "C0.-", ms=2.5, label="estimation error")
-            if label == "reactor_switching":
-                sw, rv = data[f"{key}_switch"], data[f"{key}_revert"]
-                for j, s in enumerate(sw[sw <= N]):
-                    ax.axvline(s, color="C3", ls="--", lw=0.7, label="switch to recovery" if j == 0 else None)
-                for j, s in enumerate(rv[rv <= N]):
-                    ax.axvline(s, color="C2", ls=":", lw=0.9, label="back to performance" if j == 0 else None)
-            else:
-                for j, s in enumerate(range(T, N + 1, T)):
-                    ax.axvline(s, color="0.5", ls=":", lw=0.6, label="period boundary" if j == 0 else None)
-            ax.set_ylabel(ylabels[i])
-            lim = reactor_lim[i] if label.startswith("reactor") else (
-                1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max())))
-            ax.set_ylim(-lim, lim)
-            if i == 0:
-                ax.set_title(title)
-        last = axes[min(n, 4) - 1, c]
-        last.set_xlabel(f"time step k (Ts = {Ts:g} s)")
-        last.tick_params(labelbottom=True)
-    # one legend under the figure (inside an axis it covers the bands)
-    seen: dict[str, object] = {}
-    for ax in axes[0]:
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            seen.setdefault(lab, h)
-    fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=len(seen), bbox_to_anchor=(0.5, 0.0))
-    fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees ({kind} noise, first "
-                 f"{window} steps; $\\mu_1$ = {float(data['reactor_mu1']):g} / {float(data['acc_mu1']):g} / "
-                 f"{float(data['switching_mu1']):g})")
-    fig.tight_layout(rect=(0, 0.04, 1, 1))
-    save_figure(fig, outputs.pdf, outputs.png)
-
-
-STEPS = {
-    "strategy": step_strategy,
-    "strategy_figure": step_strategy_figure,
-}
+STEPS = {"strategy": step_strategy}

@@ -8,8 +8,8 @@ with ``cfg`` the validated ``p4`` section:
 ``mc``               P4-THEORY: theory against Monte Carlo for one example (``wildcards.example``), both
                      mechanisms on the same draws; also Theorem 1 eq. (9) as printed.
 ``sweep_eta_chunk``, ``sweep_q_chunk``   steady-state sweeps, one chunk (``wildcards.chunk``) each.
-``fig4``, ``fig5``, ``fig6``, ``compare``   figures; ``fig5``/``fig6`` first merge the sweep chunks
-                     (checking that they cover the configured grid exactly once).
+``fig4``, ``fig5``, ``fig6``, ``compare``   figures (:mod:`eqrec.studies.p4_figures`); ``fig5``/``fig6``
+                     first merge the sweep chunks (checking that they cover the configured grid exactly once).
 ``values``           our value of every P4 claim with its evidence (``values.json``) and ``summary.csv``
                      (:mod:`eqrec.studies.p4_values`).
 
@@ -34,9 +34,9 @@ from eqrec.lmv.plant import plant_of
 from eqrec.lmv.recursion import (LMVResult, apply_estimator, lmv_recursion, steady_variances, suboptimal_error_cov,
                                  theorem1_as_printed)
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
-from eqrec.studies import configuration, p4_figures, p4_values
-from eqrec.studies.chunks import chunk_indices, merge_npz
-from eqrec.studies.harness import Progress, get_logger
+from eqrec.studies import configuration, p4_figures
+from eqrec.studies.chunks import chunk_indices
+from eqrec.studies.logs import Progress, get_logger
 from eqrec.studies.outputs import write_json, write_npz
 
 log = get_logger("p4")
@@ -218,42 +218,9 @@ def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     return out
 
 
-def step_fig4(cfg, inputs, outputs, wildcards) -> None:
-    """Fig. 4 from the Monte Carlo file of the tracking example."""
-    p4_figures.fig_variances(np.load(inputs.mc), int(cfg["smoother_lag"]), float(cfg["eta_bar"]),
-                             outputs.pdf, outputs.png)
-
-
-def step_fig5(cfg, inputs, outputs, wildcards) -> None:
-    """Merge the eta-sweep chunks (whole grid, once) and draw Fig. 5."""
-    d = merge_npz(list(inputs.chunks), int(cfg["sweep_eta"]["num"]), outputs.merged)
-    ex = cfg["tracking"]["example"]
-    p4_figures.fig_eta(d, ex, int(cfg["smoother_lag"]), cfg["examples"][ex], outputs.pdf, outputs.png)
-
-
-def step_fig6(cfg, inputs, outputs, wildcards) -> None:
-    """Merge the Q-sweep chunks (whole grid, once); Fig. 6 and the regions figure."""
-    d = merge_npz(list(inputs.chunks), int(cfg["sweep_q"]["num"]), outputs.merged, shared=("qlam",))
-    p4_figures.fig_q(d, cfg["tracking"]["example"], float(cfg["eta_bar"]), outputs.pdf, outputs.png)
-    names = {ex: cfg["examples"][ex].get("name", ex) for ex in cfg["examples"]}
-    p4_figures.fig_regions(d, names, float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
-
-
-def step_compare(cfg, inputs, outputs, wildcards) -> None:
-    """Figs. 7-8: zero-input vs hold-input filter of one example."""
-    ex = wildcards["example"]
-    p4_figures.fig_compare(np.load(inputs.mc), cfg["examples"][ex].get("name", ex), float(cfg["eta_bar"]),
-                           int(wildcards["number"]), outputs.pdf, outputs.png)
-
-
 STEPS = {
     "tracking": step_tracking,
     "mc": step_mc,
     "sweep_eta_chunk": step_sweep_eta_chunk,
     "sweep_q_chunk": step_sweep_q_chunk,
-    "fig4": step_fig4,
-    "fig5": step_fig5,
-    "fig6": step_fig6,
-    "compare": step_compare,
-    "values": p4_values.step_values,
 }

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from eqrec.studies.chunks import merge_npz
 from eqrec.studies.outputs import save_figure
 from eqrec.studies.plotting import paper_style, pyplot
 
@@ -137,3 +138,41 @@ def fig_compare(d, name: str, eta: float, number: int, pdf: str, png: str) -> No
                          rf"$\bar\eta = {eta:g}$")
     np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
     save_figure(fig, pdf, png)
+
+
+# --------------------------------------------------------------------------- steps
+
+def step_fig4(cfg, inputs, outputs, wildcards) -> None:
+    """Fig. 4 from the Monte Carlo file of the tracking example."""
+    fig_variances(np.load(inputs.mc), int(cfg["smoother_lag"]), float(cfg["eta_bar"]),
+                             outputs.pdf, outputs.png)
+
+
+def step_fig5(cfg, inputs, outputs, wildcards) -> None:
+    """Merge the eta-sweep chunks (whole grid, once) and draw Fig. 5."""
+    d = merge_npz(list(inputs.chunks), int(cfg["sweep_eta"]["num"]), outputs.merged)
+    ex = cfg["tracking"]["example"]
+    fig_eta(d, ex, int(cfg["smoother_lag"]), cfg["examples"][ex], outputs.pdf, outputs.png)
+
+
+def step_fig6(cfg, inputs, outputs, wildcards) -> None:
+    """Merge the Q-sweep chunks (whole grid, once); Fig. 6 and the regions figure."""
+    d = merge_npz(list(inputs.chunks), int(cfg["sweep_q"]["num"]), outputs.merged, shared=("qlam",))
+    fig_q(d, cfg["tracking"]["example"], float(cfg["eta_bar"]), outputs.pdf, outputs.png)
+    names = {ex: cfg["examples"][ex].get("name", ex) for ex in cfg["examples"]}
+    fig_regions(d, names, float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
+
+
+def step_compare(cfg, inputs, outputs, wildcards) -> None:
+    """Figs. 7-8: zero-input vs hold-input filter of one example."""
+    ex = wildcards["example"]
+    fig_compare(np.load(inputs.mc), cfg["examples"][ex].get("name", ex), float(cfg["eta_bar"]),
+                           int(wildcards["number"]), outputs.pdf, outputs.png)
+
+
+STEPS = {
+    "fig4": step_fig4,
+    "fig5": step_fig5,
+    "fig6": step_fig6,
+    "compare": step_compare,
+}
