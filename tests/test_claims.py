@@ -319,11 +319,11 @@ def test_values_files_hold_numbers_and_evidence_only():
 def test_published_values_need_the_claims_file_only():
     """The Snakefile and P2's printed step read published values through eqrec.studies.claims_file, which
     imports no wording code: editing a reason function re-plans the claims table, not P2's designs."""
-    from eqrec.studies.harness import code_inputs
+    from eqrec.studies.imports import code_inputs
 
-    names = {Path(p).name for p in code_inputs("p2")}
+    names = {Path(p).name for p in code_inputs("p2", "printed")}
     assert "claims_file.py" in names
     assert not names & {"claims.py", "claim_reasons.py", "p1_claims.py", "p2_claims.py", "p3_claims.py",
                         "p4_claims.py"}, sorted(names)
-    claims_inputs = {Path(p).name for p in code_inputs("claims")}
+    claims_inputs = {Path(p).name for p in code_inputs("claims", "table")}
     assert {"claims_file.py", "claim_reasons.py", "p1_claims.py", "p4_claims.py"} <= claims_inputs

@@ -133,9 +133,9 @@ def test_code_inputs_follow_the_imports_of_each_step():
     designs, model4 = imports.code_inputs("p1", "designs"), imports.code_inputs("p4", "mc")
     assert "src/eqrec/studies/p1.py" in designs and "src/eqrec/design/sweeps.py" in designs
     assert not any("/lmv/" in p for p in designs)  # an LMV edit does not re-run the P1 LPs
-    # P4 runs no LP (it lists core/patterns.py: config_checks, which its steps import, parses delay words)
-    assert not any("/design/" in p or p.endswith(("core/lp.py", "core/solvers.py")) for p in model4)
-    assert "src/eqrec/studies/config_checks.py" in model4  # imported by the step, not only at planning
+    # P4 runs no LP; its plant comes from eqrec.lmv.plant (config_checks only validates, at planning)
+    assert not any("/design/" in p or "/core/" in p for p in model4)
+    assert "src/eqrec/lmv/plant.py" in model4 and "src/eqrec/studies/config_checks.py" not in model4
     assert "src/eqrec/studies/config_checks.py" not in designs  # P1 steps do not import it
     for files in (designs, model4):  # the harness that runs the step, not the registry of every study
         assert "src/eqrec/studies/harness.py" in files and "src/eqrec/studies/steps.py" not in files

@@ -45,7 +45,7 @@ import pandas as pd
 
 from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
 from eqrec.models import batch_reactor
-from eqrec.studies.harness import get_logger
+from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import TIMING_KEYS, read_json, write_csv, write_json, write_text
 
 log = get_logger("p3")
