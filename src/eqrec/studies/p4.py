@@ -169,14 +169,18 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     return report
 
 
+def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[int, np.ndarray, np.ndarray, int, float, int]:
+    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk number, the whole grid, the chunk's indices
+    in it, the smoother lag ``N`` and the steady-state settings ``tol``, ``max_iter``."""
+    chunk = int(wildcards["chunk"])
+    values = grid(cfg[sweep])
+    idx = chunk_indices(len(values), int(cfg[sweep]["chunks"]), chunk, field=f"{sweep}.chunks")
+    return chunk, values, idx, int(cfg["smoother_lag"]), float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
+
+
 def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady-state variances against eta_bar (Fig. 5) for one chunk of the grid, both examples and mechanisms."""
-    chunk = int(wildcards["chunk"])
-    g = cfg["sweep_eta"]
-    etas = grid(g)
-    idx = chunk_indices(len(etas), int(g["chunks"]), chunk, field="sweep_eta.chunks")
-    N = int(cfg["smoother_lag"])
-    tol, max_iter = float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
+    chunk, etas, idx, N, tol, max_iter = _sweep_chunk(cfg, wildcards, "sweep_eta")
     out: dict[str, np.ndarray] = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
     prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx), f"eta sweep chunk {chunk}")
     for ex in cfg["examples"]:
@@ -194,12 +198,8 @@ def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
 
 def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady filter variances on the (Q_xi, Q_lambda) grid (Fig. 6): rows of Q_xi in this chunk."""
-    chunk = int(wildcards["chunk"])
-    g = cfg["sweep_q"]
-    qs = grid(g)
-    idx = chunk_indices(len(qs), int(g["chunks"]), chunk, field="sweep_q.chunks")
-    eta, N = float(cfg["eta_bar"]), int(cfg["smoother_lag"])
-    tol, max_iter = float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
+    chunk, qs, idx, N, tol, max_iter = _sweep_chunk(cfg, wildcards, "sweep_q")
+    eta = float(cfg["eta_bar"])
     out: dict[str, np.ndarray] = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
     prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx) * len(qs), f"Q sweep chunk {chunk}")
     for ex in cfg["examples"]:
