@@ -57,7 +57,7 @@ def _median_time(fn, repeats: int) -> tuple[float, float, object]:
 
 
 def part_a(repeats: int, verdicts: list) -> None:
-    from eqrec.core.systems import acc_system
+    from eqrec.core.acc import acc_system
     from eqrec.design.prefix import design_prefix
 
     system = acc_system()
@@ -84,7 +84,7 @@ def part_a(repeats: int, verdicts: list) -> None:
 
 
 def part_b(repeats: int, ipopt_repeats: int, verdicts: list) -> None:
-    from eqrec.core.patterns import full_delay_language
+    from eqrec.core.words import full_delay_language
     from eqrec.design.delay import design_delay_global
     from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
     from eqrec.models import batch_reactor

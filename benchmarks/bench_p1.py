@@ -26,9 +26,9 @@ import time
 from pathlib import Path
 
 from eqrec.core.certify import certify_design
-from eqrec.core.patterns import worst_case_word
+from eqrec.core.words import worst_case_word
 from eqrec.core.solvers import solve_lp
-from eqrec.core.systems import acc_system
+from eqrec.core.acc import acc_system
 from eqrec.design.prefix import build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 
@@ -56,7 +56,10 @@ WORKER = r"""
 import json, statistics, sys, time
 try:
     from eqrec.design.prefix import design_prefix
-    from eqrec.core.systems import acc_system
+    try:
+        from eqrec.core.acc import acc_system
+    except ImportError:  # layout before the core split of issue 18
+        from eqrec.core.systems import acc_system
 except ImportError:  # layout before the arrival-pattern core
     from eqrec.design_prefix import design_prefix
     from eqrec.systems import acc_system

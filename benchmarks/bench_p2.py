@@ -17,7 +17,7 @@ import numpy as np
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.observers import place_observer
 from eqrec.studies.p2_readings import heatmap_poles, variant_word
-from eqrec.core.systems import acc_system
+from eqrec.core.acc import acc_system
 
 GOAL = 60.0
 

@@ -43,7 +43,7 @@ def part_fixed(repeats: int) -> None:
     from eqrec.core.solvers import solve_lp
     from eqrec.design.delay import _design_from_solution, delay_language, design_delay
     from eqrec.design.prefix import build_prefix_lp
-    from eqrec.core.patterns import PrefixTree
+    from eqrec.core.prefix_tree import PrefixTree
     from eqrec.models import batch_reactor
 
     system = batch_reactor()
@@ -80,7 +80,7 @@ def part_fixed(repeats: int) -> None:
 
 
 def part_free() -> None:
-    from eqrec.core.patterns import full_delay_language
+    from eqrec.core.words import full_delay_language
     from eqrec.design.delay import design_delay_global
     from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
     from eqrec.models import batch_reactor
