@@ -210,7 +210,7 @@ rule p3_values:
         RUN_STEP
 
 
-# --- P3-IMPL (Section III-B3) and the scale table: steps of eqrec.studies.p3_strategy ----------------
+# --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3_strategy, p3_figures, p3_scale ---
 VALUES_FILES.append("results/p3/strategy_values.json")
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
