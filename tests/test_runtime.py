@@ -154,3 +154,18 @@ def test_readme_loop_runs_as_written():
     scope = {"read_sensor": lambda k: None if k % 3 == 1 else np.array([0.01 * k])}
     exec(compile(code, "README.md", "exec"), scope)
     assert np.isfinite(scope["xhat"]).all() and scope["bound"] > 0
+
+
+def test_readme_from_python_block_runs_as_written():
+    """The README's "From Python" lines (a P1 design and the (30, 4) full delay language), executed as written."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    section = text.split("From Python:", 1)[1]
+    code = re.search(r"```python\n(.*?)```", section, flags=re.S).group(1)
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    d, g = scope["d"], scope["g"]
+    assert d.certificate.mu2 <= d.mu2 * (1 + 1e-6) and d.mu1 == 1.0
+    assert g.mu1 >= g.mu1_min.lower and g.design.class_gains.K[0].ndim == 2
