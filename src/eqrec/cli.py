@@ -36,7 +36,7 @@ MAX_MU1 = 1e12
 #: Largest full delay language ``{0..D}^T`` (words) that ``--node-gains`` or ``--engine tree`` enumerate.
 MAX_ENUMERATED_WORDS = 20_000
 ENGINES = ("classes", "tree")
-#: ``eqrec.design.delay.JSON_NODE_GAINS_LIMIT``, for the help text without importing the design modules (a test
+#: ``eqrec.design.report.JSON_NODE_GAINS_LIMIT``, for the help text without importing the design modules (a test
 #: checks they agree).
 JSON_NODE_GAINS_SEQUENCES = 200
 EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usage error; "

@@ -17,7 +17,7 @@ robust constraints are written once per node:
           \Big(\sum_{\tau \le s,\ q(\tau) = 1} Q(s,\tau) Y_\tau \delta + r(s)\Big),
 
 where :math:`\mathrm{Ol}_t` is the open-loop error map and :math:`Y_\tau` the
-output-error map of :class:`eqrec.stacking.Stacking`.  Nodes where a word
+output-error map of :class:`eqrec.core.stacking.Stacking`.  Nodes where a word
 ends get level ``M1``, the others the variable ``M2`` (eq. (12b)); ``M2 >=
 M1`` covers ``t = 0``.
 
@@ -156,7 +156,7 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
     T
         Horizon for the stacked matrices (default: the longest word).
     form
-        Robust counterpart (:func:`eqrec.robust.add_robust_rows`): ``"split"``,
+        Robust counterpart (:func:`eqrec.core.robust.add_robust_rows`): ``"split"``,
         ``"abs"`` or the paper's Π-dual ``"dual"``.
     zero_offset
         Fix ``r = 0`` (no loss of optimality, see the module docstring).
