@@ -28,7 +28,23 @@ INF = np.inf
 
 @dataclass
 class LinearProgram:
-    """``min c^T x`` subject to ``row_lower <= A x <= row_upper`` and ``col_lower <= x <= col_upper``."""
+    """``min c^T x`` subject to ``row_lower <= A x <= row_upper`` and ``col_lower <= x <= col_upper``.
+
+    Parameters
+    ----------
+    c : ndarray, shape (N,)
+        Objective coefficients.
+    A : scipy.sparse.csc_matrix, shape (M, N)
+        Constraint matrix.
+    row_lower, row_upper : ndarray, shape (M,)
+        Row bounds (``-inf``/``inf`` for a one-sided row).
+    col_lower, col_upper : ndarray, shape (N,)
+        Variable bounds.
+    blocks : dict of str to ndarray
+        Column indices of the named variable blocks.
+    tracked : dict of int to ndarray
+        Positions in ``A.data`` of tracked entries, by handle (see :meth:`positions`).
+    """
 
     c: np.ndarray
     A: sp.csc_matrix
@@ -44,15 +60,37 @@ class LinearProgram:
 
         Writing ``A.data[positions]`` changes those coefficients in place
         (the sparsity pattern is fixed), e.g. to update an ``L``-dependent LP.
+
+        Parameters
+        ----------
+        handle : int
+            Handle returned by :meth:`LPBuilder.add_entries`.
+
+        Returns
+        -------
+        ndarray of int
+            Positions in ``A.data``, in the order the entries were added.
         """
         return self.tracked[handle]
 
     @property
     def shape(self) -> tuple[int, int]:
+        """``(rows, variables)`` of ``A``."""
         return self.A.shape
 
     def residual(self, x: np.ndarray) -> float:
-        """Largest violation of any row or column bound by ``x``."""
+        """Largest violation of any row or column bound by ``x``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (N,)
+            A point (e.g. a solver's solution).
+
+        Returns
+        -------
+        float
+            ``max`` of the row and column bound violations, 0 when ``x`` is feasible.
+        """
         ax = self.A @ x
         viol = [np.max(self.row_lower - ax, initial=0.0), np.max(ax - self.row_upper, initial=0.0),
                 np.max(self.col_lower - x, initial=0.0), np.max(x - self.col_upper, initial=0.0)]
@@ -78,15 +116,32 @@ class LPBuilder:
 
     @property
     def num_variables(self) -> int:
+        """Number of variables added so far."""
         return self._ncols
 
     @property
     def num_rows(self) -> int:
+        """Number of rows added so far."""
         return self._nrows
 
     def add_variables(self, count: int, lower: float | np.ndarray = -INF, upper: float | np.ndarray = INF,
                       name: str | None = None) -> np.ndarray:
-        """Add ``count`` variables and return their column indices."""
+        """Add ``count`` variables and return their column indices.
+
+        Parameters
+        ----------
+        count : int
+            Number of variables.
+        lower, upper : float or ndarray, optional
+            Bounds (broadcast to ``count``; default free).
+        name : str, optional
+            Name of the block, readable with :meth:`LPSolution.block`.
+
+        Returns
+        -------
+        ndarray of int, shape (count,)
+            Global column indices of the new variables.
+        """
         idx = np.arange(self._ncols, self._ncols + count)
         self._ncols += count
         self._col_lower.append(np.broadcast_to(np.asarray(lower, float), (count,)).copy())
@@ -96,7 +151,15 @@ class LPBuilder:
         return idx
 
     def set_cost(self, columns: np.ndarray | int, coefficients: np.ndarray | float) -> None:
-        """Add ``coefficients`` to the objective coefficients of ``columns``."""
+        """Add ``coefficients`` to the objective coefficients of ``columns``.
+
+        Parameters
+        ----------
+        columns : int or ndarray of int
+            Global column indices.
+        coefficients : float or ndarray
+            Added to their cost (broadcast to ``columns``).
+        """
         for j, c in zip(np.atleast_1d(columns), np.broadcast_to(coefficients, np.shape(np.atleast_1d(columns)))):
             self._cost[int(j)] = self._cost.get(int(j), 0.0) + float(c)
 
@@ -106,12 +169,17 @@ class LPBuilder:
 
         Parameters
         ----------
-        rows, cols, vals
+        rows, cols, vals : ndarray
             Triplets; ``rows`` are local (0 .. count-1), ``cols`` global.
-        lower, upper
+        lower, upper : float or ndarray
             Row bounds (broadcast to ``count``).
-        count
+        count : int, optional
             Number of rows (default ``max(rows) + 1``).
+
+        Returns
+        -------
+        ndarray of int, shape (count,)
+            Global indices of the new rows.
         """
         rows = np.asarray(rows, dtype=np.int64).ravel()
         if count is None:
@@ -131,6 +199,20 @@ class LPBuilder:
         With ``track=True`` the entries are kept even when zero, must not
         coincide with other entries, and the returned handle gives their
         positions in the built matrix (:meth:`LinearProgram.positions`).
+
+        Parameters
+        ----------
+        rows, cols : ndarray of int
+            Global row and column indices.
+        vals : ndarray
+            Coefficients.
+        track : bool, optional
+            Keep the entries and return a handle to their positions.
+
+        Returns
+        -------
+        int or None
+            The handle with ``track=True``, else ``None``.
         """
         rows = np.asarray(rows, dtype=np.int64).ravel()
         cols = np.asarray(cols, dtype=np.int64).ravel()
@@ -146,7 +228,13 @@ class LPBuilder:
         return handle
 
     def build(self) -> LinearProgram:
-        """Freeze into a solver-independent :class:`LinearProgram`."""
+        """Freeze into a solver-independent :class:`LinearProgram`.
+
+        Returns
+        -------
+        LinearProgram
+            CSC matrix (duplicates summed, zeros dropped unless tracked) and bounds.
+        """
         c = np.zeros(self._ncols)
         for j, v in self._cost.items():
             c[j] = v
@@ -186,6 +274,25 @@ class LPSolution:
     ``y`` of the rows in one convention for every solver, ``c - Aᵀy`` = the
     reduced costs (nonnegative at a column's lower bound, nonpositive at its
     upper bound), as HiGHS reports them.
+
+    Parameters
+    ----------
+    status : str
+        ``"optimal"``, ``"infeasible"``, ``"unbounded"``, or a solver message.
+    x : ndarray or None
+        The solution, shape (N,); ``None`` when the solver returned none.
+    objective : float
+        ``c^T x``.
+    solver : str
+        Name of the solver in the registry.
+    iterations : int
+        Iterations reported by the solver.
+    solve_time : float
+        Seconds spent inside the solver call.
+    blocks : dict of str to ndarray
+        Column indices of the named blocks (from :attr:`LinearProgram.blocks`).
+    row_dual : ndarray or None
+        Row multipliers ``y``, shape (M,), in the convention above.
     """
 
     status: str  # "optimal", "infeasible", "unbounded", or a solver message
@@ -199,16 +306,39 @@ class LPSolution:
 
     @property
     def optimal(self) -> bool:
+        """Whether ``status`` is ``"optimal"``."""
         return self.status == "optimal"
 
     def block(self, name: str) -> np.ndarray:
-        """Values of a named variable block."""
+        """Values of a named variable block.
+
+        Parameters
+        ----------
+        name : str
+            Block name given to :meth:`LPBuilder.add_variables`.
+
+        Returns
+        -------
+        ndarray
+            ``x`` at the block's columns.
+        """
         if self.x is None:
             raise SolverFailure(f"no solution to read (status {self.status})")
         return self.x[self.blocks[name]]
 
     def require_optimal(self, what: str = "design") -> "LPSolution":
-        """Raise :class:`InfeasibleDesign` or :class:`SolverFailure` unless optimal."""
+        """Raise :class:`InfeasibleDesign` or :class:`SolverFailure` unless optimal.
+
+        Parameters
+        ----------
+        what : str, optional
+            What was solved, for the error message.
+
+        Returns
+        -------
+        LPSolution
+            ``self``, when optimal.
+        """
         if self.status == "infeasible":
             raise InfeasibleDesign(f"{what} is infeasible ({self.solver})")
         if self.status == "unbounded":
