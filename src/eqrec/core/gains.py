@@ -47,15 +47,40 @@ def q_to_f(Q: np.ndarray, r: np.ndarray, CS: np.ndarray) -> tuple[np.ndarray, np
     Q : ndarray, shape (Tn, Tp)
         Block lower-triangular Q-parameter.
     r : ndarray, shape (Tn,)
+        Feedforward parameter of eq. (2).
     CS : ndarray, shape (Tp, Tn)
         The product ``C̄ S`` (strictly block lower triangular).
+
+    Returns
+    -------
+    F : ndarray, shape (Tn, Tp)
+        Stacked output-injection gains, ``(I + Q C̄ S)^{-1} Q``.
+    u0 : ndarray, shape (Tn,)
+        Stacked feedforward terms, ``(I + Q C̄ S)^{-1} r``.
     """
     Mtx = np.eye(Q.shape[0]) + Q @ CS
     return _solve_unit_lower(Mtx, Q), _solve_unit_lower(Mtx, r)
 
 
 def f_to_q(F: np.ndarray, u0: np.ndarray, CS: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eqs. (1)-(2) of the prefix-based paper: ``Q = F (I - C̄ S F)^{-1}``, ``r = (I + Q C̄ S) u0``."""
+    """Eqs. (1)-(2) of the prefix-based paper: ``Q = F (I - C̄ S F)^{-1}``, ``r = (I + Q C̄ S) u0``.
+
+    Parameters
+    ----------
+    F : ndarray, shape (Tn, Tp)
+        Stacked block lower-triangular gains of one word (eq. (9)).
+    u0 : ndarray, shape (Tn,)
+        Stacked feedforward terms.
+    CS : ndarray, shape (Tp, Tn)
+        The product ``C̄ S`` (strictly block lower triangular).
+
+    Returns
+    -------
+    Q : ndarray, shape (Tn, Tp)
+        Q-parameter of eq. (1).
+    r : ndarray, shape (Tn,)
+        Feedforward parameter of eq. (2).
+    """
     Q = np.linalg.solve((np.eye(CS.shape[0]) - CS @ F).T, F.T).T
     r = (np.eye(Q.shape[0]) + Q @ CS) @ u0
     return Q, r
@@ -67,6 +92,13 @@ class GainRow:
 
     Columns of measurements not available at ``t`` are zero (they multiply
     ``y_ξ(τ) = 0``).
+
+    Parameters
+    ----------
+    F : ndarray, shape (n, (t+1)p)
+        ``[F(t, 0), ..., F(t, t)]`` of eq. (7) of the prefix-based paper.
+    u0 : ndarray, shape (n,)
+        Feedforward term ``u0(t)``.
     """
 
     F: np.ndarray
@@ -77,18 +109,18 @@ class GainRow:
 class GainSchedule:
     """Gains of a prefix-based (eq. (7)) or time-based (eq. (6)) estimator.
 
-    Attributes
+    Parameters
     ----------
-    rows
+    rows : dict of ArrivalPattern to GainRow
         ``rows[prefix]`` is the gain row used at time ``len(prefix) - 1``
-        after observing the pattern prefix ``prefix`` (an :class:`ArrivalPattern`).
-    time_based
+        after observing the pattern prefix ``prefix`` (0/1 words are converted).
+    n, p : int
+        State and output dimensions.
+    time_based : bool, optional
         If true the schedule has a single designed pattern and the gains are
         chosen by time only; the observed prefix is ignored (so measurements
         that the designed pattern does not have get zero gain).
-    n, p
-        State and output dimensions.
-    designed
+    designed : tuple of ArrivalPattern, optional
         The patterns the schedule was designed for.
     """
 
@@ -109,10 +141,22 @@ class GainSchedule:
 
     @property
     def horizon(self) -> int:
+        """Length ``T`` of the longest prefix in ``rows``."""
         return max(k.T for k in self.rows)
 
     def row(self, observed_prefix: "ArrivalPattern | str") -> GainRow:
-        """Gain row after observing ``observed_prefix`` (a pattern prefix of length ``t + 1``)."""
+        """Gain row after observing ``observed_prefix`` (a pattern prefix of length ``t + 1``).
+
+        Parameters
+        ----------
+        observed_prefix : ArrivalPattern or str
+            Arrival-pattern prefix observed up to time ``t`` (or a 0/1 word).
+
+        Returns
+        -------
+        GainRow
+            Gains used at time ``t`` (by time alone when ``time_based``).
+        """
         observed = as_pattern(observed_prefix)
         if self.time_based:
             if observed.T > self.designed[0].T:
@@ -125,7 +169,20 @@ class GainSchedule:
                              f"of the design language {list(self.designed_words)}") from None
 
     def word_matrices(self, pattern: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray]:
-        """Stacked ``F (Tn x Tp)`` and ``u0 (Tn)`` used along ``pattern`` (eq. (9) of the prefix-based paper)."""
+        """Stacked ``F (Tn x Tp)`` and ``u0 (Tn)`` used along ``pattern`` (eq. (9) of the prefix-based paper).
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            Arrival pattern (or 0/1 word) of length ``T``.
+
+        Returns
+        -------
+        F : ndarray, shape (Tn, Tp)
+            Block lower-triangular gains of the rows along ``pattern``.
+        u0 : ndarray, shape (Tn,)
+            Stacked feedforward terms.
+        """
         pattern = as_pattern(pattern)
         T, n, p = pattern.T, self.n, self.p
         F = np.zeros((T * n, T * p))
@@ -137,7 +194,13 @@ class GainSchedule:
         return F, u0
 
     def to_json(self) -> dict:
-        """Per designed pattern ``{"F": ..., "u0": ...}`` in the CLI output convention, keyed by label."""
+        """Per designed pattern ``{"F": ..., "u0": ...}`` in the CLI output convention, keyed by label.
+
+        Returns
+        -------
+        dict of str to dict
+            ``{label: {"F": nested lists, "u0": list}}`` from :meth:`word_matrices`.
+        """
         return {w.label: dict(zip(("F", "u0"), (m.tolist() for m in self.word_matrices(w)))) for w in self.designed}
 
 
@@ -149,6 +212,24 @@ def schedule_from_word_gains(tree: PrefixTree, word_gains: dict, n: int, p: int,
     sharing a prefix must have the same gain rows on it (Proposition 1 of the
     prefix-based paper); a violation beyond ``consistency_tol`` (relative)
     raises :class:`AssertionError`.
+
+    Parameters
+    ----------
+    tree : PrefixTree
+        Prefix tree of the design language; its patterns become ``designed``.
+    word_gains : dict
+        Pattern (or 0/1 word) -> ``(F, u0)``, shapes ``(Tn, Tp)`` and ``(Tn,)``.
+    n, p : int
+        State and output dimensions.
+    time_based : bool, optional
+        Build a time-based schedule (eq. (6)) instead of a prefix-based one.
+    consistency_tol : float, optional
+        Relative tolerance of the prefix-consistency check.
+
+    Returns
+    -------
+    GainSchedule
+        One gain row per prefix of the patterns.
     """
     rows: dict[ArrivalPattern, GainRow] = {}
     for word, (F, u0) in word_gains.items():
