@@ -33,7 +33,23 @@ CERT_RTOL = 1e-6
 
 @dataclass
 class WordCertificate:
-    """Closed-loop error maps and worst-case bounds along one word."""
+    """Closed-loop error maps and worst-case bounds along one word.
+
+    Parameters
+    ----------
+    word : str
+        Label of the pattern.
+    G : ndarray, shape (T+1, n, D)
+        Linear part of ``ξ(t) = G[t] δ + c[t]`` (``δ`` laid out by ``UncertaintyLayout``).
+    c : ndarray, shape (T+1, n)
+        Affine part (from ``u0``).
+    bounds : ndarray, shape (T+1, n)
+        ``max`` over the box of ``|ξ_i(t)|``.
+    radius : ndarray, shape (D,)
+        Radii ``b`` of the uncertainty box (``η_w``, ``η_v``, ``μ1`` entries).
+    pattern : ArrivalPattern, optional
+        The pattern itself.
+    """
 
     word: str
     G: np.ndarray  # (T+1, n, D): ξ(t) = G[t] δ + c[t]
@@ -43,17 +59,49 @@ class WordCertificate:
     pattern: ArrivalPattern | None = None
 
     def worst_vertex(self, t: int, i: int) -> np.ndarray:
-        """A box vertex ``δ*`` at which ``|ξ_i(t)|`` equals its bound."""
+        """A box vertex ``δ*`` at which ``|ξ_i(t)|`` equals its bound.
+
+        Parameters
+        ----------
+        t : int
+            Time, ``0..T``.
+        i : int
+            State component.
+
+        Returns
+        -------
+        ndarray, shape (D,)
+            The worst-case uncertainty ``δ*``.
+        """
         return worst_case_vertex(self.G[t, i], self.c[t, i], self.radius)
 
     def errors(self, deltas: np.ndarray) -> np.ndarray:
-        """Errors ``ξ(t) = G_t δ + c_t`` for samples ``deltas`` (``(N, D)``): shape ``(N, T+1, n)``."""
+        """Errors ``ξ(t) = G_t δ + c_t`` for samples ``deltas``.
+
+        Parameters
+        ----------
+        deltas : ndarray, shape (N, D) or (D,)
+            Uncertainty samples.
+
+        Returns
+        -------
+        ndarray, shape (N, T+1, n)
+            The error trajectories.
+        """
         return np.einsum("tnd,kd->ktn", self.G, np.atleast_2d(deltas)) + self.c[None]
 
 
 @dataclass
 class Certificate:
-    """Worst-case bounds of a design over a set of words."""
+    """Worst-case bounds of a design over a set of words.
+
+    Parameters
+    ----------
+    mu1 : float
+        Recovery level ``μ1`` (radius of the initial-error box).
+    words : dict of str to WordCertificate, optional
+        Per-pattern certificates, keyed by label.
+    """
 
     mu1: float
     words: dict[str, WordCertificate] = field(default_factory=dict)
@@ -69,10 +117,23 @@ class Certificate:
         return float(max(wc.bounds[-1].max() for wc in self.words.values()))
 
     def per_time(self) -> np.ndarray:
-        """Max over words and components of the bound at each time (words of equal length)."""
+        """Max over words and components of the bound at each time (words of equal length).
+
+        Returns
+        -------
+        ndarray, shape (T+1,)
+            Certified level at each time ``0..T``.
+        """
         return np.max(np.stack([wc.bounds.max(axis=1) for wc in self.words.values()]), axis=0)
 
     def to_json(self) -> dict:
+        """JSON form: certified ``mu2`` and terminal level, ``M1`` and the per-word bounds.
+
+        Returns
+        -------
+        dict
+            Keys ``certified_mu2``, ``certified_terminal``, ``M1``, ``bounds`` (label -> nested lists).
+        """
         return {"certified_mu2": self.mu2, "certified_terminal": self.terminal, "M1": self.mu1,
                 "bounds": {w: wc.bounds.tolist() for w, wc in self.words.items()}}
 
@@ -84,6 +145,24 @@ def closed_loop_maps(system: AffineSystem, schedule: GainSchedule,
     At time ``t`` the estimator injects ``u_e(t) = u0 + Σ_{τ ∈ A(t)} F(t, τ) y_ξ(τ)``
     with ``y_ξ(τ) = C ξ(τ) + V v(τ)`` formed with the error of time ``τ``
     (for a late measurement, the estimate ``x̂(τ)`` the runtime estimator kept).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (its matrices, possibly time-varying).
+    schedule : GainSchedule
+        Gains ``(F, u0)`` per prefix.
+    pattern : ArrivalPattern or str
+        Pattern (or 0/1 word) of horizon ``T``.
+
+    Returns
+    -------
+    G : ndarray, shape (T+1, n, D)
+        Linear maps from ``δ = (w, v, ξ0)``.
+    c : ndarray, shape (T+1, n)
+        Affine terms.
+    layout : UncertaintyLayout
+        Positions of ``w(t)``, ``v(t)`` and ``ξ0`` in ``δ`` (``D = layout.size``).
     """
     pattern = as_pattern(pattern)
     T, n, p = pattern.T, system.n, system.p
@@ -178,7 +257,21 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
     ------
     CertificationFailure
         If a bound exceeds the designed ``M2`` (or ``M1`` at a word's end) by
-        more than ``rtol`` relative.
+        more than ``rtol`` relative, or exceeds a node's level after a prefix.
+
+    Parameters
+    ----------
+    design : Design
+        A design result (its system, schedule, ``mu1``, ``mu2`` and levels).
+    words : iterable of str or ArrivalPattern, optional
+        Patterns to certify (default the design's patterns).
+    rtol : float, optional
+        Relative tolerance on the optimised levels.
+
+    Returns
+    -------
+    Certificate
+        The certificate, also stored as ``design.certificate``.
     """
     words = list(design.patterns if words is None else words)
     cert = certify_schedule(design.system, design.schedule, words, design.mu1)
@@ -209,5 +302,17 @@ def no_data_growth(system: AffineSystem, steps: int) -> float:
     :math:`\xi(k) = A^k \xi(0)`, so every level of that prefix is at least
     :math:`\|A^k\|_\infty \mu_1` (the lower bound used to explain the batch
     reactor's max μ2 in the delayed-data paper, Sec. IV-A).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (its constant ``A``).
+    steps : int
+        Number ``k`` of steps without data.
+
+    Returns
+    -------
+    float
+        The row-sum norm ``||A^k||_∞``.
     """
     return float(np.abs(np.linalg.matrix_power(np.asarray(system.A, float), int(steps))).sum(axis=1).max())
