@@ -49,7 +49,7 @@ from eqrec.errors import InputError
 class DataClass:
     """The nodes of depth ``depth`` whose available data at time ``depth - 1`` is ``available``.
 
-    Attributes
+    Parameters
     ----------
     depth : int
         ``d``: the class bounds the error :math:`\\xi(d)` (``1 <= d <= T``).
@@ -90,9 +90,10 @@ class DataClass:
 class ClassSet:
     """The classes of a language, ordered by depth then by data set.
 
-    Attributes
+    Parameters
     ----------
     classes : tuple of DataClass
+        The classes, ordered by depth, then size and content of ``S``.
     horizon : int
         ``T``: the longest word (the stacking horizon).
     words, sequences, nodes : int
@@ -103,6 +104,8 @@ class ClassSet:
         (:func:`classes_of_full_language`).
     node_class : dict
         Tree only: node index -> position of its class in ``classes``.
+    tree : PrefixTree or None
+        Tree only: the prefix tree the classes come from.
     """
 
     classes: tuple[DataClass, ...]
@@ -121,7 +124,20 @@ class ClassSet:
         return iter(self.classes)
 
     def index(self, depth: int, available) -> int:
-        """Position of the class ``(depth, available)``; :class:`InputError` if the language has none."""
+        """Position of the class ``(depth, available)``; :class:`InputError` if the language has none.
+
+        Parameters
+        ----------
+        depth : int
+            ``d``, ``1 <= d <= T``.
+        available : iterable of int
+            ``S``: measurement times available at ``d - 1`` (any order).
+
+        Returns
+        -------
+        int
+            Index into ``classes``.
+        """
         try:
             return self._index[(int(depth), tuple(sorted(int(i) for i in available)))]
         except KeyError:
@@ -135,7 +151,13 @@ class ClassSet:
         return idx
 
     def per_depth(self) -> list[int]:
-        """Number of classes at depths ``1..T``."""
+        """Number of classes at depths ``1..T``.
+
+        Returns
+        -------
+        list of int
+            Length ``T``; entry ``d - 1`` counts the classes of depth ``d``.
+        """
         return np.bincount([c.depth for c in self.classes], minlength=self.horizon + 1)[1:].tolist()
 
 
@@ -148,6 +170,16 @@ def classes_of_tree(tree: PrefixTree) -> ClassSet:
 
     The weight of a class is the number of the tree's patterns (sequences of
     the reduced language) through its inner nodes.
+
+    Parameters
+    ----------
+    tree : PrefixTree
+        Prefix tree of the language.
+
+    Returns
+    -------
+    ClassSet
+        The classes, with ``node_class`` and ``tree`` set (``source="tree"``).
     """
     through = tree.sequences_through()
     acc: dict[tuple, dict] = {}
@@ -187,6 +219,18 @@ def full_language_counts(T: int, max_delay: int) -> dict[str, int]:
     of the others', so the reduced language is the product of the outcome
     sets; a node of depth ``d`` is a choice, per ``i < d``, of an arrival
     time ``<= d-1`` or 'not yet' (possible when ``i + τ̄ > d-1``).
+
+    Parameters
+    ----------
+    T : int
+        Horizon (word length).
+    max_delay : int
+        Largest delay ``τ̄``.
+
+    Returns
+    -------
+    dict of str to int
+        ``{"words": (τ̄+1)^T, "sequences": ..., "nodes": ...}``.
     """
     T, D = int(T), int(max_delay)
     sequences = prod(_arrival_values(i, T, D) for i in range(T))
@@ -202,6 +246,18 @@ def classes_of_full_language(T: int, max_delay: int) -> ClassSet:
     sequences whose data at ``d-1`` is ``S``: per ``i < d``, the outcomes
     arriving by ``d-1`` if ``i ∈ S`` and the others if not, times all the
     outcomes of ``i >= d``.
+
+    Parameters
+    ----------
+    T : int
+        Horizon, ``>= 1``.
+    max_delay : int
+        Largest delay ``τ̄``, ``>= 0``.
+
+    Returns
+    -------
+    ClassSet
+        The classes (``source="window"``, no tree) and the counts of :func:`full_language_counts`.
     """
     T, D = int(T), int(max_delay)
     if T < 1 or D < 0:
@@ -236,6 +292,20 @@ def class_maps(stacking: Stacking, cls: DataClass) -> tuple[np.ndarray, np.ndarr
     and :math:`y_S - \bar y_S = Z_S\delta` for the noise-free prediction
     :math:`\bar x, \bar y` from :math:`\hat x(0)`.  Shapes ``(n, D)`` and
     ``(|S| p, D)``.
+
+    Parameters
+    ----------
+    stacking : Stacking
+        Stacked maps of the system over the horizon.
+    cls : DataClass
+        The class ``(d, S)``.
+
+    Returns
+    -------
+    E : ndarray, shape (n, D)
+        Open-loop error map of time ``d``.
+    Z : ndarray, shape (|S| p, D)
+        Output maps of the measurements in ``S``, by time then output.
     """
     E = stacking.open_loop[cls.depth]
     S = list(cls.available)
@@ -253,13 +323,15 @@ class ClassGains:
     :math:`\hat x(0)` (inputs and ``f`` included) and ``S`` the data received
     by time ``d-1`` (:class:`eqrec.core.estimator.ClassEstimator` runs it).
 
-    Attributes
+    Parameters
     ----------
     classes : ClassSet
+        The classes of the language.
     K : list of ndarray
         ``K[i]`` of shape ``(n, |S_i| p)``, columns ordered by measurement time
         then output.
     n, p : int
+        State and output dimensions.
     """
 
     classes: ClassSet
@@ -269,23 +341,57 @@ class ClassGains:
 
     @property
     def horizon(self) -> int:
+        """``T`` of the class set."""
         return self.classes.horizon
 
     def gain(self, depth: int, available) -> np.ndarray:
-        """``K`` of the class ``(depth, available)``."""
+        """``K`` of the class ``(depth, available)``.
+
+        Parameters
+        ----------
+        depth : int
+            ``d``.
+        available : iterable of int
+            ``S``: measurement times available at ``d - 1``.
+
+        Returns
+        -------
+        ndarray, shape (n, |S| p)
+            The class gain.
+        """
         return self.K[self.classes.index(depth, available)]
 
     def estimate(self, depth: int, available, xbar: np.ndarray, residuals) -> np.ndarray:
         r"""The class form :math:`\hat x(d) = \bar x(d) + K_{(d,S)}(y_S - \bar y_S)`.
 
-        ``residuals``: the :math:`y(\tau) - C(\tau)\bar x(\tau)` of the times in
-        ``available`` (increasing), each of length ``p``.  :class:`InputError` if
-        the language has no class ``(depth, available)``.
+        :class:`InputError` if the language has no class ``(depth, available)``.
+
+        Parameters
+        ----------
+        depth : int
+            ``d``.
+        available : sequence of int
+            ``S``, increasing.
+        xbar : ndarray, shape (n,)
+            Noise-free prediction :math:`\bar x(d)`.
+        residuals : sequence of ndarray
+            The :math:`y(\tau) - C(\tau)\bar x(\tau)` of the times in ``available``, each of length ``p``.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The estimate :math:`\hat x(d)`.
         """
         S = tuple(available)
         K = self.gain(depth, S)
         return xbar + K @ np.concatenate([np.asarray(r, float) for r in residuals]) if S else np.array(xbar, float)
 
     def to_json(self) -> dict:
-        """``{"d:S": K}`` (``S`` as a 0/1 string over times ``0..d-1``)."""
+        """``{"d:S": K}`` (``S`` as a 0/1 string over times ``0..d-1``).
+
+        Returns
+        -------
+        dict of str to list
+            Class label -> ``K`` as nested lists.
+        """
         return {c.label: k.tolist() for c, k in zip(self.classes, self.K)}
