@@ -54,7 +54,15 @@ from eqrec.errors import InputError
 
 @dataclass(frozen=True)
 class Packet:
-    """A measurement ``y`` of time ``time`` (its time stamp)."""
+    """A measurement ``y`` of time ``time`` (its time stamp).
+
+    Parameters
+    ----------
+    time : int
+        Absolute time ``τ`` of the measurement (not the time it arrives).
+    y : ndarray, shape (p,)
+        The measurement ``y(τ)``.
+    """
 
     time: int
     y: np.ndarray
@@ -158,15 +166,15 @@ class RecoveryEstimator(_StampedEstimator):
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The model (``A, B, C, f``) used by the estimator.
-    schedule
+    schedule : GainSchedule
         Prefix-based or time-based gains.
-    xhat0
+    xhat0 : array_like, shape (n,)
         Initial estimate ``x̂(0)``.
-    periodic
+    periodic : bool, optional
         Restart the horizon every ``T`` steps instead of stopping.
-    t0
+    t0 : int, optional
         Absolute time of the first step (the time stamp of the first
         measurement; ``0`` by default).  Packets stamped before ``t0`` are
         dropped like packets of an earlier period.
@@ -181,11 +189,20 @@ class RecoveryEstimator(_StampedEstimator):
         return self.xhat  # y_ξ(τ) = y(τ) − C x̂(τ), with the estimate of the packet's own time
 
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
-        """Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
+        """Process time ``t``: the packets arriving at ``t`` and the input ``u(t)`` (eqs. (5), (7)).
 
-        ``y`` is ``None`` (nothing arrives), an array (``y(t)`` arriving on
-        time) or :class:`Packet` objects stamped with their own (absolute)
-        times ``τ <= t``.  Returns the prediction ``x̂(t+1)``.
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            ``None`` (nothing arrives), an array (``y(t)`` arriving on time) or
+            :class:`Packet` objects stamped with their own (absolute) times ``τ <= t``.
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)`` (a copy).
         """
         sys = self.system
         k, t = self._intake(y)
@@ -374,13 +391,24 @@ def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xha
 
     Parameters
     ----------
-    gains
+    system : AffineSystem
+        The model used by the estimator.
+    gains : GainSchedule or ClassGains
         Node gains (:class:`eqrec.core.gains.GainSchedule`: a
         :class:`RecoveryEstimator`, eqs. (5)-(7)) or class gains
         (:class:`eqrec.core.classes.ClassGains`: a :class:`ClassEstimator`,
         the class form).
-    xhat0, periodic, t0
-        As :class:`RecoveryEstimator`.
+    xhat0 : array_like, shape (n,)
+        Initial estimate ``x̂(0)``.
+    periodic : bool, optional
+        Restart the horizon every ``T`` steps.
+    t0 : int, optional
+        Absolute time of the first step.
+
+    Returns
+    -------
+    RecoveryEstimator or ClassEstimator
+        The estimator, at time ``t0`` with estimate ``xhat0``.
 
     Raises
     ------
