@@ -39,23 +39,23 @@ NEVER = -1
 class LongRun:
     """A long run of the true system and a causal estimator on time-stamped packets.
 
-    Attributes
+    Parameters
     ----------
-    x, xhat
-        True states and estimates, shape ``(N+1, n)``.
-    level
-        Guarantee on ``‖ξ(t)‖∞`` at each time, shape ``(N+1,)``.
-    delays
-        Delay of ``y(t)`` (:data:`NEVER`: not delivered), shape ``(N,)``.
-    recovering
-        ``True`` at the steps taken in recovery mode (switching scheme), shape ``(N,)``.
-    words
+    x, xhat : ndarray, shape (N+1, n)
+        True states and estimates.
+    level : ndarray, shape (N+1,)
+        Guarantee on ``‖ξ(t)‖∞`` at each time.
+    delays : ndarray of int, shape (N,)
+        Delay of ``y(t)`` (:data:`NEVER`: not delivered).
+    recovering : ndarray of bool, shape (N,)
+        ``True`` at the steps taken in recovery mode (switching scheme).
+    words : list of str, optional
         The delay word of each period (periodic reuse).
-    switch_times, revert_times
+    switch_times, revert_times : list of int, optional
         Start of each recovery phase and the times performance mode resumed.
-    dropped
+    dropped : list of tuple of int, optional
         Packets delivered after their period (or phase) ended, as ``(stamp, arrival)``.
-    w, v
+    w, v : ndarray or None, optional
         The noise of the run, shapes ``(N, nw)`` and ``(N, nv)``.
     """
 
@@ -88,7 +88,18 @@ class LongRun:
 
 
 def arrival_schedule(delays: np.ndarray) -> list[list[int]]:
-    """``out[t]``: the measurement times whose packets arrive at ``t`` (``t < N``), from per-measurement delays."""
+    """``out[t]``: the measurement times whose packets arrive at ``t`` (``t < N``), from per-measurement delays.
+
+    Parameters
+    ----------
+    delays : ndarray of int, shape (N,)
+        Delay of each measurement (:data:`NEVER`: not delivered).
+
+    Returns
+    -------
+    list of list of int
+        Length ``N``; arrivals at or after ``N`` are left out.
+    """
     N = len(delays)
     out: list[list[int]] = [[] for _ in range(N)]
     for tau, d in enumerate(np.asarray(delays, int)):
@@ -125,33 +136,40 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
 
     Parameters
     ----------
-    schedule
+    system : AffineSystem
+        The true system and the estimator's model.
+    schedule : GainSchedule or ClassGains
         Gains of a design of horizon ``T`` (run with ``periodic=True``): node
         gains, or class gains (the class-form estimator, re-anchored at every
         period's start).
-    words
+    words : sequence of str
         The design language as delay words (digit strings; a delay reaching
         past the period's end means missing).  Each period draws one word
         uniformly, independently.
-    periods
+    periods : int
         Number of periods; the run has ``N = periods * T`` steps.
-    mu1
-        Recovery level: ``ξ(0)`` is drawn in the box of radius ``M1``.
-    path_levels
+    rng : numpy.random.Generator
+        Random source of the words, the noise and ``ξ(0)``.
+    mu1 : float
+        Recovery level: ``ξ(0)`` is drawn in the box of radius ``mu1``.
+    path_levels : callable
         ``word -> levels (T+1,)``: the guarantee along the word's path
         (``μ1`` at ``k = 0`` and ``k = T``).
-    kind
+    kind : str, optional
         Noise (and ``ξ(0)``) drawn ``"uniform"`` in the box or at ``"vertex"`` corners.
-    controller, inputs
-        The input ``u(t)``: ``controller(x̂(t))`` (feedback on the estimate;
-        the estimator knows ``u``), or fixed ``inputs`` (``(m,)`` or ``(N, m)``),
-        or zero.
-    sequence
+    x0 : ndarray, shape (n,), optional
+        True initial state (default zero); the estimate starts at ``x0 - ξ(0)``.
+    controller : callable, optional
+        ``u(t) = controller(x̂(t))`` (feedback on the estimate; the estimator knows ``u``).
+    inputs : ndarray, optional
+        Fixed inputs, ``(m,)`` or ``(N, m)``, when there is no controller (default zero).
+    sequence : sequence of str, optional
         The words of the periods, instead of random draws (tests).
 
     Returns
     -------
     LongRun
+        With ``words`` (one per period) and ``dropped``.
     """
     T = schedule.horizon
     if sequence is None:
@@ -179,7 +197,24 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
 
 
 def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time: float) -> np.ndarray:
-    """I.i.d. delays: ``0`` with probability ``p_on_time``, else uniform on ``1..max_delay``."""
+    """I.i.d. delays: ``0`` with probability ``p_on_time``, else uniform on ``1..max_delay``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of delays.
+    max_delay : int
+        Largest delay ``τ̄``.
+    p_on_time : float
+        Probability of delay ``0``.
+
+    Returns
+    -------
+    ndarray of int, shape (N,)
+        The delays.
+    """
     late = rng.random(steps) >= p_on_time
     d = np.zeros(steps, int)
     d[late] = rng.integers(1, max_delay + 1, size=int(late.sum()))
@@ -196,20 +231,36 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
 
     Parameters
     ----------
-    performance, recovery
+    system : AffineSystem
+        The true system and the estimators' model.
+    performance, recovery : GainSchedule or ClassGains
         Gains of the period-1 (equalized-performance) design and of the
         recovery design on the words whose first measurement is late (node
         gains or class gains, either kind for each).
-    steps
+    steps : int
         Length ``N`` of the run.
-    mu1
+    rng : numpy.random.Generator
+        Random source of the delays, the noise and ``ξ(0)``.
+    mu1 : float
         The common level of both designs (``ξ(0)`` drawn in its box; the
         guarantee in performance mode and at the end of each recovery phase).
-    recovery_level
-        ``prefix -> level``: the guarantee on ``ξ`` after the observed recovery
+    recovery_level : callable
+        ``ArrivalPattern prefix -> level``: the guarantee on ``ξ`` after the observed recovery
         prefix (events ``0..j``, ``j < T - 1``): its node's level.
-    max_delay, p_on_time
-        Delays are i.i.d. (:func:`draw_delays`) unless ``delays`` is given.
+    max_delay : int
+        Largest delay of :func:`draw_delays` (used unless ``delays`` is given).
+    p_on_time : float
+        Probability of an on-time measurement in :func:`draw_delays`.
+    kind : str, optional
+        Noise (and ``ξ(0)``) drawn ``"uniform"`` in the box or at ``"vertex"`` corners.
+    x0 : ndarray, shape (n,), optional
+        True initial state (default zero); the estimate starts at ``x0 - ξ(0)``.
+    controller : callable, optional
+        ``u(t) = controller(x̂(t))`` (feedback on the estimate).
+    inputs : ndarray, optional
+        Fixed inputs, ``(m,)`` or ``(N, m)``, when there is no controller (default zero).
+    delays : ndarray of int, shape (N,), optional
+        Delays of the run instead of random draws (:data:`NEVER`: not delivered).
 
     Returns
     -------
@@ -248,6 +299,24 @@ def class_closed_loop_maps(system: AffineSystem, gains: ClassGains, pattern: "Ar
     (:func:`eqrec.core.classes.class_maps`); ``c = 0`` (the class form has no
     offsets).  Raises :class:`InputError` if a class of the pattern is not in
     the gains.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    gains : ClassGains
+        One ``K`` per class.
+    pattern : ArrivalPattern or str
+        Pattern (or 0/1 word) of horizon ``T``.
+
+    Returns
+    -------
+    G : ndarray, shape (T+1, n, D)
+        Linear maps from ``δ = (w, v, ξ0)``.
+    c : ndarray, shape (T+1, n)
+        Zeros.
+    layout : UncertaintyLayout
+        Positions of ``w(t)``, ``v(t)`` and ``ξ0`` in ``δ``.
     """
     pattern = as_pattern(pattern)
     T, n = pattern.T, system.n
@@ -273,6 +342,20 @@ def periodic_model_gap(run: LongRun, system: AffineSystem, schedule: "GainSchedu
     delay reaching past the period's end as *missing*.  The run delivers
     such packets in the next period, where the estimator drops them; a gap
     at rounding level shows that the runtime handling and the language agree.
+
+    Parameters
+    ----------
+    run : LongRun
+        A run of :func:`long_run_periodic` (with ``words``, ``w`` and ``v``).
+    system : AffineSystem
+        The system of the run.
+    schedule : GainSchedule or ClassGains
+        The gains of the run.
+
+    Returns
+    -------
+    float
+        ``max`` over periods, times and components of ``|ξ - (G δ + c)|``.
     """
     maps_of = class_closed_loop_maps if isinstance(schedule, ClassGains) else closed_loop_maps
     T = schedule.horizon
