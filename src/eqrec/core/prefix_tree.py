@@ -47,10 +47,12 @@ class PrefixNode:
 
     @property
     def depth(self) -> int:
+        """Length of the prefix."""
         return self.prefix.T
 
     @property
     def label(self) -> str:
+        """Label of the prefix (its word)."""
         return self.prefix.label
 
     @property
