@@ -46,7 +46,24 @@ BATCH_REACTOR_ETA_V = 0.05
 
 
 def zoh(Ac: np.ndarray, Bc: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarray]:
-    """Zero-order-hold discretisation ``(A, B) = (e^{Ac Ts}, ∫_0^Ts e^{Ac s} ds Bc)`` (scipy, as MATLAB ``c2d``)."""
+    """Zero-order-hold discretisation ``(A, B) = (e^{Ac Ts}, ∫_0^Ts e^{Ac s} ds Bc)`` (scipy, as MATLAB ``c2d``).
+
+    Parameters
+    ----------
+    Ac : ndarray, shape (n, n)
+        Continuous-time state matrix.
+    Bc : ndarray, shape (n, m)
+        Continuous-time input matrix.
+    Ts : float
+        Sampling time [s], positive.
+
+    Returns
+    -------
+    A : ndarray, shape (n, n)
+        Discrete state matrix.
+    B : ndarray, shape (n, m)
+        Discrete input matrix.
+    """
     from scipy.signal import cont2discrete
 
     Ac = np.asarray(Ac, float)
@@ -59,7 +76,20 @@ def zoh(Ac: np.ndarray, Bc: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarr
 
 
 def batch_reactor_matrices(Ts: float = BATCH_REACTOR_TS) -> tuple[np.ndarray, np.ndarray]:
-    """Discrete ``(A, B)`` of the batch reactor (ZOH, sampling time ``Ts``)."""
+    """Discrete ``(A, B)`` of the batch reactor (ZOH, sampling time ``Ts``).
+
+    Parameters
+    ----------
+    Ts : float, optional
+        Sampling time [s] (default :data:`BATCH_REACTOR_TS`, that of Section IV-A).
+
+    Returns
+    -------
+    A : ndarray, shape (4, 4)
+        Discrete state matrix.
+    B : ndarray, shape (4, 2)
+        Discrete input matrix.
+    """
     return zoh(BATCH_REACTOR_AC, BATCH_REACTOR_BC, Ts)
 
 
@@ -110,10 +140,23 @@ def batch_reactor(Ts: float = BATCH_REACTOR_TS, eta_v: float = BATCH_REACTOR_ETA
 def discretisation_gaps(printed_A, printed_B, Ts: float = BATCH_REACTOR_TS) -> dict[str, float]:
     """Largest entrywise gaps between printed ``A``, ``B`` and the ZOH discretisation at ``Ts``.
 
-    Returns ``{"A": max |A_zoh - A_printed|, "B": max |B_zoh - B_printed|,
-    "A_rel_digit": ..., "B_rel_digit": ...}``; the ``*_rel_digit`` values are
-    the gaps in units of the printed rounding step ``5e-5`` (four decimals):
-    a value ``<= 1`` means the printed matrix is the discretisation rounded.
+    Parameters
+    ----------
+    printed_A : array_like, shape (4, 4)
+        State matrix as printed (four decimals).
+    printed_B : array_like, shape (4, 2)
+        Input matrix as printed.
+    Ts : float, optional
+        Sampling time [s] of the discretisation (default :data:`BATCH_REACTOR_TS`).
+
+    Returns
+    -------
+    dict of str to float
+        ``{"A": max |A_zoh - A_printed|, "B": max |B_zoh - B_printed|,
+        "A_rel_digit": ..., "B_rel_digit": ...}``; the ``*_rel_digit`` values
+        are the gaps in units of the printed rounding step ``5e-5`` (four
+        decimals): a value ``<= 1`` means the printed matrix is the
+        discretisation rounded.
     """
     A, B = batch_reactor_matrices(Ts)
     pa, pb = np.asarray(printed_A, float), np.asarray(printed_B, float)

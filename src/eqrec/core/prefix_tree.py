@@ -24,6 +24,19 @@ class PrefixNode:
     The gain row of time ``depth - 1`` (``F(t, ., prefix)`` and ``u0(t, prefix)``
     of eq. (7) of the prefix-based paper) belongs to this node; it multiplies
     the measurements ``available`` at that time.
+
+    Parameters
+    ----------
+    index : int
+        Position of the node in the tree's node list (the root is 0).
+    prefix : ArrivalPattern
+        The prefix (events ``0..depth-1``) this node stands for.
+    parent : int or None
+        Index of the parent node (``None`` for the root).
+    children : list of int
+        Indices of the child nodes.
+    terminal : bool
+        Whether a pattern of the language ends here.
     """
 
     index: int
@@ -34,10 +47,12 @@ class PrefixNode:
 
     @property
     def depth(self) -> int:
+        """Length of the prefix."""
         return self.prefix.T
 
     @property
     def label(self) -> str:
+        """Label of the prefix (its word)."""
         return self.prefix.label
 
     @property

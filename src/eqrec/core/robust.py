@@ -40,17 +40,17 @@ class UncertainAffineRows:
     ``G`` is stored by its structural entries ``e`` (pairs ``(row, coord)``),
     so rows that see only a few uncertain coordinates stay small.
 
-    Attributes
+    Parameters
     ----------
-    entry_row, entry_coord : int arrays, shape (E,)
+    entry_row, entry_coord : ndarray of int, shape (E,)
         Row and uncertain coordinate of each structural entry of ``G``.
-    G0 : array, shape (E,)
+    G0 : ndarray, shape (E,)
         Constant part of each entry.
-    Gx : sparse, shape (E, nx)
+    Gx : scipy.sparse.csr_matrix, shape (E, nx)
         Linear part of each entry in the decision variables.
-    c0 : array, shape (R,)
+    c0 : ndarray, shape (R,)
         Constant part of the certain term.
-    cx : sparse, shape (R, nx)
+    cx : scipy.sparse.csr_matrix, shape (R, nx)
         Linear part of the certain term.
     """
 
@@ -63,6 +63,7 @@ class UncertainAffineRows:
 
     @property
     def num_rows(self) -> int:
+        """Number ``R`` of rows."""
         return self.c0.shape[0]
 
 
@@ -70,20 +71,20 @@ class UncertainAffineRows:
 class RobustRowsIndex:
     """Where :func:`add_robust_rows` put its rows, auxiliary columns and ``x``-dependent entries.
 
-    Attributes
+    Parameters
     ----------
-    form
-        The robust-counterpart form used.
-    level_rows
+    form : str
+        The robust-counterpart form used (``"split"``, ``"abs"`` or ``"dual"``).
+    level_rows : list of ndarray
         LP rows of the level constraints, one array per sign of the certain
         term (``+`` first); entry ``k`` is the row of robust row ``k``.
-    aux_cols
+    aux_cols : ndarray of int
         The auxiliary columns (``a`` for ``"abs"``; ``p`` then ``m`` for
         ``"split"``; ``π`` blocks for ``"dual"``).
-    gx_entries, gx_cols
+    gx_entries, gx_cols : ndarray of int
         For each ``x``-dependent coefficient ``Gx[e, j]`` placed in the LP:
         the structural entry ``e`` and the variable column ``j``.
-    gx_handles
+    gx_handles : list of (int, float)
         ``(handle, sign)`` pairs: the LP coefficient at
         ``lp.positions(handle)[i]`` equals ``sign * Gx[gx_entries[i], gx_cols[i]]``.
         Rewriting these values updates the LP in place when only ``Gx`` changes.
@@ -97,7 +98,15 @@ class RobustRowsIndex:
     gx_handles: list[tuple[int, float]]
 
     def update_gx(self, lp, values: np.ndarray) -> None:
-        """Write new ``Gx`` values (ordered as ``gx_entries, gx_cols``) into a built LP."""
+        """Write new ``Gx`` values (ordered as ``gx_entries, gx_cols``) into a built LP.
+
+        Parameters
+        ----------
+        lp : LinearProgram
+            The LP built with ``track_gx=True``; its matrix is changed in place.
+        values : ndarray, shape (len(gx_entries),)
+            The new coefficients ``Gx[gx_entries[i], gx_cols[i]]``.
+        """
         for handle, sign in self.gx_handles:
             lp.A.data[lp.positions(handle)] = sign * values
 
@@ -110,24 +119,26 @@ def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.nd
 
     Parameters
     ----------
-    builder
+    builder : LPBuilder
         LP under construction; auxiliary variables are added to it.
-    rows
+    rows : UncertainAffineRows
         The uncertain affine rows.
-    radius
+    radius : ndarray, shape (D,)
         Box radii ``b`` of the uncertain coordinates (indexed by ``entry_coord``).
-    level_const, level_coef
-        The bound ``ℓ_k``: a constant plus a multiple of one decision variable.
-    level_col
-        One level variable for every row (e.g. the intermediate level ``M2``).
-    level_cols
-        A level variable per row (``-1``: none), e.g. a level ``μ2,k`` per
-        prefix-tree node and a variable ``μ1`` on the terminal rows; overrides ``level_col``.
-    form
+    level_const : ndarray, shape (R,), or float
+        Constant part of the bound ``ℓ_k``.
+    level_col : int or None, optional
+        One level variable for every row (e.g. the intermediate level ``M2``); ``None``: none.
+    level_coef : ndarray, shape (R,), or float, optional
+        Coefficient of the level variable in ``ℓ_k`` (default 1).
+    form : {"split", "abs", "dual"}, optional
         ``"split"`` (default): ``G_e(x) = p_e - m_e``, ``p, m >= 0``;
         ``"abs"``: auxiliary ``a_e >= |G_e(x)|`` (one per variable entry);
         ``"dual"``: the Π multipliers of eq. (16) of the prefix-based paper.
-    track_gx
+    level_cols : ndarray of int, shape (R,), or None, optional
+        A level variable per row (``-1``: none), e.g. a level ``μ2,k`` per
+        prefix-tree node and a variable ``μ1`` on the terminal rows; overrides ``level_col``.
+    track_gx : bool, optional
         Keep the positions of the ``x``-dependent coefficients in the built
         LP (:attr:`RobustRowsIndex.gx_handles`) so they can be rewritten in place.
 
@@ -258,12 +269,42 @@ def _add_dual_form(builder, rows, Gx, cx, b, levels, track_gx) -> RobustRowsInde
 
 
 def worst_case_abs(G: np.ndarray, c: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """Exact ``max_{|δ| <= b} |c + G δ|`` per row: ``|c| + |G| b``."""
+    """Exact ``max_{|δ| <= b} |c + G δ|`` per row: ``|c| + |G| b``.
+
+    Parameters
+    ----------
+    G : ndarray, shape (R, D)
+        Uncertainty coefficients of the rows.
+    c : ndarray, shape (R,)
+        Certain terms.
+    radius : ndarray, shape (D,)
+        Box radii ``b``.
+
+    Returns
+    -------
+    ndarray, shape (R,)
+        The worst-case absolute value of each row.
+    """
     return np.abs(c) + np.abs(G) @ np.asarray(radius, float)
 
 
 def worst_case_vertex(G_row: np.ndarray, c: float, radius: np.ndarray) -> np.ndarray:
-    """A vertex ``δ*`` of the box with ``|c + G_row δ*| = |c| + |G_row| b``."""
+    """A vertex ``δ*`` of the box with ``|c + G_row δ*| = |c| + |G_row| b``.
+
+    Parameters
+    ----------
+    G_row : ndarray, shape (D,)
+        Uncertainty coefficients of one row.
+    c : float
+        Its certain term.
+    radius : ndarray, shape (D,)
+        Box radii ``b``.
+
+    Returns
+    -------
+    ndarray, shape (D,)
+        The maximising vertex ``δ*``.
+    """
     s = 1.0 if c >= 0 else -1.0
     sgn = np.sign(G_row)
     sgn[sgn == 0] = 1.0

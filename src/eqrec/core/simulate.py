@@ -35,7 +35,17 @@ from eqrec.core.words import as_pattern
 
 @dataclass
 class Trajectory:
-    """One simulated run: true states, estimates and errors ``ξ = x - x̂``."""
+    """One simulated run: true states, estimates and errors ``ξ = x - x̂``.
+
+    Parameters
+    ----------
+    word : str
+        Label of the run's arrival pattern.
+    x : ndarray, shape (T+1, n)
+        True states ``x(0..T)``.
+    xhat : ndarray, shape (T+1, n)
+        Estimates ``x̂(0..T)``.
+    """
 
     word: str
     x: np.ndarray  # (T+1, n)
@@ -43,18 +53,55 @@ class Trajectory:
 
     @property
     def error(self) -> np.ndarray:
+        """The errors ``ξ(t) = x(t) - x̂(t)``, shape ``(T+1, n)``."""
         return self.x - self.xhat
 
 
 def sample_uncertainty(layout: UncertaintyLayout, radius: np.ndarray, rng: np.random.Generator,
                        kind: str = "uniform", size: int | None = None) -> np.ndarray:
-    """Draw ``δ = (w, v, ξ0)`` in the box: ``"uniform"`` inside it or ``"vertex"`` at random corners."""
+    """Draw ``δ = (w, v, ξ0)`` in the box: ``"uniform"`` inside it or ``"vertex"`` at random corners.
+
+    Parameters
+    ----------
+    layout : UncertaintyLayout
+        Layout of ``δ`` (its length ``layout.size``).
+    radius : ndarray, shape (layout.size,)
+        Half-widths of the box (``layout.radius(eta_w, eta_v, mu1)``).
+    rng : numpy.random.Generator
+        Random generator.
+    kind : {"uniform", "vertex"}, optional
+        Uniform inside the box (default) or at random vertices.
+    size : int or None, optional
+        Number of draws (``None``: one draw).
+
+    Returns
+    -------
+    ndarray, shape (layout.size,) or (size, layout.size)
+        The draws.
+    """
     shape = (layout.size,) if size is None else (size, layout.size)
     return draw_box(rng, radius, shape, kind)
 
 
 def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tuple[int, ...], kind: str) -> np.ndarray:
-    """Draws in ``[-radius, radius]``: ``"uniform"`` inside the box or ``"vertex"`` at its corners."""
+    """Draws in ``[-radius, radius]``: ``"uniform"`` inside the box or ``"vertex"`` at its corners.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random generator.
+    radius : float or ndarray
+        Half-widths of the box (broadcast against ``shape``).
+    shape : tuple of int
+        Shape of the draws.
+    kind : {"uniform", "vertex"}
+        Uniform inside the box or at random vertices (:class:`ValueError` otherwise).
+
+    Returns
+    -------
+    ndarray
+        The draws, of shape ``shape``.
+    """
     if kind == "uniform":
         return rng.uniform(-1.0, 1.0, shape) * radius
     if kind == "vertex":
@@ -70,23 +117,26 @@ def closed_loop(system: AffineSystem, est: "RecoveryEstimator | ClassEstimator |
 
     Parameters
     ----------
-    est
+    system : AffineSystem
+        The true system.
+    est : RecoveryEstimator, ClassEstimator or SwitchingEstimator
         The estimator, started at ``x̂(0) = x0 - ξ0`` (its :meth:`step` takes the packets and ``u``).
-    arrive
+    arrive : sequence of sequence of int
         ``arrive[t]``: the measurement times whose packets reach the estimator at ``t``;
         ``N = len(arrive)`` steps.
-    x0, xi0
+    x0, xi0 : ndarray, shape (n,)
         Initial state and initial error.
-    w, v
+    w, v : ndarray
         Noise, shapes ``(N, nw)`` and ``(N, nv)``.
-    u_at
+    u_at : callable
         ``(t, x̂(t)) -> u(t)``.
-    after_step
+    after_step : callable or None, optional
         Called with ``t`` after each step.
 
     Returns
     -------
     x, xhat : ndarray, shape (N+1, n)
+        True states and estimates.
     dropped : list of (stamp, arrival)
         Packets that arrived stamped before the estimator's current period.
     """

@@ -195,12 +195,12 @@ def ipopt_options(options: dict | None = None, *, prefix: bool = True, **default
 
     Parameters
     ----------
-    options : dict or None
+    options : dict or None, optional
         The caller's settings; with ``prefix``, a name without a dot is an IPOPT option (``tol`` ->
         ``ipopt.tol``).
-    prefix : bool
+    prefix : bool, optional
         Whether to add ``ipopt.`` to the names of ``options`` without a dot.
-    **defaults
+    **defaults : object
         Settings of one use (e.g. ``{"ipopt.acceptable_tol": 1e-7}``), overridden by ``options``.
 
     Returns
@@ -247,15 +247,15 @@ def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
 class SolverInfo:
     """A registered LP solver.
 
-    Attributes
+    Parameters
     ----------
-    name
+    name : str
         Registry key (what users type).
-    description
+    description : str
         One line for ``--help`` and the README.
-    solve
+    solve : callable
         ``solve(lp, options) -> LPSolution``.
-    accuracy
+    accuracy : float, optional
         Absolute accuracy of its optimum beyond the feasibility tolerance
         (added to the certification tolerance).
     """
@@ -279,7 +279,18 @@ SOLVER_NAMES: tuple[str, ...] = tuple(SOLVERS)
 
 
 def solver_info(name: str) -> SolverInfo:
-    """The registry entry of ``name``; :class:`ValueError` naming the choices otherwise."""
+    """The registry entry of ``name``; :class:`ValueError` naming the choices otherwise.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`SOLVER_NAMES`.
+
+    Returns
+    -------
+    SolverInfo
+        The entry of :data:`SOLVERS`.
+    """
     try:
         return SOLVERS[name]
     except KeyError:
@@ -291,11 +302,11 @@ def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = No
 
     Parameters
     ----------
-    lp
+    lp : LinearProgram
         The problem.
-    solver
-        A name of :data:`SOLVER_NAMES`.
-    options
+    solver : str, optional
+        A name of :data:`SOLVER_NAMES` (default ``"highs"``).
+    options : dict or None, optional
         Passed to the solver (HiGHS option names, Clarabel settings, IPOPT
         options; ``x0`` is IPOPT's starting point).
 

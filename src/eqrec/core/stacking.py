@@ -33,7 +33,19 @@ from eqrec.errors import InputError
 
 @dataclass(frozen=True)
 class UncertaintyLayout:
-    """Index layout of ``δ = [w(0..T-1); v(0..T-1); ξ0]``."""
+    """Index layout of ``δ = [w(0..T-1); v(0..T-1); ξ0]``.
+
+    Parameters
+    ----------
+    T : int
+        Horizon (number of noise samples of each kind).
+    nw : int
+        Process-noise dimension (columns of ``E``).
+    nv : int
+        Measurement-noise dimension (columns of ``V``).
+    n : int
+        State dimension (length of ``ξ0``).
+    """
 
     T: int
     nw: int
@@ -42,27 +54,80 @@ class UncertaintyLayout:
 
     @property
     def size(self) -> int:
+        """Length ``D = T (nw + nv) + n`` of ``δ``."""
         return self.T * (self.nw + self.nv) + self.n
 
     def w(self, t: int) -> slice:
+        """Indices of ``w(t)`` in ``δ``.
+
+        Parameters
+        ----------
+        t : int
+            Time, ``0 <= t < T``.
+
+        Returns
+        -------
+        slice
+            The ``nw`` entries of ``w(t)``.
+        """
         return slice(t * self.nw, (t + 1) * self.nw)
 
     def v(self, t: int) -> slice:
+        """Indices of ``v(t)`` in ``δ``.
+
+        Parameters
+        ----------
+        t : int
+            Time, ``0 <= t < T``.
+
+        Returns
+        -------
+        slice
+            The ``nv`` entries of ``v(t)``.
+        """
         o = self.T * self.nw
         return slice(o + t * self.nv, o + (t + 1) * self.nv)
 
     @property
     def xi0(self) -> slice:
+        """Indices of ``ξ0`` in ``δ`` (the last ``n``)."""
         o = self.T * (self.nw + self.nv)
         return slice(o, o + self.n)
 
     def radius(self, eta_w: float, eta_v: float, mu1: float) -> np.ndarray:
-        """Box radii ``b`` of ``δ``."""
+        """Box radii ``b`` of ``δ`` (the bounds of the robust constraint (12b) of the prefix-based paper).
+
+        Parameters
+        ----------
+        eta_w : float
+            Bound of ``‖w(t)‖_∞``.
+        eta_v : float
+            Bound of ``‖v(t)‖_∞``.
+        mu1 : float
+            Bound of ``‖ξ0‖_∞`` (the recovery level μ1).
+
+        Returns
+        -------
+        ndarray, shape (size,)
+            ``eta_w`` on the ``w`` entries, ``eta_v`` on the ``v`` entries, ``mu1`` on ``ξ0``.
+        """
         return np.concatenate([np.full(self.T * self.nw, eta_w), np.full(self.T * self.nv, eta_v),
                                np.full(self.n, mu1)])
 
     def split(self, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``δ`` (or ``δ`` batches along the last axis) into ``w (T, nw)``, ``v (T, nv)``, ``ξ0 (n,)``."""
+        """``δ`` (or ``δ`` batches along the last axis) into ``w (T, nw)``, ``v (T, nv)``, ``ξ0 (n,)``.
+
+        Parameters
+        ----------
+        delta : ndarray, shape (..., size)
+            One ``δ`` or a batch of them.
+
+        Returns
+        -------
+        w : ndarray, shape (..., T, nw)
+        v : ndarray, shape (..., T, nv)
+        xi0 : ndarray, shape (..., n)
+        """
         w = delta[..., : self.T * self.nw].reshape(*delta.shape[:-1], self.T, self.nw)
         v = delta[..., self.T * self.nw: self.T * (self.nw + self.nv)].reshape(*delta.shape[:-1], self.T, self.nv)
         return w, v, delta[..., self.xi0]
@@ -73,9 +138,9 @@ class Stacking:
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The (possibly time-varying) system.
-    T
+    T : int
         Horizon (recovery time).
     """
 
@@ -139,7 +204,18 @@ class Stacking:
         return sla.block_diag(*[self.system.E_at(t) for t in range(self.T)])
 
     def arrival_indicator(self, pattern: "ArrivalPattern | str") -> np.ndarray:
-        """``q(t)`` of eq. (10): 1 if the measurement of time ``t`` arrives within the horizon."""
+        """``q(t)`` of eq. (10): 1 if the measurement of time ``t`` arrives within the horizon.
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            Arrival pattern (or 0/1 word) of length ``T``.
+
+        Returns
+        -------
+        ndarray, shape (T,)
+            ``q(0..T-1)`` as floats 0/1.
+        """
         pattern = as_pattern(pattern)
         if pattern.T != self.T:
             raise InputError(f"pattern {pattern.label!r} has length {pattern.T}, the stacking has T = {self.T}")
@@ -152,6 +228,16 @@ class Stacking:
         it arrives is carried by the causality pattern of the gains (their
         availability mask), which is nested in time, so the Q-parametrisation
         keeps that pattern (see :mod:`eqrec.design.prefix`).
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            Arrival pattern (or 0/1 word) of length ``T``.
+
+        Returns
+        -------
+        ndarray, shape (T p, (T+1) n)
+            ``C̄`` of the pattern.
         """
         n, p = self.system.n, self.system.p
         q = self.arrival_indicator(pattern)
@@ -163,14 +249,36 @@ class Stacking:
 
     def word_CS(self, pattern: "ArrivalPattern | str") -> np.ndarray:
         """``C̄ S`` of eqs. (1)-(2) for a pattern of length ``T_w <= T`` (padded with missing measurements),
-        restricted to its ``T_w p x T_w n`` block: what :func:`eqrec.core.gains.q_to_f` needs."""
+        restricted to its ``T_w p x T_w n`` block: what :func:`eqrec.core.gains.q_to_f` needs.
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            Arrival pattern (or 0/1 word) of length ``T_w <= T``.
+
+        Returns
+        -------
+        ndarray, shape (T_w p, T_w n)
+            The leading block of ``C̄ S``.
+        """
         pattern = as_pattern(pattern)
         Tw, n, p = pattern.T, self.system.n, self.system.p
         padded = ArrivalPattern(pattern.arrivals + (None,) * (self.T - Tw))
         return (self.C_bar(padded) @ self.S)[: Tw * p, : Tw * n]
 
     def N(self, pattern: "ArrivalPattern | str") -> np.ndarray:
-        """Eq. (14): ``blkdiag(q(t) V(t))``."""
+        """Eq. (14): ``blkdiag(q(t) V(t))``.
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            Arrival pattern (or 0/1 word) of length ``T``.
+
+        Returns
+        -------
+        ndarray, shape (T p, T nv)
+            ``N`` of the pattern.
+        """
         q = self.arrival_indicator(pattern)
         p, nv = self.system.p, self.system.nv
         out = np.zeros((self.T * p, self.T * nv))
@@ -182,7 +290,21 @@ class Stacking:
     def error_map_from_Q(self, word: "ArrivalPattern | str", Q: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Eq. (13): ``ξ = G δ + c`` for a block lower-triangular ``Q`` and ``r``.
 
-        Returns ``G`` of shape ``((T+1)n, D)`` (columns ordered as ``δ``) and ``c = S r``.
+        Parameters
+        ----------
+        word : ArrivalPattern or str
+            Arrival pattern (or 0/1 word) of length ``T``.
+        Q : ndarray, shape (T n, T p)
+            Block lower-triangular ``Q = F (I - C̄ S F)^{-1}`` of eq. (1).
+        r : ndarray, shape (T n,)
+            Affine term ``r = (I + Q C̄ S) u0`` of eq. (2).
+
+        Returns
+        -------
+        G : ndarray, shape ((T+1) n, D)
+            Map from ``δ`` to ``ξ`` (columns ordered as ``δ``).
+        c : ndarray, shape ((T+1) n,)
+            Constant term ``S r``.
         """
         S, Cb, J = self.S, self.C_bar(word), self.J
         I = np.eye(S.shape[0])

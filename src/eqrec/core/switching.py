@@ -45,20 +45,20 @@ class SwitchingEstimator:
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The model used by both estimators.
-    performance
+    performance : GainSchedule or ClassGains
         Gains of the period-1 design: a schedule of horizon 1 with the row of
         the on-time prefix, or class gains of horizon 1 with the on-time
         class ``(1, (0,))``.
-    recovery
+    recovery : GainSchedule or ClassGains
         Gains of the recovery design (horizon ``T``, ``.horizon``) on a
         language whose words all have their first measurement late or
         missing: a schedule, or class gains without the class ``(1, (0,))``.
-    xhat0
+    xhat0 : ndarray, shape (n,)
         Initial estimate (``‖ξ(t0)‖ <= μ1`` for the guarantees to hold).
-    t0
-        Absolute time of the first step.
+    t0 : int, optional
+        Absolute time of the first step (default 0).
 
     Attributes
     ----------
@@ -128,7 +128,18 @@ class SwitchingEstimator:
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
         """Process time ``k``: the packets arriving at ``k`` (see :meth:`RecoveryEstimator.step`) and ``u(k)``.
 
-        Returns the prediction ``x̂(k+1)``.
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            ``None`` (nothing arrives), an array (``y(k)`` on time) or packets
+            stamped with their absolute times ``τ <= k``.
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(k)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(k+1)``.
         """
         est = self._est
         k = est.time

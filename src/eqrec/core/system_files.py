@@ -29,6 +29,14 @@ MIN_NOISE_BOUND = 1e-6
 def system_from_mapping(data: Any, source: str = "<mapping>") -> tuple[AffineSystem, int | None]:
     """Build a system from a mapping (e.g. parsed YAML).
 
+    Parameters
+    ----------
+    data : dict
+        The fields ``A, C, E, eta_w, eta_v`` (required) and the optional ones
+        of ``SYSTEM_KEYS``; every leaf a finite number.
+    source : str, optional
+        Where the mapping came from (a file name), for error messages.
+
     Returns
     -------
     system : AffineSystem

@@ -25,7 +25,23 @@ KINDS = ("missing", "delay")
 
 
 def validate_word(word: str, *, field_name: str = "word", source: str | None = None) -> str:
-    """Return ``word`` if it is a non-empty string over {0, 1}, else raise :class:`InputError`."""
+    """Return ``word`` if it is a non-empty string over {0, 1}, else raise :class:`InputError`.
+
+    Parameters
+    ----------
+    word : str
+        A missing-data word ``q(0) ... q(T-1)`` (eq. (3) of the prefix-based
+        paper; ``1`` available, ``0`` missing).
+    field_name : str, optional
+        Field named in the error message.
+    source : str or None, optional
+        File (or other origin) named in the error message.
+
+    Returns
+    -------
+    str
+        The word, surrounding whitespace stripped.
+    """
     if not isinstance(word, str):
         raise InputError(f"a word must be a string of 0 and 1, got {word!r}", source, field_name)
     word = word.strip()
@@ -129,7 +145,27 @@ def parse_delay_word(word: str, max_delay: int | None = None, *, field_name: str
 
 def as_pattern(word: "ArrivalPattern | str", *, kind: str = "missing", max_delay: int | None = None,
                field_name: str = "word", source: str | None = None) -> ArrivalPattern:
-    """A pattern from a pattern or a word of the given ``kind`` (``"missing"`` or ``"delay"``)."""
+    """A pattern from a pattern or a word of the given ``kind`` (``"missing"`` or ``"delay"``).
+
+    Parameters
+    ----------
+    word : ArrivalPattern or str
+        A pattern (returned as is) or a word of ``kind``.
+    kind : {"missing", "delay"}, optional
+        A 0/1 missing-data word (:func:`validate_word`) or a delay word
+        (:func:`parse_delay_word`).
+    max_delay : int or None, optional
+        Largest allowed delay of a delay word (``None``: no limit).
+    field_name : str, optional
+        Field named in error messages.
+    source : str or None, optional
+        File (or other origin) named in error messages.
+
+    Returns
+    -------
+    ArrivalPattern
+        The word's arrival pattern.
+    """
     if isinstance(word, ArrivalPattern):
         return word
     if kind == "missing":
@@ -294,6 +330,16 @@ def worst_case_pattern(patterns: Iterable["ArrivalPattern | str"]) -> ArrivalPat
     For missing-data words this is the bitwise AND of Section III of the
     prefix-based paper: a measurement is kept only if every word has it, so
     an estimator that works for the worst case works for every word.
+
+    Parameters
+    ----------
+    patterns : iterable of ArrivalPattern or str
+        A fixed-length language (0/1 words or patterns).
+
+    Returns
+    -------
+    ArrivalPattern
+        The worst-case pattern (a measurement missing in some word is missing).
     """
     pats = as_language(patterns)
     arr = []
@@ -304,17 +350,52 @@ def worst_case_pattern(patterns: Iterable["ArrivalPattern | str"]) -> ArrivalPat
 
 
 def worst_case_word(words: Sequence[str]) -> str:
-    """Bitwise AND of a fixed-length missing-data language (Section III of the prefix-based paper)."""
+    """Bitwise AND of a fixed-length missing-data language (Section III of the prefix-based paper).
+
+    Parameters
+    ----------
+    words : sequence of str
+        0/1 words of one length.
+
+    Returns
+    -------
+    str
+        The worst-case word ``λ*``.
+    """
     return worst_case_pattern(validate_language(words)).label
 
 
 def prefixes(word: str) -> list[str]:
-    """All non-empty prefixes ``Pref(word)`` of a string, shortest first."""
+    """All non-empty prefixes ``Pref(word)`` of a string, shortest first.
+
+    Parameters
+    ----------
+    word : str
+        Any word.
+
+    Returns
+    -------
+    list of str
+        ``word[:1], word[:2], ..., word``.
+    """
     return [word[: i + 1] for i in range(len(word))]
 
 
 def extend_word(word: str, length: int) -> str:
-    """Pad a 0/1 word with ``1`` (measurements available) up to ``length`` (Section V of P1)."""
+    """Pad a 0/1 word with ``1`` (measurements available) up to ``length`` (Section V of P1).
+
+    Parameters
+    ----------
+    word : str
+        A 0/1 word.
+    length : int
+        Target length, at least ``len(word)``.
+
+    Returns
+    -------
+    str
+        The padded word.
+    """
     if length < len(word):
         raise InputError(f"cannot shorten word {word!r} to length {length}")
     return word + "1" * (length - len(word))

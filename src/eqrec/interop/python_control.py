@@ -51,6 +51,13 @@ def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=
         Noise gains (default: ``E = I_n``, ``V = I_p``).
     f : array_like, optional
         Constant affine term of the state equation.
+    name : str or None, optional
+        Name of the system (default ``"python-control system"``).
+
+    Returns
+    -------
+    AffineSystem
+        The model of eq. (3) of the prefix-based paper with these matrices.
 
     Raises
     ------
@@ -80,6 +87,8 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
     ----------
     design : eqrec.design.result.Design
         A design of the class engine (``design.class_gains`` set).
+    name : str, optional
+        Name of the returned I/O system.
 
     Returns
     -------
