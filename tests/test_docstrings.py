@@ -212,6 +212,38 @@ PUBLIC = public_objects()
 CLASSES = [(f"eqrec.{n}", getattr(eqrec, n)) for n in eqrec._PUBLIC if isinstance(getattr(eqrec, n), type)]
 
 
+#: The library: every module of these packages (the studies are the pipeline's orchestration, the CLI a command).
+LIBRARY_PACKAGES = ("eqrec.core", "eqrec.design", "eqrec.lmv", "eqrec.filters", "eqrec.interop")
+LIBRARY_MODULES = ("eqrec.models", "eqrec.errors", "eqrec.io")
+
+
+def library_objects() -> list[tuple[str, object]]:
+    """``(qualified name, object)`` of every public function and class defined in a library module, and of the
+    public methods each class defines (python-control's ``docstrings_test`` checks its whole package the same way)."""
+    import importlib
+    import pkgutil
+
+    names = list(LIBRARY_MODULES)
+    for pkg in LIBRARY_PACKAGES:
+        names += [m.name for m in pkgutil.iter_modules(importlib.import_module(pkg).__path__, pkg + ".")]
+    out = []
+    for modname in sorted(names):
+        mod = importlib.import_module(modname)
+        for name, obj in vars(mod).items():
+            if name.startswith("_") or not (inspect.isfunction(obj) or inspect.isclass(obj)):
+                continue
+            if obj.__module__ != modname:
+                continue  # imported here, checked where it is defined
+            out.append((f"{modname}.{name}", obj))
+            if inspect.isclass(obj):
+                out += [(f"{modname}.{name}.{m}", f) for m, f in public_methods(obj)
+                        if f.__qualname__.split(".")[0] == name]
+    return out
+
+
+LIBRARY = library_objects()
+
+
 # ---------------------------------------------------------------------------
 # Docstrings
 # ---------------------------------------------------------------------------
@@ -220,6 +252,21 @@ CLASSES = [(f"eqrec.{n}", getattr(eqrec, n)) for n in eqrec._PUBLIC if isinstanc
 def test_numpydoc_docstring(name, obj):
     problems = docstring_problems(obj, name)
     assert not problems, "\n".join(problems)
+
+
+@pytest.mark.parametrize("name, obj", LIBRARY, ids=[n for n, _ in LIBRARY])
+def test_numpydoc_docstring_of_the_library(name, obj):
+    """Every public function, class and method of the library, not only those of the ``eqrec`` namespace."""
+    problems = docstring_problems(obj, name)
+    assert not problems, "\n".join(problems)
+
+
+def test_the_library_is_covered():
+    names = dict(LIBRARY)
+    assert len(LIBRARY) > 250
+    assert {"eqrec.core.lp.LPBuilder", "eqrec.design.classes.build_class_lp", "eqrec.lmv.recursion.lmv_recursion",
+            "eqrec.filters.kalman.make_filter", "eqrec.models.batch_reactor"} <= names.keys()
+    assert not any(n.startswith(("eqrec.studies", "eqrec.cli")) for n in names)
 
 
 @pytest.mark.parametrize("name, cls", CLASSES, ids=[n for n, _ in CLASSES])
