@@ -110,6 +110,20 @@ class ClassLP:
     * ``"ratio"``: the Charnes–Cooper LP of :func:`eqrec.design.mu1_min.build_ratio_lp`; the
       gain row is ``y / t`` with ``y`` in columns ``gain_index[b]`` and ``t``
       in ``t_col[b]``.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The block-diagonal LP.
+    kind : str
+    block_class, block_row : numpy.ndarray
+        ``(blocks,)`` class index and state row of each block.
+    gain_index : list of numpy.ndarray
+    block_cols : numpy.ndarray
+        ``(blocks + 1,)`` column ranges of the blocks.
+    t_col : numpy.ndarray or None, optional
+    build_time : float, optional
+        Seconds spent building the LP.
     """
 
     lp: LinearProgram
@@ -130,6 +144,17 @@ def active_maps(stacking: Stacking, cls) -> tuple[np.ndarray, np.ndarray, np.nda
     """``E_d`` and ``Z_S`` of a class on the uncertain coordinates either touches, and those coordinates.
 
     The other coordinates add nothing to any row's worst case.
+
+    Parameters
+    ----------
+    stacking : Stacking
+    cls : DataClass
+        A (time, available data) class of :mod:`eqrec.core.classes`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``E`` ``(n, k)``, ``Z`` ``(|S| p, k)`` on the ``k`` active coordinates, and their ``(k,)`` indices.
     """
     E, Z = class_maps(stacking, cls)
     act = np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
@@ -145,7 +170,19 @@ class ClassBlocks:
         self.nrow = self.ncol = 0
 
     def model(self, kind: str, t0: float) -> ClassLP:
-        """The :class:`ClassLP` of the blocks added (``t0``: when the build started)."""
+        """The :class:`ClassLP` of the blocks added.
+
+        Parameters
+        ----------
+        kind : str
+            ``"level"`` or ``"ratio"`` (:class:`ClassLP`).
+        t0 : float
+            ``time.perf_counter()`` when the build started (for ``build_time``).
+
+        Returns
+        -------
+        ClassLP
+        """
         cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
         A = sp.csc_matrix((cat(self.tri_v), (cat(self.tri_r).astype(np.int64), cat(self.tri_c).astype(np.int64))),
                           shape=(self.nrow, self.ncol))
@@ -166,6 +203,21 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which
     uncertain coordinates ``c`` that ``E_d`` or ``Z_S`` touch
     (:func:`active_maps`): per class, ``n`` blocks sharing ``Z_S`` (rows: data,
     columns: coordinates), costs ``-E_d[r]`` per row ``r``, ``|λ_c| <= β_c``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    mu1 : float
+        Recovery level ``μ1`` (radius of ``ξ0``).
+    which : list of int, optional
+        Indices of the classes to include (default all).
+    stacking : Stacking, optional
+        Stacked maps over the classes' horizon; built when omitted.
+
+    Returns
+    -------
+    ClassLP
     """
     t0 = time.perf_counter()
     st = stacking or Stacking(system, classes.horizon)
@@ -197,7 +249,20 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which
 
 def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, solution: LPSolution) -> ClassGains:
     """The gains ``K`` per class from an optimal solution: minus the row multipliers (``"level"``) or
-    ``y / t`` (``"ratio"``)."""
+    ``y / t`` (``"ratio"``).
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    model : ClassLP
+    solution : LPSolution
+        Optimal solution of ``model`` (with row multipliers for ``"level"``).
+
+    Returns
+    -------
+    ClassGains
+    """
     n, p = system.n, system.p
     K = [np.zeros((n, len(c.available) * p)) for c in classes.classes]
     if model.kind == "level" and solution.row_dual is None:
@@ -213,7 +278,18 @@ def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, so
 
 
 def block_objectives(model: ClassLP, solution: LPSolution) -> np.ndarray:
-    """The optimum of each block: its level (``"level"``) or its ratio ``m_r`` (``"ratio"``)."""
+    """The optimum of each block: its level (``"level"``) or its ratio ``m_r`` (``"ratio"``).
+
+    Parameters
+    ----------
+    model : ClassLP
+    solution : LPSolution
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(blocks,)`` optimum of each block.
+    """
     if not model.blocks:
         return np.zeros(0)
     cx = np.concatenate([model.lp.c * solution.x, [0.0]])
@@ -233,7 +309,22 @@ def _default_options(solver: str) -> dict:
 
 @dataclass
 class ClassSolution:
-    """The class engine's answer at one ``μ1``: gains, the LP's levels and the certificate."""
+    """The class engine's answer at one ``μ1``: gains, the LP's levels and the certificate.
+
+    Parameters
+    ----------
+    mu1 : float
+    gains : ClassGains
+    lp_levels : numpy.ndarray
+        ``(classes, n)`` level of each (class, row), at least its certified worst case.
+    certificate : ClassCertificate
+    solution : LPSolution or None
+    model_shape : tuple of int
+        ``(rows, columns)`` of the block LP.
+    nonzeros : int
+    build_time, solve_time : float
+        Seconds spent building and solving the LP.
+    """
 
     mu1: float
     gains: ClassGains
@@ -254,6 +345,22 @@ class ClassSolution:
 def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver: str = "highs",
                   solver_options: dict | None = None, rtol: float | None = None) -> ClassSolution:
     """Solve the LAD LP of every (class, row) at ``μ1`` and certify the gains from themselves.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    mu1 : float
+        Recovery level ``μ1`` (positive).
+    solver : str, optional
+    solver_options : dict, optional
+        LP solver and its options (default: HiGHS without presolve).
+    rtol : float, optional
+        Certificate tolerance (default ``CERT_RTOL`` + the solver's accuracy).
+
+    Returns
+    -------
+    ClassSolution
 
     Raises
     ------
@@ -289,7 +396,15 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
 
 
 def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTOL) -> None:
-    """:class:`InfeasibleDesign` naming the class and row if a terminal class's level exceeds ``μ1``."""
+    """:class:`InfeasibleDesign` naming the class and row if a terminal class's level exceeds ``μ1``.
+
+    Parameters
+    ----------
+    classes : ClassSet
+    sol : ClassSolution
+    rtol : float, optional
+        Relative tolerance on ``μ1``.
+    """
     mu1 = sol.mu1
     for i, cls in enumerate(classes.classes):
         if cls.terminal and sol.levels[i] > mu1 * (1 + rtol):
@@ -324,10 +439,25 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
         or per-node levels (``max``, ``sum``; node ``levels`` filled).
     cost : {"sum", "max"} or None
         The delayed-data paper's ``J`` in ``extra["J"]`` (``None``: not computed).
+    solver : str, optional
+    solver_options : dict, optional
+        LP solver and its options (default: HiGHS without presolve).
+    method : str, optional
+        ``Design.method`` label.
+    certify : bool, optional
+        Certify the node gains (when derived) by :func:`eqrec.core.certify.certify_design`.
     node_gains : bool or None
         Derive node gains ``(F, u0)`` (``schedule``) and certify them by the
         independent recursion of :mod:`eqrec.core.certify`; default: when the
         tree has at most :data:`NODE_GAINS_LIMIT` nodes.
+    time_based : bool, optional
+        Node gains chosen by time only (:class:`~eqrec.core.gains.GainSchedule`).
+    rtol : float, optional
+        Certification tolerance (default ``CERT_RTOL`` + the solver's accuracy).
+
+    Returns
+    -------
+    Design
 
     Raises
     ------
@@ -369,7 +499,16 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
 
 
 def as_class_set(language) -> ClassSet:
-    """A :class:`ClassSet` from a class set or a prefix tree."""
+    """A :class:`ClassSet` from a class set or a prefix tree.
+
+    Parameters
+    ----------
+    language : ClassSet or PrefixTree
+
+    Returns
+    -------
+    ClassSet
+    """
     if isinstance(language, ClassSet):
         return language
     if isinstance(language, PrefixTree):
