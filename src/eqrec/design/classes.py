@@ -110,20 +110,6 @@ class ClassLP:
     * ``"ratio"``: the Charnes–Cooper LP of :func:`eqrec.design.mu1_min.build_ratio_lp`; the
       gain row is ``y / t`` with ``y`` in columns ``gain_index[b]`` and ``t``
       in ``t_col[b]``.
-
-    Parameters
-    ----------
-    lp : LinearProgram
-        The block-diagonal LP.
-    kind : str
-    block_class, block_row : numpy.ndarray
-        ``(blocks,)`` class index and state row of each block.
-    gain_index : list of numpy.ndarray
-    block_cols : numpy.ndarray
-        ``(blocks + 1,)`` column ranges of the blocks.
-    t_col : numpy.ndarray or None, optional
-    build_time : float, optional
-        Seconds spent building the LP.
     """
 
     lp: LinearProgram
@@ -144,17 +130,6 @@ def active_maps(stacking: Stacking, cls) -> tuple[np.ndarray, np.ndarray, np.nda
     """``E_d`` and ``Z_S`` of a class on the uncertain coordinates either touches, and those coordinates.
 
     The other coordinates add nothing to any row's worst case.
-
-    Parameters
-    ----------
-    stacking : Stacking
-    cls : DataClass
-        A (time, available data) class of :mod:`eqrec.core.classes`.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``E`` ``(n, k)``, ``Z`` ``(|S| p, k)`` on the ``k`` active coordinates, and their ``(k,)`` indices.
     """
     E, Z = class_maps(stacking, cls)
     act = np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
@@ -170,19 +145,7 @@ class ClassBlocks:
         self.nrow = self.ncol = 0
 
     def model(self, kind: str, t0: float) -> ClassLP:
-        """The :class:`ClassLP` of the blocks added.
-
-        Parameters
-        ----------
-        kind : str
-            ``"level"`` or ``"ratio"`` (:class:`ClassLP`).
-        t0 : float
-            ``time.perf_counter()`` when the build started (for ``build_time``).
-
-        Returns
-        -------
-        ClassLP
-        """
+        """The :class:`ClassLP` of the blocks added (``t0``: when the build started)."""
         cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
         A = sp.csc_matrix((cat(self.tri_v), (cat(self.tri_r).astype(np.int64), cat(self.tri_c).astype(np.int64))),
                           shape=(self.nrow, self.ncol))
@@ -249,20 +212,7 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which
 
 def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, solution: LPSolution) -> ClassGains:
     """The gains ``K`` per class from an optimal solution: minus the row multipliers (``"level"``) or
-    ``y / t`` (``"ratio"``).
-
-    Parameters
-    ----------
-    system : AffineSystem
-    classes : ClassSet
-    model : ClassLP
-    solution : LPSolution
-        Optimal solution of ``model`` (with row multipliers for ``"level"``).
-
-    Returns
-    -------
-    ClassGains
-    """
+    ``y / t`` (``"ratio"``)."""
     n, p = system.n, system.p
     K = [np.zeros((n, len(c.available) * p)) for c in classes.classes]
     if model.kind == "level" and solution.row_dual is None:
@@ -278,18 +228,7 @@ def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, so
 
 
 def block_objectives(model: ClassLP, solution: LPSolution) -> np.ndarray:
-    """The optimum of each block: its level (``"level"``) or its ratio ``m_r`` (``"ratio"``).
-
-    Parameters
-    ----------
-    model : ClassLP
-    solution : LPSolution
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(blocks,)`` optimum of each block.
-    """
+    """The optimum of each block: its level (``"level"``) or its ratio ``m_r`` (``"ratio"``)."""
     if not model.blocks:
         return np.zeros(0)
     cx = np.concatenate([model.lp.c * solution.x, [0.0]])
@@ -499,16 +438,7 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
 
 
 def as_class_set(language) -> ClassSet:
-    """A :class:`ClassSet` from a class set or a prefix tree.
-
-    Parameters
-    ----------
-    language : ClassSet or PrefixTree
-
-    Returns
-    -------
-    ClassSet
-    """
+    """A :class:`ClassSet` from a class set or a prefix tree."""
     if isinstance(language, ClassSet):
         return language
     if isinstance(language, PrefixTree):
