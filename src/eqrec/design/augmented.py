@@ -40,7 +40,8 @@ def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, mu1: f
     mu1 : float
         Recovery level ``μ1``.
     runtime : {"theorem2", "hold"} or None, optional
-        Reading of a missing step at run time (:func:`eqrec.design.augmented_runtime.schedule_from_augmented`).
+        Reading of a missing step at run time (default: ``"theorem2"`` for a ``"theorem2"`` design, else
+        ``"hold"``).
 
     Returns
     -------
