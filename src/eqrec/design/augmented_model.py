@@ -252,6 +252,7 @@ class AugmentedGains:
 
     @property
     def T(self) -> int:
+        """Horizon: the length of :attr:`word`."""
         return len(self.word)
 
 

@@ -123,6 +123,7 @@ class ClassLP:
 
     @property
     def blocks(self) -> int:
+        """Number of blocks, one per (class, state row)."""
         return int(self.block_class.size)
 
 
