@@ -267,31 +267,11 @@ class AugmentedLP:
         return self.lp
 
     def gains(self, solution: LPSolution) -> AugmentedGains:
-        """``(M, ν)`` of an optimal solution (:meth:`gains_from_x`).
-
-        Parameters
-        ----------
-        solution : LPSolution
-            An optimal solution of :attr:`lp`.
-
-        Returns
-        -------
-        AugmentedGains
-        """
+        """``(M, ν)`` of an optimal solution (:meth:`gains_from_x`)."""
         return self.gains_from_x(solution.x)
 
     def gains_from_x(self, x: np.ndarray) -> AugmentedGains:
-        """``(M, ν)`` of a vector ``x`` in this LP's columns (the first :attr:`num_columns` entries are read).
-
-        Parameters
-        ----------
-        x : numpy.ndarray
-            Values of the LP's columns.
-
-        Returns
-        -------
-        AugmentedGains
-        """
+        """``(M, ν)`` of a vector ``x`` in this LP's columns (the first :attr:`num_columns` entries are read)."""
         n, p, T = self.system.n, self.system.p, self.T
         M = np.zeros((T * n, T * p))
         for (s, i), mc in self.m_cols.items():
@@ -300,39 +280,13 @@ class AugmentedLP:
                               nu=np.asarray(x)[self.nu_cols].copy(), mode=self.mode)
 
     def solve(self, solver: str = "highs", options: dict | None = None) -> LPSolution:
-        """Solve the LP with a solver of the registry (:func:`eqrec.core.solvers.solve_lp`).
-
-        Parameters
-        ----------
-        solver : str, optional
-            LP solver name (default ``"highs"``).
-        options : dict, optional
-            Solver options.
-
-        Returns
-        -------
-        LPSolution
-        """
+        """Solve the LP with a solver of the registry (:func:`eqrec.core.solvers.solve_lp`)."""
         return solve_lp(self.lp, solver, options)
 
 
 @dataclass
 class AugmentedDelayLP:
-    """The LP of :func:`build_augmented_delay_lp` and where its columns are (per prefix-tree node index).
-
-    Parameters
-    ----------
-    lp : LinearProgram
-    tree : PrefixTree
-    m_cols, nu_cols : dict of int to numpy.ndarray
-        Node index -> columns of its ``M^α`` (row-major) and ``ν^α``.
-    mu2_col : int
-        Column of the common level ``μ2``.
-    level_cols : dict of int to int
-        Node index -> column of its level (``levels="sum"``).
-    build_time : float
-        Seconds spent building the LP.
-    """
+    """The LP of :func:`build_augmented_delay_lp` and where its columns are (per prefix-tree node index)."""
 
     lp: object
     tree: PrefixTree
