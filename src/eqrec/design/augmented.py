@@ -27,7 +27,29 @@ from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, Sol
 
 
 def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, mu1: float, runtime: str | None = None):
-    """Certify the converted time-based schedule of ``gains`` (the estimator as it really runs)."""
+    """Certify the converted time-based schedule of ``gains`` (the estimator as it really runs).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    gains : AugmentedGains
+        Augmented gains ``(M, ν, L, s0)`` along one word.
+    words : sequence of str or ArrivalPattern
+        Words on which the schedule is certified.
+    mu1 : float
+        Recovery level ``μ1``.
+    runtime : {"theorem2", "hold"} or None, optional
+        Reading of a missing step at run time (default: ``"theorem2"`` for a ``"theorem2"`` design, else
+        ``"hold"``).
+
+    Returns
+    -------
+    schedule : GainSchedule
+        The converted time-based gains.
+    certificate : Certificate
+        Their certificate (:func:`eqrec.core.certify.certify_schedule`) on ``words``.
+    """
     schedule = schedule_from_augmented(system, gains, runtime)
     return schedule, certify_schedule(system, schedule, list(words), mu1)
 

@@ -42,27 +42,35 @@ BOUNDS_RTOL = 1e-6
 class GuaranteeAmongOptima:
     """Result of :func:`best_guarantee_among_optima`.
 
-    Attributes
+    :attr:`exact`: ``upper <= lower (1 + BOUNDS_RTOL) + 1e-9``, the value is known.
+
+    Parameters
     ----------
-    lower, upper
+    lower, upper : float
         Bounds of the smallest worst case of the running estimator over the design LP's
         optimal gains (equal for an affine runtime: ``lower`` is then the LP value and
         ``upper`` the same LP's solution).
-    exact
-        ``upper <= lower (1 + BOUNDS_RTOL) + 1e-9``: the value is known.
-    gains
-        Gains ``(M, ν)`` (mode: the design reading) attaining ``upper``; certify them independently.
-    design_optimum
+    bound : str
+        ``"all"`` (every time) or ``"terminal"`` (``t = T`` only).
+    runtime : str
+        The running estimator, ``"theorem2"`` or ``"hold"``.
+    design_mode : str
+        The design reading whose optima were searched.
+    design_optimum : float
         The design LP's optimum ``μ2*`` (solved first, with the same solver).
-    optimum_bound
+    optimum_bound : float
         ``μ2* (1 + rel_tol) + abs_tol``: the design level every admitted gain attains.
-    design_mu2
+    gains : AugmentedGains
+        Gains ``(M, ν)`` (mode: the design reading) attaining ``upper``; certify them independently.
+    design_mu2 : float
         The design ``μ2`` of ``gains`` (at most ``optimum_bound``).
-    agree_until
+    agree_until : int
         Last time ``t`` up to which the ``"hold"`` and ``"theorem2"`` running errors coincide
         for every gain (:func:`runtimes_agree_until`).
-    lp_shapes
+    lp_shapes : list of tuple of int
         Shapes of the LPs solved after the design LP (one for an affine runtime, two otherwise).
+    solver : str
+        The LP solver used.
     """
 
     lower: float
@@ -80,6 +88,7 @@ class GuaranteeAmongOptima:
 
     @property
     def exact(self) -> bool:
+        """Whether the bounds meet: ``upper <= lower (1 + BOUNDS_RTOL) + 1e-9``."""
         return bool(self.upper <= self.lower * (1.0 + BOUNDS_RTOL) + 1e-9)
 
     @property
@@ -94,6 +103,16 @@ def runtimes_agree_until(word: "str | ArrivalPattern") -> int:
     The two runtimes first differ in ``s(k0 + 1)`` (``k0`` the first missing step), hence in
     the innovation of the first measured step ``k1 > k0``, in ``ue(k1)`` and in ``ξ(k1 + 1)``;
     so ``t = k1`` (``T`` when no measured step follows a missing one).
+
+    Parameters
+    ----------
+    word : str or ArrivalPattern
+        A missing-data word.
+
+    Returns
+    -------
+    int
+        The time ``t`` (``0..T``).
     """
     q = arrival_indicator(word)
     T = q.size
@@ -181,7 +200,7 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
 
     (``t = 0..T``, or ``t = T`` only with ``bound="terminal"``).  The design LP is built
     and solved first (its optimum ``μ2*``).  Then an LP is built on the design LP's columns
-    (:meth:`AugmentedLP.add_decision_variables`) with its robust rows (level ``μ2``, ``M1``
+    (:meth:`AugmentedLP.add_decision_variables`) with its robust rows (level ``μ2``, ``μ1``
     at the end, ``μ2`` bounded as above) and the running error's robust rows bounded by a
     new variable ``γ``, minimised; all rows go through :func:`eqrec.core.robust.add_robust_rows`
     (``form="abs"``), so ``γ`` is the exact worst case that
@@ -202,25 +221,34 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
 
     Parameters
     ----------
-    system, word, M1, L, s0
-        As for :class:`AugmentedLP` (``word`` the designed worst-case word; the running
-        estimator ignores measurements the word lacks, so its error is the same on every
-        word with at least the designed word's measurements).
-    design_mode
+    system : AffineSystem
+        The system.
+    word : str or ArrivalPattern
+        The designed worst-case word (the running estimator ignores measurements the word lacks,
+        so its error is the same on every word with at least the designed word's measurements).
+    mu1 : float
+        Recovery level ``μ1``.
+    L : numpy.ndarray
+        Observer gain, ``(n, p)`` or ``(T, n, p)``, as for :class:`AugmentedLP`.
+    s0 : numpy.ndarray, optional
+        Fixed ``s0``, shape ``(n,)`` (default 0).
+    design_mode : str, optional
         The design reading whose optima are searched (default ``"masked_gain"``).
-    runtime
-        ``"theorem2"`` or ``"hold"`` (:data:`eqrec.design.augmented_model.RUNTIME_MODES`).
-    bound
+    runtime : {"theorem2", "hold"}, optional
+        The running estimator (:data:`eqrec.design.augmented_model.RUNTIME_MODES`).
+    bound : {"all", "terminal"}, optional
         ``"all"``: every time (the certified ``μ2``); ``"terminal"``: the end of the horizon only.
-    recover
-        Also require the running error to recover: its worst case at ``t = T`` at most ``M1``
+    solver : str, optional
+        LP solver of the registry (every LP).
+    recover : bool, optional
+        Also require the running error to recover: its worst case at ``t = T`` at most ``μ1``
         (imposed where the running error is affine: the ``"theorem2"`` LP, the ``"hold"`` upper
         LP; the lower LP of ``"hold"`` stays a relaxation, and the upper LP can be infeasible for
         the injections it fixes even when a recovering optimum exists).
-    solver, options
-        LP solver of the registry and its options (every LP).
-    rel_tol, abs_tol
+    rel_tol, abs_tol : float, optional
         Tolerance of "optimal for the design LP".
+    options : dict, optional
+        Options of the LP solver.
 
     Returns
     -------

@@ -52,14 +52,40 @@ DESIGN_MODES = ("theorem2", "leak", "masked_gain")
 
 
 def check_mode(mode: str, allowed: tuple[str, ...] = MODES) -> str:
-    """Validate a missing-step reading (see the module docstring)."""
+    """Validate a missing-step reading (see the module docstring).
+
+    Parameters
+    ----------
+    mode : str
+        The reading.
+    allowed : tuple of str, optional
+        The accepted readings (default :data:`MODES`).
+
+    Returns
+    -------
+    str
+        ``mode`` unchanged (else :class:`~eqrec.errors.InputError`).
+    """
     if mode not in allowed:
         raise InputError(f"unknown augmented-estimator mode {mode!r}; choose one of {list(allowed)}", field="mode")
     return mode
 
 
 def as_time_varying_L(L: np.ndarray, T: int, n: int, p: int) -> np.ndarray:
-    """Broadcast an observer gain ``L`` (``n x p`` or ``T x n x p``) to shape ``(T, n, p)``."""
+    """Broadcast an observer gain ``L`` (``n x p`` or ``T x n x p``) to shape ``(T, n, p)``.
+
+    Parameters
+    ----------
+    L : array_like
+        ``(n, p)`` constant or ``(T, n, p)`` time-varying observer gain.
+    T, n, p : int
+        Horizon, state and output dimensions.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, n, p)`` copy of ``L``.
+    """
     try:
         L = np.asarray(L, dtype=float)
     except (TypeError, ValueError):
@@ -73,7 +99,22 @@ def as_time_varying_L(L: np.ndarray, T: int, n: int, p: int) -> np.ndarray:
 
 def effective_L(L: np.ndarray, word: "ArrivalPattern | str", mode: str) -> np.ndarray:
     """``L_k`` multiplying the measurement: zero unless ``y(k)`` arrives at ``k`` in ``"theorem2"``
-    (P2 eq. (12), P3 pattern (7)) and ``"masked_gain"``; ``L`` (shape ``(T, n, p)``) kept otherwise."""
+    (P2 eq. (12), P3 pattern (7)) and ``"masked_gain"``; ``L`` (shape ``(T, n, p)``) kept otherwise.
+
+    Parameters
+    ----------
+    L : numpy.ndarray
+        ``(T, n, p)`` observer gains.
+    word : ArrivalPattern or str
+        The word (pattern) whose arrivals decide the zeroed steps.
+    mode : str
+        The missing-step reading.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, n, p)`` measurement gains ``L_k``.
+    """
     L = np.array(L, dtype=float)
     if mode in ("theorem2", "masked_gain"):
         for k, a in enumerate(as_pattern(word).arrivals):
@@ -87,6 +128,16 @@ def missing_data_pattern(word: "ArrivalPattern | str") -> ArrivalPattern:
 
     The readings of the augmented paper (P2) concern missing data; delay words
     go through the prefix gains of :func:`eqrec.design.augmented_lp.solve_augmented_delay`.
+
+    Parameters
+    ----------
+    word : ArrivalPattern or str
+        A 0/1 word or an arrival pattern.
+
+    Returns
+    -------
+    ArrivalPattern
+        Its pattern (else :class:`~eqrec.errors.InputError`).
     """
     pattern = as_pattern(word)
     if not pattern.is_missing_data:
@@ -97,7 +148,18 @@ def missing_data_pattern(word: "ArrivalPattern | str") -> ArrivalPattern:
 
 
 def arrival_indicator(word: "ArrivalPattern | str") -> np.ndarray:
-    """``q(k)`` (1 if the measurement of step ``k`` arrives) of a missing-data pattern."""
+    """``q(k)`` (1 if the measurement of step ``k`` arrives) of a missing-data pattern.
+
+    Parameters
+    ----------
+    word : ArrivalPattern or str
+        A missing-data word.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T,)`` 0/1 indicators ``q(k)``.
+    """
     pattern = missing_data_pattern(word)
     return np.array([1 if pattern.arrives(k) else 0 for k in range(pattern.T)])
 
@@ -141,7 +203,20 @@ def innovation_maps(system: AffineSystem, Phi, L_meas, h0, const=np.asarray) -> 
 
 
 def transitions(system: AffineSystem, L: np.ndarray) -> np.ndarray:
-    """``Φ_k = A_k - L_k C_k`` for an ``L`` sequence of shape ``(T, n, p)``."""
+    """``Φ_k = A_k - L_k C_k`` for an ``L`` sequence of shape ``(T, n, p)``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (time-varying allowed).
+    L : numpy.ndarray
+        ``(T, n, p)`` observer gains.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(T, n, n)`` transitions of ``e = ξ - s``.
+    """
     return np.stack([system.A_at(k) - L[k] @ system.C_at(k) for k in range(L.shape[0])])
 
 
@@ -149,18 +224,22 @@ def transitions(system: AffineSystem, L: np.ndarray) -> np.ndarray:
 class AugmentedGains:
     """Gains ``(M, ν, L, s0)`` of the augmented estimator along one word (P2 eq. (3)).
 
-    Attributes
+    Parameters
     ----------
     word : str
         The designed (worst-case) word; ``M`` has zero columns at its missing steps.
     L : ndarray, shape (T, n, p)
         Observer gains ``L_k``.
     s0 : ndarray, shape (n,)
+        Initial auxiliary state ``s(0)``.
     M : ndarray, shape (Tn, Tp)
         Block lower-triangular injection gains ``M(k, i)``.
     nu : ndarray, shape (Tn,)
-    mode : str
-        Missing-step reading used by the design.
+        Offsets ``ν_k``.
+    mode : str, optional
+        Missing-step reading used by the design (default ``"theorem2"``).
+    extra : dict, optional
+        Free-form details of the design.
     """
 
     word: str
@@ -173,13 +252,24 @@ class AugmentedGains:
 
     @property
     def T(self) -> int:
+        """Horizon: the length of :attr:`word`."""
         return len(self.word)
 
 
 @dataclass
 class AugmentedPrefixGains:
     """``(M, ν)`` per event prefix (``M`` over the measurements available at the prefix's time), ``L``, ``s0``
-    (P3 eq. (5), constraint (6))."""
+    (P3 eq. (5), constraint (6)).
+
+    Parameters
+    ----------
+    rows : dict of ArrivalPattern to tuple of numpy.ndarray
+        Prefix -> ``(M, ν)``: ``M`` of shape ``(n, |A(k)| p)``, ``ν`` of shape ``(n,)`` at its last step ``k``.
+    L : numpy.ndarray
+        ``(T, n, p)`` observer gains.
+    s0 : numpy.ndarray
+        ``(n,)`` initial auxiliary state.
+    """
 
     rows: dict[ArrivalPattern, tuple[np.ndarray, np.ndarray]]
     L: np.ndarray  # (T, n, p)
@@ -191,16 +281,16 @@ class AugmentedStacking:
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The system (time-varying allowed).
-    word
-        Word of length ``T`` (``q_k``).
-    L
+    word : str
+        Missing-data word of length ``T`` (``q_k``).
+    L : numpy.ndarray
         Observer gain, ``n x p`` (constant) or ``T x n x p``.
-    mode
+    mode : str, optional
         One of :data:`DESIGN_MODES` (the readings whose ``e`` is independent of ``M``).
-    stacking
-        Optional core stacking to reuse.
+    stacking : Stacking, optional
+        Core stacking to reuse (when its horizon is ``T``).
     """
 
     def __init__(self, system: AffineSystem, word: str, L: np.ndarray, mode: str = "theorem2",
@@ -225,7 +315,24 @@ class AugmentedStacking:
 
     # -- the error as a function of (M, ν, s0) ---------------------------------
     def error_map(self, M: np.ndarray, nu: np.ndarray, s0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Eq. (10): ``ξ = G δ + c`` with ``G`` of shape ``((T+1)n, D)`` in the core δ layout."""
+        """Eq. (10): ``ξ = G δ + c`` with ``G`` of shape ``((T+1)n, D)`` in the core δ layout.
+
+        Parameters
+        ----------
+        M : numpy.ndarray
+            ``(Tn, Tp)`` injection gains.
+        nu : numpy.ndarray
+            ``(Tn,)`` offsets ``ν``.
+        s0 : array_like
+            ``(n,)`` initial auxiliary state.
+
+        Returns
+        -------
+        G : numpy.ndarray
+            ``((T+1)n, D)`` linear part in ``δ = (w, v, ξ0)``.
+        c : numpy.ndarray
+            ``((T+1)n,)`` constant part.
+        """
         T, n, p = self.T, self.system.n, self.system.p
         s0 = np.asarray(s0, float)
         Zst = self.Z.reshape(T * p, -1)
@@ -241,6 +348,11 @@ class AugmentedStacking:
         ``Gamma`` (``Φ_{t-1} ... Φ_{s+1}`` blocks), ``Phi`` (``Φ_{k-1} ... Φ_0``),
         ``C``, ``L`` (block diagonal of the measurement gains ``L_k``, zero at
         missing steps in ``"theorem2"`` and ``"masked_gain"``), ``W``, ``V``.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            The matrices by name.
         """
         sys, T, n = self.system, self.T, self.system.n
         Gam = np.zeros(((T + 1) * n, T * n))

@@ -19,7 +19,27 @@ from eqrec.errors import InputError
 
 @dataclass
 class NLPResult:
-    """Outcome of the IPOPT solve of Proposition 1."""
+    """Outcome of the IPOPT solve of Proposition 1.
+
+    Parameters
+    ----------
+    gains : AugmentedGains
+        The gains found (one constant ``L``).
+    mu2 : float
+        Their optimised level ``μ2``.
+    status : str
+        IPOPT's return status.
+    success : bool
+        Whether IPOPT reports success.
+    iterations : int
+        IPOPT iterations.
+    solve_time : float
+        Wall-clock seconds of the solve.
+    initial_mu2 : float
+        ``μ2`` of the initial guess.
+    stats : dict, optional
+        Further solver statistics (``t_wall_total``).
+    """
 
     gains: AugmentedGains
     mu2: float

@@ -181,7 +181,22 @@ def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains,
 
 
 def schedule_from_augmented(system: AffineSystem, gains: AugmentedGains, runtime: str | None = None) -> GainSchedule:
-    """The converted time-based :class:`GainSchedule` (``time_based=True``) of one word's augmented gains."""
+    """The converted time-based :class:`GainSchedule` (``time_based=True``) of one word's augmented gains.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : AugmentedGains
+        Gains along the designed word.
+    runtime : {"theorem2", "hold"} or None, optional
+        Treatment of missing steps (default: ``"theorem2"`` for a ``"theorem2"`` design, else ``"hold"``).
+
+    Returns
+    -------
+    GainSchedule
+        The gains ``(F, u0)`` of :func:`augmented_to_time_based`, chosen by time only.
+    """
     F, u0 = augmented_to_time_based(system, gains, runtime)
     return schedule_from_word_gains(PrefixTree([gains.word]), {gains.word: (F, u0)}, system.n, system.p,
                                     time_based=True)

@@ -26,7 +26,20 @@ from eqrec.errors import InputError
 
 
 def box_radius(stacking: Stacking, mu1: float) -> np.ndarray:
-    """Radii ``β = (η_w, η_v, μ1)`` of the uncertainty box of ``stacking``'s coordinates."""
+    """Radii ``β = (η_w, η_v, μ1)`` of the uncertainty box of ``stacking``'s coordinates.
+
+    Parameters
+    ----------
+    stacking : Stacking
+        Stacked maps of the system over the horizon (its layout orders the coordinates ``(w, v, ξ0)``).
+    mu1 : float
+        Recovery level ``μ1``, the radius of the initial error ``ξ0``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Radius of each coordinate of ``δ = (w, v, ξ0)``.
+    """
     sys = stacking.system
     return stacking.layout.radius(sys.eta_w, sys.eta_v, mu1)
 
@@ -38,6 +51,15 @@ class ClassCertificate:
     ``bounds[i, r] = Σ_c β_c |(E_d - K Z_S)[r, c]|`` is the exact worst case of
     :math:`\\xi_r(d)` for the class-form estimator (and for the node gains
     derived from it) over the box at ``mu1``.
+
+    Parameters
+    ----------
+    mu1 : float
+        Recovery level ``μ1`` of the box.
+    classes : ClassSet
+        The classes certified.
+    bounds : numpy.ndarray
+        ``(len(classes), n)`` worst case of each state row of each class.
     """
 
     mu1: float
@@ -63,7 +85,24 @@ class ClassCertificate:
 
 def certify_classes(system: AffineSystem, gains: ClassGains, mu1: float,
                     stacking: Stacking | None = None) -> ClassCertificate:
-    """Exact worst case of every class row from the gains ``K`` alone (no LP, no solver)."""
+    """Exact worst case of every class row from the gains ``K`` alone (no LP, no solver).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    gains : ClassGains
+        One gain ``K`` per class of ``gains.classes``.
+    mu1 : float
+        Recovery level ``μ1`` (radius of ``ξ0``).
+    stacking : Stacking, optional
+        Stacked maps over the classes' horizon; built when omitted.
+
+    Returns
+    -------
+    ClassCertificate
+        ``bounds[i, r] = Σ_c β_c |(E_d - K Z_S)[r, c]|`` for every class ``i`` and row ``r``.
+    """
     classes = gains.classes
     st = stacking or Stacking(system, classes.horizon)
     beta = box_radius(st, mu1)
@@ -84,6 +123,23 @@ def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | No
     :math:`\sum_{s<d}\Phi(d, s{+}1) Q_s Z_{S_s} = -K_{(d,S)} Z_S`; then
     ``F`` by eq. (2) of the prefix-based paper.  Tested equal in effect (same
     estimates) to the class form.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    gains : ClassGains
+        One gain ``K`` per class.
+    tree : PrefixTree, optional
+        Prefix tree of the language; defaults to ``gains.classes.tree`` (absent for a window-rule class set:
+        :class:`~eqrec.errors.InputError`).
+    time_based : bool, optional
+        Whether the schedule picks gains by time only (:class:`~eqrec.core.gains.GainSchedule`).
+
+    Returns
+    -------
+    GainSchedule
+        The node gains ``(F, u0 = 0)``.
     """
     classes = gains.classes
     tree = tree or classes.tree

@@ -123,6 +123,7 @@ class ClassLP:
 
     @property
     def blocks(self) -> int:
+        """Number of blocks, one per (class, state row)."""
         return int(self.block_class.size)
 
 
@@ -166,6 +167,21 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which
     uncertain coordinates ``c`` that ``E_d`` or ``Z_S`` touch
     (:func:`active_maps`): per class, ``n`` blocks sharing ``Z_S`` (rows: data,
     columns: coordinates), costs ``-E_d[r]`` per row ``r``, ``|λ_c| <= β_c``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    mu1 : float
+        Recovery level ``μ1`` (radius of ``ξ0``).
+    which : list of int, optional
+        Indices of the classes to include (default all).
+    stacking : Stacking, optional
+        Stacked maps over the classes' horizon; built when omitted.
+
+    Returns
+    -------
+    ClassLP
     """
     t0 = time.perf_counter()
     st = stacking or Stacking(system, classes.horizon)
@@ -233,7 +249,22 @@ def _default_options(solver: str) -> dict:
 
 @dataclass
 class ClassSolution:
-    """The class engine's answer at one ``μ1``: gains, the LP's levels and the certificate."""
+    """The class engine's answer at one ``μ1``: gains, the LP's levels and the certificate.
+
+    Parameters
+    ----------
+    mu1 : float
+    gains : ClassGains
+    lp_levels : numpy.ndarray
+        ``(classes, n)`` level of each (class, row), at least its certified worst case.
+    certificate : ClassCertificate
+    solution : LPSolution or None
+    model_shape : tuple of int
+        ``(rows, columns)`` of the block LP.
+    nonzeros : int
+    build_time, solve_time : float
+        Seconds spent building and solving the LP.
+    """
 
     mu1: float
     gains: ClassGains
@@ -254,6 +285,22 @@ class ClassSolution:
 def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver: str = "highs",
                   solver_options: dict | None = None, rtol: float | None = None) -> ClassSolution:
     """Solve the LAD LP of every (class, row) at ``μ1`` and certify the gains from themselves.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    mu1 : float
+        Recovery level ``μ1`` (positive).
+    solver : str, optional
+    solver_options : dict, optional
+        LP solver and its options (default: HiGHS without presolve).
+    rtol : float, optional
+        Certificate tolerance (default ``CERT_RTOL`` + the solver's accuracy).
+
+    Returns
+    -------
+    ClassSolution
 
     Raises
     ------
@@ -289,7 +336,15 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
 
 
 def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTOL) -> None:
-    """:class:`InfeasibleDesign` naming the class and row if a terminal class's level exceeds ``μ1``."""
+    """:class:`InfeasibleDesign` naming the class and row if a terminal class's level exceeds ``μ1``.
+
+    Parameters
+    ----------
+    classes : ClassSet
+    sol : ClassSolution
+    rtol : float, optional
+        Relative tolerance on ``μ1``.
+    """
     mu1 = sol.mu1
     for i, cls in enumerate(classes.classes):
         if cls.terminal and sol.levels[i] > mu1 * (1 + rtol):
@@ -324,10 +379,25 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
         or per-node levels (``max``, ``sum``; node ``levels`` filled).
     cost : {"sum", "max"} or None
         The delayed-data paper's ``J`` in ``extra["J"]`` (``None``: not computed).
+    solver : str, optional
+    solver_options : dict, optional
+        LP solver and its options (default: HiGHS without presolve).
+    method : str, optional
+        ``Design.method`` label.
+    certify : bool, optional
+        Certify the node gains (when derived) by :func:`eqrec.core.certify.certify_design`.
     node_gains : bool or None
         Derive node gains ``(F, u0)`` (``schedule``) and certify them by the
         independent recursion of :mod:`eqrec.core.certify`; default: when the
         tree has at most :data:`NODE_GAINS_LIMIT` nodes.
+    time_based : bool, optional
+        Node gains chosen by time only (:class:`~eqrec.core.gains.GainSchedule`).
+    rtol : float, optional
+        Certification tolerance (default ``CERT_RTOL`` + the solver's accuracy).
+
+    Returns
+    -------
+    Design
 
     Raises
     ------

@@ -38,7 +38,18 @@ COSTS = ("sum", "max")
 
 
 def check_cost(cost: str) -> str:
-    """``cost`` if it is one of :data:`COSTS`, else :class:`~eqrec.errors.InputError`."""
+    """``cost`` if it is one of :data:`COSTS`, else :class:`~eqrec.errors.InputError`.
+
+    Parameters
+    ----------
+    cost : str
+        ``"sum"`` (the paper's ``J``) or ``"max"`` (one common level).
+
+    Returns
+    -------
+    str
+        ``cost`` unchanged.
+    """
     if cost not in COSTS:
         raise InputError(f"unknown cost {cost!r}; choose one of {list(COSTS)}", field="cost")
     return cost
@@ -50,6 +61,20 @@ def cost_weights(tree: PrefixTree, cost: str = "sum") -> tuple[float, dict[int, 
     ``"sum"``: ``(1 + 2|L^{E'}|, {node: sequences through it})`` (module
     docstring: ``k = 0`` and ``k = T`` contribute ``|L^{E'}| μ1`` each);
     ``"max"``: ``(1, {})`` (``J = μ1 + max level``).
+
+    Parameters
+    ----------
+    tree : PrefixTree
+        Prefix tree of the reduced language ``L^{E'}``.
+    cost : str, optional
+        ``"sum"`` (default) or ``"max"``.
+
+    Returns
+    -------
+    coefficient : float
+        Coefficient of ``μ1`` in ``J``.
+    weights : dict of int to float
+        Node index -> weight of its level (non-terminal nodes; empty for ``"max"``).
     """
     check_cost(cost)
     if cost == "max":
@@ -59,7 +84,24 @@ def cost_weights(tree: PrefixTree, cost: str = "sum") -> tuple[float, dict[int, 
 
 
 def paper_cost(tree: PrefixTree, mu1: float, levels: dict[str, float], cost: str = "sum") -> float:
-    """``J`` from node levels (keyed by node label; missing nodes count as ``μ1``)."""
+    """``J`` from node levels (keyed by node label; missing nodes count as ``μ1``).
+
+    Parameters
+    ----------
+    tree : PrefixTree
+        Prefix tree of the reduced language ``L^{E'}``.
+    mu1 : float
+        Recovery level ``μ1``.
+    levels : dict of str to float
+        Node label -> level ``μ2`` of the node (levels below ``μ1`` count as ``μ1``).
+    cost : str, optional
+        ``"sum"`` (default, the delayed paper's ``J`` of Theorem 1) or ``"max"``.
+
+    Returns
+    -------
+    float
+        The cost ``J``.
+    """
     a, w = cost_weights(tree, cost)
     if cost == "max":
         return mu1 + max([mu1, *levels.values()])
@@ -69,7 +111,24 @@ def paper_cost(tree: PrefixTree, mu1: float, levels: dict[str, float], cost: str
 def class_cost(classes: ClassSet, mu1: float, levels: np.ndarray, cost: str = "sum") -> float:
     r"""``J`` from class levels: :math:`(1 + 2|\mathcal L^{E'}|)\mu_1 + \sum_{\text{inner}} w \max(\mu_1, \ell)`
     (``"sum"``, weights the sequences through the class) or :math:`\mu_1 + \max(\mu_1, \max_{\text{inner}}\ell)`
-    (``"max"``)."""
+    (``"max"``).
+
+    Parameters
+    ----------
+    classes : ClassSet
+        The (time, available data) classes; their weights count the sequences through them.
+    mu1 : float
+        Recovery level ``μ1``.
+    levels : numpy.ndarray
+        ``(len(classes),)`` level of each class (terminal classes are ignored).
+    cost : str, optional
+        ``"sum"`` (default) or ``"max"``.
+
+    Returns
+    -------
+    float
+        The cost ``J``.
+    """
     check_cost(cost)
     inner = [(c.weight, float(lv)) for c, lv in zip(classes.classes, levels) if c.inner]
     if cost == "max":
@@ -78,7 +137,18 @@ def class_cost(classes: ClassSet, mu1: float, levels: np.ndarray, cost: str = "s
 
 
 def node_bounds(certificate) -> dict[str, float]:
-    """Certified worst case of ``ξ(k)`` after each event prefix (node label), ``k = 1..T``, over the words through it."""
+    """Certified worst case of ``ξ(k)`` after each event prefix (node label), ``k = 1..T``, over the words through it.
+
+    Parameters
+    ----------
+    certificate : Certificate
+        Per-word certificate of a design (``certificate.words[w].bounds`` of shape ``(T+1, n)``).
+
+    Returns
+    -------
+    dict of str to float
+        Node label -> largest certified ``|ξ_r(k)|`` over the rows and the words through the node.
+    """
     bound: dict[str, float] = {}
     for wc in certificate.words.values():
         for t in range(1, wc.pattern.T + 1):
@@ -88,7 +158,24 @@ def node_bounds(certificate) -> dict[str, float]:
 
 
 def certified_cost(design, tree: PrefixTree, cost: str, certificate=None) -> float:
-    """``J`` recomputed from the certificate: each node's level replaced by its worst case (at least ``μ1``)."""
+    """``J`` recomputed from the certificate: each node's level replaced by its worst case (at least ``μ1``).
+
+    Parameters
+    ----------
+    design : Design
+        The design (its ``mu1`` and, by default, its ``certificate``).
+    tree : PrefixTree
+        Prefix tree of the reduced language ``L^{E'}``.
+    cost : str
+        ``"sum"`` or ``"max"``.
+    certificate : Certificate, optional
+        Certificate to use instead of ``design.certificate``.
+
+    Returns
+    -------
+    float
+        The certified cost ``J``.
+    """
     cert = certificate or design.certificate
     if cost == "max":
         return design.mu1 + max(design.mu1, cert.mu2)
