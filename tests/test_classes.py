@@ -14,7 +14,8 @@ from eqrec.core.words import full_delay_language
 from eqrec.core.solvers import SOLVER_NAMES, solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import node_schedule
-from eqrec.design.classes import build_class_lp, class_design, solve_classes
+from eqrec.design.class_lp import build_class_lp
+from eqrec.design.classes import class_design, solve_classes
 from eqrec.design.cost import class_cost
 from eqrec.design.delay import delay_language, design_delay, design_delay_global
 from eqrec.design.mu1_min import min_recovery_level

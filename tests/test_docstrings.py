@@ -264,7 +264,7 @@ def test_numpydoc_docstring_of_the_library(name, obj):
 def test_the_library_is_covered():
     names = dict(LIBRARY)
     assert len(LIBRARY) > 250
-    assert {"eqrec.core.lp.LPBuilder", "eqrec.design.classes.build_class_lp", "eqrec.lmv.recursion.lmv_recursion",
+    assert {"eqrec.core.lp.LPBuilder", "eqrec.design.class_lp.build_class_lp", "eqrec.lmv.recursion.lmv_recursion",
             "eqrec.filters.kalman.make_filter", "eqrec.models.batch_reactor"} <= names.keys()
     assert not any(n.startswith(("eqrec.studies", "eqrec.cli")) for n in names)
 

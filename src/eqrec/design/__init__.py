@@ -5,9 +5,9 @@ registry, reads the gains and certifies them from the gains alone.
     One gain per time step (the prefix-based paper's comparison estimator).
 :mod:`~eqrec.design.prefix`
     The prefix-tree LP of Theorem 3 of the prefix-based paper (engine ``"tree"``).
-:mod:`~eqrec.design.classes`, :mod:`~eqrec.design.class_gains`
-    The class engine: one small LP per (time, available data) class, with the separation theorem;
-    what its gains ``K`` give (certificate, node gains).
+:mod:`~eqrec.design.classes`, :mod:`~eqrec.design.class_lp`, :mod:`~eqrec.design.class_gains`
+    The class engine: the separation theorem and the design (solve, certify); the block LP of every
+    (time, available data) class and state row (build, read); what its gains ``K`` give (certificate, node gains).
 :mod:`~eqrec.design.mu1_min`
     μ1 free: the μ1-free theorem, the smallest feasible μ1 in closed form (Charnes–Cooper), certified.
 :mod:`~eqrec.design.cost`

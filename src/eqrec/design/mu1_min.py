@@ -47,8 +47,8 @@ from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import box_radius
-from eqrec.design.classes import (ClassBlocks, ClassLP, _default_options, active_maps, block_objectives,
-                                  read_class_gains)
+from eqrec.design.class_lp import (ClassBlocks, ClassLP, active_maps, block_lp_options, block_objectives,
+                                   read_class_gains)
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 #: Relative distance below ``μ1,min`` at which the dual certificate shows infeasibility.
@@ -87,7 +87,7 @@ class MinRecoveryLevel:
 def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], stacking: Stacking) -> ClassLP:
     r"""The Charnes–Cooper LPs of the classes ``which`` and every state row, as one block-diagonal LP.
 
-    Per (class, row ``r``), over the coordinates of :func:`eqrec.design.classes.active_maps`:
+    Per (class, row ``r``), over the coordinates of :func:`eqrec.design.class_lp.active_maps`:
     columns ``y`` (``|S| p``), ``t``, ``s^+``, ``s^-``; rows
     :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0` and
     :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`; cost the noise
@@ -220,13 +220,13 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     st = Stacking(system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
     model = build_ratio_lp(system, classes, term, st)
-    sol = solve_lp(model.lp, solver, _default_options(solver))
+    sol = solve_lp(model.lp, solver, block_lp_options(solver))
     lps = 1
     if sol.status == "infeasible":
         for i in term:  # name a terminal class that no gain contracts (its LP holds all its rows)
             one = build_ratio_lp(system, classes, [i], st)
             lps += 1
-            if solve_lp(one.lp, solver, _default_options(solver)).status == "infeasible":
+            if solve_lp(one.lp, solver, block_lp_options(solver)).status == "infeasible":
                 cls = classes.classes[i]
                 raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
                                        f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
