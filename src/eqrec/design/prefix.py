@@ -57,7 +57,35 @@ from eqrec.errors import InputError
 
 @dataclass
 class PrefixLP:
-    """The built LP of a prefix-based design and where its variables are."""
+    """The built LP of a prefix-based design and where its variables are.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The LP (Theorem 3 of the prefix-based paper, one variable block per tree node).
+    stacking : Stacking
+        The stacked maps of the horizon.
+    tree : PrefixTree
+        The language's prefix tree.
+    mu1 : float
+        Recovery level ``M1`` (radius of the initial-error box).
+    mu2_col : int
+        Column of the common level ``M2``.
+    q_cols, r_cols : dict of int to numpy.ndarray
+        Node index -> columns of its ``Q`` row (``n x k p``, row-major) and of ``r(t)``.
+    measured : dict of int to list of int
+        Node index -> available measurement times ``A(t)``.
+    build_time : float, optional
+        Seconds spent building.
+    level_cols : dict of int to int, optional
+        Node index -> column of its own level ``μ2`` (per-node levels).
+    robust_index : RobustRowsIndex or None, optional
+        Where the robust rows are (:func:`eqrec.core.robust.add_robust_rows`).
+    mu1_col : int or None, optional
+        Column of ``μ1`` as a variable (``mu1_range``), else ``None``.
+    levels : str, optional
+        The level structure (:func:`build_prefix_lp`).
+    """
 
     lp: LinearProgram
     stacking: Stacking
@@ -79,7 +107,18 @@ ENGINES = ("classes", "tree")
 
 
 def check_engine(engine: str) -> str:
-    """``engine`` if it is one of :data:`ENGINES`, else :class:`~eqrec.errors.InputError`."""
+    """``engine`` if it is one of :data:`ENGINES`, else :class:`~eqrec.errors.InputError`.
+
+    Parameters
+    ----------
+    engine : str
+        The engine name to check.
+
+    Returns
+    -------
+    str
+        ``engine`` unchanged.
+    """
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}", field="engine")
     return engine
@@ -93,6 +132,11 @@ class NodeRows:
     map of its depth, ``G_x`` the blocks of its ancestors' gain columns, ``c_x``
     their offsets.  Only the structural entries of ``G`` are kept (those that a
     constant or a column touches).
+
+    Parameters
+    ----------
+    coords : int
+        Number ``D`` of uncertain coordinates ``δ``.
     """
 
     def __init__(self, coords: int):
@@ -102,7 +146,22 @@ class NodeRows:
         self.cr, self.cc, self.cv = [], [], []
 
     def add_uncertain(self, const: np.ndarray, blocks: list, n: int) -> int:
-        """Add ``n`` rows of ``G`` (``const`` = vec ``G_0``, ``blocks`` = (columns, vec coefficients)); their first row."""
+        """Add ``n`` uncertain rows of ``G``.
+
+        Parameters
+        ----------
+        const : numpy.ndarray
+            ``vec G_0``, shape ``(n D,)`` (row-major).
+        blocks : list of (numpy.ndarray, numpy.ndarray)
+            ``(columns, coefficients)``: the columns and their ``(n D, len(columns))`` part of ``vec G``.
+        n : int
+            Number of rows.
+
+        Returns
+        -------
+        int
+            Index of the first added row.
+        """
         D = self.D
         K = np.hstack([blk for _, blk in blocks]) if blocks else np.zeros((n * D, 0))
         cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
@@ -121,14 +180,35 @@ class NodeRows:
         return row0
 
     def add_certain(self, row0: int, P: np.ndarray, cols: np.ndarray) -> None:
-        """Add ``P`` times the columns ``cols`` to the certain part of the rows from ``row0``."""
+        """Add ``P`` times the columns ``cols`` to the certain part of the rows from ``row0``.
+
+        Parameters
+        ----------
+        row0 : int
+            First row (from :meth:`add_uncertain`).
+        P : numpy.ndarray
+            Coefficients, shape ``(rows, len(cols))``.
+        cols : numpy.ndarray
+            Decision-variable columns.
+        """
         rr, cc = np.nonzero(P)
         self.cr.append(row0 + rr)
         self.cc.append(cols[cc])
         self.cv.append(P[rr, cc])
 
     def build(self, nx: int) -> UncertainAffineRows:
-        """The rows over ``nx`` decision variables."""
+        """The rows over ``nx`` decision variables.
+
+        Parameters
+        ----------
+        nx : int
+            Number of decision variables.
+
+        Returns
+        -------
+        UncertainAffineRows
+            The rows ``(G_0 + G_x x) δ + c_x x``.
+        """
         cat = np.concatenate
         return UncertainAffineRows(
             entry_row=cat(self.er), entry_coord=cat(self.ec), G0=cat(self.G0),
@@ -146,21 +226,21 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The affine system.
-    words
+    words : sequence of str or ArrivalPattern, or PrefixTree
         The language (words may differ in length: Section V extension; the
         recovery level ``M1`` is then imposed at each word's end).
-    mu1
+    mu1 : float
         Equalized recovery level.
-    T
+    T : int or None, optional
         Horizon for the stacked matrices (default: the longest word).
-    form
+    form : str, optional
         Robust counterpart (:func:`eqrec.core.robust.add_robust_rows`): ``"split"``,
         ``"abs"`` or the paper's Π-dual ``"dual"``.
-    zero_offset
+    zero_offset : bool, optional
         Fix ``r = 0`` (no loss of optimality, see the module docstring).
-    levels
+    levels : {"common", "sum", "max"}, optional
         ``"common"``: one intermediate level ``M2`` for every node (the
         prefix-based paper; minimised).  ``"sum"``: a level ``μ2`` per
         non-terminal node, ``μ2 >= M1``, minimising ``Σ_node w_node μ2,node`` with
@@ -169,13 +249,20 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
         ``"max"``: per-node levels and the largest one minimised (same optimum
         as ``"common"``).  With ``"sum"`` the column ``mu2_col`` is unused (the
         largest level is read from the node levels).
-    mu1_range
+    mu1_range : tuple of float or None, optional
         Make the recovery level a variable ``μ1 ∈ [lo, hi]`` (cost ``mu1_cost μ1``):
         terminal rows are bounded by it and every level by ``>= μ1``, while the
         initial-error box keeps the radius ``M1``.  With ``M1 = lo`` the LP is a
         relaxation of the bilinear problem (10) of the delayed-data paper over
         ``μ1 ∈ [lo, hi]`` (``|G_ξ0| μ1 >= |G_ξ0| lo``): its optimum is a lower
         bound of the cost on that interval.
+    mu1_cost : float, optional
+        Cost coefficient of the ``μ1`` column (with ``mu1_range``).
+
+    Returns
+    -------
+    PrefixLP
+        The LP and where its variables are.
     """
     t_start = time.perf_counter()
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
@@ -268,7 +355,24 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
 
 
 def word_Q_r(model: PrefixLP, x: np.ndarray, word: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray]:
-    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one pattern from the node variables."""
+    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one pattern from the node variables.
+
+    Parameters
+    ----------
+    model : PrefixLP
+        The built LP.
+    x : numpy.ndarray
+        A point of the LP (its solution).
+    word : ArrivalPattern or str
+        A pattern of the language.
+
+    Returns
+    -------
+    Q : numpy.ndarray
+        Shape ``(T n, T p)``, block lower triangular.
+    r : numpy.ndarray
+        Shape ``(T n,)``.
+    """
     sys = model.stacking.system
     word = as_pattern(word)
     n, p, T = sys.n, sys.p, word.T
@@ -285,7 +389,22 @@ def word_Q_r(model: PrefixLP, x: np.ndarray, word: "ArrivalPattern | str") -> tu
 
 
 def read_schedule(model: PrefixLP, solution, *, time_based: bool = False) -> GainSchedule:
-    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution or its point (eqs. (1), (2))."""
+    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution or its point (eqs. (1), (2)).
+
+    Parameters
+    ----------
+    model : PrefixLP
+        The built LP.
+    solution : LPSolution or numpy.ndarray
+        An optimal solution, or its point ``x``.
+    time_based : bool, optional
+        Build a time-based schedule (one gain per time).
+
+    Returns
+    -------
+    GainSchedule
+        The node gains.
+    """
     st = model.stacking
     sys = st.system
     x = getattr(solution, "x", solution)
@@ -300,8 +419,30 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
                 method: str, floor: bool = False, build_time: float | None = None) -> Design:
     """The :class:`Design` of a tree-LP point ``x``: node gains, node levels and the largest level ``mu2``.
 
-    ``floor``: levels at least ``mu1`` (the delayed-data paper's ``μ2 >= μ1``,
-    exact where the LP's bound is met only to the solver's tolerance).
+    Parameters
+    ----------
+    model : PrefixLP
+        The built LP.
+    system : AffineSystem
+        The system.
+    x : numpy.ndarray
+        The LP point.
+    solution : LPSolution
+        The solver's record.
+    mu1 : float
+        Recovery level.
+    method : str
+        Label stored in :attr:`Design.method` (``"time"``: time-based node gains).
+    floor : bool, optional
+        Levels at least ``mu1`` (the delayed-data paper's ``μ2 >= μ1``,
+        exact where the LP's bound is met only to the solver's tolerance).
+    build_time : float or None, optional
+        Seconds of building (default ``model.build_time``).
+
+    Returns
+    -------
+    Design
+        Uncertified (``extra["engine"] = "tree"``).
     """
     lv = (lambda v: float(max(v, mu1))) if floor else float
     levels = {model.tree.nodes[i].label: lv(x[c]) for i, c in model.level_cols.items()}
