@@ -57,34 +57,22 @@ from eqrec.errors import InputError
 
 @dataclass
 class PrefixLP:
-    """The built LP of a prefix-based design and where its variables are.
+    """The built LP of a prefix-based design (Theorem 3, per tree node) and where its variables are.
 
     Parameters
     ----------
     lp : LinearProgram
-        The LP (Theorem 3 of the prefix-based paper, one variable block per tree node).
     stacking : Stacking
-        The stacked maps of the horizon.
     tree : PrefixTree
-        The language's prefix tree.
     mu1 : float
-        Recovery level ``M1`` (radius of the initial-error box).
     mu2_col : int
-        Column of the common level ``M2``.
     q_cols, r_cols : dict of int to numpy.ndarray
-        Node index -> columns of its ``Q`` row (``n x k p``, row-major) and of ``r(t)``.
     measured : dict of int to list of int
-        Node index -> available measurement times ``A(t)``.
     build_time : float, optional
-        Seconds spent building.
     level_cols : dict of int to int, optional
-        Node index -> column of its own level ``μ2`` (per-node levels).
     robust_index : RobustRowsIndex or None, optional
-        Where the robust rows are (:func:`eqrec.core.robust.add_robust_rows`).
     mu1_col : int or None, optional
-        Column of ``μ1`` as a variable (``mu1_range``), else ``None``.
     levels : str, optional
-        The level structure (:func:`build_prefix_lp`).
     """
 
     lp: LinearProgram
@@ -107,18 +95,7 @@ ENGINES = ("classes", "tree")
 
 
 def check_engine(engine: str) -> str:
-    """``engine`` if it is one of :data:`ENGINES`, else :class:`~eqrec.errors.InputError`.
-
-    Parameters
-    ----------
-    engine : str
-        The engine name to check.
-
-    Returns
-    -------
-    str
-        ``engine`` unchanged.
-    """
+    """``engine`` if it is one of :data:`ENGINES`, else :class:`~eqrec.errors.InputError`."""
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}", field="engine")
     return engine
@@ -132,11 +109,6 @@ class NodeRows:
     map of its depth, ``G_x`` the blocks of its ancestors' gain columns, ``c_x``
     their offsets.  Only the structural entries of ``G`` are kept (those that a
     constant or a column touches).
-
-    Parameters
-    ----------
-    coords : int
-        Number ``D`` of uncertain coordinates ``δ``.
     """
 
     def __init__(self, coords: int):
@@ -146,22 +118,7 @@ class NodeRows:
         self.cr, self.cc, self.cv = [], [], []
 
     def add_uncertain(self, const: np.ndarray, blocks: list, n: int) -> int:
-        """Add ``n`` uncertain rows of ``G``.
-
-        Parameters
-        ----------
-        const : numpy.ndarray
-            ``vec G_0``, shape ``(n D,)`` (row-major).
-        blocks : list of (numpy.ndarray, numpy.ndarray)
-            ``(columns, coefficients)``: the columns and their ``(n D, len(columns))`` part of ``vec G``.
-        n : int
-            Number of rows.
-
-        Returns
-        -------
-        int
-            Index of the first added row.
-        """
+        """Add ``n`` rows of ``G`` (``const`` = vec ``G_0``, ``blocks`` = (columns, vec coefficients)); their first row."""
         D = self.D
         K = np.hstack([blk for _, blk in blocks]) if blocks else np.zeros((n * D, 0))
         cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
@@ -180,35 +137,14 @@ class NodeRows:
         return row0
 
     def add_certain(self, row0: int, P: np.ndarray, cols: np.ndarray) -> None:
-        """Add ``P`` times the columns ``cols`` to the certain part of the rows from ``row0``.
-
-        Parameters
-        ----------
-        row0 : int
-            First row (from :meth:`add_uncertain`).
-        P : numpy.ndarray
-            Coefficients, shape ``(rows, len(cols))``.
-        cols : numpy.ndarray
-            Decision-variable columns.
-        """
+        """Add ``P`` times the columns ``cols`` to the certain part of the rows from ``row0``."""
         rr, cc = np.nonzero(P)
         self.cr.append(row0 + rr)
         self.cc.append(cols[cc])
         self.cv.append(P[rr, cc])
 
     def build(self, nx: int) -> UncertainAffineRows:
-        """The rows over ``nx`` decision variables.
-
-        Parameters
-        ----------
-        nx : int
-            Number of decision variables.
-
-        Returns
-        -------
-        UncertainAffineRows
-            The rows ``(G_0 + G_x x) δ + c_x x``.
-        """
+        """The rows over ``nx`` decision variables."""
         cat = np.concatenate
         return UncertainAffineRows(
             entry_row=cat(self.er), entry_coord=cat(self.ec), G0=cat(self.G0),
@@ -262,7 +198,6 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
     Returns
     -------
     PrefixLP
-        The LP and where its variables are.
     """
     t_start = time.perf_counter()
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
@@ -355,24 +290,7 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
 
 
 def word_Q_r(model: PrefixLP, x: np.ndarray, word: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray]:
-    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one pattern from the node variables.
-
-    Parameters
-    ----------
-    model : PrefixLP
-        The built LP.
-    x : numpy.ndarray
-        A point of the LP (its solution).
-    word : ArrivalPattern or str
-        A pattern of the language.
-
-    Returns
-    -------
-    Q : numpy.ndarray
-        Shape ``(T n, T p)``, block lower triangular.
-    r : numpy.ndarray
-        Shape ``(T n,)``.
-    """
+    """Assemble the stacked ``Q (Tn x Tp)`` and ``r`` of one pattern from the node variables."""
     sys = model.stacking.system
     word = as_pattern(word)
     n, p, T = sys.n, sys.p, word.T
@@ -389,22 +307,7 @@ def word_Q_r(model: PrefixLP, x: np.ndarray, word: "ArrivalPattern | str") -> tu
 
 
 def read_schedule(model: PrefixLP, solution, *, time_based: bool = False) -> GainSchedule:
-    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution or its point (eqs. (1), (2)).
-
-    Parameters
-    ----------
-    model : PrefixLP
-        The built LP.
-    solution : LPSolution or numpy.ndarray
-        An optimal solution, or its point ``x``.
-    time_based : bool, optional
-        Build a time-based schedule (one gain per time).
-
-    Returns
-    -------
-    GainSchedule
-        The node gains.
-    """
+    """Recover the gains ``(F, u0)`` of every prefix from an optimal solution or its point (eqs. (1), (2))."""
     st = model.stacking
     sys = st.system
     x = getattr(solution, "x", solution)
@@ -419,30 +322,8 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
                 method: str, floor: bool = False, build_time: float | None = None) -> Design:
     """The :class:`Design` of a tree-LP point ``x``: node gains, node levels and the largest level ``mu2``.
 
-    Parameters
-    ----------
-    model : PrefixLP
-        The built LP.
-    system : AffineSystem
-        The system.
-    x : numpy.ndarray
-        The LP point.
-    solution : LPSolution
-        The solver's record.
-    mu1 : float
-        Recovery level.
-    method : str
-        Label stored in :attr:`Design.method` (``"time"``: time-based node gains).
-    floor : bool, optional
-        Levels at least ``mu1`` (the delayed-data paper's ``μ2 >= μ1``,
-        exact where the LP's bound is met only to the solver's tolerance).
-    build_time : float or None, optional
-        Seconds of building (default ``model.build_time``).
-
-    Returns
-    -------
-    Design
-        Uncertified (``extra["engine"] = "tree"``).
+    ``floor``: levels at least ``mu1`` (the delayed-data paper's ``μ2 >= μ1``,
+    exact where the LP's bound is met only to the solver's tolerance).
     """
     lv = (lambda v: float(max(v, mu1))) if floor else float
     levels = {model.tree.nodes[i].label: lv(x[c]) for i, c in model.level_cols.items()}
