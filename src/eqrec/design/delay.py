@@ -79,9 +79,18 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
                    source: str | None = None) -> tuple[ArrivalPattern, ...]:
     """The reduced event language ``L^{E'}`` of delay words, or of the full language ``{0..τ̄}^T``.
 
-    Give either ``words`` (digit strings, patterns) or ``max_delay`` and
-    ``horizon`` (all ``(τ̄+1)^T`` words).  A delay reaching past the horizon
-    means missing.  Equal event sequences are merged (first word kept as label).
+    Parameters
+    ----------
+    words : sequence of str or ArrivalPattern, optional
+        Delay words (digit strings; a delay reaching past the horizon means missing) or patterns.
+    max_delay, horizon : int or None, optional
+        ``τ̄`` and ``T``: without ``words`` the full language (all ``(τ̄+1)^T`` words), else limits checked.
+    source : str or None, optional
+
+    Returns
+    -------
+    tuple of ArrivalPattern
+        The distinct event sequences (equal ones merged, the first word kept as label).
     """
     if words is None:
         if max_delay is None or horizon is None:
@@ -91,7 +100,17 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
 
 
 def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
-    """The classes of the full language ``{0..τ̄}^T`` from the window rule (no word enumerated)."""
+    """The classes of the full language ``{0..τ̄}^T`` from the window rule (no word enumerated).
+
+    Parameters
+    ----------
+    max_delay, horizon : int
+        The largest delay ``τ̄`` and the horizon ``T``.
+
+    Returns
+    -------
+    ClassSet
+    """
     return classes_of_full_language(int(horizon), int(max_delay))
 
 
@@ -118,9 +137,22 @@ def _classes(patterns) -> ClassSet:
 class FreeMu1Result:
     """A design with ``μ1`` free, and what certifies it.
 
-    ``lower_bound`` (global route): ``J`` at the level ``mu1_min.lower``
-    proven infeasible, with every class at its optimal level there; ``J`` is
-    nondecreasing in ``μ1``, so no feasible ``μ1`` does better.
+    Parameters
+    ----------
+    design : Design
+    route, cost : str
+        ``"global"`` or ``"ipopt"``; ``"sum"`` or ``"max"``.
+    mu1, J : float
+        The recovery level found and the cost ``J`` there.
+    lower_bound : float
+        Global route: ``J`` at the level ``mu1_min.lower`` proven infeasible, with every class at its
+        optimal level there; ``J`` is nondecreasing in ``μ1``, so no feasible ``μ1`` does better.  IPOPT: ``nan``.
+    lps : int
+    time : float
+        Number of LPs solved; wall-clock seconds.
+    mu1_min : MinRecoveryLevel or None, optional
+    extra : dict, optional
+        Global route: the bracket of ``μ1,min``; route-specific details.
     """
 
     design: Design
@@ -136,6 +168,7 @@ class FreeMu1Result:
 
     @property
     def mu2(self) -> float:
+        """The design's largest level ``μ2``."""
         return self.design.mu2
 
     @property
@@ -272,9 +305,21 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
 def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs") -> str:
     """Whether a design at ``μ1`` exists: ``"optimal"``, or ``"infeasible"`` (no estimator recovers to ``mu1``).
 
-    By the separation theorem, the design exists iff every terminal class
-    reaches ``μ1`` (:func:`eqrec.design.classes.check_terminal`); never
-    raises for an infeasible design.
+    Parameters
+    ----------
+    system : AffineSystem
+    patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
+        The language, as for :func:`design_delay`.
+    mu1 : float
+    cost : str, optional
+    solver : str, optional
+        Recovery level, cost (checked only) and LP solver.
+
+    Returns
+    -------
+    str
+        ``"optimal"`` iff every terminal class reaches ``μ1`` (separation theorem,
+        :func:`eqrec.design.classes.check_terminal`), else ``"infeasible"`` (never raised).
     """
     check_cost(cost)
     classes = _classes(patterns)
@@ -293,9 +338,19 @@ def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
                        rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
     """The smallest ``μ1`` for which some estimator recovers (``‖ξ(T)‖ <= μ1`` for all ``‖ξ0‖ <= μ1``).
 
-    See :func:`eqrec.design.mu1_min.min_recovery_level`: ``upper`` is
-    attained by certified gains, ``lower = upper (1 - rtol)`` is proven
-    infeasible by a dual point.
+    Parameters
+    ----------
+    system : AffineSystem
+    patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
+        The language, as for :func:`design_delay`.
+    solver : str, optional
+    rtol : float, optional
+        LP solver; relative distance below ``μ1,min`` of the level proven infeasible.
+
+    Returns
+    -------
+    MinRecoveryLevel
+        ``upper`` attained by certified gains, ``lower = upper (1 - rtol)`` infeasible (:mod:`eqrec.design.mu1_min`).
     """
     return _class_min_recovery_level(system, _classes(patterns), solver=solver, lower_rtol=rtol)
 

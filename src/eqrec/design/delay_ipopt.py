@@ -36,6 +36,26 @@ def bilinear_problem(system: AffineSystem, tree: PrefixTree, cost: str = "sum", 
     The tree LP is built at two ξ0 radii ``r_a, r_b`` with ``μ1`` a column:
     coefficients and row bounds are affine in the radius (it multiplies the
     ξ0 entries of the robust rows), with one sparsity pattern.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    tree : PrefixTree
+        The event-prefix tree of the reduced language.
+    cost : str, optional
+        ``"sum"`` (the paper's cost, per-node levels) or ``"max"`` (one common level).
+    form : str, optional
+        Robust counterpart of :func:`eqrec.design.prefix.build_prefix_lp` (``"split"``, ``"abs"``, ``"dual"``).
+    r_a, r_b : float, optional
+        The two ξ0 radii the LP is built at (distinct).
+
+    Returns
+    -------
+    dict
+        ``A0, dA`` (sparse, one pattern), ``L0, U0, dL, dU`` (row bounds), the
+        :class:`~eqrec.design.prefix.PrefixLP` ``model`` and its LP ``base``,
+        ``mu1_col`` and the level columns ``level_cols``.
     """
     levels = "sum" if cost == "sum" else "common"
     mu1_cost, _ = cost_weights(tree, cost)
@@ -74,6 +94,20 @@ def terminal_ratios(system: AffineSystem, schedule, tree: PrefixTree) -> tuple[n
 
     The terminal worst case at radius ``μ`` is ``f_i + μ b_i``; the gains
     recover to every ``μ >= max_i f_i / (1 - b_i)`` (all ``b_i < 1``).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    schedule : GainSchedule
+        The node gains ``(F, u0)``.
+    tree : PrefixTree
+        The event-prefix tree whose sequences are evaluated.
+
+    Returns
+    -------
+    f, b : numpy.ndarray
+        Shape ``(n |sequences|,)`` each: noise/offset part and initial-error gain per terminal component.
     """
     fs, bs = [], []
     for pat in tree.patterns:
@@ -106,6 +140,39 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
     as is (tolerance widened by IPOPT's accuracy) and, with ``polish``, the
     design at IPOPT's ``μ1`` gives the exact optimum for that ``μ1``
     (``extra["polished"]``).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    patterns : sequence of str or ArrivalPattern, or PrefixTree
+        The delay language (or its reduced event-prefix tree).
+    cost : str, optional
+        ``"sum"`` (the paper's ``J``) or ``"max"``.
+    start_mu1 : float, optional
+        ``μ1`` of the starting LP (doubled until feasible).
+    form : str, optional
+        Robust counterpart of the tree LP (:func:`bilinear_problem`).
+    options : dict or None, optional
+        IPOPT options (:func:`eqrec.core.solvers.ipopt_options`).
+    polish : bool, optional
+        Also solve the LP at the level IPOPT's gains reach (``extra["polished"]``).
+    certify : bool, optional
+        Certify the gains independently.
+    solver : str, optional
+        LP solver of the start and polish LPs.
+
+    Returns
+    -------
+    FreeMu1Result
+        Route ``"ipopt"``: the design at IPOPT's ``μ1``, its ``J``; no lower bound (``nan``).
+
+    Raises
+    ------
+    InfeasibleDesign
+        If no starting level is feasible.
+    SolverFailure
+        If IPOPT stops without success.
     """
     import casadi as ca
 
@@ -192,6 +259,19 @@ def compare_free_routes(global_result: FreeMu1Result, ipopt_result: FreeMu1Resul
     infeasible level).  So the routes are compared on IPOPT's polished ``J``
     (the exact optimum at the ``μ1`` its gains reach) when there is one,
     ``"tie"`` within ``max(gap, 1e-6)``; the raw values are reported beside it.
+
+    Parameters
+    ----------
+    global_result : FreeMu1Result
+        Of :func:`eqrec.design.delay.design_delay_global`.
+    ipopt_result : FreeMu1Result
+        Of :func:`design_delay_ipopt`.
+
+    Returns
+    -------
+    dict
+        Both ``J`` and ``μ1``, the lower bound, ``better`` (``"global"``, ``"ipopt"`` or
+        ``"tie"``), the times and IPOPT's gap to the bound.
     """
     Jg, Ji = global_result.J, ipopt_result.J
     Jc = ipopt_result.extra.get("polished", {}).get("J", np.nan)

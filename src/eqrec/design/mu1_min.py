@@ -59,7 +59,7 @@ MU1_LOWER_RTOL = 1e-6
 class MinRecoveryLevel:
     """The smallest feasible recovery level: ``lower < μ1_min <= upper``.
 
-    Attributes
+    Parameters
     ----------
     upper : float
         ``μ1,min`` as attained by the recovered gains (the largest terminal
@@ -70,8 +70,14 @@ class MinRecoveryLevel:
         ``E_d[r] λ - lower > 0`` of that dual point (``nan`` if not certified).
     binding : dict
         The terminal class (label, time, data) and row that set ``μ1,min``.
-    ratios : ndarray
+    ratios : numpy.ndarray
         ``m_r`` of every terminal (class, row) block, as the LP found them.
+    gains : ClassGains or None, optional
+        The class gains ``K`` recovered from the ratio LP (``y / t``).
+    lps : int, optional
+        Number of LPs solved.
+    time : float, optional
+        Wall-clock seconds of the whole computation.
     """
 
     upper: float
@@ -93,6 +99,22 @@ def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], st
     :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`; cost the noise
     coordinates' radii times :math:`s^+ + s^-` (module docstring).  The
     optimum of a block is its ratio ``m_r``, its gain row ``y / t``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (``system.n`` state rows per class).
+    classes : ClassSet
+        The language's (time, available data) classes.
+    which : list of int
+        Indices into ``classes.classes`` of the classes to include (the terminal ones).
+    stacking : Stacking
+        The stacked variables of the horizon (:class:`eqrec.core.stacking.Stacking`).
+
+    Returns
+    -------
+    ClassLP
+        The block-diagonal LP with its block-to-(class, row) bookkeeping.
     """
     t0 = time.perf_counter()
     xi0 = np.zeros(stacking.layout.size, bool)

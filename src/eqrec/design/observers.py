@@ -9,7 +9,21 @@ import numpy as np
 
 @dataclass
 class PolePlacement:
-    """Result of placing the eigenvalues of ``A - L C``; ``L is None`` when it failed."""
+    """Result of placing the eigenvalues of ``A - L C``; ``L is None`` when it failed.
+
+    Parameters
+    ----------
+    requested : numpy.ndarray
+        The requested eigenvalues, shape ``(n,)`` (complex).
+    L : numpy.ndarray or None
+        The observer gain, shape ``(n, p)``, or ``None`` on failure.
+    achieved : numpy.ndarray or None
+        The eigenvalues of ``A - L C`` obtained, when computed.
+    ok : bool
+        Whether the placement succeeded within tolerance.
+    message : str, optional
+        Why it failed (or a note on success).
+    """
 
     requested: np.ndarray
     L: np.ndarray | None
@@ -19,7 +33,22 @@ class PolePlacement:
 
 
 def observability_rank(A: np.ndarray, C: np.ndarray, tol: float | None = None) -> int:
-    """Rank of the observability matrix ``[C; C A; ...; C A^{n-1}]`` (``n`` when ``(A, C)`` is observable)."""
+    """Rank of the observability matrix ``[C; C A; ...; C A^{n-1}]`` (``n`` when ``(A, C)`` is observable).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        State matrix, shape ``(n, n)``.
+    C : numpy.ndarray
+        Output matrix, shape ``(p, n)``.
+    tol : float or None, optional
+        Singular-value threshold of :func:`numpy.linalg.matrix_rank` (its default when ``None``).
+
+    Returns
+    -------
+    int
+        The rank, between 0 and ``n``.
+    """
     A = np.asarray(A, float)
     C = np.asarray(C, float)
     blocks, M = [], C
@@ -35,6 +64,22 @@ def place_observer(A: np.ndarray, C: np.ndarray, poles, tol: float = 1e-6) -> Po
     Never raises for an unplaceable request (e.g. an eigenvalue repeated more
     often than ``rank C``): returns ``ok=False`` with the reason, so sweeps
     can mark the point instead of hiding it.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        State matrix, shape ``(n, n)``.
+    C : numpy.ndarray
+        Output matrix, shape ``(p, n)``.
+    poles : array_like
+        The ``n`` requested eigenvalues of ``A - L C`` (complex allowed).
+    tol : float, optional
+        Relative tolerance on the achieved eigenvalues.
+
+    Returns
+    -------
+    PolePlacement
+        ``ok=True`` with ``L`` of shape ``(n, p)``, or ``ok=False`` with the reason.
     """
     from scipy.signal import place_poles
 
@@ -61,6 +106,16 @@ def default_poles(n: int) -> np.ndarray:
     """Pole-placement default when ``L`` is not given: ``n`` distinct real poles spread in ``[-0.5, 0.5]``.
 
     For ``n = 3`` this is ``{0, 0.5, -0.5}`` (the augmented paper's ACC example).
+
+    Parameters
+    ----------
+    n : int
+        State dimension (number of poles).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(n,)``: the poles.
     """
     if n == 1:
         return np.array([0.0])
@@ -78,6 +133,22 @@ def deadbeat_observer(A: np.ndarray, C: np.ndarray, seed: int = 0, tol: float = 
     ``G``; the Sylvester equation :math:`A^\top X - X F = C^\top G` gives
     :math:`A^\top - C^\top G X^{-1} = X F X^{-1}`, so :math:`L = (G X^{-1})^\top`
     makes ``A - L C`` similar to ``F^T``.  Checked by :math:`\|(A - LC)^n\| \le` ``tol`` (scaled).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        State matrix, shape ``(n, n)``.
+    C : numpy.ndarray
+        Output matrix, shape ``(p, n)``.
+    seed : int, optional
+        Seed of the random generic ``G``.
+    tol : float, optional
+        Largest accepted relative norm of ``(A - L C)^n``.
+
+    Returns
+    -------
+    PolePlacement
+        ``ok=True`` with a deadbeat ``L`` of shape ``(n, p)``, or ``ok=False`` with the reason.
     """
     import scipy.linalg as sla
 

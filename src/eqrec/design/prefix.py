@@ -57,7 +57,23 @@ from eqrec.errors import InputError
 
 @dataclass
 class PrefixLP:
-    """The built LP of a prefix-based design and where its variables are."""
+    """The built LP of a prefix-based design (Theorem 3, per tree node) and where its variables are.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+    stacking : Stacking
+    tree : PrefixTree
+    mu1 : float
+    mu2_col : int
+    q_cols, r_cols : dict of int to numpy.ndarray
+    measured : dict of int to list of int
+    build_time : float, optional
+    level_cols : dict of int to int, optional
+    robust_index : RobustRowsIndex or None, optional
+    mu1_col : int or None, optional
+    levels : str, optional
+    """
 
     lp: LinearProgram
     stacking: Stacking
@@ -146,21 +162,21 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The affine system.
-    words
+    words : sequence of str or ArrivalPattern, or PrefixTree
         The language (words may differ in length: Section V extension; the
         recovery level ``M1`` is then imposed at each word's end).
-    mu1
+    mu1 : float
         Equalized recovery level.
-    T
+    T : int or None, optional
         Horizon for the stacked matrices (default: the longest word).
-    form
+    form : str, optional
         Robust counterpart (:func:`eqrec.core.robust.add_robust_rows`): ``"split"``,
         ``"abs"`` or the paper's Π-dual ``"dual"``.
-    zero_offset
+    zero_offset : bool, optional
         Fix ``r = 0`` (no loss of optimality, see the module docstring).
-    levels
+    levels : {"common", "sum", "max"}, optional
         ``"common"``: one intermediate level ``M2`` for every node (the
         prefix-based paper; minimised).  ``"sum"``: a level ``μ2`` per
         non-terminal node, ``μ2 >= M1``, minimising ``Σ_node w_node μ2,node`` with
@@ -169,13 +185,19 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
         ``"max"``: per-node levels and the largest one minimised (same optimum
         as ``"common"``).  With ``"sum"`` the column ``mu2_col`` is unused (the
         largest level is read from the node levels).
-    mu1_range
+    mu1_range : tuple of float or None, optional
         Make the recovery level a variable ``μ1 ∈ [lo, hi]`` (cost ``mu1_cost μ1``):
         terminal rows are bounded by it and every level by ``>= μ1``, while the
         initial-error box keeps the radius ``M1``.  With ``M1 = lo`` the LP is a
         relaxation of the bilinear problem (10) of the delayed-data paper over
         ``μ1 ∈ [lo, hi]`` (``|G_ξ0| μ1 >= |G_ξ0| lo``): its optimum is a lower
         bound of the cost on that interval.
+    mu1_cost : float, optional
+        Cost coefficient of the ``μ1`` column (with ``mu1_range``).
+
+    Returns
+    -------
+    PrefixLP
     """
     t_start = time.perf_counter()
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)

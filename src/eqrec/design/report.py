@@ -26,6 +26,16 @@ def level_table(design: Design) -> list[dict]:
 
     Rows for ``k = 0`` (level ``μ1``), every non-terminal node (``k = 1..T-1``)
     and every sequence's end (``k = T``, level ``μ1``).
+
+    Parameters
+    ----------
+    design : Design
+        A certified delay design (node gains and ``certificate`` present).
+
+    Returns
+    -------
+    list of dict
+        One row per node: ``prefix``, ``k``, ``level``, ``certified``, ``sequences``.
     """
     tree = PrefixTree(design.patterns, kind="delay")
     w = tree.sequences_through()
@@ -43,6 +53,18 @@ def path_levels(design: Design, pattern) -> np.ndarray:
 
     With per-node levels (cost ``"sum"``) each time's level is that of the
     prefix node; with one common level (``"max"``) it is ``mu2``.
+
+    Parameters
+    ----------
+    design : Design
+        The design whose levels are read.
+    pattern : str or ArrivalPattern
+        A delay word or pattern of horizon ``T``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(T+1,)``: the level at each time ``k = 0..T``.
     """
     pat = parse_delay_word(pattern) if isinstance(pattern, str) else pattern
     T = pat.T
@@ -53,7 +75,25 @@ def path_levels(design: Design, pattern) -> np.ndarray:
 
 
 def word_certificate(design: Design, word):
-    """The certificate of the designed sequence equal to ``word`` (a delay word or pattern; any word of its class)."""
+    """The certificate of the designed sequence equal to ``word`` (a delay word or pattern; any word of its class).
+
+    Parameters
+    ----------
+    design : Design
+        A certified design.
+    word : str or ArrivalPattern
+        The delay word or pattern to look up.
+
+    Returns
+    -------
+    WordCertificate
+        The word's entry of ``design.certificate.words`` (its worst-case bounds per time).
+
+    Raises
+    ------
+    InputError
+        If ``word`` is not an event sequence of the designed language.
+    """
     pat = parse_delay_word(word) if isinstance(word, str) else word
     for p in design.patterns:
         if p == pat:
@@ -62,7 +102,19 @@ def word_certificate(design: Design, word):
 
 
 def class_table(design: Design) -> list[dict]:
-    """Per (time, available data) class: its level, certified worst case, sum-cost weight and gain ``K``."""
+    """Per (time, available data) class: its level, certified worst case, sum-cost weight and gain ``K``.
+
+    Parameters
+    ----------
+    design : Design
+        A class-engine design (``class_gains`` and ``class_certificate`` present).
+
+    Returns
+    -------
+    list of dict
+        One row per class: ``class``, ``k``, ``data``, ``terminal``, ``sequences``,
+        ``nodes``, ``level``, ``certified``, ``K``.
+    """
     cc = design.class_certificate
     gains = design.class_gains
     levels = design.extra.get("class_levels")
@@ -86,6 +138,25 @@ def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
     (a :class:`eqrec.design.delay.FreeMu1Result`) adds, for ``μ1`` free, the
     route, the lower bound of ``J`` that certifies it (global route) and the
     certified smallest ``μ1``.
+
+    Parameters
+    ----------
+    design : Design
+        The delay design to write.
+    free : FreeMu1Result or None, optional
+        The ``μ1``-free result the design came from, or ``None``.
+    node_gains : bool or None, optional
+        Write node gains, levels and event sequences; ``None`` decides by size.
+
+    Returns
+    -------
+    dict
+        The JSON-serialisable record.
+
+    Raises
+    ------
+    InputError
+        If node gains are asked for but the design has none.
     """
     cert = design.certificate
     ccert = design.class_certificate

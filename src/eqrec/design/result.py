@@ -180,5 +180,17 @@ def node_level(design: Design, prefix: ArrivalPattern) -> float:
     With per-node levels (the delayed-data paper's sum cost, Theorem 1 /
     Proposition 1, :mod:`eqrec.design.cost`) that of the prefix's node; with
     one common level (the prefix-based paper's ``M2``) ``mu2``.
+
+    Parameters
+    ----------
+    design : Design
+        The design whose levels are read.
+    prefix : ArrivalPattern
+        The event prefix (length ``k``) ending at the node.
+
+    Returns
+    -------
+    float
+        The node's level, else the design's common level ``mu2``.
     """
     return float(design.levels.get(prefix.label, design.mu2)) if design.levels else float(design.mu2)

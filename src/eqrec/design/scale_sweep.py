@@ -116,12 +116,29 @@ def _status(raw: str) -> str:
 
 
 def peak_memory_mb() -> float:
-    """Peak resident memory of this process in MB (``ru_maxrss``, kB on Linux)."""
+    """Peak resident memory of this process in MB (``ru_maxrss``, kB on Linux).
+
+    Returns
+    -------
+    float
+        Megabytes.
+    """
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def class_count(T: int, tau: int) -> int:
-    """Classes of ``{0..τ̄}^T`` (``Σ_{d=1}^{T} 2^min(τ̄, d)``), from the window rule of :mod:`eqrec.core.classes`."""
+    """Classes of ``{0..τ̄}^T`` (``Σ_{d=1}^{T} 2^min(τ̄, d)``), from the window rule of :mod:`eqrec.core.classes`.
+
+    Parameters
+    ----------
+    T, tau : int
+        Horizon ``T`` and largest delay ``τ̄``.
+
+    Returns
+    -------
+    int
+        The number of (time, available data) classes.
+    """
     from eqrec.core.classes import classes_of_full_language
 
     return len(classes_of_full_language(int(T), int(tau)))
@@ -200,24 +217,24 @@ def measure_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu
 
     Parameters
     ----------
-    system
+    system : AffineSystem
         The plant (time-invariant, or time-varying over at least ``T`` steps).
-    T, tau
+    T, tau : int
         Horizon and largest delay: the language ``{0..τ̄}^T``.
-    method
+    method : str, optional
         A key of :data:`METHODS` (``"none"``: build only, tree engine).
-    mu1
+    mu1 : float, optional
         The fixed recovery level ``μ1``.
-    time_limit
+    time_limit : float, optional
         HiGHS's time limit in seconds.
-    builder
+    builder : str, optional
         Tree engine: ``"core"`` (recorded as ``"classes"`` for the class engine).
-    options
+    options : dict or None, optional
         Extra HiGHS options (override the method's).
-    out
+    out : dict or None, optional
         A dict filled in as the measurement proceeds (so that the sizes and
         build time survive a later failure); a new one by default.
-    engine
+    engine : {"tree", "classes"}, optional
         ``"tree"`` (the node-per-prefix LP on the enumerated language) or
         ``"classes"`` (the class engine on the window-rule classes; no word
         enumerated).
@@ -279,11 +296,25 @@ def run_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: f
 
     Parameters
     ----------
-    mem_limit_gb
+    system : AffineSystem
+        The plant (sent to the worker as :meth:`~eqrec.core.systems.AffineSystem.to_dict`).
+    T, tau : int
+        Horizon and largest delay: the language ``{0..τ̄}^T``.
+    method : str, optional
+        A key of :data:`METHODS`.
+    mu1 : float, optional
+        The fixed recovery level ``μ1``.
+    time_limit : float, optional
+        HiGHS's time limit in seconds.
+    mem_limit_gb : float, optional
         Address-space limit of the worker (``0``: none).
-    wall_margin
+    builder : str, optional
+        Tree engine: ``"core"``.
+    options : dict or None, optional
+        Extra HiGHS options.
+    wall_margin : float, optional
         The worker is killed after ``1.5 time_limit + wall_margin`` seconds.
-    engine
+    engine : {"tree", "classes"}, optional
         ``"tree"`` or ``"classes"`` (:func:`measure_size`).
 
     Returns
@@ -327,6 +358,11 @@ def main(argv: list[str] | None = None) -> None:
 
     Prints one JSON line (:func:`measure_size`'s fields and ``peak_mb``).
     ``--engine`` overrides the JSON's ``engine`` (default ``tree``).
+
+    Parameters
+    ----------
+    argv : list of str or None, optional
+        Command-line arguments (default ``sys.argv[1:]``).
     """
     argv = sys.argv[1:] if argv is None else argv
     ap = argparse.ArgumentParser(prog="python -m eqrec.design.scale_sweep",

@@ -45,7 +45,27 @@ def lower_bound_probe(system: AffineSystem, words, mu1: float, mu2_opt: float, g
     """Solver status of the prefix LP with the ``M2`` column bounded by ``mu2_opt - gap``, per solver.
 
     ``infeasible`` from every solver proves that no estimator of the class
-    reaches ``mu2_opt - gap``.
+    reaches ``mu2_opt - gap`` (Theorem 3 of the prefix-based paper is necessary and sufficient).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    words : sequence of str or ArrivalPattern
+        The language.
+    mu1 : float
+        Recovery level ``M1``.
+    mu2_opt : float
+        The optimal ``M2`` found by a design.
+    gap : float
+        How far below ``mu2_opt`` the ``M2`` column is bounded.
+    solvers : sequence of str, optional
+        LP solvers to ask.
+
+    Returns
+    -------
+    dict of str to str
+        Solver name -> LP status (``"infeasible"`` expected from each).
     """
     out = {}
     for s in solvers:
@@ -64,6 +84,15 @@ def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> Min
     :func:`eqrec.design.mu1_min.min_recovery_level` on the language's classes.
     The time-based design is the prefix design on the worst-case word alone.
 
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    words : sequence of str or ArrivalPattern
+        The language (0/1 words or patterns).
+    method : {"prefix", "time"}, optional
+        Prefix-based estimator, or time-based (the worst-case word only).
+
     Returns
     -------
     MinRecoveryLevel
@@ -79,7 +108,24 @@ def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> Min
 
 
 def min_recovery_time(system: AffineSystem, words, mu1: float, T_max: int) -> int | None:
-    """Minimum horizon ``T`` at which ``words`` (extended by measurements) admit recovery to ``M1``."""
+    """Minimum horizon ``T`` at which ``words`` (extended by measurements) admit recovery to ``M1``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    words : sequence of str
+        The 0/1 words, extended with ``1`` (measured) up to each tried ``T``.
+    mu1 : float
+        Recovery level ``M1``.
+    T_max : int
+        Largest horizon tried (from the longest word's length).
+
+    Returns
+    -------
+    int or None
+        The smallest feasible ``T``, or ``None`` if none up to ``T_max``.
+    """
     for T in range(max(len(w) for w in words), T_max + 1):
         try:
             design_prefix(system, [extend_word(w, T) for w in words], mu1, certify=False)
@@ -91,7 +137,26 @@ def min_recovery_time(system: AffineSystem, words, mu1: float, T_max: int) -> in
 
 def mu2_curve(system: AffineSystem, words, mu1_values: Iterable[float], method: str = "prefix",
              on_point: Callable[[int, float], None] | None = None) -> list[float | None]:
-    """Optimal ``M2`` for each ``M1`` (``None`` where the design is infeasible)."""
+    """Optimal ``M2`` for each ``M1`` (``None`` where the design is infeasible).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    words : sequence of str or ArrivalPattern
+        The language.
+    mu1_values : iterable of float
+        The recovery levels ``M1`` to design at.
+    method : {"prefix", "time"}, optional
+        :func:`~eqrec.design.prefix.design_prefix` or :func:`~eqrec.design.time_based.design_time_based`.
+    on_point : callable or None, optional
+        Called as ``on_point(k, mu1)`` before the ``k``-th design (progress).
+
+    Returns
+    -------
+    list of float or None
+        The optimal ``M2`` per ``M1``, ``None`` where infeasible.
+    """
     fn = DESIGNS[method]
     out: list[float | None] = []
     for k, mu1 in enumerate(mu1_values):
@@ -109,9 +174,27 @@ DEFINITIVE = ("optimal", "infeasible")
 
 
 def observer_for(system: AffineSystem, poles: np.ndarray, seed: int = 0):
-    """Observer gain for a pole set and how it was made: ``place_poles``, or for an all-zero request
-    (which ``place_poles`` refuses when a pole repeats more than ``rank C`` times) the exact nilpotent
-    ``L`` of :func:`eqrec.design.observers.deadbeat_observer` (``seed`` picks which one: it is not unique)."""
+    """Observer gain for a pole set and how it was made.
+
+    ``place_poles``, or for an all-zero request (which ``place_poles`` refuses when a pole repeats more
+    than ``rank C`` times) the exact nilpotent ``L`` of :func:`eqrec.design.observers.deadbeat_observer`.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (its ``A`` and ``C``).
+    poles : numpy.ndarray
+        The ``n`` requested eigenvalues of ``A - L C``.
+    seed : int, optional
+        Seed of the deadbeat construction (picks which nilpotent ``L``: it is not unique).
+
+    Returns
+    -------
+    placement : PolePlacement
+        The gain ``L`` (or why it failed).
+    how : str
+        ``"place_poles"`` or ``"deadbeat"``.
+    """
     pp = place_observer(system.A, system.C, poles)
     if pp.ok or not np.allclose(np.asarray(poles, complex), 0.0):
         return pp, "place_poles"
@@ -140,6 +223,36 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
     ``observers``: the :func:`observer_for` result of each pole set, when the
     caller has them already (a sweep of several words or readings over the same
     pole sets places each ``L`` once).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system.
+    word : str
+        The 0/1 word (the augmented paper's worst-case language ``{100111}`` in Fig. 3).
+    mu1 : float
+        Recovery level ``μ1``.
+    mode : {"theorem2", "leak", "masked_gain"}
+        Reading of the missing steps (:class:`eqrec.design.augmented_lp.AugmentedLP`).
+    poles_list : iterable of numpy.ndarray
+        The pole sets, each of ``n`` eigenvalues of ``A - L C``.
+    solver : str, optional
+        First LP solver.
+    on_point : callable or None, optional
+        Called with no argument after each point (progress).
+    second_solver : str or None, optional
+        Solver for a point the first leaves undecided (``None``: none).
+    certify_runtime : str or None, optional
+        ``"theorem2"`` or ``"hold"``: also certify the gains as the estimator that runs.
+    deadbeat_seed : int, optional
+        Seed of :func:`observer_for` for all-zero pole sets.
+    observers : sequence of (PolePlacement, str) or None, optional
+        Precomputed :func:`observer_for` results, one per pole set.
+
+    Returns
+    -------
+    list of dict
+        One record per pole set (keys above).
     """
     model = None
     rows = []
