@@ -33,12 +33,34 @@ from eqrec.core.systems import AffineSystem
 
 @dataclass
 class ErrorMaps:
-    """``e(t) = c[t] + G[t] δ`` for the prediction ``x̂(t|I_{t-1})`` (``t = 0..T``) and the filter ``x̂(t|I_t)`` (``t < T``)."""
+    """``e(t) = c[t] + G[t] δ`` for the prediction ``x̂(t|I_{t-1})`` (``t = 0..T``) and the filter ``x̂(t|I_t)`` (``t < T``).
 
-    G: np.ndarray  # (T+1, n, D)
-    c: np.ndarray  # (T+1, n)
-    G_filt: np.ndarray  # (T, n, D)
-    c_filt: np.ndarray  # (T, n)
+    Built by :func:`error_maps`; ``D`` is the length of ``δ = [w; v; ξ0]``.
+
+    Parameters
+    ----------
+    G : numpy.ndarray
+        Coefficients of ``δ`` in the prediction errors, ``(T+1, n, D)``.
+    c : numpy.ndarray
+        Constant part of the prediction errors, ``(T+1, n)``.
+    G_filt : numpy.ndarray
+        Coefficients of ``δ`` in the filtered errors, ``(T, n, D)``.
+    c_filt : numpy.ndarray
+        Constant part of the filtered errors, ``(T, n)``.
+    layout : UncertaintyLayout
+        Index layout of ``δ``.
+    radius : numpy.ndarray
+        Box radii ``b`` of ``δ`` (``|δ| <= b`` componentwise), ``(D,)``.
+    pattern : ArrivalPattern
+        The arrival pattern the maps hold for.
+    name : str, optional
+        The filter's name (default ``""``).
+    """
+
+    G: np.ndarray
+    c: np.ndarray
+    G_filt: np.ndarray
+    c_filt: np.ndarray
     layout: UncertaintyLayout
     radius: np.ndarray
     pattern: ArrivalPattern
@@ -52,17 +74,56 @@ class ErrorMaps:
         raise ValueError(f"estimate must be 'prediction' or 'filtered', got {estimate!r}")
 
     def bounds(self, estimate: str = "prediction") -> np.ndarray:
-        """Exact ``max |e_i(t)|`` over the box, shape ``(T+1, n)`` (or ``(T, n)`` filtered)."""
+        """Exact ``max |e_i(t)|`` over the box, ``|c| + |G| b`` (:func:`~eqrec.core.robust.worst_case_abs`).
+
+        Parameters
+        ----------
+        estimate : str, optional
+            ``"prediction"`` (default, ``x̂(t|I_{t-1})``) or ``"filtered"`` (``x̂(t|I_t)``).
+
+        Returns
+        -------
+        numpy.ndarray
+            Worst cases per time and component, ``(T+1, n)`` (``(T, n)`` filtered).
+        """
         G, c = self._pick(estimate)
         return np.stack([worst_case_abs(G[t], c[t], self.radius) for t in range(G.shape[0])])
 
     def worst_vertex(self, t: int, i: int, estimate: str = "prediction") -> np.ndarray:
-        """A box vertex at which ``|e_i(t)|`` equals its bound."""
+        """A box vertex at which ``|e_i(t)|`` equals its bound.
+
+        Parameters
+        ----------
+        t : int
+            Time index into the maps.
+        i : int
+            State component.
+        estimate : str, optional
+            ``"prediction"`` (default) or ``"filtered"``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``δ*``, ``(D,)``, with every entry ``±b``.
+        """
         G, c = self._pick(estimate)
         return worst_case_vertex(G[t, i], c[t, i], self.radius)
 
     def errors(self, deltas: np.ndarray, estimate: str = "prediction") -> np.ndarray:
-        """Errors for samples ``deltas`` (``(N, D)``): shape ``(N, T+1, n)``."""
+        """Errors ``c[t] + G[t] δ`` for samples of ``δ``.
+
+        Parameters
+        ----------
+        deltas : numpy.ndarray
+            Samples, ``(N, D)`` (or one sample ``(D,)``).
+        estimate : str, optional
+            ``"prediction"`` (default) or ``"filtered"``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(N, T+1, n)`` (``(N, T, n)`` filtered).
+        """
         G, c = self._pick(estimate)
         return np.einsum("tnd,kd->ktn", G, np.atleast_2d(deltas)) + c[None]
 
@@ -107,7 +168,28 @@ def error_maps(filt, system: AffineSystem, pattern: "ArrivalPattern | str", x0, 
                inputs=None) -> ErrorMaps:
     """Affine error maps of ``filt`` along ``pattern`` (true ``x(0) = x0``, ``‖ξ0‖ <= mu1``).
 
-    ``pattern`` is an arrival pattern or a delay word (digits).
+    The filter runs once on affine data (module docstring); used for the comparison of Fig. 1 of the
+    delayed-data paper.
+
+    Parameters
+    ----------
+    filt : TimestampedKalman, DelayUnawareKalman or RandomDelayLMV
+        A filter of :mod:`eqrec.filters.kalman` (built for the same ``system`` and ``inputs``); it is reset.
+    system : AffineSystem
+        The true system.
+    pattern : ArrivalPattern or str
+        The arrival pattern, or a delay word (digits).
+    x0 : numpy.ndarray
+        True initial state ``x(0)``, ``(n,)``; the filter starts at ``x0 - ξ0``.
+    mu1 : float
+        Bound ``μ1`` of ``‖ξ0‖_∞`` (radius of the ``ξ0`` coordinates).
+    inputs : numpy.ndarray or None, optional
+        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+
+    Returns
+    -------
+    ErrorMaps
+        Prediction and filtered error maps and the box radii.
     """
     pattern = as_pattern(pattern, kind="delay") if isinstance(pattern, str) else pattern
     x, pred, fil, lay = _run(filt, system, pattern, x0, inputs, None)
@@ -120,7 +202,28 @@ def error_maps(filt, system: AffineSystem, pattern: "ArrivalPattern | str", x0, 
 
 def simulate_filter(filt, system: AffineSystem, pattern: "ArrivalPattern | str", delta: np.ndarray, x0, *,
                     inputs=None) -> tuple[np.ndarray, np.ndarray]:
-    """Errors of one numeric run: prediction ``(T+1, n)`` and filtered ``(T, n)``."""
+    """Errors of one numeric run: prediction ``(T+1, n)`` and filtered ``(T, n)``.
+
+    Parameters
+    ----------
+    filt : TimestampedKalman, DelayUnawareKalman or RandomDelayLMV
+        A filter of :mod:`eqrec.filters.kalman`; it is reset.
+    system : AffineSystem
+        The true system.
+    pattern : ArrivalPattern or str
+        The arrival pattern, or a delay word (digits).
+    delta : numpy.ndarray
+        The uncertainty ``δ = [w; v; ξ0]``, ``(D,)``.
+    x0 : numpy.ndarray
+        True initial state, ``(n,)``; the filter starts at ``x0 - ξ0``.
+    inputs : numpy.ndarray or None, optional
+        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``x(t) - x̂(t|I_{t-1})``, ``(T+1, n)``, and ``x(t) - x̂(t|I_t)``, ``(T, n)``.
+    """
     pattern = as_pattern(pattern, kind="delay") if isinstance(pattern, str) else pattern
     x, pred, fil, _ = _run(filt, system, pattern, x0, inputs, np.asarray(delta, float))
     return (x - pred)[..., 0], (x[:-1] - fil)[..., 0]
@@ -130,7 +233,26 @@ def truncated_normal_deltas(layout: UncertaintyLayout, radius: np.ndarray, rng: 
                             sigmas: float = 5.0) -> np.ndarray:
     """``size`` draws of ``δ``: zero-mean normal with ``σ = radius / sigmas``, truncated at ``±radius``.
 
-    Coordinates with zero radius are zero.
+    Coordinates with zero radius are zero.  With the default, ``5σ`` = bound as in the delayed-data paper's
+    Fig. 1.
+
+    Parameters
+    ----------
+    layout : UncertaintyLayout
+        Index layout of ``δ`` (its length ``D``).
+    radius : numpy.ndarray
+        Box radii ``b``, ``(D,)``.
+    rng : numpy.random.Generator
+        Random source.
+    size : int
+        Number of draws.
+    sigmas : float, optional
+        Truncation in standard deviations (default 5).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(size, D)``.
     """
     from scipy.stats import truncnorm
 
@@ -144,13 +266,19 @@ def compare_with_bounds(maps: ErrorMaps, bounds: np.ndarray, levels: np.ndarray 
 
     Parameters
     ----------
-    bounds
+    maps : ErrorMaps
+        The filter's error maps on the pattern (:func:`error_maps`).
+    bounds : numpy.ndarray
         Per time and component guarantees ``(T+1, n)`` (e.g. the proposed
-        estimator's certified worst cases on the same pattern).
-    levels
-        Optional per-time ``∞``-norm levels ``(T+1,)`` (the ``μ2,k`` along the pattern).
-    deltas
-        Optional samples ``(N, D)`` (e.g. :func:`truncated_normal_deltas`).
+        estimator's certified worst cases on the same pattern); cut to the estimate's length.
+    levels : numpy.ndarray or None, optional
+        Per-time ``∞``-norm levels ``(T+1,)`` (the ``μ2,k`` along the pattern).
+    deltas : numpy.ndarray or None, optional
+        Samples ``(N, D)`` (e.g. :func:`truncated_normal_deltas`).
+    estimate : str, optional
+        ``"prediction"`` (default) or ``"filtered"``.
+    rtol : float, optional
+        Relative tolerance: exceeding means ``> bound (1 + rtol)`` (default ``1e-9``).
 
     Returns
     -------

@@ -48,7 +48,17 @@ from eqrec.errors import InputError
 
 @dataclass(frozen=True)
 class GaussianDesign:
-    """Second moments used to design the filters: ``P0`` (initial error), ``Q = E Qw Eᵀ``, ``R = V Rv Vᵀ``."""
+    """Second moments used to design the filters: ``P0`` (initial error), ``Q = E Qw Eᵀ``, ``R = V Rv Vᵀ``.
+
+    Parameters
+    ----------
+    P0 : numpy.ndarray
+        Covariance of the initial estimation error, ``(n, n)``.
+    Q : numpy.ndarray
+        Covariance of the process noise ``E w``, ``(n, n)``.
+    R : numpy.ndarray
+        Covariance of the measurement noise ``V v``, ``(p, p)``.
+    """
 
     P0: np.ndarray
     Q: np.ndarray
@@ -56,7 +66,25 @@ class GaussianDesign:
 
     @classmethod
     def from_box(cls, system: AffineSystem, mu1: float, sigmas: float = 5.0) -> "GaussianDesign":
-        """Standard deviations ``bound / sigmas`` for ``ξ0`` (``μ1``), ``w`` (``ηw``) and ``v`` (``ηv``)."""
+        """Standard deviations ``bound / sigmas`` for ``ξ0`` (``μ1``), ``w`` (``ηw``) and ``v`` (``ηv``).
+
+        The delayed-data paper's Fig. 1 draws its noises so (``sigmas = 5``: a bound is five standard deviations).
+
+        Parameters
+        ----------
+        system : AffineSystem
+            The system: ``eta_w``, ``eta_v`` and the noise gains ``E``, ``V`` at time 0.
+        mu1 : float
+            Bound ``μ1`` of ``‖ξ0‖_∞``.
+        sigmas : float, optional
+            Number of standard deviations in a bound (default 5).
+
+        Returns
+        -------
+        GaussianDesign
+            Independent components: ``P0 = (mu1/sigmas)² I``, ``Q = (ηw/sigmas)² E Eᵀ``,
+            ``R = (ηv/sigmas)² V Vᵀ``.
+        """
         n = system.n
         E, V = system.E_at(0), system.V_at(0)
         return cls(P0=(mu1 / sigmas) ** 2 * np.eye(n), Q=(system.eta_w / sigmas) ** 2 * E @ E.T,
@@ -88,15 +116,48 @@ class _Base:
 
 
 class TimestampedKalman(_Base):
-    """Kalman filter using every packet at its own time (re-filtering from time 0 at each step)."""
+    """Kalman filter using every packet at its own time (re-filtering from time 0 at each step).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (``A(t)``, ``C(t)``, ``B(t)``, ``f``); its noise enters only through ``design``.
+    design : GaussianDesign
+        The second moments the filter is designed for.
+    inputs : numpy.ndarray or None, optional
+        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+    """
 
     name = "timestamped"
 
     def reset(self, xhat0: np.ndarray, one: np.ndarray) -> None:
+        """Start a run from the initial estimate ``x̂(0)``.
+
+        Parameters
+        ----------
+        xhat0 : numpy.ndarray
+            Initial estimate, ``(n, K)`` (one column per scenario or affine coefficient).
+        one : numpy.ndarray
+            ``(K,)``: how a constant enters the columns (module docstring).
+        """
         self.xhat0, self.one = np.asarray(xhat0, float), np.asarray(one, float)
         self.received: dict[int, np.ndarray] = {}
 
     def step(self, t: int, packets) -> tuple[np.ndarray, np.ndarray]:
+        """Process the packets arriving at ``t``; return ``(x̂(t|I_t), x̂(t+1|I_t))``.
+
+        Parameters
+        ----------
+        t : int
+            Current time, ``0 <= t < T``.
+        packets : sequence of tuple
+            ``(τ, y(τ))`` pairs of the packets arriving at ``t``, ``y(τ)`` of shape ``(p, K)``.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Filtered and one-step predicted estimates, each ``(n, K)``.
+        """
         sysm, d = self.system, self.design
         for tau, y in packets:
             self.received[int(tau)] = np.asarray(y, float)
@@ -114,15 +175,48 @@ class TimestampedKalman(_Base):
 
 
 class DelayUnawareKalman(_Base):
-    """Kalman filter treating every packet arriving at ``t`` as a measurement of ``x(t)``."""
+    """Kalman filter treating every packet arriving at ``t`` as a measurement of ``x(t)``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (``A(t)``, ``C(t)``, ``B(t)``, ``f``); its noise enters only through ``design``.
+    design : GaussianDesign
+        The second moments the filter is designed for.
+    inputs : numpy.ndarray or None, optional
+        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+    """
 
     name = "unaware"
 
     def reset(self, xhat0: np.ndarray, one: np.ndarray) -> None:
+        """Start a run from the initial estimate ``x̂(0)``.
+
+        Parameters
+        ----------
+        xhat0 : numpy.ndarray
+            Initial estimate, ``(n, K)`` (one column per scenario or affine coefficient).
+        one : numpy.ndarray
+            ``(K,)``: how a constant enters the columns (module docstring).
+        """
         self.x, self.one = np.asarray(xhat0, float).copy(), np.asarray(one, float)
         self.P = self.design.P0.copy()
 
     def step(self, t: int, packets) -> tuple[np.ndarray, np.ndarray]:
+        """Process the packets arriving at ``t``; return ``(x̂(t|I_t), x̂(t+1|I_t))``.
+
+        Parameters
+        ----------
+        t : int
+            Current time, ``0 <= t < T``.
+        packets : sequence of tuple
+            ``(τ, y(τ))`` pairs of the packets arriving at ``t``, ``y(τ)`` of shape ``(p, K)``.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Filtered and one-step predicted estimates, each ``(n, K)``.
+        """
         sysm, d = self.system, self.design
         for _, y in sorted(packets, key=lambda pk: pk[0]):
             self.x, self.P = _kalman_update(self.x, self.P, np.asarray(y, float), sysm.C_at(t), d.R)
@@ -136,16 +230,26 @@ class DelayUnawareKalman(_Base):
 class RandomDelayLMV(_Base):
     """LMV estimator for random delays (ref. [9] of the delayed-data paper), on ``X = [x; z(t-1..t-τ̄)]``.
 
+    The gains are those of the general form of Theorems 1 and 3 (``j = 0``) of the LMV study
+    (:func:`~eqrec.lmv.recursion.lmv_recursion`, :func:`~eqrec.lmv.recursion.filter_smoother`); the model is in
+    the module docstring.
+
     Parameters
     ----------
-    horizon
+    system : AffineSystem
+        The system; must be time-invariant.
+    design : GaussianDesign
+        Second moments: ``P0`` the covariance of ``x(0)``, ``Q`` of ``E w``, ``R`` of ``V v``.
+    horizon : int
         Number of steps ``T`` (gains for ``t = 0..T-1``).
-    max_delay
+    max_delay : int
         ``τ̄``.
-    x0_mean
-        Mean of ``x(0)`` (the LMV gains use the raw second moment ``E[X Xᵀ]``).
-    probabilities
-        ``p_d``, ``d = 0..τ̄`` (default uniform ``1/(τ̄+1)``).
+    x0_mean : numpy.ndarray
+        Mean of ``x(0)``, ``(n,)`` (the LMV gains use the raw second moment ``E[X Xᵀ]``).
+    inputs : numpy.ndarray or None, optional
+        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+    probabilities : numpy.ndarray or None, optional
+        ``p_d``, ``d = 0..τ̄``, ``(τ̄+1,)`` (default uniform ``1/(τ̄+1)``).
     """
 
     name = "random_delay_lmv"
@@ -196,12 +300,36 @@ class RandomDelayLMV(_Base):
         self.N, self.tb = N, tb
 
     def reset(self, xhat0: np.ndarray, one: np.ndarray) -> None:
+        """Start a run from the initial estimate ``x̂(0)``.
+
+        Parameters
+        ----------
+        xhat0 : numpy.ndarray
+            Initial estimate, ``(n, K)`` (one column per scenario or affine coefficient).
+        one : numpy.ndarray
+            ``(K,)``: how a constant enters the columns (module docstring).
+        """
         xhat0 = np.asarray(xhat0, float)
         self.one = np.asarray(one, float)
         self.X = np.zeros((self.N, xhat0.shape[1]))
         self.X[: self.system.n] = xhat0
 
     def step(self, t: int, packets) -> tuple[np.ndarray, np.ndarray]:
+        """Process the packets arriving at ``t``; return ``(x̂(t|I_t), x̂(t+1|I_t))``.
+
+        Parameters
+        ----------
+        t : int
+            Current time, ``0 <= t < T``.
+        packets : sequence of tuple
+            ``(τ, y(τ))`` pairs of the packets arriving at ``t``, ``y(τ)`` of shape ``(p, K)``.
+            Only the sum of the ``y`` enters (time stamps are not used).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Filtered and one-step predicted estimates, each ``(n, K)``.
+        """
         n, p = self.system.n, self.system.p
         yr = np.zeros((p, self.X.shape[1]))
         for _, y in packets:
@@ -219,7 +347,30 @@ FILTERS = {"timestamped": TimestampedKalman, "unaware": DelayUnawareKalman, "ran
 
 def make_filter(name: str, system: AffineSystem, design: GaussianDesign, *, horizon: int | None = None,
                 max_delay: int | None = None, x0_mean=None, inputs=None):
-    """A filter of :data:`FILTERS` by name (the LMV needs ``horizon``, ``max_delay`` and ``x0_mean``)."""
+    """A filter of :data:`FILTERS` by name (the LMV needs ``horizon``, ``max_delay`` and ``x0_mean``).
+
+    Parameters
+    ----------
+    name : str
+        ``"timestamped"``, ``"unaware"`` or ``"random_delay_lmv"``.
+    system : AffineSystem
+        The system.
+    design : GaussianDesign
+        Second moments of the design (e.g. :meth:`GaussianDesign.from_box`).
+    horizon : int or None, optional
+        Number of steps ``T`` (random-delay LMV only).
+    max_delay : int or None, optional
+        ``τ̄`` (random-delay LMV only; uniform delay probabilities).
+    x0_mean : numpy.ndarray or None, optional
+        Mean of ``x(0)``, ``(n,)`` (random-delay LMV only).
+    inputs : numpy.ndarray or None, optional
+        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+
+    Returns
+    -------
+    TimestampedKalman, DelayUnawareKalman or RandomDelayLMV
+        The filter, to be reset and stepped (as :mod:`eqrec.filters.affine` does).
+    """
     if name not in FILTERS:
         raise InputError(f"unknown filter {name!r}; choose one of {list(FILTERS)}", field="filter")
     if name == "random_delay_lmv":

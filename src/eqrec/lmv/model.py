@@ -48,10 +48,38 @@ MECHANISMS = ("zero-input", "hold-input")
 class MultNoiseSystem:
     """Common description: linear system with multiplicative and correlated additive noises.
 
-    See the module docstring for the model.  ``Ak`` has shape ``(K, n, n)``,
-    ``Ck`` ``(K, m, n)``, ``W`` ``(K, K)``; ``S = E[u r^T]`` is ``(n, m)``.
-    ``n_x`` is the number of leading state components that are the plant
-    state (the rest, for the hold-input augmentation, is the held output).
+    See the module docstring for the model (the description Theorems 1-3 of the paper are written for in
+    their general form, :mod:`eqrec.lmv.recursion`).
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        Mean state matrix, ``(n, n)``.
+    Ak : numpy.ndarray
+        Multiplicative-noise state matrices ``A_k``, ``(K, n, n)``.
+    C : numpy.ndarray
+        Mean output matrix, ``(m, n)``.
+    Ck : numpy.ndarray
+        Multiplicative-noise output matrices ``C_k``, ``(K, m, n)``.
+    W : numpy.ndarray
+        Covariance ``E[a a^T]`` of the multiplicative noises, ``(K, K)``, positive semidefinite.
+    Qu : numpy.ndarray
+        ``E[u u^T]``, ``(n, n)``.
+    R : numpy.ndarray
+        ``E[r r^T]``, ``(m, m)``.
+    S : numpy.ndarray
+        ``E[u r^T]``, ``(n, m)`` (``[[Qu, S], [S^T, R]]`` must be positive semidefinite).
+    x0_mean : numpy.ndarray
+        ``E[x(0)]``, ``(n,)``.
+    x0_cov : numpy.ndarray
+        ``Cov x(0)``, ``(n, n)``.
+    n_x : int
+        Number of leading state components that are the plant state (the rest, for the hold-input
+        augmentation, is the held output).
+    name : str, optional
+        Label used in messages (default ``""``).
+    meta : dict, optional
+        Free-form information, e.g. ``{"mechanism": ..., "eta_bar": ...}`` (default empty).
     """
 
     A: np.ndarray
@@ -80,22 +108,57 @@ class MultNoiseSystem:
 
     @property
     def n(self) -> int:
+        """State dimension ``n``."""
         return self.A.shape[0]
 
     @property
     def m(self) -> int:
+        """Output dimension ``m``."""
         return self.C.shape[0]
 
     def mult_A(self, X: np.ndarray) -> np.ndarray:
-        """``sum_kl W_kl A_k X A_l^T``."""
+        """``sum_kl W_kl A_k X A_l^T``: the multiplicative term of eqs. (8)-(9) (general form).
+
+        Parameters
+        ----------
+        X : numpy.ndarray
+            ``(n, n)``, the raw second moment ``q(t)`` in the recursion.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, n)``.
+        """
         return np.einsum("kl,kij,jh,lgh->ig", self.W, self.Ak, X, self.Ak)
 
     def mult_C(self, X: np.ndarray) -> np.ndarray:
-        """``sum_kl W_kl C_k X C_l^T``."""
+        """``sum_kl W_kl C_k X C_l^T``: the multiplicative term of eq. (7) (general form).
+
+        Parameters
+        ----------
+        X : numpy.ndarray
+            ``(n, n)``, the raw second moment ``q(t)`` in the recursion.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(m, m)``.
+        """
         return np.einsum("kl,kij,jh,lgh->ig", self.W, self.Ck, X, self.Ck)
 
     def mult_AC(self, X: np.ndarray) -> np.ndarray:
-        """``sum_kl W_kl A_k X C_l^T``."""
+        """``sum_kl W_kl A_k X C_l^T``: the cross term of the gain, eq. (6) (general form).
+
+        Parameters
+        ----------
+        X : numpy.ndarray
+            ``(n, n)``, the raw second moment ``q(t)`` in the recursion.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, m)``.
+        """
         return np.einsum("kl,kij,jh,lgh->ig", self.W, self.Ak, X, self.Ck)
 
 
@@ -109,6 +172,18 @@ def zero_input_system(plant: Plant, eta_bar: float) -> MultNoiseSystem:
     ``r = eta v`` so ``R = eta_bar Qv`` and ``S = E[u r^T] = eta_bar Gamma S``.
     Inserted in the general recursion this gives exactly eqs. (6)-(8) of
     Theorem 1 and the *corrected* eq. (9) (factor ``eta_bar Q_lambda``).
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eqs. (1)-(2).
+    eta_bar : float
+        Arrival probability ``E[eta(t)]``, ``0 < eta_bar <= 1``.
+
+    Returns
+    -------
+    MultNoiseSystem
+        State ``x`` (dimension ``n``, ``n_x = n``), output ``y_z``, ``K = 3`` multiplicative noises.
     """
     eta_bar = check_eta(eta_bar)
     n, m = plant.n, plant.m
@@ -165,6 +240,22 @@ def hold_input_system(plant: Plant, eta_bar: float, yh0_mean: np.ndarray | None 
     in the paper; by default it is deterministic zero (mean ``yh0_mean = 0``,
     covariance ``yh0_cov = 0``), i.e. nothing is held before the first
     arrival.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eqs. (1)-(2).
+    eta_bar : float
+        Arrival probability ``E[eta(t)]``, ``0 < eta_bar <= 1``.
+    yh0_mean : numpy.ndarray or None, optional
+        Mean of ``y_h(-1)``, ``(m,)``; ``None``: zero.
+    yh0_cov : numpy.ndarray or None, optional
+        Covariance of ``y_h(-1)``, ``(m, m)``; ``None``: zero.
+
+    Returns
+    -------
+    MultNoiseSystem
+        Augmented state ``X = [x; y_h(t-1)]`` (dimension ``n + m``, ``n_x = n``), output ``y_h``, ``K = 3``.
     """
     eta_bar = check_eta(eta_bar)
     n, m = plant.n, plant.m
@@ -240,7 +331,17 @@ def system_of(plant: Plant, mechanism: str, eta_bar: float) -> MultNoiseSystem:
 def second_moment_operator(sys: MultNoiseSystem) -> np.ndarray:
     r"""Matrix of ``q -> A q A^T + sum_kl W_kl A_k q A_l^T`` acting on ``vec(q)`` (column-major).
 
-    ``vec(X Q Y^T) = (Y kron X) vec(Q)``.
+    ``vec(X Q Y^T) = (Y kron X) vec(Q)``.  The map is eq. (8) without ``Qu`` (general form).
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system.
+
+    Returns
+    -------
+    numpy.ndarray
+        The ``(n^2, n^2)`` matrix ``Op`` with ``vec(q(t+1)) = Op vec(q(t)) + vec(Qu)``.
     """
     T = np.kron(sys.A, sys.A)
     for k in range(sys.W.shape[0]):
@@ -251,12 +352,34 @@ def second_moment_operator(sys: MultNoiseSystem) -> np.ndarray:
 
 
 def ms_spectral_radius(sys: MultNoiseSystem) -> float:
-    """Spectral radius of the second-moment operator (< 1 iff mean-square stable)."""
+    """Spectral radius of the second-moment operator (< 1 iff mean-square stable).
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system.
+
+    Returns
+    -------
+    float
+        Spectral radius of :func:`second_moment_operator` (``< 1``: ``q(t)`` of eq. (8) converges).
+    """
     return float(np.max(np.abs(np.linalg.eigvals(second_moment_operator(sys)))))
 
 
 def check_ms_stable(sys: MultNoiseSystem) -> float:
-    """Return the spectral radius; raise :class:`NotMeanSquareStable` if it is >= 1."""
+    """Return the spectral radius; raise :class:`NotMeanSquareStable` if it is >= 1.
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system.
+
+    Returns
+    -------
+    float
+        :func:`ms_spectral_radius`, known to be ``< 1``.
+    """
     rho = ms_spectral_radius(sys)
     if not rho < 1.0:
         raise NotMeanSquareStable(

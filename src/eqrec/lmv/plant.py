@@ -67,7 +67,36 @@ class Plant:
     ``y(t) = (H + lambda(t) H1) x(t) + v(t)``, with scalar white ``xi``,
     ``lambda`` of variances ``Qxi``, ``Qlam``; ``E[w w^T] = Qw``,
     ``E[v v^T] = Qv``, ``E[w v^T] = S``; ``x(0)`` has mean ``sigma0`` and
-    covariance ``Sigma0``.
+    covariance ``Sigma0``.  Built and checked by :meth:`from_dict`.
+
+    Parameters
+    ----------
+    Phi : numpy.ndarray
+        State matrix ``Phi``, ``(n, n)``.
+    Phi1 : numpy.ndarray
+        Multiplicative-noise state matrix ``Phi_1`` (scaled by ``xi(t)``), ``(n, n)``.
+    Gamma : numpy.ndarray
+        Process-noise gain, ``(n, r)``.
+    H : numpy.ndarray
+        Output matrix, ``(m, n)``.
+    H1 : numpy.ndarray
+        Multiplicative-noise output matrix ``H_1`` (scaled by ``lambda(t)``), ``(m, n)``.
+    Qw : numpy.ndarray
+        ``E[w w^T]``, ``(r, r)``.
+    Qv : numpy.ndarray
+        ``E[v v^T]``, ``(m, m)``.
+    S : numpy.ndarray
+        ``E[w v^T]``, ``(r, m)``.
+    Qxi : float
+        Variance ``Q_xi`` of the scalar white noise ``xi(t)``.
+    Qlam : float
+        Variance ``Q_lambda`` of the scalar white noise ``lambda(t)``.
+    sigma0 : numpy.ndarray
+        ``E[x(0)]``, ``(n,)``.
+    Sigma0 : numpy.ndarray
+        ``Cov x(0)``, ``(n, n)``.
+    name : str, optional
+        Label used in messages and system names (default ``"plant"``).
     """
 
     Phi: np.ndarray
@@ -91,6 +120,25 @@ class Plant:
         Keys: ``Phi, Phi1, Gamma, H, H1, Qxi, Qlam, sigma0, Sigma0`` and either
         ``Qw, Qv, S`` or the paper's construction ``v = c w + zeta``
         (``Qw, c, Qzeta``: ``Qv = c^2 Qw + Qzeta``, ``S = c Qw``; scalar w, v).
+        ``sigma0`` defaults to zero, ``Sigma0`` to the identity, ``Qzeta`` to 1.
+
+        Parameters
+        ----------
+        d : dict
+            The mapping (numbers or nested lists); an optional ``name`` key names the plant.
+        source : str or None, optional
+            Where the mapping came from (a file, a config path), named in the errors.
+
+        Returns
+        -------
+        Plant
+            The checked plant.
+
+        Raises
+        ------
+        InputError
+            On a missing key, a wrong shape, a non-finite entry, a negative variance or a covariance (also the
+            joint one of ``(w, v)``) that is not positive semidefinite.
         """
         try:
             Phi = _mat(d["Phi"], "Phi", source=source)
@@ -128,17 +176,30 @@ class Plant:
         return cls(Phi, Phi1, Gamma, H, H1, Qw, Qv, S, Qxi, Qlam, sigma0, Sigma0, d.get("name", "plant"))
 
     def with_(self, **changes: Any) -> "Plant":
-        """Copy with some fields replaced (e.g. ``Qxi``, ``Qlam``)."""
+        """Copy with some fields replaced (e.g. ``Qxi``, ``Qlam``).
+
+        Parameters
+        ----------
+        **changes : numpy.ndarray, float or str
+            New values of fields, by field name (not checked as :meth:`from_dict` would).
+
+        Returns
+        -------
+        Plant
+            The modified copy.
+        """
         fields = {k: getattr(self, k) for k in self.__dataclass_fields__}
         fields.update(changes)
         return Plant(**fields)
 
     @property
     def n(self) -> int:
+        """State dimension ``n``."""
         return self.Phi.shape[0]
 
     @property
     def m(self) -> int:
+        """Output dimension ``m``."""
         return self.H.shape[0]
 
 

@@ -122,9 +122,14 @@ def _histories(T: int, n: int, m: int, x0_mean: np.ndarray,
 class LMVResult:
     """Output of :func:`lmv_recursion` over ``t = 0..T`` (``T+1`` instants).
 
-    ``q[t] = E[x(t) x(t)^T]``; ``P_pred[t] = P(t|t-1)``; ``L[t]``, ``Qe[t]``
-    gain and innovation covariance at time ``t`` (``t = 0..T``);
-    ``q``/``P_pred`` have ``T+2`` entries (the last is ``t = T+1``).
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system the recursion ran on.
+    q, P_pred : numpy.ndarray
+        ``q[t] = E[x(t) x(t)^T]``, eq. (8); ``P_pred[t] = P(t|t-1)``, eq. (9); ``(T+2, n, n)`` (last: ``T+1``).
+    L, Qe : numpy.ndarray
+        Gain ``L[t]``, eq. (6), ``(T+1, n, m)``; innovation covariance ``Qe[t]``, eq. (7), ``(T+1, m, m)``.
     """
 
     sys: MultNoiseSystem
@@ -135,24 +140,29 @@ class LMVResult:
 
     @property
     def T(self) -> int:
+        """Last measurement time ``T``."""
         return self.L.shape[0] - 1
 
 
 def lmv_recursion(sys: MultNoiseSystem, T: int, check_stability: bool = True) -> LMVResult:
     """One-step LMV predictor, general form of Theorem 1 (eqs. (4)-(9)).
 
-    Parameters
-    ----------
-    sys
-        The system in the common description.
-    T
-        Last measurement time; gains for ``t = 0..T``.
-    check_stability
-        Raise :class:`NotMeanSquareStable` if the system is not mean-square
-        stable (the recursion itself is finite on a finite horizon).
-
     Initial values ``xh(0|-1) = E[x(0)]``, ``P(0|-1) = Cov x(0)``,
     ``q(0) = E x(0) E x(0)^T + Cov x(0)`` as in Theorem 1.
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system in the common description.
+    T : int
+        Last measurement time; gains for ``t = 0..T``.
+    check_stability : bool, optional
+        Raise :class:`NotMeanSquareStable` unless mean-square stable (finite anyway on a finite horizon).
+
+    Returns
+    -------
+    LMVResult
+        ``q``, ``P(t|t-1)``, ``L``, ``Qe`` over the horizon.
     """
     if int(T) != T or T < 0:
         raise InputError(f"horizon must be a non-negative integer, got {T}", None, "T")
@@ -168,10 +178,14 @@ def lmv_recursion(sys: MultNoiseSystem, T: int, check_stability: bool = True) ->
 
 @dataclass
 class SmootherResult:
-    """Filter (``j = 0``) and fixed-lag smoothers ``j = 1..N`` (Theorem 3).
+    """Filter (``j = 0``) and fixed-lag smoothers ``j = 1..N`` (Theorem 3); NaN where ``t + j > T``.
 
-    ``K[t, j]`` gain of ``e(t+j)`` in ``xh(t|t+j)``; ``P[t, j] = P(t|t+j)``;
-    entries with ``t + j > T`` are NaN.
+    Parameters
+    ----------
+    K : numpy.ndarray
+        ``K[t, j]``, gain of ``e(t+j)`` in ``xh(t|t+j)``, eq. (18); ``(T+1, N+1, n, m)``.
+    P : numpy.ndarray
+        ``P[t, j] = P(t|t+j)``, eq. (20); ``(T+1, N+1, n, n)``.
     """
 
     K: np.ndarray
@@ -179,6 +193,7 @@ class SmootherResult:
 
     @property
     def P_filt(self) -> np.ndarray:
+        """Filter error covariances ``P(t|t)``, ``(T+1, n, n)``."""
         return self.P[:, 0]
 
 

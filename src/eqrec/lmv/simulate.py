@@ -57,7 +57,20 @@ def _mult_noise(dist: str, var: float, shape: tuple, rng: np.random.Generator) -
 def fourth_moment_radius(plant: Plant, mult_dist: str = "gaussian") -> float:
     """Spectral radius of ``E[(Phi + xi Phi1)^{(x)4}]`` (``< 1``: finite fourth moments of ``x``).
 
-    ``E[xi^2] = Q_xi``, ``E[xi^4] = 3 Q_xi^2`` (Gaussian) or ``Q_xi^2`` (two-point).
+    ``E[xi^2] = Q_xi``, ``E[xi^4] = 3 Q_xi^2`` (Gaussian) or ``Q_xi^2`` (two-point).  Finite fourth moments
+    make the standard errors of :func:`compare_moments` meaningful.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eq. (1) (``Phi``, ``Phi1``, ``Qxi``).
+    mult_dist : str, optional
+        Distribution of ``xi``: ``"gaussian"`` (default) or ``"two-point"``.
+
+    Returns
+    -------
+    float
+        Spectral radius of the ``(n^4, n^4)`` fourth-moment operator.
     """
     from itertools import product
     kurt = {"gaussian": 3.0, "two-point": 1.0}
@@ -82,9 +95,28 @@ def simulate_plant(plant: Plant, eta_bar: float, T: int, runs: int, rng: np.rand
                    yh0: np.ndarray | None = None, mult_dist: str = "gaussian") -> dict[str, np.ndarray]:
     """Simulate ``runs`` independent realisations of eqs. (1)-(2) for ``t = 0..T``.
 
-    Returns arrays ``x (runs, T+1, n)``, ``y (runs, T+1, m)`` (sensor output),
-    ``eta (runs, T+1)``, ``y_zero`` (eq. (3)) and ``y_hold`` (hold-input,
-    ``y_h(-1) = yh0``, default 0).
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eqs. (1)-(2).
+    eta_bar : float
+        Arrival probability of the Bernoulli ``eta(t)``.
+    T : int
+        Last time (``T >= 0``).
+    runs : int
+        Number of independent runs ``R >= 1``.
+    rng : numpy.random.Generator
+        Source of all random draws.
+    yh0 : numpy.ndarray or None, optional
+        Held output ``y_h(-1)``, ``(m,)`` (or ``(runs, m)``); ``None``: zero.
+    mult_dist : str, optional
+        Distribution of ``xi``, ``lambda``: ``"gaussian"`` (default) or ``"two-point"`` (module docstring).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``x (runs, T+1, n)``, ``y (runs, T+1, m)`` (sensor output, eq. (2)), ``eta (runs, T+1)``, ``y_zero``
+        (eq. (3)) and ``y_hold`` (hold-input, ``y_h(-1) = yh0``), both ``(runs, T+1, m)``.
     """
     if runs < 1 or T < 0:
         raise InputError(f"need runs >= 1 and T >= 0, got runs={runs}, T={T}", None, "runs")
@@ -122,18 +154,45 @@ def _psd_sqrt(M: np.ndarray) -> np.ndarray:
 
 
 def bonferroni_z(alpha: float, k: int) -> float:
-    """Two-sided Bonferroni threshold for ``k`` comparisons at family-wise level ``alpha``."""
+    """Two-sided Bonferroni threshold for ``k`` comparisons at family-wise level ``alpha``.
+
+    Parameters
+    ----------
+    alpha : float
+        Family-wise level, ``0 < alpha < 1``.
+    k : int
+        Number of comparisons (values below 1 count as 1).
+
+    Returns
+    -------
+    float
+        ``z_crit = Phi^{-1}(1 - alpha / (2 k))`` (``Phi`` the standard normal distribution function).
+    """
     return float(norm.ppf(1.0 - alpha / (2.0 * max(int(k), 1))))
 
 
 @dataclass
 class MCComparison:
-    """Empirical vs theoretical second moments of estimation errors.
+    """Empirical vs theoretical second moments of estimation errors (built by :func:`compare_moments`).
 
-    ``emp``, ``theory``, ``se`` have shape ``(T', n, n)``; ``z`` the
-    standardised differences; ``z_crit`` the Bonferroni threshold over the
-    ``k`` distinct compared entries; ``mean_z`` the largest standardised
-    error *mean* (should be ``O(1)``: the LMV estimator is unbiased).
+    Parameters
+    ----------
+    emp : numpy.ndarray
+        Monte Carlo estimate of ``E[e e^T]``, ``(T', n, n)``.
+    theory : numpy.ndarray
+        The theoretical second moments, ``(T', n, n)``.
+    se : numpy.ndarray
+        Standard errors of ``emp``, ``(T', n, n)`` (module docstring).
+    z : numpy.ndarray
+        Standardised differences ``(emp - theory) / se``, ``(T', n, n)``; NaN below the diagonal.
+    z_crit : float
+        Bonferroni threshold over the ``k`` compared entries and the ``T' n`` compared means.
+    k : int
+        Number of distinct compared entries, ``T' n (n+1) / 2``.
+    runs : int
+        Number of Monte Carlo runs ``R``.
+    mean_z : float
+        The largest standardised error *mean* (should be ``O(1)``: the LMV estimator is unbiased).
     """
 
     emp: np.ndarray
@@ -147,26 +206,53 @@ class MCComparison:
 
     @property
     def max_abs_z(self) -> float:
+        """Largest ``|z|`` over the compared entries."""
         return float(np.nanmax(np.abs(self.z)))
 
     @property
     def passed(self) -> bool:
+        """Whether ``max_abs_z`` and ``mean_z`` are both within ``z_crit``."""
         return self.max_abs_z <= self.z_crit and self.mean_z <= self.z_crit
 
     @property
     def max_rel_err(self) -> float:
+        """Largest relative error of the empirical variances (the diagonals) against the theory."""
         d = np.einsum("tii->ti", self.theory)
         e = np.einsum("tii->ti", self.emp)
         return float(np.nanmax(np.abs(e - d) / np.abs(d)))
 
     def summary(self) -> str:
+        """One line for logs and reports.
+
+        Returns
+        -------
+        str
+            Runs, entries, ``max|z|`` against ``z_crit``, ``mean_z`` and the largest relative variance error.
+        """
         return (f"{self.runs} runs, {self.k} entries: max|z| = {self.max_abs_z:.2f} "
                 f"(Bonferroni z_crit = {self.z_crit:.2f}), max|mean z| = {self.mean_z:.2f}, "
                 f"max relative error of variances = {100 * self.max_rel_err:.1f}%")
 
 
 def compare_moments(err: np.ndarray, theory: np.ndarray, alpha: float = 1e-3) -> MCComparison:
-    """Compare ``E[e e^T]`` estimated from ``err (runs, T', n)`` with ``theory (T', n, n)``."""
+    """Compare ``E[e e^T]`` estimated from ``err (runs, T', n)`` with ``theory (T', n, n)``.
+
+    The test of the module docstring: standard errors from the sample fourth moments, Bonferroni threshold.
+
+    Parameters
+    ----------
+    err : numpy.ndarray
+        Estimation errors, ``(runs, T', n)``.
+    theory : numpy.ndarray
+        Theoretical ``E[e e^T]`` (e.g. ``P(t|t-1)`` of Theorem 1), ``(T', n, n)``.
+    alpha : float, optional
+        Family-wise level of the test (default ``1e-3``).
+
+    Returns
+    -------
+    MCComparison
+        The comparison; :attr:`MCComparison.passed` is the verdict.
+    """
     err = np.asarray(err, float)
     R = err.shape[0]
     prod = err[..., :, None] * err[..., None, :]            # (R, T', n, n)
@@ -190,20 +276,50 @@ def compare_moments(err: np.ndarray, theory: np.ndarray, alpha: float = 1e-3) ->
 
 @dataclass
 class MCRun:
-    """One Monte Carlo experiment of one mechanism: truth, estimates, theory."""
+    """One Monte Carlo experiment of one mechanism: truth, estimates, theory (built by :func:`run_mc`).
+
+    Theory and errors are on the plant state (the leading ``n_x`` components).
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The compensated system (:func:`~eqrec.lmv.model.system_of`).
+    res : LMVResult
+        Its one-step predictor, Theorem 1.
+    sm : SmootherResult
+        Its filter and smoothers, Theorem 3.
+    sim : dict
+        The realisations, :func:`simulate_plant`.
+    est : dict
+        The estimates, :func:`~eqrec.lmv.recursion.apply_estimator`.
+    P_pred : numpy.ndarray
+        Theory ``P(t|t-1)``, ``(T+1, n_x, n_x)``.
+    P_smooth : numpy.ndarray
+        Theory ``P(t|t+j)``, ``j = 0..N`` (``j = 0`` the filter), ``(T+1, N+1, n_x, n_x)``.
+    err_pred : numpy.ndarray
+        Errors ``x(t) - xh(t|t-1)``, ``(R, T+1, n_x)``.
+    err_smooth : numpy.ndarray
+        Errors ``x(t) - xh(t|t+j)``, ``(R, T+1, N+1, n_x)`` (NaN where ``t + j > T``).
+    pred_steps : int, optional
+        The ``Np`` of the ``Np``-step predictor, Theorem 2 (default 1).
+    P_npred : numpy.ndarray or None, optional
+        Theory ``P(t+Np|t)``, eq. (16), for ``t = 0..T-Np``: ``(T-Np+1, n_x, n_x)``.
+    err_npred : numpy.ndarray or None, optional
+        Errors ``x(t+Np) - xh(t+Np|t)``, ``(R, T-Np+1, n_x)``.
+    """
 
     sys: MultNoiseSystem
     res: LMVResult
     sm: SmootherResult
     sim: dict
     est: dict
-    P_pred: np.ndarray      # (T+1, n_x, n_x) theory P(t|t-1), plant block
-    P_smooth: np.ndarray    # (T+1, N+1, n_x, n_x) theory P(t|t+j)
-    err_pred: np.ndarray    # (R, T+1, n_x)
-    err_smooth: np.ndarray  # (R, T+1, N+1, n_x)
+    P_pred: np.ndarray
+    P_smooth: np.ndarray
+    err_pred: np.ndarray
+    err_smooth: np.ndarray
     pred_steps: int = 1
-    P_npred: np.ndarray | None = None    # (T+1-(Np-1), n_x, n_x) theory P(t+Np|t)
-    err_npred: np.ndarray | None = None  # (R, T+1-(Np-1), n_x) errors x(t+Np) - xh(t+Np|t)
+    P_npred: np.ndarray | None = None
+    err_npred: np.ndarray | None = None
 
 
 def run_mc(plant: Plant, eta_bar: float, mechanism: str, T: int, runs: int, N_smooth: int,
@@ -213,6 +329,34 @@ def run_mc(plant: Plant, eta_bar: float, mechanism: str, T: int, runs: int, N_sm
 
     ``sim`` (from :func:`simulate_plant`) may be passed to evaluate both
     mechanisms on the same realisations.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eqs. (1)-(2).
+    eta_bar : float
+        Arrival probability.
+    mechanism : str
+        ``"zero-input"`` or ``"hold-input"`` (:func:`~eqrec.lmv.model.system_of`).
+    T : int
+        Last time; the recursion and the simulation run over ``t = 0..T``.
+    runs : int
+        Number of runs ``R`` (used only when ``sim`` is ``None``).
+    N_smooth : int
+        Smoothing lag ``N`` of Theorem 3.
+    rng : numpy.random.Generator
+        Random source of the simulation (used only when ``sim`` is ``None``).
+    sim : dict or None, optional
+        Realisations from :func:`simulate_plant` over the same ``T``; ``None``: simulate here.
+    mult_dist : str, optional
+        Distribution of the multiplicative noises when simulating (default ``"gaussian"``).
+    pred_steps : int, optional
+        ``Np`` of the ``Np``-step predictor, Theorem 2 (``1 <= Np <= T``, default 2).
+
+    Returns
+    -------
+    MCRun
+        Truth, estimates, theoretical covariances and errors.
     """
     sys = system_of(plant, mechanism, eta_bar)
     key = {"zero-input": "y_zero", "hold-input": "y_hold"}[mechanism]
