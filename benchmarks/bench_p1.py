@@ -29,7 +29,7 @@ from eqrec.core.certify import certify_design
 from eqrec.core.words import worst_case_word
 from eqrec.core.solvers import solve_lp
 from eqrec.core.acc import acc_system
-from eqrec.design.prefix import build_prefix_lp, read_schedule
+from eqrec.design.prefix_lp import build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 
 L1 = ["101111", "110111", "111011", "111101"]

@@ -42,7 +42,7 @@ def part_fixed(repeats: int) -> None:
     from eqrec.core.certify import certify_design
     from eqrec.core.solvers import solve_lp
     from eqrec.design.delay import _design_from_solution, delay_language, design_delay
-    from eqrec.design.prefix import build_prefix_lp
+    from eqrec.design.prefix_lp import build_prefix_lp
     from eqrec.core.prefix_tree import PrefixTree
     from eqrec.models import batch_reactor
 
@@ -133,7 +133,7 @@ def main() -> None:
     ap.add_argument("--sizes", nargs="+", default=["5,2", "6,2"], help="T,tau pairs for the scale table")
     ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS))
     ap.add_argument("--builders", nargs="+", default=["core"], choices=["core"],
-                    help="core: eqrec.design.prefix.build_prefix_lp")
+                    help="core: eqrec.design.prefix_lp.build_prefix_lp")
     ap.add_argument("--engines", nargs="+", default=["tree", "classes"], choices=list(ENGINES),
                     help="tree: the node-per-prefix LP; classes: the class engine")
     ap.add_argument("--mu1", type=float, default=0.5)

@@ -7,7 +7,8 @@ from pathlib import Path
 from eqrec.core.lp import LPBuilder
 from eqrec.core.words import full_delay_language, parse_delay_word
 from eqrec.core.solvers import SOLVER_NAMES, solve_lp, solver_info
-from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -10,7 +10,8 @@ from eqrec.design.cost import cost_weights, paper_cost
 from eqrec.design.delay import delay_language, design_delay, design_delay_global, min_recovery_level
 from eqrec.design.report import level_table, path_levels, to_json, word_certificate
 from eqrec.design.delay_ipopt import bilinear_problem, compare_free_routes, design_delay_ipopt
-from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.errors import InfeasibleDesign, InputError
 from eqrec.models import batch_reactor
 

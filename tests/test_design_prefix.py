@@ -3,7 +3,8 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign, InputError
 from eqrec.core.prefix_tree import PrefixTree

@@ -221,7 +221,7 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     mu1 : float
         Recovery level ``μ1``.
     levels : {"common", "max", "sum"}
-        As :func:`eqrec.design.prefix.build_prefix_lp`: one ``μ2`` (``common``),
+        As :func:`eqrec.design.prefix_lp.build_prefix_lp`: one ``μ2`` (``common``),
         or per-node levels (``max``, ``sum``; node ``levels`` filled).
     cost : {"sum", "max"} or None
         The delayed-data paper's ``J`` in ``extra["J"]`` (``None``: not computed).

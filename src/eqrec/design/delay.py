@@ -16,7 +16,7 @@ Engines
   (:func:`delay_classes`), so ``(30, 4)`` (9.3·10²⁰ words, 446 classes) is
   one LP of a few hundred thousand columns.
 * ``engine="tree"``: the core's node-per-prefix LP
-  (:func:`eqrec.design.prefix.build_prefix_lp`), one gain row per event-prefix
+  (:func:`eqrec.design.prefix_lp.build_prefix_lp`), one gain row per event-prefix
   node over the measurements available at its time (late ones included), one
   level per non-terminal node.  It stays as the independent cross-check (the
   tests compare the two node by node) and for the paper-comparison rows.
@@ -67,7 +67,8 @@ from eqrec.design.classes import check_terminal, class_design, solve_classes
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
 from eqrec.design.mu1_min import MU1_LOWER_RTOL, MinRecoveryLevel
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
-from eqrec.design.prefix import PrefixLP, build_prefix_lp, check_engine, tree_design
+from eqrec.design.prefix import check_engine, tree_design
+from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp
 from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError
 

@@ -25,7 +25,7 @@ from eqrec.core.solvers import ipopt_options, solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.cost import check_cost, cost_weights
 from eqrec.design.delay import FreeMu1Result, _design_from_solution, _tree, design_delay
-from eqrec.design.prefix import build_prefix_lp
+from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.errors import InfeasibleDesign, SolverFailure
 
 
@@ -46,7 +46,7 @@ def bilinear_problem(system: AffineSystem, tree: PrefixTree, cost: str = "sum", 
     cost : str, optional
         ``"sum"`` (the paper's cost, per-node levels) or ``"max"`` (one common level).
     form : str, optional
-        Robust counterpart of :func:`eqrec.design.prefix.build_prefix_lp` (``"split"``, ``"abs"``, ``"dual"``).
+        Robust counterpart of :func:`eqrec.design.prefix_lp.build_prefix_lp` (``"split"``, ``"abs"``, ``"dual"``).
     r_a, r_b : float, optional
         The two ξ0 radii the LP is built at (distinct).
 
@@ -54,7 +54,7 @@ def bilinear_problem(system: AffineSystem, tree: PrefixTree, cost: str = "sum", 
     -------
     dict
         ``A0, dA`` (sparse, one pattern), ``L0, U0, dL, dU`` (row bounds), the
-        :class:`~eqrec.design.prefix.PrefixLP` ``model`` and its LP ``base``,
+        :class:`~eqrec.design.prefix_lp.PrefixLP` ``model`` and its LP ``base``,
         ``mu1_col`` and the level columns ``level_cols``.
     """
     levels = "sum" if cost == "sum" else "common"

@@ -7,7 +7,7 @@ solves the design with one of two engines (:data:`ENGINES`) and one HiGHS
 method:
 
 * ``engine="tree"``: the node-per-prefix LP
-  (:func:`eqrec.design.prefix.build_prefix_lp`, builder ``core``) on the
+  (:func:`eqrec.design.prefix_lp.build_prefix_lp`, builder ``core``) on the
   prefix tree of the enumerated event sequences;
 * ``engine="classes"``: the class engine (:func:`eqrec.design.classes.solve_classes`)
   on the (time, available data) classes of the language built by the window
@@ -47,7 +47,7 @@ HiGHS methods (:data:`METHODS`): ``simplex`` (dual simplex), ``ipm``
 (interior point, crossover off), ``ipm-x`` (interior point + crossover),
 ``pdlp`` (first-order PDLP); ``-np``: presolve off; ``auto``: HiGHS's
 choice; ``none``: build only (tree engine only).
-Builder (tree engine): ``core`` (:func:`eqrec.design.prefix.build_prefix_lp`;
+Builder (tree engine): ``core`` (:func:`eqrec.design.prefix_lp.build_prefix_lp`;
 the scenario-tree form that preceded the class engine is gone: the tree LP
 separates, :mod:`eqrec.design.classes`); the class engine records
 ``builder = "classes"``.
@@ -149,7 +149,7 @@ def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: floa
     from eqrec.core.prefix_tree import PrefixTree
     from eqrec.core.solvers import solve_lp
     from eqrec.design.delay import delay_language
-    from eqrec.design.prefix import build_prefix_lp
+    from eqrec.design.prefix_lp import build_prefix_lp
 
     build = build_prefix_lp
     build(system, PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up (imports)
@@ -264,7 +264,7 @@ def _import_all() -> None:
     from eqrec.core.solvers import solve_lp  # noqa: F401
     from eqrec.design.classes import solve_classes  # noqa: F401
     from eqrec.design.delay import delay_language  # noqa: F401
-    from eqrec.design.prefix import build_prefix_lp  # noqa: F401
+    from eqrec.design.prefix_lp import build_prefix_lp  # noqa: F401
 
 
 def _worker(args: dict) -> dict:

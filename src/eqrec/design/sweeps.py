@@ -33,7 +33,8 @@ from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_runtime import schedule_from_augmented
 from eqrec.design.mu1_min import MinRecoveryLevel, min_recovery_level
 from eqrec.design.observers import PolePlacement, deadbeat_observer, place_observer
-from eqrec.design.prefix import build_prefix_lp, design_prefix
+from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign
 
