@@ -15,11 +15,10 @@ Engines
   ``{0..τ̄}^T`` are handled from the window rule without enumerating words
   (:func:`delay_classes`), so ``(30, 4)`` (9.3·10²⁰ words, 446 classes) is
   one LP of a few hundred thousand columns.
-* ``engine="tree"``: the core's node-per-prefix LP
-  (:func:`eqrec.design.prefix_lp.build_prefix_lp`), one gain row per event-prefix
-  node over the measurements available at its time (late ones included), one
-  level per non-terminal node.  It stays as the independent cross-check (the
-  tests compare the two node by node) and for the paper-comparison rows.
+* ``engine="tree"``: the node-per-prefix LP (:func:`eqrec.design.prefix_lp.build_prefix_lp`), one gain
+  row per event-prefix node over the measurements available at its time (late ones included), one level
+  per non-terminal node.  It stays as the independent cross-check (the tests compare the two node by node)
+  and for the paper-comparison rows.
 
 The cost
 --------
