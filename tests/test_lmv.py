@@ -12,7 +12,8 @@ import pytest
 from eqrec.errors import InputError, NotMeanSquareStable
 from eqrec.lmv.model import check_ms_stable, hold_input_system, zero_input_system
 from eqrec.lmv.plant import Plant
-from eqrec.lmv.recursion import filter_smoother, lmv_recursion, steady_state, theorem1_as_printed
+from eqrec.lmv.recursion import filter_smoother, lmv_recursion, theorem1_as_printed
+from eqrec.lmv.steady import steady_state
 from eqrec.lmv.simulate import compare_moments, run_mc, simulate_plant
 from eqrec.studies.p4 import load_config, plant_of
 

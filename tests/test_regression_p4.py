@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from eqrec.lmv.model import hold_input_system, zero_input_system
-from eqrec.lmv.recursion import steady_state
+from eqrec.lmv.steady import steady_state
 from eqrec.studies import harness
 from eqrec.studies import configuration
 from eqrec.studies import p4 as lmv_study

@@ -1,4 +1,5 @@
-r"""Linear minimum-variance (LMV) estimation for systems with multiplicative noises: the recursion.
+r"""Linear minimum-variance (LMV) estimation for systems with multiplicative noises: the recursion
+(the steady state is :mod:`eqrec.lmv.steady`).
 
 It runs on the common description :class:`~eqrec.lmv.model.MultNoiseSystem` (see
 :mod:`eqrec.lmv.model` for the model and the two compensation mechanisms).
@@ -43,20 +44,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eqrec.errors import InputError, NotMeanSquareStable, SolverFailure
+from eqrec.errors import InputError
 from eqrec.lmv.plant import Plant
-from eqrec.lmv.model import MultNoiseSystem, check_eta, check_ms_stable, second_moment_operator, system_of
+from eqrec.lmv.model import MultNoiseSystem, check_eta, check_ms_stable
+
 
 __all__ = [
-    "LMVResult", "SmootherResult", "SteadyState", "lmv_recursion", "filter_smoother", "n_step_predictor",
-    "suboptimal_error_cov", "theorem1_as_printed", "steady_state", "steady_variances", "qlam_threshold",
-    "apply_estimator", "lmv_step",
+    "LMVResult", "SmootherResult", "lmv_recursion", "filter_smoother", "n_step_predictor",
+    "suboptimal_error_cov", "theorem1_as_printed", "apply_estimator", "lmv_step", "smoother_step",
+    "symmetric_part",
 ]
 
 
-# --------------------------------------------------------------------------- one step
+def symmetric_part(X: np.ndarray) -> np.ndarray:
+    """The symmetric part ``(X + X^T) / 2`` of a matrix or a stack of matrices.
 
-def _sym(X: np.ndarray) -> np.ndarray:
+    Parameters
+    ----------
+    X : numpy.ndarray
+        Shape ``(..., n, n)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(X + X^T) / 2``, transposing the last two axes.
+    """
     return 0.5 * (X + np.swapaxes(X, -1, -2))
 
 
@@ -68,7 +80,7 @@ def _propagate(sys: MultNoiseSystem, X: np.ndarray, q: np.ndarray) -> np.ndarray
 
 def lmv_step(sys: MultNoiseSystem, P: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One step of the Riccati-like recursion of Theorem 1 (general form), shared by
-    :func:`lmv_recursion` and :func:`steady_state`.
+    :func:`lmv_recursion` and :func:`eqrec.lmv.steady.steady_state`.
 
     Parameters
     ----------
@@ -88,25 +100,46 @@ def lmv_step(sys: MultNoiseSystem, P: np.ndarray, q: np.ndarray) -> tuple[np.nda
     P_next : numpy.ndarray
         ``P(t+1|t)``, eq. (9) (with the derived factor ``eta_bar Q_lambda``), shape ``(n, n)``.
     """
-    Qe = _sym(sys.C @ P @ sys.C.T + sys.mult_C(q) + sys.R)                                     # (7)
+    Qe = symmetric_part(sys.C @ P @ sys.C.T + sys.mult_C(q) + sys.R)                                     # (7)
     L = np.linalg.solve(Qe.T, (sys.A @ P @ sys.C.T + sys.mult_AC(q) + sys.S).T).T              # (6)
-    return Qe, L, _sym(_propagate(sys, P, q) - L @ Qe @ L.T)                                    # (9)
+    return Qe, L, symmetric_part(_propagate(sys, P, q) - L @ Qe @ L.T)                                    # (9)
 
 
 def _moment_step(sys: MultNoiseSystem, q: np.ndarray) -> np.ndarray:
     """``q(t+1)`` from ``q(t)``, eq. (8)."""
-    return _sym(_propagate(sys, q, q))
+    return symmetric_part(_propagate(sys, q, q))
 
 
-def _smoother_step(sys: MultNoiseSystem, M: np.ndarray, Pj: np.ndarray, Qe: np.ndarray,
-                   F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One lag of Theorem 3, eqs. (17)-(20): the gain ``K(t,j)``, ``P(t|t+j)`` from ``P(t|t+j-1)``, and
-    ``M(t,j+1) = M(t,j) F^T`` with ``F = A - L(t+j) C`` and ``Qe = Qe(t+j)``."""
+def smoother_step(sys: MultNoiseSystem, M: np.ndarray, Pj: np.ndarray, Qe: np.ndarray,
+                  F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One lag of the smoother, Theorem 3, eqs. (17)-(20), shared by :func:`filter_smoother` and
+    :func:`eqrec.lmv.steady.steady_state`.
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system in the common description.
+    M : numpy.ndarray
+        ``M(t,j)``, shape ``(n, n)``.
+    Pj : numpy.ndarray
+        ``P(t|t+j-1)``, shape ``(n, n)``.
+    Qe : numpy.ndarray
+        ``Qe(t+j)``, shape ``(m, m)``.
+    F : numpy.ndarray
+        ``A - L(t+j) C``, shape ``(n, n)``.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        The gain ``K(t,j) = M(t,j) C^T Qe(t+j)^{-1}``, shape ``(n, m)``.
+    P : numpy.ndarray
+        ``P(t|t+j)``, shape ``(n, n)``.
+    M_next : numpy.ndarray
+        ``M(t,j+1) = M(t,j) F^T``, shape ``(n, n)``.
+    """
     K = np.linalg.solve(Qe.T, (M @ sys.C.T).T).T
-    return K, _sym(Pj - K @ Qe @ K.T), M @ F.T
+    return K, symmetric_part(Pj - K @ Qe @ K.T), M @ F.T
 
-
-# --------------------------------------------------------------------------- recursion
 
 def _histories(T: int, n: int, m: int, x0_mean: np.ndarray,
                x0_cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -117,6 +150,7 @@ def _histories(T: int, n: int, m: int, x0_mean: np.ndarray,
     q[0] = np.outer(x0_mean, x0_mean) + x0_cov
     P[0] = x0_cov
     return q, P, np.empty((T + 1, n, m)), np.empty((T + 1, m, m))
+
 
 @dataclass
 class LMVResult:
@@ -198,7 +232,20 @@ class SmootherResult:
 
 
 def filter_smoother(res: LMVResult, N: int) -> SmootherResult:
-    """Filter and ``N``-step smoother, Theorem 3, eqs. (17)-(20), general form."""
+    """Filter and ``N``-step smoother, Theorem 3, eqs. (17)-(20), general form.
+
+    Parameters
+    ----------
+    res : LMVResult
+        The one-step predictor, Theorem 1.
+    N : int
+        Largest lag ``N >= 0`` (``0``: the filter only).
+
+    Returns
+    -------
+    SmootherResult
+        Gains and covariances for ``t = 0..T``, ``j = 0..N``.
+    """
     if int(N) != N or N < 0:
         raise InputError(f"smoothing lag must be a non-negative integer, got {N}", None, "N")
     sys, T = res.sys, res.T
@@ -210,7 +257,7 @@ def filter_smoother(res: LMVResult, N: int) -> SmootherResult:
         Pj = res.P_pred[t].copy()
         for j in range(min(N, T - t) + 1):
             s = t + j
-            K[t, j], Pj, M = _smoother_step(sys, M, Pj, res.Qe[s], sys.A - res.L[s] @ sys.C)
+            K[t, j], Pj, M = smoother_step(sys, M, Pj, res.Qe[s], sys.A - res.L[s] @ sys.C)
             P[t, j] = Pj
     return SmootherResult(K, P)
 
@@ -218,9 +265,19 @@ def filter_smoother(res: LMVResult, N: int) -> SmootherResult:
 def n_step_predictor(res: LMVResult, N: int) -> np.ndarray:
     """Covariances ``P(t+N|t)`` for ``t = 0..T`` (Theorem 2, eq. (16), general form).
 
-    Returned array ``Pn[t] = P(t+N|t)``, shape ``(T+1, n, n)``.  ``N = 1`` is
-    the one-step predictor.  Needs ``q`` up to ``t+N-1``, which is extended
-    here beyond the horizon of ``res`` by eq. (8).
+    Needs ``q`` up to ``t+N-1``, which is extended here beyond the horizon of ``res`` by eq. (8).
+
+    Parameters
+    ----------
+    res : LMVResult
+        The one-step predictor, Theorem 1.
+    N : int
+        Prediction steps, ``N >= 1`` (``1``: the one-step predictor).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``Pn[t] = P(t+N|t)``, ``(T+1, n, n)``.
     """
     if int(N) != N or N < 1:
         raise InputError(f"prediction horizon must be an integer >= 1, got {N}", None, "N")
@@ -232,7 +289,7 @@ def n_step_predictor(res: LMVResult, N: int) -> np.ndarray:
     for t in range(T + 1):
         Pk = res.P_pred[t + 1]
         for k in range(2, N + 1):
-            Pk = _sym(_propagate(sys, Pk, q[t + k - 1]))
+            Pk = symmetric_part(_propagate(sys, Pk, q[t + k - 1]))
         out[t] = Pk
     return out
 
@@ -247,7 +304,21 @@ def suboptimal_error_cov(sys: MultNoiseSystem, L: np.ndarray, q: np.ndarray) -> 
                  + Qu - L S^T - S L^T + L R L^T.
 
     Used to measure what an estimator with the gains of the *printed*
-    Theorem 1 really achieves.  ``q`` must hold ``E[x x^T]`` for ``t = 0..T``.
+    Theorem 1 really achieves.
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system; ``P(0) = Cov x(0)``.
+    L : numpy.ndarray
+        The gains ``L(t)``, ``t = 0..T``, ``(T+1, n, m)``.
+    q : numpy.ndarray
+        ``E[x(t) x(t)^T]`` for ``t = 0..T`` (or longer), ``(T+1, n, n)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``P(t|t-1)`` for ``t = 0..T+1``, ``(T+2, n, n)``.
     """
     T = L.shape[0] - 1
     P = np.empty((T + 2, sys.n, sys.n))
@@ -257,15 +328,14 @@ def suboptimal_error_cov(sys: MultNoiseSystem, L: np.ndarray, q: np.ndarray) -> 
         F = sys.A - Lt @ sys.C
         Bk = sys.Ak - np.einsum("ij,kjh->kih", Lt, sys.Ck)
         mult = np.einsum("kl,kij,jh,lgh->ig", sys.W, Bk, q[t], Bk)
-        P[t + 1] = _sym(F @ P[t] @ F.T + mult + sys.Qu - Lt @ sys.S.T - sys.S @ Lt.T + Lt @ sys.R @ Lt.T)
+        P[t + 1] = symmetric_part(F @ P[t] @ F.T + mult + sys.Qu - Lt @ sys.S.T - sys.S @ Lt.T + Lt @ sys.R @ Lt.T)
     return P
 
 
 def theorem1_as_printed(plant: Plant, eta_bar: float, T: int) -> dict[str, np.ndarray]:
     """Theorem 1 exactly as printed, eqs. (6)-(9), including the factor of eq. (9).
 
-    Returns ``{"q", "P", "L", "Qe"}`` (``P[t] = P_z(t|t-1)`` as the paper
-    would report it).  The only difference from the zero-input instance of
+    The only difference from the zero-input instance of
     :func:`lmv_recursion` is the factor ``eta_bar (1 - eta_bar) Q_lambda``
     (printed) instead of ``eta_bar Q_lambda`` (derived) in eq. (9).
 
@@ -273,6 +343,21 @@ def theorem1_as_printed(plant: Plant, eta_bar: float, T: int) -> dict[str, np.nd
     Joseph form of :func:`suboptimal_error_cov` (which give the same numbers up to
     rounding): the stored P4 results of the printed theorem come from this
     arithmetic, to the last bit.
+
+    Parameters
+    ----------
+    plant : Plant
+        The plant, eqs. (1)-(2).
+    eta_bar : float
+        Arrival probability.
+    T : int
+        Last measurement time.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``q``, ``P`` (``P[t] = P_z(t|t-1)`` as the paper would report it), ``L``, ``Qe``, shaped as in
+        :class:`LMVResult`.
     """
     eb = check_eta(eta_bar)
     Phi, Phi1, G, H, H1 = plant.Phi, plant.Phi1, plant.Gamma, plant.H, plant.H1
@@ -294,133 +379,25 @@ def theorem1_as_printed(plant: Plant, eta_bar: float, T: int) -> dict[str, np.nd
     return {"q": q, "P": P, "L": L, "Qe": Qe}
 
 
-# --------------------------------------------------------------------------- steady state
+def apply_estimator(res: LMVResult, y: np.ndarray, sm: SmootherResult | None = None) -> dict[str, np.ndarray]:
+    """Run the estimator on measurements ``y[..., t, :]`` (``t = 0..T``), vectorised over leading axes.
 
-@dataclass
-class SteadyState:
-    """Limits of the recursion: ``q``, ``P(t+1|t)``, ``P(t|t)``, ``P(t|t+j)`` (``j = 1..N``), gains."""
-
-    q: np.ndarray
-    P_pred: np.ndarray
-    P_filt: np.ndarray
-    P_smooth: np.ndarray
-    L: np.ndarray
-    Qe: np.ndarray
-    iterations: int
-    rho: float
-
-
-def steady_state(sys: MultNoiseSystem, N_smooth: int = 1, tol: float = 1e-12,
-                 max_iter: int = 100_000) -> SteadyState:
-    """Iterate the Riccati-like recursion (8)-(9) to convergence.
-
-    Raises :class:`NotMeanSquareStable` if ``q`` cannot converge and
-    :class:`~eqrec.errors.SolverFailure` if ``P`` has not converged (relative
-    change ``< tol``) within ``max_iter`` iterations.  Filter and smoother
-    limits follow from Theorem 3 with the limiting ``P``, ``L``, ``Qe``.
-    """
-    rho = check_ms_stable(sys)
-    # q converges geometrically; its limit solves a linear (Lyapunov-like) equation.
-    n = sys.n
-    Top = second_moment_operator(sys)
-    q = np.linalg.solve(np.eye(n * n) - Top, sys.Qu.reshape(-1, order="F")).reshape(n, n, order="F")
-    q = _sym(q)
-    P = sys.x0_cov.copy()
-    for it in range(1, max_iter + 1):
-        Pn = lmv_step(sys, P, q)[2]
-        done = np.max(np.abs(Pn - P)) <= tol * max(1.0, np.max(np.abs(Pn)))
-        P = Pn
-        if done:
-            break
-    else:
-        raise SolverFailure(f"{sys.name}: P(t+1|t) did not converge in {max_iter} iterations")
-    Qe, L, _ = lmv_step(sys, P, q)
-    M, Pj, Ps = P.copy(), P.copy(), []
-    F = sys.A - L @ sys.C
-    for _ in range(N_smooth + 1):
-        _, Pj, M = _smoother_step(sys, M, Pj, Qe, F)
-        Ps.append(Pj)
-    return SteadyState(q, P, Ps[0], np.array(Ps[1:]).reshape(N_smooth, n, n), L, Qe, it, rho)
-
-
-def steady_variances(plant: Plant, mechanism: str, eta_bar: float, N: int, tol: float,
-                     max_iter: int) -> dict[str, np.ndarray]:
-    """Steady-state error variances of the plant state under one compensation mechanism (Figs. 5-6).
+    Eqs. (4)-(5) and (17) in the general form.
 
     Parameters
     ----------
-    plant : Plant
-        The plant, eqs. (1)-(2).
-    mechanism : str
-        ``"zero-input"`` or ``"hold-input"`` (:func:`~eqrec.lmv.model.system_of`).
-    eta_bar : float
-        Arrival probability.
-    N : int
-        Smoothing lag (``N >= 1``) of the ``smooth`` entry.
-    tol, max_iter : float, int
-        Convergence of :func:`steady_state`.
+    res : LMVResult
+        Gains of the one-step predictor.
+    y : numpy.ndarray
+        Measurements (``y_z`` or ``y_h``), ``(..., T+1, m)``.
+    sm : SmootherResult or None, optional
+        Smoother gains; ``None``: no filtered or smoothed estimates.
 
     Returns
     -------
     dict of str to numpy.ndarray
-        ``pred``, ``filt``, ``smooth``: the diagonals of the limits of ``P(t+1|t)``, ``P(t|t)`` (Theorem 3,
-        eq. (20) with ``j = 0``) and ``P(t|t+N)`` on the plant's ``n`` components (NaN when the system is not
-        mean-square stable); ``stable``: a boolean 0-d array.
-    """
-    nan = np.full(plant.n, np.nan)
-    try:
-        ss = steady_state(system_of(plant, mechanism, eta_bar), N, tol, max_iter)
-    except NotMeanSquareStable:
-        return {"pred": nan, "filt": nan, "smooth": nan, "stable": np.array(False)}
-    n = plant.n
-    return {"pred": np.diag(ss.P_pred)[:n], "filt": np.diag(ss.P_filt)[:n],
-            "smooth": np.diag(ss.P_smooth[N - 1])[:n], "stable": np.array(True)}
-
-
-def qlam_threshold(plant: Plant, eta_bar: float, N: int, tol: float, max_iter: int) -> dict:
-    """``Q_lambda`` at which the steady filter-variance traces of both mechanisms are equal (at the plant's
-    ``Q_xi``), by Brent's method on ``[0, max(2 Q_lambda, 4)]`` (the crossing in Fig. 6).
-
-    Parameters
-    ----------
-    plant : Plant
-        The plant; its ``Qlam`` is varied, ``Qxi`` kept.
-    eta_bar : float
-        Arrival probability.
-    N : int
-        Smoothing lag passed to :func:`steady_variances`.
-    tol, max_iter : float, int
-        Convergence of :func:`steady_state`.
-
-    Returns
-    -------
-    dict
-        ``Qxi``; the bracket ``lo``, ``hi``; ``root`` (``None`` when one mechanism is lower on the whole
-        bracket); ``below``, the mechanism with the lower trace at ``Q_lambda = lo``, and ``above`` the other
-        (lower beyond the root).
-    """
-    from scipy.optimize import brentq
-
-    def diff(ql: float) -> float:
-        p = plant.with_(Qlam=ql)
-        return float(steady_variances(p, "hold-input", eta_bar, N, tol, max_iter)["filt"].sum()
-                     - steady_variances(p, "zero-input", eta_bar, N, tol, max_iter)["filt"].sum())
-    lo, hi = 0.0, max(2.0 * plant.Qlam, 4.0)
-    dlo, dhi = diff(lo), diff(hi)
-    below = "hold-input" if dlo < 0 else "zero-input"
-    above = "zero-input" if below == "hold-input" else "hold-input"
-    root = None if np.sign(dlo) == np.sign(dhi) else float(brentq(diff, lo, hi, xtol=1e-6))
-    return {"Qxi": plant.Qxi, "lo": lo, "hi": hi, "root": root, "below": below, "above": above}
-
-
-# --------------------------------------------------------------------------- estimator
-
-def apply_estimator(res: LMVResult, y: np.ndarray, sm: SmootherResult | None = None) -> dict[str, np.ndarray]:
-    """Run the estimator on measurements ``y[..., t, :]`` (``t = 0..T``), vectorised over leading axes.
-
-    Returns ``pred[..., t, :] = xh(t|t-1)`` (``t = 0..T+1``), the innovations
-    ``eps[..., t, :]`` and, if ``sm`` is given, ``smooth[..., t, j, :] =
-    xh(t|t+j)`` (NaN where ``t + j > T``; ``j = 0`` is the filter).
+        ``pred[..., t, :] = xh(t|t-1)`` (``t = 0..T+1``), the innovations ``eps[..., t, :]`` and, with ``sm``,
+        ``smooth[..., t, j, :] = xh(t|t+j)`` (NaN where ``t + j > T``; ``j = 0`` is the filter).
     """
     sys, T = res.sys, res.T
     y = np.asarray(y, float)

@@ -31,8 +31,8 @@ import numpy as np
 
 from eqrec.lmv.model import MECHANISMS, ms_spectral_radius, zero_input_system
 from eqrec.lmv.plant import plant_of
-from eqrec.lmv.recursion import (LMVResult, apply_estimator, lmv_recursion, steady_variances, suboptimal_error_cov,
-                                 theorem1_as_printed)
+from eqrec.lmv.recursion import LMVResult, apply_estimator, lmv_recursion, suboptimal_error_cov, theorem1_as_printed
+from eqrec.lmv.steady import steady_variances
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies import configuration, p4_figures
 from eqrec.studies.chunks import chunk_indices

@@ -18,7 +18,7 @@ import pandas as pd
 from eqrec.errors import InputError
 from eqrec.lmv.model import MECHANISMS
 from eqrec.lmv.plant import plant_of
-from eqrec.lmv.recursion import qlam_threshold, steady_variances
+from eqrec.lmv.steady import qlam_threshold, steady_variances
 from eqrec.studies.outputs import write_csv, write_json
 
 #: Relative tolerance under which two variances count as equal (a tie, e.g. at eta_bar = 1 where no packet is
