@@ -169,7 +169,7 @@ def test_bad_inputs(acc):
 
 def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
     """Two pole placements and two s0: the LP in (M^α, ν^α) has the prefix design's optimum (both costs)."""
-    from eqrec.design.augmented_lp import solve_augmented_delay
+    from eqrec.design.augmented_tree_lp import solve_augmented_delay
     from eqrec.design.augmented_runtime import augmented_to_prefix
     from eqrec.design.observers import place_observer
     from eqrec.core.certify import certify_schedule

@@ -16,9 +16,11 @@ registry, reads the gains and certifies them from the gains alone.
     The delayed-data paper's designs (Theorem 1 / Proposition 1), μ1 fixed or free.
 :mod:`~eqrec.design.delay_ipopt`
     The delayed-data paper's own μ1-free route: IPOPT on the bilinear problem (10).
-:mod:`~eqrec.design.augmented_model`, :mod:`~eqrec.design.augmented_runtime`, :mod:`~eqrec.design.augmented_lp`, :mod:`~eqrec.design.augmented_nlp`, :mod:`~eqrec.design.augmented`
+:mod:`~eqrec.design.augmented_model`, :mod:`~eqrec.design.augmented_runtime`, :mod:`~eqrec.design.augmented_lp`,
+:mod:`~eqrec.design.augmented_tree_lp`, :mod:`~eqrec.design.augmented_nlp`, :mod:`~eqrec.design.augmented`
     The state-augmented estimator, one model for the augmented paper (Theorem 2) and the delayed-data
-    paper's form (4): model, what runs (conversions, runtime), fixed-``L`` LPs, IPOPT, design.
+    paper's form (4): model, what runs (conversions, runtime), the fixed-``L`` LP of one word (P2) and of a
+    prefix tree (P3), IPOPT, design.
 :mod:`~eqrec.design.augmented_guarantee`
     A P2 reading analysis: the best guarantee as run among a design reading's optima.
 :mod:`~eqrec.design.observers`

@@ -1,4 +1,5 @@
-r"""The LPs of the augmented estimator for fixed ``L`` and ``s0`` (P2 Remark 1 / Theorem 2; P3 form (4)).
+r"""The LP of the augmented estimator for one missing-data word, fixed ``L`` and ``s0`` (P2 Remark 1 /
+Theorem 2).
 
 For fixed ``L`` and ``s0`` the innovation does not depend on the gains
 (:func:`eqrec.design.augmented_model.innovation_maps`), so the robust problem is
@@ -8,33 +9,27 @@ an LP in ``(M, ν, μ2)``, assembled through :class:`eqrec.core.lp.LPBuilder` an
 .. math:: \xi(t) = \mathrm{Ol}_t\delta + \sum_{s<t}\Phi(t,s{+}1)\Big(\nu_s
           + \sum_{i \in A(s)} M(s,i)\,(Z_i\delta + z^0_i)\Big).
 
-* :class:`AugmentedLP`: one missing-data word and a reading of its missing steps
-  (P2), ``form="abs"``, with in-place ``L`` updates for the sweeps of Fig. 3.
-* :func:`build_augmented_delay_lp`: gains per event prefix of a delay language
-  (P3 Proposition 1), ``form="split"``, levels per node.
-
-The two keep their own column and row orders (the stored results of each study
-come from them; an LP solver may pick another optimal vertex of a reordered LP).
+:class:`AugmentedLP`: one missing-data word and a reading of its missing steps (P2), ``form="abs"``, with
+in-place ``L`` updates for the sweeps of Fig. 3.  The same model with gains per event prefix of a delay
+language (P3 form (4)) is :mod:`eqrec.design.augmented_tree_lp`.  The two keep their own column and row
+orders (the stored results of each study come from them; an LP solver may pick another optimal vertex of
+a reordered LP).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from eqrec.core.lp import LinearProgram, LPBuilder, LPSolution
 from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.robust import UncertainAffineRows, add_robust_rows
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
-from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, AugmentedPrefixGains, AugmentedStacking,
-                                          as_time_varying_L, check_mode, effective_L, innovation_maps,
-                                          missing_data_pattern, transitions)
+from eqrec.design.augmented_model import DESIGN_MODES, AugmentedGains, AugmentedStacking, check_mode, missing_data_pattern
 from eqrec.errors import InputError
 
 
@@ -267,11 +262,31 @@ class AugmentedLP:
         return self.lp
 
     def gains(self, solution: LPSolution) -> AugmentedGains:
-        """``(M, ν)`` of an optimal solution (:meth:`gains_from_x`)."""
+        """``(M, ν)`` of an optimal solution (:meth:`gains_from_x`).
+
+        Parameters
+        ----------
+        solution : LPSolution
+            An optimal solution of :attr:`lp`.
+
+        Returns
+        -------
+        AugmentedGains
+        """
         return self.gains_from_x(solution.x)
 
     def gains_from_x(self, x: np.ndarray) -> AugmentedGains:
-        """``(M, ν)`` of a vector ``x`` in this LP's columns (the first :attr:`num_columns` entries are read)."""
+        """``(M, ν)`` of a vector ``x`` in this LP's columns (the first :attr:`num_columns` entries are read).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            Values of the LP's columns.
+
+        Returns
+        -------
+        AugmentedGains
+        """
         n, p, T = self.system.n, self.system.p, self.T
         M = np.zeros((T * n, T * p))
         for (s, i), mc in self.m_cols.items():
@@ -280,168 +295,17 @@ class AugmentedLP:
                               nu=np.asarray(x)[self.nu_cols].copy(), mode=self.mode)
 
     def solve(self, solver: str = "highs", options: dict | None = None) -> LPSolution:
-        """Solve the LP with a solver of the registry (:func:`eqrec.core.solvers.solve_lp`)."""
+        """Solve the LP with a solver of the registry (:func:`eqrec.core.solvers.solve_lp`).
+
+        Parameters
+        ----------
+        solver : str, optional
+            LP solver name (default ``"highs"``).
+        options : dict, optional
+            Solver options.
+
+        Returns
+        -------
+        LPSolution
+        """
         return solve_lp(self.lp, solver, options)
-
-
-@dataclass
-class AugmentedDelayLP:
-    """The LP of :func:`build_augmented_delay_lp` and where its columns are (per prefix-tree node index)."""
-
-    lp: object
-    tree: PrefixTree
-    m_cols: dict[int, np.ndarray]
-    nu_cols: dict[int, np.ndarray]
-    mu2_col: int
-    level_cols: dict[int, int]
-    build_time: float
-
-
-def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float, L, s0, *,
-                             levels: str = "common", form: str = "split") -> AugmentedDelayLP:
-    """The LP of P3 Theorem 1 / Proposition 1 in ``(M^α, ν^α)`` per prefix node, for fixed ``L`` and ``s0``.
-
-    Parameters
-    ----------
-    system : AffineSystem
-        The model.
-    tree : PrefixTree
-        The delay language's prefix tree.
-    mu1 : float
-        Recovery level ``μ1``.
-    L : array_like, shape (n, p) or (T, n, p)
-        Observer gain ``L^α`` (used at steps whose measurement arrives on time, pattern (7)).
-    s0 : array_like, shape (n,)
-        Initial auxiliary state.
-    levels : {"common", "sum"}, optional
-        Minimise the largest level, or the paper's ``Σ_k Σ_α μ2,k^α`` (node levels
-        weighted by the sequences through them).
-    form : str, optional
-        Robust-counterpart form of :func:`eqrec.core.robust.add_robust_rows`.
-
-    Returns
-    -------
-    AugmentedDelayLP
-    """
-    t0 = time.perf_counter()
-    T = tree.depth
-    st = Stacking(system, T)
-    n, p = system.n, system.p
-    lay = st.layout
-    D = lay.size
-    phi, Ol = st.transition, st.open_loop
-    Lt, h0 = as_time_varying_L(L, T, n, p), -np.asarray(s0, float).reshape(n)
-    b = LPBuilder()
-    mu2 = int(b.add_variables(1, lower=mu1, name="mu2")[0])
-    b.set_cost(mu2, 1.0 if levels == "common" else 0.0)
-    m_cols, nu_cols, measured = {}, {}, {}
-    for node in tree:
-        taus = list(node.available)
-        measured[node.index] = taus
-        m_cols[node.index] = b.add_variables(n * p * len(taus), name=f"M[{node.label}]")
-        nu_cols[node.index] = b.add_variables(n, name=f"nu[{node.label}]")
-    through = tree.sequences_through()
-    level_cols = {}
-    for node in tree:
-        if not node.terminal and levels == "sum":
-            col = int(b.add_variables(1, lower=mu1)[0])
-            level_cols[node.index] = col
-            b.set_cost(col, float(through[node.index]))
-    er, ec, G0, gr, gc, gv, cr, cc, cv, lconst, lcol = [], [], [], [], [], [], [], [], [], [], []
-    row0 = ent0 = 0
-    for node in tree:
-        t = node.depth
-        # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here)
-        Lm = effective_L(Lt, ArrivalPattern(node.prefix.arrivals + (None,) * (T - t)), "theorem2")
-        Z, z0 = map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, h0))
-        blocks, cblocks = [], []
-        for s, anc in enumerate(tree.path(node.prefix)):
-            taus = measured[anc.index]
-            P = phi[t][s + 1]
-            if taus:
-                Zs = Z[taus].reshape(len(taus) * p, D)
-                blocks.append((m_cols[anc.index],
-                               (P[:, None, :, None] * Zs.T[None, :, None, :]).reshape(n * D, n * Zs.shape[0])))
-                zs = z0[taus].reshape(-1)
-                cblocks.append((m_cols[anc.index], (P[:, :, None] * zs[None, None, :]).reshape(n, -1)))
-            cblocks.append((nu_cols[anc.index], P))
-        const = Ol[t].reshape(-1)
-        K = np.hstack([k for _, k in blocks]) if blocks else np.zeros((n * D, 0))
-        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
-        idx = np.flatnonzero((const != 0) | np.any(K != 0, axis=1))
-        er.append(row0 + idx // D)
-        ec.append(idx % D)
-        G0.append(const[idx])
-        Ki = K[idx]
-        kr, kc = np.nonzero(Ki)
-        gr.append(kr + ent0)
-        gc.append(cols[kc])
-        gv.append(Ki[kr, kc])
-        ent0 += idx.size
-        Kc = np.hstack([k for _, k in cblocks])
-        ccols = np.concatenate([c for c, _ in cblocks])
-        rr, ccx = np.nonzero(Kc)
-        cr.append(row0 + rr)
-        cc.append(ccols[ccx])
-        cv.append(Kc[rr, ccx])
-        if node.terminal:
-            lconst.append(np.full(n, float(mu1)))
-            lcol.append(np.full(n, -1))
-        else:
-            lconst.append(np.zeros(n))
-            lcol.append(np.full(n, level_cols.get(node.index, mu2)))
-        row0 += n
-    nx = b.num_variables
-    rows = UncertainAffineRows(
-        entry_row=np.concatenate(er), entry_coord=np.concatenate(ec), G0=np.concatenate(G0),
-        Gx=sp.csr_matrix((np.concatenate(gv), (np.concatenate(gr), np.concatenate(gc))), shape=(ent0, nx)),
-        c0=np.zeros(row0),
-        cx=sp.csr_matrix((np.concatenate(cv), (np.concatenate(cr), np.concatenate(cc))), shape=(row0, nx)))
-    add_robust_rows(b, rows, lay.radius(system.eta_w, system.eta_v, mu1), level_const=np.concatenate(lconst),
-                    level_cols=np.concatenate(lcol), level_coef=1.0, form=form)
-    if levels == "sum":
-        for col in level_cols.values():  # the largest level is reported through mu2
-            b.add_rows(np.array([0, 0]), np.array([col, mu2]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
-                       count=1)
-    return AugmentedDelayLP(lp=b.build(), tree=tree, m_cols=m_cols, nu_cols=nu_cols, mu2_col=mu2,
-                            level_cols=level_cols, build_time=time.perf_counter() - t0)
-
-
-def solve_augmented_delay(system: AffineSystem, patterns, mu1: float, L, s0, *, levels: str = "common",
-                          solver: str = "highs") -> tuple[AugmentedPrefixGains, LPSolution, AugmentedDelayLP]:
-    """Solve :func:`build_augmented_delay_lp` and read the gains per prefix node.
-
-    Parameters
-    ----------
-    system : AffineSystem
-        The model.
-    patterns : PrefixTree or sequence of str or ArrivalPattern
-        The delay language.
-    mu1 : float
-        Recovery level ``μ1``.
-    L : array_like, shape (n, p) or (T, n, p)
-        Observer gain.
-    s0 : array_like, shape (n,)
-        Initial auxiliary state.
-    levels : {"common", "sum"}, optional
-        Cost of :func:`build_augmented_delay_lp`.
-    solver : str, optional
-        LP solver of the registry.
-
-    Returns
-    -------
-    gains : AugmentedPrefixGains
-    solution : LPSolution
-    model : AugmentedDelayLP
-    """
-    tree = patterns if isinstance(patterns, PrefixTree) else PrefixTree(patterns, kind="delay")
-    model = build_augmented_delay_lp(system, tree, mu1, L, s0, levels=levels)
-    sol = solve_lp(model.lp, solver).require_optimal("augmented delay design")
-    n, p = system.n, system.p
-    rows = {}
-    for node in tree:
-        k = len(node.available)
-        rows[node.prefix] = (sol.x[model.m_cols[node.index]].reshape(n, k * p), sol.x[model.nu_cols[node.index]])
-    gains = AugmentedPrefixGains(rows=rows, L=as_time_varying_L(L, tree.depth, n, p),
-                                 s0=np.asarray(s0, float).reshape(n))
-    return gains, sol, model

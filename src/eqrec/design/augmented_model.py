@@ -127,7 +127,7 @@ def missing_data_pattern(word: "ArrivalPattern | str") -> ArrivalPattern:
     """The pattern of ``word``, which must be a missing-data pattern (each measurement on time or never).
 
     The readings of the augmented paper (P2) concern missing data; delay words
-    go through the prefix gains of :func:`eqrec.design.augmented_lp.solve_augmented_delay`.
+    go through the prefix gains of :func:`eqrec.design.augmented_tree_lp.solve_augmented_delay`.
 
     Parameters
     ----------

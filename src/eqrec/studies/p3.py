@@ -46,7 +46,7 @@ from eqrec.design.cost import cost_weights
 from eqrec.design.delay import FreeMu1Result, delay_language, design_delay, design_delay_global
 from eqrec.design.report import level_table, path_levels, word_certificate
 from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
-from eqrec.design.augmented_lp import solve_augmented_delay
+from eqrec.design.augmented_tree_lp import solve_augmented_delay
 from eqrec.design.augmented_runtime import augmented_to_prefix
 from eqrec.design.observers import place_observer
 from eqrec.design.prefix import design_prefix

@@ -1,0 +1,204 @@
+r"""The LP of the augmented estimator with gains per event prefix of a delay language, fixed ``L`` and
+``s0`` (form (4) of the delayed-data paper, its Theorem 1 / Proposition 1).
+
+The same model as :mod:`eqrec.design.augmented_lp` (one innovation recursion,
+:func:`eqrec.design.augmented_model.innovation_maps`): for fixed ``L`` and ``s0`` the error is affine in the
+gains ``(M^α, ν^α)`` of each prefix node, and :func:`build_augmented_delay_lp` writes the robust problem
+node by node, ``form="split"``, with a common level or a level per node.  Its column and row orders are
+those of the stored P3 results (an LP solver may pick another optimal vertex of a reordered LP).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from eqrec.core.lp import LPBuilder, LPSolution
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.robust import UncertainAffineRows, add_robust_rows
+from eqrec.core.solvers import solve_lp
+from eqrec.core.stacking import Stacking
+from eqrec.core.systems import AffineSystem
+from eqrec.design.augmented_model import (AugmentedPrefixGains, as_time_varying_L, effective_L, innovation_maps,
+                                          transitions)
+
+
+@dataclass
+class AugmentedDelayLP:
+    """The LP of :func:`build_augmented_delay_lp` and where its columns are (per prefix-tree node index).
+
+    Parameters
+    ----------
+    lp : LinearProgram
+    tree : PrefixTree
+    m_cols, nu_cols : dict of int to numpy.ndarray
+        Node index -> columns of its ``M^α`` (row-major) and ``ν^α``.
+    mu2_col : int
+        Column of the common level ``μ2``.
+    level_cols : dict of int to int
+        Node index -> column of its level (``levels="sum"``).
+    build_time : float
+        Seconds spent building the LP.
+    """
+
+    lp: object
+    tree: PrefixTree
+    m_cols: dict[int, np.ndarray]
+    nu_cols: dict[int, np.ndarray]
+    mu2_col: int
+    level_cols: dict[int, int]
+    build_time: float
+
+
+def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float, L, s0, *,
+                             levels: str = "common", form: str = "split") -> AugmentedDelayLP:
+    """The LP of P3 Theorem 1 / Proposition 1 in ``(M^α, ν^α)`` per prefix node, for fixed ``L`` and ``s0``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    tree : PrefixTree
+        The delay language's prefix tree.
+    mu1 : float
+        Recovery level ``μ1``.
+    L : array_like, shape (n, p) or (T, n, p)
+        Observer gain ``L^α`` (used at steps whose measurement arrives on time, pattern (7)).
+    s0 : array_like, shape (n,)
+        Initial auxiliary state.
+    levels : {"common", "sum"}, optional
+        Minimise the largest level, or the paper's ``Σ_k Σ_α μ2,k^α`` (node levels
+        weighted by the sequences through them).
+    form : str, optional
+        Robust-counterpart form of :func:`eqrec.core.robust.add_robust_rows`.
+
+    Returns
+    -------
+    AugmentedDelayLP
+    """
+    t0 = time.perf_counter()
+    T = tree.depth
+    st = Stacking(system, T)
+    n, p = system.n, system.p
+    lay = st.layout
+    D = lay.size
+    phi, Ol = st.transition, st.open_loop
+    Lt, h0 = as_time_varying_L(L, T, n, p), -np.asarray(s0, float).reshape(n)
+    b = LPBuilder()
+    mu2 = int(b.add_variables(1, lower=mu1, name="mu2")[0])
+    b.set_cost(mu2, 1.0 if levels == "common" else 0.0)
+    m_cols, nu_cols, measured = {}, {}, {}
+    for node in tree:
+        taus = list(node.available)
+        measured[node.index] = taus
+        m_cols[node.index] = b.add_variables(n * p * len(taus), name=f"M[{node.label}]")
+        nu_cols[node.index] = b.add_variables(n, name=f"nu[{node.label}]")
+    through = tree.sequences_through()
+    level_cols = {}
+    for node in tree:
+        if not node.terminal and levels == "sum":
+            col = int(b.add_variables(1, lower=mu1)[0])
+            level_cols[node.index] = col
+            b.set_cost(col, float(through[node.index]))
+    er, ec, G0, gr, gc, gv, cr, cc, cv, lconst, lcol = [], [], [], [], [], [], [], [], [], [], []
+    row0 = ent0 = 0
+    for node in tree:
+        t = node.depth
+        # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here)
+        Lm = effective_L(Lt, ArrivalPattern(node.prefix.arrivals + (None,) * (T - t)), "theorem2")
+        Z, z0 = map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, h0))
+        blocks, cblocks = [], []
+        for s, anc in enumerate(tree.path(node.prefix)):
+            taus = measured[anc.index]
+            P = phi[t][s + 1]
+            if taus:
+                Zs = Z[taus].reshape(len(taus) * p, D)
+                blocks.append((m_cols[anc.index],
+                               (P[:, None, :, None] * Zs.T[None, :, None, :]).reshape(n * D, n * Zs.shape[0])))
+                zs = z0[taus].reshape(-1)
+                cblocks.append((m_cols[anc.index], (P[:, :, None] * zs[None, None, :]).reshape(n, -1)))
+            cblocks.append((nu_cols[anc.index], P))
+        const = Ol[t].reshape(-1)
+        K = np.hstack([k for _, k in blocks]) if blocks else np.zeros((n * D, 0))
+        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
+        idx = np.flatnonzero((const != 0) | np.any(K != 0, axis=1))
+        er.append(row0 + idx // D)
+        ec.append(idx % D)
+        G0.append(const[idx])
+        Ki = K[idx]
+        kr, kc = np.nonzero(Ki)
+        gr.append(kr + ent0)
+        gc.append(cols[kc])
+        gv.append(Ki[kr, kc])
+        ent0 += idx.size
+        Kc = np.hstack([k for _, k in cblocks])
+        ccols = np.concatenate([c for c, _ in cblocks])
+        rr, ccx = np.nonzero(Kc)
+        cr.append(row0 + rr)
+        cc.append(ccols[ccx])
+        cv.append(Kc[rr, ccx])
+        if node.terminal:
+            lconst.append(np.full(n, float(mu1)))
+            lcol.append(np.full(n, -1))
+        else:
+            lconst.append(np.zeros(n))
+            lcol.append(np.full(n, level_cols.get(node.index, mu2)))
+        row0 += n
+    nx = b.num_variables
+    rows = UncertainAffineRows(
+        entry_row=np.concatenate(er), entry_coord=np.concatenate(ec), G0=np.concatenate(G0),
+        Gx=sp.csr_matrix((np.concatenate(gv), (np.concatenate(gr), np.concatenate(gc))), shape=(ent0, nx)),
+        c0=np.zeros(row0),
+        cx=sp.csr_matrix((np.concatenate(cv), (np.concatenate(cr), np.concatenate(cc))), shape=(row0, nx)))
+    add_robust_rows(b, rows, lay.radius(system.eta_w, system.eta_v, mu1), level_const=np.concatenate(lconst),
+                    level_cols=np.concatenate(lcol), level_coef=1.0, form=form)
+    if levels == "sum":
+        for col in level_cols.values():  # the largest level is reported through mu2
+            b.add_rows(np.array([0, 0]), np.array([col, mu2]), np.array([1.0, -1.0]), lower=-np.inf, upper=0.0,
+                       count=1)
+    return AugmentedDelayLP(lp=b.build(), tree=tree, m_cols=m_cols, nu_cols=nu_cols, mu2_col=mu2,
+                            level_cols=level_cols, build_time=time.perf_counter() - t0)
+
+
+def solve_augmented_delay(system: AffineSystem, patterns, mu1: float, L, s0, *, levels: str = "common",
+                          solver: str = "highs") -> tuple[AugmentedPrefixGains, LPSolution, AugmentedDelayLP]:
+    """Solve :func:`build_augmented_delay_lp` and read the gains per prefix node.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    patterns : PrefixTree or sequence of str or ArrivalPattern
+        The delay language.
+    mu1 : float
+        Recovery level ``μ1``.
+    L : array_like, shape (n, p) or (T, n, p)
+        Observer gain.
+    s0 : array_like, shape (n,)
+        Initial auxiliary state.
+    levels : {"common", "sum"}, optional
+        Cost of :func:`build_augmented_delay_lp`.
+    solver : str, optional
+        LP solver of the registry.
+
+    Returns
+    -------
+    gains : AugmentedPrefixGains
+    solution : LPSolution
+    model : AugmentedDelayLP
+    """
+    tree = patterns if isinstance(patterns, PrefixTree) else PrefixTree(patterns, kind="delay")
+    model = build_augmented_delay_lp(system, tree, mu1, L, s0, levels=levels)
+    sol = solve_lp(model.lp, solver).require_optimal("augmented delay design")
+    n, p = system.n, system.p
+    rows = {}
+    for node in tree:
+        k = len(node.available)
+        rows[node.prefix] = (sol.x[model.m_cols[node.index]].reshape(n, k * p), sol.x[model.nu_cols[node.index]])
+    gains = AugmentedPrefixGains(rows=rows, L=as_time_varying_L(L, tree.depth, n, p),
+                                 s0=np.asarray(s0, float).reshape(n))
+    return gains, sol, model
