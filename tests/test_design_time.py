@@ -15,3 +15,13 @@ def test_time_based_is_designed_for_the_worst_case_word(acc, L1_words):
 def test_time_based_rejects_mixed_lengths(acc):
     with pytest.raises(InputError, match="mixed lengths"):
         design_time_based(acc, ["1011", "10111"], 1.0)
+
+
+def test_sweeps_refuse_an_unknown_method_naming_the_field(acc):
+    """A misspelt method is an InputError (the project's bad-input error, exit 1 in the CLI), naming the field."""
+    from eqrec.design.sweeps import min_feasible_mu1
+    from eqrec.errors import InputError
+
+    with pytest.raises(InputError, match="unknown method 'prefx'") as info:
+        min_feasible_mu1(acc, ["101111"], method="prefx")
+    assert info.value.field == "method"

@@ -36,7 +36,7 @@ from eqrec.design.observers import PolePlacement, deadbeat_observer, place_obser
 from eqrec.design.prefix import design_prefix
 from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.design.time_based import design_time_based
-from eqrec.errors import InfeasibleDesign
+from eqrec.errors import InfeasibleDesign, InputError
 
 DESIGNS = {"prefix": design_prefix, "time": design_time_based}
 
@@ -99,9 +99,14 @@ def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> Min
     MinRecoveryLevel
         ``upper`` attained by certified gains, ``lower`` proven infeasible,
         the binding terminal class and row.
+
+    Raises
+    ------
+    InputError
+        If ``method`` is not ``"prefix"`` or ``"time"`` (field ``method``).
     """
     if method not in DESIGNS:
-        raise ValueError(f"unknown method {method!r}; choose one of {list(DESIGNS)}")
+        raise InputError(f"unknown method {method!r}; choose one of {list(DESIGNS)}", None, "method")
     language = as_language(words)
     if method == "time":
         language = [worst_case_pattern(language)]
@@ -261,7 +266,7 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
     if observers is None:
         observers = [observer_for(system, poles, deadbeat_seed) for poles in poles_list]
     if len(observers) != len(poles_list):
-        raise ValueError(f"{len(observers)} observers for {len(poles_list)} pole sets")
+        raise InputError(f"{len(observers)} observers for {len(poles_list)} pole sets", None, "observers")
     for poles, (pp, how) in zip(poles_list, observers):
         t0 = time.perf_counter()
         rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message, "observer": how,
