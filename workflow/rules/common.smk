@@ -26,7 +26,7 @@ step_config = partial(step_params, config)
 # numbers live), for rules that evaluate the paper's own design or draw a published
 # value for comparison (P2: the printed gain L, the Fig. 3b interval). As a param,
 # the rule reruns when that value changes, not on other edits of claims.yaml.
-from eqrec.studies.claims import published_value
+from eqrec.studies.claims_file import published_value
 
 CLAIMS_FILE = "config/claims.yaml"
 

@@ -14,17 +14,17 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from eqrec.core.lp import LPBuilder, LPSolution
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.robust import UncertainAffineRows, add_robust_rows
+from eqrec.core.robust import add_robust_rows
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_model import (AugmentedPrefixGains, as_time_varying_L, effective_L, innovation_maps,
                                           transitions)
+from eqrec.design.prefix_lp import NodeRows
 
 
 @dataclass
@@ -104,8 +104,8 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
             col = int(b.add_variables(1, lower=mu1)[0])
             level_cols[node.index] = col
             b.set_cost(col, float(through[node.index]))
-    er, ec, G0, gr, gc, gv, cr, cc, cv, lconst, lcol = [], [], [], [], [], [], [], [], [], [], []
-    row0 = ent0 = 0
+    rows = NodeRows(D)  # the prefix LP's node-by-node assembly of the robust rows
+    lconst, lcol = [], []
     for node in tree:
         t = node.depth
         # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here)
@@ -122,38 +122,16 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
                 zs = z0[taus].reshape(-1)
                 cblocks.append((m_cols[anc.index], (P[:, :, None] * zs[None, None, :]).reshape(n, -1)))
             cblocks.append((nu_cols[anc.index], P))
-        const = Ol[t].reshape(-1)
-        K = np.hstack([k for _, k in blocks]) if blocks else np.zeros((n * D, 0))
-        cols = np.concatenate([c for c, _ in blocks]) if blocks else np.zeros(0, int)
-        idx = np.flatnonzero((const != 0) | np.any(K != 0, axis=1))
-        er.append(row0 + idx // D)
-        ec.append(idx % D)
-        G0.append(const[idx])
-        Ki = K[idx]
-        kr, kc = np.nonzero(Ki)
-        gr.append(kr + ent0)
-        gc.append(cols[kc])
-        gv.append(Ki[kr, kc])
-        ent0 += idx.size
-        Kc = np.hstack([k for _, k in cblocks])
-        ccols = np.concatenate([c for c, _ in cblocks])
-        rr, ccx = np.nonzero(Kc)
-        cr.append(row0 + rr)
-        cc.append(ccols[ccx])
-        cv.append(Kc[rr, ccx])
+        row0 = rows.add_uncertain(Ol[t].reshape(-1), blocks, n)
+        # the certain part of every ancestor's (M, ν) in one block, in the order of the columns above
+        rows.add_certain(row0, np.hstack([k for _, k in cblocks]), np.concatenate([c for c, _ in cblocks]))
         if node.terminal:
             lconst.append(np.full(n, float(mu1)))
             lcol.append(np.full(n, -1))
         else:
             lconst.append(np.zeros(n))
             lcol.append(np.full(n, level_cols.get(node.index, mu2)))
-        row0 += n
-    nx = b.num_variables
-    rows = UncertainAffineRows(
-        entry_row=np.concatenate(er), entry_coord=np.concatenate(ec), G0=np.concatenate(G0),
-        Gx=sp.csr_matrix((np.concatenate(gv), (np.concatenate(gr), np.concatenate(gc))), shape=(ent0, nx)),
-        c0=np.zeros(row0),
-        cx=sp.csr_matrix((np.concatenate(cv), (np.concatenate(cr), np.concatenate(cc))), shape=(row0, nx)))
+    rows = rows.build(b.num_variables)
     add_robust_rows(b, rows, lay.radius(system.eta_w, system.eta_v, mu1), level_const=np.concatenate(lconst),
                     level_cols=np.concatenate(lcol), level_coef=1.0, form=form)
     if levels == "sum":

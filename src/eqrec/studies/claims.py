@@ -61,7 +61,6 @@ from eqrec.errors import InputError
 from eqrec.studies import p1_claims, p2_claims, p3_claims, p4_claims
 from eqrec.studies.claim_reasons import Reason, merged
 from eqrec.studies.claims_file import named_texts, read_claims
-from eqrec.studies.claims_file import published_value  # noqa: F401 (re-exported: the Snakefile imports it here)
 from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import write_csv, write_text
 

@@ -4,13 +4,11 @@ A rule lists as ``code`` inputs the source files of the module defining its
 step's function and of every ``eqrec`` module that imports, transitively, plus
 the harness that runs it (:func:`code_inputs`), so editing code a step does
 not import (a figure's rule does not import the LP modules) does not re-run
-its job.  The step's module is read from the step registry's tables
-(:func:`step_module`: the tables each study's branch of
-:func:`eqrec.studies.steps.steps_of` imports, then those ``STEPS`` tables,
-whose entries name functions as ``step_x`` or ``module.step_x``, and
-``**module.STEPS``),
-without importing them: the Snakefile asks at planning
-time, and importing the study modules there would cost seconds.
+its job.  The step's module is read from the step registry (:func:`step_module`:
+the ``STEPS`` tables each study's branch of :func:`eqrec.studies.steps.steps_of`
+imports; a table lists functions defined in its own module, by name) without
+importing them: the Snakefile asks at planning time, and importing the study
+modules there would cost seconds.
 
 :func:`eqrec_imports` is the package's one import walker (also used by the
 layer and circle checks of ``tests/test_architecture.py``).
@@ -120,59 +118,6 @@ def module_closure(*roots: str) -> list[str]:
 _CLOSURES: dict[tuple, tuple[list[str], list[int]]] = {}
 
 
-def _bindings(module: str) -> dict[str, tuple[str, str | None]]:
-    """Top-level names of a module: ``name -> (module, attribute)`` for imported names, ``(module, None)`` for
-    names defined there."""
-    path = module_path(module)
-    if path is None:
-        raise StepError(f"no source file for module {module}")
-    return _bindings_of(module, path, path.stat().st_mtime_ns)
-
-
-@functools.lru_cache(maxsize=None)
-def _bindings_of(module: str, path: Path, mtime_ns: int) -> dict[str, tuple[str, str | None]]:
-    out: dict[str, tuple[str, str | None]] = {}
-    for node in _tree(path).body:
-        if isinstance(node, ast.ImportFrom) and node.module:
-            for a in node.names:
-                out[a.asname or a.name] = (node.module, a.name)
-        elif isinstance(node, ast.Import):
-            for a in node.names:
-                if a.asname:
-                    out[a.asname] = (a.name, None)
-        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
-            out[node.name] = (module, None)
-        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
-            for t in node.targets if isinstance(node, ast.Assign) else [node.target]:
-                if isinstance(t, ast.Name):
-                    out[t.id] = (module, None)
-    return out
-
-
-def _defining_module(module: str, name: str) -> str:
-    """The module where ``name``, as seen in ``module``, is defined (following ``from x import name``)."""
-    for _ in range(20):
-        where = _bindings(module).get(name)
-        if where is None:
-            raise StepError(f"{module} has no top-level name {name!r}")
-        target, attr = where
-        if attr is None:
-            return target
-        if module_path(f"{target}.{attr}") is not None:  # ``from pkg import module``
-            raise StepError(f"{module}.{name} is a module, not a step function")
-        module, name = target, attr
-    raise StepError(f"import chain too long for {module}.{name}")
-
-
-def _module_of(module: str, name: str) -> str:
-    """The module a name refers to inside ``module`` (``from eqrec.studies import p1`` or ``import ... as``)."""
-    target, attr = _bindings(module).get(name, (None, None))
-    full = target if attr is None else f"{target}.{attr}"
-    if full is None or module_path(full) is None:
-        raise StepError(f"{name!r} in {module} is not an eqrec module")
-    return full
-
-
 def _table(module: str, name: str) -> ast.Dict:
     for node in _tree(module_path(module)).body:
         targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
@@ -181,33 +126,23 @@ def _table(module: str, name: str) -> ast.Dict:
     raise StepError(f"{module} has no table {name} = {{...}}")
 
 
-def _refers_to(module: str, expr: ast.expr) -> tuple[str, str]:
-    """``(module, name)`` an expression ``name`` or ``mod.name`` refers to inside ``module``."""
-    if isinstance(expr, ast.Name):
-        return module, expr.id
-    if isinstance(expr, ast.Attribute) and isinstance(expr.value, ast.Name):
-        return _module_of(module, expr.value.id), expr.attr
-    raise StepError(f"{module}: cannot read {ast.unparse(expr)!r} (a step table lists functions by name)")
-
-
-def _step_modules(module: str, table: str) -> dict[str, str]:
-    """``step -> module defining its function`` of one ``STEPS`` table (``**other.STEPS`` entries included)."""
+def _step_names(module: str, table: str) -> tuple[str, ...]:
+    """The step names of one ``STEPS`` table; each lists a function defined in that module by its name."""
     path = module_path(module)
-    return dict(_step_modules_of(module, table, path.stat().st_mtime_ns if path else 0))
+    return _step_names_of(module, table, path.stat().st_mtime_ns if path else 0)
 
 
 @functools.lru_cache(maxsize=None)
-def _step_modules_of(module: str, table: str, mtime_ns: int) -> tuple[tuple[str, str], ...]:
-    out: dict[str, str] = {}
+def _step_names_of(module: str, table: str, mtime_ns: int) -> tuple[str, ...]:
+    defined = {node.name for node in _tree(module_path(module)).body if isinstance(node, ast.FunctionDef)}
     node = _table(module, table)
     for key, value in zip(node.keys, node.values):
-        if key is None:  # **other.STEPS
-            out.update(_step_modules(*_refers_to(module, value)))
-        elif isinstance(key, ast.Constant) and isinstance(key.value, str):
-            out[key.value] = _defining_module(*_refers_to(module, value))
-        else:
+        if not (isinstance(key, ast.Constant) and isinstance(key.value, str)):
             raise StepError(f"{module}.{table}: keys are step names")
-    return tuple(out.items())
+        if not (isinstance(value, ast.Name) and value.id in defined):
+            raise StepError(f"{module}.{table}[{key.value!r}]: a step table lists functions defined in its own "
+                            f"module, by name (got {ast.unparse(value)!r})")
+    return tuple(k.value for k in node.keys)
 
 
 def _study_tables() -> dict[str, list[tuple[str, str]]]:
@@ -241,7 +176,7 @@ def step_module(study: str, step: str) -> str:
     studies = _study_tables()
     if study not in studies:
         raise StepError(f"unknown study {study!r}; choose from {list(studies)}")
-    steps = {name: module for table in studies[study] for name, module in _step_modules(*table).items()}
+    steps = {name: module for module, table in studies[study] for name in _step_names(module, table)}
     if step not in steps:
         raise StepError(f"study {study!r} has no step {step!r}; steps: {sorted(steps)}")
     return steps[step]
