@@ -33,23 +33,15 @@ configfile: "config/p4.yaml"
 configuration.type_cli_config(
     config, workflow.config_settings.config, root=workflow.basedir
 )
-try:  # a misspelt or unknown top-level section would otherwise be ignored
-    configuration.check_sections(
-        config, workflow.config_settings.configfiles, workflow.config_settings.config
+try:  # also refuses a misspelt or unknown top-level section, which would be ignored
+    configuration.validate_config(
+        config,
+        root=workflow.basedir,
+        configfiles=workflow.config_settings.configfiles,
+        overrides=workflow.config_settings.config,
     )
 except configuration.ConfigError as exc:
     raise WorkflowError(f"invalid configuration: {exc}")
-for _section in configuration.SECTIONS:
-    try:
-        configuration.validate_section(
-            config,
-            _section,
-            root=workflow.basedir,
-            configfiles=workflow.config_settings.configfiles,
-            overrides=workflow.config_settings.config,
-        )
-    except configuration.ConfigError as exc:
-        raise WorkflowError(f"invalid configuration: {exc}")
 
 # Each rules file appends the values.json its analysis writes; the claims
 # table (claims.smk, included last) needs all of them.

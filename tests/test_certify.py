@@ -60,3 +60,18 @@ def test_no_data_growth_is_the_infinity_norm_of_the_matrix_power(acc):
     A2 = acc.A @ acc.A
     assert no_data_growth(acc, 2) == pytest.approx(np.abs(A2).sum(axis=1).max(), rel=1e-14)
     assert no_data_growth(acc, 0) == pytest.approx(1.0)
+
+
+def test_no_data_growth_of_a_time_varying_system_is_the_transition_from_time_0(acc):
+    from eqrec.core.certify import no_data_growth
+    from eqrec.core.systems import AffineSystem
+    from eqrec.errors import InputError
+
+    A = np.stack([acc.A, 2.0 * acc.A, 0.5 * acc.A])
+    tv = AffineSystem(A=A, C=acc.C, E=acc.E, eta_w=acc.eta_w, eta_v=acc.eta_v)
+    P = A[1] @ A[0]
+    assert no_data_growth(tv, 2) == pytest.approx(np.abs(P).sum(axis=1).max(), rel=1e-14)
+    # the constant A of the same system would give a different (wrong) factor
+    assert no_data_growth(tv, 2) != pytest.approx(no_data_growth(acc, 2))
+    with pytest.raises(InputError):
+        no_data_growth(tv, 4)

@@ -303,10 +303,13 @@ def no_data_growth(system: AffineSystem, steps: int) -> float:
     :math:`\|A^k\|_\infty \mu_1` (the lower bound used to explain the batch
     reactor's max μ2 in the delayed-data paper, Sec. IV-A).
 
+    For a time-varying system the power is the transition
+    :math:`A_{k-1} \cdots A_0` from time 0.
+
     Parameters
     ----------
     system : AffineSystem
-        The system (its constant ``A``).
+        The system.
     steps : int
         Number ``k`` of steps without data.
 
@@ -314,5 +317,18 @@ def no_data_growth(system: AffineSystem, steps: int) -> float:
     -------
     float
         The row-sum norm ``||A^k||_∞``.
+
+    Raises
+    ------
+    InputError
+        A time-varying system shorter than ``steps``.
     """
-    return float(np.abs(np.linalg.matrix_power(np.asarray(system.A, float), int(steps))).sum(axis=1).max())
+    steps = int(steps)
+    if system.is_time_varying:
+        system.check_horizon(steps)
+        P = np.eye(system.n)
+        for t in range(steps):
+            P = system.A_at(t) @ P
+    else:
+        P = np.linalg.matrix_power(np.asarray(system.A, float), steps)
+    return float(np.abs(P).sum(axis=1).max())

@@ -44,6 +44,11 @@ __all__ = ["MECHANISMS", "MultNoiseSystem", "zero_input_system", "hold_input_sys
 MECHANISMS = ("zero-input", "hold-input")
 
 
+def _weighted(W: np.ndarray, left: np.ndarray, X: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """``sum_kl W_kl left_k X right_l^T`` (the multiplicative-noise terms of eqs. (6)-(9))."""
+    return np.einsum("kl,kij,jh,lgh->ig", W, left, X, right)
+
+
 @dataclass(frozen=True)
 class MultNoiseSystem:
     """Common description: linear system with multiplicative and correlated additive noises.
@@ -129,7 +134,7 @@ class MultNoiseSystem:
         numpy.ndarray
             ``(n, n)``.
         """
-        return np.einsum("kl,kij,jh,lgh->ig", self.W, self.Ak, X, self.Ak)
+        return _weighted(self.W, self.Ak, X, self.Ak)
 
     def mult_C(self, X: np.ndarray) -> np.ndarray:
         """``sum_kl W_kl C_k X C_l^T``: the multiplicative term of eq. (7) (general form).
@@ -144,7 +149,7 @@ class MultNoiseSystem:
         numpy.ndarray
             ``(m, m)``.
         """
-        return np.einsum("kl,kij,jh,lgh->ig", self.W, self.Ck, X, self.Ck)
+        return _weighted(self.W, self.Ck, X, self.Ck)
 
     def mult_AC(self, X: np.ndarray) -> np.ndarray:
         """``sum_kl W_kl A_k X C_l^T``: the cross term of the gain, eq. (6) (general form).
@@ -159,7 +164,7 @@ class MultNoiseSystem:
         numpy.ndarray
             ``(n, m)``.
         """
-        return np.einsum("kl,kij,jh,lgh->ig", self.W, self.Ak, X, self.Ck)
+        return _weighted(self.W, self.Ak, X, self.Ck)
 
 
 def zero_input_system(plant: Plant, eta_bar: float) -> MultNoiseSystem:
