@@ -279,10 +279,10 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
     tol_1 = rtol * max(1.0, design.mu1)
     if cert.mu2 > design.mu2 + tol_2:
         raise CertificationFailure(f"{design.method} design: gains give worst-case error {cert.mu2:.9g} "
-                                   f"> optimised M2 = {design.mu2:.9g}")
+                                   f"> optimised mu2 = {design.mu2:.9g}")
     if cert.terminal > design.mu1 + tol_1:
         raise CertificationFailure(f"{design.method} design: terminal worst-case error {cert.terminal:.9g} "
-                                   f"> M1 = {design.mu1:.9g}")
+                                   f"> mu1 = {design.mu1:.9g}")
     for wc in cert.words.values():  # per-node levels: the bound after each prefix stays below that node's level
         pattern = wc.pattern
         for t in range(1, pattern.T):
