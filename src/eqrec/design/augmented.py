@@ -172,7 +172,7 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
                              field="L")
     s0v = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
     model = AugmentedLP(system, wc, mu1, L_fixed, s0=s0v, mode=mode)
-    sol = model.solve(solver).require_optimal(f"augmented design (mu1 = {mu1:g})")
+    sol = model.solve(solver).require_optimal(f"augmented design (M1 = {mu1:g})")
     gains = model.gains(sol)
     mu2 = float(sol.x[model.mu2_col])
     solution = sol
@@ -200,10 +200,9 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
             tol2 = CERT_RTOL * max(1.0, mu2) + accuracy
             if cert.mu2 > mu2 + tol2:
                 raise CertificationFailure(f"augmented design: gains give worst-case error {cert.mu2:.9g} "
-                                           f"> optimised mu2 = {mu2:.9g}")
+                                           f"> optimised M2 = {mu2:.9g}")
             if cert.terminal > mu1 * (1 + CERT_RTOL) + accuracy:
-                raise CertificationFailure(f"augmented design: terminal worst-case error {cert.terminal:.9g} "
-                                           f"> mu1 = {mu1:.9g}")
+                raise CertificationFailure(f"augmented design: terminal worst-case error {cert.terminal:.9g} > M1")
         else:
             extra["certified_runtime"] = runtime
     return design
