@@ -24,7 +24,7 @@ from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.words import as_pattern
 from eqrec.core.robust import worst_case_abs, worst_case_vertex
-from eqrec.core.stacking import UncertaintyLayout
+from eqrec.core.stacking import Stacking, UncertaintyLayout
 from eqrec.core.systems import AffineSystem
 
 #: Relative tolerance for accepting an LP optimum (solver feasibility tolerances are ~1e-7..1e-9).
@@ -324,11 +324,8 @@ def no_data_growth(system: AffineSystem, steps: int) -> float:
         A time-varying system shorter than ``steps``.
     """
     steps = int(steps)
-    if system.is_time_varying:
-        system.check_horizon(steps)
-        P = np.eye(system.n)
-        for t in range(steps):
-            P = system.A_at(t) @ P
+    if system.is_time_varying:  # the transition of the stacked maps (checks the horizon)
+        P = Stacking(system, steps).transition[steps][0]
     else:
         P = np.linalg.matrix_power(np.asarray(system.A, float), steps)
     return float(np.abs(P).sum(axis=1).max())

@@ -176,7 +176,8 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
         idx = rng.integers(len(words), size=int(periods))
         sequence = [words[i] for i in idx]
     sequence = list(sequence)
-    dl = [parse_delays(w, field_name="words") for w in sequence]
+    parsed = {w: parse_delays(w, field_name="words") for w in dict.fromkeys(sequence)}  # each distinct word once
+    dl = [parsed[w] for w in sequence]
     if any(len(d) != T for d in dl):
         raise InputError(f"every delay word must have the design's length T = {T}", field="words")
     delays = np.array([d for ds in dl for d in ds], int)

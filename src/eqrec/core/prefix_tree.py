@@ -165,7 +165,7 @@ class PrefixTree:
         return np.bincount([n.depth for n in self.nodes], minlength=self.depth + 1)[1:].tolist()
 
     def _key(self, prefix: "ArrivalPattern | str") -> ArrivalPattern:
-        return prefix if isinstance(prefix, ArrivalPattern) else as_pattern(prefix)
+        return as_pattern(prefix)
 
     def node(self, prefix: "ArrivalPattern | str") -> PrefixNode:
         """The node of a prefix.

@@ -139,8 +139,7 @@ def parse_delay_word(word: str, max_delay: int | None = None, *, field_name: str
     >>> pattern.events()
     ('1', '10', '110', '1101')
     """
-    return ArrivalPattern.from_delays(parse_delays(word, max_delay, field_name=field_name, source=source),
-                                      word.strip())
+    return ArrivalPattern.from_delays(parse_delays(word, max_delay, field_name=field_name, source=source))
 
 
 def as_pattern(word: "ArrivalPattern | str", *, kind: str = "missing", max_delay: int | None = None,
@@ -362,7 +361,7 @@ def worst_case_word(words: Sequence[str]) -> str:
     str
         The worst-case word ``λ*``.
     """
-    return worst_case_pattern(validate_language(words)).label
+    return worst_case_pattern(words).label
 
 
 def prefixes(word: str) -> list[str]:
