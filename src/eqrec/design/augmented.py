@@ -18,7 +18,8 @@ from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_model import DESIGN_MODES, AugmentedGains, check_mode, missing_data_pattern
+from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, check_mode, default_runtime,
+                                          missing_data_pattern)
 from eqrec.design.augmented_runtime import schedule_from_augmented
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import default_poles, observability_rank, place_observer
@@ -188,7 +189,7 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     extra.update(L=gains.L[0].tolist() if np.allclose(gains.L, gains.L[0]) else gains.L.tolist(),
                  s0=gains.s0.tolist(), M=gains.M.tolist(), nu=gains.nu.tolist(), gains=gains,
                  eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
-    runtime = "theorem2" if mode == "theorem2" else "hold"
+    runtime = default_runtime(mode)
     schedule = schedule_from_augmented(system, gains, runtime)
     design = Design(method="augmented", system=system, patterns=(wc,), T=T, mu1=float(mu1), mu2=mu2,
                     schedule=schedule, solution=solution, build_time=model.build_time, extra=extra)

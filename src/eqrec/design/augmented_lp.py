@@ -100,7 +100,7 @@ class AugmentedLP:
                     self.m_cols[(s, i)] = np.arange(col, col + n * p)
                     col += n * p
         self.nu_cols = np.arange(col, col + T * n)
-        self.num_columns = nx = col + T * n
+        self.num_columns = col + T * n
         # structural entries of G: key = (t*n + a)*D + d; entry (a, d), variable (bb, pi): Φ(t,s+1)[a, bb] Z_i[pi, d]
         keys, cols, phis, zidx = [], [], [], []
         ar_n, ar_p, ar_D = np.arange(n), np.arange(p), np.arange(D)

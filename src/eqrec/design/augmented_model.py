@@ -51,6 +51,22 @@ RUNTIME_MODES = ("theorem2", "hold")
 DESIGN_MODES = ("theorem2", "leak", "masked_gain")
 
 
+def default_runtime(mode: str) -> str:
+    """The runtime a design reading's gains run in unless told otherwise.
+
+    Parameters
+    ----------
+    mode : str
+        The design reading.
+
+    Returns
+    -------
+    str
+        ``"theorem2"`` for the ``"theorem2"`` reading, ``"hold"`` (the constant ``L`` kept) for the others.
+    """
+    return "theorem2" if mode == "theorem2" else "hold"
+
+
 def check_mode(mode: str, allowed: tuple[str, ...] = MODES) -> str:
     """Validate a missing-step reading (see the module docstring).
 
@@ -306,12 +322,13 @@ class AugmentedStacking:
         # the transition keeps L at every step in the "masked_gain" reading
         L_phi = self.L if mode == "masked_gain" else self.L_eff
         self.Phi = transitions(system, L_phi)
-        # z(k) = Z[k] δ + Zs[k] s0 (innovation, eq. (9))
-        self.Z, self.Zs = map(np.stack, innovation_maps(system, self.Phi, self.L_eff, -np.eye(n)))
-        self.G0 = self.st.open_loop.reshape((T + 1) * n, -1)  # constant part of G
-        self.Hs = np.zeros(((T + 1) * n, n))  # constant part of c per unit s0
-        if mode == "masked_gain":
+        if mode == "masked_gain":  # the Appendix's literal maps define this reading
             self._literal_maps()
+        else:
+            # z(k) = Z[k] δ + Zs[k] s0 (innovation, eq. (9))
+            self.Z, self.Zs = map(np.stack, innovation_maps(system, self.Phi, self.L_eff, -np.eye(n)))
+            self.G0 = self.st.open_loop.reshape((T + 1) * n, -1)  # constant part of G
+            self.Hs = np.zeros(((T + 1) * n, n))  # constant part of c per unit s0
 
     # -- the error as a function of (M, ν, s0) ---------------------------------
     def error_map(self, M: np.ndarray, nu: np.ndarray, s0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

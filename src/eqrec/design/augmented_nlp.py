@@ -115,7 +115,7 @@ def solve_free_ipopt(model: AugmentedLP, init: AugmentedGains, init_mu2: float, 
             c = c + ca.mtimes(Mi, z0[i])
         ue_G[s], ue_c[s] = g, c
     a_list, g_list = [], []
-    rows_c, lev = [], []
+    rows_c = []
     rad = model.radius
     for t in range(T + 1):
         G = ca.SX(Ol[t])

@@ -20,7 +20,8 @@ from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_model import (RUNTIME_MODES, AugmentedGains, AugmentedPrefixGains, arrival_indicator,
-                                          as_time_varying_L, check_mode, effective_L, missing_data_pattern)
+                                          as_time_varying_L, check_mode, default_runtime, effective_L,
+                                          missing_data_pattern)
 from eqrec.errors import InputError
 
 
@@ -63,7 +64,7 @@ def _to_prefix(system: AffineSystem, tree: PrefixTree, gains, runtime: str | Non
     """Rows ``(F over all Tp columns, u0)`` per prefix of :func:`augmented_to_prefix`; one word's gains multiply
     their stored rows ``M(k, .)`` (zero columns included), prefix gains the available measurements."""
     word = isinstance(gains, AugmentedGains)
-    runtime = runtime or ("theorem2" if not word or gains.mode == "theorem2" else "hold")
+    runtime = runtime or (default_runtime(gains.mode) if word else "theorem2")
     n, p, T = system.n, system.p, tree.depth
     out: dict[ArrivalPattern, tuple[np.ndarray, np.ndarray]] = {}
     for pat in tree.patterns:
@@ -220,7 +221,7 @@ class AugmentedEstimator:
 
     def __init__(self, system: AffineSystem, gains, xhat0: np.ndarray, runtime: str | None = None):
         self.word = gains.word if isinstance(gains, AugmentedGains) else None
-        self.runtime = check_mode(runtime or ("theorem2" if self.word is None or gains.mode == "theorem2" else "hold"),
+        self.runtime = check_mode(runtime or ("theorem2" if self.word is None else default_runtime(gains.mode)),
                                   RUNTIME_MODES)
         self.system, self.gains = system, gains
         self.T = len(self.word) if self.word is not None else len(gains.L)

@@ -106,19 +106,23 @@ def build_augmented_delay_lp(system: AffineSystem, tree: PrefixTree, mu1: float,
             b.set_cost(col, float(through[node.index]))
     rows = NodeRows(D)  # the prefix LP's node-by-node assembly of the robust rows
     lconst, lcol = [], []
+    maps: dict[tuple[bool, ...], tuple[np.ndarray, np.ndarray]] = {}  # per on-time mask: nodes share them
     for node in tree:
         t = node.depth
-        # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here)
-        Lm = effective_L(Lt, ArrivalPattern(node.prefix.arrivals + (None,) * (T - t)), "theorem2")
-        Z, z0 = map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, h0))
+        # innovation maps along this node's prefix, padded to the horizon (later arrivals are not used here);
+        # they depend on the prefix only through the steps whose measurement arrives on time (pattern (7))
+        padded = ArrivalPattern(node.prefix.arrivals + (None,) * (T - t))
+        on_time = tuple(a == k for k, a in enumerate(padded.arrivals))
+        if on_time not in maps:
+            Lm = effective_L(Lt, padded, "theorem2")
+            maps[on_time] = tuple(map(np.stack, innovation_maps(system, transitions(system, Lm), Lm, h0)))
+        Z, z0 = maps[on_time]
         blocks, cblocks = [], []
         for s, anc in enumerate(tree.path(node.prefix)):
             taus = measured[anc.index]
             P = phi[t][s + 1]
             if taus:
-                Zs = Z[taus].reshape(len(taus) * p, D)
-                blocks.append((m_cols[anc.index],
-                               (P[:, None, :, None] * Zs.T[None, :, None, :]).reshape(n * D, n * Zs.shape[0])))
+                blocks.append((m_cols[anc.index], NodeRows.gain_block(P, Z[taus].reshape(len(taus) * p, D))))
                 zs = z0[taus].reshape(-1)
                 cblocks.append((m_cols[anc.index], (P[:, :, None] * zs[None, None, :]).reshape(n, -1)))
             cblocks.append((nu_cols[anc.index], P))

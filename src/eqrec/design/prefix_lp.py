@@ -117,6 +117,24 @@ class NodeRows:
         self.er, self.ec, self.G0, self.gr, self.gc, self.gv = [], [], [], [], [], []
         self.cr, self.cc, self.cv = [], [], []
 
+    @staticmethod
+    def gain_block(P: np.ndarray, Y: np.ndarray) -> np.ndarray:
+        r"""The coefficients of ``vec_r(Φ Q Y)`` in ``vec_r(Q)``: :math:`\Phi \otimes Y^T`, a block of ``vec G``.
+
+        Parameters
+        ----------
+        P : numpy.ndarray
+            ``Φ``, shape ``(n, n)``.
+        Y : numpy.ndarray
+            The maps ``Y`` the gain ``Q`` multiplies, shape ``(k, D)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(n D, n k)``, written as a broadcast outer product.
+        """
+        return (P[:, None, :, None] * Y.T[None, :, None, :]).reshape(P.shape[0] * Y.shape[1], P.shape[1] * Y.shape[0])
+
     def add_uncertain(self, const: np.ndarray, blocks: list, n: int) -> int:
         """Add ``n`` uncertain rows of ``G``.
 
@@ -296,11 +314,7 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
         for s, anc in enumerate(path):
             taus = measured[anc.index]
             if taus:
-                Ys = Y[taus].reshape(len(taus) * p, D)
-                # vec_r(Φ Q Y) = (Φ ⊗ Yᵀ) vec_r(Q), written as a broadcast outer product
-                P = phi[t][s + 1]
-                blocks.append((q_cols[anc.index],
-                               (P[:, None, :, None] * Ys.T[None, :, None, :]).reshape(n * D, n * Ys.shape[0])))
+                blocks.append((q_cols[anc.index], NodeRows.gain_block(phi[t][s + 1], Y[taus].reshape(len(taus) * p, D))))
         row0 = rows.add_uncertain(Ol[t].reshape(-1), blocks, n)
         # certain part c_t = Σ_s Φ(t, s+1) r(s) (identically zero when r is fixed to zero)
         for s, anc in enumerate(path if not zero_offset else []):

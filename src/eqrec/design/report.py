@@ -42,7 +42,7 @@ def level_table(design: Design) -> list[dict]:
     bound = node_bounds(design.certificate)
     rows = [{"prefix": "", "k": 0, "level": design.mu1, "certified": design.mu1, "sequences": len(tree.patterns)}]
     for node in tree:
-        lvl = design.mu1 if node.terminal else design.levels.get(node.label, design.mu2)
+        lvl = design.mu1 if node.terminal else node_level(design, node.prefix)
         rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
                      "sequences": w[node.index]})
     return rows

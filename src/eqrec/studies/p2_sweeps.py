@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from eqrec.core.acc import acc_system
+from eqrec.design.augmented_model import default_runtime
 from eqrec.design.sweeps import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
 from eqrec.studies.chunks import check_coverage, chunk_indices
@@ -42,7 +43,7 @@ def _sweep_options(cfg: dict, mode: str) -> dict:
     runs: ``theorem2`` for the text of Theorem 2, ``hold`` - constant ``L`` kept - for the design-only readings)."""
     h = cfg["heatmap"]
     return {"solver": h["solver"], "second_solver": h["second_solver"],
-            "certify_runtime": "theorem2" if mode == "theorem2" else "hold"}
+            "certify_runtime": default_runtime(mode)}
 
 
 def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> list[tuple[str, str, str, list[dict]]]:
