@@ -37,15 +37,34 @@ import numpy as np
 from eqrec.errors import InputError, NotMeanSquareStable
 from eqrec.lmv.plant import Plant, check_psd
 
-__all__ = ["MECHANISMS", "MultNoiseSystem", "zero_input_system", "hold_input_system", "system_of", "check_eta",
+__all__ = ["MECHANISMS", "MECHANISM_KEYS", "MultNoiseSystem", "multiplicative_term", "zero_input_system", "hold_input_system", "system_of", "check_eta",
            "second_moment_operator", "ms_spectral_radius", "check_ms_stable"]
 
 #: The two compensation mechanisms (:func:`system_of`).
 MECHANISMS = ("zero-input", "hold-input")
+#: The short key of each mechanism in the realisations (``y_<key>``) and the arrays the study writes.
+MECHANISM_KEYS = {"zero-input": "zero", "hold-input": "hold"}
 
 
-def _weighted(W: np.ndarray, left: np.ndarray, X: np.ndarray, right: np.ndarray) -> np.ndarray:
-    """``sum_kl W_kl left_k X right_l^T`` (the multiplicative-noise terms of eqs. (6)-(9))."""
+def multiplicative_term(W: np.ndarray, left: np.ndarray, X: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """``sum_kl W_kl left_k X right_l^T``: the multiplicative-noise terms of eqs. (6)-(9).
+
+    Parameters
+    ----------
+    W : numpy.ndarray
+        ``(K, K)`` covariance of the multiplicative noises.
+    left : numpy.ndarray
+        ``(K, a, n)``: the matrices the noises multiply on the left.
+    X : numpy.ndarray
+        ``(n, n)`` second moment.
+    right : numpy.ndarray
+        ``(K, b, n)``: the matrices on the right (transposed).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(a, b)``.
+    """
     return np.einsum("kl,kij,jh,lgh->ig", W, left, X, right)
 
 
@@ -134,7 +153,7 @@ class MultNoiseSystem:
         numpy.ndarray
             ``(n, n)``.
         """
-        return _weighted(self.W, self.Ak, X, self.Ak)
+        return multiplicative_term(self.W, self.Ak, X, self.Ak)
 
     def mult_C(self, X: np.ndarray) -> np.ndarray:
         """``sum_kl W_kl C_k X C_l^T``: the multiplicative term of eq. (7) (general form).
@@ -149,7 +168,7 @@ class MultNoiseSystem:
         numpy.ndarray
             ``(m, m)``.
         """
-        return _weighted(self.W, self.Ck, X, self.Ck)
+        return multiplicative_term(self.W, self.Ck, X, self.Ck)
 
     def mult_AC(self, X: np.ndarray) -> np.ndarray:
         """``sum_kl W_kl A_k X C_l^T``: the cross term of the gain, eq. (6) (general form).
@@ -164,7 +183,7 @@ class MultNoiseSystem:
         numpy.ndarray
             ``(n, m)``.
         """
-        return _weighted(self.W, self.Ak, X, self.Ck)
+        return multiplicative_term(self.W, self.Ak, X, self.Ck)
 
 
 def zero_input_system(plant: Plant, eta_bar: float) -> MultNoiseSystem:

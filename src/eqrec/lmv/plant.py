@@ -222,6 +222,4 @@ def plant_of(cfg: dict, example: str) -> Plant:
     """
     if example not in cfg["examples"]:
         raise InputError(f"unknown example {example!r}", None, "examples")
-    d = {k: v for k, v in cfg["examples"][example].items() if k != "mc_mult_dist"}
-    d.setdefault("name", example)
-    return Plant.from_dict(d, f"examples.{example}")
+    return Plant.from_dict({"name": example, **cfg["examples"][example]}, f"examples.{example}")

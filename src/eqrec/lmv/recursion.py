@@ -46,7 +46,7 @@ import numpy as np
 
 from eqrec.errors import InputError
 from eqrec.lmv.plant import Plant
-from eqrec.lmv.model import MultNoiseSystem, check_eta, check_ms_stable
+from eqrec.lmv.model import MultNoiseSystem, check_eta, check_ms_stable, multiplicative_term
 
 
 __all__ = [
@@ -327,7 +327,7 @@ def suboptimal_error_cov(sys: MultNoiseSystem, L: np.ndarray, q: np.ndarray) -> 
         Lt = L[t]
         F = sys.A - Lt @ sys.C
         Bk = sys.Ak - np.einsum("ij,kjh->kih", Lt, sys.Ck)
-        mult = np.einsum("kl,kij,jh,lgh->ig", sys.W, Bk, q[t], Bk)
+        mult = multiplicative_term(sys.W, Bk, q[t], Bk)
         P[t + 1] = symmetric_part(F @ P[t] @ F.T + mult + sys.Qu - Lt @ sys.S.T - sys.S @ Lt.T + Lt @ sys.R @ Lt.T)
     return P
 

@@ -35,10 +35,10 @@ import numpy as np
 from scipy.stats import norm
 
 from eqrec.errors import InputError
-from eqrec.lmv.model import MultNoiseSystem, system_of
+from eqrec.lmv.model import MECHANISM_KEYS, MultNoiseSystem, system_of
 from eqrec.lmv.plant import Plant
 from eqrec.lmv.recursion import (LMVResult, SmootherResult, apply_estimator, filter_smoother, lmv_recursion,
-                                 n_step_predictor)
+                                 n_step_predictor, symmetric_part)
 
 __all__ = ["fourth_moment_radius", "simulate_plant", "MCComparison", "compare_moments", "bonferroni_z", "run_mc", "MCRun"]
 
@@ -149,7 +149,7 @@ def simulate_plant(plant: Plant, eta_bar: float, T: int, runs: int, rng: np.rand
 
 
 def _psd_sqrt(M: np.ndarray) -> np.ndarray:
-    w, V = np.linalg.eigh(0.5 * (M + M.T))
+    w, V = np.linalg.eigh(symmetric_part(M))
     return V * np.sqrt(np.clip(w, 0.0, None))
 
 
@@ -359,7 +359,7 @@ def run_mc(plant: Plant, eta_bar: float, mechanism: str, T: int, runs: int, N_sm
         Truth, estimates, theoretical covariances and errors.
     """
     sys = system_of(plant, mechanism, eta_bar)
-    key = {"zero-input": "y_zero", "hold-input": "y_hold"}[mechanism]
+    key = "y_" + MECHANISM_KEYS[mechanism]
     res = lmv_recursion(sys, T)
     sm = filter_smoother(res, N_smooth)
     if sim is None:

@@ -29,9 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.lmv.model import MECHANISMS, ms_spectral_radius, zero_input_system
+from eqrec.lmv.model import MECHANISM_KEYS, MECHANISMS, ms_spectral_radius
 from eqrec.lmv.plant import plant_of
-from eqrec.lmv.recursion import LMVResult, apply_estimator, lmv_recursion, suboptimal_error_cov, theorem1_as_printed
+from eqrec.lmv.recursion import LMVResult, apply_estimator, suboptimal_error_cov, theorem1_as_printed
 from eqrec.lmv.steady import steady_variances
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies import configuration, p4_figures
@@ -42,7 +42,7 @@ from eqrec.studies.outputs import write_json, write_npz
 log = get_logger("p4")
 
 #: The key of each mechanism in the arrays the steps write.
-MECH_KEY = {"zero-input": "zero", "hold-input": "hold"}
+MECH_KEY = MECHANISM_KEYS
 
 
 # --------------------------------------------------------------------------- configuration
@@ -115,9 +115,10 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
                               "fourth_moment_radius": {d: fourth_moment_radius(plant, d)
                                                        for d in ("gaussian", "two-point")},
                               "checks": {}}
+    mcs = {}
     for mech in MECHANISMS:
         t1 = time.perf_counter()
-        mc = run_mc(plant, eta, mech, T, runs, N, rng, sim=sim, pred_steps=Np)
+        mc = mcs[mech] = run_mc(plant, eta, mech, T, runs, N, rng, sim=sim, pred_steps=Np)
         k = MECH_KEY[mech]
         report[f"ms_radius_{k}"] = ms_spectral_radius(mc.sys)
         checks = {"pred1": compare_moments(mc.err_pred, mc.P_pred, alpha),
@@ -143,8 +144,7 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
         log.info("%s %s: estimation and comparison %.2f s", example, mech, time.perf_counter() - t1)
     # Theorem 1 as printed versus the same Monte Carlo (zero-input, predictor).
     printed = theorem1_as_printed(plant, eta, T)
-    zsys = zero_input_system(plant, eta)
-    zres = lmv_recursion(zsys, T)
+    zsys, zres = mcs["zero-input"].sys, mcs["zero-input"].res
     P_true_printed_gain = suboptimal_error_cov(zsys, printed["L"], zres.q)
     est_p = apply_estimator(LMVResult(zsys, zres.q, printed["P"], printed["L"], printed["Qe"]), sim["y_zero"])
     err_p = sim["x"] - est_p["pred"][:, : T + 1]
@@ -169,18 +169,22 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     return report
 
 
-def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[int, np.ndarray, np.ndarray, int, float, int]:
-    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk number, the whole grid, the chunk's indices
-    in it, the smoother lag ``N`` and the steady-state settings ``tol``, ``max_iter``."""
+def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[int, np.ndarray, np.ndarray]:
+    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk number, the whole grid, the chunk's indices."""
     chunk = int(wildcards["chunk"])
     values = grid(cfg[sweep])
-    idx = chunk_indices(len(values), int(cfg[sweep]["chunks"]), chunk, field=f"{sweep}.chunks")
-    return chunk, values, idx, int(cfg["smoother_lag"]), float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
+    return chunk, values, chunk_indices(len(values), int(cfg[sweep]["chunks"]), chunk, field=f"{sweep}.chunks")
+
+
+def _steady_settings(cfg: dict) -> tuple[int, float, int]:
+    """The smoother lag ``N`` and the steady-state iteration's ``tol`` and ``max_iter``."""
+    return int(cfg["smoother_lag"]), float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
 
 
 def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady-state variances against eta_bar (Fig. 5) for one chunk of the grid, both examples and mechanisms."""
-    chunk, etas, idx, N, tol, max_iter = _sweep_chunk(cfg, wildcards, "sweep_eta")
+    chunk, etas, idx = _sweep_chunk(cfg, wildcards, "sweep_eta")
+    N, tol, max_iter = _steady_settings(cfg)
     out: dict[str, np.ndarray] = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
     prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx), f"eta sweep chunk {chunk}")
     for ex in cfg["examples"]:
@@ -198,7 +202,8 @@ def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
 
 def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady filter variances on the (Q_xi, Q_lambda) grid (Fig. 6): rows of Q_xi in this chunk."""
-    chunk, qs, idx, N, tol, max_iter = _sweep_chunk(cfg, wildcards, "sweep_q")
+    chunk, qs, idx = _sweep_chunk(cfg, wildcards, "sweep_q")
+    N, tol, max_iter = _steady_settings(cfg)
     eta = float(cfg["eta_bar"])
     out: dict[str, np.ndarray] = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
     prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx) * len(qs), f"Q sweep chunk {chunk}")

@@ -3,7 +3,7 @@
 Step ``values`` of :mod:`eqrec.studies.p4` reads the tracking run, the Monte
 Carlo files of each example and the merged sweeps, and compares the two
 compensation mechanisms (steady state and the ``Q_lambda`` threshold from
-:mod:`eqrec.lmv.recursion`).  Two variances within :data:`TIE_RTOL` count as a tie.
+:mod:`eqrec.lmv.steady`).  Two variances within :data:`TIE_RTOL` count as a tie.
 """
 
 from __future__ import annotations
