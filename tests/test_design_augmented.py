@@ -8,7 +8,7 @@ from eqrec.design.augmented import design_augmented
 from eqrec.design.augmented_lp import AugmentedLP
 from eqrec.design.augmented_nlp import solve_free_ipopt
 from eqrec.design.observers import place_observer
-from eqrec.studies.p2 import heatmap_poles
+from eqrec.studies.p2_readings import heatmap_poles
 from eqrec.design.time_based import design_time_based
 from eqrec.errors import InputError
 from eqrec.core.solvers import solve_lp

@@ -144,6 +144,28 @@ def class_count(T: int, tau: int) -> int:
     return len(classes_of_full_language(int(T), int(tau)))
 
 
+def tree_J(objective: float, sequences: int, mu1: float) -> float:
+    """The paper's cost ``J`` of a tree LP's optimum with levels per node (``levels="sum"``).
+
+    Every level column is bounded below by ``μ1`` and costs its weight, so ``J`` adds the
+    ``(1 + 2 |L^E'|) μ1`` of ``k = 0`` and ``k = T`` (:func:`eqrec.design.cost.cost_weights`).
+
+    Parameters
+    ----------
+    objective : float
+        The LP's optimal objective.
+    sequences : int
+        Number ``|L^E'|`` of event sequences.
+    mu1 : float
+        Recovery level ``μ1``.
+
+    Returns
+    -------
+    float
+    """
+    return float(objective) + (1.0 + 2.0 * int(sequences)) * float(mu1)
+
+
 def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: float, time_limit: float,
                   builder: str, options: dict | None, out: dict) -> dict:
     from eqrec.core.prefix_tree import PrefixTree
@@ -170,8 +192,7 @@ def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: floa
     out.update(status=_status(sol.status), solve_time=sol.solve_time, iterations=sol.iterations,
                objective=float(sol.objective))
     if sol.optimal:
-        # every level column is bounded below by μ1 and costs its weight: J adds the (1 + 2|L^E'|) μ1 of k = 0, T
-        out["J"] = float(sol.objective) + (1.0 + 2.0 * len(pats)) * float(mu1)
+        out["J"] = tree_J(sol.objective, len(pats), mu1)
         cols = list(getattr(model, "level_cols", {}).values())
         out["max_level"] = float(max([float(mu1), *(float(sol.x[c]) for c in cols)]))
     return out

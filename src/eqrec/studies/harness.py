@@ -38,6 +38,7 @@ from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 from eqrec.errors import InputError, StepError
 from eqrec.studies.configuration import SECTIONS, ConfigError
 from eqrec.studies.logs import get_logger
+from eqrec.studies.steps import get_step
 
 Step = Callable[[dict, "Files", "Files", "Wildcards"], Any]
 
@@ -116,12 +117,6 @@ class Wildcards(dict):
 
 
 # --------------------------------------------------------------------------- the step and its configuration
-
-def get_step(study: str, step: str) -> Step:
-    """The function of one step, from the step registry (:mod:`eqrec.studies.steps`)."""
-    from eqrec.studies.steps import get_step as lookup  # imports the study's modules: not at planning time
-
-    return lookup(study, step)
 
 
 class MissingConfigKey(KeyError):

@@ -91,11 +91,6 @@ def module_closure(*roots: str) -> list[str]:
     """Source files of the ``eqrec`` modules ``roots`` and of every module they import, transitively
     (a package's modules import the package's ``__init__`` first), except the edges in :data:`NOT_FOLLOWED`."""
     pkg = _package_root()
-    key = (roots, pkg)
-    if key in _CLOSURES:  # walked before: valid while none of its files changed
-        files, stamps = _CLOSURES[key]
-        if all(Path(f).stat().st_mtime_ns == t for f, t in zip(files, stamps)):
-            return list(files)
     seen: dict[Path, str] = {}
     todo = [(None, r) for r in roots]
     while todo:
@@ -110,12 +105,7 @@ def module_closure(*roots: str) -> list[str]:
         if parent:
             todo.append((name, parent))
         todo += [(name, imported) for imported in eqrec_imports(path)]
-    files = sorted(str(p) for p in seen)
-    _CLOSURES[key] = (files, [Path(f).stat().st_mtime_ns for f in files])
-    return list(files)
-
-
-_CLOSURES: dict[tuple, tuple[list[str], list[int]]] = {}
+    return sorted(str(p) for p in seen)
 
 
 def _table(module: str, name: str) -> ast.Dict:

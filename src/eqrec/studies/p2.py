@@ -43,7 +43,7 @@ from eqrec.errors import EqrecError
 from eqrec.studies.claims_file import published_value
 from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import write_json, write_npz
-from eqrec.studies.p2_readings import heatmap_poles, one_based_word, retarget, variant_word  # noqa: F401
+from eqrec.studies.p2_readings import one_based_word, retarget
 
 log = get_logger("p2")
 

@@ -18,8 +18,8 @@ REASONS, reason = registry()
 VERTEX_GAP = 1e-9
 
 
-def _vertex(ev: Mapping[str, Any]) -> str:
-    return "vertex_attained" if ev["vertex_gap"] <= VERTEX_GAP else "vertex_missed"
+def _vertex(ev: Mapping[str, Any], key: str = "vertex_gap") -> str:
+    return "vertex_attained" if ev[key] <= VERTEX_GAP else "vertex_missed"
 
 
 @reason("P3-LANG:example1-words")
@@ -53,7 +53,7 @@ def reactor_max_mu2(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     a2, paper = ev["A2_inf_norm"], ev["paper"]
     printed_mu1 = (ev["no_data_prefix"] and abs(ev["mu2_over_mu1"] - a2) <= 1e-6 * a2
                    and ev["reading_mu1"] == ev["published"]["P3-BR:mu1"]
-                   and abs(ev["reading_mu2"] - paper) <= 5.0e-5 and paper > ev["value"] + 5.0e-5)
+                   and abs(ev["reading_mu2"] - paper) <= ev["tol"] and paper > ev["value"] + ev["tol"])
     return Reason(note=["global", _vertex(ev), "largest_level"], explanation={"printed_mu1": printed_mu1})
 
 
@@ -65,8 +65,8 @@ def reactor_printed_mu1(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reas
 
 @reason("P3-BR:augmented-L-s0")
 def augmented_l_s0(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
-    """The objective for each (L, s0) pair; equal to the prefix design within ``rtol`` or not."""
-    equal = ev["relative_difference"] <= ev["rtol"]
+    """The objective for each (L, s0) pair; equal to the prefix design within ``rtol`` (p3_values decides) or not."""
+    equal = ev["value"] == "independent"
     agreement = texts["equal" if equal else "different"].format_map(ev)
     return Reason(fields={"objective_list": fmtlist(ev["objectives"], ".6f"), "agreement": agreement},
                   note=["objectives"])
@@ -82,7 +82,7 @@ def f1_proposed(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
 def f1_kalman(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """The exact worst case against the levels (whether a box vertex attains it), and how many sampled runs
     leave the bars."""
-    vertex = texts["vertex_attained" if ev["attain_gap"] <= VERTEX_GAP else "vertex_missed"].format_map(ev)
+    vertex = texts[_vertex(ev, "attain_gap")].format_map(ev)
     fields = {**fmtlists(ev, "worst_norm", "levels"), "time_list": join(ev["times"]),
               "filtered_time_list": join(ev["filtered_times"]), "vertex": vertex}
     return Reason(fields=fields, note=["worst_case", "none_sampled" if ev["sampled_exceed"] == 0 else "some_sampled"])
@@ -96,9 +96,8 @@ def acc_mu2(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
 
 @reason("P3-ACC:same-as-prefix")
 def acc_same_as_prefix(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
-    """Both costs within 1e-6 relative of P1's optimum, or their differences."""
-    same = max(ev["difference_sum"], ev["difference_max"]) <= 1e-6 * ev["p1_prefix_mu2"]
-    return Reason(note=["same" if same else "different"])
+    """Both costs within ``SAME_RTOL`` of P1's optimum (p3_values decides), or their differences."""
+    return Reason(note=[ev["value"]])
 
 
 @reason("P3-ACC:footnote-mu1-free")

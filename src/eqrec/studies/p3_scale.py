@@ -43,7 +43,7 @@ import math
 
 import pandas as pd
 
-from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size
+from eqrec.design.scale_sweep import ENGINES, FIELDS, class_count, run_size, tree_J
 from eqrec.models import batch_reactor
 from eqrec.studies.logs import get_logger
 from eqrec.studies.outputs import TIMING_KEYS, read_json, write_csv, write_json, write_text
@@ -88,7 +88,7 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
             r["classes"] = class_count(r["T"], r["tau"])
         if (r["engine"] == "tree" and r.get("J") is None and r.get("status") == "optimal"
                 and r.get("objective") is not None and r.get("sequences") is not None):
-            r["J"] = float(r["objective"]) + (1.0 + 2.0 * int(r["sequences"])) * float(r["mu1"])
+            r["J"] = tree_J(r["objective"], r["sequences"], r["mu1"])
     frame = pd.DataFrame(rows).reindex(columns=list(FIELDS))
     order = {e: i for i, e in enumerate(ENGINES)}
     frame = frame.assign(_e=frame["engine"].map(order).fillna(len(order)))

@@ -184,10 +184,9 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     # --- switching scheme: is a period-1 (equalized-performance) design feasible at the reactor's μ1?
     on_time = ["0"]
     status_at_mu1 = design_lp_status(reactor, on_time, mu1, cost)
-    mm = min_recovery_level(reactor, on_time)
-    periods_min = []
-    for P in range(1, int(sw["max_period"]) + 1):
-        periods_min.append(min_recovery_level(reactor, ["0" * P]).upper)
+    by_period = [min_recovery_level(reactor, ["0" * P]) for P in range(1, int(sw["max_period"]) + 1)]
+    mm = by_period[0]  # period 1: the on-time word
+    periods_min = [m.upper for m in by_period]
     smallest_period = next((P for P, m in enumerate(periods_min, 1) if m <= mu1), None)
     if sw["mu1"] is not None:
         mu1_s, rule = float(sw["mu1"]), "configured"
