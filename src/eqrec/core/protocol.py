@@ -1,0 +1,74 @@
+r"""The one estimator protocol: every estimator of the package runs as ``reset`` then ``step``.
+
+Every estimator, guaranteed (bounded-error designs of the three equalized-recovery
+papers) or stochastic (Kalman-type filters, the LMV filter and predictor of the
+companion study), is driven the same way, in the convention of python-control's
+discrete-time systems and of filterpy's filters:
+
+* ``est.reset(xhat0, t0=0)`` starts a run from the initial estimate
+  :math:`\hat x(t_0)` and returns the estimator;
+* ``est.step(y, u)`` processes time ``t``: what arrived at ``t`` (``None`` when
+  nothing arrived, ``y(t)`` as an array when it arrived on time, or time-stamped
+  packets ``(τ, y(τ))``, :class:`~eqrec.core.estimator.Packet`, for late ones) and
+  the input ``u(t)``; it returns the pair ``(x̂(t+1), spread)``;
+* ``spread`` is a guarantee ``b`` with :math:`\|x(t+1) - \hat x(t+1)\|_\infty \le b`
+  for every noise in the box (``kind == "guaranteed"``, a float) or the error
+  covariance the estimator believes in (``kind == "stochastic"``, an ``(n, n)``
+  array);
+* ``est.time`` is the absolute time of the current estimate and ``est.x`` a copy
+  of it.
+
+A call that raises leaves the estimator exactly as it was (every input is
+checked before any state changes), and non-finite data is refused with
+:class:`~eqrec.errors.InputError` naming the field.
+
+One loop, :func:`eqrec.core.simulate.closed_loop`, runs any estimator that
+follows this protocol.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal, Protocol, runtime_checkable
+
+import numpy as np
+
+#: What a step returns besides the estimate: a float bound (guaranteed) or a covariance (stochastic).
+Spread = "float | np.ndarray"
+
+EstimatorKind = Literal["guaranteed", "stochastic"]
+
+
+@runtime_checkable
+class Estimator(Protocol):
+    """An estimator run step by step (module docstring).
+
+    Attributes
+    ----------
+    kind : {"guaranteed", "stochastic"}
+        What the second value of :meth:`step` is: a bound on the infinity
+        norm of the error, or an error covariance.
+    name : str
+        The family in words, e.g. ``"Kalman, time-stamped"`` or
+        ``"guaranteed, class engine"`` (a column of ``eqrec compare``).
+    """
+
+    kind: EstimatorKind
+    name: str
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "Estimator":
+        """Start a run from ``x̂(t0) = xhat0``; returns ``self``."""
+        ...
+
+    def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, Any]:
+        """Process time ``t`` (what arrived, the input); returns ``(x̂(t+1), spread)``."""
+        ...
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        ...
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate."""
+        ...
