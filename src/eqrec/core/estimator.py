@@ -68,6 +68,165 @@ class Packet:
     y: np.ndarray
 
 
+def _finite_vector(value, size: int, field: str, what: str, symbol: str = "") -> np.ndarray:
+    """``value`` as a new float vector of ``size`` finite entries, or an :class:`InputError` naming ``field``."""
+    if isinstance(value, (str, bytes)):
+        raise InputError(f"{what} must be an array of {size} numbers, got a string", field=field)
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError):  # ragged nesting
+        raise InputError(f"{what} must be an array of {size} numbers, got {value!r:.60}", field=field) from None
+    if raw.dtype.kind not in "iuf":
+        raise InputError(f"{what} must be an array of {size} numbers, got {value!r:.60}", field=field)
+    arr = np.array(raw, dtype=float).reshape(-1)
+    if arr.shape != (size,):
+        expected = f"{symbol} = {size}" if symbol else str(size)
+        raise InputError(f"{what} has {arr.size} entries (shape {raw.shape}), expected {expected}", field=field)
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{what} contains NaN or infinite entries: {arr.tolist()}", field=field)
+    return arr
+
+
+def check_input(u, m: int) -> np.ndarray:
+    """The input ``u(t)`` as a finite vector of ``m`` entries (``None``: zero).
+
+    Parameters
+    ----------
+    u : array_like or None
+        The input.
+    m : int
+        Number of inputs.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        A new array.
+
+    Raises
+    ------
+    InputError
+        (field ``u``) a string, the wrong number of entries, or NaN/inf.
+    """
+    if u is None:
+        return np.zeros(m)
+    return _finite_vector(u, m, "u", "the input u", "m")
+
+
+def check_estimate(xhat0, n: int, field: str = "xhat0") -> np.ndarray:
+    """An initial estimate as a finite vector of ``n`` entries (a copy).
+
+    Parameters
+    ----------
+    xhat0 : array_like
+        The estimate.
+    n : int
+        Number of states.
+    field : str, optional
+        Name used in the error.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        A new array.
+
+    Raises
+    ------
+    InputError
+        A string, the wrong number of entries, or NaN/inf.
+    """
+    return _finite_vector(xhat0, n, field, "the initial estimate", "n")
+
+
+def _is_stamp(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def _is_pair(item) -> bool:
+    return isinstance(item, (tuple, list)) and len(item) == 2 and _is_stamp(item[0]) and not np.isscalar(item[1])
+
+
+def as_packets(y, now: int, p: int) -> list[Packet]:
+    """What arrived at time ``now``, checked: a list of :class:`Packet` with finite ``y`` of ``p`` entries.
+
+    Accepted forms: ``None`` (nothing arrived); ``y(now)`` itself (an array,
+    a list of numbers or, for ``p = 1``, a number); a :class:`Packet` or a
+    pair ``(τ, y(τ))`` with an integer stamp ``τ``; or a list of packets and
+    pairs.  Nothing is stored: the estimators call it before they change any
+    state.
+
+    Parameters
+    ----------
+    y : None, array_like, Packet, pair or sequence of them
+        What arrived.
+    now : int
+        The current absolute time (the stamp of an unstamped measurement).
+    p : int
+        Number of outputs.
+
+    Returns
+    -------
+    list of Packet
+        The packets, each ``y`` a new float array of shape ``(p,)``, in the given order.
+
+    Raises
+    ------
+    InputError
+        (field ``y``) a string, a malformed packet, a stamp that is not an
+        integer, a packet from the future (stamp ``> now``), two packets with
+        one stamp, a measurement with the wrong number of entries, or NaN/inf.
+    """
+    if y is None:
+        return []
+    if isinstance(y, (str, bytes)):
+        raise InputError(f"a measurement must be an array of p = {p} numbers, got a string", field="y")
+    if isinstance(y, Packet) or _is_pair(y):
+        items = [y]
+    elif isinstance(y, np.ndarray) or np.isscalar(y):
+        items = [Packet(now, y)]
+    else:
+        try:
+            items = list(y)
+        except TypeError:
+            raise InputError(f"a measurement must be an array of p = {p} numbers, got {type(y).__name__}",
+                             field="y") from None
+        if items and all(np.isscalar(v) and not isinstance(v, (str, bytes)) for v in items):
+            items = [Packet(now, items)]
+    out: list[Packet] = []
+    seen: set[int] = set()
+    for item in items:
+        if isinstance(item, Packet):
+            stamp, value = item.time, item.y
+        elif _is_pair(item):
+            stamp, value = item
+        else:
+            raise InputError(f"a packet is (time stamp, y) with an integer stamp, got {item!r:.80}", field="y")
+        if not _is_stamp(stamp):
+            raise InputError(f"a packet's time stamp must be an integer, got {stamp!r}", field="y")
+        stamp = int(stamp)
+        if stamp > now:
+            raise InputError(f"packet stamped {stamp} received at time {now}: a packet cannot come from the future",
+                             field="y")
+        if stamp in seen:
+            raise InputError(f"a second packet stamped {stamp} received at time {now}", field="y")
+        seen.add(stamp)
+        out.append(Packet(stamp, _finite_vector(value, p, "y", f"the measurement of time {stamp}", "p")))
+    return out
+
+
+@dataclass
+class _Opened:
+    """The state of a step under way, not yet committed (module docstring of :class:`_StampedEstimator`)."""
+
+    k: int  # absolute time of the step
+    t: int  # its period time
+    start: int  # absolute time of the period's start
+    arrivals: list  # per period time: arrival time (period time) or None
+    history: list  # reference states at the period times 0..t
+    yxi: dict  # period time -> residual
+    restarted: bool  # a new period starts at this step
+    u: np.ndarray  # the checked input
+
+
 class _StampedEstimator:
     """Packet intake shared by :class:`RecoveryEstimator` and :class:`ClassEstimator`.
 
@@ -75,17 +234,30 @@ class _StampedEstimator:
     *reference* state per period time (the state whose predicted output a
     measurement is compared with) and the residuals
     ``y(τ) − C(τ) ref(τ)`` of the packets received in the period.
+
+    A step is all-or-nothing: :meth:`_open` checks everything and builds the
+    new state aside (:class:`_Opened`), the subclass computes the estimate
+    from it, and only then :meth:`_commit` installs it; a step that raises
+    leaves the estimator exactly as it was.
+
+    Time convention: the model's time-varying matrices are read at the
+    *period time* ``t = k − period_start`` (the time of the design, whose
+    time 0 is the period's start), so a time-varying model describes one
+    period of a ``T``-periodic plant, as the design assumes.
     """
 
     T: int
 
     def __init__(self, system: AffineSystem, horizon: int, xhat0: np.ndarray, periodic: bool, t0: int):
+        if not _is_stamp(t0):
+            raise InputError(f"the start time must be an integer, got {t0!r}", field="t0")
         self.system = system
         self.T = int(horizon)
-        self.periodic = periodic
-        self.xhat = np.asarray(xhat0, float).reshape(system.n).copy()
+        self.periodic = bool(periodic)
+        system.check_horizon(self.T)
+        self.xhat = check_estimate(xhat0, system.n)
         self._t = 0  # time since the start of the current period
-        self._k = int(t0)  # absolute time (for time-varying models)
+        self._k = int(t0)  # absolute time
         self._start = int(t0)  # absolute time of the current period's start
         self._arrivals: list[int | None] = []  # per period time τ: arrival time (period time) or None
         self._history: list[np.ndarray] = []  # reference state at the period times 0..t
@@ -112,53 +284,48 @@ class _StampedEstimator:
         return self._start
 
     def _packets(self, y) -> list[Packet]:
-        if y is None:
-            return []
-        if isinstance(y, Packet):
-            return [y]
-        if isinstance(y, np.ndarray) or (isinstance(y, (list, tuple)) and y and not isinstance(y[0], Packet)):
-            return [Packet(self._k, np.asarray(y, float))]
-        return list(y)
+        return as_packets(y, self._k, self.system.p)
 
-    def _reference(self) -> np.ndarray:
+    def _reference(self, restarted: bool) -> np.ndarray:
         """The state of the current time whose predicted output the measurements of this time are compared with."""
         raise NotImplementedError
 
-    def _restart(self) -> None:
-        """Start a new period (``periodic=True``) at the current time."""
-        self._t, self._start, self._arrivals, self._history, self._yxi = 0, self._k, [], [], {}
+    def _open(self, y, u, restart_at_now: bool = False) -> _Opened:
+        """Check what arrived at the current time and ``u``, and build the step's state aside (nothing changes).
 
-    def _intake(self, y) -> tuple[int, int]:
-        """Open the step of the current time and receive its packets; returns ``(k, t)`` (absolute, period time).
-
-        Raises :class:`InputError` when the horizon is over (not periodic), for
-        a packet from the future, a second packet with one stamp, or a
-        measurement of the wrong length.  Packets stamped before the current
-        period are dropped.
+        Raises :class:`InputError` when the horizon is over (not periodic),
+        for malformed packets (:func:`as_packets`), a packet whose stamp
+        was already received in this period, or a malformed input.  Packets
+        stamped before the current period are dropped.
         """
         sys = self.system
-        if self._t == self.T:
-            if not self.periodic:
-                raise InputError(f"the estimator's horizon T = {self.T} is over (use periodic=True to restart)")
-            self._restart()
-        k, t = self._k, self._t
-        self._history.append(self._reference().copy())
-        self._arrivals.append(None)
-        for pk in self._packets(y):
-            tau_abs = int(pk.time)
-            if tau_abs > k:
-                raise InputError(f"packet stamped {tau_abs} received at time {k}: a packet cannot come from the future")
-            tau = tau_abs - self._start
+        packets = self._packets(y)
+        u = check_input(u, sys.m)
+        restarted = restart_at_now or self._t == self.T
+        if self._t == self.T and not self.periodic and not restart_at_now:
+            raise InputError(f"the estimator's horizon T = {self.T} is over (use periodic=True to restart)")
+        k = self._k
+        if restarted:
+            t, start, arrivals, history, yxi = 0, k, [], [], {}
+        else:
+            t, start = self._t, self._start
+            arrivals, history, yxi = list(self._arrivals), list(self._history), dict(self._yxi)
+        history.append(self._reference(restarted).copy())
+        arrivals.append(None)
+        for pk in packets:
+            tau = pk.time - start
             if tau < 0:
                 continue  # stamped before this period: its gains are no longer in use
-            if self._arrivals[tau] is not None:
-                raise InputError(f"a second packet stamped {tau_abs} received at time {k}")
-            yv = np.asarray(pk.y, float).reshape(-1)
-            if yv.shape != (sys.p,):
-                raise InputError(f"measurement of time {tau_abs} has {yv.size} entries, expected p = {sys.p}")
-            self._arrivals[tau] = t
-            self._yxi[tau] = yv - sys.C_at(tau_abs) @ self._history[tau]
-        return k, t
+            if arrivals[tau] is not None:
+                raise InputError(f"a second packet stamped {pk.time} received at time {k}", field="y")
+            arrivals[tau] = t
+            yxi[tau] = pk.y - sys.C_at(tau) @ history[tau]
+        return _Opened(k, t, start, arrivals, history, yxi, restarted, u)
+
+    def _commit(self, step: _Opened) -> None:
+        """Install the state of a step that succeeded."""
+        self._t, self._start, self._k = step.t + 1, step.start, step.k + 1
+        self._arrivals, self._history, self._yxi = step.arrivals, step.history, step.yxi
 
 
 class RecoveryEstimator(_StampedEstimator):
@@ -185,7 +352,7 @@ class RecoveryEstimator(_StampedEstimator):
         super().__init__(system, schedule.horizon, xhat0, periodic, t0)
         self.schedule = schedule
 
-    def _reference(self) -> np.ndarray:
+    def _reference(self, restarted: bool) -> np.ndarray:
         return self.xhat  # y_ξ(τ) = y(τ) − C x̂(τ), with the estimate of the packet's own time
 
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
@@ -205,16 +372,16 @@ class RecoveryEstimator(_StampedEstimator):
             The prediction ``x̂(t+1)`` (a copy).
         """
         sys = self.system
-        k, t = self._intake(y)
-        gain = self.schedule.row(self.observed_prefix)
+        step = self._open(y, u)
+        t = step.t
+        gain = self.schedule.row(ArrivalPattern(tuple(step.arrivals)))
         yxi = np.zeros((t + 1, sys.p))
-        for tau, v in self._yxi.items():
+        for tau, v in step.yxi.items():
             yxi[tau] = v
         ue = gain.u0 + gain.F @ yxi.reshape(-1)
-        u = np.zeros(sys.m) if u is None else np.asarray(u, float).reshape(-1)
-        self.xhat = sys.A_at(k) @ self.xhat + sys.B_at(k) @ u - ue + sys.f
-        self._t += 1
-        self._k += 1
+        xhat = sys.A_at(t) @ self.xhat + sys.B_at(t) @ step.u - ue + sys.f
+        self._commit(step)
+        self.xhat = xhat
         return self.xhat.copy()
 
 
@@ -330,12 +497,64 @@ class ClassEstimator(_StampedEstimator):
         """``x̄`` of the current time: the noise-free prediction from the period's first estimate."""
         return self._xbar.copy()
 
-    def _reference(self) -> np.ndarray:
-        return self._xbar  # residuals y(τ) − C(τ) x̄(τ)
+    def _reference(self, restarted: bool) -> np.ndarray:
+        # residuals y(τ) − C(τ) x̄(τ); a new period re-anchors x̄ at the estimate reached at the period's end
+        return self.xhat if restarted else self._xbar
 
-    def _restart(self) -> None:
-        super()._restart()
-        self._xbar = self.xhat.copy()  # re-anchor x̄ at the estimate reached at the period's end
+    def class_of(self, y, u=None) -> tuple[int, tuple[int, ...]]:
+        """The class ``(t+1, S)`` a step with these packets would need (nothing changes).
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            What would arrive at the current time (as in :meth:`step`).
+        u : ndarray or None, optional
+            The input (checked like :meth:`step` does).
+
+        Returns
+        -------
+        tuple
+            ``(depth, available)``: the period time of the predicted estimate and
+            the period times of the measurements received by then.
+
+        Raises
+        ------
+        InputError
+            As :meth:`step`, except for a class the gains lack.
+        """
+        step = self._open(y, u)
+        return step.t + 1, tuple(sorted(step.yxi))
+
+    def coast(self, y, u: np.ndarray | None = None) -> np.ndarray:
+        r"""Process time ``t`` on the model alone: :math:`\hat x(t+1) = A\hat x(t) + B u(t) + f`.
+
+        The packets are checked and recorded as :meth:`step` does but not used
+        (the step of :class:`eqrec.core.runtime.GuaranteedEstimator` with
+        ``strict=False`` when the data have left the design's language).
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            What arrived at ``t`` (as in :meth:`step`).
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)`` (a copy).
+
+        Raises
+        ------
+        InputError
+            As :meth:`step`, except for a class the gains lack (nothing changes).
+        """
+        sys = self.system
+        step = self._open(y, u)
+        xhat = sys.A_at(step.t) @ self.xhat + sys.B_at(step.t) @ step.u + sys.f
+        self._commit(step)
+        self._xbar = self.xhat = xhat
+        return xhat.copy()
 
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
         r"""Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
@@ -368,20 +587,20 @@ class ClassEstimator(_StampedEstimator):
             gains do not have.
         """
         sys = self.system
-        k, t = self._intake(y)
-        S = tuple(sorted(self._yxi))
-        u = np.zeros(sys.m) if u is None else np.asarray(u, float).reshape(-1)
-        xbar = sys.A_at(k) @ self._xbar + sys.B_at(k) @ u + sys.f
+        step = self._open(y, u)
+        k, t = step.k, step.t
+        S = tuple(sorted(step.yxi))
+        xbar0 = self.xhat if step.restarted else self._xbar
+        xbar = sys.A_at(t) @ xbar0 + sys.B_at(t) @ step.u + sys.f
         try:
-            self.xhat = self.gains.estimate(t + 1, S, xbar, [self._yxi[tau] for tau in S])
+            xhat = self.gains.estimate(t + 1, S, xbar, [step.yxi[tau] for tau in S])
         except InputError:
             raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
-                             f"{self._start}, arrival prefix {self.observed_prefix.label!r}) the measurements of "
-                             f"times {[self._start + tau for tau in S]} have arrived; the gains have no class "
-                             f"({t + 1}, {list(S)})") from None
-        self._xbar = xbar
-        self._t += 1
-        self._k += 1
+                             f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
+                             f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains have "
+                             f"no class ({t + 1}, {list(S)})") from None
+        self._commit(step)
+        self._xbar, self.xhat = xbar, xhat
         return self.xhat.copy()
 
 

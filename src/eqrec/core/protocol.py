@@ -56,11 +56,39 @@ class Estimator(Protocol):
     name: str
 
     def reset(self, xhat0: Any, t0: int = 0) -> "Estimator":
-        """Start a run from ``x̂(t0) = xhat0``; returns ``self``."""
+        """Start a run from ``x̂(t0) = xhat0``.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            The initial estimate (finite).
+        t0 : int, optional
+            Absolute time of the first step.
+
+        Returns
+        -------
+        Estimator
+            ``self``, so that ``est.reset(x0).step(...)`` chains.
+        """
         ...
 
     def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, Any]:
-        """Process time ``t`` (what arrived, the input); returns ``(x̂(t+1), spread)``."""
+        """Process time ``t``: what arrived and the input.
+
+        Parameters
+        ----------
+        y : array_like, Packet, sequence of packets, or None
+            ``y(t)`` on time, time-stamped packets ``(τ, y(τ))``, or ``None``.
+        u : array_like or None
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        xhat : ndarray, shape (n,)
+            The estimate the estimator reports for this step (``x̂(t+1)`` for the guaranteed estimators).
+        spread : float or ndarray
+            The bound (``kind == "guaranteed"``) or the error covariance (``"stochastic"``).
+        """
         ...
 
     @property

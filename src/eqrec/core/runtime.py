@@ -19,6 +19,44 @@ The bound after a prefix is the design's guarantee for it: the certified
 level of the (time, available data) class for class-engine designs
 (:mod:`eqrec.design.classes`: the exact worst case of that class), the node
 or common level otherwise, and ``μ1`` at the end of each period.
+
+Every call is all-or-nothing: the packets, the input and the initial estimate
+are checked (shapes, types, NaN/inf) before anything changes, so a call that
+raises leaves the estimator exactly as it was.
+
+**Outside the designed language** (``strict=False``, class gains): the papers
+assume the arrivals stay in the language; a real network does not.  The
+estimator then keeps a true bound: it tracks a box :math:`\beta(k) \in
+\mathbb R^n` with :math:`|\xi_i(k)| \le \beta_i(k)` for every noise in the
+box.  In a period that starts with :math:`|\xi(0)| \le \beta_0` and whose
+data stay in the language, the class maps are linear in :math:`\delta =
+(w, v, \xi_0)`, so the exact worst case of class ``(d, S)`` is
+
+.. math:: \beta(d) = |G^{w,v}_{d,S}|\, r + |G^{\xi_0}_{d,S}|\, \beta_0,
+    \qquad G_{d,S} = E_d - K_{d,S} Z_S,
+
+(``r`` the noise radii), which is the designed level when :math:`\beta_0 \le
+\mu_1`.  When a step's data has no class in the design (one loss too many, a
+packet later than designed), the estimator *coasts* to the period's end on the
+model, :math:`\hat x(k+1) = A\hat x(k) + Bu(k) + f`, with
+:math:`\beta(k+1) = |A|\,\beta(k) + |E|\, r_w` (packets are not used until
+the next period), and the next period starts from :math:`\beta_0 =
+\beta(\text{end})`.
+
+*When the designed guarantee returns.*  :attr:`GuaranteedEstimator.in_design`
+is true exactly when the current period started with :math:`\beta_0 \le
+\mu_1` (componentwise) and its data have stayed in the language; the bounds
+are then the designed levels.  After an excursion, let :math:`e = \max_i
+\beta_{0,i}/\mu_1 - 1 > 0`.  The certificate of every terminal class gives
+:math:`c_T + M_T \mu_1 \mathbf 1 \le (\mu_1 - \varepsilon)\mathbf 1`
+(:math:`c_T = |G^{w,v}_T| r`, :math:`M_T = |G^{\xi_0}_T|`,
+:math:`\varepsilon \ge 0` the design's slack at the period's end), hence
+:math:`\|M_T\|_\infty \le \rho := 1 - \min_i c_{T,i}/\mu_1 \le 1` and, after
+one period in the language, :math:`e' \le \rho\, e - \varepsilon/\mu_1`.
+So with slack (:math:`\varepsilon > 0`) the designed guarantee is back after at
+most :math:`\lceil e\,\mu_1/\varepsilon \rceil` periods in the language; without
+it the bounds converge to the designed levels geometrically (ratio
+:math:`\rho < 1` when noise reaches every state by the period's end).
 """
 
 from __future__ import annotations
@@ -27,10 +65,12 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-from eqrec.core.classes import ClassGains
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
+from eqrec.core.classes import ClassGains, class_maps
+from eqrec.core.estimator import (ClassEstimator, Packet, RecoveryEstimator, _has_class, as_packets, check_estimate,
+                                  make_estimator)
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
@@ -68,6 +108,14 @@ class GuaranteedEstimator:
     periodic : bool, optional
         Restart the horizon every ``T`` steps (Section V of the prefix-based
         paper): the gains are reused for ever (default).
+    strict : bool, optional
+        ``True`` (default): data outside the design's language raise
+        :class:`InputError` (nothing changes).  ``False`` (class gains only):
+        the estimator keeps running with a true, possibly larger bound and
+        says in :attr:`in_design` whether the designed guarantee applies
+        (module docstring).
+    name : str or None, optional
+        The family in words (:mod:`eqrec.core.protocol`).
 
     Attributes
     ----------
@@ -95,15 +143,45 @@ class GuaranteedEstimator:
     True
     """
 
+    kind = "guaranteed"
+
     def __init__(self, system: AffineSystem, gains: "GainSchedule | ClassGains", bound_of: BoundRule, mu1: float,
-                 periodic: bool = True):
+                 periodic: bool = True, strict: bool = True, name: str | None = None):
+        if not isinstance(strict, (bool, np.bool_)):
+            raise InputError(f"strict must be True or False, got {strict!r}", field="strict")
+        if not strict and not isinstance(gains, ClassGains):
+            raise InputError("strict=False needs class gains (a design of the class engine, engine='classes'): the "
+                             "bound outside the language is computed from the class maps", field="strict")
         self.system = system
         self.gains = gains
         self.bound_of = bound_of
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
+        self.strict = bool(strict)
+        self.name = name or ("guaranteed, class engine" if isinstance(gains, ClassGains) else "guaranteed, node gains")
         self._est: "RecoveryEstimator | ClassEstimator | None" = None
         self.bound = np.nan
+        self._boxes = None if strict else _ClassBoxes(system, gains, self.mu1)
+        self._beta0 = np.zeros(0)  # the current period's initial error box (strict=False)
+        self._beta = np.zeros(0)  # the error box of the current estimate (strict=False)
+        self._coasting = False  # the data left the language in this period (strict=False)
+        self._in_design = True
+
+    @property
+    def in_design(self) -> bool:
+        """Whether the designed guarantee applies to the current estimate (always true with ``strict=True``).
+
+        False from a step whose data leave the design's language until a period
+        starts again with an error box within ``μ1`` (module docstring).
+        """
+        return self._in_design
+
+    @property
+    def error_box(self) -> np.ndarray:
+        """``β``: per-state bounds ``|x_i − x̂_i| <= β_i`` of the current estimate (``strict=False`` only)."""
+        if self.strict:
+            raise InputError("the per-state error box is tracked with strict=False only", field="strict")
+        return self._beta.copy()
 
     def reset(self, xhat0, t0: int = 0) -> "GuaranteedEstimator":
         """Start from ``x̂(t0) = xhat0`` (shape ``(n,)``); the guarantee assumes its error is within ``μ1``.
@@ -127,14 +205,15 @@ class GuaranteedEstimator:
         Raises
         ------
         InputError
-            If ``xhat0`` does not have ``n`` entries.
+            If ``xhat0`` does not have ``n`` finite entries, or ``t0`` is not an integer
+            (nothing changes).
         """
-        x0 = np.asarray(xhat0, float)
-        if x0.shape != (self.system.n,):
-            raise InputError(f"the initial estimate must have n = {self.system.n} entries, got shape {x0.shape}",
-                             field="xhat0")
-        self._est = make_estimator(self.system, self.gains, x0, periodic=self.periodic, t0=int(t0))
+        x0 = check_estimate(xhat0, self.system.n)
+        self._est = make_estimator(self.system, self.gains, x0, periodic=self.periodic, t0=t0)
         self.bound = self.mu1
+        if not self.strict:
+            self._beta0 = self._beta = np.full(self.system.n, self.mu1)
+            self._coasting, self._in_design = False, True
         return self
 
     @property
@@ -187,10 +266,40 @@ class GuaranteedEstimator:
             a non-periodic estimator.
         """
         est = self._running()
-        packets = _as_packets(y, est.time)
+        packets = as_packets(y, est.time, self.system.p)
+        if not self.strict:
+            return self._relaxed_step(est, packets, u)
         xhat = est.step(packets, u)
         done = est.period_time == est.T
         self.bound = self.mu1 if done else float(self.bound_of(est.observed_prefix))
+        return xhat, self.bound
+
+    def _relaxed_step(self, est: ClassEstimator, packets: list[Packet], u) -> tuple[np.ndarray, float]:
+        """A step with ``strict=False`` (module docstring): the class step, or coasting with a growing box."""
+        boundary = est.period_time == est.T
+        if boundary and not self.periodic:
+            est.class_of(packets, u)  # raises: the horizon is over
+        beta0, coasting = (self._beta, False) if boundary else (self._beta0, self._coasting)
+        in_design = self._in_design if not boundary else bool(np.all(beta0 <= self.mu1))
+        if not coasting:
+            depth, S = est.class_of(packets, u)  # every input checked; nothing changes
+            coasting = not _has_class(self.gains, depth, S)
+        if coasting:  # out of the language: the model alone, packets unused until the next period
+            t = 0 if boundary else est.period_time
+            beta = self._boxes.coast(t, self._beta)
+            xhat = est.coast(packets, u)
+            in_design = False
+        else:
+            xhat = est.step(packets, u)
+            beta = self._boxes.box(depth, S, beta0)
+        if est.period_time == est.T and in_design:
+            beta = np.full(self.system.n, self.mu1)  # the certified recovery level
+        self._beta0, self._beta, self._coasting, self._in_design = beta0, beta, coasting, in_design
+        if in_design:
+            done = est.period_time == est.T
+            self.bound = self.mu1 if done else float(self.bound_of(est.observed_prefix))
+        else:
+            self.bound = float(beta.max())
         return xhat, self.bound
 
     def update(self, y=None, u=None) -> np.ndarray:
@@ -218,28 +327,33 @@ class GuaranteedEstimator:
         return self.step(y, u)[0]
 
 
-def _is_pair(item) -> bool:
-    return (isinstance(item, (tuple, list)) and len(item) == 2 and isinstance(item[0], (int, np.integer))
-            and not np.isscalar(item[1]))
+class _ClassBoxes:
+    """Exact per-state worst cases of the class maps for any initial error box, and the coasting box.
 
+    For the class ``(d, S)`` the error is ``G δ`` with ``G = E_d − K Z_S``
+    (:func:`eqrec.core.classes.class_maps`); its worst case over
+    ``|w| <= η_w, |v| <= η_v, |ξ0| <= β0`` is ``|G_wv| r + |G_ξ0| β0``.  The two
+    parts are computed on first use of a class and kept.
+    """
 
-def _as_packets(y, now: int) -> list[Packet]:
-    """What arrived at ``now``: ``None``; ``y(now)`` (an array, a list of numbers or a number); a
-    :class:`Packet` or a pair ``(τ, y(τ))``; or a list of packets and pairs."""
-    if y is None:
-        return []
-    if isinstance(y, Packet):
-        return [y]
-    if _is_pair(y):
-        return [Packet(int(y[0]), np.asarray(y[1], float))]
-    if np.isscalar(y) or isinstance(y, np.ndarray) or all(np.isscalar(v) for v in y):
-        return [Packet(now, np.atleast_1d(np.asarray(y, float)))]
-    out = []
-    for item in y:
-        if isinstance(item, Packet):
-            out.append(item)
-        elif _is_pair(item):
-            out.append(Packet(int(item[0]), np.asarray(item[1], float)))
-        else:
-            raise InputError(f"a packet is (time stamp, y), got {item!r}", field="y")
-    return out
+    def __init__(self, system: AffineSystem, gains: ClassGains, mu1: float):
+        self.system, self.gains = system, gains
+        self.stacking = Stacking(system, gains.horizon)
+        lay = self.stacking.layout
+        self.radius = lay.radius(system.eta_w, system.eta_v, mu1)[: lay.xi0.start]
+        self._parts: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def box(self, depth: int, available: tuple[int, ...], beta0: np.ndarray) -> np.ndarray:
+        i = self.gains.classes.index(depth, available)
+        if i not in self._parts:
+            E, Z = class_maps(self.stacking, self.gains.classes.classes[i])
+            G = np.abs(E - self.gains.K[i] @ Z)
+            cut = self.stacking.layout.xi0.start
+            self._parts[i] = (G[:, :cut] @ self.radius, G[:, cut:])
+        noise, initial = self._parts[i]
+        return noise + initial @ beta0
+
+    def coast(self, t: int, beta: np.ndarray) -> np.ndarray:
+        sys = self.system
+        r_w = self.radius[: sys.nw]  # w(t) has the same radii at every t
+        return np.abs(sys.A_at(t)) @ beta + np.abs(sys.E_at(t)) @ r_w

@@ -141,15 +141,20 @@ class SwitchingEstimator:
         ndarray, shape (n,)
             The prediction ``x̂(k+1)``.
         """
-        est = self._est
+        est, mode = self._est, self.mode
         k = est.time
-        packets = est._packets(y)
-        if self.mode == "recovery" and est.period_time == self.T:
-            self.mode = "performance"
+        packets = est._packets(y)  # checked before anything changes
+        switched, reverted = False, False
+        if mode == "recovery" and est.period_time == self.T:
+            mode, reverted = "performance", True
+            est = make_estimator(self.system, self.performance, est.xhat, periodic=True, t0=k)
+        if mode == "performance" and not any(int(pk.time) == k for pk in packets):
+            mode, switched = "recovery", True
+            est = make_estimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
+        xhat = est.step(packets, u)  # all-or-nothing; a new estimator is dropped if it raises
+        self._est, self.mode = est, mode
+        if reverted:
             self.revert_times.append(k)
-            est = self._est = make_estimator(self.system, self.performance, est.xhat, periodic=True, t0=k)
-        if self.mode == "performance" and not any(int(pk.time) == k for pk in packets):
-            self.mode = "recovery"
+        if switched:
             self.switch_times.append(k)
-            est = self._est = make_estimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
-        return est.step(packets, u)
+        return xhat

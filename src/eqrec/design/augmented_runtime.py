@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+from eqrec.core.estimator import as_packets, check_estimate, check_input
 from eqrec.core.gains import GainRow, GainSchedule, schedule_from_word_gains
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
@@ -226,7 +227,7 @@ class AugmentedEstimator:
         self.system, self.gains = system, gains
         self.T = len(self.word) if self.word is not None else len(gains.L)
         self.L = as_time_varying_L(gains.L, self.T, system.n, system.p)
-        self.xhat = np.asarray(xhat0, float).reshape(system.n).copy()
+        self.xhat = check_estimate(xhat0, system.n)
         self.s = np.asarray(gains.s0, float).reshape(system.n).copy()
         self._arrivals: list[int | None] = []
         self._xs: list[tuple[np.ndarray, np.ndarray]] = []
@@ -251,28 +252,40 @@ class AugmentedEstimator:
         n, p = sysm.n, sysm.p
         if t >= self.T:
             raise InputError(f"the estimator's horizon T = {self.T} is over")
+        u = check_input(u, sysm.m)  # everything is checked before anything changes
         if self.word is not None:
-            y = [] if (y is None or self.word[t] != "1") else [(t, y)]
-        self._xs.append((self.xhat.copy(), self.s.copy()))
-        self._arrivals.append(None)
+            y = as_packets(y, t, p)
+            if any(pk.time != t for pk in y):
+                raise InputError("an estimator of one word takes y(t) itself (or None), not time-stamped packets",
+                                 field="y")
+            y = [] if (not y or self.word[t] != "1") else [(t, y[0].y)]
+        else:
+            y = [(pk.time, pk.y) for pk in as_packets(y, t, p)]
+        xs = self._xs + [(self.xhat.copy(), self.s.copy())]
+        arrivals, z = self._arrivals + [None], dict(self._z)
         for tau, yt in y:
-            self._arrivals[tau] = t
+            if tau < 0 or arrivals[tau] is not None:
+                raise InputError(f"packet stamped {tau} at time {t}: " + ("before the horizon's start" if tau < 0
+                                 else "a second packet with this stamp"), field="y")
+            arrivals[tau] = t
             C = sysm.C_at(tau)
-            self._z[tau] = (np.asarray(yt, float).reshape(p) - C @ self._xs[tau][0]) - C @ self._xs[tau][1]
+            z[tau] = (yt - C @ xs[tau][0]) - C @ xs[tau][1]
         C = sysm.C_at(t)
-        on_time = self._arrivals[t] == t
+        on_time = arrivals[t] == t
         if not on_time:  # the innovation with ỹ(t) = 0
             z_missing = np.zeros(p) - C @ self.s
         if self.word is not None:  # ue(t) = ν_t + M(t, 0..t) z(0..t), zero columns at the missing steps
-            self._z.setdefault(t, z_missing if not on_time else None)
+            z.setdefault(t, z_missing if not on_time else None)
             M, nu = self.gains.M[t * n:(t + 1) * n, : (t + 1) * p], self.gains.nu[t * n:(t + 1) * n]
-            ue = nu + M @ np.concatenate([self._z[tau] for tau in range(t + 1)])
+            ue = nu + M @ np.concatenate([z[tau] for tau in range(t + 1)])
         else:
-            pre = ArrivalPattern(tuple(self._arrivals))
+            pre = ArrivalPattern(tuple(arrivals))
+            if pre not in self.gains.rows:
+                raise InputError(f"arrival prefix {pre.label!r} at time {t} is not in the design", field="y")
             (M, nu), taus = self.gains.rows[pre], pre.available(t)
-            ue = nu + M @ (np.concatenate([self._z[tau] for tau in taus]) if taus else np.zeros(0))
+            ue = nu + M @ (np.concatenate([z[tau] for tau in taus]) if taus else np.zeros(0))
         Lt = self.L[t] if (on_time or self.runtime == "hold") else np.zeros((n, p))
-        self.s = sysm.A_at(t) @ self.s + ue + Lt @ (self._z[t] if on_time else z_missing)
-        u = np.zeros(sysm.m) if u is None else np.asarray(u, float).reshape(-1)
-        self.xhat = sysm.A_at(t) @ self.xhat + sysm.B_at(t) @ u - ue + sysm.f
+        s_next = sysm.A_at(t) @ self.s + ue + Lt @ (z[t] if on_time else z_missing)
+        xhat = sysm.A_at(t) @ self.xhat + sysm.B_at(t) @ u - ue + sysm.f
+        self._xs, self._arrivals, self._z, self.s, self.xhat = xs, arrivals, z, s_next, xhat
         return self.xhat.copy()

@@ -116,7 +116,7 @@ class Design:
         """Seconds spent inside the solver call (``solution.solve_time``)."""
         return self.solution.solve_time
 
-    def estimator(self, periodic: bool = True) -> "GuaranteedEstimator":
+    def estimator(self, periodic: bool = True, strict: bool = True) -> "GuaranteedEstimator":
         """The designed estimator, ready to run: ``reset(x̂0)``, then ``step(y, u) -> (x̂, bound)``.
 
         Class-engine designs run in class form (:class:`eqrec.core.estimator.ClassEstimator`,
@@ -133,6 +133,11 @@ class Design:
         ----------
         periodic : bool, optional
             Reuse the gains every ``T`` steps (the default) or stop after ``T``.
+        strict : bool, optional
+            ``True`` (default): arrivals outside the language raise
+            :class:`InputError`.  ``False`` (class-engine designs): the
+            estimator keeps a true bound outside the language and reports
+            :attr:`GuaranteedEstimator.in_design` (:mod:`eqrec.core.runtime`).
 
         Returns
         -------
@@ -171,7 +176,7 @@ class Design:
                 raise InputError("this design has no gains to run")
             gains = self.schedule
             bound_of = partial(node_level, self)
-        return GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic)
+        return GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic, strict=strict)
 
 
 def node_level(design: Design, prefix: ArrivalPattern) -> float:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from eqrec.core.estimator import check_estimate
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
@@ -80,7 +81,7 @@ def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=
                         f=np.zeros(n) if f is None else np.asarray(f, float), name=name or "python-control system")
 
 
-def estimator_iosys(design, *, name: str = "eqrec_estimator"):
+def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool | None" = None):
     """The class-form estimator of a class-engine design as a discrete-time ``control.NonlinearIOSystem``.
 
     Parameters
@@ -89,6 +90,9 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
         A design of the class engine (``design.class_gains`` set).
     name : str, optional
         Name of the returned I/O system.
+    dt : float, True or None, optional
+        Sampling time of the I/O system (``None``: the plant's ``dt`` when the
+        system came from :func:`system_from_statespace`, else ``True``).
 
     Returns
     -------
@@ -96,6 +100,18 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
         Inputs ``u[i]``, ``y[j]``, ``arrived``; outputs ``xhat[k]``, ``bound``;
         the initial state for an initial estimate ``x̂(0)`` is
         ``sys.initial_state(xhat0)`` (an attribute set on the returned system).
+        ``arrived`` must be 0 or 1 exactly; ``y`` is not read when it is 0;
+        ``u`` and an arrived ``y`` must be finite.  Give a lost packet a
+        finite ``y`` (e.g. 0), not NaN: ``control.input_output_response``
+        interpolates the input array, and ``0 · NaN`` would reach the
+        neighbouring samples (refused there with :class:`InputError`).
+
+    Raises
+    ------
+    InputError
+        A design without class gains; during a simulation, ``arrived`` other
+        than 0 or 1, NaN/inf in ``u`` or in an arrived ``y``, or arrivals
+        outside the design's language.
     """
     control = _control()
     gains = design.class_gains
@@ -127,7 +143,18 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
     def update(_t, x, u, _params):
         xbar, innov, arrived, t = unpack(np.asarray(x, float))
         innov, arrived = innov.copy(), arrived.copy()
-        uu, y, got = u[:m], u[m:m + p], bool(u[m + p] > 0.5)
+        uu, y, got = u[:m], u[m:m + p], u[m + p]
+        if got not in (0.0, 1.0):
+            raise InputError(f"arrived must be 0 or 1, got {got!r} at period step {t}", field="arrived")
+        if not np.all(np.isfinite(uu)):
+            raise InputError(f"the input u contains NaN or infinite entries at period step {t}: {uu.tolist()}",
+                             field="u")
+        got = bool(got)
+        if got and not np.all(np.isfinite(y)):
+            raise InputError(f"an arrived measurement y contains NaN or infinite entries at period step {t}: "
+                             f"{y.tolist()} (control.input_output_response interpolates its input array, so a NaN "
+                             "in a lost packet's y reaches the neighbouring samples: give lost packets a finite y, "
+                             "e.g. 0)", field="y")
         if got:
             innov[t] = y - system.C_at(t) @ xbar
             arrived[t] = True
@@ -142,10 +169,12 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator"):
         return np.concatenate([xhat, [bound]])
 
     def initial_state(xhat0):
-        xhat0 = np.asarray(xhat0, float).reshape(n)
+        xhat0 = check_estimate(xhat0, n)
         return np.concatenate([xhat0, np.zeros(T * p + T), [0.0]])
 
-    sys_io = control.nlsys(update, output, dt=True, name=name,
+    if dt is None:
+        dt = getattr(system, "dt", None) or True
+    sys_io = control.nlsys(update, output, dt=dt, name=name,
                            inputs=[f"u[{i}]" for i in range(m)] + [f"y[{j}]" for j in range(p)] + ["arrived"],
                            outputs=[f"xhat[{k}]" for k in range(n)] + ["bound"],
                            states=n + T * p + T + 1)

@@ -1,0 +1,103 @@
+"""A true bound when the arrivals leave the designed language (strict=False), and the time convention of the
+runtime estimators on time-varying systems (issue 24, sections 1 and 2)."""
+import numpy as np
+import pytest
+
+from eqrec.core.systems import AffineSystem
+from eqrec.design.delay import design_delay_global
+from eqrec.errors import InputError
+
+LOSS = ["000", "300", "030", "003"]  # at most one loss per block of three
+
+
+@pytest.fixture(scope="module")
+def plant():
+    return AffineSystem(A=np.array([[1.0, 0.1], [0.0, 1.0]]), B=np.array([[0.005], [0.1]]),
+                        C=np.array([[1.0, 0.0]]), E=0.1 * np.eye(2), eta_w=0.1, eta_v=0.05)
+
+
+@pytest.fixture(scope="module")
+def design(plant):
+    return design_delay_global(plant, LOSS).design
+
+
+def _monte_carlo(system, true_A, design, loss, runs, steps, seed, t0=0, burst=False):
+    """Runs with Bernoulli (or bursty) losses beyond the design and noise at the box corners.
+
+    Returns the largest error/bound ratio, the number of out-of-design steps and of returns to the design."""
+    rng = np.random.default_rng(seed)
+    worst, outside, returns = 0.0, 0, 0
+    for _ in range(runs):
+        est = design.estimator(strict=False)
+        x = rng.uniform(-3, 3, system.n)
+        est.reset(x - rng.choice([-1.0, 1.0], system.n) * design.mu1, t0=t0)
+        previous, bad = True, False
+        for k in range(t0, t0 + steps):
+            u = np.array([np.cos(0.2 * k)])
+            y = system.C_at(0) @ x + system.V_at(0) @ (rng.choice([-1.0, 1.0], system.nv) * system.eta_v)
+            bad = (rng.random() < (0.6 if bad else 0.1)) if burst else rng.random() < loss
+            xhat, bound = est.step(None if bad else y, u)
+            w = rng.choice([-1.0, 1.0], system.nw) * system.eta_w
+            x = true_A(k) @ x + system.B_at(0) @ u + system.f + system.E_at(0) @ w
+            worst = max(worst, float(np.abs(x - xhat).max() / bound))
+            outside += not est.in_design
+            returns += est.in_design and not previous
+            previous = est.in_design
+    return worst, outside, returns
+
+
+@pytest.mark.parametrize("loss,burst", [(0.3, False), (0.6, False), (0.0, True)])
+def test_the_bound_holds_outside_the_language(plant, design, loss, burst):
+    worst, outside, returns = _monte_carlo(plant, lambda k: plant.A, design, loss, runs=60, steps=60, seed=7,
+                                           burst=burst)
+    assert worst <= 1 + 1e-12
+    assert outside > 0 and returns > 0  # the traces did leave the language, and the guarantee came back
+
+
+def test_inside_the_language_strict_false_gives_the_designed_bounds(plant, design):
+    strict, relaxed = design.estimator().reset(np.zeros(2)), design.estimator(strict=False).reset(np.zeros(2))
+    rng = np.random.default_rng(3)
+    for k in range(30):
+        y = None if k % 3 == 1 else rng.normal(size=1)
+        a, b = strict.step(y), relaxed.step(y)
+        assert np.array_equal(a[0], b[0]) and a[1] == b[1] and relaxed.in_design
+        assert np.all(relaxed.error_box <= a[1] * (1 + 1e-12))
+
+
+def test_leaving_the_language_reports_it_and_the_box(design):
+    est = design.estimator(strict=False).reset(np.zeros(2))
+    est.step(None)
+    assert est.in_design
+    _, bound = est.step(None)  # a second loss in the block: outside the language
+    assert not est.in_design and bound == pytest.approx(est.error_box.max()) and bound > design.mu2
+    with pytest.raises(InputError, match="strict=False"):
+        design.estimator().reset(np.zeros(2)).error_box
+
+
+def test_time_varying_model_is_read_at_the_period_time_over_several_periods():
+    """A 3-periodic plant (the design's model covers one period), started at t0 = 5: the guarantee holds in every
+    period, and the estimator reads the model at the period time (absolute time would run past the data)."""
+    T = 3
+    A = np.stack([[[1.0, 0.1 * (1 + 0.5 * t)], [0.0, 0.95 + 0.02 * t]] for t in range(T)])
+    system = AffineSystem(A=A, B=np.array([[0.005], [0.1]]), C=np.array([[1.0, 0.0]]), E=0.1 * np.eye(2),
+                          eta_w=0.1, eta_v=0.05)
+    design = design_delay_global(system, LOSS).design
+    t0 = 5
+    true_A = (lambda k: A[(k - t0) % T])
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    for _ in range(40):
+        est = design.estimator().reset(np.zeros(2), t0=t0)
+        x = rng.choice([-1.0, 1.0], 2) * design.mu1
+        for k in range(t0, t0 + 8 * T):
+            if (k - t0) % T == 0:
+                which = rng.integers(0, T + 1)  # the one loss of this period (T: none)
+            lost = (k - t0) % T == which
+            y = system.C_at(0) @ x + rng.choice([-1.0, 1.0], 1) * 0.05
+            xhat, bound = est.step(None if lost else y, np.array([0.3]))
+            x = true_A(k) @ x + system.B_at(0) @ np.array([0.3]) + system.E_at(0) @ (rng.choice([-1.0, 1.0], 2) * 0.1)
+            worst = max(worst, float(np.abs(x - xhat).max() / bound))
+    assert worst <= 1 + 1e-12
+    # out of the language too: the same periodic plant, losses beyond the design
+    worst, outside, _ = _monte_carlo(system, true_A, design, 0.4, runs=30, steps=30, seed=5, t0=t0)
+    assert worst <= 1 + 1e-12 and outside > 0
