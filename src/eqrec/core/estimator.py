@@ -82,7 +82,7 @@ def _finite_vector(value, size: int, field: str, what: str, symbol: str = "") ->
     if arr.shape != (size,):
         expected = f"{symbol} = {size}" if symbol else str(size)
         raise InputError(f"{what} has {arr.size} entries (shape {raw.shape}), expected {expected}", field=field)
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InputError(f"{what} contains NaN or infinite entries: {arr.tolist()}", field=field)
     return arr
 
@@ -145,6 +145,12 @@ def _is_pair(item) -> bool:
     return isinstance(item, (tuple, list)) and len(item) == 2 and _is_stamp(item[0]) and not np.isscalar(item[1])
 
 
+class _Checked(list):
+    """Packets already checked by :func:`as_packets` for the time ``now`` (not checked again)."""
+
+    now: int
+
+
 def as_packets(y, now: int, p: int) -> list[Packet]:
     """What arrived at time ``now``, checked: a list of :class:`Packet` with finite ``y`` of ``p`` entries.
 
@@ -177,6 +183,8 @@ def as_packets(y, now: int, p: int) -> list[Packet]:
     """
     if y is None:
         return []
+    if isinstance(y, _Checked) and y.now == now:
+        return y
     if isinstance(y, (str, bytes)):
         raise InputError(f"a measurement must be an array of p = {p} numbers, got a string", field="y")
     if isinstance(y, Packet) or _is_pair(y):
@@ -191,7 +199,7 @@ def as_packets(y, now: int, p: int) -> list[Packet]:
                              field="y") from None
         if items and all(np.isscalar(v) and not isinstance(v, (str, bytes)) for v in items):
             items = [Packet(now, items)]
-    out: list[Packet] = []
+    out = []
     seen: set[int] = set()
     for item in items:
         if isinstance(item, Packet):
@@ -210,7 +218,9 @@ def as_packets(y, now: int, p: int) -> list[Packet]:
             raise InputError(f"a second packet stamped {stamp} received at time {now}", field="y")
         seen.add(stamp)
         out.append(Packet(stamp, _finite_vector(value, p, "y", f"the measurement of time {stamp}", "p")))
-    return out
+    checked = _Checked(out)
+    checked.now = now
+    return checked
 
 
 @dataclass
@@ -549,8 +559,10 @@ class ClassEstimator(_StampedEstimator):
         InputError
             As :meth:`step`, except for a class the gains lack (nothing changes).
         """
+        return self._coast(self._open(y, u))
+
+    def _coast(self, step: _Opened) -> np.ndarray:
         sys = self.system
-        step = self._open(y, u)
         xhat = sys.A_at(step.t) @ self.xhat + sys.B_at(step.t) @ step.u + sys.f
         self._commit(step)
         self._xbar = self.xhat = xhat
@@ -586,8 +598,11 @@ class ClassEstimator(_StampedEstimator):
             wrong length, or observed data whose class ``(t+1, S)`` the
             gains do not have.
         """
+        return self._advance(self._open(y, u))
+
+    def _advance(self, step: _Opened) -> np.ndarray:
+        """The step of :meth:`step` from its checked state (the class lookup may still raise; nothing changes)."""
         sys = self.system
-        step = self._open(y, u)
         k, t = step.k, step.t
         S = tuple(sorted(step.yxi))
         xbar0 = self.xhat if step.restarted else self._xbar

@@ -277,20 +277,18 @@ class GuaranteedEstimator:
     def _relaxed_step(self, est: ClassEstimator, packets: list[Packet], u) -> tuple[np.ndarray, float]:
         """A step with ``strict=False`` (module docstring): the class step, or coasting with a growing box."""
         boundary = est.period_time == est.T
-        if boundary and not self.periodic:
-            est.class_of(packets, u)  # raises: the horizon is over
         beta0, coasting = (self._beta, False) if boundary else (self._beta0, self._coasting)
         in_design = self._in_design if not boundary else bool(np.all(beta0 <= self.mu1))
+        opened = est._open(packets, u)  # every input checked; nothing changes
         if not coasting:
-            depth, S = est.class_of(packets, u)  # every input checked; nothing changes
+            depth, S = opened.t + 1, tuple(sorted(opened.yxi))
             coasting = not _has_class(self.gains, depth, S)
         if coasting:  # out of the language: the model alone, packets unused until the next period
-            t = 0 if boundary else est.period_time
-            beta = self._boxes.coast(t, self._beta)
-            xhat = est.coast(packets, u)
+            beta = self._boxes.coast(opened.t, self._beta)
+            xhat = est._coast(opened)
             in_design = False
         else:
-            xhat = est.step(packets, u)
+            xhat = est._advance(opened)
             beta = self._boxes.box(depth, S, beta0)
         if est.period_time == est.T and in_design:
             beta = np.full(self.system.n, self.mu1)  # the certified recovery level
