@@ -101,3 +101,40 @@ def test_time_varying_model_is_read_at_the_period_time_over_several_periods():
     # out of the language too: the same periodic plant, losses beyond the design
     worst, outside, _ = _monte_carlo(system, true_A, design, 0.4, runs=30, steps=30, seed=5, t0=t0)
     assert worst <= 1 + 1e-12 and outside > 0
+
+
+def test_python_control_system_matches_the_estimator_outside_the_language(plant, design):
+    control = pytest.importorskip("control")
+    from eqrec.interop.python_control import estimator_iosys
+
+    io = estimator_iosys(design, strict=False)
+    rng = np.random.default_rng(0)
+    N = 60
+    U = np.vstack([np.sin(np.arange(N)), rng.normal(size=N), (rng.random(N) > 0.4).astype(float)])
+    r = control.input_output_response(io, np.arange(N), U, io.initial_state(np.zeros(2)))
+    est = design.estimator(strict=False).reset(np.zeros(2))
+    outside = 0
+    for k in range(N - 1):
+        xhat, bound = est.step(None if U[2, k] == 0 else U[1, k:k + 1], U[0, k:k + 1])
+        assert np.array_equal(xhat, r.outputs[:2, k + 1]) and bound == r.outputs[2, k + 1]
+        assert est.in_design == bool(r.outputs[3, k + 1])
+        outside += not est.in_design
+    assert outside > 0
+
+
+def test_python_control_system_refuses_bad_arrivals_and_non_finite_data(plant, design):
+    control = pytest.importorskip("control")
+    from eqrec.interop.python_control import estimator_iosys
+
+    io = estimator_iosys(design)
+    N = 6
+    for row, col, value, field in ((2, 3, 0.5, "arrived"), (0, 2, np.nan, "'u'"), (1, 2, np.inf, "'y'")):
+        U = np.vstack([np.zeros(N), np.zeros(N), np.ones(N)])
+        U[row, col] = value
+        with pytest.raises(InputError, match=field):
+            control.input_output_response(io, np.arange(N), U, io.initial_state(np.zeros(2)))
+    U = np.vstack([np.zeros(N), np.zeros(N), np.ones(N)])
+    U[2, 3], U[1, 3] = 0, 1e300  # a lost packet's y is not read
+    r = control.input_output_response(io, np.arange(N), U, io.initial_state(np.zeros(2)))
+    assert np.all(np.isfinite(r.outputs))
+    assert estimator_iosys(design, dt=0.1).dt == 0.1

@@ -61,7 +61,7 @@ it the bounds converge to the designed levels geometrically (ratio
 
 from __future__ import annotations
 
-from typing import Callable, Iterable
+from typing import Callable, Iterable, NamedTuple
 
 import numpy as np
 
@@ -161,11 +161,8 @@ class GuaranteedEstimator:
         self.name = name or ("guaranteed, class engine" if isinstance(gains, ClassGains) else "guaranteed, node gains")
         self._est: "RecoveryEstimator | ClassEstimator | None" = None
         self.bound = np.nan
-        self._boxes = None if strict else _ClassBoxes(system, gains, self.mu1)
-        self._beta0 = np.zeros(0)  # the current period's initial error box (strict=False)
-        self._beta = np.zeros(0)  # the error box of the current estimate (strict=False)
-        self._coasting = False  # the data left the language in this period (strict=False)
-        self._in_design = True
+        self._boxes = None if strict else ClassBoxes(system, gains, self.mu1)
+        self._box = BoxState(np.zeros(0), np.zeros(0), False, True)  # strict=False: the error boxes
 
     @property
     def in_design(self) -> bool:
@@ -174,14 +171,14 @@ class GuaranteedEstimator:
         False from a step whose data leave the design's language until a period
         starts again with an error box within ``μ1`` (module docstring).
         """
-        return self._in_design
+        return self._box.in_design
 
     @property
     def error_box(self) -> np.ndarray:
         """``β``: per-state bounds ``|x_i − x̂_i| <= β_i`` of the current estimate (``strict=False`` only)."""
         if self.strict:
             raise InputError("the per-state error box is tracked with strict=False only", field="strict")
-        return self._beta.copy()
+        return self._box.beta.copy()
 
     def reset(self, xhat0, t0: int = 0) -> "GuaranteedEstimator":
         """Start from ``x̂(t0) = xhat0`` (shape ``(n,)``); the guarantee assumes its error is within ``μ1``.
@@ -212,8 +209,7 @@ class GuaranteedEstimator:
         self._est = make_estimator(self.system, self.gains, x0, periodic=self.periodic, t0=t0)
         self.bound = self.mu1
         if not self.strict:
-            self._beta0 = self._beta = np.full(self.system.n, self.mu1)
-            self._coasting, self._in_design = False, True
+            self._box = self._boxes.start()
         return self
 
     @property
@@ -276,28 +272,12 @@ class GuaranteedEstimator:
 
     def _relaxed_step(self, est: ClassEstimator, packets: list[Packet], u) -> tuple[np.ndarray, float]:
         """A step with ``strict=False`` (module docstring): the class step, or coasting with a growing box."""
-        boundary = est.period_time == est.T
-        beta0, coasting = (self._beta, False) if boundary else (self._beta0, self._coasting)
-        in_design = self._in_design if not boundary else bool(np.all(beta0 <= self.mu1))
         opened = est._open(packets, u)  # every input checked; nothing changes
-        if not coasting:
-            depth, S = opened.t + 1, tuple(sorted(opened.yxi))
-            coasting = not _has_class(self.gains, depth, S)
-        if coasting:  # out of the language: the model alone, packets unused until the next period
-            beta = self._boxes.coast(opened.t, self._beta)
-            xhat = est._coast(opened)
-            in_design = False
-        else:
-            xhat = est._advance(opened)
-            beta = self._boxes.box(depth, S, beta0)
-        if est.period_time == est.T and in_design:
-            beta = np.full(self.system.n, self.mu1)  # the certified recovery level
-        self._beta0, self._beta, self._coasting, self._in_design = beta0, beta, coasting, in_design
-        if in_design:
-            done = est.period_time == est.T
-            self.bound = self.mu1 if done else float(self.bound_of(est.observed_prefix))
-        else:
-            self.bound = float(beta.max())
+        t, S = opened.t, tuple(sorted(opened.yxi))
+        boxes, coasting = self._boxes.advance(self._box, t, S)
+        xhat = est._coast(opened) if coasting else est._advance(opened)
+        self._box = boxes
+        self.bound = self._boxes.bound(boxes, t, S, self.bound_of, est.observed_prefix)
         return xhat, self.bound
 
     def update(self, y=None, u=None) -> np.ndarray:
@@ -325,23 +305,82 @@ class GuaranteedEstimator:
         return self.step(y, u)[0]
 
 
-class _ClassBoxes:
+class BoxState(NamedTuple):
+    """The error boxes of an estimator running with ``strict=False`` (module docstring).
+
+    Parameters
+    ----------
+    beta0 : ndarray, shape (n,)
+        Bounds on the initial error of the current period.
+    beta : ndarray, shape (n,)
+        Bounds on the error of the current estimate.
+    coasting : bool
+        The data have left the language in this period.
+    in_design : bool
+        The designed guarantee applies to the current estimate.
+    """
+
+    beta0: np.ndarray
+    beta: np.ndarray
+    coasting: bool
+    in_design: bool
+
+
+class ClassBoxes:
     """Exact per-state worst cases of the class maps for any initial error box, and the coasting box.
 
     For the class ``(d, S)`` the error is ``G δ`` with ``G = E_d − K Z_S``
     (:func:`eqrec.core.classes.class_maps`); its worst case over
     ``|w| <= η_w, |v| <= η_v, |ξ0| <= β0`` is ``|G_wv| r + |G_ξ0| β0``.  The two
-    parts are computed on first use of a class and kept.
+    parts are computed on first use of a class and kept.  :meth:`advance` is the
+    one transition of the boxes, used by :class:`GuaranteedEstimator` and by
+    :func:`eqrec.interop.python_control.estimator_iosys`.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model (its noise bounds give the radii).
+    gains : ClassGains
+        The design's class gains.
+    mu1 : float
+        The recovery level.
     """
 
     def __init__(self, system: AffineSystem, gains: ClassGains, mu1: float):
-        self.system, self.gains = system, gains
+        self.system, self.gains, self.mu1 = system, gains, float(mu1)
         self.stacking = Stacking(system, gains.horizon)
         lay = self.stacking.layout
         self.radius = lay.radius(system.eta_w, system.eta_v, mu1)[: lay.xi0.start]
         self._parts: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
+    def start(self) -> BoxState:
+        """The boxes after ``reset``: ``|ξ(0)| <= μ1``, in the design.
+
+        Returns
+        -------
+        BoxState
+            ``β0 = β = μ1``.
+        """
+        mu1 = np.full(self.system.n, self.mu1)
+        return BoxState(mu1, mu1, False, True)
+
     def box(self, depth: int, available: tuple[int, ...], beta0: np.ndarray) -> np.ndarray:
+        """The exact per-state worst case of the class ``(depth, available)`` from the initial box ``beta0``.
+
+        Parameters
+        ----------
+        depth : int
+            Period time of the estimate.
+        available : tuple of int
+            Period times of the measurements received.
+        beta0 : ndarray, shape (n,)
+            Bounds on the period's initial error.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            ``|G_wv| r + |G_ξ0| β0``.
+        """
         i = self.gains.classes.index(depth, available)
         if i not in self._parts:
             E, Z = class_maps(self.stacking, self.gains.classes.classes[i])
@@ -352,6 +391,82 @@ class _ClassBoxes:
         return noise + initial @ beta0
 
     def coast(self, t: int, beta: np.ndarray) -> np.ndarray:
+        """The box after a step on the model alone: ``|A(t)| β + |E(t)| r_w``.
+
+        Parameters
+        ----------
+        t : int
+            Period time of the step.
+        beta : ndarray, shape (n,)
+            Bounds on the current error.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Bounds on the next error.
+        """
         sys = self.system
         r_w = self.radius[: sys.nw]  # w(t) has the same radii at every t
         return np.abs(sys.A_at(t)) @ beta + np.abs(sys.E_at(t)) @ r_w
+
+    def advance(self, state: BoxState, t: int, available: tuple[int, ...]) -> tuple[BoxState, bool]:
+        """The boxes after the step at period time ``t`` with the measurements ``available`` received.
+
+        The step coasts when the period has already left the language or when
+        the class ``(t+1, available)`` is not in the design.  At the period's
+        end the next period starts from the box reached (``μ1`` if the period
+        stayed in the design: the certified recovery level), in the design iff
+        that box is within ``μ1``.
+
+        Parameters
+        ----------
+        state : BoxState
+            The boxes before the step.
+        t : int
+            Period time of the step (``0..T-1``).
+        available : tuple of int
+            Period times of the measurements received by the end of the step.
+
+        Returns
+        -------
+        state : BoxState
+            The boxes after the step.
+        coasting : bool
+            Whether the step runs on the model alone.
+        """
+        coasting = state.coasting or not _has_class(self.gains, t + 1, available)
+        if coasting:
+            beta, in_design = self.coast(t, state.beta), False
+        else:
+            beta, in_design = self.box(t + 1, available, state.beta0), state.in_design
+        if t + 1 == self.gains.horizon:  # the period's end: the next one starts from this box
+            if in_design:
+                beta = np.full(self.system.n, self.mu1)
+            return BoxState(beta, beta, False, bool(np.all(beta <= self.mu1))), coasting
+        return BoxState(state.beta0, beta, coasting, in_design), coasting
+
+    def bound(self, state: BoxState, t: int, available: tuple[int, ...], bound_of: BoundRule,
+              prefix: ArrivalPattern) -> float:
+        """The guarantee after the step at period time ``t``: the designed level in the design, else ``max β``.
+
+        Parameters
+        ----------
+        state : BoxState
+            The boxes after the step (:meth:`advance`).
+        t : int
+            Period time of the step.
+        available : tuple of int
+            Period times of the measurements received.
+        bound_of : callable
+            The design's level of an observed prefix.
+        prefix : ArrivalPattern
+            The observed prefix (used in the design only).
+
+        Returns
+        -------
+        float
+            The bound on ``‖ξ(t+1)‖∞``.
+        """
+        if not state.in_design:
+            return float(state.beta.max())
+        return self.mu1 if t + 1 == self.gains.horizon else float(bound_of(prefix))

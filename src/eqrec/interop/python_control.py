@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.core.estimator import check_estimate
+from eqrec.core.runtime import BoxState, ClassBoxes
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
@@ -81,7 +82,8 @@ def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=
                         f=np.zeros(n) if f is None else np.asarray(f, float), name=name or "python-control system")
 
 
-def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool | None" = None):
+def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool | None" = None,
+                    strict: bool = True):
     """The class-form estimator of a class-engine design as a discrete-time ``control.NonlinearIOSystem``.
 
     Parameters
@@ -93,6 +95,12 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
     dt : float, True or None, optional
         Sampling time of the I/O system (``None``: the plant's ``dt`` when the
         system came from :func:`system_from_statespace`, else ``True``).
+    strict : bool, optional
+        ``True`` (default): arrivals outside the language raise.  ``False``:
+        the estimator keeps a true bound outside the language, as
+        ``design.estimator(strict=False)`` (the same transition,
+        :class:`eqrec.core.runtime.ClassBoxes`), and has a third output
+        ``in_design`` (1 when the designed guarantee applies).
 
     Returns
     -------
@@ -118,15 +126,26 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
     if gains is None:
         raise InputError("estimator_iosys needs a class-engine design (design_prefix or design_delay); "
                          "for other designs use design.estimator()", field="design")
+    if not isinstance(strict, bool):
+        raise InputError(f"strict must be True or False, got {strict!r}", field="strict")
     system, cert = design.system, design.class_certificate
     classes = gains.classes
     n, p, m, T = system.n, system.p, system.m, classes.horizon
     ix_bar, ix_inn = slice(0, n), slice(n, n + T * p)
     ix_arr, ix_t = slice(n + T * p, n + T * p + T), n + T * p + T
+    base = n + T * p + T + 1  # strict=False: x̂, β0, β, coasting, in design follow
+    boxes = None if strict else ClassBoxes(system, gains, design.mu1)
 
     def unpack(x):
         t = int(round(x[ix_t]))
         return x[ix_bar], x[ix_inn].reshape(T, p), x[ix_arr] > 0.5, t
+
+    def unpack_boxes(x):
+        xhat, beta0, beta = x[base:base + n], x[base + n:base + 2 * n], x[base + 2 * n:base + 3 * n]
+        return xhat, BoxState(beta0, beta, bool(x[base + 3 * n] > 0.5), bool(x[base + 3 * n + 1] > 0.5))
+
+    def level(t, S):
+        return design.mu1 if t == 0 else float(cert.levels[classes.index(t, S)])
 
     def estimate(xbar, innov, arrived, t):
         """x̂(t) and its bound from the state at the start of step t."""
@@ -137,46 +156,75 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
             xhat = gains.estimate(t, S, xbar, innov[list(S)])
         except InputError:
             raise InputError(f"the measurements {list(S)} of the first {t} steps of a period are not an arrival "
-                             "pattern of the design's language", field="arrived") from None
-        return xhat, float(cert.levels[classes.index(t, S)])
+                             "pattern of the design's language (estimator_iosys(design, strict=False) keeps a "
+                             "true bound outside it)", field="arrived") from None
+        return xhat, level(t, S)
 
-    def update(_t, x, u, _params):
-        xbar, innov, arrived, t = unpack(np.asarray(x, float))
-        innov, arrived = innov.copy(), arrived.copy()
+    def checked(t, u):
         uu, y, got = u[:m], u[m:m + p], u[m + p]
         if got not in (0.0, 1.0):
             raise InputError(f"arrived must be 0 or 1, got {got!r} at period step {t}", field="arrived")
         if not np.all(np.isfinite(uu)):
             raise InputError(f"the input u contains NaN or infinite entries at period step {t}: {uu.tolist()}",
                              field="u")
-        got = bool(got)
         if got and not np.all(np.isfinite(y)):
             raise InputError(f"an arrived measurement y contains NaN or infinite entries at period step {t}: "
                              f"{y.tolist()} (control.input_output_response interpolates its input array, so a NaN "
                              "in a lost packet's y reaches the neighbouring samples: give lost packets a finite y, "
                              "e.g. 0)", field="y")
+        return uu, y, bool(got)
+
+    def update(_t, x, u, _params):
+        x = np.asarray(x, float)
+        xbar, innov, arrived, t = unpack(x)
+        innov, arrived = innov.copy(), arrived.copy()
+        uu, y, got = checked(t, np.asarray(u, float))
         if got:
             innov[t] = y - system.C_at(t) @ xbar
             arrived[t] = True
         nxt = system.A_at(t) @ xbar + system.B_at(t) @ uu + system.f
-        if t + 1 == T:  # period end: restart from the estimate of time T
-            xhat_T, _ = estimate(nxt, innov, arrived, T)
-            return initial_state(xhat_T)
-        return np.concatenate([nxt, innov.reshape(-1), arrived.astype(float), [t + 1]])
+        if boxes is None:
+            if t + 1 == T:  # period end: restart from the estimate of time T
+                xhat_T, _ = estimate(nxt, innov, arrived, T)
+                return initial_state(xhat_T)
+            return np.concatenate([nxt, innov.reshape(-1), arrived.astype(float), [t + 1]])
+        xhat, box = unpack_boxes(x)
+        S = tuple(int(i) for i in np.flatnonzero(arrived[:t + 1]))
+        box, coasting = boxes.advance(box, t, S)
+        if coasting:  # the model alone (the one transition of eqrec.core.runtime.ClassBoxes)
+            nxt = xhat_next = system.A_at(t) @ xhat + system.B_at(t) @ uu + system.f
+        else:
+            xhat_next = gains.estimate(t + 1, S, nxt, innov[list(S)])
+        if t + 1 == T:
+            return _relaxed_state(xhat_next, np.zeros(T * p + T), 0, xhat_next, box)
+        return _relaxed_state(nxt, np.concatenate([innov.reshape(-1), arrived.astype(float)]), t + 1, xhat_next, box)
+
+    def _relaxed_state(xbar, record, t, xhat, box):
+        return np.concatenate([xbar, record, [t], xhat, box.beta0, box.beta, [float(box.coasting),
+                                                                              float(box.in_design)]])
 
     def output(_t, x, _u, _params):
-        xhat, bound = estimate(*unpack(np.asarray(x, float)))
-        return np.concatenate([xhat, [bound]])
+        x = np.asarray(x, float)
+        if boxes is None:
+            xhat, bound = estimate(*unpack(x))
+            return np.concatenate([xhat, [bound]])
+        _, _, arrived, t = unpack(x)
+        xhat, box = unpack_boxes(x)
+        S = tuple(int(i) for i in np.flatnonzero(arrived[:t]))
+        bound = level(t, S) if box.in_design else float(box.beta.max())
+        return np.concatenate([xhat, [bound, float(box.in_design)]])
 
     def initial_state(xhat0):
         xhat0 = check_estimate(xhat0, n)
-        return np.concatenate([xhat0, np.zeros(T * p + T), [0.0]])
+        if boxes is None:
+            return np.concatenate([xhat0, np.zeros(T * p + T), [0.0]])
+        return _relaxed_state(xhat0, np.zeros(T * p + T), 0, xhat0, boxes.start())
 
     if dt is None:
         dt = getattr(system, "dt", None) or True
+    outputs = [f"xhat[{k}]" for k in range(n)] + ["bound"] + ([] if strict else ["in_design"])
     sys_io = control.nlsys(update, output, dt=dt, name=name,
                            inputs=[f"u[{i}]" for i in range(m)] + [f"y[{j}]" for j in range(p)] + ["arrived"],
-                           outputs=[f"xhat[{k}]" for k in range(n)] + ["bound"],
-                           states=n + T * p + T + 1)
+                           outputs=outputs, states=base + (0 if strict else 3 * n + 2))
     sys_io.initial_state = initial_state
     return sys_io
