@@ -23,6 +23,7 @@ The user-facing functions are in this namespace, as in python-control's
 Systems
     :class:`AffineSystem`, :func:`acc_system`, :func:`batch_reactor`, :func:`load_system`
 Arrival patterns (languages)
+    :func:`missing_words`, :func:`delay_words` (a 0/1 string reads both ways: say which),
     :func:`as_language`, :func:`validate_language`, :func:`parse_delay_word`,
     :func:`full_delay_language`, :class:`PrefixTree`
 Designs (each returns a certified :class:`Design`)
@@ -58,6 +59,8 @@ _PUBLIC: dict[str, str] = {
     "load_system": "eqrec.core.system_files",
     "batch_reactor": "eqrec.models",
     # arrival patterns
+    "missing_words": "eqrec.design.inputs",
+    "delay_words": "eqrec.design.inputs",
     "as_language": "eqrec.core.words",
     "validate_language": "eqrec.core.words",
     "parse_delay_word": "eqrec.core.words",

@@ -139,7 +139,7 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     ('100111', 1.7371)
     """
     check_mode(mode, DESIGN_MODES)
-    patterns = as_language(words)
+    patterns = as_language(words, kind="missing")
     wc_pattern = missing_data_pattern(worst_case_pattern(patterns))
     language = tuple(p.label for p in patterns)
     wc = wc_pattern.label

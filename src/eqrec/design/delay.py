@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from eqrec.core.certify import certify_design
-from eqrec.core.classes import ClassSet, classes_of_full_language, classes_of_tree
+from eqrec.core.classes import ClassSet, classes_of_full_language
 from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
@@ -64,7 +64,8 @@ from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import check_terminal, class_design, solve_classes
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
-from eqrec.design.mu1_min import MU1_LOWER_RTOL, MinRecoveryLevel
+from eqrec.design.inputs import check_mu1, check_solver, check_system, language_classes, language_tree
+from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp
@@ -114,67 +115,14 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     return classes_of_full_language(int(horizon), int(max_delay))
 
 
-def _tree(patterns) -> PrefixTree:
-    tree = patterns if isinstance(patterns, PrefixTree) else PrefixTree(
-        patterns if not isinstance(patterns, (str, ArrivalPattern)) else [patterns], kind="delay")
-    if len({p.T for p in tree.patterns}) != 1:
-        raise InputError("the delayed-data design needs a fixed-length language", field="delays")
-    return tree
+def _tree(patterns, kind: str | None = None) -> PrefixTree:
+    """The prefix tree of a fixed-length language of delay (or, with ``kind``, missing-data) words or patterns."""
+    return language_tree(patterns, kind=kind, field_name="patterns")
 
 
-def _classes(patterns) -> ClassSet:
-    """Classes of a language given as words, patterns, a tree or already as classes."""
-    if isinstance(patterns, ClassSet):
-        return patterns
-    return classes_of_tree(_tree(patterns))
-
-
-# ---------------------------------------------------------------------------
-# Results
-# ---------------------------------------------------------------------------
-
-@dataclass
-class FreeMu1Result:
-    """A design with ``μ1`` free, and what certifies it.
-
-    Parameters
-    ----------
-    design : Design
-    route, cost : str
-        ``"global"`` or ``"ipopt"``; ``"sum"`` or ``"max"``.
-    mu1, J : float
-        The recovery level found and the cost ``J`` there.
-    lower_bound : float
-        Global route: ``J`` at the level ``mu1_min.lower`` proven infeasible, with every class at its
-        optimal level there; ``J`` is nondecreasing in ``μ1``, so no feasible ``μ1`` does better.  IPOPT: ``nan``.
-    lps : int
-    time : float
-        Number of LPs solved; wall-clock seconds.
-    mu1_min : MinRecoveryLevel or None, optional
-    extra : dict, optional
-        Global route: the bracket of ``μ1,min``; route-specific details.
-    """
-
-    design: Design
-    route: str  # "global" or "ipopt"
-    cost: str
-    mu1: float
-    J: float
-    lower_bound: float  # global: valid lower bound of J over all μ1; ipopt: nan
-    lps: int
-    time: float
-    mu1_min: MinRecoveryLevel | None = None
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def mu2(self) -> float:
-        """The design's largest level ``μ2``."""
-        return self.design.mu2
-
-    @property
-    def gap(self) -> float:
-        """Relative gap ``(J - lower_bound) / J``."""
-        return float((self.J - self.lower_bound) / abs(self.J)) if np.isfinite(self.lower_bound) else np.nan
+def _classes(patterns, kind: str | None = None) -> ClassSet:
+    """Classes of a fixed-length language given as words, patterns, a tree or already as classes."""
+    return language_classes(patterns, kind=kind, field_name="patterns")
 
 
 # ---------------------------------------------------------------------------
@@ -199,8 +147,8 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
 # μ1 fixed
 # ---------------------------------------------------------------------------
 
-def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum", solver: str = "highs",
-                 form: str = "split", certify: bool = True, solver_options: dict | None = None,
+def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
+                 solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
                  engine: str = "classes", node_gains: bool | None = None) -> Design:
     r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
 
@@ -225,12 +173,18 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     system : AffineSystem
         The system.
     patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
-        Delay words (digit strings), arrival patterns or their tree (reduced
-        to ``L^{E'}``), or the classes of a full language
+        Words (read as ``kind`` says), arrival patterns (e.g.
+        :func:`eqrec.delay_words`, :func:`eqrec.missing_words`) or their tree
+        (reduced to ``L^{E'}``), or the classes of a full language
         (:func:`delay_classes`, class engine only).  The language must have
         a fixed length.
     mu1 : float
         Recovery level ``μ1``, positive.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words: delay words (digits, eq. (1)) or 0/1
+        missing-data words.  ``None`` (default): delay words when a word has a
+        digit ``2-9``; a list of 0/1 strings is refused as ambiguous
+        (:mod:`eqrec.core.words`).
     cost : {"sum", "max"}, optional
         The paper's ``J`` (module docstring; default) or the largest level.
     solver : str, optional
@@ -259,8 +213,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     Raises
     ------
     InputError
-        Malformed words, a language of mixed lengths, a non-positive
-        ``mu1``, or an unknown ``cost`` or ``engine``.
+        Malformed or ambiguous words, a language of mixed lengths, a
+        non-positive ``mu1``, or an unknown ``cost``, ``engine`` or ``solver``.
     InfeasibleDesign
         If no estimator recovers to ``mu1``.
     SolverFailure
@@ -280,13 +234,20 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     >>> prefix = eqrec.design_prefix(acc, ["101111", "110111", "111011", "111101"], mu1=1.0)
     >>> abs(design.mu2 - prefix.mu2) < 1e-9
     True
+
+    0/1 words read two ways, so they need ``kind`` (or typed patterns):
+
+    >>> missing = eqrec.design_delay(acc, ["101111", "110111", "111011", "111101"], 1.0, kind="missing")
+    >>> missing.mu2 == design.mu2
+    True
     """
+    system = check_system(system)
     check_cost(cost)
     check_engine(engine)
-    mu1 = float(mu1)
+    mu1 = check_mu1(mu1)
     rtol = 1e-6 + solver_info(solver).accuracy
     if engine == "classes":
-        classes = _classes(patterns)
+        classes = _classes(patterns, kind)
         design = class_design(system, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
                               solver=solver, solver_options=solver_options, method="delay", certify=certify,
                               node_gains=node_gains, rtol=rtol)
@@ -295,14 +256,15 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
         elif design.class_certificate is not None:
             design.extra["J_certified"] = class_cost(classes, mu1, design.class_certificate.levels, cost)
         return design
-    tree = _tree(patterns)
+    tree = _tree(patterns, kind)
     model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
     sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
     return _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
                                  certify=certify, rtol=rtol)
 
 
-def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs") -> str:
+def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs", *,
+                     kind: str | None = None) -> str:
     """Whether a design at ``μ1`` exists: ``"optimal"``, or ``"infeasible"`` (no estimator recovers to ``mu1``).
 
     Parameters
@@ -314,6 +276,8 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
     cost : str, optional
     solver : str, optional
         Recovery level, cost (checked only) and LP solver.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`design_delay`.
 
     Returns
     -------
@@ -322,9 +286,9 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
         :func:`eqrec.design.classes.check_terminal`), else ``"infeasible"`` (never raised).
     """
     check_cost(cost)
-    classes = _classes(patterns)
+    classes = _classes(patterns, kind)
     try:
-        check_terminal(classes, solve_classes(system, classes, float(mu1), solver=solver))
+        check_terminal(classes, solve_classes(check_system(system), classes, check_mu1(mu1), solver=solver))
     except InfeasibleDesign:
         return "infeasible"
     return "optimal"
@@ -334,7 +298,7 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
 # μ1 free: the global optimum (the μ1-free theorem of eqrec.design.mu1_min)
 # ---------------------------------------------------------------------------
 
-def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
+def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = None, solver: str = "highs",
                        rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
     """The smallest ``μ1`` for which some estimator recovers (``‖ξ(T)‖ <= μ1`` for all ``‖ξ0‖ <= μ1``).
 
@@ -343,6 +307,8 @@ def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
     system : AffineSystem
     patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
         The language, as for :func:`design_delay`.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`design_delay`.
     solver : str, optional
     rtol : float, optional
         LP solver; relative distance below ``μ1,min`` of the level proven infeasible.
@@ -352,10 +318,11 @@ def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
     MinRecoveryLevel
         ``upper`` attained by certified gains, ``lower = upper (1 - rtol)`` infeasible (:mod:`eqrec.design.mu1_min`).
     """
-    return _class_min_recovery_level(system, _classes(patterns), solver=solver, lower_rtol=rtol)
+    return _class_min_recovery_level(system, _classes(patterns, kind), solver=solver, lower_rtol=rtol)
 
 
-def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", solver: str = "highs",
+def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
+                        solver: str = "highs",
                         rtol: float = MU1_LOWER_RTOL, certify: bool = True,
                         node_gains: bool | None = None, engine: str = "classes") -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
@@ -379,6 +346,8 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
         The system.
     patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
         The language, as for :func:`design_delay`.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`design_delay` (0/1 strings need it).
     cost : {"sum", "max"}, optional
         The paper's ``J`` (default) or ``μ1`` plus the largest level.
     solver : str, optional
@@ -428,7 +397,9 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
     check_cost(cost)
     t_start = time.perf_counter()
     check_engine(engine)
-    classes = _classes(patterns)
+    system = check_system(system)
+    check_solver(solver)
+    classes = _classes(patterns, kind)
     mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)
     if engine == "tree":
         if classes.tree is None:

@@ -36,19 +36,23 @@ recomputed from the recovered ``k`` (upper end, attained), and a dual point
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Iterable
 
 import numpy as np
 import scipy.sparse as sp
 
 from eqrec.core.classes import ClassGains, ClassSet, class_maps
 from eqrec.core.lp import LinearProgram
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import box_radius
 from eqrec.design.class_lp import (ClassBlocks, ClassLP, active_maps, block_lp_options, block_objectives,
                                    read_class_gains)
+from eqrec.design.inputs import check_solver, check_system, language_classes
+from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 #: Relative distance below ``μ1,min`` at which the dual certificate shows infeasibility.
@@ -88,6 +92,50 @@ class MinRecoveryLevel:
     gains: ClassGains | None = None
     lps: int = 0
     time: float = 0.0
+
+
+@dataclass
+class FreeMu1Result:
+    """A design with ``μ1`` free, and what certifies it.
+
+    Parameters
+    ----------
+    design : Design
+    route, cost : str
+        ``"global"`` or ``"ipopt"``; ``"sum"`` or ``"max"``.
+    mu1, J : float
+        The recovery level found and the cost ``J`` there.
+    lower_bound : float
+        Global route: ``J`` at the level ``mu1_min.lower`` proven infeasible, with every class at its
+        optimal level there; ``J`` is nondecreasing in ``μ1``, so no feasible ``μ1`` does better.  IPOPT: ``nan``.
+    lps : int
+    time : float
+        Number of LPs solved; wall-clock seconds.
+    mu1_min : MinRecoveryLevel or None, optional
+    extra : dict, optional
+        Global route: the bracket of ``μ1,min``; route-specific details.
+    """
+
+    design: Design
+    route: str  # "global" or "ipopt"
+    cost: str
+    mu1: float
+    J: float
+    lower_bound: float  # global: valid lower bound of J over all μ1; ipopt: nan
+    lps: int
+    time: float
+    mu1_min: MinRecoveryLevel | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def mu2(self) -> float:
+        """The design's largest level ``μ2``."""
+        return self.design.mu2
+
+    @property
+    def gap(self) -> float:
+        """Relative gap ``(J - lower_bound) / J``."""
+        return float((self.J - self.lower_bound) / abs(self.J)) if np.isfinite(self.lower_bound) else np.nan
 
 
 def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], stacking: Stacking) -> ClassLP:
@@ -179,7 +227,8 @@ def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, 
     return float(E_row @ lam)
 
 
-def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str = "highs",
+def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | Iterable", *,
+                       kind: str | None = None, solver: str = "highs",
                        lower_rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
     r"""``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
 
@@ -200,12 +249,15 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     ----------
     system : AffineSystem
         The system.
-    classes : ClassSet
+    classes : ClassSet, PrefixTree or sequence of str or ArrivalPattern
         The language's (time, available data) classes:
         :func:`eqrec.core.classes.classes_of_tree` of its
         :class:`~eqrec.core.prefix_tree.PrefixTree`, or
-        :func:`eqrec.design.delay.delay_classes` for a full delay language.
-        (:func:`eqrec.design.delay.min_recovery_level` takes the words.)
+        :func:`eqrec.design.delay.delay_classes` for a full delay language;
+        or the tree itself, or the language's patterns or words (of any lengths).
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words (:mod:`eqrec.core.words`): ``None`` reads a
+        word with a digit ``2-9`` as a delay word and refuses 0/1 strings.
     solver : str, optional
         LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
         (default ``"highs"``).
@@ -237,8 +289,14 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     >>> level = eqrec.min_recovery_level(eqrec.acc_system(), classes_of_tree(tree))
     >>> round(level.upper, 4), level.lower < level.upper
     (0.2493, True)
+    >>> words = ["101111", "110111", "111011", "111101"]  # the same language as missing-data words
+    >>> round(eqrec.min_recovery_level(eqrec.acc_system(), words, kind="missing").upper, 4)
+    0.2493
     """
     t_start = time.perf_counter()
+    system = check_system(system)
+    check_solver(solver)
+    classes = language_classes(classes, kind=kind, fixed_length=False, field_name="classes")
     st = Stacking(system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
     model = build_ratio_lp(system, classes, term, st)

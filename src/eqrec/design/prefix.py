@@ -14,10 +14,10 @@ import numpy as np
 from eqrec.core.certify import certify_design
 from eqrec.core.classes import classes_of_tree
 from eqrec.core.lp import LPSolution
-from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import class_design
+from eqrec.design.inputs import check_mu1, check_solver, check_system, language_tree
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 from eqrec.errors import InputError
@@ -87,7 +87,7 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
 def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
                   zero_offset: bool = True, levels: str = "common", engine: str = "classes",
-                  node_gains: bool = True) -> Design:
+                  node_gains: bool = True, fixed_length: bool = True) -> Design:
     r"""Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
     The estimator (5) with the prefix-based output injection (7) of the
@@ -103,16 +103,19 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     ``‖ξ(0)‖∞ <= M1`` and noise in the box.  This is the LP of Remark 2 /
     Theorem 3 (eq. (16)), built per prefix-tree node instead of per word
     (the tree LP, :func:`build_prefix_lp`), or the equivalent class
-    engine (:mod:`eqrec.design.classes`).  Words may differ in length
-    (Section V): ``M1`` is imposed at each word's end.
+    engine (:mod:`eqrec.design.classes`).  With ``fixed_length=False``
+    words may differ in length (Section V): ``M1`` is imposed at each
+    word's end.
 
     Parameters
     ----------
     system : AffineSystem
         The system.
     words : sequence of str or ArrivalPattern, or PrefixTree
-        Arrival patterns or 0/1 words; delay patterns give the event-based
-        design of the delayed-data paper (one gain block per event-prefix node).
+        0/1 missing-data words (strings are always read so: see
+        :mod:`eqrec.core.words`) or arrival patterns; delay patterns
+        (:func:`eqrec.delay_words`) give the event-based design of the
+        delayed-data paper (one gain block per event-prefix node).
     mu1 : float
         Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive.
     solver : str, optional
@@ -148,6 +151,10 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         and certify them by the independent recursion (default); without
         them the design holds the class gains ``K`` and their certificate
         (the estimator in class form).
+    fixed_length : bool, optional
+        Refuse words of different lengths, with the message of ``eqrec
+        design`` (default); ``False`` designs a finite-length language
+        (Section V of the prefix-based paper).
 
     Returns
     -------
@@ -158,7 +165,8 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     Raises
     ------
     InputError
-        Malformed words, a non-positive ``mu1``, an unknown ``engine``, or
+        Malformed words, words of mixed lengths (unless ``fixed_length=False``),
+        a non-positive ``mu1``, an unknown ``engine`` or ``solver``, or
         tree-LP options (``T``, ``form``, ``zero_offset``) with the class engine.
     InfeasibleDesign
         If no prefix-based estimator achieves recovery level ``mu1``.
@@ -180,8 +188,12 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     >>> design.certificate.terminal <= 1.0 + 1e-6
     True
     """
-    if check_engine(engine) == "classes":
-        tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
+    system = check_system(system)
+    check_engine(engine)
+    check_solver(solver)
+    tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
+    mu1 = check_mu1(mu1)
+    if engine == "classes":
         if T is not None and T != tree.depth:
             raise InputError(f"the class engine designs on the words' own horizon {tree.depth}, got T = {T}",
                              field="T")
@@ -190,7 +202,7 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
                              field="engine")
         return class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
                             certify=certify, node_gains=node_gains, time_based=(method == "time"))
-    model = build_prefix_lp(system, words, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
+    model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
     sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
     design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
     if certify:

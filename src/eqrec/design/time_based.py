@@ -83,7 +83,7 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     >>> bool(design.mu2 == eqrec.design_prefix(eqrec.acc_system(), [worst], mu1=1.0).mu2)
     True
     """
-    language = as_language(words)
+    language = as_language(words, kind="missing")
     wc = worst_case_pattern(language)
     design = design_prefix(system, [wc], mu1, solver=solver, form=form, certify=False, method="time",
                            engine=engine)
