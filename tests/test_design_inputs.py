@@ -104,3 +104,80 @@ def test_a_finite_length_language_is_designed_when_asked(acc):
     assert sorted(len(w) for w in d.words) == [4, 5, 6] and d.certificate.terminal <= 1.0 + 1e-6
     with pytest.raises(InputError, match="mixed lengths"):
         eqrec.design_prefix(acc, eqrec.PrefixTree(["1011", "11011"]), 1.0)  # a tree is checked too
+
+
+# --- 2. every bad Python input is an InputError naming its field ------------------------------------------------
+
+def _plant(**changes):
+    fields = dict(A=[[1.0, 0.1], [0.0, 1.0]], C=[[1.0, 0.0]], E=[[0.0], [0.1]], eta_w=0.1, eta_v=0.05)
+    fields.update(changes)
+    return eqrec.AffineSystem(**{k: v for k, v in fields.items() if v is not _DROP})
+
+
+_DROP = object()
+NAN, INF = float("nan"), float("inf")
+
+BAD_SYSTEMS = [
+    ({"eta_w": _DROP}, "eta_w", "missing required field"), ({"eta_v": _DROP}, "eta_v", "missing required field"),
+    ({"A": _DROP}, "A", "missing required field"),
+    ({"A": "[[1, 0], [0, 1]]"}, "A", "numbers"), ({"C": [["1", "0"]]}, "C", "numbers"),
+    ({"E": [[0.0], [NAN]]}, "E", "NaN"), ({"A": [[1.0, INF], [0.0, 1.0]]}, "A", "NaN or infinite"),
+    ({"f": "x"}, "f", "numbers"), ({"f": [0.0, NAN]}, "f", "NaN"), ({"B": [[0.0], [INF]]}, "B", "NaN"),
+    ({"eta_w": NAN}, "eta_w", "finite"), ({"eta_v": INF}, "eta_v", "finite"), ({"eta_w": -0.1}, "eta_w", "non-negative"),
+    ({"eta_w": "0.1"}, "eta_w", "number"), ({"eta_v": True}, "eta_v", "number"), ({"E": [[1j], [0.0]]}, "E", "complex"),
+    ({"name": 3}, "name", "string"),
+]
+
+
+@pytest.mark.parametrize("changes, field, text", BAD_SYSTEMS, ids=[f"{f}-{t}" for _, f, t in BAD_SYSTEMS])
+def test_a_bad_system_is_an_input_error_naming_the_field(changes, field, text):
+    with pytest.raises(InputError, match=text) as info:
+        _plant(**changes)
+    assert info.value.field == field
+
+
+def _bad_design_calls(acc):
+    w = ["101111", "110111"]
+    return [
+        (lambda: eqrec.design_prefix(acc, w, 1.0, solver="gurobi"), "solver"),
+        (lambda: eqrec.design_time_based(acc, w, 1.0, solver="gurobi"), "solver"),
+        (lambda: eqrec.design_delay(acc, L1_AS_DELAYS, 1.0, solver="gurobi"), "solver"),
+        (lambda: eqrec.design_delay_global(acc, L1_AS_DELAYS, solver=["highs"]), "solver"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, solver="gurobi"), "solver"),
+        (lambda: eqrec.design_prefix(acc, w, "one"), "mu1"),
+        (lambda: eqrec.design_prefix(acc, w, None), "mu1"),
+        (lambda: eqrec.design_prefix(acc, w, True), "mu1"),
+        (lambda: eqrec.design_prefix(acc, w, -1.0, engine="tree"), "mu1"),
+        (lambda: eqrec.design_time_based(acc, w, NAN), "mu1"),
+        (lambda: eqrec.design_delay(acc, L1_AS_DELAYS, "1"), "mu1"),
+        (lambda: eqrec.design_delay(acc, L1_AS_DELAYS, INF, engine="tree"), "mu1"),
+        (lambda: eqrec.design_augmented(acc, w, "1"), "mu1"),
+        (lambda: eqrec.design_prefix("acc.yaml", w, 1.0), "system"),
+        (lambda: eqrec.design_delay_global(None, L1_AS_DELAYS), "system"),
+        (lambda: eqrec.design_prefix(acc, 101111, 1.0), "words"),
+        (lambda: eqrec.design_prefix(acc, None, 1.0), "words"),
+        (lambda: eqrec.design_prefix(acc, w, 1.0, engine="tree", form="robust"), "form"),
+        (lambda: eqrec.design_prefix(acc, w, 1.0, engine="tree", T="6"), "T"),
+        (lambda: eqrec.design_delay_global(acc, L1_AS_DELAYS, rtol="small"), "rtol"),
+        (lambda: eqrec.min_recovery_level(acc, L1_AS_DELAYS, lower_rtol=2.0), "lower_rtol"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, L=[["a", "b"]] * 3), "L"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, L=np.full((3, 2), NAN)), "L"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, s0=["0", "0", "0"]), "s0"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, s0=[NAN, 0.0, 0.0]), "s0"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, poles=["a", "b", "c"]), "poles"),
+        (lambda: eqrec.design_augmented(acc, w, 1.0, poles=[INF, 0.0, 0.0]), "poles"),
+    ]
+
+
+def test_bad_design_inputs_are_input_errors_naming_the_field(acc):
+    for k, (call, field) in enumerate(_bad_design_calls(acc)):
+        with pytest.raises(InputError) as info:
+            call()
+        assert info.value.field == field, (k, field, str(info.value))
+
+
+def test_an_unknown_solver_lists_the_choices_and_is_still_a_value_error(acc):
+    with pytest.raises(ValueError) as info:
+        eqrec.design_prefix(acc, L1, 1.0, solver="gurobi")
+    assert isinstance(info.value, InputError) and info.value.field == "solver"
+    assert "'gurobi'" in str(info.value) and all(name in str(info.value) for name in ("highs", "clarabel", "ipopt"))

@@ -29,6 +29,8 @@ def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.
         kind = "O"
     if kind in "USb":  # quoted numbers or booleans are not silently converted
         raise InputError("entries must be numbers, not strings or booleans", source, name)
+    if kind == "c":
+        raise InputError("entries must be real numbers, not complex", source, name)
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -40,6 +42,12 @@ def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.
     if not np.all(np.isfinite(arr)):
         raise InputError("contains NaN or infinite entries", source, name)
     return arr
+
+
+def _as_vector(value: Any, name: str, source: str | None) -> np.ndarray:
+    """A finite float vector (any nesting flattened), else :class:`InputError` naming ``name``."""
+    arr = _as_matrix(value, name, source, ndim_ok=(0, 1, 2))
+    return arr.reshape(-1)
 
 
 def _time_indexed(name: str, what: str, shape: str, absent: str = ""):
@@ -68,7 +76,7 @@ def _time_indexed(name: str, what: str, shape: str, absent: str = ""):
     return at
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class AffineSystem:
     r"""Affine (possibly time-varying) discrete-time system with box-bounded noise.
 
@@ -121,8 +129,10 @@ class AffineSystem:
     Raises
     ------
     InputError
-        Non-numeric, non-finite or wrongly shaped matrices, negative noise
-        bounds, or time-varying matrices of different lengths.
+        A missing required field (``A``, ``C``, ``E``, ``eta_w``, ``eta_v``),
+        non-numeric, non-finite or wrongly shaped matrices or ``f``, negative
+        or non-finite noise bounds, or time-varying matrices of different
+        lengths (the field is named).
 
     Examples
     --------
@@ -146,11 +156,15 @@ class AffineSystem:
     name: str = "system"
     source: str | None = field(default=None, compare=False)
 
-    def __post_init__(self) -> None:
-        src = self.source
-        A = _as_matrix(self.A, "A", src)
-        C = _as_matrix(self.C, "C", src)
-        E = _as_matrix(self.E, "E", src)
+    def __init__(self, A: Any = None, C: Any = None, E: Any = None, eta_w: Any = None, eta_v: Any = None,
+                 B: Any = None, f: Any = None, V: Any = None, name: str = "system", source: str | None = None):
+        src = source
+        for key, value in (("A", A), ("C", C), ("E", E), ("eta_w", eta_w), ("eta_v", eta_v)):
+            if value is None:
+                raise InputError("missing required field (the system needs A, C, E, eta_w and eta_v)", src, key)
+        A = _as_matrix(A, "A", src)
+        C = _as_matrix(C, "C", src)
+        E = _as_matrix(E, "E", src)
         n = A.shape[-1]
         if A.shape[-2] != n:
             raise InputError(f"A must be square, got shape {A.shape}", src, "A")
@@ -159,28 +173,32 @@ class AffineSystem:
         if E.shape[-2] != n:
             raise InputError(f"E must have {n} rows (n = {n}), got shape {E.shape}", src, "E")
         p = C.shape[-2]
-        V = np.eye(p) if self.V is None else _as_matrix(self.V, "V", src)
+        V = np.eye(p) if V is None else _as_matrix(V, "V", src)
         if V.shape[-2] != p:
             raise InputError(f"V must have {p} rows (p = {p}), got shape {V.shape}", src, "V")
-        B = None if self.B is None else _as_matrix(self.B, "B", src)
+        B = None if B is None else _as_matrix(B, "B", src)
         if B is not None and B.shape[-2] != n:
             raise InputError(f"B must have {n} rows, got shape {B.shape}", src, "B")
-        f = np.zeros(n) if self.f is None else np.asarray(self.f, dtype=float).reshape(-1)
+        f = np.zeros(n) if f is None else _as_vector(f, "f", src)
         if f.shape != (n,):
             raise InputError(f"f must have {n} entries, got {f.size}", src, "f")
-        for name in ("eta_w", "eta_v"):
-            val = getattr(self, name)
+        bounds = {}
+        for key, val in (("eta_w", eta_w), ("eta_v", eta_v)):
+            if isinstance(val, (bool, np.bool_)) or isinstance(val, str):
+                raise InputError(f"must be a number, got {val!r}", src, key)
             try:
                 val = float(val)
             except (TypeError, ValueError):
-                raise InputError("must be a number", src, name) from None
+                raise InputError(f"must be a number, got {val!r}", src, key) from None
             if not np.isfinite(val) or val < 0:
-                raise InputError(f"must be a finite non-negative number, got {val}", src, name)
-            object.__setattr__(self, name, val)
+                raise InputError(f"must be a finite non-negative number, got {val}", src, key)
+            bounds[key] = val
         lengths = {arr.shape[0] for arr in (A, C, E, V) if arr.ndim == 3}
         if len(lengths) > 1:
             raise InputError(f"time-varying matrices have different horizons {sorted(lengths)}", src)
-        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f).items():
+        if not isinstance(name, str):
+            raise InputError(f"must be a string, got {name!r}", src, "name")
+        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, **bounds).items():
             object.__setattr__(self, key, val)
 
     # -- dimensions (read from the matrices) -------------------------------

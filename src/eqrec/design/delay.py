@@ -64,7 +64,8 @@ from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import check_terminal, class_design, solve_classes
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
-from eqrec.design.inputs import check_mu1, check_solver, check_system, language_classes, language_tree
+from eqrec.design.inputs import (check_fraction, check_mu1, check_solver, check_system, language_classes,
+                                 language_tree)
 from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
@@ -399,6 +400,7 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_engine(engine)
     system = check_system(system)
     check_solver(solver)
+    rtol = check_fraction(rtol, "rtol")
     classes = _classes(patterns, kind)
     mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)
     if engine == "tree":

@@ -228,3 +228,57 @@ def check_mu1(mu1: Any, *, allow_free: bool = False, field_name: str = "mu1") ->
     if not np.isfinite(value) or value <= 0:
         raise InputError(f"the recovery level mu1 must be positive, got {value}", field=field_name)
     return value
+
+
+def real_array(value: Any, field_name: str, *, complex_ok: bool = False) -> np.ndarray:
+    """``value`` as a finite float (or, with ``complex_ok``, complex) array, else :class:`InputError`.
+
+    Strings, booleans, ``None`` entries and ragged nesting are refused, not
+    converted (``"1"`` is not the number 1).
+
+    Parameters
+    ----------
+    value : array_like
+        The value given.
+    field_name : str
+        Parameter named in error messages.
+    complex_ok : bool, optional
+        Accept complex entries (poles).
+
+    Returns
+    -------
+    numpy.ndarray
+        A float (or complex) array of ``value``'s shape.
+    """
+    kinds = "iufc" if complex_ok else "iuf"
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError):  # ragged nesting
+        raw = None
+    if raw is None or raw.dtype.kind not in kinds:
+        what = "numbers" if complex_ok else "real numbers"
+        raise InputError(f"must be an array of {what}, got {value!r}", field=field_name)
+    arr = raw.astype(complex if raw.dtype.kind == "c" else float)
+    if not np.all(np.isfinite(arr)):
+        raise InputError("contains NaN or infinite entries", field=field_name)
+    return arr
+
+
+def check_fraction(value: Any, field_name: str) -> float:
+    """``value`` as a float strictly between 0 and 1 (a relative tolerance), else :class:`InputError`.
+
+    Parameters
+    ----------
+    value : float
+        The value given.
+    field_name : str
+        Parameter named in error messages.
+
+    Returns
+    -------
+    float
+        ``float(value)``.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not 0 < float(value) < 1:
+        raise InputError(f"must be a number strictly between 0 and 1, got {value!r}", field=field_name)
+    return float(value)

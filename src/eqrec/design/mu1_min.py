@@ -51,7 +51,7 @@ from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import box_radius
 from eqrec.design.class_lp import (ClassBlocks, ClassLP, active_maps, block_lp_options, block_objectives,
                                    read_class_gains)
-from eqrec.design.inputs import check_solver, check_system, language_classes
+from eqrec.design.inputs import check_fraction, check_solver, check_system, language_classes
 from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
@@ -296,6 +296,7 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     t_start = time.perf_counter()
     system = check_system(system)
     check_solver(solver)
+    lower_rtol = check_fraction(lower_rtol, "lower_rtol")
     classes = language_classes(classes, kind=kind, fixed_length=False, field_name="classes")
     st = Stacking(system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
