@@ -181,3 +181,73 @@ def test_an_unknown_solver_lists_the_choices_and_is_still_a_value_error(acc):
         eqrec.design_prefix(acc, L1, 1.0, solver="gurobi")
     assert isinstance(info.value, InputError) and info.value.field == "solver"
     assert "'gurobi'" in str(info.value) and all(name in str(info.value) for name in ("highs", "clarabel", "ipopt"))
+
+
+# --- 3. per-channel noise bounds ----------------------------------------------------------------------------------
+
+MOTOR = dict(A=[[1.0, 0.1, 0.0], [0.0, 0.95, 0.08], [0.0, -0.05, 0.6]], C=[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+             E=np.eye(3))
+ETA_W = [0.01, 0.05, 0.2]
+ETA_V = [0.02, 0.1]
+
+
+def test_per_channel_bounds_are_the_design_of_the_rescaled_system():
+    vec = eqrec.AffineSystem(**MOTOR, eta_w=ETA_W, eta_v=ETA_V)
+    rescaled = eqrec.AffineSystem(**{**MOTOR, "E": np.eye(3) @ np.diag(ETA_W)}, V=np.diag(ETA_V), eta_w=1.0,
+                                  eta_v=1.0)
+    assert np.array_equal(vec.E, rescaled.E) and np.array_equal(vec.V, rescaled.V)
+    assert vec.eta_w == vec.eta_v == 1.0
+    d_vec = eqrec.design_prefix(vec, ["1011", "1101"], 3.0)
+    d_rescaled = eqrec.design_prefix(rescaled, ["1011", "1101"], 3.0)
+    assert np.array_equal(d_vec.extra["class_levels"], d_rescaled.extra["class_levels"])
+    assert d_vec.certificate.mu2 == d_rescaled.certificate.mu2
+    # the box lies strictly between the scalar boxes of the smallest and the largest bound
+    levels = [eqrec.min_recovery_level(plant, ["1011", "1101"], kind="missing").upper for plant in (
+        eqrec.AffineSystem(**MOTOR, eta_w=min(ETA_W), eta_v=min(ETA_V)), vec,
+        eqrec.AffineSystem(**MOTOR, eta_w=max(ETA_W), eta_v=max(ETA_V)))]
+    assert levels[0] < levels[1] < levels[2]
+
+
+def test_a_scalar_bound_keeps_the_matrices_and_equal_entries_are_the_scalar():
+    plant = eqrec.AffineSystem(**MOTOR, eta_w=0.05, eta_v=0.1)
+    assert plant.eta_w == 0.05 and np.array_equal(plant.E, np.eye(3)) and np.array_equal(plant.V, np.eye(2))
+    same = eqrec.AffineSystem(**MOTOR, eta_w=[0.05] * 3, eta_v=np.array([0.1, 0.1]))
+    assert same == plant
+
+
+@pytest.mark.parametrize("changes, field, text", [
+    ({"eta_w": [0.1, 0.2]}, "eta_w", "3 entries"), ({"eta_v": [0.1, 0.2, 0.3]}, "eta_v", "2 entries"),
+    ({"eta_w": [0.1, -0.2, 0.3]}, "eta_w", "non-negative"), ({"eta_w": [0.1, NAN, 0.3]}, "eta_w", "NaN"),
+    ({"eta_v": ["0.1", "0.2"]}, "eta_v", "numbers"), ({"eta_w": [[0.1, 0.2, 0.3]]}, "eta_w", "dimensions")])
+def test_a_bad_bound_vector_names_the_field(changes, field, text):
+    with pytest.raises(InputError, match=text) as info:
+        eqrec.AffineSystem(**{**MOTOR, "eta_w": ETA_W, "eta_v": ETA_V, **changes})
+    assert info.value.field == field
+
+
+SYSTEM_FILE = """A: [[1, 0.1, 0], [0, 0.95, 0.08], [0, -0.05, 0.6]]
+C: [[1, 0, 0], [0, 0, 1]]
+E: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+eta_w: {eta_w}
+eta_v: [0.02, 0.1]
+"""
+
+
+def test_per_channel_bounds_in_a_system_file(tmp_path, capsys):
+    good = tmp_path / "motor.yaml"
+    good.write_text(SYSTEM_FILE.format(eta_w="[0.01, 0.05, 0.2]"))
+    system, _ = eqrec.load_system(good)
+    assert system == eqrec.AffineSystem(**MOTOR, eta_w=ETA_W, eta_v=ETA_V, name="motor")
+    assert main(["design", str(good), "--words", "1011,1101"]) == 0
+    out = capsys.readouterr().out
+    assert '"mu2"' in out
+    for value, text in (("[0.01, 0.05]", "3 entries"), ("[0.01, -0.05, 0.2]", "non-negative"),
+                        ("[0.01, 1e-9, 0.2]", "below"), ("[[0.01], [0.05], [0.2]]", "flat list")):
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(SYSTEM_FILE.format(eta_w=value))
+        with pytest.raises(InputError, match=text) as info:
+            eqrec.load_system(bad)
+        assert info.value.field == "eta_w" and info.value.source == str(bad)
+        assert main(["design", str(bad), "--words", "1011,1101"]) == 1
+        err = capsys.readouterr().err
+        assert "bad.yaml: field 'eta_w'" in err and "Traceback" not in err

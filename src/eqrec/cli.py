@@ -47,8 +47,9 @@ SYSTEM.yaml keys (matrices as nested lists):
   A      n x n state matrix                       (required)
   C      p x n output matrix                      (required)
   E      n x nw process-noise gain                (required)
-  eta_w  bound on |w(t)|_inf                      (required)
-  eta_v  bound on |v(t)|_inf                      (required)
+  eta_w  bound on |w(t)|_inf, or one bound per    (required)
+         column of E: [1, 0.5, 2] means |w_i(t)| <= eta_w[i]
+  eta_v  bound on |v(t)|_inf, or one per column of V  (required)
   T      recovery time (default: the word length)
   B, f   input matrix and affine term (do not affect the design)
   V      p x nv measurement-noise gain (default identity)

@@ -50,6 +50,35 @@ def _as_vector(value: Any, name: str, source: str | None) -> np.ndarray:
     return arr.reshape(-1)
 
 
+def _noise_bound(value: Any, key: str, channels: int, what: str,
+                 source: str | None) -> tuple[float, np.ndarray | None]:
+    """A noise bound: a number, or one bound per channel as the scale of the channels and the bound 1.
+
+    Returns ``(bound, None)`` for a number (or a vector whose entries are all
+    equal: the same box), else ``(1.0, scale)``: the gain's columns are
+    multiplied by ``scale`` so that ``|w_i| <= scale[i]`` becomes ``|w'|∞ <= 1``.
+    """
+    if isinstance(value, (bool, np.bool_, str)):
+        raise InputError(f"must be a number or a list of numbers, got {value!r}", source, key)
+    if np.ndim(value) == 0:
+        try:
+            bound = float(value)
+        except (TypeError, ValueError):
+            raise InputError(f"must be a number or a list of numbers, got {value!r}", source, key) from None
+        if not np.isfinite(bound) or bound < 0:
+            raise InputError(f"must be a finite non-negative number, got {bound}", source, key)
+        return bound, None
+    vec = _as_matrix(value, key, source, ndim_ok=(1,))
+    if vec.shape != (channels,):
+        raise InputError(f"one bound per noise channel: {channels} entries (the {what}), got {vec.size}",
+                         source, key)
+    if np.any(vec < 0):
+        raise InputError(f"bounds must be non-negative, got {vec.tolist()}", source, key)
+    if channels and np.all(vec == vec[0]):
+        return float(vec[0]), None
+    return 1.0, vec
+
+
 def _time_indexed(name: str, what: str, shape: str, absent: str = ""):
     """The method ``<name>_at(t)`` of :class:`AffineSystem`: matrix ``name`` at time ``t`` (A, B, C, E, V alike)."""
 
@@ -105,8 +134,14 @@ class AffineSystem:
     E : array_like, shape (n, nw) or (T, n, nw)
         Process-noise gain (``W_k`` in the augmented paper); ``nw = 0``
         columns for a system without process noise.
-    eta_w, eta_v : float
-        Infinity-norm bounds of ``w`` and ``v`` (finite, non-negative).
+    eta_w, eta_v : float or array_like
+        Infinity-norm bounds of ``w`` and ``v`` (finite, non-negative), or
+        one bound per noise channel (``|w_i| <= eta_w[i]``, one entry per
+        column of ``E``; likewise ``eta_v`` and ``V``).  Per-channel bounds
+        are stored as the equivalent scalar description: ``E`` becomes
+        ``E diag(eta_w)`` and ``eta_w`` becomes 1 (the same noise set, so
+        every design, certificate and simulation uses it unchanged); equal
+        entries are the scalar bound.
     B : array_like, shape (n, m) or (T, n, m), optional
         Input matrix (does not enter the error dynamics); ``None``: no input.
     f : array_like, shape (n,), optional
@@ -143,6 +178,14 @@ class AffineSystem:
     (2, 1, 1, 1, 0)
     >>> plant.V
     array([[1.]])
+
+    One bound per process-noise channel (``|w_1| <= 0.1``, ``|w_2| <= 0.5``):
+
+    >>> plant = eqrec.AffineSystem(A=[[1.0, 0.5], [0.0, 1.0]], C=[[1.0, 0.0]], E=[[1.0, 0.0], [0.0, 1.0]],
+    ...                            eta_w=[0.1, 0.5], eta_v=0.05)
+    >>> plant.E, plant.eta_w
+    (array([[0.1, 0. ],
+           [0. , 0.5]]), 1.0)
     """
 
     A: np.ndarray
@@ -182,17 +225,13 @@ class AffineSystem:
         f = np.zeros(n) if f is None else _as_vector(f, "f", src)
         if f.shape != (n,):
             raise InputError(f"f must have {n} entries, got {f.size}", src, "f")
-        bounds = {}
-        for key, val in (("eta_w", eta_w), ("eta_v", eta_v)):
-            if isinstance(val, (bool, np.bool_)) or isinstance(val, str):
-                raise InputError(f"must be a number, got {val!r}", src, key)
-            try:
-                val = float(val)
-            except (TypeError, ValueError):
-                raise InputError(f"must be a number, got {val!r}", src, key) from None
-            if not np.isfinite(val) or val < 0:
-                raise InputError(f"must be a finite non-negative number, got {val}", src, key)
-            bounds[key] = val
+        eta_w, w_scale = _noise_bound(eta_w, "eta_w", E.shape[-1], "columns of E", src)
+        eta_v, v_scale = _noise_bound(eta_v, "eta_v", V.shape[-1], "columns of V", src)
+        if w_scale is not None:  # |w_i| <= eta_w[i]: E diag(eta_w) with |w'|_inf <= 1 is the same noise set
+            E = E * w_scale
+        if v_scale is not None:
+            V = V * v_scale
+        bounds = {"eta_w": eta_w, "eta_v": eta_v}
         lengths = {arr.shape[0] for arr in (A, C, E, V) if arr.ndim == 3}
         if len(lengths) > 1:
             raise InputError(f"time-varying matrices have different horizons {sorted(lengths)}", src)
@@ -200,6 +239,16 @@ class AffineSystem:
             raise InputError(f"must be a string, got {name!r}", src, "name")
         for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, **bounds).items():
             object.__setattr__(self, key, val)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal matrices (``numpy.array_equal``), bounds and name; ``source`` is not compared."""
+        if not isinstance(other, AffineSystem):
+            return NotImplemented
+        same = (np.array_equal(getattr(self, k), getattr(other, k)) if getattr(self, k) is not None
+                else getattr(other, k) is None for k in ("A", "C", "E", "B", "f", "V"))
+        return all(same) and (self.eta_w, self.eta_v, self.name) == (other.eta_w, other.eta_v, other.name)
+
+    __hash__ = None  # type: ignore[assignment]  # mutable numpy fields: not hashable (as before)
 
     # -- dimensions (read from the matrices) -------------------------------
     n = property(lambda self: self.A.shape[-1], doc="State dimension (int).")
