@@ -251,3 +251,97 @@ def test_per_channel_bounds_in_a_system_file(tmp_path, capsys):
         assert main(["design", str(bad), "--words", "1011,1101"]) == 1
         err = capsys.readouterr().err
         assert "bad.yaml: field 'eta_w'" in err and "Traceback" not in err
+
+
+# --- 4. per-state weights for the bound ---------------------------------------------------------------------------
+
+WEIGHTS = np.array([1.0, 2.0, 0.5])
+
+
+def test_a_weighted_design_is_the_design_of_the_scaled_system(acc):
+    weighted = eqrec.design_prefix(acc, L1, 1.0, state_weights=WEIGHTS)
+    scaled = eqrec.design_prefix(acc.scaled(WEIGHTS), L1, 1.0)
+    assert weighted.mu2 == scaled.mu2 and weighted.system == acc.scaled(WEIGHTS)
+    assert np.array_equal(weighted.state_weights, WEIGHTS) and scaled.state_weights is None
+    assert weighted.mu2 != pytest.approx(eqrec.design_prefix(acc, L1, 1.0).mu2, rel=1e-3)
+    S = acc.scaled(WEIGHTS)
+    W = np.diag(WEIGHTS)
+    assert np.allclose(S.A, W @ acc.A @ np.linalg.inv(W)) and np.allclose(S.C, acc.C @ np.linalg.inv(W))
+    assert np.allclose(S.B, W @ acc.B) and np.allclose(S.E, W @ acc.E) and np.allclose(S.f, W @ acc.f)
+    entries = (lambda plant, w: eqrec.design_time_based(plant, L1, 1.0, state_weights=w),
+               lambda plant, w: eqrec.design_delay(plant, L1_AS_DELAYS, 1.0, cost="max", state_weights=w),
+               lambda plant, w: eqrec.design_delay_global(plant, L1_AS_DELAYS, state_weights=w).design)
+    for entry in entries:
+        d = entry(acc, WEIGHTS)
+        reference = entry(acc.scaled(WEIGHTS), None)
+        assert (d.mu1, d.mu2) == (reference.mu1, reference.mu2) and np.array_equal(d.state_weights, WEIGHTS)
+
+
+@pytest.mark.parametrize("weights, text", [([1.0, 2.0], "3 positive"), ([1.0, 0.0, 1.0], "positive"),
+                                           ([1.0, -2.0, 1.0], "positive"), ([1.0, NAN, 1.0], "NaN"),
+                                           (["1", "2", "3"], "numbers")])
+def test_bad_state_weights_name_the_field(acc, weights, text):
+    with pytest.raises(InputError, match=text) as info:
+        eqrec.design_prefix(acc, L1, 1.0, state_weights=weights)
+    assert info.value.field == "state_weights"
+
+
+@pytest.mark.parametrize("method", ["prefix", "delay"])
+def test_monte_carlo_the_weighted_error_stays_within_the_bound(acc, method):
+    if method == "prefix":
+        design = eqrec.design_prefix(acc, L1, 1.0, state_weights=WEIGHTS)
+    else:
+        design = eqrec.design_delay_global(acc, L1_AS_DELAYS, state_weights=WEIGHTS).design
+    rng = np.random.default_rng(24)
+    T, worst = design.T, 0.0
+    for run in range(40):
+        x = rng.normal(size=3) * 5.0
+        e0 = rng.choice([-1.0, 1.0], size=3) * design.mu1 / WEIGHTS  # a corner of max_i w_i |e_i| <= mu1
+        est = design.estimator().reset(x - e0)
+        for period in range(3):
+            word = L1[rng.integers(len(L1))]
+            for t in range(T):
+                u = np.array([rng.uniform(-1.0, 1.0)])
+                y = acc.C @ x + acc.V @ rng.choice([-1.0, 1.0], size=acc.nv) * acc.eta_v
+                xhat, bound = est.step(y if word[t] == "1" else None, u)
+                x = acc.A @ x + acc.B @ u + acc.f + acc.E @ rng.choice([-1.0, 1.0], size=acc.nw) * acc.eta_w
+                ratio = np.max(WEIGHTS * np.abs(x - xhat)) / bound
+                worst = max(worst, ratio)
+                assert ratio <= 1.0 + 1e-9, (run, period, t)
+                assert np.array_equal(xhat, est.x) and np.all(np.abs(x - xhat) <= est.state_bounds * (1 + 1e-9))
+    assert worst > 0.3  # the bound is not vacuous on these runs
+    assert est.time == 3 * T and est.mu1 == design.mu1  # the wrapped estimator's own attributes pass through
+
+
+def test_the_cli_writes_a_weighted_design_in_the_files_coordinates(tmp_path):
+    import json
+
+    from eqrec.core.gains import schedule_from_word_gains
+    from eqrec.core.runtime import GuaranteedEstimator
+
+    out = tmp_path / "w.json"
+    assert main(["design", str(ACC_FILE), "--words", ",".join(L1), "--state-weights", "1,2,0.5",
+                 "--out", str(out)]) == 0
+    record = json.loads(out.read_text())
+    acc, _ = eqrec.load_system(ACC_FILE)
+    design = eqrec.design_prefix(acc, L1, 1.0, state_weights=WEIGHTS)
+    assert record["state_weights"] == WEIGHTS.tolist() and record["mu2"] == design.mu2
+    for row, K in zip(record["classes"], design.class_gains.K):
+        assert np.allclose(np.asarray(row["K"]).reshape(K.shape), K / WEIGHTS[:, None], rtol=1e-12, atol=0)
+    # the file's gains run on the file's system give the weighted design's estimates
+    gains = {w: (np.asarray(g["F"]), np.asarray(g["u0"])) for w, g in record["gains"].items()}
+    schedule = schedule_from_word_gains(eqrec.PrefixTree(list(gains), kind="missing"), gains, acc.n, acc.p)
+    plain = GuaranteedEstimator(acc, schedule, lambda prefix: design.mu2, design.mu1).reset(np.ones(3))
+    weighted = design.estimator().reset(np.ones(3))
+    rng = np.random.default_rng(3)
+    for t, bit in enumerate("101111" * 2):
+        y = rng.normal(size=2) if bit == "1" else None
+        u = rng.normal(size=1)
+        assert np.allclose(plain.step(y, u)[0], weighted.step(y, u)[0], rtol=1e-9, atol=1e-12), t
+
+
+def test_the_cli_refuses_bad_state_weights(capsys):
+    for args in (["--state-weights", "1,2"], ["--state-weights", "1,x,2"], ["--state-weights", "1,0,2"],
+                 ["--method", "augmented", "--state-weights", "1,1,1"]):
+        assert main(["design", str(ACC_FILE), "--words", ",".join(L1), *args]) == 1
+        assert "field '--state-weights'" in capsys.readouterr().err

@@ -71,6 +71,12 @@ from the gains alone), solver, status, words, gains: for each designed word
 --method prefix and time add engine (classes or tree) and, for the class
 engine, classes (below).
 
+State weights (--state-weights w1,...,wn; methods time, prefix, delay): the
+design is made on z = W x, W = diag(w), so mu1, mu2, every level and every
+certified value bound max_i w_i |x_i - xhat_i| instead of the plain infinity
+norm (|x_i - xhat_i| <= level / w_i). The JSON adds state_weights; its gains
+(F, u0, K) are written in the file's state x, with the conventions above.
+
 Engines (--engine, methods prefix and delay; default classes): the class
 engine solves one small LP per (time d, available data S) class and state
 row (nodes of the prefix tree that see the same data at the same time share
@@ -166,6 +172,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="augmented only: comma-separated poles of A - L C, real or complex in Python "
                         "notation, e.g. 0,0.3+0.2j,0.3-0.2j (default: n distinct poles in [-0.5, 0.5])")
     d.add_argument("--s0", default=None, help="augmented only: JSON vector s0 (default zeros)")
+    d.add_argument("--state-weights", default=None,
+                   help="time, prefix and delay: comma-separated positive weights w_1,...,w_n, one per state: the "
+                        "guarantee is then on max_i w_i |x_i - xhat_i| (a state vector of mixed units gets a "
+                        "meaningful norm); the JSON's gains stay in the file's coordinates")
     d.add_argument("--out", default=None, help="output JSON file (default: print to stdout)")
     return ap
 
@@ -177,6 +187,20 @@ def _parse_json_array(text: str, field: str) -> np.ndarray:
         raise InputError(f"not a JSON number array ({exc})", "command line", field) from None
 
 
+def _parse_weights(text: str | None, n: int) -> np.ndarray | None:
+    """``--state-weights``: ``n`` positive finite numbers, comma-separated (``None``: not given)."""
+    if text is None:
+        return None
+    try:
+        weights = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(f"must be comma-separated numbers, got {text!r}", "command line", "--state-weights") from None
+    if weights.shape != (n,) or not np.all(np.isfinite(weights)) or np.any(weights <= 0):
+        raise InputError(f"need n = {n} positive finite weights, one per state, got {text!r}", "command line",
+                         "--state-weights")
+    return weights
+
+
 def run_design(args: argparse.Namespace) -> dict:
     """Design, certify and describe one estimator (the ``design`` subcommand)."""
     from eqrec.design.prefix import design_prefix
@@ -186,8 +210,12 @@ def run_design(args: argparse.Namespace) -> dict:
 
     system, T_file = load_system(args.system)
     mu1 = _parse_mu1(args.mu1, allow_free=args.method == "delay")
+    if args.method == "augmented" and args.state_weights is not None:
+        raise InputError("--state-weights applies to --method time, prefix and delay", "command line",
+                         "--state-weights")
+    weights = _parse_weights(args.state_weights, system.n)
     if args.method == "delay":
-        return run_delay_design(args, system, T_file, mu1)
+        return run_delay_design(args, system, T_file, mu1, weights)
     for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
                         ("--cost", args.cost), ("--node-gains", args.node_gains or None)):
         if value is not None:
@@ -209,9 +237,10 @@ def run_design(args: argparse.Namespace) -> dict:
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
     extra = {}
     if args.method == "prefix":
-        design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes")
+        design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
+                               state_weights=weights)
     elif args.method == "time":
-        design = design_time_based(system, words, args.mu1, solver=args.solver)
+        design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
     else:
         try:
             from eqrec.design.augmented import design_augmented
@@ -244,6 +273,10 @@ def run_design(args: argparse.Namespace) -> dict:
             from eqrec.design.report import class_table
 
             out["classes"] = class_table(design)
+    if weights is not None:
+        from eqrec.design.report import original_coordinates
+
+        original_coordinates(out, weights)
     return out
 
 
@@ -266,14 +299,15 @@ def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
     return value
 
 
-def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str) -> dict:
+def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str,
+                     weights: np.ndarray | None = None) -> dict:
     """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
     from decimal import Decimal
 
     from eqrec.core.classes import ClassSet, full_language_counts
     from eqrec.core.words import as_language
     from eqrec.design.delay import delay_classes, delay_language, design_delay, design_delay_global
-    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, to_json
+    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, original_coordinates, to_json
 
     if args.words is not None:
         raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",
@@ -325,13 +359,13 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     cost = args.cost or "sum"
     node_gains = True if args.node_gains else None
     if mu1 == "free":
-        free = design_delay_global(system, patterns, cost=cost, solver=args.solver, node_gains=node_gains,
-                                   engine=engine)
+        free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
+                                   node_gains=node_gains, engine=engine, state_weights=weights)
         design = free.design
     else:
         free = None
-        design = design_delay(system, patterns, mu1, cost=cost, solver=args.solver, engine=engine,
-                              node_gains=node_gains)
+        design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
+                              node_gains=node_gains, state_weights=weights)
     out = to_json(design, free, node_gains=node_gains)
     out.update(solver=design.solution.solver, status=design.solution.status)
     if full:
@@ -342,6 +376,8 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         out["words"] = [p.label for p in patterns]
         if design.schedule is not None:
             out["designed_words"] = [p.label for p in design.schedule.designed]
+    if weights is not None:
+        original_coordinates(out, weights)
     return out
 
 

@@ -302,6 +302,48 @@ class AffineSystem:
         if lim is not None and lim < T:
             raise InputError(f"time-varying data covers {lim} steps, horizon needs {T}", self.source)
 
+    def scaled(self, weights: Any) -> "AffineSystem":
+        r"""The system in the weighted state ``z = W x``, ``W = diag(weights)``.
+
+        A bound on ``‖z‖∞`` is one on ``max_i w_i |x_i|``.  The similarity transform :math:`A' = W A W^{-1}`, :math:`B' = W B`,
+        :math:`C' = C W^{-1}`, :math:`E' = W E`, :math:`f' = W f` (``V`` and
+        the noise bounds unchanged): the outputs are the same and the state
+        error of an estimator of ``z`` is ``W`` times that of ``x``.  A state
+        vector of mixed units (rad, rad/s, A) gets a meaningful infinity norm.
+
+        Parameters
+        ----------
+        weights : array_like, shape (n,)
+            Positive finite weight ``w_i`` of each state.
+
+        Returns
+        -------
+        AffineSystem
+            The transformed system (same name and source).
+
+        Raises
+        ------
+        InputError
+            Weights that are not ``n`` positive finite numbers (field ``state_weights``).
+
+        Examples
+        --------
+        >>> import eqrec
+        >>> plant = eqrec.AffineSystem(A=[[1.0, 0.5], [0.0, 1.0]], C=[[1.0, 0.0]], E=[[0.0], [1.0]],
+        ...                            eta_w=0.1, eta_v=0.05)
+        >>> plant.scaled([1.0, 10.0]).A
+        array([[1.  , 0.05],
+               [0.  , 1.  ]])
+        """
+        w = _as_matrix(weights, "state_weights", self.source, ndim_ok=(1,))
+        if w.shape != (self.n,) or np.any(w <= 0):
+            raise InputError(f"need n = {self.n} positive weights, one per state, got {w.tolist()}", self.source,
+                             "state_weights")
+        col = w[:, None]
+        return AffineSystem(A=self.A * col / w, C=self.C / w, E=self.E * col, eta_w=self.eta_w, eta_v=self.eta_v,
+                            B=None if self.B is None else self.B * col, f=self.f * w, V=self.V, name=self.name,
+                            source=self.source)
+
     def to_dict(self) -> dict:
         """JSON-serialisable description (matrices as nested lists).
 

@@ -71,6 +71,7 @@ from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp
 from eqrec.design.result import Design
+from eqrec.design.weighted import weigh
 from eqrec.errors import InfeasibleDesign, InputError
 
 # ---------------------------------------------------------------------------
@@ -150,7 +151,7 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
 
 def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
                  solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
-                 engine: str = "classes", node_gains: bool | None = None) -> Design:
+                 engine: str = "classes", node_gains: bool | None = None, state_weights=None) -> Design:
     r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
 
     For a language of delay words (eq. (1) of the delayed-data paper,
@@ -203,6 +204,10 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     node_gains : bool or None, optional
         Class engine: derive node gains (default: small trees, see
         :func:`eqrec.design.classes.class_design`).
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: the levels then bound
+        ``max_i w_i |x_i − x̂_i|`` (designed on ``z = W x``,
+        :mod:`eqrec.design.weighted`).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -242,7 +247,7 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     >>> missing.mu2 == design.mu2
     True
     """
-    system = check_system(system)
+    system, weights = weigh(check_system(system), state_weights)
     check_cost(cost)
     check_engine(engine)
     mu1 = check_mu1(mu1)
@@ -256,12 +261,14 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
             design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
         elif design.class_certificate is not None:
             design.extra["J_certified"] = class_cost(classes, mu1, design.class_certificate.levels, cost)
-        return design
-    tree = _tree(patterns, kind)
-    model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
-    sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
-    return _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
-                                 certify=certify, rtol=rtol)
+    else:
+        tree = _tree(patterns, kind)
+        model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
+        sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
+        design = _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
+                                       certify=certify, rtol=rtol)
+    design.state_weights = weights
+    return design
 
 
 def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs", *,
@@ -323,9 +330,9 @@ def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = Non
 
 
 def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
-                        solver: str = "highs",
-                        rtol: float = MU1_LOWER_RTOL, certify: bool = True,
-                        node_gains: bool | None = None, engine: str = "classes") -> FreeMu1Result:
+                        solver: str = "highs", rtol: float = MU1_LOWER_RTOL, certify: bool = True,
+                        node_gains: bool | None = None, engine: str = "classes",
+                        state_weights=None) -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
 
     The delayed-data paper's problem with ``μ1`` a decision variable
@@ -364,6 +371,10 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     engine : {"classes", "tree"}, optional
         Engine of the design at ``μ1,min`` (default the class engine; the
         tree LP needs the language's words).
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: the levels then bound
+        ``max_i w_i |x_i − x̂_i|`` (designed on ``z = W x``,
+        :mod:`eqrec.design.weighted`).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -398,7 +409,7 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_cost(cost)
     t_start = time.perf_counter()
     check_engine(engine)
-    system = check_system(system)
+    system, weights = weigh(check_system(system), state_weights)
     check_solver(solver)
     rtol = check_fraction(rtol, "rtol")
     classes = _classes(patterns, kind)
@@ -416,6 +427,7 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
         low = solve_classes(system, classes, mm.lower, solver=solver)
         lower_bound = class_cost(classes, mm.lower, low.levels, cost)
     J = float(design.extra["J"])
+    design.state_weights = weights
     design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,
                         mu1_binding=mm.binding)
     return FreeMu1Result(design=design, route="global", cost=cost, mu1=mm.upper, J=J, lower_bound=float(lower_bound),

@@ -20,6 +20,7 @@ from eqrec.design.classes import class_design
 from eqrec.design.inputs import check_mu1, check_solver, check_system, language_tree
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
+from eqrec.design.weighted import weigh
 from eqrec.errors import InputError
 
 
@@ -87,7 +88,7 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
 def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
                   zero_offset: bool = True, levels: str = "common", engine: str = "classes",
-                  node_gains: bool = True, fixed_length: bool = True) -> Design:
+                  node_gains: bool = True, fixed_length: bool = True, state_weights=None) -> Design:
     r"""Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
     The estimator (5) with the prefix-based output injection (7) of the
@@ -155,6 +156,11 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         Refuse words of different lengths, with the message of ``eqrec
         design`` (default); ``False`` designs a finite-length language
         (Section V of the prefix-based paper).
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: every level and certificate
+        then bounds ``max_i w_i |x_i − x̂_i|`` (the design is made on
+        ``z = W x``, :meth:`AffineSystem.scaled`; :meth:`Design.estimator`
+        runs in the original state).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -188,7 +194,7 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     >>> design.certificate.terminal <= 1.0 + 1e-6
     True
     """
-    system = check_system(system)
+    system, weights = weigh(check_system(system), state_weights)
     check_engine(engine)
     check_solver(solver)
     tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
@@ -200,11 +206,13 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         if form != "split" or not zero_offset:
             raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
                              field="engine")
-        return class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
-                            certify=certify, node_gains=node_gains, time_based=(method == "time"))
-    model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
-    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
-    design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
-    if certify:
-        certify_design(design)
+        design = class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
+                              certify=certify, node_gains=node_gains, time_based=(method == "time"))
+    else:
+        model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
+        sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
+        design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
+        if certify:
+            certify_design(design)
+    design.state_weights = weights
     return design
