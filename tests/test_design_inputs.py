@@ -345,3 +345,37 @@ def test_the_cli_refuses_bad_state_weights(capsys):
                  ["--method", "augmented", "--state-weights", "1,1,1"]):
         assert main(["design", str(ACC_FILE), "--words", ",".join(L1), *args]) == 1
         assert "field '--state-weights'" in capsys.readouterr().err
+
+
+# --- 5. mu1 free for the prefix (and time-based) method -----------------------------------------------------------
+
+def test_prefix_mu1_free_is_the_class_engines_global_optimum(acc):
+    free = eqrec.design_prefix(acc, L1, "free")
+    mm = eqrec.min_recovery_level(acc, L1, kind="missing")
+    assert free.mu1 == mm.upper and free.extra["mu1_min_lower"] == mm.lower
+    assert free.extra["mu1_free"] == "global" and free.extra["mu1_binding"] == mm.binding
+    assert free.mu2 == eqrec.design_prefix(acc, L1, mm.upper).mu2
+    assert free.mu2 == pytest.approx(0.3991, abs=5e-5)  # the delayed-data paper's footnote on the same language
+    # the same μ1 as the delayed-data route on the same language, and nothing below it is feasible
+    assert free.mu1 == eqrec.design_delay_global(acc, L1, kind="missing").mu1
+    with pytest.raises(eqrec.InfeasibleDesign):
+        eqrec.design_prefix(acc, L1, mm.lower)
+    assert free.certificate.terminal <= free.mu1 * (1 + 1e-6)
+    tree = eqrec.design_prefix(acc, L1, "free", engine="tree")
+    assert tree.mu1 == free.mu1 and tree.mu2 == pytest.approx(free.mu2, rel=1e-7)
+    time_based = eqrec.design_time_based(acc, L1, "free")
+    assert time_based.mu1 == eqrec.min_recovery_level(acc, [time_based.extra["worst_case_word"]], kind="missing").upper
+
+
+def test_cli_prefix_mu1_free(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "free.json"
+    assert main(["design", str(ACC_FILE), "--words", ",".join(L1), "--mu1", "free", "--out", str(out)]) == 0
+    record = json.loads(out.read_text())
+    system, _ = eqrec.load_system(ACC_FILE)
+    assert record["mu1"] == eqrec.min_recovery_level(system, L1, kind="missing").upper
+    assert record["mu1_free"]["mu1_min"]["lower"] < record["mu1"] == record["mu1_free"]["mu1_min"]["upper"]
+    assert record["certified_terminal"] <= record["mu1"] * (1 + 1e-6)
+    assert main(["design", str(ACC_FILE), "--words", ",".join(L1), "--method", "augmented", "--mu1", "free"]) == 1
+    assert "'free' applies to --method prefix, time, delay only" in capsys.readouterr().err

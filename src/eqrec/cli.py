@@ -36,6 +36,8 @@ MAX_MU1 = 1e12
 #: Largest full delay language ``{0..D}^T`` (words) that ``--node-gains`` or ``--engine tree`` enumerate.
 MAX_ENUMERATED_WORDS = 20_000
 ENGINES = ("classes", "tree")
+#: The methods that take ``--mu1 free`` (the class engine's μ1-free theorem covers every prefix tree).
+FREE_METHODS = ("prefix", "time", "delay")
 #: ``eqrec.design.report.JSON_NODE_GAINS_LIMIT``, for the help text without importing the design modules (a test
 #: checks they agree).
 JSON_NODE_GAINS_SEQUENCES = 200
@@ -68,8 +70,10 @@ from the gains alone), solver, status, words, gains: for each designed word
   xhat(t+1) = A xhat + B u - ue + f,
   y_xi(tau) = y(tau) - C xhat(tau) if y(tau) has arrived by time t, else 0
 (F(t,tau) is zero wherever y(tau) has not arrived by time t).
---method prefix and time add engine (classes or tree) and, for the class
-engine, classes (below).
+--method prefix and time add engine (classes or tree), for the class engine
+classes (below), and with --mu1 free (mu1 = the smallest feasible mu1)
+mu1_free {route, mu1_min {upper (attained by certified gains), lower (proven
+infeasible), binding (the terminal class and row that set it)}}.
 
 State weights (--state-weights w1,...,wn; methods time, prefix, delay): the
 design is made on z = W x, W = diag(w), so mu1, mu2, every level and every
@@ -146,8 +150,10 @@ def _parser() -> argparse.ArgumentParser:
                         "(augmented paper); delay: delayed and missing data, gains per event prefix and a "
                         "level per prefix and time (delayed-data paper). Default: prefix")
     d.add_argument("--mu1", default="1",
-                   help="recovery level mu1 (default 1); with --method delay also 'free' (mu1 a decision "
-                        "variable: global branch and bound on LPs, certified lower bound of J)")
+                   help="recovery level mu1 (default 1); with --method prefix, time or delay also 'free': the "
+                        "smallest feasible mu1 (the class engine's mu1-free theorem, one Charnes-Cooper LP, "
+                        "certified by a bracket; every level is nondecreasing in mu1, so it is also the global "
+                        "optimum of mu2 and of the delay method's J, with a certified lower bound of J)")
     d.add_argument("--delays", default=None,
                    help="delay only: comma-separated delay words, e.g. 21210,00000")
     d.add_argument("--max-delay", type=int, default=None,
@@ -209,7 +215,7 @@ def run_design(args: argparse.Namespace) -> dict:
     from eqrec.core.system_files import load_system
 
     system, T_file = load_system(args.system)
-    mu1 = _parse_mu1(args.mu1, allow_free=args.method == "delay")
+    mu1 = _parse_mu1(args.mu1, allow_free=args.method in FREE_METHODS)
     if args.method == "augmented" and args.state_weights is not None:
         raise InputError("--state-weights applies to --method time, prefix and delay", "command line",
                          "--state-weights")
@@ -267,6 +273,10 @@ def run_design(args: argparse.Namespace) -> dict:
            "gains": design.schedule.to_json(), **extra}
     if args.method == "time":
         out["worst_case_word"] = design.extra["worst_case_word"]
+    if design.extra.get("mu1_free") is not None:
+        out["mu1_free"] = {"route": design.extra["mu1_free"], "mu1_min": {
+            "upper": design.extra["mu1_min"], "lower": design.extra["mu1_min_lower"],
+            "binding": design.extra["mu1_binding"]}}
     if args.method in ("prefix", "time"):
         out["engine"] = design.extra.get("engine", "tree")
         if design.class_gains is not None:
@@ -281,10 +291,11 @@ def run_design(args: argparse.Namespace) -> dict:
 
 
 def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
-    """``--mu1``: a finite number (at most :data:`MAX_MU1` in magnitude) or, for ``--method delay``, ``free``."""
+    """``--mu1``: a finite number (at most :data:`MAX_MU1` in magnitude) or, for :data:`FREE_METHODS`, ``free``."""
     if text.strip().lower() == "free":
         if not allow_free:
-            raise InputError("'free' applies to --method delay only; give a number", "command line", "--mu1")
+            raise InputError(f"'free' applies to --method {', '.join(FREE_METHODS)} only; give a number",
+                             "command line", "--mu1")
         return "free"
     try:
         value = float(text)

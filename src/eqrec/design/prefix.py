@@ -17,7 +17,8 @@ from eqrec.core.lp import LPSolution
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import class_design
-from eqrec.design.inputs import check_mu1, check_solver, check_system, language_tree
+from eqrec.design.inputs import FREE, check_mu1, check_solver, check_system, language_tree
+from eqrec.design.mu1_min import min_recovery_level
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
@@ -117,8 +118,14 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         :mod:`eqrec.core.words`) or arrival patterns; delay patterns
         (:func:`eqrec.delay_words`) give the event-based design of the
         delayed-data paper (one gain block per event-prefix node).
-    mu1 : float
-        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive.
+    mu1 : float or "free"
+        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive;
+        ``"free"``: the smallest feasible ``μ1`` (``μ1,min`` of the class
+        engine's μ1-free theorem, :func:`eqrec.min_recovery_level`, which
+        covers every prefix tree).  Every level is nondecreasing in ``μ1``,
+        so the design there also has the smallest ``M2`` over all ``μ1``;
+        ``extra`` records ``mu1_free``, ``mu1_min``, ``mu1_min_lower`` (proven
+        infeasible) and ``mu1_binding``.
     solver : str, optional
         LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
         (default ``"highs"``).
@@ -193,12 +200,26 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     True
     >>> design.certificate.terminal <= 1.0 + 1e-6
     True
+
+    With ``μ1`` free, the smallest recovery level any prefix-based estimator reaches:
+
+    >>> free = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1="free")
+    >>> round(free.mu1, 4), free.mu2 < design.mu2
+    (0.2493, True)
     """
     system, weights = weigh(check_system(system), state_weights)
     check_engine(engine)
     check_solver(solver)
     tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
-    mu1 = check_mu1(mu1)
+    mu1 = check_mu1(mu1, allow_free=True)
+    if mu1 == FREE:  # the class engine's global optimum over μ1 (eqrec.design.mu1_min), then the design there
+        mm = min_recovery_level(system, classes_of_tree(tree), solver=solver)
+        design = design_prefix(system, tree, mm.upper, solver=solver, T=T, form=form, certify=certify, method=method,
+                               zero_offset=zero_offset, levels=levels, engine=engine, node_gains=node_gains,
+                               fixed_length=fixed_length)
+        design.extra.update(mu1_free="global", mu1_min=mm.upper, mu1_min_lower=mm.lower, mu1_binding=mm.binding)
+        design.state_weights = weights
+        return design
     if engine == "classes":
         if T is not None and T != tree.depth:
             raise InputError(f"the class engine designs on the words' own horizon {tree.depth}, got T = {T}",

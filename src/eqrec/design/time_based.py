@@ -42,8 +42,9 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
         The system.
     words : sequence of str or ArrivalPattern
         The language: arrival patterns or 0/1 words of one length.
-    mu1 : float
-        Recovery level ``μ1`` (the prefix-based paper's ``M1``), positive.
+    mu1 : float or "free"
+        Recovery level ``μ1`` (the prefix-based paper's ``M1``), positive, or
+        ``"free"``: the smallest feasible one (as for :func:`design_prefix`).
     solver : str, optional
         LP solver (default ``"highs"``), as for :func:`design_prefix`.
     certify : bool, optional
