@@ -379,3 +379,49 @@ def test_cli_prefix_mu1_free(tmp_path, capsys):
     assert record["certified_terminal"] <= record["mu1"] * (1 + 1e-6)
     assert main(["design", str(ACC_FILE), "--words", ",".join(L1), "--method", "augmented", "--mu1", "free"]) == 1
     assert "'free' applies to --method prefix, time, delay only" in capsys.readouterr().err
+
+
+# --- 6. an infeasible μ1 names the true smallest feasible μ1 -------------------------------------------------------
+
+def _number_after(text: str, before: str) -> str:
+    import re
+
+    found = re.search(re.escape(before) + r" ([0-9][0-9.e+-]*[0-9])", text)
+    assert found is not None, text
+    return found.group(1)
+
+
+@pytest.mark.parametrize("engine", ["classes", "tree"])
+def test_retrying_at_the_printed_smallest_mu1_succeeds(engine):
+    plant = eqrec.AffineSystem(**MOTOR, eta_w=0.01, eta_v=0.02)
+    words = ["1011", "1101"]
+    with pytest.raises(eqrec.InfeasibleDesign) as info:
+        eqrec.design_prefix(plant, words, 0.1, engine=engine)
+    text = str(info.value)
+    printed = _number_after(text, "the smallest feasible mu1 is")
+    assert f"retry with mu1 >= {printed} or --mu1 free" in text
+    mu1_min = eqrec.min_recovery_level(plant, words, kind="missing").upper
+    assert float(printed) >= mu1_min and float(printed) == pytest.approx(mu1_min, rel=1e-5)
+    if engine == "classes":  # the class's worst case at the requested μ1 is not a level to retry at
+        worst = float(_number_after(text, "has smallest worst case"))
+        assert worst < mu1_min
+        with pytest.raises(eqrec.InfeasibleDesign):
+            eqrec.design_prefix(plant, words, worst, engine=engine)
+    last_digit = 10.0 ** (np.floor(np.log10(float(printed))) - 5)  # one unit of the last printed digit
+    for retry in (float(printed), float(printed) + last_digit):
+        assert eqrec.design_prefix(plant, words, retry, engine=engine).certificate.terminal <= retry * (1 + 1e-6)
+
+
+def test_the_delay_design_and_the_cli_name_the_smallest_mu1(tmp_path, capsys):
+    plant = eqrec.AffineSystem(**MOTOR, eta_w=0.01, eta_v=0.02)
+    with pytest.raises(eqrec.InfeasibleDesign, match="the smallest feasible mu1 is") as info:
+        eqrec.design_delay(plant, ["0200", "0020"], 0.01)
+    printed = float(_number_after(str(info.value), "the smallest feasible mu1 is"))
+    assert eqrec.design_delay(plant, ["0200", "0020"], printed).mu1 == printed
+    system, _ = eqrec.load_system(ACC_FILE)
+    assert main(["design", str(ACC_FILE), "--words", "101111", "--mu1", "0.05"]) == 3
+    err = capsys.readouterr().err
+    printed = float(_number_after(err, "the smallest feasible mu1 is"))
+    assert printed == pytest.approx(eqrec.min_recovery_level(system, ["101111"], kind="missing").upper, rel=1e-5)
+    out = tmp_path / "retry.json"
+    assert main(["design", str(ACC_FILE), "--words", "101111", "--mu1", str(printed), "--out", str(out)]) == 0

@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from eqrec.core.certify import certify_design
-from eqrec.core.classes import ClassSet, classes_of_full_language
+from eqrec.core.classes import ClassSet, classes_of_full_language, classes_of_tree
 from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
@@ -66,7 +66,7 @@ from eqrec.design.classes import check_terminal, class_design, solve_classes
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
 from eqrec.design.inputs import (check_fraction, check_mu1, check_solver, check_system, language_classes,
                                  language_tree)
-from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel
+from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp
@@ -264,7 +264,10 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     else:
         tree = _tree(patterns, kind)
         model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
-        sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
+        try:
+            sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
+        except InfeasibleDesign as exc:
+            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver) from None
         design = _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
                                        certify=certify, rtol=rtol)
     design.state_weights = weights

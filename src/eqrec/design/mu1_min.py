@@ -35,6 +35,7 @@ recomputed from the recovered ``k`` (upper end, attained), and a dual point
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Iterable
@@ -347,3 +348,64 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     binding = {"class": cls.label, "time": cls.depth, "data": list(cls.available), "row": r}
     return MinRecoveryLevel(upper=upper, lower=float(lower), lower_margin=float(margin), binding=binding,
                             ratios=ratios, gains=gains, lps=lps, time=time.perf_counter() - t_start)
+
+
+def round_up(value: float, digits: int = 6) -> float:
+    """``value`` rounded up to ``digits`` significant digits (a printed level that is never below the true one).
+
+    Parameters
+    ----------
+    value : float
+        A positive number.
+    digits : int, optional
+        Significant digits kept (default 6).
+
+    Returns
+    -------
+    float
+        The smallest number of ``digits`` significant digits at least ``value``.
+    """
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(value)))
+    return math.ceil(value * scale) / scale
+
+
+def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: InfeasibleDesign, *,
+                  solver: str = "highs") -> InfeasibleDesign:
+    """The error to raise for a design infeasible at ``mu1``: it names the true smallest feasible ``μ1``.
+
+    A terminal class's worst case at the requested ``mu1`` is not the level to
+    retry at (it grows with ``μ1``); ``μ1,min`` of :func:`min_recovery_level`
+    is.  It is printed rounded up (:func:`round_up`), so retrying at the
+    printed value succeeds.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system designed for.
+    classes : ClassSet
+        The language's classes.
+    mu1 : float
+        The recovery level that was infeasible.
+    error : InfeasibleDesign
+        The infeasibility found at ``mu1`` (its text is kept as the detail).
+    solver : str, optional
+        LP solver of the Charnes–Cooper LP.
+
+    Returns
+    -------
+    InfeasibleDesign
+        ``error`` itself if ``μ1,min`` cannot be computed or does not exceed
+        ``mu1``; the error of :func:`min_recovery_level` if no ``μ1`` is
+        feasible; else a new error naming ``μ1,min``.
+    """
+    try:
+        mm = min_recovery_level(system, classes, solver=solver)
+    except InfeasibleDesign as none_feasible:
+        return none_feasible
+    except (InputError, SolverFailure):
+        return error
+    if not mm.upper > mu1:
+        return error
+    shown = f"{round_up(mm.upper):.6g}"
+    return InfeasibleDesign(f"{error}; the smallest feasible mu1 is {shown} (retry with mu1 >= {shown} or --mu1 "
+                            "free; in Python mu1='free' or design_delay_global)")

@@ -18,11 +18,11 @@ from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import class_design
 from eqrec.design.inputs import FREE, check_mu1, check_solver, check_system, language_tree
-from eqrec.design.mu1_min import min_recovery_level
+from eqrec.design.mu1_min import infeasible_at, min_recovery_level
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
-from eqrec.errors import InputError
+from eqrec.errors import InfeasibleDesign, InputError
 
 
 #: The class engine (:mod:`eqrec.design.classes`) or this module's tree LP.
@@ -231,7 +231,10 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
                               certify=certify, node_gains=node_gains, time_based=(method == "time"))
     else:
         model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
-        sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
+        try:
+            sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
+        except InfeasibleDesign as exc:
+            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver) from None
         design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
         if certify:
             certify_design(design)
