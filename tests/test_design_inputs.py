@@ -425,3 +425,37 @@ def test_the_delay_design_and_the_cli_name_the_smallest_mu1(tmp_path, capsys):
     assert printed == pytest.approx(eqrec.min_recovery_level(system, ["101111"], kind="missing").upper, rel=1e-5)
     out = tmp_path / "retry.json"
     assert main(["design", str(ACC_FILE), "--words", "101111", "--mu1", str(printed), "--out", str(out)]) == 0
+
+
+# --- 7. small items -----------------------------------------------------------------------------------------------
+
+def test_help_explains_certified_terminal():
+    import subprocess
+    import sys
+
+    text = subprocess.run([sys.executable, "-m", "eqrec", "design", "--help"], capture_output=True, text=True,
+                          check=True).stdout
+    explained = " ".join(text.split()).split("certified_terminal (", 1)[1]
+    assert explained.startswith("the worst case of the error norm ||x(T) - xhat(T)||_inf at the end of the horizon")
+    assert "recomputed from the gains alone: equalized recovery holds when it is at most mu1" in explained
+
+
+def test_delay_classes_and_packet_are_public(acc):
+    from eqrec.core.estimator import Packet
+    from eqrec.design.delay import delay_classes
+
+    assert eqrec.delay_classes is delay_classes and eqrec.Packet is Packet
+    assert "delay_classes" in eqrec.__all__ and "Packet" in dir(eqrec)
+    classes = eqrec.delay_classes(max_delay=2, horizon=5)
+    assert len(classes) == 18 and classes.words == 243
+    design = eqrec.design_delay_global(acc, ["100000", "000000"], kind="delay").design  # y(0) on time or late
+    late = design.estimator().reset(np.zeros(3))
+    on_time = design.estimator().reset(np.zeros(3))
+    y0, y1 = np.array([1.0, 2.0]), np.array([1.5, 2.5])
+    x_late, _ = late.step(None)  # y(0) one step late ...
+    x_on_time, _ = on_time.step(y0)
+    assert not np.allclose(x_late, x_on_time)
+    xhat_late, bound_late = late.step([eqrec.Packet(0, y0), eqrec.Packet(1, y1)])  # ... arrives with y(1)
+    xhat, bound = on_time.step(y1)
+    assert late.time == on_time.time == 2
+    assert np.allclose(xhat_late, xhat, rtol=1e-12) and bound_late == bound  # the same data by time 1: one class

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -64,7 +65,11 @@ the horizon (t + delay >= T) means missing. --max-delay D --horizon T designs
 for all (D+1)^T delay words. Words with equal event sequences are merged.
 
 Output JSON: method, mu1, mu2 (optimum), certified_mu2 (worst case recomputed
-from the gains alone), solver, status, words, gains: for each designed word
+from the gains alone), certified_terminal (the worst case of the error norm
+||x(T) - xhat(T)||_inf at the end of the horizon, over every word, recomputed
+from the gains alone: equalized recovery holds when it is at most mu1, so the
+gains can be reused every T steps), solver, status, words, gains: for each
+designed word
 {"F": (T*n x T*p), "u0": (T*n)} in the convention
   ue(t) = u0(t) + sum_{tau<=t} F(t,tau) y_xi(tau),
   xhat(t+1) = A xhat + B u - ue + f,
@@ -432,7 +437,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"mu2 = {result['mu2']:.6g} (certified {result['certified_mu2']:.6g}); wrote {out_path}",
               file=sys.stderr)
     else:
-        print(text)
+        try:
+            print(text)
+            sys.stdout.flush()
+        except BrokenPipeError:  # the reader left (eqrec design ... | head): the design itself succeeded
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 

@@ -50,7 +50,6 @@ certificate (worst case of ``E_d − K Z_S``) and, where node gains are derived,
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -113,6 +112,14 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     Returns
     -------
     ClassSet
+        The (time, available data) classes, for :func:`design_delay` and :func:`design_delay_global`.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> classes = eqrec.delay_classes(max_delay=4, horizon=30)
+    >>> len(classes), classes.words
+    (446, 931322574615478515625)
     """
     return classes_of_full_language(int(horizon), int(max_delay))
 
