@@ -268,9 +268,9 @@ def test_periodic_restart_reanchors_the_prediction(cases):
 def switching(reactor):
     """As eqrec.studies.p3_strategy: period-1 design at the smallest period-1 level rounded up, recovery
     design on the words whose first delay is at least 1."""
-    mu1 = math.ceil(min_recovery_level(reactor, ["0"]).upper * 100 - 1e-9) / 100
+    mu1 = math.ceil(min_recovery_level(reactor, ["0"], kind="delay").upper * 100 - 1e-9) / 100
     words = [p.label for p in delay_language(max_delay=2, horizon=4)]
-    perf = design_delay(reactor, ["0"], mu1, cost="sum")
+    perf = design_delay(reactor, ["0"], mu1, kind="delay", cost="sum")
     rec = design_delay(reactor, [w for w in words if w[0] != "0"], mu1, cost="sum")
     return perf, rec, mu1
 
@@ -302,7 +302,7 @@ def test_switching_validates_class_gains(reactor, switching):
     no_on_time = ClassGains(late_only, [np.zeros((4, 0))], 4, 2)
     with pytest.raises(InputError, match="on-time"):
         SwitchingEstimator(reactor, no_on_time, rec.class_gains, np.zeros(4))
-    starts_on_time = design_delay(reactor, ["0000", "1000"], 0.5)
+    starts_on_time = design_delay(reactor, ["0000", "1000"], 0.5, kind="delay")
     with pytest.raises(InputError, match="first measurement late"):
         SwitchingEstimator(reactor, perf.class_gains, starts_on_time.class_gains, np.zeros(4))
     with pytest.raises(TypeError):

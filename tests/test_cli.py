@@ -227,7 +227,7 @@ def test_delay_bad_input_names_the_field(capsys, args, field):
 
 
 @pytest.mark.parametrize("args, field", [
-    (["--words", "101111", "--mu1", "free"], "--mu1"),
+    (["--words", "101111", "--method", "augmented", "--mu1", "free"], "--mu1"),  # prefix and time take free
     (["--words", "101111", "--cost", "sum"], "--cost"),
     (["--words", "101111", "--delays", "000000"], "--delays"),
     ([], "--words"),

@@ -223,4 +223,4 @@ def test_noise_free_system_has_no_smallest_positive_mu1(reactor):
 
     quiet = AffineSystem(A=reactor.A, C=reactor.C, E=reactor.E, eta_w=0.0, eta_v=0.0)
     with pytest.raises(InputError, match="smallest recovery level is 0"):
-        design_delay_global(quiet, ["000", "010"])
+        design_delay_global(quiet, ["000", "010"], kind="delay")

@@ -85,7 +85,7 @@ def test_missing_measurement_columns_are_zero(acc, L1_words):
 
 
 def test_finite_length_language(acc):
-    d = design_prefix(acc, ["1011", "11011", "111011"], 1.0)
+    d = design_prefix(acc, ["1011", "11011", "111011"], 1.0, fixed_length=False)  # Section V
     for w, wc in d.certificate.words.items():
         assert wc.bounds.shape == (len(w) + 1, 3)
         assert wc.bounds[-1].max() <= 1.0 + 1e-6

@@ -40,7 +40,7 @@ def periodic_design(reactor):
 
 @pytest.fixture(scope="module")
 def switching_designs(reactor):
-    perf = design_delay(reactor, ["0"], MU1_SWITCH)
+    perf = design_delay(reactor, ["0"], MU1_SWITCH, kind="delay")
     rec = design_delay(reactor, [w for w in full_delay_language(5, 2) if w[0] != "0"], MU1_SWITCH)
     return perf, rec
 
@@ -76,8 +76,8 @@ def _run(step, cfg, inputs=None, outputs=None, wildcards=None):
 
 def test_performance_design_is_infeasible_at_the_papers_mu1(reactor):
     """2 outputs, 4 states: no period-1 design at mu1 = 0.33; the smallest period-1 level is about 0.3553."""
-    assert design_lp_status(reactor, ["0"], 0.33) == "infeasible"
-    assert design_lp_status(reactor, ["0"], MU1_SWITCH) == "optimal"
+    assert design_lp_status(reactor, ["0"], 0.33, kind="delay") == "infeasible"
+    assert design_lp_status(reactor, ["0"], MU1_SWITCH, kind="delay") == "optimal"
 
 
 def test_switches_at_a_late_packet_and_reverts_after_T(reactor, switching_designs):
@@ -118,7 +118,7 @@ def test_a_stale_packet_in_performance_mode_is_dropped(reactor, switching_design
 def test_recovery_language_must_start_late(reactor, switching_designs):
     perf, _ = switching_designs
     with pytest.raises(InputError, match="first measurement late"):
-        SwitchingEstimator(reactor, perf.schedule, design_delay(reactor, ["00000", "10000"], 0.5).schedule,
+        SwitchingEstimator(reactor, perf.schedule, design_delay(reactor, ["00000", "10000"], 0.5, kind="delay").schedule,
                            np.zeros(4))
     with pytest.raises(InputError, match="horizon 1"):
         SwitchingEstimator(reactor, switching_designs[1].schedule, switching_designs[1].schedule, np.zeros(4))

@@ -23,16 +23,18 @@ The user-facing functions are in this namespace, as in python-control's
 Systems
     :class:`AffineSystem`, :func:`acc_system`, :func:`batch_reactor`, :func:`load_system`
 Arrival patterns (languages)
+    :func:`missing_words`, :func:`delay_words` (a 0/1 string reads both ways: say which),
     :func:`as_language`, :func:`validate_language`, :func:`parse_delay_word`,
-    :func:`full_delay_language`, :class:`PrefixTree`
+    :func:`full_delay_language`, :func:`delay_classes` (a full delay language's classes, no word listed),
+    :class:`PrefixTree`
 Designs (each returns a certified :class:`Design`)
     :func:`design_time_based`, :func:`design_prefix`, :func:`design_delay`,
     :func:`design_delay_global`, :func:`design_augmented`, :func:`min_recovery_level`
 Certificates
     :func:`certify_schedule`
 Estimators and simulation
-    :class:`GuaranteedEstimator` (``Design.estimator()``), :class:`ClassEstimator`,
-    :func:`simulate_run`, :func:`monte_carlo`
+    :class:`GuaranteedEstimator` (``Design.estimator()``), :class:`Packet` (a time-stamped
+    measurement for ``step``), :class:`ClassEstimator`, :func:`simulate_run`, :func:`monte_carlo`
 Errors
     :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
     :class:`SolverFailure`, :class:`CertificationFailure`
@@ -58,10 +60,13 @@ _PUBLIC: dict[str, str] = {
     "load_system": "eqrec.core.system_files",
     "batch_reactor": "eqrec.models",
     # arrival patterns
+    "missing_words": "eqrec.design.inputs",
+    "delay_words": "eqrec.design.inputs",
     "as_language": "eqrec.core.words",
     "validate_language": "eqrec.core.words",
     "parse_delay_word": "eqrec.core.words",
     "full_delay_language": "eqrec.core.words",
+    "delay_classes": "eqrec.design.delay",
     "PrefixTree": "eqrec.core.prefix_tree",
     # designs
     "Design": "eqrec.design.result",
@@ -75,6 +80,7 @@ _PUBLIC: dict[str, str] = {
     "certify_schedule": "eqrec.core.certify",
     # estimators and simulation
     "GuaranteedEstimator": "eqrec.core.runtime",
+    "Packet": "eqrec.core.estimator",
     "ClassEstimator": "eqrec.core.estimator",
     "simulate_run": "eqrec.core.simulate",
     "monte_carlo": "eqrec.core.simulate",

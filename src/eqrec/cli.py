@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -36,6 +37,8 @@ MAX_MU1 = 1e12
 #: Largest full delay language ``{0..D}^T`` (words) that ``--node-gains`` or ``--engine tree`` enumerate.
 MAX_ENUMERATED_WORDS = 20_000
 ENGINES = ("classes", "tree")
+#: The methods that take ``--mu1 free`` (the class engine's μ1-free theorem covers every prefix tree).
+FREE_METHODS = ("prefix", "time", "delay")
 #: ``eqrec.design.report.JSON_NODE_GAINS_LIMIT``, for the help text without importing the design modules (a test
 #: checks they agree).
 JSON_NODE_GAINS_SEQUENCES = 200
@@ -47,8 +50,9 @@ SYSTEM.yaml keys (matrices as nested lists):
   A      n x n state matrix                       (required)
   C      p x n output matrix                      (required)
   E      n x nw process-noise gain                (required)
-  eta_w  bound on |w(t)|_inf                      (required)
-  eta_v  bound on |v(t)|_inf                      (required)
+  eta_w  bound on |w(t)|_inf, or one bound per    (required)
+         column of E: [1, 0.5, 2] means |w_i(t)| <= eta_w[i]
+  eta_v  bound on |v(t)|_inf, or one per column of V  (required)
   T      recovery time (default: the word length)
   B, f   input matrix and affine term (do not affect the design)
   V      p x nv measurement-noise gain (default identity)
@@ -61,14 +65,26 @@ the horizon (t + delay >= T) means missing. --max-delay D --horizon T designs
 for all (D+1)^T delay words. Words with equal event sequences are merged.
 
 Output JSON: method, mu1, mu2 (optimum), certified_mu2 (worst case recomputed
-from the gains alone), solver, status, words, gains: for each designed word
+from the gains alone), certified_terminal (the worst case of the error norm
+||x(T) - xhat(T)||_inf at the end of the horizon, over every word, recomputed
+from the gains alone: equalized recovery holds when it is at most mu1, so the
+gains can be reused every T steps), solver, status, words, gains: for each
+designed word
 {"F": (T*n x T*p), "u0": (T*n)} in the convention
   ue(t) = u0(t) + sum_{tau<=t} F(t,tau) y_xi(tau),
   xhat(t+1) = A xhat + B u - ue + f,
   y_xi(tau) = y(tau) - C xhat(tau) if y(tau) has arrived by time t, else 0
 (F(t,tau) is zero wherever y(tau) has not arrived by time t).
---method prefix and time add engine (classes or tree) and, for the class
-engine, classes (below).
+--method prefix and time add engine (classes or tree), for the class engine
+classes (below), and with --mu1 free (mu1 = the smallest feasible mu1)
+mu1_free {route, mu1_min {upper (attained by certified gains), lower (proven
+infeasible), binding (the terminal class and row that set it)}}.
+
+State weights (--state-weights w1,...,wn; methods time, prefix, delay): the
+design is made on z = W x, W = diag(w), so mu1, mu2, every level and every
+certified value bound max_i w_i |x_i - xhat_i| instead of the plain infinity
+norm (|x_i - xhat_i| <= level / w_i). The JSON adds state_weights; its gains
+(F, u0, K) are written in the file's state x, with the conventions above.
 
 Engines (--engine, methods prefix and delay; default classes): the class
 engine solves one small LP per (time d, available data S) class and state
@@ -139,8 +155,10 @@ def _parser() -> argparse.ArgumentParser:
                         "(augmented paper); delay: delayed and missing data, gains per event prefix and a "
                         "level per prefix and time (delayed-data paper). Default: prefix")
     d.add_argument("--mu1", default="1",
-                   help="recovery level mu1 (default 1); with --method delay also 'free' (mu1 a decision "
-                        "variable: global branch and bound on LPs, certified lower bound of J)")
+                   help="recovery level mu1 (default 1); with --method prefix, time or delay also 'free': the "
+                        "smallest feasible mu1 (the class engine's mu1-free theorem, one Charnes-Cooper LP, "
+                        "certified by a bracket; every level is nondecreasing in mu1, so it is also the global "
+                        "optimum of mu2 and of the delay method's J, with a certified lower bound of J)")
     d.add_argument("--delays", default=None,
                    help="delay only: comma-separated delay words, e.g. 21210,00000")
     d.add_argument("--max-delay", type=int, default=None,
@@ -165,6 +183,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="augmented only: comma-separated poles of A - L C, real or complex in Python "
                         "notation, e.g. 0,0.3+0.2j,0.3-0.2j (default: n distinct poles in [-0.5, 0.5])")
     d.add_argument("--s0", default=None, help="augmented only: JSON vector s0 (default zeros)")
+    d.add_argument("--state-weights", default=None,
+                   help="time, prefix and delay: comma-separated positive weights w_1,...,w_n, one per state: the "
+                        "guarantee is then on max_i w_i |x_i - xhat_i| (a state vector of mixed units gets a "
+                        "meaningful norm); the JSON's gains stay in the file's coordinates")
     d.add_argument("--out", default=None, help="output JSON file (default: print to stdout)")
     return ap
 
@@ -176,6 +198,20 @@ def _parse_json_array(text: str, field: str) -> np.ndarray:
         raise InputError(f"not a JSON number array ({exc})", "command line", field) from None
 
 
+def _parse_weights(text: str | None, n: int) -> np.ndarray | None:
+    """``--state-weights``: ``n`` positive finite numbers, comma-separated (``None``: not given)."""
+    if text is None:
+        return None
+    try:
+        weights = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(f"must be comma-separated numbers, got {text!r}", "command line", "--state-weights") from None
+    if weights.shape != (n,) or not np.all(np.isfinite(weights)) or np.any(weights <= 0):
+        raise InputError(f"need n = {n} positive finite weights, one per state, got {text!r}", "command line",
+                         "--state-weights")
+    return weights
+
+
 def run_design(args: argparse.Namespace) -> dict:
     """Design, certify and describe one estimator (the ``design`` subcommand)."""
     from eqrec.design.prefix import design_prefix
@@ -184,9 +220,13 @@ def run_design(args: argparse.Namespace) -> dict:
     from eqrec.core.system_files import load_system
 
     system, T_file = load_system(args.system)
-    mu1 = _parse_mu1(args.mu1, allow_free=args.method == "delay")
+    mu1 = _parse_mu1(args.mu1, allow_free=args.method in FREE_METHODS)
+    if args.method == "augmented" and args.state_weights is not None:
+        raise InputError("--state-weights applies to --method time, prefix and delay", "command line",
+                         "--state-weights")
+    weights = _parse_weights(args.state_weights, system.n)
     if args.method == "delay":
-        return run_delay_design(args, system, T_file, mu1)
+        return run_delay_design(args, system, T_file, mu1, weights)
     for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
                         ("--cost", args.cost), ("--node-gains", args.node_gains or None)):
         if value is not None:
@@ -208,9 +248,10 @@ def run_design(args: argparse.Namespace) -> dict:
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
     extra = {}
     if args.method == "prefix":
-        design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes")
+        design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
+                               state_weights=weights)
     elif args.method == "time":
-        design = design_time_based(system, words, args.mu1, solver=args.solver)
+        design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
     else:
         try:
             from eqrec.design.augmented import design_augmented
@@ -237,20 +278,29 @@ def run_design(args: argparse.Namespace) -> dict:
            "gains": design.schedule.to_json(), **extra}
     if args.method == "time":
         out["worst_case_word"] = design.extra["worst_case_word"]
+    if design.extra.get("mu1_free") is not None:
+        out["mu1_free"] = {"route": design.extra["mu1_free"], "mu1_min": {
+            "upper": design.extra["mu1_min"], "lower": design.extra["mu1_min_lower"],
+            "binding": design.extra["mu1_binding"]}}
     if args.method in ("prefix", "time"):
         out["engine"] = design.extra.get("engine", "tree")
         if design.class_gains is not None:
             from eqrec.design.report import class_table
 
             out["classes"] = class_table(design)
+    if weights is not None:
+        from eqrec.design.report import original_coordinates
+
+        original_coordinates(out, weights)
     return out
 
 
 def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
-    """``--mu1``: a finite number (at most :data:`MAX_MU1` in magnitude) or, for ``--method delay``, ``free``."""
+    """``--mu1``: a finite number (at most :data:`MAX_MU1` in magnitude) or, for :data:`FREE_METHODS`, ``free``."""
     if text.strip().lower() == "free":
         if not allow_free:
-            raise InputError("'free' applies to --method delay only; give a number", "command line", "--mu1")
+            raise InputError(f"'free' applies to --method {', '.join(FREE_METHODS)} only; give a number",
+                             "command line", "--mu1")
         return "free"
     try:
         value = float(text)
@@ -265,14 +315,15 @@ def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
     return value
 
 
-def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str) -> dict:
+def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str,
+                     weights: np.ndarray | None = None) -> dict:
     """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
     from decimal import Decimal
 
     from eqrec.core.classes import ClassSet, full_language_counts
     from eqrec.core.words import as_language
     from eqrec.design.delay import delay_classes, delay_language, design_delay, design_delay_global
-    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, to_json
+    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, original_coordinates, to_json
 
     if args.words is not None:
         raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",
@@ -324,13 +375,13 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     cost = args.cost or "sum"
     node_gains = True if args.node_gains else None
     if mu1 == "free":
-        free = design_delay_global(system, patterns, cost=cost, solver=args.solver, node_gains=node_gains,
-                                   engine=engine)
+        free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
+                                   node_gains=node_gains, engine=engine, state_weights=weights)
         design = free.design
     else:
         free = None
-        design = design_delay(system, patterns, mu1, cost=cost, solver=args.solver, engine=engine,
-                              node_gains=node_gains)
+        design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
+                              node_gains=node_gains, state_weights=weights)
     out = to_json(design, free, node_gains=node_gains)
     out.update(solver=design.solution.solver, status=design.solution.status)
     if full:
@@ -341,6 +392,8 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         out["words"] = [p.label for p in patterns]
         if design.schedule is not None:
             out["designed_words"] = [p.label for p in design.schedule.designed]
+    if weights is not None:
+        original_coordinates(out, weights)
     return out
 
 
@@ -384,7 +437,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"mu2 = {result['mu2']:.6g} (certified {result['certified_mu2']:.6g}); wrote {out_path}",
               file=sys.stderr)
     else:
-        print(text)
+        try:
+            print(text)
+            sys.stdout.flush()
+        except BrokenPipeError:  # the reader left (eqrec design ... | head): the design itself succeeded
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 

@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from eqrec.core.lp import INF, LinearProgram, LPSolution
+from eqrec.errors import InputError
 
 
 #: HiGHS model status (``highspy.HighsModelStatus`` number) -> our status, for both HiGHS drivers (highspy and
@@ -279,7 +280,7 @@ SOLVER_NAMES: tuple[str, ...] = tuple(SOLVERS)
 
 
 def solver_info(name: str) -> SolverInfo:
-    """The registry entry of ``name``; :class:`ValueError` naming the choices otherwise.
+    """The registry entry of ``name``; an :class:`~eqrec.errors.InputError` (field ``solver``) naming the choices otherwise.
 
     Parameters
     ----------
@@ -290,11 +291,15 @@ def solver_info(name: str) -> SolverInfo:
     -------
     SolverInfo
         The entry of :data:`SOLVERS`.
+
+    Raises
+    ------
+    InputError
+        For any other value (also a :class:`ValueError`).
     """
-    try:
-        return SOLVERS[name]
-    except KeyError:
-        raise ValueError(f"unknown solver {name!r}; choose one of {list(SOLVER_NAMES)}") from None
+    if not isinstance(name, str) or name not in SOLVERS:
+        raise InputError(f"unknown solver {name!r}; choose one of {list(SOLVER_NAMES)}", field="solver")
+    return SOLVERS[name]
 
 
 def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None) -> LPSolution:

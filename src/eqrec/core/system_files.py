@@ -80,12 +80,16 @@ def system_from_mapping(data: Any, source: str = "<mapping>") -> tuple[AffineSys
     for key in ("A", "C", "E", "B", "f", "V"):
         if data.get(key) is not None:
             check_numbers(data[key], key)
-    for key in ("eta_w", "eta_v"):
+    for key in ("eta_w", "eta_v"):  # a number, or a flat list of numbers: one bound per noise channel
         check_numbers(data[key], key)
-        if 0 < data[key] < MIN_NOISE_BOUND:
-            raise InputError(f"noise bound {data[key]:g} is below {MIN_NOISE_BOUND:g} (use 0 for no noise), "
-                             "beyond what the double-precision design LPs solve reliably; rescale the units "
-                             "of the states and outputs", source, key)
+        bounds = data[key] if isinstance(data[key], list) else [data[key]]
+        if any(isinstance(b, list) for b in bounds):
+            raise InputError("must be a number or a flat list of numbers (one bound per noise channel)", source, key)
+        for bound in bounds:
+            if 0 < bound < MIN_NOISE_BOUND:
+                raise InputError(f"noise bound {bound:g} is below {MIN_NOISE_BOUND:g} (use 0 for no noise), "
+                                 "beyond what the double-precision design LPs solve reliably; rescale the units "
+                                 "of the states and outputs", source, key)
     T = data.get("T")
     if T is not None:
         if isinstance(T, bool) or not isinstance(T, int) or T < 1:
@@ -100,7 +104,9 @@ def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
     """Read a system YAML file (keys ``A, C, E, eta_w, eta_v`` and optional ``T, B, f, V``).
 
     The keys are the parameters of :class:`AffineSystem` (plus ``name``,
-    default the file's stem) and an optional horizon ``T``.  Unquoted
+    default the file's stem) and an optional horizon ``T``; ``eta_w`` and
+    ``eta_v`` are numbers or lists of one bound per noise channel
+    (``eta_w: [1, 0.5, 2]`` means ``|w_i| <= eta_w[i]``).  Unquoted
     numbers in exponent notation without a dot (``1e-3``, ``5E2``) are read
     as numbers, as YAML 1.2 does (PyYAML's YAML 1.1 rules would make them
     strings); quoted numbers stay strings and are rejected naming the field.

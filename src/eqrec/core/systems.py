@@ -29,6 +29,8 @@ def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.
         kind = "O"
     if kind in "USb":  # quoted numbers or booleans are not silently converted
         raise InputError("entries must be numbers, not strings or booleans", source, name)
+    if kind == "c":
+        raise InputError("entries must be real numbers, not complex", source, name)
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
@@ -40,6 +42,41 @@ def _as_matrix(value: Any, name: str, source: str | None, ndim_ok=(2, 3)) -> np.
     if not np.all(np.isfinite(arr)):
         raise InputError("contains NaN or infinite entries", source, name)
     return arr
+
+
+def _as_vector(value: Any, name: str, source: str | None) -> np.ndarray:
+    """A finite float vector (any nesting flattened), else :class:`InputError` naming ``name``."""
+    arr = _as_matrix(value, name, source, ndim_ok=(0, 1, 2))
+    return arr.reshape(-1)
+
+
+def _noise_bound(value: Any, key: str, channels: int, what: str,
+                 source: str | None) -> tuple[float, np.ndarray | None]:
+    """A noise bound: a number, or one bound per channel as the scale of the channels and the bound 1.
+
+    Returns ``(bound, None)`` for a number (or a vector whose entries are all
+    equal: the same box), else ``(1.0, scale)``: the gain's columns are
+    multiplied by ``scale`` so that ``|w_i| <= scale[i]`` becomes ``|w'|∞ <= 1``.
+    """
+    if isinstance(value, (bool, np.bool_, str)):
+        raise InputError(f"must be a number or a list of numbers, got {value!r}", source, key)
+    if np.ndim(value) == 0:
+        try:
+            bound = float(value)
+        except (TypeError, ValueError):
+            raise InputError(f"must be a number or a list of numbers, got {value!r}", source, key) from None
+        if not np.isfinite(bound) or bound < 0:
+            raise InputError(f"must be a finite non-negative number, got {bound}", source, key)
+        return bound, None
+    vec = _as_matrix(value, key, source, ndim_ok=(1,))
+    if vec.shape != (channels,):
+        raise InputError(f"one bound per noise channel: {channels} entries (the {what}), got {vec.size}",
+                         source, key)
+    if np.any(vec < 0):
+        raise InputError(f"bounds must be non-negative, got {vec.tolist()}", source, key)
+    if channels and np.all(vec == vec[0]):
+        return float(vec[0]), None
+    return 1.0, vec
 
 
 def _time_indexed(name: str, what: str, shape: str, absent: str = ""):
@@ -68,7 +105,7 @@ def _time_indexed(name: str, what: str, shape: str, absent: str = ""):
     return at
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class AffineSystem:
     r"""Affine (possibly time-varying) discrete-time system with box-bounded noise.
 
@@ -97,8 +134,14 @@ class AffineSystem:
     E : array_like, shape (n, nw) or (T, n, nw)
         Process-noise gain (``W_k`` in the augmented paper); ``nw = 0``
         columns for a system without process noise.
-    eta_w, eta_v : float
-        Infinity-norm bounds of ``w`` and ``v`` (finite, non-negative).
+    eta_w, eta_v : float or array_like
+        Infinity-norm bounds of ``w`` and ``v`` (finite, non-negative), or
+        one bound per noise channel (``|w_i| <= eta_w[i]``, one entry per
+        column of ``E``; likewise ``eta_v`` and ``V``).  Per-channel bounds
+        are stored as the equivalent scalar description: ``E`` becomes
+        ``E diag(eta_w)`` and ``eta_w`` becomes 1 (the same noise set, so
+        every design, certificate and simulation uses it unchanged); equal
+        entries are the scalar bound.
     B : array_like, shape (n, m) or (T, n, m), optional
         Input matrix (does not enter the error dynamics); ``None``: no input.
     f : array_like, shape (n,), optional
@@ -121,8 +164,10 @@ class AffineSystem:
     Raises
     ------
     InputError
-        Non-numeric, non-finite or wrongly shaped matrices, negative noise
-        bounds, or time-varying matrices of different lengths.
+        A missing required field (``A``, ``C``, ``E``, ``eta_w``, ``eta_v``),
+        non-numeric, non-finite or wrongly shaped matrices or ``f``, negative
+        or non-finite noise bounds, or time-varying matrices of different
+        lengths (the field is named).
 
     Examples
     --------
@@ -133,6 +178,14 @@ class AffineSystem:
     (2, 1, 1, 1, 0)
     >>> plant.V
     array([[1.]])
+
+    One bound per process-noise channel (``|w_1| <= 0.1``, ``|w_2| <= 0.5``):
+
+    >>> plant = eqrec.AffineSystem(A=[[1.0, 0.5], [0.0, 1.0]], C=[[1.0, 0.0]], E=[[1.0, 0.0], [0.0, 1.0]],
+    ...                            eta_w=[0.1, 0.5], eta_v=0.05)
+    >>> plant.E, plant.eta_w
+    (array([[0.1, 0. ],
+           [0. , 0.5]]), 1.0)
     """
 
     A: np.ndarray
@@ -146,11 +199,15 @@ class AffineSystem:
     name: str = "system"
     source: str | None = field(default=None, compare=False)
 
-    def __post_init__(self) -> None:
-        src = self.source
-        A = _as_matrix(self.A, "A", src)
-        C = _as_matrix(self.C, "C", src)
-        E = _as_matrix(self.E, "E", src)
+    def __init__(self, A: Any = None, C: Any = None, E: Any = None, eta_w: Any = None, eta_v: Any = None,
+                 B: Any = None, f: Any = None, V: Any = None, name: str = "system", source: str | None = None):
+        src = source
+        for key, value in (("A", A), ("C", C), ("E", E), ("eta_w", eta_w), ("eta_v", eta_v)):
+            if value is None:
+                raise InputError("missing required field (the system needs A, C, E, eta_w and eta_v)", src, key)
+        A = _as_matrix(A, "A", src)
+        C = _as_matrix(C, "C", src)
+        E = _as_matrix(E, "E", src)
         n = A.shape[-1]
         if A.shape[-2] != n:
             raise InputError(f"A must be square, got shape {A.shape}", src, "A")
@@ -159,29 +216,39 @@ class AffineSystem:
         if E.shape[-2] != n:
             raise InputError(f"E must have {n} rows (n = {n}), got shape {E.shape}", src, "E")
         p = C.shape[-2]
-        V = np.eye(p) if self.V is None else _as_matrix(self.V, "V", src)
+        V = np.eye(p) if V is None else _as_matrix(V, "V", src)
         if V.shape[-2] != p:
             raise InputError(f"V must have {p} rows (p = {p}), got shape {V.shape}", src, "V")
-        B = None if self.B is None else _as_matrix(self.B, "B", src)
+        B = None if B is None else _as_matrix(B, "B", src)
         if B is not None and B.shape[-2] != n:
             raise InputError(f"B must have {n} rows, got shape {B.shape}", src, "B")
-        f = np.zeros(n) if self.f is None else np.asarray(self.f, dtype=float).reshape(-1)
+        f = np.zeros(n) if f is None else _as_vector(f, "f", src)
         if f.shape != (n,):
             raise InputError(f"f must have {n} entries, got {f.size}", src, "f")
-        for name in ("eta_w", "eta_v"):
-            val = getattr(self, name)
-            try:
-                val = float(val)
-            except (TypeError, ValueError):
-                raise InputError("must be a number", src, name) from None
-            if not np.isfinite(val) or val < 0:
-                raise InputError(f"must be a finite non-negative number, got {val}", src, name)
-            object.__setattr__(self, name, val)
+        eta_w, w_scale = _noise_bound(eta_w, "eta_w", E.shape[-1], "columns of E", src)
+        eta_v, v_scale = _noise_bound(eta_v, "eta_v", V.shape[-1], "columns of V", src)
+        if w_scale is not None:  # |w_i| <= eta_w[i]: E diag(eta_w) with |w'|_inf <= 1 is the same noise set
+            E = E * w_scale
+        if v_scale is not None:
+            V = V * v_scale
+        bounds = {"eta_w": eta_w, "eta_v": eta_v}
         lengths = {arr.shape[0] for arr in (A, C, E, V) if arr.ndim == 3}
         if len(lengths) > 1:
             raise InputError(f"time-varying matrices have different horizons {sorted(lengths)}", src)
-        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f).items():
+        if not isinstance(name, str):
+            raise InputError(f"must be a string, got {name!r}", src, "name")
+        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, **bounds).items():
             object.__setattr__(self, key, val)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal matrices (``numpy.array_equal``), bounds and name; ``source`` is not compared."""
+        if not isinstance(other, AffineSystem):
+            return NotImplemented
+        same = (np.array_equal(getattr(self, k), getattr(other, k)) if getattr(self, k) is not None
+                else getattr(other, k) is None for k in ("A", "C", "E", "B", "f", "V"))
+        return all(same) and (self.eta_w, self.eta_v, self.name) == (other.eta_w, other.eta_v, other.name)
+
+    __hash__ = None  # type: ignore[assignment]  # mutable numpy fields: not hashable (as before)
 
     # -- dimensions (read from the matrices) -------------------------------
     n = property(lambda self: self.A.shape[-1], doc="State dimension (int).")
@@ -234,6 +301,48 @@ class AffineSystem:
         lim = self.horizon_limit
         if lim is not None and lim < T:
             raise InputError(f"time-varying data covers {lim} steps, horizon needs {T}", self.source)
+
+    def scaled(self, weights: Any) -> "AffineSystem":
+        r"""The system in the weighted state ``z = W x``, ``W = diag(weights)``.
+
+        A bound on ``‖z‖∞`` is one on ``max_i w_i |x_i|``.  The similarity transform :math:`A' = W A W^{-1}`, :math:`B' = W B`,
+        :math:`C' = C W^{-1}`, :math:`E' = W E`, :math:`f' = W f` (``V`` and
+        the noise bounds unchanged): the outputs are the same and the state
+        error of an estimator of ``z`` is ``W`` times that of ``x``.  A state
+        vector of mixed units (rad, rad/s, A) gets a meaningful infinity norm.
+
+        Parameters
+        ----------
+        weights : array_like, shape (n,)
+            Positive finite weight ``w_i`` of each state.
+
+        Returns
+        -------
+        AffineSystem
+            The transformed system (same name and source).
+
+        Raises
+        ------
+        InputError
+            Weights that are not ``n`` positive finite numbers (field ``state_weights``).
+
+        Examples
+        --------
+        >>> import eqrec
+        >>> plant = eqrec.AffineSystem(A=[[1.0, 0.5], [0.0, 1.0]], C=[[1.0, 0.0]], E=[[0.0], [1.0]],
+        ...                            eta_w=0.1, eta_v=0.05)
+        >>> plant.scaled([1.0, 10.0]).A
+        array([[1.  , 0.05],
+               [0.  , 1.  ]])
+        """
+        w = _as_matrix(weights, "state_weights", self.source, ndim_ok=(1,))
+        if w.shape != (self.n,) or np.any(w <= 0):
+            raise InputError(f"need n = {self.n} positive weights, one per state, got {w.tolist()}", self.source,
+                             "state_weights")
+        col = w[:, None]
+        return AffineSystem(A=self.A * col / w, C=self.C / w, E=self.E * col, eta_w=self.eta_w, eta_v=self.eta_v,
+                            B=None if self.B is None else self.B * col, f=self.f * w, V=self.V, name=self.name,
+                            source=self.source)
 
     def to_dict(self) -> dict:
         """JSON-serialisable description (matrices as nested lists).

@@ -9,6 +9,17 @@ the package goes through :func:`validate_word` (0/1 words) or
 language is reduced to its distinct event sequences (``L^{E'}``,
 :func:`as_language`); :func:`worst_case_pattern` is the bitwise AND of
 Section III of the prefix-based paper.
+
+The reading of a word (one rule, the same in Python and on the command line): a string over
+``{0, 1}`` is a valid missing-data word *and* a valid delay word (every packet on time or one
+step late), so it is read as ``kind`` says.  Patterns (:class:`ArrivalPattern`, e.g. from
+:func:`eqrec.missing_words` or :func:`eqrec.delay_words`) need no reading.  An entry that takes
+both readings (:func:`as_language`, :func:`eqrec.design_delay`, :func:`eqrec.design_delay_global`)
+has no default: a list of 0/1 strings without ``kind`` is refused naming the two readings, and a
+word with a digit ``2-9`` makes the list a delay language.  Entries that only take missing-data
+words (:func:`validate_language`, :func:`eqrec.design_prefix`, :func:`eqrec.design_time_based`,
+:func:`eqrec.design_augmented`, ``eqrec design --words``) read 0/1 strings as missing data;
+``eqrec design --delays`` reads delay words.
 """
 
 from __future__ import annotations
@@ -174,7 +185,23 @@ def as_pattern(word: "ArrivalPattern | str", *, kind: str = "missing", max_delay
     raise InputError(f"unknown word kind {kind!r}; choose one of {list(KINDS)}", source, "kind")
 
 
-def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str = "missing", max_delay: int | None = None,
+def _reading(words: list, kind: str | None, field_name: str, source: str | None) -> str:
+    """``kind``, or for ``None`` the one reading the strings of ``words`` allow (the module's rule)."""
+    if kind is not None:
+        if kind not in KINDS:
+            raise InputError(f"unknown word kind {kind!r}; choose one of {list(KINDS)}", source, "kind")
+        return kind
+    strings = [w.strip() for w in words if isinstance(w, str)]
+    if not strings or any(set(w) - MISSING_ALPHABET for w in strings):
+        return "delay"  # patterns only (nothing to read), or a letter beyond 0/1: not a missing-data word
+    shown = strings if len(strings) <= 4 else strings[:4] + ["..."]
+    raise InputError(f"the words {shown} are made of 0 and 1 only, so they read two ways: as missing-data words "
+                     "(1 = the measurement arrives, 0 = it is lost) or as delay words (each measurement on time "
+                     "or one step late); say which with kind='missing' or kind='delay' (or give "
+                     "eqrec.missing_words([...]) or eqrec.delay_words([...]))", source, field_name)
+
+
+def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str | None = None, max_delay: int | None = None,
                 fixed_length: bool = True, length: int | None = None, field_name: str = "words",
                 source: str | None = None) -> tuple[ArrivalPattern, ...]:
     """Patterns of a language, reduced to distinct event sequences (``L^{E'}``), first label kept.
@@ -189,9 +216,12 @@ def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str = "missing
     words : iterable of str or ArrivalPattern
         The language: patterns, or words of ``kind``; a single word or
         pattern is a one-word language.
-    kind : {"missing", "delay"}, optional
+    kind : {"missing", "delay"} or None, optional
         How to read string words: 0/1 missing-data words (eq. (3) of the
         prefix-based paper) or delay words (:func:`parse_delay_word`).
+        ``None`` (default): delay words if a word has a digit ``2-9``, and
+        an :class:`InputError` naming both readings if every word is made of
+        ``0`` and ``1`` (module docstring).
     max_delay : int or None, optional
         Largest allowed delay of a delay word (``None``: no limit).
     fixed_length : bool, optional
@@ -212,17 +242,27 @@ def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str = "missing
     ------
     InputError
         For bad letters, an empty language, mixed lengths when
-        ``fixed_length``, a length other than ``length``, or an unknown
-        ``kind``.
+        ``fixed_length``, a length other than ``length``, an unknown
+        ``kind``, or 0/1 words without ``kind``.
 
     Examples
     --------
     >>> import eqrec
     >>> eqrec.as_language(["0120", "0130", "0000"], kind="delay")
     (ArrivalPattern('0120', arrivals=(0, 2, None, 3)), ArrivalPattern('0000', arrivals=(0, 1, 2, 3)))
+    >>> eqrec.as_language(["0120", "0130", "0000"])  # a digit 2-9: delay words
+    (ArrivalPattern('0120', arrivals=(0, 2, None, 3)), ArrivalPattern('0000', arrivals=(0, 1, 2, 3)))
+    >>> eqrec.as_language(["0111", "1011"], kind="missing")
+    (ArrivalPattern('0111', arrivals=(None, 1, 2, 3)), ArrivalPattern('1011', arrivals=(0, None, 2, 3)))
     """
     if isinstance(words, (str, ArrivalPattern)):
         words = [words]
+    try:
+        words = list(words)
+    except TypeError:
+        raise InputError(f"a language is a list of words or patterns, got {type(words).__name__}",
+                         source, field_name) from None
+    kind = _reading(words, kind, field_name, source)
     out: dict[ArrivalPattern, ArrivalPattern] = {}
     for w in words:
         pat = as_pattern(w, kind=kind, max_delay=max_delay, field_name=field_name, source=source)
@@ -275,7 +315,7 @@ def validate_language(words: Iterable[str], *, fixed_length: bool = True, length
     >>> eqrec.validate_language(["101111", "110111", "101111"])
     ('101111', '110111')
     """
-    return tuple(p.label for p in as_language(words, fixed_length=fixed_length, length=length,
+    return tuple(p.label for p in as_language(words, kind="missing", fixed_length=fixed_length, length=length,
                                               field_name=field_name, source=source))
 
 
@@ -340,7 +380,7 @@ def worst_case_pattern(patterns: Iterable["ArrivalPattern | str"]) -> ArrivalPat
     ArrivalPattern
         The worst-case pattern (a measurement missing in some word is missing).
     """
-    pats = as_language(patterns)
+    pats = as_language(patterns, kind="missing")
     arr = []
     for tau in range(pats[0].T):
         a = [p.arrivals[tau] for p in pats]

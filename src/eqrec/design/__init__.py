@@ -27,6 +27,11 @@ registry, reads the gains and certifies them from the gains alone.
     Observer gains by pole placement.
 :mod:`~eqrec.design.sweeps`, :mod:`~eqrec.design.scale_sweep`
     Sweeps over levels, poles and language sizes.
+:mod:`~eqrec.design.inputs`
+    What the design entries take, checked: typed word lists (:func:`~eqrec.design.inputs.missing_words`,
+    :func:`~eqrec.design.inputs.delay_words`), languages, the system, ``μ1``, the solver.
+:mod:`~eqrec.design.weighted`
+    Per-state weights of the bound: the design on ``z = W x`` and its estimator in the original state.
 :mod:`~eqrec.design.result`, :mod:`~eqrec.design.report`
     :class:`~eqrec.design.result.Design`, what every design returns, and how to read it (tables, JSON).
 """

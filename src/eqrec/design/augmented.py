@@ -18,6 +18,7 @@ from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.inputs import check_mu1, check_solver, check_system, real_array
 from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, check_mode, default_runtime,
                                           missing_data_pattern)
 from eqrec.design.augmented_runtime import schedule_from_augmented
@@ -139,7 +140,10 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     ('100111', 1.7371)
     """
     check_mode(mode, DESIGN_MODES)
-    patterns = as_language(words)
+    system = check_system(system)
+    check_solver(solver)
+    patterns = as_language(words, kind="missing")
+    mu1 = check_mu1(mu1)
     wc_pattern = missing_data_pattern(worst_case_pattern(patterns))
     language = tuple(p.label for p in patterns)
     wc = wc_pattern.label
@@ -149,7 +153,7 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     free = isinstance(L, str)
     if free and L != "free":
         raise InputError(f"L must be None, an array or 'free', got {L!r}", field="L")
-    if s0 is not None and np.shape(s0) != (n,):
+    if s0 is not None and real_array(s0, "s0").shape != (n,):
         raise InputError(f"s0 must be a vector of n = {n} entries (the state dimension), got shape "
                          f"{np.shape(s0)}", field="s0")
     if L is None or free:
@@ -158,7 +162,7 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
             raise InfeasibleDesign(f"(A, C) is not observable (rank {rank} of the observability matrix, n = {n}): "
                                    "no observer gain L places the eigenvalues of A - L C, so no augmented "
                                    "design with L by pole placement exists; give L explicitly (--L)")
-        poles = default_poles(system.n) if poles is None else np.asarray(poles)
+        poles = default_poles(system.n) if poles is None else real_array(poles, "poles", complex_ok=True)
         if poles.shape != (n,):
             raise InputError(f"give n = {n} poles, got {poles.size}", field="poles")
         pp = place_observer(system.A_at(0), system.C_at(0), poles)
@@ -167,11 +171,11 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
         L_fixed = pp.L
         extra["poles"] = [complex(x) for x in poles]
     else:
-        L_fixed = np.asarray(L, float)
+        L_fixed = real_array(L, "L")
         if L_fixed.shape not in ((n, p), (T, n, p)):
             raise InputError(f"L must be an n x p = {n} x {p} matrix (or T x n x p), got shape {L_fixed.shape}",
                              field="L")
-    s0v = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
+    s0v = np.zeros(n) if s0 is None else real_array(s0, "s0").reshape(n)
     model = AugmentedLP(system, wc, mu1, L_fixed, s0=s0v, mode=mode)
     sol = model.solve(solver).require_optimal(f"augmented design (M1 = {mu1:g})")
     gains = model.gains(sol)

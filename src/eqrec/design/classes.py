@@ -84,6 +84,7 @@ from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import ClassCertificate, certify_classes, node_schedule
 from eqrec.design.cost import class_cost
+from eqrec.design.mu1_min import infeasible_at
 from eqrec.design.result import Design
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError
 
@@ -197,7 +198,7 @@ def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTO
             r = int(np.argmax(sol.lp_levels[i]))
             raise InfeasibleDesign(f"no estimator recovers to mu1 = {mu1:g}: terminal class {cls.label} "
                                    f"(time {cls.depth}, data {list(cls.available)}) row {r} has smallest worst "
-                                   f"case {sol.levels[i]:.9g}")
+                                   f"case {sol.levels[i]:.9g} at this mu1 (it grows with mu1)")
 
 
 #: Largest prefix tree (nodes) for which node gains are derived by default.
@@ -248,7 +249,8 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     Raises
     ------
     InfeasibleDesign
-        A terminal class cannot reach ``μ1`` (named).
+        A terminal class cannot reach ``μ1`` (named, with the smallest
+        feasible ``μ1``, :func:`eqrec.design.mu1_min.infeasible_at`).
     CertificationFailure
         The gains do not give the levels.
     """
@@ -258,7 +260,10 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     classes = as_class_set(language)
     tree = classes.tree
     sol = solve_classes(system, classes, mu1, solver=solver, solver_options=solver_options, rtol=rtol)
-    check_terminal(classes, sol)
+    try:
+        check_terminal(classes, sol)
+    except InfeasibleDesign as exc:  # name the true smallest feasible μ1, not a class's worst case at this μ1
+        raise infeasible_at(system, classes, sol.mu1, exc, solver=solver) from None
     mu1 = sol.mu1
     inner = np.array([c.inner for c in classes.classes], bool)
     mu2 = float(max(mu1, sol.levels[inner].max(initial=mu1)))

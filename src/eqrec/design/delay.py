@@ -50,7 +50,6 @@ certificate (worst case of ``E_d − K Z_S``) and, where node gains are derived,
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -64,11 +63,14 @@ from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import check_terminal, class_design, solve_classes
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
-from eqrec.design.mu1_min import MU1_LOWER_RTOL, MinRecoveryLevel
+from eqrec.design.inputs import (check_fraction, check_mu1, check_solver, check_system, language_classes,
+                                 language_tree)
+from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp
 from eqrec.design.result import Design
+from eqrec.design.weighted import weigh
 from eqrec.errors import InfeasibleDesign, InputError
 
 # ---------------------------------------------------------------------------
@@ -110,71 +112,26 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     Returns
     -------
     ClassSet
+        The (time, available data) classes, for :func:`design_delay` and :func:`design_delay_global`.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> classes = eqrec.delay_classes(max_delay=4, horizon=30)
+    >>> len(classes), classes.words
+    (446, 931322574615478515625)
     """
     return classes_of_full_language(int(horizon), int(max_delay))
 
 
-def _tree(patterns) -> PrefixTree:
-    tree = patterns if isinstance(patterns, PrefixTree) else PrefixTree(
-        patterns if not isinstance(patterns, (str, ArrivalPattern)) else [patterns], kind="delay")
-    if len({p.T for p in tree.patterns}) != 1:
-        raise InputError("the delayed-data design needs a fixed-length language", field="delays")
-    return tree
+def _tree(patterns, kind: str | None = None) -> PrefixTree:
+    """The prefix tree of a fixed-length language of delay (or, with ``kind``, missing-data) words or patterns."""
+    return language_tree(patterns, kind=kind, field_name="patterns")
 
 
-def _classes(patterns) -> ClassSet:
-    """Classes of a language given as words, patterns, a tree or already as classes."""
-    if isinstance(patterns, ClassSet):
-        return patterns
-    return classes_of_tree(_tree(patterns))
-
-
-# ---------------------------------------------------------------------------
-# Results
-# ---------------------------------------------------------------------------
-
-@dataclass
-class FreeMu1Result:
-    """A design with ``μ1`` free, and what certifies it.
-
-    Parameters
-    ----------
-    design : Design
-    route, cost : str
-        ``"global"`` or ``"ipopt"``; ``"sum"`` or ``"max"``.
-    mu1, J : float
-        The recovery level found and the cost ``J`` there.
-    lower_bound : float
-        Global route: ``J`` at the level ``mu1_min.lower`` proven infeasible, with every class at its
-        optimal level there; ``J`` is nondecreasing in ``μ1``, so no feasible ``μ1`` does better.  IPOPT: ``nan``.
-    lps : int
-    time : float
-        Number of LPs solved; wall-clock seconds.
-    mu1_min : MinRecoveryLevel or None, optional
-    extra : dict, optional
-        Global route: the bracket of ``μ1,min``; route-specific details.
-    """
-
-    design: Design
-    route: str  # "global" or "ipopt"
-    cost: str
-    mu1: float
-    J: float
-    lower_bound: float  # global: valid lower bound of J over all μ1; ipopt: nan
-    lps: int
-    time: float
-    mu1_min: MinRecoveryLevel | None = None
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def mu2(self) -> float:
-        """The design's largest level ``μ2``."""
-        return self.design.mu2
-
-    @property
-    def gap(self) -> float:
-        """Relative gap ``(J - lower_bound) / J``."""
-        return float((self.J - self.lower_bound) / abs(self.J)) if np.isfinite(self.lower_bound) else np.nan
+def _classes(patterns, kind: str | None = None) -> ClassSet:
+    """Classes of a fixed-length language given as words, patterns, a tree or already as classes."""
+    return language_classes(patterns, kind=kind, field_name="patterns")
 
 
 # ---------------------------------------------------------------------------
@@ -199,9 +156,9 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
 # μ1 fixed
 # ---------------------------------------------------------------------------
 
-def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum", solver: str = "highs",
-                 form: str = "split", certify: bool = True, solver_options: dict | None = None,
-                 engine: str = "classes", node_gains: bool | None = None) -> Design:
+def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
+                 solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
+                 engine: str = "classes", node_gains: bool | None = None, state_weights=None) -> Design:
     r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
 
     For a language of delay words (eq. (1) of the delayed-data paper,
@@ -225,12 +182,18 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     system : AffineSystem
         The system.
     patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
-        Delay words (digit strings), arrival patterns or their tree (reduced
-        to ``L^{E'}``), or the classes of a full language
+        Words (read as ``kind`` says), arrival patterns (e.g.
+        :func:`eqrec.delay_words`, :func:`eqrec.missing_words`) or their tree
+        (reduced to ``L^{E'}``), or the classes of a full language
         (:func:`delay_classes`, class engine only).  The language must have
         a fixed length.
     mu1 : float
         Recovery level ``μ1``, positive.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words: delay words (digits, eq. (1)) or 0/1
+        missing-data words.  ``None`` (default): delay words when a word has a
+        digit ``2-9``; a list of 0/1 strings is refused as ambiguous
+        (:mod:`eqrec.core.words`).
     cost : {"sum", "max"}, optional
         The paper's ``J`` (module docstring; default) or the largest level.
     solver : str, optional
@@ -248,6 +211,10 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     node_gains : bool or None, optional
         Class engine: derive node gains (default: small trees, see
         :func:`eqrec.design.classes.class_design`).
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: the levels then bound
+        ``max_i w_i |x_i − x̂_i|`` (designed on ``z = W x``,
+        :mod:`eqrec.design.weighted`).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -259,8 +226,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     Raises
     ------
     InputError
-        Malformed words, a language of mixed lengths, a non-positive
-        ``mu1``, or an unknown ``cost`` or ``engine``.
+        Malformed or ambiguous words, a language of mixed lengths, a
+        non-positive ``mu1``, or an unknown ``cost``, ``engine`` or ``solver``.
     InfeasibleDesign
         If no estimator recovers to ``mu1``.
     SolverFailure
@@ -280,13 +247,20 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
     >>> prefix = eqrec.design_prefix(acc, ["101111", "110111", "111011", "111101"], mu1=1.0)
     >>> abs(design.mu2 - prefix.mu2) < 1e-9
     True
+
+    0/1 words read two ways, so they need ``kind`` (or typed patterns):
+
+    >>> missing = eqrec.design_delay(acc, ["101111", "110111", "111011", "111101"], 1.0, kind="missing")
+    >>> missing.mu2 == design.mu2
+    True
     """
+    system, weights = weigh(check_system(system), state_weights)
     check_cost(cost)
     check_engine(engine)
-    mu1 = float(mu1)
+    mu1 = check_mu1(mu1)
     rtol = 1e-6 + solver_info(solver).accuracy
     if engine == "classes":
-        classes = _classes(patterns)
+        classes = _classes(patterns, kind)
         design = class_design(system, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
                               solver=solver, solver_options=solver_options, method="delay", certify=certify,
                               node_gains=node_gains, rtol=rtol)
@@ -294,15 +268,21 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, cost: str = "sum
             design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
         elif design.class_certificate is not None:
             design.extra["J_certified"] = class_cost(classes, mu1, design.class_certificate.levels, cost)
-        return design
-    tree = _tree(patterns)
-    model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
-    sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
-    return _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
-                                 certify=certify, rtol=rtol)
+    else:
+        tree = _tree(patterns, kind)
+        model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
+        try:
+            sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
+        except InfeasibleDesign as exc:
+            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver) from None
+        design = _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
+                                       certify=certify, rtol=rtol)
+    design.state_weights = weights
+    return design
 
 
-def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs") -> str:
+def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs", *,
+                     kind: str | None = None) -> str:
     """Whether a design at ``μ1`` exists: ``"optimal"``, or ``"infeasible"`` (no estimator recovers to ``mu1``).
 
     Parameters
@@ -314,6 +294,8 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
     cost : str, optional
     solver : str, optional
         Recovery level, cost (checked only) and LP solver.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`design_delay`.
 
     Returns
     -------
@@ -322,9 +304,9 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
         :func:`eqrec.design.classes.check_terminal`), else ``"infeasible"`` (never raised).
     """
     check_cost(cost)
-    classes = _classes(patterns)
+    classes = _classes(patterns, kind)
     try:
-        check_terminal(classes, solve_classes(system, classes, float(mu1), solver=solver))
+        check_terminal(classes, solve_classes(check_system(system), classes, check_mu1(mu1), solver=solver))
     except InfeasibleDesign:
         return "infeasible"
     return "optimal"
@@ -334,7 +316,7 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
 # μ1 free: the global optimum (the μ1-free theorem of eqrec.design.mu1_min)
 # ---------------------------------------------------------------------------
 
-def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
+def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = None, solver: str = "highs",
                        rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
     """The smallest ``μ1`` for which some estimator recovers (``‖ξ(T)‖ <= μ1`` for all ``‖ξ0‖ <= μ1``).
 
@@ -343,6 +325,8 @@ def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
     system : AffineSystem
     patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
         The language, as for :func:`design_delay`.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`design_delay`.
     solver : str, optional
     rtol : float, optional
         LP solver; relative distance below ``μ1,min`` of the level proven infeasible.
@@ -352,12 +336,13 @@ def min_recovery_level(system: AffineSystem, patterns, *, solver: str = "highs",
     MinRecoveryLevel
         ``upper`` attained by certified gains, ``lower = upper (1 - rtol)`` infeasible (:mod:`eqrec.design.mu1_min`).
     """
-    return _class_min_recovery_level(system, _classes(patterns), solver=solver, lower_rtol=rtol)
+    return _class_min_recovery_level(system, _classes(patterns, kind), solver=solver, lower_rtol=rtol)
 
 
-def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", solver: str = "highs",
-                        rtol: float = MU1_LOWER_RTOL, certify: bool = True,
-                        node_gains: bool | None = None, engine: str = "classes") -> FreeMu1Result:
+def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
+                        solver: str = "highs", rtol: float = MU1_LOWER_RTOL, certify: bool = True,
+                        node_gains: bool | None = None, engine: str = "classes",
+                        state_weights=None) -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
 
     The delayed-data paper's problem with ``μ1`` a decision variable
@@ -379,6 +364,8 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
         The system.
     patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
         The language, as for :func:`design_delay`.
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`design_delay` (0/1 strings need it).
     cost : {"sum", "max"}, optional
         The paper's ``J`` (default) or ``μ1`` plus the largest level.
     solver : str, optional
@@ -394,6 +381,10 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
     engine : {"classes", "tree"}, optional
         Engine of the design at ``μ1,min`` (default the class engine; the
         tree LP needs the language's words).
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: the levels then bound
+        ``max_i w_i |x_i − x̂_i|`` (designed on ``z = W x``,
+        :mod:`eqrec.design.weighted`).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -428,7 +419,10 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
     check_cost(cost)
     t_start = time.perf_counter()
     check_engine(engine)
-    classes = _classes(patterns)
+    system, weights = weigh(check_system(system), state_weights)
+    check_solver(solver)
+    rtol = check_fraction(rtol, "rtol")
+    classes = _classes(patterns, kind)
     mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)
     if engine == "tree":
         if classes.tree is None:
@@ -443,6 +437,7 @@ def design_delay_global(system: AffineSystem, patterns, *, cost: str = "sum", so
         low = solve_classes(system, classes, mm.lower, solver=solver)
         lower_bound = class_cost(classes, mm.lower, low.levels, cost)
     J = float(design.extra["J"])
+    design.state_weights = weights
     design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,
                         mu1_binding=mm.binding)
     return FreeMu1Result(design=design, route="global", cost=cost, mu1=mm.upper, J=J, lower_bound=float(lower_bound),

@@ -24,7 +24,8 @@ from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import ipopt_options, solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.cost import check_cost, cost_weights
-from eqrec.design.delay import FreeMu1Result, _design_from_solution, _tree, design_delay
+from eqrec.design.delay import _design_from_solution, _tree, design_delay
+from eqrec.design.mu1_min import FreeMu1Result
 from eqrec.design.prefix_lp import build_prefix_lp
 from eqrec.errors import InfeasibleDesign, SolverFailure
 
@@ -127,7 +128,8 @@ def _fixed_point(f: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(f / (1.0 - b)))
 
 
-def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", start_mu1: float = 1.0,
+def design_delay_ipopt(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
+                       start_mu1: float = 1.0,
                        form: str = "split", options: dict | None = None, polish: bool = True,
                        certify: bool = True, solver: str = "highs") -> FreeMu1Result:
     """Problem (10) with ``μ1`` a variable, by IPOPT through CasADi, started from the LP at ``start_mu1``.
@@ -147,6 +149,8 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
         The system.
     patterns : sequence of str or ArrivalPattern, or PrefixTree
         The delay language (or its reduced event-prefix tree).
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words, as for :func:`eqrec.design.delay.design_delay`.
     cost : str, optional
         ``"sum"`` (the paper's ``J``) or ``"max"``.
     start_mu1 : float, optional
@@ -178,7 +182,7 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, cost: str = "sum", sta
 
     check_cost(cost)
     t_start = time.perf_counter()
-    tree = _tree(patterns)
+    tree = _tree(patterns, kind)
     t_build = time.perf_counter()
     bl = bilinear_problem(system, tree, cost, form=form)
     build_time = time.perf_counter() - t_build

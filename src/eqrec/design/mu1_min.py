@@ -35,20 +35,25 @@ recomputed from the recovered ``k`` (upper end, attained), and a dual point
 
 from __future__ import annotations
 
+import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Iterable
 
 import numpy as np
 import scipy.sparse as sp
 
 from eqrec.core.classes import ClassGains, ClassSet, class_maps
 from eqrec.core.lp import LinearProgram
+from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import box_radius
 from eqrec.design.class_lp import (ClassBlocks, ClassLP, active_maps, block_lp_options, block_objectives,
                                    read_class_gains)
+from eqrec.design.inputs import check_fraction, check_solver, check_system, language_classes
+from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 #: Relative distance below ``μ1,min`` at which the dual certificate shows infeasibility.
@@ -88,6 +93,50 @@ class MinRecoveryLevel:
     gains: ClassGains | None = None
     lps: int = 0
     time: float = 0.0
+
+
+@dataclass
+class FreeMu1Result:
+    """A design with ``μ1`` free, and what certifies it.
+
+    Parameters
+    ----------
+    design : Design
+    route, cost : str
+        ``"global"`` or ``"ipopt"``; ``"sum"`` or ``"max"``.
+    mu1, J : float
+        The recovery level found and the cost ``J`` there.
+    lower_bound : float
+        Global route: ``J`` at the level ``mu1_min.lower`` proven infeasible, with every class at its
+        optimal level there; ``J`` is nondecreasing in ``μ1``, so no feasible ``μ1`` does better.  IPOPT: ``nan``.
+    lps : int
+    time : float
+        Number of LPs solved; wall-clock seconds.
+    mu1_min : MinRecoveryLevel or None, optional
+    extra : dict, optional
+        Global route: the bracket of ``μ1,min``; route-specific details.
+    """
+
+    design: Design
+    route: str  # "global" or "ipopt"
+    cost: str
+    mu1: float
+    J: float
+    lower_bound: float  # global: valid lower bound of J over all μ1; ipopt: nan
+    lps: int
+    time: float
+    mu1_min: MinRecoveryLevel | None = None
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def mu2(self) -> float:
+        """The design's largest level ``μ2``."""
+        return self.design.mu2
+
+    @property
+    def gap(self) -> float:
+        """Relative gap ``(J - lower_bound) / J``."""
+        return float((self.J - self.lower_bound) / abs(self.J)) if np.isfinite(self.lower_bound) else np.nan
 
 
 def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], stacking: Stacking) -> ClassLP:
@@ -179,7 +228,8 @@ def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, 
     return float(E_row @ lam)
 
 
-def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str = "highs",
+def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | Iterable", *,
+                       kind: str | None = None, solver: str = "highs",
                        lower_rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
     r"""``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
 
@@ -200,12 +250,15 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     ----------
     system : AffineSystem
         The system.
-    classes : ClassSet
+    classes : ClassSet, PrefixTree or sequence of str or ArrivalPattern
         The language's (time, available data) classes:
         :func:`eqrec.core.classes.classes_of_tree` of its
         :class:`~eqrec.core.prefix_tree.PrefixTree`, or
-        :func:`eqrec.design.delay.delay_classes` for a full delay language.
-        (:func:`eqrec.design.delay.min_recovery_level` takes the words.)
+        :func:`eqrec.design.delay.delay_classes` for a full delay language;
+        or the tree itself, or the language's patterns or words (of any lengths).
+    kind : {"missing", "delay"} or None, optional
+        Reading of string words (:mod:`eqrec.core.words`): ``None`` reads a
+        word with a digit ``2-9`` as a delay word and refuses 0/1 strings.
     solver : str, optional
         LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
         (default ``"highs"``).
@@ -237,8 +290,15 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     >>> level = eqrec.min_recovery_level(eqrec.acc_system(), classes_of_tree(tree))
     >>> round(level.upper, 4), level.lower < level.upper
     (0.2493, True)
+    >>> words = ["101111", "110111", "111011", "111101"]  # the same language as missing-data words
+    >>> round(eqrec.min_recovery_level(eqrec.acc_system(), words, kind="missing").upper, 4)
+    0.2493
     """
     t_start = time.perf_counter()
+    system = check_system(system)
+    check_solver(solver)
+    lower_rtol = check_fraction(lower_rtol, "lower_rtol")
+    classes = language_classes(classes, kind=kind, fixed_length=False, field_name="classes")
     st = Stacking(system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
     model = build_ratio_lp(system, classes, term, st)
@@ -288,3 +348,64 @@ def min_recovery_level(system: AffineSystem, classes: ClassSet, *, solver: str =
     binding = {"class": cls.label, "time": cls.depth, "data": list(cls.available), "row": r}
     return MinRecoveryLevel(upper=upper, lower=float(lower), lower_margin=float(margin), binding=binding,
                             ratios=ratios, gains=gains, lps=lps, time=time.perf_counter() - t_start)
+
+
+def round_up(value: float, digits: int = 6) -> float:
+    """``value`` rounded up to ``digits`` significant digits (a printed level that is never below the true one).
+
+    Parameters
+    ----------
+    value : float
+        A positive number.
+    digits : int, optional
+        Significant digits kept (default 6).
+
+    Returns
+    -------
+    float
+        The smallest number of ``digits`` significant digits at least ``value``.
+    """
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(value)))
+    return math.ceil(value * scale) / scale
+
+
+def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: InfeasibleDesign, *,
+                  solver: str = "highs") -> InfeasibleDesign:
+    """The error to raise for a design infeasible at ``mu1``: it names the true smallest feasible ``μ1``.
+
+    A terminal class's worst case at the requested ``mu1`` is not the level to
+    retry at (it grows with ``μ1``); ``μ1,min`` of :func:`min_recovery_level`
+    is.  It is printed rounded up (:func:`round_up`), so retrying at the
+    printed value succeeds.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system designed for.
+    classes : ClassSet
+        The language's classes.
+    mu1 : float
+        The recovery level that was infeasible.
+    error : InfeasibleDesign
+        The infeasibility found at ``mu1`` (its text is kept as the detail).
+    solver : str, optional
+        LP solver of the Charnes–Cooper LP.
+
+    Returns
+    -------
+    InfeasibleDesign
+        ``error`` itself if ``μ1,min`` cannot be computed or does not exceed
+        ``mu1``; the error of :func:`min_recovery_level` if no ``μ1`` is
+        feasible; else a new error naming ``μ1,min``.
+    """
+    try:
+        mm = min_recovery_level(system, classes, solver=solver)
+    except InfeasibleDesign as none_feasible:
+        return none_feasible
+    except (InputError, SolverFailure):
+        return error
+    if not mm.upper > mu1:
+        return error
+    shown = f"{round_up(mm.upper):.6g}"
+    return InfeasibleDesign(f"{error}; the smallest feasible mu1 is {shown} (retry with mu1 >= {shown} or --mu1 "
+                            "free; in Python mu1='free' or design_delay_global)")

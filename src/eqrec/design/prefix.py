@@ -14,13 +14,15 @@ import numpy as np
 from eqrec.core.certify import certify_design
 from eqrec.core.classes import classes_of_tree
 from eqrec.core.lp import LPSolution
-from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import class_design
+from eqrec.design.inputs import FREE, check_mu1, check_solver, check_system, language_tree
+from eqrec.design.mu1_min import infeasible_at, min_recovery_level
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
-from eqrec.errors import InputError
+from eqrec.design.weighted import weigh
+from eqrec.errors import InfeasibleDesign, InputError
 
 
 #: The class engine (:mod:`eqrec.design.classes`) or this module's tree LP.
@@ -87,7 +89,7 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
 def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
                   zero_offset: bool = True, levels: str = "common", engine: str = "classes",
-                  node_gains: bool = True) -> Design:
+                  node_gains: bool = True, fixed_length: bool = True, state_weights=None) -> Design:
     r"""Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
     The estimator (5) with the prefix-based output injection (7) of the
@@ -103,18 +105,27 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     ``‖ξ(0)‖∞ <= M1`` and noise in the box.  This is the LP of Remark 2 /
     Theorem 3 (eq. (16)), built per prefix-tree node instead of per word
     (the tree LP, :func:`build_prefix_lp`), or the equivalent class
-    engine (:mod:`eqrec.design.classes`).  Words may differ in length
-    (Section V): ``M1`` is imposed at each word's end.
+    engine (:mod:`eqrec.design.classes`).  With ``fixed_length=False``
+    words may differ in length (Section V): ``M1`` is imposed at each
+    word's end.
 
     Parameters
     ----------
     system : AffineSystem
         The system.
     words : sequence of str or ArrivalPattern, or PrefixTree
-        Arrival patterns or 0/1 words; delay patterns give the event-based
-        design of the delayed-data paper (one gain block per event-prefix node).
-    mu1 : float
-        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive.
+        0/1 missing-data words (strings are always read so: see
+        :mod:`eqrec.core.words`) or arrival patterns; delay patterns
+        (:func:`eqrec.delay_words`) give the event-based design of the
+        delayed-data paper (one gain block per event-prefix node).
+    mu1 : float or "free"
+        Recovery level ``μ1`` (``M1`` in the prefix-based paper), positive;
+        ``"free"``: the smallest feasible ``μ1`` (``μ1,min`` of the class
+        engine's μ1-free theorem, :func:`eqrec.min_recovery_level`, which
+        covers every prefix tree).  Every level is nondecreasing in ``μ1``,
+        so the design there also has the smallest ``M2`` over all ``μ1``;
+        ``extra`` records ``mu1_free``, ``mu1_min``, ``mu1_min_lower`` (proven
+        infeasible) and ``mu1_binding``.
     solver : str, optional
         LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
         (default ``"highs"``).
@@ -148,6 +159,15 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         and certify them by the independent recursion (default); without
         them the design holds the class gains ``K`` and their certificate
         (the estimator in class form).
+    fixed_length : bool, optional
+        Refuse words of different lengths, with the message of ``eqrec
+        design`` (default); ``False`` designs a finite-length language
+        (Section V of the prefix-based paper).
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: every level and certificate
+        then bounds ``max_i w_i |x_i − x̂_i|`` (the design is made on
+        ``z = W x``, :meth:`AffineSystem.scaled`; :meth:`Design.estimator`
+        runs in the original state).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -158,7 +178,8 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     Raises
     ------
     InputError
-        Malformed words, a non-positive ``mu1``, an unknown ``engine``, or
+        Malformed words, words of mixed lengths (unless ``fixed_length=False``),
+        a non-positive ``mu1``, an unknown ``engine`` or ``solver``, or
         tree-LP options (``T``, ``form``, ``zero_offset``) with the class engine.
     InfeasibleDesign
         If no prefix-based estimator achieves recovery level ``mu1``.
@@ -179,20 +200,43 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     True
     >>> design.certificate.terminal <= 1.0 + 1e-6
     True
+
+    With ``μ1`` free, the smallest recovery level any prefix-based estimator reaches:
+
+    >>> free = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1="free")
+    >>> round(free.mu1, 4), free.mu2 < design.mu2
+    (0.2493, True)
     """
-    if check_engine(engine) == "classes":
-        tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
+    system, weights = weigh(check_system(system), state_weights)
+    check_engine(engine)
+    check_solver(solver)
+    tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
+    mu1 = check_mu1(mu1, allow_free=True)
+    if mu1 == FREE:  # the class engine's global optimum over μ1 (eqrec.design.mu1_min), then the design there
+        mm = min_recovery_level(system, classes_of_tree(tree), solver=solver)
+        design = design_prefix(system, tree, mm.upper, solver=solver, T=T, form=form, certify=certify, method=method,
+                               zero_offset=zero_offset, levels=levels, engine=engine, node_gains=node_gains,
+                               fixed_length=fixed_length)
+        design.extra.update(mu1_free="global", mu1_min=mm.upper, mu1_min_lower=mm.lower, mu1_binding=mm.binding)
+        design.state_weights = weights
+        return design
+    if engine == "classes":
         if T is not None and T != tree.depth:
             raise InputError(f"the class engine designs on the words' own horizon {tree.depth}, got T = {T}",
                              field="T")
         if form != "split" or not zero_offset:
             raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
                              field="engine")
-        return class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
-                            certify=certify, node_gains=node_gains, time_based=(method == "time"))
-    model = build_prefix_lp(system, words, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
-    sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
-    design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
-    if certify:
-        certify_design(design)
+        design = class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
+                              certify=certify, node_gains=node_gains, time_based=(method == "time"))
+    else:
+        model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
+        try:
+            sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
+        except InfeasibleDesign as exc:
+            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver) from None
+        design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
+        if certify:
+            certify_design(design)
+    design.state_weights = weights
     return design

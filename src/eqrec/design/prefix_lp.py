@@ -32,6 +32,7 @@ but not what a user wants); ``zero_offset=False`` keeps the paper's free ``r``
 
 from __future__ import annotations
 
+import numbers
 import time
 from dataclasses import dataclass, field
 
@@ -47,6 +48,9 @@ from eqrec.core.robust import RobustRowsIndex, UncertainAffineRows, add_robust_r
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
+
+#: The robust-counterpart forms of :func:`eqrec.core.robust.add_robust_rows`.
+FORMS = ("split", "abs", "dual")
 
 
 @dataclass
@@ -255,10 +259,14 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
         The LP and where its variables are.
     """
     t_start = time.perf_counter()
+    if form not in FORMS:
+        raise InputError(f"unknown robust-counterpart form {form!r}; choose one of {list(FORMS)}", field="form")
+    if T is not None and (isinstance(T, bool) or not isinstance(T, numbers.Integral) or T < 1):
+        raise InputError(f"the horizon must be a positive integer, got {T!r}", field="T")
     tree = words if isinstance(words, PrefixTree) else PrefixTree(words)
-    T = tree.depth if T is None else T
+    T = tree.depth if T is None else int(T)
     if tree.depth > T:
-        raise InputError(f"words of length {tree.depth} exceed the horizon T = {T}")
+        raise InputError(f"words of length {tree.depth} exceed the horizon T = {T}", field="T")
     mu1 = float(mu1)
     if not np.isfinite(mu1) or mu1 <= 0:
         raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")

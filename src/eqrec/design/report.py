@@ -185,3 +185,36 @@ def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
             out["mu1_free"]["mu1_min"] = {"upper": free.mu1_min.upper, "lower": free.mu1_min.lower,
                                           "binding": free.mu1_min.binding}
     return out
+
+
+def original_coordinates(out: dict, weights: np.ndarray) -> dict:
+    """The gains of a weighted design's JSON (``eqrec design --state-weights``) in the system file's state ``x``.
+
+    A weighted design is made on ``z = W x`` (:mod:`eqrec.design.weighted`); its injection
+    ``ue`` and class gains ``K`` act on ``z``.  In ``x`` they are ``W^{-1}`` times them: each row of
+    ``F`` and ``u0`` (state ``i`` of its time block) and of ``K`` is divided by ``w_i``, so the JSON's
+    conventions (``x̂(t+1) = A x̂ + B u − ue + f``, ``x̂(d) = x̄(d) + K (y_S − ȳ_S)``) hold with the file's
+    matrices.  Levels and certificates stay bounds on ``max_i w_i |x_i − x̂_i|``.
+
+    Parameters
+    ----------
+    out : dict
+        The JSON record, with ``gains`` (per word ``F``, ``u0``) and/or ``classes`` (per class ``K``).
+    weights : numpy.ndarray
+        The ``n`` state weights.
+
+    Returns
+    -------
+    dict
+        ``out``, changed in place, with ``state_weights`` added.
+    """
+    w = np.asarray(weights, float)
+    for gains in (out.get("gains") or {}).values():
+        F, u0 = np.asarray(gains["F"], float), np.asarray(gains["u0"], float)
+        row_w = np.tile(w, F.shape[0] // w.size)
+        gains["F"], gains["u0"] = (F / row_w[:, None]).tolist(), (u0 / row_w).tolist()
+    for row in out.get("classes") or []:
+        row["K"] = (np.asarray(row["K"], float) / w[:, None]).tolist()
+    out["state_weights"] = w.tolist()
+    return out
+

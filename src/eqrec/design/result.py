@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from eqrec.core.gains import GainSchedule
 from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern
@@ -15,6 +17,7 @@ from eqrec.errors import InputError
 
 if TYPE_CHECKING:
     from eqrec.core.runtime import GuaranteedEstimator
+    from eqrec.design.weighted import WeightedEstimator
 
 
 @dataclass
@@ -69,6 +72,12 @@ class Design:
     class_certificate : ClassCertificate or None, optional
         Class engine: the worst case of every class recomputed from the gains ``K``
         (:class:`eqrec.design.class_gains.ClassCertificate`).
+    state_weights : numpy.ndarray or None, optional
+        Per-state weights ``w`` of a weighted design (the ``state_weights``
+        keyword of the design entries): ``system`` is then the system in
+        ``z = W x`` (:meth:`AffineSystem.scaled`), every level and certificate
+        bounds ``max_i w_i |x_i − x̂_i|``, and :meth:`estimator` runs in the
+        original state (:class:`eqrec.design.weighted.WeightedEstimator`).
 
     Attributes
     ----------
@@ -101,6 +110,7 @@ class Design:
     levels: dict[str, float] = field(default_factory=dict)
     class_gains: "object | None" = None
     class_certificate: "object | None" = None
+    state_weights: "np.ndarray | None" = None
 
     def __post_init__(self) -> None:
         self.patterns = tuple(as_pattern(p) for p in self.patterns)
@@ -116,7 +126,7 @@ class Design:
         """Seconds spent inside the solver call (``solution.solve_time``)."""
         return self.solution.solve_time
 
-    def estimator(self, periodic: bool = True, strict: bool = True) -> "GuaranteedEstimator":
+    def estimator(self, periodic: bool = True, strict: bool = True) -> "GuaranteedEstimator | WeightedEstimator":
         """The designed estimator, ready to run: ``reset(x̂0)``, then ``step(y, u) -> (x̂, bound)``.
 
         Class-engine designs run in class form (:class:`eqrec.core.estimator.ClassEstimator`,
@@ -127,7 +137,10 @@ class Design:
         level.  ``μ1`` at each period end.  With ``periodic=True`` the
         estimator restarts its horizon every ``T`` steps (Section V of the
         prefix-based paper): the error is back within ``μ1`` at each period
-        end, so the same gains apply again.
+        end, so the same gains apply again.  A weighted design
+        (:attr:`state_weights`) returns a
+        :class:`~eqrec.design.weighted.WeightedEstimator`: estimates in the
+        original state, the bound on ``max_i w_i |x_i − x̂_i|``.
 
         Parameters
         ----------
@@ -141,7 +154,7 @@ class Design:
 
         Returns
         -------
-        GuaranteedEstimator
+        GuaranteedEstimator or WeightedEstimator
             Not yet started: call :meth:`GuaranteedEstimator.reset` first.
 
         Raises
@@ -176,7 +189,12 @@ class Design:
                 raise InputError("this design has no gains to run")
             gains = self.schedule
             bound_of = partial(node_level, self)
-        return GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic, strict=strict)
+        estimator = GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic, strict=strict)
+        if self.state_weights is None:
+            return estimator
+        from eqrec.design.weighted import WeightedEstimator
+
+        return WeightedEstimator(estimator, self.state_weights)
 
 
 def node_level(design: Design, prefix: ArrivalPattern) -> float:

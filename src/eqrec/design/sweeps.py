@@ -107,7 +107,7 @@ def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> Min
     """
     if method not in DESIGNS:
         raise InputError(f"unknown method {method!r}; choose one of {list(DESIGNS)}", None, "method")
-    language = as_language(words)
+    language = as_language(words, kind="missing")
     if method == "time":
         language = [worst_case_pattern(language)]
     return min_recovery_level(system, classes_of_tree(PrefixTree(language)))

@@ -14,11 +14,14 @@ from eqrec.core.certify import certify_design
 from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.systems import AffineSystem
 from eqrec.design.prefix import design_prefix
+from eqrec.design.inputs import check_system
 from eqrec.design.result import Design
+from eqrec.design.weighted import weigh
 
 
 def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = "highs",
-                      certify: bool = True, form: str = "split", engine: str = "classes") -> Design:
+                      certify: bool = True, form: str = "split", engine: str = "classes",
+                      state_weights=None) -> Design:
     """Minimise ``M2`` of a time-based estimator for the worst-case pattern of ``words``.
 
     The time-based estimator (eqs. (5), (6) of the prefix-based paper, the
@@ -39,8 +42,9 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
         The system.
     words : sequence of str or ArrivalPattern
         The language: arrival patterns or 0/1 words of one length.
-    mu1 : float
-        Recovery level ``μ1`` (the prefix-based paper's ``M1``), positive.
+    mu1 : float or "free"
+        Recovery level ``μ1`` (the prefix-based paper's ``M1``), positive, or
+        ``"free"``: the smallest feasible one (as for :func:`design_prefix`).
     solver : str, optional
         LP solver (default ``"highs"``), as for :func:`design_prefix`.
     certify : bool, optional
@@ -51,6 +55,11 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
         paper's Π-dual ``"dual"``); ``engine="tree"`` only.
     engine : {"classes", "tree"}, optional
         The class engine (default) or the tree LP of :mod:`eqrec.design.prefix`.
+    state_weights : array_like or None, optional
+        ``n`` positive per-state weights ``w``: every level and certificate
+        then bounds ``max_i w_i |x_i − x̂_i|`` (the design is made on
+        ``z = W x``, :meth:`AffineSystem.scaled`; :meth:`Design.estimator`
+        runs in the original state).  ``None`` (default): ``‖x − x̂‖∞``.
 
     Returns
     -------
@@ -83,10 +92,12 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     >>> bool(design.mu2 == eqrec.design_prefix(eqrec.acc_system(), [worst], mu1=1.0).mu2)
     True
     """
-    language = as_language(words)
+    system, weights = weigh(check_system(system), state_weights)
+    language = as_language(words, kind="missing")
     wc = worst_case_pattern(language)
     design = design_prefix(system, [wc], mu1, solver=solver, form=form, certify=False, method="time",
                            engine=engine)
+    design.state_weights = weights
     design.extra["language"] = tuple(p.label for p in language)
     design.extra["worst_case_word"] = wc.label
     if certify:

@@ -126,6 +126,9 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
     if gains is None:
         raise InputError("estimator_iosys needs a class-engine design (design_prefix or design_delay); "
                          "for other designs use design.estimator()", field="design")
+    if getattr(design, "state_weights", None) is not None:
+        raise InputError("estimator_iosys runs designs without state weights (a weighted design's gains act on "
+                         "z = W x); use design.estimator(), which maps back to x", field="design")
     if not isinstance(strict, bool):
         raise InputError(f"strict must be True or False, got {strict!r}", field="strict")
     system, cert = design.system, design.class_certificate

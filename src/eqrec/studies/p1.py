@@ -178,7 +178,7 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
         curve[m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
     res["curve"] = curve
     fin = ext["finite_language"]
-    d = design_prefix(system, fin, float(cfg["mu1"]))
+    d = design_prefix(system, fin, float(cfg["mu1"]), fixed_length=False)  # Section V: a finite-length language
     res["finite_language"] = {"words": fin, "mu2": d.mu2, "certified_mu2": d.certificate.mu2,
                               "certified_terminal": d.certificate.terminal,
                               "per_word_terminal": {w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}

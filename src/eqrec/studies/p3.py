@@ -236,10 +236,10 @@ def step_reactor_designs(cfg, inputs, outputs, wildcards) -> dict:
     cost = br["cost"]
     x0 = np.asarray(cfg["kalman"]["x0"], float)
     log.info("batch reactor, %d words, cost %s: mu1 free, global route", len(words), cost)
-    g = design_delay_global(system, words, cost=cost)
+    g = design_delay_global(system, words, kind="delay", cost=cost)
     log.info("global: mu1 = %.6f, J = %.6f (lower bound %.6f), max mu2 = %.6f", g.mu1, g.J, g.lower_bound, g.mu2)
     log.info("mu1 free, IPOPT route on (10) from the LP at mu1 = %g", br["ipopt_start_mu1"])
-    ip = design_delay_ipopt(system, words, cost=cost, start_mu1=float(br["ipopt_start_mu1"]))
+    ip = design_delay_ipopt(system, words, kind="delay", cost=cost, start_mu1=float(br["ipopt_start_mu1"]))
     log.info("ipopt: mu1 = %.6f, J = %.6f, max mu2 = %.6f", ip.mu1, ip.J, ip.mu2)
     cmp = compare_free_routes(g, ip)
     A2_norm = no_data_growth(system, 2)
@@ -250,7 +250,7 @@ def step_reactor_designs(cfg, inputs, outputs, wildcards) -> dict:
     readings = []
     for mu1 in br["mu1_readings"]:
         log.info("reading mu1 = %g (fixed, LP)", mu1)
-        d = design_delay(system, words, float(mu1), cost=cost)
+        d = design_delay(system, words, float(mu1), kind="delay", cost=cost)
         readings.append({"mu1": float(mu1), **_design_summary(d), "A2_bound": A2_norm * float(mu1),
                          "vertex_attainment": vertex_attainment(system, d, x0)})
     res["readings"] = readings
@@ -299,8 +299,8 @@ def design_for_f1(cfg: dict, system: AffineSystem) -> Design:
     br, f1 = cfg["batch_reactor"], cfg["kalman"]
     words = reactor_language(cfg)
     if f1["mu1"] == "free":
-        return design_delay_global(system, words, cost=br["cost"]).design
-    return design_delay(system, words, float(f1["mu1"]), cost=br["cost"])
+        return design_delay_global(system, words, kind="delay", cost=br["cost"]).design
+    return design_delay(system, words, float(f1["mu1"]), kind="delay", cost=br["cost"])
 
 
 def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
@@ -385,7 +385,7 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
     out: dict = {"language": words, "missing_data_language": missing, "mu1": mu1,
                  "p1_prefix": {"mu2": p1.mu2, "certified_mu2": p1.certificate.mu2}, "fixed": {}, "free": {}}
     for cost in ("sum", "max"):
-        d = design_delay(system, words, mu1, cost=cost)
+        d = design_delay(system, words, mu1, kind="delay", cost=cost)
         s = _design_summary(d)
         lv = d.levels or {}
         s["levels_at_max"] = sum(1 for v in lv.values() if v >= d.mu2 * (1 - 1e-6))
@@ -394,8 +394,8 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
         out["fixed"][cost] = s
     for cost in ac["free_costs"]:
         log.info("ACC, mu1 free, cost %s (global route)", cost)
-        g = design_delay_global(system, words, cost=cost)
-        ip = design_delay_ipopt(system, words, cost=cost)
+        g = design_delay_global(system, words, kind="delay", cost=cost)
+        ip = design_delay_ipopt(system, words, kind="delay", cost=cost)
         out["free"][cost] = {"global": _free_summary(g), "ipopt": _free_summary(ip),
                              "compare": compare_free_routes(g, ip)}
     write_json(outputs.json, out, timings=outputs.timings)
@@ -408,7 +408,7 @@ def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
     ac = cfg["acc"]
     sim = ac["simulation"]
     missing = [p.canonical_label for p in delay_language(words)]
-    proposed = design_delay(system, words, mu1, cost=ac["cost"])
+    proposed = design_delay(system, words, mu1, kind="delay", cost=ac["cost"])
     prefix = design_prefix(system, missing, mu1, engine="tree")  # P1's estimator: the gains of P1's LP
     pat = parse_delay_word(ac["true_pattern"])
     T = pat.T

@@ -169,22 +169,22 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     T, tb, mu1 = int(rc["horizon"]), int(rc["max_delay"]), float(rc["mu1"])
     words = full_delay_language(T, tb)
     log.info("batch reactor: design on {0..%d}^%d (%d words) at mu1 = %g", tb, T, len(words), mu1)
-    d_r = design_delay(reactor, words, mu1, cost=cost)
+    d_r = design_delay(reactor, words, mu1, kind="delay", cost=cost)
     x0_r = np.asarray(rc["x0"], float)
     controller = lambda xh: -K @ xh  # noqa: E731
     per_r = _periodic(reactor, d_r, words, st, 0, x0_r, controller=controller)
 
     # --- ACC, periodic reuse (missing-data language as delay words)
     acc = acc_system()
-    d_a = design_delay(acc, list(ac["words"]), float(ac["mu1"]), cost=cost)
+    d_a = design_delay(acc, list(ac["words"]), float(ac["mu1"]), kind="delay", cost=cost)
     log.info("ACC: design on %s at mu1 = %g, max mu2 = %.6f", list(ac["words"]), float(ac["mu1"]), d_a.mu2)
     per_a = _periodic(acc, d_a, ac["words"], st, 1, np.asarray(ac["x0"], float),
                       inputs=np.array([float(ac["input_force"])]))
 
     # --- switching scheme: is a period-1 (equalized-performance) design feasible at the reactor's μ1?
     on_time = ["0"]
-    status_at_mu1 = design_lp_status(reactor, on_time, mu1, cost)
-    by_period = [min_recovery_level(reactor, ["0" * P]) for P in range(1, int(sw["max_period"]) + 1)]
+    status_at_mu1 = design_lp_status(reactor, on_time, mu1, cost, kind="delay")
+    by_period = [min_recovery_level(reactor, ["0" * P], kind="delay") for P in range(1, int(sw["max_period"]) + 1)]
     mm = by_period[0]  # period 1: the on-time word
     periods_min = [m.upper for m in by_period]
     smallest_period = next((P for P, m in enumerate(periods_min, 1) if m <= mu1), None)
@@ -198,9 +198,9 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     log.info("period-1 design at mu1 = %g: %s; smallest period-1 level %.6f (certified > %.6f); smallest on-time "
              "period recovering to %g: %s; switching at mu1 = %g", mu1, status_at_mu1, mm.upper, mm.lower, mu1,
              smallest_period, mu1_s)
-    d_p = design_delay(reactor, on_time, mu1_s, cost=cost)
+    d_p = design_delay(reactor, on_time, mu1_s, kind="delay", cost=cost)
     rec_words = [w for w in words if w[0] != "0"]
-    d_s = design_delay(reactor, rec_words, mu1_s, cost=cost)
+    d_s = design_delay(reactor, rec_words, mu1_s, kind="delay", cost=cost)
     sw_runs: dict[str, LongRun] = {}
     timing = []
     for j, kind in enumerate(st["noise"]):
@@ -243,7 +243,7 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
         "switching_mu1": mu1_s}}
     values["switching_mu1"] = {"value": mu1_s, "evidence": {
         "rule": rule, "mu1_min": mm.upper, "mu1_min_lower": mm.lower, "decimals": int(sw["decimals"]),
-        "lp_status": design_lp_status(reactor, on_time, mu1_s, cost), "reactor_mu1": mu1,
+        "lp_status": design_lp_status(reactor, on_time, mu1_s, cost, kind="delay"), "reactor_mu1": mu1,
         "status_at_reactor_mu1": status_at_mu1}}
     values["strategy_time_s"] = {"value": time.perf_counter() - t_start, "evidence": {"steps": int(st["steps"])}}
 
