@@ -129,8 +129,8 @@ def test_switching_estimator_steps_are_all_or_nothing(name, bad_y, bad_u):
     from eqrec.models import batch_reactor
 
     reactor = batch_reactor()
-    perf = design_delay(reactor, ["0"], 0.36).schedule
-    rec = design_delay(reactor, [w for w in full_delay_language(3, 1) if w[0] != "0"], 0.36).schedule
+    perf = design_delay(reactor, ["0"], 0.36, kind="delay").schedule
+    rec = design_delay(reactor, [w for w in full_delay_language(3, 1) if w[0] != "0"], 0.36, kind="delay").schedule
     widen = (lambda v: np.concatenate([v, v]) if isinstance(v, np.ndarray) and v.shape == (1,) else v)
     if isinstance(bad_y, list) and bad_y and isinstance(bad_y[0], tuple):
         bad_y = [(s, widen(v)) for s, v in bad_y]

@@ -138,3 +138,16 @@ def test_python_control_system_refuses_bad_arrivals_and_non_finite_data(plant, d
     r = control.input_output_response(io, np.arange(N), U, io.initial_state(np.zeros(2)))
     assert np.all(np.isfinite(r.outputs))
     assert estimator_iosys(design, dt=0.1).dt == 0.1
+
+
+def test_python_control_system_carries_the_plants_sampling_time():
+    control = pytest.importorskip("control")
+    from eqrec.interop.python_control import estimator_iosys, system_from_statespace
+
+    plant = system_from_statespace(control.ss([[1, 0.1], [0, 1]], [[0.005], [0.1]], [[1, 0]], 0, 0.05),
+                                   eta_w=0.1, eta_v=0.05, E=0.1 * np.eye(2))
+    assert plant.dt == 0.05
+    design = design_delay_global(plant, LOSS).design
+    assert estimator_iosys(design).dt == 0.05
+    with pytest.raises(InputError, match="dt"):
+        AffineSystem(A=[[1.0]], C=[[1.0]], E=[[1.0]], eta_w=0.1, eta_v=0.1, dt=-1)

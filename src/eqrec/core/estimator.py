@@ -62,6 +62,16 @@ class Packet:
         Absolute time ``τ`` of the measurement (not the time it arrives).
     y : ndarray, shape (p,)
         The measurement ``y(τ)``.
+
+    Examples
+    --------
+    A packet of time 3 arriving late, at time 5, among what arrives then:
+
+    >>> import numpy as np
+    >>> import eqrec
+    >>> late = eqrec.Packet(3, np.array([1.0, 2.0]))
+    >>> late.time
+    3
     """
 
     time: int

@@ -153,6 +153,9 @@ class AffineSystem:
     source : str or None, optional
         File (or other origin) of the data, named in the errors; not part of
         equality.
+    dt : float or None, optional
+        Sampling time in seconds, if known (kept for python-control's
+        systems; not part of equality or of any design).
 
     Attributes
     ----------
@@ -198,10 +201,15 @@ class AffineSystem:
     V: np.ndarray | None = None
     name: str = "system"
     source: str | None = field(default=None, compare=False)
+    dt: float | None = field(default=None, compare=False)
 
     def __init__(self, A: Any = None, C: Any = None, E: Any = None, eta_w: Any = None, eta_v: Any = None,
-                 B: Any = None, f: Any = None, V: Any = None, name: str = "system", source: str | None = None):
+                 B: Any = None, f: Any = None, V: Any = None, name: str = "system", source: str | None = None,
+                 dt: Any = None):
         src = source
+        if dt is not None and (isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer))
+                               or not np.isfinite(dt) or dt <= 0):
+            raise InputError(f"the sampling time must be a positive number of seconds, got {dt!r}", src, "dt")
         for key, value in (("A", A), ("C", C), ("E", E), ("eta_w", eta_w), ("eta_v", eta_v)):
             if value is None:
                 raise InputError("missing required field (the system needs A, C, E, eta_w and eta_v)", src, key)
@@ -237,7 +245,8 @@ class AffineSystem:
             raise InputError(f"time-varying matrices have different horizons {sorted(lengths)}", src)
         if not isinstance(name, str):
             raise InputError(f"must be a string, got {name!r}", src, "name")
-        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, **bounds).items():
+        dt = None if dt is None else float(dt)
+        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, dt=dt, **bounds).items():
             object.__setattr__(self, key, val)
 
     def __eq__(self, other: object) -> bool:
@@ -342,7 +351,7 @@ class AffineSystem:
         col = w[:, None]
         return AffineSystem(A=self.A * col / w, C=self.C / w, E=self.E * col, eta_w=self.eta_w, eta_v=self.eta_v,
                             B=None if self.B is None else self.B * col, f=self.f * w, V=self.V, name=self.name,
-                            source=self.source)
+                            source=self.source, dt=self.dt)
 
     def to_dict(self) -> dict:
         """JSON-serialisable description (matrices as nested lists).

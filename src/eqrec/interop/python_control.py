@@ -79,7 +79,8 @@ def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=
     n, p = A.shape[0], C.shape[0]
     return AffineSystem(A=A, B=B, C=C, E=np.eye(n) if E is None else np.asarray(E, float), eta_w=float(eta_w),
                         eta_v=float(eta_v), V=np.eye(p) if V is None else np.asarray(V, float),
-                        f=np.zeros(n) if f is None else np.asarray(f, float), name=name or "python-control system")
+                        f=np.zeros(n) if f is None else np.asarray(f, float), name=name or "python-control system",
+                        dt=None if ss.dt is True else float(ss.dt))
 
 
 def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool | None" = None,
@@ -224,7 +225,7 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
         return _relaxed_state(xhat0, np.zeros(T * p + T), 0, xhat0, boxes.start())
 
     if dt is None:
-        dt = getattr(system, "dt", None) or True
+        dt = system.dt or True
     outputs = [f"xhat[{k}]" for k in range(n)] + ["bound"] + ([] if strict else ["in_design"])
     sys_io = control.nlsys(update, output, dt=dt, name=name,
                            inputs=[f"u[{i}]" for i in range(m)] + [f"y[{j}]" for j in range(p)] + ["arrived"],
