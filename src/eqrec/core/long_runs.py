@@ -19,6 +19,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from eqrec.core.arrivals import NEVER, arrival_schedule, draw_delays, uniform_words
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.classes import ClassGains, class_maps
 from eqrec.core.estimator import make_estimator
@@ -30,10 +31,6 @@ from eqrec.core.switching import SwitchingEstimator
 from eqrec.core.systems import AffineSystem
 from eqrec.core.words import as_pattern, parse_delay_word, parse_delays
 from eqrec.errors import InputError
-
-#: Delay code of a measurement that is never delivered.
-NEVER = -1
-
 
 @dataclass
 class LongRun:
@@ -85,27 +82,6 @@ class LongRun:
     def max_ratio(self) -> float:
         """Largest ratio of the error to its guarantee over the run (``<= 1`` inside the guarantees)."""
         return float(self.ratio.max())
-
-
-def arrival_schedule(delays: np.ndarray) -> list[list[int]]:
-    """``out[t]``: the measurement times whose packets arrive at ``t`` (``t < N``), from per-measurement delays.
-
-    Parameters
-    ----------
-    delays : ndarray of int, shape (N,)
-        Delay of each measurement (:data:`NEVER`: not delivered).
-
-    Returns
-    -------
-    list of list of int
-        Length ``N``; arrivals at or after ``N`` are left out.
-    """
-    N = len(delays)
-    out: list[list[int]] = [[] for _ in range(N)]
-    for tau, d in enumerate(np.asarray(delays, int)):
-        if d != NEVER and tau + d < N:
-            out[tau + d].append(tau)
-    return out
 
 
 def _inputs(system: AffineSystem, controller, inputs, t: int, xhat: np.ndarray) -> np.ndarray:
@@ -173,8 +149,7 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
     """
     T = schedule.horizon
     if sequence is None:
-        idx = rng.integers(len(words), size=int(periods))
-        sequence = [words[i] for i in idx]
+        sequence = uniform_words(rng, list(words), size=int(periods))
     sequence = list(sequence)
     parsed = {w: parse_delays(w, field_name="words") for w in dict.fromkeys(sequence)}  # each distinct word once
     dl = [parsed[w] for w in sequence]
@@ -195,31 +170,6 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
     x, xhat, dropped, w, v = _drive(system, est, delays, x0, xi0, kind, rng, controller, inputs, lambda t: None)
     return LongRun(x=x, xhat=xhat, level=level, delays=delays, recovering=np.zeros(N, bool), words=sequence,
                    dropped=dropped, w=w, v=v)
-
-
-def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time: float) -> np.ndarray:
-    """I.i.d. delays: ``0`` with probability ``p_on_time``, else uniform on ``1..max_delay``.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Random source.
-    steps : int
-        Number ``N`` of delays.
-    max_delay : int
-        Largest delay ``τ̄``.
-    p_on_time : float
-        Probability of delay ``0``.
-
-    Returns
-    -------
-    ndarray of int, shape (N,)
-        The delays.
-    """
-    late = rng.random(steps) >= p_on_time
-    d = np.zeros(steps, int)
-    d[late] = rng.integers(1, max_delay + 1, size=int(late.sum()))
-    return d
 
 
 def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassGains",

@@ -23,6 +23,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from eqrec.core.arrivals import uniform_words
 from eqrec.core.classes import ClassGains
 from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
 from eqrec.core.gains import GainSchedule
@@ -298,7 +299,7 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     errs = np.zeros((runs, T + 1, system.n))
     used = []
     for i in range(runs):
-        word = words[rng.integers(len(words))] if word_choice == "random" else words[i % len(words)]
+        word = uniform_words(rng, words) if word_choice == "random" else words[i % len(words)]
         delta = sample_uncertainty(lay, radius, rng, kind)
         errs[i] = simulate_run(system, schedule, word, delta, x0, inputs).error
         used.append(word.label)

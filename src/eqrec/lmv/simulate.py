@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import norm
 
+from eqrec.core.arrivals import bernoulli_arrivals
 from eqrec.errors import InputError
 from eqrec.lmv.model import MECHANISM_KEYS, MultNoiseSystem, system_of
 from eqrec.lmv.plant import Plant
@@ -132,7 +133,7 @@ def simulate_plant(plant: Plant, eta_bar: float, T: int, runs: int, rng: np.rand
     w, v = wv[..., :r], wv[..., r:]
     xi = _mult_noise(mult_dist, plant.Qxi, (runs, T + 1), rng)
     lam = _mult_noise(mult_dist, plant.Qlam, (runs, T + 1), rng)
-    eta = (rng.random((runs, T + 1)) < eta_bar).astype(float)
+    eta = bernoulli_arrivals(rng, (runs, T + 1), eta_bar).astype(float)
     PhiT, Phi1T, GT, HT, H1T = plant.Phi.T, plant.Phi1.T, plant.Gamma.T, plant.H.T, plant.H1.T
     for t in range(T + 1):
         xt = x[:, t]

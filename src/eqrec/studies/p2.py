@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from eqrec.core.arrivals import uniform_words
 from eqrec.core.certify import certify_schedule
 from eqrec.core.gains import GainSchedule, schedule_from_word_gains
 from eqrec.core.prefix_tree import PrefixTree
@@ -196,7 +197,7 @@ def _runtime_check(system, gains, language, mu1, seed, kind, x0, runs) -> float:
     rad = lay.radius(system.eta_w, system.eta_v, mu1)
     worst = 0.0
     for _ in range(runs):
-        word = language[rng.integers(len(language))]
+        word = uniform_words(rng, language)
         delta = sample_uncertainty(lay, rad, rng, kind)
         tr = simulate_run(system, sch, word, delta, x0)
         w, v, xi0 = lay.split(delta)
