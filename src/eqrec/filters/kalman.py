@@ -38,57 +38,11 @@ scenario, or only in the constant column).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from eqrec.core.noise import GaussianDesign
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
-
-
-@dataclass(frozen=True)
-class GaussianDesign:
-    """Second moments used to design the filters: ``P0`` (initial error), ``Q = E Qw Eᵀ``, ``R = V Rv Vᵀ``.
-
-    Parameters
-    ----------
-    P0 : numpy.ndarray
-        Covariance of the initial estimation error, ``(n, n)``.
-    Q : numpy.ndarray
-        Covariance of the process noise ``E w``, ``(n, n)``.
-    R : numpy.ndarray
-        Covariance of the measurement noise ``V v``, ``(p, p)``.
-    """
-
-    P0: np.ndarray
-    Q: np.ndarray
-    R: np.ndarray
-
-    @classmethod
-    def from_box(cls, system: AffineSystem, mu1: float, sigmas: float = 5.0) -> "GaussianDesign":
-        """Standard deviations ``bound / sigmas`` for ``ξ0`` (``μ1``), ``w`` (``ηw``) and ``v`` (``ηv``).
-
-        The delayed-data paper's Fig. 1 draws its noises so (``sigmas = 5``: a bound is five standard deviations).
-
-        Parameters
-        ----------
-        system : AffineSystem
-            The system: ``eta_w``, ``eta_v`` and the noise gains ``E``, ``V`` at time 0.
-        mu1 : float
-            Bound ``μ1`` of ``‖ξ0‖_∞``.
-        sigmas : float, optional
-            Number of standard deviations in a bound (default 5).
-
-        Returns
-        -------
-        GaussianDesign
-            Independent components: ``P0 = (mu1/sigmas)² I``, ``Q = (ηw/sigmas)² E Eᵀ``,
-            ``R = (ηv/sigmas)² V Vᵀ``.
-        """
-        n = system.n
-        E, V = system.E_at(0), system.V_at(0)
-        return cls(P0=(mu1 / sigmas) ** 2 * np.eye(n), Q=(system.eta_w / sigmas) ** 2 * E @ E.T,
-                   R=(system.eta_v / sigmas) ** 2 * V @ V.T)
 
 
 def _kalman_update(x, P, y, C, R):
