@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from eqrec.core.arrivals import NEVER, arrival_schedule, draw_delays, uniform_words
+from eqrec.core.arrivals import NEVER, ArrivalTrace, arrival_schedule, draw_delays, uniform_words
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.classes import ClassGains, class_maps
 from eqrec.core.estimator import make_estimator
@@ -99,9 +99,9 @@ def _drive(system: AffineSystem, est, delays: np.ndarray, x0: np.ndarray, xi0: n
     N = len(delays)
     v = draw_box(rng, system.eta_v, (N, system.nv), kind)
     w = draw_box(rng, system.eta_w, (N, system.nw), kind)
-    x, xhat, dropped = closed_loop(system, est, arrival_schedule(delays), x0, xi0, w, v,
-                                   lambda t, xh: _inputs(system, controller, inputs, t, xh), after_step)
-    return x, xhat, dropped, w, v
+    run = closed_loop(system, est, ArrivalTrace(delays), x0, xi0, w, v,
+                      lambda t, xh: _inputs(system, controller, inputs, t, xh), after_step)
+    return run.x, run.xhat, run.dropped, w, v
 
 
 def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains", words: Sequence[str], periods: int,
