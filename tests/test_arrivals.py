@@ -12,7 +12,7 @@ pass for all but about one seed in 1.7 million per comparison.
 import numpy as np
 import pytest
 
-from eqrec.core.arrivals import (NEVER, ArrivalTrace, arrival_schedule, bernoulli_arrivals, bernoulli_trace,
+from eqrec.core.arrivals import (NEVER, ArrivalTrace, bernoulli_arrivals, bernoulli_trace,
                                  delay_trace, draw_delays, gilbert_elliott_trace, uniform_words)
 from eqrec.core.words import as_pattern, parse_delay_word
 from eqrec.errors import InputError
@@ -37,7 +37,7 @@ def test_trace_reads_per_step_and_per_measurement():
     assert tr.arrival_times().tolist() == [0, 3, NEVER, 3, 7]
     assert tr.pattern().arrivals == (0, 3, None, 3, None)
     assert ArrivalTrace.from_schedule(tr.schedule()).delays.tolist() == [0, 2, NEVER, 0, NEVER]
-    assert arrival_schedule(np.array([0, NEVER, 1, 0])) == [[0], [], [], [2, 3]]
+    assert ArrivalTrace(np.array([0, NEVER, 1, 0])).schedule() == [[0], [], [], [2, 3]]
 
 
 def test_trace_of_a_pattern_gives_the_pattern_back():
@@ -173,3 +173,29 @@ def test_bad_sampler_input_names_the_field(call, field):
     with pytest.raises(InputError) as exc:
         call(np.random.default_rng(0))
     assert exc.value.field == field
+
+
+# ---------------------------------------------------------------------------- what reaches an estimator
+
+def test_as_packets_reads_every_form_of_the_protocol():
+    from eqrec.core.estimator import Packet
+    from eqrec.core.packets import as_packets
+
+    assert as_packets(None, 3, (2,)) == [] and as_packets([], 3, (2,)) == []
+    for y in (np.array([1.0, 2.0]), [1.0, 2.0]):
+        (pk,) = as_packets(y, 3, (2,))
+        assert pk.time == 3 and pk.y.tolist() == [1.0, 2.0]
+    pks = as_packets([Packet(1, np.zeros(2)), (2, [1.0, 1.0])], 3, (2,))
+    assert [p.time for p in pks] == [1, 2]
+    assert as_packets((0, np.ones(2)), 3, (2,))[0].time == 0
+    assert as_packets(np.ones((2, 4)), 3, (2, 4))[0].y.shape == (2, 4)  # columns of an affine run
+
+
+@pytest.mark.parametrize("y", [np.array([1.0, np.inf]), np.zeros(3), [(4, np.zeros(2))],
+                               [(1, np.zeros(2)), (1, np.zeros(2))], [(1.5, np.zeros(2))], {"a": 1}, ["a", "b"]])
+def test_as_packets_refuses_bad_data_naming_the_field(y):
+    from eqrec.core.packets import as_packets
+
+    with pytest.raises(InputError) as exc:
+        as_packets(y, 3, (2,), field="y")
+    assert exc.value.field == "y"

@@ -77,3 +77,161 @@ def test_descriptions_must_fit_the_system(acc):
     with pytest.raises(InputError) as exc:
         NoisySystem(acc).design()
     assert exc.value.field == "gaussian"
+
+
+# ---------------------------------------------------------------------------- Kalman-type filters in step form
+
+from eqrec.core.arrivals import NEVER, ArrivalTrace  # noqa: E402
+from eqrec.core.protocol import Estimator  # noqa: E402
+from eqrec.core.simulate import closed_loop  # noqa: E402
+from eqrec.filters import error_maps, make_filter  # noqa: E402
+from eqrec.lmv.simulate import compare_moments  # noqa: E402
+
+DELAYED = [0, 1, 2, 0, NEVER, 1, 0, 0, 2, NEVER, 0, 1]
+MISSING = [0, NEVER, 0, 0, NEVER, NEVER, 0, 0, 0, NEVER, 0, 0]
+X0 = np.array([20.0, 40.0, 20.0])
+
+
+def _filters(acc, horizon=12, max_delay=2):
+    gd = GaussianDesign.from_box(acc, 1.0)
+    return {key: make_filter(key, acc, gd, horizon=horizon, max_delay=max_delay, x0_mean=X0)
+            for key in ("timestamped", "unaware", "random_delay_lmv")}
+
+
+def test_filters_follow_the_protocol(acc):
+    for key, f in _filters(acc).items():
+        assert f.kind == "stochastic" and f.key == key
+        assert f.name in ("Kalman, time-stamped", "Kalman, delay-unaware", "LMV, random delay")
+        assert f.reset(X0, t0=4) is f and f.time == 4
+        assert isinstance(f, Estimator)
+        xhat, P = f.step(np.array([1.0, 2.0]), np.array([206.0]))
+        assert xhat.shape == (3,) and P.shape == (3, 3) and f.time == 5 and f.filtered.shape == (3,)
+        np.testing.assert_array_equal(f.x, xhat)
+        assert np.allclose(P, P.T) and np.linalg.eigvalsh(P).min() > -1e-12
+
+
+def test_step_form_follows_the_exact_affine_maps(acc, rng):
+    """One numeric run in the one loop (plain vectors) against the affine error maps of the same filter."""
+    trace = ArrivalTrace(DELAYED)
+    pattern = trace.pattern()
+    for key, f in _filters(acc).items():
+        maps = error_maps(f, acc, pattern, X0, 1.0)
+        delta = rng.uniform(-1, 1, maps.layout.size) * maps.radius
+        w, v, xi0 = maps.layout.split(delta)
+        run = closed_loop(acc, f, trace, X0, xi0, w, v)
+        np.testing.assert_allclose(run.error, maps.errors(delta)[0], rtol=0, atol=1e-9, err_msg=key)
+
+
+def _refilter(acc, design, received, t, xhat0):
+    """Reference: the time-stamped filter at t, re-run from time 0 over everything received (no cache)."""
+    x, P = xhat0.copy(), design.P0.copy()
+    for tau in range(t + 1):
+        if tau in received:
+            C = acc.C
+            S = C @ P @ C.T + design.R
+            K = P @ C.T @ np.linalg.inv(S)
+            x = x + K @ (received[tau] - C @ x)
+            P = (np.eye(3) - K @ C) @ P @ (np.eye(3) - K @ C).T + K @ design.R @ K.T
+        x = acc.A @ x + acc.f
+        P = acc.A @ P @ acc.A.T + design.Q
+    return x, P
+
+
+def test_timestamped_filter_equals_refiltering_from_the_start(acc, rng):
+    f = _filters(acc)["timestamped"].reset(X0)
+    trace = ArrivalTrace(DELAYED)
+    ys = rng.normal(size=(12, 2)) + np.array([40.0, 20.0])
+    received = {}
+    for t in range(12):
+        for tau in trace.arriving_at(t):
+            received[tau] = ys[tau]
+        got, P = f.step([(tau, ys[tau]) for tau in trace.arriving_at(t)])
+        want, Pw = _refilter(acc, f.design, received, t, X0)
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-10)
+        np.testing.assert_allclose(P, Pw, rtol=1e-10, atol=1e-14)
+
+
+@pytest.mark.parametrize("key, arrivals", [("timestamped", DELAYED), ("unaware", MISSING)])
+def test_covariance_is_the_error_covariance_by_monte_carlo(acc, key, arrivals):
+    """Gaussian noise with the design's statistics: the P each step returns is E[e eᵀ] of x(t+1) - x̂(t+1|I_t)
+    (exact for the time-stamped filter on any trace, and for the delay-unaware one without delays); R runs at once
+    as columns, tolerance of lmv.simulate.compare_moments (Bonferroni at family-wise level 1e-3)."""
+    R = 4000
+    rng = np.random.default_rng(7)
+    g = GaussianNoise.from_box(acc, 1.0)
+    f = _filters(acc)[key]
+    trace = ArrivalTrace(arrivals)
+    N = trace.steps
+    w = rng.normal(size=(N, acc.nw, R)) * np.sqrt(g.Qw[0, 0])
+    v = rng.normal(size=(N, acc.nv, R)) * np.sqrt(g.Qv[0, 0])
+    xi0 = rng.normal(size=(3, R)) * np.sqrt(g.x0_cov[0, 0])
+    run = closed_loop(acc, f, trace, np.outer(X0, np.ones(R)), xi0, w, v, one=np.ones(R))
+    err = np.moveaxis(run.error[1:], -1, 0)  # (R, N, n)
+    check = compare_moments(err, np.stack(run.spread))
+    assert check.passed, check.summary()
+
+
+def test_filter_time_runs_on_absolute_time(acc, rng):
+    """t0 != 0 on a time-varying system: the filter reads A(t), C(t) at absolute times, like a run of the
+    system shifted by t0 from 0."""
+    T = 10
+    A = np.stack([acc.A * (1 + 0.01 * k) for k in range(T)])
+    C = np.stack([acc.C * (1 - 0.02 * k) for k in range(T)])
+    tv = AffineSystem(A=A, C=C, E=acc.E, B=np.broadcast_to(acc.B, (T,) + acc.B.shape), f=acc.f,
+                      eta_w=acc.eta_w, eta_v=acc.eta_v)
+    shifted = AffineSystem(A=A[3:], C=C[3:], E=acc.E, B=np.broadcast_to(acc.B, (T - 3,) + acc.B.shape), f=acc.f,
+                           eta_w=acc.eta_w, eta_v=acc.eta_v)
+    gd = GaussianDesign.from_box(acc, 1.0)
+    ys = rng.normal(size=(7, 2))
+    for key in ("timestamped", "unaware"):
+        a = make_filter(key, tv, gd).reset(X0, t0=3)
+        b = make_filter(key, shifted, gd).reset(X0)
+        for k in range(7):
+            pk_a = [(3 + tau, ys[tau]) for tau in ArrivalTrace(DELAYED[:7]).arriving_at(k)]
+            pk_b = [(tau, ys[tau]) for tau in ArrivalTrace(DELAYED[:7]).arriving_at(k)]
+            (xa, Pa), (xb, Pb) = a.step(pk_a, np.array([1.0])), b.step(pk_b, np.array([1.0]))
+            np.testing.assert_array_equal(xa, xb)
+            np.testing.assert_array_equal(Pa, Pb)
+
+
+BAD_STEPS = [
+    ({"y": np.array([1.0, np.nan])}, "y"),
+    ({"y": np.array([1.0, 2.0, 3.0])}, "y"),
+    ({"y": [(9, np.zeros(2))]}, "y"),  # from the future
+    ({"y": [(3, np.zeros(2)), (3, np.zeros(2))]}, "y"),
+    ({"y": np.zeros(2), "u": np.array([np.inf])}, "u"),
+    ({"y": np.zeros(2), "u": np.zeros(2)}, "u"),
+    ({"y": "abc"}, "y"),
+]
+
+
+@pytest.mark.parametrize("bad, field", BAD_STEPS)
+def test_a_refused_step_leaves_the_filter_unchanged(acc, rng, bad, field):
+    ys = rng.normal(size=(8, 2))
+    for key in ("timestamped", "unaware", "random_delay_lmv"):
+        f, twin = _filters(acc)[key].reset(X0), _filters(acc)[key].reset(X0)
+        for t in range(3):
+            f.step(ys[t]), twin.step(ys[t])
+        before = (f.time, f.x, f.filtered)
+        with pytest.raises(InputError) as exc:
+            f.step(**bad)
+        assert exc.value.field == field, key
+        assert f.time == before[0] and np.array_equal(f.x, before[1]) and np.array_equal(f.filtered, before[2])
+        for t in range(3, 8):
+            pk = None if t == 4 else [(4, ys[4]), (5, ys[5])] if t == 5 else ys[t]
+            (xa, Pa), (xb, Pb) = f.step(pk), twin.step(pk)
+            assert np.array_equal(xa, xb) and np.array_equal(Pa, Pb), key
+
+
+def test_a_second_packet_of_one_stamp_is_refused_by_the_timestamped_filter(acc):
+    f = _filters(acc)["timestamped"].reset(X0)
+    f.step(np.zeros(2))
+    x = f.x
+    with pytest.raises(InputError, match="second packet stamped 0"):
+        f.step([(0, np.ones(2))])
+    np.testing.assert_array_equal(f.x, x)
+    with pytest.raises(InputError):
+        _filters(acc)["unaware"].step(None)  # before reset
+    with pytest.raises(InputError) as exc:
+        _filters(acc)["unaware"].reset([1.0, np.nan, 0.0])
+    assert exc.value.field == "xhat0"

@@ -87,12 +87,10 @@ class ArrivalTrace:
 
     def __post_init__(self) -> None:
         raw = np.asarray(self.delays)
-        if raw.ndim != 1 or (raw.size and raw.dtype.kind not in "iu"):
-            if raw.ndim == 1 and raw.dtype.kind == "f" and np.all(np.isfinite(raw)) and np.all(raw == np.round(raw)):
-                raw = raw.astype(int)
-            else:
-                raise InputError(f"delays must be a one-dimensional array of integers, got {raw.dtype} of shape "
-                                 f"{raw.shape}", field="delays")
+        integral = raw.dtype.kind in "iu" or (raw.dtype.kind == "f" and np.all(raw == np.round(raw)))
+        if raw.ndim != 1 or (raw.size and not integral):
+            raise InputError(f"delays must be a one-dimensional array of integers, got {raw.dtype} of shape "
+                             f"{raw.shape}", field="delays")
         d = np.array(raw, dtype=np.int64)
         if np.any((d < 0) & (d != NEVER)):
             raise InputError(f"a delay is >= 0 or NEVER = {NEVER}, got {sorted(set(d[(d < 0) & (d != NEVER)].tolist()))}",
@@ -175,9 +173,6 @@ class ArrivalTrace:
         """Number ``N`` of steps (measurements) of the run."""
         return int(self.delays.size)
 
-    def __len__(self) -> int:
-        return self.steps
-
     def arrival_times(self) -> np.ndarray:
         """Arrival time ``τ + d(τ)`` of each measurement (:data:`NEVER` when lost).
 
@@ -240,22 +235,6 @@ class ArrivalTrace:
         N = self.steps
         return ArrivalPattern(tuple(None if (d == NEVER or tau + d >= N) else tau + d
                                     for tau, d in enumerate(self.delays.tolist())))
-
-
-def arrival_schedule(delays: np.ndarray) -> list[list[int]]:
-    """``out[t]``: the measurement times whose packets arrive at ``t`` (``t < N``), from per-measurement delays.
-
-    Parameters
-    ----------
-    delays : ndarray of int, shape (N,)
-        Delay of each measurement (:data:`NEVER`: not delivered).
-
-    Returns
-    -------
-    list of list of int
-        Length ``N``; arrivals at or after ``N`` are left out (:meth:`ArrivalTrace.schedule`).
-    """
-    return ArrivalTrace(np.asarray(delays, int)).schedule()
 
 
 # ------------------------------------------------------------------------------ samplers

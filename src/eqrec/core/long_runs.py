@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from eqrec.core.arrivals import NEVER, ArrivalTrace, arrival_schedule, draw_delays, uniform_words
+from eqrec.core.arrivals import NEVER, ArrivalTrace, draw_delays, uniform_words
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.classes import ClassGains, class_maps
 from eqrec.core.estimator import make_estimator
