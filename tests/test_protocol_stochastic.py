@@ -235,3 +235,117 @@ def test_a_second_packet_of_one_stamp_is_refused_by_the_timestamped_filter(acc):
     with pytest.raises(InputError) as exc:
         _filters(acc)["unaware"].reset([1.0, np.nan, 0.0])
     assert exc.value.field == "xhat0"
+
+
+# ---------------------------------------------------------------------------- P4's LMV filter and predictor in step form
+
+from eqrec.core.arrivals import bernoulli_trace  # noqa: E402
+from eqrec.lmv.estimator import LMVEstimator, apply_estimator  # noqa: E402
+from eqrec.lmv.model import system_of  # noqa: E402
+from eqrec.lmv.recursion import filter_smoother, lmv_recursion  # noqa: E402
+from eqrec.lmv.simulate import simulate_plant  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def ex1_sim(ex1):
+    return simulate_plant(ex1, 0.8, 40, 3, np.random.default_rng(3))
+
+
+@pytest.mark.parametrize("mechanism, key", [("zero-input", "y_zero"), ("hold-input", "y_hold")])
+def test_step_form_is_bit_identical_to_the_batch_recursion(ex1, ex1_sim, mechanism, key):
+    """Each run of the P4 Monte Carlo, stepped with y(t) or None (lost), gives the batch run's predictions and
+    filtered estimates to the last bit; the covariances are those of Theorems 1 and 3."""
+    sys = system_of(ex1, mechanism, 0.8)
+    res = lmv_recursion(sys, 40)
+    sm = filter_smoother(res, 0)
+    for r in range(3):
+        batch = apply_estimator(res, ex1_sim[key][r], sm)
+        est = LMVEstimator(sys, res).reset()
+        assert est.name == f"LMV, {mechanism}" and est.time == 0
+        for t in range(41):
+            y = ex1_sim["y"][r, t] if ex1_sim["eta"][r, t] else None
+            pred, P = est.step(y)
+            assert np.array_equal(pred, batch["pred"][t + 1, :2]), (r, t)
+            assert np.array_equal(est.filtered, batch["smooth"][t, 0, :2]), (r, t)
+            np.testing.assert_array_equal(P, res.P_pred[t + 1][:2, :2])
+            np.testing.assert_array_equal(est.P_filtered, sm.P_filt[t][:2, :2])
+        assert est.time == 41 and not ex1_sim["eta"][r].all()  # the runs do lose packets
+
+
+def test_gains_computed_as_the_steps_go_are_those_of_the_recursion(ex1, ex1_sim):
+    sys = system_of(ex1, "hold-input", 0.8)
+    res = lmv_recursion(sys, 10)  # the step form extends it beyond t = 10 by the same recursion
+    longer = lmv_recursion(sys, 40)
+    a, b, c = LMVEstimator(sys, res).reset(), LMVEstimator(sys).reset(), LMVEstimator(sys, longer).reset()
+    for t in range(41):
+        y = ex1_sim["y"][0, t] if ex1_sim["eta"][0, t] else None
+        (xa, Pa), (xb, Pb), (xc, Pc) = a.step(y), b.step(y), c.step(y)
+        assert np.array_equal(xa, xb) and np.array_equal(xa, xc)
+        assert np.array_equal(Pa, Pb) and np.array_equal(Pa, Pc)
+
+
+@pytest.mark.parametrize("bad, field", [
+    ({"y": np.array([np.nan])}, "y"), ({"y": np.zeros(2)}, "y"), ({"y": [(20, np.zeros(1))]}, "y"),
+    ({"y": np.zeros(1), "u": np.array([1.0])}, "u"), ({"y": np.zeros(1), "u": "x"}, "u"),
+])
+def test_a_refused_lmv_step_leaves_the_estimator_unchanged(ex1, ex1_sim, bad, field):
+    sys = system_of(ex1, "hold-input", 0.8)
+    est, twin = LMVEstimator(sys).reset(t0=5), LMVEstimator(sys).reset(t0=5)
+    ys = ex1_sim["y"][0]
+    for t in range(3):
+        est.step(ys[t]), twin.step(ys[t])
+    est.step(None), twin.step(None)  # something is held
+    before = (est.time, est.augmented, est.filtered)
+    with pytest.raises(InputError) as exc:
+        est.step(**bad)
+    assert exc.value.field == field
+    assert est.time == before[0] and np.array_equal(est.augmented, before[1])
+    assert np.array_equal(est.filtered, before[2])
+    for t in range(4, 12):
+        y = None if t % 3 == 0 else ys[t]
+        (xa, Pa), (xb, Pb) = est.step(y), twin.step(y)
+        assert np.array_equal(xa, xb) and np.array_equal(est.filtered, twin.filtered)
+
+
+def test_late_packets_count_as_lost_and_reset_checks(ex1, ex1_sim):
+    sys = system_of(ex1, "zero-input", 0.8)
+    a, b = LMVEstimator(sys).reset(t0=3), LMVEstimator(sys).reset(t0=3)
+    a.step(ex1_sim["y"][0, 0])
+    b.step(ex1_sim["y"][0, 0])
+    np.testing.assert_array_equal(a.step([(3, ex1_sim["y"][0, 0])])[0], b.step(None)[0])
+    with pytest.raises(InputError) as exc:
+        LMVEstimator(sys).reset([0.0, np.inf])
+    assert exc.value.field == "xhat0"
+    with pytest.raises(InputError):
+        LMVEstimator(sys).step(None)
+    for bad in ("nothing", "hold-input"):  # hold-input needs the augmented state of hold_input_system
+        with pytest.raises(InputError) as exc:
+            LMVEstimator(sys, compensation=bad)
+        assert exc.value.field == "compensation"
+    assert isinstance(LMVEstimator(sys).reset(), Estimator)
+
+
+def test_lmv_in_the_one_loop_on_a_bounded_error_plant_by_monte_carlo():
+    """One plant for every family: an affine system with Gaussian noise read as an LMV plant; the zero- and
+    hold-input estimators run in closed_loop on Bernoulli traces (Monte Carlo = many calls of the loop); the
+    covariance each step returns is the error covariance over the noise and the arrivals (compare_moments,
+    Bonferroni at family-wise level 1e-3)."""
+    system = AffineSystem(A=[[0.9, 0.2], [0.0, 0.7]], C=[[1.0, 0.5]], E=[[0.0], [1.0]], B=[[0.0], [1.0]],
+                          eta_w=0.5, eta_v=0.2)
+    gauss = GaussianNoise.from_box(system, mu1=1.0)
+    plant = Plant.from_description(NoisySystem(system, gauss))
+    R, N, eta = 1500, 15, 0.7
+    rng = np.random.default_rng(11)
+    for mech in ("zero-input", "hold-input"):
+        est = LMVEstimator(system_of(plant, mech, eta), system=system)
+        errs, Ps = [], None
+        for _ in range(R):
+            trace = bernoulli_trace(rng, N, 1 - eta)
+            w = rng.normal(size=(N, 1)) * np.sqrt(gauss.Qw[0, 0])
+            v = rng.normal(size=(N, 1)) * np.sqrt(gauss.Qv[0, 0])
+            xi0 = rng.normal(size=2) * np.sqrt(gauss.x0_cov[0, 0])
+            run = closed_loop(system, est, trace, xi0, xi0, w, v)  # x(0) = ξ0, x̂(0) = E x(0) = 0
+            errs.append(run.error[1:])
+            Ps = np.stack(run.spread)
+        check = compare_moments(np.array(errs), Ps)
+        assert check.passed, (mech, check.summary())

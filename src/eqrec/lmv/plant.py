@@ -208,7 +208,7 @@ class Plant:
         ``V Qv Vᵀ``, cross-covariance ``S Vᵀ`` with ``w``); without
         multiplicative terms ``Φ1 = 0``, ``H1 = 0``.  The input and ``f`` of the
         system are not part of the plant (a step-form estimator adds the
-        known ``B u + f``, :class:`~eqrec.lmv.stepper.LMVEstimator`).
+        known ``B u + f``, :class:`~eqrec.lmv.estimator.LMVEstimator`).
 
         Parameters
         ----------

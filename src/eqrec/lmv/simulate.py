@@ -38,8 +38,9 @@ from eqrec.core.arrivals import bernoulli_arrivals
 from eqrec.errors import InputError
 from eqrec.lmv.model import MECHANISM_KEYS, MultNoiseSystem, system_of
 from eqrec.lmv.plant import Plant
-from eqrec.lmv.recursion import (LMVResult, SmootherResult, apply_estimator, filter_smoother, lmv_recursion,
-                                 n_step_predictor, symmetric_part)
+from eqrec.lmv.estimator import apply_estimator
+from eqrec.lmv.recursion import (LMVResult, SmootherResult, filter_smoother, lmv_recursion, n_step_predictor,
+                                 symmetric_part)
 
 __all__ = ["fourth_moment_radius", "simulate_plant", "MCComparison", "compare_moments", "bonferroni_z", "run_mc", "MCRun"]
 
@@ -292,7 +293,7 @@ class MCRun:
     sim : dict
         The realisations, :func:`simulate_plant`.
     est : dict
-        The estimates, :func:`~eqrec.lmv.recursion.apply_estimator`.
+        The estimates, :func:`~eqrec.lmv.estimator.apply_estimator`.
     P_pred : numpy.ndarray
         Theory ``P(t|t-1)``, ``(T+1, n_x, n_x)``.
     P_smooth : numpy.ndarray
