@@ -84,3 +84,15 @@ def test_closed_loop_refuses_short_or_non_finite_noise(acc, rng):
     with pytest.raises(InputError) as exc:
         closed_loop(acc, Never(), [[0], [1], [2]], x0, xi0, w, v)
     assert exc.value.field == "v"
+
+
+def test_closed_loop_refuses_a_bad_initial_state(acc, rng):
+    import pytest
+    from eqrec.core.simulate import closed_loop
+    from eqrec.errors import InputError
+
+    w, v, x0, xi0 = _acc_run_data(acc, rng, 2)
+    for bad_x0, bad_xi0, field in ((np.array([1.0, np.nan, 0.0]), xi0, "x0"), (x0, np.zeros(2), "xi0")):
+        with pytest.raises(InputError) as exc:
+            closed_loop(acc, object(), [[0], [1]], bad_x0, bad_xi0, w, v)
+        assert exc.value.field == field

@@ -227,14 +227,18 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
     N, n = len(schedule), system.n
     w = _noise(w, N, system.nw, "w")
     v = _noise(v, N, system.nv, "v")
-    x0 = np.asarray(x0, float)
+    x0, xi0 = np.asarray(x0, float), np.asarray(xi0, float)
+    for name, arr in (("x0", x0), ("xi0", xi0)):
+        if arr.shape[:1] != (n,) or arr.shape != x0.shape or not np.all(np.isfinite(arr)):
+            raise InputError(f"need finite entries, shape ({n},) (or ({n}, K) with one), got {arr.shape}",
+                             field=name)
     x = np.zeros((N + 1,) + x0.shape)
     xhat = np.zeros((N + 1,) + x0.shape)
     x[0] = x0
     xhat[0] = x0 - xi0
     protocol = hasattr(est, "reset")
     if protocol:
-        est.reset(xhat[0], t0) if one is None else est.reset(xhat[0], t0, one=one)
+        est.reset(xhat[0].copy(), t0) if one is None else est.reset(xhat[0].copy(), t0, one=one)
     y = np.zeros((N, system.p) + x0.shape[1:])
     run = LoopRun(x=x, xhat=xhat, y=y)
     for k in range(N):
