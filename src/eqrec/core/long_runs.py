@@ -9,7 +9,10 @@ of the observed prefix, ``μ1`` at period boundaries and in performance mode).
 Every packet is delivered at its true arrival time, also when that is past
 the end of its period: the estimator drops it there, which is what the
 design language assumes (a delay past the horizon means missing);
-:func:`periodic_model_gap` checks a run against the design model.
+:func:`periodic_model_gap` checks a run against the design model.  The
+words and delays are drawn by the one arrival model
+(:mod:`eqrec.core.arrivals`) and every run is a call of the one loop,
+:func:`eqrec.core.simulate.closed_loop`.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from eqrec.core.arrivals import NEVER, ArrivalTrace, draw_delays, uniform_words
+from eqrec.core.arrivals import ArrivalTrace, draw_delays, uniform_words
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.classes import ClassGains, class_maps
 from eqrec.core.estimator import make_estimator
@@ -43,7 +46,7 @@ class LongRun:
     level : ndarray, shape (N+1,)
         Guarantee on ``‖ξ(t)‖∞`` at each time.
     delays : ndarray of int, shape (N,)
-        Delay of ``y(t)`` (:data:`NEVER`: not delivered).
+        Delay of ``y(t)`` (:data:`~eqrec.core.arrivals.NEVER`: not delivered).
     recovering : ndarray of bool, shape (N,)
         ``True`` at the steps taken in recovery mode (switching scheme).
     words : list of str, optional
@@ -199,9 +202,9 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
         ``ArrivalPattern prefix -> level``: the guarantee on ``ξ`` after the observed recovery
         prefix (events ``0..j``, ``j < T - 1``): its node's level.
     max_delay : int
-        Largest delay of :func:`draw_delays` (used unless ``delays`` is given).
+        Largest delay of :func:`~eqrec.core.arrivals.draw_delays` (used unless ``delays`` is given).
     p_on_time : float
-        Probability of an on-time measurement in :func:`draw_delays`.
+        Probability of an on-time measurement in :func:`~eqrec.core.arrivals.draw_delays`.
     kind : str, optional
         Noise (and ``ξ(0)``) drawn ``"uniform"`` in the box or at ``"vertex"`` corners.
     x0 : ndarray, shape (n,), optional
@@ -211,7 +214,7 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
     inputs : ndarray, optional
         Fixed inputs, ``(m,)`` or ``(N, m)``, when there is no controller (default zero).
     delays : ndarray of int, shape (N,), optional
-        Delays of the run instead of random draws (:data:`NEVER`: not delivered).
+        Delays of the run instead of random draws (:data:`~eqrec.core.arrivals.NEVER`: not delivered).
 
     Returns
     -------

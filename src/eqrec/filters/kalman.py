@@ -122,7 +122,10 @@ class _Filter:
             A non-finite or wrongly shaped ``xhat0`` or ``one``, or a non-integer ``t0``.
         """
         n = self.system.n
-        x = np.asarray(xhat0, float) if isinstance(xhat0, np.ndarray) else _finite(xhat0, (n,), "xhat0")
+        try:
+            x = np.asarray(xhat0, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"not numeric: {xhat0!r}", field="xhat0") from None
         if x.ndim not in (1, 2) or x.shape[0] != n:
             raise InputError(f"shape {x.shape}, expected ({n},) or ({n}, K)", field="xhat0")
         x = _finite(x, x.shape, "xhat0")
@@ -166,6 +169,9 @@ class _Filter:
     def _drive(self, t: int, u=None) -> np.ndarray:
         """Known part ``B u(t) + f`` of the dynamics (``u = None``: the inputs given at construction, else zero)."""
         if u is None:
+            if self.inputs is not None and not 0 <= t < len(self.inputs):
+                raise InputError(f"the inputs given at construction cover times 0..{len(self.inputs) - 1}, not {t}",
+                                 field="inputs")
             u = np.zeros(self.system.m) if self.inputs is None else self.inputs[t]
         return self.system.B_at(t) @ u + self.system.f
 
