@@ -54,7 +54,7 @@ def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, r
 
 def test_what_arrived_is_the_protocol_form():
     from eqrec.core.estimator import Packet
-    from eqrec.core.packets import what_arrived
+    from eqrec.core.simulate import what_arrived
 
     y = np.arange(8.0).reshape(4, 2)
     assert what_arrived([], 2, y) is None

@@ -3,48 +3,39 @@
 At time ``t`` an estimator is given ``None`` (nothing arrived), ``y(t)``
 itself (its packet arrived on time and alone), or time-stamped packets
 ``(τ, y(τ))`` (:class:`~eqrec.core.estimator.Packet`, late ones among them).
-:func:`what_arrived` builds that form from an arrival trace
-(:class:`~eqrec.core.arrivals.ArrivalTrace`) for the simulation loop;
-:func:`as_packets` reads any of the forms back into checked packets for an
-estimator, before the estimator changes any state.
+:func:`eqrec.core.simulate.what_arrived` builds that form from an arrival
+trace for the simulation loop; :func:`as_packets` reads any of the forms back
+into checked packets for an estimator, before the estimator changes any
+state.  The module needs no estimator (a packet is anything with a ``time``
+and a ``y``), so the LMV layer reads packets without the bounded-error ones.
 """
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from eqrec.core.estimator import Packet
 from eqrec.errors import InputError
 
 
-def what_arrived(stamps: Sequence[int], now: int, y: np.ndarray, t0: int = 0) -> "None | np.ndarray | list[Packet]":
-    """What reaches the estimator at step ``now``, in the protocol's form (:mod:`eqrec.core.protocol`).
+class Stamped(NamedTuple):
+    """A checked measurement with its time stamp (what :func:`as_packets` returns).
 
     Parameters
     ----------
-    stamps : sequence of int
-        Step indices ``τ`` (from ``t0``) of the packets arriving at step ``now``.
-    now : int
-        Step index of the arrival (from ``t0``).
-    y : ndarray, shape (N, p) or (N, p, K)
-        The measurements by step index.
-    t0 : int, optional
-        Absolute time of step 0 (packets are stamped with absolute times; default 0).
-
-    Returns
-    -------
-    None, ndarray or list of Packet
-        ``None`` when nothing arrives, ``y(now)`` itself when exactly the on-time
-        packet arrives, else the packets ``Packet(t0 + τ, y(τ))`` in the order of ``stamps``.
+    time : int
+        Absolute time ``τ`` of the measurement.
+    y : numpy.ndarray
+        The measurement ``y(τ)``, a finite float array.
     """
-    stamps = list(stamps)
-    if not stamps:
-        return None
-    if stamps == [now]:
-        return y[now]
-    return [Packet(t0 + int(tau), y[tau]) for tau in stamps]
+
+    time: int
+    y: np.ndarray
+
+
+def _is_packet(item: Any) -> bool:
+    return hasattr(item, "time") and hasattr(item, "y") and not isinstance(item, np.ndarray)
 
 
 def _is_pair(item: Any) -> bool:
@@ -52,7 +43,7 @@ def _is_pair(item: Any) -> bool:
             and not isinstance(item[0], (bool, np.bool_)) and not np.isscalar(item[1]))
 
 
-def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> list[Packet]:
+def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> list[Stamped]:
     """Read what arrived at time ``now`` in any of the protocol's forms, checked before anything is used.
 
     Forms: ``None`` or an empty list (nothing); ``y(now)`` itself (an array,
@@ -72,7 +63,7 @@ def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> li
 
     Returns
     -------
-    list of Packet
+    list of Stamped
         The packets, in the given order, each ``y`` a float array of ``shape``.
 
     Raises
@@ -83,17 +74,17 @@ def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> li
     """
     if y is None or (isinstance(y, (list, tuple)) and len(y) == 0):
         return []
-    if isinstance(y, Packet) or _is_pair(y):
+    if _is_packet(y) or _is_pair(y):
         items = [y]
     elif isinstance(y, np.ndarray) or np.isscalar(y) or (isinstance(y, (list, tuple)) and all(np.isscalar(e) for e in y)):
-        items = [Packet(int(now), y)]
+        items = [Stamped(int(now), y)]
     elif isinstance(y, (list, tuple)):
         items = list(y)
     else:
         raise InputError(f"expected a measurement, packets or None, got {type(y).__name__}", field=field)
-    out: list[Packet] = []
+    out: list[Stamped] = []
     for item in items:
-        if isinstance(item, Packet):
+        if _is_packet(item):
             tau, val = item.time, item.y
         elif _is_pair(item):
             tau, val = item
@@ -118,5 +109,5 @@ def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> li
                                  field=field)
         if not np.all(np.isfinite(arr)):
             raise InputError(f"the measurement of time {tau} contains NaN or infinite entries", field=field)
-        out.append(Packet(int(tau), arr))
+        out.append(Stamped(int(tau), arr))
     return out

@@ -24,9 +24,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 from eqrec.core.arrivals import ArrivalTrace, uniform_words
-from eqrec.core.packets import what_arrived
 from eqrec.core.classes import ClassGains
-from eqrec.core.estimator import make_estimator
+from eqrec.core.estimator import Packet, make_estimator
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.stacking import UncertaintyLayout
@@ -147,6 +146,34 @@ class LoopRun:
     def bound(self) -> np.ndarray:
         """The spreads as floats, shape ``(N,)`` (a guaranteed estimator's bounds on ``‖ξ(t+1)‖∞``)."""
         return np.array([float(b) for b in self.spread])
+
+
+def what_arrived(stamps: Sequence[int], now: int, y: np.ndarray, t0: int = 0) -> "None | np.ndarray | list[Packet]":
+    """What reaches the estimator at step ``now``, in the protocol's form (:mod:`eqrec.core.protocol`).
+
+    Parameters
+    ----------
+    stamps : sequence of int
+        Step indices ``τ`` (from ``t0``) of the packets arriving at step ``now``.
+    now : int
+        Step index of the arrival (from ``t0``).
+    y : ndarray, shape (N, p) or (N, p, K)
+        The measurements by step index.
+    t0 : int, optional
+        Absolute time of step 0 (packets are stamped with absolute times; default 0).
+
+    Returns
+    -------
+    None, ndarray or list of Packet
+        ``None`` when nothing arrives, ``y(now)`` itself when exactly the on-time
+        packet arrives, else the packets ``Packet(t0 + τ, y(τ))`` in the order of ``stamps``.
+    """
+    stamps = list(stamps)
+    if not stamps:
+        return None
+    if stamps == [now]:
+        return y[now]
+    return [Packet(t0 + int(tau), y[tau]) for tau in stamps]
 
 
 def _noise(arr, N: int, rows: int, name: str) -> np.ndarray:
