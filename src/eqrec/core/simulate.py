@@ -2,9 +2,12 @@
 
 The system (eq. (3) of the prefix-based paper with noise gains) is driven by
 an input sequence and noise drawn uniformly in the box, at random box
-vertices, or at the worst-case vertex of a certified bound; the estimator of
-:mod:`eqrec.core.estimator` runs causally on the time-stamped packets that
-arrive (:func:`closed_loop`).  :func:`simulate_run` is one run along an
+vertices, or at the worst-case vertex of a certified bound; an estimator runs
+causally on the time-stamped packets that arrive.  :func:`closed_loop` is the
+package's one simulation loop: it runs any estimator of the protocol
+(:mod:`eqrec.core.protocol`: guaranteed, Kalman-type, LMV) or the raw
+estimators of :mod:`eqrec.core.estimator` on an arrival trace
+(:mod:`eqrec.core.arrivals`).  :func:`simulate_run` is one run along an
 arrival pattern, :func:`monte_carlo` many runs on a language.  Runs over
 many periods (Section III-B3 of the delayed-data paper) are in
 :mod:`eqrec.core.long_runs`.
