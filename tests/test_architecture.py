@@ -12,7 +12,7 @@ PKG = Path(__file__).resolve().parents[1] / "src" / "eqrec"
 ALLOWED = {
     "core": {"core", "errors"},
     "design": {"core", "design", "errors"},
-    "lmv": {"lmv", "errors"},
+    "lmv": {"lmv", "core", "errors"},
     "filters": {"core", "filters", "lmv", "errors"},
     "studies": {"core", "design", "lmv", "filters", "studies", "errors", "models", "io"},
     "interop": {"core", "design", "interop", "errors"},

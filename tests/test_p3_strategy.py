@@ -15,7 +15,8 @@ from eqrec.core.certify import closed_loop_maps
 from eqrec.core.estimator import Packet, RecoveryEstimator
 from eqrec.core.switching import SwitchingEstimator
 from eqrec.core.words import full_delay_language, parse_delay_word
-from eqrec.core.long_runs import NEVER, arrival_schedule, long_run_periodic, long_run_switching, periodic_model_gap
+from eqrec.core.arrivals import NEVER, ArrivalTrace
+from eqrec.core.long_runs import long_run_periodic, long_run_switching, periodic_model_gap
 from eqrec.design.delay import design_delay, design_lp_status
 from eqrec.design.report import path_levels
 from eqrec.design.scale_sweep import run_size
@@ -159,7 +160,7 @@ def test_late_across_a_period_boundary_counts_as_missing(reactor, periodic_desig
     d = periodic_design
     pat = parse_delay_word("00002")
     assert pat.arrivals[4] is None  # the language: delay past the horizon = missing
-    assert arrival_schedule(np.array([0, 0, 0, 0, 2, 0, 0, 0, 0, 0]))[6] == [4, 6]
+    assert ArrivalTrace(np.array([0, 0, 0, 0, 2, 0, 0, 0, 0, 0])).schedule()[6] == [4, 6]
     rng = np.random.default_rng(5)
     ys = rng.normal(size=(10, 2))
     with_late = RecoveryEstimator(reactor, d.schedule, np.zeros(4), periodic=True)
@@ -177,7 +178,7 @@ def test_late_across_a_period_boundary_counts_as_missing(reactor, periodic_desig
 
 
 def test_never_delivered_packets(reactor):
-    sched = arrival_schedule(np.array([0, NEVER, 1, 0]))
+    sched = ArrivalTrace(np.array([0, NEVER, 1, 0])).schedule()
     assert sched == [[0], [], [], [2, 3]]
 
 

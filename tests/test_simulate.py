@@ -19,3 +19,80 @@ def test_monte_carlo_inside_certified_bounds(acc, L1_words):
     bounds = np.stack([d.certificate.words[w].bounds for w in words])
     assert np.all(np.abs(errs) <= bounds + 1e-9)
     assert set(words) <= set(L1_words)
+
+
+# ---------------------------------------------------------------------------- the one loop
+
+def _acc_run_data(acc, rng, N):
+    w = rng.uniform(-1, 1, (N, acc.nw)) * acc.eta_w
+    v = rng.uniform(-1, 1, (N, acc.nv)) * acc.eta_v
+    return w, v, np.array([20.0, 40.0, 20.0]), rng.uniform(-1, 1, 3)
+
+
+def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, rng):
+    """The same design run as GuaranteedEstimator (reset/step -> (x̂, bound)) and as the raw RecoveryEstimator
+    (step -> x̂): the one loop gives the same estimates, and the bounds the protocol estimator returns hold."""
+    from eqrec.core.arrivals import uniform_words, ArrivalTrace
+    from eqrec.core.estimator import make_estimator
+    from eqrec.core.simulate import closed_loop
+
+    d = design_prefix(acc, L1_words, 1.0)
+    words = uniform_words(rng, L1_words, size=5)
+    trace = ArrivalTrace.from_pattern("".join(words))
+    N = trace.steps
+    w, v, x0, xi0 = _acc_run_data(acc, rng, N)
+    u_at = lambda k, xh: np.array([206.0 + np.sin(k)])  # noqa: E731
+    guaranteed = d.estimator()
+    raw = closed_loop(acc, make_estimator(acc, guaranteed.gains, x0 - xi0, periodic=True), trace, x0, xi0, w, v, u_at)
+    prot = closed_loop(acc, guaranteed, trace, x0, xi0, w, v, u_at)
+    assert raw.spread == [] and len(prot.spread) == N
+    np.testing.assert_array_equal(prot.xhat, raw.xhat)
+    np.testing.assert_array_equal(prot.x, raw.x)
+    assert np.all(np.abs(prot.error[1:]).max(axis=1) <= prot.bound * (1 + 1e-9))
+    assert abs(prot.bound.max() - d.mu2) <= 1e-9 and prot.bound[5] == 1.0  # mu1 = 1 at the end of each period
+
+
+def test_what_arrived_is_the_protocol_form():
+    from eqrec.core.estimator import Packet
+    from eqrec.core.simulate import what_arrived
+
+    y = np.arange(8.0).reshape(4, 2)
+    assert what_arrived([], 2, y) is None
+    np.testing.assert_array_equal(what_arrived([2], 2, y), y[2])
+    late = what_arrived([0, 2], 2, y, t0=10)
+    assert [p.time for p in late] == [10, 12] and all(isinstance(p, Packet) for p in late)
+    np.testing.assert_array_equal(late[0].y, y[0])
+
+
+def test_closed_loop_refuses_short_or_non_finite_noise(acc, rng):
+    import pytest
+    from eqrec.core.simulate import closed_loop
+    from eqrec.errors import InputError
+
+    class Never:  # fails the test if the loop steps it
+        def reset(self, xhat0, t0=0):
+            return self
+
+        def step(self, y=None, u=None):
+            raise AssertionError("stepped")
+
+    w, v, x0, xi0 = _acc_run_data(acc, rng, 3)
+    with pytest.raises(InputError) as exc:
+        closed_loop(acc, Never(), [[0], [1], [2], [3]], x0, xi0, w, v)
+    assert exc.value.field == "w"
+    v[1, 0] = np.nan
+    with pytest.raises(InputError) as exc:
+        closed_loop(acc, Never(), [[0], [1], [2]], x0, xi0, w, v)
+    assert exc.value.field == "v"
+
+
+def test_closed_loop_refuses_a_bad_initial_state(acc, rng):
+    import pytest
+    from eqrec.core.simulate import closed_loop
+    from eqrec.errors import InputError
+
+    w, v, x0, xi0 = _acc_run_data(acc, rng, 2)
+    for bad_x0, bad_xi0, field in ((np.array([1.0, np.nan, 0.0]), xi0, "x0"), (x0, np.zeros(2), "xi0")):
+        with pytest.raises(InputError) as exc:
+            closed_loop(acc, object(), [[0], [1]], bad_x0, bad_xi0, w, v)
+        assert exc.value.field == field

@@ -9,7 +9,10 @@ of the observed prefix, ``μ1`` at period boundaries and in performance mode).
 Every packet is delivered at its true arrival time, also when that is past
 the end of its period: the estimator drops it there, which is what the
 design language assumes (a delay past the horizon means missing);
-:func:`periodic_model_gap` checks a run against the design model.
+:func:`periodic_model_gap` checks a run against the design model.  The
+words and delays are drawn by the one arrival model
+(:mod:`eqrec.core.arrivals`) and every run is a call of the one loop,
+:func:`eqrec.core.simulate.closed_loop`.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from eqrec.core.arrivals import ArrivalTrace, draw_delays, uniform_words
 from eqrec.core.certify import closed_loop_maps
 from eqrec.core.classes import ClassGains, class_maps
 from eqrec.core.estimator import make_estimator
@@ -31,10 +35,6 @@ from eqrec.core.systems import AffineSystem
 from eqrec.core.words import as_pattern, parse_delay_word, parse_delays
 from eqrec.errors import InputError
 
-#: Delay code of a measurement that is never delivered.
-NEVER = -1
-
-
 @dataclass
 class LongRun:
     """A long run of the true system and a causal estimator on time-stamped packets.
@@ -46,7 +46,7 @@ class LongRun:
     level : ndarray, shape (N+1,)
         Guarantee on ``‖ξ(t)‖∞`` at each time.
     delays : ndarray of int, shape (N,)
-        Delay of ``y(t)`` (:data:`NEVER`: not delivered).
+        Delay of ``y(t)`` (:data:`~eqrec.core.arrivals.NEVER`: not delivered).
     recovering : ndarray of bool, shape (N,)
         ``True`` at the steps taken in recovery mode (switching scheme).
     words : list of str, optional
@@ -87,27 +87,6 @@ class LongRun:
         return float(self.ratio.max())
 
 
-def arrival_schedule(delays: np.ndarray) -> list[list[int]]:
-    """``out[t]``: the measurement times whose packets arrive at ``t`` (``t < N``), from per-measurement delays.
-
-    Parameters
-    ----------
-    delays : ndarray of int, shape (N,)
-        Delay of each measurement (:data:`NEVER`: not delivered).
-
-    Returns
-    -------
-    list of list of int
-        Length ``N``; arrivals at or after ``N`` are left out.
-    """
-    N = len(delays)
-    out: list[list[int]] = [[] for _ in range(N)]
-    for tau, d in enumerate(np.asarray(delays, int)):
-        if d != NEVER and tau + d < N:
-            out[tau + d].append(tau)
-    return out
-
-
 def _inputs(system: AffineSystem, controller, inputs, t: int, xhat: np.ndarray) -> np.ndarray:
     if controller is not None:
         return np.asarray(controller(xhat), float).reshape(system.m)
@@ -123,9 +102,9 @@ def _drive(system: AffineSystem, est, delays: np.ndarray, x0: np.ndarray, xi0: n
     N = len(delays)
     v = draw_box(rng, system.eta_v, (N, system.nv), kind)
     w = draw_box(rng, system.eta_w, (N, system.nw), kind)
-    x, xhat, dropped = closed_loop(system, est, arrival_schedule(delays), x0, xi0, w, v,
-                                   lambda t, xh: _inputs(system, controller, inputs, t, xh), after_step)
-    return x, xhat, dropped, w, v
+    run = closed_loop(system, est, ArrivalTrace(delays), x0, xi0, w, v,
+                      lambda t, xh: _inputs(system, controller, inputs, t, xh), after_step)
+    return run.x, run.xhat, run.dropped, w, v
 
 
 def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains", words: Sequence[str], periods: int,
@@ -173,8 +152,7 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
     """
     T = schedule.horizon
     if sequence is None:
-        idx = rng.integers(len(words), size=int(periods))
-        sequence = [words[i] for i in idx]
+        sequence = uniform_words(rng, list(words), size=int(periods))
     sequence = list(sequence)
     parsed = {w: parse_delays(w, field_name="words") for w in dict.fromkeys(sequence)}  # each distinct word once
     dl = [parsed[w] for w in sequence]
@@ -195,31 +173,6 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
     x, xhat, dropped, w, v = _drive(system, est, delays, x0, xi0, kind, rng, controller, inputs, lambda t: None)
     return LongRun(x=x, xhat=xhat, level=level, delays=delays, recovering=np.zeros(N, bool), words=sequence,
                    dropped=dropped, w=w, v=v)
-
-
-def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time: float) -> np.ndarray:
-    """I.i.d. delays: ``0`` with probability ``p_on_time``, else uniform on ``1..max_delay``.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator
-        Random source.
-    steps : int
-        Number ``N`` of delays.
-    max_delay : int
-        Largest delay ``τ̄``.
-    p_on_time : float
-        Probability of delay ``0``.
-
-    Returns
-    -------
-    ndarray of int, shape (N,)
-        The delays.
-    """
-    late = rng.random(steps) >= p_on_time
-    d = np.zeros(steps, int)
-    d[late] = rng.integers(1, max_delay + 1, size=int(late.sum()))
-    return d
 
 
 def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassGains",
@@ -249,9 +202,9 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
         ``ArrivalPattern prefix -> level``: the guarantee on ``ξ`` after the observed recovery
         prefix (events ``0..j``, ``j < T - 1``): its node's level.
     max_delay : int
-        Largest delay of :func:`draw_delays` (used unless ``delays`` is given).
+        Largest delay of :func:`~eqrec.core.arrivals.draw_delays` (used unless ``delays`` is given).
     p_on_time : float
-        Probability of an on-time measurement in :func:`draw_delays`.
+        Probability of an on-time measurement in :func:`~eqrec.core.arrivals.draw_delays`.
     kind : str, optional
         Noise (and ``ξ(0)``) drawn ``"uniform"`` in the box or at ``"vertex"`` corners.
     x0 : ndarray, shape (n,), optional
@@ -261,7 +214,7 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
     inputs : ndarray, optional
         Fixed inputs, ``(m,)`` or ``(N, m)``, when there is no controller (default zero).
     delays : ndarray of int, shape (N,), optional
-        Delays of the run instead of random draws (:data:`NEVER`: not delivered).
+        Delays of the run instead of random draws (:data:`~eqrec.core.arrivals.NEVER`: not delivered).
 
     Returns
     -------

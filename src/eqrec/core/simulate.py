@@ -2,9 +2,12 @@
 
 The system (eq. (3) of the prefix-based paper with noise gains) is driven by
 an input sequence and noise drawn uniformly in the box, at random box
-vertices, or at the worst-case vertex of a certified bound; the estimator of
-:mod:`eqrec.core.estimator` runs causally on the time-stamped packets that
-arrive (:func:`closed_loop`).  :func:`simulate_run` is one run along an
+vertices, or at the worst-case vertex of a certified bound; an estimator runs
+causally on the time-stamped packets that arrive.  :func:`closed_loop` is the
+package's one simulation loop: it runs any estimator of the protocol
+(:mod:`eqrec.core.protocol`: guaranteed, Kalman-type, LMV) or the raw
+estimators of :mod:`eqrec.core.estimator` on an arrival trace
+(:mod:`eqrec.core.arrivals`).  :func:`simulate_run` is one run along an
 arrival pattern, :func:`monte_carlo` many runs on a language.  Runs over
 many periods (Section III-B3 of the delayed-data paper) are in
 :mod:`eqrec.core.long_runs`.
@@ -18,19 +21,20 @@ accepts both (:func:`eqrec.core.estimator.make_estimator`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
 
+from eqrec.core.arrivals import ArrivalTrace, uniform_words
 from eqrec.core.classes import ClassGains
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
+from eqrec.core.estimator import Packet, make_estimator
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.stacking import UncertaintyLayout
-from eqrec.core.switching import SwitchingEstimator
 from eqrec.core.systems import AffineSystem
 from eqrec.core.words import as_pattern
+from eqrec.errors import InputError
 
 
 @dataclass
@@ -109,55 +113,184 @@ def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tupl
     raise ValueError(f"unknown noise kind {kind!r} (uniform or vertex)")
 
 
-def closed_loop(system: AffineSystem, est: "RecoveryEstimator | ClassEstimator | SwitchingEstimator",
-                arrive: Sequence[Sequence[int]], x0: np.ndarray, xi0: np.ndarray, w: np.ndarray, v: np.ndarray,
-                u_at: Callable[[int, np.ndarray], np.ndarray], after_step: Callable[[int], None] | None = None
-                ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
-    """Step the true system (eq. (3) of the prefix-based paper) and a causal estimator on time-stamped packets.
+@dataclass
+class LoopRun:
+    """What :func:`closed_loop` returns: the true states, the estimates, what the estimator said about them.
+
+    Parameters
+    ----------
+    x : ndarray, shape (N+1, n) or (N+1, n, K)
+        True states ``x(t0..t0+N)``.
+    xhat : ndarray, shape (N+1, n) or (N+1, n, K)
+        Estimates ``x̂(t0..t0+N)`` (``x̂(t0) = x(t0) − ξ0``).
+    spread : list
+        Per step, the second value of a protocol estimator's ``step`` (a float
+        bound or an ``(n, n)`` covariance for ``x̂(t+1)``); empty for an
+        estimator of the older form (``step`` returns the estimate only).
+    dropped : list of (int, int)
+        Packets ``(stamp, arrival)`` that arrived stamped before the
+        estimator's current period (estimators with ``period_start``).
+    y : ndarray, shape (N, p) or (N, p, K)
+        The measurements ``y(t) = C x(t) + V v(t)`` (sent, whether they arrive or not).
+    """
+
+    x: np.ndarray
+    xhat: np.ndarray
+    spread: list = field(default_factory=list)
+    dropped: list = field(default_factory=list)
+    y: np.ndarray | None = None
+
+    @property
+    def error(self) -> np.ndarray:
+        """The errors ``ξ = x − x̂``, shape of :attr:`x`."""
+        return self.x - self.xhat
+
+    @property
+    def bound(self) -> np.ndarray:
+        """The spreads as floats, shape ``(N,)`` (a guaranteed estimator's bounds on ``‖ξ(t+1)‖∞``)."""
+        return np.array([float(b) for b in self.spread])
+
+
+def what_arrived(stamps: Sequence[int], now: int, y: np.ndarray, t0: int = 0) -> "None | np.ndarray | list[Packet]":
+    """What reaches the estimator at step ``now``, in the protocol's form (:mod:`eqrec.core.protocol`).
+
+    Parameters
+    ----------
+    stamps : sequence of int
+        Step indices ``τ`` (from ``t0``) of the packets arriving at step ``now``.
+    now : int
+        Step index of the arrival (from ``t0``).
+    y : ndarray, shape (N, p) or (N, p, K)
+        The measurements by step index.
+    t0 : int, optional
+        Absolute time of step 0 (packets are stamped with absolute times; default 0).
+
+    Returns
+    -------
+    None, ndarray or list of Packet
+        ``None`` when nothing arrives, ``y(now)`` itself when exactly the on-time
+        packet arrives, else the packets ``Packet(t0 + τ, y(τ))`` in the order of ``stamps``.
+    """
+    stamps = list(stamps)
+    if not stamps:
+        return None
+    if stamps == [now]:
+        return y[now]
+    return [Packet(t0 + int(tau), y[tau]) for tau in stamps]
+
+
+def _noise(arr, N: int, rows: int, name: str) -> np.ndarray:
+    a = np.asarray(arr, float)
+    if a.ndim < 2 or a.shape[0] < N or a.shape[1] != rows:
+        raise InputError(f"need at least {N} rows of {rows} entries, got shape {a.shape}", field=name)
+    if not np.all(np.isfinite(a[:N])):
+        raise InputError("contains NaN or infinite entries", field=name)
+    return a
+
+
+def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequence[int]]", x0: np.ndarray,
+                xi0: np.ndarray, w: np.ndarray, v: np.ndarray,
+                u_at: Callable[[int, np.ndarray], np.ndarray] | None = None,
+                after_step: Callable[[int], None] | None = None, *, t0: int = 0,
+                one: np.ndarray | None = None) -> LoopRun:
+    """The one simulation loop: the true system (eq. (3) of the prefix-based paper) and any estimator on a trace.
+
+    At each step ``k = 0..N-1`` (absolute time ``t = t0 + k``): the input
+    ``u = u_at(k, x̂(t))``; the measurement ``y(t) = C(t) x(t) + V(t) v(k)``
+    is sent; what the trace delivers at ``k`` reaches the estimator in the
+    protocol's form (:func:`what_arrived`: ``None``, ``y(t)``, or time-stamped
+    packets); ``x(t+1) = A(t) x(t) + B(t) u + f + E(t) w(k)``.
+
+    ``est`` is any estimator of the protocol (:mod:`eqrec.core.protocol`:
+    ``reset``, ``step(y, u) -> (x̂(t+1), spread)``): guaranteed, Kalman-type
+    or LMV; the loop resets it at ``x̂(t0) = x0 − ξ0``.  An estimator of the
+    older form (:class:`~eqrec.core.estimator.RecoveryEstimator`,
+    :class:`~eqrec.core.estimator.ClassEstimator`,
+    :class:`~eqrec.core.switching.SwitchingEstimator`,
+    :class:`~eqrec.design.augmented_runtime.AugmentedEstimator`: no
+    ``reset``, ``step(y, u) -> x̂(t+1)``) runs as built (started at
+    ``x0 − ξ0`` by its caller).  A Monte Carlo is many calls of this loop
+    (:func:`monte_carlo`, :mod:`eqrec.core.long_runs`).
+
+    **Affine runs** (``one`` given): states, noise and measurements carry a
+    last axis of ``K`` columns (scenarios, or the constant and the
+    coefficients of an affine map of the uncertainty,
+    :mod:`eqrec.filters.affine`); the known part ``B u + f`` enters the
+    columns as ``outer(B u + f, one)`` and the estimator is reset with
+    ``one``.
 
     Parameters
     ----------
     system : AffineSystem
         The true system.
-    est : RecoveryEstimator, ClassEstimator or SwitchingEstimator
-        The estimator, started at ``x̂(0) = x0 - ξ0`` (its :meth:`step` takes the packets and ``u``).
-    arrive : sequence of sequence of int
-        ``arrive[t]``: the measurement times whose packets reach the estimator at ``t``;
-        ``N = len(arrive)`` steps.
-    x0, xi0 : ndarray, shape (n,)
+    est : object
+        The estimator (see above).
+    arrive : ArrivalTrace or sequence of sequence of int
+        The arrival trace (:class:`~eqrec.core.arrivals.ArrivalTrace`), or
+        ``arrive[k]``: the step indices of the measurements arriving at step
+        ``k``; ``N`` steps.
+    x0, xi0 : ndarray, shape (n,) or (n, K)
         Initial state and initial error.
     w, v : ndarray
-        Noise, shapes ``(N, nw)`` and ``(N, nv)``.
-    u_at : callable
-        ``(t, x̂(t)) -> u(t)``.
+        Noise by step index, shapes ``(N, nw)`` and ``(N, nv)`` (``(N, nw, K)``,
+        ``(N, nv, K)`` for affine runs).
+    u_at : callable or None, optional
+        ``(k, x̂(t)) -> u(t)`` (``None``: zero input).
     after_step : callable or None, optional
-        Called with ``t`` after each step.
+        Called with ``k`` after each step.
+    t0 : int, optional
+        Absolute time of step 0 (time-varying systems, packet stamps; default 0).
+    one : ndarray, shape (K,), or None, optional
+        How a constant enters the columns of an affine run (``None``: a plain run).
 
     Returns
     -------
-    x, xhat : ndarray, shape (N+1, n)
-        True states and estimates.
-    dropped : list of (stamp, arrival)
-        Packets that arrived stamped before the estimator's current period.
+    LoopRun
+        States, estimates, spreads, dropped packets and measurements.
+
+    Raises
+    ------
+    InputError
+        Noise arrays too short or not finite, or what the estimator refuses.
     """
-    N = len(arrive)
-    n = system.n
-    x = np.zeros((N + 1, n))
-    xhat = np.zeros((N + 1, n))
+    schedule = arrive.schedule() if isinstance(arrive, ArrivalTrace) else [list(a) for a in arrive]
+    N, n = len(schedule), system.n
+    w = _noise(w, N, system.nw, "w")
+    v = _noise(v, N, system.nv, "v")
+    x0, xi0 = np.asarray(x0, float), np.asarray(xi0, float)
+    for name, arr in (("x0", x0), ("xi0", xi0)):
+        if arr.shape[:1] != (n,) or arr.shape != x0.shape or not np.all(np.isfinite(arr)):
+            raise InputError(f"need finite entries, shape ({n},) (or ({n}, K) with one), got {arr.shape}",
+                             field=name)
+    x = np.zeros((N + 1,) + x0.shape)
+    xhat = np.zeros((N + 1,) + x0.shape)
     x[0] = x0
     xhat[0] = x0 - xi0
-    y = np.zeros((N, system.p))
-    dropped = []
-    for t in range(N):
-        u = u_at(t, xhat[t])
-        y[t] = system.C_at(t) @ x[t] + system.V_at(t) @ v[t]
-        packets = [Packet(tau, y[tau]) for tau in arrive[t]]
-        xhat[t + 1] = est.step(packets, u)
-        dropped += [(tau, t) for tau in arrive[t] if tau < est.period_start]  # stamped before this period
-        x[t + 1] = system.A_at(t) @ x[t] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[t]
+    protocol = hasattr(est, "reset")
+    if protocol:
+        est.reset(xhat[0].copy(), t0) if one is None else est.reset(xhat[0].copy(), t0, one=one)
+    y = np.zeros((N, system.p) + x0.shape[1:])
+    run = LoopRun(x=x, xhat=xhat, y=y)
+    for k in range(N):
+        t = t0 + k
+        u = np.zeros(system.m) if u_at is None else u_at(k, xhat[k])
+        y[k] = system.C_at(t) @ x[k] + system.V_at(t) @ v[k]
+        out = est.step(what_arrived(schedule[k], k, y, t0), u)
+        if protocol:
+            xhat[k + 1], spread = out
+            run.spread.append(spread)
+        else:
+            xhat[k + 1] = out
+        start = getattr(est, "period_start", None)
+        if start is not None:
+            run.dropped += [(t0 + tau, t) for tau in schedule[k] if t0 + tau < start]  # stamped before this period
+        if one is None:
+            x[k + 1] = system.A_at(t) @ x[k] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[k]
+        else:
+            x[k + 1] = system.A_at(t) @ x[k] + np.outer(system.B_at(t) @ u + system.f, one) + system.E_at(t) @ w[k]
         if after_step is not None:
-            after_step(t)
-    return x, xhat, dropped
+            after_step(k)
+    return run
 
 
 def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", word: "ArrivalPattern | str",
@@ -223,9 +356,9 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     w, v, xi0 = lay.split(np.asarray(delta, float))
     est = make_estimator(system, schedule, x0 - xi0, periodic=periodic)
     arrive = [pattern.arriving_at(t) for t in range(T)]
-    x, xhat, _ = closed_loop(system, est, arrive, x0, xi0, w, v,
-                             lambda t, _xhat: np.zeros(system.m) if inputs is None else inputs[t])
-    return Trajectory(word=pattern.label, x=x, xhat=xhat)
+    run = closed_loop(system, est, ArrivalTrace.from_pattern(pattern), x0, xi0, w, v,
+                      None if inputs is None else (lambda t, _xhat: inputs[t]))
+    return Trajectory(word=pattern.label, x=run.x, xhat=run.xhat)
 
 
 def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", words, mu1: float, runs: int, seed: int,
@@ -298,7 +431,7 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     errs = np.zeros((runs, T + 1, system.n))
     used = []
     for i in range(runs):
-        word = words[rng.integers(len(words))] if word_choice == "random" else words[i % len(words)]
+        word = uniform_words(rng, words) if word_choice == "random" else words[i % len(words)]
         delta = sample_uncertainty(lay, radius, rng, kind)
         errs[i] = simulate_run(system, schedule, word, delta, x0, inputs).error
         used.append(word.label)

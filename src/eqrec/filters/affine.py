@@ -14,7 +14,9 @@ attained at the vertex :meth:`ErrorMaps.worst_vertex`.
 
 :func:`simulate_filter` runs the same filter on numbers (the true system
 simulated step by step), which the tests use to check that a vertex attains
-the bound.  The initial estimate is ``x̂(0) = x0 − ξ0`` as in
+the bound.  Both run in the package's one simulation loop,
+:func:`eqrec.core.simulate.closed_loop` (affine runs carry the columns on a
+last axis).  The initial estimate is ``x̂(0) = x0 − ξ0`` as in
 :func:`eqrec.core.simulate.simulate_run`.
 """
 
@@ -24,9 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from eqrec.core.arrivals import ArrivalTrace
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.words import as_pattern
 from eqrec.core.robust import worst_case_abs, worst_case_vertex
+from eqrec.core.simulate import closed_loop
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.systems import AffineSystem
 
@@ -129,8 +133,9 @@ class ErrorMaps:
 
 
 def _run(filt, system: AffineSystem, pattern: ArrivalPattern, x0: np.ndarray, inputs, delta: np.ndarray | None):
-    """Run ``filt`` on affine (``delta is None``) or numeric data; returns ``(x, pred, filtered)`` arrays."""
-    T, n, p = pattern.T, system.n, system.p
+    """Run ``filt`` in the one loop (:func:`~eqrec.core.simulate.closed_loop`) on affine (``delta is None``)
+    or numeric data; returns ``(x, pred, filtered, layout)`` arrays with a last axis of columns."""
+    T, n = pattern.T, system.n
     lay = UncertaintyLayout(T, system.nw, system.nv, n)
     D = lay.size
     if delta is None:  # columns: [1, δ_1..δ_D]
@@ -142,26 +147,17 @@ def _run(filt, system: AffineSystem, pattern: ArrivalPattern, x0: np.ndarray, in
         K = 1
         one = np.ones(1)
         basis = np.asarray(delta, float).reshape(D, 1)
-
-    def part(sl):
-        return basis[sl]
-
-    x = np.zeros((T + 1, n, K))
-    x[0] = np.outer(np.asarray(x0, float), one)
-    xhat0 = x[0] - part(lay.xi0)
-    filt.reset(xhat0, one)
-    pred = np.zeros((T + 1, n, K))
+    w = np.stack([basis[lay.w(t)] for t in range(T)]).reshape(T, system.nw, K)
+    v = np.stack([basis[lay.v(t)] for t in range(T)]).reshape(T, system.nv, K)
     fil = np.zeros((T, n, K))
-    pred[0] = xhat0
-    y = np.zeros((T, p, K))
-    for t in range(T):
-        u = np.zeros(system.m) if inputs is None else np.asarray(inputs, float)[t]
-        y[t] = system.C_at(t) @ x[t] + system.V_at(t) @ part(lay.v(t))
-        packets = [(tau, y[tau]) for tau in pattern.arriving_at(t)]
-        fil[t], pred[t + 1] = filt.step(t, packets)
-        x[t + 1] = (system.A_at(t) @ x[t] + np.outer(system.B_at(t) @ u + system.f, one)
-                    + system.E_at(t) @ part(lay.w(t)))
-    return x, pred, fil, lay
+
+    def keep_filtered(k: int) -> None:
+        fil[k] = filt.filtered
+
+    u_at = None if inputs is None else (lambda k, _xhat: np.asarray(inputs, float)[k])
+    run = closed_loop(system, filt, ArrivalTrace.from_pattern(pattern), np.outer(np.asarray(x0, float), one),
+                      basis[lay.xi0], w, v, u_at, keep_filtered, one=one)
+    return run.x, run.xhat, fil, lay
 
 
 def error_maps(filt, system: AffineSystem, pattern: "ArrivalPattern | str", x0, mu1: float, *,

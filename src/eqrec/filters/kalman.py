@@ -3,18 +3,19 @@ r"""Kalman-type estimators for delayed (out-of-sequence) and missing measurement
 Three estimators of the comparison of the delayed-data paper (Fig. 1, its
 ref. [9]), each run on the packets that actually arrive:
 
-``TimestampedKalman`` (``"timestamped"``)
+``TimestampedKalman`` (``"timestamped"``, "Kalman, time-stamped")
     Uses each packet at its own time stamp: at time ``t`` it re-runs the
-    Kalman filter from time 0 over the measurements received so far
-    (``y(τ)``, ``τ ∈ A(t)``), so ``x̂(t|I_t)`` is the best linear (Gaussian:
+    Kalman filter over the measurements received so far (``y(τ)``,
+    ``τ ∈ A(t)``), from the earliest stamp received at ``t`` (the filter
+    before it is kept), so ``x̂(t|I_t)`` is the best linear (Gaussian:
     the conditional mean) estimate from the data received so far — the
     complete in-sequence re-filtering of ref. [6] of the paper, equal to a
     state augmented with the last ``τ̄`` states.
-``DelayUnawareKalman`` (``"unaware"``)
+``DelayUnawareKalman`` (``"unaware"``, "Kalman, delay-unaware")
     A standard Kalman filter that treats whatever arrives at ``t`` as a
     measurement of the current state ``x(t)`` (several packets: sequential
     updates, oldest stamp first); nothing when nothing arrives.
-``RandomDelayLMV`` (``"random_delay_lmv"``)
+``RandomDelayLMV`` (``"random_delay_lmv"``, "LMV, random delay")
     In the spirit of ref. [9] (Zhang, Feng, Han 2011): the receiver gets the
     sum of what arrives, ``y_r(t) = Σ_d γ_d(t) z(t-d)``, with
     ``γ_d(t) ∈ {0, 1}`` Bernoulli of known probability ``p_d`` (the packet
@@ -29,66 +30,30 @@ ref. [9]), each run on the packets that actually arrive:
     Time stamps are not used.
 
 Each estimator is designed from Gaussian statistics matched to the box
-(:class:`GaussianDesign`: ``5σ`` = bound, as in the paper) and runs on
-arrays of shape ``(dim, K)``: ``K`` scenarios at once, or the ``1 + D``
-coefficient columns of an affine map (:mod:`eqrec.filters.affine`); the
-vector ``one`` (length ``K``) says how a constant enters (``1`` in every
-scenario, or only in the constant column).
+(:class:`~eqrec.core.noise.GaussianDesign`: ``5σ`` = bound, as in the
+paper) and follows the estimator protocol (:mod:`eqrec.core.protocol`,
+``kind = "stochastic"``): ``reset(x̂0, t0)``, then one ``step(y, u)`` per
+time with what arrived (``None``, ``y(t)``, or time-stamped packets) and the
+input, returning the prediction ``x̂(t+1|I_t)`` and its error covariance
+``P(t+1|I_t)`` under the design statistics; the filtered ``x̂(t|I_t)`` is
+:attr:`~_Filter.filtered`.  A call that raises leaves the filter as it was.
+
+The same filters run on arrays of shape ``(dim, K)``: ``K`` scenarios at
+once, or the ``1 + D`` coefficient columns of an affine map
+(:mod:`eqrec.filters.affine`); ``reset(x̂0, t0, one=...)`` with ``x̂0`` of
+shape ``(n, K)`` and the vector ``one`` (length ``K``) saying how a
+constant enters (``1`` in every scenario, or only in the constant column).
+A plain run is the case ``K = 1``, ``one = [1]``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from eqrec.core.packets import as_packets
+from eqrec.core.noise import GaussianDesign
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
-
-
-@dataclass(frozen=True)
-class GaussianDesign:
-    """Second moments used to design the filters: ``P0`` (initial error), ``Q = E Qw Eᵀ``, ``R = V Rv Vᵀ``.
-
-    Parameters
-    ----------
-    P0 : numpy.ndarray
-        Covariance of the initial estimation error, ``(n, n)``.
-    Q : numpy.ndarray
-        Covariance of the process noise ``E w``, ``(n, n)``.
-    R : numpy.ndarray
-        Covariance of the measurement noise ``V v``, ``(p, p)``.
-    """
-
-    P0: np.ndarray
-    Q: np.ndarray
-    R: np.ndarray
-
-    @classmethod
-    def from_box(cls, system: AffineSystem, mu1: float, sigmas: float = 5.0) -> "GaussianDesign":
-        """Standard deviations ``bound / sigmas`` for ``ξ0`` (``μ1``), ``w`` (``ηw``) and ``v`` (``ηv``).
-
-        The delayed-data paper's Fig. 1 draws its noises so (``sigmas = 5``: a bound is five standard deviations).
-
-        Parameters
-        ----------
-        system : AffineSystem
-            The system: ``eta_w``, ``eta_v`` and the noise gains ``E``, ``V`` at time 0.
-        mu1 : float
-            Bound ``μ1`` of ``‖ξ0‖_∞``.
-        sigmas : float, optional
-            Number of standard deviations in a bound (default 5).
-
-        Returns
-        -------
-        GaussianDesign
-            Independent components: ``P0 = (mu1/sigmas)² I``, ``Q = (ηw/sigmas)² E Eᵀ``,
-            ``R = (ηv/sigmas)² V Vᵀ``.
-        """
-        n = system.n
-        E, V = system.E_at(0), system.V_at(0)
-        return cls(P0=(mu1 / sigmas) ** 2 * np.eye(n), Q=(system.eta_w / sigmas) ** 2 * E @ E.T,
-                   R=(system.eta_v / sigmas) ** 2 * V @ V.T)
 
 
 def _kalman_update(x, P, y, C, R):
@@ -100,23 +65,159 @@ def _kalman_update(x, P, y, C, R):
     return x, P
 
 
-class _Base:
-    """Common interface: ``reset(xhat0, one)`` then ``step(t, packets) -> (x̂(t|I_t), x̂(t+1|I_t))``."""
+def _finite(value, shape: tuple[int, ...], field: str) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"not numeric: {value!r}", field=field) from None
+    if arr.shape != shape:
+        if len(shape) == 1 and arr.size == shape[0]:
+            arr = arr.reshape(shape)
+        else:
+            raise InputError(f"shape {arr.shape}, expected {shape}", field=field)
+    if not np.all(np.isfinite(arr)):
+        raise InputError("contains NaN or infinite entries", field=field)
+    return arr
 
+
+class _Filter:
+    """The protocol shared by the three filters (module docstring): validation, the clock, the columns.
+
+    Subclasses implement ``_start()`` (state after :meth:`reset`) and
+    ``_advance(t, packets, drive)``, which computes the step without
+    changing the filter and returns ``(filtered, prediction, covariance,
+    commit)``; ``commit()`` stores the new state.
+    """
+
+    kind = "stochastic"
     name = ""
+    key = ""
 
     def __init__(self, system: AffineSystem, design: GaussianDesign, inputs: np.ndarray | None = None):
         self.system, self.design = system, design
         self.inputs = None if inputs is None else np.asarray(inputs, float)
+        self._time: int | None = None
+        self.filtered: np.ndarray | None = None
 
-    def _drive(self, t: int) -> np.ndarray:
-        """Known part ``B u(t) + f`` of the dynamics."""
-        u = np.zeros(self.system.m) if self.inputs is None else self.inputs[t]
+    def reset(self, xhat0: np.ndarray, t0: int = 0, one: np.ndarray | None = None) -> "_Filter":
+        """Start a run from the initial estimate ``x̂(t0)``.
+
+        Parameters
+        ----------
+        xhat0 : numpy.ndarray
+            Initial estimate, ``(n,)`` (a plain run) or ``(n, K)`` (one column per scenario or affine coefficient).
+        t0 : int, optional
+            Absolute time of the first step (default 0).
+        one : numpy.ndarray or None, optional
+            ``(K,)``: how a constant enters the columns (module docstring); default ones.
+
+        Returns
+        -------
+        _Filter
+            The filter itself.
+
+        Raises
+        ------
+        InputError
+            A non-finite or wrongly shaped ``xhat0`` or ``one``, or a non-integer ``t0``.
+        """
+        n = self.system.n
+        try:
+            x = np.asarray(xhat0, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"not numeric: {xhat0!r}", field="xhat0") from None
+        if x.ndim not in (1, 2) or x.shape[0] != n:
+            raise InputError(f"shape {x.shape}, expected ({n},) or ({n}, K)", field="xhat0")
+        x = _finite(x, x.shape, "xhat0")
+        K = 1 if x.ndim == 1 else x.shape[1]
+        one = np.ones(K) if one is None else _finite(one, (K,), "one")
+        if isinstance(t0, (bool, np.bool_)) or not isinstance(t0, (int, np.integer)):
+            raise InputError(f"the start time is an integer, got {t0!r}", field="t0")
+        self._vector = x.ndim == 1
+        self.xhat0 = x.reshape(n, 1) if self._vector else x
+        self.one = one
+        self._time, self._t0 = int(t0), int(t0)
+        self.filtered = None
+        self._start()
+        return self
+
+    def _start(self) -> None:
+        raise NotImplementedError
+
+    def _advance(self, t: int, packets: list, drive: np.ndarray):
+        raise NotImplementedError
+
+    def _prediction(self) -> np.ndarray:
+        raise NotImplementedError
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        if self._time is None:
+            raise InputError("call reset(xhat0) before running the filter")
+        return self._time
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current prediction ``x̂(t|I_{t-1})`` (``(n,)``, or ``(n, K)`` for columns)."""
+        self.time  # noqa: B018 - raises before reset
+        return self._out(self._prediction()).copy()
+
+    def _out(self, X: np.ndarray) -> np.ndarray:
+        return X[:, 0] if self._vector else X
+
+    def _drive(self, t: int, u=None) -> np.ndarray:
+        """Known part ``B u(t) + f`` of the dynamics (``u = None``: the inputs given at construction, else zero)."""
+        if u is None:
+            if self.inputs is not None and not 0 <= t < len(self.inputs):
+                raise InputError(f"the inputs given at construction cover times 0..{len(self.inputs) - 1}, not {t}",
+                                 field="inputs")
+            u = np.zeros(self.system.m) if self.inputs is None else self.inputs[t]
         return self.system.B_at(t) @ u + self.system.f
 
+    def step(self, y=None, u=None) -> tuple[np.ndarray, np.ndarray]:
+        """Process time ``t``: what arrived and the input; return ``(x̂(t+1|I_t), P(t+1|I_t))``.
 
-class TimestampedKalman(_Base):
-    """Kalman filter using every packet at its own time (re-filtering from time 0 at each step).
+        Parameters
+        ----------
+        y : numpy.ndarray, Packet, sequence of packets, or None, optional
+            What arrived at ``t``: ``None``, ``y(t)`` (``(p,)``, or ``(p, K)``
+            for columns), or time-stamped packets ``(τ, y(τ))``, ``τ <= t``.
+        u : numpy.ndarray or None, optional
+            The input ``u(t)``, ``(m,)`` (``None``: the inputs given at construction, else zero).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The prediction (``(n,)`` or ``(n, K)``) and its error covariance ``(n, n)`` under the design
+            statistics; the filtered estimate is then :attr:`filtered`.
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`; a measurement or input of the wrong shape or not finite, a stamp from the
+            future or given twice (the filter is left unchanged).
+        """
+        t = self.time
+        sysm = self.system
+        shape = (sysm.p,) if self._vector else (sysm.p, self.one.size)
+        packets = as_packets(y, t, shape)
+        if self._vector:
+            packets = [(pk.time, pk.y.reshape(sysm.p, 1)) for pk in packets]
+        else:
+            packets = [(pk.time, pk.y) for pk in packets]
+        if u is not None:
+            u = _finite(u, (sysm.m,), "u")
+        drive = self._drive(t, u)
+        filt, pred, P, commit = self._advance(t, packets, drive)
+        commit()
+        self._time = t + 1
+        self.filtered = self._out(filt).copy()
+        return self._out(pred).copy(), P.copy()
+
+
+class TimestampedKalman(_Filter):
+    """Kalman filter using every packet at its own time (re-filtering from the earliest new stamp at each step).
 
     Parameters
     ----------
@@ -125,56 +226,51 @@ class TimestampedKalman(_Base):
     design : GaussianDesign
         The second moments the filter is designed for.
     inputs : numpy.ndarray or None, optional
-        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+        Known inputs ``u(t)``, ``(T, m)``, used when :meth:`step` gets no ``u``; ``None``: zero.
     """
 
-    name = "timestamped"
+    name = "Kalman, time-stamped"
+    key = "timestamped"
 
-    def reset(self, xhat0: np.ndarray, one: np.ndarray) -> None:
-        """Start a run from the initial estimate ``x̂(0)``.
-
-        Parameters
-        ----------
-        xhat0 : numpy.ndarray
-            Initial estimate, ``(n, K)`` (one column per scenario or affine coefficient).
-        one : numpy.ndarray
-            ``(K,)``: how a constant enters the columns (module docstring).
-        """
-        self.xhat0, self.one = np.asarray(xhat0, float), np.asarray(one, float)
+    def _start(self) -> None:
         self.received: dict[int, np.ndarray] = {}
+        self._drives: list[np.ndarray] = []
+        self._pre = [(self.xhat0.copy(), self.design.P0.copy())]  # the prediction of t0 + k before its update
 
-    def step(self, t: int, packets) -> tuple[np.ndarray, np.ndarray]:
-        """Process the packets arriving at ``t``; return ``(x̂(t|I_t), x̂(t+1|I_t))``.
+    def _prediction(self) -> np.ndarray:
+        return self._pre[-1][0]
 
-        Parameters
-        ----------
-        t : int
-            Current time, ``0 <= t < T``.
-        packets : sequence of tuple
-            ``(τ, y(τ))`` pairs of the packets arriving at ``t``, ``y(τ)`` of shape ``(p, K)``.
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            Filtered and one-step predicted estimates, each ``(n, K)``.
-        """
-        sysm, d = self.system, self.design
+    def _advance(self, t, packets, drive):
+        sysm, d, t0 = self.system, self.design, self._t0
+        new = {}
         for tau, y in packets:
-            self.received[int(tau)] = np.asarray(y, float)
-        x, P = self.xhat0.copy(), d.P0.copy()
-        filt = x
-        for tau in range(t + 1):
+            if tau < t0:
+                continue  # stamped before the run started
             if tau in self.received:
-                x, P = _kalman_update(x, P, self.received[tau], sysm.C_at(tau), d.R)
+                raise InputError(f"a second packet stamped {tau} received at time {t}", field="y")
+            new[int(tau)] = y
+        received = {**self.received, **new}
+        drives = self._drives + [drive]
+        s = min([*new, t])
+        x, P = self._pre[s - t0]
+        pre = self._pre[: s - t0 + 1]
+        filt = x
+        for tau in range(s, t + 1):
+            if tau in received:
+                x, P = _kalman_update(x, P, received[tau], sysm.C_at(tau), d.R)
             if tau == t:
                 filt = x
             A = sysm.A_at(tau)
-            x = A @ x + np.outer(self._drive(tau), self.one)
+            x = A @ x + np.outer(drives[tau - t0], self.one)
             P = A @ P @ A.T + d.Q
-        return filt, x
+            pre.append((x, P))
+
+        def commit():
+            self.received, self._drives, self._pre = received, drives, pre
+        return filt, x, P, commit
 
 
-class DelayUnawareKalman(_Base):
+class DelayUnawareKalman(_Filter):
     """Kalman filter treating every packet arriving at ``t`` as a measurement of ``x(t)``.
 
     Parameters
@@ -184,50 +280,34 @@ class DelayUnawareKalman(_Base):
     design : GaussianDesign
         The second moments the filter is designed for.
     inputs : numpy.ndarray or None, optional
-        Known inputs ``u(t)``, ``(T, m)``; ``None``: zero.
+        Known inputs ``u(t)``, ``(T, m)``, used when :meth:`step` gets no ``u``; ``None``: zero.
     """
 
-    name = "unaware"
+    name = "Kalman, delay-unaware"
+    key = "unaware"
 
-    def reset(self, xhat0: np.ndarray, one: np.ndarray) -> None:
-        """Start a run from the initial estimate ``x̂(0)``.
+    def _start(self) -> None:
+        self.X, self.P = self.xhat0.copy(), self.design.P0.copy()
 
-        Parameters
-        ----------
-        xhat0 : numpy.ndarray
-            Initial estimate, ``(n, K)`` (one column per scenario or affine coefficient).
-        one : numpy.ndarray
-            ``(K,)``: how a constant enters the columns (module docstring).
-        """
-        self.x, self.one = np.asarray(xhat0, float).copy(), np.asarray(one, float)
-        self.P = self.design.P0.copy()
+    def _prediction(self) -> np.ndarray:
+        return self.X
 
-    def step(self, t: int, packets) -> tuple[np.ndarray, np.ndarray]:
-        """Process the packets arriving at ``t``; return ``(x̂(t|I_t), x̂(t+1|I_t))``.
-
-        Parameters
-        ----------
-        t : int
-            Current time, ``0 <= t < T``.
-        packets : sequence of tuple
-            ``(τ, y(τ))`` pairs of the packets arriving at ``t``, ``y(τ)`` of shape ``(p, K)``.
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            Filtered and one-step predicted estimates, each ``(n, K)``.
-        """
+    def _advance(self, t, packets, drive):
         sysm, d = self.system, self.design
+        x, P = self.X, self.P
         for _, y in sorted(packets, key=lambda pk: pk[0]):
-            self.x, self.P = _kalman_update(self.x, self.P, np.asarray(y, float), sysm.C_at(t), d.R)
-        filt = self.x
+            x, P = _kalman_update(x, P, y, sysm.C_at(t), d.R)
+        filt = x
         A = sysm.A_at(t)
-        self.x = A @ self.x + np.outer(self._drive(t), self.one)
-        self.P = A @ self.P @ A.T + d.Q
-        return filt, self.x
+        x = A @ x + np.outer(drive, self.one)
+        P = A @ P @ A.T + d.Q
+
+        def commit():
+            self.X, self.P = x, P
+        return filt, x, P, commit
 
 
-class RandomDelayLMV(_Base):
+class RandomDelayLMV(_Filter):
     """LMV estimator for random delays (ref. [9] of the delayed-data paper), on ``X = [x; z(t-1..t-τ̄)]``.
 
     The gains are those of the general form of Theorems 1 and 3 (``j = 0``) of the LMV study
@@ -252,7 +332,8 @@ class RandomDelayLMV(_Base):
         ``p_d``, ``d = 0..τ̄``, ``(τ̄+1,)`` (default uniform ``1/(τ̄+1)``).
     """
 
-    name = "random_delay_lmv"
+    name = "LMV, random delay"
+    key = "random_delay_lmv"
 
     def __init__(self, system: AffineSystem, design: GaussianDesign, horizon: int, max_delay: int,
                  x0_mean: np.ndarray, inputs: np.ndarray | None = None, probabilities=None):
@@ -299,50 +380,35 @@ class RandomDelayLMV(_Base):
         self.Kf = filter_smoother(self.res, 0).K[:, 0]
         self.N, self.tb = N, tb
 
-    def reset(self, xhat0: np.ndarray, one: np.ndarray) -> None:
-        """Start a run from the initial estimate ``x̂(0)``.
+    def _start(self) -> None:
+        self.X = np.zeros((self.N, self.xhat0.shape[1]))
+        self.X[: self.system.n] = self.xhat0
 
-        Parameters
-        ----------
-        xhat0 : numpy.ndarray
-            Initial estimate, ``(n, K)`` (one column per scenario or affine coefficient).
-        one : numpy.ndarray
-            ``(K,)``: how a constant enters the columns (module docstring).
-        """
-        xhat0 = np.asarray(xhat0, float)
-        self.one = np.asarray(one, float)
-        self.X = np.zeros((self.N, xhat0.shape[1]))
-        self.X[: self.system.n] = xhat0
+    def _prediction(self) -> np.ndarray:
+        return self.X[: self.system.n]
 
-    def step(self, t: int, packets) -> tuple[np.ndarray, np.ndarray]:
-        """Process the packets arriving at ``t``; return ``(x̂(t|I_t), x̂(t+1|I_t))``.
-
-        Parameters
-        ----------
-        t : int
-            Current time, ``0 <= t < T``.
-        packets : sequence of tuple
-            ``(τ, y(τ))`` pairs of the packets arriving at ``t``, ``y(τ)`` of shape ``(p, K)``.
-            Only the sum of the ``y`` enters (time stamps are not used).
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            Filtered and one-step predicted estimates, each ``(n, K)``.
-        """
-        n, p = self.system.n, self.system.p
+    def _advance(self, t, packets, drive):
+        n, p, k = self.system.n, self.system.p, t - self._t0
+        if k >= self.Kf.shape[0]:
+            raise InputError(f"the gains cover {self.Kf.shape[0]} steps from t0 = {self._t0}; time {t} is past them",
+                             field="horizon")
         yr = np.zeros((p, self.X.shape[1]))
-        for _, y in packets:
-            yr = yr + np.asarray(y, float)
+        for _, y in packets:  # only the sum enters (time stamps are not used)
+            yr = yr + y
         eps = yr - self.model.C @ self.X
-        filt = (self.X + self.Kf[t] @ eps)[:n]
-        drive = np.zeros(self.N)
-        drive[:n] = self._drive(t)
-        self.X = self.model.A @ self.X + self.res.L[t] @ eps + np.outer(drive, self.one)
-        return filt, self.X[:n]
+        filt = (self.X + self.Kf[k] @ eps)[:n]
+        full = np.zeros(self.N)
+        full[:n] = drive
+        X = self.model.A @ self.X + self.res.L[k] @ eps + np.outer(full, self.one)
+        P = self.res.P_pred[k + 1][:n, :n]
+
+        def commit():
+            self.X = X
+        return filt, X[:n], P, commit
 
 
-FILTERS = {"timestamped": TimestampedKalman, "unaware": DelayUnawareKalman, "random_delay_lmv": RandomDelayLMV}
+#: The filters by key.
+FILTERS = {cls.key: cls for cls in (TimestampedKalman, DelayUnawareKalman, RandomDelayLMV)}
 
 
 def make_filter(name: str, system: AffineSystem, design: GaussianDesign, *, horizon: int | None = None,

@@ -1,10 +1,14 @@
-"""The plant of the LMV companion study, eqs. (1)-(2) of the paper, and its loading from a mapping.
+"""The plant of the LMV companion study, eqs. (1)-(2) of the paper: a loader of the package's one system description.
 
-:class:`Plant` holds the matrices and variances; :meth:`Plant.from_dict`
+:class:`Plant` holds the matrices and variances in the paper's notation; :meth:`Plant.from_dict`
 builds it from a configuration mapping (``config/p4.yaml``; :func:`plant_of` picks
-a named example) and checks shapes, finiteness and positive semidefiniteness.  The mathematics on the plant (its
-two compensated systems, the recursion) is in :mod:`eqrec.lmv.model` and
-:mod:`eqrec.lmv.recursion`.
+a named example) and checks shapes, finiteness and positive semidefiniteness.  :meth:`Plant.description` is
+the same plant as the package's one description, a :class:`~eqrec.core.noise.NoisySystem` (the
+:class:`~eqrec.core.systems.AffineSystem` ``A = Φ``, ``C = H``, ``E = Γ``, ``V = I`` with Gaussian and
+multiplicative noise), and :meth:`Plant.from_description` reads any such description (an affine system with
+Gaussian noise, e.g. a bounded-error plant with ``5σ`` = bound) as a plant, so that the LMV estimators run on
+the plants of the other families.  The mathematics on the plant (its two compensated systems, the recursion) is
+in :mod:`eqrec.lmv.model` and :mod:`eqrec.lmv.recursion`.
 """
 
 from __future__ import annotations
@@ -14,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from eqrec.core.noise import GaussianNoise, MultiplicativeNoise, NoisySystem, check_psd
+from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
 __all__ = ["Plant", "check_psd", "plant_of"]
@@ -39,24 +45,6 @@ def _mat(value: Any, name: str, shape: tuple[int | None, int | None] | None = No
             if want is not None and got != want:
                 raise InputError(f"shape {arr.shape} does not fit, expected {shape}", source, name)
     return arr
-
-
-def check_psd(M: np.ndarray, name: str, source: str | None) -> None:
-    """Raise :class:`~eqrec.errors.InputError` unless ``M`` is a symmetric positive semidefinite covariance.
-
-    Parameters
-    ----------
-    M : numpy.ndarray
-        Square matrix.
-    name : str
-        Field named in the error.
-    source : str or None
-        Where ``M`` came from (a file, a system name), named in the error.
-    """
-    if not np.allclose(M, M.T, atol=1e-12 * max(1.0, np.abs(M).max())):
-        raise InputError("covariance matrix is not symmetric", source, name)
-    if np.linalg.eigvalsh(M).min() < -1e-10 * max(1.0, np.abs(M).max()):
-        raise InputError("covariance matrix is not positive semidefinite", source, name)
 
 
 @dataclass(frozen=True)
@@ -191,6 +179,70 @@ class Plant:
         fields = {k: getattr(self, k) for k in self.__dataclass_fields__}
         fields.update(changes)
         return Plant(**fields)
+
+    def description(self) -> NoisySystem:
+        """The plant as the package's one system description (module docstring).
+
+        ``x(t+1) = Φ x + Γ w``, ``y = H x + v`` is the affine system ``A = Φ``,
+        ``C = H``, ``E = Γ``, ``V = I`` (no input, ``f = 0``); its noise is
+        Gaussian (``Qw``, ``Qv``, ``S``, ``x(0) ~ (σ0, Σ0)``), not bounded, so the
+        box of the system is empty (``eta_w = eta_v = 0``: no bounded-error
+        guarantee is claimed); the multiplicative terms are ``A1 = Φ1``,
+        ``C1 = H1`` with variances ``Qξ``, ``Qλ``.
+
+        Returns
+        -------
+        NoisySystem
+            The system, its Gaussian noise and its multiplicative terms.
+        """
+        system = AffineSystem(A=self.Phi, C=self.H, E=self.Gamma, V=np.eye(self.m), eta_w=0.0, eta_v=0.0,
+                              name=self.name)
+        gauss = GaussianNoise(Qw=self.Qw, Qv=self.Qv, S=self.S, x0_mean=self.sigma0, x0_cov=self.Sigma0)
+        return NoisySystem(system, gauss, MultiplicativeNoise(A1=self.Phi1, C1=self.H1, Qxi=self.Qxi, Qlam=self.Qlam))
+
+    @classmethod
+    def from_description(cls, desc: NoisySystem, name: str | None = None) -> "Plant":
+        """Read a system description as a plant of eqs. (1)-(2) (the inverse of :meth:`description`).
+
+        ``y = C x + V v`` gives the plant's output noise ``V v`` (covariance
+        ``V Qv Vᵀ``, cross-covariance ``S Vᵀ`` with ``w``); without
+        multiplicative terms ``Φ1 = 0``, ``H1 = 0``.  The input and ``f`` of the
+        system are not part of the plant (a step-form estimator adds the
+        known ``B u + f``, :class:`~eqrec.lmv.estimator.LMVEstimator`).
+
+        Parameters
+        ----------
+        desc : NoisySystem
+            A time-invariant system with a Gaussian description.
+        name : str or None, optional
+            The plant's name (default: the system's).
+
+        Returns
+        -------
+        Plant
+            The plant, checked as :meth:`from_dict` checks one.
+
+        Raises
+        ------
+        InputError
+            A time-varying system or no Gaussian description.
+        """
+        sysm, g, mult = desc.system, desc.gaussian, desc.multiplicative
+        if sysm.is_time_varying:
+            raise InputError("the LMV plant of eqs. (1)-(2) is time-invariant", sysm.name, "system")
+        if g is None:
+            raise InputError("the LMV estimators need second moments (a Gaussian description)", sysm.name,
+                             "gaussian")
+        if sysm.nw == 0:
+            raise InputError("the plant needs a process noise (nw >= 1)", sysm.name, "E")
+        n, p = sysm.n, sysm.p
+        V = sysm.V
+        mapping = {"name": name or sysm.name, "Phi": sysm.A, "Gamma": sysm.E, "H": sysm.C, "Qw": g.Qw,
+                   "Qv": V @ g.Qv @ V.T, "S": g.S @ V.T, "sigma0": g.x0_mean, "Sigma0": g.x0_cov,
+                   "Phi1": np.zeros((n, n)) if mult is None else mult.A1,
+                   "H1": np.zeros((p, n)) if mult is None else mult.C1,
+                   "Qxi": 0.0 if mult is None else mult.Qxi, "Qlam": 0.0 if mult is None else mult.Qlam}
+        return cls.from_dict(mapping, sysm.name)
 
     @property
     def n(self) -> int:

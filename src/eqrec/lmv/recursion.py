@@ -51,7 +51,7 @@ from eqrec.lmv.model import MultNoiseSystem, check_eta, check_ms_stable, multipl
 
 __all__ = [
     "LMVResult", "SmootherResult", "lmv_recursion", "filter_smoother", "n_step_predictor",
-    "suboptimal_error_cov", "theorem1_as_printed", "apply_estimator", "lmv_step", "smoother_step",
+    "suboptimal_error_cov", "theorem1_as_printed", "lmv_step", "smoother_step",
     "symmetric_part",
 ]
 
@@ -377,48 +377,3 @@ def theorem1_as_printed(plant: Plant, eta_bar: float, T: int) -> dict[str, np.nd
                     - eb * Lt @ plant.S.T @ G.T - eb * G @ plant.S @ Lt.T)
         L[t] = Lt
     return {"q": q, "P": P, "L": L, "Qe": Qe}
-
-
-def apply_estimator(res: LMVResult, y: np.ndarray, sm: SmootherResult | None = None) -> dict[str, np.ndarray]:
-    """Run the estimator on measurements ``y[..., t, :]`` (``t = 0..T``), vectorised over leading axes.
-
-    Eqs. (4)-(5) and (17) in the general form.
-
-    Parameters
-    ----------
-    res : LMVResult
-        Gains of the one-step predictor.
-    y : numpy.ndarray
-        Measurements (``y_z`` or ``y_h``), ``(..., T+1, m)``.
-    sm : SmootherResult or None, optional
-        Smoother gains; ``None``: no filtered or smoothed estimates.
-
-    Returns
-    -------
-    dict of str to numpy.ndarray
-        ``pred[..., t, :] = xh(t|t-1)`` (``t = 0..T+1``), the innovations ``eps[..., t, :]`` and, with ``sm``,
-        ``smooth[..., t, j, :] = xh(t|t+j)`` (NaN where ``t + j > T``; ``j = 0`` is the filter).
-    """
-    sys, T = res.sys, res.T
-    y = np.asarray(y, float)
-    if y.shape[-2:] != (T + 1, sys.m):
-        raise InputError(f"measurements have shape {y.shape}, expected (..., {T + 1}, {sys.m})", None, "y")
-    lead = y.shape[:-2]
-    pred = np.empty(lead + (T + 2, sys.n))
-    eps = np.empty(lead + (T + 1, sys.m))
-    pred[..., 0, :] = sys.x0_mean
-    for t in range(T + 1):
-        eps[..., t, :] = y[..., t, :] - pred[..., t, :] @ sys.C.T
-        pred[..., t + 1, :] = pred[..., t, :] @ sys.A.T + eps[..., t, :] @ res.L[t].T
-    out = {"pred": pred, "eps": eps}
-    if sm is not None:
-        N = sm.K.shape[1] - 1
-        smooth = np.full(lead + (T + 1, N + 1, sys.n), np.nan)
-        acc = pred[..., : T + 1, :].copy()
-        for j in range(N + 1):
-            valid = T + 1 - j
-            acc[..., :valid, :] = acc[..., :valid, :] + np.einsum(
-                "tij,...tj->...ti", sm.K[:valid, j], eps[..., j: j + valid, :])
-            smooth[..., :valid, j, :] = acc[..., :valid, :]
-        out["smooth"] = smooth
-    return out

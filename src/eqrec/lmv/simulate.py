@@ -34,11 +34,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import norm
 
+from eqrec.core.arrivals import bernoulli_arrivals
 from eqrec.errors import InputError
 from eqrec.lmv.model import MECHANISM_KEYS, MultNoiseSystem, system_of
 from eqrec.lmv.plant import Plant
-from eqrec.lmv.recursion import (LMVResult, SmootherResult, apply_estimator, filter_smoother, lmv_recursion,
-                                 n_step_predictor, symmetric_part)
+from eqrec.lmv.estimator import apply_estimator
+from eqrec.lmv.recursion import (LMVResult, SmootherResult, filter_smoother, lmv_recursion, n_step_predictor,
+                                 symmetric_part)
 
 __all__ = ["fourth_moment_radius", "simulate_plant", "MCComparison", "compare_moments", "bonferroni_z", "run_mc", "MCRun"]
 
@@ -132,7 +134,7 @@ def simulate_plant(plant: Plant, eta_bar: float, T: int, runs: int, rng: np.rand
     w, v = wv[..., :r], wv[..., r:]
     xi = _mult_noise(mult_dist, plant.Qxi, (runs, T + 1), rng)
     lam = _mult_noise(mult_dist, plant.Qlam, (runs, T + 1), rng)
-    eta = (rng.random((runs, T + 1)) < eta_bar).astype(float)
+    eta = bernoulli_arrivals(rng, (runs, T + 1), eta_bar).astype(float)
     PhiT, Phi1T, GT, HT, H1T = plant.Phi.T, plant.Phi1.T, plant.Gamma.T, plant.H.T, plant.H1.T
     for t in range(T + 1):
         xt = x[:, t]
@@ -291,7 +293,7 @@ class MCRun:
     sim : dict
         The realisations, :func:`simulate_plant`.
     est : dict
-        The estimates, :func:`~eqrec.lmv.recursion.apply_estimator`.
+        The estimates, :func:`~eqrec.lmv.estimator.apply_estimator`.
     P_pred : numpy.ndarray
         Theory ``P(t|t-1)``, ``(T+1, n_x, n_x)``.
     P_smooth : numpy.ndarray

@@ -31,7 +31,8 @@ import numpy as np
 
 from eqrec.lmv.model import MECHANISM_KEYS, MECHANISMS, ms_spectral_radius
 from eqrec.lmv.plant import plant_of
-from eqrec.lmv.recursion import LMVResult, apply_estimator, suboptimal_error_cov, theorem1_as_printed
+from eqrec.lmv.estimator import apply_estimator
+from eqrec.lmv.recursion import LMVResult, suboptimal_error_cov, theorem1_as_printed
 from eqrec.lmv.steady import steady_variances
 from eqrec.lmv.simulate import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies import configuration, p4_figures

@@ -1,0 +1,440 @@
+r"""The one arrival model: traces of packet arrivals and the samplers that draw them.
+
+An :class:`ArrivalTrace` says, for a run of ``N`` steps, when each
+measurement ``y(τ)`` reaches the estimator: its delay ``d(τ)`` (arrival at
+``τ + d(τ)``) or :data:`NEVER` when it is lost.  Read per step,
+:meth:`ArrivalTrace.arriving_at` is the list of time stamps arriving at
+``t`` (the ``arrive[t]`` every simulation loop builds packets from,
+:func:`eqrec.core.simulate.closed_loop`).
+
+Every random arrival of the package is drawn here, from a
+:class:`numpy.random.Generator` (the same seed gives the same trace):
+
+* :func:`uniform_words` — words drawn uniformly from a language (one per run
+  of a Monte Carlo, one per period of a long run);
+* :func:`bernoulli_arrivals` / :func:`bernoulli_trace` — i.i.d. arrivals,
+  a packet lost with probability ``loss`` (the Bernoulli ``η(t)`` of the LMV
+  study arrives with probability ``η̄ = 1 − loss``);
+* :func:`delay_trace` — i.i.d. delays with probabilities ``p_0 .. p_D``
+  (lost with the remaining probability ``1 − Σ p_d``);
+* :func:`draw_delays` — the i.i.d. delays of the switching runs of the
+  delayed-data paper (on time with probability ``p_on_time``, else uniform on
+  ``1..τ̄``), with the draw order of the stored results;
+* :func:`gilbert_elliott_trace` — bursts: a two-state (good/bad) Markov
+  channel with its own loss probability in each state (Gilbert–Elliott).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence, TypeVar
+
+import numpy as np
+
+from eqrec.core.patterns import ArrivalPattern
+from eqrec.core.words import as_pattern
+from eqrec.errors import InputError
+
+#: Delay code of a measurement that is never delivered.
+NEVER = -1
+
+W = TypeVar("W")
+
+
+def _probability(value: float, field: str) -> float:
+    try:
+        p = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"a probability must be a number, got {value!r}", field=field) from None
+    if not (0.0 <= p <= 1.0):  # also refuses NaN
+        raise InputError(f"a probability must lie in [0, 1], got {p}", field=field)
+    return p
+
+
+def _steps(value: int, field: str = "steps") -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise InputError(f"the number of steps must be a non-negative integer, got {value!r}", field=field)
+    return int(value)
+
+
+@dataclass(frozen=True, eq=False)
+class ArrivalTrace:
+    """When each measurement of a run of ``N`` steps reaches the estimator (module docstring).
+
+    Parameters
+    ----------
+    delays : array_like of int, shape (N,)
+        ``delays[τ]``: the delay of ``y(τ)`` (it arrives at ``τ + delays[τ]``),
+        or :data:`NEVER` (``-1``) when it is lost.  Stored as a read-only
+        integer array.
+
+    Raises
+    ------
+    InputError
+        Not a one-dimensional array of integers ``>= 0`` or ``NEVER`` (field ``delays``).
+
+    Examples
+    --------
+    >>> from eqrec.core.arrivals import NEVER, ArrivalTrace
+    >>> trace = ArrivalTrace([0, 2, NEVER, 0])
+    >>> [trace.arriving_at(t) for t in range(trace.steps)]
+    [[0], [], [], [1, 3]]
+    >>> ArrivalTrace.from_pattern("1011").delays.tolist()
+    [0, -1, 0, 0]
+    """
+
+    delays: np.ndarray
+
+    def __post_init__(self) -> None:
+        raw = np.asarray(self.delays)
+        integral = raw.dtype.kind in "iu" or (raw.dtype.kind == "f" and np.all(raw == np.round(raw)))
+        if raw.ndim != 1 or (raw.size and not integral):
+            raise InputError(f"delays must be a one-dimensional array of integers, got {raw.dtype} of shape "
+                             f"{raw.shape}", field="delays")
+        d = np.array(raw, dtype=np.int64)
+        if np.any((d < 0) & (d != NEVER)):
+            raise InputError(f"a delay is >= 0 or NEVER = {NEVER}, got {sorted(set(d[(d < 0) & (d != NEVER)].tolist()))}",
+                             field="delays")
+        d.flags.writeable = False
+        object.__setattr__(self, "delays", d)
+
+    # -- construction -------------------------------------------------------
+    @classmethod
+    def from_pattern(cls, pattern: "ArrivalPattern | str") -> "ArrivalTrace":
+        """The trace of an arrival pattern (or a 0/1 missing-data word) of horizon ``T``.
+
+        Parameters
+        ----------
+        pattern : ArrivalPattern or str
+            The pattern; a measurement it never delivers within the horizon is lost.
+
+        Returns
+        -------
+        ArrivalTrace
+            ``T`` steps.
+        """
+        pat = as_pattern(pattern)
+        return cls(np.array([NEVER if a is None else a - tau for tau, a in enumerate(pat.arrivals)], np.int64))
+
+    @classmethod
+    def from_arrived(cls, arrived: "np.ndarray | Sequence[bool]") -> "ArrivalTrace":
+        """Each measurement on time (``True``) or lost (``False``).
+
+        Parameters
+        ----------
+        arrived : array_like of bool, shape (N,)
+            Whether ``y(t)`` arrives (at ``t``).
+
+        Returns
+        -------
+        ArrivalTrace
+            Delays ``0`` or :data:`NEVER`.
+        """
+        a = np.asarray(arrived)
+        if a.ndim != 1:
+            raise InputError(f"arrived must be one-dimensional, got shape {a.shape}", field="arrived")
+        return cls(np.where(a.astype(bool), 0, NEVER).astype(np.int64))
+
+    @classmethod
+    def from_schedule(cls, arrive: Sequence[Sequence[int]]) -> "ArrivalTrace":
+        """The trace of ``arrive[t]`` lists (the stamps arriving at each step ``t < N``).
+
+        Parameters
+        ----------
+        arrive : sequence of sequence of int
+            ``arrive[t]``: the measurement times ``τ <= t`` whose packets arrive at ``t``;
+            a stamp in no list is lost.
+
+        Returns
+        -------
+        ArrivalTrace
+            ``N = len(arrive)`` steps.
+
+        Raises
+        ------
+        InputError
+            A stamp outside ``0..t`` or listed twice (field ``arrive``).
+        """
+        N = len(arrive)
+        d = np.full(N, NEVER, np.int64)
+        for t, stamps in enumerate(arrive):
+            for tau in stamps:
+                tau = int(tau)
+                if not 0 <= tau <= t:
+                    raise InputError(f"stamp {tau} arrives at {t}: a stamp lies in 0..t", field="arrive")
+                if d[tau] != NEVER:
+                    raise InputError(f"stamp {tau} arrives twice", field="arrive")
+                d[tau] = t - tau
+        return cls(d)
+
+    # -- reading ----------------------------------------------------------------
+    @property
+    def steps(self) -> int:
+        """Number ``N`` of steps (measurements) of the run."""
+        return int(self.delays.size)
+
+    def arrival_times(self) -> np.ndarray:
+        """Arrival time ``τ + d(τ)`` of each measurement (:data:`NEVER` when lost).
+
+        Returns
+        -------
+        ndarray of int, shape (N,)
+            Arrival times, possibly ``>= N`` (after the run).
+        """
+        tau = np.arange(self.steps)
+        return np.where(self.delays == NEVER, NEVER, tau + self.delays)
+
+    def arriving_at(self, t: int) -> list[int]:
+        """The stamps whose packets arrive at step ``t``, increasing.
+
+        Parameters
+        ----------
+        t : int
+            Step, ``0 <= t < N``.
+
+        Returns
+        -------
+        list of int
+            ``{τ : τ + d(τ) = t}``.
+        """
+        return [int(tau) for tau in np.flatnonzero(self.arrival_times() == t)]
+
+    def schedule(self) -> list[list[int]]:
+        """``out[t]``: the stamps arriving at ``t``, for every ``t < N`` (arrivals at or after ``N`` left out).
+
+        Returns
+        -------
+        list of list of int
+            Length ``N``; each list increasing.
+        """
+        N = self.steps
+        out: list[list[int]] = [[] for _ in range(N)]
+        for tau, d in enumerate(self.delays.tolist()):
+            if d != NEVER and tau + d < N:
+                out[tau + d].append(tau)
+        return out
+
+    @property
+    def lost(self) -> np.ndarray:
+        """``True`` for a measurement that is never delivered (bool, shape ``(N,)``)."""
+        return self.delays == NEVER
+
+    @property
+    def on_time(self) -> np.ndarray:
+        """``True`` for a measurement that arrives at its own time (bool, shape ``(N,)``)."""
+        return self.delays == 0
+
+    def pattern(self) -> ArrivalPattern:
+        """The trace as an arrival pattern of horizon ``N`` (a packet arriving at or after ``N`` is missing).
+
+        Returns
+        -------
+        ArrivalPattern
+            ``arrivals[τ] = τ + d(τ)`` when it is ``< N``, else ``None``.
+        """
+        N = self.steps
+        return ArrivalPattern(tuple(None if (d == NEVER or tau + d >= N) else tau + d
+                                    for tau, d in enumerate(self.delays.tolist())))
+
+
+# ------------------------------------------------------------------------------ samplers
+
+def uniform_words(rng: np.random.Generator, words: Sequence[W], size: int | None = None) -> "W | list[W]":
+    """Words drawn uniformly and independently from a language.
+
+    One call ``rng.integers(len(words), size=size)``: ``size=None`` draws one
+    word (one Monte Carlo run), an integer a list of them (one per period of a
+    long run).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    words : sequence
+        The language (words, patterns or anything to pick from); not empty.
+    size : int or None, optional
+        Number of words (``None``: one word, not a list).
+
+    Returns
+    -------
+    object or list
+        ``words[i]`` for a uniform ``i``, or a list of ``size`` of them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from eqrec.core.arrivals import uniform_words
+    >>> uniform_words(np.random.default_rng(0), ["101", "110", "111"], size=4)
+    ['111', '110', '110', '101']
+    """
+    if len(words) == 0:
+        raise InputError("cannot draw from an empty language", field="words")
+    if size is None:
+        return words[rng.integers(len(words))]
+    idx = rng.integers(len(words), size=_steps(size, "size"))
+    return [words[i] for i in idx]
+
+
+def bernoulli_arrivals(rng: np.random.Generator, shape: "int | tuple[int, ...]", arrival: float) -> np.ndarray:
+    """I.i.d. arrival indicators ``η = (U < η̄)`` with ``U`` uniform on ``[0, 1)``: one ``rng.random(shape)``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    shape : int or tuple of int
+        Shape of the draws (e.g. ``(runs, T+1)``).
+    arrival : float
+        Arrival probability ``η̄`` in ``[0, 1]``.
+
+    Returns
+    -------
+    ndarray of bool
+        ``True`` where the packet arrives.
+    """
+    p = _probability(arrival, "arrival")
+    return rng.random(shape) < p
+
+
+def bernoulli_trace(rng: np.random.Generator, steps: int, loss: float) -> ArrivalTrace:
+    """Bernoulli losses: each packet on time, or lost with probability ``loss``, independently.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of measurements.
+    loss : float
+        Loss probability in ``[0, 1]``.
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays ``0`` or :data:`NEVER`.
+    """
+    p = _probability(loss, "loss")
+    return ArrivalTrace.from_arrived(bernoulli_arrivals(rng, _steps(steps), 1.0 - p))
+
+
+def delay_trace(rng: np.random.Generator, steps: int, probabilities: "Sequence[float] | np.ndarray") -> ArrivalTrace:
+    """I.i.d. delays: ``d`` with probability ``p_d`` (``d = 0..D``), lost with probability ``1 − Σ p_d``.
+
+    One uniform draw per measurement, read through the cumulative probabilities.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of measurements.
+    probabilities : sequence of float
+        ``p_0 .. p_D``, each in ``[0, 1]``, with sum at most 1 (up to ``1e-12``).
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays in ``0..D`` or :data:`NEVER`.
+    """
+    try:
+        p = np.asarray(probabilities, float)
+    except (TypeError, ValueError):
+        raise InputError(f"delay probabilities must be numbers, got {probabilities!r}", field="probabilities") from None
+    if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)) or np.any(p < 0) or np.any(p > 1):
+        raise InputError(f"need delay probabilities p_0..p_D in [0, 1], got {p.tolist()}", field="probabilities")
+    if p.sum() > 1.0 + 1e-12:
+        raise InputError(f"delay probabilities sum to {p.sum()} > 1", field="probabilities")
+    u = rng.random(_steps(steps))
+    d = np.searchsorted(np.cumsum(p), u, side="right")
+    return ArrivalTrace(np.where(d >= p.size, NEVER, d).astype(np.int64))
+
+
+def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time: float) -> np.ndarray:
+    """I.i.d. delays: ``0`` with probability ``p_on_time``, else uniform on ``1..max_delay``.
+
+    The delays of the switching runs of the delayed-data paper (Section
+    III-B3; :func:`eqrec.core.long_runs.long_run_switching`): first one
+    ``rng.random(steps)`` (late where ``>= p_on_time``), then one
+    ``rng.integers`` for the late ones.  The same law as :func:`delay_trace`
+    with ``p_0 = p_on_time``, ``p_d = (1 − p_on_time)/τ̄``, drawn in another
+    order (the order of the stored results).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of delays.
+    max_delay : int
+        Largest delay ``τ̄ >= 1``.
+    p_on_time : float
+        Probability of delay ``0``.
+
+    Returns
+    -------
+    ndarray of int, shape (N,)
+        The delays.
+    """
+    p = _probability(p_on_time, "p_on_time")
+    if isinstance(max_delay, bool) or not isinstance(max_delay, (int, np.integer)) or max_delay < 1:
+        raise InputError(f"the largest delay must be an integer >= 1, got {max_delay!r}", field="max_delay")
+    late = rng.random(_steps(steps)) >= p
+    d = np.zeros(steps, int)
+    d[late] = rng.integers(1, max_delay + 1, size=int(late.sum()))
+    return d
+
+
+def gilbert_elliott_trace(rng: np.random.Generator, steps: int, p_good_to_bad: float, p_bad_to_good: float,
+                          loss_good: float = 0.0, loss_bad: float = 1.0, start: str = "stationary") -> ArrivalTrace:
+    r"""Bursts of losses: the Gilbert–Elliott channel, a two-state Markov chain with a loss probability per state.
+
+    The channel is *good* or *bad*; from one step to the next it goes from
+    good to bad with probability ``p_good_to_bad`` and back with
+    ``p_bad_to_good``; in each state a packet is lost with that state's
+    probability.  In the stationary regime the channel is bad with
+    probability :math:`\pi_b = p_{gb} / (p_{gb} + p_{bg})`, the loss rate is
+    :math:`(1 - \pi_b)\,\ell_g + \pi_b\,\ell_b`, and a stay in the bad state
+    lasts :math:`1 / p_{bg}` steps on average (Gilbert's model:
+    ``loss_good = 0``, ``loss_bad = 1``).  Draws, in order: the initial state
+    (one ``rng.random()`` for ``start="stationary"``), the ``N`` transitions,
+    the ``N`` losses.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of measurements.
+    p_good_to_bad : float
+        Probability of a transition good → bad.
+    p_bad_to_good : float
+        Probability of a transition bad → good.
+    loss_good : float, optional
+        Loss probability in the good state (default 0).
+    loss_bad : float, optional
+        Loss probability in the bad state (default 1).
+    start : {"stationary", "good", "bad"}, optional
+        Initial state: drawn from the stationary law (default; good when both
+        transition probabilities are 0), or fixed.
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays ``0`` or :data:`NEVER`.
+    """
+    pgb, pbg = _probability(p_good_to_bad, "p_good_to_bad"), _probability(p_bad_to_good, "p_bad_to_good")
+    lg, lb = _probability(loss_good, "loss_good"), _probability(loss_bad, "loss_bad")
+    N = _steps(steps)
+    if start == "stationary":
+        pi_bad = pgb / (pgb + pbg) if pgb + pbg > 0 else 0.0
+        bad = bool(rng.random() < pi_bad)
+    elif start in ("good", "bad"):
+        bad = start == "bad"
+    else:
+        raise InputError(f"start must be 'stationary', 'good' or 'bad', got {start!r}", field="start")
+    u_move, u_loss = rng.random(N), rng.random(N)
+    lost = np.zeros(N, bool)
+    for t in range(N):
+        lost[t] = u_loss[t] < (lb if bad else lg)
+        bad = (u_move[t] >= pbg) if bad else (u_move[t] < pgb)
+    return ArrivalTrace.from_arrived(~lost)

@@ -1,0 +1,322 @@
+r"""The LMV filter and one-step predictor of the companion study in step form, and the batch run built on it.
+
+:class:`LMVEstimator` follows the estimator protocol (:mod:`eqrec.core.protocol`,
+``kind = "stochastic"``): ``reset(x̂0, t0)``, then one ``step(y, u)`` per time
+with the measurement ``y(t)`` or ``None`` for a lost packet.  The
+compensation of a loss is the one of the system the gains belong to
+(:func:`~eqrec.lmv.model.system_of`):
+
+* **zero-input** (eq. (3), Theorems 1-3 of the paper): a lost packet is
+  ``y_z(t) = 0``;
+* **hold-input** (ref. [15]): the estimator holds the last received value,
+  ``y_h(t) = y_h(t-1)``, starting from ``y_h(-1)`` (the mean the system was
+  built with, zero by default).
+
+Each step forms the innovation ``ε(t) = y_c(t) − C x̂(t|t−1)`` and returns the
+one-step prediction (eqs. (4)-(5))
+
+.. math:: \hat x(t+1|t) = A \hat x(t|t-1) + L(t)\,\varepsilon(t)
+
+with its error covariance ``P(t+1|t)`` (eq. (9)) on the plant state; the
+filter ``x̂(t|t) = x̂(t|t−1) + K(t, 0) ε(t)`` (Theorem 3, ``j = 0``) is
+:attr:`LMVEstimator.filtered` with ``P(t|t)`` in
+:attr:`LMVEstimator.P_filtered`.  The gains are those of
+:func:`~eqrec.lmv.recursion.lmv_recursion` (given, or computed step by step
+by the same recursion, so the horizon is unbounded).  A packet that arrives
+late counts as lost (the dropout model has no delays).  A call that raises
+leaves the estimator as it was.
+
+:func:`apply_estimator`, the batch run of the study (vectorised over runs,
+with the fixed-lag smoother), is the step form run on already compensated
+measurements: bit for bit the same estimates.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.core.packets import as_packets
+from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
+from eqrec.lmv.model import MultNoiseSystem, check_ms_stable
+from eqrec.lmv.recursion import LMVResult, SmootherResult, _moment_step, lmv_step, smoother_step
+
+__all__ = ["COMPENSATIONS", "LMVEstimator", "apply_estimator"]
+
+#: How a lost packet is replaced (``"none"``: every measurement must be given, already compensated).
+COMPENSATIONS = ("zero-input", "hold-input", "none")
+
+
+class LMVEstimator:
+    """The LMV one-step predictor and filter in step form (module docstring).
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The compensated system (:func:`~eqrec.lmv.model.zero_input_system`,
+        :func:`~eqrec.lmv.model.hold_input_system`), or any system in the common description.
+    result : LMVResult or None, optional
+        Precomputed gains of ``sys`` (:func:`~eqrec.lmv.recursion.lmv_recursion`); beyond its horizon, and
+        without it, the gains are computed by the same recursion as the steps go.
+    compensation : {"zero-input", "hold-input", "none"} or None, optional
+        What a lost packet becomes (default: the mechanism ``sys`` was built for, ``"none"`` for another system).
+    system : AffineSystem or None, optional
+        Known part of the dynamics: ``B(t) u(t) + f`` is added to the plant block of the prediction (``None``:
+        no input).  The gains stay those of ``sys`` (whose second moment ``q`` does not see the input's mean).
+    check_stability : bool, optional
+        Refuse a system that is not mean-square stable when the gains are computed here (default ``True``;
+        :class:`~eqrec.errors.NotMeanSquareStable`).
+
+    Attributes
+    ----------
+    filtered : numpy.ndarray or None
+        ``x̂(t|t)`` of the last step (plant state).
+    P_filtered : numpy.ndarray or None
+        ``P(t|t)`` of the last step (plant block).
+    """
+
+    kind = "stochastic"
+
+    def __init__(self, sys: MultNoiseSystem, result: LMVResult | None = None, *, compensation: str | None = None,
+                 system: AffineSystem | None = None, check_stability: bool = True):
+        mech = sys.meta.get("mechanism", "none") if compensation is None else compensation
+        if mech not in COMPENSATIONS:
+            raise InputError(f"unknown compensation {mech!r}; one of {COMPENSATIONS}", sys.name, "compensation")
+        if mech == "hold-input" and sys.n != sys.n_x + sys.m:
+            raise InputError("hold-input compensation needs the augmented state [x; y_h] (hold_input_system)",
+                             sys.name, "compensation")
+        if result is not None and result.sys is not sys:
+            raise InputError("the gains belong to another system", sys.name, "result")
+        if system is not None and system.n != sys.n_x:
+            raise InputError(f"the system has n = {system.n} states, the LMV plant n_x = {sys.n_x}", sys.name,
+                             "system")
+        if result is None and check_stability:
+            check_ms_stable(sys)
+        self.sys, self.compensation, self.system = sys, mech, system
+        self.name = "LMV" if mech == "none" else f"LMV, {mech}"
+        if result is None:
+            self._q = [np.outer(sys.x0_mean, sys.x0_mean) + sys.x0_cov]
+            self._P, self._L, self._Qe = [sys.x0_cov], [], []
+        else:
+            self._q, self._P = list(result.q), list(result.P_pred)
+            self._L, self._Qe = list(result.L), list(result.Qe)
+        self._X: np.ndarray | None = None
+        self.filtered: np.ndarray | None = None
+        self.P_filtered: np.ndarray | None = None
+
+    # -- gains ----------------------------------------------------------------
+    def _gains(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """``L(k)`` and ``Qe(k)``, extending the recursion of Theorem 1 as far as needed."""
+        while len(self._L) <= k:
+            j = len(self._L)
+            Qe, L, P_next = lmv_step(self.sys, self._P[j], self._q[j])
+            q_next = _moment_step(self.sys, self._q[j]) if len(self._q) <= j + 1 else self._q[j + 1]
+            self._Qe.append(Qe)
+            self._L.append(L)
+            if len(self._P) <= j + 1:
+                self._P.append(P_next)
+            if len(self._q) <= j + 1:
+                self._q.append(q_next)
+        return self._L[k], self._Qe[k]
+
+    # -- the protocol -----------------------------------------------------------
+    def reset(self, xhat0: "np.ndarray | None" = None, t0: int = 0) -> "LMVEstimator":
+        """Start from ``x̂(t0|t0−1) = xhat0`` (the plant state; ``None``: its mean ``E[x(0)]``).
+
+        Parameters
+        ----------
+        xhat0 : numpy.ndarray or None, optional
+            Initial estimate, ``(n_x,)``, or ``(..., n_x)`` for runs advanced together (:meth:`advance`).
+        t0 : int, optional
+            Absolute time of the first step (default 0); the gains count from it.
+
+        Returns
+        -------
+        LMVEstimator
+            The estimator itself.
+
+        Raises
+        ------
+        InputError
+            A non-finite or wrongly shaped ``xhat0``, a non-integer ``t0``.
+        """
+        sys, nx = self.sys, self.sys.n_x
+        x = sys.x0_mean[:nx] if xhat0 is None else xhat0
+        try:
+            x = np.asarray(x, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"not numeric: {xhat0!r}", sys.name, "xhat0") from None
+        if x.ndim == 0 or x.shape[-1] != nx or not np.all(np.isfinite(x)):
+            raise InputError(f"need {nx} finite entries (last axis), got shape {x.shape}", sys.name, "xhat0")
+        if isinstance(t0, (bool, np.bool_)) or not isinstance(t0, (int, np.integer)):
+            raise InputError(f"the start time is an integer, got {t0!r}", sys.name, "t0")
+        rest = np.broadcast_to(sys.x0_mean[nx:], x.shape[:-1] + (sys.n - nx,))
+        self._X = np.concatenate([x, rest], axis=-1)
+        self._held = np.array(sys.x0_mean[nx:], float)  # y_h(-1) of the hold-input register
+        self._k, self._t0 = 0, int(t0)
+        self.filtered = self.P_filtered = None
+        return self
+
+    def _running(self) -> np.ndarray:
+        if self._X is None:
+            raise InputError("call reset() before running the estimator", self.sys.name)
+        return self._X
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        self._running()
+        return self._t0 + self._k
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current prediction ``x̂(t|t−1)`` of the plant state."""
+        return self._running()[..., : self.sys.n_x].copy()
+
+    @property
+    def augmented(self) -> np.ndarray:
+        """A copy of the whole state of the common description (``[x̂; ŷ_h]`` for hold-input)."""
+        return self._running().copy()
+
+    def _compensated(self, y, t: int) -> tuple[np.ndarray, bool]:
+        """``(y_c(t), arrived)`` from what arrived (checked; late packets count as lost)."""
+        m = self.sys.m
+        on_time = [pk.y for pk in as_packets(y, t, (m,)) if pk.time == t]
+        if on_time:
+            return on_time[0], True
+        if self.compensation == "none":
+            raise InputError(f"no compensation: the measurement of time {t} must be given", self.sys.name, "y")
+        return (np.zeros(m) if self.compensation == "zero-input" else self._held.copy()), False
+
+    def _drive(self, t: int, u) -> np.ndarray | None:
+        """``B(t) u + f`` (checked) or ``None`` without a known part."""
+        if self.system is None:
+            if u is not None:
+                try:
+                    uu = np.asarray(u, dtype=float)
+                except (TypeError, ValueError):
+                    raise InputError(f"not numeric: {u!r}", self.sys.name, "u") from None
+                if uu.size and not (np.all(np.isfinite(uu)) and np.all(uu == 0)):
+                    raise InputError("this estimator has no input model (give system=...)", self.sys.name, "u")
+            return None
+        m = self.system.m
+        try:
+            uu = np.zeros(m) if u is None else np.asarray(u, dtype=float).reshape(m)
+        except (TypeError, ValueError):
+            raise InputError(f"need {m} numbers, got {u!r}", self.sys.name, "u") from None
+        if not np.all(np.isfinite(uu)):
+            raise InputError("contains NaN or infinite entries", self.sys.name, "u")
+        return self.system.B_at(t) @ uu + self.system.f
+
+    def _predict(self, X: np.ndarray, y_c: np.ndarray, k: int, drive) -> tuple[np.ndarray, np.ndarray]:
+        """Eqs. (4)-(5): ``(ε(t), x̂(t+1|t))`` without changing the estimator."""
+        sys = self.sys
+        L, _ = self._gains(k)
+        eps = y_c - X @ sys.C.T
+        X_next = X @ sys.A.T + eps @ L.T
+        if drive is not None:
+            X_next[..., : sys.n_x] += drive
+        return eps, X_next
+
+    def step(self, y=None, u=None) -> tuple[np.ndarray, np.ndarray]:
+        """Process time ``t``: ``y(t)`` or ``None`` (lost), and the input; return ``(x̂(t+1|t), P(t+1|t))``.
+
+        Parameters
+        ----------
+        y : numpy.ndarray, Packet, sequence of packets, or None, optional
+            The measurement ``y(t)`` (``(m,)``), or ``None`` when the packet was lost (time-stamped packets are
+            accepted: the on-time one is used, late ones count as lost).
+        u : numpy.ndarray or None, optional
+            The input ``u(t)`` (only with ``system``; otherwise ``None`` or zeros).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The prediction of the plant state, ``(n_x,)``, and its error covariance ``P(t+1|t)`` (plant block,
+            ``(n_x, n_x)``); the filter is then :attr:`filtered`, :attr:`P_filtered`.
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`, for runs reset together (use :meth:`advance`), a measurement or input of the
+            wrong shape or not finite, a packet from the future; nothing changes.
+        """
+        X, sys = self._running(), self.sys
+        if X.ndim != 1:
+            raise InputError("several runs were reset together: step them with advance()", sys.name, "y")
+        t, k, nx = self.time, self._k, sys.n_x
+        y_c, arrived = self._compensated(y, t)
+        drive = self._drive(t, u)
+        eps, X_next = self._predict(X, y_c, k, drive)
+        L, Qe = self._gains(k)
+        K, P_filt, _ = smoother_step(sys, self._P[k], self._P[k], Qe, sys.A - L @ sys.C)
+        self.filtered = (X + np.einsum("ij,...j->...i", K, eps))[:nx]
+        self.P_filtered = P_filt[:nx, :nx]
+        if arrived and self.compensation == "hold-input":
+            self._held = y_c.copy()
+        self._X, self._k = X_next, k + 1
+        return X_next[:nx].copy(), self._P[k + 1][:nx, :nx].copy()
+
+    def advance(self, y_c: np.ndarray) -> np.ndarray:
+        """One step of runs advanced together on compensated measurements (no input): returns ``ε(t)``.
+
+        Parameters
+        ----------
+        y_c : numpy.ndarray
+            ``y_z(t)`` or ``y_h(t)`` of every run, ``(..., m)`` (the leading axes of :meth:`reset`).
+
+        Returns
+        -------
+        numpy.ndarray
+            The innovations ``ε(t)``, ``(..., m)``; the predictions are then :attr:`augmented`.
+        """
+        eps, self._X = self._predict(self._running(), y_c, self._k, None)
+        self._k += 1
+        return eps
+
+
+def apply_estimator(res: LMVResult, y: np.ndarray, sm: SmootherResult | None = None) -> dict[str, np.ndarray]:
+    """Run the estimator on measurements ``y[..., t, :]`` (``t = 0..T``), vectorised over leading axes.
+
+    Eqs. (4)-(5) by the step form (:meth:`LMVEstimator.advance`, all runs together) and the fixed-lag
+    smoother (17) in the general form.
+
+    Parameters
+    ----------
+    res : LMVResult
+        Gains of the one-step predictor.
+    y : numpy.ndarray
+        Measurements (``y_z`` or ``y_h``), ``(..., T+1, m)``.
+    sm : SmootherResult or None, optional
+        Smoother gains; ``None``: no filtered or smoothed estimates.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``pred[..., t, :] = xh(t|t-1)`` (``t = 0..T+1``), the innovations ``eps[..., t, :]`` and, with ``sm``,
+        ``smooth[..., t, j, :] = xh(t|t+j)`` (NaN where ``t + j > T``; ``j = 0`` is the filter).
+    """
+    sys, T = res.sys, res.T
+    y = np.asarray(y, float)
+    if y.shape[-2:] != (T + 1, sys.m):
+        raise InputError(f"measurements have shape {y.shape}, expected (..., {T + 1}, {sys.m})", None, "y")
+    lead = y.shape[:-2]
+    pred = np.empty(lead + (T + 2, sys.n))
+    eps = np.empty(lead + (T + 1, sys.m))
+    pred[..., 0, :] = sys.x0_mean
+    est = LMVEstimator(sys, res, compensation="none").reset(pred[..., 0, : sys.n_x])
+    for t in range(T + 1):
+        eps[..., t, :] = est.advance(y[..., t, :])
+        pred[..., t + 1, :] = est.augmented
+    out = {"pred": pred, "eps": eps}
+    if sm is not None:
+        N = sm.K.shape[1] - 1
+        smooth = np.full(lead + (T + 1, N + 1, sys.n), np.nan)
+        acc = pred[..., : T + 1, :].copy()
+        for j in range(N + 1):
+            valid = T + 1 - j
+            acc[..., :valid, :] = acc[..., :valid, :] + np.einsum(
+                "tij,...tj->...ti", sm.K[:valid, j], eps[..., j: j + valid, :])
+            smooth[..., :valid, j, :] = acc[..., :valid, :]
+        out["smooth"] = smooth
+    return out
