@@ -47,6 +47,7 @@ import numpy as np
 
 from eqrec.core.classes import ClassGains
 from eqrec.core.gains import GainSchedule
+from eqrec.core.packets import Stamped, as_packets, finite_array
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
@@ -79,22 +80,8 @@ class Packet:
 
 
 def _finite_vector(value, size: int, field: str, what: str, symbol: str = "") -> np.ndarray:
-    """``value`` as a new float vector of ``size`` finite entries, or an :class:`InputError` naming ``field``."""
-    if isinstance(value, (str, bytes)):
-        raise InputError(f"{what} must be an array of {size} numbers, got a string", field=field)
-    try:
-        raw = np.asarray(value)
-    except (TypeError, ValueError):  # ragged nesting
-        raise InputError(f"{what} must be an array of {size} numbers, got {value!r:.60}", field=field) from None
-    if raw.dtype.kind not in "iuf":
-        raise InputError(f"{what} must be an array of {size} numbers, got {value!r:.60}", field=field)
-    arr = np.array(raw, dtype=float).reshape(-1)
-    if arr.shape != (size,):
-        expected = f"{symbol} = {size}" if symbol else str(size)
-        raise InputError(f"{what} has {arr.size} entries (shape {raw.shape}), expected {expected}", field=field)
-    if not np.isfinite(arr).all():
-        raise InputError(f"{what} contains NaN or infinite entries: {arr.tolist()}", field=field)
-    return arr
+    """``value`` as a new float vector of ``size`` finite entries (:func:`eqrec.core.packets.finite_array`)."""
+    return finite_array(value, (size,), field, what, symbol)
 
 
 def check_input(u, m: int) -> np.ndarray:
@@ -149,88 +136,6 @@ def check_estimate(xhat0, n: int, field: str = "xhat0") -> np.ndarray:
 
 def _is_stamp(value) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
-
-
-def _is_pair(item) -> bool:
-    return isinstance(item, (tuple, list)) and len(item) == 2 and _is_stamp(item[0]) and not np.isscalar(item[1])
-
-
-class _Checked(list):
-    """Packets already checked by :func:`as_packets` for the time ``now`` (not checked again)."""
-
-    now: int
-
-
-def as_packets(y, now: int, p: int) -> list[Packet]:
-    """What arrived at time ``now``, checked: a list of :class:`Packet` with finite ``y`` of ``p`` entries.
-
-    Accepted forms: ``None`` (nothing arrived); ``y(now)`` itself (an array,
-    a list of numbers or, for ``p = 1``, a number); a :class:`Packet` or a
-    pair ``(τ, y(τ))`` with an integer stamp ``τ``; or a list of packets and
-    pairs.  Nothing is stored: the estimators call it before they change any
-    state.
-
-    Parameters
-    ----------
-    y : None, array_like, Packet, pair or sequence of them
-        What arrived.
-    now : int
-        The current absolute time (the stamp of an unstamped measurement).
-    p : int
-        Number of outputs.
-
-    Returns
-    -------
-    list of Packet
-        The packets, each ``y`` a new float array of shape ``(p,)``, in the given order.
-
-    Raises
-    ------
-    InputError
-        (field ``y``) a string, a malformed packet, a stamp that is not an
-        integer, a packet from the future (stamp ``> now``), two packets with
-        one stamp, a measurement with the wrong number of entries, or NaN/inf.
-    """
-    if y is None:
-        return []
-    if isinstance(y, _Checked) and y.now == now:
-        return y
-    if isinstance(y, (str, bytes)):
-        raise InputError(f"a measurement must be an array of p = {p} numbers, got a string", field="y")
-    if isinstance(y, Packet) or _is_pair(y):
-        items = [y]
-    elif isinstance(y, np.ndarray) or np.isscalar(y):
-        items = [Packet(now, y)]
-    else:
-        try:
-            items = list(y)
-        except TypeError:
-            raise InputError(f"a measurement must be an array of p = {p} numbers, got {type(y).__name__}",
-                             field="y") from None
-        if items and all(np.isscalar(v) and not isinstance(v, (str, bytes)) for v in items):
-            items = [Packet(now, items)]
-    out = []
-    seen: set[int] = set()
-    for item in items:
-        if isinstance(item, Packet):
-            stamp, value = item.time, item.y
-        elif _is_pair(item):
-            stamp, value = item
-        else:
-            raise InputError(f"a packet is (time stamp, y) with an integer stamp, got {item!r:.80}", field="y")
-        if not _is_stamp(stamp):
-            raise InputError(f"a packet's time stamp must be an integer, got {stamp!r}", field="y")
-        stamp = int(stamp)
-        if stamp > now:
-            raise InputError(f"packet stamped {stamp} received at time {now}: a packet cannot come from the future",
-                             field="y")
-        if stamp in seen:
-            raise InputError(f"a second packet stamped {stamp} received at time {now}", field="y")
-        seen.add(stamp)
-        out.append(Packet(stamp, _finite_vector(value, p, "y", f"the measurement of time {stamp}", "p")))
-    checked = _Checked(out)
-    checked.now = now
-    return checked
 
 
 @dataclass
@@ -303,7 +208,7 @@ class _StampedEstimator:
         """Absolute time of the current period's first step."""
         return self._start
 
-    def _packets(self, y) -> list[Packet]:
+    def _packets(self, y) -> list[Stamped]:
         return as_packets(y, self._k, self.system.p)
 
     def _reference(self, restarted: bool) -> np.ndarray:

@@ -34,21 +34,84 @@ class Stamped(NamedTuple):
     y: np.ndarray
 
 
+class _Checked(list):
+    """Packets already checked by :func:`as_packets` for the time ``now`` and the shape ``shape`` (not checked
+    again when an estimator passes them on)."""
+
+    now: int
+    shape: tuple[int, ...]
+
+
 def _is_packet(item: Any) -> bool:
     return hasattr(item, "time") and hasattr(item, "y") and not isinstance(item, np.ndarray)
 
 
+def _is_stamp(value: Any) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
 def _is_pair(item: Any) -> bool:
-    return (isinstance(item, (tuple, list)) and len(item) == 2 and isinstance(item[0], (int, np.integer))
-            and not isinstance(item[0], (bool, np.bool_)) and not np.isscalar(item[1]))
+    return isinstance(item, (tuple, list)) and len(item) == 2 and _is_stamp(item[0]) and not np.isscalar(item[1])
 
 
-def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> list[Stamped]:
+def _is_number(value: Any) -> bool:
+    return np.isscalar(value) and not isinstance(value, (str, bytes))
+
+
+def finite_array(value: Any, shape: tuple[int, ...], field: str, what: str, symbol: str = "") -> np.ndarray:
+    """``value`` as a new finite float array of ``shape`` (a vector may come nested), or an :class:`InputError`.
+
+    Parameters
+    ----------
+    value : array_like
+        The numbers (strings, booleans and objects are refused, not converted).
+    shape : tuple of int
+        The shape required; a vector of ``shape = (k,)`` may be given with any nesting of ``k`` entries.
+    field : str
+        The field named in the error.
+    what : str
+        What the value is, in words (the start of the message).
+    symbol : str, optional
+        The name of the length in the message (``"p"`` gives ``expected p = 2``).
+
+    Returns
+    -------
+    numpy.ndarray
+        A new float array of ``shape``.
+
+    Raises
+    ------
+    InputError
+        A string, non-numeric entries, another shape, or NaN/inf entries.
+    """
+    if isinstance(value, (str, bytes)):
+        raise InputError(f"{what} must be numbers, got a string", field=field)
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError):  # ragged nesting
+        raise InputError(f"{what} must be numbers, got {value!r:.60}", field=field) from None
+    if raw.dtype.kind not in "iuf":
+        raise InputError(f"{what} must be numbers, got {value!r:.60}", field=field)
+    shape = tuple(shape)
+    arr = np.array(raw, dtype=float)
+    if len(shape) == 1 and arr.size == shape[0]:
+        arr = arr.reshape(shape)
+    if arr.shape != shape:
+        expected = f"{symbol} = {shape[0]}" if symbol and len(shape) == 1 else str(shape)
+        raise InputError(f"{what} has {arr.size} entries (shape {raw.shape}), expected {expected}", field=field)
+    if not np.isfinite(arr).all():
+        raise InputError(f"{what} contains NaN or infinite entries: {arr.tolist()}", field=field)
+    return arr
+
+
+def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y") -> list[Stamped]:
     """Read what arrived at time ``now`` in any of the protocol's forms, checked before anything is used.
 
     Forms: ``None`` or an empty list (nothing); ``y(now)`` itself (an array,
-    or a list of numbers); a :class:`~eqrec.core.estimator.Packet` or a pair
-    ``(τ, y(τ))``; a list of packets and pairs.
+    a list of numbers or, for ``p = 1``, a number); a
+    :class:`~eqrec.core.estimator.Packet` or a pair ``(τ, y(τ))`` with an
+    integer stamp; a list of packets and pairs.  The one reader of packets of
+    every estimator.
 
     Parameters
     ----------
@@ -56,58 +119,55 @@ def as_packets(y: Any, now: int, shape: tuple[int, ...], field: str = "y") -> li
         What arrived.
     now : int
         Absolute time of the step.
-    shape : tuple of int
-        Shape every measurement must have (``(p,)``, or ``(p, K)`` for affine runs).
+    shape : tuple of int or int
+        Shape every measurement must have (``(p,)`` or ``p``, or ``(p, K)`` for affine runs).
     field : str, optional
         Field named in the errors (default ``"y"``).
 
     Returns
     -------
     list of Stamped
-        The packets, in the given order, each ``y`` a float array of ``shape``.
+        The packets, in the given order, each ``y`` a new float array of ``shape``.
 
     Raises
     ------
     InputError
-        A measurement of another shape or with NaN/inf entries, a stamp that is
-        not an integer, from the future (``> now``) or given twice, naming ``field``.
+        A string, a malformed packet, a measurement of another shape or with
+        NaN/inf entries, a stamp that is not an integer, from the future
+        (``> now``) or given twice, naming ``field``.
     """
+    shape = (int(shape),) if isinstance(shape, (int, np.integer)) else tuple(shape)
     if y is None or (isinstance(y, (list, tuple)) and len(y) == 0):
         return []
+    if isinstance(y, _Checked) and y.now == now and y.shape == shape:
+        return y
+    if isinstance(y, (str, bytes)):
+        raise InputError("a measurement must be numbers, got a string", field=field)
     if _is_packet(y) or _is_pair(y):
         items = [y]
-    elif isinstance(y, np.ndarray) or np.isscalar(y) or (isinstance(y, (list, tuple)) and all(np.isscalar(e) for e in y)):
+    elif isinstance(y, np.ndarray) or _is_number(y) or (isinstance(y, (list, tuple)) and all(_is_number(e) for e in y)):
         items = [Stamped(int(now), y)]
     elif isinstance(y, (list, tuple)):
         items = list(y)
     else:
         raise InputError(f"expected a measurement, packets or None, got {type(y).__name__}", field=field)
-    out: list[Stamped] = []
+    out = _Checked()
+    out.now, out.shape = now, shape
+    seen: set[int] = set()
     for item in items:
         if _is_packet(item):
             tau, val = item.time, item.y
-        elif _is_pair(item):
+        elif isinstance(item, (tuple, list)) and len(item) == 2 and not np.isscalar(item[1]):
             tau, val = item
         else:
-            raise InputError(f"a packet is (time stamp, y), got {item!r}", field=field)
-        if isinstance(tau, (bool, np.bool_)) or not isinstance(tau, (int, np.integer)):
+            raise InputError(f"a packet is (time stamp, y), got {item!r:.80}", field=field)
+        if not _is_stamp(tau):
             raise InputError(f"a time stamp is an integer, got {tau!r}", field=field)
         if tau > now:
             raise InputError(f"packet stamped {tau} received at time {now}: a packet cannot come from the future",
                              field=field)
-        if any(pk.time == tau for pk in out):
-            raise InputError(f"two packets stamped {tau} received at time {now}", field=field)
-        try:
-            arr = np.asarray(val, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"the measurement of time {tau} is not numeric: {val!r}", field=field) from None
-        if arr.shape != tuple(shape):
-            if arr.size == int(np.prod(shape)) and len(shape) == 1:
-                arr = arr.reshape(shape)
-            else:
-                raise InputError(f"the measurement of time {tau} has shape {arr.shape}, expected {tuple(shape)}",
-                                 field=field)
-        if not np.all(np.isfinite(arr)):
-            raise InputError(f"the measurement of time {tau} contains NaN or infinite entries", field=field)
-        out.append(Stamped(int(tau), arr))
+        if int(tau) in seen:
+            raise InputError(f"a second packet stamped {tau} received at time {now}", field=field)
+        seen.add(int(tau))
+        out.append(Stamped(int(tau), finite_array(val, shape, field, f"the measurement of time {tau}", "p")))
     return out

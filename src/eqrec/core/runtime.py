@@ -66,9 +66,9 @@ from typing import Callable, Iterable, NamedTuple
 import numpy as np
 
 from eqrec.core.classes import ClassGains, class_maps
-from eqrec.core.estimator import (ClassEstimator, Packet, RecoveryEstimator, _has_class, as_packets, check_estimate,
-                                  make_estimator)
+from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, _has_class, check_estimate, make_estimator
 from eqrec.core.gains import GainSchedule
+from eqrec.core.packets import as_packets
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
