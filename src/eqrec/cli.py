@@ -11,6 +11,7 @@ Examples
     eqrec design system.yaml --method delay --max-delay 2 --horizon 5 --mu1 0.33 --cost max
     eqrec design system.yaml --method delay --max-delay 4 --horizon 30 --mu1 free --out design.json
     eqrec design system.yaml --method delay --max-delay 2 --horizon 5 --engine tree --node-gains
+    eqrec compare system.yaml --loss 0.1 --max-delay 2 --horizon 5 --runs 50 --out cmp
 
 Exit status: 0 on success, 1 for malformed input (the message names the file
 and field), 2 for a usage error (argparse), 3 for an infeasible or unbounded
@@ -29,6 +30,7 @@ import numpy as np
 
 from eqrec.core.solvers import SOLVER_NAMES
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
+from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
@@ -45,85 +47,6 @@ JSON_NODE_GAINS_SEQUENCES = 200
 EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usage error; "
              "3 infeasible or unbounded design (no file written); 4 solver or certification failure.")
 
-SYSTEM_HELP = """\
-SYSTEM.yaml keys (matrices as nested lists):
-  A      n x n state matrix                       (required)
-  C      p x n output matrix                      (required)
-  E      n x nw process-noise gain                (required)
-  eta_w  bound on |w(t)|_inf, or one bound per    (required)
-         column of E: [1, 0.5, 2] means |w_i(t)| <= eta_w[i]
-  eta_v  bound on |v(t)|_inf, or one per column of V  (required)
-  T      recovery time (default: the word length)
-  B, f   input matrix and affine term (do not affect the design)
-  V      p x nv measurement-noise gain (default identity)
-
-Words (--words) are strings over {0,1}: character t is 1 if the measurement
-of time t (0-based) arrives, 0 if it is missing; all words must have length T.
-Delay words (--delays, --method delay) are digit strings: character t is the
-delay of the measurement of time t (0 = on time); a delay that reaches past
-the horizon (t + delay >= T) means missing. --max-delay D --horizon T designs
-for all (D+1)^T delay words. Words with equal event sequences are merged.
-
-Output JSON: method, mu1, mu2 (optimum), certified_mu2 (worst case recomputed
-from the gains alone), certified_terminal (the worst case of the error norm
-||x(T) - xhat(T)||_inf at the end of the horizon, over every word, recomputed
-from the gains alone: equalized recovery holds when it is at most mu1, so the
-gains can be reused every T steps), solver, status, words, gains: for each
-designed word
-{"F": (T*n x T*p), "u0": (T*n)} in the convention
-  ue(t) = u0(t) + sum_{tau<=t} F(t,tau) y_xi(tau),
-  xhat(t+1) = A xhat + B u - ue + f,
-  y_xi(tau) = y(tau) - C xhat(tau) if y(tau) has arrived by time t, else 0
-(F(t,tau) is zero wherever y(tau) has not arrived by time t).
---method prefix and time add engine (classes or tree), for the class engine
-classes (below), and with --mu1 free (mu1 = the smallest feasible mu1)
-mu1_free {route, mu1_min {upper (attained by certified gains), lower (proven
-infeasible), binding (the terminal class and row that set it)}}.
-
-State weights (--state-weights w1,...,wn; methods time, prefix, delay): the
-design is made on z = W x, W = diag(w), so mu1, mu2, every level and every
-certified value bound max_i w_i |x_i - xhat_i| instead of the plain infinity
-norm (|x_i - xhat_i| <= level / w_i). The JSON adds state_weights; its gains
-(F, u0, K) are written in the file's state x, with the conventions above.
-
-Engines (--engine, methods prefix and delay; default classes): the class
-engine solves one small LP per (time d, available data S) class and state
-row (nodes of the prefix tree that see the same data at the same time share
-their level) and derives the node gains from the class gains K; the tree
-engine solves one LP with a gain row per prefix-tree node (the independent
-cross-check).  Both give the same optimum.  For --max-delay D --horizon T the
-class engine builds the classes from the window rule without enumerating the
-(D+1)^T words: D = 4, T = 30 (9.3e20 words, 446 classes) takes seconds and
-writes about 1 MB.  --engine tree and --node-gains need the words enumerated
-and are refused above %(limit)d words.
-
-Class keys (class engine): classes, one row per class {class, k, data,
-terminal, sequences, nodes, level, certified, K}.  The label "d:S" is the
-time d and, as a 0/1 string over the times 0..d-1, the measurements received
-by time d-1 (1: received; data lists their times).  The class-form estimator
-  xhat(d) = xbar(d) + K (y_S - ybar_S)
-(xbar, ybar the noise-free prediction from xhat(0), inputs and f included;
-y_S stacks y(tau) for tau in S, by time then output; K is n x |S|p) has the
-worst case "certified" (recomputed from K alone) at time d along every
-sequence of the class; "level" is the designed level, at most mu1 for a
-terminal class (where words end), "sequences" the class's weight in the sum
-cost.
-
---method delay adds: engine, cost, J (the cost of --cost), J_certified,
-sequences and nodes (of the reduced event language and its prefix tree),
-classes (class engine), and with --mu1 free: mu1_free {route, J, lower_bound
-(a certified lower bound of J over every mu1), gap, mu1_min}.  With node
-gains (--node-gains; by default when the reduced language has at most %(seq)d
-sequences) it also writes gains, levels (one row per event prefix and time:
-designed level, certified worst case, sequences through it; a prefix is
-labelled by its 0/1 word while no measurement has arrived late, else by its
-events e_0.e_1...) and event_sequences (per designed sequence, for each time
-t a 0/1 string over y(0..t): character tau is 1 if y(tau) is available at
-time t).  words lists the delay words (designed_words the designed ones),
-except for a --max-delay language left unenumerated: then words is the
-number of words and designed_words is omitted (max_delay and horizon name
-the language).
-"""
 
 
 def _system_help() -> str:
@@ -141,6 +64,9 @@ def _parser() -> argparse.ArgumentParser:
 
     ap.add_argument("--version", action="version", version=f"eqrec {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
+    from eqrec.compare.command import add_parser as add_compare_parser
+
+    add_compare_parser(sub, EXIT_HELP)
     d = sub.add_parser("design", help="design and certify an estimator for a system file",
                        description="Minimise the intermediate level mu2 for a given recovery level mu1, "
                                    "recover the gains, certify them from the gains alone, write JSON.",
@@ -419,6 +345,11 @@ def _write_atomic(path: Path, text: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
+        if args.command == "compare":
+            from eqrec.compare.command import run as run_compare
+
+            print(run_compare(args))
+            return 0
         out_path = _check_out(args.out)
         result = run_design(args)
         text = json.dumps(result, indent=2)

@@ -57,3 +57,27 @@ def write_text(path: str | Path, text: str) -> None:
     """
     with atomic_path(path) as tmp:
         tmp.write_text(text)
+
+
+def save_figure(fig, *paths: "str | Path") -> None:
+    """Save a matplotlib figure to each path (format from the suffix: PDF, PNG, ...) atomically, then close it.
+
+    PDFs carry no creation date, so an unchanged figure is byte-identical.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    *paths : str or Path
+        The files to write.
+    """
+    import matplotlib.pyplot as plt
+
+    try:
+        for p in paths:
+            fmt = Path(p).suffix.lstrip(".").lower()
+            meta = {"CreationDate": None} if fmt == "pdf" else None
+            with atomic_path(p) as tmp:
+                fig.savefig(tmp, format=fmt, metadata=meta)
+    finally:
+        plt.close(fig)

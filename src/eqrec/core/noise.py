@@ -52,6 +52,8 @@ def check_psd(M: np.ndarray, name: str, source: str | None) -> None:
     source : str or None
         Where ``M`` came from (a file, a system name), named in the error.
     """
+    if M.size == 0:  # no noise of this kind (e.g. a plant without process noise)
+        return
     if not np.allclose(M, M.T, atol=1e-12 * max(1.0, np.abs(M).max())):
         raise InputError("covariance matrix is not symmetric", source, name)
     if np.linalg.eigvalsh(M).min() < -1e-10 * max(1.0, np.abs(M).max()):

@@ -15,7 +15,7 @@ import numpy as np
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
-SYSTEM_KEYS = {"A", "C", "E", "eta_w", "eta_v", "T", "B", "f", "V", "name"}
+SYSTEM_KEYS = {"A", "C", "E", "eta_w", "eta_v", "T", "B", "f", "V", "name", "gaussian"}
 
 #: Largest magnitude of a matrix entry or noise bound read from a file, and the smallest
 #: nonzero noise bound. The design LPs are solved in double precision with absolute

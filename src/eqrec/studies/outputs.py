@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from eqrec.errors import StepError
+from eqrec.io import save_figure  # noqa: F401  (the one figure writer, re-exported for the steps)
 from eqrec.io import atomic_path, write_text
 
 def _json_default(obj: Any) -> Any:
@@ -168,18 +169,3 @@ def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: 
         rest.to_csv(tmp, **kwargs)
 
 
-def save_figure(fig, *paths: str | Path) -> None:
-    """Save a figure to each path (format from the suffix: PDF, PNG, ...) atomically, then close it.
-
-    PDFs carry no creation date, so an unchanged figure is byte-identical.
-    """
-    import matplotlib.pyplot as plt
-
-    try:
-        for p in paths:
-            fmt = Path(p).suffix.lstrip(".").lower()
-            meta = {"CreationDate": None} if fmt == "pdf" else None
-            with atomic_path(p) as tmp:
-                fig.savefig(tmp, format=fmt, metadata=meta)
-    finally:
-        plt.close(fig)

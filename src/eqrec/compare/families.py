@@ -1,0 +1,458 @@
+r"""Every estimator family on the same plant and the same packet traces (``eqrec compare``).
+
+No paper of the project puts bounded-error estimators, Kalman-type filters
+and LMV filters side by side; this module does, on one plant
+(:class:`~eqrec.core.systems.AffineSystem`: its box for the guaranteed
+designs, Gaussian statistics for the others) and, run by run, on one arrival
+trace, one noise realisation and one initial error shared by every family:
+
+``guaranteed, class engine``
+    The delayed-data paper's estimator for the full language ``{0..D}^T``
+    (:func:`eqrec.design.delay.design_delay_global`, ``μ1`` free), run with
+    ``strict=False`` (:mod:`eqrec.core.runtime`): a true bound also when
+    the traces leave the language.
+``guaranteed, prefix (P1)``
+    The prefix-based paper's estimator for "at most one of ``T`` measurements
+    lost" (missing-data words, ``μ1`` free), ``strict=False``; a late packet
+    counts as lost (its language has no delays).
+``Kalman, time-stamped`` and ``Kalman, delay-unaware``
+    :mod:`eqrec.filters.kalman`, designed from the Gaussian statistics.
+``LMV, zero-input`` and ``LMV, hold-input``
+    The companion study's LMV one-step predictor (:mod:`eqrec.lmv.estimator`)
+    for Bernoulli arrivals of rate ``η̄`` = the probability that a packet
+    arrives on time; a late packet counts as lost.
+
+Every estimator reports the one-step prediction ``x̂(t+1)`` after the data of
+time ``t`` (the protocol of :mod:`eqrec.core.protocol`), so the errors
+compared are those of the same quantity.
+
+**Traces.**  Each measurement is lost with probability ``loss`` (independently,
+or in bursts: a Gilbert channel with the same average loss and mean burst
+length ``burst``); a packet that is not lost is delayed by ``d`` steps, ``d``
+uniform on ``0..D``.  **Noise** and **initial error**: normal with
+``σ = bound / 5`` truncated at the bound (the delayed-data paper's Fig. 1), in
+the box of the system and within ``μ1`` of both guaranteed designs, so every
+guarantee applies.  The Gaussian statistics of the Kalman and LMV filters are
+those same normals (``5σ`` = bound) unless the system file gives a
+``gaussian`` section (``Qw``, ``Qv``, ``x0_cov``: then the draws use them too,
+truncated at the box).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+
+from eqrec.core.arrivals import NEVER, ArrivalTrace, gilbert_elliott_trace
+from eqrec.core.noise import GaussianDesign, GaussianNoise, NoisySystem
+from eqrec.core.packets import as_packets
+from eqrec.core.simulate import closed_loop
+from eqrec.core.stacking import UncertaintyLayout
+from eqrec.core.systems import AffineSystem
+from eqrec.errors import InputError
+
+#: The families, in the order of the table, in words.
+FAMILIES = ("guaranteed, class engine", "guaranteed, prefix (P1)", "Kalman, time-stamped", "Kalman, delay-unaware",
+            "LMV, zero-input", "LMV, hold-input")
+
+#: The columns of ``compare.csv`` (then ``rms_x1 ... rms_xn``).
+COLUMNS = ("estimator", "rms", "max_error", "bound", "median_bound", "violations", "outside_design")
+
+#: A violation is an error above the bound by more than this relative margin (rounding of the bound's arithmetic).
+VIOLATION_RTOL = 1e-9
+
+
+def _number(value: Any, field_name: str, low: float, high: float, integer: bool = False,
+            low_open: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"must be a number, got {value!r}", field=field_name)
+    if integer and float(value) != int(value):
+        raise InputError(f"must be an integer, got {value!r}", field=field_name)
+    if not np.isfinite(value) or value < low or value > high or (low_open and value == low):
+        raise InputError(f"must be in {'(' if low_open else '['}{low}, {high}], got {value!r}", field=field_name)
+    return int(value) if integer else float(value)
+
+
+@dataclass(frozen=True)
+class CompareSetup:
+    """What ``eqrec compare`` runs: the language of the designs, the traces and the Monte Carlo size.
+
+    Parameters
+    ----------
+    loss : float
+        Probability that a measurement is lost, ``0 <= loss < 1``.
+    max_delay : int
+        Largest delay ``D`` of a packet that is not lost (and of the class-engine design's language).
+    horizon : int
+        Recovery time ``T`` of the guaranteed designs.
+    runs : int, optional
+        Number of Monte Carlo runs (default 50).
+    periods : int, optional
+        Length of a run in periods of ``T`` steps (default 10).
+    burst : float or None, optional
+        Mean length of a burst of losses (a Gilbert channel with average loss
+        ``loss``; ``None``: independent losses).
+    seed : int, optional
+        Seed of the draws (default 0).
+    sigmas : float, optional
+        Bounds in standard deviations of the normals drawn (default 5).
+
+    Raises
+    ------
+    InputError
+        A value out of its range, naming the field.
+    """
+
+    loss: float
+    max_delay: int
+    horizon: int
+    runs: int = 50
+    periods: int = 10
+    burst: float | None = None
+    seed: int = 0
+    sigmas: float = 5.0
+
+    def __post_init__(self) -> None:
+        checked = {"loss": _number(self.loss, "loss", 0.0, 0.99),
+                   "max_delay": _number(self.max_delay, "max_delay", 0, 10, integer=True),
+                   "horizon": _number(self.horizon, "horizon", 1, 30, integer=True),
+                   "runs": _number(self.runs, "runs", 1, 100_000, integer=True),
+                   "periods": _number(self.periods, "periods", 1, 10_000, integer=True),
+                   "seed": _number(self.seed, "seed", 0, 2**63 - 1, integer=True),
+                   "sigmas": _number(self.sigmas, "sigmas", 0.0, 100.0, low_open=True)}
+        if self.burst is not None:
+            checked["burst"] = _number(self.burst, "burst", 1.0, 1e6)
+            if checked["loss"] == 0:
+                raise InputError("a burst length needs a positive loss", field="burst")
+            if checked["loss"] / (1 - checked["loss"]) / checked["burst"] > 1:
+                raise InputError(f"a mean burst of {checked['burst']} steps cannot give an average loss of "
+                                 f"{checked['loss']} (the channel would have to enter a burst with probability > 1)",
+                                 field="burst")
+        for key, value in checked.items():
+            object.__setattr__(self, key, value)
+
+    @property
+    def steps(self) -> int:
+        """Steps of a run: ``periods · T``."""
+        return self.periods * self.horizon
+
+    @property
+    def on_time_rate(self) -> float:
+        """Probability that a packet arrives on time: ``(1 − loss) / (D + 1)`` (the LMV filters' ``η̄``)."""
+        return (1.0 - self.loss) / (self.max_delay + 1)
+
+
+def draw_trace(rng: np.random.Generator, setup: CompareSetup) -> ArrivalTrace:
+    """One run's arrivals: losses (independent or in bursts), then a uniform delay ``0..D`` per packet kept.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source (draws, in order: the losses, then one delay per measurement).
+    setup : CompareSetup
+        The loss, burst and delay settings.
+
+    Returns
+    -------
+    ArrivalTrace
+        ``setup.steps`` measurements.
+    """
+    N = setup.steps
+    if setup.burst is None:
+        lost = rng.random(N) < setup.loss
+    else:  # Gilbert channel: bad (every packet lost) for 1/p_bg steps on average, stationary loss = `loss`
+        p_bg = 1.0 / setup.burst
+        p_gb = setup.loss * p_bg / (1.0 - setup.loss)
+        lost = gilbert_elliott_trace(rng, N, p_gb, p_bg).lost
+    delays = rng.integers(0, setup.max_delay + 1, N)
+    return ArrivalTrace(np.where(lost, NEVER, delays))
+
+
+class OnTimeOnly:
+    """A protocol estimator fed only the packet of the current time: a late packet counts as lost.
+
+    For the estimators whose model has losses but no delays (the prefix-based
+    paper's, the LMV filters).
+
+    Parameters
+    ----------
+    estimator : object
+        An estimator of the protocol (:mod:`eqrec.core.protocol`).
+    p : int
+        Number of outputs.
+    """
+
+    def __init__(self, estimator: Any, p: int):
+        self.estimator, self.p = estimator, p
+        self.kind, self.name = estimator.kind, estimator.name
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "OnTimeOnly":
+        """Start the wrapped estimator (:meth:`eqrec.core.protocol.Estimator.reset`).
+
+        Parameters
+        ----------
+        xhat0 : array_like
+            Initial estimate.
+        t0 : int, optional
+            Absolute time of the first step.
+
+        Returns
+        -------
+        OnTimeOnly
+            ``self``.
+        """
+        self.estimator.reset(xhat0, t0)
+        return self
+
+    def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, Any]:
+        """Pass ``y(t)`` on if its packet is among those arriving at ``t``, else ``None``.
+
+        Parameters
+        ----------
+        y : object
+            What arrived (any protocol form).
+        u : array_like or None, optional
+            The input.
+
+        Returns
+        -------
+        tuple
+            What the wrapped estimator returns.
+        """
+        now = self.estimator.time
+        on_time = [pk.y for pk in as_packets(y, now, self.p) if pk.time == now]
+        return self.estimator.step(on_time[0] if on_time else None, u)
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        return self.estimator.time
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate."""
+        return self.estimator.x
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.__dict__["estimator"], name)
+
+
+@dataclass
+class CompareResult:
+    """What :func:`compare_families` returns.
+
+    Parameters
+    ----------
+    setup : CompareSetup
+        The settings.
+    table : pandas.DataFrame
+        One row per family (:data:`COLUMNS` and the per-state RMS).
+    errors : dict of str to ndarray
+        Per family, ``‖x(t+1) − x̂(t+1)‖∞``, shape ``(runs, steps)``.
+    bounds : dict of str to ndarray
+        Per guaranteed family, the bound of each step, shape ``(runs, steps)``.
+    mu1 : dict of str to float
+        The recovery level of each guaranteed design.
+    outside : dict of str to ndarray
+        Per guaranteed family, whether each step was outside the design, shape ``(runs, steps)``.
+    """
+
+    setup: CompareSetup
+    table: pd.DataFrame
+    errors: dict[str, np.ndarray]
+    bounds: dict[str, np.ndarray]
+    mu1: dict[str, float]
+    outside: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+def _missing_data_words(T: int) -> list[str]:
+    """Every 0/1 word of length ``T`` with at most one ``0`` (at most one measurement of ``T`` lost)."""
+    return ["1" * T] + ["1" * i + "0" + "1" * (T - 1 - i) for i in range(T)]
+
+
+def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs") -> dict[str, Any]:
+    """The two guaranteed designs of the comparison, each at its smallest feasible ``μ1``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    setup : CompareSetup
+        ``D`` and ``T``.
+    solver : str, optional
+        LP solver (default HiGHS).
+
+    Returns
+    -------
+    dict
+        ``{family: Design}`` for the class engine on ``{0..D}^T`` and the prefix
+        design on "at most one of ``T`` lost".
+
+    Raises
+    ------
+    InfeasibleDesign, SolverFailure, CertificationFailure
+        As the designs.
+    """
+    from eqrec.design.delay import delay_classes, design_delay_global
+    from eqrec.design.prefix import design_prefix
+
+    classes = delay_classes(max_delay=setup.max_delay, horizon=setup.horizon)
+    return {FAMILIES[0]: design_delay_global(system, classes, solver=solver).design,
+            FAMILIES[1]: design_prefix(system, _missing_data_words(setup.horizon), "free", solver=solver)}
+
+
+def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar: float, steps: int) -> Any:
+    from eqrec.lmv.estimator import LMVEstimator
+    from eqrec.lmv.model import system_of
+    from eqrec.lmv.plant import Plant
+    from eqrec.lmv.recursion import lmv_recursion
+
+    if system.nw == 0:  # the LMV plant has a process noise: give it a zero one (same system)
+        system = AffineSystem(A=system.A, C=system.C, E=np.zeros((system.n, 1)), eta_w=1.0, eta_v=system.eta_v,
+                              B=system.B, f=system.f, V=system.V, name=system.name, source=system.source)
+        gaussian = GaussianNoise(Qw=np.zeros((1, 1)), Qv=gaussian.Qv, x0_cov=gaussian.x0_cov,
+                                 x0_mean=gaussian.x0_mean)
+    plant = Plant.from_description(NoisySystem(system, gaussian))
+    sys = system_of(plant, mechanism, eta_bar)
+    return lambda: LMVEstimator(sys, lmv_recursion(sys, steps + 1, check_stability=False), system=system)
+
+
+def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "GaussianNoise | dict | None" = None,
+                     solver: str = "highs", progress: Callable[[str], None] | None = None) -> CompareResult:
+    """Run every family (module docstring) on the same traces, noise and initial errors.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant (time-invariant).
+    setup : CompareSetup
+        Traces and Monte Carlo size.
+    gaussian : GaussianNoise, dict or None, optional
+        Second moments of the noise and of the initial error (``None``: from
+        the box, ``5σ`` = bound, with ``μ1`` the smaller of the two designs';
+        a dict with some of ``Qw``, ``Qv``, ``x0_cov``, as a system file's
+        ``gaussian`` section, takes the others from the box).
+    solver : str, optional
+        LP solver of the guaranteed designs.
+    progress : callable or None, optional
+        Called with a line of text per family done.
+
+    Returns
+    -------
+    CompareResult
+        The table, the errors, the bounds.
+
+    Raises
+    ------
+    InputError
+        A time-varying system, or a Gaussian description that does not fit it.
+    """
+    from eqrec.filters.kalman import DelayUnawareKalman, TimestampedKalman
+
+    if system.is_time_varying:
+        raise InputError("the comparison runs on a time-invariant system", system.source, "A")
+    designs = guaranteed_designs(system, setup, solver)
+    mu1 = min(d.mu1 for d in designs.values())
+    gaussian = _gaussian(system, gaussian, mu1, setup.sigmas)
+    kalman = GaussianDesign(P0=gaussian.x0_cov, Q=system.E @ gaussian.Qw @ system.E.T,
+                            R=system.V @ gaussian.Qv @ system.V.T)
+    N, n, p = setup.steps, system.n, system.p
+    makers: dict[str, Callable[[], Any]] = {
+        FAMILIES[0]: lambda: designs[FAMILIES[0]].estimator(strict=False),
+        FAMILIES[1]: lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p),
+        FAMILIES[2]: lambda: TimestampedKalman(system, kalman),
+        FAMILIES[3]: lambda: DelayUnawareKalman(system, kalman),
+    }
+    for family, mechanism in ((FAMILIES[4], "zero-input"), (FAMILIES[5], "hold-input")):
+        make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)
+        makers[family] = (lambda make=make: OnTimeOnly(make(), p))
+    # the draws, in order, per run: the trace, then the noise and the initial error
+    rng = np.random.default_rng(setup.seed)
+    lay = UncertaintyLayout(N, system.nw, system.nv, n)
+    radius = lay.radius(system.eta_w, system.eta_v, mu1)
+    scale = np.concatenate([np.tile(np.sqrt(np.diag(gaussian.Qw)), N), np.tile(np.sqrt(np.diag(gaussian.Qv)), N),
+                            np.sqrt(np.diag(gaussian.x0_cov))])
+    runs = []
+    for _ in range(setup.runs):
+        trace = draw_trace(rng, setup)
+        z = _truncated_normal(rng, lay.size, setup.sigmas)
+        delta = np.clip(z * scale, -radius, radius)  # within the box, so every guarantee applies
+        runs.append((trace, *lay.split(delta)))
+    errors, bounds, outside, rows = {}, {}, {}, []
+    x0 = np.zeros(n)
+    for family in FAMILIES:
+        err = np.zeros((setup.runs, N))
+        sq = np.zeros(n)
+        bnd = np.full((setup.runs, N), np.nan)
+        out = np.zeros((setup.runs, N), bool)
+        for r, (trace, w, v, xi0) in enumerate(runs):
+            est = makers[family]()
+            flags: list[bool] = []
+            after = (lambda _k, est=est, flags=flags: flags.append(not est.in_design)) if family in designs else None
+            run = closed_loop(system, est, trace, x0, xi0, w, v, after_step=after)
+            e = run.error[1:]
+            err[r] = np.abs(e).max(axis=1)
+            sq += (e ** 2).sum(axis=0)
+            if family in designs:
+                bnd[r] = run.spread
+                out[r] = flags
+        errors[family] = err
+        row = {"estimator": family, "rms": float(np.sqrt(sq.sum() / (setup.runs * N * n))),
+               "max_error": float(err.max())}
+        if family in designs:
+            bounds[family], outside[family] = bnd, out
+            row.update(bound=float(bnd.max()), median_bound=float(np.median(bnd)),
+                       violations=int(np.sum(err > bnd * (1 + VIOLATION_RTOL))),
+                       outside_design=float(out.mean()))
+        else:
+            row.update(bound=np.nan, median_bound=np.nan, violations=pd.NA, outside_design=np.nan)
+        row.update({f"rms_x{i + 1}": float(np.sqrt(sq[i] / (setup.runs * N))) for i in range(n)})
+        rows.append(row)
+        if progress is not None:
+            progress(f"{family}: rms {row['rms']:.4g}, max error {row['max_error']:.4g}")
+    table = pd.DataFrame(rows, columns=[*COLUMNS, *[f"rms_x{i + 1}" for i in range(n)]])
+    table["violations"] = table["violations"].astype("Int64")
+    return CompareResult(setup=setup, table=table, errors=errors, bounds=bounds,
+                         mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside)
+
+
+def _gaussian(system: AffineSystem, given: "GaussianNoise | dict | None", mu1: float, sigmas: float) -> GaussianNoise:
+    """The Gaussian description: given, or from a system file's ``gaussian`` section, or from the box."""
+    box = GaussianNoise.from_box(system, mu1, sigmas)
+    if given is None:
+        return box
+    if isinstance(given, dict):
+        unknown = set(given) - {"Qw", "Qv", "x0_cov"}
+        if unknown:
+            raise InputError(f"unknown key(s) {sorted(unknown)}; allowed: Qw, Qv, x0_cov", system.source, "gaussian")
+        given = GaussianNoise(Qw=given.get("Qw", box.Qw), Qv=given.get("Qv", box.Qv),
+                              x0_cov=given.get("x0_cov", box.x0_cov))
+    given.check(system)
+    return given
+
+
+def _truncated_normal(rng: np.random.Generator, size: int, sigmas: float) -> np.ndarray:
+    """Standard normals redrawn until within ``±sigmas`` (in draw order: deterministic for a seed)."""
+    z = rng.standard_normal(size)
+    bad = np.abs(z) > sigmas
+    while bad.any():
+        z[bad] = rng.standard_normal(int(bad.sum()))
+        bad = np.abs(z) > sigmas
+    return z
+
+
+def write_table(result: CompareResult, path: str) -> None:
+    """Write ``compare.csv``: one row per family, numbers with 6 significant digits, empty where not applicable.
+
+    Parameters
+    ----------
+    result : CompareResult
+        The comparison.
+    path : str
+        The CSV file to write.
+    """
+    result.table.to_csv(path, index=False, float_format="%.6g", na_rep="", lineterminator="\n")
+

@@ -1,0 +1,119 @@
+"""``eqrec compare``: every estimator family on the same traces (issue 24, section 4)."""
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from eqrec.compare import COLUMNS, FAMILIES, CompareSetup, compare_families, draw_trace, write_table
+from eqrec.core.arrivals import NEVER
+from eqrec.errors import InputError
+from eqrec.models import batch_reactor
+
+
+@pytest.fixture(scope="module")
+def reactor_result():
+    return compare_families(batch_reactor(), CompareSetup(loss=0.2, max_delay=1, horizon=4, runs=12, periods=5,
+                                                          seed=3))
+
+
+def test_every_family_has_a_row_and_the_guaranteed_ones_hold(reactor_result):
+    table = reactor_result.table
+    assert list(table["estimator"]) == list(FAMILIES)
+    assert list(table.columns[:len(COLUMNS)]) == list(COLUMNS)
+    guaranteed = table[table["estimator"].str.startswith("guaranteed")]
+    assert (guaranteed["violations"] == 0).all()
+    assert (guaranteed["max_error"] <= guaranteed["bound"]).all()
+    assert (guaranteed["outside_design"] > 0).any()  # the traces did leave the language at loss 0.2
+    others = table[~table["estimator"].str.startswith("guaranteed")]
+    assert others["bound"].isna().all() and others["violations"].isna().all()
+    for family, err in reactor_result.errors.items():
+        assert err.shape == (12, 20) and np.all(np.isfinite(err))
+
+
+def test_the_table_is_the_errors_it_summarises(reactor_result):
+    row = reactor_result.table.set_index("estimator").loc[FAMILIES[2]]
+    assert row["max_error"] == reactor_result.errors[FAMILIES[2]].max()
+    per_state = [row[f"rms_x{i}"] for i in range(1, 5)]
+    assert row["rms"] == pytest.approx(np.sqrt(np.mean(np.square(per_state))))
+
+
+def test_in_the_language_the_class_engine_stays_in_design():
+    result = compare_families(batch_reactor(), CompareSetup(loss=0.0, max_delay=1, horizon=4, runs=5, periods=4))
+    row = result.table.set_index("estimator").loc[FAMILIES[0]]
+    assert row["outside_design"] == 0 and row["violations"] == 0
+    assert row["bound"] <= result.mu1[FAMILIES[0]] * 10
+
+
+def test_traces_follow_the_settings():
+    rng = np.random.default_rng(0)
+    setup = CompareSetup(loss=0.3, max_delay=2, horizon=5, periods=400)
+    d = draw_trace(rng, setup).delays
+    lost = d == NEVER
+    assert abs(lost.mean() - 0.3) < 5 * np.sqrt(0.3 * 0.7 / d.size)
+    assert set(d[~lost].tolist()) == {0, 1, 2}
+    burst = draw_trace(np.random.default_rng(1), CompareSetup(loss=0.2, max_delay=0, horizon=5, periods=2000,
+                                                              burst=5.0)).delays == NEVER
+    runs = np.diff(np.flatnonzero(np.diff(np.r_[0, burst.astype(int), 0])))[::2]
+    assert abs(burst.mean() - 0.2) < 0.03 and abs(runs.mean() - 5.0) < 0.6  # mean burst length
+
+
+def test_results_are_reproducible_byte_for_byte(tmp_path):
+    setup = CompareSetup(loss=0.1, max_delay=1, horizon=4, runs=4, periods=3, seed=5)
+    for name in ("a.csv", "b.csv"):
+        write_table(compare_families(batch_reactor(), setup), str(tmp_path / name))
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    table = pd.read_csv(tmp_path / "a.csv")
+    assert table.loc[2:, "bound"].isna().all()
+
+
+@pytest.mark.parametrize("kwargs,field", [
+    (dict(loss=1.2), "loss"), (dict(loss="0.1"), "loss"), (dict(max_delay=-1), "max_delay"),
+    (dict(horizon=0), "horizon"), (dict(runs=2.5), "runs"), (dict(burst=0.5), "burst"),
+    (dict(loss=0.9, burst=2.0), "burst"), (dict(loss=0.0, burst=3.0), "burst"), (dict(seed=-1), "seed"),
+])
+def test_bad_settings_name_the_field(kwargs, field):
+    base = dict(loss=0.1, max_delay=1, horizon=4)
+    with pytest.raises(InputError) as exc:
+        CompareSetup(**{**base, **kwargs})
+    assert exc.value.field == field
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "eqrec", "compare", *args], capture_output=True, text=True)
+
+
+def test_cli_writes_the_table_and_the_figure(tmp_path):
+    out = tmp_path / "cmp"
+    r = _cli("examples/batch_reactor.yaml", "--loss", "0.1", "--max-delay", "1", "--horizon", "4", "--runs", "4",
+             "--periods", "3", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert {p.name for p in out.iterdir()} == {"compare.csv", "compare.png", "compare.pdf"}
+    assert "guaranteed, class engine" in r.stdout and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("args,code,text", [
+    (["--loss", "1.5"], 1, "loss"),
+    (["--loss", "0.1", "--burst", "0.2"], 1, "burst"),
+    (["--loss", "0.1", "--solver", "gurobi"], 1, "solver"),
+    (["--loss", "abc"], 2, "invalid float"),
+])
+def test_cli_refuses_bad_input_and_writes_nothing(tmp_path, args, code, text):
+    out = tmp_path / "cmp"
+    r = _cli("examples/batch_reactor.yaml", "--max-delay", "1", "--horizon", "4", "--runs", "2", "--periods", "2",
+             *args, "--out", str(out))
+    assert r.returncode == code and text in r.stderr and "Traceback" not in r.stderr
+    assert not out.exists()
+
+
+def test_cli_refuses_an_output_folder_without_parent_and_a_bad_gaussian_section(tmp_path):
+    r = _cli("examples/batch_reactor.yaml", "--loss", "0.1", "--max-delay", "1", "--horizon", "4",
+             "--out", str(tmp_path / "missing" / "cmp"))
+    assert r.returncode == 1 and "--out" in r.stderr
+    system = tmp_path / "plant.yaml"
+    system.write_text("A: [[1.0, 0.1], [0.0, 1.0]]\nC: [[1.0, 0.0]]\nE: [[0.1, 0.0], [0.0, 0.1]]\n"
+                      "eta_w: 0.1\neta_v: 0.05\ngaussian: {Qw: [[1.0, 2.0], [2.0, 1.0]]}\n")
+    r = _cli(str(system), "--loss", "0.1", "--max-delay", "1", "--horizon", "3", "--runs", "2", "--periods", "2",
+             "--out", str(tmp_path / "g"))
+    assert r.returncode == 1 and "Qw" in r.stderr and not (tmp_path / "g").exists()
