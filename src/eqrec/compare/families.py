@@ -46,7 +46,7 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from eqrec.core.arrivals import NEVER, ArrivalTrace, gilbert_elliott_trace
+from eqrec.core.arrivals import ArrivalTrace, delay_trace, gilbert_elliott_trace, with_uniform_delays
 from eqrec.core.noise import GaussianDesign, GaussianNoise, NoisySystem
 from eqrec.core.packets import as_packets
 from eqrec.core.simulate import closed_loop
@@ -151,7 +151,8 @@ def draw_trace(rng: np.random.Generator, setup: CompareSetup) -> ArrivalTrace:
     Parameters
     ----------
     rng : numpy.random.Generator
-        Random source (draws, in order: the losses, then one delay per measurement).
+        Random source (:mod:`eqrec.core.arrivals` draws: one uniform per measurement for independent
+        losses and delays; the channel, then one delay per measurement, for bursts).
     setup : CompareSetup
         The loss, burst and delay settings.
 
@@ -162,13 +163,11 @@ def draw_trace(rng: np.random.Generator, setup: CompareSetup) -> ArrivalTrace:
     """
     N = setup.steps
     if setup.burst is None:
-        lost = rng.random(N) < setup.loss
-    else:  # Gilbert channel: bad (every packet lost) for 1/p_bg steps on average, stationary loss = `loss`
-        p_bg = 1.0 / setup.burst
-        p_gb = setup.loss * p_bg / (1.0 - setup.loss)
-        lost = gilbert_elliott_trace(rng, N, p_gb, p_bg).lost
-    delays = rng.integers(0, setup.max_delay + 1, N)
-    return ArrivalTrace(np.where(lost, NEVER, delays))
+        return delay_trace(rng, N, [(1.0 - setup.loss) / (setup.max_delay + 1)] * (setup.max_delay + 1))
+    # Gilbert channel: bad (every packet lost) for 1/p_bg steps on average, stationary loss = `loss`
+    p_bg = 1.0 / setup.burst
+    p_gb = setup.loss * p_bg / (1.0 - setup.loss)
+    return with_uniform_delays(rng, gilbert_elliott_trace(rng, N, p_gb, p_bg), setup.max_delay)
 
 
 class OnTimeOnly:

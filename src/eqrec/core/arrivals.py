@@ -438,3 +438,34 @@ def gilbert_elliott_trace(rng: np.random.Generator, steps: int, p_good_to_bad: f
         lost[t] = u_loss[t] < (lb if bad else lg)
         bad = (u_move[t] >= pbg) if bad else (u_move[t] < pgb)
     return ArrivalTrace.from_arrived(~lost)
+
+
+def with_uniform_delays(rng: np.random.Generator, trace: ArrivalTrace, max_delay: int) -> ArrivalTrace:
+    """The same losses, each packet that is not lost delayed by ``d`` uniform on ``0..max_delay``.
+
+    One ``rng.integers`` draw per measurement (lost ones included, so the draws
+    do not depend on the losses).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    trace : ArrivalTrace
+        The losses (its delays other than :data:`NEVER` are replaced).
+    max_delay : int
+        Largest delay ``D >= 0``.
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays in ``0..D`` or :data:`NEVER`.
+
+    Raises
+    ------
+    InputError
+        A negative or non-integer ``max_delay``.
+    """
+    if isinstance(max_delay, bool) or not isinstance(max_delay, (int, np.integer)) or max_delay < 0:
+        raise InputError(f"the largest delay must be an integer >= 0, got {max_delay!r}", field="max_delay")
+    delays = rng.integers(0, int(max_delay) + 1, trace.steps)
+    return ArrivalTrace(np.where(trace.lost, NEVER, delays))
