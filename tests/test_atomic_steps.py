@@ -203,3 +203,52 @@ def test_a_horizon_that_is_over_is_refused_atomically(class_design):
     with pytest.raises(InputError, match="horizon"):
         est.step(np.ones(1))
     assert pickle.dumps(est) == before
+
+
+@pytest.mark.parametrize("bad_y,bad_u", [
+    (np.array([np.nan, 0.0]), None), ("12", None), (np.zeros(3), None), (np.zeros(2), np.array([np.inf])),
+    (np.zeros(2), np.zeros(4)), ([(0, np.zeros(2))], None),
+])
+def test_augmented_estimator_steps_are_all_or_nothing(acc, bad_y, bad_u):
+    """The state-augmented estimator (one word): every refused step leaves (x̂, s, the record) as they were."""
+    from eqrec.design.augmented_model import AugmentedGains, as_time_varying_L
+    from eqrec.design.augmented_runtime import AugmentedEstimator
+
+    rng = np.random.default_rng(4)
+    word, n, p = "110111", 3, 2
+    M = np.zeros((6 * n, 6 * p))
+    for k in range(6):
+        for i in range(k + 1):
+            if word[i] == "1":
+                M[k * n:(k + 1) * n, i * p:(i + 1) * p] = rng.normal(size=(n, p)) * 0.3
+    gains = AugmentedGains(word, as_time_varying_L(rng.normal(size=(n, p)) * 0.5, 6, n, p), rng.normal(size=n), M,
+                           rng.normal(size=6 * n) * 0.1, "theorem2")
+    est, twin = (AugmentedEstimator(acc, gains, np.ones(3)) for _ in range(2))
+    for e in (est, twin):
+        e.step(np.array([0.5, 0.2]))
+    before = state_of(est)
+    with pytest.raises(InputError):
+        est.step(bad_y, bad_u)
+    assert state_of(est) == before
+    for y in (None, np.array([0.1, 0.3]), np.array([0.0, 1.0])):
+        assert np.array_equal(est.step(y), twin.step(y))
+    with pytest.raises(InputError, match="xhat0"):
+        AugmentedEstimator(acc, gains, np.array([np.nan, 0.0, 0.0]))
+
+
+def test_weighted_estimator_reset_and_steps_are_all_or_nothing(plant):
+    design = design_delay_global(plant, LOSS, state_weights=[1.0, 4.0]).design
+    est, twin = (design.estimator(strict=False).reset(np.zeros(2)) for _ in range(2))
+    for e in (est, twin):
+        e.step(np.array([0.3]))
+    before = state_of(est)
+    for bad in ((np.array([np.nan]),), ("x",)):
+        with pytest.raises(InputError):
+            est.step(*bad)
+    with pytest.raises(InputError, match="xhat0"):
+        est.reset("0.5")
+    assert state_of(est) == before
+    for y in (None, np.array([0.2]), None):
+        a, b = est.step(y), twin.step(y)
+        assert np.array_equal(a[0], b[0]) and a[1] == b[1]
+    assert np.array_equal(est.error_box, twin.error_box)

@@ -117,14 +117,9 @@ class WeightedEstimator:
         InputError
             If ``xhat0`` is not ``n`` numbers, and the errors of the wrapped estimator's ``reset``.
         """
-        try:
-            x0 = np.asarray(xhat0, float)
-        except (TypeError, ValueError):
-            raise InputError(f"the initial estimate must be {self.weights.size} numbers, got {xhat0!r}",
-                             field="xhat0") from None
-        if x0.shape != self.weights.shape:
-            raise InputError(f"the initial estimate must have n = {self.weights.size} entries, got shape {x0.shape}",
-                             field="xhat0")
+        from eqrec.core.estimator import check_estimate
+
+        x0 = check_estimate(xhat0, self.weights.size)
         self.estimator.reset(self.weights * x0, t0)
         return self
 
