@@ -32,6 +32,8 @@ from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
+from eqrec.core.packets import as_packets
+
 #: What a step returns besides the estimate: a float bound (guaranteed) or a covariance (stochastic).
 Spread = "float | np.ndarray"
 
@@ -100,3 +102,73 @@ class Estimator(Protocol):
     def x(self) -> np.ndarray:
         """A copy of the current estimate."""
         ...
+
+
+class OnTimeOnly:
+    """A protocol estimator fed only the packet of the current time: a late packet counts as lost.
+
+    An adapter for the estimators whose model has losses but no delays (the
+    prefix-based paper's, the LMV filters) on traces with late packets
+    (:mod:`eqrec.compare`).
+
+    Parameters
+    ----------
+    estimator : object
+        An estimator of the protocol (:mod:`eqrec.core.protocol`).
+    p : int
+        Number of outputs.
+    """
+
+    def __init__(self, estimator: Any, p: int):
+        self.estimator, self.p = estimator, p
+        self.kind, self.name = estimator.kind, estimator.name
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "OnTimeOnly":
+        """Start the wrapped estimator (:meth:`eqrec.core.protocol.Estimator.reset`).
+
+        Parameters
+        ----------
+        xhat0 : array_like
+            Initial estimate.
+        t0 : int, optional
+            Absolute time of the first step.
+
+        Returns
+        -------
+        OnTimeOnly
+            ``self``.
+        """
+        self.estimator.reset(xhat0, t0)
+        return self
+
+    def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, Any]:
+        """Pass ``y(t)`` on if its packet is among those arriving at ``t``, else ``None``.
+
+        Parameters
+        ----------
+        y : object
+            What arrived (any protocol form).
+        u : array_like or None, optional
+            The input.
+
+        Returns
+        -------
+        tuple
+            What the wrapped estimator returns.
+        """
+        now = self.estimator.time
+        on_time = [pk.y for pk in as_packets(y, now, self.p) if pk.time == now]
+        return self.estimator.step(on_time[0] if on_time else None, u)
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        return self.estimator.time
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate."""
+        return self.estimator.x
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.__dict__["estimator"], name)
