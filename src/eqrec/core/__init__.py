@@ -19,7 +19,7 @@ certification, the runtime estimator and simulation.  Nothing here designs an es
     Worst cases recomputed from the gains alone.
 :mod:`~eqrec.core.protocol`
     The one estimator protocol (``reset``, then ``step(y, u) -> (x̂, bound or covariance)``) of every estimator.
-:mod:`~eqrec.core.estimator`, :mod:`~eqrec.core.switching`, :mod:`~eqrec.core.runtime`
+:mod:`~eqrec.core.estimator`, :mod:`~eqrec.core.switching`, :mod:`~eqrec.core.runtime`, :mod:`~eqrec.core.error_boxes`
     Causal estimators on time-stamped packets, the switching strategy, and the user-facing guaranteed estimator.
 :mod:`~eqrec.core.simulate`, :mod:`~eqrec.core.long_runs`
     Runs within one horizon and Monte Carlo; long runs (periodic reuse, the switching scheme).

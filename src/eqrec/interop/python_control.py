@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.core.estimator import check_estimate
-from eqrec.core.runtime import BoxState, ClassBoxes
+from eqrec.core.error_boxes import BoxState, ClassBoxes
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
@@ -100,7 +100,7 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
         ``True`` (default): arrivals outside the language raise.  ``False``:
         the estimator keeps a true bound outside the language, as
         ``design.estimator(strict=False)`` (the same transition,
-        :class:`eqrec.core.runtime.ClassBoxes`), and has a third output
+        :class:`eqrec.core.error_boxes.ClassBoxes`), and has a third output
         ``in_design`` (1 when the designed guarantee applies).
 
     Returns
@@ -195,7 +195,7 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
         xhat, box = unpack_boxes(x)
         S = tuple(int(i) for i in np.flatnonzero(arrived[:t + 1]))
         box, coasting = boxes.advance(box, t, S)
-        if coasting:  # the model alone (the one transition of eqrec.core.runtime.ClassBoxes)
+        if coasting:  # the model alone (the one transition of eqrec.core.error_boxes.ClassBoxes)
             nxt = xhat_next = system.A_at(t) @ xhat + system.B_at(t) @ uu + system.f
         else:
             xhat_next = gains.estimate(t + 1, S, nxt, innov[list(S)])
