@@ -18,7 +18,7 @@
 # under `results/p2/` (run `snakemake --cores 2 p2` first); it recomputes nothing.
 #
 # Key fact used throughout: for fixed $L$ and $s_0$ the augmented gains $(M, \nu)$ and the
-# time-based gains $(F, u_0)$ are in bijection (`eqrec.augmented`), so the augmented estimator
+# time-based gains $(F, u_0)$ are in bijection (`eqrec.design.augmented_runtime`), so the augmented estimator
 # can never beat the time-based optimum on the same word, and its optimum does not depend on $L$ or $s_0$.
 
 # %%

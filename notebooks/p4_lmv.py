@@ -17,7 +17,7 @@
 # Reads `results/p4/` only (run `snakemake --cores 2` first). One LMV innovation
 # recursion for systems with multiplicative noises (`eqrec.lmv`) serves both
 # compensation mechanisms; the hold-input filter is the augmented-state
-# estimator of the paper's ref. [15], derived in `eqrec.lmv.hold_input_system`.
+# estimator of the paper's ref. [15], derived in `eqrec.lmv.model.hold_input_system`.
 # Initial conditions (symbolic in the paper): x(0) ~ N(0, I), y_h(−1) = 0.
 
 # %%
