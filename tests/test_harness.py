@@ -134,10 +134,11 @@ def test_code_inputs_follow_the_imports_of_each_step():
     assert "src/eqrec/studies/p1.py" in designs and "src/eqrec/design/sweeps.py" in designs
     assert not any("/lmv/" in p for p in designs)  # an LMV edit does not re-run the P1 LPs
     # P4 runs no LP; its plant comes from eqrec.lmv.plant (config_checks only validates, at planning); of the core
-    # it reads only the shared system description, arrival model and packet forms (issue 24), no LP or estimator
+    # it reads only the shared system description, arrival model and packet forms (issue 24) and the input checks
+    # they share (core.checks), no LP or estimator
     assert not any("/design/" in p for p in model4)
     assert {p for p in model4 if "/core/" in p} <= {f"src/eqrec/core/{m}.py" for m in (
-        "__init__", "systems", "noise", "arrivals", "packets", "patterns", "words")}
+        "__init__", "systems", "noise", "arrivals", "packets", "patterns", "words", "checks")}
     assert "src/eqrec/lmv/plant.py" in model4 and "src/eqrec/studies/config_checks.py" not in model4
     assert "src/eqrec/studies/config_checks.py" not in designs  # P1 steps do not import it
     for files in (designs, model4):  # the harness that runs the step, not the registry of every study

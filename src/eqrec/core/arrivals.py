@@ -31,6 +31,7 @@ from typing import Sequence, TypeVar
 
 import numpy as np
 
+from eqrec.core.checks import generator, integer
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.words import as_pattern
 from eqrec.errors import InputError
@@ -123,7 +124,7 @@ class ArrivalTrace:
         Parameters
         ----------
         arrived : array_like of bool, shape (N,)
-            Whether ``y(t)`` arrives (at ``t``).
+            Whether ``y(t)`` arrives (at ``t``): ``True``/``False`` or ``1``/``0`` (anything else is refused).
 
         Returns
         -------
@@ -131,8 +132,8 @@ class ArrivalTrace:
             Delays ``0`` or :data:`NEVER`.
         """
         a = np.asarray(arrived)
-        if a.ndim != 1:
-            raise InputError(f"arrived must be one-dimensional, got shape {a.shape}", field="arrived")
+        if a.ndim != 1 or not np.isin(a, (0, 1)).all():  # a fraction, NaN or a string is not an arrival
+            raise InputError(f"arrived must be a vector of 0/1 (or bool), got {arrived!r:.60}", field="arrived")
         return cls(np.where(a.astype(bool), 0, NEVER).astype(np.int64))
 
     @classmethod
@@ -153,13 +154,19 @@ class ArrivalTrace:
         Raises
         ------
         InputError
-            A stamp outside ``0..t`` or listed twice (field ``arrive``).
+            Not a sequence of sequences, a stamp that is not an integer, outside ``0..t`` or listed twice
+            (field ``arrive``).
         """
+        try:
+            arrive = [list(stamps) for stamps in arrive]
+        except TypeError:
+            raise InputError(f"arrive[t] lists the stamps arriving at step t, got {arrive!r:.60}", field="arrive") \
+                from None
         N = len(arrive)
         d = np.full(N, NEVER, np.int64)
         for t, stamps in enumerate(arrive):
             for tau in stamps:
-                tau = int(tau)
+                tau = integer(tau, "arrive")
                 if not 0 <= tau <= t:
                     raise InputError(f"stamp {tau} arrives at {t}: a stamp lies in 0..t", field="arrive")
                 if d[tau] != NEVER:
@@ -267,11 +274,11 @@ def uniform_words(rng: np.random.Generator, words: Sequence[W], size: int | None
     >>> uniform_words(np.random.default_rng(0), ["101", "110", "111"], size=4)
     ['111', '110', '110', '101']
     """
-    if len(words) == 0:
-        raise InputError("cannot draw from an empty language", field="words")
+    if not hasattr(words, "__len__") or isinstance(words, str) or len(words) == 0:
+        raise InputError(f"need a non-empty sequence of words to draw from, got {words!r:.60}", field="words")
     if size is None:
-        return words[rng.integers(len(words))]
-    idx = rng.integers(len(words), size=_steps(size, "size"))
+        return words[generator(rng).integers(len(words))]
+    idx = generator(rng).integers(len(words), size=_steps(size, "size"))
     return [words[i] for i in idx]
 
 
@@ -293,7 +300,9 @@ def bernoulli_arrivals(rng: np.random.Generator, shape: "int | tuple[int, ...]",
         ``True`` where the packet arrives.
     """
     p = _probability(arrival, "arrival")
-    return rng.random(shape) < p
+    for size in shape if isinstance(shape, tuple) else (shape,):  # non-negative integers
+        _steps(size, "shape")
+    return generator(rng).random(shape) < p
 
 
 def bernoulli_trace(rng: np.random.Generator, steps: int, loss: float) -> ArrivalTrace:
@@ -344,7 +353,7 @@ def delay_trace(rng: np.random.Generator, steps: int, probabilities: "Sequence[f
         raise InputError(f"need delay probabilities p_0..p_D in [0, 1], got {p.tolist()}", field="probabilities")
     if p.sum() > 1.0 + 1e-12:
         raise InputError(f"delay probabilities sum to {p.sum()} > 1", field="probabilities")
-    u = rng.random(_steps(steps))
+    u = generator(rng).random(_steps(steps))
     d = np.searchsorted(np.cumsum(p), u, side="right")
     return ArrivalTrace(np.where(d >= p.size, NEVER, d).astype(np.int64))
 
@@ -378,7 +387,7 @@ def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time:
     p = _probability(p_on_time, "p_on_time")
     if isinstance(max_delay, bool) or not isinstance(max_delay, (int, np.integer)) or max_delay < 1:
         raise InputError(f"the largest delay must be an integer >= 1, got {max_delay!r}", field="max_delay")
-    late = rng.random(_steps(steps)) >= p
+    late = generator(rng).random(_steps(steps)) >= p
     d = np.zeros(steps, int)
     d[late] = rng.integers(1, max_delay + 1, size=int(late.sum()))
     return d
@@ -424,7 +433,7 @@ def gilbert_elliott_trace(rng: np.random.Generator, steps: int, p_good_to_bad: f
     """
     pgb, pbg = _probability(p_good_to_bad, "p_good_to_bad"), _probability(p_bad_to_good, "p_bad_to_good")
     lg, lb = _probability(loss_good, "loss_good"), _probability(loss_bad, "loss_bad")
-    N = _steps(steps)
+    N, rng = _steps(steps), generator(rng)
     if start == "stationary":
         pi_bad = pgb / (pgb + pbg) if pgb + pbg > 0 else 0.0
         bad = bool(rng.random() < pi_bad)

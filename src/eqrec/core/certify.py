@@ -19,10 +19,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from eqrec.errors import CertificationFailure
+from eqrec.errors import CertificationFailure, InputError
+from eqrec.core.checks import positive
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.words import as_pattern
+from eqrec.core.words import as_language, as_pattern
 from eqrec.core.robust import worst_case_abs, worst_case_vertex
 from eqrec.core.stacking import Stacking, UncertaintyLayout
 from eqrec.core.systems import AffineSystem
@@ -229,7 +230,8 @@ def certify_schedule(system: AffineSystem, schedule: GainSchedule, words, mu1: f
     Raises
     ------
     InputError
-        Malformed words, or a pattern with a prefix the schedule has no gains for.
+        Malformed words, or a pattern with a prefix the schedule has no gains for (field ``words``), a
+        ``mu1`` that is not a positive finite number, a ``system`` or ``schedule`` of another type.
 
     Examples
     --------
@@ -240,10 +242,22 @@ def certify_schedule(system: AffineSystem, schedule: GainSchedule, words, mu1: f
     >>> sorted(cert.words), cert.mu2 <= design.mu2 * (1 + 1e-9), cert.terminal <= 1.0 + 1e-6
     (['101111', '110111'], True, True)
     """
-    cert = Certificate(mu1=float(mu1))
+    if not isinstance(system, AffineSystem):
+        raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
+    if not isinstance(schedule, GainSchedule):
+        raise InputError(f"expected node gains (GainSchedule, design.schedule), got {type(schedule).__name__}",
+                         field="schedule")
+    cert = Certificate(mu1=positive(mu1, "mu1"))
+    if not isinstance(words, (list, tuple)):  # one word, or an iterable: read (and refused) as a language
+        words = as_language(words, kind="missing", fixed_length=False)
     for w in words:
-        w = as_pattern(w)
-        G, c, lay = closed_loop_maps(system, schedule, w)
+        w = as_pattern(w, field_name="words")
+        try:
+            G, c, lay = closed_loop_maps(system, schedule, w)
+        except InputError as exc:  # a prefix the gains do not cover: the word is at fault
+            if exc.field is not None:
+                raise
+            raise InputError(f"word {w.label!r}: {exc}", field="words") from None
         radius = lay.radius(system.eta_w, system.eta_v, mu1)
         bounds = np.stack([worst_case_abs(G[t], c[t], radius) for t in range(w.T + 1)])
         cert.words[w.label] = WordCertificate(word=w.label, G=G, c=c, bounds=bounds, radius=radius, pattern=w)

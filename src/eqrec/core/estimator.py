@@ -299,7 +299,7 @@ class RecoveryEstimator(_StampedEstimator):
         sys = self.system
         step = self._open(y, u)
         t = step.t
-        gain = self.schedule.row(ArrivalPattern(tuple(step.arrivals)))
+        gain = self.schedule.row(ArrivalPattern(tuple(step.arrivals)), field="y")
         yxi = np.zeros((t + 1, sys.p))
         for tau, v in step.yxi.items():
             yxi[tau] = v
@@ -528,7 +528,7 @@ class ClassEstimator(_StampedEstimator):
             raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
                              f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
                              f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains have "
-                             f"no class ({t + 1}, {list(S)})") from None
+                             f"no class ({t + 1}, {list(S)})", field="y") from None
         self._commit(step)
         self._xbar, self.xhat = xbar, xhat
         return self.xhat.copy()
@@ -561,14 +561,14 @@ def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xha
 
     Raises
     ------
-    TypeError
-        For gains of any other kind.
+    InputError
+        For gains of any other kind (field ``gains``).
     """
     if isinstance(gains, GainSchedule):
         return RecoveryEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
     if isinstance(gains, ClassGains):
         return ClassEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
-    raise TypeError(f"expected a GainSchedule or ClassGains, got {type(gains).__name__}")
+    raise InputError(f"expected a GainSchedule or ClassGains, got {type(gains).__name__}", field="gains")
 
 
 def _has_class(gains: ClassGains, depth: int, available: tuple[int, ...]) -> bool:

@@ -144,13 +144,15 @@ class GainSchedule:
         """Length ``T`` of the longest prefix in ``rows``."""
         return max(k.T for k in self.rows)
 
-    def row(self, observed_prefix: "ArrivalPattern | str") -> GainRow:
+    def row(self, observed_prefix: "ArrivalPattern | str", field: str | None = None) -> GainRow:
         """Gain row after observing ``observed_prefix`` (a pattern prefix of length ``t + 1``).
 
         Parameters
         ----------
         observed_prefix : ArrivalPattern or str
             Arrival-pattern prefix observed up to time ``t`` (or a 0/1 word).
+        field : str or None, optional
+            Field named in the error when the prefix has no gains (an estimator names its data ``y``).
 
         Returns
         -------
@@ -160,13 +162,13 @@ class GainSchedule:
         observed = as_pattern(observed_prefix)
         if self.time_based:
             if observed.T > self.designed[0].T:
-                raise InputError(f"time {observed.T - 1} is beyond the horizon {self.horizon}")
+                raise InputError(f"time {observed.T - 1} is beyond the horizon {self.horizon}", field=field)
             return self.rows[self.designed[0].prefix(observed.T)]
         try:
             return self.rows[observed]
         except KeyError:
             raise InputError(f"observed arrival prefix {observed.label!r} is not a prefix of any pattern "
-                             f"of the design language {list(self.designed_words)}") from None
+                             f"of the design language {list(self.designed_words)}", field=field) from None
 
     def word_matrices(self, pattern: "ArrivalPattern | str") -> tuple[np.ndarray, np.ndarray]:
         """Stacked ``F (Tn x Tp)`` and ``u0 (Tn)`` used along ``pattern`` (eq. (9) of the prefix-based paper).

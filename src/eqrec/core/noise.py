@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from eqrec.core.checks import positive
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 
@@ -70,6 +71,13 @@ def _array(value: Any, name: str, shape: tuple[int, ...], source: str | None = N
     if not np.all(np.isfinite(arr)):
         raise InputError("contains NaN or infinite entries", source, name)
     return arr
+
+
+def _box_scale(system: Any, mu1: Any, sigmas: Any) -> tuple[float, float]:
+    """``(mu1, sigmas)`` of a ``from_box`` checked (the system an :class:`AffineSystem`, the field named)."""
+    if not isinstance(system, AffineSystem):
+        raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
+    return positive(mu1, "mu1", zero_ok=True), positive(sigmas, "sigmas")
 
 
 def _square(value: Any, name: str) -> np.ndarray:
@@ -122,7 +130,14 @@ class GaussianDesign:
         GaussianDesign
             Independent components: ``P0 = (mu1/sigmas)² I``, ``Q = (ηw/sigmas)² E Eᵀ``,
             ``R = (ηv/sigmas)² V Vᵀ``.
+
+        Raises
+        ------
+        InputError
+            A ``system`` that is not an :class:`AffineSystem`, ``mu1`` not a finite number >= 0, ``sigmas``
+            not a positive one.
         """
+        mu1, sigmas = _box_scale(system, mu1, sigmas)
         n = system.n
         E, V = system.E_at(0), system.V_at(0)
         return cls(P0=(mu1 / sigmas) ** 2 * np.eye(n), Q=(system.eta_w / sigmas) ** 2 * E @ E.T,
@@ -195,6 +210,7 @@ class GaussianNoise:
         GaussianNoise
             ``Qw = (ηw/σ)² I``, ``Qv = (ηv/σ)² I``, ``x0_cov = (μ1/σ)² I``, zero mean.
         """
+        mu1, sigmas = _box_scale(system, mu1, sigmas)
         return cls(Qw=(system.eta_w / sigmas) ** 2 * np.eye(system.nw), Qv=(system.eta_v / sigmas) ** 2 * np.eye(system.nv),
                    x0_cov=(mu1 / sigmas) ** 2 * np.eye(system.n))
 

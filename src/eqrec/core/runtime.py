@@ -145,14 +145,13 @@ class GuaranteedEstimator:
 
     def __init__(self, system: AffineSystem, gains: "GainSchedule | ClassGains", bound_of: BoundRule, mu1: float,
                  periodic: bool = True, strict: bool = True, name: str | None = None):
-        if not isinstance(strict, (bool, np.bool_)):
-            raise InputError(f"strict must be True or False, got {strict!r}", field="strict")
+        for key, flag in (("strict", strict), ("periodic", periodic)):
+            if not isinstance(flag, (bool, np.bool_)):
+                raise InputError(f"{key} must be True or False, got {flag!r}", field=key)
         if not strict and not isinstance(gains, ClassGains):
             raise InputError("strict=False needs class gains (a design of the class engine, engine='classes'): the "
                              "bound outside the language is computed from the class maps", field="strict")
-        self.system = system
-        self.gains = gains
-        self.bound_of = bound_of
+        self.system, self.gains, self.bound_of = system, gains, bound_of
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
         self.strict = bool(strict)

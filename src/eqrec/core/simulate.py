@@ -27,13 +27,15 @@ from typing import Callable, Sequence
 import numpy as np
 
 from eqrec.core.arrivals import ArrivalTrace, uniform_words
+from eqrec.core.checks import floats, instance, integer, positive, seeded
 from eqrec.core.classes import ClassGains
 from eqrec.core.estimator import Packet, make_estimator
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.stacking import UncertaintyLayout
 from eqrec.core.systems import AffineSystem
-from eqrec.core.words import as_pattern
+from eqrec.core.packets import finite_array
+from eqrec.core.words import as_language, as_pattern
 from eqrec.errors import InputError
 
 
@@ -99,7 +101,7 @@ def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tupl
     shape : tuple of int
         Shape of the draws.
     kind : {"uniform", "vertex"}
-        Uniform inside the box or at random vertices (:class:`ValueError` otherwise).
+        Uniform inside the box or at random vertices (:class:`InputError` naming ``kind`` otherwise).
 
     Returns
     -------
@@ -110,7 +112,7 @@ def draw_box(rng: np.random.Generator, radius: "float | np.ndarray", shape: tupl
         return rng.uniform(-1.0, 1.0, shape) * radius
     if kind == "vertex":
         return rng.choice([-1.0, 1.0], shape) * radius
-    raise ValueError(f"unknown noise kind {kind!r} (uniform or vertex)")
+    raise InputError(f"unknown noise kind {kind!r} (uniform or vertex)", field="kind")
 
 
 @dataclass
@@ -180,7 +182,7 @@ def what_arrived(stamps: Sequence[int], now: int, y: np.ndarray, t0: int = 0) ->
 
 
 def _noise(arr, N: int, rows: int, name: str) -> np.ndarray:
-    a = np.asarray(arr, float)
+    a = floats(arr, name)
     if a.ndim < 2 or a.shape[0] < N or a.shape[1] != rows:
         raise InputError(f"need at least {N} rows of {rows} entries, got shape {a.shape}", field=name)
     if not np.all(np.isfinite(a[:N])):
@@ -251,17 +253,19 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
     Raises
     ------
     InputError
-        Noise arrays too short or not finite, or what the estimator refuses.
+        Noise arrays too short or not finite, a bad ``arrive``, ``system`` or ``est``, what the estimator refuses.
     """
-    schedule = arrive.schedule() if isinstance(arrive, ArrivalTrace) else [list(a) for a in arrive]
-    N, n = len(schedule), system.n
+    trace = arrive if isinstance(arrive, ArrivalTrace) else ArrivalTrace.from_schedule(arrive)  # checked (arrive)
+    schedule = trace.schedule()  # each step's stamps in increasing order
+    N, n = len(schedule), instance(system, AffineSystem, "system").n
     w = _noise(w, N, system.nw, "w")
     v = _noise(v, N, system.nv, "v")
-    x0, xi0 = np.asarray(x0, float), np.asarray(xi0, float)
+    x0, xi0 = floats(x0, "x0"), floats(xi0, "xi0")
     for name, arr in (("x0", x0), ("xi0", xi0)):
         if arr.shape[:1] != (n,) or arr.shape != x0.shape or not np.all(np.isfinite(arr)):
             raise InputError(f"need finite entries, shape ({n},) (or ({n}, K) with one), got {arr.shape}",
                              field=name)
+    instance(getattr(est, "step", None), Callable, "est", "an estimator")
     x = np.zeros((N + 1,) + x0.shape)
     xhat = np.zeros((N + 1,) + x0.shape)
     x[0] = x0
@@ -336,7 +340,8 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     Raises
     ------
     InputError
-        Malformed word, or an arrival prefix the gains do not cover.
+        Malformed word, or an arrival prefix the gains do not cover; a system, gains or ``periodic`` of another
+        type, a ``delta``, ``x0`` or ``inputs`` of another shape or with NaN/inf entries (the field is named).
 
     Examples
     --------
@@ -350,12 +355,15 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     >>> run.error.shape, bool(np.abs(run.error).max() <= design.mu2 + 1e-9)
     ((7, 3), True)
     """
+    instance(system, AffineSystem, "system"), instance(periodic, (bool, np.bool_), "periodic", "True or False")
+    instance(schedule, (GainSchedule, ClassGains), "schedule", "design.schedule or design.class_gains")
     pattern = as_pattern(word)
     T = pattern.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
-    w, v, xi0 = lay.split(np.asarray(delta, float))
+    w, v, xi0 = lay.split(finite_array(delta, (lay.size,), "delta", "the uncertainty delta"))
+    x0 = finite_array(x0, (system.n,), "x0", "the initial state", "n")
+    inputs = None if inputs is None else _noise(inputs, T, system.m, "inputs")
     est = make_estimator(system, schedule, x0 - xi0, periodic=periodic)
-    arrive = [pattern.arriving_at(t) for t in range(T)]
     run = closed_loop(system, est, ArrivalTrace.from_pattern(pattern), x0, xi0, w, v,
                       None if inputs is None else (lambda t, _xhat: inputs[t]))
     return Trajectory(word=pattern.label, x=run.x, xhat=run.xhat)
@@ -407,9 +415,8 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     Raises
     ------
     InputError
-        Malformed words.
-    ValueError
-        An unknown ``kind``.
+        Malformed, no or mixed-length words, an unknown ``kind``, ``runs`` not an integer >= 0, a bad
+        ``seed``, ``mu1`` not a positive number, or the errors of :func:`simulate_run` (the field is named).
 
     Examples
     --------
@@ -422,12 +429,17 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     >>> errors.shape, bool(np.abs(errors).max() <= design.mu2 + 1e-9)
     ((20, 7, 3), True)
     """
-    rng = np.random.default_rng(seed)
-    words = [as_pattern(w) for w in ([words] if isinstance(words, (str, ArrivalPattern)) else words)]
+    instance(system, AffineSystem, "system")
+    runs, mu1, rng = integer(runs, "runs"), positive(mu1, "mu1"), seeded(seed)
+    if not isinstance(words, (list, tuple)):  # one word, or an iterable: read (and refused) as a language
+        words = as_language(words, kind="missing", fixed_length=False)
+    words = [as_pattern(w, field_name="words") for w in words]
+    if len({w.T for w in words}) != 1:
+        raise InputError(f"need words of one length, got {[w.label for w in words]}", field="words")
     T = words[0].T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
     radius = lay.radius(system.eta_w, system.eta_v, mu1)
-    x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
+    x0 = np.zeros(system.n) if x0 is None else finite_array(x0, (system.n,), "x0", "the initial state", "n")
     errs = np.zeros((runs, T + 1, system.n))
     used = []
     for i in range(runs):

@@ -7,6 +7,7 @@ a finite number of a size the double-precision design LPs solve reliably.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -129,8 +130,9 @@ def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
     Raises
     ------
     InputError
-        A missing file or directory, invalid YAML, a missing, unknown or
-        malformed field (the message names the file and the field).
+        A path that is not a path, a missing, unreadable or binary file, a
+        directory, invalid YAML, a missing, unknown or malformed field (the
+        message names the file and the field).
     """
     import re
 
@@ -145,6 +147,8 @@ def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
         re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
         list("-+0123456789."))
 
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"a system file is a path (str or pathlib.Path), got {type(path).__name__}", field="path")
     path = Path(path)
     if path.is_dir():
         raise InputError("is a directory, not a system file", str(path))
@@ -154,4 +158,6 @@ def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
         data = yaml.load(path.read_text(), Loader=_Loader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         raise InputError(f"not valid YAML ({exc})", str(path)) from None
+    except (OSError, UnicodeDecodeError) as exc:  # unreadable, or not a text file
+        raise InputError(f"cannot read the file ({exc})", str(path)) from None
     return system_from_mapping(data, str(path))

@@ -240,9 +240,10 @@ class AffineSystem:
         if v_scale is not None:
             V = V * v_scale
         bounds = {"eta_w": eta_w, "eta_v": eta_v}
-        lengths = {arr.shape[0] for arr in (A, C, E, V) if arr.ndim == 3}
-        if len(lengths) > 1:
-            raise InputError(f"time-varying matrices have different horizons {sorted(lengths)}", src)
+        lengths = {key: arr.shape[0] for key, arr in zip("ACEV", (A, C, E, V)) if arr.ndim == 3}
+        if len(set(lengths.values())) > 1:  # name the first matrix whose horizon differs from the first one's
+            odd = next(k for k, h in lengths.items() if h != next(iter(lengths.values())))
+            raise InputError(f"time-varying matrices have different horizons {lengths}", src, odd)
         if not isinstance(name, str):
             raise InputError(f"must be a string, got {name!r}", src, "name")
         dt = None if dt is None else float(dt)

@@ -28,6 +28,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from eqrec.core.checks import integer
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.errors import InputError
 
@@ -93,8 +94,8 @@ def parse_delays(word: str, max_delay: int | None = None, *, field_name: str = "
     Raises
     ------
     InputError
-        For a non-string or empty word, a non-digit letter, or a delay above
-        ``max_delay``.
+        For a non-string or empty word, a non-digit letter, a delay above
+        ``max_delay``, or a ``max_delay`` that is not an integer >= 0 (field ``max_delay``).
     """
     if not isinstance(word, str):
         raise InputError(f"a delay word must be a string of digits, got {word!r}", source, field_name)
@@ -106,6 +107,7 @@ def parse_delays(word: str, max_delay: int | None = None, *, field_name: str = "
         raise InputError(f"delay word {word!r} has letters {bad} that are not digits 0-9", source, field_name)
     delays = tuple(int(c) for c in word)
     if max_delay is not None:
+        integer(max_delay, "max_delay", source=source)
         over = [d for d in delays if d > max_delay]
         if over:
             raise InputError(f"delay word {word!r} has delays {sorted(set(over))} above the maximum delay "
@@ -257,6 +259,8 @@ def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str | None = N
     """
     if isinstance(words, (str, ArrivalPattern)):
         words = [words]
+    if isinstance(words, dict):  # its keys would be read silently
+        raise InputError("a language is a list of words or patterns, got a dict", source, field_name)
     try:
         words = list(words)
     except TypeError:
@@ -343,7 +347,7 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     Raises
     ------
     InputError
-        If ``T < 1`` or ``max_delay`` is outside ``0..9``.
+        If ``T`` is not an integer >= 1 or ``max_delay`` not one in ``0..9`` (the field is named).
 
     Examples
     --------
@@ -353,8 +357,7 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     >>> len(eqrec.as_language(eqrec.full_delay_language(2, 2), kind="delay"))
     6
     """
-    if T < 1 or max_delay < 0 or max_delay > 9:
-        raise InputError(f"need T >= 1 and 0 <= max delay <= 9, got T = {T}, max delay = {max_delay}")
+    T, max_delay = integer(T, "T", low=1), integer(max_delay, "max_delay", high=9)
     digits = np.indices((max_delay + 1,) * T).reshape(T, -1).T
     return tuple("".join(map(str, row)) for row in digits)
 

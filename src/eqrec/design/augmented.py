@@ -13,12 +13,13 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.core.certify import CERT_RTOL, certify_schedule
+from eqrec.core.checks import instance
 from eqrec.core.lp import LPSolution
 from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.solvers import solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.inputs import check_mu1, check_solver, check_system, real_array
+from eqrec.design.inputs import check_flags, check_mu1, check_solver, check_system, real_array
 from eqrec.design.augmented_model import (DESIGN_MODES, AugmentedGains, check_mode, default_runtime,
                                           missing_data_pattern)
 from eqrec.design.augmented_runtime import schedule_from_augmented
@@ -142,6 +143,8 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     check_mode(mode, DESIGN_MODES)
     system = check_system(system)
     check_solver(solver)
+    check_flags(certify=certify)
+    instance(ipopt_options, (dict, type(None)), "ipopt_options", "a dict or None")
     patterns = as_language(words, kind="missing")
     mu1 = check_mu1(mu1)
     wc_pattern = missing_data_pattern(worst_case_pattern(patterns))

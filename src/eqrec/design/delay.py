@@ -54,6 +54,7 @@ import time
 import numpy as np
 
 from eqrec.core.certify import certify_design
+from eqrec.core.checks import instance, integer
 from eqrec.core.classes import ClassSet, classes_of_full_language, classes_of_tree
 from eqrec.core.lp import LPSolution
 from eqrec.core.patterns import ArrivalPattern
@@ -63,8 +64,8 @@ from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import check_terminal, class_design, solve_classes
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
-from eqrec.design.inputs import (check_fraction, check_mu1, check_solver, check_system, language_classes,
-                                 language_tree)
+from eqrec.design.inputs import (check_flags, check_fraction, check_mu1, check_solver, check_system,
+                                 language_classes, language_tree)
 from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
@@ -73,9 +74,7 @@ from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
 from eqrec.errors import InfeasibleDesign, InputError
 
-# ---------------------------------------------------------------------------
-# Languages
-# ---------------------------------------------------------------------------
+# -------- Languages
 
 def delay_language(words=None, *, max_delay: int | None = None, horizon: int | None = None,
                    source: str | None = None) -> tuple[ArrivalPattern, ...]:
@@ -97,7 +96,7 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
     if words is None:
         if max_delay is None or horizon is None:
             raise InputError("give delay words, or both the maximum delay and the horizon", source, "delays")
-        words = full_delay_language(int(horizon), int(max_delay))
+        words = full_delay_language(horizon, max_delay)
     return as_language(words, kind="delay", max_delay=max_delay, length=horizon, source=source)
 
 
@@ -114,6 +113,11 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     ClassSet
         The (time, available data) classes, for :func:`design_delay` and :func:`design_delay_global`.
 
+    Raises
+    ------
+    InputError
+        ``horizon`` not an integer >= 1 or ``max_delay`` not one >= 0 (the field is named).
+
     Examples
     --------
     >>> import eqrec
@@ -121,7 +125,7 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     >>> len(classes), classes.words
     (446, 931322574615478515625)
     """
-    return classes_of_full_language(int(horizon), int(max_delay))
+    return classes_of_full_language(integer(horizon, "horizon", low=1), integer(max_delay, "max_delay"))
 
 
 def _tree(patterns, kind: str | None = None) -> PrefixTree:
@@ -134,9 +138,7 @@ def _classes(patterns, kind: str | None = None) -> ClassSet:
     return language_classes(patterns, kind=kind, field_name="patterns")
 
 
-# ---------------------------------------------------------------------------
-# Designs from LP solutions
-# ---------------------------------------------------------------------------
+# -------- Designs from LP solutions
 
 def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSystem, x: np.ndarray, mu1: float,
                           cost: str, sol: LPSolution, *, build_time: float = 0.0, certify: bool = True,
@@ -152,9 +154,7 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
     return design
 
 
-# ---------------------------------------------------------------------------
-# μ1 fixed
-# ---------------------------------------------------------------------------
+# -------- μ1 fixed
 
 def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
                  solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
@@ -257,6 +257,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     system, weights = weigh(check_system(system), state_weights)
     check_cost(cost)
     check_engine(engine)
+    check_flags(certify=certify, node_gains=node_gains)
+    instance(solver_options, (dict, type(None)), "solver_options", "a dict or None")
     mu1 = check_mu1(mu1)
     rtol = 1e-6 + solver_info(solver).accuracy
     if engine == "classes":
@@ -312,9 +314,7 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
     return "optimal"
 
 
-# ---------------------------------------------------------------------------
-# μ1 free: the global optimum (the μ1-free theorem of eqrec.design.mu1_min)
-# ---------------------------------------------------------------------------
+# -------- μ1 free: the global optimum (the μ1-free theorem of eqrec.design.mu1_min)
 
 def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = None, solver: str = "highs",
                        rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
@@ -421,6 +421,7 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_engine(engine)
     system, weights = weigh(check_system(system), state_weights)
     check_solver(solver)
+    check_flags(certify=certify, node_gains=node_gains)
     rtol = check_fraction(rtol, "rtol")
     classes = _classes(patterns, kind)
     mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)

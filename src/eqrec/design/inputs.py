@@ -200,6 +200,23 @@ def check_solver(solver: Any) -> str:
     return solver
 
 
+def check_flags(*, none_ok: tuple[str, ...] = ("node_gains",), **flags: Any) -> None:
+    """Each flag ``True`` or ``False`` (or ``None``, the default, for those in ``none_ok``), else :class:`InputError`.
+
+    A string such as ``"no"`` would otherwise be read as true.
+
+    Parameters
+    ----------
+    none_ok : tuple of str, optional
+        The flags that may also be ``None`` (default ``("node_gains",)``).
+    **flags : bool
+        The flags, by name (the name is the field of the error).
+    """
+    for name, value in flags.items():
+        if not (isinstance(value, (bool, np.bool_)) or (value is None and name in none_ok)):
+            raise InputError(f"must be True or False, got {value!r}", field=name)
+
+
 def check_mu1(mu1: Any, *, allow_free: bool = False, field_name: str = "mu1") -> "float | str":
     """The recovery level ``μ1`` as a positive finite float (or ``"free"`` where allowed), else :class:`InputError`.
 

@@ -17,7 +17,7 @@ from eqrec.core.lp import LPSolution
 from eqrec.core.solvers import solve_lp
 from eqrec.core.systems import AffineSystem
 from eqrec.design.classes import class_design
-from eqrec.design.inputs import FREE, check_mu1, check_solver, check_system, language_tree
+from eqrec.design.inputs import FREE, check_flags, check_mu1, check_solver, check_system, language_tree
 from eqrec.design.mu1_min import infeasible_at, min_recovery_level
 from eqrec.design.prefix_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
@@ -210,6 +210,7 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     system, weights = weigh(check_system(system), state_weights)
     check_engine(engine)
     check_solver(solver)
+    check_flags(certify=certify, zero_offset=zero_offset, node_gains=node_gains, fixed_length=fixed_length)
     tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
     mu1 = check_mu1(mu1, allow_free=True)
     if mu1 == FREE:  # the class engine's global optimum over μ1 (eqrec.design.mu1_min), then the design there

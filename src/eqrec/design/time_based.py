@@ -14,7 +14,7 @@ from eqrec.core.certify import certify_design
 from eqrec.core.words import as_language, worst_case_pattern
 from eqrec.core.systems import AffineSystem
 from eqrec.design.prefix import design_prefix
-from eqrec.design.inputs import check_system
+from eqrec.design.inputs import check_flags, check_system
 from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
 
@@ -93,6 +93,7 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     True
     """
     system, weights = weigh(check_system(system), state_weights)
+    check_flags(certify=certify)
     language = as_language(words, kind="missing")
     wc = worst_case_pattern(language)
     design = design_prefix(system, [wc], mu1, solver=solver, form=form, certify=False, method="time",

@@ -94,8 +94,12 @@ class _Filter:
     key = ""
 
     def __init__(self, system: AffineSystem, design: GaussianDesign, inputs: np.ndarray | None = None):
+        for key, value, kind in (("system", system, AffineSystem), ("design", design, GaussianDesign)):
+            if not isinstance(value, kind):
+                raise InputError(f"expected a {kind.__name__}, got {type(value).__name__}", field=key)
         self.system, self.design = system, design
-        self.inputs = None if inputs is None else np.asarray(inputs, float)
+        rows = len(inputs) if isinstance(inputs, (list, tuple, np.ndarray)) else 0
+        self.inputs = None if inputs is None else _finite(inputs, (rows, system.m), "inputs")
         self._time: int | None = None
         self.filtered: np.ndarray | None = None
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from eqrec.core.checks import instance, positive
 from eqrec.core.estimator import check_estimate
 from eqrec.core.error_boxes import BoxState, ClassBoxes
 from eqrec.core.systems import AffineSystem
@@ -64,8 +65,8 @@ def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=
     Raises
     ------
     InputError
-        A continuous-time system (discretise it first, e.g. ``control.c2d``)
-        or a nonzero ``D``.
+        A continuous-time system (discretise it first, e.g. ``control.c2d``),
+        a nonzero ``D``, or bad noise bounds or gains (as :class:`AffineSystem`).
     """
     control = _control()
     if not isinstance(ss, control.StateSpace):
@@ -76,11 +77,9 @@ def system_from_statespace(ss, *, eta_w: float, eta_v: float, E=None, V=None, f=
     A, B, C, D = (np.asarray(m, float) for m in (ss.A, ss.B, ss.C, ss.D))
     if np.any(D != 0):
         raise InputError("D must be zero: the model y = C x + V v has no feedthrough of u", field="D")
-    n, p = A.shape[0], C.shape[0]
-    return AffineSystem(A=A, B=B, C=C, E=np.eye(n) if E is None else np.asarray(E, float), eta_w=float(eta_w),
-                        eta_v=float(eta_v), V=np.eye(p) if V is None else np.asarray(V, float),
-                        f=np.zeros(n) if f is None else np.asarray(f, float), name=name or "python-control system",
-                        dt=None if ss.dt is True else float(ss.dt))
+    # E, V, f and the bounds are checked by AffineSystem (the field is named; V and f default to I and 0)
+    return AffineSystem(A=A, B=B, C=C, E=np.eye(A.shape[0]) if E is None else E, eta_w=eta_w, eta_v=eta_v, V=V,
+                        f=f, name=name or "python-control system", dt=None if ss.dt is True else float(ss.dt))
 
 
 def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool | None" = None,
@@ -118,12 +117,16 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
     Raises
     ------
     InputError
-        A design without class gains; during a simulation, ``arrived`` other
+        A design without class gains, a ``dt`` that is not ``True`` or a positive number, a ``name`` that is not
+        a string; during a simulation, ``arrived`` other
         than 0 or 1, NaN/inf in ``u`` or in an arrived ``y``, or arrivals
         outside the design's language.
     """
     control = _control()
-    gains = design.class_gains
+    gains = getattr(design, "class_gains", None)
+    if dt is not None and dt is not True:
+        positive(dt, "dt")
+    instance(name, str, "name")
     if gains is None:
         raise InputError("estimator_iosys needs a class-engine design (design_prefix or design_delay); "
                          "for other designs use design.estimator()", field="design")

@@ -67,6 +67,12 @@ class LMVEstimator:
         Refuse a system that is not mean-square stable when the gains are computed here (default ``True``;
         :class:`~eqrec.errors.NotMeanSquareStable`).
 
+    Raises
+    ------
+    InputError
+        ``sys`` not a :class:`~eqrec.lmv.model.MultNoiseSystem`, ``system`` not an :class:`AffineSystem` of its
+        plant's size, gains of another system, an unknown ``compensation`` (the field is named).
+
     Attributes
     ----------
     filtered : numpy.ndarray or None
@@ -79,14 +85,19 @@ class LMVEstimator:
 
     def __init__(self, sys: MultNoiseSystem, result: LMVResult | None = None, *, compensation: str | None = None,
                  system: AffineSystem | None = None, check_stability: bool = True):
+        if not isinstance(sys, MultNoiseSystem):
+            raise InputError(f"expected a MultNoiseSystem (eqrec.lmv.model.zero_input_system, hold_input_system or "
+                             f"system_of), got {type(sys).__name__}", field="sys")
+        if system is not None and not isinstance(system, AffineSystem):
+            raise InputError(f"expected an AffineSystem or None, got {type(system).__name__}", field="system")
         mech = sys.meta.get("mechanism", "none") if compensation is None else compensation
         if mech not in COMPENSATIONS:
             raise InputError(f"unknown compensation {mech!r}; one of {COMPENSATIONS}", sys.name, "compensation")
         if mech == "hold-input" and sys.n != sys.n_x + sys.m:
             raise InputError("hold-input compensation needs the augmented state [x; y_h] (hold_input_system)",
                              sys.name, "compensation")
-        if result is not None and result.sys is not sys:
-            raise InputError("the gains belong to another system", sys.name, "result")
+        if result is not None and (not isinstance(result, LMVResult) or result.sys is not sys):
+            raise InputError("need the LMVResult of this system (lmv_recursion(sys, N)) or None", sys.name, "result")
         if system is not None and system.n != sys.n_x:
             raise InputError(f"the system has n = {system.n} states, the LMV plant n_x = {sys.n_x}", sys.name,
                              "system")
