@@ -138,7 +138,7 @@ def test_code_inputs_follow_the_imports_of_each_step():
     # they share (core.checks), no LP or estimator
     assert not any("/design/" in p for p in model4)
     assert {p for p in model4 if "/core/" in p} <= {f"src/eqrec/core/{m}.py" for m in (
-        "__init__", "systems", "noise", "arrivals", "packets", "patterns", "words", "checks")}
+        "__init__", "systems", "noise", "arrivals", "traces", "packets", "patterns", "words", "checks")}
     assert "src/eqrec/lmv/plant.py" in model4 and "src/eqrec/studies/config_checks.py" not in model4
     assert "src/eqrec/studies/config_checks.py" not in designs  # P1 steps do not import it
     for files in (designs, model4):  # the harness that runs the step, not the registry of every study

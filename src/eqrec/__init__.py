@@ -80,7 +80,7 @@ _PUBLIC: dict[str, str] = {
     "certify_schedule": "eqrec.core.certify",
     # estimators and simulation
     "GuaranteedEstimator": "eqrec.core.runtime",
-    "Packet": "eqrec.core.estimator",
+    "Packet": "eqrec.core.packets",
     "ClassEstimator": "eqrec.core.estimator",
     "simulate_run": "eqrec.core.simulate",
     "monte_carlo": "eqrec.core.simulate",

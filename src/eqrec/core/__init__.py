@@ -17,9 +17,15 @@ certification, the runtime estimator and simulation.  Nothing here designs an es
     Gain schedules ``(F, u0)`` per word.
 :mod:`~eqrec.core.certify`
     Worst cases recomputed from the gains alone.
+:mod:`~eqrec.core.arrivals`, :mod:`~eqrec.core.traces`, :mod:`~eqrec.core.packets`
+    The one arrival model (every random arrival draw) and its trace type; what reaches an estimator at a step
+    (packets, inputs, initial estimates, checked).
+:mod:`~eqrec.core.noise`, :mod:`~eqrec.core.checks`
+    One system description (the box, Gaussian second moments, multiplicative terms); shared input checks.
 :mod:`~eqrec.core.protocol`
     The one estimator protocol (``reset``, then ``step(y, u) -> (x̂, bound or covariance)``) of every estimator.
-:mod:`~eqrec.core.estimator`, :mod:`~eqrec.core.switching`, :mod:`~eqrec.core.runtime`, :mod:`~eqrec.core.error_boxes`
+:mod:`~eqrec.core.intake`, :mod:`~eqrec.core.estimator`, :mod:`~eqrec.core.switching`, :mod:`~eqrec.core.runtime`,
+:mod:`~eqrec.core.error_boxes`
     Causal estimators on time-stamped packets, the switching strategy, and the user-facing guaranteed estimator.
 :mod:`~eqrec.core.simulate`, :mod:`~eqrec.core.long_runs`
     Runs within one horizon and Monte Carlo; long runs (periodic reuse, the switching scheme).

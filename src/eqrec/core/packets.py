@@ -12,6 +12,7 @@ and a ``y``), so the LMV layer reads packets without the bounded-error ones.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -171,3 +172,79 @@ def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y
         seen.add(int(tau))
         out.append(Stamped(int(tau), finite_array(val, shape, field, f"the measurement of time {tau}", "p")))
     return out
+
+
+@dataclass(frozen=True)
+class Packet:
+    """A measurement ``y`` of time ``time`` (its time stamp).
+
+    Parameters
+    ----------
+    time : int
+        Absolute time ``τ`` of the measurement (not the time it arrives).
+    y : ndarray, shape (p,)
+        The measurement ``y(τ)``.
+
+    Examples
+    --------
+    A packet of time 3 arriving late, at time 5, among what arrives then:
+
+    >>> import numpy as np
+    >>> import eqrec
+    >>> late = eqrec.Packet(3, np.array([1.0, 2.0]))
+    >>> late.time
+    3
+    """
+
+    time: int
+    y: np.ndarray
+
+
+def check_input(u, m: int) -> np.ndarray:
+    """The input ``u(t)`` as a finite vector of ``m`` entries (``None``: zero).
+
+    Parameters
+    ----------
+    u : array_like or None
+        The input.
+    m : int
+        Number of inputs.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+        A new array.
+
+    Raises
+    ------
+    InputError
+        (field ``u``) a string, the wrong number of entries, or NaN/inf.
+    """
+    if u is None:
+        return np.zeros(m)
+    return finite_array(u, (m,), "u", "the input u", "m")
+
+
+def check_estimate(xhat0, n: int, field: str = "xhat0") -> np.ndarray:
+    """An initial estimate as a finite vector of ``n`` entries (a copy).
+
+    Parameters
+    ----------
+    xhat0 : array_like
+        The estimate.
+    n : int
+        Number of states.
+    field : str, optional
+        Name used in the error.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        A new array.
+
+    Raises
+    ------
+    InputError
+        A string, the wrong number of entries, or NaN/inf.
+    """
+    return finite_array(xhat0, (n,), field, "the initial estimate", "n")

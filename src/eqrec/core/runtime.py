@@ -67,10 +67,10 @@ import numpy as np
 
 from eqrec.core.classes import ClassGains
 from eqrec.core.error_boxes import BoundRule, BoxState, ClassBoxes
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, check_estimate, make_estimator
+from eqrec.core.estimator import ClassEstimator, RecoveryEstimator, make_estimator
+from eqrec.core.packets import Packet, check_estimate
 from eqrec.core.gains import GainSchedule
 from eqrec.core.packets import as_packets
-from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
 

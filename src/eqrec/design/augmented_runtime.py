@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from eqrec.core.estimator import check_estimate, check_input
+from eqrec.core.packets import check_estimate, check_input
 from eqrec.core.packets import as_packets
 from eqrec.core.gains import GainRow, GainSchedule, schedule_from_word_gains
 from eqrec.core.patterns import ArrivalPattern

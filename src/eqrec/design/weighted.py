@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 from eqrec.core.systems import AffineSystem
-from eqrec.errors import InputError
 
 
 def weigh(system: AffineSystem, state_weights: Any) -> tuple[AffineSystem, np.ndarray | None]:
@@ -117,7 +116,7 @@ class WeightedEstimator:
         InputError
             If ``xhat0`` is not ``n`` numbers, and the errors of the wrapped estimator's ``reset``.
         """
-        from eqrec.core.estimator import check_estimate
+        from eqrec.core.packets import check_estimate
 
         x0 = check_estimate(xhat0, self.weights.size)
         self.estimator.reset(self.weights * x0, t0)

@@ -351,7 +351,7 @@ class RandomDelayLMV(_Filter):
         pd = np.full(tb + 1, 1.0 / (tb + 1)) if probabilities is None else np.asarray(probabilities, float)
         if pd.shape != (tb + 1,) or np.any(pd < 0) or np.any(pd > 1):
             raise InputError(f"need {tb + 1} delay probabilities in [0, 1], got {pd}", field="probabilities")
-        A, C, V = system.A, system.C, system.V
+        A, C = system.A, system.C
         N = n + tb * p
         Aa = np.zeros((N, N))
         Aa[:n, :n] = A

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.core.checks import instance, positive
-from eqrec.core.estimator import check_estimate
+from eqrec.core.packets import check_estimate
 from eqrec.core.error_boxes import BoxState, ClassBoxes
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
