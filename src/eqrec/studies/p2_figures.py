@@ -50,7 +50,7 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
                                   f"run on the true words", c, "C3"))
     errs0 = sim[f"{fig}/time"]
     T = errs0.shape[1] - 1
-    f, axes = plt.subplots(3, len(cols), figsize=(2.45 * len(cols) + 0.6, 6.6), sharex=True, sharey="row",
+    f, axes = plt.subplots(3, len(cols), figsize=(2.25 * len(cols) + 0.5, 6.6), sharex=True, sharey="row",
                            squeeze=False, layout="constrained")
     for j, (name, title, mu2, color) in enumerate(cols):
         trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, mu1, mu2),
@@ -68,7 +68,7 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     f.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3))
     what = ("no missing data" if fig == "f1" else
             f"language {{{', '.join(d['language'])}}} (worst case {d['worst_case_word']})")
-    f.suptitle(f"Fig. {fig[1:]}: {what}, {errs0.shape[0]} runs, the same draws for every estimator")
+    f.suptitle(f"{what[0].upper()}{what[1:]}, {errs0.shape[0]} runs, the same draws for every estimator")
     save_figure(f, outputs.pdf, outputs.png)
 
 
@@ -247,7 +247,7 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     for ax in axes[npanel:]:
         ax.axis("off")
     axes[npanel].legend(handles=list(legend.values()), loc="center", frameon=False,
-                        title="Fig. 3a: eig($A - LC$) = {0, $r e^{\\pm j\\theta}$}", title_fontsize=8)
+                        title="eigenvalues of $A - LC$: 0 and $r e^{\\pm j\\theta}$", title_fontsize=8)
     save_figure(f, outputs.pdf, outputs.png)
 
 
@@ -291,7 +291,7 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
     handles.append(plt.Line2D([], [], marker="*", ls="", color="0.6", mec="k", mew=0.4, ms=9))
     labels.append(r"$\lambda = 0$: an exact nilpotent $L$ (one of many)")
     ax.set_ylabel(r"optimal $\mu_2$ of the design LP")
-    ax.set_title(r"Fig. 3b: optimal $\mu_2$ against a real double eigenvalue $\lambda$ of $A - LC$ (third at 0)")
+    ax.set_title(r"Optimal $\mu_2$ against a real double eigenvalue $\lambda$ of $A - LC$ (third at 0)")
     if unsolved:
         st = axs[1, 0]
         for row, (var, g) in enumerate(unsolved):
