@@ -42,13 +42,13 @@ def _feasibility_panel(ax, res: dict) -> None:
     c = res["curve"]
     lo = {m: res["min_M1"][m] for m in ("prefix", "time")}
     ax.axvspan(0.0, lo["prefix"], color="0.80", lw=0,
-               label=f"no design meets $M_1$ < {lo['prefix']:.4f} (smallest, prefix-based)")
+               label=f"no design: $M_1$ < {lo['prefix']:.4f}")
     ax.axvspan(lo["prefix"], lo["time"], color="C3", alpha=0.25, lw=0,
-               label=f"only prefix-based feasible: $M_1$ < {lo['time']:.4f} (smallest, time-based)")
+               label=f"time-based infeasible: $M_1$ < {lo['time']:.4f}")
     for m, style, name in (("prefix", "C0-", "prefix-based"), ("time", "C3--", "time-based")):
         mu1 = [a for a, b in zip(c["M1"], c[m]) if b is not None]
         M2 = [b for b in c[m] if b is not None]
-        ax.plot(mu1, M2, style, marker=".", label=f"{name} $M_2^*$ (computed for $M_1$ \u2265 {min(mu1):g})")
+        ax.plot(mu1, M2, style, marker=".", label=f"{name}, computed from $M_1$ = {min(mu1):g}")
     ax.set_xlim(0.0, 1.03 * max(c["M1"]))
     ax.set_ylim(0.0, None)
     ax.set_xlabel("recovery level $M_1$")
