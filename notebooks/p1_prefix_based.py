@@ -54,9 +54,10 @@ for key in ("A", "B", "f", "E"):
 rows = []
 for method, d in designs["designs"].items():
     for solver, s in d["solvers"].items():
-        rows.append({"method": method, "solver": solver, "mu2": s["mu2"], "certified_mu2": s["certified_mu2"],
-                     "terminal": s["certified_terminal"], "iterations": s["iterations"]})
-pd.DataFrame(rows)
+        rows.append({"estimator": f"{method}-based", "solver": solver, "optimal M2": s["mu2"],
+                     "certified M2": s["certified_mu2"], "certified end level": s["certified_terminal"],
+                     "iterations": s["iterations"]})
+pd.DataFrame(rows).set_index(["estimator", "solver"]).round(6)
 
 # %% [markdown]
 # Readings of the paper other than ours (to explain differences):
@@ -77,9 +78,13 @@ display(Image(filename=str(RES / "fig1_trajectories.png")))
 
 # %%
 display(Image(filename=str(RES / "fig_ext_M2_vs_M1.png")))
-print("smallest feasible M1:", ext["min_M1"])
-print("finite-length language", ext["finite_language"]["words"], "-> M2* =", round(ext["finite_language"]["mu2"], 6))
-pd.DataFrame(ext["min_T"])
+display(pd.DataFrame({"smallest feasible M1": ext["min_M1"]})
+        .rename(index={"prefix": "prefix-based", "time": "time-based"}).round(6))
+display(pd.DataFrame([{"finite-length language": ", ".join(ext["finite_language"]["words"]),
+                       "optimal M2": ext["finite_language"]["mu2"]}]).round(6))
+min_T = pd.DataFrame(ext["min_T"])
+min_T["T"] = [f"{int(t)}" if pd.notna(t) else "none up to T_max" for t in min_T["T"]]
+min_T.rename(columns={"M1": "recovery level M1", "T": "minimum recovery time T"})
 
 # %% [markdown]
 # ## Claims: published numbers next to ours

@@ -146,7 +146,16 @@ def test_heatmap_merge_rejects_a_partial_or_repeated_grid(small_run, tmp_path):
 
 
 def test_figures(small_run, tmp_path):
+    from pathlib import Path
+
+    from eqrec.studies.claims_file import published_value
+
     d, cfg, _ = small_run
+    claims = Path(__file__).resolve().parents[1] / "config" / "claims.yaml"
+    # the rules add the paper's values (config/claims.yaml) to the figures' cfg
+    paper = {"f1": published_value(claims, "P2-F1:mu2-augmented"), "f2": published_value(claims, "P2-F2:mu2-augmented"),
+             "mu2": published_value(claims, "P2-F3a:mu2-region")}
+    cfg = {**cfg, "published": paper}
     for fig in ("f1", "f2"):
         harness.run_step("p2", "figure_trajectories", cfg,
                          {"designs": d / "designs.json", "simulation": d / "simulation.npz"},

@@ -117,7 +117,7 @@ rule p1_figure_ext:
     params:
         study="p1",
         step="figure_ext",
-        cfg={},
+        cfg=step_config("p1", "extensions.T_max"),
     script:
         RUN_STEP
 

@@ -7,7 +7,8 @@ working directory, and write
 * ``results/notebooks/<name>.ipynb``: the notebook with its outputs and
   figures embedded (GitHub renders it without running anything), and
 * ``results/notebooks/<name>.html``: its nbconvert HTML rendering (an item of
-  ``snakemake --report``).
+  ``snakemake --report``), readable offline: its maths is MathML made at build
+  time and it loads no script from the network (:mod:`eqrec.studies.notebook_html`).
 
 Both files depend only on the notebook and the results it reads: cell ids are
 ``cell-0``, ``cell-1``, ...; no execution timestamps, kernel ids or jupytext
@@ -57,14 +58,15 @@ READS: dict[str, list[str]] = {
     ],
     "p2_augmented": [
         *(f"results/p2/{f}" for f in ("values.json", "designs.json", "checks.json", "heatmap.csv",
-                                      "realaxis.csv")),
+                                      "realaxis.csv", "f1_trajectories.png", "f2_trajectories.png",
+                                      "f3a_heatmap.png", "f3b_realaxis.png")),
         "results/claims.csv",
     ],
     "p3_delayed": [
         *(f"results/p3/{f}" for f in ("languages.json", "reactor_model.json", "reactor_designs.json",
                                       "augmented.json", "kalman.json", "acc.json", "values.json", "examples.md",
                                       "language_counts.csv", "fig1_kalman.png", "fig2_acc.png",
-                                      "scale_table.csv")),
+                                      "scale_table.csv", "fig_strategy.png", "strategy_values.json")),
         "results/claims.csv",
     ],
     "p4_lmv": [
@@ -181,10 +183,11 @@ def to_ipynb(nb) -> str:
 
 
 def to_html(nb, title: str) -> str:
-    from nbconvert import HTMLExporter
+    """The notebook's HTML, readable offline: maths as MathML, no script from the network
+    (:func:`eqrec.studies.notebook_html.offline_html`)."""
+    from eqrec.studies.notebook_html import offline_html
 
-    body, _ = HTMLExporter().from_notebook_node(nb, resources={"metadata": {"name": title}})
-    return body if body.endswith("\n") else body + "\n"
+    return offline_html(nb, title)
 
 
 def step_execute(cfg, inputs, outputs, wildcards):

@@ -19,13 +19,14 @@ from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajec
 
 # the linearised batch reactor's states are dimensionless deviations (Sec. IV-A of the delayed-data paper)
 STATE_LABELS_REACTOR = tuple(rf"$\tilde x_{i}$ [–]" for i in range(1, 5))
-FILTER_TITLES = {"timestamped": "Time-stamped Kalman (re-filtering)", "unaware": "Delay-unaware Kalman",
-                 "random_delay_lmv": "Random-delay LMV (ref. [9])"}
+FILTER_TITLES = {"timestamped": "Time-stamped Kalman\n(re-filtering)", "unaware": "Delay-unaware\nKalman",
+                 "random_delay_lmv": "Random-delay LMV\n(ref. [9])"}
 
 
 def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     """P3-F1: errors of the proposed estimator and of each Kalman-type filter (prediction ``x̂(t|I_{t-1})``)
-    on the true pattern, with the proposed estimator's guarantee levels along that pattern."""
+    on the true pattern, with the proposed estimator's guarantee levels along that pattern (one y scale per row,
+    tick labels on the first column only)."""
     paper_style()
     plt = pyplot()
     data = np.load(inputs.npz)
@@ -34,29 +35,36 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     names = list(res["filters"])
     cols = [("proposed", "Proposed estimator", data["proposed_errors"], "C0")]
     cols += [(n, FILTER_TITLES.get(n, n), data[f"{n}_prediction_errors"], "C3") for n in names]
-    fig, axes = plt.subplots(4, len(cols), figsize=(2.6 * len(cols), 7.0), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(4, len(cols), figsize=(1.8 * len(cols) + 0.7, 7.4), sharex=True, sharey="row",
+                             squeeze=False, layout="constrained")
     for c, (name, title, errs, color) in enumerate(cols):
-        verdict = "" if name == "proposed" else f"\nexact worst case {res['filters'][name]['prediction']['verdict']}"
+        inside = bool(np.all(np.abs(errs) <= levels[None, :, None] + 1e-12))
+        if name == "proposed":
+            verdict = "\nruns and worst case inside"
+        else:
+            verdict = (f"\nruns {'inside' if inside else 'OUTSIDE'}, exact worst\n"
+                       f"case {res['filters'][name]['prediction']['verdict']}")
         trajectory_panel(axes[:, c], errs, levels, title + verdict, state_labels=STATE_LABELS_REACTOR,
                          color=color, ylabels=(c == 0))
         worst = data["proposed_bounds"] if name == "proposed" else data[f"{name}_prediction_worst"]
         worst_case_lines(axes[:, c], worst, "exact worst case")
     # one scale per state across the estimators: the same quantity, compared
     for i in range(axes.shape[0]):
-        lim = 1.15 * max(max(np.max(levels), np.max((data["proposed_bounds"] if n == "proposed" else
-                                                     data[f"{n}_prediction_worst"])[:, i]),
-                             np.max(np.abs(e[:, :, i]))) for n, _, e, _ in cols)
+        lim = 1.1 * max(max(np.max(levels), np.max((data["proposed_bounds"] if n == "proposed" else
+                                                    data[f"{n}_prediction_worst"])[:, i]),
+                            np.max(np.abs(e[:, :, i]))) for n, _, e, _ in cols)
         for ax in axes[i]:
             ax.set_ylim(-lim, lim)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     labels = ["proposed estimator: error" if lab == "estimation error" else lab for lab in labels]
+    labels = ["guarantee $\\mu_{2,k}$ of the proposed estimator" if lab == "guarantee" else lab for lab in labels]
     if len(cols) > 1:  # the Kalman-type filters' traces, drawn in their own colour
         handles.insert(1, plt.Line2D([], [], color=cols[1][3], alpha=0.6, lw=1.0))
         labels.insert(1, "Kalman-type filter: error")
-    fig.legend(handles, labels, loc="lower center", ncol=len(labels), bbox_to_anchor=(0.5, -0.02))
-    fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs "
-                 f"(truncated normal, bound = {res['sigmas']:g} sigma): errors and the guarantees "
-                 rf"$\mu_{{2,k}}$ ($\mu_1$ = {res['mu1']:.4f})")
+    fig.legend(handles, labels, loc="outside lower center", ncol=2)
+    fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs (truncated normal, "
+                 f"bound = {res['sigmas']:g} sigma):\nerrors and the guarantees $\\mu_{{2,k}}$ "
+                 f"($\\mu_1$ = {res['mu1']:.4f}); the same scale in each row")
     save_figure(fig, outputs.pdf, outputs.png)
 
 
@@ -86,19 +94,23 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
     """P3-IMPL figure: errors per state with the per-time guarantees over a window of each long run.
 
     Columns: periodic reuse on the batch reactor, on the ACC, and the
-    switching scheme on the batch reactor (recovery phases shaded, switching
-    instants marked).  The run with the first noise kind is shown.
+    switching scheme on the batch reactor (switching instants marked), each
+    with its own ``μ1`` in its title.  The run with the first noise kind is
+    shown; the reactor's states are named as in Fig. 1; no vertical grid, so
+    that the vertical lines are the period boundaries and switching instants.
     """
     paper_style()
     plt = pyplot()
     data = np.load(inputs.npz)
     kind = str(data["noise"][0])
     window = int(cfg["strategy"]["figure"]["window"])
-    reactor_labels = [rf"$\xi_{i}$ [–]" for i in range(1, 5)]  # the linearised reactor's states are dimensionless
-    cols = (("reactor_periodic", "Batch reactor, gains reused every T", reactor_labels),
-            ("acc_periodic", "ACC, gains reused every T", list(STATE_LABELS_ACC)),
-            ("reactor_switching", "Batch reactor, switching scheme", reactor_labels))
-    fig, axes = plt.subplots(4, 3, figsize=(10.0, 8.2), sharex="col")
+    cols = (("reactor_periodic", "Batch reactor,\ngains reused every $T$", list(STATE_LABELS_REACTOR),
+             float(data["reactor_mu1"])),
+            ("acc_periodic", "ACC,\ngains reused every $T$", [lab.replace(" error", "\nerror") for lab in
+                                                            STATE_LABELS_ACC], float(data["acc_mu1"])),
+            ("reactor_switching", "Batch reactor,\nswitching scheme", list(STATE_LABELS_REACTOR),
+             float(data["switching_mu1"])))
+    fig, axes = plt.subplots(4, 3, figsize=(7.4, 8.0), sharex="col", layout="constrained")
     # one scale per reactor state across the two reactor columns (the same quantity)
     reactor_lim = {}
     for label in ("reactor_periodic", "reactor_switching"):
@@ -107,7 +119,7 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
         for i in range(data[f"{key}_error"].shape[1]):
             reactor_lim[i] = max(reactor_lim.get(i, 0.0), 1.15 * max(float(data[f"{key}_level"][: N + 1].max()),
                                                                   float(np.abs(data[f"{key}_error"][: N + 1, i]).max())))
-    for c, (label, title, ylabels) in enumerate(cols):
+    for c, (label, title, ylabels, mu1) in enumerate(cols):
         key = f"{label}_{kind}"
         err, lev = data[f"{key}_error"], data[f"{key}_level"]
         T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
@@ -119,36 +131,37 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
             if i >= n:
                 ax.axis("off")
                 continue
+            ax.grid(False, axis="x")
             ax.fill_between(t, -lev[: N + 1], lev[: N + 1], step="mid", color="0.85", label="guarantee")
             ax.plot(t, err[: N + 1, i], "C0.-", ms=2.5, label="estimation error")
             if label == "reactor_switching":
                 sw, rv = data[f"{key}_switch"], data[f"{key}_revert"]
                 for j, s in enumerate(sw[sw <= N]):
-                    ax.axvline(s, color="C3", ls="--", lw=0.7, label="switch to recovery" if j == 0 else None)
+                    ax.axvline(s, color="C3", ls="--", lw=0.8, label="switch to recovery" if j == 0 else None)
                 for j, s in enumerate(rv[rv <= N]):
-                    ax.axvline(s, color="C2", ls=":", lw=0.9, label="back to performance" if j == 0 else None)
+                    ax.axvline(s, color="C2", ls=":", lw=1.0, label="back to performance" if j == 0 else None)
             else:
                 for j, s in enumerate(range(T, N + 1, T)):
-                    ax.axvline(s, color="0.5", ls=":", lw=0.6, label="period boundary" if j == 0 else None)
+                    ax.axvline(s, color="C4", ls="-", lw=0.7, alpha=0.8,
+                               label="period boundary (every $T$ steps)" if j == 0 else None)
             ax.set_ylabel(ylabels[i])
             lim = reactor_lim[i] if label.startswith("reactor") else (
                 1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max())))
             ax.set_ylim(-lim, lim)
             if i == 0:
-                ax.set_title(title)
+                ax.set_title(f"{title} = {T}\n$\\mu_1$ = {mu1:g}" if "every" in title else
+                             f"{title}\n$\\mu_1$ = {mu1:g}")
         last = axes[min(n, 4) - 1, c]
-        last.set_xlabel(f"time step k (Ts = {Ts:g} s)")
+        last.set_xlabel(f"time step $k$\n($T_s$ = {Ts:g} s)")
         last.tick_params(labelbottom=True)
     # one legend under the figure (inside an axis it covers the bands)
     seen: dict[str, object] = {}
     for ax in axes[0]:
         for h, lab in zip(*ax.get_legend_handles_labels()):
             seen.setdefault(lab, h)
-    fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=len(seen), bbox_to_anchor=(0.5, 0.0))
-    fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees ({kind} noise, first "
-                 f"{window} steps; $\\mu_1$ = {float(data['reactor_mu1']):g} / {float(data['acc_mu1']):g} / "
-                 f"{float(data['switching_mu1']):g})")
-    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncol=3)
+    fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees\n({kind} noise, first "
+                 f"{window} steps of each run)")
     save_figure(fig, outputs.pdf, outputs.png)
 
 

@@ -96,7 +96,8 @@ def _check_record(c) -> dict:
 def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     """Monte Carlo validation (P4-THEORY) and the error-variance curves of Figs. 4, 7, 8.
 
-    Both mechanisms are run on the same realisations.  Also measures
+    Both mechanisms are run on the same realisations.  The standard errors of the Monte Carlo variances
+    (``outputs.se``: ``{mechanism}/se_{estimator}`` and ``runs``) give the figures their uncertainty bands.  Also measures
     Theorem 1 *as printed* (eq. (9)) against the same Monte Carlo.
     """
     example = wildcards["example"]
@@ -111,6 +112,7 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     log.info("%s: simulated %d runs x %d steps (%s multiplicative noise) in %.2f s", example, runs, T + 1, dist,
              time.perf_counter() - t0)
     arrays: dict[str, np.ndarray] = {"t": np.arange(T + 1)}
+    errors: dict[str, np.ndarray] = {"t": np.arange(T + 1), "runs": np.array(runs)}  # standard errors (figures)
     report: dict[str, Any] = {"example": example, "runs": runs, "T": T, "eta_bar": eta, "alpha": alpha,
                               "mult_dist": dist, "seed": seed, "smoother_lag": N, "pred_steps": Np,
                               "fourth_moment_radius": {d: fourth_moment_radius(plant, d)
@@ -133,15 +135,16 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
             log.info("%s %s %s: %s", example, mech, name, c.summary())
         arrays[f"{k}/theory_pred"] = _diag(mc.P_pred)
         arrays[f"{k}/mc_pred"] = _diag(checks["pred1"].emp)
+        errors[f"{k}/se_pred"] = _diag(checks["pred1"].se)
         arrays[f"{k}/theory_npred"] = _diag(mc.P_npred)
         arrays[f"{k}/mc_npred"] = _diag(checks[f"pred{Np}"].emp)
         for j in range(N + 1):
             name = "filt" if j == 0 else f"smooth{j}"
-            th = np.full((T + 1, plant.n), np.nan)
-            em = np.full((T + 1, plant.n), np.nan)
+            th, em, se = (np.full((T + 1, plant.n), np.nan) for _ in range(3))
             th[: T + 1 - j] = _diag(checks[name].theory)
             em[: T + 1 - j] = _diag(checks[name].emp)
-            arrays[f"{k}/theory_{name}"], arrays[f"{k}/mc_{name}"] = th, em
+            se[: T + 1 - j] = _diag(checks[name].se)
+            arrays[f"{k}/theory_{name}"], arrays[f"{k}/mc_{name}"], errors[f"{k}/se_{name}"] = th, em, se
         log.info("%s %s: estimation and comparison %.2f s", example, mech, time.perf_counter() - t1)
     # Theorem 1 as printed versus the same Monte Carlo (zero-input, predictor).
     printed = theorem1_as_printed(plant, eta, T)
@@ -166,6 +169,7 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     arrays["printed/mc_pred"] = _diag(c_printed.emp)
     report["elapsed_s"] = time.perf_counter() - t0
     write_npz(outputs.npz, **arrays)
+    write_npz(outputs.se, **errors)
     write_json(outputs.json, report, timings=outputs.timings)
     return report
 

@@ -27,13 +27,44 @@ def pyplot():
     return plt
 
 
+#: Width (px) at which a reader sees a figure (the report, a notebook) and the smallest text height (em, px)
+#: allowed there, mathtext scripts aside; ``tests/test_figure_text.py`` measures every stored PDF against it.
+REPORT_WIDTH_PX, MIN_EM_PX = 800, 11.0
+
+
 def paper_style() -> None:
-    """Matplotlib settings close to the papers' (serif, small, grid)."""
+    """Matplotlib settings close to the papers' (serif, small, grid) and the maths in the text's serif font.
+
+    With 8 pt for the smallest text, a figure up to 7.2 in wide (as saved, ``bbox="tight"``) shows every
+    text at least :data:`MIN_EM_PX` tall when drawn :data:`REPORT_WIDTH_PX` wide.
+    """
     pyplot().rcParams.update({
         "font.family": "serif", "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9,
         "legend.fontsize": 8, "xtick.labelsize": 8, "ytick.labelsize": 8, "axes.grid": True,
         "grid.alpha": 0.3, "figure.dpi": 150, "savefig.bbox": "tight", "lines.linewidth": 0.8,
+        "mathtext.fontset": "dejavuserif", "figure.titlesize": 10,
     })
+
+
+def same_scale_per_row(axes, symmetric: bool = True) -> None:
+    """One y scale per row of a grid of axes (the same quantity across the columns), ``±`` the largest limit.
+
+    Parameters
+    ----------
+    axes : numpy.ndarray
+        ``(rows, cols)`` axes.
+    symmetric : bool, optional
+        ``(-lim, lim)`` with ``lim`` the largest absolute limit of the row (default), else the union.
+    """
+    for row in np.atleast_2d(axes):
+        lims = [ax.get_ylim() for ax in row]
+        if symmetric:
+            lim = max(abs(v) for pair in lims for v in pair)
+            lo, hi = -lim, lim
+        else:
+            lo, hi = min(a for a, _ in lims), max(b for _, b in lims)
+        for ax in row:
+            ax.set_ylim(lo, hi)
 
 
 def guarantee_bars(ax, levels: Sequence[float], label: str | None = "guarantee") -> None:
