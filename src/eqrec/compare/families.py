@@ -247,7 +247,8 @@ def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar:
                                  x0_mean=gaussian.x0_mean)
     plant = Plant.from_description(NoisySystem(system, gaussian))
     sys = system_of(plant, mechanism, eta_bar)
-    return lambda: LMVEstimator(sys, lmv_recursion(sys, steps + 1, check_stability=False), system=system)
+    gains = lmv_recursion(sys, steps + 1, check_stability=False)  # the same gains for every run
+    return lambda: LMVEstimator(sys, gains, system=system)
 
 
 def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "GaussianNoise | dict | None" = None,
