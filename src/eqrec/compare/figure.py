@@ -33,8 +33,11 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
 
     s = result.setup
     t = np.arange(1, s.steps + 1)
-    with plt.rc_context({"font.family": "serif", "font.size": 9, "axes.titlesize": 9, "legend.fontsize": 8,
-                         "axes.grid": True, "grid.alpha": 0.3, "savefig.bbox": "tight", "figure.dpi": 150}):
+    # from matplotlib's defaults, whatever the caller set (paper_style() of the studies changes rcParams globally):
+    # the same figure, byte for byte, from any process
+    style = {"font.family": "serif", "font.size": 9, "axes.titlesize": 9, "legend.fontsize": 8, "axes.grid": True,
+             "grid.alpha": 0.3, "savefig.bbox": "tight", "figure.dpi": 150}
+    with plt.style.context("default"), plt.rc_context(style):
         fig, axes = plt.subplots(2, 3, figsize=(7.5, 4.8), sharex=True, sharey=True)
         positive = [a[a > 0] for a in (*result.errors.values(), *result.bounds.values())]
         low = min(float(np.quantile(a, 0.01)) for a in positive if a.size)

@@ -75,7 +75,7 @@ def setup_of(cfg: dict, system: str, setting: str) -> CompareSetup:
     try:
         return CompareSetup(loss=traces["loss"], max_delay=plant["max_delay"], horizon=plant["horizon"],
                             runs=cfg["runs"], periods=cfg["periods"],
-                            burst=traces["burst"] if "burst" in traces else None, seed=cfg["seed"])
+                            burst=traces.get("burst"), seed=cfg["seed"])
     except InputError as exc:
         field = _FIELDS.get(exc.field or "", exc.field or "").format(system=system, setting=setting)
         raise InputError(str(exc).removeprefix(f"field '{exc.field}': "), field=field) from None
