@@ -4,6 +4,7 @@
 #
 #   snakemake --cores 2                          # everything, default config
 #   snakemake --cores 2 p1                       # one paper (p1, p2, p3, p4)
+#   snakemake --cores 2 compare                  # every estimator family on the same traces (results/compare/)
 #   snakemake --cores 2 notebooks                # the executed notebooks (results/notebooks/)
 #   snakemake --cores 2 p3_scale                 # the P3 scale table (slow, up to 16 GB; not in `all`)
 #   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
@@ -23,6 +24,7 @@ configfile: "config/config.yaml"
 configfile: "config/p2.yaml"
 configfile: "config/p3.yaml"
 configfile: "config/p4.yaml"
+configfile: "config/compare.yaml"
 
 
 # Validate every section once, after the --configfile/--config overrides, with
@@ -55,6 +57,7 @@ include: "workflow/rules/p1.smk"
 include: "workflow/rules/p2.smk"
 include: "workflow/rules/p3.smk"
 include: "workflow/rules/p4.smk"
+include: "workflow/rules/compare.smk"
 include: "workflow/rules/notebooks.smk"
 include: "workflow/rules/claims.smk"
 
@@ -67,4 +70,5 @@ rule all:
         rules.p2.input,
         rules.p3.input,
         rules.p4.input,
+        rules.compare.input,
         rules.notebooks.input,

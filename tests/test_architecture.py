@@ -127,7 +127,7 @@ def test_the_step_registry_imports_every_table_of_steps_and_nothing_loads_a_modu
     with_steps = {name for name, f in MODULES.items() if name.startswith("eqrec.studies.")
                   and any(line.startswith("STEPS = ") for line in f.read_text().splitlines())}
     registry = _module_imports(MODULES["eqrec.studies.steps"])
-    studies = {"eqrec.studies." + s for s in ("p1", "p2", "p3", "p4", "claims", "notebooks")}
+    studies = {"eqrec.studies." + s for s in ("p1", "p2", "p3", "p4", "compare", "claims", "notebooks")}
     assert studies <= with_steps and with_steps <= registry
     for name in ("p1_figures", "p3_figures", "p3_strategy"):
         assert "eqrec.studies." + name in with_steps

@@ -80,7 +80,12 @@ def test_defaults_come_from_the_schemas():
     ("p4", {"T": -1}, "p4.T"), ("p4", {"eta_bar": 1.5}, "p4.eta_bar"), ("p4", {"eta_bar": "0.8"}, "p4.eta_bar"),
     ("p4", {"sweep_eta": {"chunks": 0}}, "p4.sweep_eta.chunks"), ("p4", {"mc": {"runs": "10000"}}, "p4.mc.runs"),
     ("p4", {"tracking": {"example": "ex3"}}, "p4.tracking.example"), ("p1", {"mu1": "1"}, "p1.mu1"),
-    ("p1", {"language": ["101", "11"]}, "p1.language"), ("p2", {"heatmap": {"n_r": 2.5}}, "p2.heatmap.n_r")])
+    ("p1", {"language": ["101", "11"]}, "p1.language"), ("p2", {"heatmap": {"n_r": 2.5}}, "p2.heatmap.n_r"),
+    ("compare", {"runs": 0}, "compare.runs"), ("compare", {"systems": {"acc": {"model": "motor"}}},
+                                                        "compare.systems.acc.model"),
+    ("compare", {"settings": {"burst": {"burst": 0.5}}}, "compare.settings.burst.burst"),
+    ("compare", {"settings": {"burst": {"loss": 0.9, "burst": 4}}}, "compare.settings.burst.burst"),  # 4 < 9 steps
+    ("compare", {"settings": {"loss_01": {"loss": 0.1}}}, "compare.settings")])
 def test_config_errors_name_file_and_field(tmp_path, study, override, field):
     over = tmp_path / "over.yaml"
     over.write_text(yaml.safe_dump({study: override}))

@@ -25,8 +25,11 @@ def test_readme_says_how_to_recover_from_a_stale_lock():
 def test_config_readme_names_every_section_and_top_level_key():
     import yaml
 
+    from eqrec.studies.configuration import SECTIONS
+
     text = (ROOT / "config" / "README.md").read_text()
-    for section in ("p1", "p2", "p3", "p4"):
+    assert {"p1", "p2", "p3", "p4", "compare"} <= set(SECTIONS)
+    for section in SECTIONS:
         schema = yaml.safe_load((ROOT / "config" / "schemas" / f"{section}.schema.yaml").read_text())
         assert f"`{section}`" in text
         for key in schema["properties"]:

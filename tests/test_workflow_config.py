@@ -101,8 +101,8 @@ def test_unknown_section_is_refused_naming_it(workdir, how):
     assert "Building DAG" not in text
 
 
-def test_check_sections_accepts_the_four_sections():
-    configuration.check_sections({"p1": {}, "p2": {}, "p3": {}, "p4": {}})
+def test_check_sections_accepts_the_five_sections():
+    configuration.check_sections({"p1": {}, "p2": {}, "p3": {}, "p4": {}, "compare": {}})
     with pytest.raises(configuration.ConfigError, match="'p5'"):
         configuration.check_sections({"p1": {}, "p5": {}})
 

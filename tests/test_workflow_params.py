@@ -42,6 +42,8 @@ def default_rules():
     ({"p4": {"sweep_q": {"num": 22}}}, {"p4_sweep_q_chunk", "p4_fig6"}),
     # one P1 extension: its job only, not the designs' LPs or the simulation
     ({"p1": {"extensions": {"M1_points": 20}}}, {"p1_extensions"}),
+    # the compare seed: the (system, setting) jobs, not the table that merges their files
+    ({"compare": {"seed": 1}}, {"compare_run"}),
 ])
 def test_a_changed_parameter_replans_only_the_jobs_whose_step_reads_it(default_rules, override, replanned):
     changed = _rules(override)

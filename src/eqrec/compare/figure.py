@@ -27,13 +27,17 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullLocator
 
     from eqrec.io import save_figure
 
     s = result.setup
     t = np.arange(1, s.steps + 1)
-    with plt.rc_context({"font.family": "serif", "font.size": 9, "axes.titlesize": 9, "legend.fontsize": 8,
-                         "axes.grid": True, "grid.alpha": 0.3, "savefig.bbox": "tight", "figure.dpi": 150}):
+    # from matplotlib's defaults, whatever the caller set (paper_style() of the studies changes rcParams globally):
+    # the same figure, byte for byte, from any process
+    style = {"font.family": "serif", "font.size": 9, "axes.titlesize": 9, "legend.fontsize": 8, "axes.grid": True,
+             "grid.alpha": 0.3, "savefig.bbox": "tight", "figure.dpi": 150}
+    with plt.style.context("default"), plt.rc_context(style):
         fig, axes = plt.subplots(2, 3, figsize=(7.5, 4.8), sharex=True, sharey=True)
         positive = [a[a > 0] for a in (*result.errors.values(), *result.bounds.values())]
         low = min(float(np.quantile(a, 0.01)) for a in positive if a.size)
@@ -56,6 +60,7 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
                 ax.axvline(k + 0.5, color="0.85", linewidth=0.5, zorder=0)
             ax.set_yscale("log")
             ax.set_ylim(low / 2, high * 2)
+            ax.yaxis.set_minor_locator(NullLocator())  # the decades are the grid (and the layout is faster)
         for ax in axes[1]:
             ax.set_xlabel("time step t + 1")
         for ax in axes[:, 0]:

@@ -84,5 +84,25 @@ def check_p4(cfg: dict) -> None:
             raise InputError("need lo <= hi", field=f"{g}.lo")
 
 
+def check_compare(cfg: dict) -> None:
+    """What the schema cannot say: a burst setting whose average loss the Gilbert channel can give.
+
+    The same conditions as :class:`eqrec.compare.CompareSetup` (which imports pandas; too heavy for every start of
+    the workflow): a burst needs a positive loss, and mean bursts of ``b`` steps give at most an average loss
+    ``b / (b + 1)`` (the channel enters a burst with probability ``loss / (1 - loss) / b <= 1``).
+    ``tests/test_compare_study.py`` checks that both accept the same settings.
+    """
+    for name, setting in cfg["settings"].items():
+        if "burst" not in setting:
+            continue
+        loss, burst = float(setting["loss"]), float(setting["burst"])
+        if loss == 0:
+            raise InputError("a burst length needs a positive loss", field=f"settings.{name}.burst")
+        if loss / (1 - loss) / burst > 1:
+            raise InputError(f"a mean burst of {burst:g} steps cannot give an average loss of {loss:g} (the channel "
+                             f"would have to enter a burst with probability > 1)", field=f"settings.{name}.burst")
+
+
 #: The check of each configuration section.
-CHECKS: dict[str, Callable[[dict], None]] = {"p1": check_p1, "p2": check_p2, "p3": check_p3, "p4": check_p4}
+CHECKS: dict[str, Callable[[dict], None]] = {"p1": check_p1, "p2": check_p2, "p3": check_p3, "p4": check_p4,
+                                             "compare": check_compare}

@@ -39,6 +39,7 @@ SECTIONS: dict[str, Section] = {
     "p2": Section("p2", "config/p2.yaml", "config/schemas/p2.schema.yaml"),
     "p3": Section("p3", "config/p3.yaml", "config/schemas/p3.schema.yaml"),
     "p4": Section("p4", "config/p4.yaml", "config/schemas/p4.schema.yaml"),
+    "compare": Section("compare", "config/compare.yaml", "config/schemas/compare.schema.yaml"),
 }
 
 
@@ -212,7 +213,8 @@ def validate_section(config: dict, section: str, root: str | Path = ".", configf
 
 
 def check_sections(config: Mapping, configfiles: Sequence[str | Path] = (), overrides: Mapping | None = None) -> None:
-    """Refuse a top-level configuration key that is not a section (``p1`` .. ``p4``), naming where it came from.
+    """Refuse a top-level configuration key that is not a section (``p1`` .. ``p4``, ``compare``), naming where it
+    came from.
 
     Snakemake merges every ``--configfile`` and ``--config`` into one
     mapping; a misspelt section (``p2x:``) or an unknown one (``--config

@@ -76,6 +76,13 @@ READS: dict[str, list[str]] = {
                                       "fig8_compare_ex2.png")),
         "results/claims.csv",
     ],
+    "compare": [
+        "results/compare/compare.csv",
+        "results/compare/summary.json",
+        *(f"results/compare/{system}_{setting}.png" for system in ("acc", "reactor")
+          for setting in ("loss01", "loss03", "burst")),
+        "results/claims.csv",
+    ],
 }
 
 

@@ -22,8 +22,9 @@ from eqrec.errors import StepError
 
 Step = Callable[..., Any]
 
-#: The studies with pipeline steps (``claims`` builds the comparison table, ``notebooks`` executes the notebooks).
-STUDIES = ("p1", "p2", "p3", "p4", "claims", "notebooks")
+#: The studies with pipeline steps (``compare`` runs every estimator family on the same traces, ``claims`` builds
+#: the comparison table, ``notebooks`` executes the notebooks).
+STUDIES = ("p1", "p2", "p3", "p4", "compare", "claims", "notebooks")
 
 
 def steps_of(study: str) -> dict[str, Step]:
@@ -45,6 +46,10 @@ def steps_of(study: str) -> dict[str, Step]:
         from eqrec.studies import p4, p4_figures, p4_values
 
         tables = p4.STEPS, p4_figures.STEPS, p4_values.STEPS
+    elif study == "compare":
+        from eqrec.studies import compare
+
+        tables = (compare.STEPS,)
     elif study == "claims":
         from eqrec.studies import claims
 

@@ -1,0 +1,73 @@
+"""The compare study's configuration and merge step: the planning-time check refuses what CompareSetup refuses,
+errors name the field of config/compare.yaml, and the table step refuses jobs that do not cover the pairs."""
+import copy
+from pathlib import Path
+
+import pytest
+
+from eqrec.compare import CompareSetup
+from eqrec.errors import InputError
+from eqrec.studies import compare, configuration, harness
+from eqrec.studies.config_checks import check_compare
+
+ROOT = Path(__file__).resolve().parents[1]
+CFG = configuration.load_config("compare", root=ROOT)
+RES = ROOT / "results" / "compare"
+
+
+@pytest.mark.parametrize("loss", [0.0, 0.1, 0.5, 0.8, 0.81, 0.9, 0.99])
+@pytest.mark.parametrize("burst", [1.0, 1.5, 4.0, 9.0])
+def test_the_planning_check_accepts_exactly_the_settings_compare_setup_accepts(loss, burst):
+    try:
+        CompareSetup(loss=loss, max_delay=1, horizon=4, burst=burst)
+        accepted = True
+    except InputError:
+        accepted = False
+    cfg = {"settings": {"b": {"loss": loss, "burst": burst}}}
+    if accepted:
+        check_compare(cfg)
+    else:
+        with pytest.raises(InputError, match="settings.b.burst"):
+            check_compare(cfg)
+
+
+def test_the_default_configuration_has_the_settings_of_the_issue():
+    assert {(s["model"], s["horizon"], s["max_delay"]) for s in CFG["systems"].values()} == {
+        ("acc", 6, 1), ("batch_reactor", 5, 2)}
+    settings = sorted((s["loss"], s.get("burst", 0)) for s in CFG["settings"].values())
+    assert settings == [(0.1, 0), (0.1, 4), (0.3, 0)]  # 0: independent losses
+
+
+def test_setup_errors_name_the_field_of_the_section():
+    cfg = copy.deepcopy(CFG)
+    cfg["systems"]["acc"]["horizon"] = 40  # past CompareSetup's range (the schema says the same)
+    with pytest.raises(InputError, match=r"field 'systems\.acc\.horizon'"):
+        compare.setup_of(cfg, "acc", "loss01")
+    setup = compare.setup_of(CFG, "reactor", "burst")
+    assert (setup.loss, setup.burst, setup.max_delay, setup.horizon, setup.runs) == (0.1, 4.0, 2, 5, CFG["runs"])
+
+
+def test_the_table_step_refuses_jobs_that_do_not_cover_the_pairs(tmp_path):
+    pairs = [(s, k) for s in CFG["systems"] for k in CFG["settings"]]
+    out = {"csv": tmp_path / "compare.csv", "json": tmp_path / "summary.json"}
+    short = {"csv": [RES / f"{s}_{k}.csv" for s, k in pairs[:-1]],
+             "json": [RES / f"{s}_{k}.json" for s, k in pairs[:-1]]}
+    with pytest.raises(InputError, match="exactly once"):
+        harness.run_step("compare", "table", CFG, inputs=short, outputs=out)
+    swapped = {"csv": [RES / f"{s}_{k}.csv" for s, k in pairs[::-1]],
+               "json": [RES / f"{s}_{k}.json" for s, k in pairs]}
+    with pytest.raises(InputError, match="same order"):
+        harness.run_step("compare", "table", CFG, inputs=swapped, outputs=out)
+    assert not out["csv"].exists()
+
+
+def test_the_merged_table_puts_system_and_setting_first():
+    import pandas as pd
+
+    table = pd.read_csv(RES / "compare.csv")
+    assert list(table.columns[:7]) == [*compare.KEYS, "estimator"]
+    assert len(table) == 6 * len(CFG["systems"]) * len(CFG["settings"])
+    guaranteed = table[table["estimator"].str.startswith("guaranteed")]
+    assert (guaranteed["violations"] == 0).all() and guaranteed["bound"].notna().all()
+    others = table[~table["estimator"].str.startswith("guaranteed")]
+    assert others[["bound", "violations", "outside_design"]].isna().all().all()

@@ -1,0 +1,79 @@
+# Compare (issue 24, beyond the papers): every estimator family (guaranteed class
+# engine and prefix designs with strict=False, time-stamped and delay-unaware
+# Kalman, LMV zero-/hold-input) on the same plant, packet traces, noise and
+# initial errors. One job per (system, setting) of config/compare.yaml runs
+# eqrec.compare through eqrec.studies.compare (harness, common.smk); the table
+# step merges the jobs' tables, checking that they cover the configured pairs.
+COMPARE_SYSTEMS = list(config["compare"]["systems"])
+COMPARE_SETTINGS = list(config["compare"]["settings"])
+
+
+rule compare_run:
+    """One (system, setting): the table, the figure and the summary of every family on the same traces."""
+    input:
+        code=code_inputs("compare", "run"),
+    output:
+        csv="results/compare/{system}_{setting}.csv",
+        json="results/compare/{system}_{setting}.json",
+        pdf="results/compare/{system}_{setting}.pdf",
+        png=report(
+            "results/compare/{system}_{setting}.png",
+            caption="../report/compare.rst",
+            category="Compare",
+            subcategory="{system}",
+        ),
+        timings="results/timings/compare/{system}_{setting}.json",
+    log:
+        "logs/compare/{system}_{setting}.log",
+    wildcard_constraints:
+        system="|".join(COMPARE_SYSTEMS),
+        setting="|".join(COMPARE_SETTINGS),
+    params:
+        study="compare",
+        step="run",
+        cfg=step_config("compare", "periods", "runs", "seed", "settings", "systems"),
+    script:
+        RUN_STEP
+
+
+rule compare_table:
+    """Every (system, setting) in one table, compare.csv, and the summaries in summary.json."""
+    input:
+        csv=expand(
+            "results/compare/{system}_{setting}.csv",
+            system=COMPARE_SYSTEMS,
+            setting=COMPARE_SETTINGS,
+        ),
+        json=expand(
+            "results/compare/{system}_{setting}.json",
+            system=COMPARE_SYSTEMS,
+            setting=COMPARE_SETTINGS,
+        ),
+        code=code_inputs("compare", "table"),
+    output:
+        csv=report(
+            "results/compare/compare.csv",
+            caption="../report/compare_table.rst",
+            category="Compare",
+        ),
+        json="results/compare/summary.json",
+    log:
+        "logs/compare/table.log",
+    params:
+        study="compare",
+        step="table",
+        cfg=step_config("compare", "settings", "systems"),
+    script:
+        RUN_STEP
+
+
+rule compare:
+    """All compare outputs."""
+    input:
+        rules.compare_table.output,
+        expand(
+            "results/compare/{system}_{setting}.{ext}",
+            system=COMPARE_SYSTEMS,
+            setting=COMPARE_SETTINGS,
+            ext=("png", "pdf"),
+        ),
