@@ -66,7 +66,8 @@ def highs_status(code: int, fallback: str = "") -> tuple[str, float]:
     return status, {"infeasible": INF, "unbounded": -INF}.get(status, np.nan)
 
 
-def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
+def _highs_model(lp: LinearProgram, options: dict):
+    """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet)."""
     import highspy
 
     h = highspy.Highs()
@@ -89,6 +90,11 @@ def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
     model.a_matrix_.num_col_ = nc
     model.a_matrix_.num_row_ = nr
     h.passModel(model)
+    return h
+
+
+def _highs_run(h, lp: LinearProgram, cost: np.ndarray) -> LPSolution:
+    """Run ``h`` (holding ``lp`` with objective ``cost``) and read its answer."""
     t0 = time.perf_counter()
     h.run()
     elapsed = time.perf_counter() - t0
@@ -99,9 +105,13 @@ def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
     if status == "optimal":
         hs = h.getSolution()
         x = np.asarray(hs.col_value)
-        return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks,
+        return LPSolution("optimal", x, float(cost @ x), "highs", iters, elapsed, lp.blocks,
                           row_dual=np.asarray(hs.row_dual) if hs.dual_valid else None)
     return LPSolution(status, None, objective, "highs", iters, elapsed, lp.blocks)
+
+
+def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
+    return _highs_run(_highs_model(lp, options), lp, lp.c)
 
 
 def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
@@ -321,3 +331,44 @@ def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = No
         Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.
     """
     return solver_info(solver).solve(lp, dict(options or {}))
+
+
+def solve_lp_costs(lp: LinearProgram, costs, solver: str = "highs", options: dict | None = None) -> list[LPSolution]:
+    """Solve ``lp`` once per objective of ``costs``, in order (same rows, bounds and matrix).
+
+    With HiGHS the model is loaded once and each solve starts from the previous optimal basis (still primal
+    feasible: only the objective changes), so the answers depend only on ``lp``, ``costs`` and their order; the
+    other solvers solve each objective from scratch.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The problem (its own ``c`` is ignored).
+    costs : sequence of numpy.ndarray
+        The objectives, each of length ``lp.shape[1]``.
+    solver : str, optional
+        A name of :data:`SOLVER_NAMES` (default ``"highs"``).
+    options : dict or None, optional
+        Passed to the solver, as :func:`solve_lp`.
+
+    Returns
+    -------
+    list of LPSolution
+        One per objective, in order (never raises for infeasibility).
+    """
+    info = solver_info(solver)
+    if solver != "highs":
+        return [info.solve(LinearProgram(c=np.asarray(c, float), A=lp.A, row_lower=lp.row_lower,
+                                         row_upper=lp.row_upper, col_lower=lp.col_lower, col_upper=lp.col_upper),
+                           dict(options or {})) for c in costs]
+    out: list[LPSolution] = []
+    h = None
+    for c in costs:
+        c = np.asarray(c, float)
+        if h is None:
+            h = _highs_model(LinearProgram(c=c, A=lp.A, row_lower=lp.row_lower, row_upper=lp.row_upper,
+                                           col_lower=lp.col_lower, col_upper=lp.col_upper), dict(options or {}))
+        else:
+            h.changeColsCost(c.size, np.arange(c.size, dtype=np.int32), c)
+        out.append(_highs_run(h, lp, c))
+    return out
