@@ -27,6 +27,8 @@ from eqrec.errors import InputError
 
 #: URL schemes of a Dask scheduler address.
 SCHEDULER_SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://", "ws://", "wss://")
+#: Seconds to wait for a Dask scheduler to answer.
+CONNECT_TIMEOUT = 30.0
 
 
 def check_jobs(n_jobs) -> int:
@@ -132,7 +134,7 @@ def connected(scheduler) -> Iterator:
         return
     distributed = _distributed()
     try:
-        client = distributed.Client(scheduler, set_as_default=False, timeout=30)
+        client = distributed.Client(scheduler, set_as_default=False, timeout=CONNECT_TIMEOUT)
     except OSError as exc:
         raise InputError(f"cannot reach the Dask scheduler {scheduler} ({exc})", field="scheduler") from None
     try:

@@ -273,8 +273,8 @@ def ratio_task(system: AffineSystem, horizon: int, chunk: list[DataClass], solve
 def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: tuple, *, n_jobs, scheduler,
          label: str) -> list:
     """``task`` over the classes ``which`` in batches; its per-class results in the order of ``which``."""
-    weights = [class_work(classes.classes[i], system) for i in which]
-    total = system.n * sum(weights)
+    weights = [system.n * class_work(classes.classes[i], system) for i in which]  # n LPs per class
+    total = sum(weights)
     workers = 1 if scheduler is None and total < POOL_MIN_WORK else check_jobs(n_jobs)
     runs = plan_batches(weights, workers)
     tasks = [(system, classes.horizon, [classes.classes[which[j]] for j in run], *args) for run in runs]
