@@ -333,19 +333,23 @@ def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = No
     return solver_info(solver).solve(lp, dict(options or {}))
 
 
-def solve_lp_costs(lp: LinearProgram, costs, solver: str = "highs", options: dict | None = None) -> list[LPSolution]:
-    """Solve ``lp`` once per objective of ``costs``, in order (same rows, bounds and matrix).
+def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
+                  options: dict | None = None) -> list[list[LPSolution]]:
+    """Solve ``lp`` for every column-bound pair of ``bounds`` and, under each, every objective of ``costs``.
 
-    With HiGHS the model is loaded once and each solve starts from the previous optimal basis (still primal
-    feasible: only the objective changes), so the answers depend only on ``lp``, ``costs`` and their order; the
-    other solvers solve each objective from scratch.
+    The rows and the matrix stay.  With HiGHS the model is loaded once and each solve starts from the previous
+    optimal basis (after an objective change it is still primal feasible, after a bound change still dual
+    feasible), in the fixed order bounds then objectives, so the answers depend only on the arguments; the other
+    solvers solve each variant from scratch.
 
     Parameters
     ----------
     lp : LinearProgram
-        The problem (its own ``c`` is ignored).
+        The problem (its own ``c`` is ignored; its column bounds are used when ``bounds`` is ``None``).
     costs : sequence of numpy.ndarray
         The objectives, each of length ``lp.shape[1]``.
+    bounds : sequence of tuple of numpy.ndarray, optional
+        ``(col_lower, col_upper)`` pairs (default: ``lp``'s own, once).
     solver : str, optional
         A name of :data:`SOLVER_NAMES` (default ``"highs"``).
     options : dict or None, optional
@@ -353,22 +357,28 @@ def solve_lp_costs(lp: LinearProgram, costs, solver: str = "highs", options: dic
 
     Returns
     -------
-    list of LPSolution
-        One per objective, in order (never raises for infeasibility).
+    list of list of LPSolution
+        ``out[j][i]``: bounds ``j``, objective ``i`` (never raises for infeasibility).
     """
     info = solver_info(solver)
+    bounds = [(lp.col_lower, lp.col_upper)] if bounds is None else list(bounds)
+    variant = lambda c, lo, hi: LinearProgram(c=np.asarray(c, float), A=lp.A, row_lower=lp.row_lower,  # noqa: E731
+                                              row_upper=lp.row_upper, col_lower=lo, col_upper=hi)
     if solver != "highs":
-        return [info.solve(LinearProgram(c=np.asarray(c, float), A=lp.A, row_lower=lp.row_lower,
-                                         row_upper=lp.row_upper, col_lower=lp.col_lower, col_upper=lp.col_upper),
-                           dict(options or {})) for c in costs]
-    out: list[LPSolution] = []
+        return [[info.solve(variant(c, lo, hi), dict(options or {})) for c in costs] for lo, hi in bounds]
+    out: list[list[LPSolution]] = []
     h = None
-    for c in costs:
-        c = np.asarray(c, float)
-        if h is None:
-            h = _highs_model(LinearProgram(c=c, A=lp.A, row_lower=lp.row_lower, row_upper=lp.row_upper,
-                                           col_lower=lp.col_lower, col_upper=lp.col_upper), dict(options or {}))
-        else:
-            h.changeColsCost(c.size, np.arange(c.size, dtype=np.int32), c)
-        out.append(_highs_run(h, lp, c))
+    cols = np.arange(lp.A.shape[1], dtype=np.int32)
+    for lo, hi in bounds:
+        if h is not None:
+            h.changeColsBounds(cols.size, cols, np.asarray(lo, float), np.asarray(hi, float))
+        row = []
+        for c in costs:
+            c = np.asarray(c, float)
+            if h is None:
+                h = _highs_model(variant(c, lo, hi), dict(options or {}))
+            else:
+                h.changeColsCost(c.size, cols, c)
+            row.append(_highs_run(h, lp, c))
+        out.append(row)
     return out

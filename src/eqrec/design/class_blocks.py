@@ -10,7 +10,8 @@ them **per class**:
   alone (:func:`eqrec.core.classes.class_maps`; nothing of the other classes is held), one LP per
   state row on the shared constraints :math:`Z_S\lambda = 0`, :math:`|\lambda| \le \beta`, solved in row
   order with HiGHS keeping its basis from one row to the next (only the objective changes:
-  :func:`eqrec.core.solvers.solve_lp_costs`), then the class certificate
+  :func:`eqrec.core.solvers.solve_lp_grid`; the same for a second ``μ1``, e.g. the lower end of
+  μ1 free, with the bounds changed), then the class certificate
   :math:`\sum_c \beta_c |(E_d - K Z_S)[r, c]|` recomputed from the gains; the maps are released;
 * the Charnes–Cooper LPs of μ1 free (:func:`ratio_task`), one per terminal (class, row), and the
   ratio recomputed from each gain row.
@@ -39,7 +40,7 @@ import scipy.sparse as sp
 from eqrec.core.classes import ClassSet, DataClass, class_maps
 from eqrec.core.lp import LinearProgram
 from eqrec.core.parallel import Progress, check_jobs, run_tasks
-from eqrec.core.solvers import solve_lp, solve_lp_costs
+from eqrec.core.solvers import solve_lp, solve_lp_grid
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import box_radius
@@ -167,9 +168,12 @@ class LevelBlock:
     nonzeros: int
 
 
-def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1: float, solver: str,
-               options: dict) -> list[LevelBlock]:
-    """Solve the level LP of every state row of each class of ``chunk`` and certify its gain (module docstring).
+def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1s: list[float], solver: str,
+               options: dict) -> list[list[LevelBlock]]:
+    """Solve the level LP of every state row of each class of ``chunk`` at each ``μ1`` and certify its gains.
+
+    Per class one model (module docstring): the rows in order at ``mu1s[0]``, then at ``mu1s[1]`` (only the
+    radii of ``ξ0`` change), ...
 
     Parameters
     ----------
@@ -178,16 +182,16 @@ def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1: 
         ``T`` of the class set.
     chunk : list of DataClass
         The classes of this task.
-    mu1 : float
-        Recovery level.
+    mu1s : list of float
+        Recovery levels.
     solver : str
     options : dict
         LP solver and its options.
 
     Returns
     -------
-    list of LevelBlock
-        One per class of ``chunk``, in order.
+    list of list of LevelBlock
+        Per class of ``chunk``, one per ``μ1``, in order.
 
     Raises
     ------
@@ -195,26 +199,31 @@ def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1: 
         A row's LP without an optimum, or without row multipliers.
     """
     st = Stacking(system, horizon)
-    beta = box_radius(st, float(mu1))
+    betas = [box_radius(st, float(mu1)) for mu1 in mu1s]
     out = []
     for cls in chunk:
         E, Z, act = active_maps(st, cls)
         m, C = Z.shape
-        K, levels, iters = np.zeros((system.n, m)), np.zeros(system.n), 0
+        K = [np.zeros((system.n, m)) for _ in mu1s]
+        levels, iters = np.zeros((len(mu1s), system.n)), np.zeros(len(mu1s), np.int64)
         if C:
-            A = _csc(Z)
-            lp = LinearProgram(c=np.zeros(C), A=A, row_lower=np.zeros(m), row_upper=np.zeros(m),
-                               col_lower=-beta[act], col_upper=beta[act])
-            for r, sol in enumerate(solve_lp_costs(lp, [-E[r] for r in range(system.n)], solver, options)):
-                sol.require_optimal(f"class {cls.label} row {r} (mu1 = {mu1:g})")
-                if sol.row_dual is None:
-                    raise SolverFailure(f"solver {sol.solver} returned no row multipliers (the class gains are "
-                                        "read from them)")
-                K[r], levels[r], iters = -sol.row_dual, -sol.objective, iters + sol.iterations
+            lp = LinearProgram(c=np.zeros(C), A=_csc(Z), row_lower=np.zeros(m), row_upper=np.zeros(m),
+                               col_lower=-betas[0][act], col_upper=betas[0][act])
+            grid = solve_lp_grid(lp, [-E[r] for r in range(system.n)], [(-b[act], b[act]) for b in betas], solver,
+                                 options)
+            for j, sols in enumerate(grid):
+                for r, sol in enumerate(sols):
+                    if not sol.optimal:
+                        sol.require_optimal(f"class {cls.label} row {r} (mu1 = {mu1s[j]:g})")
+                    if sol.row_dual is None:
+                        raise SolverFailure(f"solver {sol.solver} returned no row multipliers (the class gains are "
+                                            "read from them)")
+                    K[j][r], levels[j, r], iters[j] = -sol.row_dual, -sol.objective, iters[j] + sol.iterations
         E, Z = class_maps(st, cls)
-        bounds = np.abs(E - K @ Z) @ beta if Z.size else np.abs(E) @ beta
-        out.append(LevelBlock(K=K, levels=levels, bounds=bounds, iterations=iters, rows=system.n * m,
-                              cols=system.n * C, nonzeros=system.n * int(np.count_nonzero(Z))))
+        size = {"rows": system.n * m, "cols": system.n * C, "nonzeros": system.n * int(np.count_nonzero(Z))}
+        out.append([LevelBlock(K=K[j], levels=levels[j], iterations=int(iters[j]), **size,
+                               bounds=np.abs(E - K[j] @ Z) @ betas[j] if Z.size else np.abs(E) @ betas[j])
+                    for j in range(len(mu1s))])
     return out
 
 
@@ -288,15 +297,16 @@ def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: 
     return per_class
 
 
-def solve_level_blocks(system: AffineSystem, classes: ClassSet, mu1: float, *, solver: str, options: dict,
-                       n_jobs=None, scheduler=None) -> tuple[list[LevelBlock], float]:
+def solve_level_blocks(system: AffineSystem, classes: ClassSet, mu1s: list[float], *, solver: str, options: dict,
+                       n_jobs=None, scheduler=None) -> tuple[list[list[LevelBlock]], float]:
     """:func:`level_task` over every class, in batches (:func:`eqrec.core.parallel.run_tasks`).
 
     Parameters
     ----------
     system : AffineSystem
     classes : ClassSet
-    mu1 : float
+    mu1s : list of float
+        Recovery levels, solved one after the other per class.
     solver : str
     options : dict
     n_jobs : int or None, optional
@@ -307,12 +317,13 @@ def solve_level_blocks(system: AffineSystem, classes: ClassSet, mu1: float, *, s
     Returns
     -------
     tuple
-        The :class:`LevelBlock` of each class in order, and the wall-clock seconds.
+        Per ``μ1``, the :class:`LevelBlock` of each class in order; and the wall-clock seconds.
     """
     t0 = time.perf_counter()
-    blocks = _run(level_task, system, classes, list(range(len(classes))), (float(mu1), solver, dict(options)),
-                  n_jobs=n_jobs, scheduler=scheduler, label="eqrec: classes solved")
-    return blocks, time.perf_counter() - t0
+    per_class = _run(level_task, system, classes, list(range(len(classes))),
+                     ([float(mu) for mu in mu1s], solver, dict(options)), n_jobs=n_jobs, scheduler=scheduler,
+                     label="eqrec: classes solved")
+    return [[blocks[j] for blocks in per_class] for j in range(len(mu1s))], time.perf_counter() - t0
 
 
 def solve_ratio_blocks(system: AffineSystem, classes: ClassSet, which: list[int], *, solver: str, n_jobs=None,

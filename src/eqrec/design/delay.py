@@ -61,7 +61,7 @@ from eqrec.core.parallel import check_jobs, check_scheduler, connected
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_blocks import choose_path
-from eqrec.design.classes import check_terminal, class_design, solve_classes
+from eqrec.design.classes import check_terminal, class_design, solve_classes, solve_classes_at
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
 from eqrec.design.delay_languages import _classes, _tree, delay_classes, delay_language  # noqa: F401 (re-exported)
 from eqrec.design.inputs import check_fraction, check_mu1, check_solver, check_system
@@ -98,7 +98,7 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
 def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
                  solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
                  engine: str = "classes", node_gains: bool | None = None, state_weights=None, n_jobs=None,
-                 scheduler=None) -> Design:
+                 scheduler=None, solved=None) -> Design:
     r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
 
     For a language of delay words (eq. (1) of the delayed-data paper,
@@ -160,6 +160,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     scheduler : str, distributed.Client or None, optional
         A Dask scheduler (``"tcp://host:8786"`` or a client) running those solves instead
         (:mod:`eqrec.design.class_blocks`; the same result as on this machine).
+    solved : ClassSolution or None, optional
+        Class engine: the class LPs already solved at ``mu1`` (:func:`eqrec.design.classes.solve_classes_at`).
 
     Returns
     -------
@@ -208,7 +210,7 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
         classes = _classes(patterns, kind)
         design = class_design(system, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
                               solver=solver, solver_options=solver_options, method="delay", certify=certify,
-                              node_gains=node_gains, rtol=rtol, n_jobs=n_jobs, scheduler=scheduler)
+                              node_gains=node_gains, rtol=rtol, n_jobs=n_jobs, scheduler=scheduler, solved=solved)
         if design.certificate is not None and classes.tree is not None:
             design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
         elif design.class_certificate is not None:
@@ -387,18 +389,19 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     with connected(scheduler if large else None) as client:  # one connection for the three steps
         par = {"n_jobs": n_jobs, "scheduler": client}
         mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol, **par)
+        # the levels at μ1,min (the design) and at the level proven infeasible (the bound), in one pass per class
+        at = [mm.upper] + ([mm.lower] if np.isfinite(mm.lower) else [])
         if engine == "tree":
             if classes.tree is None:
                 raise InputError("the tree engine needs the language's words (a prefix tree)", field="engine")
+            sols = [None, *solve_classes_at(system, classes, at[1:], solver=solver, **par)]
             design = design_delay(system, classes.tree, mm.upper, cost=cost, solver=solver, certify=certify,
                                   engine="tree")
         else:
+            sols = solve_classes_at(system, classes, at, solver=solver, **par)
             design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
-                                  node_gains=node_gains, **par)
-        lower_bound = np.nan
-        if np.isfinite(mm.lower):
-            low = solve_classes(system, classes, mm.lower, solver=solver, **par)
-            lower_bound = class_cost(classes, mm.lower, low.levels, cost)
+                                  node_gains=node_gains, solved=sols[0], **par)
+        lower_bound = class_cost(classes, mm.lower, sols[1].levels, cost) if len(at) > 1 else np.nan
     J = float(design.extra["J"])
     design.state_weights = weights
     design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,
