@@ -26,7 +26,8 @@ Which path (:func:`choose_path`): the per-class solves give other optimal vertic
 LP (a degenerate LP has several; last digits of a level may move), so the choice depends on the size
 only, never on the number of workers: ``"auto"`` keeps the one block LP up to
 :data:`MONOLITHIC_MAX_WORK` (every language of the papers' studies, whose stored results it wrote) and
-solves per class beyond (measured faster from far below that size: ``benchmarks/bench_classes.py``).
+solves per class beyond, where that is measured faster (``benchmarks/bench_classes.py``, part d).  Below
+:data:`POOL_MIN_WORK` the per-class solves run in this process (no pool to start).
 """
 
 from __future__ import annotations
@@ -50,11 +51,14 @@ from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 #: The ways to solve the class LPs: by size, the one block LP, or per class.
 PATHS = ("auto", "monolithic", "blocks")
 #: Largest estimated work (:func:`class_work` summed over the LPs) solved as one block LP by ``path="auto"``.
-#: 2e6 is above every language of the papers' studies (the largest, the scale table's class sizes, request
-#: the one LP explicitly) and below the (4, 20) reactor language, where the per-class solves are already faster.
+#: Measured on the batch reactor, one core: the one LP is faster up to (τ̄, T) = (4, 16) (work 3.2e5, 0.18 s
+#: either way), the per-class solves beyond ((4, 20): 0.23 s against 0.29 s; (4, 40): 0.6 s against 2.9 s).
+#: Every language of the papers' studies is far below (the reactor's (2, 5): 3.4e3; the scale table measures the
+#: one LP by name), so their stored results keep the one LP's bytes.
 MONOLITHIC_MAX_WORK = 400_000
-#: Estimated work below which the per-class solves stay in this process (a pool's start costs ~0.5 s).
-POOL_MIN_WORK = 0
+#: Estimated work below which the per-class solves stay in this process, ``n_jobs`` whatever (starting a pool
+#: of workers costs 0.3-1 s; one core does about 1.5e7 units a second).
+POOL_MIN_WORK = 8_000_000
 #: Batches per worker (load balance) and smallest work of a batch (task overhead).
 BATCHES_PER_WORKER, MIN_BATCH_WORK = 6, 400_000
 
