@@ -220,3 +220,21 @@ def test_cli_jobs_and_scheduler(tmp_path, capsys):
     assert "field '--scheduler'" in capsys.readouterr().err
     assert main(["design", system, "--words", "11111", "--method", "time", "--jobs", "2"]) == 1
     assert "--jobs applies to --method prefix and delay" in capsys.readouterr().err
+
+
+def test_scale_free_step_writes_values_timings_and_figure(tmp_path, monkeypatch):
+    """The p3_scale target's mu1-free scaling: values in results, times and memory in the timings, a figure."""
+    from types import SimpleNamespace
+
+    import eqrec.studies.p3_scale_free as free
+
+    monkeypatch.setattr(free, "FREE_SIZES", [(2, 5)])
+    out = SimpleNamespace(**{k: str(tmp_path / f"{k}.{ext}") for k, ext in (
+        ("csv", "csv"), ("timings_csv", "csv"), ("timings_md", "md"), ("pdf", "pdf"), ("png", "png"))})
+    free.step_scale_free({"scale": {"time_limit": 600}}, None, out, None)
+    values = (tmp_path / "csv.csv").read_text().splitlines()
+    assert values[0] == "tau,T,classes,config,status,mu1,J,mu2,lower_bound" and len(values) == 4
+    assert len({line.split(",", 4)[-1] for line in values[1:]}) == 1  # the same values for every configuration
+    assert (tmp_path / "timings_csv.csv").read_text().startswith("tau,T,config,wall_time,peak_mb")
+    assert "| 2 | 5 | 18 | blocks-2 |" in (tmp_path / "timings_md.md").read_text()
+    assert (tmp_path / "png.png").stat().st_size > 0 and (tmp_path / "pdf.pdf").stat().st_size > 0
