@@ -238,3 +238,18 @@ def test_scale_free_step_writes_values_timings_and_figure(tmp_path, monkeypatch)
     assert (tmp_path / "timings_csv.csv").read_text().startswith("tau,T,config,wall_time,peak_mb")
     assert "| 2 | 5 | 18 | blocks-2 |" in (tmp_path / "timings_md.md").read_text()
     assert (tmp_path / "png.png").stat().st_size > 0 and (tmp_path / "pdf.pdf").stat().st_size > 0
+
+
+def test_workers_started_ahead_give_the_same_bytes_and_are_settled(reactor, classes, monkeypatch):
+    import warnings
+
+    monkeypatch.setattr(class_blocks, "MONOLITHIC_MAX_WORK", 0)
+    monkeypatch.setattr(class_blocks, "POOL_MIN_WORK", 0)
+    one = design_delay_global(reactor, classes, n_jobs=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # joblib warns about warm-up tasks nobody waited for
+        assert class_blocks.prestart_workers(reactor, classes, n_jobs=2)
+        parallel.settle()
+        two = design_delay_global(reactor, classes, n_jobs=2)
+    assert not parallel._WARMING
+    assert _free_bytes(one) == _free_bytes(two)

@@ -185,6 +185,45 @@ def _isatty(stream) -> bool:
         return False
 
 
+#: Warm-up tasks of a pool started ahead (:func:`prestart`), consumed by :func:`settle`.
+_WARMING: list = []
+
+
+def prestart(fn: Callable, n_jobs=None) -> None:
+    """Start the local worker processes now, in the background, each loading ``fn``'s module.
+
+    The next :func:`run_tasks` on this machine finds them ready (joblib reuses its pool): a caller that has other
+    work first (μ1 free: the Charnes–Cooper LPs) hides their start (0.3-1 s) behind it.  Call :func:`settle`
+    when done, whatever happens.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (the task function to come).
+    n_jobs : int or None, optional
+        Worker processes (:func:`check_jobs`); nothing is started for one.
+    """
+    workers = check_jobs(n_jobs)
+    if workers <= 1:
+        return
+    import joblib
+
+    with joblib.parallel_config(backend="loky", n_jobs=workers):
+        _WARMING.append(joblib.Parallel(n_jobs=workers, return_as="generator_unordered", batch_size=1,
+                                        pre_dispatch="all")(joblib.delayed(_touch)(fn) for _ in range(workers)))
+
+
+def settle() -> None:
+    """Wait for the warm-up tasks of :func:`prestart` (if any) and drop them."""
+    while _WARMING:
+        for _ in _WARMING.pop():
+            pass
+
+
+def _touch(fn: Callable) -> int:
+    return os.getpid()
+
+
 def run_tasks(fn: Callable, tasks: Sequence[tuple], *, n_jobs=None, scheduler=None,
               progress: Progress | None = None, units: Sequence[int] | None = None) -> list:
     """``[fn(*task) for task in tasks]``, on worker processes or a Dask cluster, in task order.
@@ -223,11 +262,12 @@ def run_tasks(fn: Callable, tasks: Sequence[tuple], *, n_jobs=None, scheduler=No
     import joblib
 
     out: list = [None] * len(tasks)
+    settle()
     with connected(scheduler) as client:
         config = (joblib.parallel_config(backend="dask", client=client) if client is not None
-                  else joblib.parallel_config(backend="loky", n_jobs=min(workers, len(tasks))))
-        with config:
-            par = joblib.Parallel(n_jobs=-1 if client is not None else min(workers, len(tasks)),
+                  else joblib.parallel_config(backend="loky", n_jobs=workers))
+        with config:  # loky: the pool of `workers` processes is joblib's reusable one (started ahead or not)
+            par = joblib.Parallel(n_jobs=-1 if client is not None else workers,
                                   return_as="generator_unordered", batch_size=1, pre_dispatch="all")
             for i, result in par(joblib.delayed(_indexed)(fn, i, task) for i, task in enumerate(tasks)):
                 out[i] = result

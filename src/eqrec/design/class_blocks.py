@@ -40,7 +40,7 @@ import scipy.sparse as sp
 
 from eqrec.core.classes import ClassSet, DataClass, class_maps
 from eqrec.core.lp import LinearProgram
-from eqrec.core.parallel import Progress, check_jobs, run_tasks
+from eqrec.core.parallel import Progress, check_jobs, prestart, run_tasks
 from eqrec.core.solvers import solve_lp, solve_lp_grid
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
@@ -299,6 +299,31 @@ def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: 
         for j, r in zip(run, res):
             per_class[j] = r
     return per_class
+
+
+def prestart_workers(system: AffineSystem, classes: ClassSet, n_jobs=None, scheduler=None) -> bool:
+    """Start the local workers ahead (:func:`eqrec.core.parallel.prestart`) if the level LPs will need them.
+
+    That is: solved per class, with more work than :data:`POOL_MIN_WORK`, more than one worker and no scheduler.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    n_jobs : int or None, optional
+    scheduler : str, distributed.Client or None, optional
+
+    Returns
+    -------
+    bool
+        Whether they were started (then call :func:`eqrec.core.parallel.settle` when done).
+    """
+    if scheduler is not None or check_jobs(n_jobs) <= 1 or choose_path("auto", classes, None, system) != "blocks":
+        return False
+    if system.n * sum(class_work(c, system) for c in classes.classes) < POOL_MIN_WORK:
+        return False
+    prestart(level_task, n_jobs)
+    return True
 
 
 def solve_level_blocks(system: AffineSystem, classes: ClassSet, mu1s: list[float], *, solver: str, options: dict,

@@ -49,6 +49,7 @@ certificate (worst case of ``E_d − K Z_S``) and, where node gains are derived,
 
 from __future__ import annotations
 
+import contextlib
 import time
 
 import numpy as np
@@ -57,10 +58,10 @@ from eqrec.core.certify import certify_design
 from eqrec.core.classes import classes_of_tree
 from eqrec.core.lp import LPSolution
 from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.parallel import check_jobs, check_scheduler, connected
+from eqrec.core.parallel import check_jobs, check_scheduler, connected, settle
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
-from eqrec.design.class_blocks import choose_path
+from eqrec.design.class_blocks import choose_path, prestart_workers
 from eqrec.design.classes import check_terminal, class_design, solve_classes, solve_classes_at
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
 from eqrec.design.delay_languages import _classes, _tree, delay_classes, delay_language  # noqa: F401 (re-exported)
@@ -294,6 +295,17 @@ def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = Non
                                      scheduler=scheduler)
 
 
+@contextlib.contextmanager
+def _workers_ahead(system: AffineSystem, classes, n_jobs, scheduler):
+    """The local workers of the level LPs started while μ1,min is computed, and settled on exit."""
+    started = prestart_workers(system, classes, n_jobs, scheduler)
+    try:
+        yield
+    finally:
+        if started:
+            settle()
+
+
 def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
                         solver: str = "highs", rtol: float = MU1_LOWER_RTOL, certify: bool = True,
                         node_gains: bool | None = None, engine: str = "classes", state_weights=None,
@@ -386,8 +398,8 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_jobs(n_jobs)
     scheduler = check_scheduler(scheduler)
     large = choose_path("auto", classes, None, system) == "blocks"  # else no class LP runs on the scheduler
-    with connected(scheduler if large else None) as client:  # one connection for the three steps
-        par = {"n_jobs": n_jobs, "scheduler": client}
+    with connected(scheduler if large else None) as client, _workers_ahead(system, classes, n_jobs, client):
+        par = {"n_jobs": n_jobs, "scheduler": client}  # one connection, one pool, for the three steps
         mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol, **par)
         # the levels at μ1,min (the design) and at the level proven infeasible (the bound), in one pass per class
         at = [mm.upper] + ([mm.lower] if np.isfinite(mm.lower) else [])
