@@ -392,6 +392,7 @@ rule p3_scale_free:
         png="results/p3/fig_scale_free.png",
     log:
         "logs/p3/scale_free.log",
+    threads: 2
     params:
         study="p3",
         step="scale_free",
