@@ -187,6 +187,30 @@ def _isatty(stream) -> bool:
 
 #: Warm-up tasks of a pool started ahead (:func:`prestart`), consumed by :func:`settle`.
 _WARMING: list = []
+#: The local pool last seen running: its size and when (``time.monotonic()``).
+_POOL = {"workers": 0, "seen": -1e9}
+#: Seconds a pool is taken to be still running after its last use (joblib's loky pool stops after 300 s idle).
+POOL_ALIVE_S = 200.0
+
+
+def pool_ready(n_jobs=None) -> bool:
+    """Whether a local pool of ``n_jobs`` workers ran recently (:data:`POOL_ALIVE_S`): tasks start at once there.
+
+    Parameters
+    ----------
+    n_jobs : int or None, optional
+        Worker processes (:func:`check_jobs`).
+
+    Returns
+    -------
+    bool
+    """
+    workers = check_jobs(n_jobs)
+    return workers > 1 and _POOL["workers"] == workers and time.monotonic() - _POOL["seen"] < POOL_ALIVE_S
+
+
+def _pool_seen(workers: int) -> None:
+    _POOL.update(workers=workers, seen=time.monotonic())
 
 
 def prestart(fn: Callable, n_jobs=None) -> None:
@@ -216,8 +240,8 @@ def prestart(fn: Callable, n_jobs=None) -> None:
 def settle() -> None:
     """Wait for the warm-up tasks of :func:`prestart` (if any) and drop them."""
     while _WARMING:
-        for _ in _WARMING.pop():
-            pass
+        workers = len([_ for _ in _WARMING.pop()])
+        _pool_seen(workers)
 
 
 def _touch(fn: Callable) -> int:
@@ -273,6 +297,8 @@ def run_tasks(fn: Callable, tasks: Sequence[tuple], *, n_jobs=None, scheduler=No
                 out[i] = result
                 if progress is not None:
                     progress.advance(units[i])
+        if client is None:
+            _pool_seen(workers)
     return out
 
 

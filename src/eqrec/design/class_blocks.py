@@ -27,7 +27,8 @@ LP (a degenerate LP has several; last digits of a level may move), so the choice
 only, never on the number of workers: ``"auto"`` keeps the one block LP up to
 :data:`MONOLITHIC_MAX_WORK` (every language of the papers' studies, whose stored results it wrote) and
 solves per class beyond, where that is measured faster (``benchmarks/bench_classes.py``, part d).  Below
-:data:`POOL_MIN_WORK` the per-class solves run in this process (no pool to start).
+:data:`POOL_MIN_WORK` the per-class solves run in this process unless the workers are already up
+(:func:`eqrec.core.parallel.pool_ready`).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ import scipy.sparse as sp
 
 from eqrec.core.classes import ClassSet, DataClass, class_maps
 from eqrec.core.lp import LinearProgram
-from eqrec.core.parallel import Progress, check_jobs, prestart, run_tasks
+from eqrec.core.parallel import Progress, check_jobs, pool_ready, prestart, run_tasks
 from eqrec.core.solvers import solve_lp, solve_lp_grid
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
@@ -56,8 +57,8 @@ PATHS = ("auto", "monolithic", "blocks")
 #: Every language of the papers' studies is far below (the reactor's (2, 5): 3.4e3; the scale table measures the
 #: one LP by name), so their stored results keep the one LP's bytes.
 MONOLITHIC_MAX_WORK = 400_000
-#: Estimated work below which the per-class solves stay in this process, ``n_jobs`` whatever (starting a pool
-#: of workers costs 0.3-1 s; one core does about 1.5e7 units a second).
+#: Estimated work below which the per-class solves stay in this process, ``n_jobs`` whatever, unless the pool
+#: of workers is already running (starting it costs 0.3-1 s; one core does about 1.5e7 units a second).
 POOL_MIN_WORK = 8_000_000
 #: Batches per worker (load balance) and smallest work of a batch (task overhead).
 BATCHES_PER_WORKER, MIN_BATCH_WORK = 6, 400_000
@@ -288,7 +289,8 @@ def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: 
     """``task`` over the classes ``which`` in batches; its per-class results in the order of ``which``."""
     weights = [system.n * class_work(classes.classes[i], system) for i in which]  # n LPs per class
     total = sum(weights)
-    workers = 1 if scheduler is None and total < POOL_MIN_WORK else check_jobs(n_jobs)
+    local = scheduler is None and total < POOL_MIN_WORK and not pool_ready(n_jobs)  # no pool to start for this
+    workers = 1 if local else check_jobs(n_jobs)
     runs = plan_batches(weights, workers)
     tasks = [(system, classes.horizon, [classes.classes[which[j]] for j in run], *args) for run in runs]
     progress = Progress(len(which), label) if total >= POOL_MIN_WORK else None
