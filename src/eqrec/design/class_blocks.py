@@ -62,6 +62,10 @@ MONOLITHIC_MAX_WORK = 400_000
 POOL_MIN_WORK = 8_000_000
 #: Batches per worker (load balance) and smallest work of a batch (task overhead).
 BATCHES_PER_WORKER, MIN_BATCH_WORK = 6, 400_000
+#: Fixed cost of a class's LPs in the batches' work units (``n`` times :func:`class_work`), added to each class's
+#: weight: a HiGHS model per class and a run per row and ``μ1`` cost about 1.1 ms, its maps and certificate
+#: 0.3 ms, where a unit costs about 3.5e-8 s (fit on the reactor's (4, 60), one core, μ1 free).
+CLASS_OVERHEAD = 40_000
 
 
 def check_path(path: str) -> str:
@@ -287,8 +291,9 @@ def ratio_task(system: AffineSystem, horizon: int, chunk: list[DataClass], solve
 def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: tuple, *, n_jobs, scheduler,
          label: str) -> list:
     """``task`` over the classes ``which`` in batches; its per-class results in the order of ``which``."""
-    weights = [system.n * class_work(classes.classes[i], system) for i in which]  # n LPs per class
-    total = sum(weights)
+    work = [system.n * class_work(classes.classes[i], system) for i in which]  # n LPs per class
+    total = sum(work)
+    weights = [CLASS_OVERHEAD + w for w in work]  # what a batch costs
     local = scheduler is None and total < POOL_MIN_WORK and not pool_ready(n_jobs)  # no pool to start for this
     workers = 1 if local else check_jobs(n_jobs)
     runs = plan_batches(weights, workers)
