@@ -107,9 +107,14 @@ def free_figure(frame: pd.DataFrame, outputs) -> None:
                     fontsize=6)
     ax.set_xscale("log")
     ax.set_yscale("log")
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    ax.set_xticks([300, 500, 1000, 2000, 4000])
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("classes (time, available data)")
-    ax.set_ylabel("design time, mu1 free [s]")
-    ax.set_title("Batch reactor {0..τ̄}^T, mu1 free: the class engine")
+    ax.set_ylabel(r"design time, $\mu_1$ free [s]")
+    ax.set_title(r"Batch reactor $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
     ax.legend()
     save_figure(fig, outputs.pdf, outputs.png)
 
