@@ -3,6 +3,7 @@
     python benchmarks/bench_classes.py                 # all parts
     python benchmarks/bench_classes.py --only a --repeats 50
     python benchmarks/bench_classes.py --only c --sizes 8,3 20,4 30,4 40,4 30,5
+    python benchmarks/bench_classes.py --only d --free-sizes 4,60 --configs blocks-1 blocks-2
 
 a. The prefix-based paper's design end to end (build, solve, gains,
    certificate) on the ACC language L1 (``101111, 110111, 111011, 111101``,
@@ -29,6 +30,20 @@ c. Full languages ``{0..τ̄}^T`` on the batch reactor (sum cost, ``μ1 = 0.5``
    beside it.  Targets: (8, 3) <= 1 s, (20, 4) <= 5 s, (30, 4) <= 10 s and
    <= 1 GB peak.
 
+d. Issue 27: the batch reactor's full language ``{0..τ̄}^T`` with ``μ1`` free
+   (:func:`eqrec.design.delay.design_delay_global` on
+   :func:`eqrec.design.delay.delay_classes`), one fresh process per size and
+   configuration: the one block LP (``monolithic``: today's algorithm, forced
+   through ``class_blocks.MONOLITHIC_MAX_WORK``), per class on 1 and 2 worker
+   processes (``n_jobs``), and per class on a ``dask.distributed.LocalCluster``
+   (2 worker processes, 1 thread each; its start not counted).  ``cold``: the
+   first design in the process (the worker pool starts inside it, as for the
+   CLI); ``warm``: the median of the next ``--warm-repeats`` (the pool already
+   up); peak memory: the main process and the largest worker (``VmHWM``).  The
+   sizes are ``(τ̄, T)``.  Targets: (4, 100) <= 20 s and <= 1 GB; (5, 60) <= 15 s;
+   (4, 60) <= 5 s; (30, 4) = (τ̄, T) = (4, 30) not slower than the one block LP;
+   speed-up from 1 to 2 workers >= 1.7x at (4, 60) (warm, and cold beside it).
+
 Medians over ``--repeats`` (part c: ``--size-repeats`` fresh processes per
 size, peak memory the largest).  The last table lists every target with
 PASS or MISS.  Timings depend on the machine's load (2 shared cores here).
@@ -37,7 +52,12 @@ PASS or MISS.  Timings depend on the machine's load (2 shared cores here).
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import resource
 import statistics
+import subprocess
+import sys
 import time
 
 ACC_L1 = ["101111", "110111", "111011", "111101"]
@@ -45,6 +65,11 @@ HISTORICAL_GLOBAL_S = 2.497  # results/p3/reactor_designs.json global.time_s at 
 
 #: (label, target seconds, target peak MB or None) of part c.
 SIZE_TARGETS = {(8, 3): (1.0, None), (20, 4): (5.0, None), (30, 4): (10.0, 1024.0)}
+#: Part d: (τ̄, T) -> (target seconds, target peak MB) of the per-class design on 2 workers (cold).
+FREE_TARGETS = {(4, 100): (20.0, 1024.0), (5, 60): (15.0, None), (4, 60): (5.0, None)}
+#: Part d configurations: label -> (n_jobs, dask, monolithic).
+CONFIGS = {"monolithic": (1, False, True), "blocks-1": (1, False, False), "blocks-2": (2, False, False),
+           "dask-2": (2, True, False)}
 
 
 def _median_time(fn, repeats: int) -> tuple[float, float, object]:
@@ -147,17 +172,129 @@ def part_c(sizes, size_repeats: int, mem_limit_gb: float, time_limit: float, ver
                                  f"<= {limit_mb / 1024:g} GB", bool(ok) and peak <= limit_mb))
 
 
+def _vmhwm_mb(pid: int) -> float:
+    """Peak resident memory of a process (``VmHWM``), MB; 0 if unreadable."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return 0.0
+
+
+def free_worker(tau: int, T: int, config: str, warm_repeats: int) -> dict:
+    """One configuration of part d in this (fresh) process: cold and warm times, peaks."""
+    import psutil
+
+    from eqrec.design import class_blocks
+    from eqrec.design.delay import delay_classes, design_delay_global
+    from eqrec.models import batch_reactor
+
+    n_jobs, dask, mono = CONFIGS[config]
+    if mono:
+        class_blocks.MONOLITHIC_MAX_WORK = float("inf")
+    system = batch_reactor()
+    design_delay_global(system, delay_classes(max_delay=1, horizon=3), n_jobs=1)  # imports
+    cluster = client = None
+    kw = {"n_jobs": n_jobs}
+    if dask:
+        from dask.distributed import Client, LocalCluster
+
+        cluster = LocalCluster(n_workers=n_jobs, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+        kw = {"scheduler": client}
+    times, res = [], None
+    for _ in range(1 + warm_repeats):
+        t0 = time.perf_counter()
+        classes = delay_classes(max_delay=tau, horizon=T)
+        res = design_delay_global(system, classes, **kw)
+        times.append(time.perf_counter() - t0)
+    workers = psutil.Process().children(recursive=True)
+    out = {"tau": tau, "T": T, "config": config, "classes": len(classes), "cold": times[0],
+           "warm": statistics.median(times[1:]) if warm_repeats else float("nan"),
+           "main_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+           "worker_mb": max([_vmhwm_mb(p.pid) for p in workers], default=0.0), "mu1": res.mu1, "J": res.J,
+           "mu2": res.mu2, "lower_bound": res.lower_bound}
+    if client is not None:
+        client.close()
+        cluster.close()
+    return out
+
+
+def part_d(sizes, configs, warm_repeats: int, mono_max_classes: int, verdicts: list) -> None:
+    from eqrec.design.delay import delay_classes
+
+    print(f"\nd. reactor {{0..tau}}^T, mu1 free (design_delay_global), one fresh process per size and configuration; "
+          f"cold = first design (pool start inside), warm = median of {warm_repeats} more; load average "
+          f"{os.getloadavg()[0]:.2f} at the start")
+    print(f"   {'tau':>3} {'T':>3} {'classes':>7} {'config':>10} {'cold s':>8} {'warm s':>8} {'main MB':>8} "
+          f"{'worker MB':>9}  {'mu1':>12} {'J':>14}  load")
+    rows = {}
+    for tau, T in sizes:
+        n_classes = len(delay_classes(max_delay=tau, horizon=T))
+        for config in configs:
+            if config == "monolithic" and n_classes > mono_max_classes:
+                continue
+            arg = json.dumps({"tau": tau, "T": T, "config": config, "warm": warm_repeats})
+            proc = subprocess.run([sys.executable, __file__, "--free-worker", arg], capture_output=True, text=True)
+            if proc.returncode:
+                print(f"   {tau:>3} {T:>3} {config}: failed\n{proc.stderr[-2000:]}")
+                continue
+            r = json.loads(proc.stdout.strip().splitlines()[-1])
+            rows[(tau, T, config)] = r
+            print(f"   {tau:>3} {T:>3} {r['classes']:>7} {config:>10} {r['cold']:8.2f} {r['warm']:8.2f} "
+                  f"{r['main_mb']:8.0f} {r['worker_mb']:9.0f}  {r['mu1']:12.9g} {r['J']:14.9g}  "
+                  f"{os.getloadavg()[0]:.2f}", flush=True)
+    for (tau, T), (limit_s, limit_mb) in FREE_TARGETS.items():
+        r = rows.get((tau, T, "blocks-2"))
+        if r:
+            verdicts.append(("d", f"({tau},{T}) mu1 free, 2 workers, cold", f"{r['cold']:.2f} s", f"<= {limit_s:g} s",
+                             r["cold"] <= limit_s))
+            if limit_mb:
+                peak = max(r["main_mb"], r["worker_mb"])
+                verdicts.append(("d", f"({tau},{T}) peak memory (main or worker)", f"{peak:.0f} MB",
+                                 f"<= {limit_mb / 1024:g} GB", peak <= limit_mb))
+    one, two = rows.get((4, 60, "blocks-1")), rows.get((4, 60, "blocks-2"))
+    if one and two:
+        for kind in ("warm", "cold"):
+            ratio = one[kind] / two[kind]
+            verdicts.append(("d", f"(4,60) speed-up 1 -> 2 workers, {kind}", f"{ratio:.2f}x", ">= 1.7x", ratio >= 1.7))
+    mono, blocks = rows.get((4, 30, "monolithic")), rows.get((4, 30, "blocks-2"))
+    if mono and blocks:
+        verdicts.append(("d", "(T,tau) = (30,4): per class 2 workers vs one LP", f"{blocks['cold']:.2f} s",
+                         f"<= {mono['cold']:.2f} s", blocks["cold"] <= mono["cold"]))
+    for (tau, T, config), r in rows.items():
+        ref = rows.get((tau, T, "blocks-1"))
+        if ref and config != "blocks-1":
+            same = all(r[k] == ref[k] for k in ("mu1", "J", "mu2", "lower_bound"))
+            if config != "monolithic":
+                verdicts.append(("d", f"({tau},{T}) {config}: same mu1, J, mu2, bound as 1 worker", str(same),
+                                 "bytes", same))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--only", choices=["a", "b", "c"], action="append")
+    ap.add_argument("--only", choices=["a", "b", "c", "d"], action="append")
     ap.add_argument("--repeats", type=int, default=20, help="repeats of parts a and b")
     ap.add_argument("--ipopt-repeats", type=int, default=3)
     ap.add_argument("--sizes", nargs="+", default=["8,3", "20,4", "30,4", "40,4", "30,5"], help="T,tau pairs (part c)")
     ap.add_argument("--size-repeats", type=int, default=3, help="fresh processes per size (part c)")
     ap.add_argument("--mem-limit-gb", type=float, default=4.0)
     ap.add_argument("--time-limit", type=float, default=300.0)
+    ap.add_argument("--free-sizes", nargs="+", default=["4,30", "4,60", "5,60", "4,100"], help="tau,T pairs (d)")
+    ap.add_argument("--configs", nargs="+", default=list(CONFIGS), choices=list(CONFIGS), help="part d")
+    ap.add_argument("--warm-repeats", type=int, default=2, help="part d: designs after the first, per process")
+    ap.add_argument("--mono-max-classes", type=int, default=1000,
+                    help="part d: the one block LP only up to this many classes (it takes minutes beyond)")
+    ap.add_argument("--free-worker", default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
-    parts = a.only or ["a", "b", "c"]
+    if a.free_worker:
+        w = json.loads(a.free_worker)
+        print(json.dumps(free_worker(w["tau"], w["T"], w["config"], w["warm"])))
+        return
+    parts = a.only or ["a", "b", "c", "d"]
     verdicts: list = []
     if "a" in parts:
         part_a(a.repeats, verdicts)
@@ -166,6 +303,9 @@ def main() -> None:
     if "c" in parts:
         sizes = [tuple(int(v) for v in s.split(",")) for s in a.sizes]
         part_c(sizes, a.size_repeats, a.mem_limit_gb, a.time_limit, verdicts)
+    if "d" in parts:
+        part_d([tuple(int(v) for v in s.split(",")) for s in a.free_sizes], a.configs, a.warm_repeats,
+               a.mono_max_classes, verdicts)
     print("\nTargets")
     print(f"   {'part':4} {'case':42} {'measured':>12} {'target':>10}  verdict")
     for part, case, measured, target, ok in verdicts:

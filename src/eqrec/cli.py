@@ -113,8 +113,29 @@ def _parser() -> argparse.ArgumentParser:
                    help="time, prefix and delay: comma-separated positive weights w_1,...,w_n, one per state: the "
                         "guarantee is then on max_i w_i |x_i - xhat_i| (a state vector of mixed units gets a "
                         "meaningful norm); the JSON's gains stay in the file's coordinates")
+    d.add_argument("--jobs", type=int, default=None,
+                   help="prefix and delay: worker processes for the class LPs of a large language, solved per "
+                        "class (default: every core; 1: in this process); the result does not depend on it")
+    d.add_argument("--scheduler", default=None,
+                   help="prefix and delay: a Dask scheduler address, e.g. tcp://host:8786, whose workers solve the "
+                        "class LPs instead (needs pip install 'eqrec[dask]'); the same result as on this machine")
     d.add_argument("--out", default=None, help="output JSON file (default: print to stdout)")
     return ap
+
+
+def _parallel(args: argparse.Namespace) -> dict:
+    """``--jobs`` and ``--scheduler`` as the design functions' ``n_jobs`` and ``scheduler`` (checked)."""
+    from eqrec.core.parallel import check_jobs, check_scheduler
+
+    par = {"n_jobs": args.jobs, "scheduler": args.scheduler}
+    for flag, key, check in (("--jobs", "n_jobs", check_jobs), ("--scheduler", "scheduler", check_scheduler)):
+        if par[key] is not None and args.method not in ("prefix", "delay"):
+            raise InputError(f"{flag} applies to --method prefix and delay only", "command line", flag)
+        try:
+            check(par[key])
+        except InputError as exc:
+            raise InputError(str(exc).split(": ", 1)[-1], "command line", flag) from None
+    return par
 
 
 def _parse_json_array(text: str, field: str) -> np.ndarray:
@@ -151,8 +172,9 @@ def run_design(args: argparse.Namespace) -> dict:
         raise InputError("--state-weights applies to --method time, prefix and delay", "command line",
                          "--state-weights")
     weights = _parse_weights(args.state_weights, system.n)
+    par = _parallel(args)
     if args.method == "delay":
-        return run_delay_design(args, system, T_file, mu1, weights)
+        return run_delay_design(args, system, T_file, mu1, weights, par)
     for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
                         ("--cost", args.cost), ("--node-gains", args.node_gains or None)):
         if value is not None:
@@ -175,7 +197,7 @@ def run_design(args: argparse.Namespace) -> dict:
     extra = {}
     if args.method == "prefix":
         design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
-                               state_weights=weights)
+                               state_weights=weights, **par)
     elif args.method == "time":
         design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
     else:
@@ -242,7 +264,7 @@ def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
 
 
 def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str,
-                     weights: np.ndarray | None = None) -> dict:
+                     weights: np.ndarray | None = None, par: dict | None = None) -> dict:
     """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
     from decimal import Decimal
 
@@ -302,12 +324,12 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     node_gains = True if args.node_gains else None
     if mu1 == "free":
         free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
-                                   node_gains=node_gains, engine=engine, state_weights=weights)
+                                   node_gains=node_gains, engine=engine, state_weights=weights, **(par or {}))
         design = free.design
     else:
         free = None
         design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
-                              node_gains=node_gains, state_weights=weights)
+                              node_gains=node_gains, state_weights=weights, **(par or {}))
     out = to_json(design, free, node_gains=node_gains)
     out.update(solver=design.solution.solver, status=design.solution.status)
     if full:

@@ -380,10 +380,32 @@ rule p3_scale_table_full:
         RUN_STEP
 
 
+rule p3_scale_free:
+    """The class engine with mu1 free against the number of classes: per class on 1 and 2 workers, one block LP."""
+    input:
+        code=code_inputs("p3", "scale_free"),
+    output:
+        csv="results/p3/scale_free.csv",
+        timings_csv="results/timings/p3/scale_free.csv",
+        timings_md="results/timings/p3/scale_free.md",
+        pdf="results/p3/fig_scale_free.pdf",
+        png="results/p3/fig_scale_free.png",
+    log:
+        "logs/p3/scale_free.log",
+    threads: 2
+    params:
+        study="p3",
+        step="scale_free",
+        cfg=step_config("p3", "scale.time_limit"),
+    script:
+        RUN_STEP
+
+
 rule p3_scale:
-    """Full P3 scale table with the slow tree sizes (outside `all`; up to 16 GB): snakemake --cores 2 p3_scale."""
+    """Full P3 scale table with the slow tree sizes and the mu1-free scaling (outside `all`; up to 16 GB)."""
     input:
         rules.p3_scale_table_full.output,
+        rules.p3_scale_free.output,
 
 
 rule p3:

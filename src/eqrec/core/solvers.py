@@ -66,7 +66,8 @@ def highs_status(code: int, fallback: str = "") -> tuple[str, float]:
     return status, {"infeasible": INF, "unbounded": -INF}.get(status, np.nan)
 
 
-def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
+def _highs_model(lp: LinearProgram, options: dict):
+    """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet)."""
     import highspy
 
     h = highspy.Highs()
@@ -89,6 +90,11 @@ def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
     model.a_matrix_.num_col_ = nc
     model.a_matrix_.num_row_ = nr
     h.passModel(model)
+    return h
+
+
+def _highs_run(h, lp: LinearProgram, cost: np.ndarray) -> LPSolution:
+    """Run ``h`` (holding ``lp`` with objective ``cost``) and read its answer."""
     t0 = time.perf_counter()
     h.run()
     elapsed = time.perf_counter() - t0
@@ -99,9 +105,13 @@ def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
     if status == "optimal":
         hs = h.getSolution()
         x = np.asarray(hs.col_value)
-        return LPSolution("optimal", x, float(lp.c @ x), "highs", iters, elapsed, lp.blocks,
+        return LPSolution("optimal", x, float(cost @ x), "highs", iters, elapsed, lp.blocks,
                           row_dual=np.asarray(hs.row_dual) if hs.dual_valid else None)
     return LPSolution(status, None, objective, "highs", iters, elapsed, lp.blocks)
+
+
+def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
+    return _highs_run(_highs_model(lp, options), lp, lp.c)
 
 
 def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
@@ -321,3 +331,54 @@ def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = No
         Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.
     """
     return solver_info(solver).solve(lp, dict(options or {}))
+
+
+def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
+                  options: dict | None = None) -> list[list[LPSolution]]:
+    """Solve ``lp`` for every column-bound pair of ``bounds`` and, under each, every objective of ``costs``.
+
+    The rows and the matrix stay.  With HiGHS the model is loaded once and each solve starts from the previous
+    optimal basis (after an objective change it is still primal feasible, after a bound change still dual
+    feasible), in the fixed order bounds then objectives, so the answers depend only on the arguments; the other
+    solvers solve each variant from scratch.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The problem (its own ``c`` is ignored; its column bounds are used when ``bounds`` is ``None``).
+    costs : sequence of numpy.ndarray
+        The objectives, each of length ``lp.shape[1]``.
+    bounds : sequence of tuple of numpy.ndarray, optional
+        ``(col_lower, col_upper)`` pairs (default: ``lp``'s own, once).
+    solver : str, optional
+        A name of :data:`SOLVER_NAMES` (default ``"highs"``).
+    options : dict or None, optional
+        Passed to the solver, as :func:`solve_lp`.
+
+    Returns
+    -------
+    list of list of LPSolution
+        ``out[j][i]``: bounds ``j``, objective ``i`` (never raises for infeasibility).
+    """
+    info = solver_info(solver)
+    bounds = [(lp.col_lower, lp.col_upper)] if bounds is None else list(bounds)
+    variant = lambda c, lo, hi: LinearProgram(c=np.asarray(c, float), A=lp.A, row_lower=lp.row_lower,  # noqa: E731
+                                              row_upper=lp.row_upper, col_lower=lo, col_upper=hi)
+    if solver != "highs":
+        return [[info.solve(variant(c, lo, hi), dict(options or {})) for c in costs] for lo, hi in bounds]
+    out: list[list[LPSolution]] = []
+    h = None
+    cols = np.arange(lp.A.shape[1], dtype=np.int32)
+    for lo, hi in bounds:
+        if h is not None:
+            h.changeColsBounds(cols.size, cols, np.asarray(lo, float), np.asarray(hi, float))
+        row = []
+        for c in costs:
+            c = np.asarray(c, float)
+            if h is None:
+                h = _highs_model(variant(c, lo, hi), dict(options or {}))
+            else:
+                h.changeColsCost(c.size, cols, c)
+            row.append(_highs_run(h, lp, c))
+        out.append(row)
+    return out

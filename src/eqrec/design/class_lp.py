@@ -6,7 +6,7 @@ least-absolute-deviations LP per (class, state row ``r``),
 .. math:: \ell(d, S) = \max_r \min_{k} \sum_c \beta_c\, \big|E_d[r, c] - (k^\top Z_S)[c]\big|,
 
 and :func:`build_class_lp` writes them as independent blocks of one LP (``kind="level"``; the
-Charnes–Cooper ratio LP of μ1 free is :func:`eqrec.design.mu1_min.build_ratio_lp`, on the same blocks).
+Charnes–Cooper ratio LP of μ1 free, :mod:`eqrec.design.mu1_min`, is :func:`build_ratio_lp`, on the same blocks).
 Building and reading are separate steps; :func:`eqrec.design.classes.solve_classes` solves it.
 """
 
@@ -44,7 +44,7 @@ class ClassLP:
       :math:`\min_k \sum_c \beta_c|E_d[r,c] - (k^\top Z_S)[c]|`).  It has
       ``|S| p`` rows per block, where the LAD LP has one per uncertain
       coordinate: about twice as fast with HiGHS on the papers' systems.
-    * ``"ratio"``: the Charnes–Cooper LP of :func:`eqrec.design.mu1_min.build_ratio_lp`; the
+    * ``"ratio"``: the Charnes–Cooper LP of :func:`build_ratio_lp`; the
       gain row is ``y / t`` with ``y`` in columns ``gain_index[b]`` and ``t``
       in ``t_col[b]``.
 
@@ -182,6 +182,74 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which
         bl.nrow += n * m
         bl.ncol += n * C
     return bl.model("level", t0)
+
+
+def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], stacking: Stacking, *,
+                   rows: list[int] | None = None) -> ClassLP:
+    r"""The Charnes–Cooper LPs of the classes ``which`` and state rows, as one block-diagonal LP (μ1 free).
+
+    Per (class, row ``r``), over the coordinates of :func:`active_maps`:
+    columns ``y`` (``|S| p``), ``t``, ``s^+``, ``s^-``; rows
+    :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0` and
+    :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`; cost the noise
+    coordinates' radii times :math:`s^+ + s^-` (:mod:`eqrec.design.mu1_min`).  The
+    optimum of a block is its ratio ``m_r``, its gain row ``y / t``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The system (``system.n`` state rows per class).
+    classes : ClassSet
+        The language's (time, available data) classes.
+    which : list of int
+        Indices into ``classes.classes`` of the classes to include (the terminal ones).
+    stacking : Stacking
+        The stacked variables of the horizon (:class:`eqrec.core.stacking.Stacking`).
+    rows : list of int, optional
+        The state rows of each class (default all, in order).
+
+    Returns
+    -------
+    ClassLP
+        The block-diagonal LP with its block-to-(class, row) bookkeeping.
+    """
+    t0 = time.perf_counter()
+    xi0 = np.zeros(stacking.layout.size, bool)
+    xi0[stacking.layout.xi0] = True
+    beta = box_radius(stacking, 1.0)
+    bl = ClassBlocks()
+    for ci in which:
+        E, Z, act = active_maps(stacking, classes.classes[ci])
+        m, C = Z.shape
+        zr, zc = np.nonzero(Z)
+        zv = Z[zr, zc]
+        x_act = xi0[act]
+        xa = np.flatnonzero(x_act)
+        noise_cost = np.where(x_act, 0.0, beta[act])
+        eye = np.arange(C)
+        for r in range(system.n) if rows is None else rows:
+            e = E[r]
+            ez = np.flatnonzero(e)
+            # columns y (m), t, s+ (C), s- (C); rows: C equalities Z^T y - t e + s+ - s- = 0, then the x̃0 row
+            t_c, sp_c, sm_c = bl.ncol + m, bl.ncol + m + 1, bl.ncol + m + 1 + C
+            nrow = bl.nrow
+            bl.tri_r += [nrow + zc, nrow + ez, nrow + eye, nrow + eye, np.full(2 * xa.size + 1, nrow + C)]
+            bl.tri_c += [bl.ncol + zr, np.full(ez.size, t_c), sp_c + eye, sm_c + eye,
+                         np.concatenate([sp_c + xa, sm_c + xa, [t_c]])]
+            bl.tri_v += [zv, -e[ez], np.ones(C), -np.ones(C), np.concatenate([np.ones(2 * xa.size), [-1.0]])]
+            bl.rlo.append(np.concatenate([np.zeros(C), [-np.inf]]))
+            bl.rhi.append(np.concatenate([np.zeros(C), [-1.0]]))
+            bl.cost.append(np.concatenate([np.zeros(m + 1), noise_cost, noise_cost]))
+            bl.clo.append(np.concatenate([np.full(m, -np.inf), np.zeros(1 + 2 * C)]))
+            bl.chi.append(np.full(m + 1 + 2 * C, np.inf))
+            bl.gain_index.append(bl.ncol + np.arange(m))
+            bl.tcols.append(t_c)
+            bl.ncol += m + 1 + 2 * C
+            bl.nrow += C + 1
+            bl.bstart.append(bl.ncol)
+            bl.bcls.append(ci)
+            bl.brow.append(r)
+    return bl.model("ratio", t0)
 
 
 def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, solution: LPSolution) -> ClassGains:

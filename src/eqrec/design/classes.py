@@ -78,18 +78,19 @@ import numpy as np
 from eqrec.core.certify import CERT_RTOL, certify_design
 from eqrec.core.classes import ClassGains, ClassSet, classes_of_tree
 from eqrec.core.lp import LPSolution
+from eqrec.core.parallel import check_jobs, check_scheduler
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
+from eqrec.design.class_blocks import choose_path, solve_level_blocks
 from eqrec.design.class_gains import ClassCertificate, certify_classes, node_schedule
+from eqrec.design.class_lp import block_lp_options, block_objectives, build_class_lp, read_class_gains
 from eqrec.design.cost import class_cost
 from eqrec.design.mu1_min import infeasible_at
 from eqrec.design.result import Design
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError
 
-
-from eqrec.design.class_lp import block_lp_options, block_objectives, build_class_lp, read_class_gains
 # ---------------------------------------------------------------------------
 # Fixed μ1
 # ---------------------------------------------------------------------------
@@ -130,8 +131,12 @@ class ClassSolution:
 
 
 def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver: str = "highs",
-                  solver_options: dict | None = None, rtol: float | None = None) -> ClassSolution:
+                  solver_options: dict | None = None, rtol: float | None = None, n_jobs=None, scheduler=None,
+                  path: str = "auto") -> ClassSolution:
     """Solve the LAD LP of every (class, row) at ``μ1`` and certify the gains from themselves.
+
+    Small languages are one block-diagonal LP; large ones are solved per class, in batches on every core or a
+    Dask cluster (:mod:`eqrec.design.class_blocks`; the same bytes whatever the workers and the batching).
 
     Parameters
     ----------
@@ -144,6 +149,12 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
         LP solver and its options (default: HiGHS without presolve).
     rtol : float, optional
         Certificate tolerance (default ``CERT_RTOL`` + the solver's accuracy).
+    n_jobs : int or None, optional
+        Worker processes of the per-class solves (default every core; :func:`eqrec.core.parallel.check_jobs`).
+    scheduler : str, distributed.Client or None, optional
+        A Dask scheduler (``"tcp://host:8786"`` or a client): the per-class solves run on its workers.
+    path : {"auto", "monolithic", "blocks"}, optional
+        One block LP, per class, or by size (default; :func:`eqrec.design.class_blocks.choose_path`).
 
     Returns
     -------
@@ -156,19 +167,78 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
     CertificationFailure
         If a recomputed worst case exceeds the LP's level by more than ``rtol``.
     """
-    mu1 = float(mu1)
-    if not np.isfinite(mu1) or mu1 <= 0:
-        raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
-    st = Stacking(system, classes.horizon)
-    model = build_class_lp(system, classes, mu1, stacking=st)
-    t0 = time.perf_counter()
+    return solve_classes_at(system, classes, [mu1], solver=solver, solver_options=solver_options, rtol=rtol,
+                            n_jobs=n_jobs, scheduler=scheduler, path=path)[0]
+
+
+def solve_classes_at(system: AffineSystem, classes: ClassSet, mu1s, *, solver: str = "highs",
+                     solver_options: dict | None = None, rtol: float | None = None, n_jobs=None, scheduler=None,
+                     path: str = "auto") -> list[ClassSolution]:
+    """:func:`solve_classes` at several ``μ1`` (μ1 free: at ``μ1,min`` and at the level proven infeasible).
+
+    Per class, the levels are solved one after the other on one model (:func:`eqrec.design.class_blocks.level_task`,
+    one pass over the classes); the one block LP is solved once per ``μ1``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+    classes : ClassSet
+    mu1s : sequence of float
+        Recovery levels (positive).
+    solver : str, optional
+    solver_options : dict, optional
+    rtol : float, optional
+    n_jobs : int or None, optional
+    scheduler : str, distributed.Client or None, optional
+    path : {"auto", "monolithic", "blocks"}, optional
+        As :func:`solve_classes`.
+
+    Returns
+    -------
+    list of ClassSolution
+        One per ``μ1``, in order.
+    """
+    mu1s = [float(mu1) for mu1 in mu1s]
+    for mu1 in mu1s:
+        if not np.isfinite(mu1) or mu1 <= 0:
+            raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
+    check_jobs(n_jobs)
+    scheduler = check_scheduler(scheduler)
     options = block_lp_options(solver) if solver_options is None else solver_options
-    sol = solve_lp(model.lp, solver, options).require_optimal(f"class LPs (mu1 = {mu1:g})")
-    solve_time = time.perf_counter() - t0
-    gains = read_class_gains(system, classes, model, sol)
-    lp_levels = np.zeros((len(classes), system.n))
-    lp_levels[model.block_class, model.block_row] = block_objectives(model, sol)
-    cert = certify_classes(system, gains, mu1, st)
+    n, N = system.n, len(classes)
+    if choose_path(path, classes, None, system) == "blocks":
+        per_mu1, solve_time = solve_level_blocks(system, classes, mu1s, solver=solver, options=options,
+                                                 n_jobs=n_jobs, scheduler=scheduler)
+        out = []
+        for mu1, blocks in zip(mu1s, per_mu1):
+            lp_levels = np.array([b.levels for b in blocks]).reshape(N, n)
+            sol = LPSolution("optimal", None, float(-lp_levels.sum()), solver, sum(b.iterations for b in blocks),
+                             solve_time / len(mu1s))
+            out.append(_certified(
+                classes, mu1, ClassGains(classes=classes, K=[b.K for b in blocks], n=n, p=system.p), lp_levels,
+                ClassCertificate(mu1=mu1, classes=classes, bounds=np.array([b.bounds for b in blocks]).reshape(N, n)),
+                sol, (sum(b.rows for b in blocks), sum(b.cols for b in blocks)), sum(b.nonzeros for b in blocks),
+                0.0, sol.solve_time, solver, rtol))
+        return out
+    st = Stacking(system, classes.horizon)
+    out = []
+    for mu1 in mu1s:
+        model = build_class_lp(system, classes, mu1, stacking=st)
+        t0 = time.perf_counter()
+        sol = solve_lp(model.lp, solver, options).require_optimal(f"class LPs (mu1 = {mu1:g})")
+        solve_time = time.perf_counter() - t0
+        gains = read_class_gains(system, classes, model, sol)
+        lp_levels = np.zeros((N, n))
+        lp_levels[model.block_class, model.block_row] = block_objectives(model, sol)
+        out.append(_certified(classes, mu1, gains, lp_levels, certify_classes(system, gains, mu1, st), sol,
+                              model.lp.shape, int(model.lp.A.nnz), model.build_time, solve_time, solver, rtol))
+    return out
+
+
+def _certified(classes: ClassSet, mu1: float, gains: ClassGains, lp_levels: np.ndarray, cert: ClassCertificate,
+               sol: LPSolution, shape, nnz: int, build_time: float, solve_time: float, solver: str,
+               rtol: float | None) -> ClassSolution:
+    """The :class:`ClassSolution`, once every certified worst case is within ``rtol`` of its LP level."""
     rtol = CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol
     excess = cert.bounds - lp_levels
     scale = np.maximum(1.0, np.abs(lp_levels))
@@ -178,8 +248,8 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
                                    f"{cert.bounds[i, r]:.9g} > the LP's level {lp_levels[i, r]:.9g}")
     # the certified value is the level: never below what the gains really give
     return ClassSolution(mu1=mu1, gains=gains, lp_levels=np.maximum(lp_levels, cert.bounds), certificate=cert,
-                         solution=sol, model_shape=model.lp.shape, nonzeros=int(model.lp.A.nnz),
-                         build_time=model.build_time, solve_time=solve_time)
+                         solution=sol, model_shape=tuple(shape), nonzeros=int(nnz), build_time=build_time,
+                         solve_time=solve_time)
 
 
 def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTOL) -> None:
@@ -210,7 +280,7 @@ LEVELS = ("common", "max", "sum")
 def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "common", cost: str | None = None,
                  solver: str = "highs", solver_options: dict | None = None, method: str = "prefix",
                  certify: bool = True, node_gains: bool | None = None, time_based: bool = False,
-                 rtol: float | None = None):
+                 rtol: float | None = None, n_jobs=None, scheduler=None, solved: ClassSolution | None = None):
     """A prefix-tree design at ``μ1`` by the class engine, as a :class:`eqrec.design.result.Design`.
 
     Parameters
@@ -241,6 +311,11 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
         Node gains chosen by time only (:class:`~eqrec.core.gains.GainSchedule`).
     rtol : float, optional
         Certification tolerance (default ``CERT_RTOL`` + the solver's accuracy).
+    n_jobs : int or None, optional
+    scheduler : str, distributed.Client or None, optional
+        Where the class LPs of a large language run (:func:`solve_classes`).
+    solved : ClassSolution or None, optional
+        The class LPs already solved at ``mu1`` (:func:`solve_classes_at`): not solved again.
 
     Returns
     -------
@@ -259,11 +334,15 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     t0 = time.perf_counter()
     classes = as_class_set(language)
     tree = classes.tree
-    sol = solve_classes(system, classes, mu1, solver=solver, solver_options=solver_options, rtol=rtol)
+    if solved is not None and (solved.gains.classes is not classes or solved.mu1 != float(mu1)):
+        raise InputError("the given class solution is of other classes or another mu1", field="solved")
+    sol = solved or solve_classes(system, classes, mu1, solver=solver, solver_options=solver_options, rtol=rtol,
+                                  n_jobs=n_jobs, scheduler=scheduler)
     try:
         check_terminal(classes, sol)
     except InfeasibleDesign as exc:  # name the true smallest feasible μ1, not a class's worst case at this μ1
-        raise infeasible_at(system, classes, sol.mu1, exc, solver=solver) from None
+        raise infeasible_at(system, classes, sol.mu1, exc, solver=solver, n_jobs=n_jobs,
+                            scheduler=scheduler) from None
     mu1 = sol.mu1
     inner = np.array([c.inner for c in classes.classes], bool)
     mu2 = float(max(mu1, sol.levels[inner].max(initial=mu1)))

@@ -49,23 +49,24 @@ certificate (worst case of ``E_d − K Z_S``) and, where node gains are derived,
 
 from __future__ import annotations
 
+import contextlib
 import time
 
 import numpy as np
 
 from eqrec.core.certify import certify_design
 from eqrec.core.checks import instance, integer
-from eqrec.core.classes import ClassSet, classes_of_full_language, classes_of_tree
+from eqrec.core.classes import ClassSet, classes_of_tree
 from eqrec.core.lp import LPSolution
-from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import as_language, full_delay_language
+from eqrec.core.parallel import check_jobs, check_scheduler, connected, settle
 from eqrec.core.solvers import solve_lp, solver_info
 from eqrec.core.systems import AffineSystem
-from eqrec.design.classes import check_terminal, class_design, solve_classes
+from eqrec.design.class_blocks import choose_path, prestart_workers
+from eqrec.design.classes import check_terminal, class_design, solve_classes, solve_classes_at
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
-from eqrec.design.inputs import (check_flags, check_fraction, check_mu1, check_solver, check_system,
-                                 language_classes, language_tree)
+from eqrec.design.delay_languages import _classes, _tree, delay_classes, delay_language  # noqa: F401 (re-exported)
+from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system
 from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix import check_engine, tree_design
@@ -74,71 +75,9 @@ from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
 from eqrec.errors import InfeasibleDesign, InputError
 
-# -------- Languages
-
-def delay_language(words=None, *, max_delay: int | None = None, horizon: int | None = None,
-                   source: str | None = None) -> tuple[ArrivalPattern, ...]:
-    """The reduced event language ``L^{E'}`` of delay words, or of the full language ``{0..τ̄}^T``.
-
-    Parameters
-    ----------
-    words : sequence of str or ArrivalPattern, optional
-        Delay words (digit strings; a delay reaching past the horizon means missing) or patterns.
-    max_delay, horizon : int or None, optional
-        ``τ̄`` and ``T``: without ``words`` the full language (all ``(τ̄+1)^T`` words), else limits checked.
-    source : str or None, optional
-
-    Returns
-    -------
-    tuple of ArrivalPattern
-        The distinct event sequences (equal ones merged, the first word kept as label).
-    """
-    if words is None:
-        if max_delay is None or horizon is None:
-            raise InputError("give delay words, or both the maximum delay and the horizon", source, "delays")
-        words = full_delay_language(horizon, max_delay)
-    return as_language(words, kind="delay", max_delay=max_delay, length=horizon, source=source)
-
-
-def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
-    """The classes of the full language ``{0..τ̄}^T`` from the window rule (no word enumerated).
-
-    Parameters
-    ----------
-    max_delay, horizon : int
-        The largest delay ``τ̄`` and the horizon ``T``.
-
-    Returns
-    -------
-    ClassSet
-        The (time, available data) classes, for :func:`design_delay` and :func:`design_delay_global`.
-
-    Raises
-    ------
-    InputError
-        ``horizon`` not an integer >= 1 or ``max_delay`` not one >= 0 (the field is named).
-
-    Examples
-    --------
-    >>> import eqrec
-    >>> classes = eqrec.delay_classes(max_delay=4, horizon=30)
-    >>> len(classes), classes.words
-    (446, 931322574615478515625)
-    """
-    return classes_of_full_language(integer(horizon, "horizon", low=1), integer(max_delay, "max_delay"))
-
-
-def _tree(patterns, kind: str | None = None) -> PrefixTree:
-    """The prefix tree of a fixed-length language of delay (or, with ``kind``, missing-data) words or patterns."""
-    return language_tree(patterns, kind=kind, field_name="patterns")
-
-
-def _classes(patterns, kind: str | None = None) -> ClassSet:
-    """Classes of a fixed-length language given as words, patterns, a tree or already as classes."""
-    return language_classes(patterns, kind=kind, field_name="patterns")
-
-
-# -------- Designs from LP solutions
+# ---------------------------------------------------------------------------
+# Designs from LP solutions
+# ---------------------------------------------------------------------------
 
 def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSystem, x: np.ndarray, mu1: float,
                           cost: str, sol: LPSolution, *, build_time: float = 0.0, certify: bool = True,
@@ -158,7 +97,8 @@ def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSyste
 
 def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
                  solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
-                 engine: str = "classes", node_gains: bool | None = None, state_weights=None) -> Design:
+                 engine: str = "classes", node_gains: bool | None = None, state_weights=None, n_jobs=None,
+                 scheduler=None, solved=None) -> Design:
     r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
 
     For a language of delay words (eq. (1) of the delayed-data paper,
@@ -215,6 +155,13 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
         ``n`` positive per-state weights ``w``: the levels then bound
         ``max_i w_i |x_i − x̂_i|`` (designed on ``z = W x``,
         :mod:`eqrec.design.weighted`).  ``None`` (default): ``‖x − x̂‖∞``.
+    n_jobs : int or None, optional
+        Worker processes of the class engine's per-class solves (large languages; default every core).
+    scheduler : str, distributed.Client or None, optional
+        A Dask scheduler (``"tcp://host:8786"`` or a client) running those solves instead
+        (:mod:`eqrec.design.class_blocks`; the same result as on this machine).
+    solved : ClassSolution or None, optional
+        Class engine: the class LPs already solved at ``mu1`` (:func:`eqrec.design.classes.solve_classes_at`).
 
     Returns
     -------
@@ -265,7 +212,7 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
         classes = _classes(patterns, kind)
         design = class_design(system, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
                               solver=solver, solver_options=solver_options, method="delay", certify=certify,
-                              node_gains=node_gains, rtol=rtol)
+                              node_gains=node_gains, rtol=rtol, n_jobs=n_jobs, scheduler=scheduler, solved=solved)
         if design.certificate is not None and classes.tree is not None:
             design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
         elif design.class_certificate is not None:
@@ -284,7 +231,7 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
 
 
 def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "sum", solver: str = "highs", *,
-                     kind: str | None = None) -> str:
+                     kind: str | None = None, n_jobs=None, scheduler=None) -> str:
     """Whether a design at ``μ1`` exists: ``"optimal"``, or ``"infeasible"`` (no estimator recovers to ``mu1``).
 
     Parameters
@@ -298,6 +245,9 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
         Recovery level, cost (checked only) and LP solver.
     kind : {"missing", "delay"} or None, optional
         Reading of string words, as for :func:`design_delay`.
+    n_jobs : int or None, optional
+    scheduler : str, distributed.Client or None, optional
+        Where the class LPs run, as for :func:`design_delay`.
 
     Returns
     -------
@@ -308,7 +258,8 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
     check_cost(cost)
     classes = _classes(patterns, kind)
     try:
-        check_terminal(classes, solve_classes(check_system(system), classes, check_mu1(mu1), solver=solver))
+        check_terminal(classes, solve_classes(check_system(system), classes, check_mu1(mu1), solver=solver,
+                                              n_jobs=n_jobs, scheduler=scheduler))
     except InfeasibleDesign:
         return "infeasible"
     return "optimal"
@@ -317,7 +268,7 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
 # -------- μ1 free: the global optimum (the μ1-free theorem of eqrec.design.mu1_min)
 
 def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = None, solver: str = "highs",
-                       rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
+                       rtol: float = MU1_LOWER_RTOL, n_jobs=None, scheduler=None) -> MinRecoveryLevel:
     """The smallest ``μ1`` for which some estimator recovers (``‖ξ(T)‖ <= μ1`` for all ``‖ξ0‖ <= μ1``).
 
     Parameters
@@ -330,19 +281,34 @@ def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = Non
     solver : str, optional
     rtol : float, optional
         LP solver; relative distance below ``μ1,min`` of the level proven infeasible.
+    n_jobs : int or None, optional
+    scheduler : str, distributed.Client or None, optional
+        Where the Charnes–Cooper LPs run, as for :func:`design_delay`.
 
     Returns
     -------
     MinRecoveryLevel
         ``upper`` attained by certified gains, ``lower = upper (1 - rtol)`` infeasible (:mod:`eqrec.design.mu1_min`).
     """
-    return _class_min_recovery_level(system, _classes(patterns, kind), solver=solver, lower_rtol=rtol)
+    return _class_min_recovery_level(system, _classes(patterns, kind), solver=solver, lower_rtol=rtol, n_jobs=n_jobs,
+                                     scheduler=scheduler)
+
+
+@contextlib.contextmanager
+def _workers_ahead(system: AffineSystem, classes, n_jobs, scheduler):
+    """The local workers of the level LPs started while μ1,min is computed, and settled on exit."""
+    started = prestart_workers(system, classes, n_jobs, scheduler)
+    try:
+        yield
+    finally:
+        if started:
+            settle()
 
 
 def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
                         solver: str = "highs", rtol: float = MU1_LOWER_RTOL, certify: bool = True,
-                        node_gains: bool | None = None, engine: str = "classes",
-                        state_weights=None) -> FreeMu1Result:
+                        node_gains: bool | None = None, engine: str = "classes", state_weights=None,
+                        n_jobs=None, scheduler=None) -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
 
     The delayed-data paper's problem with ``μ1`` a decision variable
@@ -385,6 +351,11 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
         ``n`` positive per-state weights ``w``: the levels then bound
         ``max_i w_i |x_i − x̂_i|`` (designed on ``z = W x``,
         :mod:`eqrec.design.weighted`).  ``None`` (default): ``‖x − x̂‖∞``.
+    n_jobs : int or None, optional
+        Worker processes of the class engine's per-class solves (large languages; default every core).
+    scheduler : str, distributed.Client or None, optional
+        A Dask scheduler (``"tcp://host:8786"`` or a client) running those solves instead
+        (:mod:`eqrec.design.class_blocks`; the same result as on this machine).
 
     Returns
     -------
@@ -424,19 +395,25 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_flags(certify=certify, node_gains=node_gains)
     rtol = check_fraction(rtol, "rtol")
     classes = _classes(patterns, kind)
-    mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol)
-    if engine == "tree":
-        if classes.tree is None:
-            raise InputError("the tree engine needs the language's words (a prefix tree)", field="engine")
-        design = design_delay(system, classes.tree, mm.upper, cost=cost, solver=solver, certify=certify,
-                              engine="tree")
-    else:
-        design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
-                              node_gains=node_gains)
-    lower_bound = np.nan
-    if np.isfinite(mm.lower):
-        low = solve_classes(system, classes, mm.lower, solver=solver)
-        lower_bound = class_cost(classes, mm.lower, low.levels, cost)
+    check_jobs(n_jobs)
+    scheduler = check_scheduler(scheduler)
+    large = choose_path("auto", classes, None, system) == "blocks"  # else no class LP runs on the scheduler
+    with connected(scheduler if large else None) as client, _workers_ahead(system, classes, n_jobs, client):
+        par = {"n_jobs": n_jobs, "scheduler": client}  # one connection, one pool, for the three steps
+        mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol, **par)
+        # the levels at μ1,min (the design) and at the level proven infeasible (the bound), in one pass per class
+        at = [mm.upper] + ([mm.lower] if np.isfinite(mm.lower) else [])
+        if engine == "tree":
+            if classes.tree is None:
+                raise InputError("the tree engine needs the language's words (a prefix tree)", field="engine")
+            sols = [None, *solve_classes_at(system, classes, at[1:], solver=solver, **par)]
+            design = design_delay(system, classes.tree, mm.upper, cost=cost, solver=solver, certify=certify,
+                                  engine="tree")
+        else:
+            sols = solve_classes_at(system, classes, at, solver=solver, **par)
+            design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
+                                  node_gains=node_gains, solved=sols[0], **par)
+        lower_bound = class_cost(classes, mm.lower, sols[1].levels, cost) if len(at) > 1 else np.nan
     J = float(design.extra["J"])
     design.state_weights = weights
     design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,

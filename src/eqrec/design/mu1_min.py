@@ -46,12 +46,13 @@ import scipy.sparse as sp
 from eqrec.core.classes import ClassGains, ClassSet, class_maps
 from eqrec.core.lp import LinearProgram
 from eqrec.core.prefix_tree import PrefixTree
+from eqrec.core.parallel import check_jobs, check_scheduler
 from eqrec.core.solvers import solve_lp
 from eqrec.core.stacking import Stacking
 from eqrec.core.systems import AffineSystem
 from eqrec.design.class_gains import box_radius
-from eqrec.design.class_lp import (ClassBlocks, ClassLP, active_maps, block_lp_options, block_objectives,
-                                   read_class_gains)
+from eqrec.design.class_blocks import choose_path, solve_ratio_blocks
+from eqrec.design.class_lp import block_lp_options, block_objectives, build_ratio_lp, read_class_gains
 from eqrec.design.inputs import check_fraction, check_solver, check_system, language_classes
 from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
@@ -139,71 +140,6 @@ class FreeMu1Result:
         return float((self.J - self.lower_bound) / abs(self.J)) if np.isfinite(self.lower_bound) else np.nan
 
 
-def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], stacking: Stacking) -> ClassLP:
-    r"""The Charnes–Cooper LPs of the classes ``which`` and every state row, as one block-diagonal LP.
-
-    Per (class, row ``r``), over the coordinates of :func:`eqrec.design.class_lp.active_maps`:
-    columns ``y`` (``|S| p``), ``t``, ``s^+``, ``s^-``; rows
-    :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0` and
-    :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`; cost the noise
-    coordinates' radii times :math:`s^+ + s^-` (module docstring).  The
-    optimum of a block is its ratio ``m_r``, its gain row ``y / t``.
-
-    Parameters
-    ----------
-    system : AffineSystem
-        The system (``system.n`` state rows per class).
-    classes : ClassSet
-        The language's (time, available data) classes.
-    which : list of int
-        Indices into ``classes.classes`` of the classes to include (the terminal ones).
-    stacking : Stacking
-        The stacked variables of the horizon (:class:`eqrec.core.stacking.Stacking`).
-
-    Returns
-    -------
-    ClassLP
-        The block-diagonal LP with its block-to-(class, row) bookkeeping.
-    """
-    t0 = time.perf_counter()
-    xi0 = np.zeros(stacking.layout.size, bool)
-    xi0[stacking.layout.xi0] = True
-    beta = box_radius(stacking, 1.0)
-    bl = ClassBlocks()
-    for ci in which:
-        E, Z, act = active_maps(stacking, classes.classes[ci])
-        m, C = Z.shape
-        zr, zc = np.nonzero(Z)
-        zv = Z[zr, zc]
-        x_act = xi0[act]
-        xa = np.flatnonzero(x_act)
-        noise_cost = np.where(x_act, 0.0, beta[act])
-        eye = np.arange(C)
-        for r in range(system.n):
-            e = E[r]
-            ez = np.flatnonzero(e)
-            # columns y (m), t, s+ (C), s- (C); rows: C equalities Z^T y - t e + s+ - s- = 0, then the x̃0 row
-            t_c, sp_c, sm_c = bl.ncol + m, bl.ncol + m + 1, bl.ncol + m + 1 + C
-            nrow = bl.nrow
-            bl.tri_r += [nrow + zc, nrow + ez, nrow + eye, nrow + eye, np.full(2 * xa.size + 1, nrow + C)]
-            bl.tri_c += [bl.ncol + zr, np.full(ez.size, t_c), sp_c + eye, sm_c + eye,
-                         np.concatenate([sp_c + xa, sm_c + xa, [t_c]])]
-            bl.tri_v += [zv, -e[ez], np.ones(C), -np.ones(C), np.concatenate([np.ones(2 * xa.size), [-1.0]])]
-            bl.rlo.append(np.concatenate([np.zeros(C), [-np.inf]]))
-            bl.rhi.append(np.concatenate([np.zeros(C), [-1.0]]))
-            bl.cost.append(np.concatenate([np.zeros(m + 1), noise_cost, noise_cost]))
-            bl.clo.append(np.concatenate([np.full(m, -np.inf), np.zeros(1 + 2 * C)]))
-            bl.chi.append(np.full(m + 1 + 2 * C, np.inf))
-            bl.gain_index.append(bl.ncol + np.arange(m))
-            bl.tcols.append(t_c)
-            bl.ncol += m + 1 + 2 * C
-            bl.nrow += C + 1
-            bl.bstart.append(bl.ncol)
-            bl.bcls.append(ci)
-            bl.brow.append(r)
-    return bl.model("ratio", t0)
-
-
 def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, solver: str) -> float:
     r"""``E_row λ`` for a ``λ`` with ``Z λ = 0`` and ``|λ| <= β`` (a lower bound of the row's level), or ``nan``.
 
@@ -228,9 +164,40 @@ def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, 
     return float(E_row @ lam)
 
 
+def _monolithic_ratios(system: AffineSystem, classes: ClassSet, term: list[int], st: Stacking, solver: str) -> tuple:
+    """The terminal ratio LPs as one block LP: gains, ratios, recomputed ratios, LPs solved, block class and row."""
+    model = build_ratio_lp(system, classes, term, st)
+    sol = solve_lp(model.lp, solver, block_lp_options(solver))
+    lps = 1
+    if sol.status == "infeasible":
+        for i in term:  # name a terminal class that no gain contracts (its LP holds all its rows)
+            one = build_ratio_lp(system, classes, [i], st)
+            lps += 1
+            if solve_lp(one.lp, solver, block_lp_options(solver)).status == "infeasible":
+                cls = classes.classes[i]
+                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
+                                       f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
+                                       "initial error contract (min_k a(k) >= 1)")
+        raise InfeasibleDesign("no recovery level is feasible (the terminal ratio LP is infeasible)")
+    sol.require_optimal("the smallest recovery level (Charnes-Cooper LP)")
+    gains = read_class_gains(system, classes, model, sol)
+    # recompute each block's ratio from its k alone
+    xi0 = np.zeros(st.layout.size, bool)
+    xi0[st.layout.xi0] = True
+    noise_beta = np.where(xi0, 0.0, box_radius(st, 1.0))
+    recomputed = np.zeros(model.blocks)
+    for b in range(model.blocks):
+        i, r = model.block_class[b], model.block_row[b]
+        E, Z = class_maps(st, classes.classes[i])
+        resid = np.abs(E[r] - gains.K[i][r] @ Z)
+        a = resid[xi0].sum()
+        recomputed[b] = resid @ noise_beta / (1.0 - a) if a < 1 else np.inf
+    return gains, block_objectives(model, sol), recomputed, lps, model.block_class, model.block_row
+
+
 def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | Iterable", *,
-                       kind: str | None = None, solver: str = "highs",
-                       lower_rtol: float = MU1_LOWER_RTOL) -> MinRecoveryLevel:
+                       kind: str | None = None, solver: str = "highs", lower_rtol: float = MU1_LOWER_RTOL,
+                       n_jobs=None, scheduler=None, path: str = "auto") -> MinRecoveryLevel:
     r"""``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
 
     The smallest ``μ1`` for which some prefix-tree estimator recovers,
@@ -265,6 +232,13 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     lower_rtol : float, optional
         Relative distance below ``μ1,min`` of the level to prove infeasible
         by a dual point (default :data:`MU1_LOWER_RTOL`).
+    n_jobs : int or None, optional
+        Worker processes of the per-(class, row) LPs of a large language (default every core).
+    scheduler : str, distributed.Client or None, optional
+        A Dask scheduler running them instead (:mod:`eqrec.design.class_blocks`).
+    path : {"auto", "monolithic", "blocks"}, optional
+        One block LP, one LP per terminal (class, row), or by size (default;
+        :func:`eqrec.design.class_blocks.choose_path`).
 
     Returns
     -------
@@ -299,35 +273,19 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     check_solver(solver)
     lower_rtol = check_fraction(lower_rtol, "lower_rtol")
     classes = language_classes(classes, kind=kind, fixed_length=False, field_name="classes")
+    check_jobs(n_jobs)
+    scheduler = check_scheduler(scheduler)
     st = Stacking(system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
-    model = build_ratio_lp(system, classes, term, st)
-    sol = solve_lp(model.lp, solver, block_lp_options(solver))
-    lps = 1
-    if sol.status == "infeasible":
-        for i in term:  # name a terminal class that no gain contracts (its LP holds all its rows)
-            one = build_ratio_lp(system, classes, [i], st)
-            lps += 1
-            if solve_lp(one.lp, solver, block_lp_options(solver)).status == "infeasible":
-                cls = classes.classes[i]
-                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
-                                       f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
-                                       "initial error contract (min_k a(k) >= 1)")
-        raise InfeasibleDesign("no recovery level is feasible (the terminal ratio LP is infeasible)")
-    sol.require_optimal("the smallest recovery level (Charnes-Cooper LP)")
-    gains = read_class_gains(system, classes, model, sol)
-    ratios = block_objectives(model, sol)
-    # recompute each block's ratio from its k alone
-    xi0 = np.zeros(st.layout.size, bool)
-    xi0[st.layout.xi0] = True
-    noise_beta = np.where(xi0, 0.0, box_radius(st, 1.0))
-    recomputed = np.zeros(model.blocks)
-    for b in range(model.blocks):
-        i, r = model.block_class[b], model.block_row[b]
-        E, Z = class_maps(st, classes.classes[i])
-        resid = np.abs(E[r] - gains.K[i][r] @ Z)
-        a = resid[xi0].sum()
-        recomputed[b] = resid @ noise_beta / (1.0 - a) if a < 1 else np.inf
+    if choose_path(path, classes, term, system) == "blocks":
+        res = solve_ratio_blocks(system, classes, term, solver=solver, n_jobs=n_jobs, scheduler=scheduler)
+        K = [res["gains"].get(i, np.zeros((system.n, len(c.available) * system.p)))
+             for i, c in enumerate(classes.classes)]
+        gains = ClassGains(classes=classes, K=K, n=system.n, p=system.p)
+        ratios, recomputed, lps = res["ratios"], res["recomputed"], res["lps"]
+        block_class, block_row = res["block_class"], res["block_row"]
+    else:
+        gains, ratios, recomputed, lps, block_class, block_row = _monolithic_ratios(system, classes, term, st, solver)
     if not np.all(np.isfinite(recomputed)):
         raise SolverFailure("the ratio LP returned gains that do not contract the initial error")
     bmax = int(np.argmax(recomputed))
@@ -336,7 +294,7 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     if upper <= 1e-12 * scale:
         raise InputError("the smallest recovery level is 0 (no noise reaches the end of the horizon); "
                          "fix mu1 instead", field="mu1")
-    i, r = int(model.block_class[bmax]), int(model.block_row[bmax])
+    i, r = int(block_class[bmax]), int(block_row[bmax])
     cls = classes.classes[i]
     lower = upper * (1.0 - lower_rtol)
     E, Z = class_maps(st, cls)
@@ -370,7 +328,7 @@ def round_up(value: float, digits: int = 6) -> float:
 
 
 def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: InfeasibleDesign, *,
-                  solver: str = "highs") -> InfeasibleDesign:
+                  solver: str = "highs", n_jobs=None, scheduler=None) -> InfeasibleDesign:
     """The error to raise for a design infeasible at ``mu1``: it names the true smallest feasible ``μ1``.
 
     A terminal class's worst case at the requested ``mu1`` is not the level to
@@ -390,6 +348,9 @@ def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: In
         The infeasibility found at ``mu1`` (its text is kept as the detail).
     solver : str, optional
         LP solver of the Charnes–Cooper LP.
+    n_jobs : int or None, optional
+    scheduler : str, distributed.Client or None, optional
+        Where its LPs run (:func:`min_recovery_level`).
 
     Returns
     -------
@@ -399,7 +360,7 @@ def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: In
         feasible; else a new error naming ``μ1,min``.
     """
     try:
-        mm = min_recovery_level(system, classes, solver=solver)
+        mm = min_recovery_level(system, classes, solver=solver, n_jobs=n_jobs, scheduler=scheduler)
     except InfeasibleDesign as none_feasible:
         return none_feasible
     except (InputError, SolverFailure):

@@ -89,7 +89,8 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
 def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "highs", T: int | None = None,
                   form: str = "split", certify: bool = True, method: str = "prefix",
                   zero_offset: bool = True, levels: str = "common", engine: str = "classes",
-                  node_gains: bool = True, fixed_length: bool = True, state_weights=None) -> Design:
+                  node_gains: bool = True, fixed_length: bool = True, state_weights=None, n_jobs=None,
+                  scheduler=None) -> Design:
     r"""Minimise ``M2`` for a prefix-based estimator (Remark 2 / Theorem 3 of the prefix-based paper).
 
     The estimator (5) with the prefix-based output injection (7) of the
@@ -168,6 +169,11 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         then bounds ``max_i w_i |x_i − x̂_i|`` (the design is made on
         ``z = W x``, :meth:`AffineSystem.scaled`; :meth:`Design.estimator`
         runs in the original state).  ``None`` (default): ``‖x − x̂‖∞``.
+    n_jobs : int or None, optional
+        Class engine: worker processes of the per-class solves of a large language (default every core).
+    scheduler : str, distributed.Client or None, optional
+        Class engine: a Dask scheduler (``"tcp://host:8786"`` or a client) running them instead
+        (:mod:`eqrec.design.class_blocks`).
 
     Returns
     -------
@@ -214,10 +220,10 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
     mu1 = check_mu1(mu1, allow_free=True)
     if mu1 == FREE:  # the class engine's global optimum over μ1 (eqrec.design.mu1_min), then the design there
-        mm = min_recovery_level(system, classes_of_tree(tree), solver=solver)
+        mm = min_recovery_level(system, classes_of_tree(tree), solver=solver, n_jobs=n_jobs, scheduler=scheduler)
         design = design_prefix(system, tree, mm.upper, solver=solver, T=T, form=form, certify=certify, method=method,
                                zero_offset=zero_offset, levels=levels, engine=engine, node_gains=node_gains,
-                               fixed_length=fixed_length)
+                               fixed_length=fixed_length, n_jobs=n_jobs, scheduler=scheduler)
         design.extra.update(mu1_free="global", mu1_min=mm.upper, mu1_min_lower=mm.lower, mu1_binding=mm.binding)
         design.state_weights = weights
         return design
@@ -229,7 +235,8 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
             raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
                              field="engine")
         design = class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
-                              certify=certify, node_gains=node_gains, time_based=(method == "time"))
+                              certify=certify, node_gains=node_gains, time_based=(method == "time"), n_jobs=n_jobs,
+                              scheduler=scheduler)
     else:
         model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
         try:

@@ -206,7 +206,9 @@ def _measure_classes(system: AffineSystem, T: int, tau: int, method: str, mu1: f
     from eqrec.errors import SolverFailure
 
     opts = {**METHODS[method], **(options or {}), "time_limit": float(time_limit)}
-    solve_classes(system, classes_of_full_language(2, 1), float(mu1), solver_options=opts)  # warm-up (imports)
+    # the scale table measures the one block LP (its rows, columns, iterations); per class: engine "blocks"
+    solve_classes(system, classes_of_full_language(2, 1), float(mu1), solver_options=opts,
+                  path="monolithic")  # warm-up (imports)
     t0 = time.perf_counter()
     classes = classes_of_full_language(int(T), int(tau))
     t1 = time.perf_counter()
@@ -214,7 +216,7 @@ def _measure_classes(system: AffineSystem, T: int, tau: int, method: str, mu1: f
     out.update(words=int(counts["words"]), sequences=int(counts["sequences"]), nodes=int(counts["nodes"]),
                classes=len(classes), classes_time=t1 - t0)
     try:
-        sol = solve_classes(system, classes, float(mu1), solver="highs", solver_options=opts)
+        sol = solve_classes(system, classes, float(mu1), solver="highs", solver_options=opts, path="monolithic")
     except SolverFailure as exc:
         out.update(status=_status(str(exc)), detail=f"SolverFailure: {exc}")
         return out

@@ -39,9 +39,10 @@ def steps_of(study: str) -> dict[str, Step]:
 
         tables = p2.STEPS, p2_sweeps.STEPS, p2_values.STEPS, p2_figures.STEPS
     elif study == "p3":
-        from eqrec.studies import p3, p3_figures, p3_scale, p3_strategy, p3_values
+        from eqrec.studies import p3, p3_figures, p3_scale, p3_scale_free, p3_strategy, p3_values
 
-        tables = p3.STEPS, p3_figures.STEPS, p3_values.STEPS, p3_strategy.STEPS, p3_scale.STEPS
+        tables = (p3.STEPS, p3_figures.STEPS, p3_values.STEPS, p3_strategy.STEPS, p3_scale.STEPS,
+                  p3_scale_free.STEPS)
     elif study == "p4":
         from eqrec.studies import p4, p4_figures, p4_values
 
