@@ -313,6 +313,29 @@ def class_maps(stacking: Stacking, cls: DataClass) -> tuple[np.ndarray, np.ndarr
     return E, Z
 
 
+def class_error_map(stacking: Stacking, gains: "ClassGains", i: int) -> np.ndarray:
+    r"""``G = E_d − K Z_S``: the error map of class ``i`` under its gain, :math:`\xi(d) = G\delta`.
+
+    The one formula of a class's closed-loop error (certificate, long runs, error boxes).
+
+    Parameters
+    ----------
+    stacking : Stacking
+        Stacked maps of the system over the horizon.
+    gains : ClassGains
+        The class gains.
+    i : int
+        Index of the class in ``gains.classes``.
+
+    Returns
+    -------
+    ndarray, shape (n, D)
+        The map from ``δ = (w, v, ξ0)`` to the error at the class's time.
+    """
+    E, Z = class_maps(stacking, gains.classes.classes[i])
+    return E - gains.K[i] @ Z
+
+
 @dataclass
 class ClassGains:
     r"""One gain per class: the estimator in class form.

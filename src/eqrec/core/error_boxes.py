@@ -16,7 +16,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from eqrec.core.classes import ClassGains, class_maps
+from eqrec.core.classes import ClassGains, class_error_map
 from eqrec.core.estimator import _has_class
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.stacking import Stacking
@@ -104,8 +104,7 @@ class ClassBoxes:
         """
         i = self.gains.classes.index(depth, available)
         if i not in self._parts:
-            E, Z = class_maps(self.stacking, self.gains.classes.classes[i])
-            G = np.abs(E - self.gains.K[i] @ Z)
+            G = np.abs(class_error_map(self.stacking, self.gains, i))
             cut = self.stacking.layout.xi0.start
             self._parts[i] = (G[:, :cut] @ self.radius, G[:, cut:])
         noise, initial = self._parts[i]

@@ -13,14 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eqrec.core.packets import Stamped, as_packets, check_estimate, check_input
+from eqrec.core.packets import Stamped, _is_stamp, as_packets, check_estimate, check_input
 from eqrec.core.patterns import ArrivalPattern
 from eqrec.core.systems import AffineSystem
 from eqrec.errors import InputError
-
-
-def _is_stamp(value) -> bool:
-    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 @dataclass

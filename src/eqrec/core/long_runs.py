@@ -24,7 +24,7 @@ import numpy as np
 
 from eqrec.core.arrivals import ArrivalTrace, draw_delays, uniform_words
 from eqrec.core.certify import closed_loop_maps
-from eqrec.core.classes import ClassGains, class_maps
+from eqrec.core.classes import ClassGains, class_error_map
 from eqrec.core.estimator import make_estimator
 from eqrec.core.gains import GainSchedule
 from eqrec.core.patterns import ArrivalPattern
@@ -280,8 +280,7 @@ def class_closed_loop_maps(system: AffineSystem, gains: ClassGains, pattern: "Ar
     G[0][:, lay.xi0] = np.eye(n)
     for d in range(1, T + 1):
         i = gains.classes.index(d, pattern.available(d - 1))
-        E, Z = class_maps(st, gains.classes.classes[i])
-        G[d] = E - gains.K[i] @ Z
+        G[d] = class_error_map(st, gains, i)
     return G, np.zeros((T + 1, n)), lay
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eqrec.core.classes import ClassGains, ClassSet, class_maps
+from eqrec.core.classes import ClassGains, ClassSet, class_error_map
 from eqrec.core.gains import GainSchedule, q_to_f, schedule_from_word_gains
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.stacking import Stacking
@@ -107,9 +107,8 @@ def certify_classes(system: AffineSystem, gains: ClassGains, mu1: float,
     st = stacking or Stacking(system, classes.horizon)
     beta = box_radius(st, mu1)
     bounds = np.zeros((len(classes), system.n))
-    for i, (cls, K) in enumerate(zip(classes.classes, gains.K)):
-        E, Z = class_maps(st, cls)
-        bounds[i] = np.abs(E - K @ Z) @ beta
+    for i in range(len(classes)):
+        bounds[i] = np.abs(class_error_map(st, gains, i)) @ beta
     return ClassCertificate(mu1=float(mu1), classes=classes, bounds=bounds)
 
 

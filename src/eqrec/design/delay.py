@@ -55,8 +55,8 @@ import time
 import numpy as np
 
 from eqrec.core.certify import certify_design
-from eqrec.core.checks import instance, integer
-from eqrec.core.classes import ClassSet, classes_of_tree
+from eqrec.core.checks import instance
+from eqrec.core.classes import classes_of_tree
 from eqrec.core.lp import LPSolution
 from eqrec.core.prefix_tree import PrefixTree
 from eqrec.core.parallel import check_jobs, check_scheduler, connected, settle
