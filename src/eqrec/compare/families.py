@@ -47,7 +47,7 @@ import numpy as np
 import pandas as pd
 
 from eqrec.core.arrivals import ArrivalTrace, delay_trace, gilbert_elliott_trace, with_uniform_delays
-from eqrec.core.noise import GaussianDesign, GaussianNoise, NoisySystem
+from eqrec.core.noise import GaussianNoise, NoisySystem
 from eqrec.core.protocol import OnTimeOnly
 from eqrec.core.simulate import closed_loop
 from eqrec.core.stacking import UncertaintyLayout
@@ -288,8 +288,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     designs = guaranteed_designs(system, setup, solver)
     mu1 = min(d.mu1 for d in designs.values())
     gaussian = _gaussian(system, gaussian, mu1, setup.sigmas)
-    kalman = GaussianDesign(P0=gaussian.x0_cov, Q=system.E @ gaussian.Qw @ system.E.T,
-                            R=system.V @ gaussian.Qv @ system.V.T)
+    kalman = gaussian.design(system)  # P0, Q = E Qw Eᵀ, R = V Qv Vᵀ
     N, n, p = setup.steps, system.n, system.p
     makers: dict[str, Callable[[], Any]] = {
         FAMILIES[0]: lambda: designs[FAMILIES[0]].estimator(strict=False),
