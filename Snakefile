@@ -12,7 +12,7 @@
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import min_version
 
-from eqrec.studies import configuration
+from eqrec.studies.pipeline import configuration
 
 min_version("9.0")
 

@@ -7,23 +7,23 @@
 
 a. The prefix-based paper's design end to end (build, solve, gains,
    certificate) on the ACC language L1 (``101111, 110111, 111011, 111101``,
-   ``μ1 = 1``): :func:`eqrec.design.prefix.design_prefix` with
+   ``μ1 = 1``): :func:`eqrec.design.prefix.design.design_prefix` with
    ``engine="classes"`` in class form (gains ``K``, certificate from them),
    with node gains derived and certified by the recursion, and
    ``engine="tree"``.  Targets (class form): <= 5 ms and <= 0.3x the tree.
 b. The batch reactor's ``{0..2}^5`` with ``μ1`` free and its certificate:
-   :func:`eqrec.design.delay.design_delay_global` in class form (class gains,
+   :func:`eqrec.design.delay.design.design_delay_global` in class form (class gains,
    class certificate, the μ1 bracket; target <= 100 ms; with node gains
    printed beside it) against
    the paper's route, IPOPT on problem (10)
-   (:func:`eqrec.design.delay_ipopt.design_delay_ipopt`).  The previous global
+   (:func:`eqrec.design.delay.ipopt.design_delay_ipopt`).  The previous global
    route (Dinkelbach + interval branch and bound on the tree LP, removed in
    commit b2da9c6) is quoted from git history, not measured: 2.5 s
    (``results/p3/reactor_designs.json``, ``global.time_s`` = 2.497 s at commit
    52958df; 1.65 to 3.0 s in the regenerated results up to 3973e51).
 c. Full languages ``{0..τ̄}^T`` on the batch reactor (sum cost, ``μ1 = 0.5``
    fixed) by the class engine, one fresh process per run through
-   :func:`eqrec.design.scale_sweep.run_size` so that the peak memory is that
+   :func:`eqrec.studies.p3.size_run.run_size` so that the peak memory is that
    size's.  The time is the design's: class set + LP build + HiGHS solve
    (+ the certificate inside ``solve_classes``), measured in the worker;
    the worker's wall time (interpreter start and imports included) is printed
@@ -31,8 +31,8 @@ c. Full languages ``{0..τ̄}^T`` on the batch reactor (sum cost, ``μ1 = 0.5``
    <= 1 GB peak.
 
 d. Issue 27: the batch reactor's full language ``{0..τ̄}^T`` with ``μ1`` free
-   (:func:`eqrec.design.delay.design_delay_global` on
-   :func:`eqrec.design.delay.delay_classes`), one fresh process per size and
+   (:func:`eqrec.design.delay.design.design_delay_global` on
+   :func:`eqrec.design.delay.design.delay_classes`), one fresh process per size and
    configuration: the one block LP (``monolithic``: today's algorithm, forced
    through ``class_blocks.MONOLITHIC_MAX_WORK``), per class on 1 and 2 worker
    processes (``n_jobs``), and per class on a ``dask.distributed.LocalCluster``
@@ -82,8 +82,8 @@ def _median_time(fn, repeats: int) -> tuple[float, float, object]:
 
 
 def part_a(repeats: int, verdicts: list) -> None:
-    from eqrec.core.acc import acc_system
-    from eqrec.design.prefix import design_prefix
+    from eqrec.systems.examples import acc_system
+    from eqrec.design.prefix.design import design_prefix
 
     system = acc_system()
     print(f"\na. P1 prefix design end to end (build, solve, gains, certificate), ACC L1 = {ACC_L1}, mu1 = 1; "
@@ -109,10 +109,10 @@ def part_a(repeats: int, verdicts: list) -> None:
 
 
 def part_b(repeats: int, ipopt_repeats: int, verdicts: list) -> None:
-    from eqrec.core.words import full_delay_language
-    from eqrec.design.delay import design_delay_global
-    from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
-    from eqrec.models import batch_reactor
+    from eqrec.arrivals.words import full_delay_language
+    from eqrec.design.delay.design import design_delay_global
+    from eqrec.design.delay.ipopt import compare_free_routes, design_delay_ipopt
+    from eqrec.systems.examples import batch_reactor
 
     system = batch_reactor()
     words = full_delay_language(5, 2)
@@ -138,8 +138,8 @@ def part_b(repeats: int, ipopt_repeats: int, verdicts: list) -> None:
 
 
 def part_c(sizes, size_repeats: int, mem_limit_gb: float, time_limit: float, verdicts: list) -> None:
-    from eqrec.design.scale_sweep import run_size
-    from eqrec.models import batch_reactor
+    from eqrec.studies.p3.size_run import run_size
+    from eqrec.systems.examples import batch_reactor
 
     system = batch_reactor()
     print(f"\nc. full languages {{0..tau}}^T, batch reactor, class engine, sum cost, mu1 = 0.5, HiGHS simplex; "
@@ -188,9 +188,9 @@ def free_worker(tau: int, T: int, config: str, warm_repeats: int) -> dict:
     """One configuration of part d in this (fresh) process: cold and warm times, peaks."""
     import psutil
 
-    from eqrec.design import class_blocks
-    from eqrec.design.delay import delay_classes, design_delay_global
-    from eqrec.models import batch_reactor
+    from eqrec.design.classes import blocks as class_blocks
+    from eqrec.design.delay.design import delay_classes, design_delay_global
+    from eqrec.systems.examples import batch_reactor
 
     n_jobs, dask, mono = CONFIGS[config]
     if mono:
@@ -224,7 +224,7 @@ def free_worker(tau: int, T: int, config: str, warm_repeats: int) -> dict:
 
 
 def part_d(sizes, configs, warm_repeats: int, mono_max_classes: int, verdicts: list) -> None:
-    from eqrec.design.delay import delay_classes
+    from eqrec.design.delay.design import delay_classes
 
     print(f"\nd. reactor {{0..tau}}^T, mu1 free (design_delay_global), one fresh process per size and configuration; "
           f"cold = first design (pool start inside), warm = median of {warm_repeats} more; load average "

@@ -25,11 +25,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from eqrec.core.certify import certify_design
-from eqrec.core.words import worst_case_word
-from eqrec.core.solvers import solve_lp
-from eqrec.core.acc import acc_system
-from eqrec.design.prefix_lp import build_prefix_lp, read_schedule
+from eqrec.bounds.certify import certify_design
+from eqrec.arrivals.words import worst_case_word
+from eqrec.lp.solvers import solve_lp
+from eqrec.systems.examples import acc_system
+from eqrec.design.prefix.tree_lp import build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 
 L1 = ["101111", "110111", "111011", "111101"]
@@ -55,11 +55,11 @@ def one(system, words, solver, method):
 WORKER = r"""
 import json, statistics, sys, time
 try:
-    from eqrec.design.prefix import design_prefix
+    from eqrec.design.prefix.design import design_prefix
     try:
-        from eqrec.core.acc import acc_system
+        from eqrec.systems.examples import acc_system
     except ImportError:  # layout before the core split of issue 18
-        from eqrec.core.systems import acc_system
+        from eqrec.systems.affine import acc_system
 except ImportError:  # layout before the arrival-pattern core
     from eqrec.design_prefix import design_prefix
     from eqrec.systems import acc_system

@@ -3,7 +3,7 @@
     python benchmarks/bench_p2.py [--n 31] [--variant theorem2] [--jobs 2]
 
 The LP is built once per job; each grid point only rewrites the L-dependent
-matrix values (eqrec.design.augmented_lp.AugmentedLP.set_L, as eqrec.design.sweeps.fixed_L_sweep does) and re-solves.
+matrix values (eqrec.design.augmented.word_lp.AugmentedLP.set_L, as eqrec.studies.searches.fixed_L_sweep does) and re-solves.
 With --jobs 2 the θ-chunks run in two processes, as two Snakemake jobs would.
 """
 from __future__ import annotations
@@ -14,10 +14,10 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from eqrec.design.augmented_lp import AugmentedLP
+from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.observers import place_observer
-from eqrec.studies.p2_readings import heatmap_poles, variant_word
-from eqrec.core.acc import acc_system
+from eqrec.studies.p2.readings import heatmap_poles, variant_word
+from eqrec.systems.examples import acc_system
 
 GOAL = 60.0
 

@@ -10,7 +10,7 @@
    the class engine's ``design_delay`` end to end beside it.
 2. ``μ1`` free with its global certificate: ``design_delay_global`` (the
    smallest feasible ``μ1`` by one Charnes–Cooper LP, certified; the μ1-free
-   theorem of :mod:`eqrec.design.classes`; goal <= 20 s) and the paper's
+   theorem of :mod:`eqrec.design.classes.engine`; goal <= 20 s) and the paper's
    route (``design_delay_ipopt``: IPOPT on problem (10) from the LP at ``μ1 = 1``).
 3. Scale table for the full language ``{0..τ̄}^T`` (``--engines tree classes``):
    words, reduced sequences, prefix-tree nodes, classes, LP rows / columns /
@@ -24,7 +24,7 @@
    ``--mem-limit-gb`` (address-space limit) is reported as such.
    ``--engines classes`` measures the class engine
    (``benchmarks/bench_classes.py`` has its targets).  The worker is
-   :func:`eqrec.design.scale_sweep.run_size` (shared with the P3 scale steps
+   :func:`eqrec.studies.p3.size_run.run_size` (shared with the P3 scale steps
    of the pipeline).
 """
 
@@ -34,17 +34,17 @@ import argparse
 import statistics
 import time
 
-from eqrec.design.scale_sweep import ENGINES, METHODS, run_size
-from eqrec.models import batch_reactor
+from eqrec.studies.p3.size_run import ENGINES, METHODS, run_size
+from eqrec.systems.examples import batch_reactor
 
 
 def part_fixed(repeats: int) -> None:
-    from eqrec.core.certify import certify_design
-    from eqrec.core.solvers import solve_lp
-    from eqrec.design.delay import _design_from_solution, delay_language, design_delay
-    from eqrec.design.prefix_lp import build_prefix_lp
-    from eqrec.core.prefix_tree import PrefixTree
-    from eqrec.models import batch_reactor
+    from eqrec.bounds.certify import certify_design
+    from eqrec.lp.solvers import solve_lp
+    from eqrec.design.delay.design import _design_from_solution, delay_language, design_delay
+    from eqrec.design.prefix.tree_lp import build_prefix_lp
+    from eqrec.arrivals.prefix_tree import PrefixTree
+    from eqrec.systems.examples import batch_reactor
 
     system = batch_reactor()
     design_delay(system, delay_language(max_delay=2, horizon=5), 0.33)  # warm-up (imports, caches)
@@ -80,10 +80,10 @@ def part_fixed(repeats: int) -> None:
 
 
 def part_free() -> None:
-    from eqrec.core.words import full_delay_language
-    from eqrec.design.delay import design_delay_global
-    from eqrec.design.delay_ipopt import compare_free_routes, design_delay_ipopt
-    from eqrec.models import batch_reactor
+    from eqrec.arrivals.words import full_delay_language
+    from eqrec.design.delay.design import design_delay_global
+    from eqrec.design.delay.ipopt import compare_free_routes, design_delay_ipopt
+    from eqrec.systems.examples import batch_reactor
 
     system = batch_reactor()
     words = full_delay_language(5, 2)
@@ -133,7 +133,7 @@ def main() -> None:
     ap.add_argument("--sizes", nargs="+", default=["5,2", "6,2"], help="T,tau pairs for the scale table")
     ap.add_argument("--methods", nargs="+", default=["simplex", "ipm"], choices=list(METHODS))
     ap.add_argument("--builders", nargs="+", default=["core"], choices=["core"],
-                    help="core: eqrec.design.prefix_lp.build_prefix_lp")
+                    help="core: eqrec.design.prefix.tree_lp.build_prefix_lp")
     ap.add_argument("--engines", nargs="+", default=["tree", "classes"], choices=list(ENGINES),
                     help="tree: the node-per-prefix LP; classes: the class engine")
     ap.add_argument("--mu1", type=float, default=0.5)

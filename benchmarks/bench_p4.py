@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from eqrec.lmv.simulate import run_mc, simulate_plant
-from eqrec.studies.p4 import load_config, plant_of
+from eqrec.lmv.monte_carlo import run_mc, simulate_plant
+from eqrec.studies.p4.steps import load_config, plant_of
 
 ROOT = Path(__file__).resolve().parents[1]
 

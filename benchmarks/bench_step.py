@@ -17,10 +17,10 @@ import time
 
 import numpy as np
 
-from eqrec.core.acc import acc_system
-from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import design_delay_global
-from eqrec.design.prefix import design_prefix
+from eqrec.systems.examples import acc_system
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.delay.design import design_delay_global
+from eqrec.design.prefix.design import design_prefix
 
 
 def _trace(steps: int, p: int, loss: float | None, seed: int) -> list:

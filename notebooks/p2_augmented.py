@@ -18,7 +18,7 @@
 # under `results/p2/` (run `snakemake --cores 2 p2` first); it recomputes nothing.
 #
 # Key fact used throughout: for fixed $L$ and $s_0$ the augmented gains $(M, \nu)$ and the
-# time-based gains $(F, u_0)$ are in bijection (`eqrec.design.augmented_runtime`), so the augmented estimator
+# time-based gains $(F, u_0)$ are in bijection (`eqrec.design.augmented.runtime`), so the augmented estimator
 # can never beat the time-based optimum on the same word, and its optimum does not depend on $L$ or $s_0$.
 
 # %%
@@ -40,7 +40,7 @@ real = pd.read_csv(RES / "realaxis.csv")
 claims = pd.read_csv(ROOT / "results" / "claims.csv")
 paper = claims.set_index("id")["paper_value"]
 
-#: the readings of the paper's text compared here (eqrec.studies.p2_readings), in words
+#: the readings of the paper's text compared here (eqrec.studies.p2.readings), in words
 READINGS = {"theorem2": "Theorem 2 as stated", "one_based": "word read with 1-based times",
             "leak": "constant L kept at missing steps", "masked_gain": "Appendix, gain masked when missing"}
 pd.set_option("display.precision", 4)

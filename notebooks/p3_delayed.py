@@ -123,7 +123,7 @@ display(Image(filename=str(RES / "fig2_acc.png")))
 # A node of depth $d$ whose available data at time $d-1$ is the set $S$ attains exactly the error maps
 # $(E_d - K Z_S)\delta$ for every gain $K$, whatever its ancestors' gains (its own gain acts last on all of
 # $Z_S$). So the tree LP separates: one small LP per class $(d, S)$ and state row, nodes of one class share
-# their level, and the estimator needs one $K$ per class (`eqrec.design.classes`, proofs in its docstring).
+# their level, and the estimator needs one $K$ per class (`eqrec.design.classes.engine`, proofs in its docstring).
 # With $\mu_1$ free, every class level is nondecreasing in $\mu_1$, so the optimum is the smallest feasible
 # $\mu_1$, one Charnes-Cooper LP. The scale table puts the paper's tree LP and the class engine side by side on
 # the batch reactor's full languages $\{0..\bar\tau\}^T$ (sum cost, $\mu_1 = 0.5$); their build and solve

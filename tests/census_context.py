@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import eqrec
-from eqrec.core.noise import GaussianDesign, GaussianNoise, NoisySystem
-from eqrec.core.simulate import closed_loop
-from eqrec.filters.kalman import TimestampedKalman
+from eqrec.systems.noise import GaussianDesign, GaussianNoise, NoisySystem
+from eqrec.simulate.loop import closed_loop
+from eqrec.estimators.kalman import TimestampedKalman
 from eqrec.interop.python_control import estimator_iosys, system_from_statespace
 from eqrec.lmv.estimator import LMVEstimator
 from eqrec.lmv.model import system_of

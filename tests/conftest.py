@@ -3,8 +3,8 @@ import pytest
 
 from pathlib import Path
 
-from eqrec.core.acc import acc_system
-from eqrec.studies.claims_file import published_value
+from eqrec.systems.examples import acc_system
+from eqrec.studies.claims.published import published_value
 
 #: The one file of published values; tests that compare with a paper's number read it here.
 CLAIMS_FILE = Path(__file__).resolve().parents[1] / "config" / "claims.yaml"

@@ -1,4 +1,4 @@
-"""The one arrival model (eqrec.core.arrivals): traces and samplers.
+"""The one arrival model (eqrec.arrivals.draws): traces and samplers.
 
 Statistical tolerance: a frequency estimated from ``N`` draws is compared with
 its probability within ``Z = 5`` standard errors (``sqrt(p (1 - p) / N)`` for
@@ -12,9 +12,9 @@ pass for all but about one seed in 1.7 million per comparison.
 import numpy as np
 import pytest
 
-from eqrec.core.arrivals import (NEVER, ArrivalTrace, bernoulli_arrivals, bernoulli_trace,
+from eqrec.arrivals.draws import (NEVER, ArrivalTrace, bernoulli_arrivals, bernoulli_trace,
                                  delay_trace, draw_delays, gilbert_elliott_trace, uniform_words)
-from eqrec.core.words import as_pattern, parse_delay_word
+from eqrec.arrivals.words import as_pattern, parse_delay_word
 from eqrec.errors import InputError
 
 Z = 5.0
@@ -178,8 +178,8 @@ def test_bad_sampler_input_names_the_field(call, field):
 # ---------------------------------------------------------------------------- what reaches an estimator
 
 def test_as_packets_reads_every_form_of_the_protocol():
-    from eqrec.core.estimator import Packet
-    from eqrec.core.packets import as_packets
+    from eqrec.estimators.causal import Packet
+    from eqrec.estimators.packets import as_packets
 
     assert as_packets(None, 3, (2,)) == [] and as_packets([], 3, (2,)) == []
     for y in (np.array([1.0, 2.0]), [1.0, 2.0]):
@@ -194,7 +194,7 @@ def test_as_packets_reads_every_form_of_the_protocol():
 @pytest.mark.parametrize("y", [np.array([1.0, np.inf]), np.zeros(3), [(4, np.zeros(2))],
                                [(1, np.zeros(2)), (1, np.zeros(2))], [(1.5, np.zeros(2))], {"a": 1}, ["a", "b"]])
 def test_as_packets_refuses_bad_data_naming_the_field(y):
-    from eqrec.core.packets import as_packets
+    from eqrec.estimators.packets import as_packets
 
     with pytest.raises(InputError) as exc:
         as_packets(y, 3, (2,), field="y")

@@ -6,11 +6,11 @@ raises, and a twin that never saw the bad call gives bit-identical estimates aft
 import numpy as np
 import pytest
 
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator
-from eqrec.core.switching import SwitchingEstimator
-from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import design_delay_global
-from eqrec.design.prefix import design_prefix
+from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator
+from eqrec.estimators.switching import SwitchingEstimator
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.delay.design import design_delay_global
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InputError
 
 LOSS = ["000", "300", "030", "003"]  # delay words: at most one packet of three lost
@@ -124,9 +124,9 @@ SWITCHING_BAD = [c for c in BAD_CALLS if c[0] != "a stamp received before"]  # s
 @pytest.mark.parametrize("name,bad_y,bad_u", SWITCHING_BAD, ids=[c[0] for c in SWITCHING_BAD])
 def test_switching_estimator_steps_are_all_or_nothing(name, bad_y, bad_u):
     """The switching strategy on the batch reactor (p = 2): the bad calls, widened to two outputs."""
-    from eqrec.core.words import full_delay_language
-    from eqrec.design.delay import design_delay
-    from eqrec.models import batch_reactor
+    from eqrec.arrivals.words import full_delay_language
+    from eqrec.design.delay.design import design_delay
+    from eqrec.systems.examples import batch_reactor
 
     reactor = batch_reactor()
     perf = design_delay(reactor, ["0"], 0.36, kind="delay").schedule
@@ -211,8 +211,8 @@ def test_a_horizon_that_is_over_is_refused_atomically(class_design):
 ])
 def test_augmented_estimator_steps_are_all_or_nothing(acc, bad_y, bad_u):
     """The state-augmented estimator (one word): every refused step leaves (x̂, s, the record) as they were."""
-    from eqrec.design.augmented_model import AugmentedGains, as_time_varying_L
-    from eqrec.design.augmented_runtime import AugmentedEstimator
+    from eqrec.design.augmented.model import AugmentedGains, as_time_varying_L
+    from eqrec.design.augmented.runtime import AugmentedEstimator
 
     rng = np.random.default_rng(4)
     word, n, p = "110111", 3, 2

@@ -2,16 +2,16 @@
 import numpy as np
 import pytest
 
-from eqrec.core.gains import schedule_from_word_gains
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import as_pattern
-from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking, as_time_varying_L
-from eqrec.design.augmented_runtime import (AugmentedEstimator, augmented_to_prefix, augmented_to_time_based,
+from eqrec.bounds.gains import schedule_from_word_gains
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import as_pattern
+from eqrec.design.augmented.model import AugmentedGains, AugmentedStacking, as_time_varying_L
+from eqrec.design.augmented.runtime import (AugmentedEstimator, augmented_to_prefix, augmented_to_time_based,
                                             prefix_to_augmented, schedule_from_augmented)
-from eqrec.core.certify import closed_loop_maps
+from eqrec.bounds.certify import closed_loop_maps
 from eqrec.errors import InputError
-from eqrec.core.simulate import sample_uncertainty, simulate_run
-from eqrec.core.stacking import UncertaintyLayout
+from eqrec.simulate.loop import sample_uncertainty, simulate_run
+from eqrec.bounds.stacking import UncertaintyLayout
 
 
 def paper_blocks(aug, M):
@@ -162,8 +162,8 @@ def test_masked_gain_reading_is_the_appendix_formula_and_differs_from_the_dynami
 def test_runtime_on_packets_equals_the_converted_prefix_schedule(acc, rng, runtime):
     """Delay words (P3 form (4)): the estimator on time-stamped packets gives the x̂ of its prefix-based schedule,
     late measurements entering through M with the stored x̂(τ), s(τ)."""
-    from eqrec.core.words import full_delay_language
-    from eqrec.design.augmented_model import AugmentedPrefixGains
+    from eqrec.arrivals.words import full_delay_language
+    from eqrec.design.augmented.model import AugmentedPrefixGains
 
     n, p, T = 3, 2, 4
     tree = PrefixTree(full_delay_language(T, 1), kind="delay")

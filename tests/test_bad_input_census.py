@@ -25,11 +25,11 @@ import pytest
 
 import eqrec
 from census_context import AMBIGUOUS, DELAYS, INF, NAN, WORDS, Ctx
-from eqrec.core import arrivals
-from eqrec.core.arrivals import ArrivalTrace
-from eqrec.core.noise import GaussianDesign
+from eqrec.arrivals import draws as arrivals
+from eqrec.arrivals.draws import ArrivalTrace
+from eqrec.systems.noise import GaussianDesign
 from eqrec.errors import EqrecError, InfeasibleDesign, InputError
-from eqrec.filters.kalman import TimestampedKalman
+from eqrec.estimators.kalman import TimestampedKalman
 from eqrec.lmv.estimator import LMVEstimator
 
 

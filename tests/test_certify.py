@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from eqrec.core.certify import certify_design, certify_schedule
-from eqrec.design.prefix import design_prefix
+from eqrec.bounds.certify import certify_design, certify_schedule
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import CertificationFailure
-from eqrec.core.simulate import sample_uncertainty, simulate_run
+from eqrec.simulate.loop import sample_uncertainty, simulate_run
 
 
 def test_bounds_are_attained_and_never_exceeded(acc, L1_words, rng):
@@ -24,7 +24,7 @@ def test_bounds_are_attained_and_never_exceeded(acc, L1_words, rng):
 
 
 def wc_layout(acc):
-    from eqrec.core.stacking import UncertaintyLayout
+    from eqrec.bounds.stacking import UncertaintyLayout
 
     return UncertaintyLayout(6, acc.nw, acc.nv, acc.n)
 
@@ -55,7 +55,7 @@ def test_error_maps_equal_the_causal_runs(acc, L1_words, rng):
 
 
 def test_no_data_growth_is_the_infinity_norm_of_the_matrix_power(acc):
-    from eqrec.core.certify import no_data_growth
+    from eqrec.bounds.certify import no_data_growth
 
     A2 = acc.A @ acc.A
     assert no_data_growth(acc, 2) == pytest.approx(np.abs(A2).sum(axis=1).max(), rel=1e-14)
@@ -63,8 +63,8 @@ def test_no_data_growth_is_the_infinity_norm_of_the_matrix_power(acc):
 
 
 def test_no_data_growth_of_a_time_varying_system_is_the_transition_from_time_0(acc):
-    from eqrec.core.certify import no_data_growth
-    from eqrec.core.systems import AffineSystem
+    from eqrec.bounds.certify import no_data_growth
+    from eqrec.systems.affine import AffineSystem
     from eqrec.errors import InputError
 
     A = np.stack([acc.A, 2.0 * acc.A, 0.5 * acc.A])

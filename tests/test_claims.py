@@ -10,10 +10,10 @@ import pytest
 import yaml
 
 from eqrec.errors import InputError
-from eqrec.studies.claim_reasons import Reason, each, fmtcomplex, fmtlist, join, registry
-from eqrec.studies.claims import REASONS, build_claims_table, compare_one, default_atol, load_claims, without_timings
-from eqrec.studies.claims_file import published_value
-from eqrec.studies.outputs import write_json
+from eqrec.studies.claims.reasons import Reason, each, fmtcomplex, fmtlist, join, registry
+from eqrec.studies.claims.table import REASONS, build_claims_table, compare_one, default_atol, load_claims, without_timings
+from eqrec.studies.claims.published import published_value
+from eqrec.studies.pipeline.outputs import write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 CLAIMS_FILE = ROOT / "config" / "claims.yaml"
@@ -176,7 +176,7 @@ def test_reason_functions_are_found_by_their_claim_id():
     src = ROOT / "src" / "eqrec" / "studies"
     for cid in REASONS:
         study = cid[:2].lower()
-        text = (src / f"{study}_claims.py").read_text()
+        text = (src / study / "claims.py").read_text()
         assert re.search(r'@reason\([^)]*"' + re.escape(cid) + '"', text), cid
 
 
@@ -317,13 +317,17 @@ def test_values_files_hold_numbers_and_evidence_only():
 
 
 def test_published_values_need_the_claims_file_only():
-    """The Snakefile and P2's printed step read published values through eqrec.studies.claims_file, which
+    """The Snakefile and P2's printed step read published values through eqrec.studies.claims.published, which
     imports no wording code: editing a reason function re-plans the claims table, not P2's designs."""
-    from eqrec.studies.imports import code_inputs
+    from eqrec.studies.pipeline.imports import code_inputs
 
-    names = {Path(p).name for p in code_inputs("p2", "printed")}
-    assert "claims_file.py" in names
-    assert not names & {"claims.py", "claim_reasons.py", "p1_claims.py", "p2_claims.py", "p3_claims.py",
-                        "p4_claims.py"}, sorted(names)
-    claims_inputs = {Path(p).name for p in code_inputs("claims", "table")}
-    assert {"claims_file.py", "claim_reasons.py", "p1_claims.py", "p4_claims.py"} <= claims_inputs
+    def rel(paths):
+        return {Path(p).as_posix().split("src/eqrec/", 1)[1] for p in paths}
+
+    names = rel(code_inputs("p2", "printed"))
+    assert "studies/claims/published.py" in names
+    assert not names & {"studies/claims/table.py", "studies/claims/reasons.py", "studies/p1/claims.py",
+                        "studies/p2/claims.py", "studies/p3/claims.py", "studies/p4/claims.py"}, sorted(names)
+    claims_inputs = rel(code_inputs("claims", "table"))
+    assert {"studies/claims/published.py", "studies/claims/reasons.py", "studies/p1/claims.py",
+            "studies/p4/claims.py"} <= claims_inputs

@@ -1,4 +1,4 @@
-"""The class LPs per class (eqrec.design.class_blocks): same optimum as the one block LP, the same bytes whatever the
+"""The class LPs per class (eqrec.design.classes.blocks): same optimum as the one block LP, the same bytes whatever the
 workers, the batching and the backend (local processes or a real Dask cluster), inputs checked, progress quiet off a
 terminal."""
 import io
@@ -8,19 +8,19 @@ import numpy as np
 import pytest
 
 from eqrec.cli import main
-from eqrec.core import parallel
-from eqrec.core.classes import classes_of_full_language, classes_of_tree
-from eqrec.core.parallel import Progress, check_jobs, check_scheduler, run_tasks
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.systems import AffineSystem
-from eqrec.design import class_blocks
-from eqrec.design.class_blocks import choose_path, plan_batches
-from eqrec.design.classes import solve_classes
-from eqrec.design.delay import delay_classes, design_delay, design_delay_global
+from eqrec.lp import parallel
+from eqrec.bounds.data_classes import classes_of_full_language, classes_of_tree
+from eqrec.lp.parallel import Progress, check_jobs, check_scheduler, run_tasks
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.classes import blocks as class_blocks
+from eqrec.design.classes.blocks import choose_path, plan_batches
+from eqrec.design.classes.engine import solve_classes
+from eqrec.design.delay.design import delay_classes, design_delay, design_delay_global
 from eqrec.design.mu1_min import min_recovery_level
-from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InfeasibleDesign, InputError
-from eqrec.models import batch_reactor
+from eqrec.systems.examples import batch_reactor
 
 SIZE = (3, 8)  # (max delay, horizon): 54 classes, a few hundred LPs
 
@@ -127,7 +127,7 @@ def test_large_design_per_class_matches_the_block_lp(reactor, monkeypatch):
     fixed = design_delay(reactor, classes, 0.5, n_jobs=1)
     assert fixed.extra["J"] == pytest.approx(design_delay(reactor, classes, 0.5, n_jobs=2).extra["J"], rel=0)
     words = ["101111", "110111", "111011", "111101"]
-    from eqrec.core.acc import acc_system
+    from eqrec.systems.examples import acc_system
 
     assert design_prefix(acc_system(), words, 1.0, n_jobs=1).mu2 == pytest.approx(
         design_prefix(acc_system(), words, 1.0, engine="tree").mu2, rel=1e-9)
@@ -226,7 +226,7 @@ def test_scale_free_step_writes_values_timings_and_figure(tmp_path, monkeypatch)
     """The p3_scale target's mu1-free scaling: values in results, times and memory in the timings, a figure."""
     from types import SimpleNamespace
 
-    import eqrec.studies.p3_scale_free as free
+    import eqrec.studies.p3.free_table as free
 
     monkeypatch.setattr(free, "FREE_SIZES", [(2, 5)])
     out = SimpleNamespace(**{k: str(tmp_path / f"{k}.{ext}") for k, ext in (

@@ -1,7 +1,7 @@
-"""The class-form estimator (:class:`eqrec.core.estimator.ClassEstimator`) at run time.
+"""The class-form estimator (:class:`eqrec.estimators.causal.ClassEstimator`) at run time.
 
 x̂(d) = x̄(d) + K_(d,S) (y_S − ȳ_S) must give the same estimates as the node gains derived from the
-same K (:func:`eqrec.design.classes.node_schedule`), attain every class level at a worst-case vertex,
+same K (:func:`eqrec.design.classes.engine.node_schedule`), attain every class level at a worst-case vertex,
 and run periodically and in the switching scheme exactly as the schedule does.
 """
 import math
@@ -12,21 +12,21 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from eqrec.core.classes import ClassGains, class_maps, classes_of_tree
-from eqrec.core.estimator import ClassEstimator, Packet, RecoveryEstimator, make_estimator
-from eqrec.core.switching import SwitchingEstimator
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import parse_delay_word
-from eqrec.core.robust import worst_case_vertex
-from eqrec.core.long_runs import class_closed_loop_maps, long_run_periodic, long_run_switching, periodic_model_gap
-from eqrec.core.simulate import monte_carlo, simulate_run
-from eqrec.core.stacking import Stacking, UncertaintyLayout
-from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import delay_classes, delay_language, design_delay, min_recovery_level
+from eqrec.bounds.data_classes import ClassGains, class_maps, classes_of_tree
+from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator, make_estimator
+from eqrec.estimators.switching import SwitchingEstimator
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import parse_delay_word
+from eqrec.lp.robust import worst_case_vertex
+from eqrec.simulate.long_runs import class_closed_loop_maps, long_run_periodic, long_run_switching, periodic_model_gap
+from eqrec.simulate.loop import monte_carlo, simulate_run
+from eqrec.bounds.stacking import Stacking, UncertaintyLayout
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.delay.design import delay_classes, delay_language, design_delay, min_recovery_level
 from eqrec.design.report import node_level, path_levels
-from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InputError
-from eqrec.models import batch_reactor
+from eqrec.systems.examples import batch_reactor
 
 ATOL = 1e-9
 RTOL = 1e-9
@@ -266,7 +266,7 @@ def test_periodic_restart_reanchors_the_prediction(cases):
 
 @pytest.fixture(scope="module")
 def switching(reactor):
-    """As eqrec.studies.p3_strategy: period-1 design at the smallest period-1 level rounded up, recovery
+    """As eqrec.studies.p3.strategy: period-1 design at the smallest period-1 level rounded up, recovery
     design on the words whose first delay is at least 1."""
     mu1 = math.ceil(min_recovery_level(reactor, ["0"], kind="delay").upper * 100 - 1e-9) / 100
     words = [p.label for p in delay_language(max_delay=2, horizon=4)]

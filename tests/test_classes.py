@@ -1,27 +1,27 @@
-"""The class engine (eqrec.core.classes, eqrec.design.classes) against the tree LP and brute force."""
+"""The class engine (eqrec.bounds.data_classes, eqrec.design.classes.engine) against the tree LP and brute force."""
 import itertools
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from eqrec.core.certify import certify_schedule
-from eqrec.core.classes import classes_of_full_language, classes_of_tree, full_language_counts
-from eqrec.core.lp import LinearProgram
-from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import full_delay_language
-from eqrec.core.solvers import SOLVER_NAMES, solve_lp
-from eqrec.core.systems import AffineSystem
-from eqrec.design.class_gains import node_schedule
-from eqrec.design.class_lp import build_class_lp
-from eqrec.design.classes import class_design, solve_classes
+from eqrec.bounds.certify import certify_schedule
+from eqrec.bounds.data_classes import classes_of_full_language, classes_of_tree, full_language_counts
+from eqrec.lp.model import LinearProgram
+from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import full_delay_language
+from eqrec.lp.solvers import SOLVER_NAMES, solve_lp
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.classes.gains import node_schedule
+from eqrec.design.classes.block_lp import build_class_lp
+from eqrec.design.classes.engine import class_design, solve_classes
 from eqrec.design.cost import class_cost
-from eqrec.design.delay import delay_language, design_delay, design_delay_global
+from eqrec.design.delay.design import delay_language, design_delay, design_delay_global
 from eqrec.design.mu1_min import min_recovery_level
-from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InfeasibleDesign
-from eqrec.models import batch_reactor
+from eqrec.systems.examples import batch_reactor
 
 ACC_DELAY = ["060000", "006000", "000600", "000060"]
 
@@ -198,8 +198,8 @@ def test_cost_is_nondecreasing_in_mu1(reactor, cost):
 
 def test_dual_certificate_is_a_true_lower_bound(reactor):
     """The dual point behind ``lower`` is feasible for the LAD dual: Z λ = 0, |λ| <= β (checked here again)."""
-    from eqrec.core.classes import class_maps
-    from eqrec.core.stacking import Stacking
+    from eqrec.bounds.data_classes import class_maps
+    from eqrec.bounds.stacking import Stacking
     from eqrec.design.mu1_min import _dual_lower_certificate
 
     classes = classes_of_full_language(5, 2)

@@ -250,8 +250,8 @@ def test_delay_infeasible_exit_code_writes_nothing(tmp_path, capsys):
 
 
 def test_batch_reactor_example_is_the_zoh_model():
-    from eqrec.core.system_files import load_system
-    from eqrec.models import batch_reactor
+    from eqrec.systems.files import load_system
+    from eqrec.systems.examples import batch_reactor
 
     system, _ = load_system(BATCH_REACTOR)
     ref = batch_reactor()

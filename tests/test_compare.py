@@ -7,9 +7,9 @@ import pandas as pd
 import pytest
 
 from eqrec.compare import COLUMNS, FAMILIES, CompareSetup, compare_families, draw_trace, write_table
-from eqrec.core.arrivals import NEVER
+from eqrec.arrivals.draws import NEVER
 from eqrec.errors import InputError
-from eqrec.models import batch_reactor
+from eqrec.systems.examples import batch_reactor
 
 
 @pytest.fixture(scope="module")

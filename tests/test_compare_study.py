@@ -7,8 +7,9 @@ import pytest
 
 from eqrec.compare import CompareSetup
 from eqrec.errors import InputError
-from eqrec.studies import compare, configuration, harness
-from eqrec.studies.config_checks import check_compare
+from eqrec.studies.compare import steps as compare
+from eqrec.studies.pipeline import configuration, harness
+from eqrec.studies.pipeline.checks import check_compare
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = configuration.load_config("compare", root=ROOT)

@@ -4,11 +4,11 @@ import pytest
 import yaml
 from pathlib import Path
 
-from eqrec.core.lp import LPBuilder
-from eqrec.core.words import full_delay_language, parse_delay_word
-from eqrec.core.solvers import SOLVER_NAMES, solve_lp, solver_info
-from eqrec.design.prefix import design_prefix
-from eqrec.design.prefix_lp import build_prefix_lp
+from eqrec.lp.model import LPBuilder
+from eqrec.arrivals.words import full_delay_language, parse_delay_word
+from eqrec.lp.solvers import SOLVER_NAMES, solve_lp, solver_info
+from eqrec.design.prefix.design import design_prefix
+from eqrec.design.prefix.tree_lp import build_prefix_lp
 from eqrec.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -96,7 +96,7 @@ def test_missing_data_language_as_delay_words_gives_the_p1_optimum_exactly(acc, 
 
 
 def test_delay_design_is_certified_and_causal_runs_attain_the_bounds(acc):
-    from eqrec.core.simulate import simulate_run
+    from eqrec.simulate.loop import simulate_run
 
     pats = [parse_delay_word(w) for w in full_delay_language(4, 1)]
     d = design_prefix(acc, pats, 1.0)

@@ -2,18 +2,18 @@
 import numpy as np
 import pytest
 
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import full_delay_language, parse_delay_word
-from eqrec.core.simulate import simulate_run
-from eqrec.core.solvers import solve_lp
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import full_delay_language, parse_delay_word
+from eqrec.simulate.loop import simulate_run
+from eqrec.lp.solvers import solve_lp
 from eqrec.design.cost import cost_weights, paper_cost
-from eqrec.design.delay import delay_language, design_delay, design_delay_global, min_recovery_level
+from eqrec.design.delay.design import delay_language, design_delay, design_delay_global, min_recovery_level
 from eqrec.design.report import level_table, path_levels, to_json, word_certificate
-from eqrec.design.delay_ipopt import bilinear_problem, compare_free_routes, design_delay_ipopt
-from eqrec.design.prefix import design_prefix
-from eqrec.design.prefix_lp import build_prefix_lp
+from eqrec.design.delay.ipopt import bilinear_problem, compare_free_routes, design_delay_ipopt
+from eqrec.design.prefix.design import design_prefix
+from eqrec.design.prefix.tree_lp import build_prefix_lp
 from eqrec.errors import InfeasibleDesign, InputError
-from eqrec.models import batch_reactor
+from eqrec.systems.examples import batch_reactor
 
 ACC_DELAY = ["060000", "006000", "000600", "000060"]  # Sec. IV-B: delay 6 = beyond the horizon = missing
 
@@ -71,7 +71,7 @@ def test_acc_language_with_mu1_1_is_the_p1_prefix_problem(acc, published):
 
 def test_bilinear_problem_at_fixed_mu1_is_the_tree_lp(reactor, small_language):
     """Problem (10) as data (IPOPT's route): at μ1 fixed it is the tree LP at that μ1."""
-    from eqrec.core.lp import LinearProgram
+    from eqrec.lp.model import LinearProgram
 
     tree = PrefixTree(small_language)
     bl = bilinear_problem(reactor, tree, "sum")
@@ -169,10 +169,10 @@ def test_bad_inputs(acc):
 
 def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
     """Two pole placements and two s0: the LP in (M^α, ν^α) has the prefix design's optimum (both costs)."""
-    from eqrec.design.augmented_tree_lp import solve_augmented_delay
-    from eqrec.design.augmented_runtime import augmented_to_prefix
+    from eqrec.design.augmented.tree_lp import solve_augmented_delay
+    from eqrec.design.augmented.runtime import augmented_to_prefix
     from eqrec.design.observers import place_observer
-    from eqrec.core.certify import certify_schedule
+    from eqrec.bounds.certify import certify_schedule
 
     tree = PrefixTree(delay_language(max_delay=2, horizon=4))
     mu1 = 0.5
@@ -191,8 +191,8 @@ def test_augmented_form_optimum_does_not_depend_on_L_or_s0(reactor):
 
 
 def test_augmented_gains_are_a_reparametrisation_of_the_prefix_gains(reactor):
-    from eqrec.core.stacking import UncertaintyLayout
-    from eqrec.design.augmented_runtime import AugmentedEstimator, augmented_to_prefix, prefix_to_augmented
+    from eqrec.bounds.stacking import UncertaintyLayout
+    from eqrec.design.augmented.runtime import AugmentedEstimator, augmented_to_prefix, prefix_to_augmented
     from eqrec.design.observers import place_observer
 
     tree = PrefixTree(delay_language(max_delay=2, horizon=3))
@@ -219,7 +219,7 @@ def test_augmented_gains_are_a_reparametrisation_of_the_prefix_gains(reactor):
 
 
 def test_noise_free_system_has_no_smallest_positive_mu1(reactor):
-    from eqrec.core.systems import AffineSystem
+    from eqrec.systems.affine import AffineSystem
 
     quiet = AffineSystem(A=reactor.A, C=reactor.C, E=reactor.E, eta_w=0.0, eta_v=0.0)
     with pytest.raises(InputError, match="smallest recovery level is 0"):

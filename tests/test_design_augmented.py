@@ -2,16 +2,16 @@
 import numpy as np
 import pytest
 
-from eqrec.design.augmented_model import AugmentedGains, AugmentedStacking
-from eqrec.design.augmented_runtime import augmented_to_time_based
-from eqrec.design.augmented import design_augmented
-from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.augmented_nlp import solve_free_ipopt
+from eqrec.design.augmented.model import AugmentedGains, AugmentedStacking
+from eqrec.design.augmented.runtime import augmented_to_time_based
+from eqrec.design.augmented.design import design_augmented
+from eqrec.design.augmented.word_lp import AugmentedLP
+from eqrec.design.augmented.nlp import solve_free_ipopt
 from eqrec.design.observers import place_observer
-from eqrec.studies.p2_readings import heatmap_poles
-from eqrec.design.time_based import design_time_based
+from eqrec.studies.p2.readings import heatmap_poles
+from eqrec.design.prefix.time_based import design_time_based
 from eqrec.errors import InputError
-from eqrec.core.solvers import solve_lp
+from eqrec.lp.solvers import solve_lp
 
 
 @pytest.fixture(scope="module")
@@ -151,9 +151,9 @@ def printed_L(published):
 
 def test_runtimes_agree_until(acc, printed_L):
     """The hold and theorem2 runtimes have the same error up to t = 3 on 100111 for any gains, not after."""
-    from eqrec.core.certify import closed_loop_maps
-    from eqrec.design.augmented_guarantee import runtimes_agree_until
-    from eqrec.design.augmented_runtime import schedule_from_augmented
+    from eqrec.bounds.certify import closed_loop_maps
+    from eqrec.studies.p2.guarantee import runtimes_agree_until
+    from eqrec.design.augmented.runtime import schedule_from_augmented
 
     assert runtimes_agree_until("100111") == 3 and runtimes_agree_until("111111") == 6
     assert runtimes_agree_until("111100") == 6
@@ -169,9 +169,9 @@ def test_runtimes_agree_until(acc, printed_L):
 def test_best_guarantee_among_optima(acc, printed_L, runtime):
     """γ* over the masked_gain optima at the printed L: ≤ every solver's pick as run, = certify() of its own
     gains, which are optimal for the masked_gain LP; HiGHS and Clarabel agree."""
-    from eqrec.core.robust import worst_case_abs
-    from eqrec.design.augmented import certify_augmented
-    from eqrec.design.augmented_guarantee import best_guarantee_among_optima
+    from eqrec.lp.robust import worst_case_abs
+    from eqrec.design.augmented.design import certify_augmented
+    from eqrec.studies.p2.guarantee import best_guarantee_among_optima
 
     words = ["100111", "101111", "110111"]
     m = AugmentedLP(acc, "100111", 1.0, printed_L, mode="masked_gain")
@@ -194,8 +194,8 @@ def test_best_guarantee_among_optima(acc, printed_L, runtime):
 
 
 def test_best_terminal_among_optima_and_inputs(acc, printed_L):
-    from eqrec.design.augmented import certify_augmented
-    from eqrec.design.augmented_guarantee import best_guarantee_among_optima
+    from eqrec.design.augmented.design import certify_augmented
+    from eqrec.studies.p2.guarantee import best_guarantee_among_optima
 
     r = best_guarantee_among_optima(acc, "100111", 1.0, printed_L, bound="terminal")
     cert = certify_augmented(acc, r.gains, ["100111"], 1.0, "theorem2")[1]

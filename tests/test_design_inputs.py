@@ -316,8 +316,8 @@ def test_monte_carlo_the_weighted_error_stays_within_the_bound(acc, method):
 def test_the_cli_writes_a_weighted_design_in_the_files_coordinates(tmp_path):
     import json
 
-    from eqrec.core.gains import schedule_from_word_gains
-    from eqrec.core.runtime import GuaranteedEstimator
+    from eqrec.bounds.gains import schedule_from_word_gains
+    from eqrec.estimators.guaranteed import GuaranteedEstimator
 
     out = tmp_path / "w.json"
     assert main(["design", str(ACC_FILE), "--words", ",".join(L1), "--state-weights", "1,2,0.5",
@@ -441,8 +441,8 @@ def test_help_explains_certified_terminal():
 
 
 def test_delay_classes_and_packet_are_public(acc):
-    from eqrec.core.estimator import Packet
-    from eqrec.design.delay import delay_classes
+    from eqrec.estimators.causal import Packet
+    from eqrec.design.delay.design import delay_classes
 
     assert eqrec.delay_classes is delay_classes and eqrec.Packet is Packet
     assert "delay_classes" in eqrec.__all__ and "Packet" in dir(eqrec)

@@ -3,13 +3,13 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from eqrec.design.prefix import design_prefix
-from eqrec.design.prefix_lp import build_prefix_lp
-from eqrec.design.time_based import design_time_based
+from eqrec.design.prefix.design import design_prefix
+from eqrec.design.prefix.tree_lp import build_prefix_lp
+from eqrec.design.prefix.time_based import design_time_based
 from eqrec.errors import InfeasibleDesign, InputError
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import prefixes
-from eqrec.core.stacking import Stacking
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import prefixes
+from eqrec.bounds.stacking import Stacking
 
 
 def paper_copy_per_word_optimum(system, words, mu1):
@@ -111,14 +111,14 @@ def test_optimum_is_a_lower_bound(acc, L1_words):
     d = design_prefix(acc, L1_words, 1.0)
     m = build_prefix_lp(acc, PrefixTree(L1_words), 1.0)
     m.lp.col_upper[m.mu2_col] = d.mu2 - 1e-5
-    from eqrec.core.solvers import solve_lp
+    from eqrec.lp.solvers import solve_lp
 
     assert solve_lp(m.lp, "highs").status == "infeasible"
 
 
 @pytest.mark.parametrize("method", ["prefix", "time"])
 def test_zero_offset_loses_no_optimality(acc, L1_words, method):
-    from eqrec.core.words import worst_case_word
+    from eqrec.arrivals.words import worst_case_word
 
     words = L1_words if method == "prefix" else [worst_case_word(L1_words)]
     free = design_prefix(acc, words, 1.0, zero_offset=False, engine="tree")
@@ -128,7 +128,7 @@ def test_zero_offset_loses_no_optimality(acc, L1_words, method):
 
 
 def test_time_varying_system_with_constant_data_matches_lti(acc, L1_words):
-    from eqrec.core.systems import AffineSystem
+    from eqrec.systems.affine import AffineSystem
 
     tv = AffineSystem(A=np.stack([acc.A] * 6), C=np.stack([acc.C] * 6), E=np.stack([acc.E] * 6),
                       eta_w=acc.eta_w, eta_v=acc.eta_v)
@@ -136,7 +136,7 @@ def test_time_varying_system_with_constant_data_matches_lti(acc, L1_words):
 
 
 def test_time_varying_system_is_certified(acc):
-    from eqrec.core.systems import AffineSystem
+    from eqrec.systems.affine import AffineSystem
 
     A = np.stack([acc.A * (1 + 0.02 * k) for k in range(5)])
     tv = AffineSystem(A=A, C=acc.C, E=acc.E, eta_w=acc.eta_w, eta_v=acc.eta_v)

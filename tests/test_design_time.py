@@ -1,6 +1,6 @@
 import pytest
 
-from eqrec.design.time_based import design_time_based
+from eqrec.design.prefix.time_based import design_time_based
 from eqrec.errors import InputError
 
 
@@ -19,7 +19,7 @@ def test_time_based_rejects_mixed_lengths(acc):
 
 def test_sweeps_refuse_an_unknown_method_naming_the_field(acc):
     """A misspelt method is an InputError (the project's bad-input error, exit 1 in the CLI), naming the field."""
-    from eqrec.design.sweeps import min_feasible_mu1
+    from eqrec.studies.searches import min_feasible_mu1
     from eqrec.errors import InputError
 
     with pytest.raises(InputError, match="unknown method 'prefx'") as info:

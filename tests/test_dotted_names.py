@@ -34,7 +34,7 @@ def _unresolved(text: str) -> set[str]:
 
 
 def test_the_finder_finds_a_stale_name():
-    assert _unresolved("see eqrec.augmented and eqrec.core.systems.AffineSystem") == {"eqrec.augmented"}
+    assert _unresolved("see eqrec.augmented and eqrec.systems.affine.AffineSystem") == {"eqrec.augmented"}
 
 
 @pytest.mark.parametrize("path", _texts(), ids=lambda p: str(p.relative_to(ROOT)))

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from eqrec.design.prefix import design_prefix
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InputError
-from eqrec.core.estimator import RecoveryEstimator
-from eqrec.core.simulate import simulate_run
+from eqrec.estimators.causal import RecoveryEstimator
+from eqrec.simulate.loop import simulate_run
 
 
 def test_runtime_estimator_follows_the_closed_loop_map(acc, L1_words, rng):
@@ -58,10 +58,10 @@ def test_horizon_over_without_periodic(acc, L1_words):
 
 def test_late_packet_uses_the_estimate_of_its_own_time(acc):
     """A late y(τ) enters as y(τ) - C x̂(τ); the certificate's maps assume exactly that."""
-    from eqrec.core.certify import closed_loop_maps
-    from eqrec.core.estimator import Packet, RecoveryEstimator
-    from eqrec.core.words import parse_delay_word
-    from eqrec.core.simulate import simulate_run
+    from eqrec.bounds.certify import closed_loop_maps
+    from eqrec.estimators.causal import Packet, RecoveryEstimator
+    from eqrec.arrivals.words import parse_delay_word
+    from eqrec.simulate.loop import simulate_run
 
     pats = [parse_delay_word(w) for w in ("0100", "0000", "2000")]
     d = design_prefix(acc, pats, 1.0)

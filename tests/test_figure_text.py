@@ -90,7 +90,7 @@ def text_heights(pdf: Path) -> tuple[float, list[tuple[float, str]]]:
 
 
 def _figure(tmp_path, fontsize: float, text: str) -> Path:
-    from eqrec.studies.outputs import save_figure
+    from eqrec.studies.pipeline.outputs import save_figure
     from eqrec.studies.plotting import paper_style, pyplot
 
     paper_style()

@@ -2,12 +2,12 @@
 import numpy as np
 import pytest
 
-from eqrec.core.words import parse_delay_word
-from eqrec.core.stacking import UncertaintyLayout
+from eqrec.arrivals.words import parse_delay_word
+from eqrec.bounds.stacking import UncertaintyLayout
 from eqrec.errors import InputError
-from eqrec.filters import (FILTERS, DelayUnawareKalman, GaussianDesign, TimestampedKalman, error_maps, make_filter,
-                           simulate_filter, truncated_normal_deltas)
-from eqrec.models import batch_reactor
+from eqrec.estimators.kalman import FILTERS, DelayUnawareKalman, GaussianDesign, TimestampedKalman, make_filter
+from eqrec.simulate.filter_runs import error_maps, simulate_filter, truncated_normal_deltas
+from eqrec.systems.examples import batch_reactor
 
 X0 = np.ones(4)
 
@@ -127,7 +127,7 @@ def test_bad_inputs(reactor):
 
 
 def test_compare_with_bounds(reactor):
-    from eqrec.filters import compare_with_bounds
+    from eqrec.simulate.filter_runs import compare_with_bounds
 
     mu1 = 0.33
     maps = error_maps(_make("unaware", reactor, mu1, 5, 2, X0), reactor, "21210", X0, mu1)

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from eqrec.core.certify import closed_loop_maps
-from eqrec.core.gains import GainSchedule, f_to_q, q_to_f, schedule_from_word_gains
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.stacking import Stacking
+from eqrec.bounds.certify import closed_loop_maps
+from eqrec.bounds.gains import GainSchedule, f_to_q, q_to_f, schedule_from_word_gains
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.bounds.stacking import Stacking
 
 
 def _random_lower(rng, T, n, p, word):
@@ -45,7 +45,7 @@ def test_inconsistent_prefix_gains_are_rejected(rng):
 
 
 def test_time_based_schedule_ignores_observed_prefix():
-    from eqrec.core.gains import GainRow
+    from eqrec.bounds.gains import GainRow
 
     rows = {"1": GainRow(np.ones((1, 1)), np.zeros(1)), "10": GainRow(np.ones((1, 2)), np.ones(1))}
     s = GainSchedule(rows=rows, n=1, p=1, time_based=True, designed=("10",))

@@ -13,10 +13,10 @@ import yaml
 from snakemake.iocontainers import Namedlist
 
 from eqrec.errors import InputError
-from eqrec.studies import harness, imports, logs, steps
-from eqrec.studies import outputs
+from eqrec.studies.pipeline import harness, imports, logs, steps
+from eqrec.studies.pipeline import outputs
 from eqrec import errors
-from eqrec.studies import configuration
+from eqrec.studies.pipeline import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 RULES = ROOT / "workflow" / "rules"
@@ -136,7 +136,7 @@ def test_a_step_cannot_write_a_timing_next_to_the_results(tmp_path):
 
 def test_code_inputs_follow_the_imports_of_each_step():
     designs, model4 = imports.code_inputs("p1", "designs"), imports.code_inputs("p4", "mc")
-    assert "src/eqrec/studies/p1.py" in designs and "src/eqrec/design/sweeps.py" in designs
+    assert "src/eqrec/studies/p1/steps.py" in designs and "src/eqrec/studies/searches.py" in designs
     assert not any("/lmv/" in p for p in designs)  # an LMV edit does not re-run the P1 LPs
     # P4 runs no LP; its plant comes from eqrec.lmv.plant (config_checks only validates, at planning); of the core
     # it reads only the shared system description, arrival model and packet forms (issue 24) and the input checks
@@ -144,13 +144,13 @@ def test_code_inputs_follow_the_imports_of_each_step():
     assert not any("/design/" in p for p in model4)
     assert {p for p in model4 if "/core/" in p} <= {f"src/eqrec/core/{m}.py" for m in (
         "__init__", "systems", "noise", "arrivals", "traces", "packets", "patterns", "words", "checks")}
-    assert "src/eqrec/lmv/plant.py" in model4 and "src/eqrec/studies/config_checks.py" not in model4
-    assert "src/eqrec/studies/config_checks.py" not in designs  # P1 steps do not import it
+    assert "src/eqrec/lmv/plant.py" in model4 and "src/eqrec/studies/pipeline/checks.py" not in model4
+    assert "src/eqrec/studies/pipeline/checks.py" not in designs  # P1 steps do not import it
     for files in (designs, model4):  # the harness that runs the step, not the registry of every study
-        assert "src/eqrec/studies/harness.py" in files and "src/eqrec/studies/steps.py" not in files
+        assert "src/eqrec/studies/pipeline/harness.py" in files and "src/eqrec/studies/pipeline/steps.py" not in files
     # a figure's step imports its figures module, not the study's LP modules
     fig = imports.code_inputs("p1", "figure1")
-    assert "src/eqrec/studies/p1_figures.py" in fig and "src/eqrec/studies/p1.py" not in fig
+    assert "src/eqrec/studies/p1/figures.py" in fig and "src/eqrec/studies/p1/steps.py" not in fig
     assert not any("/design/" in p for p in fig)
 
 
@@ -164,8 +164,8 @@ def test_step_modules_read_with_ast_are_those_of_the_registered_functions():
 
 def test_the_import_walker_sees_lazy_imports(tmp_path):
     src = tmp_path / "m.py"
-    src.write_text("import os\nfrom eqrec.core import lp\n\ndef f():\n    import eqrec.design.delay\n")
-    assert imports.eqrec_imports(src) == ["eqrec.core", "eqrec.core.lp", "eqrec.design.delay"]
+    src.write_text("import os\nfrom eqrec.core import lp\n\ndef f():\n    import eqrec.design.delay.design\n")
+    assert imports.eqrec_imports(src) == ["eqrec.core", "eqrec.core.lp", "eqrec.design.delay.design"]
 
 
 # --------------------------------------------------------------------------- atomic writers

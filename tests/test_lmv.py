@@ -14,8 +14,8 @@ from eqrec.lmv.model import check_ms_stable, hold_input_system, zero_input_syste
 from eqrec.lmv.plant import Plant
 from eqrec.lmv.recursion import filter_smoother, lmv_recursion, theorem1_as_printed
 from eqrec.lmv.steady import steady_state
-from eqrec.lmv.simulate import compare_moments, run_mc, simulate_plant
-from eqrec.studies.p4 import load_config, plant_of
+from eqrec.lmv.monte_carlo import compare_moments, run_mc, simulate_plant
+from eqrec.studies.p4.steps import load_config, plant_of
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = load_config(ROOT / "config" / "p4.yaml")

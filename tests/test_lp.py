@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from eqrec.errors import InfeasibleDesign
-from eqrec.core.lp import LPBuilder
-from eqrec.core.solvers import solve_lp
+from eqrec.lp.model import LPBuilder
+from eqrec.lp.solvers import solve_lp
 
 
 def small_lp(infeasible=False, unbounded=False):
@@ -68,7 +68,7 @@ def test_highs_drivers_agree_on_limits(highs_options, scipy_options, status):
 def test_highs_status_table():
     """Every HiGHS model status is in the table; the non-definitive ones in HiGHS's own words."""
     highspy = pytest.importorskip("highspy")
-    from eqrec.core.solvers import HIGHS_STATUS, highs_status
+    from eqrec.lp.solvers import HIGHS_STATUS, highs_status
 
     h = highspy.Highs()
     members = {int(getattr(highspy.HighsModelStatus, name)): getattr(highspy.HighsModelStatus, name)

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from eqrec.errors import InputError
-from eqrec.models import BATCH_REACTOR_C, batch_reactor, batch_reactor_matrices, discretisation_gaps, zoh
+from eqrec.systems.examples import BATCH_REACTOR_C, batch_reactor, batch_reactor_matrices, discretisation_gaps, zoh
 
 def test_zoh_discretisation_reproduces_the_printed_matrices_to_rounding(published):
     # printed in Section IV-A of the delayed-data paper (four decimals): claims P3-BR:A, P3-BR:B
@@ -15,7 +15,7 @@ def test_zoh_discretisation_reproduces_the_printed_matrices_to_rounding(publishe
 def test_zoh_is_the_matrix_exponential():
     import scipy.linalg as sla
 
-    from eqrec.models import BATCH_REACTOR_AC, BATCH_REACTOR_BC
+    from eqrec.systems.examples import BATCH_REACTOR_AC, BATCH_REACTOR_BC
 
     n, m = 4, 2
     M = np.zeros((n + m, n + m))

@@ -5,7 +5,7 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from eqrec.studies.notebook_html import markdown_maths, offline_html, tex_to_mathml
+from eqrec.studies.notebooks.html import markdown_maths, offline_html, tex_to_mathml
 
 ROOT = Path(__file__).resolve().parents[1]
 HTML = sorted((ROOT / "results" / "notebooks").glob("*.html"))

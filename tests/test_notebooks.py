@@ -11,9 +11,9 @@ import nbformat
 import pytest
 from snakemake.iocontainers import Namedlist
 
-from eqrec.studies import harness
-from eqrec.studies import outputs
-from eqrec.studies import notebooks as nbstudy
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import outputs
+from eqrec.studies.notebooks import execute as nbstudy
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.py"))

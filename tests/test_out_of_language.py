@@ -3,8 +3,8 @@ runtime estimators on time-varying systems (issue 24, sections 1 and 2)."""
 import numpy as np
 import pytest
 
-from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import design_delay_global
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.delay.design import design_delay_global
 from eqrec.errors import InputError
 
 LOSS = ["000", "300", "030", "003"]  # at most one loss per block of three

@@ -7,10 +7,10 @@ import pytest
 import yaml
 
 from eqrec.errors import InputError
-from eqrec.studies import harness
-from eqrec.studies import configuration
-from eqrec.studies.p2_readings import one_based_word, variant_word
-from eqrec.studies.p2_grids import constant_interval
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import configuration
+from eqrec.studies.p2.readings import one_based_word, variant_word
+from eqrec.studies.p2.grids import constant_interval
 
 
 def test_one_based_word():
@@ -148,7 +148,7 @@ def test_heatmap_merge_rejects_a_partial_or_repeated_grid(small_run, tmp_path):
 def test_figures(small_run, tmp_path):
     from pathlib import Path
 
-    from eqrec.studies.claims_file import published_value
+    from eqrec.studies.claims.published import published_value
 
     d, cfg, _ = small_run
     claims = Path(__file__).resolve().parents[1] / "config" / "claims.yaml"

@@ -3,12 +3,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.core.lp import LPSolution
-from eqrec.design import sweeps
-from eqrec.design.augmented_lp import AugmentedLP
-from eqrec.design.sweeps import fixed_L_sweep, observer_for
-from eqrec.studies.p2_readings import heatmap_poles
-from eqrec.studies.p2_values import CLASSES, class_counts
+from eqrec.lp.model import LPSolution
+from eqrec.design.augmented.word_lp import AugmentedLP
+from eqrec.studies.searches import fixed_L_sweep, observer_for
+from eqrec.studies.p2.readings import heatmap_poles
+from eqrec.studies.p2.values import CLASSES, class_counts
 
 
 def test_r0_gets_an_exact_nilpotent_L(acc):
@@ -67,7 +66,7 @@ def test_class_counts_add_up_and_reject_unknown_statuses():
 
 def test_chunks_partition_the_grid_and_the_merge_checks_coverage():
     from eqrec.errors import InputError
-    from eqrec.studies.chunks import check_coverage, chunk_indices
+    from eqrec.studies.pipeline.chunks import check_coverage, chunk_indices
 
     for num, chunks in ((31, 1), (31, 4), (5, 5)):
         parts = [chunk_indices(num, chunks, k) for k in range(chunks)]

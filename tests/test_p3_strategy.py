@@ -2,7 +2,7 @@
 
 The switching estimator's logic, periodic reuse on long runs (inside the
 guarantees, late packets across a period boundary read as missing), and the
-steps of :mod:`eqrec.studies.p3_strategy` run as the pipeline runs them.
+steps of :mod:`eqrec.studies.p3.strategy` run as the pipeline runs them.
 """
 
 import json
@@ -11,19 +11,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from eqrec.core.certify import closed_loop_maps
-from eqrec.core.estimator import Packet, RecoveryEstimator
-from eqrec.core.switching import SwitchingEstimator
-from eqrec.core.words import full_delay_language, parse_delay_word
-from eqrec.core.arrivals import NEVER, ArrivalTrace
-from eqrec.core.long_runs import long_run_periodic, long_run_switching, periodic_model_gap
-from eqrec.design.delay import design_delay, design_lp_status
+from eqrec.bounds.certify import closed_loop_maps
+from eqrec.estimators.causal import Packet, RecoveryEstimator
+from eqrec.estimators.switching import SwitchingEstimator
+from eqrec.arrivals.words import full_delay_language, parse_delay_word
+from eqrec.arrivals.draws import NEVER, ArrivalTrace
+from eqrec.simulate.long_runs import long_run_periodic, long_run_switching, periodic_model_gap
+from eqrec.design.delay.design import design_delay, design_lp_status
 from eqrec.design.report import path_levels
-from eqrec.design.scale_sweep import run_size
+from eqrec.studies.p3.size_run import run_size
 from eqrec.errors import InputError
-from eqrec.models import batch_reactor
-from eqrec.studies import harness, p3_strategy
-from eqrec.studies import outputs
+from eqrec.systems.examples import batch_reactor
+from eqrec.studies.pipeline import harness
+from eqrec.studies.p3 import strategy as p3_strategy
+from eqrec.studies.pipeline import outputs
 from eqrec import errors
 
 MU1_SWITCH = 0.36  # the smallest period-1 level of the batch reactor (0.3553), rounded up

@@ -8,18 +8,19 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.core.patterns import event_indices, event_matrix, gain_zero_pattern
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import full_delay_language, parse_delay_word
-from eqrec.design.delay import delay_language, design_delay
-from eqrec.design.prefix import design_prefix
+from eqrec.arrivals.patterns import event_indices, event_matrix, gain_zero_pattern
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import full_delay_language, parse_delay_word
+from eqrec.design.delay.design import delay_language, design_delay
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InputError
-from eqrec.filters import GaussianDesign, error_maps, make_filter, simulate_filter
-from eqrec.models import batch_reactor
-from eqrec.studies import harness
-from eqrec.studies import configuration
-from eqrec.studies.p3 import language_counts, language_examples
-from eqrec.studies.p3_values import _compare_bounds
+from eqrec.estimators.kalman import GaussianDesign, make_filter
+from eqrec.simulate.filter_runs import error_maps, simulate_filter
+from eqrec.systems.examples import batch_reactor
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import configuration
+from eqrec.studies.p3.steps import language_counts, language_examples
+from eqrec.studies.p3.values import _compare_bounds
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -99,7 +100,7 @@ def test_zero_pattern_matches_the_designed_gains():
 # --------------------------------------------------------------------------- ACC: the same problem as P1
 
 def test_acc_delay_design_equals_p1_prefix_optimum(cfg):
-    from eqrec.core.acc import acc_system
+    from eqrec.systems.examples import acc_system
 
     acc = acc_system()
     words = cfg["acc"]["language"]

@@ -1,7 +1,7 @@
 """P4 counts are tie-robust: equal variances (eta_bar = 1, both compensations the same filter) count as ties."""
 import numpy as np
 
-from eqrec.studies.p4_values import TIE_RTOL, _better, _ranking
+from eqrec.studies.p4.values import TIE_RTOL, _better, _ranking
 
 
 def test_last_digit_differences_are_ties():

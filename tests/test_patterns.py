@@ -1,8 +1,8 @@
 import pytest
 
 from eqrec.errors import InputError
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import extend_word, prefixes, validate_language, worst_case_word
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import extend_word, prefixes, validate_language, worst_case_word
 
 
 def test_worst_case_word_examples_of_the_papers(L1_words):
@@ -49,8 +49,8 @@ def test_helpers():
 
 # --- arrival patterns: delay words, events (delayed-data paper, Sec. III-A) ---------------------
 
-from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.words import as_language, full_delay_language, parse_delay_word, worst_case_pattern
+from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.arrivals.words import as_language, full_delay_language, parse_delay_word, worst_case_pattern
 
 
 def test_example_1_and_3_event_sequences_and_reduction():

@@ -1,6 +1,6 @@
 import numpy as np
 
-from eqrec.studies.outputs import save_figure
+from eqrec.studies.pipeline.outputs import save_figure
 from eqrec.studies.plotting import guarantee_bars, paper_style, trajectory_panel
 
 

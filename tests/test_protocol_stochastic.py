@@ -1,13 +1,13 @@
-"""One system description, the stochastic estimators in step form (the protocol of eqrec.core.protocol), and the
+"""One system description, the stochastic estimators in step form (the protocol of eqrec.estimators.protocol), and the
 one simulation loop running them."""
 
 import numpy as np
 import pytest
 
-from eqrec.core.noise import GaussianDesign, GaussianNoise, MultiplicativeNoise, NoisySystem
-from eqrec.core.systems import AffineSystem
+from eqrec.systems.noise import GaussianDesign, GaussianNoise, MultiplicativeNoise, NoisySystem
+from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
-from eqrec.filters import kalman
+from eqrec.estimators import kalman
 from eqrec.lmv.plant import Plant
 
 EX1 = {"Phi": [[0.8, 0.0], [0.9, 0.2]], "Phi1": [[0.1, 0.05], [0.2, 0.1]], "Gamma": [1.0, 0.5],
@@ -81,11 +81,12 @@ def test_descriptions_must_fit_the_system(acc):
 
 # ---------------------------------------------------------------------------- Kalman-type filters in step form
 
-from eqrec.core.arrivals import NEVER, ArrivalTrace  # noqa: E402
-from eqrec.core.protocol import Estimator  # noqa: E402
-from eqrec.core.simulate import closed_loop  # noqa: E402
-from eqrec.filters import error_maps, make_filter  # noqa: E402
-from eqrec.lmv.simulate import compare_moments  # noqa: E402
+from eqrec.arrivals.draws import NEVER, ArrivalTrace  # noqa: E402
+from eqrec.estimators.protocol import Estimator  # noqa: E402
+from eqrec.simulate.loop import closed_loop  # noqa: E402
+from eqrec.simulate.filter_runs import error_maps  # noqa: E402
+from eqrec.estimators.kalman import make_filter
+from eqrec.lmv.monte_carlo import compare_moments  # noqa: E402
 
 DELAYED = [0, 1, 2, 0, NEVER, 1, 0, 0, 2, NEVER, 0, 1]
 MISSING = [0, NEVER, 0, 0, NEVER, NEVER, 0, 0, 0, NEVER, 0, 0]
@@ -239,11 +240,11 @@ def test_a_second_packet_of_one_stamp_is_refused_by_the_timestamped_filter(acc):
 
 # ---------------------------------------------------------------------------- P4's LMV filter and predictor in step form
 
-from eqrec.core.arrivals import bernoulli_trace  # noqa: E402
+from eqrec.arrivals.draws import bernoulli_trace  # noqa: E402
 from eqrec.lmv.estimator import LMVEstimator, apply_estimator  # noqa: E402
 from eqrec.lmv.model import system_of  # noqa: E402
 from eqrec.lmv.recursion import filter_smoother, lmv_recursion  # noqa: E402
-from eqrec.lmv.simulate import simulate_plant  # noqa: E402
+from eqrec.lmv.monte_carlo import simulate_plant  # noqa: E402
 
 
 @pytest.fixture(scope="module")

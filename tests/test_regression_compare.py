@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from eqrec.studies import configuration, harness
+from eqrec.studies.pipeline import configuration, harness
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "compare"

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from eqrec.design.prefix import design_prefix
-from eqrec.design.sweeps import min_feasible_mu1
+from eqrec.design.prefix.design import design_prefix
+from eqrec.studies.searches import min_feasible_mu1
 from eqrec.errors import InfeasibleDesign
-from eqrec.design.time_based import design_time_based
-from eqrec.studies import harness
-from eqrec.studies import configuration
-from eqrec.studies import p1 as p1_study
+from eqrec.design.prefix.time_based import design_time_based
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import configuration
+from eqrec.studies.p1 import steps as p1_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p1"

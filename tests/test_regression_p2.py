@@ -12,11 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.core.acc import acc_system
-from eqrec.design.augmented import design_augmented
-from eqrec.design.time_based import design_time_based
-from eqrec.studies import harness
-from eqrec.studies import configuration
+from eqrec.systems.examples import acc_system
+from eqrec.design.augmented.design import design_augmented
+from eqrec.design.prefix.time_based import design_time_based
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p2"

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from eqrec.core.acc import acc_system
-from eqrec.design.delay import delay_language, design_delay
+from eqrec.systems.examples import acc_system
+from eqrec.design.delay.design import delay_language, design_delay
 from eqrec.errors import InfeasibleDesign
-from eqrec.studies import harness
-from eqrec.studies import configuration
-from eqrec.studies import p3 as p3_study
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import configuration
+from eqrec.studies.p3 import steps as p3_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p3"

@@ -11,9 +11,9 @@ import pytest
 
 from eqrec.lmv.model import hold_input_system, zero_input_system
 from eqrec.lmv.steady import steady_state
-from eqrec.studies import harness
-from eqrec.studies import configuration
-from eqrec.studies import p4 as lmv_study
+from eqrec.studies.pipeline import harness
+from eqrec.studies.pipeline import configuration
+from eqrec.studies.p4 import steps as lmv_study
 
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p4"

@@ -25,7 +25,7 @@ def test_readme_says_how_to_recover_from_a_stale_lock():
 def test_config_readme_names_every_section_and_top_level_key():
     import yaml
 
-    from eqrec.studies.configuration import SECTIONS
+    from eqrec.studies.pipeline.configuration import SECTIONS
 
     text = (ROOT / "config" / "README.md").read_text()
     assert {"p1", "p2", "p3", "p4", "compare"} <= set(SECTIONS)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from eqrec.core.lp import LPBuilder
-from eqrec.core.solvers import solve_lp
-from eqrec.core.robust import UncertainAffineRows, add_robust_rows, worst_case_abs, worst_case_vertex
+from eqrec.lp.model import LPBuilder
+from eqrec.lp.solvers import solve_lp
+from eqrec.lp.robust import UncertainAffineRows, add_robust_rows, worst_case_abs, worst_case_vertex
 
 
 def test_worst_case_matches_vertex_enumeration(rng):

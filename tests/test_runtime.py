@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from eqrec.core.systems import AffineSystem
-from eqrec.design.delay import delay_language, design_delay, design_delay_global
-from eqrec.design.prefix import design_prefix
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.delay.design import delay_language, design_delay, design_delay_global
+from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InputError
-from eqrec.models import batch_reactor
+from eqrec.systems.examples import batch_reactor
 
 LOSS_LANGUAGE = ["000", "300", "030", "003"]  # delay words: at most one of three packets lost (3 = beyond T)
 
@@ -57,7 +57,7 @@ def test_bounds_are_the_class_levels_and_mu1_at_period_ends(plant):
 
 def test_same_estimates_as_the_node_gain_estimator(plant):
     """Class form (class gains) and the recursive form (node gains, tree engine) give the same x̂ on one run."""
-    from eqrec.core.estimator import RecoveryEstimator
+    from eqrec.estimators.causal import RecoveryEstimator
 
     design = design_delay(plant, LOSS_LANGUAGE, 1.5, cost="sum")
     est = design.estimator(periodic=False).reset(np.ones(2))
@@ -136,8 +136,8 @@ def test_statespace_checks():
         system_from_statespace(control.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]]), eta_w=0.1, eta_v=0.1)
     with pytest.raises(InputError, match="D must be zero"):
         system_from_statespace(control.ss([[0.5]], [[1.0]], [[1.0]], [[1.0]], True), eta_w=0.1, eta_v=0.1)
-    from eqrec.design.time_based import design_time_based
-    from eqrec.core.acc import acc_system
+    from eqrec.design.prefix.time_based import design_time_based
+    from eqrec.systems.examples import acc_system
 
     with pytest.raises(InputError, match="class-engine design"):
         estimator_iosys(design_time_based(acc_system(), ["101111"], 1.0, engine="tree"))

@@ -12,11 +12,12 @@ from pathlib import Path
 
 import pytest
 
-from eqrec.design.scale_sweep import FIELDS, class_count, measure_size, run_size
-from eqrec.models import batch_reactor
-from eqrec.studies import harness, p3_scale
-from eqrec.studies import outputs
-from eqrec.studies import configuration
+from eqrec.studies.p3.size_run import FIELDS, class_count, measure_size, run_size
+from eqrec.systems.examples import batch_reactor
+from eqrec.studies.pipeline import harness
+from eqrec.studies.p3 import scale_table as p3_scale
+from eqrec.studies.pipeline import outputs
+from eqrec.studies.pipeline import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -111,7 +112,7 @@ def test_class_engine_in_a_fresh_process_never_enumerates(reactor):
 def test_worker_cli_engine_flag(reactor):
     args = {"system": reactor.to_dict(), "T": 3, "tau": 1, "method": "simplex", "mu1": 0.5, "time_limit": 60,
             "mem_limit_gb": 0, "builder": "core", "options": {}}
-    out = subprocess.run([sys.executable, "-m", "eqrec.design.scale_sweep", json.dumps(args), "--engine", "classes"],
+    out = subprocess.run([sys.executable, "-m", "eqrec.studies.p3.size_run", json.dumps(args), "--engine", "classes"],
                          capture_output=True, text=True, timeout=120)
     row = json.loads([ln for ln in out.stdout.splitlines() if ln.startswith("{")][-1])
     assert row["engine"] == "classes" and row["classes"] == class_count(3, 1) == 6 and row["status"] == "optimal"

@@ -1,8 +1,8 @@
 import numpy as np
 
-from eqrec.design.prefix import design_prefix
-from eqrec.core.simulate import monte_carlo, sample_uncertainty
-from eqrec.core.stacking import UncertaintyLayout
+from eqrec.design.prefix.design import design_prefix
+from eqrec.simulate.loop import monte_carlo, sample_uncertainty
+from eqrec.bounds.stacking import UncertaintyLayout
 
 
 def test_samples_stay_in_the_box(rng):
@@ -32,9 +32,9 @@ def _acc_run_data(acc, rng, N):
 def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, rng):
     """The same design run as GuaranteedEstimator (reset/step -> (x̂, bound)) and as the raw RecoveryEstimator
     (step -> x̂): the one loop gives the same estimates, and the bounds the protocol estimator returns hold."""
-    from eqrec.core.arrivals import uniform_words, ArrivalTrace
-    from eqrec.core.estimator import make_estimator
-    from eqrec.core.simulate import closed_loop
+    from eqrec.arrivals.draws import uniform_words, ArrivalTrace
+    from eqrec.estimators.causal import make_estimator
+    from eqrec.simulate.loop import closed_loop
 
     d = design_prefix(acc, L1_words, 1.0)
     words = uniform_words(rng, L1_words, size=5)
@@ -53,8 +53,8 @@ def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, r
 
 
 def test_what_arrived_is_the_protocol_form():
-    from eqrec.core.estimator import Packet
-    from eqrec.core.simulate import what_arrived
+    from eqrec.estimators.causal import Packet
+    from eqrec.simulate.loop import what_arrived
 
     y = np.arange(8.0).reshape(4, 2)
     assert what_arrived([], 2, y) is None
@@ -66,7 +66,7 @@ def test_what_arrived_is_the_protocol_form():
 
 def test_closed_loop_refuses_short_or_non_finite_noise(acc, rng):
     import pytest
-    from eqrec.core.simulate import closed_loop
+    from eqrec.simulate.loop import closed_loop
     from eqrec.errors import InputError
 
     class Never:  # fails the test if the loop steps it
@@ -88,7 +88,7 @@ def test_closed_loop_refuses_short_or_non_finite_noise(acc, rng):
 
 def test_closed_loop_refuses_a_bad_initial_state(acc, rng):
     import pytest
-    from eqrec.core.simulate import closed_loop
+    from eqrec.simulate.loop import closed_loop
     from eqrec.errors import InputError
 
     w, v, x0, xi0 = _acc_run_data(acc, rng, 2)

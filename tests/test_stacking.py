@@ -1,6 +1,6 @@
 import numpy as np
 
-from eqrec.core.stacking import Stacking
+from eqrec.bounds.stacking import Stacking
 
 
 def test_open_loop_equals_paper_stacked_form(acc):
@@ -22,7 +22,7 @@ def test_output_maps_include_measurement_noise(acc):
 
 def test_layout_roundtrip():
     st_lay = Stacking.__new__(Stacking)
-    from eqrec.core.stacking import UncertaintyLayout
+    from eqrec.bounds.stacking import UncertaintyLayout
 
     lay = UncertaintyLayout(T=3, nw=1, nv=2, n=3)
     d = np.arange(lay.size, dtype=float)

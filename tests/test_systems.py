@@ -3,9 +3,9 @@ import pytest
 import scipy.linalg as sla
 
 from eqrec.errors import InputError
-from eqrec.core.acc import ACC_CONSTANTS, acc_system
-from eqrec.core.system_files import load_system, system_from_mapping
-from eqrec.core.systems import AffineSystem
+from eqrec.systems.examples import ACC_CONSTANTS, acc_system
+from eqrec.systems.files import load_system, system_from_mapping
+from eqrec.systems.affine import AffineSystem
 
 
 def test_acc_matches_exact_zoh_of_continuous_model():

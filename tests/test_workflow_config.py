@@ -13,8 +13,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.studies import harness, imports
-from eqrec.studies import configuration
+from eqrec.studies.pipeline import harness, imports
+from eqrec.studies.pipeline import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -154,7 +154,7 @@ def test_sweep_merge_checks_the_grid(tmp_path):
     for k, f in enumerate(files):
         harness.run_step("p4", "sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
     from eqrec.errors import InputError
-    from eqrec.studies.chunks import merge_npz as merge_chunks
+    from eqrec.studies.pipeline.chunks import merge_npz as merge_chunks
 
     with pytest.raises(InputError, match="exactly once"):
         merge_chunks(files[:1], 4, tmp_path / "m.npz")

@@ -11,7 +11,7 @@ import pytest
 from snakemake.api import SnakemakeApi
 from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings
 
-from eqrec.studies import configuration, harness, imports
+from eqrec.studies.pipeline import configuration, harness, imports
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,14 +74,14 @@ def test_figure_rules_do_not_list_the_design_modules_as_code(default_rules):
         p, inputs = default_rules[rule]
         assert imports.step_module(p["study"], p["step"]).endswith("_figures"), rule
         code = [f for f in inputs if f.startswith("src/")]
-        assert "src/eqrec/studies/plotting.py" in code and "src/eqrec/studies/harness.py" in code, rule
+        assert "src/eqrec/studies/plotting.py" in code and "src/eqrec/studies/pipeline/harness.py" in code, rule
         assert not any(f.startswith(("src/eqrec/design/", "src/eqrec/core/", "src/eqrec/lmv/")) for f in code), rule
     # and an edit to a figures module does not re-run the LPs: their rules do not list it
     assert not any(f.endswith("_figures.py") for rule in ("p1_designs", "p2_designs", "p3_acc", "p3_reactor_designs")
                    for f in default_rules[rule][1])
     # the LP steps do list the design modules, and no P4 rule lists them
-    assert "src/eqrec/design/classes.py" in default_rules["p3_strategy"][1]
-    assert "src/eqrec/design/prefix.py" in default_rules["p1_designs"][1]
+    assert "src/eqrec/design/classes/engine.py" in default_rules["p3_strategy"][1]
+    assert "src/eqrec/design/prefix/design.py" in default_rules["p1_designs"][1]
     for rule, (p, inputs) in default_rules.items():
         if p.get("study") == "p4":
             assert not any("/design/" in f for f in inputs), rule

@@ -39,8 +39,11 @@ Errors
     :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
     :class:`SolverFailure`, :class:`CertificationFailure`
 
-The layers (:mod:`eqrec.core`, :mod:`eqrec.design`, :mod:`eqrec.filters`,
-:mod:`eqrec.lmv`, :mod:`eqrec.studies`) are importable as usual.  The names
+The rooms, from the bottom layer up (each imports only from the rooms below it):
+:mod:`eqrec.systems`, :mod:`eqrec.arrivals`, :mod:`eqrec.lp`, :mod:`eqrec.bounds` (the
+bounded-error mathematics), :mod:`eqrec.estimators`, :mod:`eqrec.simulate`, :mod:`eqrec.lmv`,
+:mod:`eqrec.design` (one subpackage per engine), :mod:`eqrec.interop`, :mod:`eqrec.compare`,
+:mod:`eqrec.studies` (one folder per paper).  They are importable as usual.  The names
 above load on first use (PEP 562), so ``import eqrec`` itself imports no
 solver.
 """
@@ -55,35 +58,35 @@ __version__ = "0.1.0"
 #: Public name -> the module that defines it.
 _PUBLIC: dict[str, str] = {
     # systems
-    "AffineSystem": "eqrec.core.systems",
-    "acc_system": "eqrec.core.acc",
-    "load_system": "eqrec.core.system_files",
-    "batch_reactor": "eqrec.models",
+    "AffineSystem": "eqrec.systems.affine",
+    "acc_system": "eqrec.systems.examples",
+    "load_system": "eqrec.systems.files",
+    "batch_reactor": "eqrec.systems.examples",
     # arrival patterns
     "missing_words": "eqrec.design.inputs",
     "delay_words": "eqrec.design.inputs",
-    "as_language": "eqrec.core.words",
-    "validate_language": "eqrec.core.words",
-    "parse_delay_word": "eqrec.core.words",
-    "full_delay_language": "eqrec.core.words",
-    "delay_classes": "eqrec.design.delay",
-    "PrefixTree": "eqrec.core.prefix_tree",
+    "as_language": "eqrec.arrivals.words",
+    "validate_language": "eqrec.arrivals.words",
+    "parse_delay_word": "eqrec.arrivals.words",
+    "full_delay_language": "eqrec.arrivals.words",
+    "delay_classes": "eqrec.design.delay.design",
+    "PrefixTree": "eqrec.arrivals.prefix_tree",
     # designs
     "Design": "eqrec.design.result",
-    "design_time_based": "eqrec.design.time_based",
-    "design_prefix": "eqrec.design.prefix",
-    "design_delay": "eqrec.design.delay",
-    "design_delay_global": "eqrec.design.delay",
-    "design_augmented": "eqrec.design.augmented",
+    "design_time_based": "eqrec.design.prefix.time_based",
+    "design_prefix": "eqrec.design.prefix.design",
+    "design_delay": "eqrec.design.delay.design",
+    "design_delay_global": "eqrec.design.delay.design",
+    "design_augmented": "eqrec.design.augmented.design",
     "min_recovery_level": "eqrec.design.mu1_min",
     # certificates
-    "certify_schedule": "eqrec.core.certify",
+    "certify_schedule": "eqrec.bounds.certify",
     # estimators and simulation
-    "GuaranteedEstimator": "eqrec.core.runtime",
-    "Packet": "eqrec.core.packets",
-    "ClassEstimator": "eqrec.core.estimator",
-    "simulate_run": "eqrec.core.simulate",
-    "monte_carlo": "eqrec.core.simulate",
+    "GuaranteedEstimator": "eqrec.estimators.guaranteed",
+    "Packet": "eqrec.estimators.packets",
+    "ClassEstimator": "eqrec.estimators.causal",
+    "simulate_run": "eqrec.simulate.loop",
+    "monte_carlo": "eqrec.simulate.loop",
     # errors
     "EqrecError": "eqrec.errors",
     "InputError": "eqrec.errors",

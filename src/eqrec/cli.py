@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from eqrec.core.solvers import SOLVER_NAMES
+from eqrec.lp.solvers import SOLVER_NAMES
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
@@ -125,7 +125,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def _parallel(args: argparse.Namespace) -> dict:
     """``--jobs`` and ``--scheduler`` as the design functions' ``n_jobs`` and ``scheduler`` (checked)."""
-    from eqrec.core.parallel import check_jobs, check_scheduler
+    from eqrec.lp.parallel import check_jobs, check_scheduler
 
     par = {"n_jobs": args.jobs, "scheduler": args.scheduler}
     for flag, key, check in (("--jobs", "n_jobs", check_jobs), ("--scheduler", "scheduler", check_scheduler)):
@@ -161,10 +161,10 @@ def _parse_weights(text: str | None, n: int) -> np.ndarray | None:
 
 def run_design(args: argparse.Namespace) -> dict:
     """Design, certify and describe one estimator (the ``design`` subcommand)."""
-    from eqrec.design.prefix import design_prefix
-    from eqrec.design.time_based import design_time_based
-    from eqrec.core.words import validate_language
-    from eqrec.core.system_files import load_system
+    from eqrec.design.prefix.design import design_prefix
+    from eqrec.design.prefix.time_based import design_time_based
+    from eqrec.arrivals.words import validate_language
+    from eqrec.systems.files import load_system
 
     system, T_file = load_system(args.system)
     mu1 = _parse_mu1(args.mu1, allow_free=args.method in FREE_METHODS)
@@ -202,7 +202,7 @@ def run_design(args: argparse.Namespace) -> dict:
         design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
     else:
         try:
-            from eqrec.design.augmented import design_augmented
+            from eqrec.design.augmented.design import design_augmented
         except ImportError:  # pragma: no cover - depends on the P2 module being present
             raise InputError("the augmented design is not available in this installation",
                              "command line", "--method") from None
@@ -268,9 +268,9 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     """The delayed-data design (``--method delay``): Theorem 1 / Proposition 1 of the delayed-data paper."""
     from decimal import Decimal
 
-    from eqrec.core.classes import ClassSet, full_language_counts
-    from eqrec.core.words import as_language
-    from eqrec.design.delay import delay_classes, delay_language, design_delay, design_delay_global
+    from eqrec.bounds.data_classes import ClassSet, full_language_counts
+    from eqrec.arrivals.words import as_language
+    from eqrec.design.delay.design import delay_classes, delay_language, design_delay, design_delay_global
     from eqrec.design.report import JSON_NODE_GAINS_LIMIT, original_coordinates, to_json
 
     if args.words is not None:

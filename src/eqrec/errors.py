@@ -84,7 +84,7 @@ class CertificationFailure(EqrecError):
     """Recovered gains do not achieve what the optimiser reported.
 
     Raised by the independent certification
-    (:func:`eqrec.core.certify.certify_design`) when the exact worst case of
+    (:func:`eqrec.bounds.certify.certify_design`) when the exact worst case of
     the recovered gains exceeds the optimised ``μ2`` (or ``μ1`` at a
     pattern's end) by more than the tolerance; exit status 4 on the command
     line.

@@ -1,4 +1,4 @@
-"""Atomic file writing, shared by the workflow's steps (:mod:`eqrec.studies.harness`) and the CLI.
+"""Atomic file writing, shared by the workflow's steps (:mod:`eqrec.studies.pipeline.harness`) and the CLI.
 
 A file is written to a temporary file in its own folder and moved onto its
 name with :func:`os.replace`, so a reader never sees half a file and a failed

@@ -1,6 +1,6 @@
 # Shared by the rules files. Every rule is thin: it runs the one generic
 # script, workflow/scripts/run_step.py, which calls
-# eqrec.studies.harness.run_from_snakemake; the rule's params name the step
+# eqrec.studies.pipeline.harness.run_from_snakemake; the rule's params name the step
 # (study, step) and carry cfg, the configuration keys that step reads (no
 # more), as Snakemake resolved them (config files, --configfile, --config;
 # validated by the Snakefile), nested as in the study's section. A changed
@@ -10,13 +10,13 @@
 #
 # Each rule lists as `code` inputs the package modules its step imports,
 # transitively (the module defining the step function, found in the step
-# registry's tables, and what it imports; eqrec.studies.imports reads them
+# registry's tables, and what it imports; eqrec.studies.pipeline.imports reads them
 # with ast), so editing code a step does not import (the LP modules for a
 # figure, eqrec/lmv for P1) does not re-run its job. No mathematics here.
 from functools import partial
 
-from eqrec.studies.configuration import step_params
-from eqrec.studies.imports import code_inputs
+from eqrec.studies.pipeline.configuration import step_params
+from eqrec.studies.pipeline.imports import code_inputs
 
 # A rule's cfg param: step_config("p3", "strategy.figure", ...), the keys its
 # step reads of config["p3"] ("mu1", "heatmap.solver", or a whole subtree).
@@ -26,12 +26,12 @@ step_config = partial(step_params, config)
 # numbers live), for rules that evaluate the paper's own design or draw a published
 # value for comparison (P2: the printed gain L, the Fig. 3b interval). As a param,
 # the rule reruns when that value changes, not on other edits of claims.yaml.
-from eqrec.studies.claims_file import published_value
+from eqrec.studies.claims.published import published_value
 
 CLAIMS_FILE = "config/claims.yaml"
 
 # The timings file (under results/timings/) a step writes beside each results file.
-from eqrec.studies.outputs import timings_of
+from eqrec.studies.pipeline.outputs import timings_of
 
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"

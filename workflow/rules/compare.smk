@@ -2,7 +2,7 @@
 # engine and prefix designs with strict=False, time-stamped and delay-unaware
 # Kalman, LMV zero-/hold-input) on the same plant, packet traces, noise and
 # initial errors. One job per (system, setting) of config/compare.yaml runs
-# eqrec.compare through eqrec.studies.compare (harness, common.smk); the table
+# eqrec.compare through eqrec.studies.compare.steps (harness, common.smk); the table
 # step merges the jobs' tables, checking that they cover the configured pairs.
 COMPARE_SYSTEMS = list(config["compare"]["systems"])
 COMPARE_SETTINGS = list(config["compare"]["settings"])

@@ -1,12 +1,12 @@
 # The notebooks (notebooks/<name>.py, jupytext) executed against results/:
 # results/notebooks/<name>.ipynb with outputs and figures embedded (readable on
 # GitHub without running anything) and its HTML rendering (in the report).
-# Each runs after the result files it reads (eqrec.studies.notebooks.READS;
+# Each runs after the result files it reads (eqrec.studies.notebooks.execute.READS;
 # rule_inputs gives the notebook's source and those files); the step
-# eqrec.studies.notebooks.execute writes byte-identical files for unchanged
+# eqrec.studies.notebooks.execute.execute writes byte-identical files for unchanged
 # inputs.
-from eqrec.studies.notebooks import READS as NOTEBOOK_READS
-from eqrec.studies.notebooks import rule_inputs as notebook_inputs
+from eqrec.studies.notebooks.execute import READS as NOTEBOOK_READS
+from eqrec.studies.notebooks.execute import rule_inputs as notebook_inputs
 
 NOTEBOOKS = sorted(NOTEBOOK_READS)
 

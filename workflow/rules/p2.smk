@@ -1,5 +1,5 @@
 # P2: state-augmented estimator (Hassaan, Shen, Yong, ACC 2019).
-# Each rule runs one step of eqrec.studies.p2 through the harness (common.smk).
+# Each rule runs one step of eqrec.studies.p2.steps through the harness (common.smk).
 # The heat-map chunks come from the resolved configuration (p2.heatmap.chunks,
 # p2.heatmap.variants); the merge checks that they cover the grid exactly once.
 VALUES_FILES.append("results/p2/values.json")

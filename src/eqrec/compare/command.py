@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> str:
 
     from eqrec.compare.families import CompareSetup, compare_families, write_table
     from eqrec.compare.figure import compare_figure
-    from eqrec.core.system_files import load_system
+    from eqrec.systems.files import load_system
 
     out = _out_dir(args.out)
     setup = CompareSetup(loss=args.loss, max_delay=args.max_delay, horizon=args.horizon, runs=args.runs,

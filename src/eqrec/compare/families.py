@@ -2,28 +2,28 @@ r"""Every estimator family on the same plant and the same packet traces (``eqrec
 
 No paper of the project puts bounded-error estimators, Kalman-type filters
 and LMV filters side by side; this module does, on one plant
-(:class:`~eqrec.core.systems.AffineSystem`: its box for the guaranteed
+(:class:`~eqrec.systems.affine.AffineSystem`: its box for the guaranteed
 designs, Gaussian statistics for the others) and, run by run, on one arrival
 trace, one noise realisation and one initial error shared by every family:
 
 ``guaranteed, class engine``
     The delayed-data paper's estimator for the full language ``{0..D}^T``
-    (:func:`eqrec.design.delay.design_delay_global`, ``μ1`` free), run with
-    ``strict=False`` (:mod:`eqrec.core.runtime`): a true bound also when
+    (:func:`eqrec.design.delay.design.design_delay_global`, ``μ1`` free), run with
+    ``strict=False`` (:mod:`eqrec.estimators.guaranteed`): a true bound also when
     the traces leave the language.
 ``guaranteed, prefix (P1)``
     The prefix-based paper's estimator for "at most one of ``T`` measurements
     lost" (missing-data words, ``μ1`` free), ``strict=False``; a late packet
     counts as lost (its language has no delays).
 ``Kalman, time-stamped`` and ``Kalman, delay-unaware``
-    :mod:`eqrec.filters.kalman`, designed from the Gaussian statistics.
+    :mod:`eqrec.estimators.kalman`, designed from the Gaussian statistics.
 ``LMV, zero-input`` and ``LMV, hold-input``
     The companion study's LMV one-step predictor (:mod:`eqrec.lmv.estimator`)
     for Bernoulli arrivals of rate ``η̄`` = the probability that a packet
     arrives on time; a late packet counts as lost.
 
 Every estimator reports the one-step prediction ``x̂(t+1)`` after the data of
-time ``t`` (the protocol of :mod:`eqrec.core.protocol`), so the errors
+time ``t`` (the protocol of :mod:`eqrec.estimators.protocol`), so the errors
 compared are those of the same quantity.
 
 **Traces.**  Each measurement is lost with probability ``loss`` (independently,
@@ -46,12 +46,12 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from eqrec.core.arrivals import ArrivalTrace, delay_trace, gilbert_elliott_trace, with_uniform_delays
-from eqrec.core.noise import GaussianNoise, NoisySystem
-from eqrec.core.protocol import OnTimeOnly
-from eqrec.core.simulate import closed_loop
-from eqrec.core.stacking import UncertaintyLayout
-from eqrec.core.systems import AffineSystem
+from eqrec.arrivals.draws import ArrivalTrace, delay_trace, gilbert_elliott_trace, with_uniform_delays
+from eqrec.systems.noise import GaussianNoise, NoisySystem
+from eqrec.estimators.protocol import OnTimeOnly
+from eqrec.simulate.loop import closed_loop
+from eqrec.bounds.stacking import UncertaintyLayout
+from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 #: The families, in the order of the table, in words.
@@ -151,7 +151,7 @@ def draw_trace(rng: np.random.Generator, setup: CompareSetup) -> ArrivalTrace:
     Parameters
     ----------
     rng : numpy.random.Generator
-        Random source (:mod:`eqrec.core.arrivals` draws: one uniform per measurement for independent
+        Random source (:mod:`eqrec.arrivals.draws` draws: one uniform per measurement for independent
         losses and delays; the channel, then one delay per measurement, for bursts).
     setup : CompareSetup
         The loss, burst and delay settings.
@@ -226,8 +226,8 @@ def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = 
     InfeasibleDesign, SolverFailure, CertificationFailure
         As the designs.
     """
-    from eqrec.design.delay import delay_classes, design_delay_global
-    from eqrec.design.prefix import design_prefix
+    from eqrec.design.delay.design import delay_classes, design_delay_global
+    from eqrec.design.prefix.design import design_prefix
 
     classes = delay_classes(max_delay=setup.max_delay, horizon=setup.horizon)
     return {FAMILIES[0]: design_delay_global(system, classes, solver=solver).design,
@@ -281,7 +281,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     InputError
         A time-varying system, or a Gaussian description that does not fit it.
     """
-    from eqrec.filters.kalman import DelayUnawareKalman, TimestampedKalman
+    from eqrec.estimators.kalman import DelayUnawareKalman, TimestampedKalman
 
     if system.is_time_varying:
         raise InputError("the comparison runs on a time-invariant system", system.source, "A")

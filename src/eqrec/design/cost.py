@@ -20,7 +20,7 @@ What exactly is counted
   weights; :func:`paper_cost` evaluates ``J`` from node levels (a test checks
   it against the literal double sum), and
   :func:`class_cost` from class levels (nodes of one class share their level,
-  :mod:`eqrec.design.classes`).
+  :mod:`eqrec.design.classes.engine`).
 
 ``cost="max"``: the largest level ``max_{k,α} μ2,k^α`` (one common level, the
 prefix-based paper's ``M2``), and ``J = μ1 + max μ2`` when ``μ1`` is free.
@@ -30,8 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.core.classes import ClassSet
-from eqrec.core.prefix_tree import PrefixTree
+from eqrec.bounds.data_classes import ClassSet
+from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.errors import InputError
 
 COSTS = ("sum", "max")

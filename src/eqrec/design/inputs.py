@@ -5,7 +5,7 @@ Every public design entry (:func:`eqrec.design_prefix`, :func:`eqrec.design_time
 :func:`eqrec.min_recovery_level`) reads its inputs through this module, so a bad input is an
 :class:`~eqrec.errors.InputError` naming the parameter, never a raw numpy or Python error.
 
-Words are read by the one rule of :mod:`eqrec.core.words`: a 0/1 string is both a missing-data
+Words are read by the one rule of :mod:`eqrec.arrivals.words`: a 0/1 string is both a missing-data
 word and a delay word, so :func:`missing_words` and :func:`delay_words` make the reading explicit
 (typed patterns need no reading).
 """
@@ -17,12 +17,12 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from eqrec.core.classes import ClassSet, classes_of_tree
-from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.solvers import solver_info
-from eqrec.core.systems import AffineSystem
-from eqrec.core.words import as_language
+from eqrec.bounds.data_classes import ClassSet, classes_of_tree
+from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.lp.solvers import solver_info
+from eqrec.systems.affine import AffineSystem
+from eqrec.arrivals.words import as_language
 from eqrec.errors import InputError
 
 #: The value of ``mu1`` that asks for the smallest feasible recovery level (the μ1-free theorem).
@@ -35,7 +35,7 @@ def missing_words(words: Iterable["str | ArrivalPattern"], *, field_name: str = 
 
     The explicit reading of eq. (3) of the prefix-based paper, accepted by
     every design entry (a 0/1 string alone is also a delay word: see
-    :mod:`eqrec.core.words`).  Equal words are merged; lengths may differ
+    :mod:`eqrec.arrivals.words`).  Equal words are merged; lengths may differ
     (the design entries check them).
 
     Parameters
@@ -115,7 +115,7 @@ def language_tree(words: Any, *, kind: str | None, fixed_length: bool = True,
     words : PrefixTree, ArrivalPattern, str or iterable of them
         The language.
     kind : {"missing", "delay"} or None
-        Reading of the strings (:func:`eqrec.core.words.as_language`; ``None``: refuse 0/1 strings).
+        Reading of the strings (:func:`eqrec.arrivals.words.as_language`; ``None``: refuse 0/1 strings).
     fixed_length : bool, optional
         Refuse words of different lengths, with the command line's message (default).
     field_name : str, optional
@@ -146,7 +146,7 @@ def language_classes(language: Any, *, kind: str | None, fixed_length: bool = Tr
     Parameters
     ----------
     language : ClassSet, PrefixTree, ArrivalPattern, str or iterable of them
-        The language (a :class:`~eqrec.core.classes.ClassSet` is returned as is).
+        The language (a :class:`~eqrec.bounds.data_classes.ClassSet` is returned as is).
     kind : {"missing", "delay"} or None
         Reading of string words (:func:`language_tree`).
     fixed_length : bool, optional
@@ -157,7 +157,7 @@ def language_classes(language: Any, *, kind: str | None, fixed_length: bool = Tr
     Returns
     -------
     ClassSet
-        The classes (:func:`eqrec.core.classes.classes_of_tree` of the language's tree).
+        The classes (:func:`eqrec.bounds.data_classes.classes_of_tree` of the language's tree).
     """
     if isinstance(language, ClassSet):
         return language
@@ -165,7 +165,7 @@ def language_classes(language: Any, *, kind: str | None, fixed_length: bool = Tr
 
 
 def check_system(system: Any) -> AffineSystem:
-    """``system`` if it is an :class:`~eqrec.core.systems.AffineSystem`, else an :class:`InputError`.
+    """``system`` if it is an :class:`~eqrec.systems.affine.AffineSystem`, else an :class:`InputError`.
 
     Parameters
     ----------
@@ -189,7 +189,7 @@ def check_solver(solver: Any) -> str:
     Parameters
     ----------
     solver : str
-        A name of :data:`eqrec.core.solvers.SOLVER_NAMES`.
+        A name of :data:`eqrec.lp.solvers.SOLVER_NAMES`.
 
     Returns
     -------

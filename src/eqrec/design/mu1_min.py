@@ -1,6 +1,6 @@
 r"""μ1 free: the smallest feasible recovery level μ1,min in closed form, certified.
 
-The class engine (:mod:`eqrec.design.classes`) separates a prefix-tree design
+The class engine (:mod:`eqrec.design.classes.engine`) separates a prefix-tree design
 at fixed ``μ1`` into one LP per (time, available data) class and state row,
 whose optimum is the class level :math:`\ell(d, S)`, with ``δ`` in the box
 of radii :math:`\beta = (\eta_w, \eta_v, \mu_1)`.
@@ -43,16 +43,16 @@ from typing import Iterable
 import numpy as np
 import scipy.sparse as sp
 
-from eqrec.core.classes import ClassGains, ClassSet, class_maps
-from eqrec.core.lp import LinearProgram
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.parallel import check_jobs, check_scheduler
-from eqrec.core.solvers import solve_lp
-from eqrec.core.stacking import Stacking
-from eqrec.core.systems import AffineSystem
-from eqrec.design.class_gains import box_radius
-from eqrec.design.class_blocks import choose_path, solve_ratio_blocks
-from eqrec.design.class_lp import block_lp_options, block_objectives, build_ratio_lp, read_class_gains
+from eqrec.bounds.data_classes import ClassGains, ClassSet, class_maps
+from eqrec.lp.model import LinearProgram
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.lp.parallel import check_jobs, check_scheduler
+from eqrec.lp.solvers import solve_lp
+from eqrec.bounds.stacking import Stacking
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.classes.gains import box_radius
+from eqrec.design.classes.blocks import choose_path, solve_ratio_blocks
+from eqrec.design.classes.block_lp import block_lp_options, block_objectives, build_ratio_lp, read_class_gains
 from eqrec.design.inputs import check_fraction, check_solver, check_system, language_classes
 from eqrec.design.result import Design
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
@@ -219,15 +219,15 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
         The system.
     classes : ClassSet, PrefixTree or sequence of str or ArrivalPattern
         The language's (time, available data) classes:
-        :func:`eqrec.core.classes.classes_of_tree` of its
-        :class:`~eqrec.core.prefix_tree.PrefixTree`, or
-        :func:`eqrec.design.delay.delay_classes` for a full delay language;
+        :func:`eqrec.bounds.data_classes.classes_of_tree` of its
+        :class:`~eqrec.arrivals.prefix_tree.PrefixTree`, or
+        :func:`eqrec.design.delay.design.delay_classes` for a full delay language;
         or the tree itself, or the language's patterns or words (of any lengths).
     kind : {"missing", "delay"} or None, optional
-        Reading of string words (:mod:`eqrec.core.words`): ``None`` reads a
+        Reading of string words (:mod:`eqrec.arrivals.words`): ``None`` reads a
         word with a digit ``2-9`` as a delay word and refuses 0/1 strings.
     solver : str, optional
-        LP solver, a name of :data:`eqrec.core.solvers.SOLVER_NAMES`
+        LP solver, a name of :data:`eqrec.lp.solvers.SOLVER_NAMES`
         (default ``"highs"``).
     lower_rtol : float, optional
         Relative distance below ``μ1,min`` of the level to prove infeasible
@@ -235,10 +235,10 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     n_jobs : int or None, optional
         Worker processes of the per-(class, row) LPs of a large language (default every core).
     scheduler : str, distributed.Client or None, optional
-        A Dask scheduler running them instead (:mod:`eqrec.design.class_blocks`).
+        A Dask scheduler running them instead (:mod:`eqrec.design.classes.blocks`).
     path : {"auto", "monolithic", "blocks"}, optional
         One block LP, one LP per terminal (class, row), or by size (default;
-        :func:`eqrec.design.class_blocks.choose_path`).
+        :func:`eqrec.design.classes.blocks.choose_path`).
 
     Returns
     -------
@@ -259,7 +259,7 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     Examples
     --------
     >>> import eqrec
-    >>> from eqrec.core.classes import classes_of_tree
+    >>> from eqrec.bounds.data_classes import classes_of_tree
     >>> tree = eqrec.PrefixTree(["060000", "006000", "000600", "000060"], kind="delay")
     >>> level = eqrec.min_recovery_level(eqrec.acc_system(), classes_of_tree(tree))
     >>> round(level.upper, 4), level.lower < level.upper

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.core.prefix_tree import PrefixTree
-from eqrec.core.words import parse_delay_word
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.arrivals.words import parse_delay_word
 from eqrec.design.cost import node_bounds
 from eqrec.design.result import Design, node_level
 from eqrec.errors import InputError
@@ -135,7 +135,7 @@ def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
     levels per event prefix and the event sequences: with ``node_gains``
     (default: when the reduced language has at most
     :data:`JSON_NODE_GAINS_LIMIT` sequences and node gains exist).  ``free``
-    (a :class:`eqrec.design.delay.FreeMu1Result`) adds, for ``μ1`` free, the
+    (a :class:`eqrec.design.delay.design.FreeMu1Result`) adds, for ``μ1`` free, the
     route, the lower bound of ``J`` that certifies it (global route) and the
     certified smallest ``μ1``.
 

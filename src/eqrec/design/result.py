@@ -8,21 +8,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from eqrec.core.gains import GainSchedule
-from eqrec.core.lp import LPSolution
-from eqrec.core.patterns import ArrivalPattern
-from eqrec.core.words import as_pattern
-from eqrec.core.systems import AffineSystem
+from eqrec.bounds.gains import GainSchedule
+from eqrec.lp.model import LPSolution
+from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.arrivals.words import as_pattern
+from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 if TYPE_CHECKING:
-    from eqrec.core.runtime import GuaranteedEstimator
+    from eqrec.estimators.guaranteed import GuaranteedEstimator
     from eqrec.design.weighted import WeightedEstimator
 
 
 @dataclass
 class Design:
-    """A solved (and, once :func:`eqrec.core.certify.certify_design` ran, certified) design.
+    """A solved (and, once :func:`eqrec.bounds.certify.certify_design` ran, certified) design.
 
     What every design function returns (:func:`eqrec.design_prefix`,
     :func:`eqrec.design_time_based`, :func:`eqrec.design_delay`,
@@ -58,7 +58,7 @@ class Design:
         Seconds spent building the optimisation problem.
     certificate : Certificate or None, optional
         The independent worst-case certificate of the node gains
-        (:class:`eqrec.core.certify.Certificate`), attached by certification.
+        (:class:`eqrec.bounds.certify.Certificate`), attached by certification.
     extra : dict, optional
         Method-specific details (engine, problem sizes, cost ``J``, worst-case
         word, ...).
@@ -66,12 +66,12 @@ class Design:
         Optional per-node levels ``μ2`` keyed by the node's prefix label.
     class_gains : ClassGains or None, optional
         Class engine: one gain ``K`` per (time, available data) class
-        (:class:`eqrec.core.classes.ClassGains`), the estimator in class form.
+        (:class:`eqrec.bounds.data_classes.ClassGains`), the estimator in class form.
         ``schedule`` (node gains) is then derived from them, or ``None`` for a
         language too large to enumerate.
     class_certificate : ClassCertificate or None, optional
         Class engine: the worst case of every class recomputed from the gains ``K``
-        (:class:`eqrec.design.class_gains.ClassCertificate`).
+        (:class:`eqrec.design.classes.gains.ClassCertificate`).
     state_weights : numpy.ndarray or None, optional
         Per-state weights ``w`` of a weighted design (the ``state_weights``
         keyword of the design entries): ``system`` is then the system in
@@ -129,10 +129,10 @@ class Design:
     def estimator(self, periodic: bool = True, strict: bool = True) -> "GuaranteedEstimator | WeightedEstimator":
         """The designed estimator, ready to run: ``reset(x̂0)``, then ``step(y, u) -> (x̂, bound)``.
 
-        Class-engine designs run in class form (:class:`eqrec.core.estimator.ClassEstimator`,
+        Class-engine designs run in class form (:class:`eqrec.estimators.causal.ClassEstimator`,
         one gain per (time, available data) class, no prefix tree) with the
         certified level of the class as the bound; other designs run their
-        node gains (:class:`eqrec.core.estimator.RecoveryEstimator`, eqs.
+        node gains (:class:`eqrec.estimators.causal.RecoveryEstimator`, eqs.
         (5), (7) of the prefix-based paper) with the node's (or the common)
         level.  ``μ1`` at each period end.  With ``periodic=True`` the
         estimator restarts its horizon every ``T`` steps (Section V of the
@@ -150,7 +150,7 @@ class Design:
             ``True`` (default): arrivals outside the language raise
             :class:`InputError`.  ``False`` (class-engine designs): the
             estimator keeps a true bound outside the language and reports
-            :attr:`GuaranteedEstimator.in_design` (:mod:`eqrec.core.runtime`).
+            :attr:`GuaranteedEstimator.in_design` (:mod:`eqrec.estimators.guaranteed`).
 
         Returns
         -------
@@ -175,7 +175,7 @@ class Design:
         >>> abs(estimator.bound - design.mu2) < 1e-9
         True
         """
-        from eqrec.core.runtime import GuaranteedEstimator
+        from eqrec.estimators.guaranteed import GuaranteedEstimator
 
         if self.class_gains is not None:
             gains, cert = self.class_gains, self.class_certificate

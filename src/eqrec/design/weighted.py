@@ -1,7 +1,7 @@
 r"""A design with per-state weights: the guarantee on ``max_i w_i |x_i − x̂_i|``, the estimate in the original state.
 
 With ``state_weights = (w_1, ..., w_n)`` a design entry designs on the system in the weighted state
-``z = W x``, ``W = diag(w)`` (:meth:`eqrec.core.systems.AffineSystem.scaled`): every level and
+``z = W x``, ``W = diag(w)`` (:meth:`eqrec.systems.affine.AffineSystem.scaled`): every level and
 certificate is then a bound on
 
 .. math:: \|W (x - \hat x)\|_\infty = \max_i w_i |x_i - \hat x_i|,
@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.core.systems import AffineSystem
+from eqrec.systems.affine import AffineSystem
 
 
 def weigh(system: AffineSystem, state_weights: Any) -> tuple[AffineSystem, np.ndarray | None]:
@@ -51,7 +51,7 @@ def weigh(system: AffineSystem, state_weights: Any) -> tuple[AffineSystem, np.nd
 class WeightedEstimator:
     r"""The estimator of a weighted design, in the original coordinates (module docstring).
 
-    Wraps the designed estimator of ``z = W x`` (:class:`eqrec.core.runtime.GuaranteedEstimator`, made by
+    Wraps the designed estimator of ``z = W x`` (:class:`eqrec.estimators.guaranteed.GuaranteedEstimator`, made by
     :meth:`eqrec.design.result.Design.estimator`) and keeps its protocol: :meth:`reset` from ``x̂(t0)``,
     :meth:`step` ``(y, u) -> (x̂(t+1), bound)``, :attr:`time`, :attr:`x`, :attr:`bound`.  The estimate is
     ``x̂ = W^{-1} ẑ``; the **bound is on the weighted norm**,
@@ -116,7 +116,7 @@ class WeightedEstimator:
         InputError
             If ``xhat0`` is not ``n`` numbers, and the errors of the wrapped estimator's ``reset``.
         """
-        from eqrec.core.packets import check_estimate
+        from eqrec.estimators.packets import check_estimate
 
         x0 = check_estimate(xhat0, self.weights.size)
         self.estimator.reset(self.weights * x0, t0)
@@ -128,7 +128,7 @@ class WeightedEstimator:
         Parameters
         ----------
         y : array_like, Packet, sequence of packets, or None, optional
-            What arrived at time ``t`` (:meth:`eqrec.core.runtime.GuaranteedEstimator.step`).
+            What arrived at time ``t`` (:meth:`eqrec.estimators.guaranteed.GuaranteedEstimator.step`).
         u : array_like or None, optional
             The input ``u(t)`` (``None``: zero).
 

@@ -5,7 +5,7 @@ Requires the optional extra ``pip install -e ".[control]"`` (python-control).
 * :func:`system_from_statespace` turns a discrete-time ``control.StateSpace``
   ``x(t+1) = A x + B u``, ``y = C x`` with the noise gains and bounds of the
   papers' model (``+ E w``, ``+ V v``, ``|w|∞ <= η_w``, ``|v|∞ <= η_v``) into an
-  :class:`eqrec.core.systems.AffineSystem`.
+  :class:`eqrec.systems.affine.AffineSystem`.
 * :func:`estimator_iosys` turns a class-engine design into a discrete-time
   ``control.NonlinearIOSystem`` usable with ``control.input_output_response``:
   inputs ``u`` (m), ``y`` (p) and ``arrived`` (1: the measurement of this
@@ -24,10 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.core.checks import instance, positive
-from eqrec.core.packets import check_estimate
-from eqrec.core.error_boxes import BoxState, ClassBoxes
-from eqrec.core.systems import AffineSystem
+from eqrec.checks import instance, positive
+from eqrec.estimators.packets import check_estimate
+from eqrec.estimators.error_boxes import BoxState, ClassBoxes
+from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 
@@ -99,7 +99,7 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
         ``True`` (default): arrivals outside the language raise.  ``False``:
         the estimator keeps a true bound outside the language, as
         ``design.estimator(strict=False)`` (the same transition,
-        :class:`eqrec.core.error_boxes.ClassBoxes`), and has a third output
+        :class:`eqrec.estimators.error_boxes.ClassBoxes`), and has a third output
         ``in_design`` (1 when the designed guarantee applies).
 
     Returns
@@ -198,7 +198,7 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
         xhat, box = unpack_boxes(x)
         S = tuple(int(i) for i in np.flatnonzero(arrived[:t + 1]))
         box, coasting = boxes.advance(box, t, S)
-        if coasting:  # the model alone (the one transition of eqrec.core.error_boxes.ClassBoxes)
+        if coasting:  # the model alone (the one transition of eqrec.estimators.error_boxes.ClassBoxes)
             nxt = xhat_next = system.A_at(t) @ xhat + system.B_at(t) @ uu + system.f
         else:
             xhat_next = gains.estimate(t + 1, S, nxt, innov[list(S)])

@@ -4,7 +4,7 @@ the arrival model, the packet forms of the estimator protocol).
 
 :mod:`~eqrec.lmv.plant`
     The plant of eqs. (1)-(2), its loading from a configuration mapping, and the package's one system description
-    (:class:`~eqrec.core.noise.NoisySystem`) read and written in the paper's notation.
+    (:class:`~eqrec.systems.noise.NoisySystem`) read and written in the paper's notation.
 :mod:`~eqrec.lmv.model`
     The common description (a system with multiplicative noises), the two compensation mechanisms mapped
     onto it, mean-square stability.
@@ -15,6 +15,6 @@ the arrival model, the packet forms of the estimator protocol).
     lost packet) and the batch run on measurements built on it.
 :mod:`~eqrec.lmv.steady`
     The steady state of the recursion and the comparison of the mechanisms in it (the Figs. 5-6 sweeps).
-:mod:`~eqrec.lmv.simulate`
+:mod:`~eqrec.lmv.monte_carlo`
     Vectorised Monte Carlo of the plant and the statistical comparison with the theory.
 """

@@ -1,6 +1,6 @@
 r"""The LMV filter and one-step predictor of the companion study in step form, and the batch run built on it.
 
-:class:`LMVEstimator` follows the estimator protocol (:mod:`eqrec.core.protocol`,
+:class:`LMVEstimator` follows the estimator protocol (:mod:`eqrec.estimators.protocol`,
 ``kind = "stochastic"``): ``reset(x̂0, t0)``, then one ``step(y, u)`` per time
 with the measurement ``y(t)`` or ``None`` for a lost packet.  The
 compensation of a loss is the one of the system the gains belong to
@@ -35,8 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.core.packets import as_packets
-from eqrec.core.systems import AffineSystem
+from eqrec.estimators.packets import as_packets
+from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 from eqrec.lmv.model import MultNoiseSystem, check_ms_stable
 from eqrec.lmv.recursion import LMVResult, SmootherResult, _moment_step, lmv_step, smoother_step

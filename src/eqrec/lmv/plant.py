@@ -3,8 +3,8 @@
 :class:`Plant` holds the matrices and variances in the paper's notation; :meth:`Plant.from_dict`
 builds it from a configuration mapping (``config/p4.yaml``; :func:`plant_of` picks
 a named example) and checks shapes, finiteness and positive semidefiniteness.  :meth:`Plant.description` is
-the same plant as the package's one description, a :class:`~eqrec.core.noise.NoisySystem` (the
-:class:`~eqrec.core.systems.AffineSystem` ``A = Φ``, ``C = H``, ``E = Γ``, ``V = I`` with Gaussian and
+the same plant as the package's one description, a :class:`~eqrec.systems.noise.NoisySystem` (the
+:class:`~eqrec.systems.affine.AffineSystem` ``A = Φ``, ``C = H``, ``E = Γ``, ``V = I`` with Gaussian and
 multiplicative noise), and :meth:`Plant.from_description` reads any such description (an affine system with
 Gaussian noise, e.g. a bounded-error plant with ``5σ`` = bound) as a plant, so that the LMV estimators run on
 the plants of the other families.  The mathematics on the plant (its two compensated systems, the recursion) is
@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.core.noise import GaussianNoise, MultiplicativeNoise, NoisySystem, check_psd
-from eqrec.core.systems import AffineSystem
+from eqrec.systems.noise import GaussianNoise, MultiplicativeNoise, NoisySystem, check_psd
+from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 __all__ = ["Plant", "check_psd", "plant_of"]

@@ -1,7 +1,7 @@
 """Figures in the style of the papers: error trajectories with guarantee bars.
 
 Shared by the figure modules of every study (``p1_figures``, ``p2_figures``, ``p3_figures``,
-``p4_figures``); figures are written by :func:`eqrec.studies.outputs.save_figure`
+``p4_figures``); figures are written by :func:`eqrec.studies.pipeline.outputs.save_figure`
 (atomic, PDF without a creation date).  Matplotlib is imported on first use
 (non-interactive ``Agg`` backend), so importing a study stays cheap.
 """
@@ -129,7 +129,7 @@ def worst_case_lines(axes_column, worst: np.ndarray, label: str = "exact worst c
     axes_column
         One axis per state component.
     worst
-        Array ``(T+1, n)`` (e.g. the certified bounds of :mod:`eqrec.core.certify`).
+        Array ``(T+1, n)`` (e.g. the certified bounds of :mod:`eqrec.bounds.certify`).
     label
         Legend entry (on the first axis only).
     """

@@ -1,0 +1,289 @@
+r"""The one arrival model: traces of packet arrivals (:mod:`eqrec.arrivals.traces`) and the samplers that draw them.
+
+An :class:`~eqrec.arrivals.traces.ArrivalTrace` says, for a run of ``N`` steps, when each
+measurement ``y(τ)`` reaches the estimator: its delay ``d(τ)`` (arrival at
+``τ + d(τ)``) or :data:`NEVER` when it is lost.  Read per step,
+:meth:`ArrivalTrace.arriving_at` is the list of time stamps arriving at
+``t`` (the ``arrive[t]`` every simulation loop builds packets from,
+:func:`eqrec.simulate.loop.closed_loop`).
+
+Every random arrival of the package is drawn here, from a
+:class:`numpy.random.Generator` (the same seed gives the same trace):
+
+* :func:`uniform_words` — words drawn uniformly from a language (one per run
+  of a Monte Carlo, one per period of a long run);
+* :func:`bernoulli_arrivals` / :func:`bernoulli_trace` — i.i.d. arrivals,
+  a packet lost with probability ``loss`` (the Bernoulli ``η(t)`` of the LMV
+  study arrives with probability ``η̄ = 1 − loss``);
+* :func:`delay_trace` — i.i.d. delays with probabilities ``p_0 .. p_D``
+  (lost with the remaining probability ``1 − Σ p_d``);
+* :func:`draw_delays` — the i.i.d. delays of the switching runs of the
+  delayed-data paper (on time with probability ``p_on_time``, else uniform on
+  ``1..τ̄``), with the draw order of the stored results;
+* :func:`gilbert_elliott_trace` — bursts: a two-state (good/bad) Markov
+  channel with its own loss probability in each state (Gilbert–Elliott).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence, TypeVar
+
+import numpy as np
+
+from eqrec.checks import generator
+from eqrec.arrivals.traces import NEVER, ArrivalTrace  # noqa: F401  (the trace type, re-exported with its samplers)
+from eqrec.errors import InputError
+
+W = TypeVar("W")
+
+
+def _probability(value: float, field: str) -> float:
+    try:
+        p = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"a probability must be a number, got {value!r}", field=field) from None
+    if not (0.0 <= p <= 1.0):  # also refuses NaN
+        raise InputError(f"a probability must lie in [0, 1], got {p}", field=field)
+    return p
+
+
+def _steps(value: int, field: str = "steps") -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise InputError(f"the number of steps must be a non-negative integer, got {value!r}", field=field)
+    return int(value)
+
+
+# ------------------------------------------------------------------------------ samplers
+
+def uniform_words(rng: np.random.Generator, words: Sequence[W], size: int | None = None) -> "W | list[W]":
+    """Words drawn uniformly and independently from a language.
+
+    One call ``rng.integers(len(words), size=size)``: ``size=None`` draws one
+    word (one Monte Carlo run), an integer a list of them (one per period of a
+    long run).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    words : sequence
+        The language (words, patterns or anything to pick from); not empty.
+    size : int or None, optional
+        Number of words (``None``: one word, not a list).
+
+    Returns
+    -------
+    object or list
+        ``words[i]`` for a uniform ``i``, or a list of ``size`` of them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from eqrec.arrivals.draws import uniform_words
+    >>> uniform_words(np.random.default_rng(0), ["101", "110", "111"], size=4)
+    ['111', '110', '110', '101']
+    """
+    if not hasattr(words, "__len__") or isinstance(words, str) or len(words) == 0:
+        raise InputError(f"need a non-empty sequence of words to draw from, got {words!r:.60}", field="words")
+    if size is None:
+        return words[generator(rng).integers(len(words))]
+    idx = generator(rng).integers(len(words), size=_steps(size, "size"))
+    return [words[i] for i in idx]
+
+
+def bernoulli_arrivals(rng: np.random.Generator, shape: "int | tuple[int, ...]", arrival: float) -> np.ndarray:
+    """I.i.d. arrival indicators ``η = (U < η̄)`` with ``U`` uniform on ``[0, 1)``: one ``rng.random(shape)``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    shape : int or tuple of int
+        Shape of the draws (e.g. ``(runs, T+1)``).
+    arrival : float
+        Arrival probability ``η̄`` in ``[0, 1]``.
+
+    Returns
+    -------
+    ndarray of bool
+        ``True`` where the packet arrives.
+    """
+    p = _probability(arrival, "arrival")
+    for size in shape if isinstance(shape, tuple) else (shape,):  # non-negative integers
+        _steps(size, "shape")
+    return generator(rng).random(shape) < p
+
+
+def bernoulli_trace(rng: np.random.Generator, steps: int, loss: float) -> ArrivalTrace:
+    """Bernoulli losses: each packet on time, or lost with probability ``loss``, independently.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of measurements.
+    loss : float
+        Loss probability in ``[0, 1]``.
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays ``0`` or :data:`NEVER`.
+    """
+    p = _probability(loss, "loss")
+    return ArrivalTrace.from_arrived(bernoulli_arrivals(rng, _steps(steps), 1.0 - p))
+
+
+def delay_trace(rng: np.random.Generator, steps: int, probabilities: "Sequence[float] | np.ndarray") -> ArrivalTrace:
+    """I.i.d. delays: ``d`` with probability ``p_d`` (``d = 0..D``), lost with probability ``1 − Σ p_d``.
+
+    One uniform draw per measurement, read through the cumulative probabilities.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of measurements.
+    probabilities : sequence of float
+        ``p_0 .. p_D``, each in ``[0, 1]``, with sum at most 1 (up to ``1e-12``).
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays in ``0..D`` or :data:`NEVER`.
+    """
+    try:
+        p = np.asarray(probabilities, float)
+    except (TypeError, ValueError):
+        raise InputError(f"delay probabilities must be numbers, got {probabilities!r}", field="probabilities") from None
+    if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)) or np.any(p < 0) or np.any(p > 1):
+        raise InputError(f"need delay probabilities p_0..p_D in [0, 1], got {p.tolist()}", field="probabilities")
+    if p.sum() > 1.0 + 1e-12:
+        raise InputError(f"delay probabilities sum to {p.sum()} > 1", field="probabilities")
+    u = generator(rng).random(_steps(steps))
+    d = np.searchsorted(np.cumsum(p), u, side="right")
+    return ArrivalTrace(np.where(d >= p.size, NEVER, d).astype(np.int64))
+
+
+def draw_delays(rng: np.random.Generator, steps: int, max_delay: int, p_on_time: float) -> np.ndarray:
+    """I.i.d. delays: ``0`` with probability ``p_on_time``, else uniform on ``1..max_delay``.
+
+    The delays of the switching runs of the delayed-data paper (Section
+    III-B3; :func:`eqrec.simulate.long_runs.long_run_switching`): first one
+    ``rng.random(steps)`` (late where ``>= p_on_time``), then one
+    ``rng.integers`` for the late ones.  The same law as :func:`delay_trace`
+    with ``p_0 = p_on_time``, ``p_d = (1 − p_on_time)/τ̄``, drawn in another
+    order (the order of the stored results).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of delays.
+    max_delay : int
+        Largest delay ``τ̄ >= 1``.
+    p_on_time : float
+        Probability of delay ``0``.
+
+    Returns
+    -------
+    ndarray of int, shape (N,)
+        The delays.
+    """
+    p = _probability(p_on_time, "p_on_time")
+    if isinstance(max_delay, bool) or not isinstance(max_delay, (int, np.integer)) or max_delay < 1:
+        raise InputError(f"the largest delay must be an integer >= 1, got {max_delay!r}", field="max_delay")
+    late = generator(rng).random(_steps(steps)) >= p
+    d = np.zeros(steps, int)
+    d[late] = rng.integers(1, max_delay + 1, size=int(late.sum()))
+    return d
+
+
+def gilbert_elliott_trace(rng: np.random.Generator, steps: int, p_good_to_bad: float, p_bad_to_good: float,
+                          loss_good: float = 0.0, loss_bad: float = 1.0, start: str = "stationary") -> ArrivalTrace:
+    r"""Bursts of losses: the Gilbert–Elliott channel, a two-state Markov chain with a loss probability per state.
+
+    The channel is *good* or *bad*; from one step to the next it goes from
+    good to bad with probability ``p_good_to_bad`` and back with
+    ``p_bad_to_good``; in each state a packet is lost with that state's
+    probability.  In the stationary regime the channel is bad with
+    probability :math:`\pi_b = p_{gb} / (p_{gb} + p_{bg})`, the loss rate is
+    :math:`(1 - \pi_b)\,\ell_g + \pi_b\,\ell_b`, and a stay in the bad state
+    lasts :math:`1 / p_{bg}` steps on average (Gilbert's model:
+    ``loss_good = 0``, ``loss_bad = 1``).  Draws, in order: the initial state
+    (one ``rng.random()`` for ``start="stationary"``), the ``N`` transitions,
+    the ``N`` losses.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    steps : int
+        Number ``N`` of measurements.
+    p_good_to_bad : float
+        Probability of a transition good → bad.
+    p_bad_to_good : float
+        Probability of a transition bad → good.
+    loss_good : float, optional
+        Loss probability in the good state (default 0).
+    loss_bad : float, optional
+        Loss probability in the bad state (default 1).
+    start : {"stationary", "good", "bad"}, optional
+        Initial state: drawn from the stationary law (default; good when both
+        transition probabilities are 0), or fixed.
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays ``0`` or :data:`NEVER`.
+    """
+    pgb, pbg = _probability(p_good_to_bad, "p_good_to_bad"), _probability(p_bad_to_good, "p_bad_to_good")
+    lg, lb = _probability(loss_good, "loss_good"), _probability(loss_bad, "loss_bad")
+    N, rng = _steps(steps), generator(rng)
+    if start == "stationary":
+        pi_bad = pgb / (pgb + pbg) if pgb + pbg > 0 else 0.0
+        bad = bool(rng.random() < pi_bad)
+    elif start in ("good", "bad"):
+        bad = start == "bad"
+    else:
+        raise InputError(f"start must be 'stationary', 'good' or 'bad', got {start!r}", field="start")
+    u_move, u_loss = rng.random(N), rng.random(N)
+    lost = np.zeros(N, bool)
+    for t in range(N):
+        lost[t] = u_loss[t] < (lb if bad else lg)
+        bad = (u_move[t] >= pbg) if bad else (u_move[t] < pgb)
+    return ArrivalTrace.from_arrived(~lost)
+
+
+def with_uniform_delays(rng: np.random.Generator, trace: ArrivalTrace, max_delay: int) -> ArrivalTrace:
+    """The same losses, each packet that is not lost delayed by ``d`` uniform on ``0..max_delay``.
+
+    One ``rng.integers`` draw per measurement (lost ones included, so the draws
+    do not depend on the losses).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Random source.
+    trace : ArrivalTrace
+        The losses (its delays other than :data:`NEVER` are replaced).
+    max_delay : int
+        Largest delay ``D >= 0``.
+
+    Returns
+    -------
+    ArrivalTrace
+        Delays in ``0..D`` or :data:`NEVER`.
+
+    Raises
+    ------
+    InputError
+        A negative or non-integer ``max_delay``.
+    """
+    if isinstance(max_delay, bool) or not isinstance(max_delay, (int, np.integer)) or max_delay < 0:
+        raise InputError(f"the largest delay must be an integer >= 0, got {max_delay!r}", field="max_delay")
+    delays = rng.integers(0, int(max_delay) + 1, trace.steps)
+    return ArrivalTrace(np.where(trace.lost, NEVER, delays))

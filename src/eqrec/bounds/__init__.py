@@ -1,0 +1,12 @@
+"""The bounded-error mathematics: stacked error maps over a horizon, gains from the Q-parametrisation, the data
+classes of a language and their error maps, and the certificate computed from the gains alone.
+
+:mod:`~eqrec.bounds.stacking`
+    Stacked matrices over a finite horizon, shared by every design method.
+:mod:`~eqrec.bounds.gains`
+    Recovery of the gains from the Q-parametrisation; gain schedules ``(F, u0)`` per word.
+:mod:`~eqrec.bounds.data_classes`
+    The (time, available data) classes of a prefix tree and the class error map ``E_d − K Z_S``.
+:mod:`~eqrec.bounds.certify`
+    Worst cases recomputed from the gains alone (the independent certificate of every design).
+"""

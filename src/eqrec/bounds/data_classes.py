@@ -1,0 +1,420 @@
+r"""Data classes of a prefix tree: the nodes that see the same data at the same time.
+
+A node of depth ``d`` of the prefix tree of a language (missing-data words,
+delay words) owns the error :math:`\xi(d)` and the gain row of time ``d-1``,
+which multiplies the measurements available at ``d-1``: the set
+:math:`S = \mathcal A(d-1)` of times ``i`` with ``i + τ(i) <= d-1``.  The pair
+``(d, S)`` is the node's **class**.  :mod:`eqrec.design.classes.engine` proves that
+every design on the tree separates into one small LP per (class, state row)
+and that nodes of one class have the same optimal level; this module finds
+the classes, without solving anything.
+
+Two ways to get them
+--------------------
+* :func:`classes_of_tree`: from any prefix tree (missing-data or delay
+  words, words of different lengths), with each class's nodes, whether a
+  word ends in it (its level is then bounded by ``μ1``) and the weight of
+  the sum cost (sequences of the reduced language through its inner nodes).
+* :func:`classes_of_full_language`: for the full language
+  :math:`\{0..\bar\tau\}^T` of the delayed-data paper, directly from the
+  **window rule**, never enumerating a word: at time ``k = d-1`` every
+  measurement ``i <= k - τ̄`` has arrived, and each ``i`` in the window
+  ``(k - τ̄, k]`` has arrived or not, independently.  So depth ``d`` has
+  :math:`2^{\min(\bar\tau, d)}` classes and the whole language
+  :math:`\sum_{d=1}^{T} 2^{\min(\bar\tau, d)}` (18 for the batch reactor's
+  ``(5, 2)``, 446 for ``(30, 4)``, where there are :math:`5^{30} \approx
+  9.3\cdot 10^{20}` words).  The counts the sum cost needs follow in closed
+  form because the arrival times of different measurements are independent
+  (:func:`full_language_counts`).
+
+The error maps of a class, :math:`E_d` (open loop) and :math:`Z_S` (the
+stacked output maps of the measurements in ``S``), come from
+:class:`eqrec.bounds.stacking.Stacking` (:func:`class_maps`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from itertools import combinations
+from math import prod
+
+import numpy as np
+
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.bounds.stacking import Stacking
+from eqrec.errors import InputError
+
+
+@dataclass(frozen=True)
+class DataClass:
+    """The nodes of depth ``depth`` whose available data at time ``depth - 1`` is ``available``.
+
+    Parameters
+    ----------
+    depth : int
+        ``d``: the class bounds the error :math:`\\xi(d)` (``1 <= d <= T``).
+    available : tuple of int
+        ``S``: the measurement times available at ``d - 1``, increasing.
+    terminal : bool
+        A word of the language ends at a node of this class (its level must
+        be at most ``μ1``: the terminal constraint).
+    inner : bool
+        A node of this class is not a word's end (its level counts in ``μ2``).
+    weight : int
+        Sequences of the reduced language through the class's inner nodes:
+        the class's weight in the delayed-data paper's sum cost.
+    nodes : int
+        Prefix-tree nodes in the class.
+    """
+
+    depth: int
+    available: tuple[int, ...]
+    terminal: bool
+    inner: bool
+    weight: int
+    nodes: int
+
+    @property
+    def key(self) -> tuple[int, tuple[int, ...]]:
+        """``(d, S)``."""
+        return self.depth, self.available
+
+    @property
+    def label(self) -> str:
+        """``d:S`` with ``S`` as a 0/1 string over the times ``0..d-1`` (``1``: available)."""
+        s = set(self.available)
+        return f"{self.depth}:" + "".join("1" if i in s else "0" for i in range(self.depth))
+
+
+@dataclass
+class ClassSet:
+    """The classes of a language, ordered by depth then by data set.
+
+    Parameters
+    ----------
+    classes : tuple of DataClass
+        The classes, ordered by depth, then size and content of ``S``.
+    horizon : int
+        ``T``: the longest word (the stacking horizon).
+    words, sequences, nodes : int
+        Words of the language, sequences of its reduced language
+        (distinct event sequences) and prefix-tree nodes.
+    source : str
+        ``"tree"`` (:func:`classes_of_tree`) or ``"window"``
+        (:func:`classes_of_full_language`).
+    node_class : dict
+        Tree only: node index -> position of its class in ``classes``.
+    tree : PrefixTree or None
+        Tree only: the prefix tree the classes come from.
+    """
+
+    classes: tuple[DataClass, ...]
+    horizon: int
+    words: int
+    sequences: int
+    nodes: int
+    source: str
+    node_class: dict[int, int] = field(default_factory=dict)
+    tree: PrefixTree | None = None
+
+    def __len__(self) -> int:
+        return len(self.classes)
+
+    def __iter__(self):
+        return iter(self.classes)
+
+    def index(self, depth: int, available) -> int:
+        """Position of the class ``(depth, available)``; :class:`InputError` if the language has none.
+
+        Parameters
+        ----------
+        depth : int
+            ``d``, ``1 <= d <= T``.
+        available : iterable of int
+            ``S``: measurement times available at ``d - 1`` (any order).
+
+        Returns
+        -------
+        int
+            Index into ``classes``.
+        """
+        try:
+            return self._index[(int(depth), tuple(sorted(int(i) for i in available)))]
+        except KeyError:
+            raise InputError(f"no class of depth {depth} with data {sorted(available)} in this language") from None
+
+    @property
+    def _index(self) -> dict:
+        idx = self.__dict__.get("_idx")
+        if idx is None:
+            idx = self.__dict__["_idx"] = {c.key: i for i, c in enumerate(self.classes)}
+        return idx
+
+    def per_depth(self) -> list[int]:
+        """Number of classes at depths ``1..T``.
+
+        Returns
+        -------
+        list of int
+            Length ``T``; entry ``d - 1`` counts the classes of depth ``d``.
+        """
+        return np.bincount([c.depth for c in self.classes], minlength=self.horizon + 1)[1:].tolist()
+
+
+def _ordered(found: dict) -> tuple[DataClass, ...]:
+    return tuple(sorted(found.values(), key=lambda c: (c.depth, len(c.available), c.available)))
+
+
+def classes_of_tree(tree: PrefixTree) -> ClassSet:
+    """The classes ``(d, S)`` of the nodes of ``tree`` (any language, words of any lengths).
+
+    The weight of a class is the number of the tree's patterns (sequences of
+    the reduced language) through its inner nodes.
+
+    Parameters
+    ----------
+    tree : PrefixTree
+        Prefix tree of the language.
+
+    Returns
+    -------
+    ClassSet
+        The classes, with ``node_class`` and ``tree`` set (``source="tree"``).
+    """
+    through = tree.sequences_through()
+    acc: dict[tuple, dict] = {}
+    of_node: dict[int, tuple] = {}
+    for node in tree:
+        key = (node.depth, tuple(node.available))
+        a = acc.setdefault(key, {"terminal": False, "inner": False, "weight": 0, "nodes": 0})
+        a["nodes"] += 1
+        if node.terminal:
+            a["terminal"] = True
+        if not node.terminal:  # a word's end (even with children) is bounded by μ1 only
+            a["inner"] = True
+            a["weight"] += through[node.index]
+        of_node[node.index] = key
+    found = {k: DataClass(k[0], k[1], v["terminal"], v["inner"], v["weight"], v["nodes"]) for k, v in acc.items()}
+    classes = _ordered(found)
+    pos = {c.key: i for i, c in enumerate(classes)}
+    return ClassSet(classes=classes, horizon=tree.depth, words=len(tree.patterns), sequences=len(tree.patterns),
+                    nodes=len(tree), source="tree", node_class={i: pos[k] for i, k in of_node.items()}, tree=tree)
+
+
+def _arrival_values(i: int, T: int, max_delay: int) -> int:
+    """Distinct arrival outcomes of measurement ``i`` in ``{0..τ̄}^T``: times ``i..min(i+τ̄, T-1)``, and 'never'
+    when ``i + τ̄ >= T`` (a delay past the horizon means missing)."""
+    return min(max_delay, T - 1 - i) + 1 + (1 if i + max_delay >= T else 0)
+
+
+def _arrived_by(i: int, k: int, max_delay: int) -> int:
+    """Outcomes of measurement ``i`` that arrive by time ``k`` (``i <= k``): times ``i..min(i+τ̄, k)``."""
+    return min(max_delay, k - i) + 1
+
+
+def full_language_counts(T: int, max_delay: int) -> dict[str, int]:
+    """Words, sequences (distinct event sequences) and prefix-tree nodes of ``{0..τ̄}^T``, in closed form.
+
+    The arrival outcome of each measurement (a time, or never) is independent
+    of the others', so the reduced language is the product of the outcome
+    sets; a node of depth ``d`` is a choice, per ``i < d``, of an arrival
+    time ``<= d-1`` or 'not yet' (possible when ``i + τ̄ > d-1``).
+
+    Parameters
+    ----------
+    T : int
+        Horizon (word length).
+    max_delay : int
+        Largest delay ``τ̄``.
+
+    Returns
+    -------
+    dict of str to int
+        ``{"words": (τ̄+1)^T, "sequences": ..., "nodes": ...}``.
+    """
+    T, D = int(T), int(max_delay)
+    sequences = prod(_arrival_values(i, T, D) for i in range(T))
+    nodes = sum(prod(_arrived_by(i, d - 1, D) + (1 if i + D > d - 1 else 0) for i in range(d))
+                for d in range(1, T + 1))
+    return {"words": (D + 1) ** T, "sequences": sequences, "nodes": nodes}
+
+
+def classes_of_full_language(T: int, max_delay: int) -> ClassSet:
+    """The classes of ``{0..τ̄}^T`` from the window rule (module docstring), never enumerating words.
+
+    The weight of the inner class ``(d, S)`` (``d < T``) is the number of
+    sequences whose data at ``d-1`` is ``S``: per ``i < d``, the outcomes
+    arriving by ``d-1`` if ``i ∈ S`` and the others if not, times all the
+    outcomes of ``i >= d``.
+
+    Parameters
+    ----------
+    T : int
+        Horizon, ``>= 1``.
+    max_delay : int
+        Largest delay ``τ̄``, ``>= 0``.
+
+    Returns
+    -------
+    ClassSet
+        The classes (``source="window"``, no tree) and the counts of :func:`full_language_counts`.
+    """
+    T, D = int(T), int(max_delay)
+    if T < 1 or D < 0:
+        raise InputError(f"the full language needs horizon >= 1 and max delay >= 0, got ({T}, {D})",
+                         field="max_delay")
+    counts = full_language_counts(T, D)
+    classes = []
+    for d in range(1, T + 1):
+        k = d - 1
+        always = tuple(range(0, k - D + 1))
+        window = tuple(range(max(0, k - D + 1), k + 1))
+        tail = prod(_arrival_values(i, T, D) for i in range(d, T))
+        for r in range(len(window) + 1):
+            for chosen in combinations(window, r):
+                S = tuple(sorted(always + chosen))
+                inner = d < T
+                s = set(S)
+                # nodes: per i < d, an arrival time <= k if i ∈ S, else 'not yet' (the window makes it possible)
+                nodes = prod(_arrived_by(i, k, D) if i in s else 1 for i in range(d))
+                weight = 0
+                if inner:
+                    weight = tail * prod(_arrived_by(i, k, D) if i in s
+                                         else _arrival_values(i, T, D) - _arrived_by(i, k, D) for i in range(d))
+                classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight, nodes=nodes))
+    return ClassSet(classes=_ordered({c.key: c for c in classes}), horizon=T, source="window", **counts)
+
+
+def class_maps(stacking: Stacking, cls: DataClass) -> tuple[np.ndarray, np.ndarray]:
+    r"""``(E_d, Z_S)``: the open-loop error map of time ``d`` and the stacked output maps of ``S``.
+
+    With :math:`\delta = (w, v, \xi_0)`, :math:`x(d) - \bar x(d) = E_d\delta`
+    and :math:`y_S - \bar y_S = Z_S\delta` for the noise-free prediction
+    :math:`\bar x, \bar y` from :math:`\hat x(0)`.  Shapes ``(n, D)`` and
+    ``(|S| p, D)``.
+
+    Parameters
+    ----------
+    stacking : Stacking
+        Stacked maps of the system over the horizon.
+    cls : DataClass
+        The class ``(d, S)``.
+
+    Returns
+    -------
+    E : ndarray, shape (n, D)
+        Open-loop error map of time ``d``.
+    Z : ndarray, shape (|S| p, D)
+        Output maps of the measurements in ``S``, by time then output.
+    """
+    E = stacking.open_loop[cls.depth]
+    S = list(cls.available)
+    Z = stacking.output_maps[S].reshape(len(S) * stacking.system.p, -1) if S else np.zeros((0, E.shape[1]))
+    return E, Z
+
+
+def class_error_map(stacking: Stacking, gains: "ClassGains", i: int) -> np.ndarray:
+    r"""``G = E_d − K Z_S``: the error map of class ``i`` under its gain, :math:`\xi(d) = G\delta`.
+
+    The one formula of a class's closed-loop error (certificate, long runs, error boxes).
+
+    Parameters
+    ----------
+    stacking : Stacking
+        Stacked maps of the system over the horizon.
+    gains : ClassGains
+        The class gains.
+    i : int
+        Index of the class in ``gains.classes``.
+
+    Returns
+    -------
+    ndarray, shape (n, D)
+        The map from ``δ = (w, v, ξ0)`` to the error at the class's time.
+    """
+    E, Z = class_maps(stacking, gains.classes.classes[i])
+    return E - gains.K[i] @ Z
+
+
+@dataclass
+class ClassGains:
+    r"""One gain per class: the estimator in class form.
+
+    .. math:: \hat x(d) = \bar x(d) + K_{(d,S)}\,(y_S - \bar y_S),
+
+    with :math:`\bar x, \bar y` the noise-free prediction from
+    :math:`\hat x(0)` (inputs and ``f`` included) and ``S`` the data received
+    by time ``d-1`` (:class:`eqrec.estimators.causal.ClassEstimator` runs it).
+
+    Parameters
+    ----------
+    classes : ClassSet
+        The classes of the language.
+    K : list of ndarray
+        ``K[i]`` of shape ``(n, |S_i| p)``, columns ordered by measurement time
+        then output.
+    n, p : int
+        State and output dimensions.
+    """
+
+    classes: ClassSet
+    K: list[np.ndarray]
+    n: int
+    p: int
+
+    @property
+    def horizon(self) -> int:
+        """``T`` of the class set."""
+        return self.classes.horizon
+
+    def gain(self, depth: int, available) -> np.ndarray:
+        """``K`` of the class ``(depth, available)``.
+
+        Parameters
+        ----------
+        depth : int
+            ``d``.
+        available : iterable of int
+            ``S``: measurement times available at ``d - 1``.
+
+        Returns
+        -------
+        ndarray, shape (n, |S| p)
+            The class gain.
+        """
+        return self.K[self.classes.index(depth, available)]
+
+    def estimate(self, depth: int, available, xbar: np.ndarray, residuals) -> np.ndarray:
+        r"""The class form :math:`\hat x(d) = \bar x(d) + K_{(d,S)}(y_S - \bar y_S)`.
+
+        :class:`InputError` if the language has no class ``(depth, available)``.
+
+        Parameters
+        ----------
+        depth : int
+            ``d``.
+        available : sequence of int
+            ``S``, increasing.
+        xbar : ndarray, shape (n,)
+            Noise-free prediction :math:`\bar x(d)`.
+        residuals : sequence of ndarray
+            The :math:`y(\tau) - C(\tau)\bar x(\tau)` of the times in ``available``, each of length ``p``.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The estimate :math:`\hat x(d)`.
+        """
+        S = tuple(available)
+        K = self.gain(depth, S)
+        return xbar + K @ np.concatenate([np.asarray(r, float) for r in residuals]) if S else np.array(xbar, float)
+
+    def to_json(self) -> dict:
+        """``{"d:S": K}`` (``S`` as a 0/1 string over times ``0..d-1``).
+
+        Returns
+        -------
+        dict of str to list
+            Class label -> ``K`` as nested lists.
+        """
+        return {c.label: k.tolist() for c, k in zip(self.classes, self.K)}

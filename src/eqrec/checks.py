@@ -1,0 +1,195 @@
+"""Checks of inputs shared by the core modules: integers, positive numbers, float arrays, random generators.
+
+Each returns the checked value or raises :class:`~eqrec.errors.InputError`
+naming the field, so an entry point refuses a bad scalar before it changes
+anything (never a raw ``TypeError`` from a comparison or ``ValueError``
+from numpy).
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+
+from eqrec.errors import InputError
+
+
+def integer(value: Any, field: str, *, low: int = 0, high: int | None = None, source: str | None = None) -> int:
+    """``value`` as an ``int`` in ``low..high``, else an :class:`InputError` naming ``field``.
+
+    Parameters
+    ----------
+    value : int
+        The value given (a Python or numpy integer; booleans and floats are refused).
+    field : str
+        The field named in the error.
+    low : int, optional
+        Smallest allowed value (default 0).
+    high : int or None, optional
+        Largest allowed value (``None``: no limit).
+    source : str or None, optional
+        File (or other origin) named in the error.
+
+    Returns
+    -------
+    int
+        ``int(value)``.
+
+    Examples
+    --------
+    >>> from eqrec.checks import integer
+    >>> integer(3, "runs", low=1)
+    3
+    """
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if not ok or value < low or (high is not None and value > high):
+        span = f"{low}..{high}" if high is not None else f">= {low}"
+        raise InputError(f"must be an integer {span}, got {value!r}", source, field)
+    return int(value)
+
+
+def positive(value: Any, field: str, *, zero_ok: bool = False, source: str | None = None) -> float:
+    """``value`` as a positive (or non-negative) finite ``float``, else an :class:`InputError` naming ``field``.
+
+    Parameters
+    ----------
+    value : float
+        The value given (a real number; strings and booleans are refused).
+    field : str
+        The field named in the error.
+    zero_ok : bool, optional
+        Accept 0 as well (default ``False``).
+    source : str or None, optional
+        File (or other origin) named in the error.
+
+    Returns
+    -------
+    float
+        ``float(value)``.
+
+    Examples
+    --------
+    >>> from eqrec.checks import positive
+    >>> positive(0.5, "mu1")
+    0.5
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not np.isfinite(value) \
+            or value < 0 or (value == 0 and not zero_ok):
+        raise InputError(f"must be a {'non-negative' if zero_ok else 'positive'} finite number, got {value!r}",
+                         source, field)
+    return float(value)
+
+
+def generator(rng: Any, field: str = "rng") -> np.random.Generator:
+    """``rng`` if it is a :class:`numpy.random.Generator`, else an :class:`InputError` naming ``field``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        The value given.
+    field : str, optional
+        The field named in the error (default ``"rng"``).
+
+    Returns
+    -------
+    numpy.random.Generator
+        ``rng`` unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from eqrec.checks import generator
+    >>> isinstance(generator(np.random.default_rng(0)), np.random.Generator)
+    True
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise InputError(f"expected a numpy.random.Generator (numpy.random.default_rng(seed)), got "
+                         f"{type(rng).__name__}", field=field)
+    return rng
+
+
+def floats(value: Any, field: str) -> np.ndarray:
+    """``value`` as a float array, else an :class:`InputError` naming ``field`` (shape and finiteness unchecked).
+
+    Parameters
+    ----------
+    value : array_like
+        The numbers given.
+    field : str
+        The field named in the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``numpy.asarray(value, float)``.
+
+    Examples
+    --------
+    >>> from eqrec.checks import floats
+    >>> floats([1, 2], "x0")
+    array([1., 2.])
+    """
+    try:
+        return np.asarray(value, float)
+    except (TypeError, ValueError):  # strings, ragged or non-numeric data
+        raise InputError(f"must be numbers, got {value!r:.60}", field=field) from None
+
+
+def seeded(seed: Any, field: str = "seed") -> np.random.Generator:
+    """``numpy.random.default_rng(seed)``, else an :class:`InputError` naming ``field``.
+
+    Parameters
+    ----------
+    seed : int or None
+        A seed :func:`numpy.random.default_rng` takes (a non-negative integer, ``None``, ...).
+    field : str, optional
+        The field named in the error (default ``"seed"``).
+
+    Returns
+    -------
+    numpy.random.Generator
+        The generator.
+
+    Examples
+    --------
+    >>> from eqrec.checks import seeded
+    >>> float(seeded(0).uniform()) == float(__import__("numpy").random.default_rng(0).uniform())
+    True
+    """
+    try:
+        return np.random.default_rng(seed)
+    except (TypeError, ValueError):
+        raise InputError(f"a seed is an integer >= 0 (or None), got {seed!r}", field=field) from None
+
+
+def instance(value: Any, kind: "type | tuple[type, ...]", field: str, what: str | None = None) -> Any:
+    """``value`` if it is an instance of ``kind``, else an :class:`InputError` naming ``field``.
+
+    Parameters
+    ----------
+    value : object
+        The value given.
+    kind : type or tuple of type
+        The type(s) accepted.
+    field : str
+        The field named in the error.
+    what : str or None, optional
+        What is expected, in words (default: the name of ``kind``).
+
+    Returns
+    -------
+    object
+        ``value`` unchanged.
+
+    Examples
+    --------
+    >>> from eqrec.checks import instance
+    >>> instance(True, bool, "strict")
+    True
+    """
+    if not isinstance(value, kind):
+        names = what or " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+        raise InputError(f"expected {names}, got {type(value).__name__}", field=field)
+    return value

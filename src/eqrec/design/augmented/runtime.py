@@ -1,0 +1,292 @@
+r"""What runs: the augmented estimator (P2 eqs. (2)-(3); P3 eqs. (4)-(5)) and its prefix-based form.
+
+Equivalence with the prefix-based (time-based) estimator
+--------------------------------------------------------
+``s`` is a causal affine function of the available ``ỹ`` and ``s0``, hence so is
+``ue``: every augmented estimator *is* a prefix-based one ``ue = u0 + F ỹ``
+(:func:`augmented_to_prefix`); for given ``L`` and ``s0`` the map ``ỹ -> z`` is
+affine with unit block lower-triangular linear part, so every ``(F, u0)`` has a
+unique ``(M, ν)`` (:func:`prefix_to_augmented`).  Hence for every ``L`` and ``s0``
+the optimum equals that of the prefix-based (time-based for one word) design.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+
+from eqrec.estimators.packets import check_estimate, check_input
+from eqrec.estimators.packets import as_packets
+from eqrec.bounds.gains import GainRow, GainSchedule, schedule_from_word_gains
+from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.systems.affine import AffineSystem
+from eqrec.design.augmented.model import (RUNTIME_MODES, AugmentedGains, AugmentedPrefixGains, arrival_indicator,
+                                          as_time_varying_L, check_mode, default_runtime, effective_L,
+                                          missing_data_pattern)
+from eqrec.errors import InputError
+
+
+def _innovation_recursion(system: AffineSystem, pattern: ArrivalPattern, L: np.ndarray, s0, injection) -> None:
+    r"""Propagate ``s(k) = Sy ỹ + sc`` (affine in the stacked ``ỹ``) along ``pattern``.
+
+    At step ``k`` the innovation rows ``z(k) = Z[k] ỹ + zc[k]`` are filled (``ỹ(k)``
+    enters iff ``y(k)`` ever arrives) and ``injection(k, Z, zc)`` returns the gain row
+    ``(F_k, u0_k)`` of ``ue(k) = u0_k + F_k ỹ``; ``s(k+1) = A s + ue + L_k z(k)`` with ``L``
+    as the runtime uses it (zero where it ignores the step; ``z(k) = -C s(k)`` at a missing step).
+    Shared by both conversion directions and both parametrisations.
+    """
+    T, n, p = pattern.T, system.n, system.p
+    Sy = np.zeros((n, T * p))
+    sc = np.asarray(s0, float).reshape(n).copy()
+    Z = np.zeros((T * p, T * p))
+    zc = np.zeros(T * p)
+    for k in range(T):
+        C = system.C_at(k)
+        rows = slice(k * p, (k + 1) * p)
+        Z[rows] = -C @ Sy
+        if pattern.arrivals[k] is not None:
+            Z[rows, rows] += np.eye(p)
+        zc[rows] = -C @ sc
+        Fk, uk = injection(k, Z, zc)
+        zk = Z[rows] if pattern.arrivals[k] in (k, None) else -C @ Sy  # ỹ(k) not there yet: 0 at time k
+        Sy = system.A_at(k) @ Sy + Fk + L[k] @ zk
+        sc = system.A_at(k) @ sc + uk + L[k] @ zc[rows]
+
+
+def _columns(pre: ArrivalPattern, t: int, p: int) -> np.ndarray:
+    return np.array([tau * p + j for tau in pre.available(t) for j in range(p)], dtype=np.int64)
+
+
+def _runtime_L(gains, T: int, n: int, p: int, pattern, runtime: str) -> np.ndarray:
+    return effective_L(as_time_varying_L(gains.L, T, n, p), pattern, check_mode(runtime, RUNTIME_MODES))
+
+
+def _to_prefix(system: AffineSystem, tree: PrefixTree, gains, runtime: str | None):
+    """Rows ``(F over all Tp columns, u0)`` per prefix of :func:`augmented_to_prefix`; one word's gains multiply
+    their stored rows ``M(k, .)`` (zero columns included), prefix gains the available measurements."""
+    word = isinstance(gains, AugmentedGains)
+    runtime = runtime or (default_runtime(gains.mode) if word else "theorem2")
+    n, p, T = system.n, system.p, tree.depth
+    out: dict[ArrivalPattern, tuple[np.ndarray, np.ndarray]] = {}
+    for pat in tree.patterns:
+        def injection(t, Z, zc, pat=pat):
+            pre = pat.prefix(t + 1)
+            if word:
+                M, nu = gains.M[t * n:(t + 1) * n], gains.nu[t * n:(t + 1) * n]
+                out[pre] = (M @ Z, nu + M @ zc)
+            else:
+                (M, nu), cols = gains.rows[pre], _columns(pre, t, p)
+                out[pre] = (M @ Z[cols], nu + M @ zc[cols])
+            return out[pre]
+
+        _innovation_recursion(system, pat, _runtime_L(gains, T, n, p, pat, runtime), gains.s0, injection)
+    return out
+
+
+def augmented_to_prefix(system: AffineSystem, tree: PrefixTree, gains: AugmentedPrefixGains,
+                        runtime: str = "theorem2") -> GainSchedule:
+    """The prefix-based schedule ``ue = u0 + F ỹ`` producing the same ``x̂`` as the augmented estimator.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    tree : PrefixTree
+        The patterns.
+    gains : AugmentedPrefixGains
+        Gains per prefix.
+    runtime : {"theorem2", "hold"}, optional
+        How the running estimator treats a step whose measurement is not on time.
+
+    Returns
+    -------
+    GainSchedule
+        Rows ``F(t, 0..t)``, ``u0(t)`` per prefix (the form of P3 eq. (7)).
+    """
+    out = _to_prefix(system, tree, gains, runtime)
+    rows = {pre: GainRow(F[:, : pre.T * system.p].copy(), np.asarray(u0, float).copy()) for pre, (F, u0) in out.items()}
+    return GainSchedule(rows=rows, n=system.n, p=system.p, designed=tree.patterns)
+
+
+def prefix_to_augmented(system: AffineSystem, tree: PrefixTree, schedule: GainSchedule, L, s0,
+                        runtime: str = "theorem2") -> AugmentedPrefixGains:
+    """The unique ``(M, ν)`` per prefix reproducing ``schedule`` for given ``L`` and ``s0`` (inverse of
+    :func:`augmented_to_prefix`).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    tree : PrefixTree
+        The patterns of ``schedule``.
+    schedule : GainSchedule
+        Prefix-based (or time-based) gains ``ue = u0 + F ỹ``.
+    L : array_like, shape (n, p) or (T, n, p)
+        Observer gain.
+    s0 : array_like, shape (n,)
+        Initial auxiliary state.
+    runtime : {"theorem2", "hold"}, optional
+        Treatment of steps whose measurement is not on time.
+
+    Returns
+    -------
+    AugmentedPrefixGains
+        ``M = F P^{-1}``, ``ν = u0 - M p0`` on the available measurements, with
+        ``z = P ỹ + p0`` (``P`` unit block lower triangular).
+    """
+    n, p, T = system.n, system.p, tree.depth
+    Lt = as_time_varying_L(L, T, n, p)
+    out: dict[ArrivalPattern, tuple[np.ndarray, np.ndarray]] = {}
+    for pat in tree.patterns:
+        def injection(t, Z, zc, pat=pat):
+            pre = pat.prefix(t + 1)
+            g = schedule.row(pre)
+            cols = _columns(pre, t, p)
+            F = np.zeros((n, T * p))
+            F[:, : (t + 1) * p] = g.F
+            if pre not in out:
+                P = Z[np.ix_(cols, cols)]
+                M = sla.solve_triangular(P.T, F[:, cols].T, lower=False, unit_diagonal=True).T if cols.size \
+                    else np.zeros((n, 0))
+                out[pre] = (M, g.u0 - M @ zc[cols])
+            return F, g.u0
+
+        _innovation_recursion(system, pat, effective_L(Lt, pat, check_mode(runtime, RUNTIME_MODES)), s0, injection)
+    return AugmentedPrefixGains(rows=out, L=Lt, s0=np.asarray(s0, float).reshape(n).copy())
+
+
+def augmented_to_time_based(system: AffineSystem, gains: AugmentedGains,
+                            runtime: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked time-based gains of one word's augmented gains (:func:`augmented_to_prefix` along the word).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : AugmentedGains
+        Gains along the designed word.
+    runtime : {"theorem2", "hold"} or None, optional
+        Treatment of missing steps (default: ``"theorem2"`` for a ``"theorem2"`` design, else ``"hold"``).
+
+    Returns
+    -------
+    F : ndarray, shape (Tn, Tp)
+        Block lower triangular, zero columns at missing steps.
+    u0 : ndarray, shape (Tn,)
+    """
+    pattern = missing_data_pattern(gains.word)
+    out = _to_prefix(system, PrefixTree([pattern]), gains, runtime)
+    pres = [pattern.prefix(k + 1) for k in range(pattern.T)]
+    F = np.vstack([out[pre][0] for pre in pres])
+    F[:, np.repeat(arrival_indicator(pattern) == 0, system.p)] = 0.0  # ỹ is zero there: immaterial columns
+    return F, np.concatenate([out[pre][1] for pre in pres])
+
+
+def schedule_from_augmented(system: AffineSystem, gains: AugmentedGains, runtime: str | None = None) -> GainSchedule:
+    """The converted time-based :class:`GainSchedule` (``time_based=True``) of one word's augmented gains.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : AugmentedGains
+        Gains along the designed word.
+    runtime : {"theorem2", "hold"} or None, optional
+        Treatment of missing steps (default: ``"theorem2"`` for a ``"theorem2"`` design, else ``"hold"``).
+
+    Returns
+    -------
+    GainSchedule
+        The gains ``(F, u0)`` of :func:`augmented_to_time_based`, chosen by time only.
+    """
+    F, u0 = augmented_to_time_based(system, gains, runtime)
+    return schedule_from_word_gains(PrefixTree([gains.word]), {gains.word: (F, u0)}, system.n, system.p,
+                                    time_based=True)
+
+
+class AugmentedEstimator:
+    """The causal augmented estimator running both recursions (P2 eqs. (2)-(3); P3 eqs. (4)-(5)).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : AugmentedGains or AugmentedPrefixGains
+        Designed gains (one word: measurements the designed word lacks are ignored).
+    xhat0 : array_like, shape (n,)
+        Initial estimate.
+    runtime : {"theorem2", "hold"} or None, optional
+        Treatment of a step whose measurement is not on time (``L_k = 0``, or ``L`` kept with ``ỹ = 0``);
+        default ``"theorem2"``, or for one word its design mode's runtime.
+    """
+
+    def __init__(self, system: AffineSystem, gains, xhat0: np.ndarray, runtime: str | None = None):
+        self.word = gains.word if isinstance(gains, AugmentedGains) else None
+        self.runtime = check_mode(runtime or ("theorem2" if self.word is None else default_runtime(gains.mode)),
+                                  RUNTIME_MODES)
+        self.system, self.gains = system, gains
+        self.T = len(self.word) if self.word is not None else len(gains.L)
+        self.L = as_time_varying_L(gains.L, self.T, system.n, system.p)
+        self.xhat = check_estimate(xhat0, system.n)
+        self.s = np.asarray(gains.s0, float).reshape(system.n).copy()
+        self._arrivals: list[int | None] = []
+        self._xs: list[tuple[np.ndarray, np.ndarray]] = []
+        self._z: dict[int, np.ndarray] = {}
+
+    def step(self, y, u: np.ndarray | None = None) -> np.ndarray:
+        """Process time ``t`` and return ``x̂(t+1)``.
+
+        Parameters
+        ----------
+        y : array_like, None or list of (int, array_like)
+            One word's gains: the measurement of ``t`` (``None`` if missing); prefix gains: the
+            time-stamped packets ``(τ, y(τ))`` arriving at ``t``.
+        u : array_like or None, optional
+            Known input ``u(t)`` (default zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
+        sysm, t = self.system, len(self._arrivals)
+        n, p = sysm.n, sysm.p
+        if t >= self.T:
+            raise InputError(f"the estimator's horizon T = {self.T} is over")
+        u = check_input(u, sysm.m)  # everything is checked before anything changes
+        if self.word is not None:
+            y = as_packets(y, t, p)
+            if any(pk.time != t for pk in y):
+                raise InputError("an estimator of one word takes y(t) itself (or None), not time-stamped packets",
+                                 field="y")
+            y = [] if (not y or self.word[t] != "1") else [(t, y[0].y)]
+        else:
+            y = [(pk.time, pk.y) for pk in as_packets(y, t, p)]
+        xs = self._xs + [(self.xhat.copy(), self.s.copy())]
+        arrivals, z = self._arrivals + [None], dict(self._z)
+        for tau, yt in y:
+            if tau < 0 or arrivals[tau] is not None:
+                raise InputError(f"packet stamped {tau} at time {t}: " + ("before the horizon's start" if tau < 0
+                                 else "a second packet with this stamp"), field="y")
+            arrivals[tau] = t
+            C = sysm.C_at(tau)
+            z[tau] = (yt - C @ xs[tau][0]) - C @ xs[tau][1]
+        C = sysm.C_at(t)
+        on_time = arrivals[t] == t
+        if not on_time:  # the innovation with ỹ(t) = 0
+            z_missing = np.zeros(p) - C @ self.s
+        if self.word is not None:  # ue(t) = ν_t + M(t, 0..t) z(0..t), zero columns at the missing steps
+            z.setdefault(t, z_missing if not on_time else None)
+            M, nu = self.gains.M[t * n:(t + 1) * n, : (t + 1) * p], self.gains.nu[t * n:(t + 1) * n]
+            ue = nu + M @ np.concatenate([z[tau] for tau in range(t + 1)])
+        else:
+            pre = ArrivalPattern(tuple(arrivals))
+            if pre not in self.gains.rows:
+                raise InputError(f"arrival prefix {pre.label!r} at time {t} is not in the design", field="y")
+            (M, nu), taus = self.gains.rows[pre], pre.available(t)
+            ue = nu + M @ (np.concatenate([z[tau] for tau in taus]) if taus else np.zeros(0))
+        Lt = self.L[t] if (on_time or self.runtime == "hold") else np.zeros((n, p))
+        s_next = sysm.A_at(t) @ self.s + ue + Lt @ (z[t] if on_time else z_missing)
+        xhat = sysm.A_at(t) @ self.xhat + sysm.B_at(t) @ u - ue + sysm.f
+        self._xs, self._arrivals, self._z, self.s, self.xhat = xs, arrivals, z, s_next, xhat
+        return self.xhat.copy()

@@ -1,0 +1,11 @@
+"""The class engine: every prefix-tree design as independent LPs per (time, available data) class.
+
+:mod:`~eqrec.design.classes.engine`
+    The separation theorem and the design (solve, certify).
+:mod:`~eqrec.design.classes.block_lp`
+    One block LP holding the LP of every class and state row (build, read).
+:mod:`~eqrec.design.classes.blocks`
+    The class LPs one class at a time, in batches, on every core or a Dask cluster.
+:mod:`~eqrec.design.classes.gains`
+    What the class gains ``K`` give: their exact worst case and the node gains of the recursive estimator.
+"""

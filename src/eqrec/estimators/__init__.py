@@ -1,0 +1,19 @@
+"""Estimators: one protocol (``reset``, then ``step(y, u) -> (x̂, bound or covariance)``) for every estimator.
+
+:mod:`~eqrec.estimators.protocol`
+    The estimator protocol and the on-time-only adapter.
+:mod:`~eqrec.estimators.packets`
+    What reaches an estimator at a step (packets, inputs, initial estimates), checked.
+:mod:`~eqrec.estimators.intake`
+    The packet intake and the period clock of the causal estimators (all-or-nothing steps).
+:mod:`~eqrec.estimators.causal`
+    The causal equalized-recovery estimators on time-stamped packets (class and node gains).
+:mod:`~eqrec.estimators.switching`
+    The switching strategy of the delayed-data paper (Section III-B3).
+:mod:`~eqrec.estimators.error_boxes`
+    The error boxes of an estimator outside its language (``strict=False``).
+:mod:`~eqrec.estimators.guaranteed`
+    :class:`~eqrec.estimators.guaranteed.GuaranteedEstimator`: each step returns the estimate and its guarantee.
+:mod:`~eqrec.estimators.kalman`
+    Kalman-type filters for delayed and missing measurements (time-stamped, delay-unaware, random-delay LMV).
+"""

@@ -1,0 +1,379 @@
+r"""The causal equalized-recovery estimator running on a stream of time-stamped packets.
+
+Eqs. (5)-(7) of the prefix-based paper, with delayed packets as in the
+delayed-data paper:
+
+.. math::
+    \hat x(t+1) = A\hat x(t) + Bu(t) - u_e(t) + f, \qquad
+    u_e(t) = u_0(t, P_t) + \sum_{\tau \in \mathcal A(t)} F(t, \tau, P_t)\, y_\xi(\tau),
+
+where :math:`\mathcal A(t)` is the set of measurement times whose packets
+have arrived by ``t``, :math:`P_t` the observed arrival prefix (the events
+``0..t``), and :math:`y_\xi(\tau) = y(\tau) - C(\tau)\hat x(\tau)` is formed
+with the estimate of the packet's *own* time: the estimator keeps its history
+``x̂(0..t)`` so that a late ``y(τ)`` enters as ``y(τ) − C x̂(τ)``.  The gains
+are looked up by ``P_t`` (prefix-based) or by ``t`` alone (time-based).
+
+With ``periodic=True`` the estimator restarts its horizon every ``T`` steps
+(Section V of the prefix-based paper, Section III-D of the augmented paper):
+the error is back below ``M1`` at the end of each period, so the same gains
+apply again.  A packet stamped before the current period is dropped: its
+gains are no longer in use, and the design language counts a delay that
+reaches past the period's end as a missing measurement (Definition 1 of the
+delayed-data paper), so dropping it is exactly what the guarantee assumes.
+
+:class:`eqrec.estimators.switching.SwitchingEstimator` is the implementation strategy of Section III-B3
+of the delayed-data paper: an equalized-performance estimator (equalized
+recovery with period 1) while every measurement arrives on time, switching
+to a recovery estimator for ``T`` steps when one is late or missing.
+
+:class:`ClassEstimator` runs the same estimator in **class form**
+(:mod:`eqrec.design.classes.engine`): one gain ``K`` per (time, available data)
+class instead of one gain row per prefix-tree node,
+
+.. math:: \hat x(d) = \bar x(d) + K_{(d, S)}\,(y_S - \bar y_S),
+
+with :math:`\bar x` the noise-free prediction from the period's first
+estimate.  Both take the same packets and raise the same errors;
+:func:`make_estimator` picks one from the kind of gains.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+import numpy as np
+
+from eqrec.bounds.data_classes import ClassGains
+from eqrec.bounds.gains import GainSchedule
+from eqrec.estimators.intake import _Opened, _StampedEstimator
+from eqrec.estimators.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
+from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.systems.affine import AffineSystem
+from eqrec.errors import InputError
+
+
+class RecoveryEstimator(_StampedEstimator):
+    """Causal estimator of eqs. (5)-(7) on time-stamped packets.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model (``A, B, C, f``) used by the estimator.
+    schedule : GainSchedule
+        Prefix-based or time-based gains.
+    xhat0 : array_like, shape (n,)
+        Initial estimate ``x̂(0)``.
+    periodic : bool, optional
+        Restart the horizon every ``T`` steps instead of stopping.
+    t0 : int, optional
+        Absolute time of the first step (the time stamp of the first
+        measurement; ``0`` by default).  Packets stamped before ``t0`` are
+        dropped like packets of an earlier period.
+    """
+
+    def __init__(self, system: AffineSystem, schedule: GainSchedule, xhat0: np.ndarray, periodic: bool = False,
+                 t0: int = 0):
+        super().__init__(system, schedule.horizon, xhat0, periodic, t0)
+        self.schedule = schedule
+
+    def _reference(self, restarted: bool) -> np.ndarray:
+        return self.xhat  # y_ξ(τ) = y(τ) − C x̂(τ), with the estimate of the packet's own time
+
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+        """Process time ``t``: the packets arriving at ``t`` and the input ``u(t)`` (eqs. (5), (7)).
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            ``None`` (nothing arrives), an array (``y(t)`` arriving on time) or
+            :class:`Packet` objects stamped with their own (absolute) times ``τ <= t``.
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)`` (a copy).
+        """
+        sys = self.system
+        step = self._open(y, u)
+        t = step.t
+        gain = self.schedule.row(ArrivalPattern(tuple(step.arrivals)), field="y")
+        yxi = np.zeros((t + 1, sys.p))
+        for tau, v in step.yxi.items():
+            yxi[tau] = v
+        ue = gain.u0 + gain.F @ yxi.reshape(-1)
+        xhat = sys.A_at(t) @ self.xhat + sys.B_at(t) @ step.u - ue + sys.f
+        self._commit(step)
+        self.xhat = xhat
+        return self.xhat.copy()
+
+
+class ClassEstimator(_StampedEstimator):
+    r"""The equalized-recovery estimator in class form: one gain per (time, available data) class.
+
+    The class form of the delayed-data paper's estimator (its eqs. (5)-(7)
+    with the gains of Theorem 1, rewritten by the separation theorem of
+    :mod:`eqrec.design.classes.engine`): at period time ``t`` the estimator has
+    received the measurements of the times ``S = A(t)`` (a packet stamped
+    ``τ`` of the current period that arrived at or before ``t``) and predicts
+
+    .. math::
+        \hat x(t+1) = \bar x(t+1) + K_{(t+1,\,S)}\,(y_S - \bar y_S),
+
+    where :math:`\bar x` is the noise-free prediction from the period's first
+    estimate :math:`\hat x(0)`,
+
+    .. math::
+        \bar x(0) = \hat x(0), \qquad \bar x(s+1) = A(s)\,\bar x(s) + B(s)\,u(s) + f,
+        \qquad \bar y(\tau) = C(\tau)\,\bar x(\tau),
+
+    (inputs and ``f`` included, so they cancel in the error), and
+    :math:`y_S - \bar y_S` stacks :math:`y(\tau) - \bar y(\tau)` over
+    :math:`\tau \in S` in increasing time (the column order of ``K``).  With
+    :math:`\delta = (w, v, \xi_0)` of the period, :math:`x(d) - \bar x(d) =
+    E_d\delta` and :math:`y_S - \bar y_S = Z_S\delta`
+    (:func:`eqrec.bounds.data_classes.class_maps`), so the error is exactly
+
+    .. math:: \xi(t+1) = x(t+1) - \hat x(t+1) = (E_{t+1} - K_{(t+1,S)} Z_S)\,\delta,
+
+    whose worst case over the box is the class's certified level.  Unlike
+    :class:`RecoveryEstimator` it needs no prefix tree and no history of
+    estimates, only the ``K`` of the current class (looked up by
+    ``(t+1, S)``); any arrival prefix whose classes are in the design gets
+    their guarantees, whether or not the prefix itself is one of the design's.
+
+    Packet handling, periodic restart and errors are those of
+    :class:`RecoveryEstimator`.  With ``periodic=True`` the horizon restarts
+    every ``T`` steps and :math:`\bar x` is re-anchored at the estimate reached
+    at the period's end (``‖ξ‖ <= μ1`` there, so the same gains apply again);
+    packets stamped before the current period are dropped (the language counts
+    a delay past the period's end as a missing measurement).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model (``A, B, C, f``) used by the estimator (time-varying
+        matrices are read at absolute times, as in :class:`RecoveryEstimator`).
+    gains : ClassGains
+        One ``K`` per class (:class:`eqrec.bounds.data_classes.ClassGains`, e.g.
+        ``design.class_gains`` of the class engine).
+    xhat0 : array_like, shape (n,)
+        Initial estimate ``x̂(0)``.
+    periodic : bool, optional
+        Restart the horizon every ``T`` steps instead of stopping (default
+        ``False``).
+    t0 : int, optional
+        Absolute time of the first step; packets stamped before it are dropped.
+
+    Attributes
+    ----------
+    xhat : ndarray, shape (n,)
+        The current estimate (of time :attr:`time`).
+    time : int
+        Absolute time of the next step.
+    period_time : int
+        Steps taken in the current period (``0..T``).
+    observed_prefix : ArrivalPattern
+        The arrival prefix observed so far in the current period.
+    prediction : ndarray, shape (n,)
+        ``x̄`` of the current time.
+
+    Raises
+    ------
+    InputError
+        Gains whose shapes do not fit the system; in :meth:`step`, the
+        errors of :meth:`RecoveryEstimator.step`, or observed data whose class
+        ``(t+1, S)`` the gains do not have.
+
+    See Also
+    --------
+    GuaranteedEstimator : the same estimator with its per-step guarantee
+        (what :meth:`Design.estimator` returns).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> acc = eqrec.acc_system()
+    >>> words = ["101111", "110111", "111011", "111101"]  # the prefix-based paper's L1
+    >>> estimator = eqrec.ClassEstimator(acc, eqrec.design_prefix(acc, words, mu1=1.0).class_gains, np.zeros(3))
+    >>> xhat = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives on time
+    >>> xhat.shape, estimator.time, estimator.observed_prefix.label
+    ((3,), 1, '1')
+    """
+
+    def __init__(self, system: AffineSystem, gains: ClassGains, xhat0: np.ndarray, periodic: bool = False,
+                 t0: int = 0):
+        if (gains.n, gains.p) != (system.n, system.p):
+            raise InputError(f"class gains for n = {gains.n}, p = {gains.p} do not fit the system "
+                             f"(n = {system.n}, p = {system.p})")
+        for cls, K in zip(gains.classes.classes, gains.K):
+            if np.shape(K) != (system.n, len(cls.available) * system.p):
+                raise InputError(f"the gain of class {cls.label} has shape {np.shape(K)}, expected "
+                                 f"{(system.n, len(cls.available) * system.p)}")
+        super().__init__(system, gains.horizon, xhat0, periodic, t0)
+        self.gains = gains
+        self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
+
+    @property
+    def prediction(self) -> np.ndarray:
+        """``x̄`` of the current time: the noise-free prediction from the period's first estimate."""
+        return self._xbar.copy()
+
+    def _reference(self, restarted: bool) -> np.ndarray:
+        # residuals y(τ) − C(τ) x̄(τ); a new period re-anchors x̄ at the estimate reached at the period's end
+        return self.xhat if restarted else self._xbar
+
+    def class_of(self, y, u=None) -> tuple[int, tuple[int, ...]]:
+        """The class ``(t+1, S)`` a step with these packets would need (nothing changes).
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            What would arrive at the current time (as in :meth:`step`).
+        u : ndarray or None, optional
+            The input (checked like :meth:`step` does).
+
+        Returns
+        -------
+        tuple
+            ``(depth, available)``: the period time of the predicted estimate and
+            the period times of the measurements received by then.
+
+        Raises
+        ------
+        InputError
+            As :meth:`step`, except for a class the gains lack.
+        """
+        step = self._open(y, u)
+        return step.t + 1, tuple(sorted(step.yxi))
+
+    def coast(self, y, u: np.ndarray | None = None) -> np.ndarray:
+        r"""Process time ``t`` on the model alone: :math:`\hat x(t+1) = A\hat x(t) + B u(t) + f`.
+
+        The packets are checked and recorded as :meth:`step` does but not used
+        (the step of :class:`eqrec.estimators.guaranteed.GuaranteedEstimator` with
+        ``strict=False`` when the data have left the design's language).
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            What arrived at ``t`` (as in :meth:`step`).
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)`` (a copy).
+
+        Raises
+        ------
+        InputError
+            As :meth:`step`, except for a class the gains lack (nothing changes).
+        """
+        return self._coast(self._open(y, u))
+
+    def _coast(self, step: _Opened) -> np.ndarray:
+        sys = self.system
+        xhat = sys.A_at(step.t) @ self.xhat + sys.B_at(step.t) @ step.u + sys.f
+        self._commit(step)
+        self._xbar = self.xhat = xhat
+        return xhat.copy()
+
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+        r"""Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
+
+        Advances the noise-free prediction
+        :math:`\bar x(t+1) = A\bar x(t) + B u(t) + f` and returns
+        :math:`\hat x(t+1) = \bar x(t+1) + K_{(t+1,S)}(y_S - \bar y_S)`,
+        with ``S`` the measurement times of the period received so far.
+
+        Parameters
+        ----------
+        y : ndarray, Packet, iterable of Packet, or None
+            As in :meth:`RecoveryEstimator.step`: ``None`` (nothing arrives),
+            an array (``y(t)`` arriving on time) or :class:`Packet` objects
+            stamped with their own (absolute) times ``τ <= t``.
+        u : ndarray, shape (m,), or None, optional
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The prediction ``x̂(t+1)`` (a copy).
+
+        Raises
+        ------
+        InputError
+            When the horizon is over (not periodic), for a packet from the
+            future, a second packet with one stamp, a measurement of the
+            wrong length, or observed data whose class ``(t+1, S)`` the
+            gains do not have.
+        """
+        return self._advance(self._open(y, u))
+
+    def _advance(self, step: _Opened) -> np.ndarray:
+        """The step of :meth:`step` from its checked state (the class lookup may still raise; nothing changes)."""
+        sys = self.system
+        k, t = step.k, step.t
+        S = tuple(sorted(step.yxi))
+        xbar0 = self.xhat if step.restarted else self._xbar
+        xbar = sys.A_at(t) @ xbar0 + sys.B_at(t) @ step.u + sys.f
+        try:
+            xhat = self.gains.estimate(t + 1, S, xbar, [step.yxi[tau] for tau in S])
+        except InputError:
+            raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
+                             f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
+                             f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains have "
+                             f"no class ({t + 1}, {list(S)})", field="y") from None
+        self._commit(step)
+        self._xbar, self.xhat = xbar, xhat
+        return self.xhat.copy()
+
+
+def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: np.ndarray,
+                   periodic: bool = False, t0: int = 0) -> "RecoveryEstimator | ClassEstimator":
+    """The runtime estimator of a design's gains.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model used by the estimator.
+    gains : GainSchedule or ClassGains
+        Node gains (:class:`eqrec.bounds.gains.GainSchedule`: a
+        :class:`RecoveryEstimator`, eqs. (5)-(7)) or class gains
+        (:class:`eqrec.bounds.data_classes.ClassGains`: a :class:`ClassEstimator`,
+        the class form).
+    xhat0 : array_like, shape (n,)
+        Initial estimate ``x̂(0)``.
+    periodic : bool, optional
+        Restart the horizon every ``T`` steps.
+    t0 : int, optional
+        Absolute time of the first step.
+
+    Returns
+    -------
+    RecoveryEstimator or ClassEstimator
+        The estimator, at time ``t0`` with estimate ``xhat0``.
+
+    Raises
+    ------
+    InputError
+        For gains of any other kind (field ``gains``).
+    """
+    if isinstance(gains, GainSchedule):
+        return RecoveryEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
+    if isinstance(gains, ClassGains):
+        return ClassEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
+    raise InputError(f"expected a GainSchedule or ClassGains, got {type(gains).__name__}", field="gains")
+
+
+def _has_class(gains: ClassGains, depth: int, available: tuple[int, ...]) -> bool:
+    try:
+        gains.classes.index(depth, available)
+    except InputError:
+        return False
+    return True

@@ -1,0 +1,174 @@
+r"""The one estimator protocol: every estimator of the package runs as ``reset`` then ``step``.
+
+Every estimator, guaranteed (bounded-error designs of the three equalized-recovery
+papers) or stochastic (Kalman-type filters, the LMV filter and predictor of the
+companion study), is driven the same way, in the convention of python-control's
+discrete-time systems and of filterpy's filters:
+
+* ``est.reset(xhat0, t0=0)`` starts a run from the initial estimate
+  :math:`\hat x(t_0)` and returns the estimator;
+* ``est.step(y, u)`` processes time ``t``: what arrived at ``t`` (``None`` when
+  nothing arrived, ``y(t)`` as an array when it arrived on time, or time-stamped
+  packets ``(τ, y(τ))``, :class:`~eqrec.estimators.causal.Packet`, for late ones) and
+  the input ``u(t)``; it returns the pair ``(x̂(t+1), spread)``;
+* ``spread`` is a guarantee ``b`` with :math:`\|x(t+1) - \hat x(t+1)\|_\infty \le b`
+  for every noise in the box (``kind == "guaranteed"``, a float) or the error
+  covariance the estimator believes in (``kind == "stochastic"``, an ``(n, n)``
+  array);
+* ``est.time`` is the absolute time of the current estimate and ``est.x`` a copy
+  of it.
+
+A call that raises leaves the estimator exactly as it was (every input is
+checked before any state changes), and non-finite data is refused with
+:class:`~eqrec.errors.InputError` naming the field.
+
+One loop, :func:`eqrec.simulate.loop.closed_loop`, runs any estimator that
+follows this protocol.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal, Protocol, runtime_checkable
+
+import numpy as np
+
+from eqrec.estimators.packets import as_packets
+
+#: What a step returns besides the estimate: a float bound (guaranteed) or a covariance (stochastic).
+Spread = "float | np.ndarray"
+
+EstimatorKind = Literal["guaranteed", "stochastic"]
+
+
+@runtime_checkable
+class Estimator(Protocol):
+    """An estimator run step by step (module docstring).
+
+    Attributes
+    ----------
+    kind : {"guaranteed", "stochastic"}
+        What the second value of :meth:`step` is: a bound on the infinity
+        norm of the error, or an error covariance.
+    name : str
+        The family in words, e.g. ``"Kalman, time-stamped"`` or
+        ``"guaranteed, class engine"`` (a column of ``eqrec compare``).
+    """
+
+    kind: EstimatorKind
+    name: str
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "Estimator":
+        """Start a run from ``x̂(t0) = xhat0``.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            The initial estimate (finite).
+        t0 : int, optional
+            Absolute time of the first step.
+
+        Returns
+        -------
+        Estimator
+            ``self``, so that ``est.reset(x0).step(...)`` chains.
+        """
+        ...
+
+    def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, Any]:
+        """Process time ``t``: what arrived and the input.
+
+        Parameters
+        ----------
+        y : array_like, Packet, sequence of packets, or None
+            ``y(t)`` on time, time-stamped packets ``(τ, y(τ))``, or ``None``.
+        u : array_like or None
+            The input ``u(t)`` (``None``: zero).
+
+        Returns
+        -------
+        xhat : ndarray, shape (n,)
+            The estimate the estimator reports for this step (``x̂(t+1)`` for the guaranteed estimators).
+        spread : float or ndarray
+            The bound (``kind == "guaranteed"``) or the error covariance (``"stochastic"``).
+        """
+        ...
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        ...
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate."""
+        ...
+
+
+class OnTimeOnly:
+    """A protocol estimator fed only the packet of the current time: a late packet counts as lost.
+
+    An adapter for the estimators whose model has losses but no delays (the
+    prefix-based paper's, the LMV filters) on traces with late packets
+    (:mod:`eqrec.compare`).
+
+    Parameters
+    ----------
+    estimator : object
+        An estimator of the protocol (:mod:`eqrec.estimators.protocol`).
+    p : int
+        Number of outputs.
+    """
+
+    def __init__(self, estimator: Any, p: int):
+        self.estimator, self.p = estimator, p
+        self.kind, self.name = estimator.kind, estimator.name
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "OnTimeOnly":
+        """Start the wrapped estimator (:meth:`eqrec.estimators.protocol.Estimator.reset`).
+
+        Parameters
+        ----------
+        xhat0 : array_like
+            Initial estimate.
+        t0 : int, optional
+            Absolute time of the first step.
+
+        Returns
+        -------
+        OnTimeOnly
+            ``self``.
+        """
+        self.estimator.reset(xhat0, t0)
+        return self
+
+    def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, Any]:
+        """Pass ``y(t)`` on if its packet is among those arriving at ``t``, else ``None``.
+
+        Parameters
+        ----------
+        y : object
+            What arrived (any protocol form).
+        u : array_like or None, optional
+            The input.
+
+        Returns
+        -------
+        tuple
+            What the wrapped estimator returns.
+        """
+        now = self.estimator.time
+        on_time = [pk.y for pk in as_packets(y, now, self.p) if pk.time == now]
+        return self.estimator.step(on_time[0] if on_time else None, u)
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        return self.estimator.time
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate."""
+        return self.estimator.x
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.__dict__["estimator"], name)

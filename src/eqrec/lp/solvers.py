@@ -1,0 +1,384 @@
+"""The LP solver registry: one list of solver names, one entry point.
+
+Every design solves a :class:`eqrec.lp.model.LinearProgram`; the solver is a
+parameter.  :data:`SOLVERS` maps each name to a :class:`SolverInfo`;
+:data:`SOLVER_NAMES` is the list the CLI and the configuration schemas offer
+(a test checks they agree).
+
+``"ipopt"`` is the interior-point NLP solver the augmented paper uses, run
+through CasADi on the LP as a smooth problem with linear constraints; its
+optimum is accurate to its tolerance only, so :attr:`SolverInfo.accuracy`
+widens the certification tolerance for it.  The nonconvex augmented design
+with ``L`` free is a design *method* (:mod:`eqrec.design.augmented.nlp`), not
+an LP solver.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+
+from eqrec.lp.model import INF, LinearProgram, LPSolution
+from eqrec.errors import InputError
+
+
+#: HiGHS model status (``highspy.HighsModelStatus`` number) -> our status, for both HiGHS drivers (highspy and
+#: SciPy's ``linprog``).  The definitive outcomes in our words ("unbounded or infeasible", which HiGHS's presolve
+#: reports for an infeasible design LP, reads as infeasible: the design LPs bound their objective below); every
+#: other status in HiGHS's own words (``Highs.modelStatusToString``; stored sweep results hold "Unknown", "Not Set"
+#: and "Solve error").
+HIGHS_STATUS: dict[int, str] = {
+    0: "Not Set", 1: "Load error", 2: "Model error", 3: "Presolve error", 4: "Solve error", 5: "Postsolve error",
+    6: "Empty", 7: "optimal", 8: "infeasible", 9: "infeasible", 10: "unbounded", 11: "Bound on objective reached",
+    12: "Target for objective reached", 13: "Time limit reached", 14: "Iteration limit reached", 15: "Unknown",
+    16: "Solution limit reached", 17: "Interrupted by user", 18: "Memory limit reached", 19: "Interrupted by HiGHS",
+}
+
+#: SciPy ``linprog`` status -> HiGHS model status, when SciPy's message does not carry HiGHS's own (SciPy's checks
+#: before calling HiGHS): 0 optimal, 2 infeasible, 3 unbounded; 1 (a limit) and 4 (numerical) name no outcome.
+_SCIPY_TO_HIGHS = {0: 7, 2: 8, 3: 10}
+
+
+def highs_status(code: int, fallback: str = "") -> tuple[str, float]:
+    """Our status of a HiGHS model status and the objective value that goes with it (:data:`HIGHS_STATUS`).
+
+    Parameters
+    ----------
+    code : int
+        The ``highspy.HighsModelStatus`` number.
+    fallback : str
+        The status of a number outside the table (default ``"HiGHS model status <code>"``).
+
+    Returns
+    -------
+    status : str
+        ``"optimal"``, ``"infeasible"``, ``"unbounded"`` or HiGHS's words for any other status.
+    objective : float
+        ``+inf`` for an infeasible LP, ``-inf`` for an unbounded one, ``nan`` otherwise (the optimal value is the
+        caller's).
+    """
+    status = HIGHS_STATUS.get(int(code), fallback or f"HiGHS model status {int(code)}")
+    return status, {"infeasible": INF, "unbounded": -INF}.get(status, np.nan)
+
+
+def _highs_model(lp: LinearProgram, options: dict):
+    """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet)."""
+    import highspy
+
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    for key, val in options.items():
+        h.setOptionValue(key, val)
+    model = highspy.HighsLp()
+    nr, nc = lp.A.shape
+    model.num_col_ = nc
+    model.num_row_ = nr
+    model.col_cost_ = lp.c
+    model.col_lower_ = lp.col_lower
+    model.col_upper_ = lp.col_upper
+    model.row_lower_ = lp.row_lower
+    model.row_upper_ = lp.row_upper
+    model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    model.a_matrix_.start_ = lp.A.indptr
+    model.a_matrix_.index_ = lp.A.indices
+    model.a_matrix_.value_ = lp.A.data
+    model.a_matrix_.num_col_ = nc
+    model.a_matrix_.num_row_ = nr
+    h.passModel(model)
+    return h
+
+
+def _highs_run(h, lp: LinearProgram, cost: np.ndarray) -> LPSolution:
+    """Run ``h`` (holding ``lp`` with objective ``cost``) and read its answer."""
+    t0 = time.perf_counter()
+    h.run()
+    elapsed = time.perf_counter() - t0
+    ms = h.getModelStatus()
+    info = h.getInfo()
+    iters = int(info.simplex_iteration_count) + int(max(info.ipm_iteration_count, 0))
+    status, objective = highs_status(int(ms), h.modelStatusToString(ms))
+    if status == "optimal":
+        hs = h.getSolution()
+        x = np.asarray(hs.col_value)
+        return LPSolution("optimal", x, float(cost @ x), "highs", iters, elapsed, lp.blocks,
+                          row_dual=np.asarray(hs.row_dual) if hs.dual_valid else None)
+    return LPSolution(status, None, objective, "highs", iters, elapsed, lp.blocks)
+
+
+def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
+    return _highs_run(_highs_model(lp, options), lp, lp.c)
+
+
+def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
+    import clarabel
+
+    A = lp.A.tocsr()
+    nc = A.shape[1]
+    eye = sp.identity(nc, format="csr")
+    eq = np.isfinite(lp.row_lower) & (lp.row_lower == lp.row_upper)
+    up = np.isfinite(lp.row_upper) & ~eq
+    lo = np.isfinite(lp.row_lower) & ~eq
+    cup = np.isfinite(lp.col_upper)
+    clo = np.isfinite(lp.col_lower)
+    # Clarabel form: A_c x + s = b, s in cones; equalities first (zero cone).
+    parts = [A[eq], A[up], -A[lo], eye[cup], -eye[clo]]
+    rhs = [lp.row_upper[eq], lp.row_upper[up], -lp.row_lower[lo], lp.col_upper[cup], -lp.col_lower[clo]]
+    Ac = sp.vstack(parts, format="csc")
+    b = np.concatenate(rhs)
+    n_eq = int(eq.sum())
+    cones = []
+    if n_eq:
+        cones.append(clarabel.ZeroConeT(n_eq))
+    if Ac.shape[0] - n_eq:
+        cones.append(clarabel.NonnegativeConeT(Ac.shape[0] - n_eq))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    for key, val in options.items():
+        setattr(settings, key, val)
+    P = sp.csc_matrix((nc, nc))
+    t0 = time.perf_counter()
+    solver = clarabel.DefaultSolver(P, lp.c, Ac, b, cones, settings)
+    sol = solver.solve()
+    elapsed = time.perf_counter() - t0
+    status = str(sol.status)
+    if status in ("Solved", "AlmostSolved"):
+        x = np.asarray(sol.x)
+        # KKT of Clarabel: c + A_cᵀ z = 0, so y = -z on equality and upper rows, +z on (negated) lower rows
+        z = np.asarray(sol.z)
+        y = np.zeros(A.shape[0])
+        k = 0
+        for mask, sign in ((eq, -1.0), (up, -1.0), (lo, 1.0)):
+            cnt = int(mask.sum())
+            y[mask] += sign * z[k:k + cnt]
+            k += cnt
+        return LPSolution("optimal", x, float(lp.c @ x), "clarabel", int(sol.iterations), elapsed, lp.blocks,
+                          row_dual=y)
+    if "PrimalInfeasible" in status:
+        return LPSolution("infeasible", None, INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
+    if "DualInfeasible" in status:
+        return LPSolution("unbounded", None, -INF, "clarabel", int(sol.iterations), elapsed, lp.blocks)
+    return LPSolution(status, None, np.nan, "clarabel", int(sol.iterations), elapsed, lp.blocks)
+
+
+def _solve_scipy(lp: LinearProgram, options: dict) -> LPSolution:
+    from scipy.optimize import linprog
+
+    A = lp.A.tocsr()
+    eq = lp.row_lower == lp.row_upper
+    up = np.isfinite(lp.row_upper) & ~eq
+    lo = np.isfinite(lp.row_lower) & ~eq
+    A_ub = sp.vstack([A[up], -A[lo]], format="csr")
+    b_ub = np.concatenate([lp.row_upper[up], -lp.row_lower[lo]])
+    bounds = np.column_stack([np.where(np.isfinite(lp.col_lower), lp.col_lower, None),
+                              np.where(np.isfinite(lp.col_upper), lp.col_upper, None)])
+    t0 = time.perf_counter()
+    res = linprog(lp.c, A_ub=A_ub, b_ub=b_ub, A_eq=A[eq] if eq.any() else None,
+                  b_eq=lp.row_upper[eq] if eq.any() else None, bounds=bounds, method="highs", options=options)
+    elapsed = time.perf_counter() - t0
+    code = re.search(r"HiGHS Status (\d+)", str(res.message))  # SciPy's message names HiGHS's model status
+    status, obj = highs_status(int(code.group(1)) if code else _SCIPY_TO_HIGHS.get(res.status, -1), str(res.message))
+    x = res.x if status == "optimal" else None
+    y = None
+    if status == "optimal":  # marginals are d(objective)/d(rhs): y on equality and upper rows, minus on lower rows
+        y = np.zeros(A.shape[0])
+        if eq.any():
+            y[eq] = res.eqlin.marginals
+        m_ub = np.asarray(res.ineqlin.marginals) if A_ub.shape[0] else np.zeros(0)
+        y[up] += m_ub[: int(up.sum())]
+        y[lo] -= m_ub[int(up.sum()):]
+        obj = float(res.fun)
+    return LPSolution(status, x, obj, "scipy", int(getattr(res, "nit", 0) or 0), elapsed, lp.blocks, row_dual=y)
+
+
+#: The IPOPT settings of every nonlinear solve (CasADi ``nlpsol`` options): quiet, tolerance 1e-9, at most 3000
+#: iterations.  :func:`ipopt_options` adds the caller's settings.
+IPOPT_OPTIONS: dict = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "ipopt.tol": 1e-9,
+                       "ipopt.max_iter": 3000}
+
+
+def ipopt_options(options: dict | None = None, *, prefix: bool = True, **defaults) -> dict:
+    """CasADi ``nlpsol`` options for IPOPT: :data:`IPOPT_OPTIONS`, then ``defaults``, then ``options``.
+
+    Parameters
+    ----------
+    options : dict or None, optional
+        The caller's settings; with ``prefix``, a name without a dot is an IPOPT option (``tol`` ->
+        ``ipopt.tol``).
+    prefix : bool, optional
+        Whether to add ``ipopt.`` to the names of ``options`` without a dot.
+    **defaults : object
+        Settings of one use (e.g. ``{"ipopt.acceptable_tol": 1e-7}``), overridden by ``options``.
+
+    Returns
+    -------
+    dict
+        The options to pass to ``casadi.nlpsol(..., "ipopt", ...)``.
+    """
+    out = {**IPOPT_OPTIONS, **defaults}
+    for key, val in (options or {}).items():
+        out[key if not prefix or "." in key else f"ipopt.{key}"] = val
+    return out
+
+
+def _solve_ipopt(lp: LinearProgram, options: dict) -> LPSolution:
+    import casadi as ca
+
+    A = lp.A.tocsc()
+    A.sort_indices()
+    nr, nc = A.shape
+    x = ca.MX.sym("x", nc)
+    Acas = ca.DM(ca.Sparsity(nr, nc, A.indptr.tolist(), A.indices.tolist()), A.data)
+    nlp = {"x": x, "f": ca.dot(ca.DM(lp.c), x), "g": ca.mtimes(Acas, x)}
+    x0 = np.asarray(options.pop("x0", np.zeros(nc)), float)
+    solver = ca.nlpsol("lp", "ipopt", nlp, ipopt_options(options))
+    t0 = time.perf_counter()
+    sol = solver(x0=x0, lbx=lp.col_lower, ubx=lp.col_upper, lbg=lp.row_lower, ubg=lp.row_upper)
+    elapsed = time.perf_counter() - t0
+    stats = solver.stats()
+    status = str(stats.get("return_status"))
+    iters = int(stats.get("iter_count", 0))
+    if status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+        xv = np.asarray(sol["x"]).reshape(-1)
+        # stationarity of c x + lam_gᵀ (A x) + lam_xᵀ x: y = -lam_g
+        return LPSolution("optimal", xv, float(lp.c @ xv), "ipopt", iters, elapsed, lp.blocks,
+                          row_dual=-np.asarray(sol["lam_g"]).reshape(-1))
+    if status == "Infeasible_Problem_Detected":
+        return LPSolution("infeasible", None, INF, "ipopt", iters, elapsed, lp.blocks)
+    if status == "Diverging_Iterates":
+        return LPSolution("unbounded", None, -INF, "ipopt", iters, elapsed, lp.blocks)
+    return LPSolution(status, None, np.nan, "ipopt", iters, elapsed, lp.blocks)
+
+
+@dataclass(frozen=True)
+class SolverInfo:
+    """A registered LP solver.
+
+    Parameters
+    ----------
+    name : str
+        Registry key (what users type).
+    description : str
+        One line for ``--help`` and the README.
+    solve : callable
+        ``solve(lp, options) -> LPSolution``.
+    accuracy : float, optional
+        Absolute accuracy of its optimum beyond the feasibility tolerance
+        (added to the certification tolerance).
+    """
+
+    name: str
+    description: str
+    solve: Callable[[LinearProgram, dict], LPSolution]
+    accuracy: float = 0.0
+
+
+SOLVERS: dict[str, SolverInfo] = {
+    "highs": SolverInfo("highs", "HiGHS dual simplex (highspy); exact vertex optimum", _solve_highs),
+    "clarabel": SolverInfo("clarabel", "Clarabel interior point", _solve_clarabel),
+    "scipy": SolverInfo("scipy", "scipy.optimize.linprog (HiGHS inside SciPy)", _solve_scipy),
+    "ipopt": SolverInfo("ipopt", "IPOPT interior point through CasADi (the augmented paper's solver)",
+                        _solve_ipopt, accuracy=1e-6),
+}
+
+#: The solver names offered by the CLI and the configuration schemas.
+SOLVER_NAMES: tuple[str, ...] = tuple(SOLVERS)
+
+
+def solver_info(name: str) -> SolverInfo:
+    """The registry entry of ``name``; an :class:`~eqrec.errors.InputError` (field ``solver``) naming the choices otherwise.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`SOLVER_NAMES`.
+
+    Returns
+    -------
+    SolverInfo
+        The entry of :data:`SOLVERS`.
+
+    Raises
+    ------
+    InputError
+        For any other value (also a :class:`ValueError`).
+    """
+    if not isinstance(name, str) or name not in SOLVERS:
+        raise InputError(f"unknown solver {name!r}; choose one of {list(SOLVER_NAMES)}", field="solver")
+    return SOLVERS[name]
+
+
+def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None) -> LPSolution:
+    """Solve a :class:`LinearProgram` with a registered solver.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The problem.
+    solver : str, optional
+        A name of :data:`SOLVER_NAMES` (default ``"highs"``).
+    options : dict or None, optional
+        Passed to the solver (HiGHS option names, Clarabel settings, IPOPT
+        options; ``x0`` is IPOPT's starting point).
+
+    Returns
+    -------
+    LPSolution
+        Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.
+    """
+    return solver_info(solver).solve(lp, dict(options or {}))
+
+
+def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
+                  options: dict | None = None) -> list[list[LPSolution]]:
+    """Solve ``lp`` for every column-bound pair of ``bounds`` and, under each, every objective of ``costs``.
+
+    The rows and the matrix stay.  With HiGHS the model is loaded once and each solve starts from the previous
+    optimal basis (after an objective change it is still primal feasible, after a bound change still dual
+    feasible), in the fixed order bounds then objectives, so the answers depend only on the arguments; the other
+    solvers solve each variant from scratch.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The problem (its own ``c`` is ignored; its column bounds are used when ``bounds`` is ``None``).
+    costs : sequence of numpy.ndarray
+        The objectives, each of length ``lp.shape[1]``.
+    bounds : sequence of tuple of numpy.ndarray, optional
+        ``(col_lower, col_upper)`` pairs (default: ``lp``'s own, once).
+    solver : str, optional
+        A name of :data:`SOLVER_NAMES` (default ``"highs"``).
+    options : dict or None, optional
+        Passed to the solver, as :func:`solve_lp`.
+
+    Returns
+    -------
+    list of list of LPSolution
+        ``out[j][i]``: bounds ``j``, objective ``i`` (never raises for infeasibility).
+    """
+    info = solver_info(solver)
+    bounds = [(lp.col_lower, lp.col_upper)] if bounds is None else list(bounds)
+    variant = lambda c, lo, hi: LinearProgram(c=np.asarray(c, float), A=lp.A, row_lower=lp.row_lower,  # noqa: E731
+                                              row_upper=lp.row_upper, col_lower=lo, col_upper=hi)
+    if solver != "highs":
+        return [[info.solve(variant(c, lo, hi), dict(options or {})) for c in costs] for lo, hi in bounds]
+    out: list[list[LPSolution]] = []
+    h = None
+    cols = np.arange(lp.A.shape[1], dtype=np.int32)
+    for lo, hi in bounds:
+        if h is not None:
+            h.changeColsBounds(cols.size, cols, np.asarray(lo, float), np.asarray(hi, float))
+        row = []
+        for c in costs:
+            c = np.asarray(c, float)
+            if h is None:
+                h = _highs_model(variant(c, lo, hi), dict(options or {}))
+            else:
+                h.changeColsCost(c.size, cols, c)
+            row.append(_highs_run(h, lp, c))
+        out.append(row)
+    return out

@@ -1,0 +1,188 @@
+"""Compare study: every estimator family on the same plant and the same packet traces (issue 24, beyond the papers).
+
+Pipeline steps (``STEPS``; one per rule of ``workflow/rules/compare.smk``, run by
+:mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
+with ``cfg`` the validated ``compare`` section (``config/compare.yaml``):
+
+``run``     one (system, setting) pair (``wildcards.system``, ``wildcards.setting``):
+            :func:`eqrec.compare.compare_families` on that plant and those traces; its table
+            (``<system>_<setting>.csv``, :func:`eqrec.compare.write_table`), its figure
+            (``.png``/``.pdf``, :func:`eqrec.compare.compare_figure`) and what the table does not hold
+            (``.json``: the settings, the ``μ1`` of each guaranteed design, the bounds inside and outside the
+            designed language, the other families' errors against the class engine's bound); the wall time
+            goes to ``results/timings/compare/``.
+``table``   every pair's table in one, ``compare.csv`` (the columns ``system, setting, loss, burst,
+            max_delay, horizon`` first, each cell as its job wrote it), and ``summary.json`` (the pairs'
+            ``.json``), in the configuration's order; checks that the jobs cover the configured pairs
+            exactly once.
+
+The mathematics is in :mod:`eqrec.compare` (the traces, the families, the Monte Carlo, the table and the figure);
+the plants are the package's models (:func:`eqrec.systems.examples.acc_system`, :func:`eqrec.systems.examples.batch_reactor`).
+"""
+
+from __future__ import annotations
+
+import io
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from eqrec.compare import FAMILIES, CompareResult, CompareSetup, compare_families, compare_figure, write_table
+from eqrec.systems.examples import acc_system
+from eqrec.systems.affine import AffineSystem
+from eqrec.errors import InputError
+from eqrec.io import atomic_path
+from eqrec.systems.examples import batch_reactor
+from eqrec.studies.pipeline.logs import get_logger
+from eqrec.studies.pipeline.outputs import read_json, write_json, write_text
+
+log = get_logger("compare")
+
+#: The plants a system's ``model`` names (``config/schemas/compare.schema.yaml``).
+MODELS: dict[str, Callable[[], AffineSystem]] = {"acc": acc_system, "batch_reactor": batch_reactor}
+
+#: The columns of ``compare.csv`` before those of :data:`eqrec.compare.COLUMNS`: which job wrote the row.
+KEYS = ("system", "setting", "loss", "burst", "max_delay", "horizon")
+
+#: The field of the ``compare`` section behind each :class:`~eqrec.compare.CompareSetup` argument.
+_FIELDS = {"loss": "settings.{setting}.loss", "burst": "settings.{setting}.burst",
+           "max_delay": "systems.{system}.max_delay", "horizon": "systems.{system}.horizon"}
+
+
+def setup_of(cfg: dict, system: str, setting: str) -> CompareSetup:
+    """The :class:`~eqrec.compare.CompareSetup` of one (system, setting) pair of the ``compare`` section.
+
+    Parameters
+    ----------
+    cfg : dict
+        The ``compare`` section.
+    system, setting : str
+        Keys of ``cfg["systems"]`` and ``cfg["settings"]``.
+
+    Returns
+    -------
+    CompareSetup
+        Loss and burst of the setting, ``D`` and ``T`` of the system, the section's runs, periods and seed.
+
+    Raises
+    ------
+    InputError
+        A value :class:`~eqrec.compare.CompareSetup` refuses, naming the field of the section.
+    """
+    plant, traces = cfg["systems"][system], cfg["settings"][setting]
+    try:
+        return CompareSetup(loss=traces["loss"], max_delay=plant["max_delay"], horizon=plant["horizon"],
+                            runs=cfg["runs"], periods=cfg["periods"],
+                            burst=traces.get("burst"), seed=cfg["seed"])
+    except InputError as exc:
+        field = _FIELDS.get(exc.field or "", exc.field or "").format(system=system, setting=setting)
+        raise InputError(str(exc).removeprefix(f"field '{exc.field}': "), field=field) from None
+
+
+def _median(values: np.ndarray) -> float | None:
+    return float(np.median(values)) if values.size else None
+
+
+def summary_of(result: CompareResult) -> dict[str, Any]:
+    """What ``compare.csv`` does not hold, per family: the guaranteed designs' ``μ1`` and bounds inside and
+    outside the designed language, and every other family's error against the class engine's bound.
+
+    Parameters
+    ----------
+    result : CompareResult
+        One comparison.
+
+    Returns
+    -------
+    dict
+        ``guaranteed``: per guaranteed family its ``mu1``, the median bound of the steps inside and outside
+        its design (``None`` where there is none), its largest bound and largest error / bound (at most 1:
+        the guarantee); ``against_class_bound``: per other family the steps (of ``runs · steps``) whose error
+        is above the class engine's bound of the same run and step, their fraction, and the largest
+        error / that bound (the delayed-data paper's Fig. 1 asks this of its Kalman filters).
+    """
+    guaranteed = {}
+    for family, bound in result.bounds.items():
+        out, err = result.outside[family], result.errors[family]
+        guaranteed[family] = {"mu1": result.mu1[family], "median_bound_in_design": _median(bound[~out]),
+                              "median_bound_outside": _median(bound[out]), "largest_bound": float(bound.max()),
+                              "largest_error_over_bound": float((err / bound).max())}
+    reference = result.bounds[FAMILIES[0]]
+    against = {}
+    for family in FAMILIES[1:]:
+        err = result.errors[family]
+        above = err > reference
+        against[family] = {"steps_above": int(above.sum()), "fraction_above": float(above.mean()),
+                           "largest_error_over_bound": float((err / reference).max())}
+    return {"guaranteed": guaranteed, "against_class_bound": against}
+
+
+def title_of(name: str, setup: CompareSetup) -> str:
+    """The figure title: the plant in words and the settings."""
+    burst = "independent losses" if setup.burst is None else f"bursts of {setup.burst:g} steps on average"
+    return (f"{name}: loss {setup.loss:g} ({burst}), delays up to {setup.max_delay}, T = {setup.horizon}, "
+            f"{setup.runs} runs")
+
+
+# --------------------------------------------------------------------------- steps
+
+def step_run(cfg, inputs, outputs, wildcards) -> dict:
+    """One (system, setting) pair: the comparison's table, figure and summary (wall time to the timings)."""
+    system, setting = wildcards["system"], wildcards["setting"]
+    plant = cfg["systems"][system]
+    setup = setup_of(cfg, system, setting)
+    model = MODELS[plant["model"]]()
+    t0 = time.perf_counter()
+    result = compare_families(model, setup, progress=lambda line: log.info("%s %s: %s", system, setting, line))
+    elapsed = time.perf_counter() - t0
+    with atomic_path(outputs.csv) as tmp:
+        write_table(result, str(tmp))
+    compare_figure(result, outputs.png, outputs.pdf, title=title_of(plant["name"], setup))
+    report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
+              "n": model.n, "p": model.p,
+              "setup": {"loss": setup.loss, "burst": setup.burst, "max_delay": setup.max_delay,
+                        "horizon": setup.horizon, "runs": setup.runs, "periods": setup.periods,
+                        "steps": setup.steps, "seed": setup.seed, "sigmas": setup.sigmas,
+                        "on_time_rate": setup.on_time_rate},
+              **summary_of(result), "elapsed_s": elapsed}
+    write_json(outputs.json, report, timings=outputs.timings)
+    log.info("%s %s: %d runs x %d steps, six families, in %.2f s", system, setting, setup.runs, setup.steps, elapsed)
+    return report
+
+
+def step_table(cfg, inputs, outputs, wildcards) -> None:
+    """Every pair's table in ``compare.csv`` (cells as the jobs wrote them) and their summaries in
+    ``summary.json``, in the order of the inputs (the rule lists them in the configuration's order); the jobs must
+    cover the configured pairs exactly once."""
+    import pandas as pd
+
+    expected = sorted((s, k) for s in cfg["systems"] for k in cfg["settings"])
+    jobs = [read_json(p) for p in inputs.json]
+    found = [(j["system"], j["setting"]) for j in jobs]
+    tables = [Path(p).name for p in inputs.csv]
+    if sorted(found) != expected or tables != [f"{s}_{k}.csv" for s, k in found]:
+        raise InputError(f"the jobs {found} (tables {tables}) do not cover the configured (system, setting) pairs "
+                         f"{expected} exactly once, in the same order", field="settings")
+    frames = []
+    for (system, setting), job, path in zip(found, jobs, inputs.csv):
+        setup = job["setup"]
+        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+        keys = {"system": system, "setting": setting, "loss": f"{setup['loss']:g}",
+                "burst": "" if setup["burst"] is None else f"{setup['burst']:g}",
+                "max_delay": str(setup["max_delay"]), "horizon": str(setup["horizon"])}
+        frames.append(frame.assign(**keys))
+    table = pd.concat(frames, ignore_index=True).fillna("")
+    rest = [c for c in table.columns if c not in KEYS]
+    buf = io.StringIO()
+    table[[*KEYS, *rest]].to_csv(buf, index=False, lineterminator="\n")
+    write_text(outputs.csv, buf.getvalue())
+    write_json(outputs.json, {"pairs": jobs})
+    log.info("compare.csv: %d rows of %d (system, setting) pairs", len(table), len(found))
+
+
+STEPS = {
+    "run": step_run,
+    "table": step_table,
+}

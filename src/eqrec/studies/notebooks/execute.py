@@ -1,0 +1,212 @@
+"""Executed notebooks: ``notebooks/<name>.py`` (jupytext, percent format) run against ``results/``.
+
+One step, ``execute``: read the notebook with jupytext, run it in a fresh
+``python3`` kernel with the repository root (the working directory) as its
+working directory, and write
+
+* ``results/notebooks/<name>.ipynb``: the notebook with its outputs and
+  figures embedded (GitHub renders it without running anything), and
+* ``results/notebooks/<name>.html``: its nbconvert HTML rendering (an item of
+  ``snakemake --report``), readable offline: its maths is MathML made at build
+  time and it loads no script from the network (:mod:`eqrec.studies.notebooks.html`).
+
+Both files depend only on the notebook and the results it reads: cell ids are
+``cell-0``, ``cell-1``, ...; no execution timestamps, kernel ids or jupytext
+versions; consecutive stream outputs are merged (how a kernel splits printed
+text into messages depends on timing); the kernel runs with
+``SOURCE_DATE_EPOCH=0`` and a fixed SVG hash salt, and matplotlib's inline PNGs
+carry no date, so a figure drawn in a notebook is byte-identical too.  The
+notebooks show no timing or memory value (those live in ``results/timings/``).
+
+A cell that raises fails the step with one line naming the notebook, the cell
+(number and first source line) and the error.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+from typing import Iterator
+
+from eqrec.errors import StepError
+from eqrec.studies.pipeline.logs import get_logger
+from eqrec.studies.pipeline.outputs import write_text
+
+log = get_logger("notebooks")
+
+#: Seconds a single cell may run before the step fails.
+CELL_TIMEOUT = 300
+
+KERNELSPEC = {"display_name": "Python 3", "language": "python", "name": "python3"}
+LANGUAGE_INFO = {"name": "python", "pygments_lexer": "ipython3"}
+
+#: Environment of the kernel: no dates in files matplotlib writes, fixed string hashes (set order).
+KERNEL_ENV = {"SOURCE_DATE_EPOCH": "0", "PYTHONHASHSEED": "0"}
+#: The kernel's matplotlib rc file (``MATPLOTLIBRC``): fixed SVG ids, no PDF/SVG dates.
+MATPLOTLIBRC = "svg.hashsalt: eqrec-notebooks\n"
+
+
+#: The result files each notebook reads (its rule's inputs): a notebook runs after them and re-runs when
+#: one changes.  ``tests/test_notebooks.py`` checks that every file a notebook names is listed here.
+READS: dict[str, list[str]] = {
+    "p1_prefix_based": [
+        *(f"results/p1/{f}" for f in ("model.json", "designs.json", "extensions.json", "fig1_trajectories.png",
+                                      "fig_ext_M2_vs_M1.png")),
+        "results/claims.csv",
+    ],
+    "p2_augmented": [
+        *(f"results/p2/{f}" for f in ("values.json", "designs.json", "checks.json", "heatmap.csv",
+                                      "realaxis.csv", "f1_trajectories.png", "f2_trajectories.png",
+                                      "f3a_heatmap.png", "f3b_realaxis.png")),
+        "results/claims.csv",
+    ],
+    "p3_delayed": [
+        *(f"results/p3/{f}" for f in ("languages.json", "reactor_model.json", "reactor_designs.json",
+                                      "augmented.json", "kalman.json", "acc.json", "values.json", "examples.md",
+                                      "language_counts.csv", "fig1_kalman.png", "fig2_acc.png",
+                                      "scale_table.csv", "fig_strategy.png", "strategy_values.json")),
+        "results/claims.csv",
+    ],
+    "p4_lmv": [
+        *(f"results/p4/{f}" for f in ("values.json", "mc_ex1.json", "mc_ex2.json", "fig1_filter.png",
+                                      "fig2_predictor.png", "fig3_smoother.png", "fig4_variances.png",
+                                      "fig5_eta.png", "fig6_q.png", "regions.png", "fig7_compare_ex1.png",
+                                      "fig8_compare_ex2.png")),
+        "results/claims.csv",
+    ],
+    "compare": [
+        "results/compare/compare.csv",
+        "results/compare/summary.json",
+        *(f"results/compare/{system}_{setting}.png" for system in ("acc", "reactor")
+          for setting in ("loss01", "loss03", "burst")),
+        "results/claims.csv",
+    ],
+}
+
+
+def rule_inputs(wildcards) -> dict[str, str | list[str]]:
+    """The inputs of the rule running notebook ``wildcards.name``: its source and the result files it reads."""
+    return {"notebook": f"notebooks/{wildcards.name}.py", "results": list(READS[wildcards.name])}
+
+
+class NotebookError(StepError):
+    """A notebook cell raised; the message names the notebook and the cell."""
+
+
+@contextlib.contextmanager
+def _environ(**env: str) -> Iterator[None]:
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _merge_streams(outputs: list) -> list:
+    """Consecutive stream outputs of one stream as one output (the kernel's split depends on timing)."""
+    merged: list = []
+    for out in outputs:
+        prev = merged[-1] if merged else None
+        if (out.get("output_type") == "stream" and prev is not None and prev.get("output_type") == "stream"
+                and prev.get("name") == out.get("name")):
+            prev["text"] = prev["text"] + out["text"]
+        else:
+            merged.append(out)
+    return merged
+
+
+def normalise(nb) -> None:
+    """Make an executed notebook depend only on its source and outputs (in place)."""
+    nb.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": dict(LANGUAGE_INFO)}
+    for i, cell in enumerate(nb.cells):
+        cell["id"] = f"cell-{i}"
+        for key in ("execution", "jupytext", "ExecuteTime", "collapsed", "scrolled"):
+            cell.metadata.pop(key, None)
+        if cell.cell_type == "code":
+            cell.outputs = _merge_streams(cell.outputs)
+            for out in cell.outputs:
+                out.get("metadata", {}).pop("execution", None)
+    nb.nbformat, nb.nbformat_minor = 4, 5
+
+
+def _cell_line(nb, i: int) -> str:
+    """``cell 3 ('summary = heat.groupby(...')``: the cell's number and first non-empty source line."""
+    first = next((ln.strip() for ln in nb.cells[i].source.splitlines() if ln.strip()), "")
+    return f"cell {i} ({first!r})"
+
+
+def execute(source: str | Path, workdir: str | Path | None = None, timeout: int = CELL_TIMEOUT):
+    """The executed, normalised notebook of a jupytext file (raises :class:`NotebookError` if a cell fails)."""
+    import jupytext
+    from nbclient import NotebookClient
+
+    source = Path(source)
+    workdir = Path(workdir or Path.cwd()).resolve()
+    nb = jupytext.read(source)
+    nb.metadata["kernelspec"] = dict(KERNELSPEC)
+    client = NotebookClient(nb, timeout=timeout, kernel_name="python3", record_timing=False,
+                            resources={"metadata": {"path": str(workdir)}})
+    # the kernel inherits this environment
+    with tempfile.TemporaryDirectory(prefix="eqrec-nb-") as tmp:
+        rc = Path(tmp) / "matplotlibrc"
+        rc.write_text(MATPLOTLIBRC)
+        with _environ(**KERNEL_ENV, MATPLOTLIBRC=str(rc)):
+            _run(client, nb, source)
+    normalise(nb)
+    return nb
+
+
+def _run(client, nb, source: Path) -> None:
+    """Execute; a failing cell becomes one :class:`NotebookError` line naming the notebook and the cell."""
+    from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
+
+    current: list[int] = []
+    client.on_cell_execute = lambda cell, cell_index: current.append(cell_index)
+    try:
+        client.execute()
+    except (CellExecutionError, CellTimeoutError, DeadKernelError) as exc:
+        where = _cell_line(nb, current[-1]) if current else "before the first cell"
+        errors = [o for o in nb.cells[current[-1]].get("outputs", []) if o.get("output_type") == "error"] \
+            if current else []
+        if errors:
+            what = f"{errors[0]['ename']}: {errors[0]['evalue']}"
+        else:  # a timeout or a dead kernel records no error output
+            what = f"{type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[-1]}"
+        raise NotebookError(f"notebook {source}, {where}: {what}") from None
+
+
+def to_ipynb(nb) -> str:
+    import nbformat
+
+    nbformat.validate(nb)
+    return nbformat.writes(nb, version=4) + "\n"
+
+
+def to_html(nb, title: str) -> str:
+    """The notebook's HTML, readable offline: maths as MathML, no script from the network
+    (:func:`eqrec.studies.notebooks.html.offline_html`)."""
+    from eqrec.studies.notebooks.html import offline_html
+
+    return offline_html(nb, title)
+
+
+def step_execute(cfg, inputs, outputs, wildcards):
+    """``notebooks/<name>.py`` executed against ``results/``: ``<name>.ipynb`` and ``<name>.html``."""
+    import time
+
+    t0 = time.perf_counter()
+    nb = execute(inputs.notebook, workdir=Path.cwd())
+    log.info("%s executed in %.1f s", inputs.notebook, time.perf_counter() - t0)
+    name = Path(inputs.notebook).stem
+    write_text(outputs.ipynb, to_ipynb(nb))
+    write_text(outputs.html, to_html(nb, name))
+
+
+STEPS = {"execute": step_execute}

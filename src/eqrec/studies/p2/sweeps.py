@@ -1,0 +1,125 @@
+"""P2 eigenvalue sweeps: the Fig. 3a heat map (in θ-chunks) and the Fig. 3b real axis.
+
+Every point has a class (``optimal``, ``infeasible``, ``solver_failed``,
+``placement_failed``; :func:`eqrec.studies.searches.fixed_L_sweep` re-solves an
+undecided point with the second solver and gives the all-zero pole set an
+exact nilpotent ``L``) and, when optimal, the certified worst case of its gains
+as the estimator that runs.
+
+Steps ``heatmap_chunk`` (``wildcards.chunk``: a θ-chunk of every variant),
+``heatmap_merge`` (checks that the chunks cover the configured grid of every
+configured variant exactly once) and ``realaxis``.  In each job the LP of
+each variant is built once and only its ``L``-dependent coefficients change
+from point to point (:func:`eqrec.studies.searches.fixed_L_sweep`), and each
+observer gain is placed once for all variants.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from eqrec.systems.examples import acc_system
+from eqrec.design.augmented.model import default_runtime
+from eqrec.studies.searches import fixed_L_sweep, observer_for
+from eqrec.errors import InputError
+from eqrec.studies.pipeline.chunks import check_coverage, chunk_indices
+from eqrec.studies.pipeline.logs import Progress, get_logger
+from eqrec.studies.pipeline.outputs import INTERMEDIATE, write_csv
+from eqrec.studies.p2.readings import heatmap_poles, variant_word
+from eqrec.studies.p2.grids import heatmap_grid, realaxis_grid
+
+log = get_logger("p2")
+
+
+def theta_chunk(cfg: dict, chunk: int) -> np.ndarray:
+    """Indices of θ handled by job ``chunk`` (``heatmap.chunks`` near-equal parts)."""
+    h = cfg["heatmap"]
+    return chunk_indices(int(h["n_theta"]), int(h["chunks"]), chunk, field="heatmap.chunks")
+
+
+def _sweep_options(cfg: dict, mode: str) -> dict:
+    """Solvers of the sweeps and the runtime in which each point's gains are certified (the estimator that
+    runs: ``theorem2`` for the text of Theorem 2, ``hold`` - constant ``L`` kept - for the design-only readings)."""
+    h = cfg["heatmap"]
+    return {"solver": h["solver"], "second_solver": h["second_solver"],
+            "certify_runtime": default_runtime(mode)}
+
+
+def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> list[tuple[str, str, str, list[dict]]]:
+    """Every configured variant over the same pole sets: ``(variant, mode, word, records)``.
+
+    The observer gain of a pole set does not depend on the variant, so each
+    ``L`` is placed once (:func:`eqrec.studies.searches.observer_for`) and
+    shared by the variants' LPs.
+    """
+    observers = [observer_for(system, p) for p in poles]
+    out = []
+    for variant in cfg["heatmap"]["variants"]:
+        mode, word = variant_word(cfg["heatmap"]["word"], variant)
+        prog = Progress(log, len(poles), f"{what} {variant}")
+        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, poles, on_point=prog.advance,
+                             observers=observers, **_sweep_options(cfg, mode))
+        out.append((variant, mode, word, recs))
+    return out
+
+
+def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """P2-F3a, one θ-chunk of every variant."""
+    chunk = int(wildcards["chunk"])
+    r_grid, th_grid = heatmap_grid(cfg)
+    pts = [(r, th_grid[j]) for j in theta_chunk(cfg, chunk) for r in r_grid]
+    swept = _sweep_variants(cfg, acc_system(), [heatmap_poles(r, th) for r, th in pts], f"heat map chunk {chunk}:")
+    df = pd.DataFrame([{"variant": variant, "word": word, "mode": mode, "r": r, "theta": th, **rec}
+                       for variant, mode, word, recs in swept for (r, th), rec in zip(pts, recs)])
+    write_csv(outputs.csv, df, timings=INTERMEDIATE)  # a temporary chunk: the merge splits the timings off
+    return df
+
+
+def _grid_index(values: np.ndarray, grid: np.ndarray, what: str) -> np.ndarray:
+    idx = np.abs(values[:, None] - grid[None, :]).argmin(axis=1)
+    off = np.abs(grid[idx] - values)
+    if len(off) and off.max() > 1e-9 * max(1.0, float(np.abs(grid).max())):
+        raise InputError(f"chunk rows at {what} = {values[off.argmax()]!r}, not a point of the configured grid",
+                         field=f"heatmap.{'n_r' if what == 'r' else 'n_theta'}")
+    return idx
+
+
+def check_heatmap_coverage(cfg: dict, df: pd.DataFrame) -> None:
+    """Every configured variant has every ``(r, θ)`` point of the configured grid exactly once."""
+    r_grid, th_grid = heatmap_grid(cfg)
+    variants = list(cfg["heatmap"]["variants"])
+    extra = sorted(set(df["variant"]) - set(variants))
+    if extra:
+        raise InputError(f"chunks of variants {extra} that the configuration does not list", field="heatmap.variants")
+    for var in variants:
+        g = df[df["variant"] == var]
+        i = _grid_index(g["r"].to_numpy(float), r_grid, "r")
+        j = _grid_index(g["theta"].to_numpy(float), th_grid, "theta")
+        check_coverage(j * len(r_grid) + i, len(th_grid) * len(r_grid), field="heatmap.chunks",
+                       what=f"variant {var} (heatmap.chunks = {cfg['heatmap']['chunks']})")
+
+
+def step_heatmap_merge(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """P2-F3a: the whole grid, after checking that the chunks cover it exactly once."""
+    files = list(inputs.chunks)
+    df = pd.concat([pd.read_csv(p, keep_default_na=False, na_values=["nan", "NaN"]) for p in files],
+                   ignore_index=True)
+    check_heatmap_coverage(cfg, df)
+    df = df.sort_values(["variant", "theta", "r"])
+    write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "r", "theta"])
+    log.info("merged %d chunk files: %d points", len(files), len(df))
+    return df
+
+
+def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """P2-F3b: eigenvalues ``{0, λ, λ}`` for real ``λ`` (the heat map at θ = 0 and π, finer)."""
+    lam = realaxis_grid(cfg)
+    swept = _sweep_variants(cfg, acc_system(), [np.array([0.0, x, x]) for x in lam], "real axis")
+    df = pd.DataFrame([{"variant": variant, "word": word, "lam": x, **rec}
+                       for variant, _, word, recs in swept for x, rec in zip(lam, recs)])
+    write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "lam"])
+    return df
+
+
+STEPS = {"heatmap_chunk": step_heatmap_chunk, "heatmap_merge": step_heatmap_merge, "realaxis": step_realaxis}

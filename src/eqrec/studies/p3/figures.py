@@ -1,0 +1,168 @@
+"""P3 figures: Fig. 1 (batch reactor, proposed vs Kalman-type filters), Fig. 2 (ACC, proposed vs P1
+prefix-based) and the implementation-strategy figure (P3-IMPL, long runs of :mod:`eqrec.studies.p3.strategy`).
+
+Steps ``figure1`` and ``figure2``: errors per state with the per-time
+guarantee levels ``μ2,k`` along the true pattern's path (clear bars), as in
+the paper's figures; ``strategy_figure``: a window of each long run with its
+per-time guarantees.  Drawing only: no design is computed here.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from eqrec.studies.pipeline.outputs import save_figure
+from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajectory_panel, worst_case_lines
+
+# the linearised batch reactor's states are dimensionless deviations (Sec. IV-A of the delayed-data paper)
+STATE_LABELS_REACTOR = tuple(rf"$\tilde x_{i}$ [–]" for i in range(1, 5))
+FILTER_TITLES = {"timestamped": "Time-stamped Kalman\n(re-filtering)", "unaware": "Delay-unaware\nKalman",
+                 "random_delay_lmv": "Random-delay LMV\n(ref. [9])"}
+
+
+def step_figure1(cfg, inputs, outputs, wildcards) -> None:
+    """P3-F1: errors of the proposed estimator and of each Kalman-type filter (prediction ``x̂(t|I_{t-1})``)
+    on the true pattern, with the proposed estimator's guarantee levels along that pattern (one y scale per row,
+    tick labels on the first column only)."""
+    paper_style()
+    plt = pyplot()
+    data = np.load(inputs.npz)
+    res = json.loads(Path(inputs.json).read_text())
+    levels = data["levels"]
+    names = list(res["filters"])
+    cols = [("proposed", "Proposed estimator", data["proposed_errors"], "C0")]
+    cols += [(n, FILTER_TITLES.get(n, n), data[f"{n}_prediction_errors"], "C3") for n in names]
+    fig, axes = plt.subplots(4, len(cols), figsize=(1.8 * len(cols) + 0.7, 7.4), sharex=True, sharey="row",
+                             squeeze=False, layout="constrained")
+    for c, (name, title, errs, color) in enumerate(cols):
+        inside = bool(np.all(np.abs(errs) <= levels[None, :, None] + 1e-12))
+        if name == "proposed":
+            verdict = "\nruns and worst case inside"
+        else:
+            verdict = (f"\nruns {'inside' if inside else 'OUTSIDE'}, exact worst\n"
+                       f"case {res['filters'][name]['prediction']['verdict']}")
+        trajectory_panel(axes[:, c], errs, levels, title + verdict, state_labels=STATE_LABELS_REACTOR,
+                         color=color, ylabels=(c == 0))
+        worst = data["proposed_bounds"] if name == "proposed" else data[f"{name}_prediction_worst"]
+        worst_case_lines(axes[:, c], worst, "exact worst case")
+    # one scale per state across the estimators: the same quantity, compared
+    for i in range(axes.shape[0]):
+        lim = 1.1 * max(max(np.max(levels), np.max((data["proposed_bounds"] if n == "proposed" else
+                                                    data[f"{n}_prediction_worst"])[:, i]),
+                            np.max(np.abs(e[:, :, i]))) for n, _, e, _ in cols)
+        for ax in axes[i]:
+            ax.set_ylim(-lim, lim)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    labels = ["proposed estimator: error" if lab == "estimation error" else lab for lab in labels]
+    labels = ["guarantee $\\mu_{2,k}$ of the proposed estimator" if lab == "guarantee" else lab for lab in labels]
+    if len(cols) > 1:  # the Kalman-type filters' traces, drawn in their own colour
+        handles.insert(1, plt.Line2D([], [], color=cols[1][3], alpha=0.6, lw=1.0))
+        labels.insert(1, "Kalman-type filter: error")
+    fig.legend(handles, labels, loc="outside lower center", ncol=2)
+    fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs (truncated normal, "
+                 f"bound = {res['sigmas']:g} sigma):\nerrors and the guarantees $\\mu_{{2,k}}$ "
+                 f"($\\mu_1$ = {res['mu1']:.4f}); the same scale in each row")
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+def step_figure2(cfg, inputs, outputs, wildcards) -> None:
+    """P3-F2: proposed estimator (time-varying levels) vs P1's prefix-based estimator (one level), same draws."""
+    paper_style()
+    plt = pyplot()
+    data = np.load(inputs.npz)
+    pattern = cfg["acc"]["true_pattern"]
+    fig, axes = plt.subplots(3, 2, figsize=(7.0, 6.0), sharex=True)
+    for col, name, title in ((0, "proposed", "Proposed estimator (levels per event prefix)"),
+                             (1, "prefix", "Prefix-based estimator of P1 (one level $M_2$)")):
+        errs = data[f"{name}_errors"]
+        trajectory_panel(axes[:, col], errs, data[f"{name}_levels"],
+                         f"{title}\nmax level {float(data[f'{name}_mu2']):.4f}", state_labels=STATE_LABELS_ACC,
+                         ylabels=(col == 0))
+        worst = data[f"{name}_bounds"]
+        worst_case_lines(axes[:, col], worst, "certified worst case")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, bbox_to_anchor=(0.5, -0.02))
+    fig.suptitle(f"ACC, true pattern {pattern} (missing data at k = 1), {data['proposed_errors'].shape[0]} runs, "
+                 rf"$\mu_1$ = {float(data['mu1']):g}")
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
+    """P3-IMPL figure: errors per state with the per-time guarantees over a window of each long run.
+
+    Columns: periodic reuse on the batch reactor, on the ACC, and the
+    switching scheme on the batch reactor (switching instants marked), each
+    with its own ``μ1`` in its title.  The run with the first noise kind is
+    shown; the reactor's states are named as in Fig. 1; no vertical grid, so
+    that the vertical lines are the period boundaries and switching instants.
+    """
+    paper_style()
+    plt = pyplot()
+    data = np.load(inputs.npz)
+    kind = str(data["noise"][0])
+    window = int(cfg["strategy"]["figure"]["window"])
+    cols = (("reactor_periodic", "Batch reactor,\ngains reused every $T$", list(STATE_LABELS_REACTOR),
+             float(data["reactor_mu1"])),
+            ("acc_periodic", "ACC,\ngains reused every $T$", [lab.replace(" error", "\nerror") for lab in
+                                                            STATE_LABELS_ACC], float(data["acc_mu1"])),
+            ("reactor_switching", "Batch reactor,\nswitching scheme", list(STATE_LABELS_REACTOR),
+             float(data["switching_mu1"])))
+    fig, axes = plt.subplots(4, 3, figsize=(7.4, 8.0), sharex="col", layout="constrained")
+    # one scale per reactor state across the two reactor columns (the same quantity)
+    reactor_lim = {}
+    for label in ("reactor_periodic", "reactor_switching"):
+        key = f"{label}_{kind}"
+        N = min(window, data[f"{key}_error"].shape[0] - 1)
+        for i in range(data[f"{key}_error"].shape[1]):
+            reactor_lim[i] = max(reactor_lim.get(i, 0.0), 1.15 * max(float(data[f"{key}_level"][: N + 1].max()),
+                                                                  float(np.abs(data[f"{key}_error"][: N + 1, i]).max())))
+    for c, (label, title, ylabels, mu1) in enumerate(cols):
+        key = f"{label}_{kind}"
+        err, lev = data[f"{key}_error"], data[f"{key}_level"]
+        T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
+        N = min(window, err.shape[0] - 1)
+        t = np.arange(N + 1)
+        n = err.shape[1]
+        for i in range(4):
+            ax = axes[i, c]
+            if i >= n:
+                ax.axis("off")
+                continue
+            ax.grid(False, axis="x")
+            ax.fill_between(t, -lev[: N + 1], lev[: N + 1], step="mid", color="0.85", label="guarantee")
+            ax.plot(t, err[: N + 1, i], "C0.-", ms=2.5, label="estimation error")
+            if label == "reactor_switching":
+                sw, rv = data[f"{key}_switch"], data[f"{key}_revert"]
+                for j, s in enumerate(sw[sw <= N]):
+                    ax.axvline(s, color="C3", ls="--", lw=0.8, label="switch to recovery" if j == 0 else None)
+                for j, s in enumerate(rv[rv <= N]):
+                    ax.axvline(s, color="C2", ls=":", lw=1.0, label="back to performance" if j == 0 else None)
+            else:
+                for j, s in enumerate(range(T, N + 1, T)):
+                    ax.axvline(s, color="C4", ls="-", lw=0.7, alpha=0.8,
+                               label="period boundary (every $T$ steps)" if j == 0 else None)
+            ax.set_ylabel(ylabels[i])
+            lim = reactor_lim[i] if label.startswith("reactor") else (
+                1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max())))
+            ax.set_ylim(-lim, lim)
+            if i == 0:
+                ax.set_title(f"{title} = {T}\n$\\mu_1$ = {mu1:g}" if "every" in title else
+                             f"{title}\n$\\mu_1$ = {mu1:g}")
+        last = axes[min(n, 4) - 1, c]
+        last.set_xlabel(f"time step $k$\n($T_s$ = {Ts:g} s)")
+        last.tick_params(labelbottom=True)
+    # one legend under the figure (inside an axis it covers the bands)
+    seen: dict[str, object] = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(lab, h)
+    fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncol=3)
+    fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees\n({kind} noise, first "
+                 f"{window} steps of each run)")
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+STEPS = {"figure1": step_figure1, "figure2": step_figure2, "strategy_figure": step_strategy_figure}

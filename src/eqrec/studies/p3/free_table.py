@@ -1,0 +1,122 @@
+r"""The class engine at scale with ``μ1`` free (issue 27): time against the number of classes, per class on 1 and
+2 workers and as one block LP, in the target ``p3_scale`` (outside the default run).
+
+Step ``scale_free``: for each ``(τ̄, T)`` of :data:`FREE_SIZES`, the batch reactor's μ1-free design on the full
+language ``{0..τ̄}^T`` (:func:`eqrec.design.delay.design.design_delay_global`) in a fresh process per configuration of
+:data:`eqrec.studies.p3.free_size_run.CONFIGS` (:func:`eqrec.studies.p3.free_size_run.run_free`; the one block LP only up to
+:data:`FREE_MONOLITHIC_MAX_CLASSES` classes: it takes minutes beyond).  Writes
+
+* ``results/p3/scale_free.csv``: ``μ1``, ``J``, ``μ2`` and the lower bound of ``J`` per size and configuration
+  (1 and 2 workers: the same bytes; the one block LP: the same optimum to the last digits);
+* ``results/timings/p3/scale_free.csv`` and ``.md``: the wall time and peak memory of each (measurements);
+* ``results/p3/fig_scale_free.{pdf,png}``: time against classes, log-log, one line per configuration.
+
+``cfg``: the ``p3`` section; ``scale.time_limit`` bounds each process (three times it, wall clock).
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from eqrec.studies.p3.free_size_run import CONFIGS, run_free
+from eqrec.systems.examples import batch_reactor
+from eqrec.studies.pipeline.logs import get_logger
+from eqrec.studies.pipeline.outputs import save_figure, write_csv, write_text
+from eqrec.studies.plotting import paper_style, pyplot
+
+log = get_logger("p3")
+
+#: ``(τ̄, T)`` of the μ1-free scale runs, in increasing number of classes.
+FREE_SIZES = [(4, 20), (4, 30), (4, 40), (5, 30), (4, 60), (4, 100), (5, 60), (5, 100), (6, 60)]
+#: The one block LP only up to this many classes.
+FREE_MONOLITHIC_MAX_CLASSES = 1000
+#: Columns of ``scale_free.csv`` (then the measured ``wall_time`` and ``peak_mb``, split off to the timings).
+FREE_FIELDS = ("tau", "T", "classes", "config", "status", "mu1", "J", "mu2", "lower_bound", "wall_time", "peak_mb")
+
+
+def step_scale_free(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
+    """The μ1-free scale runs, their table (values; times and memory in the timings) and the figure."""
+    from eqrec.bounds.data_classes import classes_of_full_language
+
+    timeout = 3 * float(cfg["scale"]["time_limit"])
+    system = batch_reactor()
+    rows = []
+    for tau, T in FREE_SIZES:
+        n_classes = len(classes_of_full_language(T, tau))
+        for config in CONFIGS:
+            if config == "monolithic" and n_classes > FREE_MONOLITHIC_MAX_CLASSES:
+                continue
+            r = run_free(system, tau, T, config, timeout=timeout)
+            r.setdefault("classes", n_classes)
+            log.info("scale free (tau, T) = (%d, %d), %d classes, %s: %s, %.2f s, %.0f MB, mu1 = %s", tau, T, n_classes,
+                     config, r["status"], r.get("wall_time", float("nan")), r.get("peak_mb", float("nan")),
+                     r.get("mu1"))
+            rows.append(r)
+    frame = pd.DataFrame(rows).reindex(columns=list(FREE_FIELDS))
+    write_csv(outputs.csv, frame, timings=outputs.timings_csv, keys=["tau", "T", "config"])
+    write_text(outputs.timings_md, free_markdown(frame))
+    free_figure(frame, outputs)
+    return frame
+
+
+def free_markdown(frame: pd.DataFrame) -> str:
+    """The μ1-free scale runs as a Markdown table, times and memory included.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Columns :data:`FREE_FIELDS`.
+
+    Returns
+    -------
+    str
+    """
+    lines = ["# P3 scale, mu1 free (class engine per class vs one block LP)", "",
+             "Batch reactor, full language {0..τ̄}^T, mu1 free (design_delay_global), one fresh process per row; "
+             "wall time from the window rule to the certified design, worker start included; peak memory of the "
+             "process or its largest worker.", "",
+             "| τ̄ | T | classes | configuration | time [s] | peak [MB] | μ1 | J | max μ2 | status |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in frame.itertuples(index=False):
+        lines.append(f"| {r.tau} | {r.T} | {r.classes} | {r.config} | {r.wall_time:.2f} | {r.peak_mb:.0f} | "
+                     f"{r.mu1:.9g} | {r.J:.9g} | {r.mu2:.6f} | {r.status} |")
+    return "\n".join(lines) + "\n"
+
+
+def free_figure(frame: pd.DataFrame, outputs) -> None:
+    """Time against classes (log-log), one line per configuration: ``outputs.pdf`` and ``outputs.png``.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Columns :data:`FREE_FIELDS`.
+    outputs : snakemake.io.Namedlist
+        ``pdf`` and ``png`` paths.
+    """
+    plt = pyplot()
+    paper_style()
+    fig, ax = plt.subplots(figsize=(5.0, 3.4))
+    styles = {"monolithic": ("one block LP (1 core)", "s--"), "blocks-1": ("per class, 1 worker", "o-"),
+              "blocks-2": ("per class, 2 workers", "^-")}
+    for config, (label, style) in styles.items():
+        part = frame[(frame["config"] == config) & (frame["status"] == "optimal")].sort_values("classes")
+        if len(part):
+            ax.plot(part["classes"], part["wall_time"], style, label=label, ms=4)
+    for r in frame[frame["config"] == "blocks-2"].itertuples(index=False):
+        ax.annotate(f"({r.tau},{r.T})", (r.classes, r.wall_time), textcoords="offset points", xytext=(3, -9),
+                    fontsize=6)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    ax.set_xticks([300, 500, 1000, 2000, 4000])
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("classes (time, available data)")
+    ax.set_ylabel(r"design time, $\mu_1$ free [s]")
+    ax.set_title(r"Batch reactor $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
+    ax.legend()
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+STEPS = {"scale_free": step_scale_free}

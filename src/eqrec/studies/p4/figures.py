@@ -1,0 +1,233 @@
+"""P4 figures: Figs. 1-8 of the LMV paper and the zero- vs hold-input regions (plotting only).
+
+Called by the steps of :mod:`eqrec.studies.p4.steps`; every figure is written as
+PDF and PNG by :func:`eqrec.studies.pipeline.outputs.save_figure`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.studies.pipeline.chunks import merge_npz
+from eqrec.studies.pipeline.outputs import save_figure
+from eqrec.studies.plotting import paper_style, pyplot
+
+
+def _plt():
+    paper_style()
+    return pyplot()
+
+
+#: The examples' states have no physical unit (the paper gives none): their axes say so.
+UNIT = "[–]"
+#: Half-width of the Monte Carlo bands in standard errors (a 95 % normal interval).
+Z_BAND = 1.96
+
+
+def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, num: int, pdf: str,
+                 png: str) -> None:
+    """Figs. 1-3: true state components and their estimate against time (legend below the panels)."""
+    plt = _plt()
+    n = x.shape[1]
+    fig, axes = plt.subplots(n, 1, figsize=(5.4, 1.8 * n + 0.9), sharex=True, layout="constrained")
+    t = np.arange(x.shape[0])
+    for i, ax in enumerate(np.atleast_1d(axes)):
+        ax.plot(t, x[:, i], "k-", label=r"true state $x_i(t)$")
+        ax.plot(t, est[:, i], "r--", label="estimate " + sym.format(i="i"))
+        ax.set_ylabel(rf"state $x_{i + 1}$ {UNIT}")
+    np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
+    np.atleast_1d(axes)[0].set_title(rf"Tracking by the LMV {title}, arrival probability $\bar\eta$ = {eta:g}")
+    handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=2)
+    save_figure(fig, pdf, png)
+
+
+def _mc_band(ax, t: np.ndarray, mc: np.ndarray, se: np.ndarray, color: str, every: int = 4) -> None:
+    """Monte Carlo estimates (markers, every ``every``-th step) with their ``± Z_BAND`` standard-error band."""
+    ax.fill_between(t, mc - Z_BAND * se, mc + Z_BAND * se, color=color, alpha=0.18, lw=0)
+    ax.plot(t[::every], mc[::every], "o", ms=2.6, color=color, mfc="none", mew=0.8)
+
+
+def _mc_legend(fig, rows: list[tuple[str, str]], runs: int, ncol: int = 2) -> None:
+    """One entry per curve (its colour: line, markers and band together), then what line, markers and band are."""
+    from matplotlib.legend_handler import HandlerTuple
+    from matplotlib.patches import Patch
+
+    plt = pyplot()
+    handles = [(Patch(color=col, alpha=0.18, lw=0), plt.Line2D([], [], color=col),
+                plt.Line2D([], [], ls="", marker="o", ms=2.6, color=col, mfc="none")) for _, col in rows]
+    labels = [label for label, _ in rows]
+    handles += [plt.Line2D([], [], color="0.3"), (Patch(color="0.3", alpha=0.18, lw=0),
+                plt.Line2D([], [], ls="", marker="o", ms=2.6, color="0.3", mfc="none"))]
+    labels += ["line: theory", f"markers: Monte Carlo, {runs} runs (every 4th step);\n"
+                               f"band: its 95 % interval (± {Z_BAND:g} standard errors)"]
+    fig.legend(handles, labels, loc="outside lower center", ncol=ncol, handler_map={tuple: HandlerTuple(ndivide=1)})
+
+
+def fig_variances(d, se, N: int, eta: float, pdf: str, png: str) -> None:
+    """Fig. 4: theoretical (lines) and Monte Carlo (markers, 95 % band) error variances, zero-input."""
+    plt = _plt()
+    n = d["zero/theory_pred"].shape[1]
+    fig, axes = plt.subplots(n, 1, figsize=(5.4, 2.0 * n + 1.2), sharex=True, layout="constrained")
+    t = d["t"]
+    styles = [("pred", "one-step predictor $P(t|t-1)$", "C3"), ("filt", "filter $P(t|t)$", "C0"),
+              (f"smooth{N}", f"{N}-step smoother $P(t|t+{N})$", "C2")]
+    for i, ax in enumerate(np.atleast_1d(axes)):
+        for key, _, col in styles:
+            ax.plot(t, d[f"zero/theory_{key}"][:, i], color=col)
+            _mc_band(ax, t, d[f"zero/mc_{key}"][:, i], se[f"zero/se_{key}"][:, i], col)
+        ax.set_ylabel(rf"error variance of $x_{i + 1}$ {UNIT}")
+    np.atleast_1d(axes)[0].set_title(rf"Estimation error variances, zero-input, $\bar\eta$ = {eta:g}")
+    np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
+    _mc_legend(fig, [(label, col) for _, label, col in styles], int(se["runs"]))
+    save_figure(fig, pdf, png)
+
+
+def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None:
+    """Fig. 5: steady-state variances against eta_bar (zero-input); linear axes (the range is under a decade)."""
+    plt = _plt()
+    etas = d["eta"]
+    n = d[f"{ex}/zero/filt"].shape[1]
+    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.3), layout="constrained")
+    p = example
+    for i, ax in enumerate(np.atleast_1d(axes)):
+        for key, label, col in (("pred", "one-step predictor", "C3"), ("filt", "filter", "C0"),
+                                ("smooth", f"{N}-step smoother", "C2")):
+            ax.plot(etas, d[f"{ex}/zero/{key}"][:, i], color=col, label=label)
+        ax.set_xlabel(r"arrival probability $\bar\eta$")
+        ax.set_ylabel(rf"steady error variance of $x_{i + 1}$ {UNIT}")
+        ax.set_ylim(0, None)
+    handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3)
+    fig.suptitle(rf"Steady-state error variances (zero-input), $Q_\xi$ = {p['Qxi']:g}, $Q_\lambda$ = {p['Qlam']:g}")
+    save_figure(fig, pdf, png)
+
+
+def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
+    """Fig. 6: steady filter variance surfaces over (Q_xi, Q_lambda), zero-input."""
+    plt = _plt()
+    F = d[f"{ex}/zero/filt"]
+    n = F.shape[-1]
+    XI, LA = np.meshgrid(d["qxi"], d["qlam"], indexing="ij")
+    fig = plt.figure(figsize=(3.4 * n, 3.0))
+    for i in range(n):
+        ax = fig.add_subplot(1, n, i + 1, projection="3d")
+        ax.plot_surface(XI, LA, F[..., i], cmap="viridis", linewidth=0.2, edgecolor="k", alpha=0.9)
+        ax.set_xlabel(r"$Q_\xi$")
+        ax.set_ylabel(r"$Q_\lambda$")
+        ax.set_zlabel(rf"filter variance of $x_{i + 1}$ {UNIT}")
+    fig.suptitle(rf"Steady filtering error variances (zero-input), $0 \leq Q_\xi, Q_\lambda \leq {d['qxi'][-1]:g}$, "
+                 rf"$\bar\eta$ = {eta:g}", fontsize=9)
+    save_figure(fig, pdf, png)
+
+
+def fig_regions(d: dict, names: dict, working: dict, eta_bar: float, pdf: str, png: str) -> None:
+    """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example.
+
+    One colour scale for every panel (the same quantity), logarithmic and symmetric about 1, so a ratio ``r``
+    and ``1/r`` are equally strong; the working point of Figs. 7/8 (``working[ex] = (Q_xi, Q_lambda)``) marked.
+    """
+    from matplotlib.colors import LogNorm
+
+    plt = _plt()
+    exs = list(names)
+    ratios = {ex: d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1) for ex in exs}
+    m = max(1.25, *(max(float(np.nanmax(r)), 1.0 / float(np.nanmin(r))) for r in ratios.values()))
+    # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
+    norm = LogNorm(vmin=1.0 / m, vmax=m)
+    fig, axes = plt.subplots(1, len(exs), figsize=(3.1 * len(exs) + 0.9, 3.4), layout="constrained", squeeze=False)
+    for ax, ex in zip(axes[0], exs):
+        im = ax.pcolormesh(d["qlam"], d["qxi"], ratios[ex], cmap="RdBu_r", norm=norm, shading="auto")
+        ax.contour(d["qlam"], d["qxi"], ratios[ex], levels=[1.0], colors="k", linewidths=1.0)
+        qxi, qlam = working[ex]
+        ax.plot([qlam], [qxi], "*", color="gold", mec="k", mew=0.6, ms=11, clip_on=False, zorder=5,
+                label="working point of Figs. 7 and 8")
+        ax.set_xlabel(r"$Q_\lambda$ (variance of $\lambda$)")
+        ax.set_ylabel(r"$Q_\xi$ (variance of $\xi$)")
+        ax.set_title(names[ex])
+    cb = fig.colorbar(im, ax=list(axes[0]), label=r"tr $P_{\mathrm{hold}}$ / tr $P_{\mathrm{zero}}$ (filter)")
+    ticks = [t for t in (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.75, 2.0) if 1.0 / m <= t <= m]
+    cb.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
+    cb.minorticks_off()
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    handles.append(pyplot().Line2D([], [], color="k", lw=1.0))
+    labels.append("equal variances (ratio 1)")
+    fig.legend(handles, labels, loc="outside lower center", ncol=2)
+    fig.suptitle(rf"Hold-input vs zero-input filter, $\bar\eta$ = {eta_bar:g}: blue, ratio < 1: hold-input better; "
+                 "red: zero-input better", fontsize=9)
+    save_figure(fig, pdf, png)
+
+
+def _verdict(d, T: int) -> tuple[str, float]:
+    """Which mechanism has the lower theoretical filter variance at ``t = T`` in every component, and the
+    trace gap in percent of the lower one."""
+    z, h = d["zero/theory_filt"][T], d["hold/theory_filt"][T]
+    who = "zero-input" if np.all(z < h) else "hold-input" if np.all(h < z) else "neither (mixed)"
+    return who, 100.0 * abs(float(h.sum() - z.sum())) / min(float(h.sum()), float(z.sum()))
+
+
+def fig_compare(d, se, name: str, eta: float, number: int, paper: str | None, pdf: str, png: str) -> None:
+    """Figs. 7-8: filter error variances of zero- and hold-input, theory (lines) and Monte Carlo (markers, 95 %
+    band); the title gives the theoretical verdict and the paper's (``paper``, from ``config/claims.yaml``)."""
+    plt = _plt()
+    n = d["zero/theory_filt"].shape[1]
+    fig, axes = plt.subplots(n, 1, figsize=(5.6, 1.9 * n + 1.5), sharex=True, layout="constrained")
+    t = d["t"]
+    rows = (("zero", "zero-input", "C0"), ("hold", "hold-input", "C3"))
+    for i, ax in enumerate(np.atleast_1d(axes)):
+        for k, _, col in rows:
+            ax.plot(t, d[f"{k}/theory_filt"][:, i], color=col)
+            _mc_band(ax, t, d[f"{k}/mc_filt"][:, i], se[f"{k}/se_filt"][:, i], col)
+        ax.set_ylabel(rf"filter variance of $x_{i + 1}$ {UNIT}")
+    T = int(np.flatnonzero(np.isfinite(d["zero/theory_filt"][:, 0]))[-1])
+    who, gap = _verdict(d, T)
+    rel_se = 100.0 * Z_BAND * float(np.nanmax(se["zero/se_filt"][T] / d["zero/mc_filt"][T]))
+    flag = ""
+    if paper is not None:
+        flag = (f"; the paper: {paper} lower" + (" (the opposite)" if paper != who and "mixed" not in who else ""))
+    np.atleast_1d(axes)[0].set_title(
+        rf"{name}: filter error variances of the two mechanisms, $\bar\eta$ = {eta:g}" + "\n"
+        f"theory at t = {T}: {who} lower (trace {gap:.1f} % apart){flag}" + "\n"
+        f"Monte Carlo 95 % interval: up to ± {rel_se:.1f} % of the variance", fontsize=8)
+    np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
+    _mc_legend(fig, [(label, col) for _, label, col in rows], int(se["runs"]))
+    save_figure(fig, pdf, png)
+
+
+# --------------------------------------------------------------------------- steps
+
+def step_fig4(cfg, inputs, outputs, wildcards) -> None:
+    """Fig. 4 from the Monte Carlo file of the tracking example."""
+    fig_variances(np.load(inputs.mc), np.load(inputs.se), int(cfg["smoother_lag"]), float(cfg["eta_bar"]),
+                  outputs.pdf, outputs.png)
+
+
+def step_fig5(cfg, inputs, outputs, wildcards) -> None:
+    """Merge the eta-sweep chunks (whole grid, once) and draw Fig. 5."""
+    d = merge_npz(list(inputs.chunks), int(cfg["sweep_eta"]["num"]), outputs.merged)
+    ex = cfg["tracking"]["example"]
+    fig_eta(d, ex, int(cfg["smoother_lag"]), cfg["examples"][ex], outputs.pdf, outputs.png)
+
+
+def step_fig6(cfg, inputs, outputs, wildcards) -> None:
+    """Merge the Q-sweep chunks (whole grid, once); Fig. 6 and the regions figure."""
+    d = merge_npz(list(inputs.chunks), int(cfg["sweep_q"]["num"]), outputs.merged, shared=("qlam",))
+    fig_q(d, cfg["tracking"]["example"], float(cfg["eta_bar"]), outputs.pdf, outputs.png)
+    names = {ex: cfg["examples"][ex].get("name", ex) for ex in cfg["examples"]}
+    working = {ex: (float(cfg["examples"][ex]["Qxi"]), float(cfg["examples"][ex]["Qlam"])) for ex in cfg["examples"]}
+    fig_regions(d, names, working, float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
+
+
+def step_compare(cfg, inputs, outputs, wildcards) -> None:
+    """Figs. 7-8: zero-input vs hold-input filter of one example."""
+    ex = wildcards["example"]
+    fig_compare(np.load(inputs.mc), np.load(inputs.se), cfg["examples"][ex].get("name", ex), float(cfg["eta_bar"]),
+                int(wildcards["number"]), cfg["published"].get(ex), outputs.pdf, outputs.png)
+
+
+STEPS = {
+    "fig4": step_fig4,
+    "fig5": step_fig5,
+    "fig6": step_fig6,
+    "compare": step_compare,
+}

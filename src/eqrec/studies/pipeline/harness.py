@@ -1,0 +1,278 @@
+"""The study harness: runs one pipeline step, and nothing else.
+
+Every Snakemake rule runs ``workflow/scripts/run_step.py``, which calls
+:func:`run_from_snakemake`; the rule's ``params`` name the step (``study``,
+``step``) and carry ``cfg``, the configuration keys that step reads (nested as
+in the study's section, validated once by the Snakefile,
+:mod:`eqrec.studies.pipeline.configuration`; picked by ``step_config`` in
+``workflow/rules/common.smk``).  A key the rule does not give raises
+:class:`MissingConfigKey` naming it.
+
+A step is a plain function ``step(cfg, inputs, outputs, wildcards)`` listed
+in the ``STEPS`` table of the module that defines it; the step registry
+(:mod:`eqrec.studies.pipeline.steps`) maps ``(study, step)`` to it.  Outside Snakemake::
+
+    from eqrec.studies.pipeline import configuration, harness
+    cfg = configuration.load_config("p1", "config/config.yaml")
+    harness.run_step("p1", "designs", cfg, outputs={"json": "designs.json", "timings": "t.json"})
+
+The harness owns what every step shares: the log (``[p1] message`` lines in
+the rule's log file; the loggers and progress lines are in
+:mod:`eqrec.studies.pipeline.logs`), the check that every declared output was written,
+and the exit status (a failing step exits 1 with one line naming the step and,
+for a configuration problem, the file and field).  The writers a step uses are
+in :mod:`eqrec.studies.pipeline.outputs`.  The modules a rule lists as code inputs come
+from :mod:`eqrec.studies.pipeline.imports`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
+
+from eqrec.errors import InputError, StepError
+from eqrec.studies.pipeline.configuration import SECTIONS, ConfigError
+from eqrec.studies.pipeline.logs import get_logger
+from eqrec.studies.pipeline.steps import get_step
+
+Step = Callable[[dict, "Files", "Files", "Wildcards"], Any]
+
+
+# --------------------------------------------------------------------------- files and wildcards
+
+class Files(Sequence[str]):
+    """A step's inputs or outputs: positional paths plus named entries (a path or a list of paths).
+
+    ``files.json``, ``files["json"]`` and ``files[0]`` work as on Snakemake's
+    ``input``/``output`` objects.
+    """
+
+    def __init__(self, items: Iterable[str] = (), **named: str | Sequence[str]):
+        self._named: dict[str, str | list[str]] = {}
+        self._items = [str(p) for p in items]
+        for key, val in named.items():
+            if isinstance(val, (str, os.PathLike)):
+                self._named[key] = str(val)
+                self._items.append(str(val))
+            else:
+                self._named[key] = [str(v) for v in val]
+                self._items.extend(self._named[key])
+
+    @classmethod
+    def of(cls, obj: "Files | Mapping[str, Any] | Sequence[str] | None") -> "Files":
+        """Files from a mapping (named), a sequence (positional), a Snakemake ``Namedlist`` or ``None``."""
+        if obj is None:
+            return cls()
+        if isinstance(obj, Files):
+            return obj
+        if isinstance(obj, Mapping):
+            return cls(**obj)
+        if hasattr(obj, "_names"):  # snakemake.io.Namedlist
+            named = {k: (v if isinstance(v, str) else list(v)) for k, v in obj.items()}
+            seen = {p for v in named.values() for p in ([v] if isinstance(v, str) else v)}
+            return cls([p for p in obj if p not in seen], **named)
+        if isinstance(obj, (str, os.PathLike)):
+            return cls([obj])
+        return cls(obj)
+
+    def __getattr__(self, name: str) -> str | list[str]:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        try:
+            return self._named[name]
+        except KeyError:
+            raise AttributeError(f"no file named {name!r} (declared: {sorted(self._named)})") from None
+
+    def __getitem__(self, key):  # type: ignore[override]
+        if isinstance(key, str):
+            return self.__getattr__(key)
+        return self._items[key]
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._items)
+
+    def names(self) -> list[str]:
+        return list(self._named)
+
+    def __repr__(self) -> str:
+        return f"Files({self._items!r}, named={sorted(self._named)})"
+
+
+class Wildcards(dict):
+    """The wildcards of a job (``wildcards.chunk`` or ``wildcards["chunk"]``)."""
+
+    def __getattr__(self, name: str) -> str:
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(f"no wildcard {name!r} (have: {sorted(self)})") from None
+
+
+# --------------------------------------------------------------------------- the step and its configuration
+
+
+class MissingConfigKey(KeyError):
+    """A step read a configuration key its rule does not give it."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class StepConfig(dict):
+    """The configuration a rule gives its step: the keys the step reads, nested as in the study's section.
+
+    Reading a key that is not there raises :class:`MissingConfigKey` naming
+    the full key (``p3.strategy.figure.window``) and where a rule lists the
+    keys of its step, rather than a bare ``KeyError``.
+    """
+
+    def __init__(self, data: Mapping[str, Any] = (), where: str = "", path: tuple = ()):
+        super().__init__((k, StepConfig(v, where, (*path, k)) if isinstance(v, Mapping) else v)
+                         for k, v in dict(data).items())
+        self._where, self._path = where, path
+
+    def __missing__(self, key):
+        name = ".".join(map(str, (*self._path, key)))
+        raise MissingConfigKey(f"configuration key '{name}' is not among the keys the rule of step {self._where} "
+                               f"gives it: add it to its params cfg=step_config(...) (workflow/rules/*.smk)")
+
+
+# --------------------------------------------------------------------------- logging
+
+class _StudyFormatter(logging.Formatter):
+    def format(self, record: logging.LogRecord) -> str:
+        parts = record.name.split(".")
+        study = parts[2] if len(parts) > 2 and parts[:2] == ["eqrec", "studies"] else parts[-1]
+        msg = record.getMessage()
+        if record.exc_info:
+            msg += "\n" + self.formatException(record.exc_info)
+        return f"[{study}] {msg}"
+
+
+@contextlib.contextmanager
+def _log_handler(stream) -> Iterator[None]:
+    root = logging.getLogger("eqrec.studies")
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(_StudyFormatter())
+    old_level, old_propagate = root.level, root.propagate
+    root.addHandler(handler)
+    root.setLevel(logging.INFO)
+    root.propagate = False
+    try:
+        yield
+    finally:
+        handler.flush()
+        root.removeHandler(handler)
+        root.setLevel(old_level)
+        root.propagate = old_propagate
+
+
+@contextlib.contextmanager
+def _fds_to(log_path: str | Path | None) -> Iterator[Any]:
+    """Send standard output and error to ``log_path``: file descriptors 1 and 2 (solver output) and
+    ``sys.stdout``/``sys.stderr`` (Python output).
+
+    Yields a writable stream on the original standard error (for the one-line
+    failure message), or ``sys.stderr`` when there is no log.
+    """
+    if log_path is None:
+        yield sys.stderr
+        return
+    Path(log_path).parent.mkdir(parents=True, exist_ok=True)
+    Path(log_path).write_text("")
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved_fds = os.dup(1), os.dup(2)
+    saved_streams = sys.stdout, sys.stderr
+    fd = os.open(log_path, os.O_WRONLY | os.O_APPEND)
+    stream = open(log_path, "a", buffering=1)
+    terminal = os.fdopen(os.dup(saved_fds[1]), "w")
+    try:
+        os.dup2(fd, 1)
+        os.dup2(fd, 2)
+        sys.stdout = sys.stderr = stream
+        yield terminal
+    finally:
+        stream.flush()
+        sys.stdout, sys.stderr = saved_streams
+        os.dup2(saved_fds[0], 1)
+        os.dup2(saved_fds[1], 2)
+        for f in (*saved_fds, fd):
+            os.close(f)
+        stream.close()
+        terminal.close()
+
+
+# --------------------------------------------------------------------------- running a step
+
+def run_step(study: str, step: str, cfg: Mapping[str, Any] | None = None, inputs=None, outputs=None,
+             wildcards: Mapping[str, Any] | None = None, log: str | Path | None = None) -> Any:
+    """Run one step (as its rule would) and return what the step returns.
+
+    ``inputs``/``outputs``: mappings of names to paths (or lists), sequences, or
+    :class:`Files`.  Output folders are created; after the step every declared
+    output must exist.  With ``log``, the step's output goes to that file.
+    Exceptions propagate (``run_from_snakemake`` turns them into an exit status).
+    """
+    fn = get_step(study, step)
+    ins, outs = Files.of(inputs), Files.of(outputs)
+    wc = Wildcards({k: str(v) for k, v in (wildcards or {}).items()})
+    for p in outs:
+        Path(p).parent.mkdir(parents=True, exist_ok=True)
+    log_ = get_logger(study)
+    with _fds_to(log) as _, _log_handler(sys.stderr):
+        t0 = time.perf_counter()
+        log_.info("step %s%s", step, "".join(f" {k}={v}" for k, v in wc.items()))
+        given = StepConfig(cfg or {}, f"{study}.{step}", (study,) if study in SECTIONS else ())
+        result = fn(given, ins, outs, wc)
+        missing = [p for p in outs if not Path(p).exists()]
+        if missing:
+            raise StepError(f"step {study}.{step} did not write its declared outputs {missing}")
+        log_.info("step %s done in %.2f s", step, time.perf_counter() - t0)
+    return result
+
+
+def failure_message(study: str, step: str, exc: BaseException) -> str:
+    """One line naming the step and, for a configuration problem, the file and field."""
+    head = f"[{study}] step {step} failed: "
+    if isinstance(exc, InputError) and exc.field and study in SECTIONS and not isinstance(exc, ConfigError):
+        field = exc.field if exc.field.startswith(f"{study}.") else f"{study}.{exc.field}"
+        return (head + f"{exc} (configuration field '{field}' of {SECTIONS[study].config_file} "
+                       f"or of a --configfile/--config override)")
+    return head + f"{type(exc).__name__}: {exc}"
+
+
+def run_from_snakemake(smk) -> None:
+    """Entry point of ``workflow/scripts/run_step.py``: run the step its rule names; exit 1 on failure.
+
+    The step's output (Python and solvers alike) goes to the rule's log file;
+    a failure is logged with its traceback and reported on the terminal in
+    one line (step, and for a configuration problem the file and field).
+    """
+    study, step = smk.params.study, smk.params.step
+    cfg = smk.params.cfg if "cfg" in smk.params.keys() else {}
+    log = smk.log[0] if len(smk.log) else None
+    with _fds_to(log) as terminal:
+        try:
+            run_step(study, step, cfg, smk.input, smk.output, dict(smk.wildcards.items()))
+        except Exception as exc:
+            import traceback
+
+            msg = failure_message(study, step, exc)
+            traceback.print_exc()
+            print(msg, file=sys.stderr, flush=True)
+            if terminal is not sys.stderr:
+                print(msg, file=terminal, flush=True)
+            failed = True
+        else:
+            failed = False
+    if failed:
+        raise SystemExit(1)

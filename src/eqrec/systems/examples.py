@@ -1,0 +1,237 @@
+r"""The example plants of the papers, built from first principles: one home for them.
+
+:func:`acc_system`
+    The adaptive-cruise-control plant of Section VI of the prefix-based paper (P1), from its Table I constants.
+:func:`batch_reactor`
+    The batch reactor of the delayed/missing-data paper (P3).
+
+The batch reactor
+-----------------
+Rosenbrock's unstable batch reactor (the continuous model of Walsh, Ye,
+Bushnell 2002, used by the paper's ref. [20]),
+
+.. math:: \dot x = A_c x + B_c u, \qquad z = C x + V v,
+
+is discretised with a zero-order hold and ``Ts = 0.05`` s (what MATLAB's
+``c2d`` does; here :func:`scipy.signal.cont2discrete`).  Section IV-A of the
+paper uses the output matrix ``C`` printed there (not the ``C`` of the
+networked-control literature), no process noise (``W = ∅``: the system has
+zero noise columns), ``V = I`` and ``ηv = 0.05`` (5 standard deviations of
+``v ~ N(0, 0.01²)``).
+
+The paper prints the discretised ``A``, ``B`` to four decimals; those
+printed values live with the other published numbers (``config/claims.yaml``
+and the tests), never here: :func:`discretisation_gaps` measures how far a
+printed pair is from this discretisation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eqrec.systems.affine import AffineSystem
+from eqrec.errors import InputError
+
+#: Continuous-time state matrix of the batch reactor.
+BATCH_REACTOR_AC = np.array([[1.38, -0.2077, 6.715, -5.676],
+                             [-0.5814, -4.29, 0.0, 0.675],
+                             [1.067, 4.273, -6.654, 5.893],
+                             [0.048, 4.273, 1.343, -2.104]])
+#: Continuous-time input matrix of the batch reactor.
+BATCH_REACTOR_BC = np.array([[0.0, 0.0],
+                             [5.679, 0.0],
+                             [1.136, -3.146],
+                             [1.136, 0.0]])
+#: Output matrix used in Section IV-A of the delayed-data paper.
+BATCH_REACTOR_C = np.array([[1.0, 0.0, 1.0, -1.0],
+                            [0.0, 1.0, 0.0, 0.0]])
+#: Sampling time and measurement-noise bound of Section IV-A.
+BATCH_REACTOR_TS = 0.05
+BATCH_REACTOR_ETA_V = 0.05
+
+
+def zoh(Ac: np.ndarray, Bc: np.ndarray, Ts: float) -> tuple[np.ndarray, np.ndarray]:
+    """Zero-order-hold discretisation ``(A, B) = (e^{Ac Ts}, ∫_0^Ts e^{Ac s} ds Bc)`` (scipy, as MATLAB ``c2d``).
+
+    Parameters
+    ----------
+    Ac : ndarray, shape (n, n)
+        Continuous-time state matrix.
+    Bc : ndarray, shape (n, m)
+        Continuous-time input matrix.
+    Ts : float
+        Sampling time [s], positive.
+
+    Returns
+    -------
+    A : ndarray, shape (n, n)
+        Discrete state matrix.
+    B : ndarray, shape (n, m)
+        Discrete input matrix.
+    """
+    from scipy.signal import cont2discrete
+
+    Ac = np.asarray(Ac, float)
+    Bc = np.asarray(Bc, float)
+    if not (np.isfinite(Ts) and Ts > 0):
+        raise InputError(f"the sampling time must be positive, got {Ts}", field="Ts")
+    Ad, Bd, *_ = cont2discrete((Ac, Bc, np.eye(Ac.shape[0]), np.zeros((Ac.shape[0], Bc.shape[1]))), Ts,
+                               method="zoh")
+    return np.asarray(Ad), np.asarray(Bd)
+
+
+def batch_reactor_matrices(Ts: float = BATCH_REACTOR_TS) -> tuple[np.ndarray, np.ndarray]:
+    """Discrete ``(A, B)`` of the batch reactor (ZOH, sampling time ``Ts``).
+
+    Parameters
+    ----------
+    Ts : float, optional
+        Sampling time [s] (default :data:`BATCH_REACTOR_TS`, that of Section IV-A).
+
+    Returns
+    -------
+    A : ndarray, shape (4, 4)
+        Discrete state matrix.
+    B : ndarray, shape (4, 2)
+        Discrete input matrix.
+    """
+    return zoh(BATCH_REACTOR_AC, BATCH_REACTOR_BC, Ts)
+
+
+def batch_reactor(Ts: float = BATCH_REACTOR_TS, eta_v: float = BATCH_REACTOR_ETA_V) -> AffineSystem:
+    r"""The batch reactor of Section IV-A: ZOH at ``Ts``, printed ``C``, ``W = ∅``, ``V = I``, bound ``eta_v``.
+
+    Rosenbrock's unstable batch reactor :math:`\dot x = A_c x + B_c u`
+    (:data:`BATCH_REACTOR_AC`, :data:`BATCH_REACTOR_BC`) discretised with a
+    zero-order hold, :math:`A = e^{A_c T_s}`,
+    :math:`B = \int_0^{T_s} e^{A_c s}\,ds\,B_c` (as MATLAB's ``c2d``), with
+    the output matrix :data:`BATCH_REACTOR_C` printed in Section IV-A of the
+    delayed-data paper (Hassaan, Shen, Yong), no process noise and
+    measurement noise :math:`V = I`, :math:`\|v\|_\infty \le \eta_v`.
+
+    Parameters
+    ----------
+    Ts : float, optional
+        Sampling time [s] (Section IV-A: 0.05).
+    eta_v : float, optional
+        Measurement-noise bound (Section IV-A: 0.05, five standard
+        deviations of ``v ~ N(0, 0.01²)``).
+
+    Returns
+    -------
+    AffineSystem
+        ``n = 4``, ``p = 2``, ``m = 2`` and no process-noise columns
+        (``E`` of shape ``(4, 0)``, ``eta_w = 0``).
+
+    Raises
+    ------
+    InputError
+        If ``Ts`` is not a positive number.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> reactor = eqrec.batch_reactor()
+    >>> reactor.n, reactor.p, reactor.m, reactor.E.shape, reactor.eta_w
+    (4, 2, 2, (4, 0), 0.0)
+    >>> import numpy as np, scipy.linalg as sla  # A = exp(Ac Ts), the zero-order hold
+    >>> bool(np.allclose(reactor.A, sla.expm(eqrec.systems.examples.BATCH_REACTOR_AC * 0.05)))
+    True
+    """
+    A, B = batch_reactor_matrices(Ts)
+    return AffineSystem(A=A, B=B, C=BATCH_REACTOR_C.copy(), E=np.zeros((4, 0)), eta_w=0.0, eta_v=eta_v,
+                        V=np.eye(2), name="batch reactor")
+
+
+def discretisation_gaps(printed_A, printed_B, Ts: float = BATCH_REACTOR_TS) -> dict[str, float]:
+    """Largest entrywise gaps between printed ``A``, ``B`` and the ZOH discretisation at ``Ts``.
+
+    Parameters
+    ----------
+    printed_A : array_like, shape (4, 4)
+        State matrix as printed (four decimals).
+    printed_B : array_like, shape (4, 2)
+        Input matrix as printed.
+    Ts : float, optional
+        Sampling time [s] of the discretisation (default :data:`BATCH_REACTOR_TS`).
+
+    Returns
+    -------
+    dict of str to float
+        ``{"A": max |A_zoh - A_printed|, "B": max |B_zoh - B_printed|,
+        "A_rel_digit": ..., "B_rel_digit": ...}``; the ``*_rel_digit`` values
+        are the gaps in units of the printed rounding step ``5e-5`` (four
+        decimals): a value ``<= 1`` means the printed matrix is the
+        discretisation rounded.
+    """
+    A, B = batch_reactor_matrices(Ts)
+    pa, pb = np.asarray(printed_A, float), np.asarray(printed_B, float)
+    if pa.shape != A.shape or pb.shape != B.shape:
+        raise InputError(f"printed matrices must have shapes {A.shape} and {B.shape}, got {pa.shape}, {pb.shape}")
+    gA, gB = float(np.abs(A - pa).max()), float(np.abs(B - pb).max())
+    return {"A": gA, "B": gB, "A_rel_digit": gA / 5e-5, "B_rel_digit": gB / 5e-5}
+
+#: Table I of the prefix-based paper (SI units).
+ACC_CONSTANTS = {"m": 1370.0, "k0": 7.58, "k1": 9.9407, "Ts": 0.5, "eta_w": 0.1, "eta_v": 0.05}
+
+
+def acc_system(m: float = ACC_CONSTANTS["m"], k0: float = ACC_CONSTANTS["k0"],
+               k1: float = ACC_CONSTANTS["k1"], Ts: float = ACC_CONSTANTS["Ts"],
+               eta_w: float = ACC_CONSTANTS["eta_w"], eta_v: float = ACC_CONSTANTS["eta_v"]) -> AffineSystem:
+    r"""Discrete adaptive-cruise-control model of Section VI of the prefix-based paper.
+
+    Exact zero-order-hold discretisation of ``m dv_e/dt = u - k0 - k1 v_e``,
+    ``dh/dt = v_L - v_e``, ``dv_L/dt = w`` (lead acceleration), with state
+    ``x = [v_e, h, v_L]`` (ego speed, headway, lead speed) and outputs
+    ``[v_e, h]``; built from the Table I constants, not from rounded
+    matrices.  With :math:`\kappa = k_1/m` and :math:`a = e^{-\kappa T_s}`,
+
+    .. math::
+        A = \begin{bmatrix} a & 0 & 0 \\ (a-1)/\kappa & 1 & T_s \\ 0 & 0 & 1 \end{bmatrix},
+        \quad
+        B = \frac{1}{k_1^2}\begin{bmatrix} (1-a)\,k_1 \\ m(1-a) - k_1 T_s \\ 0 \end{bmatrix},
+        \quad
+        f = -k_0 B,
+        \quad
+        E = \begin{bmatrix} 0 \\ T_s^2/2 \\ T_s \end{bmatrix}.
+
+    Parameters
+    ----------
+    m : float
+        Vehicle mass [kg] (Table I: 1370).
+    k0 : float
+        Friction coefficient ``k̄0`` [N] (Table I: 7.58).
+    k1 : float
+        Drag coefficient ``k̄1`` [N s/m] (Table I: 9.9407).
+    Ts : float
+        Sampling time [s] (Table I: 0.5).
+    eta_w : float
+        Bound on the lead vehicle's acceleration ``|w|`` (Table I: 0.1).
+    eta_v : float
+        Bound on the measurement noise ``‖v‖∞`` (Table I: 0.05).
+
+    Returns
+    -------
+    AffineSystem
+        Named ``"ACC"``, with ``n = 3``, ``p = 2``, ``m = 1``,
+        ``E = [0, Ts^2/2, Ts]^T`` and ``V = I``.
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> acc = eqrec.acc_system()
+    >>> acc.A.shape, acc.C.shape, acc.E.shape
+    ((3, 3), (2, 3), (3, 1))
+    >>> acc.eta_w, acc.eta_v
+    (0.1, 0.05)
+    """
+    kappa = k1 / m
+    a = np.exp(-kappa * Ts)
+    A = np.array([[a, 0.0, 0.0],
+                  [(a - 1.0) / kappa, 1.0, Ts],
+                  [0.0, 0.0, 1.0]])
+    B = (1.0 / k1**2) * np.array([[(1.0 - a) * k1], [m * (1.0 - a) - k1 * Ts], [0.0]])
+    f = np.array([-(k0 / k1) * (1.0 - a), -(k0 / k1**2) * (m * (1.0 - a) - k1 * Ts), 0.0])
+    C = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    E = np.array([[0.0], [Ts**2 / 2.0], [Ts]])
+    return AffineSystem(A=A, B=B, f=f, C=C, E=E, eta_w=eta_w, eta_v=eta_v, name="ACC")
