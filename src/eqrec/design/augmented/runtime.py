@@ -20,6 +20,7 @@ from eqrec.estimators.packets import as_packets
 from eqrec.bounds.gains import GainRow, GainSchedule, schedule_from_word_gains
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
+from eqrec.bounds.stacking import UncertaintyLayout
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.model import (RUNTIME_MODES, AugmentedGains, AugmentedPrefixGains, arrival_indicator,
                                           as_time_varying_L, check_mode, default_runtime, effective_L,
@@ -203,6 +204,71 @@ def schedule_from_augmented(system: AffineSystem, gains: AugmentedGains, runtime
     F, u0 = augmented_to_time_based(system, gains, runtime)
     return schedule_from_word_gains(PrefixTree([gains.word]), {gains.word: (F, u0)}, system.n, system.p,
                                     time_based=True)
+
+
+def running_error_maps(system: AffineSystem, gains: AugmentedGains, runtime: str | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""The error and the innovations of the running estimator (P2 eqs. (2)-(3), (6)-(8)) as affine maps of ``δ``.
+
+    Along the designed word (``q_k``: 1 if ``y(k)`` arrives), with ``ξ = x - x̂``, ``e = ξ - s``, ``L_k`` the
+    runtime's gain (:func:`eqrec.design.augmented.model.effective_L`) and ``δ = (w, v, ξ0)``:
+
+    .. math:: \xi(k+1) = A_k\xi(k) + E_k w(k) + u_e(k), \qquad
+              u_e(k) = \nu_k + \textstyle\sum_{i \le k} M(k, i)\, z(i),
+
+    .. math:: e(k+1) = A_k e(k) + E_k w(k) - L_k z(k), \qquad
+              z(k) = \begin{cases} C_k e(k) + V_k v(k) & q_k = 1 \\
+                                   -C_k s(k) = C_k e(k) - C_k \xi(k) & q_k = 0, \end{cases}
+
+    from ``ξ(0) = ξ0``, ``e(0) = ξ0 - s0`` (``u_e`` cancels in ``e``; it enters ``e`` only through
+    ``-L_k z(k)`` at a missing step with ``L_k ≠ 0``: the ``"hold"`` runtime).  The same estimator as
+    :class:`AugmentedEstimator` and, through :func:`schedule_from_augmented`, as
+    :func:`eqrec.bounds.certify.closed_loop_maps` (equal up to rounding).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : AugmentedGains
+        Gains along the designed word.
+    runtime : {"theorem2", "hold"} or None, optional
+        Treatment of missing steps (default: the design mode's runtime).
+
+    Returns
+    -------
+    G : numpy.ndarray, shape (T+1, n, D)
+        ``ξ(t) = G[t] δ + c[t]``.
+    c : numpy.ndarray, shape (T+1, n)
+    Z : numpy.ndarray, shape (T, p, D)
+        ``z(k) = Z[k] δ + zc[k]``.
+    zc : numpy.ndarray, shape (T, p)
+    """
+    runtime = check_mode(runtime or default_runtime(gains.mode), RUNTIME_MODES)
+    q = arrival_indicator(gains.word)
+    T, n, p = q.size, system.n, system.p
+    L = _runtime_L(gains, T, n, p, missing_data_pattern(gains.word), runtime)
+    lay = UncertaintyLayout(T, system.nw, system.nv, n)
+    G = np.zeros((T + 1, n, lay.size))
+    c = np.zeros((T + 1, n))
+    Z = np.zeros((T, p, lay.size))
+    zc = np.zeros((T, p))
+    G[0][:, lay.xi0] = np.eye(n)
+    Ge, ce = G[0].copy(), -np.asarray(gains.s0, float).reshape(n)
+    for k in range(T):
+        A, C = system.A_at(k), system.C_at(k)
+        if q[k]:
+            Z[k], zc[k] = C @ Ge, C @ ce
+            Z[k][:, lay.v(k)] += system.V_at(k)
+        else:
+            Z[k], zc[k] = C @ (Ge - G[k]), C @ (ce - c[k])
+        Mk = gains.M[k * n:(k + 1) * n, : (k + 1) * p]
+        G[k + 1] = A @ G[k] + Mk @ Z[: k + 1].reshape(-1, lay.size)
+        G[k + 1][:, lay.w(k)] += system.E_at(k)
+        c[k + 1] = A @ c[k] + gains.nu[k * n:(k + 1) * n] + Mk @ zc[: k + 1].reshape(-1)
+        Ge = A @ Ge - L[k] @ Z[k]
+        Ge[:, lay.w(k)] += system.E_at(k)
+        ce = A @ ce - L[k] @ zc[k]
+    return G, c, Z, zc
 
 
 class AugmentedEstimator:

@@ -8,10 +8,17 @@ best one.  Built on the public interface of :class:`AugmentedLP` (its columns,
 robust rows and levels) and :mod:`eqrec.design.augmented.runtime`.
 
 With the ``"hold"`` runtime the running error is affine in the later gains only
-once the earlier ones are fixed; its coefficients are read off the certified maps
-(:func:`eqrec.bounds.certify.closed_loop_maps`) by unit steps, checked affine at a
-random point.  A closed form of these coefficients would differ from them in the
-last bits, and the LP solvers' optima (stored in ``results/p2/printed.json``) with them.
+once the earlier ones are fixed.  Its coefficients come exactly from the model of
+the running estimator (:func:`eqrec.design.augmented.runtime.running_error_maps`):
+P2 eqs. (2)-(3) with the observer as in eq. (7) (``s(k+1) = A s + u_e + L z(k)``, ``z(k) = -C s(k)``
+at a missing step in ``"hold"``; ``u_e(k) = ν_k + Σ_i M(k, i) z(i)``), propagated as the error
+``ξ`` of eq. (6) and ``e = ξ - s`` of eq. (8).  ``u_e`` cancels in ``e`` and enters it only at a
+missing step, so with the gains before the last missing step fixed the innovations
+``z(i) = Z_i δ + z_i`` are fixed and, over the free gains,
+``ξ(t) = G⁰_t δ + c⁰_t + Σ_{s<t} Φ(t, s+1) (ν_s + Σ_i M(s, i) (Z_i δ + z_i))``,
+``Φ(t, s+1) = A_{t-1} ... A_{s+1}``: each coefficient is one product of an entry of ``Φ`` and one of
+``Z_i`` or ``z_i`` (no finite differences; tests/test_exact_hold_rows.py checks them against
+:func:`eqrec.bounds.certify.closed_loop_maps` of the converted gains).
 """
 
 from __future__ import annotations
@@ -21,15 +28,15 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from eqrec.bounds.certify import closed_loop_maps
 from eqrec.lp.model import LPBuilder
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.lp.robust import UncertainAffineRows, add_robust_rows
 from eqrec.lp.solvers import solve_lp
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.word_lp import AugmentedLP
-from eqrec.design.augmented.model import DESIGN_MODES, RUNTIME_MODES, AugmentedGains, arrival_indicator, check_mode
-from eqrec.design.augmented.runtime import schedule_from_augmented
+from eqrec.design.augmented.model import (DESIGN_MODES, RUNTIME_MODES, AugmentedGains, arrival_indicator,
+                                          as_time_varying_L, check_mode, effective_L)
+from eqrec.design.augmented.runtime import running_error_maps
 from eqrec.errors import InputError
 
 #: Default tolerance of "optimal for the design LP": ``μ2 <= μ2* (1 + rel) + abs``.
@@ -135,49 +142,61 @@ def _select_rows(rows: UncertainAffineRows, keep: np.ndarray) -> UncertainAffine
 
 def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray, cols: np.ndarray, runtime: str,
                   keep: np.ndarray) -> UncertainAffineRows:
-    """Rows of the running error (the maps :func:`eqrec.bounds.certify.closed_loop_maps` of the converted gains)
-    as an affine function of the columns ``cols``, the others fixed at ``x_base``.
+    r"""Rows ``keep`` of the running error as an affine function of the columns ``cols`` of ``design``, the
+    others fixed at ``x_base``: exact coefficients from the running estimator's model (P2 eqs. (2)-(3), (6)-(8),
+    :func:`eqrec.design.augmented.runtime.running_error_maps`).
 
-    Valid only where that function is affine (checked at a random point): its coefficients are
-    read off the certified maps by unit steps in each column.
+    With ``x_f``: ``x_base`` with ``cols`` set to 0, the innovations ``z(i) = Z_i δ + z_i`` and the error
+    ``ξ(t) = G^0_t δ + c^0_t`` are those of the gains of ``x_f``, and a column of ``M(s, i)[b, π]`` or
+    ``ν_s[b]`` adds ``Φ(t, s+1)[:, b] (Z_i[π] δ + z_i[π])`` or ``Φ(t, s+1)[:, b]`` to ``ξ(t)``, ``t > s``
+    (``Φ(t, s+1) = A_{t-1} ... A_{s+1}``).  Valid (checked, else ``AssertionError``) when every column of
+    ``cols`` is a gain column of a step ``s >= k_c``, ``k_c`` the last missing step whose runtime gain ``L_k``
+    is nonzero: then ``u_e(s)`` enters ``e = ξ - s`` at no later step, so no ``z(i)`` depends on ``cols``.
     """
-    def maps(x):
-        G, c, _ = closed_loop_maps(system, schedule_from_augmented(system, design.gains_from_x(x), runtime),
-                                   design.word)
-        return G.reshape(-1, G.shape[-1])[keep], c.reshape(-1)[keep]
-
-    G0, c0 = maps(x_base)
-    dG, dc = [], []
-    for j in cols:
-        x = x_base.copy()
-        x[j] += 1.0
-        Gj, cj = maps(x)
-        dG.append(Gj - G0)
-        dc.append(cj - c0)
-    dG = np.stack(dG, axis=-1) if dG else np.zeros(G0.shape + (0,))
-    dc = np.stack(dc, axis=-1) if dc else np.zeros(c0.shape + (0,))
-    scale = max(1.0, float(np.abs(G0).max()), float(np.abs(dG).max(initial=0.0)))
-    dG[np.abs(dG) <= 1e-13 * scale] = 0.0
-    dc[np.abs(dc) <= 1e-13 * scale] = 0.0
-    rng = np.random.default_rng(0)
-    step = rng.normal(size=len(cols))
-    x = x_base.copy()
-    x[cols] += step
-    Gr, cr = maps(x)
-    err = max(float(np.abs(Gr - G0 - dG @ step).max()), float(np.abs(cr - c0 - dc @ step).max()))
-    if err > 1e-9 * scale * max(1.0, float(np.abs(step).sum())):
-        raise AssertionError(f"the {runtime} running error is not affine in the free gains (error {err:.3g})")
-    # G(x) = G0 + dG (x - x_base)[cols]: constant parts at x = 0 in the free columns
-    xb = x_base[np.asarray(cols, dtype=np.int64)]
+    n, p, T = system.n, system.p, design.T
+    cols = np.asarray(cols, dtype=np.int64)
+    keep = np.asarray(keep, dtype=np.int64)
+    # each column's step s, source i (None for ν) and entry (b, π)
+    info = {}
+    for (s_, i_), mc in design.m_cols.items():
+        for k, col in enumerate(mc):
+            info[int(col)] = (s_, i_, k // p, k % p)
+    for k, col in enumerate(design.nu_cols):
+        info[int(col)] = (k // n, None, k % n, None)
+    if any(int(j) not in info for j in cols):
+        raise AssertionError("the free columns must be gain columns (M, nu) of the design LP")
+    L = effective_L(as_time_varying_L(design.L, T, n, p), design.word, runtime)
+    q = arrival_indicator(design.word)
+    coupled = [k for k in range(T) if q[k] == 0 and np.any(L[k])]
+    k_c = max(coupled, default=0)
+    early = sorted({info[int(j)][0] for j in cols if info[int(j)][0] < k_c})
+    if early:
+        raise AssertionError(f"the {runtime} running error is not affine in the free gains: gains of steps {early} "
+                             f"are free and feed the auxiliary state's error at missing step {k_c}")
+    x_f = np.array(x_base, dtype=float)
+    x_f[cols] = 0.0
+    Gt, ct, Z, zc = running_error_maps(system, design.gains_from_x(x_f), runtime)
+    D = Gt.shape[-1]
+    Gc, cc = Gt.reshape(-1, D), ct.reshape(-1)
+    dG = np.zeros(((T + 1) * n, D, cols.size))
+    dc = np.zeros(((T + 1) * n, cols.size))
+    phi = design.st.transition
+    for j, col in enumerate(cols):
+        s_, i_, b, pi = info[int(col)]
+        for t in range(s_ + 1, T + 1):
+            P = phi[t][s_ + 1][:, b]
+            if i_ is None:
+                dc[t * n:(t + 1) * n, j] = P
+            else:
+                dG[t * n:(t + 1) * n, :, j] = np.outer(P, Z[i_, pi])
+                dc[t * n:(t + 1) * n, j] = P * zc[i_, pi]
+    G0, c0, dG, dc = Gc[keep], cc[keep], dG[keep], dc[keep]
     struct = (G0 != 0) | np.any(dG != 0, axis=-1)
-    G0 = G0 - dG @ xb
-    c0 = c0 - dc @ xb
     er, ed = np.nonzero(struct)
-    Gx = sp.csr_matrix(dG[er, ed].reshape(er.size, -1))
-    Gx = sp.csr_matrix((Gx.tocoo().data, (Gx.tocoo().row, np.asarray(cols)[Gx.tocoo().col])),
-                       shape=(er.size, x_base.size))
+    Gx = sp.coo_matrix(dG[er, ed].reshape(er.size, -1))
+    Gx = sp.csr_matrix((Gx.data, (Gx.row, cols[Gx.col])), shape=(er.size, x_base.size))
     cxc = sp.coo_matrix(dc)
-    cx = sp.csr_matrix((cxc.data, (cxc.row, np.asarray(cols)[cxc.col])), shape=(keep.size, x_base.size))
+    cx = sp.csr_matrix((cxc.data, (cxc.row, cols[cxc.col])), shape=(keep.size, x_base.size))
     return UncertainAffineRows(entry_row=er, entry_coord=ed, G0=G0[er, ed], Gx=Gx, c0=c0, cx=cx)
 
 
@@ -216,7 +235,7 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
       ``"theorem2"`` LP restricted to the times ``t <= runtimes_agree_until(word)``, where the
       two runtimes have the same error for every gain; *upper*, the gains of the injections
       before the last missing step fixed at that solution (then the running error is affine
-      in the others, its coefficients read off the certified maps) and ``γ`` minimised over
+      in the others, its coefficients from the running estimator's model) and ``γ`` minimised over
       all times.  When they meet (:attr:`GuaranteeAmongOptima.exact`) the value is known.
 
     Parameters
