@@ -1,138 +1,113 @@
-"""The import graph of ``src/eqrec``: every module in a layer (core <- design <- studies; lmv on its own; the CLI
-and the package namespace on top), imports only downwards, and no circle between modules."""
+"""The import graph of ``src/eqrec`` and the shape of its folders.
+
+The layer rules are import-linter contracts in ``pyproject.toml`` (``[tool.importlinter]``: the rooms' layers, the
+design engines' layers, nothing imports the studies, the LMV study does not import the designs); they are run here
+as ``lint-imports`` would run them.  The graph is grimp's, imports inside functions included (a lazy import is still
+a dependency).  No circle between modules is checked on the same graph.
+"""
+import ast
+import re
+from collections import Counter
 from pathlib import Path
 
+import grimp
 import pytest
+from importlinter.cli import lint_imports
 
-from eqrec.studies.pipeline.imports import eqrec_imports
-
-PKG = Path(__file__).resolve().parents[1] / "src" / "eqrec"
-
-# subpackage -> subpackages (and top-level modules) it may import
-ALLOWED = {
-    "core": {"core", "errors"},
-    "design": {"core", "design", "errors"},
-    "lmv": {"lmv", "core", "errors"},
-    "filters": {"core", "filters", "lmv", "errors"},
-    "studies": {"core", "design", "lmv", "filters", "studies", "errors", "models", "io", "compare"},
-    "interop": {"core", "design", "interop", "errors"},
-    # top-level modules
-    "errors": {"errors"},
-    "io": set(),
-    "models": {"core", "errors"},
-    "cli": {"core", "design", "errors", "io", "cli_help", "compare", "__init__"},
-    "cli_help": set(),
-    "compare": {"core", "design", "filters", "lmv", "errors", "io", "compare"},
-    "__main__": {"cli"},
-    "__init__": {"core", "design", "filters", "lmv", "interop", "errors", "models"},
-}
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "src" / "eqrec"
+PYPROJECT = ROOT / "pyproject.toml"
 
 
-def _module_name(path: Path) -> str:
-    parts = path.relative_to(PKG.parent).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+def _lint(config: Path, capsys) -> tuple[int, str]:
+    """Run import-linter's contracts of ``config``: its exit code and its report."""
+    code = lint_imports(config_filename=str(config), no_cache=True, no_logo=True)
+    return code, capsys.readouterr().out
 
 
-def _layer(path: Path) -> str:
-    rel = path.relative_to(PKG)
-    return rel.parts[0] if len(rel.parts) > 1 else rel.stem
+def test_the_import_contracts_are_kept(capsys):
+    code, report = _lint(PYPROJECT, capsys)
+    assert code == 0, report
+    assert "4 kept, 0 broken" in report, report
 
 
-MODULES = {_module_name(f): f for f in sorted(PKG.rglob("*.py"))}
+def test_a_broken_contract_fails(tmp_path, capsys):
+    """The check can fail: without the contracts' ignore, the estimators import the LMV study (a lazy import inside
+    ``RandomDelayLMV.__init__``, found all the same)."""
+    config = tmp_path / "broken.toml"
+    config.write_text('[tool.importlinter]\nroot_package = "eqrec"\n\n[[tool.importlinter.contracts]]\n'
+                      'name = "estimators below lmv"\ntype = "forbidden"\nsource_modules = ["eqrec.estimators"]\n'
+                      'forbidden_modules = ["eqrec.lmv"]\n')
+    code, report = _lint(config, capsys)
+    assert code != 0, report
+    assert "0 kept, 1 broken" in report and "eqrec.estimators.kalman -> eqrec.lmv.model (l.345)" in report, report
 
 
-def _module_imports(path: Path) -> set[str]:
-    """The ``eqrec`` modules a file imports (also inside functions: a lazy import is still a dependency), read by
-    the package's one import walker."""
-    return {name for name in eqrec_imports(path) if name in MODULES} - {_module_name(path)}
+# ---------------------------------------------------------------------------
+# No import circle between modules
+# ---------------------------------------------------------------------------
+
+def circles(graph: grimp.ImportGraph) -> list[tuple[str, ...]]:
+    """The import circles between modules: for each import ``a -> b`` with a chain back ``b -> ... -> a``, the
+    shortest such circle (each circle once, by its set of modules)."""
+    found: dict[frozenset, tuple[str, ...]] = {}
+    for importer in sorted(graph.modules):
+        for imported in sorted(graph.find_modules_directly_imported_by(importer)):
+            back = graph.find_shortest_chain(importer=imported, imported=importer)
+            if back:
+                found.setdefault(frozenset(back), (importer, *back))
+    return sorted(found.values())
 
 
-def _imports(path: Path):
-    """The subpackages (or top-level modules) of ``eqrec`` a file imports from (``__init__`` for a name of the
-    package itself, such as ``from eqrec import __version__``)."""
-    for name in eqrec_imports(path):
-        parts = name.split(".")
-        if len(parts) > 1:
-            yield parts[1] if f"eqrec.{parts[1]}" in MODULES else "__init__"
-
-
-@pytest.mark.parametrize("sub", sorted(k for k in ALLOWED if (PKG / k).is_dir()))
-def test_import_directions(sub):
-    folder = PKG / sub
-    if not folder.is_dir():
-        pytest.skip(f"no subpackage {sub}")
-    bad = {(f.name, target) for f in folder.rglob("*.py") for target in _imports(f) if target not in ALLOWED[sub]}
-    assert not bad, f"eqrec.{sub} imports outside its layer: {sorted(bad)}"
-
-
-def test_every_module_is_in_a_layer():
-    """No module escapes the direction check (the CLI, the models, the namespace included)."""
-    assert {_layer(f) for f in MODULES.values()} <= set(ALLOWED), sorted({_layer(f) for f in MODULES.values()})
-    for name, f in MODULES.items():
-        if len(f.relative_to(PKG).parts) == 1:  # a top-level module
-            bad = {t for t in _imports(f) if t not in ALLOWED[_layer(f)]}
-            assert not bad, f"{name} imports {sorted(bad)}"
-
-
-def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
-    """The strongly connected components of more than one module (Tarjan)."""
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    on_stack: set[str] = set()
-    circles: list[list[str]] = []
-
-    def visit(v: str) -> None:
-        index[v] = low[v] = len(index)
-        stack.append(v)
-        on_stack.add(v)
-        for w in sorted(graph.get(v, ())):
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in on_stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            comp = []
-            while True:
-                w = stack.pop()
-                on_stack.discard(w)
-                comp.append(w)
-                if w == v:
-                    break
-            if len(comp) > 1:
-                circles.append(sorted(comp))
-
-    for v in sorted(graph):
-        if v not in index:
-            visit(v)
-    return circles
-
-
-def test_circle_finder_finds_circles():
-    assert _circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
-    assert _circles({"a": {"b"}, "b": set()}) == []
+def test_the_circle_finder_finds_circles():
+    graph = grimp.ImportGraph()
+    for module in ("p", "p.a", "p.b", "p.c", "p.d"):
+        graph.add_module(module)
+    for importer, imported in (("p.a", "p.b"), ("p.b", "p.c"), ("p.c", "p.a"), ("p.d", "p.a")):
+        graph.add_import(importer=importer, imported=imported)
+    assert circles(graph) == [("p.a", "p.b", "p.c", "p.a")]
+    graph.remove_import(importer="p.c", imported="p.a")
+    assert circles(graph) == []
 
 
 def test_no_import_circle_between_modules():
-    graph = {name: _module_imports(f) for name, f in MODULES.items()}
-    assert len(graph) > 50 and "eqrec.cli" in graph and "eqrec.systems.examples" in graph
-    assert not _circles(graph), f"import circles: {_circles(graph)}"
+    graph = grimp.build_graph("eqrec", cache_dir=None)
+    assert len(graph.modules) > 100 and {"eqrec.cli", "eqrec.systems.examples"} <= graph.modules
+    # a lazy import (inside RandomDelayLMV.__init__) is in the graph
+    assert graph.direct_import_exists(importer="eqrec.estimators.kalman", imported="eqrec.lmv.recursion")
+    assert not circles(graph), f"import circles: {circles(graph)}"
 
 
-def test_the_step_registry_imports_every_table_of_steps_and_nothing_loads_a_module_by_name():
-    """The steps the workflow runs are edges of the graph: the registry imports each module with a STEPS table,
-    and no study module imports another one only to list its steps (a figures module is not an edge of the
-    study module, so a figure's rule does not list the LP code as its code)."""
-    with_steps = {name for name, f in MODULES.items() if name.startswith("eqrec.studies.")
-                  and any(line.startswith("STEPS = ") for line in f.read_text().splitlines())}
-    registry = _module_imports(MODULES["eqrec.studies.pipeline.steps"])
-    studies = {"eqrec.studies." + s for s in ("p1", "p2", "p3", "p4", "compare", "claims", "notebooks")}
-    assert studies <= with_steps and with_steps <= registry
-    for name in ("p1_figures", "p3_figures", "p3_strategy"):
-        assert "eqrec.studies." + name in with_steps
-    for study in ("p1", "p3"):
-        assert not any(m.startswith(f"eqrec.studies.{study}_") for m in _module_imports(MODULES["eqrec.studies." + study]))
-    for name, f in MODULES.items():
-        if name.startswith("eqrec.studies"):
-            assert "importlib" not in f.read_text() and "__import__" not in f.read_text(), name
+# ---------------------------------------------------------------------------
+# Folders
+# ---------------------------------------------------------------------------
+
+PACKAGES = sorted(init.parent for init in PKG.rglob("__init__.py"))
+
+
+def _modules(folder: Path) -> list[str]:
+    return sorted(f.stem for f in folder.glob("*.py") if f.stem != "__init__")
+
+
+def test_every_folder_is_a_package():
+    folders = {f.parent for f in PKG.rglob("*.py")}
+    assert folders == set(PACKAGES), sorted(map(str, folders - set(PACKAGES)))
+    assert len(PACKAGES) > 20
+
+
+@pytest.mark.parametrize("folder", PACKAGES, ids=[str(p.relative_to(PKG.parent)) for p in PACKAGES])
+def test_a_folder_has_at_most_12_modules_and_no_three_share_a_prefix(folder):
+    modules = _modules(folder)
+    assert len(modules) <= 12, f"{len(modules)} modules: {modules}"
+    prefixes = Counter(m.split("_")[0] for m in modules)
+    crowded = {p: [m for m in modules if m.split("_")[0] == p] for p, n in prefixes.items() if n >= 3}
+    assert not crowded, f"three or more modules share a prefix: {crowded}"
+
+
+@pytest.mark.parametrize("folder", PACKAGES, ids=[str(p.relative_to(PKG.parent)) for p in PACKAGES])
+def test_a_package_docstring_names_its_modules(folder):
+    doc = ast.get_docstring(ast.parse((folder / "__init__.py").read_text())) or ""
+    assert doc.strip(), f"{folder / '__init__.py'}: no docstring"
+    subpackages = sorted(d.name for d in folder.iterdir() if (d / "__init__.py").is_file())
+    missing = [m for m in _modules(folder) + subpackages if not re.search(rf"(?<![\w]){re.escape(m)}(?![\w])", doc)]
+    assert not missing, f"{folder / '__init__.py'}: the docstring does not name {missing}"

@@ -39,11 +39,16 @@ Errors
     :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
     :class:`SolverFailure`, :class:`CertificationFailure`
 
-The rooms, from the bottom layer up (each imports only from the rooms below it):
+The rooms, from the bottom layer up (each imports only from the rooms below it, but for the
+LMV recursion under :class:`eqrec.estimators.kalman.RandomDelayLMV`; the import-linter
+contracts of ``pyproject.toml`` hold the order):
+:mod:`eqrec.errors`, :mod:`eqrec.checks` (input checks), :mod:`eqrec.io` (atomic file writing),
 :mod:`eqrec.systems`, :mod:`eqrec.arrivals`, :mod:`eqrec.lp`, :mod:`eqrec.bounds` (the
 bounded-error mathematics), :mod:`eqrec.estimators`, :mod:`eqrec.simulate`, :mod:`eqrec.lmv`,
 :mod:`eqrec.design` (one subpackage per engine), :mod:`eqrec.interop`, :mod:`eqrec.compare`,
-:mod:`eqrec.studies` (one folder per paper).  They are importable as usual.  The names
+:mod:`eqrec.studies` (one folder per paper), and on top the command line :mod:`eqrec.cli`
+(its long help in :mod:`eqrec.cli_help`; ``python -m eqrec``: :mod:`eqrec.__main__`).
+They are importable as usual.  The names
 above load on first use (PEP 562), so ``import eqrec`` itself imports no
 solver.
 """

@@ -96,5 +96,7 @@ class NotMeanSquareStable(EqrecError):
 
 
 class StepError(EqrecError):
-    """A pipeline step that did not do what its rule declares (an output not written, a timing without a
-    timings output)."""
+    """A pipeline step that did not do what its rule declares.
+
+    An output not written, a timing without a timings output.
+    """

@@ -267,12 +267,6 @@ def certify_schedule(system: AffineSystem, schedule: GainSchedule, words, mu1: f
 def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
     """Certify a :class:`eqrec.design.result.Design` from its gains alone and attach the certificate.
 
-    Raises
-    ------
-    CertificationFailure
-        If a bound exceeds the designed ``M2`` (or ``M1`` at a word's end) by
-        more than ``rtol`` relative, or exceeds a node's level after a prefix.
-
     Parameters
     ----------
     design : Design
@@ -286,6 +280,12 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
     -------
     Certificate
         The certificate, also stored as ``design.certificate``.
+
+    Raises
+    ------
+    CertificationFailure
+        If a bound exceeds the designed ``M2`` (or ``M1`` at a word's end) by
+        more than ``rtol`` relative, or exceeds a node's level after a prefix.
     """
     words = list(design.patterns if words is None else words)
     cert = certify_schedule(design.system, design.schedule, words, design.mu1)

@@ -143,7 +143,7 @@ class WeightedEstimator:
         return z / self.weights, bound
 
     def update(self, y: Any = None, u: Any = None) -> np.ndarray:
-        """filterpy's spelling of :meth:`step` without the bound; returns ``x̂(t+1)``.
+        """The filterpy spelling of :meth:`step` without the bound; returns ``x̂(t+1)``.
 
         Parameters
         ----------

@@ -189,7 +189,7 @@ class ClassEstimator(_StampedEstimator):
 
     See Also
     --------
-    GuaranteedEstimator : the same estimator with its per-step guarantee
+    GuaranteedEstimator : The same estimator with its per-step guarantee
         (what :meth:`Design.estimator` returns).
 
     Examples

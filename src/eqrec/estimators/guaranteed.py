@@ -278,7 +278,7 @@ class GuaranteedEstimator:
         return xhat, self.bound
 
     def update(self, y=None, u=None) -> np.ndarray:
-        """filterpy's spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.
+        """The filterpy spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.
 
         The same as :meth:`step` without the bound (read :attr:`bound`).
 

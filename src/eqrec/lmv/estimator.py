@@ -67,18 +67,18 @@ class LMVEstimator:
         Refuse a system that is not mean-square stable when the gains are computed here (default ``True``;
         :class:`~eqrec.errors.NotMeanSquareStable`).
 
-    Raises
-    ------
-    InputError
-        ``sys`` not a :class:`~eqrec.lmv.model.MultNoiseSystem`, ``system`` not an :class:`AffineSystem` of its
-        plant's size, gains of another system, an unknown ``compensation`` (the field is named).
-
     Attributes
     ----------
     filtered : numpy.ndarray or None
         ``x̂(t|t)`` of the last step (plant state).
     P_filtered : numpy.ndarray or None
         ``P(t|t)`` of the last step (plant block).
+
+    Raises
+    ------
+    InputError
+        ``sys`` not a :class:`~eqrec.lmv.model.MultNoiseSystem`, ``system`` not an :class:`AffineSystem` of its
+        plant's size, gains of another system, an unknown ``compensation`` (the field is named).
     """
 
     kind = "stochastic"

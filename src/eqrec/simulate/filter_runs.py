@@ -258,7 +258,7 @@ def truncated_normal_deltas(layout: UncertaintyLayout, radius: np.ndarray, rng: 
 
 def compare_with_bounds(maps: ErrorMaps, bounds: np.ndarray, levels: np.ndarray | None = None,
                         deltas: np.ndarray | None = None, estimate: str = "prediction", rtol: float = 1e-9) -> dict:
-    """Does the filter stay within another estimator's guarantees on this pattern?
+    """Check whether the filter stays within another estimator's guarantees on this pattern.
 
     Parameters
     ----------

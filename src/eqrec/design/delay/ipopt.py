@@ -107,8 +107,10 @@ def terminal_ratios(system: AffineSystem, schedule, tree: PrefixTree) -> tuple[n
 
     Returns
     -------
-    f, b : numpy.ndarray
-        Shape ``(n |sequences|,)`` each: noise/offset part and initial-error gain per terminal component.
+    f : numpy.ndarray
+        Shape ``(n |sequences|,)``: the noise/offset part per terminal component.
+    b : numpy.ndarray
+        Shape ``(n |sequences|,)``: the initial-error gain per terminal component.
     """
     fs, bs = [], []
     for pat in tree.patterns:
