@@ -179,7 +179,7 @@ def test_bad_sampler_input_names_the_field(call, field):
 
 def test_as_packets_reads_every_form_of_the_protocol():
     from eqrec.estimators.causal import Packet
-    from eqrec.estimators.packets import as_packets
+    from eqrec.arrivals.packets import as_packets
 
     assert as_packets(None, 3, (2,)) == [] and as_packets([], 3, (2,)) == []
     for y in (np.array([1.0, 2.0]), [1.0, 2.0]):
@@ -194,7 +194,7 @@ def test_as_packets_reads_every_form_of_the_protocol():
 @pytest.mark.parametrize("y", [np.array([1.0, np.inf]), np.zeros(3), [(4, np.zeros(2))],
                                [(1, np.zeros(2)), (1, np.zeros(2))], [(1.5, np.zeros(2))], {"a": 1}, ["a", "b"]])
 def test_as_packets_refuses_bad_data_naming_the_field(y):
-    from eqrec.estimators.packets import as_packets
+    from eqrec.arrivals.packets import as_packets
 
     with pytest.raises(InputError) as exc:
         as_packets(y, 3, (2,), field="y")

@@ -39,12 +39,12 @@ Errors
     :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
     :class:`SolverFailure`, :class:`CertificationFailure`
 
-The rooms, from the bottom layer up (each imports only from the rooms below it, but for the
-LMV recursion under :class:`eqrec.estimators.kalman.RandomDelayLMV`; the import-linter
-contracts of ``pyproject.toml`` hold the order):
+The rooms, from the bottom layer up (each imports only from the rooms below it; the
+import-linter contracts of ``pyproject.toml`` hold the order):
 :mod:`eqrec.errors`, :mod:`eqrec.checks` (input checks), :mod:`eqrec.io` (atomic file writing),
 :mod:`eqrec.systems`, :mod:`eqrec.arrivals`, :mod:`eqrec.lp`, :mod:`eqrec.bounds` (the
-bounded-error mathematics), :mod:`eqrec.estimators`, :mod:`eqrec.simulate`, :mod:`eqrec.lmv`,
+bounded-error mathematics), :mod:`eqrec.lmv` (the LMV study's mathematics), :mod:`eqrec.estimators`,
+:mod:`eqrec.simulate`,
 :mod:`eqrec.design` (one subpackage per engine), :mod:`eqrec.interop`, :mod:`eqrec.compare`,
 :mod:`eqrec.studies` (one folder per paper), and on top the command line :mod:`eqrec.cli`
 (its long help in :mod:`eqrec.cli_help`; ``python -m eqrec``: :mod:`eqrec.__main__`).
@@ -88,7 +88,7 @@ _PUBLIC: dict[str, str] = {
     "certify_schedule": "eqrec.bounds.certify",
     # estimators and simulation
     "GuaranteedEstimator": "eqrec.estimators.guaranteed",
-    "Packet": "eqrec.estimators.packets",
+    "Packet": "eqrec.arrivals.packets",
     "ClassEstimator": "eqrec.estimators.causal",
     "simulate_run": "eqrec.simulate.loop",
     "monte_carlo": "eqrec.simulate.loop",

@@ -10,4 +10,6 @@
     The arrival trace of a run (a delay per measurement, or never).
 :mod:`~eqrec.arrivals.draws`
     The one arrival model: every random arrival draw (uniform words, Bernoulli, delays, Gilbert–Elliott bursts).
+:mod:`~eqrec.arrivals.packets`
+    What reaches an estimator at one step (packets, inputs, initial estimates), checked.
 """

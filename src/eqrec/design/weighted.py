@@ -116,7 +116,7 @@ class WeightedEstimator:
         InputError
             If ``xhat0`` is not ``n`` numbers, and the errors of the wrapped estimator's ``reset``.
         """
-        from eqrec.estimators.packets import check_estimate
+        from eqrec.arrivals.packets import check_estimate
 
         x0 = check_estimate(xhat0, self.weights.size)
         self.estimator.reset(self.weights * x0, t0)

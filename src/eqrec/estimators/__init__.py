@@ -2,8 +2,6 @@
 
 :mod:`~eqrec.estimators.protocol`
     The estimator protocol and the on-time-only adapter.
-:mod:`~eqrec.estimators.packets`
-    What reaches an estimator at a step (packets, inputs, initial estimates), checked.
 :mod:`~eqrec.estimators.intake`
     The packet intake and the period clock of the causal estimators (all-or-nothing steps).
 :mod:`~eqrec.estimators.causal`

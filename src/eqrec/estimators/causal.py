@@ -47,7 +47,7 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.estimators.intake import _Opened, _StampedEstimator
-from eqrec.estimators.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
+from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError

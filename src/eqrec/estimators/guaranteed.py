@@ -68,9 +68,9 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.estimators.error_boxes import BoundRule, BoxState, ClassBoxes
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
-from eqrec.estimators.packets import Packet, check_estimate
+from eqrec.arrivals.packets import Packet, check_estimate
 from eqrec.bounds.gains import GainSchedule
-from eqrec.estimators.packets import as_packets
+from eqrec.arrivals.packets import as_packets
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eqrec.estimators.packets import Stamped, _is_stamp, as_packets, check_estimate, check_input
+from eqrec.arrivals.packets import Stamped, _is_stamp, as_packets, check_estimate, check_input
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.estimators.packets import as_packets
+from eqrec.arrivals.packets import as_packets
 from eqrec.systems.noise import GaussianDesign
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError

@@ -32,7 +32,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from eqrec.estimators.packets import as_packets
+from eqrec.arrivals.packets import as_packets
 
 #: What a step returns besides the estimate: a float bound (guaranteed) or a covariance (stochastic).
 Spread = "float | np.ndarray"

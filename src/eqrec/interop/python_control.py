@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from eqrec.checks import instance, positive
-from eqrec.estimators.packets import check_estimate
+from eqrec.arrivals.packets import check_estimate
 from eqrec.estimators.error_boxes import BoxState, ClassBoxes
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.estimators.packets import as_packets
+from eqrec.arrivals.packets import as_packets
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 from eqrec.lmv.model import MultNoiseSystem, check_ms_stable

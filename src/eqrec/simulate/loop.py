@@ -34,7 +34,7 @@ from eqrec.bounds.gains import GainSchedule
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.bounds.stacking import UncertaintyLayout
 from eqrec.systems.affine import AffineSystem
-from eqrec.estimators.packets import finite_array
+from eqrec.arrivals.packets import finite_array
 from eqrec.arrivals.words import as_language, as_pattern
 from eqrec.errors import InputError
 

@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from eqrec.estimators.packets import check_estimate, check_input
-from eqrec.estimators.packets import as_packets
+from eqrec.arrivals.packets import check_estimate, check_input
+from eqrec.arrivals.packets import as_packets
 from eqrec.bounds.gains import GainRow, GainSchedule, schedule_from_word_gains
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
