@@ -27,15 +27,17 @@ configfile: "config/p4.yaml"
 configfile: "config/compare.yaml"
 
 
-# Validate every section once, after the --configfile/--config overrides, with
-# the defaults of its schema filled in (snakemake.utils.validate(...,
-# set_default=True) inside configuration.validate_section, plus the cross-field
-# checks of the study); a bad value stops the run here, naming file and field.
+# Validate the whole configuration once, after the --configfile/--config
+# overrides, with the defaults of its schemas filled in (configuration.
+# validate_config: snakemake.utils.validate(config, "config/schemas/
+# config.schema.yaml", set_default=True), then the cross-field checks of the
+# studies); a bad value, unknown key or unknown section stops the run here,
+# naming file and field.
 # nested --config values arrive as text: give them the types their schema asks for
 configuration.type_cli_config(
     config, workflow.config_settings.config, root=workflow.basedir
 )
-try:  # also refuses a misspelt or unknown top-level section, which would be ignored
+try:
     configuration.validate_config(
         config,
         root=workflow.basedir,

@@ -3,6 +3,7 @@
 Snakemake runs in a temporary copy of the workflow (Snakefile, workflow/,
 config/, results/); the package is the installed one.
 """
+import copy
 import json
 import shutil
 import subprocess
@@ -12,6 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
+from snakemake.utils import update_config
 
 from eqrec.studies.pipeline import harness, imports
 from eqrec.studies.pipeline import configuration
@@ -101,10 +104,79 @@ def test_unknown_section_is_refused_naming_it(workdir, how):
     assert "Building DAG" not in text
 
 
-def test_check_sections_accepts_the_five_sections():
-    configuration.check_sections({"p1": {}, "p2": {}, "p3": {}, "p4": {}, "compare": {}})
-    with pytest.raises(configuration.ConfigError, match="'p5'"):
-        configuration.check_sections({"p1": {}, "p5": {}})
+def _default_config():
+    """The five default files merged, as the Snakefile's ``configfile:`` lines load them."""
+    config = {}
+    for section in configuration.SECTIONS.values():
+        config.update(yaml.safe_load((ROOT / section.config_file).read_text()))
+    return config
+
+
+def test_the_five_sections_validate_and_an_unknown_one_is_refused():
+    config = _default_config()
+    assert set(configuration.validate_config(config, root=ROOT)) == set(configuration.SECTIONS)
+    with pytest.raises(configuration.ConfigError, match="unknown configuration section 'p5'"):
+        configuration.validate_config({**config, "p5": {}}, root=ROOT)
+
+
+@pytest.mark.parametrize("override,field", [
+    ({"p1": {"simulation": {"bogus": 1}}}, "p1.simulation.bogus"),
+    ({"p2": {"heatmap": {"bogus": 1}}}, "p2.heatmap.bogus"),
+    ({"p3": {"kalman": {"bogus": 1}}}, "p3.kalman.bogus"),
+    ({"p3": {"strategy": {"reactor": {"bogus": 1}}}}, "p3.strategy.reactor.bogus"),
+    ({"p4": {"sweep_eta": {"bogus": 1}}}, "p4.sweep_eta.bogus"),  # a $ref with its own properties
+    ({"p4": {"examples": {"ex1": {"bogus": 1}}}}, "p4.examples.ex1.bogus"),
+    ({"compare": {"systems": {"acc": {"bogus": 1}}}}, "compare.systems.acc.bogus")])
+def test_unknown_nested_key_is_refused_naming_file_and_field(tmp_path, override, field):
+    """Every object of every section is closed (additionalProperties: false): a nested misspelt key is named."""
+    over = tmp_path / "over.yaml"
+    over.write_text(yaml.safe_dump(override))
+    config = _default_config()
+    update_config(config, override)
+    with pytest.raises(configuration.ConfigError) as err:
+        configuration.validate_config(config, root=ROOT, configfiles=[over])
+    assert f"over.yaml: field '{field}': unknown key 'bogus'" in str(err.value)
+    config = _default_config()
+    update_config(config, override)
+    with pytest.raises(configuration.ConfigError) as err:  # the same through --config
+        configuration.validate_config(config, root=ROOT, overrides=override)
+    assert f"--config: field '{field}': unknown key 'bogus'" in str(err.value)
+
+
+def test_unknown_nested_key_on_the_command_line_stops_snakemake(workdir):
+    out = run(["-n", "--config", "p3={strategy: {reactor: {horizn: 4}}}"], workdir)
+    text = out.stdout + out.stderr
+    assert out.returncode != 0 and "--config: field 'p3.strategy.reactor.horizn': unknown key 'horizn'" in text
+    assert "Building DAG" not in text
+
+
+def test_defaults_are_filled_at_every_level_of_every_section():
+    config = _default_config()
+    for section, key in [("p1", "simulation"), ("p2", "heatmap"), ("p3", "strategy"),
+                         ("p4", "steady"), ("p4", "smoother_lag"), ("compare", "seed")]:
+        del config[section][key]
+    del config["p4"]["examples"]["ex1"]["mc_mult_dist"]
+    configuration.validate_config(config, root=ROOT)
+    assert config["p1"]["simulation"] == {"runs": 100, "seed": 2019, "x0": [20.0, 40.0, 20.0], "input_force": 206.4}
+    # not in config/config.yaml at all
+    assert config["p1"]["probe_solvers"] == ["highs", "clarabel"] and config["p1"]["acc_constants"] == {}
+    assert config["p2"]["heatmap"]["chunks"] == 2 and config["p2"]["heatmap"]["second_solver"] == "clarabel"
+    assert config["p3"]["strategy"]["reactor"]["horizon"] == 5 and config["p3"]["strategy"]["figure"] == {"window": 60}
+    assert config["p4"]["steady"] == {"tol": 1.0e-12, "max_iter": 100000} and config["p4"]["smoother_lag"] == 2
+    assert config["p4"]["examples"]["ex1"]["mc_mult_dist"] == "gaussian"
+    assert config["compare"]["seed"] == 0
+
+
+def test_cli_text_is_typed_only_where_the_schema_wants_a_number():
+    config = _default_config()
+    cli = {"p1": {"mu1": "1.5", "language": ["1011"]}, "p2": {"realaxis": {"grid_denominator": "null"}},
+           "p3": {"kalman": {"mu1": "0.5", "true_pattern": "21210"}}, "p4": {"sweep_q": {"chunks": "7"}}}
+    update_config(config, copy.deepcopy(cli))
+    configuration.type_cli_config(config, cli, ROOT)
+    assert config["p1"]["mu1"] == 1.5 and config["p1"]["language"] == ["1011"]  # a word stays text
+    assert config["p2"]["realaxis"]["grid_denominator"] is None and config["p4"]["sweep_q"]["chunks"] == 7
+    assert config["p3"]["kalman"] == {**config["p3"]["kalman"], "mu1": 0.5, "true_pattern": "21210"}
+    configuration.validate_config(config, root=ROOT, overrides=cli)
 
 
 def test_heatmap_chunks_follow_the_resolved_config(workdir):

@@ -1,9 +1,10 @@
 """What the configuration schemas cannot say: the cross-field checks of each study's section.
 
-:func:`eqrec.studies.pipeline.configuration.validate_section` runs ``CHECKS[section]`` after
-the schema (``config/schemas/<section>.schema.yaml``).  This module imports
-only light modules (no solver, no SciPy statistics): the Snakefile validates
-the configuration at every start, and Snakemake starts once per job.
+:func:`eqrec.studies.pipeline.configuration.validate_config` runs ``CHECKS[section]`` after
+the schema (``config/schemas/config.schema.yaml``, which refers to
+``<section>.schema.yaml``).  This module imports only light modules (no
+solver, no SciPy statistics): the Snakefile validates the configuration at
+every start, and Snakemake starts once per job.
 A check raises :class:`~eqrec.errors.InputError` naming the field relative
 to the section; the harness adds the file and the section.
 """
