@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.studies.pipeline import harness, imports
+from eqrec.studies.pipeline import code, harness
 from eqrec.studies.pipeline import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,7 +56,8 @@ def test_p1_override_replans_the_jobs_that_read_it_and_reaches_the_step(workdir)
     assert designs["M1"] == 1.5 and list(designs["designs"]["prefix"]["solvers"]) == ["highs"]
     assert "[p1] step designs done" in (workdir / "logs/p1/designs.log").read_text()
     # an edit to code P1 does not import (the LMV model) does not re-plan P1
-    assert not any("/lmv/" in p for step in ("model", "designs") for p in imports.code_inputs("p1", step))
+    assert not any("/lmv/" in p for step in ("model", "designs")
+                   for p in code.code_inputs(f"eqrec.studies.p1.steps:step_{step}"))
 
 
 def test_config_override_on_the_command_line(workdir):
@@ -117,15 +118,18 @@ def test_heatmap_chunks_follow_the_resolved_config(workdir):
     assert "chunk_4.csv" not in text
 
 
+SWEEPS = "eqrec.studies.p2.sweeps:step_"
+
+
 def _heatmap(tmp_path, chunks):
     """The reduced heat map (4 x 4 grid, a sub-grid of the configured 31 x 31 one) in ``chunks`` jobs."""
     cfg = configuration.load_config("p2", root=ROOT, overrides={"p2": {"heatmap": {"n_r": 4, "n_theta": 4, "chunks": chunks}}})
     files = []
     for k in range(chunks):
         files.append(tmp_path / f"chunk_{k}.csv")
-        harness.run_step("p2", "heatmap_chunk", cfg, outputs={"csv": files[-1]}, wildcards={"chunk": k})
+        harness.run_step(SWEEPS + "heatmap_chunk", cfg, outputs={"csv": files[-1]}, wildcards={"chunk": k})
     out = tmp_path / f"heatmap_{chunks}.csv"
-    harness.run_step("p2", "heatmap_merge", cfg, inputs={"chunks": files},
+    harness.run_step(SWEEPS + "heatmap_merge", cfg, inputs={"chunks": files},
                      outputs={"csv": out, "timings": tmp_path / "timings.csv"})
     return pd.read_csv(out)
 
@@ -152,7 +156,7 @@ def test_sweep_merge_checks_the_grid(tmp_path):
     cfg = configuration.load_config("p4", root=ROOT, overrides={"p4": {"sweep_eta": {"num": 4, "chunks": 2}}})
     files = [tmp_path / f"chunk{k}.npz" for k in range(2)]
     for k, f in enumerate(files):
-        harness.run_step("p4", "sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
+        harness.run_step("eqrec.studies.p4.steps:step_sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
     from eqrec.errors import InputError
     from eqrec.studies.pipeline.chunks import merge_npz as merge_chunks
 

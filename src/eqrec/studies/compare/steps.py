@@ -1,6 +1,6 @@
 """Compare study: every estimator family on the same plant and the same packet traces (issue 24, beyond the papers).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/compare.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/compare.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``compare`` section (``config/compare.yaml``):
 
@@ -180,9 +180,3 @@ def step_table(cfg, inputs, outputs, wildcards) -> None:
     write_text(outputs.csv, buf.getvalue())
     write_json(outputs.json, {"pairs": jobs})
     log.info("compare.csv: %d rows of %d (system, setting) pairs", len(table), len(found))
-
-
-STEPS = {
-    "run": step_run,
-    "table": step_table,
-}

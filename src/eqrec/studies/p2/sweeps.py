@@ -120,6 +120,3 @@ def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
                        for variant, _, word, recs in swept for x, rec in zip(lam, recs)])
     write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "lam"])
     return df
-
-
-STEPS = {"heatmap_chunk": step_heatmap_chunk, "heatmap_merge": step_heatmap_merge, "realaxis": step_realaxis}

@@ -1,6 +1,6 @@
 """P4 study: the LMV companion paper (zero- vs hold-input compensation of packet dropouts; targets P4-*).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/p4.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/p4.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``p4`` section:
 
@@ -227,11 +227,3 @@ def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
             out[f"{ex}/{MECH_KEY[mech]}/filt"], out[f"{ex}/{MECH_KEY[mech]}/stable"] = filt, stable
     write_npz(outputs.npz, **out)
     return out
-
-
-STEPS = {
-    "tracking": step_tracking,
-    "mc": step_mc,
-    "sweep_eta_chunk": step_sweep_eta_chunk,
-    "sweep_q_chunk": step_sweep_q_chunk,
-}
