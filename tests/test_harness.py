@@ -241,7 +241,7 @@ def test_run_from_snakemake_logs_and_writes(tmp_path):
 def test_a_failing_step_exits_1_naming_the_config_field(tmp_path, capfd):
     cfg = configuration.load_config("p2", root=ROOT)
     smk = _smk(tmp_path, "eqrec.studies.p2.sweeps:step_heatmap_chunk", cfg, {"csv": str(tmp_path / "c.csv")},
-               variant="theorem2", chunk=9)
+               variant="theorem2", scatteritem="10-of-2")
     with pytest.raises(SystemExit) as exc:
         harness.run_from_snakemake(smk)
     assert exc.value.code == 1

@@ -97,7 +97,7 @@ def small_run(tmp_path_factory):
     chunks = []
     for c in range(2):
         chunks.append(d / f"hm_{c}.csv")
-        run("heatmap_chunk", outs={"csv": chunks[-1]}, chunk=c)
+        run("heatmap_chunk", outs={"csv": chunks[-1]}, scatteritem=f"{c + 1}-of-2")
     run("heatmap_merge", {"chunks": chunks}, {"csv": d / "heatmap.csv", "timings": t / "heatmap.csv"})
     run("realaxis", outs={"csv": d / "realaxis.csv", "timings": t / "realaxis.csv"})
     run("checks", outs={"json": d / "checks.json", "timings": t / "checks.json"})

@@ -50,7 +50,7 @@ def _theta_zero_chunk(tmp_path) -> tuple[pd.DataFrame, pd.DataFrame]:
     cfg["heatmap"]["chunks"] = cfg["heatmap"]["n_theta"]
     out = tmp_path / "chunk.csv"
     harness.run_step(P2_SWEEPS + "heatmap_chunk", cfg, outputs={"csv": out},
-                     wildcards={"chunk": 0})
+                     wildcards={"scatteritem": f"1-of-{cfg['heatmap']['chunks']}"})
     fresh = pd.read_csv(out).sort_values(["variant", "r"], kind="stable").reset_index(drop=True)
     stored = pd.read_csv(RES / "heatmap.csv")
     stored = stored[stored["theta"] == 0.0].sort_values(["variant", "r"], kind="stable").reset_index(drop=True)

@@ -42,7 +42,7 @@ def test_sweep_chunk_matches_stored(tmp_path):
     cfg["sweep_q"]["chunks"] = cfg["sweep_q"]["num"]
     out = tmp_path / "chunk0.npz"
     harness.run_step("eqrec.studies.p4.steps:step_sweep_q_chunk", cfg, outputs={"npz": out},
-                     wildcards={"chunk": 0})
+                     wildcards={"scatteritem": f"1-of-{cfg['sweep_q']['chunks']}"})
     a, b = np.load(out), np.load(RES / "sweep_q.npz")
     assert a["idx"].tolist() == [0]
     keys = [k for k in b.files if k.endswith(("/filt", "/stable"))]

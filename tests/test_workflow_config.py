@@ -109,13 +109,17 @@ def test_check_sections_accepts_the_five_sections():
 
 
 def test_heatmap_chunks_follow_the_resolved_config(workdir):
+    """The scattergather count of the heat map is the resolved p2.heatmap.chunks (or --set-scatter)."""
     (workdir / "override.yaml").write_text("p2:\n  heatmap:\n    chunks: 4\n")
     out = run(["-n", "results/p2/heatmap.csv", "--configfile", "override.yaml", "--forceall"], workdir)
     text = out.stdout + out.stderr
     assert out.returncode == 0, text[-3000:]
-    for k in range(4):
-        assert f"results/p2/heatmap/chunk_{k}.csv" in text
-    assert "chunk_4.csv" not in text
+    for k in range(1, 5):
+        assert f"results/p2/heatmap/chunk_{k}-of-4.csv" in text
+    assert "chunk_5-of-4.csv" not in text and "-of-2.csv" not in text
+    out = run(["-n", "results/p2/heatmap.csv", "--set-scatter", "heatmap=3", "--forceall"], workdir)
+    text = out.stdout + out.stderr
+    assert out.returncode == 0 and "results/p2/heatmap/chunk_3-of-3.csv" in text and "-of-2.csv" not in text
 
 
 SWEEPS = "eqrec.studies.p2.sweeps:step_"
@@ -127,7 +131,8 @@ def _heatmap(tmp_path, chunks):
     files = []
     for k in range(chunks):
         files.append(tmp_path / f"chunk_{k}.csv")
-        harness.run_step(SWEEPS + "heatmap_chunk", cfg, outputs={"csv": files[-1]}, wildcards={"chunk": k})
+        harness.run_step(SWEEPS + "heatmap_chunk", cfg, outputs={"csv": files[-1]},
+                         wildcards={"scatteritem": f"{k + 1}-of-{chunks}"})
     out = tmp_path / f"heatmap_{chunks}.csv"
     harness.run_step(SWEEPS + "heatmap_merge", cfg, inputs={"chunks": files},
                      outputs={"csv": out, "timings": tmp_path / "timings.csv"})
@@ -156,7 +161,8 @@ def test_sweep_merge_checks_the_grid(tmp_path):
     cfg = configuration.load_config("p4", root=ROOT, overrides={"p4": {"sweep_eta": {"num": 4, "chunks": 2}}})
     files = [tmp_path / f"chunk{k}.npz" for k in range(2)]
     for k, f in enumerate(files):
-        harness.run_step("eqrec.studies.p4.steps:step_sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
+        harness.run_step("eqrec.studies.p4.steps:step_sweep_eta_chunk", cfg, outputs={"npz": f},
+                         wildcards={"scatteritem": f"{k + 1}-of-2"})
     from eqrec.errors import InputError
     from eqrec.studies.pipeline.chunks import merge_npz as merge_chunks
 

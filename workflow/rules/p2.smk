@@ -1,11 +1,13 @@
 # P2: state-augmented estimator (Hassaan, Shen, Yong, ACC 2019).
 # Each rule runs one step of eqrec.studies.p2.steps through the harness (common.smk).
-# The heat-map chunks come from the resolved configuration (p2.heatmap.chunks,
-# p2.heatmap.variants); the merge checks that they cover the grid exactly once.
+# The heat map runs in p2.heatmap.chunks scattergather jobs (the resolved
+# configuration, or --set-scatter heatmap=N), each every configured variant;
+# the merge checks that they cover the grid exactly once.
 VALUES_FILES.append("results/p2/values.json")
 
 
-P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
+scattergather:
+    heatmap=config["p2"]["heatmap"]["chunks"],
 
 
 rule p2_designs:
@@ -48,11 +50,9 @@ rule p2_heatmap_chunk:
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_chunk"),
     output:
-        csv=temp("results/p2/heatmap/chunk_{chunk}.csv"),
+        csv=temp("results/p2/heatmap/chunk_{scatteritem}.csv"),
     log:
-        "logs/p2/heatmap_chunk_{chunk}.log",
-    wildcard_constraints:
-        chunk=r"\d+",
+        "logs/p2/heatmap_chunk_{scatteritem}.log",
     params:
         step="eqrec.studies.p2.sweeps:step_heatmap_chunk",
         cfg=step_config("p2", "heatmap", "mu1"),
@@ -63,7 +63,7 @@ rule p2_heatmap_chunk:
 rule p2_heatmap_merge:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
-        chunks=expand("results/p2/heatmap/chunk_{chunk}.csv", chunk=P2_CHUNKS),
+        chunks=gather.heatmap("results/p2/heatmap/chunk_{scatteritem}.csv"),
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_merge"),
     output:
         csv="results/p2/heatmap.csv",

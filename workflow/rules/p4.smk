@@ -1,12 +1,16 @@
 # P4: LMV filter / predictor / smoother with zero- vs hold-input compensation.
 # Each rule runs one step of eqrec.studies.p4.steps, p4_figures or p4_values through the harness (common.smk).
-# The sweep chunks come from the resolved configuration (p4.sweep_*.chunks);
-# the merging steps (fig5, fig6) check that they cover the grid exactly once.
+# The sweeps run in p4.sweep_*.chunks scattergather jobs (the resolved
+# configuration, or --set-scatter sweep_eta=N); the merging steps (fig5, fig6)
+# check that they cover the grid exactly once.
 VALUES_FILES.append("results/p4/values.json")
 
 P4_EXAMPLES = list(config["p4"]["examples"])
-P4_ETA_CHUNKS = list(range(config["p4"]["sweep_eta"]["chunks"]))
-P4_Q_CHUNKS = list(range(config["p4"]["sweep_q"]["chunks"]))
+
+
+scattergather:
+    sweep_eta=config["p4"]["sweep_eta"]["chunks"],
+    sweep_q=config["p4"]["sweep_q"]["chunks"],
 
 
 rule p4_tracking:
@@ -69,11 +73,9 @@ rule p4_sweep_eta_chunk:
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_sweep_eta_chunk"),
     output:
-        npz=temp("results/p4/sweep_eta/chunk{chunk}.npz"),
+        npz=temp("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
     log:
-        "logs/p4/sweep_eta_{chunk}.log",
-    wildcard_constraints:
-        chunk=r"\d+",
+        "logs/p4/sweep_eta_{scatteritem}.log",
     params:
         step="eqrec.studies.p4.steps:step_sweep_eta_chunk",
         cfg=step_config("p4", "examples", "smoother_lag", "steady", "sweep_eta"),
@@ -86,11 +88,9 @@ rule p4_sweep_q_chunk:
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_sweep_q_chunk"),
     output:
-        npz=temp("results/p4/sweep_q/chunk{chunk}.npz"),
+        npz=temp("results/p4/sweep_q/chunk_{scatteritem}.npz"),
     log:
-        "logs/p4/sweep_q_{chunk}.log",
-    wildcard_constraints:
-        chunk=r"\d+",
+        "logs/p4/sweep_q_{scatteritem}.log",
     params:
         step="eqrec.studies.p4.steps:step_sweep_q_chunk",
         cfg=step_config(
@@ -125,7 +125,7 @@ rule p4_fig4:
 rule p4_fig5:
     """P4-F5: merge the arrival-rate chunks; error variances against the arrival rate."""
     input:
-        chunks=expand("results/p4/sweep_eta/chunk{chunk}.npz", chunk=P4_ETA_CHUNKS),
+        chunks=gather.sweep_eta("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
         code=code_inputs("eqrec.studies.p4.figures:step_fig5"),
     output:
         merged="results/p4/sweep_eta.npz",
@@ -147,7 +147,7 @@ rule p4_fig5:
 rule p4_fig6:
     """P4-F6: merge the Q chunks; filter variance against Q_xi and Q_lambda, and where each mechanism wins."""
     input:
-        chunks=expand("results/p4/sweep_q/chunk{chunk}.npz", chunk=P4_Q_CHUNKS),
+        chunks=gather.sweep_q("results/p4/sweep_q/chunk_{scatteritem}.npz"),
         code=code_inputs("eqrec.studies.p4.figures:step_fig6"),
     output:
         merged="results/p4/sweep_q.npz",

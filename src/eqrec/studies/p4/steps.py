@@ -7,7 +7,7 @@ with ``cfg`` the validated ``p4`` section:
 ``tracking``         Figs. 1-3: one realisation of the tracking example.
 ``mc``               P4-THEORY: theory against Monte Carlo for one example (``wildcards.example``), both
                      mechanisms on the same draws; also Theorem 1 eq. (9) as printed.
-``sweep_eta_chunk``, ``sweep_q_chunk``   steady-state sweeps, one chunk (``wildcards.chunk``) each.
+``sweep_eta_chunk``, ``sweep_q_chunk``   steady-state sweeps, one chunk (``wildcards.scatteritem``, ``i-of-n``) each.
 ``fig4``, ``fig5``, ``fig6``, ``compare``   figures (:mod:`eqrec.studies.p4.figures`); ``fig5``/``fig6``
                      first merge the sweep chunks (checking that they cover the configured grid exactly once).
 ``values``           our value of every P4 claim with its evidence (``values.json``) and ``summary.csv``
@@ -37,7 +37,7 @@ from eqrec.lmv.steady import steady_variances
 from eqrec.lmv.monte_carlo import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies.pipeline import configuration
 from eqrec.studies.p4 import figures as p4_figures
-from eqrec.studies.pipeline.chunks import chunk_indices
+from eqrec.studies.pipeline.chunks import scatter_indices
 from eqrec.studies.pipeline.logs import Progress, get_logger
 from eqrec.studies.pipeline.outputs import write_json, write_npz
 
@@ -175,11 +175,11 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     return report
 
 
-def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[int, np.ndarray, np.ndarray]:
-    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk number, the whole grid, the chunk's indices."""
-    chunk = int(wildcards["chunk"])
+def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[str, np.ndarray, np.ndarray]:
+    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk (``i-of-n``), the whole grid, the chunk's
+    indices."""
     values = grid(cfg[sweep])
-    return chunk, values, chunk_indices(len(values), int(cfg[sweep]["chunks"]), chunk, field=f"{sweep}.chunks")
+    return *scatter_indices(wildcards, len(values), field=f"{sweep}.chunks"), values
 
 
 def _steady_settings(cfg: dict) -> tuple[int, float, int]:
@@ -189,7 +189,7 @@ def _steady_settings(cfg: dict) -> tuple[int, float, int]:
 
 def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady-state variances against eta_bar (Fig. 5) for one chunk of the grid, both examples and mechanisms."""
-    chunk, etas, idx = _sweep_chunk(cfg, wildcards, "sweep_eta")
+    chunk, idx, etas = _sweep_chunk(cfg, wildcards, "sweep_eta")
     N, tol, max_iter = _steady_settings(cfg)
     out: dict[str, np.ndarray] = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
     prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx), f"eta sweep chunk {chunk}")
@@ -208,7 +208,7 @@ def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
 
 def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady filter variances on the (Q_xi, Q_lambda) grid (Fig. 6): rows of Q_xi in this chunk."""
-    chunk, qs, idx = _sweep_chunk(cfg, wildcards, "sweep_q")
+    chunk, idx, qs = _sweep_chunk(cfg, wildcards, "sweep_q")
     N, tol, max_iter = _steady_settings(cfg)
     eta = float(cfg["eta_bar"])
     out: dict[str, np.ndarray] = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
