@@ -22,9 +22,10 @@ rule compare_run:
             category="Compare",
             subcategory="{system}",
         ),
-        timings="results/timings/compare/{system}_{setting}.json",
     log:
         "logs/compare/{system}_{setting}.log",
+    benchmark:
+        "results/timings/compare/{system}_{setting}.tsv"
     wildcard_constraints:
         system="|".join(COMPARE_SYSTEMS),
         setting="|".join(COMPARE_SETTINGS),

@@ -54,9 +54,10 @@ rule p4_mc:
         npz="results/p4/mc_{example}.npz",
         se="results/p4/mc_{example}_se.npz",
         json="results/p4/mc_{example}.json",
-        timings="results/timings/p4/mc_{example}.json",
     log:
         "logs/p4/mc_{example}.log",
+    benchmark:
+        "results/timings/p4/mc_{example}.tsv"
     wildcard_constraints:
         example="|".join(P4_EXAMPLES),
     params:

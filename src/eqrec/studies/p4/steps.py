@@ -168,10 +168,9 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     arrays["printed/theory_pred"] = _diag(printed["P"][: T + 1])
     arrays["printed/true_pred"] = _diag(P_true_printed_gain[: T + 1])
     arrays["printed/mc_pred"] = _diag(c_printed.emp)
-    report["elapsed_s"] = time.perf_counter() - t0
     write_npz(outputs.npz, **arrays)
     write_npz(outputs.se, **errors)
-    write_json(outputs.json, report, timings=outputs.timings)
+    write_json(outputs.json, report)
     return report
 
 
