@@ -215,6 +215,10 @@ P3_SCALE_CLASSES = [
     f"results/p3/scale/classes_T{T}_tau{tau}.json"
     for T, tau in config["p3"]["scale"]["class_sizes"]
 ]
+P3_SCALE = list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))
+P3_SCALE_FULL = list(
+    dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)
+)
 
 
 rule p3_strategy:
@@ -290,10 +294,9 @@ rule p3_scale_size:
         RUN_STEP
 
 
-rule p3_scale_class_size:
-    """Scale table, one size of the class engine: the classes of {0..tau}^T by the window rule, fresh process."""
-    input:
-        code=code_inputs("eqrec.studies.p3.scale_table:step_scale_size"),
+# Scale table, one size of the class engine: the classes of {0..tau}^T by the window
+# rule, fresh process (the same step; the engine comes from the output path).
+use rule p3_scale_size as p3_scale_class_size with:
     output:
         json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
         timings="results/timings/p3/scale/{engine}_T{T}_tau{tau}.json",
@@ -303,25 +306,13 @@ rule p3_scale_class_size:
         engine="classes",
         T=r"\d+",
         tau=r"\d+",
-    params:
-        step="eqrec.studies.p3.scale_table:step_scale_size",
-        cfg=step_config(
-            "p3",
-            "scale.builder",
-            "scale.mem_limit_gb",
-            "scale.method",
-            "scale.mu1",
-            "scale.time_limit",
-        ),
-    script:
-        RUN_STEP
 
 
 rule p3_scale_table:
     """Scale table of the default run: the tree LP at the fast sizes next to the class engine (CSV and Markdown)."""
     input:
-        sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES)),
-        timings=timings_of(list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))),
+        sizes=P3_SCALE,
+        timings=timings_of(P3_SCALE),
         code=code_inputs("eqrec.studies.p3.scale_table:step_scale_table"),
     output:
         csv="results/p3/scale_table.csv",
@@ -344,10 +335,8 @@ rule p3_scale_table:
 rule p3_scale_table_full:
     """Full scale table: the default run's rows and the slow tree sizes (CSV and Markdown)."""
     input:
-        sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)),
-        timings=timings_of(
-            list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES))
-        ),
+        sizes=P3_SCALE_FULL,
+        timings=timings_of(P3_SCALE_FULL),
         code=code_inputs("eqrec.studies.p3.scale_table:step_scale_table"),
     output:
         csv="results/p3/scale_table_full.csv",
