@@ -1,5 +1,5 @@
 # P2: state-augmented estimator (Hassaan, Shen, Yong, ACC 2019).
-# Each rule runs one step of eqrec.studies.p2.steps through the harness (common.smk).
+# Each rule runs one step of eqrec.studies.p2 (steps, sweeps, values, figures) through the harness (common.smk).
 # The heat map runs in p2.heatmap.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter heatmap=N), each every configured variant;
 # the merge checks that they cover the grid exactly once.

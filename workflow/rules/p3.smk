@@ -1,5 +1,5 @@
 # P3: delayed/missing-data paper (Hassaan, Shen, Yong; equalized recovery with delayed and missing observations).
-# Each rule runs one step of eqrec.studies.p3.steps through the harness (common.smk).
+# Each rule runs one step of eqrec.studies.p3 (steps, figures, values, strategy, scale tables) through the harness.
 VALUES_FILES.append("results/p3/values.json")
 
 
@@ -199,7 +199,7 @@ rule p3_values:
         RUN_STEP
 
 
-# --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3.strategy, p3_figures, p3_scale ---
+# --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
 VALUES_FILES.append("results/p3/strategy_values.json")
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).

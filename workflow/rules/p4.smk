@@ -1,5 +1,5 @@
 # P4: LMV filter / predictor / smoother with zero- vs hold-input compensation.
-# Each rule runs one step of eqrec.studies.p4.steps, p4_figures or p4_values through the harness (common.smk).
+# Each rule runs one step of eqrec.studies.p4 (steps, figures, values) through the harness (common.smk).
 # The sweeps run in p4.sweep_*.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter sweep_eta=N); the merging steps (fig5, fig6)
 # check that they cover the grid exactly once.
