@@ -319,15 +319,15 @@ def test_values_files_hold_numbers_and_evidence_only():
 def test_published_values_need_the_claims_file_only():
     """The Snakefile and P2's printed step read published values through eqrec.studies.claims.published, which
     imports no wording code: editing a reason function re-plans the claims table, not P2's designs."""
-    from eqrec.studies.pipeline.imports import code_inputs
+    from eqrec.studies.pipeline.code import code_inputs
 
     def rel(paths):
         return {Path(p).as_posix().split("src/eqrec/", 1)[1] for p in paths}
 
-    names = rel(code_inputs("p2", "printed"))
+    names = rel(code_inputs("eqrec.studies.p2.steps:step_printed"))
     assert "studies/claims/published.py" in names
     assert not names & {"studies/claims/table.py", "studies/claims/reasons.py", "studies/p1/claims.py",
                         "studies/p2/claims.py", "studies/p3/claims.py", "studies/p4/claims.py"}, sorted(names)
-    claims_inputs = rel(code_inputs("claims", "table"))
+    claims_inputs = rel(code_inputs("eqrec.studies.claims.table:step_table"))
     assert {"studies/claims/published.py", "studies/claims/reasons.py", "studies/p1/claims.py",
             "studies/p4/claims.py"} <= claims_inputs

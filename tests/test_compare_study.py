@@ -11,6 +11,9 @@ from eqrec.studies.compare import steps as compare
 from eqrec.studies.pipeline import configuration, harness
 from eqrec.studies.pipeline.checks import check_compare
 
+#: The paths of the steps run here, as the rules name them.
+COMPARE = "eqrec.studies.compare.steps:step_"
+
 ROOT = Path(__file__).resolve().parents[1]
 CFG = configuration.load_config("compare", root=ROOT)
 RES = ROOT / "results" / "compare"
@@ -54,11 +57,11 @@ def test_the_table_step_refuses_jobs_that_do_not_cover_the_pairs(tmp_path):
     short = {"csv": [RES / f"{s}_{k}.csv" for s, k in pairs[:-1]],
              "json": [RES / f"{s}_{k}.json" for s, k in pairs[:-1]]}
     with pytest.raises(InputError, match="exactly once"):
-        harness.run_step("compare", "table", CFG, inputs=short, outputs=out)
+        harness.run_step(COMPARE + "table", CFG, inputs=short, outputs=out)
     swapped = {"csv": [RES / f"{s}_{k}.csv" for s, k in pairs[::-1]],
                "json": [RES / f"{s}_{k}.json" for s, k in pairs]}
     with pytest.raises(InputError, match="same order"):
-        harness.run_step("compare", "table", CFG, inputs=swapped, outputs=out)
+        harness.run_step(COMPARE + "table", CFG, inputs=swapped, outputs=out)
     assert not out["csv"].exists()
 
 

@@ -1,4 +1,4 @@
-"""The study harness: step registry, configuration with schema defaults, atomic writers, logs and exit status."""
+"""The study harness: step paths, code inputs, configuration (schema defaults), atomic writers, logs, exit status."""
 import ast
 import copy
 import json
@@ -13,7 +13,7 @@ import yaml
 from snakemake.iocontainers import Namedlist
 
 from eqrec.errors import InputError
-from eqrec.studies.pipeline import harness, imports, logs, steps
+from eqrec.studies.pipeline import code, harness, logs
 from eqrec.studies.pipeline import outputs
 from eqrec import errors
 from eqrec.studies.pipeline import configuration
@@ -23,30 +23,30 @@ RULES = ROOT / "workflow" / "rules"
 
 
 def _rule_steps():
-    """(rule, study, step, body) of every rule that runs the harness."""
+    """(rule, step, body, rules file) of every rule that runs the harness."""
     out = []
     for smk in RULES.glob("*.smk"):
         text = smk.read_text()
         for rule, body in re.findall(r"^rule (\w+):\n(.*?)(?=^rule |\Z)", text, flags=re.S | re.M):
             if "RUN_STEP" in body:
-                study = re.search(r'study="(\w+)"', body).group(1)
-                step = re.search(r'step="(\w+)"', body).group(1)
-                out.append((rule, study, step, body))
+                out.append((rule, re.search(r'step="([\w.:]+)"', body).group(1), body, smk.stem))
     return out
 
 
-def test_every_rule_runs_a_registered_step_through_the_one_script():
+def test_every_rule_names_a_step_function_and_runs_it_through_the_one_script():
     rules = _rule_steps()
-    reg = steps.registry()
     assert len(rules) >= 27
-    for rule, study, step, body in rules:
-        assert (study, step) in reg, rule
-        assert rule == "claims" or rule == f"{study}_{step}", rule  # rule names follow the steps
+    for rule, step, body, study in rules:
+        fn = harness.resolve_step(step, rule)  # the path resolves (pkgutil.resolve_name) to a step function
+        assert callable(fn) and step == f"{fn.__module__}:{fn.__name__}" and fn.__name__.startswith("step_"), rule
+        assert step.startswith(f"eqrec.studies.{study}.") and harness.step_names(step)[0] == study, rule
+        assert rule.startswith(study), rule  # rules files, rules, step folders: one study each
         # its code inputs are those of its own step, its configuration keys of its own section
-        assert f'code=code_inputs("{study}", "{step}")' in body, rule
-        cfg = re.search(r"cfg=(.*?),\n    script:", body, flags=re.S).group(1)
-        assert cfg == "{}" or cfg.startswith(f'step_config(\n            "{study}",') or \
-            cfg.startswith(f'step_config("{study}",'), (rule, cfg)
+        assert f'code=code_inputs("{step}")' in body, rule
+        assert "study=" not in body and body.count("step=") == 1, rule
+        cfg = re.search(r"\n        cfg=(.*?),\n    (?:script|benchmark):", body, flags=re.S)
+        assert cfg is None or cfg.group(1).startswith((f'step_config(\n            "{study}",',
+                                                       f'step_config("{study}",')), (rule, cfg)
     for smk in RULES.glob("*.smk"):
         assert "shell:" not in smk.read_text() and "python -m" not in smk.read_text(), smk.name
     script = (ROOT / "workflow" / "scripts" / "run_step.py").read_text()
@@ -134,38 +134,36 @@ def test_a_step_cannot_write_a_timing_next_to_the_results(tmp_path):
     assert (tmp_path / "tt.csv").read_text() == "r,solve_time\n0.0,0.1\n1.0,0.2\n"
 
 
+P1, P4 = "eqrec.studies.p1.steps:step_", "eqrec.studies.p4.steps:step_"
+
+
 def test_code_inputs_follow_the_imports_of_each_step():
-    designs, model4 = imports.code_inputs("p1", "designs"), imports.code_inputs("p4", "mc")
+    designs, model4 = code.code_inputs(P1 + "designs"), code.code_inputs(P4 + "mc")
     assert "src/eqrec/studies/p1/steps.py" in designs and "src/eqrec/studies/searches.py" in designs
     assert not any("/lmv/" in p for p in designs)  # an LMV edit does not re-run the P1 LPs
-    # P4 runs no LP; its plant comes from eqrec.lmv.plant (config_checks only validates, at planning); of the core
-    # it reads only the shared system description, arrival model and packet forms (issue 24) and the input checks
-    # they share (core.checks), no LP or estimator
-    assert not any("/design/" in p for p in model4)
-    assert {p for p in model4 if "/core/" in p} <= {f"src/eqrec/core/{m}.py" for m in (
-        "__init__", "systems", "noise", "arrivals", "traces", "packets", "patterns", "words", "checks")}
+    # P4 runs no LP; its plant comes from eqrec.lmv.plant (the configuration checks only validate, at planning);
+    # of the core it reads only the system description, the noise and the input checks, no LP or estimator
+    assert not any(p.startswith(("src/eqrec/design/", "src/eqrec/lp/", "src/eqrec/bounds/")) for p in model4)
     assert "src/eqrec/lmv/plant.py" in model4 and "src/eqrec/studies/pipeline/checks.py" not in model4
     assert "src/eqrec/studies/pipeline/checks.py" not in designs  # P1 steps do not import it
-    for files in (designs, model4):  # the harness that runs the step, not the registry of every study
-        assert "src/eqrec/studies/pipeline/harness.py" in files and "src/eqrec/studies/pipeline/steps.py" not in files
+    for files in (designs, model4):  # the harness that runs the step and its parent packages, nothing else
+        assert {"src/eqrec/studies/pipeline/harness.py", "src/eqrec/studies/pipeline/__init__.py",
+                "src/eqrec/studies/__init__.py", "src/eqrec/__init__.py"} <= set(files)
+        assert "src/eqrec/studies/pipeline/code.py" not in files and files == sorted(set(files))
     # a figure's step imports its figures module, not the study's LP modules
-    fig = imports.code_inputs("p1", "figure1")
+    fig = code.code_inputs("eqrec.studies.p1.figures:step_figure1")
     assert "src/eqrec/studies/p1/figures.py" in fig and "src/eqrec/studies/p1/steps.py" not in fig
-    assert not any("/design/" in p for p in fig)
+    assert not any(p.startswith(("src/eqrec/design/", "src/eqrec/lp/")) for p in fig)
+    with pytest.raises(errors.StepError, match="no module 'eqrec.studies.p9'"):
+        code.code_inputs("eqrec.studies.p9:step_model")
 
 
-def test_step_modules_read_with_ast_are_those_of_the_registered_functions():
-    """The Snakefile reads a step's module from the tables without importing them: the same as importing."""
-    for (study, step), fn in steps.registry().items():
-        assert imports.step_module(study, step) == fn.__module__, (study, step)
-    with pytest.raises(errors.StepError, match="no step 'nope'"):
-        imports.step_module("p1", "nope")
-
-
-def test_the_import_walker_sees_lazy_imports(tmp_path):
-    src = tmp_path / "m.py"
-    src.write_text("import os\nfrom eqrec.core import lp\n\ndef f():\n    import eqrec.design.delay.design\n")
-    assert imports.eqrec_imports(src) == ["eqrec.core", "eqrec.core.lp", "eqrec.design.delay.design"]
+def test_code_inputs_see_lazy_imports():
+    """grimp reads imports inside functions too: the notebooks step imports its HTML module when it renders."""
+    source = (ROOT / "src/eqrec/studies/notebooks/execute.py").read_text()
+    top = [n for n in ast.parse(source).body if isinstance(n, (ast.Import, ast.ImportFrom))]
+    assert not any("html" in ast.unparse(n) for n in top)  # imported inside to_html only
+    assert "src/eqrec/studies/notebooks/html.py" in code.code_inputs("eqrec.studies.notebooks.execute:step_execute")
 
 
 # --------------------------------------------------------------------------- atomic writers
@@ -225,16 +223,16 @@ def test_files_behave_like_snakemake_namedlists():
         f.csv
 
 
-def _smk(tmp_path, study, step, cfg, output, **wildcards):
+def _smk(tmp_path, step, cfg, output, rule="a_rule", **wildcards):
     log = Namedlist([str(tmp_path / "logs" / "step.log")])
-    params = Namedlist(fromdict={"study": study, "step": step, "cfg": cfg})
-    return SimpleNamespace(params=params, input=Namedlist([]), output=Namedlist(fromdict=output),
+    params = Namedlist(fromdict={"step": step, "cfg": cfg})
+    return SimpleNamespace(params=params, input=Namedlist([]), output=Namedlist(fromdict=output), rule=rule,
                            wildcards=Namedlist(fromdict={k: str(v) for k, v in wildcards.items()}), log=log)
 
 
 def test_run_from_snakemake_logs_and_writes(tmp_path):
     cfg = configuration.load_config("p1", root=ROOT)
-    harness.run_from_snakemake(_smk(tmp_path, "p1", "model", cfg, {"json": str(tmp_path / "model.json")}))
+    harness.run_from_snakemake(_smk(tmp_path, P1 + "model", cfg, {"json": str(tmp_path / "model.json")}))
     assert (tmp_path / "model.json").is_file()
     log = (tmp_path / "logs" / "step.log").read_text().splitlines()
     assert log[0] == "[p1] step model" and log[-1].startswith("[p1] step model done in")
@@ -242,7 +240,8 @@ def test_run_from_snakemake_logs_and_writes(tmp_path):
 
 def test_a_failing_step_exits_1_naming_the_config_field(tmp_path, capfd):
     cfg = configuration.load_config("p2", root=ROOT)
-    smk = _smk(tmp_path, "p2", "heatmap_chunk", cfg, {"csv": str(tmp_path / "c.csv")}, variant="theorem2", chunk=9)
+    smk = _smk(tmp_path, "eqrec.studies.p2.sweeps:step_heatmap_chunk", cfg, {"csv": str(tmp_path / "c.csv")},
+               variant="theorem2", scatteritem="10-of-2")
     with pytest.raises(SystemExit) as exc:
         harness.run_from_snakemake(smk)
     assert exc.value.code == 1
@@ -255,14 +254,24 @@ def test_a_failing_step_exits_1_naming_the_config_field(tmp_path, capfd):
 def test_a_step_must_write_its_declared_outputs(tmp_path):
     cfg = configuration.load_config("p1", root=ROOT)
     with pytest.raises(errors.StepError, match="did not write"):
-        harness.run_step("p1", "model", cfg, outputs={"json": tmp_path / "m.json", "extra": tmp_path / "x.json"})
+        harness.run_step(P1 + "model", cfg, outputs={"json": tmp_path / "m.json", "extra": tmp_path / "x.json"})
 
 
-def test_unknown_steps_are_named():
-    with pytest.raises(errors.StepError, match="no step 'nope'"):
-        harness.get_step("p1", "nope")
-    with pytest.raises(errors.StepError, match="unknown study"):
-        harness.get_step("p9", "model")
+def test_a_step_that_does_not_resolve_is_named_with_its_rule(tmp_path, capfd):
+    with pytest.raises(errors.StepError, match=r"rule p1_model: step 'eqrec.studies.p1.steps:step_nope' does not "
+                                               r"resolve: AttributeError"):
+        harness.resolve_step(P1 + "nope", "p1_model")
+    with pytest.raises(errors.StepError, match=r"step 'eqrec.studies.p9.steps:step_model' does not resolve: "
+                                               r"ModuleNotFoundError"):
+        harness.resolve_step("eqrec.studies.p9.steps:step_model")
+    for bad in ("model", "eqrec.studies.p1.steps.step_model", "os:getcwd"):
+        with pytest.raises(errors.StepError, match="is not the path of a step function"):
+            harness.resolve_step(bad)
+    with pytest.raises(SystemExit) as exc:
+        harness.run_from_snakemake(_smk(tmp_path, P1 + "nope", {}, {"json": str(tmp_path / "m.json")}, "p1_model"))
+    assert exc.value.code == 1
+    assert "[p1] step nope failed: StepError: rule p1_model: step 'eqrec.studies.p1.steps:step_nope'" in \
+        capfd.readouterr().err
 
 
 def test_progress_lines(caplog):

@@ -15,6 +15,8 @@ from eqrec.studies.pipeline import harness
 from eqrec.studies.pipeline import outputs
 from eqrec.studies.notebooks import execute as nbstudy
 
+#: The notebooks step, as its rule names it.
+EXECUTE = "eqrec.studies.notebooks.execute:step_execute"
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.py"))
 EXECUTED = ROOT / "results" / "notebooks"
@@ -68,7 +70,7 @@ def test_notebook_executes(path):
 
 def _run(tmp_path, source: Path, tag: str):
     out = {"ipynb": tmp_path / tag / f"{source.stem}.ipynb", "html": tmp_path / tag / f"{source.stem}.html"}
-    harness.run_step("notebooks", "execute", {}, inputs={"notebook": str(source), "results": []}, outputs=out)
+    harness.run_step(EXECUTE, {}, inputs={"notebook": str(source), "results": []}, outputs=out)
     return out["ipynb"].read_bytes(), out["html"].read_bytes()
 
 
@@ -95,7 +97,7 @@ def test_execution_is_byte_identical_and_carries_no_run_metadata(tmp_path, monke
 
 def _smk(tmp_path, source: Path):
     out = {"ipynb": str(tmp_path / "out.ipynb"), "html": str(tmp_path / "out.html")}
-    return SimpleNamespace(params=Namedlist(fromdict={"study": "notebooks", "step": "execute", "cfg": {}}),
+    return SimpleNamespace(params=Namedlist(fromdict={"step": EXECUTE}),
                            input=Namedlist(fromdict={"notebook": str(source)}), output=Namedlist(fromdict=out),
                            wildcards=Namedlist(fromdict={"name": source.stem}),
                            log=Namedlist([str(tmp_path / "logs" / "nb.log")]))

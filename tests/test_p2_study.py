@@ -12,6 +12,10 @@ from eqrec.studies.pipeline import configuration
 from eqrec.studies.p2.readings import one_based_word, variant_word
 from eqrec.studies.p2.grids import constant_interval
 
+#: The paths of the steps run here, as the rules name them.
+P2_FIGURES = "eqrec.studies.p2.figures:step_"
+P2_SWEEPS = "eqrec.studies.p2.sweeps:step_"
+
 
 def test_one_based_word():
     assert one_based_word("100111") == "110011"
@@ -75,19 +79,25 @@ SMALL = {"runs": 20, "heatmap": {"n_r": 4, "n_theta": 4, "chunks": 2, "variants"
          "realaxis": {"n": 7}, "s0_samples": [[1.0, 0.0, -1.0]]}
 
 
+#: The paths of the P2 steps (as the rules name them).
+P2 = {name: f"eqrec.studies.p2.{module}:step_{name}" for module, names in (
+    ("steps", ("designs", "simulate", "checks", "printed")), ("sweeps", ("heatmap_chunk", "heatmap_merge", "realaxis")),
+    ("values", ("values",))) for name in names}
+
+
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     """The P2 steps on a small grid, run through the harness as the rules run them (defaults from the schema)."""
     d = tmp_path_factory.mktemp("p2")
     cfg = configuration.load_config("p2", "config/p2.yaml", overrides={"p2": SMALL})
-    run = lambda step, ins=None, outs=None, **wc: harness.run_step("p2", step, cfg, ins, outs, wc)  # noqa: E731
+    run = lambda step, ins=None, outs=None, **wc: harness.run_step(P2[step], cfg, ins, outs, wc)  # noqa: E731
     t = d / "timings"
     run("designs", outs={"json": d / "designs.json", "npz": d / "designs.npz", "timings": t / "designs.json"})
     run("simulate", {"designs": d / "designs.npz"}, {"npz": d / "simulation.npz"})
     chunks = []
     for c in range(2):
         chunks.append(d / f"hm_{c}.csv")
-        run("heatmap_chunk", outs={"csv": chunks[-1]}, chunk=c)
+        run("heatmap_chunk", outs={"csv": chunks[-1]}, scatteritem=f"{c + 1}-of-2")
     run("heatmap_merge", {"chunks": chunks}, {"csv": d / "heatmap.csv", "timings": t / "heatmap.csv"})
     run("realaxis", outs={"csv": d / "realaxis.csv", "timings": t / "realaxis.csv"})
     run("checks", outs={"json": d / "checks.json", "timings": t / "checks.json"})
@@ -137,10 +147,10 @@ def test_heatmap_merge_rejects_a_partial_or_repeated_grid(small_run, tmp_path):
     d, cfg, _ = small_run
     chunks = sorted(d.glob("hm_*.csv"))
     with pytest.raises(InputError, match="miss 8"):
-        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks[:-1]},
+        harness.run_step(P2_SWEEPS + "heatmap_merge", cfg, {"chunks": chunks[:-1]},
                          {"csv": tmp_path / "h.csv", "timings": tmp_path / "t.csv"})
     with pytest.raises(InputError, match="repeat"):
-        harness.run_step("p2", "heatmap_merge", cfg, {"chunks": chunks + chunks[:1]},
+        harness.run_step(P2_SWEEPS + "heatmap_merge", cfg, {"chunks": chunks + chunks[:1]},
                          {"csv": tmp_path / "h.csv", "timings": tmp_path / "t.csv"})
     assert not (tmp_path / "h.csv").exists()
 
@@ -157,11 +167,11 @@ def test_figures(small_run, tmp_path):
              "mu2": published_value(claims, "P2-F3a:mu2-region")}
     cfg = {**cfg, "published": paper}
     for fig in ("f1", "f2"):
-        harness.run_step("p2", "figure_trajectories", cfg,
+        harness.run_step(P2_FIGURES + "figure_trajectories", cfg,
                          {"designs": d / "designs.json", "simulation": d / "simulation.npz"},
                          {"pdf": tmp_path / f"{fig}.pdf", "png": tmp_path / f"{fig}.png"}, {"fig": fig})
-    harness.run_step("p2", "figure_heatmap", cfg, {"csv": d / "heatmap.csv", "printed": d / "printed.json"},
+    harness.run_step(P2_FIGURES + "figure_heatmap", cfg, {"csv": d / "heatmap.csv", "printed": d / "printed.json"},
                      {"pdf": tmp_path / "h.pdf", "png": tmp_path / "h.png"})
-    harness.run_step("p2", "figure_realaxis", cfg, {"csv": d / "realaxis.csv", "printed": d / "printed.json"},
+    harness.run_step(P2_FIGURES + "figure_realaxis", cfg, {"csv": d / "realaxis.csv", "printed": d / "printed.json"},
                      {"pdf": tmp_path / "r.pdf", "png": tmp_path / "r.png"})
     assert all((tmp_path / f).stat().st_size > 1000 for f in ("f1.png", "f2.png", "h.png", "r.png"))

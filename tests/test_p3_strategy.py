@@ -25,7 +25,6 @@ from eqrec.systems.examples import batch_reactor
 from eqrec.studies.pipeline import harness
 from eqrec.studies.p3 import strategy as p3_strategy
 from eqrec.studies.pipeline import outputs
-from eqrec import errors
 
 MU1_SWITCH = 0.36  # the smallest period-1 level of the batch reactor (0.3553), rounded up
 
@@ -60,18 +59,8 @@ def _cfg(steps=300, max_period=3, window=40):
 
 
 def _run(step, cfg, inputs=None, outputs=None, wildcards=None):
-    """Through the harness once the "p3" study registers the step; directly before that."""
-    try:
-        harness.get_step("p3", step)
-    except (errors.StepError, ImportError):
-        outs = harness.Files.of(outputs)
-        for p in outs:
-            Path(p).parent.mkdir(parents=True, exist_ok=True)
-        result = p3_strategy.STEPS[step](cfg, harness.Files.of(inputs), outs,
-                                         harness.Wildcards({k: str(v) for k, v in (wildcards or {}).items()}))
-        assert all(Path(p).exists() for p in outs)
-        return result
-    return harness.run_step("p3", step, cfg, inputs, outputs, wildcards)
+    """Through the harness, as the rules run the step (``step``: ``module:function`` under eqrec.studies.p3)."""
+    return harness.run_step(f"eqrec.studies.p3.{step}", cfg, inputs, outputs, wildcards)
 
 
 # --------------------------------------------------------------------------- the switching estimator
@@ -189,7 +178,7 @@ def test_strategy_steps(tmp_path, published):
     cfg = _cfg()
     out = {"npz": str(tmp_path / "strategy.npz"), "values": str(tmp_path / "strategy_values.json"),
            "timings": str(tmp_path / "timings" / "strategy_values.json")}
-    _run("strategy", cfg, outputs=out)
+    _run("strategy:step_strategy", cfg, outputs=out)
     vals = json.loads(Path(out["values"]).read_text())
     for key in ("periodic_reactor_within", "periodic_acc_within", "switching_within"):
         assert vals[key]["value"] == "inside", vals[key]
@@ -203,7 +192,7 @@ def test_strategy_steps(tmp_path, published):
     for entry in vals.values():  # claims format: numbers, statuses, lists; no prose
         assert set(entry) == {"value", "evidence"}
     figs = {"pdf": str(tmp_path / "fig.pdf"), "png": str(tmp_path / "fig.png")}
-    _run("strategy_figure", cfg, inputs={"npz": out["npz"]}, outputs=figs)
+    _run("figures:step_strategy_figure", cfg, inputs={"npz": out["npz"]}, outputs=figs)
     assert Path(figs["png"]).stat().st_size > 10_000
 
 
@@ -212,7 +201,7 @@ def test_scale_steps(tmp_path):
     files, timings = [], []
     for T, tau in cfg["scale"]["tree_sizes"]:
         f, t = str(tmp_path / f"T{T}_tau{tau}.json"), str(tmp_path / "timings" / f"T{T}_tau{tau}.json")
-        _run("scale_size", cfg, outputs={"json": f, "timings": t}, wildcards={"T": T, "tau": tau})
+        _run("scale_table:step_scale_size", cfg, outputs={"json": f, "timings": t}, wildcards={"T": T, "tau": tau})
         files.append(f)
         timings.append(t)
     rows = [outputs.read_json(f, timings=t) for f, t in zip(files, timings)]
@@ -221,7 +210,7 @@ def test_scale_steps(tmp_path):
     assert all(r["cols"] > 0 and r["nnz"] > 0 and r["peak_mb"] > 0 for r in rows)
     out = {"csv": str(tmp_path / "scale.csv"), "md": str(tmp_path / "scale.md"),
            "timings_csv": str(tmp_path / "timings" / "scale.csv"), "timings_md": str(tmp_path / "timings" / "scale.md")}
-    _run("scale_table", cfg, inputs={"sizes": files[::-1], "timings": timings[::-1]}, outputs=out)
+    _run("scale_table:step_scale_table", cfg, inputs={"sizes": files[::-1], "timings": timings[::-1]}, outputs=out)
     import pandas as pd
 
     frame = pd.read_csv(out["csv"])

@@ -22,6 +22,11 @@ from eqrec.studies.pipeline import configuration
 from eqrec.studies.p3.steps import language_counts, language_examples
 from eqrec.studies.p3.values import _compare_bounds
 
+#: The paths of the steps run here, as the rules name them.
+P3_FIGURES = "eqrec.studies.p3.figures:step_"
+P3 = "eqrec.studies.p3.steps:step_"
+P3_VALUES = "eqrec.studies.p3.values:step_"
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -153,28 +158,28 @@ def test_steps_run_through_the_harness(cfg, tmp_path):
         "languages": "languages.json", "csv": "examples.csv", "md": "examples.md", "counts": "counts.csv",
         "model": "model.json", "designs": "designs.json", "augmented": "augmented.json", "kalman": "kalman.json",
         "kalman_npz": "kalman.npz", "acc": "acc.json", "acc_npz": "acc.npz", "values": "values.json"}.items()}
-    harness.run_step("p3", "languages", small, outputs={"json": o["languages"], "csv": o["csv"], "md": o["md"],
+    harness.run_step(P3 + "languages", small, outputs={"json": o["languages"], "csv": o["csv"], "md": o["md"],
                                                         "counts": o["counts"]})
     assert "e_{0,1}e_{1,3}" in o["md"].read_text() and len(pd.read_csv(o["counts"])) == 2
-    harness.run_step("p3", "reactor_model", small, outputs={"json": o["model"]})
-    des = harness.run_step("p3", "reactor_designs", small, outputs={"json": o["designs"],
+    harness.run_step(P3 + "reactor_model", small, outputs={"json": o["model"]})
+    des = harness.run_step(P3 + "reactor_designs", small, outputs={"json": o["designs"],
                                                                     "timings": tmp_path / "t_designs.json"})
     assert des["global"]["vertex_attainment"]["max_gap"] < 1e-9
     assert des["global"]["certified_mu2"] <= des["global"]["mu2"] * (1 + 1e-6)
     assert des["compare"]["ipopt_consistent_with_bound"]
-    aug = harness.run_step("p3", "augmented", small, outputs={"json": o["augmented"]})
+    aug = harness.run_step(P3 + "augmented", small, outputs={"json": o["augmented"]})
     assert aug["max_difference_to_prefix"] <= 1e-6 * abs(aug["prefix_objective"])
-    kal = harness.run_step("p3", "kalman", small, outputs={"json": o["kalman"], "npz": o["kalman_npz"]})
+    kal = harness.run_step(P3 + "kalman", small, outputs={"json": o["kalman"], "npz": o["kalman_npz"]})
     assert kal["proposed"]["max_ratio_levels"] <= 1 + 1e-9 and kal["proposed"]["runtime_vs_maps"] < 1e-9
     for e in kal["filters"].values():
         assert e["prediction"]["vertex"]["attain_gap"] < 1e-9
-    harness.run_step("p3", "acc", small, outputs={"json": o["acc"], "timings": tmp_path / "t_acc.json"})
-    harness.run_step("p3", "acc_simulate", small, outputs={"npz": o["acc_npz"]})
-    harness.run_step("p3", "figure1", small, inputs={"json": o["kalman"], "npz": o["kalman_npz"]},
+    harness.run_step(P3 + "acc", small, outputs={"json": o["acc"], "timings": tmp_path / "t_acc.json"})
+    harness.run_step(P3 + "acc_simulate", small, outputs={"npz": o["acc_npz"]})
+    harness.run_step(P3_FIGURES + "figure1", small, inputs={"json": o["kalman"], "npz": o["kalman_npz"]},
                      outputs={"pdf": tmp_path / "f1.pdf", "png": tmp_path / "f1.png"})
-    harness.run_step("p3", "figure2", small, inputs={"npz": o["acc_npz"]},
+    harness.run_step(P3_FIGURES + "figure2", small, inputs={"npz": o["acc_npz"]},
                      outputs={"pdf": tmp_path / "f2.pdf", "png": tmp_path / "f2.png"})
-    v = harness.run_step("p3", "values", small, inputs={
+    v = harness.run_step(P3_VALUES + "values", small, inputs={
         "languages": o["languages"], "model": o["model"], "designs": o["designs"], "augmented": o["augmented"],
         "kalman": o["kalman"], "acc": o["acc"], "acc_npz": o["acc_npz"]}, outputs={"json": o["values"]})
     stored = json.loads(o["values"].read_text())

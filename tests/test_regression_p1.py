@@ -17,6 +17,9 @@ from eqrec.studies.pipeline import harness
 from eqrec.studies.pipeline import configuration
 from eqrec.studies.p1 import steps as p1_study
 
+#: The paths of the steps run here, as the rules name them.
+P1 = "eqrec.studies.p1.steps:step_"
+
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p1"
 CFG = configuration.load_config("p1", root=ROOT)
@@ -28,7 +31,7 @@ def stored():
 
 
 def test_model(stored, tmp_path):
-    fresh = harness.run_step("p1", "model", CFG, outputs={"json": tmp_path / "m.json"})
+    fresh = harness.run_step(P1 + "model", CFG, outputs={"json": tmp_path / "m.json"})
     for key in ("A", "B", "f", "E"):
         np.testing.assert_allclose(fresh[key], stored["model"][key], atol=1e-12)
 
@@ -46,7 +49,7 @@ def test_optimal_levels(stored, method, solver):
 
 def test_simulation(tmp_path):
     out = tmp_path / "sim.npz"
-    harness.run_step("p1", "simulate", CFG, outputs={"npz": out})
+    harness.run_step(P1 + "simulate", CFG, outputs={"npz": out})
     a, b = np.load(out), np.load(RES / "simulation.npz")
     for key in ("prefix_errors", "time_errors", "prefix_bounds"):
         np.testing.assert_allclose(a[key], b[key], atol=1e-9)

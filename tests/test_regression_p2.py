@@ -18,6 +18,10 @@ from eqrec.design.prefix.time_based import design_time_based
 from eqrec.studies.pipeline import harness
 from eqrec.studies.pipeline import configuration
 
+#: The paths of the steps run here, as the rules name them.
+P2 = "eqrec.studies.p2.steps:step_"
+P2_SWEEPS = "eqrec.studies.p2.sweeps:step_"
+
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p2"
 CFG = configuration.load_config("p2", root=ROOT)
@@ -45,7 +49,8 @@ def _theta_zero_chunk(tmp_path) -> tuple[pd.DataFrame, pd.DataFrame]:
     cfg = copy.deepcopy(CFG)
     cfg["heatmap"]["chunks"] = cfg["heatmap"]["n_theta"]
     out = tmp_path / "chunk.csv"
-    harness.run_step("p2", "heatmap_chunk", cfg, outputs={"csv": out}, wildcards={"chunk": 0})
+    harness.run_step(P2_SWEEPS + "heatmap_chunk", cfg, outputs={"csv": out},
+                     wildcards={"scatteritem": f"1-of-{cfg['heatmap']['chunks']}"})
     fresh = pd.read_csv(out).sort_values(["variant", "r"], kind="stable").reset_index(drop=True)
     stored = pd.read_csv(RES / "heatmap.csv")
     stored = stored[stored["theta"] == 0.0].sort_values(["variant", "r"], kind="stable").reset_index(drop=True)
@@ -67,7 +72,7 @@ def test_heatmap_chunk_matches_stored(tmp_path):
 def test_printed_L_step_matches_stored(tmp_path):
     """The Fig. 2 design at the printed L (read from config/claims.yaml) and its certified guarantees."""
     out = tmp_path / "printed.json"
-    fresh = harness.run_step("p2", "printed", CFG, inputs={"claims": ROOT / "config" / "claims.yaml"},
+    fresh = harness.run_step(P2 + "printed", CFG, inputs={"claims": ROOT / "config" / "claims.yaml"},
                              outputs={"json": out})
     stored = json.loads((RES / "printed.json").read_text())
     for mode in ("theorem2", "masked_gain"):

@@ -18,6 +18,10 @@ from eqrec.studies.pipeline import harness
 from eqrec.studies.pipeline import configuration
 from eqrec.studies.p3 import steps as p3_study
 
+#: The paths of the steps run here, as the rules name them.
+P3 = "eqrec.studies.p3.steps:step_"
+P3_VALUES = "eqrec.studies.p3.values:step_"
+
 ROOT = Path(__file__).resolve().parents[1]
 RES = ROOT / "results" / "p3"
 CFG = configuration.load_config("p3", root=ROOT)
@@ -31,13 +35,13 @@ def stored():
 
 def test_languages(stored, tmp_path):
     out = {k: tmp_path / f"{k}.out" for k in ("json", "csv", "md", "counts")}
-    fresh = harness.run_step("p3", "languages", CFG, outputs=out)
+    fresh = harness.run_step(P3 + "languages", CFG, outputs=out)
     assert json.loads(json.dumps(fresh)) == stored["languages"]
     assert out["md"].read_text() == (RES / "examples.md").read_text()
 
 
 def test_discretisation(stored, tmp_path):
-    fresh = harness.run_step("p3", "reactor_model", CFG, outputs={"json": tmp_path / "m.json"})
+    fresh = harness.run_step(P3 + "reactor_model", CFG, outputs={"json": tmp_path / "m.json"})
     for key in ("A", "B"):
         np.testing.assert_allclose(fresh[key], stored["reactor_model"][key], atol=1e-12)
 
@@ -73,7 +77,7 @@ def test_acc_designs(stored):
 def test_kalman_worst_cases(stored, tmp_path):
     k = stored["kalman"]
     cfg = configuration.load_config("p3", root=ROOT, overrides={"p3": {"kalman": {"mu1": k["mu1"]}}})
-    fresh = harness.run_step("p3", "kalman", cfg, outputs={"json": tmp_path / "k.json", "npz": tmp_path / "k.npz"})
+    fresh = harness.run_step(P3 + "kalman", cfg, outputs={"json": tmp_path / "k.json", "npz": tmp_path / "k.npz"})
     np.testing.assert_allclose(fresh["levels"], k["levels"], rtol=1e-6)
     for name, e in k["filters"].items():
         for est in ("prediction", "filtered"):
@@ -85,7 +89,7 @@ def test_kalman_worst_cases(stored, tmp_path):
 
 
 def test_acc_simulation(tmp_path):
-    harness.run_step("p3", "acc_simulate", CFG, outputs={"npz": tmp_path / "a.npz"})
+    harness.run_step(P3 + "acc_simulate", CFG, outputs={"npz": tmp_path / "a.npz"})
     a, b = np.load(tmp_path / "a.npz"), np.load(RES / "acc_simulation.npz")
     for key in ("proposed_errors", "prefix_errors", "proposed_bounds", "prefix_bounds"):
         np.testing.assert_allclose(a[key], b[key], atol=1e-9)
@@ -95,5 +99,5 @@ def test_values_are_what_the_values_step_makes_of_the_stored_results(stored, tmp
     inputs = {"languages": RES / "languages.json", "model": RES / "reactor_model.json",
               "designs": RES / "reactor_designs.json", "augmented": RES / "augmented.json",
               "kalman": RES / "kalman.json", "acc": RES / "acc.json", "acc_npz": RES / "acc_simulation.npz"}
-    harness.run_step("p3", "values", CFG, inputs=inputs, outputs={"json": tmp_path / "v.json"})
+    harness.run_step(P3_VALUES + "values", CFG, inputs=inputs, outputs={"json": tmp_path / "v.json"})
     assert json.loads((tmp_path / "v.json").read_text()) == stored["values"]

@@ -41,7 +41,8 @@ def test_sweep_chunk_matches_stored(tmp_path):
     cfg = copy.deepcopy(CFG)
     cfg["sweep_q"]["chunks"] = cfg["sweep_q"]["num"]
     out = tmp_path / "chunk0.npz"
-    harness.run_step("p4", "sweep_q_chunk", cfg, outputs={"npz": out}, wildcards={"chunk": 0})
+    harness.run_step("eqrec.studies.p4.steps:step_sweep_q_chunk", cfg, outputs={"npz": out},
+                     wildcards={"scatteritem": f"1-of-{cfg['sweep_q']['chunks']}"})
     a, b = np.load(out), np.load(RES / "sweep_q.npz")
     assert a["idx"].tolist() == [0]
     keys = [k for k in b.files if k.endswith(("/filt", "/stable"))]

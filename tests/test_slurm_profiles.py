@@ -21,7 +21,7 @@ DEFAULT_PROFILE = ROOT / "workflow" / "profiles" / "default" / "config.yaml"
 
 
 def _job_rules() -> set[str]:
-    """Rules of the workflow that run a job (script/shell/run), from the rules files."""
+    """Rules of the workflow that run a job (script/shell/run, or inherit one by `use rule`), from the rules files."""
     names = set()
     for smk in [ROOT / "Snakefile", *sorted((ROOT / "workflow" / "rules").glob("*.smk"))]:
         text = smk.read_text()
@@ -29,6 +29,9 @@ def _job_rules() -> set[str]:
         for name, body in zip(blocks[1::2], blocks[2::2]):
             if re.search(r"^    (script|shell|run|notebook|wrapper):", body, flags=re.M):
                 names.add(name)
+        # use rule base as name with: ... runs what its base runs
+        names |= {name for base, name in re.findall(r"^use rule (\w+) as (\w+) with:", text, flags=re.M)
+                  if base in names}
     return names
 
 

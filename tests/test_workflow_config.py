@@ -16,7 +16,7 @@ import pytest
 import yaml
 from snakemake.utils import update_config
 
-from eqrec.studies.pipeline import harness, imports
+from eqrec.studies.pipeline import code, harness
 from eqrec.studies.pipeline import configuration
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,7 +59,8 @@ def test_p1_override_replans_the_jobs_that_read_it_and_reaches_the_step(workdir)
     assert designs["M1"] == 1.5 and list(designs["designs"]["prefix"]["solvers"]) == ["highs"]
     assert "[p1] step designs done" in (workdir / "logs/p1/designs.log").read_text()
     # an edit to code P1 does not import (the LMV model) does not re-plan P1
-    assert not any("/lmv/" in p for step in ("model", "designs") for p in imports.code_inputs("p1", step))
+    assert not any("/lmv/" in p for step in ("model", "designs")
+                   for p in code.code_inputs(f"eqrec.studies.p1.steps:step_{step}"))
 
 
 def test_config_override_on_the_command_line(workdir):
@@ -180,13 +181,20 @@ def test_cli_text_is_typed_only_where_the_schema_wants_a_number():
 
 
 def test_heatmap_chunks_follow_the_resolved_config(workdir):
+    """The scattergather count of the heat map is the resolved p2.heatmap.chunks (or --set-scatter)."""
     (workdir / "override.yaml").write_text("p2:\n  heatmap:\n    chunks: 4\n")
     out = run(["-n", "results/p2/heatmap.csv", "--configfile", "override.yaml", "--forceall"], workdir)
     text = out.stdout + out.stderr
     assert out.returncode == 0, text[-3000:]
-    for k in range(4):
-        assert f"results/p2/heatmap/chunk_{k}.csv" in text
-    assert "chunk_4.csv" not in text
+    for k in range(1, 5):
+        assert f"results/p2/heatmap/chunk_{k}-of-4.csv" in text
+    assert "chunk_5-of-4.csv" not in text and "-of-2.csv" not in text
+    out = run(["-n", "results/p2/heatmap.csv", "--set-scatter", "heatmap=3", "--forceall"], workdir)
+    text = out.stdout + out.stderr
+    assert out.returncode == 0 and "results/p2/heatmap/chunk_3-of-3.csv" in text and "-of-2.csv" not in text
+
+
+SWEEPS = "eqrec.studies.p2.sweeps:step_"
 
 
 def _heatmap(tmp_path, chunks):
@@ -195,9 +203,10 @@ def _heatmap(tmp_path, chunks):
     files = []
     for k in range(chunks):
         files.append(tmp_path / f"chunk_{k}.csv")
-        harness.run_step("p2", "heatmap_chunk", cfg, outputs={"csv": files[-1]}, wildcards={"chunk": k})
+        harness.run_step(SWEEPS + "heatmap_chunk", cfg, outputs={"csv": files[-1]},
+                         wildcards={"scatteritem": f"{k + 1}-of-{chunks}"})
     out = tmp_path / f"heatmap_{chunks}.csv"
-    harness.run_step("p2", "heatmap_merge", cfg, inputs={"chunks": files},
+    harness.run_step(SWEEPS + "heatmap_merge", cfg, inputs={"chunks": files},
                      outputs={"csv": out, "timings": tmp_path / "timings.csv"})
     return pd.read_csv(out)
 
@@ -224,7 +233,8 @@ def test_sweep_merge_checks_the_grid(tmp_path):
     cfg = configuration.load_config("p4", root=ROOT, overrides={"p4": {"sweep_eta": {"num": 4, "chunks": 2}}})
     files = [tmp_path / f"chunk{k}.npz" for k in range(2)]
     for k, f in enumerate(files):
-        harness.run_step("p4", "sweep_eta_chunk", cfg, outputs={"npz": f}, wildcards={"chunk": k})
+        harness.run_step("eqrec.studies.p4.steps:step_sweep_eta_chunk", cfg, outputs={"npz": f},
+                         wildcards={"scatteritem": f"{k + 1}-of-2"})
     from eqrec.errors import InputError
     from eqrec.studies.pipeline.chunks import merge_npz as merge_chunks
 

@@ -8,7 +8,7 @@ rule claims:
         claims="config/claims.yaml",
         values=VALUES_FILES,
         timings=TIMING_VALUES_FILES,
-        code=code_inputs("claims", "table"),
+        code=code_inputs("eqrec.studies.claims.table:step_table"),
     output:
         csv=report(
             "results/claims.csv", caption="../report/claims.rst", category="Claims"
@@ -22,8 +22,6 @@ rule claims:
     log:
         "logs/claims.log",
     params:
-        study="claims",
-        step="table",
-        cfg={},
+        step="eqrec.studies.claims.table:step_table",
     script:
         RUN_STEP

@@ -11,7 +11,7 @@ COMPARE_SETTINGS = list(config["compare"]["settings"])
 rule compare_run:
     """One (system, setting): the table, the figure and the summary of every family on the same traces."""
     input:
-        code=code_inputs("compare", "run"),
+        code=code_inputs("eqrec.studies.compare.steps:step_run"),
     output:
         csv="results/compare/{system}_{setting}.csv",
         json="results/compare/{system}_{setting}.json",
@@ -22,15 +22,15 @@ rule compare_run:
             category="Compare",
             subcategory="{system}",
         ),
-        timings="results/timings/compare/{system}_{setting}.json",
     log:
         "logs/compare/{system}_{setting}.log",
+    benchmark:
+        "results/timings/compare/{system}_{setting}.tsv"
     wildcard_constraints:
         system="|".join(COMPARE_SYSTEMS),
         setting="|".join(COMPARE_SETTINGS),
     params:
-        study="compare",
-        step="run",
+        step="eqrec.studies.compare.steps:step_run",
         cfg=step_config("compare", "periods", "runs", "seed", "settings", "systems"),
     script:
         RUN_STEP
@@ -49,7 +49,7 @@ rule compare_table:
             system=COMPARE_SYSTEMS,
             setting=COMPARE_SETTINGS,
         ),
-        code=code_inputs("compare", "table"),
+        code=code_inputs("eqrec.studies.compare.steps:step_table"),
     output:
         csv=report(
             "results/compare/compare.csv",
@@ -60,8 +60,7 @@ rule compare_table:
     log:
         "logs/compare/table.log",
     params:
-        study="compare",
-        step="table",
+        step="eqrec.studies.compare.steps:step_table",
         cfg=step_config("compare", "settings", "systems"),
     script:
         RUN_STEP

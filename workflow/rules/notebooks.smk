@@ -15,7 +15,7 @@ rule notebooks_execute:
     """One notebook executed: .ipynb with its outputs, and its HTML rendering."""
     input:
         unpack(notebook_inputs),
-        code=code_inputs("notebooks", "execute"),
+        code=code_inputs("eqrec.studies.notebooks.execute:step_execute"),
     output:
         ipynb="results/notebooks/{name}.ipynb",
         html=report(
@@ -28,9 +28,7 @@ rule notebooks_execute:
     wildcard_constraints:
         name="|".join(NOTEBOOKS),
     params:
-        study="notebooks",
-        step="execute",
-        cfg={},
+        step="eqrec.studies.notebooks.execute:step_execute",
     script:
         RUN_STEP
 

@@ -7,14 +7,13 @@ TIMING_VALUES_FILES.append("results/timings/p1/values.json")
 rule p1_model:
     """P1-T1: ACC model from the Table I constants."""
     input:
-        code=code_inputs("p1", "model"),
+        code=code_inputs("eqrec.studies.p1.steps:step_model"),
     output:
         json="results/p1/model.json",
     log:
         "logs/p1/model.log",
     params:
-        study="p1",
-        step="model",
+        step="eqrec.studies.p1.steps:step_model",
         cfg=step_config("p1", "acc_constants"),
     script:
         RUN_STEP
@@ -23,15 +22,14 @@ rule p1_model:
 rule p1_designs:
     """P1-M2, P1-TIME: prefix- and time-based designs on L1, certified, timed, probed."""
     input:
-        code=code_inputs("p1", "designs"),
+        code=code_inputs("eqrec.studies.p1.steps:step_designs"),
     output:
         json="results/p1/designs.json",
         timings="results/timings/p1/designs.json",
     log:
         "logs/p1/designs.log",
     params:
-        study="p1",
-        step="designs",
+        step="eqrec.studies.p1.steps:step_designs",
         cfg=step_config(
             "p1",
             "acc_constants",
@@ -49,14 +47,13 @@ rule p1_designs:
 rule p1_simulate:
     """P1-F1: Monte Carlo runs of both estimators on the same draws."""
     input:
-        code=code_inputs("p1", "simulate"),
+        code=code_inputs("eqrec.studies.p1.steps:step_simulate"),
     output:
         npz="results/p1/simulation.npz",
     log:
         "logs/p1/simulate.log",
     params:
-        study="p1",
-        step="simulate",
+        step="eqrec.studies.p1.steps:step_simulate",
         cfg=step_config("p1", "acc_constants", "language", "mu1", "simulation"),
     script:
         RUN_STEP
@@ -66,7 +63,7 @@ rule p1_figure1:
     """P1-F1 figure."""
     input:
         npz="results/p1/simulation.npz",
-        code=code_inputs("p1", "figure1"),
+        code=code_inputs("eqrec.studies.p1.figures:step_figure1"),
     output:
         pdf="results/p1/fig1_trajectories.pdf",
         png=report(
@@ -77,9 +74,7 @@ rule p1_figure1:
     log:
         "logs/p1/figure1.log",
     params:
-        study="p1",
-        step="figure1",
-        cfg={},
+        step="eqrec.studies.p1.figures:step_figure1",
     script:
         RUN_STEP
 
@@ -87,14 +82,13 @@ rule p1_figure1:
 rule p1_extensions:
     """P1-EXT: M2*(M1), minimum M1, finite-length language, minimum T."""
     input:
-        code=code_inputs("p1", "extensions"),
+        code=code_inputs("eqrec.studies.p1.steps:step_extensions"),
     output:
         json="results/p1/extensions.json",
     log:
         "logs/p1/extensions.log",
     params:
-        study="p1",
-        step="extensions",
+        step="eqrec.studies.p1.steps:step_extensions",
         cfg=step_config("p1", "acc_constants", "extensions", "language", "mu1"),
     script:
         RUN_STEP
@@ -104,7 +98,7 @@ rule p1_figure_ext:
     """P1-EXT figure."""
     input:
         json="results/p1/extensions.json",
-        code=code_inputs("p1", "figure_ext"),
+        code=code_inputs("eqrec.studies.p1.figures:step_figure_ext"),
     output:
         pdf="results/p1/fig_ext_M2_vs_M1.pdf",
         png=report(
@@ -115,8 +109,7 @@ rule p1_figure_ext:
     log:
         "logs/p1/figure_ext.log",
     params:
-        study="p1",
-        step="figure_ext",
+        step="eqrec.studies.p1.figures:step_figure_ext",
         cfg=step_config("p1", "extensions.T_max"),
     script:
         RUN_STEP
@@ -130,16 +123,14 @@ rule p1_values:
         designs_timings="results/timings/p1/designs.json",
         simulation="results/p1/simulation.npz",
         extensions="results/p1/extensions.json",
-        code=code_inputs("p1", "values"),
+        code=code_inputs("eqrec.studies.p1.steps:step_values"),
     output:
         json="results/p1/values.json",
         timings="results/timings/p1/values.json",
     log:
         "logs/p1/values.log",
     params:
-        study="p1",
-        step="values",
-        cfg={},
+        step="eqrec.studies.p1.steps:step_values",
     script:
         RUN_STEP
 

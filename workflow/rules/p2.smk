@@ -1,17 +1,19 @@
 # P2: state-augmented estimator (Hassaan, Shen, Yong, ACC 2019).
-# Each rule runs one step of eqrec.studies.p2.steps through the harness (common.smk).
-# The heat-map chunks come from the resolved configuration (p2.heatmap.chunks,
-# p2.heatmap.variants); the merge checks that they cover the grid exactly once.
+# Each rule runs one step of eqrec.studies.p2 (steps, sweeps, values, figures) through the harness (common.smk).
+# The heat map runs in p2.heatmap.chunks scattergather jobs (the resolved
+# configuration, or --set-scatter heatmap=N), each every configured variant;
+# the merge checks that they cover the grid exactly once.
 VALUES_FILES.append("results/p2/values.json")
 
 
-P2_CHUNKS = list(range(config["p2"]["heatmap"]["chunks"]))
+scattergather:
+    heatmap=config["p2"]["heatmap"]["chunks"],
 
 
 rule p2_designs:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
     input:
-        code=code_inputs("p2", "designs"),
+        code=code_inputs("eqrec.studies.p2.steps:step_designs"),
     output:
         json="results/p2/designs.json",
         timings="results/timings/p2/designs.json",
@@ -19,8 +21,7 @@ rule p2_designs:
     log:
         "logs/p2/designs.log",
     params:
-        study="p2",
-        step="designs",
+        step="eqrec.studies.p2.steps:step_designs",
         cfg=step_config("p2", "T", "f1_words", "f2_words", "init_poles", "mu1"),
     script:
         RUN_STEP
@@ -30,14 +31,13 @@ rule p2_simulate:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
     input:
         designs="results/p2/designs.npz",
-        code=code_inputs("p2", "simulate"),
+        code=code_inputs("eqrec.studies.p2.steps:step_simulate"),
     output:
         npz="results/p2/simulation.npz",
     log:
         "logs/p2/simulate.log",
     params:
-        study="p2",
-        step="simulate",
+        step="eqrec.studies.p2.steps:step_simulate",
         cfg=step_config(
             "p2", "f1_words", "f2_words", "mu1", "noise", "runs", "seed", "x0"
         ),
@@ -48,16 +48,13 @@ rule p2_simulate:
 rule p2_heatmap_chunk:
     """P2-F3a: one theta-chunk of the eigenvalue sweep, every variant (one LP per variant, L values updated)."""
     input:
-        code=code_inputs("p2", "heatmap_chunk"),
+        code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_chunk"),
     output:
-        csv=temp("results/p2/heatmap/chunk_{chunk}.csv"),
+        csv=temp("results/p2/heatmap/chunk_{scatteritem}.csv"),
     log:
-        "logs/p2/heatmap_chunk_{chunk}.log",
-    wildcard_constraints:
-        chunk=r"\d+",
+        "logs/p2/heatmap_chunk_{scatteritem}.log",
     params:
-        study="p2",
-        step="heatmap_chunk",
+        step="eqrec.studies.p2.sweeps:step_heatmap_chunk",
         cfg=step_config("p2", "heatmap", "mu1"),
     script:
         RUN_STEP
@@ -66,16 +63,15 @@ rule p2_heatmap_chunk:
 rule p2_heatmap_merge:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
-        chunks=expand("results/p2/heatmap/chunk_{chunk}.csv", chunk=P2_CHUNKS),
-        code=code_inputs("p2", "heatmap_merge"),
+        chunks=gather.heatmap("results/p2/heatmap/chunk_{scatteritem}.csv"),
+        code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_merge"),
     output:
         csv="results/p2/heatmap.csv",
         timings="results/timings/p2/heatmap.csv",
     log:
         "logs/p2/heatmap_merge.log",
     params:
-        study="p2",
-        step="heatmap_merge",
+        step="eqrec.studies.p2.sweeps:step_heatmap_merge",
         cfg=step_config(
             "p2",
             "heatmap.chunks",
@@ -91,15 +87,14 @@ rule p2_heatmap_merge:
 rule p2_realaxis:
     """P2-F3b: real double eigenvalue sweep."""
     input:
-        code=code_inputs("p2", "realaxis"),
+        code=code_inputs("eqrec.studies.p2.sweeps:step_realaxis"),
     output:
         csv="results/p2/realaxis.csv",
         timings="results/timings/p2/realaxis.csv",
     log:
         "logs/p2/realaxis.log",
     params:
-        study="p2",
-        step="realaxis",
+        step="eqrec.studies.p2.sweeps:step_realaxis",
         cfg=step_config(
             "p2",
             "heatmap.second_solver",
@@ -116,15 +111,14 @@ rule p2_realaxis:
 rule p2_checks:
     """P2-S0, P2-SOLVER."""
     input:
-        code=code_inputs("p2", "checks"),
+        code=code_inputs("eqrec.studies.p2.steps:step_checks"),
     output:
         json="results/p2/checks.json",
         timings="results/timings/p2/checks.json",
     log:
         "logs/p2/checks.log",
     params:
-        study="p2",
-        step="checks",
+        step="eqrec.studies.p2.steps:step_checks",
         cfg=step_config(
             "p2",
             "f2_words",
@@ -146,14 +140,13 @@ rule p2_printed:
     masked_gain gains certified as the estimator that runs; nilpotent L at r = 0."""
     input:
         claims=ancient("config/claims.yaml"),
-        code=code_inputs("p2", "printed"),
+        code=code_inputs("eqrec.studies.p2.steps:step_printed"),
     output:
         json="results/p2/printed.json",
     log:
         "logs/p2/printed.log",
     params:
-        study="p2",
-        step="printed",
+        step="eqrec.studies.p2.steps:step_printed",
         cfg=step_config(
             "p2", "T", "f2_words", "heatmap.solver", "mu1", "printed", "solvers"
         ),
@@ -174,14 +167,13 @@ rule p2_values:
         realaxis="results/p2/realaxis.csv",
         checks="results/p2/checks.json",
         printed="results/p2/printed.json",
-        code=code_inputs("p2", "values"),
+        code=code_inputs("eqrec.studies.p2.values:step_values"),
     output:
         json="results/p2/values.json",
     log:
         "logs/p2/values.log",
     params:
-        study="p2",
-        step="values",
+        step="eqrec.studies.p2.values:step_values",
         cfg=step_config(
             "p2",
             "heatmap.n_r",
@@ -201,7 +193,7 @@ rule p2_figure_trajectories:
     input:
         designs="results/p2/designs.json",
         simulation="results/p2/simulation.npz",
-        code=code_inputs("p2", "figure_trajectories"),
+        code=code_inputs("eqrec.studies.p2.figures:step_figure_trajectories"),
     output:
         pdf="results/p2/{fig}_trajectories.pdf",
         png=report(
@@ -214,8 +206,7 @@ rule p2_figure_trajectories:
     wildcard_constraints:
         fig="f1|f2",
     params:
-        study="p2",
-        step="figure_trajectories",
+        step="eqrec.studies.p2.figures:step_figure_trajectories",
         # the paper's mu2 of each figure (config/claims.yaml), drawn for comparison
         cfg=step_config("p2", "mu1")
         | {
@@ -233,7 +224,7 @@ rule p2_figure_heatmap:
     input:
         csv="results/p2/heatmap.csv",
         printed="results/p2/printed.json",
-        code=code_inputs("p2", "figure_heatmap"),
+        code=code_inputs("eqrec.studies.p2.figures:step_figure_heatmap"),
     output:
         pdf="results/p2/f3a_heatmap.pdf",
         png=report(
@@ -242,8 +233,7 @@ rule p2_figure_heatmap:
     log:
         "logs/p2/figure_f3a.log",
     params:
-        study="p2",
-        step="figure_heatmap",
+        step="eqrec.studies.p2.figures:step_figure_heatmap",
         cfg=step_config(
             "p2",
             "heatmap.n_r",
@@ -263,7 +253,7 @@ rule p2_figure_realaxis:
     input:
         csv="results/p2/realaxis.csv",
         printed="results/p2/printed.json",
-        code=code_inputs("p2", "figure_realaxis"),
+        code=code_inputs("eqrec.studies.p2.figures:step_figure_realaxis"),
     output:
         pdf="results/p2/f3b_realaxis.pdf",
         png=report(
@@ -274,9 +264,7 @@ rule p2_figure_realaxis:
     log:
         "logs/p2/figure_f3b.log",
     params:
-        study="p2",
-        step="figure_realaxis",
-        cfg={},
+        step="eqrec.studies.p2.figures:step_figure_realaxis",
     script:
         RUN_STEP
 

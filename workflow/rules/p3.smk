@@ -1,12 +1,12 @@
 # P3: delayed/missing-data paper (Hassaan, Shen, Yong; equalized recovery with delayed and missing observations).
-# Each rule runs one step of eqrec.studies.p3.steps through the harness (common.smk).
+# Each rule runs one step of eqrec.studies.p3 (steps, figures, values, strategy, scale tables) through the harness.
 VALUES_FILES.append("results/p3/values.json")
 
 
 rule p3_languages:
     """P3-LANG: Examples 1-5 and the language counts of {0..max delay}^T."""
     input:
-        code=code_inputs("p3", "languages"),
+        code=code_inputs("eqrec.studies.p3.steps:step_languages"),
     output:
         json="results/p3/languages.json",
         csv="results/p3/examples.csv",
@@ -15,8 +15,7 @@ rule p3_languages:
     log:
         "logs/p3/languages.log",
     params:
-        study="p3",
-        step="languages",
+        step="eqrec.studies.p3.steps:step_languages",
         cfg=step_config("p3", "languages"),
     script:
         RUN_STEP
@@ -25,14 +24,13 @@ rule p3_languages:
 rule p3_reactor_model:
     """P3-BR: ZOH discretisation of the batch reactor."""
     input:
-        code=code_inputs("p3", "reactor_model"),
+        code=code_inputs("eqrec.studies.p3.steps:step_reactor_model"),
     output:
         json="results/p3/reactor_model.json",
     log:
         "logs/p3/reactor_model.log",
     params:
-        study="p3",
-        step="reactor_model",
+        step="eqrec.studies.p3.steps:step_reactor_model",
         cfg=step_config("p3", "batch_reactor.Ts", "batch_reactor.eta_v"),
     script:
         RUN_STEP
@@ -41,15 +39,14 @@ rule p3_reactor_model:
 rule p3_reactor_designs:
     """P3-BR: mu1 free (certified global route and IPOPT on (10)) and at the configured readings of mu1."""
     input:
-        code=code_inputs("p3", "reactor_designs"),
+        code=code_inputs("eqrec.studies.p3.steps:step_reactor_designs"),
     output:
         json="results/p3/reactor_designs.json",
         timings="results/timings/p3/reactor_designs.json",
     log:
         "logs/p3/reactor_designs.log",
     params:
-        study="p3",
-        step="reactor_designs",
+        step="eqrec.studies.p3.steps:step_reactor_designs",
         cfg=step_config("p3", "batch_reactor", "kalman.x0"),
     script:
         RUN_STEP
@@ -58,14 +55,13 @@ rule p3_reactor_designs:
 rule p3_augmented:
     """The augmented form (4) with fixed L and s0: optimum against pole placements and s0."""
     input:
-        code=code_inputs("p3", "augmented"),
+        code=code_inputs("eqrec.studies.p3.steps:step_augmented"),
     output:
         json="results/p3/augmented.json",
     log:
         "logs/p3/augmented.log",
     params:
-        study="p3",
-        step="augmented",
+        step="eqrec.studies.p3.steps:step_augmented",
         cfg=step_config(
             "p3",
             "augmented",
@@ -82,15 +78,14 @@ rule p3_augmented:
 rule p3_kalman:
     """P3-F1: proposed estimator vs Kalman-type filters on the true pattern (exact worst cases, runs)."""
     input:
-        code=code_inputs("p3", "kalman"),
+        code=code_inputs("eqrec.studies.p3.steps:step_kalman"),
     output:
         json="results/p3/kalman.json",
         npz="results/p3/kalman.npz",
     log:
         "logs/p3/kalman.log",
     params:
-        study="p3",
-        step="kalman",
+        step="eqrec.studies.p3.steps:step_kalman",
         cfg=step_config(
             "p3",
             "batch_reactor.Ts",
@@ -109,7 +104,7 @@ rule p3_figure1:
     input:
         json="results/p3/kalman.json",
         npz="results/p3/kalman.npz",
-        code=code_inputs("p3", "figure1"),
+        code=code_inputs("eqrec.studies.p3.figures:step_figure1"),
     output:
         pdf="results/p3/fig1_kalman.pdf",
         png=report(
@@ -120,9 +115,7 @@ rule p3_figure1:
     log:
         "logs/p3/figure1.log",
     params:
-        study="p3",
-        step="figure1",
-        cfg={},
+        step="eqrec.studies.p3.figures:step_figure1",
     script:
         RUN_STEP
 
@@ -130,15 +123,14 @@ rule p3_figure1:
 rule p3_acc:
     """P3-ACC: the ACC language with mu1 = 1 vs P1's prefix design; mu1 free (footnote 1)."""
     input:
-        code=code_inputs("p3", "acc"),
+        code=code_inputs("eqrec.studies.p3.steps:step_acc"),
     output:
         json="results/p3/acc.json",
         timings="results/timings/p3/acc.json",
     log:
         "logs/p3/acc.log",
     params:
-        study="p3",
-        step="acc",
+        step="eqrec.studies.p3.steps:step_acc",
         cfg=step_config("p3", "acc.free_costs", "acc.language", "acc.mu1"),
     script:
         RUN_STEP
@@ -147,14 +139,13 @@ rule p3_acc:
 rule p3_acc_simulate:
     """P3-F2: proposed vs P1 prefix-based estimator on the true pattern, same draws."""
     input:
-        code=code_inputs("p3", "acc_simulate"),
+        code=code_inputs("eqrec.studies.p3.steps:step_acc_simulate"),
     output:
         npz="results/p3/acc_simulation.npz",
     log:
         "logs/p3/acc_simulate.log",
     params:
-        study="p3",
-        step="acc_simulate",
+        step="eqrec.studies.p3.steps:step_acc_simulate",
         cfg=step_config(
             "p3",
             "acc.cost",
@@ -171,7 +162,7 @@ rule p3_figure2:
     """P3-F2 figure."""
     input:
         npz="results/p3/acc_simulation.npz",
-        code=code_inputs("p3", "figure2"),
+        code=code_inputs("eqrec.studies.p3.figures:step_figure2"),
     output:
         pdf="results/p3/fig2_acc.pdf",
         png=report(
@@ -180,8 +171,7 @@ rule p3_figure2:
     log:
         "logs/p3/figure2.log",
     params:
-        study="p3",
-        step="figure2",
+        step="eqrec.studies.p3.figures:step_figure2",
         cfg=step_config("p3", "acc.true_pattern"),
     script:
         RUN_STEP
@@ -197,20 +187,19 @@ rule p3_values:
         kalman="results/p3/kalman.json",
         acc="results/p3/acc.json",
         acc_npz="results/p3/acc_simulation.npz",
-        code=code_inputs("p3", "values"),
+        code=code_inputs("eqrec.studies.p3.values:step_values"),
     output:
         json="results/p3/values.json",
     log:
         "logs/p3/values.log",
     params:
-        study="p3",
-        step="values",
+        step="eqrec.studies.p3.values:step_values",
         cfg=step_config("p3", "batch_reactor.horizon", "batch_reactor.max_delay"),
     script:
         RUN_STEP
 
 
-# --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3.strategy, p3_figures, p3_scale ---
+# --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
 VALUES_FILES.append("results/p3/strategy_values.json")
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
@@ -226,12 +215,16 @@ P3_SCALE_CLASSES = [
     f"results/p3/scale/classes_T{T}_tau{tau}.json"
     for T, tau in config["p3"]["scale"]["class_sizes"]
 ]
+P3_SCALE = list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))
+P3_SCALE_FULL = list(
+    dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)
+)
 
 
 rule p3_strategy:
     """P3-IMPL: gains reused every T (batch reactor, ACC) and the switching scheme; 10^4-step runs vs the guarantees."""
     input:
-        code=code_inputs("p3", "strategy"),
+        code=code_inputs("eqrec.studies.p3.strategy:step_strategy"),
     output:
         npz="results/p3/strategy.npz",
         values="results/p3/strategy_values.json",
@@ -239,8 +232,7 @@ rule p3_strategy:
     log:
         "logs/p3/strategy.log",
     params:
-        study="p3",
-        step="strategy",
+        step="eqrec.studies.p3.strategy:step_strategy",
         cfg=step_config(
             "p3",
             "strategy.acc",
@@ -259,7 +251,7 @@ rule p3_strategy_figure:
     """P3-IMPL figure: errors per state with the per-time guarantees, period boundaries and switching instants."""
     input:
         npz="results/p3/strategy.npz",
-        code=code_inputs("p3", "strategy_figure"),
+        code=code_inputs("eqrec.studies.p3.figures:step_strategy_figure"),
     output:
         pdf="results/p3/fig_strategy.pdf",
         png=report(
@@ -270,8 +262,7 @@ rule p3_strategy_figure:
     log:
         "logs/p3/strategy_figure.log",
     params:
-        study="p3",
-        step="strategy_figure",
+        step="eqrec.studies.p3.figures:step_strategy_figure",
         cfg=step_config("p3", "strategy.figure"),
     script:
         RUN_STEP
@@ -280,7 +271,7 @@ rule p3_strategy_figure:
 rule p3_scale_size:
     """Scale table, one size of the tree LP: {0..tau}^T enumerated, node-per-prefix LP, fresh process with limits."""
     input:
-        code=code_inputs("p3", "scale_size"),
+        code=code_inputs("eqrec.studies.p3.scale_table:step_scale_size"),
     output:
         json="results/p3/scale/T{T}_tau{tau}.json",
         timings="results/timings/p3/scale/T{T}_tau{tau}.json",
@@ -290,8 +281,7 @@ rule p3_scale_size:
         T=r"\d+",
         tau=r"\d+",
     params:
-        study="p3",
-        step="scale_size",
+        step="eqrec.studies.p3.scale_table:step_scale_size",
         cfg=step_config(
             "p3",
             "scale.builder",
@@ -304,10 +294,9 @@ rule p3_scale_size:
         RUN_STEP
 
 
-rule p3_scale_class_size:
-    """Scale table, one size of the class engine: the classes of {0..tau}^T by the window rule, fresh process."""
-    input:
-        code=code_inputs("p3", "scale_class_size"),
+# Scale table, one size of the class engine: the classes of {0..tau}^T by the window
+# rule, fresh process (the same step; the engine comes from the output path).
+use rule p3_scale_size as p3_scale_class_size with:
     output:
         json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
         timings="results/timings/p3/scale/{engine}_T{T}_tau{tau}.json",
@@ -317,27 +306,14 @@ rule p3_scale_class_size:
         engine="classes",
         T=r"\d+",
         tau=r"\d+",
-    params:
-        study="p3",
-        step="scale_class_size",
-        cfg=step_config(
-            "p3",
-            "scale.builder",
-            "scale.mem_limit_gb",
-            "scale.method",
-            "scale.mu1",
-            "scale.time_limit",
-        ),
-    script:
-        RUN_STEP
 
 
 rule p3_scale_table:
     """Scale table of the default run: the tree LP at the fast sizes next to the class engine (CSV and Markdown)."""
     input:
-        sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES)),
-        timings=timings_of(list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))),
-        code=code_inputs("p3", "scale_table"),
+        sizes=P3_SCALE,
+        timings=timings_of(P3_SCALE),
+        code=code_inputs("eqrec.studies.p3.scale_table:step_scale_table"),
     output:
         csv="results/p3/scale_table.csv",
         timings_csv="results/timings/p3/scale_table.csv",
@@ -350,8 +326,7 @@ rule p3_scale_table:
     log:
         "logs/p3/scale_table.log",
     params:
-        study="p3",
-        step="scale_table",
+        step="eqrec.studies.p3.scale_table:step_scale_table",
         cfg=step_config("p3", "scale.tree_slow_sizes"),
     script:
         RUN_STEP
@@ -360,11 +335,9 @@ rule p3_scale_table:
 rule p3_scale_table_full:
     """Full scale table: the default run's rows and the slow tree sizes (CSV and Markdown)."""
     input:
-        sizes=list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)),
-        timings=timings_of(
-            list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES))
-        ),
-        code=code_inputs("p3", "scale_table_full"),
+        sizes=P3_SCALE_FULL,
+        timings=timings_of(P3_SCALE_FULL),
+        code=code_inputs("eqrec.studies.p3.scale_table:step_scale_table"),
     output:
         csv="results/p3/scale_table_full.csv",
         md="results/p3/scale_table_full.md",
@@ -373,8 +346,7 @@ rule p3_scale_table_full:
     log:
         "logs/p3/scale_table_full.log",
     params:
-        study="p3",
-        step="scale_table_full",
+        step="eqrec.studies.p3.scale_table:step_scale_table",
         cfg=step_config("p3", "scale.tree_slow_sizes"),
     script:
         RUN_STEP
@@ -383,7 +355,7 @@ rule p3_scale_table_full:
 rule p3_scale_free:
     """The class engine with mu1 free against the number of classes: per class on 1 and 2 workers, one block LP."""
     input:
-        code=code_inputs("p3", "scale_free"),
+        code=code_inputs("eqrec.studies.p3.free_table:step_scale_free"),
     output:
         csv="results/p3/scale_free.csv",
         timings_csv="results/timings/p3/scale_free.csv",
@@ -394,8 +366,7 @@ rule p3_scale_free:
         "logs/p3/scale_free.log",
     threads: 2
     params:
-        study="p3",
-        step="scale_free",
+        step="eqrec.studies.p3.free_table:step_scale_free",
         cfg=step_config("p3", "scale.time_limit"),
     script:
         RUN_STEP

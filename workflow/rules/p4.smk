@@ -1,18 +1,22 @@
 # P4: LMV filter / predictor / smoother with zero- vs hold-input compensation.
-# Each rule runs one step of eqrec.studies.p4.steps, p4_figures or p4_values through the harness (common.smk).
-# The sweep chunks come from the resolved configuration (p4.sweep_*.chunks);
-# the merging steps (fig5, fig6) check that they cover the grid exactly once.
+# Each rule runs one step of eqrec.studies.p4 (steps, figures, values) through the harness (common.smk).
+# The sweeps run in p4.sweep_*.chunks scattergather jobs (the resolved
+# configuration, or --set-scatter sweep_eta=N); the merging steps (fig5, fig6)
+# check that they cover the grid exactly once.
 VALUES_FILES.append("results/p4/values.json")
 
 P4_EXAMPLES = list(config["p4"]["examples"])
-P4_ETA_CHUNKS = list(range(config["p4"]["sweep_eta"]["chunks"]))
-P4_Q_CHUNKS = list(range(config["p4"]["sweep_q"]["chunks"]))
+
+
+scattergather:
+    sweep_eta=config["p4"]["sweep_eta"]["chunks"],
+    sweep_q=config["p4"]["sweep_q"]["chunks"],
 
 
 rule p4_tracking:
     """P4-F1..F3: one realisation of the tracking example with filter, predictor and smoother."""
     input:
-        code=code_inputs("p4", "tracking"),
+        code=code_inputs("eqrec.studies.p4.steps:step_tracking"),
     output:
         npz="results/p4/tracking.npz",
         f1="results/p4/fig1_filter.pdf",
@@ -34,8 +38,7 @@ rule p4_tracking:
     log:
         "logs/p4/tracking.log",
     params:
-        study="p4",
-        step="tracking",
+        step="eqrec.studies.p4.steps:step_tracking",
         cfg=step_config(
             "p4", "T", "eta_bar", "examples", "pred_steps", "smoother_lag", "tracking"
         ),
@@ -46,19 +49,19 @@ rule p4_tracking:
 rule p4_mc:
     """P4-THEORY: theory against Monte Carlo for one example (both mechanisms, same draws)."""
     input:
-        code=code_inputs("p4", "mc"),
+        code=code_inputs("eqrec.studies.p4.steps:step_mc"),
     output:
         npz="results/p4/mc_{example}.npz",
         se="results/p4/mc_{example}_se.npz",
         json="results/p4/mc_{example}.json",
-        timings="results/timings/p4/mc_{example}.json",
     log:
         "logs/p4/mc_{example}.log",
+    benchmark:
+        "results/timings/p4/mc_{example}.tsv"
     wildcard_constraints:
         example="|".join(P4_EXAMPLES),
     params:
-        study="p4",
-        step="mc",
+        step="eqrec.studies.p4.steps:step_mc",
         cfg=step_config(
             "p4", "T", "eta_bar", "examples", "mc", "pred_steps", "smoother_lag"
         ),
@@ -69,16 +72,13 @@ rule p4_mc:
 rule p4_sweep_eta_chunk:
     """P4-F5: one chunk of the arrival-rate sweep (steady state)."""
     input:
-        code=code_inputs("p4", "sweep_eta_chunk"),
+        code=code_inputs("eqrec.studies.p4.steps:step_sweep_eta_chunk"),
     output:
-        npz=temp("results/p4/sweep_eta/chunk{chunk}.npz"),
+        npz=temp("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
     log:
-        "logs/p4/sweep_eta_{chunk}.log",
-    wildcard_constraints:
-        chunk=r"\d+",
+        "logs/p4/sweep_eta_{scatteritem}.log",
     params:
-        study="p4",
-        step="sweep_eta_chunk",
+        step="eqrec.studies.p4.steps:step_sweep_eta_chunk",
         cfg=step_config("p4", "examples", "smoother_lag", "steady", "sweep_eta"),
     script:
         RUN_STEP
@@ -87,16 +87,13 @@ rule p4_sweep_eta_chunk:
 rule p4_sweep_q_chunk:
     """P4-F6: one chunk of the (Q_xi, Q_lambda) sweep (steady state)."""
     input:
-        code=code_inputs("p4", "sweep_q_chunk"),
+        code=code_inputs("eqrec.studies.p4.steps:step_sweep_q_chunk"),
     output:
-        npz=temp("results/p4/sweep_q/chunk{chunk}.npz"),
+        npz=temp("results/p4/sweep_q/chunk_{scatteritem}.npz"),
     log:
-        "logs/p4/sweep_q_{chunk}.log",
-    wildcard_constraints:
-        chunk=r"\d+",
+        "logs/p4/sweep_q_{scatteritem}.log",
     params:
-        study="p4",
-        step="sweep_q_chunk",
+        step="eqrec.studies.p4.steps:step_sweep_q_chunk",
         cfg=step_config(
             "p4", "eta_bar", "examples", "smoother_lag", "steady", "sweep_q"
         ),
@@ -109,7 +106,7 @@ rule p4_fig4:
     input:
         mc=f"results/p4/mc_{config['p4']['tracking']['example']}.npz",
         se=f"results/p4/mc_{config['p4']['tracking']['example']}_se.npz",
-        code=code_inputs("p4", "fig4"),
+        code=code_inputs("eqrec.studies.p4.figures:step_fig4"),
     output:
         pdf="results/p4/fig4_variances.pdf",
         png=report(
@@ -120,8 +117,7 @@ rule p4_fig4:
     log:
         "logs/p4/fig4.log",
     params:
-        study="p4",
-        step="fig4",
+        step="eqrec.studies.p4.figures:step_fig4",
         cfg=step_config("p4", "eta_bar", "smoother_lag"),
     script:
         RUN_STEP
@@ -130,8 +126,8 @@ rule p4_fig4:
 rule p4_fig5:
     """P4-F5: merge the arrival-rate chunks; error variances against the arrival rate."""
     input:
-        chunks=expand("results/p4/sweep_eta/chunk{chunk}.npz", chunk=P4_ETA_CHUNKS),
-        code=code_inputs("p4", "fig5"),
+        chunks=gather.sweep_eta("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
+        code=code_inputs("eqrec.studies.p4.figures:step_fig5"),
     output:
         merged="results/p4/sweep_eta.npz",
         pdf="results/p4/fig5_eta.pdf",
@@ -141,8 +137,7 @@ rule p4_fig5:
     log:
         "logs/p4/fig5.log",
     params:
-        study="p4",
-        step="fig5",
+        step="eqrec.studies.p4.figures:step_fig5",
         cfg=step_config(
             "p4", "examples", "smoother_lag", "sweep_eta.num", "tracking.example"
         ),
@@ -153,8 +148,8 @@ rule p4_fig5:
 rule p4_fig6:
     """P4-F6: merge the Q chunks; filter variance against Q_xi and Q_lambda, and where each mechanism wins."""
     input:
-        chunks=expand("results/p4/sweep_q/chunk{chunk}.npz", chunk=P4_Q_CHUNKS),
-        code=code_inputs("p4", "fig6"),
+        chunks=gather.sweep_q("results/p4/sweep_q/chunk_{scatteritem}.npz"),
+        code=code_inputs("eqrec.studies.p4.figures:step_fig6"),
     output:
         merged="results/p4/sweep_q.npz",
         pdf="results/p4/fig6_q.pdf",
@@ -168,8 +163,7 @@ rule p4_fig6:
     log:
         "logs/p4/fig6.log",
     params:
-        study="p4",
-        step="fig6",
+        step="eqrec.studies.p4.figures:step_fig6",
         cfg=step_config("p4", "eta_bar", "examples", "sweep_q.num", "tracking.example"),
     script:
         RUN_STEP
@@ -180,7 +174,7 @@ rule p4_compare:
     input:
         mc="results/p4/mc_{example}.npz",
         se="results/p4/mc_{example}_se.npz",
-        code=code_inputs("p4", "compare"),
+        code=code_inputs("eqrec.studies.p4.figures:step_compare"),
     output:
         pdf="results/p4/fig{number}_compare_{example}.pdf",
         png=report(
@@ -193,8 +187,7 @@ rule p4_compare:
     wildcard_constraints:
         number=r"\d+",
     params:
-        study="p4",
-        step="compare",
+        step="eqrec.studies.p4.figures:step_compare",
         # the paper's verdict of each figure (config/claims.yaml), printed beside ours
         cfg=step_config("p4", "eta_bar", "examples")
         | {
@@ -215,15 +208,14 @@ rule p4_values:
         mc_npz=expand("results/p4/mc_{example}.npz", example=P4_EXAMPLES),
         eta="results/p4/sweep_eta.npz",
         q="results/p4/sweep_q.npz",
-        code=code_inputs("p4", "values"),
+        code=code_inputs("eqrec.studies.p4.values:step_values"),
     output:
         values="results/p4/values.json",
         table="results/p4/summary.csv",
     log:
         "logs/p4/values.log",
     params:
-        study="p4",
-        step="values",
+        step="eqrec.studies.p4.values:step_values",
         cfg=step_config(
             "p4",
             "T",

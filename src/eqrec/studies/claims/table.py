@@ -353,6 +353,3 @@ def step_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     for status, n in table["status"].value_counts().items():
         log.info("%s: %d", status, n)
     return table
-
-
-STEPS = {"table": step_table}

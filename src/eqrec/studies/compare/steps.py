@@ -1,6 +1,6 @@
 """Compare study: every estimator family on the same plant and the same packet traces (issue 24, beyond the papers).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/compare.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/compare.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``compare`` section (``config/compare.yaml``):
 
@@ -9,8 +9,8 @@ with ``cfg`` the validated ``compare`` section (``config/compare.yaml``):
             (``<system>_<setting>.csv``, :func:`eqrec.compare.write_table`), its figure
             (``.png``/``.pdf``, :func:`eqrec.compare.compare_figure`) and what the table does not hold
             (``.json``: the settings, the ``μ1`` of each guaranteed design, the bounds inside and outside the
-            designed language, the other families' errors against the class engine's bound); the wall time
-            goes to ``results/timings/compare/``.
+            designed language, the other families' errors against the class engine's bound); the job's wall
+            time and peak memory are its rule's benchmark (``results/timings/compare/``).
 ``table``   every pair's table in one, ``compare.csv`` (the columns ``system, setting, loss, burst,
             max_delay, horizon`` first, each cell as its job wrote it), and ``summary.json`` (the pairs'
             ``.json``), in the configuration's order; checks that the jobs cover the configured pairs
@@ -23,7 +23,6 @@ the plants are the package's models (:func:`eqrec.systems.examples.acc_system`, 
 from __future__ import annotations
 
 import io
-import time
 from pathlib import Path
 from typing import Any, Callable
 
@@ -129,14 +128,12 @@ def title_of(name: str, setup: CompareSetup) -> str:
 # --------------------------------------------------------------------------- steps
 
 def step_run(cfg, inputs, outputs, wildcards) -> dict:
-    """One (system, setting) pair: the comparison's table, figure and summary (wall time to the timings)."""
+    """One (system, setting) pair: the comparison's table, figure and summary."""
     system, setting = wildcards["system"], wildcards["setting"]
     plant = cfg["systems"][system]
     setup = setup_of(cfg, system, setting)
     model = MODELS[plant["model"]]()
-    t0 = time.perf_counter()
     result = compare_families(model, setup, progress=lambda line: log.info("%s %s: %s", system, setting, line))
-    elapsed = time.perf_counter() - t0
     with atomic_path(outputs.csv) as tmp:
         write_table(result, str(tmp))
     compare_figure(result, outputs.png, outputs.pdf, title=title_of(plant["name"], setup))
@@ -146,9 +143,9 @@ def step_run(cfg, inputs, outputs, wildcards) -> dict:
                         "horizon": setup.horizon, "runs": setup.runs, "periods": setup.periods,
                         "steps": setup.steps, "seed": setup.seed, "sigmas": setup.sigmas,
                         "on_time_rate": setup.on_time_rate},
-              **summary_of(result), "elapsed_s": elapsed}
-    write_json(outputs.json, report, timings=outputs.timings)
-    log.info("%s %s: %d runs x %d steps, six families, in %.2f s", system, setting, setup.runs, setup.steps, elapsed)
+              **summary_of(result)}
+    write_json(outputs.json, report)
+    log.info("%s %s: %d runs x %d steps, six families", system, setting, setup.runs, setup.steps)
     return report
 
 
@@ -180,9 +177,3 @@ def step_table(cfg, inputs, outputs, wildcards) -> None:
     write_text(outputs.csv, buf.getvalue())
     write_json(outputs.json, {"pairs": jobs})
     log.info("compare.csv: %d rows of %d (system, setting) pairs", len(table), len(found))
-
-
-STEPS = {
-    "run": step_run,
-    "table": step_table,
-}

@@ -207,6 +207,3 @@ def step_execute(cfg, inputs, outputs, wildcards):
     name = Path(inputs.notebook).stem
     write_text(outputs.ipynb, to_ipynb(nb))
     write_text(outputs.html, to_html(nb, name))
-
-
-STEPS = {"execute": step_execute}

@@ -94,6 +94,3 @@ def step_figure_ext(cfg, inputs, outputs, wildcards) -> None:
     for ax in (ax1, ax2):
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=1, frameon=False)
     save_figure(fig, outputs.pdf, outputs.png)
-
-
-STEPS = {"figure1": step_figure1, "figure_ext": step_figure_ext}

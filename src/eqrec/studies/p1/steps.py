@@ -1,6 +1,6 @@
 """P1 study: the prefix-based paper (Rutledge, Yong, Ozay, ACC 2019; targets P1-* of TARGETS.md).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/p1.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/p1.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``p1`` section:
 
@@ -269,12 +269,3 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     }
     write_json(outputs.json, values, timings=outputs.timings)
     return values
-
-
-STEPS = {
-    "model": step_model,
-    "designs": step_designs,
-    "simulate": step_simulate,
-    "extensions": step_extensions,
-    "values": step_values,
-}

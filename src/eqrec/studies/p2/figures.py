@@ -315,7 +315,3 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
         ax.set_xlabel(r"real eigenvalue $\lambda$ (double) of $A - LC$, third eigenvalue at 0")
     f.legend(handles, labels, loc="outside lower center", ncol=2, frameon=False)
     save_figure(f, outputs.pdf, outputs.png)
-
-
-STEPS = {"figure_trajectories": step_figure_trajectories, "figure_heatmap": step_figure_heatmap,
-         "figure_realaxis": step_figure_realaxis}

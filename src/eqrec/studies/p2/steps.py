@@ -1,6 +1,6 @@
 """P2 study: the state-augmented estimator paper (Hassaan, Shen, Yong, ACC 2019; targets P2-*).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/p2.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/p2.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``p2`` section:
 
@@ -370,11 +370,3 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
     out["published_interval"] = [float(x) for x in published_value(inputs.claims, pc["interval_claim"])]
     write_json(outputs.json, out)
     return out
-
-
-STEPS = {
-    "designs": step_designs,
-    "simulate": step_simulate,
-    "checks": step_checks,
-    "printed": step_printed,
-}

@@ -6,7 +6,7 @@ undecided point with the second solver and gives the all-zero pole set an
 exact nilpotent ``L``) and, when optimal, the certified worst case of its gains
 as the estimator that runs.
 
-Steps ``heatmap_chunk`` (``wildcards.chunk``: a θ-chunk of every variant),
+Steps ``heatmap_chunk`` (``wildcards.scatteritem``: a θ-chunk of every variant),
 ``heatmap_merge`` (checks that the chunks cover the configured grid of every
 configured variant exactly once) and ``realaxis``.  In each job the LP of
 each variant is built once and only its ``L``-dependent coefficients change
@@ -23,19 +23,13 @@ from eqrec.systems.examples import acc_system
 from eqrec.design.augmented.model import default_runtime
 from eqrec.studies.searches import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
-from eqrec.studies.pipeline.chunks import check_coverage, chunk_indices
+from eqrec.studies.pipeline.chunks import check_coverage, scatter_indices
 from eqrec.studies.pipeline.logs import Progress, get_logger
 from eqrec.studies.pipeline.outputs import INTERMEDIATE, write_csv
 from eqrec.studies.p2.readings import heatmap_poles, variant_word
 from eqrec.studies.p2.grids import heatmap_grid, realaxis_grid
 
 log = get_logger("p2")
-
-
-def theta_chunk(cfg: dict, chunk: int) -> np.ndarray:
-    """Indices of θ handled by job ``chunk`` (``heatmap.chunks`` near-equal parts)."""
-    h = cfg["heatmap"]
-    return chunk_indices(int(h["n_theta"]), int(h["chunks"]), chunk, field="heatmap.chunks")
 
 
 def _sweep_options(cfg: dict, mode: str) -> dict:
@@ -66,9 +60,9 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> li
 
 def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """P2-F3a, one θ-chunk of every variant."""
-    chunk = int(wildcards["chunk"])
     r_grid, th_grid = heatmap_grid(cfg)
-    pts = [(r, th_grid[j]) for j in theta_chunk(cfg, chunk) for r in r_grid]
+    chunk, thetas = scatter_indices(wildcards, len(th_grid), field="heatmap.chunks")
+    pts = [(r, th_grid[j]) for j in thetas for r in r_grid]
     swept = _sweep_variants(cfg, acc_system(), [heatmap_poles(r, th) for r, th in pts], f"heat map chunk {chunk}:")
     df = pd.DataFrame([{"variant": variant, "word": word, "mode": mode, "r": r, "theta": th, **rec}
                        for variant, mode, word, recs in swept for (r, th), rec in zip(pts, recs)])
@@ -120,6 +114,3 @@ def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
                        for variant, _, word, recs in swept for x, rec in zip(lam, recs)])
     write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "lam"])
     return df
-
-
-STEPS = {"heatmap_chunk": step_heatmap_chunk, "heatmap_merge": step_heatmap_merge, "realaxis": step_realaxis}

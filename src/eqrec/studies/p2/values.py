@@ -248,6 +248,3 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                                 "evidence": {"runs": 20}}
     write_json(outputs.json, v)
     return v
-
-
-STEPS = {"values": step_values}

@@ -163,6 +163,3 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
     fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees\n({kind} noise, first "
                  f"{window} steps of each run)")
     save_figure(fig, outputs.pdf, outputs.png)
-
-
-STEPS = {"figure1": step_figure1, "figure2": step_figure2, "strategy_figure": step_strategy_figure}

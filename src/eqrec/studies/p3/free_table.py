@@ -117,6 +117,3 @@ def free_figure(frame: pd.DataFrame, outputs) -> None:
     ax.set_title(r"Batch reactor $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
     ax.legend()
     save_figure(fig, outputs.pdf, outputs.png)
-
-
-STEPS = {"scale_free": step_scale_free}

@@ -245,11 +245,3 @@ def step_scale_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     log.info("scale table: %d rows (%d tree, %d classes)", len(frame), int((frame["engine"] == "tree").sum()),
              int((frame["engine"] == "classes").sum()))
     return frame
-
-
-STEPS = {
-    "scale_size": step_scale_size,
-    "scale_class_size": step_scale_size,  # the same step; the engine comes from the output path
-    "scale_table": step_scale_table,
-    "scale_table_full": step_scale_table,  # the same step over more sizes
-}

@@ -1,6 +1,6 @@
 r"""P3 study: the delayed/missing-data paper (Hassaan, Shen, Yong; targets P3-* of TARGETS.md).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/p3.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/p3.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``p3`` section:
 
@@ -432,14 +432,3 @@ def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
               "proposed_mu2": proposed.mu2, "prefix_mu2": prefix.mu2}
     write_npz(outputs.npz, compressed=True, **arrays)
     return arrays
-
-
-STEPS = {
-    "languages": step_languages,
-    "reactor_model": step_reactor_model,
-    "reactor_designs": step_reactor_designs,
-    "augmented": step_augmented,
-    "kalman": step_kalman,
-    "acc": step_acc,
-    "acc_simulate": step_acc_simulate,
-}

@@ -265,6 +265,3 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     write_json(outputs.values, values, timings=outputs.timings)
     log.info("P3-IMPL done in %.1f s", time.perf_counter() - t_start)
     return values
-
-
-STEPS = {"strategy": step_strategy}

@@ -183,6 +183,3 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                                  "evidence": f2_ev}
     write_json(outputs.json, v)
     return v
-
-
-STEPS = {"values": step_values}

@@ -223,11 +223,3 @@ def step_compare(cfg, inputs, outputs, wildcards) -> None:
     ex = wildcards["example"]
     fig_compare(np.load(inputs.mc), np.load(inputs.se), cfg["examples"][ex].get("name", ex), float(cfg["eta_bar"]),
                 int(wildcards["number"]), cfg["published"].get(ex), outputs.pdf, outputs.png)
-
-
-STEPS = {
-    "fig4": step_fig4,
-    "fig5": step_fig5,
-    "fig6": step_fig6,
-    "compare": step_compare,
-}

@@ -1,13 +1,13 @@
 """P4 study: the LMV companion paper (zero- vs hold-input compensation of packet dropouts; targets P4-*).
 
-Pipeline steps (``STEPS``; one per rule of ``workflow/rules/p4.smk``, run by
+Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/p4.smk``, run by
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``p4`` section:
 
 ``tracking``         Figs. 1-3: one realisation of the tracking example.
 ``mc``               P4-THEORY: theory against Monte Carlo for one example (``wildcards.example``), both
                      mechanisms on the same draws; also Theorem 1 eq. (9) as printed.
-``sweep_eta_chunk``, ``sweep_q_chunk``   steady-state sweeps, one chunk (``wildcards.chunk``) each.
+``sweep_eta_chunk``, ``sweep_q_chunk``   steady-state sweeps, one chunk (``wildcards.scatteritem``, ``i-of-n``) each.
 ``fig4``, ``fig5``, ``fig6``, ``compare``   figures (:mod:`eqrec.studies.p4.figures`); ``fig5``/``fig6``
                      first merge the sweep chunks (checking that they cover the configured grid exactly once).
 ``values``           our value of every P4 claim with its evidence (``values.json``) and ``summary.csv``
@@ -37,7 +37,7 @@ from eqrec.lmv.steady import steady_variances
 from eqrec.lmv.monte_carlo import compare_moments, fourth_moment_radius, run_mc, simulate_plant
 from eqrec.studies.pipeline import configuration
 from eqrec.studies.p4 import figures as p4_figures
-from eqrec.studies.pipeline.chunks import chunk_indices
+from eqrec.studies.pipeline.chunks import scatter_indices
 from eqrec.studies.pipeline.logs import Progress, get_logger
 from eqrec.studies.pipeline.outputs import write_json, write_npz
 
@@ -168,18 +168,17 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     arrays["printed/theory_pred"] = _diag(printed["P"][: T + 1])
     arrays["printed/true_pred"] = _diag(P_true_printed_gain[: T + 1])
     arrays["printed/mc_pred"] = _diag(c_printed.emp)
-    report["elapsed_s"] = time.perf_counter() - t0
     write_npz(outputs.npz, **arrays)
     write_npz(outputs.se, **errors)
-    write_json(outputs.json, report, timings=outputs.timings)
+    write_json(outputs.json, report)
     return report
 
 
-def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[int, np.ndarray, np.ndarray]:
-    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk number, the whole grid, the chunk's indices."""
-    chunk = int(wildcards["chunk"])
+def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[str, np.ndarray, np.ndarray]:
+    """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk (``i-of-n``), the whole grid, the chunk's
+    indices."""
     values = grid(cfg[sweep])
-    return chunk, values, chunk_indices(len(values), int(cfg[sweep]["chunks"]), chunk, field=f"{sweep}.chunks")
+    return *scatter_indices(wildcards, len(values), field=f"{sweep}.chunks"), values
 
 
 def _steady_settings(cfg: dict) -> tuple[int, float, int]:
@@ -189,7 +188,7 @@ def _steady_settings(cfg: dict) -> tuple[int, float, int]:
 
 def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady-state variances against eta_bar (Fig. 5) for one chunk of the grid, both examples and mechanisms."""
-    chunk, etas, idx = _sweep_chunk(cfg, wildcards, "sweep_eta")
+    chunk, idx, etas = _sweep_chunk(cfg, wildcards, "sweep_eta")
     N, tol, max_iter = _steady_settings(cfg)
     out: dict[str, np.ndarray] = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
     prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx), f"eta sweep chunk {chunk}")
@@ -208,7 +207,7 @@ def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
 
 def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady filter variances on the (Q_xi, Q_lambda) grid (Fig. 6): rows of Q_xi in this chunk."""
-    chunk, qs, idx = _sweep_chunk(cfg, wildcards, "sweep_q")
+    chunk, idx, qs = _sweep_chunk(cfg, wildcards, "sweep_q")
     N, tol, max_iter = _steady_settings(cfg)
     eta = float(cfg["eta_bar"])
     out: dict[str, np.ndarray] = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
@@ -227,11 +226,3 @@ def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
             out[f"{ex}/{MECH_KEY[mech]}/filt"], out[f"{ex}/{MECH_KEY[mech]}/stable"] = filt, stable
     write_npz(outputs.npz, **out)
     return out
-
-
-STEPS = {
-    "tracking": step_tracking,
-    "mc": step_mc,
-    "sweep_eta_chunk": step_sweep_eta_chunk,
-    "sweep_q_chunk": step_sweep_q_chunk,
-}

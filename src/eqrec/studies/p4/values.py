@@ -196,6 +196,3 @@ def _example_file(files: Sequence[str], stem: str) -> str:
     if len(hits) != 1:
         raise InputError(f"expected one input named {stem}.*, got {hits}", None, stem)
     return hits[0]
-
-
-STEPS = {"values": step_values}

@@ -1,7 +1,9 @@
 """Sweeps in chunk jobs: the grid points of a chunk, and the check that merged chunks cover the grid.
 
-A sweep of ``num`` points runs as ``chunks`` jobs (a configured count); chunk
-``k`` computes :func:`chunk_indices`, and the merging step checks with
+A sweep of ``num`` points runs as ``n`` jobs through Snakemake's
+``scattergather`` (``n`` is the configured ``chunks`` count, or ``--set-scatter``);
+the job of ``scatteritem`` ``"i-of-n"`` computes the points :func:`scatter_indices`
+gives, and the merging step (its inputs ``gather.<sweep>(...)``) checks with
 :func:`check_coverage` that its chunk files hold every point exactly once, so
 no chunk count leaves a trace in the merged result.  Used by the P2 heat map
 (CSV chunks, :mod:`eqrec.studies.p2.sweeps`) and the P4 steady-state sweeps
@@ -38,6 +40,14 @@ def chunk_indices(num: int, chunks: int, k: int, field: str = "chunks") -> np.nd
         raise InputError(f"chunk {k} requested, the configuration splits the grid into chunks 0..{chunks - 1}",
                          field=field)
     return np.array_split(np.arange(num), chunks)[k]
+
+
+def scatter_indices(wildcards, num: int, field: str = "chunks") -> tuple[str, np.ndarray]:
+    """The job's chunk (Snakemake's ``scatteritem`` wildcard, ``"i-of-n"`` with ``i`` from 1) and its grid indices
+    (:func:`chunk_indices` of part ``i - 1`` of ``n``)."""
+    item = wildcards["scatteritem"]
+    i, _, n = item.partition("-of-")
+    return item, chunk_indices(num, int(n), int(i) - 1, field)
 
 
 def check_coverage(idx: np.ndarray, num: int, field: str = "chunks", what: str = "",

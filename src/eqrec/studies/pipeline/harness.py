@@ -1,20 +1,21 @@
 """The study harness: runs one pipeline step, and nothing else.
 
 Every Snakemake rule runs ``workflow/scripts/run_step.py``, which calls
-:func:`run_from_snakemake`; the rule's ``params`` name the step (``study``,
-``step``) and carry ``cfg``, the configuration keys that step reads (nested as
+:func:`run_from_snakemake`; the rule's ``params`` name the step by the path of
+its function (``step="eqrec.studies.p1.steps:step_designs"``, resolved with
+:func:`pkgutil.resolve_name`; the study is the folder of :mod:`eqrec.studies` it
+is in) and carry ``cfg``, the configuration keys that step reads (nested as
 in the study's section, validated once by the Snakefile,
 :mod:`eqrec.studies.pipeline.configuration`; picked by ``step_config`` in
 ``workflow/rules/common.smk``).  A key the rule does not give raises
 :class:`MissingConfigKey` naming it.
 
-A step is a plain function ``step(cfg, inputs, outputs, wildcards)`` listed
-in the ``STEPS`` table of the module that defines it; the step registry
-(:mod:`eqrec.studies.pipeline.steps`) maps ``(study, step)`` to it.  Outside Snakemake::
+A step is a plain function ``step(cfg, inputs, outputs, wildcards)``.  Outside Snakemake::
 
     from eqrec.studies.pipeline import configuration, harness
     cfg = configuration.load_config("p1", "config/config.yaml")
-    harness.run_step("p1", "designs", cfg, outputs={"json": "designs.json", "timings": "t.json"})
+    harness.run_step("eqrec.studies.p1.steps:step_designs", cfg,
+                     outputs={"json": "designs.json", "timings": "t.json"})
 
 The harness owns what every step shares: the log (``[p1] message`` lines in
 the rule's log file; the loggers and progress lines are in
@@ -22,7 +23,7 @@ the rule's log file; the loggers and progress lines are in
 and the exit status (a failing step exits 1 with one line naming the step and,
 for a configuration problem, the file and field).  The writers a step uses are
 in :mod:`eqrec.studies.pipeline.outputs`.  The modules a rule lists as code inputs come
-from :mod:`eqrec.studies.pipeline.imports`.
+from :mod:`eqrec.studies.pipeline.code`.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import pkgutil
 import sys
 import time
 from pathlib import Path
@@ -38,7 +40,6 @@ from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 from eqrec.errors import InputError, StepError
 from eqrec.studies.pipeline.configuration import SECTIONS, ConfigError
 from eqrec.studies.pipeline.logs import get_logger
-from eqrec.studies.pipeline.steps import get_step
 
 Step = Callable[[dict, "Files", "Files", "Wildcards"], Any]
 
@@ -213,16 +214,42 @@ def _fds_to(log_path: str | Path | None) -> Iterator[Any]:
 
 # --------------------------------------------------------------------------- running a step
 
-def run_step(study: str, step: str, cfg: Mapping[str, Any] | None = None, inputs=None, outputs=None,
-             wildcards: Mapping[str, Any] | None = None, log: str | Path | None = None) -> Any:
+def step_names(step: str) -> tuple[str, str]:
+    """``(study, name)`` of a step path: ``"eqrec.studies.p1.steps:step_designs"`` -> ``("p1", "designs")``."""
+    module, _, function = step.partition(":")
+    parts = module.split(".")
+    return parts[2] if len(parts) > 2 else module, function.removeprefix("step_")
+
+
+def resolve_step(step: str, rule: str | None = None) -> Step:
+    """The function of a step path (``"module:function"``, :func:`pkgutil.resolve_name`); a
+    :class:`~eqrec.errors.StepError` naming the rule and the step otherwise."""
+    where = f"rule {rule}: " if rule else ""
+    if not step.startswith("eqrec.studies.") or ":" not in step:
+        raise StepError(f"{where}step {step!r} is not the path of a step function, "
+                        f"'eqrec.studies.<study>.<module>:<function>'")
+    try:
+        fn = pkgutil.resolve_name(step)
+    except (ImportError, AttributeError) as exc:
+        raise StepError(f"{where}step {step!r} does not resolve: {type(exc).__name__}: {exc}") from exc
+    if not callable(fn):
+        raise StepError(f"{where}step {step!r} is not a function")
+    return fn
+
+
+def run_step(step: str, cfg: Mapping[str, Any] | None = None, inputs=None, outputs=None,
+             wildcards: Mapping[str, Any] | None = None, log: str | Path | None = None,
+             rule: str | None = None) -> Any:
     """Run one step (as its rule would) and return what the step returns.
 
+    ``step``: the path of the step's function (``"eqrec.studies.p1.steps:step_model"``).
     ``inputs``/``outputs``: mappings of names to paths (or lists), sequences, or
     :class:`Files`.  Output folders are created; after the step every declared
     output must exist.  With ``log``, the step's output goes to that file.
     Exceptions propagate (``run_from_snakemake`` turns them into an exit status).
     """
-    fn = get_step(study, step)
+    fn = resolve_step(step, rule)
+    study, name = step_names(step)
     ins, outs = Files.of(inputs), Files.of(outputs)
     wc = Wildcards({k: str(v) for k, v in (wildcards or {}).items()})
     for p in outs:
@@ -230,13 +257,13 @@ def run_step(study: str, step: str, cfg: Mapping[str, Any] | None = None, inputs
     log_ = get_logger(study)
     with _fds_to(log) as _, _log_handler(sys.stderr):
         t0 = time.perf_counter()
-        log_.info("step %s%s", step, "".join(f" {k}={v}" for k, v in wc.items()))
-        given = StepConfig(cfg or {}, f"{study}.{step}", (study,) if study in SECTIONS else ())
+        log_.info("step %s%s", name, "".join(f" {k}={v}" for k, v in wc.items()))
+        given = StepConfig(cfg or {}, f"{study}.{name}", (study,) if study in SECTIONS else ())
         result = fn(given, ins, outs, wc)
         missing = [p for p in outs if not Path(p).exists()]
         if missing:
-            raise StepError(f"step {study}.{step} did not write its declared outputs {missing}")
-        log_.info("step %s done in %.2f s", step, time.perf_counter() - t0)
+            raise StepError(f"step {study}.{name} did not write its declared outputs {missing}")
+        log_.info("step %s done in %.2f s", name, time.perf_counter() - t0)
     return result
 
 
@@ -257,16 +284,16 @@ def run_from_snakemake(smk) -> None:
     a failure is logged with its traceback and reported on the terminal in
     one line (step, and for a configuration problem the file and field).
     """
-    study, step = smk.params.study, smk.params.step
+    step = smk.params.step
     cfg = smk.params.cfg if "cfg" in smk.params.keys() else {}
     log = smk.log[0] if len(smk.log) else None
     with _fds_to(log) as terminal:
         try:
-            run_step(study, step, cfg, smk.input, smk.output, dict(smk.wildcards.items()))
+            run_step(step, cfg, smk.input, smk.output, dict(smk.wildcards.items()), rule=getattr(smk, "rule", None))
         except Exception as exc:
             import traceback
 
-            msg = failure_message(study, step, exc)
+            msg = failure_message(*step_names(step), exc)
             traceback.print_exc()
             print(msg, file=sys.stderr, flush=True)
             if terminal is not sys.stderr:
