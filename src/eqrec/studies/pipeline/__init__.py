@@ -6,6 +6,6 @@
     The workflow configuration: schema validation and the cross-field checks.
 :mod:`~eqrec.studies.pipeline.outputs`, :mod:`~eqrec.studies.pipeline.chunks`, :mod:`~eqrec.studies.pipeline.logs`
     Result files (JSON, CSV, timings beside), sweep chunks, job logs.
-:mod:`~eqrec.studies.pipeline.steps`, :mod:`~eqrec.studies.pipeline.imports`
-    The step registry and the import walker (a rule's code inputs).
+:mod:`~eqrec.studies.pipeline.code`
+    A rule's code inputs: the modules its step imports, from grimp's import graph of the package.
 """
