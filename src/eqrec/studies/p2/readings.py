@@ -29,13 +29,9 @@ def one_based_word(word: str) -> str:
     ``100111`` misses ``k = 1, 2`` (0-based); the Fig. 2 caption says
     ``k = 2 and 3``. Read 1-based, the missing steps become ``k = 2, 3``:
     ``110011``. A missing position shifted past the horizon is dropped.
+    The 0/1 word is shifted one step later, its first step measured.
     """
-    T = len(word)
-    out = ["1"] * T
-    for i, c in enumerate(word):
-        if c == "0" and i + 1 < T:
-            out[i + 1] = "0"
-    return "".join(out)
+    return ("1" + word)[:len(word)]
 
 
 def variant_word(word: str, variant: str) -> tuple[str, str]:

@@ -32,28 +32,24 @@ from eqrec.studies.p2.grids import heatmap_grid, realaxis_grid
 log = get_logger("p2")
 
 
-def _sweep_options(cfg: dict, mode: str) -> dict:
-    """Solvers of the sweeps and the runtime in which each point's gains are certified (the estimator that
-    runs: ``theorem2`` for the text of Theorem 2, ``hold`` - constant ``L`` kept - for the design-only readings)."""
-    h = cfg["heatmap"]
-    return {"solver": h["solver"], "second_solver": h["second_solver"],
-            "certify_runtime": default_runtime(mode)}
-
-
 def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> list[tuple[str, str, str, list[dict]]]:
     """Every configured variant over the same pole sets: ``(variant, mode, word, records)``.
 
     The observer gain of a pole set does not depend on the variant, so each
     ``L`` is placed once (:func:`eqrec.studies.searches.observer_for`) and
-    shared by the variants' LPs.
+    shared by the variants' LPs.  Each point's gains are certified as the
+    estimator that runs (``theorem2`` for the text of Theorem 2, ``hold`` -
+    constant ``L`` kept - for the design-only readings).
     """
+    h = cfg["heatmap"]
     observers = [observer_for(system, p) for p in poles]
     out = []
-    for variant in cfg["heatmap"]["variants"]:
-        mode, word = variant_word(cfg["heatmap"]["word"], variant)
+    for variant in h["variants"]:
+        mode, word = variant_word(h["word"], variant)
         prog = Progress(log, len(poles), f"{what} {variant}")
-        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, poles, on_point=prog.advance,
-                             observers=observers, **_sweep_options(cfg, mode))
+        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, poles, h["solver"], on_point=prog.advance,
+                             second_solver=h["second_solver"], certify_runtime=default_runtime(mode),
+                             observers=observers)
         out.append((variant, mode, word, recs))
     return out
 
