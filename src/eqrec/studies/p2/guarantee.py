@@ -74,8 +74,6 @@ class GuaranteeAmongOptima:
     agree_until : int
         Last time ``t`` up to which the ``"hold"`` and ``"theorem2"`` running errors coincide
         for every gain (:func:`runtimes_agree_until`).
-    lp_shapes : list of tuple of int
-        Shapes of the LPs solved after the design LP (one for an affine runtime, two otherwise).
     solver : str
         The LP solver used.
     """
@@ -90,7 +88,6 @@ class GuaranteeAmongOptima:
     gains: AugmentedGains
     design_mu2: float
     agree_until: int
-    lp_shapes: list
     solver: str
 
     @property
@@ -122,12 +119,8 @@ def runtimes_agree_until(word: "str | ArrivalPattern") -> int:
         The time ``t`` (``0..T``).
     """
     q = arrival_indicator(word)
-    T = q.size
-    missing = np.flatnonzero(q == 0)
-    if missing.size == 0:
-        return T
-    after = [k for k in range(int(missing[0]) + 1, T) if q[k]]
-    return after[0] if after else T
+    measured_after_missing = [k for k in range(q.size) if q[k] and not q[:k].all()]
+    return measured_after_missing[0] if measured_after_missing else q.size
 
 
 def _select_rows(rows: UncertainAffineRows, keep: np.ndarray) -> UncertainAffineRows:
@@ -311,10 +304,9 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
                             form="abs")
         if recover_rows is not None:
             add_robust_rows(b, recover_rows, design.radius, level_const=design.mu1, form="abs")
-        lp = b.build()
         what = f"best {bound} guarantee ({runtime} runtime) among the {design_mode} optima ({solver})"
-        sol = solve_lp(lp, solver, options).require_optimal(what)
-        return sol, float(sol.x[gamma]), float(sol.x[mu2]), lp.shape
+        sol = solve_lp(b.build(), solver, options).require_optimal(what)
+        return sol, float(sol.x[gamma]), float(sol.x[mu2])
 
     # the theorem2 running error: affine in (M, nu); for "hold" only its rows up to `agree` are the same
     run = AugmentedLP(system, design.word, mu1, L, s0=design.s0, mode="theorem2")
@@ -324,22 +316,20 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
     keep = rows_bound if runtime == "theorem2" else rows_bound[rows_bound < (agree + 1) * n]
     terminal = rows_all[T * n:]
     rec_t2 = _select_rows(rows_t2, terminal) if (recover and runtime == "theorem2") else None
-    sol, lower, mu2v, shape = optima_lp(_select_rows(rows_t2, keep), recover_rows=rec_t2)
-    shapes = [shape]
+    sol, lower, mu2v = optima_lp(_select_rows(rows_t2, keep), recover_rows=rec_t2)
     x = sol.x[: design.num_columns]
     upper = lower
     if runtime == "hold":
         # gains of the injections ue(j), j < last missing step, fixed: the hold error is affine in the rest
         q = arrival_indicator(design.word)
         k_last = int(np.flatnonzero(q == 0).max()) if np.any(q == 0) else 0
-        early = [mc for (s_, _), mc in design.m_cols.items() if s_ < k_last] + [design.nu_cols[: k_last * n]]
-        early = np.concatenate(early) if early else np.zeros(0, np.int64)
+        early = np.concatenate([mc for (s_, _), mc in design.m_cols.items() if s_ < k_last]
+                               + [design.nu_cols[: k_last * n]])
         free = np.setdiff1d(np.arange(1, design.num_columns), early)
         rows_h = _running_rows(system, design, x.copy(), free, "hold", rows_bound)
         rec_h = _running_rows(system, design, x.copy(), free, "hold", terminal) if recover else None
-        sol2, upper, mu2v, shape2 = optima_lp(rows_h, fixed={int(c): float(x[c]) for c in early}, recover_rows=rec_h)
-        shapes.append(shape2)
+        sol2, upper, mu2v = optima_lp(rows_h, fixed={int(c): float(x[c]) for c in early}, recover_rows=rec_h)
         x = sol2.x[: design.num_columns]
     return GuaranteeAmongOptima(lower=lower, upper=upper, bound=bound, runtime=runtime, design_mode=design_mode,
                                 design_optimum=opt, optimum_bound=level, gains=design.gains_from_x(x),
-                                design_mu2=mu2v, agree_until=agree, lp_shapes=shapes, solver=solver)
+                                design_mu2=mu2v, agree_until=agree, solver=solver)
