@@ -55,7 +55,9 @@ def _eig(system: AffineSystem, L: np.ndarray) -> list[list[float]]:
     return [[float(e.real), float(e.imag)] for e in ev]
 
 
-def _gains_npz(prefix: str, g: AugmentedGains, F: np.ndarray, u0: np.ndarray) -> dict:
+def _gains_npz(prefix: str, system: AffineSystem, g: AugmentedGains, runtime: str | None = None) -> dict:
+    """The gains and their converted time-based form (``runtime`` as in ``augmented_to_time_based``)."""
+    F, u0 = augmented_to_time_based(system, g, runtime)
     return {f"{prefix}/M": g.M, f"{prefix}/nu": g.nu, f"{prefix}/L": g.L, f"{prefix}/s0": g.s0,
             f"{prefix}/F": F, f"{prefix}/u0": u0, f"{prefix}/word": np.array(g.word),
             f"{prefix}/mode": np.array(g.mode)}
@@ -78,7 +80,7 @@ def _gains_from(npz, prefix: str) -> AugmentedGains:
 
 # --------------------------------------------------------------------------- designs
 
-def _augmented_entry(system, d, language) -> dict:
+def _augmented_entry(system, d) -> dict:
     g: AugmentedGains = d.extra["gains"]
     cert = d.certificate
     return {"design_mu2": d.mu2, "certified_mu2": cert.mu2, "certified_terminal": cert.terminal,
@@ -101,43 +103,36 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         wc = worst_case_word(language)
         res: dict[str, Any] = {"language": list(language), "worst_case_word": wc}
         tb = design_time_based(system, language, mu1, engine="tree")  # the paper-comparison row: the papers' LP
-        F, u0 = tb.schedule.word_matrices(wc)
-        arrays.update(_schedule_npz(f"{fig}/time", wc, F, u0))
+        arrays.update(_schedule_npz(f"{fig}/time", wc, *tb.schedule.word_matrices(wc)))
         res["time"] = {"mu2": tb.mu2, "certified_mu2": tb.certificate.mu2, "solve_time": tb.solve_time,
                        "iterations": tb.solution.iterations}
-        for name, kwargs in (("augmented_lp", {"L": None, "poles": poles}),
-                             ("augmented_free", {"L": "free", "poles": poles})):
+        for name, Lspec in (("augmented_lp", None), ("augmented_free", "free")):
             t0 = time.perf_counter()
-            d = design_augmented(system, language, mu1, **kwargs)
-            entry = _augmented_entry(system, d, language)
-            entry["wall_time"] = time.perf_counter() - t0
-            res[name] = entry
-            g = d.extra["gains"]
-            arrays.update(_gains_npz(f"{fig}/{name}", g, *augmented_to_time_based(system, g)))
+            d = design_augmented(system, language, mu1, L=Lspec, poles=poles)
+            res[name] = {**_augmented_entry(system, d), "wall_time": time.perf_counter() - t0}
+            arrays.update(_gains_npz(f"{fig}/{name}", system, d.extra["gains"]))
             log.info("%s %s: mu2 = %.9g (certified %.9g)", fig, name, d.mu2, d.certificate.mu2)
         if fig == "f2":
             # Reading 1: word positions read as 1-based time indices (caption: k = 2 and 3).
             w1 = one_based_word(wc)
             tb1 = design_time_based(system, [w1], mu1)
             d1 = design_augmented(system, [w1], mu1, L="free", poles=poles)
-            res["one_based"] = {"word": w1, "time_mu2": tb1.mu2, "augmented_free": _augmented_entry(system, d1, [w1])}
             g1 = d1.extra["gains"]
-            arrays.update(_gains_npz("f2/one_based", g1, *augmented_to_time_based(system, g1)))
+            arrays.update(_gains_npz("f2/one_based", system, g1))
             # What the 1-based design really guarantees on the true worst-case word.
-            sch1 = schedule_from_augmented(system, g1)
-            res["one_based"]["certified_on_true_words"] = {
-                w: float(certify_schedule(system, retarget(sch1, w1, wc), [w], mu1).words[w].bounds.max())
-                for w in [wc]}
+            on_true = certify_schedule(system, retarget(schedule_from_augmented(system, g1), w1, wc), [wc], mu1)
+            res["one_based"] = {"word": w1, "time_mu2": tb1.mu2, "augmented_free": _augmented_entry(system, d1),
+                                "certified_on_true_words": {wc: float(on_true.words[wc].bounds.max())}}
             # Reading 2: constant L kept at the missing steps with the measurement in the s-dynamics (leak).
             leak = {}
             for name, Lspec in (("leak_lp", None), ("leak_free", "free")):
                 try:
                     dl = design_augmented(system, language, mu1, L=Lspec, poles=poles, mode="leak")
-                    e = _augmented_entry(system, dl, language)
+                    e = _augmented_entry(system, dl)
                     gl = dl.extra["gains"]
                     e["certified_mu2_theorem2_runtime"] = certify_schedule(
                         system, schedule_from_augmented(system, gl, "theorem2"), [wc], mu1).mu2
-                    arrays.update(_gains_npz(f"f2/{name}", gl, *augmented_to_time_based(system, gl, "hold")))
+                    arrays.update(_gains_npz(f"f2/{name}", system, gl, "hold"))
                     leak[name] = e
                 except EqrecError as exc:
                     leak[name] = {"status": f"{type(exc).__name__}: {exc}"}
@@ -341,17 +336,13 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
                  {k: round(b["certified_hold"]["mu2"], 6) for k, b in by_solver.items()})
     # ... so the solver-independent quantity: the best guarantee any masked_gain optimum gives as run (an LP over
     # the optima, solved by each LP solver), its gains certified; the smallest end-of-horizon bound; recovery
-    among: dict[str, Any] = {"rel_tol": OPTIMUM_RTOL, "abs_tol": OPTIMUM_ATOL, "runtimes": {}}
-    for rt in ("hold", "theorem2"):
-        among["runtimes"][rt] = {
-            solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, runtime=rt, solver=solver),
-                                  words, mu1) for solver in lp_solvers}
-    among["terminal_theorem2"] = {
-        solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, bound="terminal", solver=solver),
-                              words, mu1) for solver in lp_solvers}
-    among["recover_theorem2"] = {
-        solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, recover=True, solver=solver),
-                              words, mu1) for solver in lp_solvers}
+    def per_solver(**options) -> dict:
+        return {solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, solver=solver, **options),
+                                      words, mu1) for solver in lp_solvers}
+
+    among = {"rel_tol": OPTIMUM_RTOL, "abs_tol": OPTIMUM_ATOL,
+             "runtimes": {rt: per_solver(runtime=rt) for rt in ("hold", "theorem2")},
+             "terminal_theorem2": per_solver(bound="terminal"), "recover_theorem2": per_solver(recover=True)}
     out["masked_gain"]["among_optima"] = among
     log.info("printed L, masked_gain: best guarantee among the optima as run %s",
              {rt: {k: round(e["upper"], 9) for k, e in per.items()} for rt, per in among["runtimes"].items()})
