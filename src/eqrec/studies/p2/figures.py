@@ -149,11 +149,16 @@ def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=Non
     return pm, handles, counts
 
 
+def _optimal_values(g: pd.DataFrame, column: str = "mu2") -> tuple[pd.Series, bool]:
+    """``column`` at the optimal points, and whether it is one value there (a flat map, relative ``1e-6``)."""
+    vals = g.loc[g["status"] == "optimal", column].astype(float)
+    return vals, bool(len(vals)) and float(vals.max() - vals.min()) <= 1e-6 * max(1.0, abs(float(vals.max())))
+
+
 def _panel_title(name: str, word: str, g: pd.DataFrame, counts: dict, column: str = "mu2") -> str:
     """Reading and word, then what the panel shows in words: a flat map, else the range; the other classes."""
     n = int(sum(counts.values()))
-    vals = g.loc[g["status"] == "optimal", column].astype(float)
-    flat = len(vals) and float(vals.max() - vals.min()) <= 1e-6 * max(1.0, abs(float(vals.max())))
+    vals, flat = _optimal_values(g, column)
     lines = [name, f"word {word}: " + (f"one value at all {counts['optimal']} points" if flat else
                                        f"from {float(vals.min()):.4g} to {float(vals.max()):.4g}")]
     other = [f"{CLASS_STYLE[c][1]} at {k}" for c, k in counts.items() if c != "optimal" and k]
@@ -164,9 +169,8 @@ def _panel_title(name: str, word: str, g: pd.DataFrame, counts: dict, column: st
 
 def _flat_value_label(ax, g: pd.DataFrame, r_max: float) -> None:
     """Print the value inside a flat panel (one colour says little on its own)."""
-    vals = g.loc[g["status"] == "optimal", "mu2"].astype(float)
-    if len(vals) and float(vals.max() - vals.min()) <= 1e-6 * max(1.0, abs(vals.max())) and \
-            (g["status"] == "optimal").all():
+    vals, flat = _optimal_values(g)
+    if flat and (g["status"] == "optimal").all():
         ax.text(0.0, 0.55 * r_max, f"$\\mu_2$ = {float(vals.iloc[0]):.4g}\neverywhere", ha="center", va="center",
                 fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.5", "boxstyle": "round,pad=0.3"})
 
@@ -211,13 +215,11 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     norm = Normalize(min(vmin, paper), max(vmax, paper))
     extra = "masked_gain" in variants and "certified_mu2" in df
     npanel = len(variants) + int(extra)
-    ncols = 2
-    nrows = (npanel + 1 + ncols - 1) // ncols  # one more cell for the legend
-    f, axes = plt.subplots(nrows, ncols, figsize=(7.2, 2.05 * nrows + 0.2), squeeze=False, layout="constrained")
+    nrows = (npanel + 2) // 2  # two columns, and one more cell for the legend
+    f, axes = plt.subplots(nrows, 2, figsize=(7.2, 2.05 * nrows + 0.2), squeeze=False, layout="constrained")
     axes = axes.ravel()
     pm = None
     legend: dict[str, object] = {}
-    lp_axes = []
     for ax, var in zip(axes, variants):
         g = df[df["variant"] == var]
         mg = var == "masked_gain"  # the reading with a region: its edge and the published interval drawn
@@ -227,8 +229,7 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
         ax.set_title(_panel_title(READING_NAMES.get(var, var), g["word"].iloc[0], g, counts), fontsize=8)
         _flat_value_label(ax, g, r_grid[-1])
         legend.update(handles)
-        lp_axes.append(ax)
-    _colorbar_with_paper(f, pm, lp_axes, r"design LP optimum $\mu_2$ (all four maps)", paper)
+    _colorbar_with_paper(f, pm, list(axes[:len(variants)]), r"design LP optimum $\mu_2$ (all four maps)", paper)
     if extra:
         ax = axes[len(variants)]
         g = df[df["variant"] == "masked_gain"]
@@ -310,8 +311,6 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
         st.set_ylim(-0.55, len(unsolved) - 0.45)
         st.set_title(r"where the LP has no solution (no $\mu_2$)", fontsize=8)
         st.grid(False, axis="y")
-        st.set_xlabel(r"real eigenvalue $\lambda$ (double) of $A - LC$, third eigenvalue at 0")
-    else:
-        ax.set_xlabel(r"real eigenvalue $\lambda$ (double) of $A - LC$, third eigenvalue at 0")
+    axs[-1, 0].set_xlabel(r"real eigenvalue $\lambda$ (double) of $A - LC$, third eigenvalue at 0")
     f.legend(handles, labels, loc="outside lower center", ncol=2, frameon=False)
     save_figure(f, outputs.pdf, outputs.png)
