@@ -150,12 +150,8 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     cols = np.asarray(cols, dtype=np.int64)
     keep = np.asarray(keep, dtype=np.int64)
     # each column's step s, source i (None for ν) and entry (b, π)
-    info = {}
-    for (s_, i_), mc in design.m_cols.items():
-        for k, col in enumerate(mc):
-            info[int(col)] = (s_, i_, k // p, k % p)
-    for k, col in enumerate(design.nu_cols):
-        info[int(col)] = (k // n, None, k % n, None)
+    info = {int(col): (s_, i_, k // p, k % p) for (s_, i_), mc in design.m_cols.items() for k, col in enumerate(mc)}
+    info.update({int(col): (k // n, None, k % n, None) for k, col in enumerate(design.nu_cols)})
     if any(int(j) not in info for j in cols):
         raise AssertionError("the free columns must be gain columns (M, nu) of the design LP")
     L = effective_L(as_time_varying_L(design.L, T, n, p), design.word, runtime)
