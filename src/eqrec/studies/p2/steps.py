@@ -253,16 +253,14 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
     sols = {}
     for solver in cfg["solvers"]:
         if solver == "ipopt":
-            res = solve_free_ipopt(base, g0, float(sol0.objective), free_L=False, free_s0=False)
-            g, mu2, it, tt = res.gains, res.mu2, res.iterations, res.solve_time
             # IPOPT starts from the HiGHS optimum; also from zero gains to see where an interior method lands
             gz = AugmentedGains(wc, g0.L, g0.s0, np.zeros_like(g0.M), np.zeros_like(g0.nu), "theorem2")
-            resz = solve_free_ipopt(base, gz, 10.0, free_L=False, free_s0=False)
-            sols["ipopt_from_zero"] = (resz.gains, resz.mu2, resz.iterations, resz.solve_time)
+            for name, start, mu2_start in (("ipopt_from_zero", gz, 10.0), (solver, g0, float(sol0.objective))):
+                res = solve_free_ipopt(base, start, mu2_start, free_L=False, free_s0=False)
+                sols[name] = (res.gains, res.mu2, res.iterations, res.solve_time)
         else:
             sol = base.solve(solver).require_optimal(solver)
-            g, mu2, it, tt = base.gains(sol), float(sol.objective), sol.iterations, sol.solve_time
-        sols[solver] = (g, mu2, it, tt)
+            sols[solver] = (base.gains(sol), float(sol.objective), sol.iterations, sol.solve_time)
     rows = {}
     ref_F = None
     for name, (g, mu2, it, tt) in sols.items():
