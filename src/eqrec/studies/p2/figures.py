@@ -79,8 +79,7 @@ CLASS_STYLE = {"infeasible": ("////", "LP infeasible"), "solver_failed": ("xxxx"
 
 
 def _edges(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    mid = 0.5 * (x[1:] + x[:-1])
-    return np.concatenate([[lo], mid, [hi]])
+    return np.concatenate([[lo], 0.5 * (x[1:] + x[:-1]), [hi]])
 
 
 def _polar_grid(g: pd.DataFrame, r_grid: np.ndarray, th_grid: np.ndarray, column: str) -> np.ndarray:

@@ -93,9 +93,8 @@ def among_optima_summary(ao: dict, solver: str, mu1: float, rtol: float = 1e-6) 
                         "terminal": per[solver]["certified"]["terminal"]}
         ok = ok and exact and design_ok and spread <= rtol and cert_diff <= rtol
     term, rec = ao["terminal_theorem2"], ao["recover_theorem2"]
-    first = next(iter(ao["runtimes"]["hold"].values()))
     return {"value": runtimes["hold"]["value"], "runtimes": runtimes, "agree": bool(ok),
-            "agree_until": first["agree_until"], "rel_tol": ao["rel_tol"], "abs_tol": ao["abs_tol"],
+            "agree_until": next(iter(ao["runtimes"]["hold"].values()))["agree_until"], "rel_tol": ao["rel_tol"], "abs_tol": ao["abs_tol"],
             "terminal_theorem2": {"value": term[solver]["upper"], "solver_spread": _solver_spread(term),
                                   "exact": all(e["exact"] for e in term.values())},
             "recover_theorem2": {"value": rec[solver]["upper"], "solver_spread": _solver_spread(rec),
