@@ -237,8 +237,7 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
         g = m.gains(sol)
         err = errors(schedule_from_augmented(system, g))
         # the exact correspondence: same M, ν shifted by M (z0(0) - z0(s0)) gives the identical estimator
-        aug = AugmentedStacking(system, wc, pp.L, "theorem2")
-        z0 = aug.Zs.reshape(-1, system.n) @ s0
+        z0 = AugmentedStacking(system, wc, pp.L, "theorem2").Zs.reshape(-1, system.n) @ s0
         gm = AugmentedGains(wc, g0.L, s0, g0.M, g0.nu - g0.M @ z0, "theorem2")
         F0, u00 = augmented_to_time_based(system, g0)
         Fm, u0m = augmented_to_time_based(system, gm)
