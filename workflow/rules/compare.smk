@@ -31,7 +31,7 @@ rule compare_run:
         setting="|".join(COMPARE_SETTINGS),
     params:
         step="eqrec.studies.compare.steps:step_run",
-        cfg=step_config("compare", "periods", "runs", "seed", "settings", "systems"),
+        cfg=step_config("compare", "periods runs seed settings systems"),
     script:
         RUN_STEP
 
@@ -61,7 +61,7 @@ rule compare_table:
         "logs/compare/table.log",
     params:
         step="eqrec.studies.compare.steps:step_table",
-        cfg=step_config("compare", "settings", "systems"),
+        cfg=step_config("compare", "settings systems"),
     script:
         RUN_STEP
 

@@ -32,13 +32,7 @@ rule p1_designs:
         step="eqrec.studies.p1.steps:step_designs",
         cfg=step_config(
             "p1",
-            "acc_constants",
-            "language",
-            "mu1",
-            "probe_gap",
-            "probe_solvers",
-            "solvers",
-            "timing_repeats",
+            "acc_constants language mu1 probe_gap probe_solvers solvers timing_repeats",
         ),
     script:
         RUN_STEP
@@ -54,7 +48,7 @@ rule p1_simulate:
         "logs/p1/simulate.log",
     params:
         step="eqrec.studies.p1.steps:step_simulate",
-        cfg=step_config("p1", "acc_constants", "language", "mu1", "simulation"),
+        cfg=step_config("p1", "acc_constants language mu1 simulation"),
     script:
         RUN_STEP
 
@@ -89,7 +83,7 @@ rule p1_extensions:
         "logs/p1/extensions.log",
     params:
         step="eqrec.studies.p1.steps:step_extensions",
-        cfg=step_config("p1", "acc_constants", "extensions", "language", "mu1"),
+        cfg=step_config("p1", "acc_constants extensions language mu1"),
     script:
         RUN_STEP
 

@@ -31,7 +31,7 @@ rule p3_reactor_model:
         "logs/p3/reactor_model.log",
     params:
         step="eqrec.studies.p3.steps:step_reactor_model",
-        cfg=step_config("p3", "batch_reactor.Ts", "batch_reactor.eta_v"),
+        cfg=step_config("p3", batch_reactor="Ts eta_v"),
     script:
         RUN_STEP
 
@@ -47,7 +47,7 @@ rule p3_reactor_designs:
         "logs/p3/reactor_designs.log",
     params:
         step="eqrec.studies.p3.steps:step_reactor_designs",
-        cfg=step_config("p3", "batch_reactor", "kalman.x0"),
+        cfg=step_config("p3", "batch_reactor kalman.x0"),
     script:
         RUN_STEP
 
@@ -63,13 +63,7 @@ rule p3_augmented:
     params:
         step="eqrec.studies.p3.steps:step_augmented",
         cfg=step_config(
-            "p3",
-            "augmented",
-            "batch_reactor.Ts",
-            "batch_reactor.cost",
-            "batch_reactor.eta_v",
-            "batch_reactor.horizon",
-            "batch_reactor.max_delay",
+            "p3", "augmented", batch_reactor="Ts cost eta_v horizon max_delay"
         ),
     script:
         RUN_STEP
@@ -86,15 +80,7 @@ rule p3_kalman:
         "logs/p3/kalman.log",
     params:
         step="eqrec.studies.p3.steps:step_kalman",
-        cfg=step_config(
-            "p3",
-            "batch_reactor.Ts",
-            "batch_reactor.cost",
-            "batch_reactor.eta_v",
-            "batch_reactor.horizon",
-            "batch_reactor.max_delay",
-            "kalman",
-        ),
+        cfg=step_config("p3", "kalman", batch_reactor="Ts cost eta_v horizon max_delay"),
     script:
         RUN_STEP
 
@@ -131,7 +117,7 @@ rule p3_acc:
         "logs/p3/acc.log",
     params:
         step="eqrec.studies.p3.steps:step_acc",
-        cfg=step_config("p3", "acc.free_costs", "acc.language", "acc.mu1"),
+        cfg=step_config("p3", acc="free_costs language mu1"),
     script:
         RUN_STEP
 
@@ -146,14 +132,7 @@ rule p3_acc_simulate:
         "logs/p3/acc_simulate.log",
     params:
         step="eqrec.studies.p3.steps:step_acc_simulate",
-        cfg=step_config(
-            "p3",
-            "acc.cost",
-            "acc.language",
-            "acc.mu1",
-            "acc.simulation",
-            "acc.true_pattern",
-        ),
+        cfg=step_config("p3", acc="cost language mu1 simulation true_pattern"),
     script:
         RUN_STEP
 
@@ -194,7 +173,7 @@ rule p3_values:
         "logs/p3/values.log",
     params:
         step="eqrec.studies.p3.values:step_values",
-        cfg=step_config("p3", "batch_reactor.horizon", "batch_reactor.max_delay"),
+        cfg=step_config("p3", batch_reactor="horizon max_delay"),
     script:
         RUN_STEP
 
@@ -233,16 +212,7 @@ rule p3_strategy:
         "logs/p3/strategy.log",
     params:
         step="eqrec.studies.p3.strategy:step_strategy",
-        cfg=step_config(
-            "p3",
-            "strategy.acc",
-            "strategy.cost",
-            "strategy.noise",
-            "strategy.reactor",
-            "strategy.seed",
-            "strategy.steps",
-            "strategy.switching",
-        ),
+        cfg=step_config("p3", strategy="acc cost noise reactor seed steps switching"),
     script:
         RUN_STEP
 
@@ -282,14 +252,7 @@ rule p3_scale_size:
         tau=r"\d+",
     params:
         step="eqrec.studies.p3.scale_table:step_scale_size",
-        cfg=step_config(
-            "p3",
-            "scale.builder",
-            "scale.mem_limit_gb",
-            "scale.method",
-            "scale.mu1",
-            "scale.time_limit",
-        ),
+        cfg=step_config("p3", scale="builder mem_limit_gb method mu1 time_limit"),
     script:
         RUN_STEP
 
