@@ -1,7 +1,5 @@
 # P1: prefix-based estimator (Rutledge, Yong, Ozay, ACC 2019).
 # Each rule runs one step of eqrec.studies.p1.steps through the harness (common.smk).
-VALUES_FILES.append("results/p1/values.json")
-TIMING_VALUES_FILES.append("results/timings/p1/values.json")
 
 
 rule p1_model:

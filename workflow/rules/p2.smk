@@ -3,7 +3,6 @@
 # The heat map runs in p2.heatmap.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter heatmap=N), each every configured variant;
 # the merge checks that they cover the grid exactly once.
-VALUES_FILES.append("results/p2/values.json")
 
 
 scattergather:

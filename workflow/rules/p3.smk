@@ -1,6 +1,5 @@
 # P3: delayed/missing-data paper (Hassaan, Shen, Yong; equalized recovery with delayed and missing observations).
 # Each rule runs one step of eqrec.studies.p3 (steps, figures, values, strategy, scale tables) through the harness.
-VALUES_FILES.append("results/p3/values.json")
 
 
 rule p3_languages:
@@ -179,7 +178,6 @@ rule p3_values:
 
 
 # --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
-VALUES_FILES.append("results/p3/strategy_values.json")
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
 P3_SCALE_TREE = [

@@ -3,7 +3,6 @@
 # The sweeps run in p4.sweep_*.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter sweep_eta=N); the merging steps (fig5, fig6)
 # check that they cover the grid exactly once.
-VALUES_FILES.append("results/p4/values.json")
 
 P4_EXAMPLES = list(config["p4"]["examples"])
 
