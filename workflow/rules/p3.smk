@@ -180,21 +180,17 @@ rule p3_values:
 # --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
-P3_SCALE_TREE = [
-    f"results/p3/scale/T{T}_tau{tau}.json"
-    for T, tau in config["p3"]["scale"]["tree_sizes"]
-]
-P3_SCALE_TREE_SLOW = [
-    f"results/p3/scale/T{T}_tau{tau}.json"
-    for T, tau in config["p3"]["scale"]["tree_slow_sizes"]
-]
-P3_SCALE_CLASSES = [
-    f"results/p3/scale/classes_T{T}_tau{tau}.json"
-    for T, tau in config["p3"]["scale"]["class_sizes"]
-]
+def scale_files(sizes, engine=""):
+    """The per-size JSONs of one size list of p3.scale (engine="classes_": the class engine's)."""
+    scale = config["p3"]["scale"]
+    return [f"results/p3/scale/{engine}T{T}_tau{tau}.json" for T, tau in scale[sizes]]
+
+
+P3_SCALE_TREE = scale_files("tree_sizes")
+P3_SCALE_CLASSES = scale_files("class_sizes", engine="classes_")
 P3_SCALE = list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))
 P3_SCALE_FULL = list(
-    dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)
+    dict.fromkeys(P3_SCALE_TREE + scale_files("tree_slow_sizes") + P3_SCALE_CLASSES)
 )
 
 
@@ -293,7 +289,8 @@ rule p3_scale_table:
         RUN_STEP
 
 
-rule p3_scale_table_full:
+# The same step on the slow tree sizes too (target p3_scale).
+use rule p3_scale_table as p3_scale_table_full with:
     """Full scale table: the default run's rows and the slow tree sizes (CSV and Markdown)."""
     input:
         sizes=P3_SCALE_FULL,
@@ -306,11 +303,6 @@ rule p3_scale_table_full:
         timings_md="results/timings/p3/scale_table_full.md",
     log:
         "logs/p3/scale_table_full.log",
-    params:
-        step="eqrec.studies.p3.scale_table:step_scale_table",
-        cfg=step_config("p3", "scale.tree_slow_sizes"),
-    script:
-        RUN_STEP
 
 
 rule p3_scale_free:
