@@ -21,7 +21,9 @@
 #   `use rule _step as p1_model with:`) would save the two `script:` lines of
 #   each rule, but the template is itself a rule: it shows in --list-rules,
 #   needs a log of its own for `snakemake --lint` and resources in the SLURM
-#   profile, and a reader has to look elsewhere to see what a rule runs.
+#   profile, and a reader has to look elsewhere to see what a rule runs. (A
+#   template in a module, `use rule step from steps as p1_model with:`, is no
+#   rule of its own, but dresses every rule of the workflow as an imported one.)
 #   `use rule ... with:` is kept for true variants of one rule
 #   (p3_scale_class_size, p3_scale_table_full).
 # - the step is named twice, in `code=code_inputs(...)` and `step=...`, because
