@@ -1,4 +1,4 @@
-# Shared by the rules files. Every rule is thin: it runs the one generic
+# Shared by the rules files. Every rule is thin, it runs the one generic
 # script, workflow/scripts/run_step.py, which calls
 # eqrec.studies.pipeline.harness.run_from_snakemake; the rule's params name the
 # step by the path of its function (step="eqrec.studies.p1.steps:step_model",
@@ -16,18 +16,20 @@
 # editing code a step does not import (the LP modules for a figure, eqrec/lmv
 # for P1) does not re-run its job. No mathematics here.
 #
-# Why each rule spells out `input: code=...`, `params: step=...` and `script:`:
-# - a template rule (`rule _step` with only `script:`, every rule written as
-#   `use rule _step as p1_model with:`) would save the two `script:` lines of
-#   each rule, but the template is itself a rule: it shows in --list-rules,
+# Why the rules spell out their `code` input, `step` param and script (this
+# file has functions, so `snakemake --lint` wants no line in it to look like a
+# rule header, a colon after the word rule).
+# - a template (a rule `_step` with only the script, and every other one written
+#   as `use rule _step as p1_model with`) would save the two script lines of
+#   each, but the template is itself a rule. It shows in --list-rules,
 #   needs a log of its own for `snakemake --lint` and resources in the SLURM
 #   profile, and a reader has to look elsewhere to see what a rule runs. (A
-#   template in a module, `use rule step from steps as p1_model with:`, is no
+#   template in a module, `use rule step from steps as p1_model with`, is no
 #   rule of its own, but dresses every rule of the workflow as an imported one.)
-#   `use rule ... with:` is kept for true variants of one rule
+#   `use rule ... with` is kept for true variants of one step
 #   (p3_scale_class_size, p3_scale_table_full).
 # - the step is named twice, in `code=code_inputs(...)` and `step=...`, because
-#   no directive sees the other: input functions get only the wildcards, and
+#   no directive sees the other. Input functions get only the wildcards, and
 #   `input: **d` / `params: **d` (valid Snakemake) fill one directive each.
 # - step_config takes the keys as one space-separated string (as
 #   collections.namedtuple takes its field names), which snakefmt keeps on one
@@ -84,3 +86,9 @@ def published(**claims):
             name: published_value(CLAIMS_FILE, claim) for name, claim in claims.items()
         }
     }
+
+
+def scale_files(sizes, engine=""):
+    """The per-size JSONs of one size list of p3.scale (engine="classes_": the class engine's)."""
+    scale = config["p3"]["scale"]
+    return [f"results/p3/scale/{engine}T{T}_tau{tau}.json" for T, tau in scale[sizes]]

@@ -180,12 +180,6 @@ rule p3_values:
 # --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
-def scale_files(sizes, engine=""):
-    """The per-size JSONs of one size list of p3.scale (engine="classes_": the class engine's)."""
-    scale = config["p3"]["scale"]
-    return [f"results/p3/scale/{engine}T{T}_tau{tau}.json" for T, tau in scale[sizes]]
-
-
 P3_SCALE_TREE = scale_files("tree_sizes")
 P3_SCALE_CLASSES = scale_files("class_sizes", engine="classes_")
 P3_SCALE = list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))
