@@ -47,12 +47,6 @@ try:
 except configuration.ConfigError as exc:
     raise WorkflowError(f"invalid configuration: {exc}")
 
-# Each rules file appends the values.json its analysis writes; the claims
-# table (claims.smk, included last) needs all of them.
-VALUES_FILES = []
-# ... and the values files of its timings (results/timings/), for the timing claims.
-TIMING_VALUES_FILES = []
-
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/p1.smk"

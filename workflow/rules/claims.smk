@@ -1,13 +1,20 @@
 # The comparison table: every published number next to ours, worded by the
-# templates of config/claims.yaml from the evidence in the values.json files.
+# templates of config/claims.yaml from the evidence in the values.json files
+# of the studies (included before this file) and the values of P1's timings.
 
 
 rule claims:
     """results/claims.csv and the readable results/REPRODUCTION.md."""
     input:
         claims="config/claims.yaml",
-        values=VALUES_FILES,
-        timings=TIMING_VALUES_FILES,
+        values=[
+            rules.p1_values.output.json,
+            rules.p2_values.output.json,
+            rules.p3_values.output.json,
+            rules.p3_strategy.output.values,
+            rules.p4_values.output.values,
+        ],
+        timings=[rules.p1_values.output.timings],
         code=code_inputs("eqrec.studies.claims.table:step_table"),
     output:
         csv=report(

@@ -1,4 +1,4 @@
-# Shared by the rules files. Every rule is thin: it runs the one generic
+# Shared by the rules files. Every rule is thin, it runs the one generic
 # script, workflow/scripts/run_step.py, which calls
 # eqrec.studies.pipeline.harness.run_from_snakemake; the rule's params name the
 # step by the path of its function (step="eqrec.studies.p1.steps:step_model",
@@ -15,25 +15,80 @@
 # import graph grimp builds of the package: eqrec.studies.pipeline.code), so
 # editing code a step does not import (the LP modules for a figure, eqrec/lmv
 # for P1) does not re-run its job. No mathematics here.
-from functools import partial
-
-from eqrec.studies.pipeline.configuration import step_params
-from eqrec.studies.pipeline.code import code_inputs
-
-# A rule's cfg param: step_config("p3", "strategy.figure", ...), the keys its
-# step reads of config["p3"] ("mu1", "heatmap.solver", or a whole subtree).
-step_config = partial(step_params, config)
-
-# The paper's value of one claim (config/claims.yaml, the only place published
-# numbers live), for rules that evaluate the paper's own design or draw a published
-# value for comparison (P2: the printed gain L, the Fig. 3b interval). As a param,
-# the rule reruns when that value changes, not on other edits of claims.yaml.
+#
+# Why the rules spell out their `code` input, `step` param and script (this
+# file has functions, so `snakemake --lint` wants no line in it to look like a
+# rule header, a colon after the word rule).
+# - a template (a rule `_step` with only the script, and every other one written
+#   as `use rule _step as p1_model with`) would save the two script lines of
+#   each, but the template is itself a rule. It shows in --list-rules,
+#   needs a log of its own for `snakemake --lint` and resources in the SLURM
+#   profile, and a reader has to look elsewhere to see what a rule runs. (A
+#   template in a module, `use rule step from steps as p1_model with`, is no
+#   rule of its own, but dresses every rule of the workflow as an imported one.)
+#   `use rule ... with` is kept for true variants of one step
+#   (p3_scale_class_size, p3_scale_table_full).
+# - the step is named twice, in `code=code_inputs(...)` and `step=...`, because
+#   no directive sees the other. Input functions get only the wildcards, and
+#   `input: **d` / `params: **d` (valid Snakemake) fill one directive each.
+# - step_config takes the keys as one space-separated string (as
+#   collections.namedtuple takes its field names), which snakefmt keeps on one
+#   line where a list of strings is broken into one key a line.
 from eqrec.studies.claims.published import published_value
-
-CLAIMS_FILE = "config/claims.yaml"
+from eqrec.studies.pipeline.code import code_inputs
+from eqrec.studies.pipeline.configuration import step_params
 
 # The timings file (under results/timings/) a step writes beside each results file.
 from eqrec.studies.pipeline.outputs import timings_of
 
+# The only place published numbers live.
+CLAIMS_FILE = "config/claims.yaml"
+
 # Relative to the rules files.
 RUN_STEP = "../scripts/run_step.py"
+
+
+def step_config(section, keys="", **subtrees):
+    """A rule's ``cfg`` param: the configuration keys its step reads.
+
+    Parameters
+    ----------
+    section : str
+        The study's section of the configuration (``"p3"``).
+    keys : str
+        Space-separated dotted paths in that section (``"mu1 heatmap.solver"``,
+        or a whole subtree such as ``"strategy.figure"``).
+    **subtrees : str
+        Keys of one subtree, space-separated (``heatmap="n_r n_theta"`` is
+        ``"heatmap.n_r heatmap.n_theta"``).
+
+    Returns
+    -------
+    dict
+        The keys nested as in the section (``configuration.step_params``).
+    """
+    paths = keys.split()
+    for subtree, subkeys in subtrees.items():
+        paths += [f"{subtree}.{key}" for key in subkeys.split()]
+    return step_params(config, section, *paths)
+
+
+def published(**claims):
+    """The paper's values of claims (config/claims.yaml), as ``{"published": {name: value}}``.
+
+    For the ``cfg`` of steps that draw a published value for comparison
+    (``step_config("p2", "mu1") | published(f1="P2-F1:mu2-augmented")``). As a
+    param, the rule reruns when that value changes, not on other edits of
+    claims.yaml.
+    """
+    return {
+        "published": {
+            name: published_value(CLAIMS_FILE, claim) for name, claim in claims.items()
+        }
+    }
+
+
+def scale_files(sizes, engine=""):
+    """The per-size JSONs of one size list of p3.scale (engine="classes_": the class engine's)."""
+    scale = config["p3"]["scale"]
+    return [f"results/p3/scale/{engine}T{T}_tau{tau}.json" for T, tau in scale[sizes]]

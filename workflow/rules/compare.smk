@@ -4,8 +4,11 @@
 # initial errors. One job per (system, setting) of config/compare.yaml runs
 # eqrec.compare through eqrec.studies.compare.steps (harness, common.smk); the table
 # step merges the jobs' tables, checking that they cover the configured pairs.
-COMPARE_SYSTEMS = list(config["compare"]["systems"])
-COMPARE_SETTINGS = list(config["compare"]["settings"])
+# every (system, setting) pair, for expand()
+COMPARE_PAIRS = dict(
+    system=list(config["compare"]["systems"]),
+    setting=list(config["compare"]["settings"]),
+)
 
 
 rule compare_run:
@@ -27,11 +30,11 @@ rule compare_run:
     benchmark:
         "results/timings/compare/{system}_{setting}.tsv"
     wildcard_constraints:
-        system="|".join(COMPARE_SYSTEMS),
-        setting="|".join(COMPARE_SETTINGS),
+        system="|".join(COMPARE_PAIRS["system"]),
+        setting="|".join(COMPARE_PAIRS["setting"]),
     params:
         step="eqrec.studies.compare.steps:step_run",
-        cfg=step_config("compare", "periods", "runs", "seed", "settings", "systems"),
+        cfg=step_config("compare", "periods runs seed settings systems"),
     script:
         RUN_STEP
 
@@ -39,16 +42,8 @@ rule compare_run:
 rule compare_table:
     """Every (system, setting) in one table, compare.csv, and the summaries in summary.json."""
     input:
-        csv=expand(
-            "results/compare/{system}_{setting}.csv",
-            system=COMPARE_SYSTEMS,
-            setting=COMPARE_SETTINGS,
-        ),
-        json=expand(
-            "results/compare/{system}_{setting}.json",
-            system=COMPARE_SYSTEMS,
-            setting=COMPARE_SETTINGS,
-        ),
+        csv=expand(rules.compare_run.output.csv, **COMPARE_PAIRS),
+        json=expand(rules.compare_run.output.json, **COMPARE_PAIRS),
         code=code_inputs("eqrec.studies.compare.steps:step_table"),
     output:
         csv=report(
@@ -61,7 +56,7 @@ rule compare_table:
         "logs/compare/table.log",
     params:
         step="eqrec.studies.compare.steps:step_table",
-        cfg=step_config("compare", "settings", "systems"),
+        cfg=step_config("compare", "settings systems"),
     script:
         RUN_STEP
 
@@ -72,7 +67,6 @@ rule compare:
         rules.compare_table.output,
         expand(
             "results/compare/{system}_{setting}.{ext}",
-            system=COMPARE_SYSTEMS,
-            setting=COMPARE_SETTINGS,
+            **COMPARE_PAIRS,
             ext=("png", "pdf"),
         ),

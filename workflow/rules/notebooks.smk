@@ -5,16 +5,15 @@
 # rule_inputs gives the notebook's source and those files); the step
 # eqrec.studies.notebooks.execute.execute writes byte-identical files for unchanged
 # inputs.
-from eqrec.studies.notebooks.execute import READS as NOTEBOOK_READS
-from eqrec.studies.notebooks.execute import rule_inputs as notebook_inputs
+from eqrec.studies.notebooks import execute as notebook_execute
 
-NOTEBOOKS = sorted(NOTEBOOK_READS)
+NOTEBOOKS = sorted(notebook_execute.READS)
 
 
 rule notebooks_execute:
     """One notebook executed: .ipynb with its outputs, and its HTML rendering."""
     input:
-        unpack(notebook_inputs),
+        unpack(notebook_execute.rule_inputs),
         code=code_inputs("eqrec.studies.notebooks.execute:step_execute"),
     output:
         ipynb="results/notebooks/{name}.ipynb",

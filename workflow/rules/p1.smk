@@ -1,7 +1,5 @@
 # P1: prefix-based estimator (Rutledge, Yong, Ozay, ACC 2019).
 # Each rule runs one step of eqrec.studies.p1.steps through the harness (common.smk).
-VALUES_FILES.append("results/p1/values.json")
-TIMING_VALUES_FILES.append("results/timings/p1/values.json")
 
 
 rule p1_model:
@@ -32,13 +30,7 @@ rule p1_designs:
         step="eqrec.studies.p1.steps:step_designs",
         cfg=step_config(
             "p1",
-            "acc_constants",
-            "language",
-            "mu1",
-            "probe_gap",
-            "probe_solvers",
-            "solvers",
-            "timing_repeats",
+            "acc_constants language mu1 probe_gap probe_solvers solvers timing_repeats",
         ),
     script:
         RUN_STEP
@@ -54,7 +46,7 @@ rule p1_simulate:
         "logs/p1/simulate.log",
     params:
         step="eqrec.studies.p1.steps:step_simulate",
-        cfg=step_config("p1", "acc_constants", "language", "mu1", "simulation"),
+        cfg=step_config("p1", "acc_constants language mu1 simulation"),
     script:
         RUN_STEP
 
@@ -89,7 +81,7 @@ rule p1_extensions:
         "logs/p1/extensions.log",
     params:
         step="eqrec.studies.p1.steps:step_extensions",
-        cfg=step_config("p1", "acc_constants", "extensions", "language", "mu1"),
+        cfg=step_config("p1", "acc_constants extensions language mu1"),
     script:
         RUN_STEP
 

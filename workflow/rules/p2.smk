@@ -3,7 +3,6 @@
 # The heat map runs in p2.heatmap.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter heatmap=N), each every configured variant;
 # the merge checks that they cover the grid exactly once.
-VALUES_FILES.append("results/p2/values.json")
 
 
 scattergather:
@@ -22,7 +21,7 @@ rule p2_designs:
         "logs/p2/designs.log",
     params:
         step="eqrec.studies.p2.steps:step_designs",
-        cfg=step_config("p2", "T", "f1_words", "f2_words", "init_poles", "mu1"),
+        cfg=step_config("p2", "T f1_words f2_words init_poles mu1"),
     script:
         RUN_STEP
 
@@ -38,9 +37,7 @@ rule p2_simulate:
         "logs/p2/simulate.log",
     params:
         step="eqrec.studies.p2.steps:step_simulate",
-        cfg=step_config(
-            "p2", "f1_words", "f2_words", "mu1", "noise", "runs", "seed", "x0"
-        ),
+        cfg=step_config("p2", "f1_words f2_words mu1 noise runs seed x0"),
     script:
         RUN_STEP
 
@@ -55,7 +52,7 @@ rule p2_heatmap_chunk:
         "logs/p2/heatmap_chunk_{scatteritem}.log",
     params:
         step="eqrec.studies.p2.sweeps:step_heatmap_chunk",
-        cfg=step_config("p2", "heatmap", "mu1"),
+        cfg=step_config("p2", "heatmap mu1"),
     script:
         RUN_STEP
 
@@ -72,14 +69,7 @@ rule p2_heatmap_merge:
         "logs/p2/heatmap_merge.log",
     params:
         step="eqrec.studies.p2.sweeps:step_heatmap_merge",
-        cfg=step_config(
-            "p2",
-            "heatmap.chunks",
-            "heatmap.n_r",
-            "heatmap.n_theta",
-            "heatmap.r_max",
-            "heatmap.variants",
-        ),
+        cfg=step_config("p2", heatmap="chunks n_r n_theta r_max variants"),
     script:
         RUN_STEP
 
@@ -96,13 +86,7 @@ rule p2_realaxis:
     params:
         step="eqrec.studies.p2.sweeps:step_realaxis",
         cfg=step_config(
-            "p2",
-            "heatmap.second_solver",
-            "heatmap.solver",
-            "heatmap.variants",
-            "heatmap.word",
-            "mu1",
-            "realaxis",
+            "p2", "mu1 realaxis", heatmap="second_solver solver variants word"
         ),
     script:
         RUN_STEP
@@ -120,16 +104,7 @@ rule p2_checks:
     params:
         step="eqrec.studies.p2.steps:step_checks",
         cfg=step_config(
-            "p2",
-            "f2_words",
-            "init_poles",
-            "mu1",
-            "noise",
-            "runs",
-            "s0_samples",
-            "seed",
-            "solvers",
-            "x0",
+            "p2", "f2_words init_poles mu1 noise runs s0_samples seed solvers x0"
         ),
     script:
         RUN_STEP
@@ -147,9 +122,7 @@ rule p2_printed:
         "logs/p2/printed.log",
     params:
         step="eqrec.studies.p2.steps:step_printed",
-        cfg=step_config(
-            "p2", "T", "f2_words", "heatmap.solver", "mu1", "printed", "solvers"
-        ),
+        cfg=step_config("p2", "T f2_words heatmap.solver mu1 printed solvers"),
         published=[
             published_value(CLAIMS_FILE, config["p2"]["printed"][k])
             for k in ("L_claim", "interval_claim")
@@ -175,14 +148,7 @@ rule p2_values:
     params:
         step="eqrec.studies.p2.values:step_values",
         cfg=step_config(
-            "p2",
-            "heatmap.n_r",
-            "heatmap.n_theta",
-            "heatmap.r_max",
-            "init_poles",
-            "mu1",
-            "mu2_tol",
-            "realaxis",
+            "p2", "init_poles mu1 mu2_tol realaxis", heatmap="n_r n_theta r_max"
         ),
     script:
         RUN_STEP
@@ -209,12 +175,7 @@ rule p2_figure_trajectories:
         step="eqrec.studies.p2.figures:step_figure_trajectories",
         # the paper's mu2 of each figure (config/claims.yaml), drawn for comparison
         cfg=step_config("p2", "mu1")
-        | {
-            "published": {
-                "f1": published_value(CLAIMS_FILE, "P2-F1:mu2-augmented"),
-                "f2": published_value(CLAIMS_FILE, "P2-F2:mu2-augmented"),
-            }
-        },
+        | published(f1="P2-F1:mu2-augmented", f2="P2-F2:mu2-augmented"),
     script:
         RUN_STEP
 
@@ -234,16 +195,9 @@ rule p2_figure_heatmap:
         "logs/p2/figure_f3a.log",
     params:
         step="eqrec.studies.p2.figures:step_figure_heatmap",
-        cfg=step_config(
-            "p2",
-            "heatmap.n_r",
-            "heatmap.n_theta",
-            "heatmap.r_max",
-            "heatmap.variants",
-            "mu2_tol",
-        )
+        cfg=step_config("p2", "mu2_tol", heatmap="n_r n_theta r_max variants")
         # the paper's smallest mu2 (config/claims.yaml): a labelled tick of the colour bar
-        | {"published": {"mu2": published_value(CLAIMS_FILE, "P2-F3a:mu2-region")}},
+        | published(mu2="P2-F3a:mu2-region"),
     script:
         RUN_STEP
 

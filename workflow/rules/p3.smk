@@ -1,6 +1,5 @@
 # P3: delayed/missing-data paper (Hassaan, Shen, Yong; equalized recovery with delayed and missing observations).
 # Each rule runs one step of eqrec.studies.p3 (steps, figures, values, strategy, scale tables) through the harness.
-VALUES_FILES.append("results/p3/values.json")
 
 
 rule p3_languages:
@@ -31,7 +30,7 @@ rule p3_reactor_model:
         "logs/p3/reactor_model.log",
     params:
         step="eqrec.studies.p3.steps:step_reactor_model",
-        cfg=step_config("p3", "batch_reactor.Ts", "batch_reactor.eta_v"),
+        cfg=step_config("p3", batch_reactor="Ts eta_v"),
     script:
         RUN_STEP
 
@@ -47,7 +46,7 @@ rule p3_reactor_designs:
         "logs/p3/reactor_designs.log",
     params:
         step="eqrec.studies.p3.steps:step_reactor_designs",
-        cfg=step_config("p3", "batch_reactor", "kalman.x0"),
+        cfg=step_config("p3", "batch_reactor kalman.x0"),
     script:
         RUN_STEP
 
@@ -63,13 +62,7 @@ rule p3_augmented:
     params:
         step="eqrec.studies.p3.steps:step_augmented",
         cfg=step_config(
-            "p3",
-            "augmented",
-            "batch_reactor.Ts",
-            "batch_reactor.cost",
-            "batch_reactor.eta_v",
-            "batch_reactor.horizon",
-            "batch_reactor.max_delay",
+            "p3", "augmented", batch_reactor="Ts cost eta_v horizon max_delay"
         ),
     script:
         RUN_STEP
@@ -86,15 +79,7 @@ rule p3_kalman:
         "logs/p3/kalman.log",
     params:
         step="eqrec.studies.p3.steps:step_kalman",
-        cfg=step_config(
-            "p3",
-            "batch_reactor.Ts",
-            "batch_reactor.cost",
-            "batch_reactor.eta_v",
-            "batch_reactor.horizon",
-            "batch_reactor.max_delay",
-            "kalman",
-        ),
+        cfg=step_config("p3", "kalman", batch_reactor="Ts cost eta_v horizon max_delay"),
     script:
         RUN_STEP
 
@@ -131,7 +116,7 @@ rule p3_acc:
         "logs/p3/acc.log",
     params:
         step="eqrec.studies.p3.steps:step_acc",
-        cfg=step_config("p3", "acc.free_costs", "acc.language", "acc.mu1"),
+        cfg=step_config("p3", acc="free_costs language mu1"),
     script:
         RUN_STEP
 
@@ -146,14 +131,7 @@ rule p3_acc_simulate:
         "logs/p3/acc_simulate.log",
     params:
         step="eqrec.studies.p3.steps:step_acc_simulate",
-        cfg=step_config(
-            "p3",
-            "acc.cost",
-            "acc.language",
-            "acc.mu1",
-            "acc.simulation",
-            "acc.true_pattern",
-        ),
+        cfg=step_config("p3", acc="cost language mu1 simulation true_pattern"),
     script:
         RUN_STEP
 
@@ -194,30 +172,19 @@ rule p3_values:
         "logs/p3/values.log",
     params:
         step="eqrec.studies.p3.values:step_values",
-        cfg=step_config("p3", "batch_reactor.horizon", "batch_reactor.max_delay"),
+        cfg=step_config("p3", batch_reactor="horizon max_delay"),
     script:
         RUN_STEP
 
 
 # --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
-VALUES_FILES.append("results/p3/strategy_values.json")
 # Scale table: the tree LP at the fast sizes and the class engine run in the default run (seconds each);
 # the slow tree sizes only in the target p3_scale (minutes and up to 16 GB each).
-P3_SCALE_TREE = [
-    f"results/p3/scale/T{T}_tau{tau}.json"
-    for T, tau in config["p3"]["scale"]["tree_sizes"]
-]
-P3_SCALE_TREE_SLOW = [
-    f"results/p3/scale/T{T}_tau{tau}.json"
-    for T, tau in config["p3"]["scale"]["tree_slow_sizes"]
-]
-P3_SCALE_CLASSES = [
-    f"results/p3/scale/classes_T{T}_tau{tau}.json"
-    for T, tau in config["p3"]["scale"]["class_sizes"]
-]
+P3_SCALE_TREE = scale_files("tree_sizes")
+P3_SCALE_CLASSES = scale_files("class_sizes", engine="classes_")
 P3_SCALE = list(dict.fromkeys(P3_SCALE_TREE + P3_SCALE_CLASSES))
 P3_SCALE_FULL = list(
-    dict.fromkeys(P3_SCALE_TREE + P3_SCALE_TREE_SLOW + P3_SCALE_CLASSES)
+    dict.fromkeys(P3_SCALE_TREE + scale_files("tree_slow_sizes") + P3_SCALE_CLASSES)
 )
 
 
@@ -233,16 +200,7 @@ rule p3_strategy:
         "logs/p3/strategy.log",
     params:
         step="eqrec.studies.p3.strategy:step_strategy",
-        cfg=step_config(
-            "p3",
-            "strategy.acc",
-            "strategy.cost",
-            "strategy.noise",
-            "strategy.reactor",
-            "strategy.seed",
-            "strategy.steps",
-            "strategy.switching",
-        ),
+        cfg=step_config("p3", strategy="acc cost noise reactor seed steps switching"),
     script:
         RUN_STEP
 
@@ -282,14 +240,7 @@ rule p3_scale_size:
         tau=r"\d+",
     params:
         step="eqrec.studies.p3.scale_table:step_scale_size",
-        cfg=step_config(
-            "p3",
-            "scale.builder",
-            "scale.mem_limit_gb",
-            "scale.method",
-            "scale.mu1",
-            "scale.time_limit",
-        ),
+        cfg=step_config("p3", scale="builder mem_limit_gb method mu1 time_limit"),
     script:
         RUN_STEP
 
@@ -332,7 +283,8 @@ rule p3_scale_table:
         RUN_STEP
 
 
-rule p3_scale_table_full:
+# The same step on the slow tree sizes too (target p3_scale).
+use rule p3_scale_table as p3_scale_table_full with:
     """Full scale table: the default run's rows and the slow tree sizes (CSV and Markdown)."""
     input:
         sizes=P3_SCALE_FULL,
@@ -345,11 +297,6 @@ rule p3_scale_table_full:
         timings_md="results/timings/p3/scale_table_full.md",
     log:
         "logs/p3/scale_table_full.log",
-    params:
-        step="eqrec.studies.p3.scale_table:step_scale_table",
-        cfg=step_config("p3", "scale.tree_slow_sizes"),
-    script:
-        RUN_STEP
 
 
 rule p3_scale_free:

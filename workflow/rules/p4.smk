@@ -3,7 +3,6 @@
 # The sweeps run in p4.sweep_*.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter sweep_eta=N); the merging steps (fig5, fig6)
 # check that they cover the grid exactly once.
-VALUES_FILES.append("results/p4/values.json")
 
 P4_EXAMPLES = list(config["p4"]["examples"])
 
@@ -39,9 +38,7 @@ rule p4_tracking:
         "logs/p4/tracking.log",
     params:
         step="eqrec.studies.p4.steps:step_tracking",
-        cfg=step_config(
-            "p4", "T", "eta_bar", "examples", "pred_steps", "smoother_lag", "tracking"
-        ),
+        cfg=step_config("p4", "T eta_bar examples pred_steps smoother_lag tracking"),
     script:
         RUN_STEP
 
@@ -62,9 +59,7 @@ rule p4_mc:
         example="|".join(P4_EXAMPLES),
     params:
         step="eqrec.studies.p4.steps:step_mc",
-        cfg=step_config(
-            "p4", "T", "eta_bar", "examples", "mc", "pred_steps", "smoother_lag"
-        ),
+        cfg=step_config("p4", "T eta_bar examples mc pred_steps smoother_lag"),
     script:
         RUN_STEP
 
@@ -79,7 +74,7 @@ rule p4_sweep_eta_chunk:
         "logs/p4/sweep_eta_{scatteritem}.log",
     params:
         step="eqrec.studies.p4.steps:step_sweep_eta_chunk",
-        cfg=step_config("p4", "examples", "smoother_lag", "steady", "sweep_eta"),
+        cfg=step_config("p4", "examples smoother_lag steady sweep_eta"),
     script:
         RUN_STEP
 
@@ -94,9 +89,7 @@ rule p4_sweep_q_chunk:
         "logs/p4/sweep_q_{scatteritem}.log",
     params:
         step="eqrec.studies.p4.steps:step_sweep_q_chunk",
-        cfg=step_config(
-            "p4", "eta_bar", "examples", "smoother_lag", "steady", "sweep_q"
-        ),
+        cfg=step_config("p4", "eta_bar examples smoother_lag steady sweep_q"),
     script:
         RUN_STEP
 
@@ -118,7 +111,7 @@ rule p4_fig4:
         "logs/p4/fig4.log",
     params:
         step="eqrec.studies.p4.figures:step_fig4",
-        cfg=step_config("p4", "eta_bar", "smoother_lag"),
+        cfg=step_config("p4", "eta_bar smoother_lag"),
     script:
         RUN_STEP
 
@@ -138,9 +131,7 @@ rule p4_fig5:
         "logs/p4/fig5.log",
     params:
         step="eqrec.studies.p4.figures:step_fig5",
-        cfg=step_config(
-            "p4", "examples", "smoother_lag", "sweep_eta.num", "tracking.example"
-        ),
+        cfg=step_config("p4", "examples smoother_lag sweep_eta.num tracking.example"),
     script:
         RUN_STEP
 
@@ -164,7 +155,7 @@ rule p4_fig6:
         "logs/p4/fig6.log",
     params:
         step="eqrec.studies.p4.figures:step_fig6",
-        cfg=step_config("p4", "eta_bar", "examples", "sweep_q.num", "tracking.example"),
+        cfg=step_config("p4", "eta_bar examples sweep_q.num tracking.example"),
     script:
         RUN_STEP
 
@@ -189,13 +180,8 @@ rule p4_compare:
     params:
         step="eqrec.studies.p4.figures:step_compare",
         # the paper's verdict of each figure (config/claims.yaml), printed beside ours
-        cfg=step_config("p4", "eta_bar", "examples")
-        | {
-            "published": {
-                "ex1": published_value(CLAIMS_FILE, "P4-F7:better-ex1"),
-                "ex2": published_value(CLAIMS_FILE, "P4-F8:better-ex2"),
-            }
-        },
+        cfg=step_config("p4", "eta_bar examples")
+        | published(ex1="P4-F7:better-ex1", ex2="P4-F8:better-ex2"),
     script:
         RUN_STEP
 
@@ -217,14 +203,7 @@ rule p4_values:
     params:
         step="eqrec.studies.p4.values:step_values",
         cfg=step_config(
-            "p4",
-            "T",
-            "eta_bar",
-            "examples",
-            "mc.alpha",
-            "smoother_lag",
-            "steady",
-            "tracking",
+            "p4", "T eta_bar examples mc.alpha smoother_lag steady tracking"
         ),
     script:
         RUN_STEP
