@@ -219,7 +219,8 @@ def step_params(config: Mapping, section: str, *keys: str) -> dict:
     as before) with keys sorted recursively, so that a job is re-planned only
     when a value its step reads changes.  A key the section does not have
     raises :class:`ConfigError` (a misspelt key in a rule).  The rules call it
-    as ``step_config(section, *keys)`` (``workflow/rules/common.smk``).
+    through ``step_config(section, "mu1 heatmap.solver", strategy="figure")``
+    (``workflow/rules/common.smk``: space-separated paths, keys of one subtree by name).
     """
     def canon(x):
         if isinstance(x, Mapping):
