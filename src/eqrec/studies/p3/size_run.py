@@ -55,7 +55,6 @@ separates, :mod:`eqrec.design.classes.engine`); the class engine records
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import resource
@@ -406,15 +405,9 @@ def main(argv: list[str] | None = None) -> None:
         Command-line arguments (default ``sys.argv[1:]``).
     """
     argv = sys.argv[1:] if argv is None else argv
-    ap = argparse.ArgumentParser(prog="python -m eqrec.studies.p3.size_run",
-                                 description="One size of the P3 scale table in this process (one JSON line).")
-    ap.add_argument("args", help="JSON: system (AffineSystem.to_dict), T, tau, method, mu1, time_limit, "
-                                 "mem_limit_gb, builder, options, engine")
-    ap.add_argument("--engine", choices=list(ENGINES), default=None, help="tree (default) or classes")
-    ns = ap.parse_args(argv)
-    args = json.loads(ns.args)
-    if ns.engine is not None:
-        args["engine"] = ns.engine
+    args = json.loads(argv[0])  # system (AffineSystem.to_dict), T, tau, method, mu1, time_limit, mem_limit_gb, ...
+    if "--engine" in argv:
+        args["engine"] = argv[argv.index("--engine") + 1]
     print(json.dumps(_worker(args)), flush=True)
     sys.stderr.flush()
     os._exit(0)  # no interpreter shutdown: threads left by a failed allocation must not keep the worker alive
