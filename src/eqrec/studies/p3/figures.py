@@ -32,11 +32,10 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     data = np.load(inputs.npz)
     res = json.loads(Path(inputs.json).read_text())
     levels = data["levels"]
-    names = list(res["filters"])
     # (name, title, errors, exact worst case, colour) per column
     cols = [("proposed", "Proposed estimator", data["proposed_errors"], data["proposed_bounds"], "C0")]
     cols += [(n, FILTER_TITLES.get(n, n), data[f"{n}_prediction_errors"], data[f"{n}_prediction_worst"], "C3")
-             for n in names]
+             for n in res["filters"]]
     fig, axes = plt.subplots(4, len(cols), figsize=(1.8 * len(cols) + 0.7, 7.4), sharex=True, sharey="row",
                              squeeze=False, layout="constrained")
     for c, (name, title, errs, worst, color) in enumerate(cols):

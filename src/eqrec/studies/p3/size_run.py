@@ -55,6 +55,7 @@ separates, :mod:`eqrec.design.classes.engine`); the class engine records
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import resource
@@ -68,15 +69,10 @@ from eqrec.systems.affine import AffineSystem
 
 #: HiGHS options of each method name.
 METHODS: dict[str, dict] = {
-    "simplex": {"solver": "simplex"},
-    "ipm": {"solver": "ipm", "run_crossover": "off"},
-    "ipm-x": {"solver": "ipm", "run_crossover": "on"},
-    "pdlp": {"solver": "pdlp"},
+    "simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
+    "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"},
     "pdlp-np": {"solver": "pdlp", "presolve": "off"},
-    "ipm-np": {"solver": "ipm", "run_crossover": "off", "presolve": "off"},
-    "auto": {},
-    "none": {},
-}
+    "ipm-np": {"solver": "ipm", "run_crossover": "off", "presolve": "off"}, "auto": {}, "none": {}}
 BUILDERS = ("core",)
 #: ``tree``: the node-per-prefix LP; ``classes``: the class engine (module docstring).
 ENGINES = ("tree", "classes")
@@ -273,15 +269,9 @@ def measure_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu
 
 def _import_all() -> None:
     """Load every module (and shared library) of a measurement before the memory limit is set."""
-    import highspy  # noqa: F401
-    import scipy.linalg  # noqa: F401
-    import scipy.sparse  # noqa: F401
-
-    from eqrec.bounds.data_classes import classes_of_full_language  # noqa: F401
-    from eqrec.lp.solvers import solve_lp  # noqa: F401
-    from eqrec.design.classes.engine import solve_classes  # noqa: F401
-    from eqrec.design.delay.design import delay_language  # noqa: F401
-    from eqrec.design.prefix.tree_lp import build_prefix_lp  # noqa: F401
+    for module in ("highspy", "scipy.linalg", "scipy.sparse", "eqrec.bounds.data_classes", "eqrec.lp.solvers",
+                   "eqrec.design.classes.engine", "eqrec.design.delay.design", "eqrec.design.prefix.tree_lp"):
+        importlib.import_module(module)
 
 
 def _worker(args: dict) -> dict:

@@ -233,10 +233,9 @@ def step_reactor_designs(cfg, inputs, outputs, wildcards) -> dict:
     log.info("mu1 free, IPOPT route on (10) from the LP at mu1 = %g", br["ipopt_start_mu1"])
     ip = design_delay_ipopt(system, words, kind="delay", cost=cost, start_mu1=float(br["ipopt_start_mu1"]))
     log.info("ipopt: mu1 = %.6f, J = %.6f, max mu2 = %.6f", ip.mu1, ip.J, ip.mu2)
-    cmp = compare_free_routes(g, ip)
     A2_norm = no_data_growth(system, 2)
     res: dict = {"words": len(words), "cost": cost, "global": _free_summary(g), "ipopt": _free_summary(ip),
-                 "compare": dict(cmp), "A2_inf_norm": A2_norm}
+                 "compare": compare_free_routes(g, ip), "A2_inf_norm": A2_norm}
     res["global"]["vertex_attainment"] = vertex_attainment(system, g.design, x0)
     res["global"]["levels"] = level_table(g.design)
     readings = []
@@ -335,6 +334,7 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
         entry = {}
         for est in ("prediction", "filtered"):
             cmp = compare_with_bounds(maps, wc.bounds, levels, deltas, estimate=est)
+            errors = arrays[f"{name}_{est}_errors"] = maps.errors(deltas, est)
             n_t = cmp["worst"].shape[0]
             exceed_t = [int(t) for t in np.nonzero(cmp["exceeds_levels"])[0]]
             entry[est] = {"worst": cmp["worst"].tolist(), "worst_norm": cmp["worst_norm"].tolist(),
@@ -342,17 +342,14 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
                           "max_ratio_levels": cmp["max_ratio_levels"], "max_ratio_bounds": cmp["max_ratio"],
                           "sampled_exceed_levels": cmp["sampled_exceed_levels"],
                           "sampled_exceed_bounds": cmp["sampled_exceed"], "samples": cmp["samples"],
-                          "sampled_max_ratio_levels": float(np.max(np.abs(maps.errors(deltas, est)).max(axis=2)
-                                                                   / levels[None, :n_t])),
+                          "sampled_max_ratio_levels": float(np.max(np.abs(errors).max(axis=2) / levels[None, :n_t])),
                           "verdict": "outside" if exceed_t else "inside"}
             # the worst-case vertex of the largest excess attains the exact bound
-            wn = np.asarray(cmp["worst_norm"]) / levels[:n_t]
-            t = int(np.argmax(wn))
+            t = int(np.argmax(np.asarray(cmp["worst_norm"]) / levels[:n_t]))
             i = int(np.argmax(cmp["worst"][t]))
             v = maps.worst_vertex(t, i, est)
             entry[est]["vertex"] = {"t": t, "i": i, "attain_gap": float(abs(abs(maps.errors(v, est)[0, t, i])
                                                                            - cmp["worst"][t, i]))}
-            arrays[f"{name}_{est}_errors"] = maps.errors(deltas, est)
             arrays[f"{name}_{est}_worst"] = cmp["worst"]
         res["filters"][name] = entry
     write_json(outputs.json, res)

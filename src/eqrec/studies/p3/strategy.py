@@ -226,15 +226,12 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
 
     # --- values
     ev_r, ev_a = per_r["evidence"], per_a["evidence"]
-    values["periodic_reactor_within"] = {"value": _within(ev_r["max_ratio"]), "evidence": ev_r}
-    values["periodic_reactor_max_ratio"] = {"value": ev_r["max_ratio"], "evidence": {
-        k: ev_r[k] for k in ("steps", "ratio_tol", "max_ratio_after_start_uniform", "model_gap") if k in ev_r}}
-    values["periodic_acc_within"] = {"value": _within(ev_a["max_ratio"]), "evidence": ev_a}
-    values["periodic_acc_max_ratio"] = {"value": ev_a["max_ratio"], "evidence": {
-        k: ev_a[k] for k in ("steps", "ratio_tol", "model_gap") if k in ev_a}}
-    values["switching_within"] = {"value": _within(sw_ev["max_ratio"]), "evidence": sw_ev}
-    values["switching_max_ratio"] = {"value": sw_ev["max_ratio"], "evidence": {
-        k: sw_ev[k] for k in ("steps", "ratio_tol", "max_ratio_performance", "max_ratio_recovery")}}
+    for name, ev, keys in (("periodic_reactor", ev_r, ("max_ratio_after_start_uniform", "model_gap")),
+                           ("periodic_acc", ev_a, ("model_gap",)),
+                           ("switching", sw_ev, ("max_ratio_performance", "max_ratio_recovery"))):
+        values[f"{name}_within"] = {"value": _within(ev["max_ratio"]), "evidence": ev}
+        values[f"{name}_max_ratio"] = {"value": ev["max_ratio"], "evidence": {
+            k: ev[k] for k in ("steps", "ratio_tol", *keys) if k in ev}}
     values["performance_period1_status"] = {"value": status_at_mu1, "evidence": {
         "mu1": mu1, "lp_status": status_at_mu1, "mu1_min": mm.upper, "mu1_min_lower": mm.lower,
         "smallest_period": smallest_period, "max_period": int(sw["max_period"]), "period_mu1_min": periods_min,
