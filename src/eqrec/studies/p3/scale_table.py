@@ -81,9 +81,8 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
     objective plus the constant ``(1 + 2|L^{E'}|) μ1`` it leaves out) are
     filled in.
     """
-    rows = [dict(r) for r in rows]
+    rows = [{"engine": "tree", **r} for r in rows]
     for r in rows:
-        r.setdefault("engine", "tree")
         if r.get("classes") is None and "T" in r and "tau" in r:
             r["classes"] = class_count(r["T"], r["tau"])
         if (r["engine"] == "tree" and r.get("J") is None and r.get("status") == "optimal"
