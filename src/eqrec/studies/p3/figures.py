@@ -32,12 +32,13 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     data = np.load(inputs.npz)
     res = json.loads(Path(inputs.json).read_text())
     levels = data["levels"]
-    names = list(res["filters"])
-    cols = [("proposed", "Proposed estimator", data["proposed_errors"], "C0")]
-    cols += [(n, FILTER_TITLES.get(n, n), data[f"{n}_prediction_errors"], "C3") for n in names]
+    # (name, title, errors, exact worst case, colour) per column
+    cols = [("proposed", "Proposed estimator", data["proposed_errors"], data["proposed_bounds"], "C0")]
+    cols += [(n, FILTER_TITLES.get(n, n), data[f"{n}_prediction_errors"], data[f"{n}_prediction_worst"], "C3")
+             for n in res["filters"]]
     fig, axes = plt.subplots(4, len(cols), figsize=(1.8 * len(cols) + 0.7, 7.4), sharex=True, sharey="row",
                              squeeze=False, layout="constrained")
-    for c, (name, title, errs, color) in enumerate(cols):
+    for c, (name, title, errs, worst, color) in enumerate(cols):
         inside = bool(np.all(np.abs(errs) <= levels[None, :, None] + 1e-12))
         if name == "proposed":
             verdict = "\nruns and worst case inside"
@@ -46,20 +47,18 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
                        f"case {res['filters'][name]['prediction']['verdict']}")
         trajectory_panel(axes[:, c], errs, levels, title + verdict, state_labels=STATE_LABELS_REACTOR,
                          color=color, ylabels=(c == 0))
-        worst = data["proposed_bounds"] if name == "proposed" else data[f"{name}_prediction_worst"]
         worst_case_lines(axes[:, c], worst, "exact worst case")
     # one scale per state across the estimators: the same quantity, compared
     for i in range(axes.shape[0]):
-        lim = 1.1 * max(max(np.max(levels), np.max((data["proposed_bounds"] if n == "proposed" else
-                                                    data[f"{n}_prediction_worst"])[:, i]),
-                            np.max(np.abs(e[:, :, i]))) for n, _, e, _ in cols)
+        lim = 1.1 * max(max(np.max(levels), np.max(worst[:, i]), np.max(np.abs(errs[:, :, i])))
+                        for _, _, errs, worst, _ in cols)
         for ax in axes[i]:
             ax.set_ylim(-lim, lim)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     labels = ["proposed estimator: error" if lab == "estimation error" else lab for lab in labels]
     labels = ["guarantee $\\mu_{2,k}$ of the proposed estimator" if lab == "guarantee" else lab for lab in labels]
     if len(cols) > 1:  # the Kalman-type filters' traces, drawn in their own colour
-        handles.insert(1, plt.Line2D([], [], color=cols[1][3], alpha=0.6, lw=1.0))
+        handles.insert(1, plt.Line2D([], [], color=cols[1][4], alpha=0.6, lw=1.0))
         labels.insert(1, "Kalman-type filter: error")
     fig.legend(handles, labels, loc="outside lower center", ncol=2)
     fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs (truncated normal, "
@@ -77,12 +76,10 @@ def step_figure2(cfg, inputs, outputs, wildcards) -> None:
     fig, axes = plt.subplots(3, 2, figsize=(7.0, 6.0), sharex=True)
     for col, name, title in ((0, "proposed", "Proposed estimator (levels per event prefix)"),
                              (1, "prefix", "Prefix-based estimator of P1 (one level $M_2$)")):
-        errs = data[f"{name}_errors"]
-        trajectory_panel(axes[:, col], errs, data[f"{name}_levels"],
+        trajectory_panel(axes[:, col], data[f"{name}_errors"], data[f"{name}_levels"],
                          f"{title}\nmax level {float(data[f'{name}_mu2']):.4f}", state_labels=STATE_LABELS_ACC,
                          ylabels=(col == 0))
-        worst = data[f"{name}_bounds"]
-        worst_case_lines(axes[:, col], worst, "certified worst case")
+        worst_case_lines(axes[:, col], data[f"{name}_bounds"], "certified worst case")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=3, bbox_to_anchor=(0.5, -0.02))
     fig.suptitle(f"ACC, true pattern {pattern} (missing data at k = 1), {data['proposed_errors'].shape[0]} runs, "
@@ -111,14 +108,12 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
             ("reactor_switching", "Batch reactor,\nswitching scheme", list(STATE_LABELS_REACTOR),
              float(data["switching_mu1"])))
     fig, axes = plt.subplots(4, 3, figsize=(7.4, 8.0), sharex="col", layout="constrained")
-    # one scale per reactor state across the two reactor columns (the same quantity)
-    reactor_lim = {}
-    for label in ("reactor_periodic", "reactor_switching"):
-        key = f"{label}_{kind}"
-        N = min(window, data[f"{key}_error"].shape[0] - 1)
-        for i in range(data[f"{key}_error"].shape[1]):
-            reactor_lim[i] = max(reactor_lim.get(i, 0.0), 1.15 * max(float(data[f"{key}_level"][: N + 1].max()),
-                                                                  float(np.abs(data[f"{key}_error"][: N + 1, i]).max())))
+
+    def limit(label: str, i: int) -> float:  # the y range of state i over the window of one run
+        err, lev = data[f"{label}_{kind}_error"], data[f"{label}_{kind}_level"]
+        N = min(window, err.shape[0] - 1)
+        return 1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max()))
+
     for c, (label, title, ylabels, mu1) in enumerate(cols):
         key = f"{label}_{kind}"
         err, lev = data[f"{key}_error"], data[f"{key}_level"]
@@ -145,8 +140,9 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
                     ax.axvline(s, color="C4", ls="-", lw=0.7, alpha=0.8,
                                label="period boundary (every $T$ steps)" if j == 0 else None)
             ax.set_ylabel(ylabels[i])
-            lim = reactor_lim[i] if label.startswith("reactor") else (
-                1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max())))
+            # one scale per reactor state across the two reactor columns (the same quantity)
+            lim = (max(limit("reactor_periodic", i), limit("reactor_switching", i)) if label.startswith("reactor")
+                   else limit(label, i))
             ax.set_ylim(-lim, lim)
             if i == 0:
                 ax.set_title(f"{title} = {T}\n$\\mu_1$ = {mu1:g}" if "every" in title else

@@ -17,11 +17,10 @@ its workers' (``VmHWM``).  The target ``p3_scale`` tabulates and plots them
 from __future__ import annotations
 
 import json
-import resource
-import subprocess
 import sys
 import time
 
+from eqrec.studies.p3.size_run import peak_memory_mb, run_fresh
 from eqrec.systems.files import system_from_mapping
 from eqrec.systems.affine import AffineSystem
 
@@ -73,7 +72,7 @@ def measure_free(system: AffineSystem, tau: int, T: int, config: str) -> dict:
     classes = delay_classes(max_delay=int(tau), horizon=int(T))
     res = design_delay_global(system, classes, n_jobs=n_jobs)
     wall = time.perf_counter() - t0
-    peak = max(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, _peak_mb_of_children())
+    peak = max(peak_memory_mb(), _peak_mb_of_children())
     return {"tau": int(tau), "T": int(T), "config": config, "classes": len(classes), "mu1": float(res.mu1),
             "J": float(res.J), "mu2": float(res.mu2), "lower_bound": float(res.lower_bound), "wall_time": wall,
             "peak_mb": peak}
@@ -97,16 +96,13 @@ def run_free(system: AffineSystem, tau: int, T: int, config: str, timeout: float
         :func:`measure_free`'s fields and ``status`` (``"optimal"``, ``"wall-clock kill"`` or
         ``"crashed (...)"``).
     """
-    arg = json.dumps({"system": system.to_dict(), "tau": int(tau), "T": int(T), "config": config})
     base = {"tau": int(tau), "T": int(T), "config": config}
-    try:
-        proc = subprocess.run([sys.executable, "-m", "eqrec.studies.p3.free_size_run", arg], capture_output=True, text=True,
-                              timeout=timeout)
-    except subprocess.TimeoutExpired:
+    proc, result = run_fresh("eqrec.studies.p3.free_size_run", {"system": system.to_dict(), **base}, timeout)
+    if proc is None:
         return {**base, "status": "wall-clock kill"}
     if proc.returncode:
         return {**base, "status": f"crashed ({proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else ''})"}
-    return {**json.loads(proc.stdout.strip().splitlines()[-1]), "status": "optimal"}
+    return {**result, "status": "optimal"}
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import pandas as pd
 
 from eqrec.studies.p3.free_size_run import CONFIGS, run_free
+from eqrec.studies.p3.size_run import class_count
 from eqrec.systems.examples import batch_reactor
 from eqrec.studies.pipeline.logs import get_logger
 from eqrec.studies.pipeline.outputs import save_figure, write_csv, write_text
@@ -36,13 +37,11 @@ FREE_FIELDS = ("tau", "T", "classes", "config", "status", "mu1", "J", "mu2", "lo
 
 def step_scale_free(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """The μ1-free scale runs, their table (values; times and memory in the timings) and the figure."""
-    from eqrec.bounds.data_classes import classes_of_full_language
-
     timeout = 3 * float(cfg["scale"]["time_limit"])
     system = batch_reactor()
     rows = []
     for tau, T in FREE_SIZES:
-        n_classes = len(classes_of_full_language(T, tau))
+        n_classes = class_count(T, tau)
         for config in CONFIGS:
             if config == "monolithic" and n_classes > FREE_MONOLITHIC_MAX_CLASSES:
                 continue

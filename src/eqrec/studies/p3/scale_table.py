@@ -81,9 +81,8 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
     objective plus the constant ``(1 + 2|L^{E'}|) μ1`` it leaves out) are
     filled in.
     """
-    rows = [dict(r) for r in rows]
+    rows = [{"engine": "tree", **r} for r in rows]
     for r in rows:
-        r.setdefault("engine", "tree")
         if r.get("classes") is None and "T" in r and "tau" in r:
             r["classes"] = class_count(r["T"], r["tau"])
         if (r["engine"] == "tree" and r.get("J") is None and r.get("status") == "optimal"
@@ -187,8 +186,6 @@ def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None, timing
 def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
     """Per size run by both engines: LP sizes, total times (language + build + solve), peak memory and J of each
     (without times and memory when ``timings`` is false)."""
-    if not len(frame):
-        return ""
     by = {(int(_value(r["T"])), int(_value(r["tau"])), r["engine"]): r for _, r in frame.iterrows()}
     sizes = sorted({(T, tau) for T, tau, e in by if (T, tau, "tree") in by and (T, tau, "classes") in by})
     if not sizes:
@@ -201,29 +198,19 @@ def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
         vals = [v for v in vals if v is not None and not (isinstance(v, float) and math.isnan(v))]
         return float(sum(vals)) if vals else float("nan")
 
-    # (header, cell of (T, τ̄, tree row, class row), format of _md_cell, a measurement?)
-    columns = [
-        ("T", lambda T, tau, t, c: T, "T", False),
-        ("τ̄", lambda T, tau, t, c: tau, "tau", False),
-        ("sequences", lambda T, tau, t, c: _value(c["sequences"]), "sequences", False),
-        ("nodes", lambda T, tau, t, c: _value(c["nodes"]), "nodes", False),
-        ("classes", lambda T, tau, t, c: _value(c["classes"]), "classes", False),
-        ("tree LP cols", lambda T, tau, t, c: _value(t["cols"]), "cols", False),
-        ("class LP cols", lambda T, tau, t, c: _value(c["cols"]), "cols", False),
-        ("tree total [s]", lambda T, tau, t, c: total(t), "", True),
-        ("classes total [s]", lambda T, tau, t, c: total(c), "", True),
-        ("tree peak [MB]", lambda T, tau, t, c: _value(t["peak_mb"]), "peak_mb", True),
-        ("classes peak [MB]", lambda T, tau, t, c: _value(c["peak_mb"]), "peak_mb", True),
-        ("tree status", lambda T, tau, t, c: t["status"], "status", False),
-        ("classes status", lambda T, tau, t, c: c["status"], "status", False),
-        ("J (tree)", lambda T, tau, t, c: _value(t["J"]), "J", False),
-        ("J (classes)", lambda T, tau, t, c: _value(c["J"]), "J", False),
-    ]
-    columns = [col for col in columns if timings or not col[3]]
+    # (header, engine of the row, field; "total" is the sum above)
+    columns = [("T", "classes", "T"), ("τ̄", "classes", "tau"), ("sequences", "classes", "sequences"),
+               ("nodes", "classes", "nodes"), ("classes", "classes", "classes"), ("tree LP cols", "tree", "cols"),
+               ("class LP cols", "classes", "cols"), ("tree total [s]", "tree", "total"),
+               ("classes total [s]", "classes", "total"), ("tree peak [MB]", "tree", "peak_mb"),
+               ("classes peak [MB]", "classes", "peak_mb"), ("tree status", "tree", "status"),
+               ("classes status", "classes", "status"), ("J (tree)", "tree", "J"), ("J (classes)", "classes", "J")]
+    columns = [col for col in columns if timings or col[2] not in ("total", "peak_mb")]
     lines = ["| " + " | ".join(h for h, *_ in columns) + " |", "|" + "---|" * len(columns)]
     for T, tau in sizes:
-        t, c = by[(T, tau, "tree")], by[(T, tau, "classes")]
-        lines.append("| " + " | ".join(_md_cell(cell(T, tau, t, c), fmt) for _, cell, fmt, _ in columns) + " |")
+        rows = {engine: by[(T, tau, engine)] for engine in ENGINES}
+        cells = [total(rows[e]) if f == "total" else _value(rows[e][f]) for _, e, f in columns]
+        lines.append("| " + " | ".join(_md_cell(v, f) for v, (_, _, f) in zip(cells, columns)) + " |")
     return "\n".join(lines) + "\n"
 
 

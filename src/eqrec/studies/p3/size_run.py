@@ -55,7 +55,7 @@ separates, :mod:`eqrec.design.classes.engine`); the class engine records
 
 from __future__ import annotations
 
-import argparse
+import importlib
 import json
 import os
 import resource
@@ -69,15 +69,10 @@ from eqrec.systems.affine import AffineSystem
 
 #: HiGHS options of each method name.
 METHODS: dict[str, dict] = {
-    "simplex": {"solver": "simplex"},
-    "ipm": {"solver": "ipm", "run_crossover": "off"},
-    "ipm-x": {"solver": "ipm", "run_crossover": "on"},
-    "pdlp": {"solver": "pdlp"},
+    "simplex": {"solver": "simplex"}, "ipm": {"solver": "ipm", "run_crossover": "off"},
+    "ipm-x": {"solver": "ipm", "run_crossover": "on"}, "pdlp": {"solver": "pdlp"},
     "pdlp-np": {"solver": "pdlp", "presolve": "off"},
-    "ipm-np": {"solver": "ipm", "run_crossover": "off", "presolve": "off"},
-    "auto": {},
-    "none": {},
-}
+    "ipm-np": {"solver": "ipm", "run_crossover": "off", "presolve": "off"}, "auto": {}, "none": {}}
 BUILDERS = ("core",)
 #: ``tree``: the node-per-prefix LP; ``classes``: the class engine (module docstring).
 ENGINES = ("tree", "classes")
@@ -92,18 +87,19 @@ _MEMORY_MARKERS = ("MemoryError", "bad_alloc", "Cannot allocate memory", "out of
 
 
 def _check(method: str, builder: str, engine: str = "tree") -> None:
-    if engine not in ENGINES:
-        raise ValueError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}")
-    if method not in METHODS:
-        raise ValueError(f"unknown HiGHS method {method!r}; choose one of {sorted(METHODS)}")
-    if builder not in BUILDERS:
-        raise ValueError(f"unknown builder {builder!r}; choose one of {list(BUILDERS)}")
+    for name, value, allowed in (("engine", engine, ENGINES), ("HiGHS method", method, METHODS),
+                                 ("builder", builder, BUILDERS)):
+        if value not in allowed:
+            raise ValueError(f"unknown {name} {value!r}; choose one of {sorted(allowed)}")
     if engine == "classes" and method == "none":
         raise ValueError("the class engine has no build-only method: choose a HiGHS method")
 
 
-def _builder(engine: str, builder: str) -> str:
-    return "classes" if engine == "classes" else builder
+def _size_fields(engine: str, T: int, tau: int, method: str, builder: str, mu1: float, time_limit: float) -> dict:
+    """The fields that name a measurement, known before it runs (the class engine records ``builder = "classes"``)."""
+    return {"engine": engine, "T": int(T), "tau": int(tau), "classes": class_count(T, tau), "method": method,
+            "builder": "classes" if engine == "classes" else builder, "mu1": float(mu1),
+            "time_limit": float(time_limit)}
 
 
 def _status(raw: str) -> str:
@@ -166,28 +162,25 @@ def tree_J(objective: float, sequences: int, mu1: float) -> float:
     return float(objective) + (1.0 + 2.0 * int(sequences)) * float(mu1)
 
 
-def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: float, time_limit: float,
-                  builder: str, options: dict | None, out: dict) -> dict:
+def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: float, opts: dict, out: dict) -> dict:
     from eqrec.arrivals.prefix_tree import PrefixTree
     from eqrec.lp.solvers import solve_lp
     from eqrec.design.delay.design import delay_language
     from eqrec.design.prefix.tree_lp import build_prefix_lp
 
-    build = build_prefix_lp
-    build(system, PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up (imports)
+    build_prefix_lp(system, PrefixTree(delay_language(max_delay=1, horizon=2)), mu1, levels="sum")  # warm-up
     t0 = time.perf_counter()
     pats = delay_language(max_delay=int(tau), horizon=int(T))
     tree = PrefixTree(pats)
     t1 = time.perf_counter()
     out.update(words=(int(tau) + 1) ** int(T), sequences=len(pats), nodes=len(tree), tree_time=t1 - t0)
-    model = build(system, tree, float(mu1), levels="sum")
+    model = build_prefix_lp(system, tree, float(mu1), levels="sum")
     t2 = time.perf_counter()
     out.update(rows=int(model.lp.shape[0]), cols=int(model.lp.shape[1]), nnz=int(model.lp.A.nnz),
                build_time=t2 - t1)
     if method == "none":
         out["status"] = "built"
         return out
-    opts = {**METHODS[method], **(options or {}), "time_limit": float(time_limit)}
     sol = solve_lp(model.lp, "highs", opts)
     out.update(status=_status(sol.status), solve_time=sol.solve_time, iterations=sol.iterations,
                objective=float(sol.objective))
@@ -198,14 +191,12 @@ def _measure_tree(system: AffineSystem, T: int, tau: int, method: str, mu1: floa
     return out
 
 
-def _measure_classes(system: AffineSystem, T: int, tau: int, method: str, mu1: float, time_limit: float,
-                     options: dict | None, out: dict) -> dict:
+def _measure_classes(system: AffineSystem, T: int, tau: int, mu1: float, opts: dict, out: dict) -> dict:
     from eqrec.bounds.data_classes import classes_of_full_language, full_language_counts
     from eqrec.design.classes.engine import solve_classes
     from eqrec.design.cost import class_cost
     from eqrec.errors import SolverFailure
 
-    opts = {**METHODS[method], **(options or {}), "time_limit": float(time_limit)}
     # the scale table measures the one block LP (its rows, columns, iterations); per class: engine "blocks"
     solve_classes(system, classes_of_full_language(2, 1), float(mu1), solver_options=opts,
                   path="monolithic")  # warm-up (imports)
@@ -269,25 +260,18 @@ def measure_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu
     """
     _check(method, builder, engine)
     out = {} if out is None else out
-    out.update({"engine": engine, "T": int(T), "tau": int(tau), "method": method,
-                "builder": _builder(engine, builder), "mu1": float(mu1), "time_limit": float(time_limit),
-                "classes": class_count(T, tau)})
+    out.update(_size_fields(engine, T, tau, method, builder, mu1, time_limit))
+    opts = {**METHODS[method], **(options or {}), "time_limit": float(time_limit)}
     if engine == "classes":
-        return _measure_classes(system, T, tau, method, float(mu1), time_limit, options, out)
-    return _measure_tree(system, T, tau, method, float(mu1), time_limit, builder, options, out)
+        return _measure_classes(system, T, tau, float(mu1), opts, out)
+    return _measure_tree(system, T, tau, method, float(mu1), opts, out)
 
 
 def _import_all() -> None:
     """Load every module (and shared library) of a measurement before the memory limit is set."""
-    import highspy  # noqa: F401
-    import scipy.linalg  # noqa: F401
-    import scipy.sparse  # noqa: F401
-
-    from eqrec.bounds.data_classes import classes_of_full_language  # noqa: F401
-    from eqrec.lp.solvers import solve_lp  # noqa: F401
-    from eqrec.design.classes.engine import solve_classes  # noqa: F401
-    from eqrec.design.delay.design import delay_language  # noqa: F401
-    from eqrec.design.prefix.tree_lp import build_prefix_lp  # noqa: F401
+    for module in ("highspy", "scipy.linalg", "scipy.sparse", "eqrec.bounds.data_classes", "eqrec.lp.solvers",
+                   "eqrec.design.classes.engine", "eqrec.design.delay.design", "eqrec.design.prefix.tree_lp"):
+        importlib.import_module(module)
 
 
 def _worker(args: dict) -> dict:
@@ -297,19 +281,47 @@ def _worker(args: dict) -> dict:
     if mem_gb > 0:
         lim = int(mem_gb * 2**30)
         resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
-    engine = args.get("engine", "tree")
-    out = {"engine": engine, "T": args["T"], "tau": args["tau"], "method": args["method"],
-           "builder": _builder(engine, args["builder"])}
+    out: dict = {}
     try:
         measure_size(system, args["T"], args["tau"], args["method"], args["mu1"], args["time_limit"],
-                     args["builder"], args.get("options"), out=out, engine=engine)
-    except MemoryError as exc:
-        out.update(status="memory limit", detail=f"MemoryError: {exc}")
-    except Exception as exc:  # noqa: BLE001 - reported, never raised: the table records every size
+                     args["builder"], args.get("options"), out=out, engine=args.get("engine", "tree"))
+    except Exception as exc:  # noqa: BLE001 - reported, never raised: the table records every size (MemoryError too)
         text = f"{type(exc).__name__}: {exc}"
         out.update(status="memory limit" if any(m in text for m in _MEMORY_MARKERS) else "error", detail=text)
     out["peak_mb"] = peak_memory_mb()
     return out
+
+
+def run_fresh(module: str, payload: dict, timeout: float, *flags: str,
+              env: dict | None = None) -> tuple[subprocess.CompletedProcess | None, dict | None]:
+    """``python -m module '<payload as JSON>' *flags`` in a fresh process (its own peak memory).
+
+    Parameters
+    ----------
+    module : str
+        The worker module (prints its result as a JSON line).
+    payload : dict
+        The worker's arguments, sent as one JSON argument.
+    timeout : float
+        Wall-clock seconds before the process is killed.
+    *flags : str
+        Further command-line arguments.
+    env : dict or None, optional
+        The process's environment (default: this one's).
+
+    Returns
+    -------
+    tuple
+        The finished process and its last output line that is a JSON object (``None`` if none);
+        ``(None, None)`` when it was killed at ``timeout``.
+    """
+    try:
+        proc = subprocess.run([sys.executable, "-m", module, json.dumps(payload), *flags], capture_output=True,
+                              text=True, timeout=timeout, env=env)
+    except subprocess.TimeoutExpired:
+        return None, None
+    lines = [ln for ln in proc.stdout.strip().splitlines() if ln.startswith("{")]
+    return proc, (json.loads(lines[-1]) if lines else None)
 
 
 def run_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: float = 0.5,
@@ -351,20 +363,15 @@ def run_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: f
     args = {"system": system.to_dict(), "T": int(T), "tau": int(tau), "method": method, "mu1": float(mu1),
             "time_limit": float(time_limit), "mem_limit_gb": float(mem_limit_gb), "builder": builder,
             "options": dict(options or {}), "engine": engine}
-    base = {"engine": engine, "T": int(T), "tau": int(tau), "classes": class_count(T, tau), "method": method,
-            "builder": _builder(engine, builder), "mu1": float(mu1), "time_limit": float(time_limit),
-            "mem_limit_gb": float(mem_limit_gb)}
+    base = {**_size_fields(engine, T, tau, method, builder, mu1, time_limit), "mem_limit_gb": float(mem_limit_gb)}
     t0 = time.perf_counter()
-    try:
-        p = subprocess.run([sys.executable, "-m", "eqrec.studies.p3.size_run", json.dumps(args), "--engine", engine],
-                           capture_output=True, text=True, timeout=1.5 * float(time_limit) + wall_margin,
-                           env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
-    except subprocess.TimeoutExpired:
-        return {**base, "status": "wall-clock kill", "wall_time": time.perf_counter() - t0}
+    p, result = run_fresh("eqrec.studies.p3.size_run", args, 1.5 * float(time_limit) + wall_margin, "--engine",
+                          engine, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
     wall = time.perf_counter() - t0
-    lines = [ln for ln in p.stdout.strip().splitlines() if ln.startswith("{")]
-    if p.returncode == 0 and lines:
-        return {**base, **json.loads(lines[-1]), "mem_limit_gb": float(mem_limit_gb), "wall_time": wall}
+    if p is None:
+        return {**base, "status": "wall-clock kill", "wall_time": wall}
+    if p.returncode == 0 and result is not None:
+        return {**base, **result, "mem_limit_gb": float(mem_limit_gb), "wall_time": wall}
     tail = p.stderr.strip().splitlines()[-3:]
     if any(m in p.stderr for m in _MEMORY_MARKERS) or (mem_limit_gb > 0 and p.returncode == -signal.SIGABRT
                                                        and "alloc" in p.stderr):
@@ -388,15 +395,9 @@ def main(argv: list[str] | None = None) -> None:
         Command-line arguments (default ``sys.argv[1:]``).
     """
     argv = sys.argv[1:] if argv is None else argv
-    ap = argparse.ArgumentParser(prog="python -m eqrec.studies.p3.size_run",
-                                 description="One size of the P3 scale table in this process (one JSON line).")
-    ap.add_argument("args", help="JSON: system (AffineSystem.to_dict), T, tau, method, mu1, time_limit, "
-                                 "mem_limit_gb, builder, options, engine")
-    ap.add_argument("--engine", choices=list(ENGINES), default=None, help="tree (default) or classes")
-    ns = ap.parse_args(argv)
-    args = json.loads(ns.args)
-    if ns.engine is not None:
-        args["engine"] = ns.engine
+    args = json.loads(argv[0])  # system (AffineSystem.to_dict), T, tau, method, mu1, time_limit, mem_limit_gb, ...
+    if "--engine" in argv:
+        args["engine"] = argv[argv.index("--engine") + 1]
     print(json.dumps(_worker(args)), flush=True)
     sys.stderr.flush()
     os._exit(0)  # no interpreter shutdown: threads left by a failed allocation must not keep the worker alive

@@ -77,7 +77,8 @@ def reactor_language(cfg: dict) -> tuple[str, ...]:
 
 # --------------------------------------------------------------------------- P3-LANG
 
-def _blocks(rows: list[list[str]]) -> str:
+def pattern_text(rows: list[list[str]]) -> str:
+    """A zero pattern (rows of entries) on one line: ``[a, b; c, d]``."""
     return "[" + "; ".join(", ".join(r) for r in rows) + "]"
 
 
@@ -87,19 +88,14 @@ def language_examples(T: int, max_delay: int) -> dict:
     pats = [parse_delay_word(w) for w in words]
     reduced = list(delay_language(words, max_delay=max_delay))
     alpha_of = {p: k + 1 for k, p in enumerate(reduced)}
-    word_rows = []
-    for w, p in zip(words, pats):
-        word_rows.append({"word": w, "arrivals": [a for a in p.arrivals], "events": list(p.events()),
-                          "event_indices": list(event_indices(p)), "event_sequence": event_sequence_label(p),
-                          "alpha": alpha_of[p]})
-    seq_rows = []
-    for k, p in enumerate(reduced):
-        seq_rows.append({
-            "alpha": k + 1, "event_sequence": event_sequence_label(p), "event_indices": list(event_indices(p)),
-            "words": [w for w, q in zip(words, pats) if q == p],
-            "prefixes": [event_sequence_label(p, i) for i in range(1, T + 1)],
-            "event_matrix": event_matrix(p).tolist(), "M_pattern": gain_zero_pattern(p, "M"),
-            "L_pattern": gain_zero_pattern(p, "L")})
+    word_rows = [{"word": w, "arrivals": list(p.arrivals), "events": list(p.events()),
+                  "event_indices": list(event_indices(p)), "event_sequence": event_sequence_label(p),
+                  "alpha": alpha_of[p]} for w, p in zip(words, pats)]
+    seq_rows = [{"alpha": k + 1, "event_sequence": event_sequence_label(p), "event_indices": list(event_indices(p)),
+                 "words": [w for w, q in zip(words, pats) if q == p],
+                 "prefixes": [event_sequence_label(p, i) for i in range(1, T + 1)],
+                 "event_matrix": event_matrix(p).tolist(), "M_pattern": gain_zero_pattern(p, "M"),
+                 "L_pattern": gain_zero_pattern(p, "L")} for k, p in enumerate(reduced)]
     # constraint (6): sequences sharing a prefix share the gain blocks of that prefix
     tree = PrefixTree(reduced)
     shared = []
@@ -134,8 +130,8 @@ def _examples_markdown(ex: dict) -> str:
               "zero pattern of L |", "|---|---|---|---|---|---|---|"]
     for r in ex["reduced"]:
         E = "[" + "; ".join(" ".join(map(str, row)) for row in r["event_matrix"]) + "]"
-        lines.append(f"| {r['alpha']} | {r['event_sequence']} | {', '.join(r['words'])} | "
-                     f"{', '.join(r['prefixes'])} | {E} | {_blocks(r['M_pattern'])} | {_blocks(r['L_pattern'])} |")
+        lines.append(f"| {r['alpha']} | {r['event_sequence']} | {', '.join(r['words'])} | {', '.join(r['prefixes'])} | "
+                     f"{E} | {pattern_text(r['M_pattern'])} | {pattern_text(r['L_pattern'])} |")
     lines += ["", "## Shared prefixes (constraint (6))", "", "| prefix | length | sequences alpha |", "|---|---|---|"]
     for r in ex["shared_prefixes"]:
         lines.append(f"| {r['prefix']} | {r['length']} | {r['alphas']} |")
@@ -155,7 +151,8 @@ def step_languages(cfg, inputs, outputs, wildcards) -> dict:
     write_json(outputs.json, data)
     rows = [{"alpha": r["alpha"], "event_sequence": r["event_sequence"], "words": " ".join(r["words"]),
              "prefixes": " ".join(r["prefixes"]), "event_matrix": json.dumps(r["event_matrix"]),
-             "M_pattern": _blocks(r["M_pattern"]), "L_pattern": _blocks(r["L_pattern"])} for r in ex["reduced"]]
+             "M_pattern": pattern_text(r["M_pattern"]), "L_pattern": pattern_text(r["L_pattern"])}
+            for r in ex["reduced"]]
     write_csv(outputs.csv, pd.DataFrame(rows))
     write_text(outputs.md, _examples_markdown(ex))
     write_csv(outputs.counts, pd.DataFrame([{**c, "nodes_per_depth": " ".join(map(str, c["nodes_per_depth"]))}
@@ -177,16 +174,6 @@ def step_reactor_model(cfg, inputs, outputs, wildcards) -> dict:
     return data
 
 
-def _certificate_summary(design: Design) -> dict:
-    """Certified worst cases per node (from the gains alone) against the designed levels."""
-    rows = level_table(design)
-    inner = [r for r in rows if 0 < r["k"] < design.T]
-    ratio = max(r["certified"] / r["level"] for r in inner) if inner else 1.0
-    return {"certified_mu2": design.certificate.mu2, "certified_terminal": design.certificate.terminal,
-            "J_certified": design.extra.get("J_certified"), "nodes": len(rows) - 1,
-            "max_certified_over_level": float(ratio)}
-
-
 def vertex_attainment(system: AffineSystem, design: Design, x0: np.ndarray) -> dict:
     """Run the causal estimator at the worst-case vertex of every sequence's largest component at every time.
 
@@ -205,14 +192,18 @@ def vertex_attainment(system: AffineSystem, design: Design, x0: np.ndarray) -> d
 
 
 def _design_summary(design: Design) -> dict:
-    """Levels and certificate of a design; ``argmax_*``: the event prefix whose level is the largest."""
-    inner = [r for r in level_table(design) if 0 < r["k"] < design.T]
+    """Levels and certificate of a design; ``argmax_*``: the event prefix whose level is the largest; the certified
+    worst cases per node (from the gains alone) against the designed levels."""
+    rows = level_table(design)
+    inner = [r for r in rows if 0 < r["k"] < design.T]
     top = max(inner, key=lambda r: r["level"]) if inner else None
+    ratio = max(r["certified"] / r["level"] for r in inner) if inner else 1.0
     return {"mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"), "cost": design.extra.get("cost"),
-            "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes"),
-            "classes": design.extra.get("classes"), "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
+            "sequences": design.extra.get("sequences"), "nodes": len(rows) - 1, "classes": design.extra.get("classes"),
+            "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
             "argmax_prefix": None if top is None else top["prefix"], "argmax_depth": None if top is None else top["k"],
-            **_certificate_summary(design)}
+            "certified_mu2": design.certificate.mu2, "certified_terminal": design.certificate.terminal,
+            "J_certified": design.extra.get("J_certified"), "max_certified_over_level": float(ratio)}
 
 
 def _free_summary(res: FreeMu1Result) -> dict:
@@ -242,10 +233,9 @@ def step_reactor_designs(cfg, inputs, outputs, wildcards) -> dict:
     log.info("mu1 free, IPOPT route on (10) from the LP at mu1 = %g", br["ipopt_start_mu1"])
     ip = design_delay_ipopt(system, words, kind="delay", cost=cost, start_mu1=float(br["ipopt_start_mu1"]))
     log.info("ipopt: mu1 = %.6f, J = %.6f, max mu2 = %.6f", ip.mu1, ip.J, ip.mu2)
-    cmp = compare_free_routes(g, ip)
     A2_norm = no_data_growth(system, 2)
     res: dict = {"words": len(words), "cost": cost, "global": _free_summary(g), "ipopt": _free_summary(ip),
-                 "compare": {k: v for k, v in cmp.items()}, "A2_inf_norm": A2_norm}
+                 "compare": compare_free_routes(g, ip), "A2_inf_norm": A2_norm}
     res["global"]["vertex_attainment"] = vertex_attainment(system, g.design, x0)
     res["global"]["levels"] = level_table(g.design)
     readings = []
@@ -344,6 +334,7 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
         entry = {}
         for est in ("prediction", "filtered"):
             cmp = compare_with_bounds(maps, wc.bounds, levels, deltas, estimate=est)
+            errors = arrays[f"{name}_{est}_errors"] = maps.errors(deltas, est)
             n_t = cmp["worst"].shape[0]
             exceed_t = [int(t) for t in np.nonzero(cmp["exceeds_levels"])[0]]
             entry[est] = {"worst": cmp["worst"].tolist(), "worst_norm": cmp["worst_norm"].tolist(),
@@ -351,17 +342,14 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
                           "max_ratio_levels": cmp["max_ratio_levels"], "max_ratio_bounds": cmp["max_ratio"],
                           "sampled_exceed_levels": cmp["sampled_exceed_levels"],
                           "sampled_exceed_bounds": cmp["sampled_exceed"], "samples": cmp["samples"],
-                          "sampled_max_ratio_levels": float(np.max(np.abs(maps.errors(deltas, est)).max(axis=2)
-                                                                   / levels[None, :n_t])),
+                          "sampled_max_ratio_levels": float(np.max(np.abs(errors).max(axis=2) / levels[None, :n_t])),
                           "verdict": "outside" if exceed_t else "inside"}
             # the worst-case vertex of the largest excess attains the exact bound
-            wn = np.asarray(cmp["worst_norm"]) / levels[:n_t]
-            t = int(np.argmax(wn))
+            t = int(np.argmax(np.asarray(cmp["worst_norm"]) / levels[:n_t]))
             i = int(np.argmax(cmp["worst"][t]))
             v = maps.worst_vertex(t, i, est)
             entry[est]["vertex"] = {"t": t, "i": i, "attain_gap": float(abs(abs(maps.errors(v, est)[0, t, i])
                                                                            - cmp["worst"][t, i]))}
-            arrays[f"{name}_{est}_errors"] = maps.errors(deltas, est)
             arrays[f"{name}_{est}_worst"] = cmp["worst"]
         res["filters"][name] = entry
     write_json(outputs.json, res)
@@ -371,18 +359,18 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
 
 # --------------------------------------------------------------------------- P3-ACC and P3-F2
 
-def _acc(cfg: dict) -> tuple[AffineSystem, list[str], float]:
+def _acc(cfg: dict) -> tuple[AffineSystem, list[str], float, list[str], Design]:
+    """The ACC, its delay words, ``μ1``, the same language as missing-data words and P1's prefix design on it."""
     acc = cfg["acc"]
-    return acc_system(), list(acc["language"]), float(acc["mu1"])
+    system, words, mu1 = acc_system(), list(acc["language"]), float(acc["mu1"])
+    missing = [p.canonical_label for p in delay_language(words)]
+    return system, words, mu1, missing, design_prefix(system, missing, mu1, engine="tree")  # P1's LP's gains
 
 
 def step_acc(cfg, inputs, outputs, wildcards) -> dict:
     """P3-ACC: the ACC delay language at ``μ1 = 1`` (sum and max costs) vs P1's prefix design; ``μ1`` free."""
-    system, words, mu1 = _acc(cfg)
-    ac = cfg["acc"]
-    missing = [p.canonical_label for p in delay_language(words)]
+    system, words, mu1, missing, p1 = _acc(cfg)
     log.info("ACC: delay language %s = missing-data language %s, mu1 = %g", words, missing, mu1)
-    p1 = design_prefix(system, missing, mu1, engine="tree")  # P1's estimator: the gains of P1's LP
     out: dict = {"language": words, "missing_data_language": missing, "mu1": mu1,
                  "p1_prefix": {"mu2": p1.mu2, "certified_mu2": p1.certificate.mu2}, "fixed": {}, "free": {}}
     for cost in ("sum", "max"):
@@ -393,7 +381,7 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
         s["levels_below_max"] = sum(1 for v in lv.values() if v < d.mu2 * (1 - 1e-6))
         s["difference_to_p1"] = abs(d.mu2 - p1.mu2)
         out["fixed"][cost] = s
-    for cost in ac["free_costs"]:
+    for cost in cfg["acc"]["free_costs"]:
         log.info("ACC, mu1 free, cost %s (global route)", cost)
         g = design_delay_global(system, words, kind="delay", cost=cost)
         ip = design_delay_ipopt(system, words, kind="delay", cost=cost)
@@ -405,12 +393,10 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
 
 def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
     """P3-F2: proposed (delay design, paper's cost) vs P1 prefix-based estimator on the true pattern, same draws."""
-    system, words, mu1 = _acc(cfg)
+    system, words, mu1, _, prefix = _acc(cfg)
     ac = cfg["acc"]
     sim = ac["simulation"]
-    missing = [p.canonical_label for p in delay_language(words)]
     proposed = design_delay(system, words, mu1, kind="delay", cost=ac["cost"])
-    prefix = design_prefix(system, missing, mu1, engine="tree")  # P1's estimator: the gains of P1's LP
     pat = parse_delay_word(ac["true_pattern"])
     T = pat.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
@@ -419,9 +405,8 @@ def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
     deltas = sample_uncertainty(lay, radius, rng, sim["noise"], size=int(sim["runs"]))
     x0 = np.asarray(sim["x0"], float)
     u = np.full((T, system.m), float(sim["input_force"]))
-    errs = {}
-    for name, d in (("proposed", proposed), ("prefix", prefix)):
-        errs[name] = np.stack([simulate_run(system, d.schedule, pat, dl, x0, u).error for dl in deltas])
+    errs = {name: np.stack([simulate_run(system, d.schedule, pat, dl, x0, u).error for dl in deltas])
+            for name, d in (("proposed", proposed), ("prefix", prefix))}
     b_prop = word_certificate(proposed, pat).bounds
     cert_p = certify_schedule(system, prefix.schedule, [pat], mu1)
     b_pref = next(iter(cert_p.words.values())).bounds

@@ -125,26 +125,32 @@ def _within(ratio: float) -> str:
     return "inside" if ratio <= 1.0 + RATIO_TOL else "outside"
 
 
-def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset: int, x0, **drive) -> dict:
-    T = design.T
-    periods = math.ceil(int(st["steps"]) / T)
+def _long_runs(st: dict, seed_offset: int, what: str, run) -> tuple[dict[str, LongRun], float]:
+    """One long run ``run(rng, kind=kind)`` per noise kind of ``st["noise"]`` (its own random stream) and the longest
+    run time."""
     runs: dict[str, LongRun] = {}
-    gaps, dropped, timing = [], 0, []
+    timing = []
     for j, kind in enumerate(st["noise"]):
         rng = np.random.default_rng([int(st["seed"]), seed_offset, j])
         t0 = time.perf_counter()
-        r = long_run_periodic(system, design.schedule, list(words), periods, rng, mu1=design.mu1,
-                              path_levels=partial(path_levels, design), kind=kind, x0=x0, **drive)
+        r = runs[kind] = run(rng, kind=kind)
         timing.append(time.perf_counter() - t0)
-        gaps.append(periodic_model_gap(r, system, design.schedule))
-        dropped += len(r.dropped)
-        runs[kind] = r
-        log.info("periodic %s, %s noise: %d steps in %.2f s, max error/guarantee %.6f, %d packets dropped "
-                 "after their period", system.name, kind, r.delays.size, timing[-1], r.max_ratio, len(r.dropped))
+        log.info("%s, %s noise: %d steps in %.2f s, max error/guarantee %.6f, %d switches, %d packets dropped late",
+                 what, kind, r.delays.size, timing[-1], r.max_ratio, len(r.switch_times), len(r.dropped))
+    return runs, max(timing)
+
+
+def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset: int, x0, **drive) -> dict:
+    T = design.T
+    periods = math.ceil(int(st["steps"]) / T)
+    run = partial(long_run_periodic, system, design.schedule, list(words), periods, mu1=design.mu1,
+                  path_levels=partial(path_levels, design), x0=x0, **drive)
+    runs, run_time = _long_runs(st, seed_offset, f"periodic {system.name}", run)
+    gap = max(periodic_model_gap(r, system, design.schedule) for r in runs.values())
     ev = _ratio_evidence(runs, T)
     ev.update(T=T, periods=periods, mu1=design.mu1, max_mu2=design.mu2, words=len(words),
-              sequences=len(design.patterns), model_gap=max(gaps), dropped_late=dropped,
-              certificate_excess=certificate_excess(design), run_time_s=max(timing))
+              sequences=len(design.patterns), model_gap=gap, dropped_late=sum(len(r.dropped) for r in runs.values()),
+              certificate_excess=certificate_excess(design), run_time_s=run_time)
     return {"runs": runs, "evidence": ev}
 
 
@@ -201,18 +207,10 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     d_p = design_delay(reactor, on_time, mu1_s, kind="delay", cost=cost)
     rec_words = [w for w in words if w[0] != "0"]
     d_s = design_delay(reactor, rec_words, mu1_s, kind="delay", cost=cost)
-    sw_runs: dict[str, LongRun] = {}
-    timing = []
-    for j, kind in enumerate(st["noise"]):
-        rng = np.random.default_rng([int(st["seed"]), 2, j])
-        t0 = time.perf_counter()
-        r = long_run_switching(reactor, d_p.schedule, d_s.schedule, int(st["steps"]), rng, mu1=mu1_s,
-                               recovery_level=partial(node_level, d_s), max_delay=tb,
-                               p_on_time=float(sw["p_on_time"]), kind=kind, x0=x0_r, controller=controller)
-        timing.append(time.perf_counter() - t0)
-        sw_runs[kind] = r
-        log.info("switching, %s noise: %d steps in %.2f s, %d switches, max error/guarantee %.6f", kind,
-                 r.delays.size, timing[-1], len(r.switch_times), r.max_ratio)
+    sw_runs, sw_time = _long_runs(st, 2, "switching", partial(
+        long_run_switching, reactor, d_p.schedule, d_s.schedule, int(st["steps"]), mu1=mu1_s,
+        recovery_level=partial(node_level, d_s), max_delay=tb, p_on_time=float(sw["p_on_time"]), x0=x0_r,
+        controller=controller))
     sw_ev = _ratio_evidence(sw_runs, None)
     perf = [float(r.ratio[1:][~r.recovering].max()) for r in sw_runs.values() if (~r.recovering).any()]
     rec = [float(r.ratio[1:][r.recovering].max()) for r in sw_runs.values() if r.recovering.any()]
@@ -224,19 +222,16 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
                  max_ratio_performance=max(perf, default=0.0), max_ratio_recovery=max(rec, default=0.0),
                  dropped_late=int(sum(len(r.dropped) for r in sw_runs.values())),
                  certificate_excess=max(certificate_excess(d_s), float(d_p.certificate.terminal - mu1_s)),
-                 run_time_s=max(timing))
+                 run_time_s=sw_time)
 
     # --- values
     ev_r, ev_a = per_r["evidence"], per_a["evidence"]
-    values["periodic_reactor_within"] = {"value": _within(ev_r["max_ratio"]), "evidence": ev_r}
-    values["periodic_reactor_max_ratio"] = {"value": ev_r["max_ratio"], "evidence": {
-        k: ev_r[k] for k in ("steps", "ratio_tol", "max_ratio_after_start_uniform", "model_gap") if k in ev_r}}
-    values["periodic_acc_within"] = {"value": _within(ev_a["max_ratio"]), "evidence": ev_a}
-    values["periodic_acc_max_ratio"] = {"value": ev_a["max_ratio"], "evidence": {
-        k: ev_a[k] for k in ("steps", "ratio_tol", "model_gap") if k in ev_a}}
-    values["switching_within"] = {"value": _within(sw_ev["max_ratio"]), "evidence": sw_ev}
-    values["switching_max_ratio"] = {"value": sw_ev["max_ratio"], "evidence": {
-        k: sw_ev[k] for k in ("steps", "ratio_tol", "max_ratio_performance", "max_ratio_recovery")}}
+    for name, ev, keys in (("periodic_reactor", ev_r, ("max_ratio_after_start_uniform", "model_gap")),
+                           ("periodic_acc", ev_a, ("model_gap",)),
+                           ("switching", sw_ev, ("max_ratio_performance", "max_ratio_recovery"))):
+        values[f"{name}_within"] = {"value": _within(ev["max_ratio"]), "evidence": ev}
+        values[f"{name}_max_ratio"] = {"value": ev["max_ratio"], "evidence": {
+            k: ev[k] for k in ("steps", "ratio_tol", *keys) if k in ev}}
     values["performance_period1_status"] = {"value": status_at_mu1, "evidence": {
         "mu1": mu1, "lp_status": status_at_mu1, "mu1_min": mm.upper, "mu1_min_lower": mm.lower,
         "smallest_period": smallest_period, "max_period": int(sw["max_period"]), "period_mu1_min": periods_min,

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from eqrec.studies.p3.steps import pattern_text
 from eqrec.studies.pipeline.outputs import write_json
 
 #: Relative tolerance for "the same optimum" and for comparing certified bounds.
@@ -32,14 +33,21 @@ def _compare_bounds(a: np.ndarray, b: np.ndarray, rtol: float = SAME_RTOL) -> st
     return "mixed"
 
 
+def _pick(entry: dict, *keys: str, prefix: str = "") -> dict:
+    """``{prefix + key: entry[key]}`` for the ``keys`` in their order (``None`` for a key ``entry`` lacks)."""
+    return {prefix + key: entry.get(key) for key in keys}
+
+
+def _f2_verdict(proposed: np.ndarray, prefix: np.ndarray) -> str:
+    """:func:`_compare_bounds` of the proposed and the prefix-based estimator, by name."""
+    who = _compare_bounds(proposed, prefix)
+    return {"first": "proposed", "second": "prefix-based"}.get(who, who)
+
+
 def step_values(cfg, inputs, outputs, wildcards) -> dict:
     """``values.json``: ``{key: {"value": v, "evidence": {...}}}`` for every P3 number and claim."""
-    lang = json.loads(Path(inputs.languages).read_text())
-    model = json.loads(Path(inputs.model).read_text())
-    br = json.loads(Path(inputs.designs).read_text())
-    aug = json.loads(Path(inputs.augmented).read_text())
-    kal = json.loads(Path(inputs.kalman).read_text())
-    acc = json.loads(Path(inputs.acc).read_text())
+    lang, model, br, aug, kal, acc = (json.loads(Path(path).read_text()) for path in (
+        inputs.languages, inputs.model, inputs.designs, inputs.augmented, inputs.kalman, inputs.acc))
     sim = np.load(inputs.acc_npz)
     v: dict[str, Any] = {}
 
@@ -60,9 +68,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     for k in (0, 1):
         s = seqs[k]
         v[f"lang_E{k + 1}"] = {"value": s["event_matrix"], "evidence": {"sequence": s["event_sequence"]}}
-        v[f"lang_M{k + 1}_pattern"] = {"value": "[" + "; ".join(", ".join(r) for r in s["M_pattern"]) + "]",
-                                       "evidence": {"L_pattern": "[" + "; ".join(", ".join(r) for r in s["L_pattern"])
-                                                    + "]", "sequence": s["event_sequence"]}}
+        v[f"lang_M{k + 1}_pattern"] = {"value": pattern_text(s["M_pattern"]), "evidence": {
+            "L_pattern": pattern_text(s["L_pattern"]), "sequence": s["event_sequence"]}}
     counts = {f"{c['T']},{c['max_delay']}": c for c in lang["counts"]}
     T_br, tb_br = cfg["batch_reactor"]["horizon"], cfg["batch_reactor"]["max_delay"]
     v["br_classes"] = {"value": br["global"]["classes"], "evidence": {
@@ -74,8 +81,9 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                    for k, c in counts.items()}}}
 
     # P3-BR: discretisation
-    v["br_A"] = {"value": np.round(np.asarray(model["A"]), 4).tolist(), "evidence": {"Ts": model["Ts"], "decimals": 4}}
-    v["br_B"] = {"value": np.round(np.asarray(model["B"]), 4).tolist(), "evidence": {"Ts": model["Ts"], "decimals": 4}}
+    for name in ("A", "B"):
+        v[f"br_{name}"] = {"value": np.round(np.asarray(model[name]), 4).tolist(),
+                           "evidence": {"Ts": model["Ts"], "decimals": 4}}
 
     # P3-BR: designs
     g, ip, cmp = br["global"], br["ipopt"], br["compare"]
@@ -83,26 +91,21 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     rd = readings[0] if readings else {}
     A2 = br["A2_inf_norm"]
     design_ev = {
-        "J": g["J"], "lower_bound": g["lower_bound"], "gap": g["gap"], "mu1_min_lower": g["mu1_min"]["lower"],
+        **_pick(g, "J", "lower_bound", "gap"), "mu1_min_lower": g["mu1_min"]["lower"],
         "mu1_min_upper": g["mu1_min"]["upper"], "binding_class": g["mu1_min"]["binding"]["class"],
-        "binding_row": g["mu1_min"]["binding"]["row"], "classes": g["classes"], "ipopt_mu1": ip["mu1"], "ipopt_J": ip["J"], "ipopt_mu2": ip["mu2"],
-        "ipopt_status": ip["status"], "better": cmp["better"], "tolerance": cmp["tolerance"],
-        "certified_mu2": g["certified_mu2"], "certified_terminal": g["certified_terminal"],
-        "max_certified_over_level": g["max_certified_over_level"], "nodes": g["nodes"],
+        "binding_row": g["mu1_min"]["binding"]["row"], "classes": g["classes"],
+        **_pick(ip, "mu1", "J", "mu2", "status", prefix="ipopt_"), **_pick(cmp, "better", "tolerance"),
+        **_pick(g, "certified_mu2", "certified_terminal", "max_certified_over_level", "nodes"),
         "vertex_gap": g["vertex_attainment"]["max_gap"], "vertex_runs": g["vertex_attainment"]["runs"],
         "sequences": g["sequences"], "A2_inf_norm": A2, "mu2_over_mu1": g["mu2"] / g["mu1"],
-        "argmax_prefix": g["argmax_prefix"], "argmax_depth": g["argmax_depth"], "no_data_prefix":
-            br["no_data_prefix"]["exists"],
-        "reading_mu1": rd.get("mu1"), "reading_mu2": rd.get("mu2"), "reading_A2_bound": rd.get("A2_bound"),
-        "reading_certified_mu2": rd.get("certified_mu2")}
-    v["br_mu1"] = {"value": g["mu1"], "evidence": design_ev}
-    v["br_max_mu2"] = {"value": g["mu2"], "evidence": design_ev}
-    v["br_J"] = {"value": g["J"], "evidence": design_ev}
+        **_pick(g, "argmax_prefix", "argmax_depth"), "no_data_prefix": br["no_data_prefix"]["exists"],
+        **_pick(rd, "mu1", "mu2", "A2_bound", "certified_mu2", prefix="reading_")}
+    for key, value in (("br_mu1", g["mu1"]), ("br_max_mu2", g["mu2"]), ("br_J", g["J"])):
+        v[key] = {"value": value, "evidence": design_ev}
     for k, r in enumerate(readings):  # the configured readings of μ1, in config order
         v[f"br_reading_{k}_max_mu2"] = {"value": r["mu2"], "evidence": {
-            "mu1": r["mu1"], "A2_bound": r["A2_bound"], "certified_mu2": r["certified_mu2"],
-            "certified_terminal": r["certified_terminal"], "vertex_gap": r["vertex_attainment"]["max_gap"],
-            "argmax_prefix": r["argmax_prefix"], "J": r["J"]}}
+            **_pick(r, "mu1", "A2_bound", "certified_mu2", "certified_terminal"),
+            "vertex_gap": r["vertex_attainment"]["max_gap"], **_pick(r, "argmax_prefix", "J")}}
     reach = cmp["better"] in ("tie", "ipopt") and cmp["ipopt_consistent_with_bound"]
     v["br_ipopt_global"] = {"value": "yes" if reach else "no", "evidence": {
         **cmp, "ipopt_iterations": ip["iterations"], "mu1_of_ipopt_gains": ip["mu1_of_gains"],
@@ -153,22 +156,20 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "below_max": fs["levels_below_max"], "at_max": fs["levels_at_max"], "min_level": fs["min_level"],
         "mu2": fs["mu2"], "argmax_prefix": fs["argmax_prefix"]}}
     for cost, e in acc["free"].items():
-        gg, cc = e["global"], e["compare"]
+        gg = e["global"]
         v[f"acc_free_mu2_{cost}"] = {"value": gg["mu2"], "evidence": {
-            "mu1": gg["mu1"], "J": gg["J"], "lower_bound": gg["lower_bound"], "gap": gg["gap"],
-            "ipopt_mu2": e["ipopt"]["mu2"], "better": cc["better"], "certified_mu2": gg["certified_mu2"],
+            **_pick(gg, "mu1", "J", "lower_bound", "gap"), "ipopt_mu2": e["ipopt"]["mu2"],
+            "better": e["compare"]["better"], "certified_mu2": gg["certified_mu2"],
             "other_costs": {k: x["global"]["mu2"] for k, x in acc["free"].items()}}}
 
     # P3-F2
     b_prop, b_pref = sim["proposed_bounds"].max(axis=1), sim["prefix_bounds"].max(axis=1)
-    who = _compare_bounds(b_prop, b_pref)
     e_prop = np.abs(sim["proposed_errors"]).max(axis=2)
     e_pref = np.abs(sim["prefix_errors"]).max(axis=2)
-    v["f2_better"] = {"value": {"first": "proposed", "second": "prefix-based"}.get(who, who), "evidence": {
+    v["f2_better"] = {"value": _f2_verdict(b_prop, b_pref), "evidence": {
         "proposed_bound": b_prop.tolist(), "prefix_bound": b_pref.tolist(),
         "proposed_levels": sim["proposed_levels"].tolist(), "prefix_levels": sim["prefix_levels"].tolist(),
-        "levels_verdict": {"first": "proposed", "second": "prefix-based"}.get(
-            lv := _compare_bounds(sim["proposed_levels"], sim["prefix_levels"]), lv),
+        "levels_verdict": _f2_verdict(sim["proposed_levels"], sim["prefix_levels"]),
         "runs": int(sim["proposed_errors"].shape[0]),
         "mean_error_proposed": float(e_prop.mean()), "mean_error_prefix": float(e_pref.mean()),
         "runs_lower_proposed": int((e_prop.sum(axis=1) < e_pref.sum(axis=1)).sum()),
