@@ -22,7 +22,6 @@ the plants are the package's models (:func:`eqrec.systems.examples.acc_system`, 
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 from typing import Any, Callable
 
@@ -172,8 +171,6 @@ def step_table(cfg, inputs, outputs, wildcards) -> None:
         frames.append(frame.assign(**keys))
     table = pd.concat(frames, ignore_index=True).fillna("")
     rest = [c for c in table.columns if c not in KEYS]
-    buf = io.StringIO()
-    table[[*KEYS, *rest]].to_csv(buf, index=False, lineterminator="\n")
-    write_text(outputs.csv, buf.getvalue())
+    write_text(outputs.csv, table[[*KEYS, *rest]].to_csv(index=False, lineterminator="\n"))
     write_json(outputs.json, {"pairs": jobs})
     log.info("compare.csv: %d rows of %d (system, setting) pairs", len(table), len(found))
