@@ -138,10 +138,8 @@ def step_run(cfg, inputs, outputs, wildcards) -> dict:
     compare_figure(result, outputs.png, outputs.pdf, title=title_of(plant["name"], setup))
     report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
               "n": model.n, "p": model.p,
-              "setup": {"loss": setup.loss, "burst": setup.burst, "max_delay": setup.max_delay,
-                        "horizon": setup.horizon, "runs": setup.runs, "periods": setup.periods,
-                        "steps": setup.steps, "seed": setup.seed, "sigmas": setup.sigmas,
-                        "on_time_rate": setup.on_time_rate},
+              "setup": {key: getattr(setup, key) for key in ("loss", "burst", "max_delay", "horizon", "runs",
+                                                             "periods", "steps", "seed", "sigmas", "on_time_rate")},
               **summary_of(result)}
     write_json(outputs.json, report)
     log.info("%s %s: %d runs x %d steps, six families", system, setting, setup.runs, setup.steps)

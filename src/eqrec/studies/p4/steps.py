@@ -80,9 +80,8 @@ def step_tracking(cfg, inputs, outputs, wildcards) -> None:
     labels = [("filter", r"$\hat{{x}}_{i}(t|t)$", filt),
               ("one-step predictor", r"$\hat{{x}}_{i}(t|t-1)$", pred),
               (f"{N}-step smoother", r"$\hat{{x}}_{i}(t|t+" + str(N) + ")$", smooth)]
-    figs = [(outputs.f1, outputs.f1png), (outputs.f2, outputs.f2png), (outputs.f3, outputs.f3png)]
-    for (title, sym, est), (pdf, png), num in zip(labels, figs, (1, 2, 3)):
-        p4_figures.fig_tracking(x, est, title, sym, eta, num, pdf, png)
+    for num, (title, sym, est) in enumerate(labels, start=1):  # Figs. 1-3
+        p4_figures.fig_tracking(x, est, title, sym, eta, outputs[f"f{num}"], outputs[f"f{num}png"])
 
 
 def _check_record(c) -> dict:

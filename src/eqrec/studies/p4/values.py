@@ -38,12 +38,6 @@ def _ranking(zero: np.ndarray, hold: np.ndarray, rtol: float = TIE_RTOL) -> np.n
     return out
 
 
-def _better(zero: np.ndarray, hold: np.ndarray) -> str:
-    """``zero-input``/``hold-input`` if one is lower in every component, ``tie`` if equal (within
-    :data:`TIE_RTOL`), else ``mixed``."""
-    return str(_ranking(zero, hold)[()])
-
-
 def _better_t(d, mech: str, T: int) -> np.ndarray:
     z, h = d["zero/theory_filt"][1: T + 1], d["hold/theory_filt"][1: T + 1]
     return (z < h) if mech == "zero-input" else (h < z)
@@ -147,7 +141,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         plant = plant_of(cfg, ex)
         ssz = steady_variances(plant, "zero-input", eta, N, tol, max_iter)["filt"]
         ssh = steady_variances(plant, "hold-input", eta, N, tol, max_iter)["filt"]
-        verdict = _better(ssz, ssh)
+        verdict = str(_ranking(ssz, ssh)[()])  # of the steady states: one point
         ez, eh = e[f"{ex}/zero/filt"], e[f"{ex}/hold/filt"]
         Fz, Fh = q[f"{ex}/zero/filt"], q[f"{ex}/hold/filt"]
         rank_eta, rank_q = _ranking(ez, eh), _ranking(Fz, Fh)  # ties (eta_bar = 1: the same filter) kept apart

@@ -22,16 +22,10 @@ from eqrec.io import atomic_path, write_text
 def _json_default(obj: Any) -> Any:
     import numpy as np
 
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.floating):
-        return float(obj)
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (set, tuple)):
-        return list(obj)
+    for types, convert in ((np.bool_, bool), (np.integer, int), (np.floating, float), (np.ndarray, np.ndarray.tolist),
+                           ((set, tuple), list)):
+        if isinstance(obj, types):
+            return convert(obj)
     raise TypeError(f"cannot write {type(obj).__name__} as JSON")
 
 
