@@ -46,25 +46,18 @@ def paper_style() -> None:
     })
 
 
-def same_scale_per_row(axes, symmetric: bool = True) -> None:
+def same_scale_per_row(axes) -> None:
     """One y scale per row of a grid of axes (the same quantity across the columns), ``±`` the largest limit.
 
     Parameters
     ----------
     axes : numpy.ndarray
-        ``(rows, cols)`` axes.
-    symmetric : bool, optional
-        ``(-lim, lim)`` with ``lim`` the largest absolute limit of the row (default), else the union.
+        ``(rows, cols)`` axes; each row gets ``(-lim, lim)`` with ``lim`` its largest absolute limit.
     """
     for row in np.atleast_2d(axes):
-        lims = [ax.get_ylim() for ax in row]
-        if symmetric:
-            lim = max(abs(v) for pair in lims for v in pair)
-            lo, hi = -lim, lim
-        else:
-            lo, hi = min(a for a, _ in lims), max(b for _, b in lims)
+        lim = max(abs(v) for ax in row for v in ax.get_ylim())
         for ax in row:
-            ax.set_ylim(lo, hi)
+            ax.set_ylim(-lim, lim)
 
 
 def guarantee_bars(ax, levels: Sequence[float], label: str | None = "guarantee") -> None:

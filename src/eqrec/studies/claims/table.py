@@ -137,9 +137,8 @@ def compare_one(entry: dict, ours: Any) -> tuple[str, str]:
         same = str(ours).strip().lower() == str(paper).strip().lower()
         return ("reproduced" if same else "differs"), "exact match" if same else ""
     if kind == "number":
-        atol = float(cmp.get("atol", default_atol(paper)))
-        rtol = float(cmp.get("rtol", 0.0))
-        ok = abs(float(ours) - float(paper)) <= atol + rtol * abs(float(paper))
+        atol, rtol = float(cmp.get("atol", default_atol(paper))), float(cmp.get("rtol", 0.0))
+        ok = abs(float(ours) - float(paper)) <= _tolerance(entry)
         return ("reproduced" if ok else "differs"), f"tolerance {atol:g} + {rtol:g}|paper|"
     if kind == "array":
         a, b = np.asarray(ours, float), np.asarray(paper, float)
@@ -149,7 +148,7 @@ def compare_one(entry: dict, ours: Any) -> tuple[str, str]:
         gap = float(np.max(np.abs(a - b))) if a.size else 0.0
         return ("reproduced" if gap <= atol else "differs"), f"largest entry gap {gap:.2g} (tolerance {atol:g})"
     if kind == "interval":
-        atol = float(cmp.get("atol", max(default_atol(paper[0]), default_atol(paper[1]))))
+        atol = _tolerance(entry)
         ok = all(abs(float(a) - float(b)) <= atol for a, b in zip(ours, paper))
         return ("reproduced" if ok else "differs"), f"endpoint tolerance {atol:g}"
     raise AssertionError(kind)
@@ -285,15 +284,12 @@ def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | s
         ctx = {**evidence, "value": ours, "paper": _number(entry["paper_value"]), "tol": _tolerance(entry),
                "published": published}
         fields, note, explanation = _reason(entry, ctx, reasons)
-        parts = []
         if status == "differs":
-            parts += [t for t in (note, explanation) if t]
-            if not parts:
-                parts.append("unexplained")
+            parts = [t for t in (note, explanation) if t] or ["unexplained"]
         elif status == "reproduced":
-            parts.append(("within " if tol != "exact match" else "") + tol + (f"; {note}" if note else ""))
+            parts = [("within " if tol != "exact match" else "") + tol + (f"; {note}" if note else "")]
         else:
-            parts.extend(p for p in (tol, note) if p)
+            parts = [p for p in (tol, note) if p]
         shown = _fill(entry["shown_as"], fields, entry["id"]) if entry.get("shown_as") else _format(ours)
         rows.append({"id": entry["id"], "quantity": entry["quantity"], "paper_value": _format(entry["paper_value"]),
                      "our_value": shown, "status": status, "reason": " ".join(parts), "source": entry["source"],

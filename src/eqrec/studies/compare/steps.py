@@ -22,7 +22,6 @@ the plants are the package's models (:func:`eqrec.systems.examples.acc_system`, 
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 from typing import Any, Callable
 
@@ -139,10 +138,8 @@ def step_run(cfg, inputs, outputs, wildcards) -> dict:
     compare_figure(result, outputs.png, outputs.pdf, title=title_of(plant["name"], setup))
     report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
               "n": model.n, "p": model.p,
-              "setup": {"loss": setup.loss, "burst": setup.burst, "max_delay": setup.max_delay,
-                        "horizon": setup.horizon, "runs": setup.runs, "periods": setup.periods,
-                        "steps": setup.steps, "seed": setup.seed, "sigmas": setup.sigmas,
-                        "on_time_rate": setup.on_time_rate},
+              "setup": {key: getattr(setup, key) for key in ("loss", "burst", "max_delay", "horizon", "runs",
+                                                             "periods", "steps", "seed", "sigmas", "on_time_rate")},
               **summary_of(result)}
     write_json(outputs.json, report)
     log.info("%s %s: %d runs x %d steps, six families", system, setting, setup.runs, setup.steps)
@@ -172,8 +169,6 @@ def step_table(cfg, inputs, outputs, wildcards) -> None:
         frames.append(frame.assign(**keys))
     table = pd.concat(frames, ignore_index=True).fillna("")
     rest = [c for c in table.columns if c not in KEYS]
-    buf = io.StringIO()
-    table[[*KEYS, *rest]].to_csv(buf, index=False, lineterminator="\n")
-    write_text(outputs.csv, buf.getvalue())
+    write_text(outputs.csv, table[[*KEYS, *rest]].to_csv(index=False, lineterminator="\n"))
     write_json(outputs.json, {"pairs": jobs})
     log.info("compare.csv: %d rows of %d (system, setting) pairs", len(table), len(found))

@@ -24,11 +24,11 @@ A cell that raises fails the step with one line naming the notebook, the cell
 
 from __future__ import annotations
 
-import contextlib
 import os
 import tempfile
+import time
 from pathlib import Path
-from typing import Iterator
+from unittest import mock
 
 from eqrec.errors import StepError
 from eqrec.studies.pipeline.logs import get_logger
@@ -51,39 +51,25 @@ MATPLOTLIBRC = "svg.hashsalt: eqrec-notebooks\n"
 #: The result files each notebook reads (its rule's inputs): a notebook runs after them and re-runs when
 #: one changes.  ``tests/test_notebooks.py`` checks that every file a notebook names is listed here.
 READS: dict[str, list[str]] = {
-    "p1_prefix_based": [
-        *(f"results/p1/{f}" for f in ("model.json", "designs.json", "extensions.json", "fig1_trajectories.png",
-                                      "fig_ext_M2_vs_M1.png")),
-        "results/claims.csv",
-    ],
-    "p2_augmented": [
-        *(f"results/p2/{f}" for f in ("values.json", "designs.json", "checks.json", "heatmap.csv",
-                                      "realaxis.csv", "f1_trajectories.png", "f2_trajectories.png",
-                                      "f3a_heatmap.png", "f3b_realaxis.png")),
-        "results/claims.csv",
-    ],
-    "p3_delayed": [
-        *(f"results/p3/{f}" for f in ("languages.json", "reactor_model.json", "reactor_designs.json",
-                                      "augmented.json", "kalman.json", "acc.json", "values.json", "examples.md",
-                                      "language_counts.csv", "fig1_kalman.png", "fig2_acc.png",
-                                      "scale_table.csv", "fig_strategy.png", "strategy_values.json")),
-        "results/claims.csv",
-    ],
-    "p4_lmv": [
-        *(f"results/p4/{f}" for f in ("values.json", "mc_ex1.json", "mc_ex2.json", "fig1_filter.png",
-                                      "fig2_predictor.png", "fig3_smoother.png", "fig4_variances.png",
-                                      "fig5_eta.png", "fig6_q.png", "regions.png", "fig7_compare_ex1.png",
-                                      "fig8_compare_ex2.png")),
-        "results/claims.csv",
-    ],
-    "compare": [
-        "results/compare/compare.csv",
-        "results/compare/summary.json",
-        *(f"results/compare/{system}_{setting}.png" for system in ("acc", "reactor")
-          for setting in ("loss01", "loss03", "burst")),
-        "results/claims.csv",
-    ],
+    "p1_prefix_based": [*(f"results/p1/{f}" for f in (
+        "model.json", "designs.json", "extensions.json", "fig1_trajectories.png", "fig_ext_M2_vs_M1.png"))],
+    "p2_augmented": [*(f"results/p2/{f}" for f in (
+        "values.json", "designs.json", "checks.json", "heatmap.csv", "realaxis.csv", "f1_trajectories.png",
+        "f2_trajectories.png", "f3a_heatmap.png", "f3b_realaxis.png"))],
+    "p3_delayed": [*(f"results/p3/{f}" for f in (
+        "languages.json", "reactor_model.json", "reactor_designs.json", "augmented.json", "kalman.json", "acc.json",
+        "values.json", "examples.md", "language_counts.csv", "fig1_kalman.png", "fig2_acc.png", "scale_table.csv",
+        "fig_strategy.png", "strategy_values.json"))],
+    "p4_lmv": [*(f"results/p4/{f}" for f in (
+        "values.json", "mc_ex1.json", "mc_ex2.json", "fig1_filter.png", "fig2_predictor.png", "fig3_smoother.png",
+        "fig4_variances.png", "fig5_eta.png", "fig6_q.png", "regions.png", "fig7_compare_ex1.png",
+        "fig8_compare_ex2.png"))],
+    "compare": ["results/compare/compare.csv", "results/compare/summary.json",
+                *(f"results/compare/{system}_{setting}.png" for system in ("acc", "reactor")
+                  for setting in ("loss01", "loss03", "burst"))],
 }
+for _files in READS.values():  # every notebook reads the claims table
+    _files.append("results/claims.csv")
 
 
 def rule_inputs(wildcards) -> dict[str, str | list[str]]:
@@ -93,20 +79,6 @@ def rule_inputs(wildcards) -> dict[str, str | list[str]]:
 
 class NotebookError(StepError):
     """A notebook cell raised; the message names the notebook and the cell."""
-
-
-@contextlib.contextmanager
-def _environ(**env: str) -> Iterator[None]:
-    old = {k: os.environ.get(k) for k in env}
-    os.environ.update(env)
-    try:
-        yield
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
 
 
 def _merge_streams(outputs: list) -> list:
@@ -157,7 +129,7 @@ def execute(source: str | Path, workdir: str | Path | None = None, timeout: int 
     with tempfile.TemporaryDirectory(prefix="eqrec-nb-") as tmp:
         rc = Path(tmp) / "matplotlibrc"
         rc.write_text(MATPLOTLIBRC)
-        with _environ(**KERNEL_ENV, MATPLOTLIBRC=str(rc)):
+        with mock.patch.dict(os.environ, {**KERNEL_ENV, "MATPLOTLIBRC": str(rc)}):
             _run(client, nb, source)
     normalise(nb)
     return nb
@@ -182,28 +154,16 @@ def _run(client, nb, source: Path) -> None:
         raise NotebookError(f"notebook {source}, {where}: {what}") from None
 
 
-def to_ipynb(nb) -> str:
+def step_execute(cfg, inputs, outputs, wildcards):
+    """``notebooks/<name>.py`` executed against ``results/``: ``<name>.ipynb`` and ``<name>.html`` (readable
+    offline: maths as MathML, no script from the network, :func:`eqrec.studies.notebooks.html.offline_html`)."""
     import nbformat
 
-    nbformat.validate(nb)
-    return nbformat.writes(nb, version=4) + "\n"
-
-
-def to_html(nb, title: str) -> str:
-    """The notebook's HTML, readable offline: maths as MathML, no script from the network
-    (:func:`eqrec.studies.notebooks.html.offline_html`)."""
     from eqrec.studies.notebooks.html import offline_html
-
-    return offline_html(nb, title)
-
-
-def step_execute(cfg, inputs, outputs, wildcards):
-    """``notebooks/<name>.py`` executed against ``results/``: ``<name>.ipynb`` and ``<name>.html``."""
-    import time
 
     t0 = time.perf_counter()
     nb = execute(inputs.notebook, workdir=Path.cwd())
     log.info("%s executed in %.1f s", inputs.notebook, time.perf_counter() - t0)
-    name = Path(inputs.notebook).stem
-    write_text(outputs.ipynb, to_ipynb(nb))
-    write_text(outputs.html, to_html(nb, name))
+    nbformat.validate(nb)
+    write_text(outputs.ipynb, nbformat.writes(nb, version=4) + "\n")
+    write_text(outputs.html, offline_html(nb, Path(inputs.notebook).stem))

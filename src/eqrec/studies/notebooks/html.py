@@ -34,8 +34,7 @@ _SCRIPT_MI = re.compile(r'<mi mathvariant="script">([A-Za-z])</mi>')
 def _script_letter(ch: str) -> str:
     if ch in _SCRIPT_EXCEPTIONS:
         return _SCRIPT_EXCEPTIONS[ch]
-    base = 0x1D49C if ch.isupper() else 0x1D4B6
-    return chr(base + ord(ch.upper() if ch.isupper() else ch) - ord("A" if ch.isupper() else "a"))
+    return chr(0x1D49C + ord(ch) - ord("A") if ch.isupper() else 0x1D4B6 + ord(ch) - ord("a"))
 
 
 def tex_to_mathml(tex: str, display: bool = False) -> str:

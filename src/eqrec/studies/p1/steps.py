@@ -15,9 +15,7 @@ with ``cfg`` the validated ``p1`` section:
 
 from __future__ import annotations
 
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -57,7 +55,6 @@ def step_model(cfg, inputs, outputs, wildcards) -> dict:
 
 def _timed_design(fn, repeats: int) -> tuple[Design, dict]:
     """Run a design ``repeats`` times; report the best build/solve/total times."""
-    best = None
     builds, solves, totals = [], [], []
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -65,9 +62,13 @@ def _timed_design(fn, repeats: int) -> tuple[Design, dict]:
         totals.append(time.perf_counter() - t0)
         builds.append(d.build_time)
         solves.append(d.solve_time)
-        best = d
-    return best, {"build_s": min(builds), "solve_s": min(solves), "total_s": min(totals),
-                  "iterations": best.solution.iterations, "solver": best.solution.solver, "repeats": repeats}
+    return d, {"build_s": min(builds), "solve_s": min(solves), "total_s": min(totals),
+               "iterations": d.solution.iterations, "solver": d.solution.solver, "repeats": repeats}
+
+
+def _certified(d: Design) -> dict:
+    """The design's optimal M2 and what its certificate gives (largest level, terminal error)."""
+    return {"mu2": d.mu2, "certified_mu2": d.certificate.mu2, "certified_terminal": d.certificate.terminal}
 
 
 def step_designs(cfg, inputs, outputs, wildcards) -> dict:
@@ -83,11 +84,9 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
             # the paper-comparison rows (values, iterations, times) keep the paper's form: the tree LP
             d, timing = _timed_design(lambda: fn(system, L1, mu1, solver=solver, engine="tree"),
                                       int(cfg["timing_repeats"]) if solver == "highs" else 1)
-            entry["solvers"][solver] = {"mu2": d.mu2, "certified_mu2": d.certificate.mu2,
-                                        "certified_terminal": d.certificate.terminal, **timing}
+            entry["solvers"][solver] = {**_certified(d), **timing}
             if solver == "highs":
-                entry.update(mu2=d.mu2, certified_mu2=d.certificate.mu2, certified_terminal=d.certificate.terminal,
-                             words=list(d.words), gains=d.schedule.to_json(), timing=timing,
+                entry.update(**_certified(d), words=list(d.words), gains=d.schedule.to_json(), timing=timing,
                              per_time_bound=d.certificate.per_time().tolist())
                 log.info("%s-based: probing M2 <= %.6f - %g", method, d.mu2, gap)
                 entry["lower_bound_probe"] = {"gap": gap, "status": lower_bound_probe(
@@ -179,8 +178,7 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     res["curve"] = curve
     fin = ext["finite_language"]
     d = design_prefix(system, fin, float(cfg["mu1"]), fixed_length=False)  # Section V: a finite-length language
-    res["finite_language"] = {"words": fin, "mu2": d.mu2, "certified_mu2": d.certificate.mu2,
-                              "certified_terminal": d.certificate.terminal,
+    res["finite_language"] = {"words": fin, **_certified(d),
                               "per_word_terminal": {w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}
     res["min_T"] = []
     prog = Progress(log, len(ext["min_T_levels"]), "minimum recovery time", "levels")
@@ -228,9 +226,9 @@ def _min_T_value(min_T: list[dict], language: list[str]) -> dict:
 
 def step_values(cfg, inputs, outputs, wildcards) -> dict:
     """Our value of every published P1 number, with the evidence behind it (numbers only)."""
-    model = json.loads(Path(inputs.model).read_text())
+    model = read_json(inputs.model)
     des = read_json(inputs.designs, timings=inputs.designs_timings)
-    ext = json.loads(Path(inputs.extensions).read_text())
+    ext = read_json(inputs.extensions)
     sim = np.load(inputs.simulation)
     p, t = des["designs"]["prefix"], des["designs"]["time"]
     var = des["variants"]

@@ -24,8 +24,7 @@ UNIT = "[–]"
 Z_BAND = 1.96
 
 
-def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, num: int, pdf: str,
-                 png: str) -> None:
+def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, pdf: str, png: str) -> None:
     """Figs. 1-3: true state components and their estimate against time (legend below the panels)."""
     plt = _plt()
     n = x.shape[1]
@@ -89,7 +88,6 @@ def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None
     etas = d["eta"]
     n = d[f"{ex}/zero/filt"].shape[1]
     fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.3), layout="constrained")
-    p = example
     for i, ax in enumerate(np.atleast_1d(axes)):
         for key, label, col in (("pred", "one-step predictor", "C3"), ("filt", "filter", "C0"),
                                 ("smooth", f"{N}-step smoother", "C2")):
@@ -99,7 +97,8 @@ def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None
         ax.set_ylim(0, None)
     handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=3)
-    fig.suptitle(rf"Steady-state error variances (zero-input), $Q_\xi$ = {p['Qxi']:g}, $Q_\lambda$ = {p['Qlam']:g}")
+    fig.suptitle(rf"Steady-state error variances (zero-input), $Q_\xi$ = {example['Qxi']:g}, "
+                 rf"$Q_\lambda$ = {example['Qlam']:g}")
     save_figure(fig, pdf, png)
 
 
@@ -166,7 +165,7 @@ def _verdict(d, T: int) -> tuple[str, float]:
     return who, 100.0 * abs(float(h.sum() - z.sum())) / min(float(h.sum()), float(z.sum()))
 
 
-def fig_compare(d, se, name: str, eta: float, number: int, paper: str | None, pdf: str, png: str) -> None:
+def fig_compare(d, se, name: str, eta: float, paper: str | None, pdf: str, png: str) -> None:
     """Figs. 7-8: filter error variances of zero- and hold-input, theory (lines) and Monte Carlo (markers, 95 %
     band); the title gives the theoretical verdict and the paper's (``paper``, from ``config/claims.yaml``)."""
     plt = _plt()
@@ -222,4 +221,4 @@ def step_compare(cfg, inputs, outputs, wildcards) -> None:
     """Figs. 7-8: zero-input vs hold-input filter of one example."""
     ex = wildcards["example"]
     fig_compare(np.load(inputs.mc), np.load(inputs.se), cfg["examples"][ex].get("name", ex), float(cfg["eta_bar"]),
-                int(wildcards["number"]), cfg["published"].get(ex), outputs.pdf, outputs.png)
+                cfg["published"].get(ex), outputs.pdf, outputs.png)

@@ -43,10 +43,6 @@ from eqrec.studies.pipeline.outputs import write_json, write_npz
 
 log = get_logger("p4")
 
-#: The key of each mechanism in the arrays the steps write.
-MECH_KEY = MECHANISM_KEYS
-
-
 # --------------------------------------------------------------------------- configuration
 
 
@@ -84,9 +80,8 @@ def step_tracking(cfg, inputs, outputs, wildcards) -> None:
     labels = [("filter", r"$\hat{{x}}_{i}(t|t)$", filt),
               ("one-step predictor", r"$\hat{{x}}_{i}(t|t-1)$", pred),
               (f"{N}-step smoother", r"$\hat{{x}}_{i}(t|t+" + str(N) + ")$", smooth)]
-    figs = [(outputs.f1, outputs.f1png), (outputs.f2, outputs.f2png), (outputs.f3, outputs.f3png)]
-    for (title, sym, est), (pdf, png), num in zip(labels, figs, (1, 2, 3)):
-        p4_figures.fig_tracking(x, est, title, sym, eta, num, pdf, png)
+    for num, (title, sym, est) in enumerate(labels, start=1):  # Figs. 1-3
+        p4_figures.fig_tracking(x, est, title, sym, eta, outputs[f"f{num}"], outputs[f"f{num}png"])
 
 
 def _check_record(c) -> dict:
@@ -123,29 +118,24 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
     for mech in MECHANISMS:
         t1 = time.perf_counter()
         mc = mcs[mech] = run_mc(plant, eta, mech, T, runs, N, rng, sim=sim, pred_steps=Np)
-        k = MECH_KEY[mech]
+        k = MECHANISM_KEYS[mech]
         report[f"ms_radius_{k}"] = ms_spectral_radius(mc.sys)
         checks = {"pred1": compare_moments(mc.err_pred, mc.P_pred, alpha),
                   f"pred{Np}": compare_moments(mc.err_npred, mc.P_npred, alpha)}
-        for j in range(N + 1):
-            valid = np.arange(T + 1 - j)
-            checks["filt" if j == 0 else f"smooth{j}"] = compare_moments(
-                mc.err_smooth[:, valid, j], mc.P_smooth[valid, j], alpha)
-        for name, c in checks.items():
-            report["checks"][f"{k}/{name}"] = _check_record(c)
-            log.info("%s %s %s: %s", example, mech, name, c.summary())
         arrays[f"{k}/theory_pred"] = _diag(mc.P_pred)
         arrays[f"{k}/mc_pred"] = _diag(checks["pred1"].emp)
         errors[f"{k}/se_pred"] = _diag(checks["pred1"].se)
         arrays[f"{k}/theory_npred"] = _diag(mc.P_npred)
         arrays[f"{k}/mc_npred"] = _diag(checks[f"pred{Np}"].emp)
-        for j in range(N + 1):
-            name = "filt" if j == 0 else f"smooth{j}"
-            th, em, se = (np.full((T + 1, plant.n), np.nan) for _ in range(3))
-            th[: T + 1 - j] = _diag(checks[name].theory)
-            em[: T + 1 - j] = _diag(checks[name].emp)
-            se[: T + 1 - j] = _diag(checks[name].se)
-            arrays[f"{k}/theory_{name}"], arrays[f"{k}/mc_{name}"], errors[f"{k}/se_{name}"] = th, em, se
+        for j in range(N + 1):  # the j-step smoother (j = 0: the filter) has values up to t = T - j; NaN after
+            name, valid = "filt" if j == 0 else f"smooth{j}", np.arange(T + 1 - j)
+            c = checks[name] = compare_moments(mc.err_smooth[:, valid, j], mc.P_smooth[valid, j], alpha)
+            for store, key, moment in ((arrays, "theory", c.theory), (arrays, "mc", c.emp), (errors, "se", c.se)):
+                store[f"{k}/{key}_{name}"] = np.full((T + 1, plant.n), np.nan)
+                store[f"{k}/{key}_{name}"][valid] = _diag(moment)
+        for name, c in checks.items():
+            report["checks"][f"{k}/{name}"] = _check_record(c)
+            log.info("%s %s %s: %s", example, mech, name, c.summary())
         log.info("%s %s: estimation and comparison %.2f s", example, mech, time.perf_counter() - t1)
     # Theorem 1 as printed versus the same Monte Carlo (zero-input, predictor).
     printed = theorem1_as_printed(plant, eta, T)
@@ -200,7 +190,7 @@ def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
                 rows.append(steady_variances(plant, mech, float(e), N, tol, max_iter))
                 prog.advance()
             for key in ("pred", "filt", "smooth", "stable"):
-                out[f"{ex}/{MECH_KEY[mech]}/{key}"] = np.array([r[key] for r in rows])
+                out[f"{ex}/{MECHANISM_KEYS[mech]}/{key}"] = np.array([r[key] for r in rows])
     write_npz(outputs.npz, **out)
     return out
 
@@ -223,6 +213,6 @@ def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
                                          tol, max_iter)
                     filt[a, b], stable[a, b] = r["filt"], bool(r["stable"])
                     prog.advance()
-            out[f"{ex}/{MECH_KEY[mech]}/filt"], out[f"{ex}/{MECH_KEY[mech]}/stable"] = filt, stable
+            out[f"{ex}/{MECHANISM_KEYS[mech]}/filt"], out[f"{ex}/{MECHANISM_KEYS[mech]}/stable"] = filt, stable
     write_npz(outputs.npz, **out)
     return out

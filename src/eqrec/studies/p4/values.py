@@ -25,6 +25,10 @@ from eqrec.studies.pipeline.outputs import write_csv, write_json
 #: lost and both compensations are the same filter): counts must not depend on last-digit rounding.
 TIE_RTOL = 1e-9
 
+#: The rows of ``summary.csv``, in order: the key of ``values.json`` and the target of TARGETS.md it answers.
+SUMMARY_TARGETS = {"ordering": "P4-F4", "eta_trend": "P4-F5", "q_trend": "P4-F6", "better_ex1": "P4-F7",
+                   "better_ex2": "P4-F8", "theory_vs_mc": "P4-THEORY", "eq9_as_printed": "P4-THEORY"}
+
 
 def _ranking(zero: np.ndarray, hold: np.ndarray, rtol: float = TIE_RTOL) -> np.ndarray:
     """Per point (last axis = components): ``zero-input`` / ``hold-input`` if lower in every component by more
@@ -36,12 +40,6 @@ def _ranking(zero: np.ndarray, hold: np.ndarray, rtol: float = TIE_RTOL) -> np.n
     out[np.all(zero < hold - gap, axis=-1)] = "zero-input"
     out[np.all(hold < zero - gap, axis=-1)] = "hold-input"
     return out
-
-
-def _better(zero: np.ndarray, hold: np.ndarray) -> str:
-    """``zero-input``/``hold-input`` if one is lower in every component, ``tie`` if equal (within
-    :data:`TIE_RTOL`), else ``mixed``."""
-    return str(_ranking(zero, hold)[()])
 
 
 def _better_t(d, mech: str, T: int) -> np.ndarray:
@@ -72,7 +70,6 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     mc_npz = {ex: _example_file(inputs.mc_npz, f"mc_{ex}") for ex in cfg["examples"]}
     reports = {ex: json.loads(Path(p).read_text()) for ex, p in mc_json.items()}
     values: dict[str, dict] = {}
-    rows = []
 
     # P4-F1..F3: tracking, one realisation
     tr = np.load(inputs.tracking)
@@ -101,7 +98,6 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                      "theory": {k: v[tlast].tolist() for k, v in th.items()},
                      "mc": {k: v[tlast].tolist() for k, v in mcv.items()},
                      "strict_theory": strict["theory"], "strict_mc": strict["mc"]}}
-    rows.append(("P4-F4", "ordering", values["ordering"]["value"]))
 
     # P4-F5: trend in eta_bar
     e = np.load(inputs.eta)
@@ -115,7 +111,6 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                      "eta_hi": float(etas[-1]), "points": int(len(etas)), "decreasing": decreasing,
                      "filt_lo": e[f"{ex0}/zero/filt"][0].tolist(), "filt_mid": e[f"{ex0}/zero/filt"][i_mid].tolist(),
                      "filt_hi": e[f"{ex0}/zero/filt"][-1].tolist()}}
-    rows.append(("P4-F5", "eta_trend", values["eta_trend"]["value"]))
 
     # P4-F6: trend in Q_xi, Q_lambda
     q = np.load(inputs.q)
@@ -128,7 +123,6 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                      "q_lo": float(q["qxi"][0]), "q_hi": float(q["qxi"][-1]), "q_lam_hi": float(q["qlam"][-1]),
                      "increasing_xi": inc_xi, "increasing_lam": inc_lam, "filt_lo": F[0, 0].tolist(),
                      "filt_hi": F[-1, -1].tolist(), "all_stable": bool(np.all(q[f"{ex0}/zero/stable"]))}}
-    rows.append(("P4-F6", "q_trend", values["q_trend"]["value"]))
 
     # P4-THEORY: corrected recursion vs Monte Carlo (per example)
     theory = {}
@@ -140,14 +134,14 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
                       "passed": all(bool(c["passed"]) for c in corrected.values())}
 
     # P4-F7 / P4-F8: zero vs hold
-    for ex, key, fignum in (("ex1", "better_ex1", 7), ("ex2", "better_ex2", 8)):
+    for ex, key in (("ex1", "better_ex1"), ("ex2", "better_ex2")):
         if ex not in mc_npz:
             continue
         d = np.load(mc_npz[ex])
         plant = plant_of(cfg, ex)
         ssz = steady_variances(plant, "zero-input", eta, N, tol, max_iter)["filt"]
         ssh = steady_variances(plant, "hold-input", eta, N, tol, max_iter)["filt"]
-        verdict = _better(ssz, ssh)
+        verdict = str(_ranking(ssz, ssh)[()])  # of the steady states: one point
         ez, eh = e[f"{ex}/zero/filt"], e[f"{ex}/hold/filt"]
         Fz, Fh = q[f"{ex}/zero/filt"], q[f"{ex}/hold/filt"]
         rank_eta, rank_q = _ranking(ez, eh), _ranking(Fz, Fh)  # ties (eta_bar = 1: the same filter) kept apart
@@ -168,12 +162,10 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
             "frac_zero": float(np.mean(rank_q == "zero-input")),
             "frac_tie": float(np.mean(rank_q == "tie")),
             "theory_checks_passed": theory[ex]["passed"]}}
-        rows.append((f"P4-F{fignum}", key, verdict))
 
     all_pass = all(t["passed"] for t in theory.values())
     values["theory_vs_mc"] = {"value": "agrees" if all_pass else "disagrees",
                               "evidence": {"alpha": cfg["mc"]["alpha"], "examples": theory, "all_passed": all_pass}}
-    rows.append(("P4-THEORY", "theory_vs_mc", values["theory_vs_mc"]["value"]))
     printed = {}
     for ex, rep in reports.items():
         pe, cp = rep["printed_eq9"], rep["checks"]["printed_eq9/pred1"]
@@ -184,8 +176,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     values["eq9_as_printed"] = {"value": "agrees" if printed_ok else "disagrees",
                                 "evidence": {"examples": printed, "printed_passed": printed_ok,
                                              "corrected_passed": all_pass}}
-    rows.append(("P4-THEORY", "eq9_as_printed", values["eq9_as_printed"]["value"]))
     write_json(outputs.values, values)
+    rows = [(target, key, values[key]["value"]) for key, target in SUMMARY_TARGETS.items() if key in values]
     write_csv(outputs.table, pd.DataFrame(rows, columns=["target", "key", "value"]))
     return values
 

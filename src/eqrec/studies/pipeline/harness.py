@@ -100,9 +100,6 @@ class Files(Sequence[str]):
     def __iter__(self) -> Iterator[str]:
         return iter(self._items)
 
-    def names(self) -> list[str]:
-        return list(self._named)
-
     def __repr__(self) -> str:
         return f"Files({self._items!r}, named={sorted(self._named)})"
 
@@ -298,8 +295,4 @@ def run_from_snakemake(smk) -> None:
             print(msg, file=sys.stderr, flush=True)
             if terminal is not sys.stderr:
                 print(msg, file=terminal, flush=True)
-            failed = True
-        else:
-            failed = False
-    if failed:
-        raise SystemExit(1)
+            raise SystemExit(1) from None

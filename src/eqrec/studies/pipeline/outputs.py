@@ -22,16 +22,10 @@ from eqrec.io import atomic_path, write_text
 def _json_default(obj: Any) -> Any:
     import numpy as np
 
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.floating):
-        return float(obj)
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (set, tuple)):
-        return list(obj)
+    for types, convert in ((np.bool_, bool), (np.integer, int), (np.floating, float), (np.ndarray, np.ndarray.tolist),
+                           ((set, tuple), list)):
+        if isinstance(obj, types):
+            return convert(obj)
     raise TypeError(f"cannot write {type(obj).__name__} as JSON")
 
 
@@ -96,13 +90,6 @@ def merge_timings(data: Any, timings: Any) -> Any:
     raise StepError("timings file does not match its results file (run the workflow again)")
 
 
-def split_timing_columns(frame, keys: Sequence[str]):
-    """``(rest, timings)`` of a table: the :data:`TIMING_KEYS` columns go to ``timings``, with the ``keys`` columns
-    that identify a row."""
-    timed = [c for c in frame.columns if c in TIMING_KEYS]
-    return frame.drop(columns=timed), frame[[*keys, *timed]]
-
-
 def _json_text(data: Any) -> str:
     return json.dumps(data, indent=2, default=_json_default) + "\n"
 
@@ -142,9 +129,8 @@ def read_json(path: str | Path, timings: str | Path | None = None) -> Any:
 def write_npz(path: str | Path, compressed: bool = False, **arrays: Any) -> None:
     import numpy as np
 
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as fh:
-            (np.savez_compressed if compressed else np.savez)(fh, **arrays)
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        (np.savez_compressed if compressed else np.savez)(fh, **arrays)
 
 
 def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: Sequence[str] = (),
@@ -159,7 +145,8 @@ def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: 
         with atomic_path(path) as tmp:
             frame.to_csv(tmp, **kwargs)
         return
-    rest, timed = split_timing_columns(frame, keys)
+    timing_columns = [c for c in frame.columns if c in TIMING_KEYS]
+    rest, timed = frame.drop(columns=timing_columns), frame[[*keys, *timing_columns]]
     if timings is None and timed.shape[1] > len(keys):
         raise StepError(f"{path}: timing columns {list(timed.columns[len(keys):])} need a timings output")
     if timings is not None:
