@@ -54,15 +54,19 @@ def one(system, words, solver, method):
 # Timed in a fresh interpreter of either version: design_prefix end to end on L1 (prefix and time-based).
 WORKER = r"""
 import json, statistics, sys, time
-try:
+try:  # the layout of issue 25 (rooms and engine subpackages)
     from eqrec.design.prefix.design import design_prefix
+    from eqrec.systems.examples import acc_system
+except ImportError:
     try:
-        from eqrec.systems.examples import acc_system
-    except ImportError:  # layout before the core split of issue 18
-        from eqrec.systems.affine import acc_system
-except ImportError:  # layout before the arrival-pattern core
-    from eqrec.design_prefix import design_prefix
-    from eqrec.systems import acc_system
+        from eqrec.design.prefix import design_prefix
+        try:
+            from eqrec.core.acc import acc_system
+        except ImportError:  # layout before the core split of issue 18
+            from eqrec.core.systems import acc_system
+    except ImportError:  # layout before the arrival-pattern core
+        from eqrec.design_prefix import design_prefix
+        from eqrec.systems import acc_system
 L1 = ["101111", "110111", "111011", "111101"]
 acc = acc_system()
 out = {}

@@ -298,7 +298,7 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
     """P3-F1: the proposed estimator and the Kalman-type filters on the true pattern, same draws.
 
     Each filter is affine in ``δ = (w, v, ξ0)`` on a fixed pattern: its exact
-    worst case over the box (:func:`eqrec.filters.error_maps`) is compared with
+    worst case over the box (:func:`eqrec.simulate.filter_runs.error_maps`) is compared with
     the proposed estimator's guarantees along the pattern (levels ``μ2,k`` and
     per-component certified bounds), for the prediction ``x̂(t|I_{t-1})`` (the
     information the proposed ``x̂(t)`` uses) and the filtered ``x̂(t|I_t)``.
