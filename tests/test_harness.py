@@ -230,6 +230,23 @@ def _smk(tmp_path, step, cfg, output, rule="a_rule", **wildcards):
                            wildcards=Namedlist(fromdict={k: str(v) for k, v in wildcards.items()}), log=log)
 
 
+def test_a_disabled_study_logger_still_logs(tmp_path):
+    """logging.config.dictConfig (disable_existing_loggers, as Snakemake's API calls it) must not silence a step run
+    later in the same process."""
+    import logging
+
+    logger = logs.get_logger("p1")
+    logger.disabled = True
+    try:
+        harness.run_step(P1 + "model", configuration.load_config("p1", root=ROOT),
+                         outputs={"json": str(tmp_path / "model.json")}, log=tmp_path / "step.log")
+        assert (tmp_path / "step.log").read_text().startswith("[p1] step model")
+        assert logger.disabled  # restored
+    finally:
+        logger.disabled = False
+    assert logging.getLogger("eqrec.studies").handlers == []
+
+
 def test_run_from_snakemake_logs_and_writes(tmp_path):
     cfg = configuration.load_config("p1", root=ROOT)
     harness.run_from_snakemake(_smk(tmp_path, P1 + "model", cfg, {"json": str(tmp_path / "model.json")}))

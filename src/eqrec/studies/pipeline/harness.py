@@ -161,6 +161,13 @@ def _log_handler(stream) -> Iterator[None]:
     handler = logging.StreamHandler(stream)
     handler.setFormatter(_StudyFormatter())
     old_level, old_propagate = root.level, root.propagate
+    # a logging.config call elsewhere in this process (dictConfig's disable_existing_loggers, e.g. Snakemake's
+    # API) may have disabled the studies' loggers: a step's log lines go out whatever ran before it
+    studies = [logger for name, logger in logging.root.manager.loggerDict.items()
+               if name.startswith("eqrec.studies") and isinstance(logger, logging.Logger)]
+    disabled = {logger: logger.disabled for logger in studies}
+    for logger in studies:
+        logger.disabled = False
     root.addHandler(handler)
     root.setLevel(logging.INFO)
     root.propagate = False
@@ -171,6 +178,8 @@ def _log_handler(stream) -> Iterator[None]:
         root.removeHandler(handler)
         root.setLevel(old_level)
         root.propagate = old_propagate
+        for logger, was in disabled.items():
+            logger.disabled = was
 
 
 @contextlib.contextmanager
