@@ -59,8 +59,27 @@ def _columns(pre: ArrivalPattern, t: int, p: int) -> np.ndarray:
     return np.array([tau * p + j for tau in pre.available(t) for j in range(p)], dtype=np.int64)
 
 
-def _runtime_L(gains, T: int, n: int, p: int, pattern, runtime: str) -> np.ndarray:
-    return effective_L(as_time_varying_L(gains.L, T, n, p), pattern, check_mode(runtime, RUNTIME_MODES))
+def runtime_L(L: np.ndarray, T: int, n: int, p: int, pattern: "ArrivalPattern | str", runtime: str) -> np.ndarray:
+    """The gains ``L_k`` (shape ``(T, n, p)``) as the runtime ``runtime`` uses them along ``pattern``: the
+    design's ``L`` (constant or per step), zero at the steps the runtime ignores
+    (:func:`eqrec.design.augmented.model.effective_L`).
+
+    Parameters
+    ----------
+    L : numpy.ndarray
+        The design's observer gain, ``(n, p)`` or ``(T, n, p)``.
+    T, n, p : int
+        Horizon, state and output dimensions.
+    pattern : ArrivalPattern or str
+        The arrival pattern (or 0/1 word) run along.
+    runtime : {"theorem2", "hold"}
+        Treatment of missing steps.
+
+    Returns
+    -------
+    numpy.ndarray, shape (T, n, p)
+    """
+    return effective_L(as_time_varying_L(L, T, n, p), pattern, check_mode(runtime, RUNTIME_MODES))
 
 
 def _to_prefix(system: AffineSystem, tree: PrefixTree, gains, runtime: str | None):
@@ -81,7 +100,7 @@ def _to_prefix(system: AffineSystem, tree: PrefixTree, gains, runtime: str | Non
                 out[pre] = (M @ Z[cols], nu + M @ zc[cols])
             return out[pre]
 
-        _innovation_recursion(system, pat, _runtime_L(gains, T, n, p, pat, runtime), gains.s0, injection)
+        _innovation_recursion(system, pat, runtime_L(gains.L, T, n, p, pat, runtime), gains.s0, injection)
     return out
 
 
@@ -246,7 +265,7 @@ def running_error_maps(system: AffineSystem, gains: AugmentedGains, runtime: str
     runtime = check_mode(runtime or default_runtime(gains.mode), RUNTIME_MODES)
     q = arrival_indicator(gains.word)
     T, n, p = q.size, system.n, system.p
-    L = _runtime_L(gains, T, n, p, missing_data_pattern(gains.word), runtime)
+    L = runtime_L(gains.L, T, n, p, missing_data_pattern(gains.word), runtime)
     lay = UncertaintyLayout(T, system.nw, system.nv, n)
     G = np.zeros((T + 1, n, lay.size))
     c = np.zeros((T + 1, n))

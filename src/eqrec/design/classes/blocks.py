@@ -231,7 +231,7 @@ def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1s:
         E, Z = class_maps(st, cls)
         size = {"rows": system.n * m, "cols": system.n * C, "nonzeros": system.n * int(np.count_nonzero(Z))}
         out.append([LevelBlock(K=K[j], levels=levels[j], iterations=int(iters[j]), **size,
-                               bounds=np.abs(E - K[j] @ Z) @ betas[j] if Z.size else np.abs(E) @ betas[j])
+                               bounds=np.abs(E - K[j] @ Z) @ betas[j])
                     for j in range(len(mu1s))])
     return out
 
@@ -280,7 +280,7 @@ def ratio_task(system: AffineSystem, horizon: int, chunk: list[DataClass], solve
                 rows.append((sol.status, None, None, None, sol.iterations))
                 continue
             k = sol.x[model.gain_index[0]] / sol.x[model.t_col[0]]
-            resid = np.abs(E[r] - k @ Z) if Z.size else np.abs(E[r])
+            resid = np.abs(E[r] - k @ Z)  # no data (Z empty): k @ Z is zero
             a = resid[xi0].sum()
             rows.append(("optimal", float(sol.objective), k, resid @ noise_beta / (1.0 - a) if a < 1 else np.inf,
                          sol.iterations))

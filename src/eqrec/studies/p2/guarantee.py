@@ -35,8 +35,8 @@ from eqrec.lp.solvers import solve_lp
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.augmented.model import (DESIGN_MODES, RUNTIME_MODES, AugmentedGains, arrival_indicator,
-                                          as_time_varying_L, check_mode, effective_L)
-from eqrec.design.augmented.runtime import running_error_maps
+                                          check_mode)
+from eqrec.design.augmented.runtime import running_error_maps, runtime_L
 from eqrec.errors import InputError
 
 #: Default tolerance of "optimal for the design LP": ``μ2 <= μ2* (1 + rel) + abs``.
@@ -154,7 +154,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     info.update({int(col): (k // n, None, k % n, None) for k, col in enumerate(design.nu_cols)})
     if any(int(j) not in info for j in cols):
         raise AssertionError("the free columns must be gain columns (M, nu) of the design LP")
-    L = effective_L(as_time_varying_L(design.L, T, n, p), design.word, runtime)
+    L = runtime_L(design.L, T, n, p, design.word, runtime)
     q = arrival_indicator(design.word)
     coupled = [k for k in range(T) if q[k] == 0 and np.any(L[k])]
     k_c = max(coupled, default=0)
