@@ -48,6 +48,18 @@ except configuration.ConfigError as exc:
     raise WorkflowError(f"invalid configuration: {exc}")
 
 
+# The template of every rule that runs a step (`use rule step as p1_model with:`
+# gives the files, log and params): the one script, which runs the step named by
+# the params through eqrec.studies.pipeline.harness. Not a target of its own.
+# The script's path is relative to the rules files, where the inheriting rules are.
+rule step:
+    """Template of the step rules: runs the step its params name (not a target)."""
+    log:
+        "logs/step.log",
+    script:
+        "../scripts/run_step.py"
+
+
 include: "workflow/rules/common.smk"
 include: "workflow/rules/p1.smk"
 include: "workflow/rules/p2.smk"

@@ -23,13 +23,15 @@ RULES = ROOT / "workflow" / "rules"
 
 
 def _rule_steps():
-    """(rule, step, body, rules file) of every rule that runs the harness."""
+    """(rule, step, body, rules file) of every rule that runs the harness: inherits the Snakefile's template rule
+    ``step`` (``use rule step as p1_model with:``)."""
     out = []
     for smk in RULES.glob("*.smk"):
         text = smk.read_text()
-        for rule, body in re.findall(r"^rule (\w+):\n(.*?)(?=^rule |\Z)", text, flags=re.S | re.M):
-            if "RUN_STEP" in body:
-                out.append((rule, re.search(r'step="([\w.:]+)"', body).group(1), body, smk.stem))
+        assert "script:" not in text, smk.name  # no rule runs anything but the template's script
+        for rule, body in re.findall(r"^use rule step as (\w+) with:\n(.*?)(?=^(?:use )?rule |\Z)", text,
+                                     flags=re.S | re.M):
+            out.append((rule, re.search(r'step="([\w.:]+)"', body).group(1), body, smk.stem))
     return out
 
 
@@ -44,11 +46,13 @@ def test_every_rule_names_a_step_function_and_runs_it_through_the_one_script():
         # its code inputs are those of its own step, its configuration keys of its own section
         assert f'code=code_inputs("{step}")' in body, rule
         assert "study=" not in body and body.count("step=") == 1, rule
-        cfg = re.search(r"\n        cfg=(.*?),\n    (?:script|benchmark):", body, flags=re.S)
+        cfg = re.search(r"\n        cfg=(.*?),\n(?:    benchmark:|\n|\Z)", body, flags=re.S)
         assert cfg is None or cfg.group(1).startswith((f'step_config(\n            "{study}",',
                                                        f'step_config("{study}",')), (rule, cfg)
     for smk in RULES.glob("*.smk"):
         assert "shell:" not in smk.read_text() and "python -m" not in smk.read_text(), smk.name
+    template = re.search(r"^rule step:\n(.*?)\n\n", (ROOT / "Snakefile").read_text(), flags=re.S | re.M).group(1)
+    assert "output:" not in template and 'script:\n        "../scripts/run_step.py"' in template
     script = (ROOT / "workflow" / "scripts" / "run_step.py").read_text()
     assert "run_from_snakemake(snakemake)" in script
 

@@ -21,18 +21,25 @@ DEFAULT_PROFILE = ROOT / "workflow" / "profiles" / "default" / "config.yaml"
 
 
 def _job_rules() -> set[str]:
-    """Rules of the workflow that run a job (script/shell/run, or inherit one by `use rule`), from the rules files."""
-    names = set()
+    """Rules of the workflow that run a job: a script/shell/run of their own or inherited by `use rule`, and
+    outputs (the Snakefile's template `step`, which has none, is never a job), from the rules files."""
+    runs, outputs, inherits = set(), set(), []
     for smk in [ROOT / "Snakefile", *sorted((ROOT / "workflow" / "rules").glob("*.smk"))]:
-        text = smk.read_text()
-        blocks = re.split(r"^(?:rule|checkpoint) (\w+):", text, flags=re.M)
-        for name, body in zip(blocks[1::2], blocks[2::2]):
+        blocks = re.split(r"^(?:rule (\w+):|use rule (\w+) as (\w+) with:)", smk.read_text(), flags=re.M)
+        for name, base, child, body in zip(blocks[1::4], blocks[2::4], blocks[3::4], blocks[4::4]):
+            if child:  # runs what its base runs
+                name = child
+                inherits.append((base, child))
             if re.search(r"^    (script|shell|run|notebook|wrapper):", body, flags=re.M):
-                names.add(name)
-        # use rule base as name with: ... runs what its base runs
-        names |= {name for base, name in re.findall(r"^use rule (\w+) as (\w+) with:", text, flags=re.M)
-                  if base in names}
-    return names
+                runs.add(name)
+            if re.search(r"^    output:", body, flags=re.M):
+                outputs.add(name)
+    for base, child in inherits:  # in file order: a base is defined before it is used
+        if base in runs:
+            runs.add(child)
+        if base in outputs:
+            outputs.add(child)
+    return runs & outputs
 
 
 def test_slurm_profile_sets_resources_for_exactly_the_job_rules():

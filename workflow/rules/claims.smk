@@ -3,7 +3,7 @@
 # of the studies (included before this file) and the values of P1's timings.
 
 
-rule claims:
+use rule step as claims with:
     """results/claims.csv and the readable results/REPRODUCTION.md."""
     input:
         claims="config/claims.yaml",
@@ -17,18 +17,10 @@ rule claims:
         timings=[rules.p1_values.output.timings],
         code=code_inputs("eqrec.studies.claims.table:step_table"),
     output:
-        csv=report(
-            "results/claims.csv", caption="../report/claims.rst", category="Claims"
-        ),
-        md=report(
-            "results/REPRODUCTION.md",
-            caption="../report/reproduction.rst",
-            category="Claims",
-        ),
+        csv=in_report("results/claims.csv", "claims", "Claims"),
+        md=in_report("results/REPRODUCTION.md", "reproduction", "Claims"),
         timings="results/timings/claims.csv",
     log:
         "logs/claims.log",
     params:
         step="eqrec.studies.claims.table:step_table",
-    script:
-        RUN_STEP

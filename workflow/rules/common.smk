@@ -1,12 +1,15 @@
-# Shared by the rules files. Every rule is thin, it runs the one generic
-# script, workflow/scripts/run_step.py, which calls
-# eqrec.studies.pipeline.harness.run_from_snakemake; the rule's params name the
-# step by the path of its function (step="eqrec.studies.p1.steps:step_model",
-# resolved with pkgutil.resolve_name) and carry cfg, the configuration keys that
-# step reads (no more; none when absent), as Snakemake resolved them (config
-# files, --configfile, --config; validated by the Snakefile), nested as in the
-# study's section. A changed value therefore re-plans the jobs whose step reads
-# it (params rerun trigger), and only those: a figure's parameter re-plans that
+# Shared by the rules files. Every rule that runs a step inherits (Snakemake's
+# "use rule step as p1_model with") from the template rule `step` of the
+# Snakefile, which holds the one thing they share, the generic script
+# workflow/scripts/run_step.py, which calls
+# eqrec.studies.pipeline.harness.run_from_snakemake. Each rule gives its files,
+# its log and its params: the step by the path of its function
+# (step="eqrec.studies.p1.steps:step_model", resolved with
+# pkgutil.resolve_name) and cfg, the configuration keys that step reads (no
+# more; none when absent), as Snakemake resolved them (config files,
+# --configfile, --config; validated by the Snakefile), nested as in the study's
+# section. A changed value therefore re-plans the jobs whose step reads it
+# (params rerun trigger), and only those: a figure's parameter re-plans that
 # figure. A step reading a key its rule does not give fails naming the key
 # (harness.StepConfig).
 #
@@ -16,24 +19,14 @@
 # editing code a step does not import (the LP modules for a figure, eqrec/lmv
 # for P1) does not re-run its job. No mathematics here.
 #
-# Why the rules spell out their `code` input, `step` param and script (this
-# file has functions, so `snakemake --lint` wants no line in it to look like a
-# rule header, a colon after the word rule).
-# - a template (a rule `_step` with only the script, and every other one written
-#   as `use rule _step as p1_model with`) would save the two script lines of
-#   each, but the template is itself a rule. It shows in --list-rules,
-#   needs a log of its own for `snakemake --lint` and resources in the SLURM
-#   profile, and a reader has to look elsewhere to see what a rule runs. (A
-#   template in a module, `use rule step from steps as p1_model with`, is no
-#   rule of its own, but dresses every rule of the workflow as an imported one.)
-#   `use rule ... with` is kept for true variants of one step
-#   (p3_scale_class_size, p3_scale_table_full).
-# - the step is named twice, in `code=code_inputs(...)` and `step=...`, because
-#   no directive sees the other. Input functions get only the wildcards, and
-#   `input: **d` / `params: **d` (valid Snakemake) fill one directive each.
-# - step_config takes the keys as one space-separated string (as
-#   collections.namedtuple takes its field names), which snakefmt keeps on one
-#   line where a list of strings is broken into one key a line.
+# The step is named twice, in `code=code_inputs(...)` and `step=...`, because
+# no directive sees the other: input functions get only the wildcards, and
+# `input: **d` / `params: **d` (valid Snakemake) fill one directive each.
+# step_config takes the keys as one space-separated string (as
+# collections.namedtuple takes its field names), which snakefmt keeps on one
+# line where a list of strings is broken into one key a line. (This file has
+# functions, so `snakemake --lint` wants no rule in it, and the template lives
+# in the Snakefile.)
 from eqrec.studies.claims.published import published_value
 from eqrec.studies.pipeline.code import code_inputs
 from eqrec.studies.pipeline.configuration import step_params
@@ -43,9 +36,6 @@ from eqrec.studies.pipeline.outputs import timings_of
 
 # The only place published numbers live.
 CLAIMS_FILE = "config/claims.yaml"
-
-# Relative to the rules files.
-RUN_STEP = "../scripts/run_step.py"
 
 
 def step_config(section, keys="", **subtrees):
@@ -86,6 +76,13 @@ def published(**claims):
             name: published_value(CLAIMS_FILE, claim) for name, claim in claims.items()
         }
     }
+
+
+def in_report(path, caption, category, **kwargs):
+    """An output shown in ``snakemake --report``: ``path`` with the caption
+    ``workflow/report/<caption>.rst``, under ``category`` (``kwargs``:
+    ``subcategory`` and the other options of Snakemake's ``report``)."""
+    return report(path, caption=f"../report/{caption}.rst", category=category, **kwargs)
 
 
 def scale_files(sizes, engine=""):

@@ -11,7 +11,7 @@ COMPARE_PAIRS = dict(
 )
 
 
-rule compare_run:
+use rule step as compare_run with:
     """One (system, setting): the table, the figure and the summary of every family on the same traces."""
     input:
         code=code_inputs("eqrec.studies.compare.steps:step_run"),
@@ -19,10 +19,10 @@ rule compare_run:
         csv="results/compare/{system}_{setting}.csv",
         json="results/compare/{system}_{setting}.json",
         pdf="results/compare/{system}_{setting}.pdf",
-        png=report(
+        png=in_report(
             "results/compare/{system}_{setting}.png",
-            caption="../report/compare.rst",
-            category="Compare",
+            "compare",
+            "Compare",
             subcategory="{system}",
         ),
     log:
@@ -35,30 +35,22 @@ rule compare_run:
     params:
         step="eqrec.studies.compare.steps:step_run",
         cfg=step_config("compare", "periods runs seed settings systems"),
-    script:
-        RUN_STEP
 
 
-rule compare_table:
+use rule step as compare_table with:
     """Every (system, setting) in one table, compare.csv, and the summaries in summary.json."""
     input:
         csv=expand(rules.compare_run.output.csv, **COMPARE_PAIRS),
         json=expand(rules.compare_run.output.json, **COMPARE_PAIRS),
         code=code_inputs("eqrec.studies.compare.steps:step_table"),
     output:
-        csv=report(
-            "results/compare/compare.csv",
-            caption="../report/compare_table.rst",
-            category="Compare",
-        ),
+        csv=in_report("results/compare/compare.csv", "compare_table", "Compare"),
         json="results/compare/summary.json",
     log:
         "logs/compare/table.log",
     params:
         step="eqrec.studies.compare.steps:step_table",
         cfg=step_config("compare", "settings systems"),
-    script:
-        RUN_STEP
 
 
 rule compare:

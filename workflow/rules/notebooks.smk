@@ -10,26 +10,20 @@ from eqrec.studies.notebooks import execute as notebook_execute
 NOTEBOOKS = sorted(notebook_execute.READS)
 
 
-rule notebooks_execute:
+use rule step as notebooks_execute with:
     """One notebook executed: .ipynb with its outputs, and its HTML rendering."""
     input:
         unpack(notebook_execute.rule_inputs),
         code=code_inputs("eqrec.studies.notebooks.execute:step_execute"),
     output:
         ipynb="results/notebooks/{name}.ipynb",
-        html=report(
-            "results/notebooks/{name}.html",
-            caption="../report/notebooks.rst",
-            category="Notebooks",
-        ),
+        html=in_report("results/notebooks/{name}.html", "notebooks", "Notebooks"),
     log:
         "logs/notebooks/{name}.log",
     wildcard_constraints:
         name="|".join(NOTEBOOKS),
     params:
         step="eqrec.studies.notebooks.execute:step_execute",
-    script:
-        RUN_STEP
 
 
 rule notebooks:

@@ -2,7 +2,7 @@
 # Each rule runs one step of eqrec.studies.p1.steps through the harness (common.smk).
 
 
-rule p1_model:
+use rule step as p1_model with:
     """P1-T1: ACC model from the Table I constants."""
     input:
         code=code_inputs("eqrec.studies.p1.steps:step_model"),
@@ -13,11 +13,9 @@ rule p1_model:
     params:
         step="eqrec.studies.p1.steps:step_model",
         cfg=step_config("p1", "acc_constants"),
-    script:
-        RUN_STEP
 
 
-rule p1_designs:
+use rule step as p1_designs with:
     """P1-M2, P1-TIME: prefix- and time-based designs on L1, certified, timed, probed."""
     input:
         code=code_inputs("eqrec.studies.p1.steps:step_designs"),
@@ -32,11 +30,9 @@ rule p1_designs:
             "p1",
             "acc_constants language mu1 probe_gap probe_solvers solvers timing_repeats",
         ),
-    script:
-        RUN_STEP
 
 
-rule p1_simulate:
+use rule step as p1_simulate with:
     """P1-F1: Monte Carlo runs of both estimators on the same draws."""
     input:
         code=code_inputs("eqrec.studies.p1.steps:step_simulate"),
@@ -47,31 +43,23 @@ rule p1_simulate:
     params:
         step="eqrec.studies.p1.steps:step_simulate",
         cfg=step_config("p1", "acc_constants language mu1 simulation"),
-    script:
-        RUN_STEP
 
 
-rule p1_figure1:
+use rule step as p1_figure1 with:
     """P1-F1 figure."""
     input:
         npz="results/p1/simulation.npz",
         code=code_inputs("eqrec.studies.p1.figures:step_figure1"),
     output:
         pdf="results/p1/fig1_trajectories.pdf",
-        png=report(
-            "results/p1/fig1_trajectories.png",
-            caption="../report/p1_fig1.rst",
-            category="P1",
-        ),
+        png=in_report("results/p1/fig1_trajectories.png", "p1_fig1", "P1"),
     log:
         "logs/p1/figure1.log",
     params:
         step="eqrec.studies.p1.figures:step_figure1",
-    script:
-        RUN_STEP
 
 
-rule p1_extensions:
+use rule step as p1_extensions with:
     """P1-EXT: M2*(M1), minimum M1, finite-length language, minimum T."""
     input:
         code=code_inputs("eqrec.studies.p1.steps:step_extensions"),
@@ -82,32 +70,24 @@ rule p1_extensions:
     params:
         step="eqrec.studies.p1.steps:step_extensions",
         cfg=step_config("p1", "acc_constants extensions language mu1"),
-    script:
-        RUN_STEP
 
 
-rule p1_figure_ext:
+use rule step as p1_figure_ext with:
     """P1-EXT figure."""
     input:
         json="results/p1/extensions.json",
         code=code_inputs("eqrec.studies.p1.figures:step_figure_ext"),
     output:
         pdf="results/p1/fig_ext_M2_vs_M1.pdf",
-        png=report(
-            "results/p1/fig_ext_M2_vs_M1.png",
-            caption="../report/p1_ext.rst",
-            category="P1",
-        ),
+        png=in_report("results/p1/fig_ext_M2_vs_M1.png", "p1_ext", "P1"),
     log:
         "logs/p1/figure_ext.log",
     params:
         step="eqrec.studies.p1.figures:step_figure_ext",
         cfg=step_config("p1", "extensions.T_max"),
-    script:
-        RUN_STEP
 
 
-rule p1_values:
+use rule step as p1_values with:
     """Our value of every published P1 number, with its evidence."""
     input:
         model="results/p1/model.json",
@@ -123,8 +103,6 @@ rule p1_values:
         "logs/p1/values.log",
     params:
         step="eqrec.studies.p1.steps:step_values",
-    script:
-        RUN_STEP
 
 
 rule p1:

@@ -9,7 +9,7 @@ scattergather:
     heatmap=config["p2"]["heatmap"]["chunks"],
 
 
-rule p2_designs:
+use rule step as p2_designs with:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
     input:
         code=code_inputs("eqrec.studies.p2.steps:step_designs"),
@@ -22,11 +22,9 @@ rule p2_designs:
     params:
         step="eqrec.studies.p2.steps:step_designs",
         cfg=step_config("p2", "T f1_words f2_words init_poles mu1"),
-    script:
-        RUN_STEP
 
 
-rule p2_simulate:
+use rule step as p2_simulate with:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
     input:
         designs="results/p2/designs.npz",
@@ -38,11 +36,9 @@ rule p2_simulate:
     params:
         step="eqrec.studies.p2.steps:step_simulate",
         cfg=step_config("p2", "f1_words f2_words mu1 noise runs seed x0"),
-    script:
-        RUN_STEP
 
 
-rule p2_heatmap_chunk:
+use rule step as p2_heatmap_chunk with:
     """P2-F3a: one theta-chunk of the eigenvalue sweep, every variant (one LP per variant, L values updated)."""
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_chunk"),
@@ -53,11 +49,9 @@ rule p2_heatmap_chunk:
     params:
         step="eqrec.studies.p2.sweeps:step_heatmap_chunk",
         cfg=step_config("p2", "heatmap mu1"),
-    script:
-        RUN_STEP
 
 
-rule p2_heatmap_merge:
+use rule step as p2_heatmap_merge with:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
         chunks=gather.heatmap("results/p2/heatmap/chunk_{scatteritem}.csv"),
@@ -70,11 +64,9 @@ rule p2_heatmap_merge:
     params:
         step="eqrec.studies.p2.sweeps:step_heatmap_merge",
         cfg=step_config("p2", heatmap="chunks n_r n_theta r_max variants"),
-    script:
-        RUN_STEP
 
 
-rule p2_realaxis:
+use rule step as p2_realaxis with:
     """P2-F3b: real double eigenvalue sweep."""
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_realaxis"),
@@ -88,11 +80,9 @@ rule p2_realaxis:
         cfg=step_config(
             "p2", "mu1 realaxis", heatmap="second_solver solver variants word"
         ),
-    script:
-        RUN_STEP
 
 
-rule p2_checks:
+use rule step as p2_checks with:
     """P2-S0, P2-SOLVER."""
     input:
         code=code_inputs("eqrec.studies.p2.steps:step_checks"),
@@ -106,11 +96,9 @@ rule p2_checks:
         cfg=step_config(
             "p2", "f2_words init_poles mu1 noise runs s0_samples seed solvers x0"
         ),
-    script:
-        RUN_STEP
 
 
-rule p2_printed:
+use rule step as p2_printed with:
     """P2-F2 at the paper's printed L (read from config/claims.yaml): theorem2 and masked_gain LPs, the
     masked_gain gains certified as the estimator that runs; nilpotent L at r = 0."""
     input:
@@ -127,11 +115,9 @@ rule p2_printed:
             published_value(CLAIMS_FILE, config["p2"]["printed"][k])
             for k in ("L_claim", "interval_claim")
         ],
-    script:
-        RUN_STEP
 
 
-rule p2_values:
+use rule step as p2_values with:
     """Our value of every published P2 number, with its evidence."""
     input:
         designs="results/p2/designs.json",
@@ -150,11 +136,9 @@ rule p2_values:
         cfg=step_config(
             "p2", "init_poles mu1 mu2_tol realaxis", heatmap="n_r n_theta r_max"
         ),
-    script:
-        RUN_STEP
 
 
-rule p2_figure_trajectories:
+use rule step as p2_figure_trajectories with:
     """P2-F1 / P2-F2 figures."""
     input:
         designs="results/p2/designs.json",
@@ -162,11 +146,7 @@ rule p2_figure_trajectories:
         code=code_inputs("eqrec.studies.p2.figures:step_figure_trajectories"),
     output:
         pdf="results/p2/{fig}_trajectories.pdf",
-        png=report(
-            "results/p2/{fig}_trajectories.png",
-            caption="../report/p2_trajectories.rst",
-            category="P2",
-        ),
+        png=in_report("results/p2/{fig}_trajectories.png", "p2_trajectories", "P2"),
     log:
         "logs/p2/figure_{fig}.log",
     wildcard_constraints:
@@ -176,11 +156,9 @@ rule p2_figure_trajectories:
         # the paper's mu2 of each figure (config/claims.yaml), drawn for comparison
         cfg=step_config("p2", "mu1")
         | published(f1="P2-F1:mu2-augmented", f2="P2-F2:mu2-augmented"),
-    script:
-        RUN_STEP
 
 
-rule p2_figure_heatmap:
+use rule step as p2_figure_heatmap with:
     """P2-F3a figure."""
     input:
         csv="results/p2/heatmap.csv",
@@ -188,9 +166,7 @@ rule p2_figure_heatmap:
         code=code_inputs("eqrec.studies.p2.figures:step_figure_heatmap"),
     output:
         pdf="results/p2/f3a_heatmap.pdf",
-        png=report(
-            "results/p2/f3a_heatmap.png", caption="../report/p2_f3a.rst", category="P2"
-        ),
+        png=in_report("results/p2/f3a_heatmap.png", "p2_f3a", "P2"),
     log:
         "logs/p2/figure_f3a.log",
     params:
@@ -198,11 +174,9 @@ rule p2_figure_heatmap:
         cfg=step_config("p2", "mu2_tol", heatmap="n_r n_theta r_max variants")
         # the paper's smallest mu2 (config/claims.yaml): a labelled tick of the colour bar
         | published(mu2="P2-F3a:mu2-region"),
-    script:
-        RUN_STEP
 
 
-rule p2_figure_realaxis:
+use rule step as p2_figure_realaxis with:
     """P2-F3b figure."""
     input:
         csv="results/p2/realaxis.csv",
@@ -210,17 +184,11 @@ rule p2_figure_realaxis:
         code=code_inputs("eqrec.studies.p2.figures:step_figure_realaxis"),
     output:
         pdf="results/p2/f3b_realaxis.pdf",
-        png=report(
-            "results/p2/f3b_realaxis.png",
-            caption="../report/p2_f3b.rst",
-            category="P2",
-        ),
+        png=in_report("results/p2/f3b_realaxis.png", "p2_f3b", "P2"),
     log:
         "logs/p2/figure_f3b.log",
     params:
         step="eqrec.studies.p2.figures:step_figure_realaxis",
-    script:
-        RUN_STEP
 
 
 rule p2:

@@ -2,7 +2,7 @@
 # Each rule runs one step of eqrec.studies.p3 (steps, figures, values, strategy, scale tables) through the harness.
 
 
-rule p3_languages:
+use rule step as p3_languages with:
     """P3-LANG: Examples 1-5 and the language counts of {0..max delay}^T."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_languages"),
@@ -16,11 +16,9 @@ rule p3_languages:
     params:
         step="eqrec.studies.p3.steps:step_languages",
         cfg=step_config("p3", "languages"),
-    script:
-        RUN_STEP
 
 
-rule p3_reactor_model:
+use rule step as p3_reactor_model with:
     """P3-BR: ZOH discretisation of the batch reactor."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_reactor_model"),
@@ -31,11 +29,9 @@ rule p3_reactor_model:
     params:
         step="eqrec.studies.p3.steps:step_reactor_model",
         cfg=step_config("p3", batch_reactor="Ts eta_v"),
-    script:
-        RUN_STEP
 
 
-rule p3_reactor_designs:
+use rule step as p3_reactor_designs with:
     """P3-BR: mu1 free (certified global route and IPOPT on (10)) and at the configured readings of mu1."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_reactor_designs"),
@@ -47,11 +43,9 @@ rule p3_reactor_designs:
     params:
         step="eqrec.studies.p3.steps:step_reactor_designs",
         cfg=step_config("p3", "batch_reactor kalman.x0"),
-    script:
-        RUN_STEP
 
 
-rule p3_augmented:
+use rule step as p3_augmented with:
     """The augmented form (4) with fixed L and s0: optimum against pole placements and s0."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_augmented"),
@@ -64,11 +58,9 @@ rule p3_augmented:
         cfg=step_config(
             "p3", "augmented", batch_reactor="Ts cost eta_v horizon max_delay"
         ),
-    script:
-        RUN_STEP
 
 
-rule p3_kalman:
+use rule step as p3_kalman with:
     """P3-F1: proposed estimator vs Kalman-type filters on the true pattern (exact worst cases, runs)."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_kalman"),
@@ -80,11 +72,9 @@ rule p3_kalman:
     params:
         step="eqrec.studies.p3.steps:step_kalman",
         cfg=step_config("p3", "kalman", batch_reactor="Ts cost eta_v horizon max_delay"),
-    script:
-        RUN_STEP
 
 
-rule p3_figure1:
+use rule step as p3_figure1 with:
     """P3-F1 figure."""
     input:
         json="results/p3/kalman.json",
@@ -92,20 +82,14 @@ rule p3_figure1:
         code=code_inputs("eqrec.studies.p3.figures:step_figure1"),
     output:
         pdf="results/p3/fig1_kalman.pdf",
-        png=report(
-            "results/p3/fig1_kalman.png",
-            caption="../report/p3_fig1.rst",
-            category="P3",
-        ),
+        png=in_report("results/p3/fig1_kalman.png", "p3_fig1", "P3"),
     log:
         "logs/p3/figure1.log",
     params:
         step="eqrec.studies.p3.figures:step_figure1",
-    script:
-        RUN_STEP
 
 
-rule p3_acc:
+use rule step as p3_acc with:
     """P3-ACC: the ACC language with mu1 = 1 vs P1's prefix design; mu1 free (footnote 1)."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_acc"),
@@ -117,11 +101,9 @@ rule p3_acc:
     params:
         step="eqrec.studies.p3.steps:step_acc",
         cfg=step_config("p3", acc="free_costs language mu1"),
-    script:
-        RUN_STEP
 
 
-rule p3_acc_simulate:
+use rule step as p3_acc_simulate with:
     """P3-F2: proposed vs P1 prefix-based estimator on the true pattern, same draws."""
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_acc_simulate"),
@@ -132,30 +114,24 @@ rule p3_acc_simulate:
     params:
         step="eqrec.studies.p3.steps:step_acc_simulate",
         cfg=step_config("p3", acc="cost language mu1 simulation true_pattern"),
-    script:
-        RUN_STEP
 
 
-rule p3_figure2:
+use rule step as p3_figure2 with:
     """P3-F2 figure."""
     input:
         npz="results/p3/acc_simulation.npz",
         code=code_inputs("eqrec.studies.p3.figures:step_figure2"),
     output:
         pdf="results/p3/fig2_acc.pdf",
-        png=report(
-            "results/p3/fig2_acc.png", caption="../report/p3_fig2.rst", category="P3"
-        ),
+        png=in_report("results/p3/fig2_acc.png", "p3_fig2", "P3"),
     log:
         "logs/p3/figure2.log",
     params:
         step="eqrec.studies.p3.figures:step_figure2",
         cfg=step_config("p3", "acc.true_pattern"),
-    script:
-        RUN_STEP
 
 
-rule p3_values:
+use rule step as p3_values with:
     """Our value of every published P3 number and claim, with its evidence."""
     input:
         languages="results/p3/languages.json",
@@ -173,8 +149,6 @@ rule p3_values:
     params:
         step="eqrec.studies.p3.values:step_values",
         cfg=step_config("p3", batch_reactor="horizon max_delay"),
-    script:
-        RUN_STEP
 
 
 # --- P3-IMPL (Section III-B3) and the scale table: eqrec.studies.p3 (strategy, figures, scale_table) ---
@@ -188,7 +162,7 @@ P3_SCALE_FULL = list(
 )
 
 
-rule p3_strategy:
+use rule step as p3_strategy with:
     """P3-IMPL: gains reused every T (batch reactor, ACC) and the switching scheme; 10^4-step runs vs the guarantees."""
     input:
         code=code_inputs("eqrec.studies.p3.strategy:step_strategy"),
@@ -201,32 +175,24 @@ rule p3_strategy:
     params:
         step="eqrec.studies.p3.strategy:step_strategy",
         cfg=step_config("p3", strategy="acc cost noise reactor seed steps switching"),
-    script:
-        RUN_STEP
 
 
-rule p3_strategy_figure:
+use rule step as p3_strategy_figure with:
     """P3-IMPL figure: errors per state with the per-time guarantees, period boundaries and switching instants."""
     input:
         npz="results/p3/strategy.npz",
         code=code_inputs("eqrec.studies.p3.figures:step_strategy_figure"),
     output:
         pdf="results/p3/fig_strategy.pdf",
-        png=report(
-            "results/p3/fig_strategy.png",
-            caption="../report/p3_strategy.rst",
-            category="P3",
-        ),
+        png=in_report("results/p3/fig_strategy.png", "p3_strategy", "P3"),
     log:
         "logs/p3/strategy_figure.log",
     params:
         step="eqrec.studies.p3.figures:step_strategy_figure",
         cfg=step_config("p3", "strategy.figure"),
-    script:
-        RUN_STEP
 
 
-rule p3_scale_size:
+use rule step as p3_scale_size with:
     """Scale table, one size of the tree LP: {0..tau}^T enumerated, node-per-prefix LP, fresh process with limits."""
     input:
         code=code_inputs("eqrec.studies.p3.scale_table:step_scale_size"),
@@ -241,8 +207,6 @@ rule p3_scale_size:
     params:
         step="eqrec.studies.p3.scale_table:step_scale_size",
         cfg=step_config("p3", scale="builder mem_limit_gb method mu1 time_limit"),
-    script:
-        RUN_STEP
 
 
 # Scale table, one size of the class engine: the classes of {0..tau}^T by the window
@@ -259,7 +223,7 @@ use rule p3_scale_size as p3_scale_class_size with:
         tau=r"\d+",
 
 
-rule p3_scale_table:
+use rule step as p3_scale_table with:
     """Scale table of the default run: the tree LP at the fast sizes next to the class engine (CSV and Markdown)."""
     input:
         sizes=P3_SCALE,
@@ -269,18 +233,12 @@ rule p3_scale_table:
         csv="results/p3/scale_table.csv",
         timings_csv="results/timings/p3/scale_table.csv",
         timings_md="results/timings/p3/scale_table.md",
-        md=report(
-            "results/p3/scale_table.md",
-            caption="../report/p3_scale.rst",
-            category="P3",
-        ),
+        md=in_report("results/p3/scale_table.md", "p3_scale", "P3"),
     log:
         "logs/p3/scale_table.log",
     params:
         step="eqrec.studies.p3.scale_table:step_scale_table",
         cfg=step_config("p3", "scale.tree_slow_sizes"),
-    script:
-        RUN_STEP
 
 
 # The same step on the slow tree sizes too (target p3_scale).
@@ -299,7 +257,7 @@ use rule p3_scale_table as p3_scale_table_full with:
         "logs/p3/scale_table_full.log",
 
 
-rule p3_scale_free:
+use rule step as p3_scale_free with:
     """The class engine with mu1 free against the number of classes: per class on 1 and 2 workers, one block LP."""
     input:
         code=code_inputs("eqrec.studies.p3.free_table:step_scale_free"),
@@ -315,8 +273,6 @@ rule p3_scale_free:
     params:
         step="eqrec.studies.p3.free_table:step_scale_free",
         cfg=step_config("p3", "scale.time_limit"),
-    script:
-        RUN_STEP
 
 
 rule p3_scale:

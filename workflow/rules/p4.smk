@@ -12,38 +12,26 @@ scattergather:
     sweep_q=config["p4"]["sweep_q"]["chunks"],
 
 
-rule p4_tracking:
+use rule step as p4_tracking with:
     """P4-F1..F3: one realisation of the tracking example with filter, predictor and smoother."""
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_tracking"),
     output:
         npz="results/p4/tracking.npz",
         f1="results/p4/fig1_filter.pdf",
-        f1png=report(
-            "results/p4/fig1_filter.png", caption="../report/p4_f1.rst", category="P4"
-        ),
+        f1png=in_report("results/p4/fig1_filter.png", "p4_f1", "P4"),
         f2="results/p4/fig2_predictor.pdf",
-        f2png=report(
-            "results/p4/fig2_predictor.png",
-            caption="../report/p4_f2.rst",
-            category="P4",
-        ),
+        f2png=in_report("results/p4/fig2_predictor.png", "p4_f2", "P4"),
         f3="results/p4/fig3_smoother.pdf",
-        f3png=report(
-            "results/p4/fig3_smoother.png",
-            caption="../report/p4_f3.rst",
-            category="P4",
-        ),
+        f3png=in_report("results/p4/fig3_smoother.png", "p4_f3", "P4"),
     log:
         "logs/p4/tracking.log",
     params:
         step="eqrec.studies.p4.steps:step_tracking",
         cfg=step_config("p4", "T eta_bar examples pred_steps smoother_lag tracking"),
-    script:
-        RUN_STEP
 
 
-rule p4_mc:
+use rule step as p4_mc with:
     """P4-THEORY: theory against Monte Carlo for one example (both mechanisms, same draws)."""
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_mc"),
@@ -60,11 +48,9 @@ rule p4_mc:
     params:
         step="eqrec.studies.p4.steps:step_mc",
         cfg=step_config("p4", "T eta_bar examples mc pred_steps smoother_lag"),
-    script:
-        RUN_STEP
 
 
-rule p4_sweep_eta_chunk:
+use rule step as p4_sweep_eta_chunk with:
     """P4-F5: one chunk of the arrival-rate sweep (steady state)."""
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_sweep_eta_chunk"),
@@ -75,11 +61,9 @@ rule p4_sweep_eta_chunk:
     params:
         step="eqrec.studies.p4.steps:step_sweep_eta_chunk",
         cfg=step_config("p4", "examples smoother_lag steady sweep_eta"),
-    script:
-        RUN_STEP
 
 
-rule p4_sweep_q_chunk:
+use rule step as p4_sweep_q_chunk with:
     """P4-F6: one chunk of the (Q_xi, Q_lambda) sweep (steady state)."""
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_sweep_q_chunk"),
@@ -90,11 +74,9 @@ rule p4_sweep_q_chunk:
     params:
         step="eqrec.studies.p4.steps:step_sweep_q_chunk",
         cfg=step_config("p4", "eta_bar examples smoother_lag steady sweep_q"),
-    script:
-        RUN_STEP
 
 
-rule p4_fig4:
+use rule step as p4_fig4 with:
     """P4-F4: error variances of predictor, filter, smoother."""
     input:
         mc=f"results/p4/mc_{config['p4']['tracking']['example']}.npz",
@@ -102,21 +84,15 @@ rule p4_fig4:
         code=code_inputs("eqrec.studies.p4.figures:step_fig4"),
     output:
         pdf="results/p4/fig4_variances.pdf",
-        png=report(
-            "results/p4/fig4_variances.png",
-            caption="../report/p4_f4.rst",
-            category="P4",
-        ),
+        png=in_report("results/p4/fig4_variances.png", "p4_f4", "P4"),
     log:
         "logs/p4/fig4.log",
     params:
         step="eqrec.studies.p4.figures:step_fig4",
         cfg=step_config("p4", "eta_bar smoother_lag"),
-    script:
-        RUN_STEP
 
 
-rule p4_fig5:
+use rule step as p4_fig5 with:
     """P4-F5: merge the arrival-rate chunks; error variances against the arrival rate."""
     input:
         chunks=gather.sweep_eta("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
@@ -124,19 +100,15 @@ rule p4_fig5:
     output:
         merged="results/p4/sweep_eta.npz",
         pdf="results/p4/fig5_eta.pdf",
-        png=report(
-            "results/p4/fig5_eta.png", caption="../report/p4_f5.rst", category="P4"
-        ),
+        png=in_report("results/p4/fig5_eta.png", "p4_f5", "P4"),
     log:
         "logs/p4/fig5.log",
     params:
         step="eqrec.studies.p4.figures:step_fig5",
         cfg=step_config("p4", "examples smoother_lag sweep_eta.num tracking.example"),
-    script:
-        RUN_STEP
 
 
-rule p4_fig6:
+use rule step as p4_fig6 with:
     """P4-F6: merge the Q chunks; filter variance against Q_xi and Q_lambda, and where each mechanism wins."""
     input:
         chunks=gather.sweep_q("results/p4/sweep_q/chunk_{scatteritem}.npz"),
@@ -144,23 +116,17 @@ rule p4_fig6:
     output:
         merged="results/p4/sweep_q.npz",
         pdf="results/p4/fig6_q.pdf",
-        png=report(
-            "results/p4/fig6_q.png", caption="../report/p4_f6.rst", category="P4"
-        ),
+        png=in_report("results/p4/fig6_q.png", "p4_f6", "P4"),
         rpdf="results/p4/regions.pdf",
-        rpng=report(
-            "results/p4/regions.png", caption="../report/p4_regions.rst", category="P4"
-        ),
+        rpng=in_report("results/p4/regions.png", "p4_regions", "P4"),
     log:
         "logs/p4/fig6.log",
     params:
         step="eqrec.studies.p4.figures:step_fig6",
         cfg=step_config("p4", "eta_bar examples sweep_q.num tracking.example"),
-    script:
-        RUN_STEP
 
 
-rule p4_compare:
+use rule step as p4_compare with:
     """P4-F7 (Example 1) / P4-F8 (Example 2): zero-input vs hold-input filter."""
     input:
         mc="results/p4/mc_{example}.npz",
@@ -168,10 +134,8 @@ rule p4_compare:
         code=code_inputs("eqrec.studies.p4.figures:step_compare"),
     output:
         pdf="results/p4/fig{number}_compare_{example}.pdf",
-        png=report(
-            "results/p4/fig{number}_compare_{example}.png",
-            caption="../report/p4_compare.rst",
-            category="P4",
+        png=in_report(
+            "results/p4/fig{number}_compare_{example}.png", "p4_compare", "P4"
         ),
     log:
         "logs/p4/fig{number}_{example}.log",
@@ -182,11 +146,9 @@ rule p4_compare:
         # the paper's verdict of each figure (config/claims.yaml), printed beside ours
         cfg=step_config("p4", "eta_bar examples")
         | published(ex1="P4-F7:better-ex1", ex2="P4-F8:better-ex2"),
-    script:
-        RUN_STEP
 
 
-rule p4_values:
+use rule step as p4_values with:
     """Our value of every P4 claim, with its evidence."""
     input:
         tracking="results/p4/tracking.npz",
@@ -205,8 +167,6 @@ rule p4_values:
         cfg=step_config(
             "p4", "T eta_bar examples mc.alpha smoother_lag steady tracking"
         ),
-    script:
-        RUN_STEP
 
 
 rule p4:
