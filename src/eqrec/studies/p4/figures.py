@@ -130,16 +130,17 @@ def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
     save_figure(fig, pdf, png)
 
 
-def fig_regions(d: dict, names: dict, working: dict, eta_bar: float, pdf: str, png: str) -> None:
+def fig_regions(d: dict, examples: dict, eta_bar: float, pdf: str, png: str) -> None:
     """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example.
 
     One colour scale for every panel (the same quantity), logarithmic and symmetric about 1, so a ratio ``r``
-    and ``1/r`` are equally strong; the working point of Figs. 7/8 (``working[ex] = (Q_xi, Q_lambda)``) marked.
+    and ``1/r`` are equally strong; the working point of Figs. 7/8 (``Qxi``, ``Qlam`` of ``examples[ex]``, the
+    configured examples, titled by their ``name``) marked.
     """
     from matplotlib.colors import LogNorm
 
     plt = _plt()
-    exs = list(names)
+    exs = list(examples)
     ratios = {ex: d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1) for ex in exs}
     m = max(1.25, *(max(float(np.nanmax(r)), 1.0 / float(np.nanmin(r))) for r in ratios.values()))
     # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
@@ -148,12 +149,11 @@ def fig_regions(d: dict, names: dict, working: dict, eta_bar: float, pdf: str, p
     for ax, ex in zip(axes[0], exs):
         im = ax.pcolormesh(d["qlam"], d["qxi"], ratios[ex], cmap="RdBu_r", norm=norm, shading="auto")
         ax.contour(d["qlam"], d["qxi"], ratios[ex], levels=[1.0], colors="k", linewidths=1.0)
-        qxi, qlam = working[ex]
-        ax.plot([qlam], [qxi], "*", color="gold", mec="k", mew=0.6, ms=11, clip_on=False, zorder=5,
-                label="working point of Figs. 7 and 8")
+        ax.plot([float(examples[ex]["Qlam"])], [float(examples[ex]["Qxi"])], "*", color="gold", mec="k", mew=0.6,
+                ms=11, clip_on=False, zorder=5, label="working point of Figs. 7 and 8")
         ax.set_xlabel(r"$Q_\lambda$ (variance of $\lambda$)")
         ax.set_ylabel(r"$Q_\xi$ (variance of $\xi$)")
-        ax.set_title(names[ex])
+        ax.set_title(examples[ex].get("name", ex))
     cb = fig.colorbar(im, ax=list(axes[0]), label=r"tr $P_{\mathrm{hold}}$ / tr $P_{\mathrm{zero}}$ (filter)")
     ticks = [t for t in (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.75, 2.0) if 1.0 / m <= t <= m]
     cb.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
@@ -210,9 +210,7 @@ def step_fig6(cfg, inputs, outputs, wildcards) -> None:
     """Merge the Q-sweep chunks (whole grid, once); Fig. 6 and the regions figure."""
     d = merge_npz(list(inputs.chunks), int(cfg["sweep_q"]["num"]), outputs.merged, shared=("qlam",))
     fig_q(d, cfg["tracking"]["example"], float(cfg["eta_bar"]), outputs.pdf, outputs.png)
-    names = {ex: cfg["examples"][ex].get("name", ex) for ex in cfg["examples"]}
-    working = {ex: (float(cfg["examples"][ex]["Qxi"]), float(cfg["examples"][ex]["Qlam"])) for ex in cfg["examples"]}
-    fig_regions(d, names, working, float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
+    fig_regions(d, cfg["examples"], float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
 
 
 def step_compare(cfg, inputs, outputs, wildcards) -> None:

@@ -44,17 +44,14 @@ def _ranking(zero: np.ndarray, hold: np.ndarray, rtol: float = TIE_RTOL) -> np.n
     return out
 
 
-def _better_t(d, mech: str, T: int) -> np.ndarray:
+def _from_t(d, mech: str, T: int) -> str:
+    """First t of 1..T from which ``mech`` has the lower theoretical filter variance in every component until T
+    (``never`` if not at T)."""
     z, h = d["zero/theory_filt"][1: T + 1], d["hold/theory_filt"][1: T + 1]
-    return (z < h) if mech == "zero-input" else (h < z)
-
-
-def _from_t(better: np.ndarray) -> str:
-    """First t (1-based index into t = 1..T) from which ``better`` holds in all components until T."""
-    allc = np.all(better, axis=1)
-    if not allc[-1]:
+    better = np.all((z < h) if mech == "zero-input" else (h < z), axis=1)
+    if not better[-1]:
         return "never"
-    bad = np.flatnonzero(~allc)
+    bad = np.flatnonzero(~better)
     return str(1 if len(bad) == 0 else int(bad[-1]) + 2)
 
 
@@ -151,7 +148,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
             "steady_zero": ssz.tolist(), "steady_hold": ssh.tolist(),
             "trace_zero": float(ssz.sum()), "trace_hold": float(ssh.sum()),
             **{f"{src}_{m}_T": d[f"{m}/{src}_filt"][T].tolist() for src in ("theory", "mc") for m in ("zero", "hold")},
-            "from_t": {m: _from_t(_better_t(d, m, T)) for m in MECHANISMS},
+            "from_t": {m: _from_t(d, m, T) for m in MECHANISMS},
             "qlam_threshold": qlam_threshold(plant, eta, N, tol, max_iter),
             "eta_lo": float(etas[0]), "eta_hi": float(etas[-1]),
             **{f"{k}_eta": _grid_set(etas[rank_eta == r])
