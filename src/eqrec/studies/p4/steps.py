@@ -23,9 +23,10 @@ mechanism; set in ``config/p4.yaml``.
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -161,44 +162,39 @@ def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[str, np.ndarray, np.
     return *scatter_indices(wildcards, len(values), field=f"{sweep}.chunks"), values
 
 
-def _steady_points(points: list, mech: str, cfg: dict, prog: Progress, keys: tuple) -> dict[str, np.ndarray]:
-    """The steady-state variances of ``mech`` at every ``(plant, eta_bar)`` of ``points``: ``keys`` of the
-    results (:func:`eqrec.lmv.steady.steady_variances`, smoother lag and iteration of ``cfg``), each stacked over
-    the points."""
+def _sweep(cfg: dict, outputs, what: str, out: dict, points_of: Callable, keys: tuple, shape: tuple) -> dict:
+    """Write one chunk of a sweep (``outputs.npz``): ``out`` (its grid) and, per example and mechanism, the
+    ``keys`` of :func:`eqrec.lmv.steady.steady_variances` at the points ``(plant, eta_bar)`` that ``points_of``
+    makes of the example's plant, in the grid's ``shape`` (then the components)."""
     N, tol, max_iter = int(cfg["smoother_lag"]), float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
-    rows = []
-    for plant, eta in points:
-        rows.append(steady_variances(plant, mech, eta, N, tol, max_iter))
-        prog.advance()
-    return {key: np.array([r[key] for r in rows]) for key in keys}
+    prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * math.prod(shape), what)
+    for ex in cfg["examples"]:
+        points = points_of(plant_of(cfg, ex))
+        for mech in MECHANISMS:
+            rows = []
+            for plant, eta in points:
+                rows.append(steady_variances(plant, mech, eta, N, tol, max_iter))
+                prog.advance()
+            for key in keys:
+                v = np.array([r[key] for r in rows])
+                out[f"{ex}/{MECHANISM_KEYS[mech]}/{key}"] = v.reshape(*shape, *v.shape[1:])
+    write_npz(outputs.npz, **out)
+    return out
 
 
 def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady-state variances against eta_bar (Fig. 5) for one chunk of the grid, both examples and mechanisms."""
     chunk, idx, etas = _sweep_chunk(cfg, wildcards, "sweep_eta")
-    out: dict[str, np.ndarray] = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
-    prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx), f"eta sweep chunk {chunk}")
-    for ex in cfg["examples"]:
-        points = [(plant_of(cfg, ex), float(e)) for e in etas[idx]]
-        for mech in MECHANISMS:
-            rows = _steady_points(points, mech, cfg, prog, ("pred", "filt", "smooth", "stable"))
-            out.update({f"{ex}/{MECHANISM_KEYS[mech]}/{key}": v for key, v in rows.items()})
-    write_npz(outputs.npz, **out)
-    return out
+    grid = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
+    return _sweep(cfg, outputs, f"eta sweep chunk {chunk}", grid, lambda plant: [(plant, float(e)) for e in etas[idx]],
+                  ("pred", "filt", "smooth", "stable"), (len(idx),))
 
 
 def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady filter variances on the (Q_xi, Q_lambda) grid (Fig. 6): rows of Q_xi in this chunk."""
     chunk, idx, qs = _sweep_chunk(cfg, wildcards, "sweep_q")
     eta = float(cfg["eta_bar"])
-    out: dict[str, np.ndarray] = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
-    prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx) * len(qs), f"Q sweep chunk {chunk}")
-    for ex in cfg["examples"]:
-        base = plant_of(cfg, ex)
-        points = [(base.with_(Qxi=float(qs[i]), Qlam=float(ql)), eta) for i in idx for ql in qs]
-        for mech in MECHANISMS:
-            rows = _steady_points(points, mech, cfg, prog, ("filt", "stable"))
-            for key, v in rows.items():  # rows of Q_xi, columns of Q_lambda
-                out[f"{ex}/{MECHANISM_KEYS[mech]}/{key}"] = v.reshape(len(idx), len(qs), *v.shape[1:])
-    write_npz(outputs.npz, **out)
-    return out
+    grid = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
+    return _sweep(cfg, outputs, f"Q sweep chunk {chunk}", grid,
+                  lambda base: [(base.with_(Qxi=float(qs[i]), Qlam=float(ql)), eta) for i in idx for ql in qs],
+                  ("filt", "stable"), (len(idx), len(qs)))
