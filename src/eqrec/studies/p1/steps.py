@@ -165,11 +165,10 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     res["min_M1_bracket"] = {m: {"lower": r.lower, "upper": r.upper, "binding": r.binding}
                              for m, r in smallest.items()}
     grid = np.linspace(float(ext["M1_min_plot"]), float(ext["M1_max"]), int(ext["M1_points"]))
-    curve: dict = {"M1": grid.tolist()}
+    res["curve"] = {"M1": grid.tolist()}
     for m in METHODS:
         prog = Progress(log, grid.size, f"M2*(M1) curve, {m}-based", "levels")
-        curve[m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
-    res["curve"] = curve
+        res["curve"][m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
     fin = ext["finite_language"]
     d = design_prefix(system, fin, float(cfg["mu1"]), fixed_length=False)  # Section V: a finite-length language
     res["finite_language"] = {"words": fin, **_certified(d), "per_word_terminal": {
