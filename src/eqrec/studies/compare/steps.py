@@ -28,11 +28,10 @@ from typing import Any, Callable
 import numpy as np
 
 from eqrec.compare import FAMILIES, CompareResult, CompareSetup, compare_families, compare_figure, write_table
-from eqrec.systems.examples import acc_system
+from eqrec.systems.examples import acc_system, batch_reactor
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 from eqrec.io import atomic_path
-from eqrec.systems.examples import batch_reactor
 from eqrec.studies.pipeline.logs import get_logger
 from eqrec.studies.pipeline.outputs import read_json, write_json, write_text
 
@@ -110,10 +109,9 @@ def summary_of(result: CompareResult) -> dict[str, Any]:
     reference = result.bounds[FAMILIES[0]]
     against = {}
     for family in FAMILIES[1:]:
-        err = result.errors[family]
-        above = err > reference
+        above = result.errors[family] > reference
         against[family] = {"steps_above": int(above.sum()), "fraction_above": float(above.mean()),
-                           "largest_error_over_bound": float((err / reference).max())}
+                           "largest_error_over_bound": float((result.errors[family] / reference).max())}
     return {"guaranteed": guaranteed, "against_class_bound": against}
 
 
@@ -160,13 +158,12 @@ def step_table(cfg, inputs, outputs, wildcards) -> None:
         raise InputError(f"the jobs {found} (tables {tables}) do not cover the configured (system, setting) pairs "
                          f"{expected} exactly once, in the same order", field="settings")
     frames = []
-    for (system, setting), job, path in zip(found, jobs, inputs.csv):
+    for job, path in zip(jobs, inputs.csv):  # the cells of KEYS as the job's settings print them
         setup = job["setup"]
-        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
-        keys = {"system": system, "setting": setting, "loss": f"{setup['loss']:g}",
-                "burst": "" if setup["burst"] is None else f"{setup['burst']:g}",
-                "max_delay": str(setup["max_delay"]), "horizon": str(setup["horizon"])}
-        frames.append(frame.assign(**keys))
+        frames.append(pd.read_csv(path, dtype=str, keep_default_na=False).assign(
+            system=job["system"], setting=job["setting"], loss=f"{setup['loss']:g}",
+            burst="" if setup["burst"] is None else f"{setup['burst']:g}",
+            max_delay=str(setup["max_delay"]), horizon=str(setup["horizon"])))
     table = pd.concat(frames, ignore_index=True).fillna("")
     rest = [c for c in table.columns if c not in KEYS]
     write_text(outputs.csv, table[[*KEYS, *rest]].to_csv(index=False, lineterminator="\n"))

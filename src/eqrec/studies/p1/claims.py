@@ -7,6 +7,7 @@ see :mod:`eqrec.studies.claims.reasons` for the contract.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, Mapping
 
 from eqrec.studies.claims.reasons import Reason, all_are, join, registry
@@ -14,27 +15,23 @@ from eqrec.studies.claims.reasons import Reason, all_are, join, registry
 REASONS, reason = registry()
 
 
-def _optimum(ev: Mapping[str, Any]) -> tuple[bool, dict[str, Any], list[str]]:
-    """Whether the LP probe below the optimum is infeasible for every solver (the optimum is proven)."""
-    proven = all_are(ev["probe_status"], "infeasible")
-    return proven, {"probe_statuses": join(ev["probe_status"])}, ["optimum", "proven" if proven else "not_proven"]
-
-
 @reason("P1-M2:time-L1")
 def time_l1(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
-    """The LP optimum, and whether the probe proves it the lowest M2 of the class."""
-    _, fields, note = _optimum(ev)
-    return Reason(fields=fields, note=note)
+    """The LP optimum, and whether the LP probe below it, infeasible for every solver, proves it the lowest M2
+    of the class."""
+    proven = all_are(ev["probe_status"], "infeasible")
+    return Reason(fields={"probe_statuses": join(ev["probe_status"])},
+                  note=["optimum", "proven" if proven else "not_proven"])
 
 
 @reason("P1-M2:prefix-L1")
 def prefix_l1(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
     """As P1-M2:time-L1, with the alternative readings; the misprint explanation holds while the published
     value is below the proven optimum and our optimum rounds to the delayed-data paper's value (P3-ACC:mu2)."""
-    proven, fields, note = _optimum(ev)
-    misprint = (proven and ev["paper"] < ev["mu2"] - ev["probe_gap"]
+    optimum = time_l1(ev, texts)
+    misprint = (all_are(ev["probe_status"], "infeasible") and ev["paper"] < ev["mu2"] - ev["probe_gap"]
                 and abs(ev["mu2"] - ev["published"]["P3-ACC:mu2"]) <= 5.0e-5)
-    return Reason(fields=fields, note=[*note, "readings"], explanation={"misprint": misprint})
+    return replace(optimum, note=[*optimum.note, "readings"], explanation={"misprint": misprint})
 
 
 @reason("P1-EXT:finite-length")

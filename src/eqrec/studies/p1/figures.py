@@ -25,8 +25,7 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     for col, method, name in ((0, "prefix", "Prefix-based"), (1, "time", "Time-based")):
         errs = data[f"{method}_errors"]
         mu2 = float(data[f"{method}_mu2"])
-        T = errs.shape[1] - 1
-        levels = [mu1] + [mu2] * (T - 1) + [mu1]
+        levels = [mu1] + [mu2] * (errs.shape[1] - 2) + [mu1]  # M1 at t = 0 and T, M2 at the times between
         trajectory_panel(axes[:, col], errs, levels,
                          f"{name} estimator\n$M_1$ = {mu1:g}, $M_2^*$ = {mu2:.4f}", ylabels=(col == 0))
     same_scale_per_row(axes)
@@ -40,14 +39,12 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
 def _feasibility_panel(ax, res: dict) -> None:
     """Left panel of P1-EXT: ``M2*(M1)`` per estimator; levels below the smallest feasible ``M1`` shaded."""
     c = res["curve"]
-    lo = {m: res["min_M1"][m] for m in ("prefix", "time")}
-    ax.axvspan(0.0, lo["prefix"], color="0.80", lw=0,
-               label=f"no design: $M_1$ < {lo['prefix']:.4f}")
+    lo = res["min_M1"]
+    ax.axvspan(0.0, lo["prefix"], color="0.80", lw=0, label=f"no design: $M_1$ < {lo['prefix']:.4f}")
     ax.axvspan(lo["prefix"], lo["time"], color="C3", alpha=0.25, lw=0,
                label=f"time-based infeasible: $M_1$ < {lo['time']:.4f}")
     for m, style, name in (("prefix", "C0-", "prefix-based"), ("time", "C3--", "time-based")):
-        mu1 = [a for a, b in zip(c["M1"], c[m]) if b is not None]
-        M2 = [b for b in c[m] if b is not None]
+        mu1, M2 = zip(*[(a, b) for a, b in zip(c["M1"], c[m]) if b is not None])  # the computed levels
         ax.plot(mu1, M2, style, marker=".", label=f"{name}, computed from $M_1$ = {min(mu1):g}")
     ax.set_xlim(0.0, 1.03 * max(c["M1"]))
     ax.set_ylim(0.0, None)

@@ -15,6 +15,7 @@ with ``cfg`` the validated ``p1`` section:
 
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
@@ -55,14 +56,13 @@ def step_model(cfg, inputs, outputs, wildcards) -> dict:
 
 def _timed_design(fn, repeats: int) -> tuple[Design, dict]:
     """Run a design ``repeats`` times; report the best build/solve/total times."""
-    builds, solves, totals = [], [], []
+    runs = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         d = fn()
-        totals.append(time.perf_counter() - t0)
-        builds.append(d.build_time)
-        solves.append(d.solve_time)
-    return d, {"build_s": min(builds), "solve_s": min(solves), "total_s": min(totals),
+        runs.append((d.build_time, d.solve_time, time.perf_counter() - t0))
+    build, solve, total = map(min, zip(*runs))
+    return d, {"build_s": build, "solve_s": solve, "total_s": total,
                "iterations": d.solution.iterations, "solver": d.solution.solver, "repeats": repeats}
 
 
@@ -95,8 +95,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
                 dc, timing_c = _timed_design(lambda: fn(system, L1, mu1, solver=solver), int(cfg["timing_repeats"]))
                 entry["class_engine"] = {"mu2": dc.mu2, "certified_mu2": dc.certificate.mu2,
                                          "classes": dc.extra.get("classes"), **timing_c}
-        mus = [v["mu2"] for v in entry["solvers"].values()]
-        entry["solver_spread"] = float(max(mus) - min(mus))
+        entry["solver_spread"] = float(np.ptp([v["mu2"] for v in entry["solvers"].values()]))
         result["designs"][method] = entry
     result["variants"] = design_variants(cfg)
     write_json(outputs.json, result, timings=outputs.timings)
@@ -140,19 +139,14 @@ def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
                                   kind="uniform", x0=x0, inputs=u)
         verrs, _ = monte_carlo(system, d.schedule, L1, mu1, int(sim["runs"]), int(sim["seed"]) + 1,
                                kind="vertex", x0=x0, inputs=u)
-        cert = d.certificate
-        bound = np.stack([cert.words[w].bounds for w in words])
-        # worst-case vertex of every (word, t, i): the simulated error must attain the bound
-        attain = []
-        for w in L1:
-            wc = cert.words[w]
-            for t in range(1, T + 1):
-                for i in range(system.n):
-                    tr = simulate_run(system, d.schedule, w, wc.worst_vertex(t, i), x0, u)
-                    attain.append(abs(abs(tr.error[t, i]) - wc.bounds[t, i]))
-        arrays.update({f"{method}_errors": errs, f"{method}_vertex_errors": verrs, f"{method}_bounds": bound,
-                       f"{method}_words": np.array(words), f"{method}_mu2": d.mu2,
-                       f"{method}_attain_gap": float(max(attain))})
+        cert = d.certificate.words
+        attain = []  # worst-case vertex of every (word, t, i): the simulated error must attain the bound
+        for w, t, i in itertools.product(L1, range(1, T + 1), range(system.n)):
+            error = simulate_run(system, d.schedule, w, cert[w].worst_vertex(t, i), x0, u).error[t, i]
+            attain.append(abs(abs(error) - cert[w].bounds[t, i]))
+        arrays.update({f"{method}_{key}": value for key, value in (
+            ("errors", errs), ("vertex_errors", verrs), ("bounds", np.stack([cert[w].bounds for w in words])),
+            ("words", np.array(words)), ("mu2", d.mu2), ("attain_gap", float(max(attain))))})
     write_npz(outputs.npz, compressed=True, M1=mu1, **arrays)  # the stored key keeps its name
     return arrays
 
@@ -171,15 +165,14 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     res["min_M1_bracket"] = {m: {"lower": r.lower, "upper": r.upper, "binding": r.binding}
                              for m, r in smallest.items()}
     grid = np.linspace(float(ext["M1_min_plot"]), float(ext["M1_max"]), int(ext["M1_points"]))
-    curve: dict = {"M1": grid.tolist()}
+    res["curve"] = {"M1": grid.tolist()}
     for m in METHODS:
         prog = Progress(log, grid.size, f"M2*(M1) curve, {m}-based", "levels")
-        curve[m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
-    res["curve"] = curve
+        res["curve"][m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
     fin = ext["finite_language"]
     d = design_prefix(system, fin, float(cfg["mu1"]), fixed_length=False)  # Section V: a finite-length language
-    res["finite_language"] = {"words": fin, **_certified(d),
-                              "per_word_terminal": {w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}
+    res["finite_language"] = {"words": fin, **_certified(d), "per_word_terminal": {
+        w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}
     res["min_T"] = []
     prog = Progress(log, len(ext["min_T_levels"]), "minimum recovery time", "levels")
     for mu1 in ext["min_T_levels"]:
@@ -193,15 +186,16 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
 
 def _design_evidence(entry: dict, mu1: float) -> dict:
     probe = entry["lower_bound_probe"]
-    return {"mu2": entry["mu2"], "certified_mu2": entry["certified_mu2"],
-            "certified_terminal": entry["certified_terminal"], "M1": mu1, "solver_spread": entry["solver_spread"],
-            "probe_gap": probe["gap"], "probe_status": probe["status"]}
+    return {**{k: entry[k] for k in ("mu2", "certified_mu2", "certified_terminal")}, "M1": mu1,
+            "solver_spread": entry["solver_spread"], "probe_gap": probe["gap"], "probe_status": probe["status"]}
 
 
-def _sim_evidence(sim, m: str) -> dict:
+def _within_value(sim, m: str) -> dict:
+    """P1-F1: whether the simulated errors of the ``m``-based estimator stay inside its bounds."""
     errs, bounds = sim[f"{m}_errors"], sim[f"{m}_bounds"]
-    return {"runs": int(errs.shape[0]), "max_ratio": float(np.max(np.abs(errs) / np.maximum(bounds, 1e-300))),
-            "attain_gap": float(sim[f"{m}_attain_gap"]), "vertex_runs": int(sim[f"{m}_vertex_errors"].shape[0])}
+    return {"value": "inside" if np.all(np.abs(errs) <= bounds + 1e-9) else "outside", "evidence": {
+        "runs": int(errs.shape[0]), "max_ratio": float(np.max(np.abs(errs) / np.maximum(bounds, 1e-300))),
+        "attain_gap": float(sim[f"{m}_attain_gap"]), "vertex_runs": int(sim[f"{m}_vertex_errors"].shape[0])}}
 
 
 def _finite_language_value(fin: dict, mu1: float) -> dict:
@@ -210,8 +204,7 @@ def _finite_language_value(fin: dict, mu1: float) -> dict:
     ok = (fin["certified_mu2"] <= fin["mu2"] * (1 + 1e-9)
           and fin["certified_terminal"] <= mu1 * (1 + 1e-9))
     return {"value": "yes" if ok else "no",
-            "evidence": {"words": fin["words"], "mu2": fin["mu2"], "certified_mu2": fin["certified_mu2"],
-                         "certified_terminal": fin["certified_terminal"], "mu1": mu1}}
+            "evidence": {**{k: fin[k] for k in ("words", "mu2", "certified_mu2", "certified_terminal")}, "mu1": mu1}}
 
 
 def _min_T_value(min_T: list[dict], language: list[str]) -> dict:
@@ -235,9 +228,6 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     mu1 = float(des["M1"])
     A, B, f, E = (np.asarray(model[k]) for k in ("A", "B", "f", "E"))
 
-    def within(m):
-        return "inside" if np.all(np.abs(sim[f"{m}_errors"]) <= sim[f"{m}_bounds"] + 1e-9) else "outside"
-
     def timing(entry):
         return {k: entry["timing"][k] for k in ("iterations", "build_s", "solve_s", "total_s", "repeats", "solver")}
 
@@ -254,8 +244,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "prefix_iterations": {"value": p["timing"]["iterations"], "evidence": {"solver": p["timing"]["solver"]}},
         "time_time_s": {"value": t["timing"]["total_s"], "evidence": timing(t)},
         "time_iterations": {"value": t["timing"]["iterations"], "evidence": {"solver": t["timing"]["solver"]}},
-        "fig1_prefix_within": {"value": within("prefix"), "evidence": _sim_evidence(sim, "prefix")},
-        "fig1_time_within": {"value": within("time"), "evidence": _sim_evidence(sim, "time")},
+        "fig1_prefix_within": _within_value(sim, "prefix"),
+        "fig1_time_within": _within_value(sim, "time"),
         "fig1_prefix_lower": {"value": "prefix" if p["mu2"] < t["mu2"] else "time",
                               "evidence": {"prefix_mu2": p["mu2"], "time_mu2": t["mu2"],
                                            "ratio": p["mu2"] / t["mu2"]}},

@@ -7,6 +7,7 @@ see :mod:`eqrec.studies.claims.reasons` for the contract.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, Mapping
 
 from eqrec.studies.claims.reasons import Reason, each, fmtlist, fmtlists, registry
@@ -49,8 +50,9 @@ def _eta_range(texts: Mapping[str, str], cells: Mapping[str, Any], single: bool 
     return texts["eta_value" if single and cells["count"] == 1 else "eta_values"].format_map(cells)
 
 
-def _compensation(ev: Mapping[str, Any], texts: Mapping[str, str]) -> tuple[dict[str, Any], list[str]]:
-    """Fields and note of the compensation comparison (zero-input vs hold-input)."""
+@reason("P4-F8:better-ex2")
+def better_ex2(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
+    """The compensation comparison (zero-input vs hold-input): variances, the Q_lambda threshold, the regions."""
     threshold = ev["qlam_threshold"]
     fields = {**fmtlists(ev, "steady_zero", "steady_hold", "theory_zero_T", "theory_hold_T", "mc_zero_T", "mc_hold_T"),
               "zero_from_t": ev["from_t"]["zero-input"], "hold_from_t": ev["from_t"]["hold-input"],
@@ -59,25 +61,18 @@ def _compensation(ev: Mapping[str, Any], texts: Mapping[str, str]) -> tuple[dict
               "zero_better": _eta_range(texts, ev["zero_better_eta"]),
               "tie": _eta_range(texts, ev["tie_eta"], single=True),
               "percent_hold": 100.0 * ev["frac_hold"], "percent_zero": 100.0 * ev["frac_zero"]}
-    return fields, ["variances", "threshold" if threshold["root"] is not None else "no_threshold", "regions"]
+    return Reason(fields=fields, note=["variances", "threshold" if threshold["root"] is not None else "no_threshold",
+                                       "regions"])
 
 
 @reason("P4-F7:better-ex1")
 def better_ex1(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
-    """The comparison; the threshold explanation while both filters pass the Monte Carlo test and the published
-    verdict is ours below a Q_lambda threshold only."""
-    fields, note = _compensation(ev, texts)
+    """The comparison (as P4-F8:better-ex2); the threshold explanation while both filters pass the Monte Carlo test
+    and the published verdict is ours below a Q_lambda threshold only."""
     threshold = ev["qlam_threshold"]
     holds = (ev["theory_checks_passed"] and threshold["root"] is not None and threshold["below"] == ev["paper"]
              and ev["value"] != ev["paper"])
-    return Reason(fields=fields, note=note, explanation={"threshold": holds})
-
-
-@reason("P4-F8:better-ex2")
-def better_ex2(ev: Mapping[str, Any], texts: Mapping[str, str]) -> Reason:
-    """The comparison (as P4-F7:better-ex1, without an explanation)."""
-    fields, note = _compensation(ev, texts)
-    return Reason(fields=fields, note=note)
+    return replace(better_ex2(ev, texts), explanation={"threshold": holds})
 
 
 @reason("P4-THEORY:recursion")

@@ -24,20 +24,24 @@ UNIT = "[–]"
 Z_BAND = 1.96
 
 
+def _time_panels(n: int, width: float, per_panel: float, extra: float):
+    """A column of ``n`` panels (one per state component) against time: shared x axis, labelled below."""
+    fig, axes = _plt().subplots(n, 1, figsize=(width, per_panel * n + extra), sharex=True, layout="constrained",
+                                squeeze=False)
+    axes[-1, 0].set_xlabel("time step $t$")
+    return fig, axes[:, 0]
+
+
 def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, pdf: str, png: str) -> None:
     """Figs. 1-3: true state components and their estimate against time (legend below the panels)."""
-    plt = _plt()
-    n = x.shape[1]
-    fig, axes = plt.subplots(n, 1, figsize=(5.4, 1.8 * n + 0.9), sharex=True, layout="constrained")
+    fig, axes = _time_panels(x.shape[1], 5.4, 1.8, 0.9)
     t = np.arange(x.shape[0])
-    for i, ax in enumerate(np.atleast_1d(axes)):
+    for i, ax in enumerate(axes):
         ax.plot(t, x[:, i], "k-", label=r"true state $x_i(t)$")
         ax.plot(t, est[:, i], "r--", label="estimate " + sym.format(i="i"))
         ax.set_ylabel(rf"state $x_{i + 1}$ {UNIT}")
-    np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
-    np.atleast_1d(axes)[0].set_title(rf"Tracking by the LMV {title}, arrival probability $\bar\eta$ = {eta:g}")
-    handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=2)
+    axes[0].set_title(rf"Tracking by the LMV {title}, arrival probability $\bar\eta$ = {eta:g}")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2)
     save_figure(fig, pdf, png)
 
 
@@ -47,38 +51,45 @@ def _mc_band(ax, t: np.ndarray, mc: np.ndarray, se: np.ndarray, color: str, ever
     ax.plot(t[::every], mc[::every], "o", ms=2.6, color=color, mfc="none", mew=0.8)
 
 
-def _mc_legend(fig, rows: list[tuple[str, str]], runs: int, ncol: int = 2) -> None:
+def _mc_legend(fig, rows: list[tuple[str, str]], runs: int) -> None:
     """One entry per curve (its colour: line, markers and band together), then what line, markers and band are."""
     from matplotlib.legend_handler import HandlerTuple
     from matplotlib.patches import Patch
 
-    plt = pyplot()
-    handles = [(Patch(color=col, alpha=0.18, lw=0), plt.Line2D([], [], color=col),
-                plt.Line2D([], [], ls="", marker="o", ms=2.6, color=col, mfc="none")) for _, col in rows]
-    labels = [label for label, _ in rows]
-    handles += [plt.Line2D([], [], color="0.3"), (Patch(color="0.3", alpha=0.18, lw=0),
-                plt.Line2D([], [], ls="", marker="o", ms=2.6, color="0.3", mfc="none"))]
-    labels += ["line: theory", f"markers: Monte Carlo, {runs} runs (every 4th step);\n"
-                               f"band: its 95 % interval (± {Z_BAND:g} standard errors)"]
-    fig.legend(handles, labels, loc="outside lower center", ncol=ncol, handler_map={tuple: HandlerTuple(ndivide=1)})
+    Line2D = pyplot().Line2D
+
+    def keys(col):  # band, line, markers of one colour
+        return (Patch(color=col, alpha=0.18, lw=0), Line2D([], [], color=col),
+                Line2D([], [], ls="", marker="o", ms=2.6, color=col, mfc="none"))
+
+    band, line, markers = keys("0.3")
+    labels = [label for label, _ in rows] + [
+        "line: theory", f"markers: Monte Carlo, {runs} runs (every 4th step);\n"
+                        f"band: its 95 % interval (± {Z_BAND:g} standard errors)"]
+    fig.legend([keys(col) for _, col in rows] + [line, (band, markers)], labels, loc="outside lower center", ncol=2,
+               handler_map={tuple: HandlerTuple(ndivide=1)})
+
+
+def _theory_mc_figure(d, se, rows: tuple, what: str, width: float, per_panel: float, extra: float):
+    """Theory (lines) and Monte Carlo (markers, 95 % band) against time, one panel per component, one curve per
+    row ``(mechanism, estimator, label, colour)`` of ``rows``; returns the figure and its panels."""
+    fig, axes = _time_panels(d["zero/theory_filt"].shape[1], width, per_panel, extra)
+    t = d["t"]
+    for i, ax in enumerate(axes):
+        for mech, est, _, col in rows:
+            ax.plot(t, d[f"{mech}/theory_{est}"][:, i], color=col)
+            _mc_band(ax, t, d[f"{mech}/mc_{est}"][:, i], se[f"{mech}/se_{est}"][:, i], col)
+        ax.set_ylabel(rf"{what} of $x_{i + 1}$ {UNIT}")
+    _mc_legend(fig, [(label, col) for *_, label, col in rows], int(se["runs"]))
+    return fig, axes
 
 
 def fig_variances(d, se, N: int, eta: float, pdf: str, png: str) -> None:
     """Fig. 4: theoretical (lines) and Monte Carlo (markers, 95 % band) error variances, zero-input."""
-    plt = _plt()
-    n = d["zero/theory_pred"].shape[1]
-    fig, axes = plt.subplots(n, 1, figsize=(5.4, 2.0 * n + 1.2), sharex=True, layout="constrained")
-    t = d["t"]
-    styles = [("pred", "one-step predictor $P(t|t-1)$", "C3"), ("filt", "filter $P(t|t)$", "C0"),
-              (f"smooth{N}", f"{N}-step smoother $P(t|t+{N})$", "C2")]
-    for i, ax in enumerate(np.atleast_1d(axes)):
-        for key, _, col in styles:
-            ax.plot(t, d[f"zero/theory_{key}"][:, i], color=col)
-            _mc_band(ax, t, d[f"zero/mc_{key}"][:, i], se[f"zero/se_{key}"][:, i], col)
-        ax.set_ylabel(rf"error variance of $x_{i + 1}$ {UNIT}")
-    np.atleast_1d(axes)[0].set_title(rf"Estimation error variances, zero-input, $\bar\eta$ = {eta:g}")
-    np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
-    _mc_legend(fig, [(label, col) for _, label, col in styles], int(se["runs"]))
+    rows = (("zero", "pred", "one-step predictor $P(t|t-1)$", "C3"), ("zero", "filt", "filter $P(t|t)$", "C0"),
+            ("zero", f"smooth{N}", f"{N}-step smoother $P(t|t+{N})$", "C2"))
+    fig, axes = _theory_mc_figure(d, se, rows, "error variance", 5.4, 2.0, 1.2)
+    axes[0].set_title(rf"Estimation error variances, zero-input, $\bar\eta$ = {eta:g}")
     save_figure(fig, pdf, png)
 
 
@@ -87,16 +98,15 @@ def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None
     plt = _plt()
     etas = d["eta"]
     n = d[f"{ex}/zero/filt"].shape[1]
-    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.3), layout="constrained")
-    for i, ax in enumerate(np.atleast_1d(axes)):
+    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.3), layout="constrained", squeeze=False)
+    for i, ax in enumerate(axes[0]):
         for key, label, col in (("pred", "one-step predictor", "C3"), ("filt", "filter", "C0"),
                                 ("smooth", f"{N}-step smoother", "C2")):
             ax.plot(etas, d[f"{ex}/zero/{key}"][:, i], color=col, label=label)
         ax.set_xlabel(r"arrival probability $\bar\eta$")
         ax.set_ylabel(rf"steady error variance of $x_{i + 1}$ {UNIT}")
         ax.set_ylim(0, None)
-    handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=3)
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside lower center", ncol=3)
     fig.suptitle(rf"Steady-state error variances (zero-input), $Q_\xi$ = {example['Qxi']:g}, "
                  rf"$Q_\lambda$ = {example['Qlam']:g}")
     save_figure(fig, pdf, png)
@@ -120,16 +130,17 @@ def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
     save_figure(fig, pdf, png)
 
 
-def fig_regions(d: dict, names: dict, working: dict, eta_bar: float, pdf: str, png: str) -> None:
+def fig_regions(d: dict, examples: dict, eta_bar: float, pdf: str, png: str) -> None:
     """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example.
 
     One colour scale for every panel (the same quantity), logarithmic and symmetric about 1, so a ratio ``r``
-    and ``1/r`` are equally strong; the working point of Figs. 7/8 (``working[ex] = (Q_xi, Q_lambda)``) marked.
+    and ``1/r`` are equally strong; the working point of Figs. 7/8 (``Qxi``, ``Qlam`` of ``examples[ex]``, the
+    configured examples, titled by their ``name``) marked.
     """
     from matplotlib.colors import LogNorm
 
     plt = _plt()
-    exs = list(names)
+    exs = list(examples)
     ratios = {ex: d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1) for ex in exs}
     m = max(1.25, *(max(float(np.nanmax(r)), 1.0 / float(np.nanmin(r))) for r in ratios.values()))
     # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
@@ -138,20 +149,18 @@ def fig_regions(d: dict, names: dict, working: dict, eta_bar: float, pdf: str, p
     for ax, ex in zip(axes[0], exs):
         im = ax.pcolormesh(d["qlam"], d["qxi"], ratios[ex], cmap="RdBu_r", norm=norm, shading="auto")
         ax.contour(d["qlam"], d["qxi"], ratios[ex], levels=[1.0], colors="k", linewidths=1.0)
-        qxi, qlam = working[ex]
-        ax.plot([qlam], [qxi], "*", color="gold", mec="k", mew=0.6, ms=11, clip_on=False, zorder=5,
-                label="working point of Figs. 7 and 8")
+        ax.plot([float(examples[ex]["Qlam"])], [float(examples[ex]["Qxi"])], "*", color="gold", mec="k", mew=0.6,
+                ms=11, clip_on=False, zorder=5, label="working point of Figs. 7 and 8")
         ax.set_xlabel(r"$Q_\lambda$ (variance of $\lambda$)")
         ax.set_ylabel(r"$Q_\xi$ (variance of $\xi$)")
-        ax.set_title(names[ex])
+        ax.set_title(examples[ex].get("name", ex))
     cb = fig.colorbar(im, ax=list(axes[0]), label=r"tr $P_{\mathrm{hold}}$ / tr $P_{\mathrm{zero}}$ (filter)")
     ticks = [t for t in (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.75, 2.0) if 1.0 / m <= t <= m]
     cb.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
     cb.minorticks_off()
     handles, labels = axes[0][0].get_legend_handles_labels()
-    handles.append(pyplot().Line2D([], [], color="k", lw=1.0))
-    labels.append("equal variances (ratio 1)")
-    fig.legend(handles, labels, loc="outside lower center", ncol=2)
+    fig.legend([*handles, plt.Line2D([], [], color="k", lw=1.0)], [*labels, "equal variances (ratio 1)"],
+               loc="outside lower center", ncol=2)
     fig.suptitle(rf"Hold-input vs zero-input filter, $\bar\eta$ = {eta_bar:g}: blue, ratio < 1: hold-input better; "
                  "red: zero-input better", fontsize=9)
     save_figure(fig, pdf, png)
@@ -168,28 +177,17 @@ def _verdict(d, T: int) -> tuple[str, float]:
 def fig_compare(d, se, name: str, eta: float, paper: str | None, pdf: str, png: str) -> None:
     """Figs. 7-8: filter error variances of zero- and hold-input, theory (lines) and Monte Carlo (markers, 95 %
     band); the title gives the theoretical verdict and the paper's (``paper``, from ``config/claims.yaml``)."""
-    plt = _plt()
-    n = d["zero/theory_filt"].shape[1]
-    fig, axes = plt.subplots(n, 1, figsize=(5.6, 1.9 * n + 1.5), sharex=True, layout="constrained")
-    t = d["t"]
-    rows = (("zero", "zero-input", "C0"), ("hold", "hold-input", "C3"))
-    for i, ax in enumerate(np.atleast_1d(axes)):
-        for k, _, col in rows:
-            ax.plot(t, d[f"{k}/theory_filt"][:, i], color=col)
-            _mc_band(ax, t, d[f"{k}/mc_filt"][:, i], se[f"{k}/se_filt"][:, i], col)
-        ax.set_ylabel(rf"filter variance of $x_{i + 1}$ {UNIT}")
+    rows = (("zero", "filt", "zero-input", "C0"), ("hold", "filt", "hold-input", "C3"))
+    fig, axes = _theory_mc_figure(d, se, rows, "filter variance", 5.6, 1.9, 1.5)
     T = int(np.flatnonzero(np.isfinite(d["zero/theory_filt"][:, 0]))[-1])
     who, gap = _verdict(d, T)
     rel_se = 100.0 * Z_BAND * float(np.nanmax(se["zero/se_filt"][T] / d["zero/mc_filt"][T]))
-    flag = ""
-    if paper is not None:
-        flag = (f"; the paper: {paper} lower" + (" (the opposite)" if paper != who and "mixed" not in who else ""))
-    np.atleast_1d(axes)[0].set_title(
+    opposite = " (the opposite)" if paper != who and "mixed" not in who else ""
+    flag = "" if paper is None else f"; the paper: {paper} lower{opposite}"
+    axes[0].set_title(
         rf"{name}: filter error variances of the two mechanisms, $\bar\eta$ = {eta:g}" + "\n"
         f"theory at t = {T}: {who} lower (trace {gap:.1f} % apart){flag}" + "\n"
         f"Monte Carlo 95 % interval: up to ± {rel_se:.1f} % of the variance", fontsize=8)
-    np.atleast_1d(axes)[-1].set_xlabel("time step $t$")
-    _mc_legend(fig, [(label, col) for _, label, col in rows], int(se["runs"]))
     save_figure(fig, pdf, png)
 
 
@@ -212,9 +210,7 @@ def step_fig6(cfg, inputs, outputs, wildcards) -> None:
     """Merge the Q-sweep chunks (whole grid, once); Fig. 6 and the regions figure."""
     d = merge_npz(list(inputs.chunks), int(cfg["sweep_q"]["num"]), outputs.merged, shared=("qlam",))
     fig_q(d, cfg["tracking"]["example"], float(cfg["eta_bar"]), outputs.pdf, outputs.png)
-    names = {ex: cfg["examples"][ex].get("name", ex) for ex in cfg["examples"]}
-    working = {ex: (float(cfg["examples"][ex]["Qxi"]), float(cfg["examples"][ex]["Qlam"])) for ex in cfg["examples"]}
-    fig_regions(d, names, working, float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
+    fig_regions(d, cfg["examples"], float(cfg["eta_bar"]), outputs.rpdf, outputs.rpng)
 
 
 def step_compare(cfg, inputs, outputs, wildcards) -> None:

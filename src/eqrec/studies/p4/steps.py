@@ -23,9 +23,10 @@ mechanism; set in ``config/p4.yaml``.
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -51,11 +52,6 @@ def load_config(*files: str | Path, overrides=None) -> dict:
     return configuration.load_config("p4", *files, overrides=overrides)
 
 
-def grid(g: dict) -> np.ndarray:
-    """The points of a sweep section (``lo``, ``hi``, ``num``)."""
-    return np.linspace(float(g["lo"]), float(g["hi"]), int(g["num"]))
-
-
 def _diag(P: np.ndarray) -> np.ndarray:
     return np.einsum("...ii->...i", P)
 
@@ -71,17 +67,13 @@ def step_tracking(cfg, inputs, outputs, wildcards) -> None:
     sim = simulate_plant(plant, eta, T, 1, rng, mult_dist=cfg["examples"][ex]["mc_mult_dist"])
     mc = run_mc(plant, eta, "zero-input", T, 1, N, rng, sim=sim, pred_steps=int(cfg["pred_steps"]))
     x = sim["x"][0]
-    filt = mc.est["smooth"][0, :, 0]
-    pred = mc.est["pred"][0, : T + 1]
-    smooth = mc.est["smooth"][0, :, N]
-    write_npz(outputs.npz, x=x, filt=filt, pred=pred, smooth=smooth, eta=sim["eta"][0], y=sim["y_zero"][0],
-              N=N, eta_bar=eta)
+    est = {"filt": mc.est["smooth"][0, :, 0], "pred": mc.est["pred"][0, : T + 1], "smooth": mc.est["smooth"][0, :, N]}
+    write_npz(outputs.npz, x=x, **est, eta=sim["eta"][0], y=sim["y_zero"][0], N=N, eta_bar=eta)
     log.info("tracking %s: %d/%d packets arrived", ex, int(sim["eta"][0].sum()), T + 1)
-    labels = [("filter", r"$\hat{{x}}_{i}(t|t)$", filt),
-              ("one-step predictor", r"$\hat{{x}}_{i}(t|t-1)$", pred),
-              (f"{N}-step smoother", r"$\hat{{x}}_{i}(t|t+" + str(N) + ")$", smooth)]
-    for num, (title, sym, est) in enumerate(labels, start=1):  # Figs. 1-3
-        p4_figures.fig_tracking(x, est, title, sym, eta, outputs[f"f{num}"], outputs[f"f{num}png"])
+    labels = [("filter", r"$\hat{{x}}_{i}(t|t)$"), ("one-step predictor", r"$\hat{{x}}_{i}(t|t-1)$"),
+              (f"{N}-step smoother", r"$\hat{{x}}_{i}(t|t+" + str(N) + ")$")]
+    for num, ((title, sym), e) in enumerate(zip(labels, est.values()), start=1):  # Figs. 1-3
+        p4_figures.fig_tracking(x, e, title, sym, eta, outputs[f"f{num}"], outputs[f"f{num}png"])
 
 
 def _check_record(c) -> dict:
@@ -122,11 +114,9 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
         report[f"ms_radius_{k}"] = ms_spectral_radius(mc.sys)
         checks = {"pred1": compare_moments(mc.err_pred, mc.P_pred, alpha),
                   f"pred{Np}": compare_moments(mc.err_npred, mc.P_npred, alpha)}
-        arrays[f"{k}/theory_pred"] = _diag(mc.P_pred)
-        arrays[f"{k}/mc_pred"] = _diag(checks["pred1"].emp)
+        for name, P, c in (("pred", mc.P_pred, checks["pred1"]), ("npred", mc.P_npred, checks[f"pred{Np}"])):
+            arrays[f"{k}/theory_{name}"], arrays[f"{k}/mc_{name}"] = _diag(P), _diag(c.emp)
         errors[f"{k}/se_pred"] = _diag(checks["pred1"].se)
-        arrays[f"{k}/theory_npred"] = _diag(mc.P_npred)
-        arrays[f"{k}/mc_npred"] = _diag(checks[f"pred{Np}"].emp)
         for j in range(N + 1):  # the j-step smoother (j = 0: the filter) has values up to t = T - j; NaN after
             name, valid = "filt" if j == 0 else f"smooth{j}", np.arange(T + 1 - j)
             c = checks[name] = compare_moments(mc.err_smooth[:, valid, j], mc.P_smooth[valid, j], alpha)
@@ -167,52 +157,44 @@ def step_mc(cfg, inputs, outputs, wildcards) -> dict:
 def _sweep_chunk(cfg: dict, wildcards, sweep: str) -> tuple[str, np.ndarray, np.ndarray]:
     """One job of a sweep (``sweep_eta`` or ``sweep_q``): its chunk (``i-of-n``), the whole grid, the chunk's
     indices."""
-    values = grid(cfg[sweep])
+    g = cfg[sweep]
+    values = np.linspace(float(g["lo"]), float(g["hi"]), int(g["num"]))
     return *scatter_indices(wildcards, len(values), field=f"{sweep}.chunks"), values
 
 
-def _steady_settings(cfg: dict) -> tuple[int, float, int]:
-    """The smoother lag ``N`` and the steady-state iteration's ``tol`` and ``max_iter``."""
-    return int(cfg["smoother_lag"]), float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
+def _sweep(cfg: dict, outputs, what: str, out: dict, points_of: Callable, keys: tuple, shape: tuple) -> dict:
+    """Write one chunk of a sweep (``outputs.npz``): ``out`` (its grid) and, per example and mechanism, the
+    ``keys`` of :func:`eqrec.lmv.steady.steady_variances` at the points ``(plant, eta_bar)`` that ``points_of``
+    makes of the example's plant, in the grid's ``shape`` (then the components)."""
+    N, tol, max_iter = int(cfg["smoother_lag"]), float(cfg["steady"]["tol"]), int(cfg["steady"]["max_iter"])
+    prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * math.prod(shape), what)
+    for ex in cfg["examples"]:
+        points = points_of(plant_of(cfg, ex))
+        for mech in MECHANISMS:
+            rows = []
+            for plant, eta in points:
+                rows.append(steady_variances(plant, mech, eta, N, tol, max_iter))
+                prog.advance()
+            for key in keys:
+                v = np.array([r[key] for r in rows])
+                out[f"{ex}/{MECHANISM_KEYS[mech]}/{key}"] = v.reshape(*shape, *v.shape[1:])
+    write_npz(outputs.npz, **out)
+    return out
 
 
 def step_sweep_eta_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady-state variances against eta_bar (Fig. 5) for one chunk of the grid, both examples and mechanisms."""
     chunk, idx, etas = _sweep_chunk(cfg, wildcards, "sweep_eta")
-    N, tol, max_iter = _steady_settings(cfg)
-    out: dict[str, np.ndarray] = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
-    prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx), f"eta sweep chunk {chunk}")
-    for ex in cfg["examples"]:
-        plant = plant_of(cfg, ex)
-        for mech in MECHANISMS:
-            rows = []
-            for e in etas[idx]:
-                rows.append(steady_variances(plant, mech, float(e), N, tol, max_iter))
-                prog.advance()
-            for key in ("pred", "filt", "smooth", "stable"):
-                out[f"{ex}/{MECHANISM_KEYS[mech]}/{key}"] = np.array([r[key] for r in rows])
-    write_npz(outputs.npz, **out)
-    return out
+    grid = {"idx": idx, "eta": etas[idx], "num": np.array(len(etas))}
+    return _sweep(cfg, outputs, f"eta sweep chunk {chunk}", grid, lambda plant: [(plant, float(e)) for e in etas[idx]],
+                  ("pred", "filt", "smooth", "stable"), (len(idx),))
 
 
 def step_sweep_q_chunk(cfg, inputs, outputs, wildcards) -> dict:
     """Steady filter variances on the (Q_xi, Q_lambda) grid (Fig. 6): rows of Q_xi in this chunk."""
     chunk, idx, qs = _sweep_chunk(cfg, wildcards, "sweep_q")
-    N, tol, max_iter = _steady_settings(cfg)
     eta = float(cfg["eta_bar"])
-    out: dict[str, np.ndarray] = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
-    prog = Progress(log, len(cfg["examples"]) * len(MECHANISMS) * len(idx) * len(qs), f"Q sweep chunk {chunk}")
-    for ex in cfg["examples"]:
-        base = plant_of(cfg, ex)
-        for mech in MECHANISMS:
-            filt = np.full((len(idx), len(qs), base.n), np.nan)
-            stable = np.zeros((len(idx), len(qs)), bool)
-            for a, i in enumerate(idx):
-                for b, ql in enumerate(qs):
-                    r = steady_variances(base.with_(Qxi=float(qs[i]), Qlam=float(ql)), mech, eta, N,
-                                         tol, max_iter)
-                    filt[a, b], stable[a, b] = r["filt"], bool(r["stable"])
-                    prog.advance()
-            out[f"{ex}/{MECHANISM_KEYS[mech]}/filt"], out[f"{ex}/{MECHANISM_KEYS[mech]}/stable"] = filt, stable
-    write_npz(outputs.npz, **out)
-    return out
+    grid = {"idx": idx, "qxi": qs[idx], "qlam": qs, "num": np.array(len(qs))}
+    return _sweep(cfg, outputs, f"Q sweep chunk {chunk}", grid,
+                  lambda base: [(base.with_(Qxi=float(qs[i]), Qlam=float(ql)), eta) for i in idx for ql in qs],
+                  ("filt", "stable"), (len(idx), len(qs)))
