@@ -85,6 +85,12 @@ def in_report(path, caption, category, **kwargs):
     return report(path, caption=f"../report/{caption}.rst", category=category, **kwargs)
 
 
+def figure(stem, caption, category):
+    """A figure's two outputs: ``pdf`` (``<stem>.pdf``) and ``png``, shown in the
+    report (``in_report``); for ``output: **figure(...)``."""
+    return {"pdf": f"{stem}.pdf", "png": in_report(f"{stem}.png", caption, category)}
+
+
 def scale_files(sizes, engine=""):
     """The per-size JSONs of one size list of p3.scale (engine="classes_": the class engine's)."""
     scale = config["p3"]["scale"]

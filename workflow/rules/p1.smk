@@ -51,8 +51,7 @@ use rule step as p1_figure1 with:
         npz="results/p1/simulation.npz",
         code=code_inputs("eqrec.studies.p1.figures:step_figure1"),
     output:
-        pdf="results/p1/fig1_trajectories.pdf",
-        png=in_report("results/p1/fig1_trajectories.png", "p1_fig1", "P1"),
+        **figure("results/p1/fig1_trajectories", "p1_fig1", "P1"),
     log:
         "logs/p1/figure1.log",
     params:
@@ -78,8 +77,7 @@ use rule step as p1_figure_ext with:
         json="results/p1/extensions.json",
         code=code_inputs("eqrec.studies.p1.figures:step_figure_ext"),
     output:
-        pdf="results/p1/fig_ext_M2_vs_M1.pdf",
-        png=in_report("results/p1/fig_ext_M2_vs_M1.png", "p1_ext", "P1"),
+        **figure("results/p1/fig_ext_M2_vs_M1", "p1_ext", "P1"),
     log:
         "logs/p1/figure_ext.log",
     params:

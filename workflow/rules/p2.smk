@@ -145,8 +145,7 @@ use rule step as p2_figure_trajectories with:
         simulation="results/p2/simulation.npz",
         code=code_inputs("eqrec.studies.p2.figures:step_figure_trajectories"),
     output:
-        pdf="results/p2/{fig}_trajectories.pdf",
-        png=in_report("results/p2/{fig}_trajectories.png", "p2_trajectories", "P2"),
+        **figure("results/p2/{fig}_trajectories", "p2_trajectories", "P2"),
     log:
         "logs/p2/figure_{fig}.log",
     wildcard_constraints:
@@ -165,8 +164,7 @@ use rule step as p2_figure_heatmap with:
         printed="results/p2/printed.json",
         code=code_inputs("eqrec.studies.p2.figures:step_figure_heatmap"),
     output:
-        pdf="results/p2/f3a_heatmap.pdf",
-        png=in_report("results/p2/f3a_heatmap.png", "p2_f3a", "P2"),
+        **figure("results/p2/f3a_heatmap", "p2_f3a", "P2"),
     log:
         "logs/p2/figure_f3a.log",
     params:
@@ -183,8 +181,7 @@ use rule step as p2_figure_realaxis with:
         printed="results/p2/printed.json",
         code=code_inputs("eqrec.studies.p2.figures:step_figure_realaxis"),
     output:
-        pdf="results/p2/f3b_realaxis.pdf",
-        png=in_report("results/p2/f3b_realaxis.png", "p2_f3b", "P2"),
+        **figure("results/p2/f3b_realaxis", "p2_f3b", "P2"),
     log:
         "logs/p2/figure_f3b.log",
     params:

@@ -81,8 +81,7 @@ use rule step as p3_figure1 with:
         npz="results/p3/kalman.npz",
         code=code_inputs("eqrec.studies.p3.figures:step_figure1"),
     output:
-        pdf="results/p3/fig1_kalman.pdf",
-        png=in_report("results/p3/fig1_kalman.png", "p3_fig1", "P3"),
+        **figure("results/p3/fig1_kalman", "p3_fig1", "P3"),
     log:
         "logs/p3/figure1.log",
     params:
@@ -122,8 +121,7 @@ use rule step as p3_figure2 with:
         npz="results/p3/acc_simulation.npz",
         code=code_inputs("eqrec.studies.p3.figures:step_figure2"),
     output:
-        pdf="results/p3/fig2_acc.pdf",
-        png=in_report("results/p3/fig2_acc.png", "p3_fig2", "P3"),
+        **figure("results/p3/fig2_acc", "p3_fig2", "P3"),
     log:
         "logs/p3/figure2.log",
     params:
@@ -183,8 +181,7 @@ use rule step as p3_strategy_figure with:
         npz="results/p3/strategy.npz",
         code=code_inputs("eqrec.studies.p3.figures:step_strategy_figure"),
     output:
-        pdf="results/p3/fig_strategy.pdf",
-        png=in_report("results/p3/fig_strategy.png", "p3_strategy", "P3"),
+        **figure("results/p3/fig_strategy", "p3_strategy", "P3"),
     log:
         "logs/p3/strategy_figure.log",
     params:

@@ -83,8 +83,7 @@ use rule step as p4_fig4 with:
         se=f"results/p4/mc_{config['p4']['tracking']['example']}_se.npz",
         code=code_inputs("eqrec.studies.p4.figures:step_fig4"),
     output:
-        pdf="results/p4/fig4_variances.pdf",
-        png=in_report("results/p4/fig4_variances.png", "p4_f4", "P4"),
+        **figure("results/p4/fig4_variances", "p4_f4", "P4"),
     log:
         "logs/p4/fig4.log",
     params:
@@ -98,9 +97,8 @@ use rule step as p4_fig5 with:
         chunks=gather.sweep_eta("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
         code=code_inputs("eqrec.studies.p4.figures:step_fig5"),
     output:
+        **figure("results/p4/fig5_eta", "p4_f5", "P4"),
         merged="results/p4/sweep_eta.npz",
-        pdf="results/p4/fig5_eta.pdf",
-        png=in_report("results/p4/fig5_eta.png", "p4_f5", "P4"),
     log:
         "logs/p4/fig5.log",
     params:
@@ -114,9 +112,8 @@ use rule step as p4_fig6 with:
         chunks=gather.sweep_q("results/p4/sweep_q/chunk_{scatteritem}.npz"),
         code=code_inputs("eqrec.studies.p4.figures:step_fig6"),
     output:
+        **figure("results/p4/fig6_q", "p4_f6", "P4"),
         merged="results/p4/sweep_q.npz",
-        pdf="results/p4/fig6_q.pdf",
-        png=in_report("results/p4/fig6_q.png", "p4_f6", "P4"),
         rpdf="results/p4/regions.pdf",
         rpng=in_report("results/p4/regions.png", "p4_regions", "P4"),
     log:
