@@ -191,7 +191,6 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     nrows = (npanel + 2) // 2  # two columns, and one more cell for the legend
     f, axes = plt.subplots(nrows, 2, figsize=(7.2, 2.05 * nrows + 0.2), squeeze=False, layout="constrained")
     axes = axes.ravel()
-    pm = None
     legend: dict[str, object] = {}
     for ax, var in zip(axes, variants):
         g = df[df["variant"] == var]

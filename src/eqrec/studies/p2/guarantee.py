@@ -147,8 +147,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     is nonzero: then ``u_e(s)`` enters ``e = ξ - s`` at no later step, so no ``z(i)`` depends on ``cols``.
     """
     n, p, T = system.n, system.p, design.T
-    cols = np.asarray(cols, dtype=np.int64)
-    keep = np.asarray(keep, dtype=np.int64)
+    cols, keep = (np.asarray(a, dtype=np.int64) for a in (cols, keep))
     # each column's step s, source i (None for ν) and entry (b, π)
     info = {int(col): (s_, i_, k // p, k % p) for (s_, i_), mc in design.m_cols.items() for k, col in enumerate(mc)}
     info.update({int(col): (k // n, None, k % n, None) for k, col in enumerate(design.nu_cols)})
@@ -156,8 +155,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
         raise AssertionError("the free columns must be gain columns (M, nu) of the design LP")
     L = runtime_L(design.L, T, n, p, design.word, runtime)
     q = arrival_indicator(design.word)
-    coupled = [k for k in range(T) if q[k] == 0 and np.any(L[k])]
-    k_c = max(coupled, default=0)
+    k_c = max((k for k in range(T) if q[k] == 0 and np.any(L[k])), default=0)  # the last coupled missing step
     early = sorted({info[int(j)][0] for j in cols if info[int(j)][0] < k_c})
     if early:
         raise AssertionError(f"the {runtime} running error is not affine in the free gains: gains of steps {early} "

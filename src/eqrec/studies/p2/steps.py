@@ -178,8 +178,7 @@ def _runtime_check(system, gains, language, mu1, seed, kind, x0, runs) -> float:
     included) on the same words and draws as the Monte Carlo (seed ``seed``)."""
     sch = schedule_from_augmented(system, gains)
     rng = np.random.default_rng(seed)
-    T = gains.T
-    lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
+    lay = UncertaintyLayout(gains.T, system.nw, system.nv, system.n)
     rad = lay.radius(system.eta_w, system.eta_v, mu1)
     worst = 0.0
     for _ in range(runs):
