@@ -101,30 +101,23 @@ def f2_certified_masked_gain(ev: Mapping[str, Any], texts: Mapping[str, str]) ->
     optima, heatmap = ev["among_optima"], ev["heatmap"]
     hold, theorem2 = optima["runtimes"]["hold"], optima["runtimes"]["theorem2"]
     fields = {"rel_tol": optima["rel_tol"], "abs_tol": optima["abs_tol"], "word_list": join(ev["words"]),
-              "optima_hold": hold["value"], "optima_hold_spread": hold["solver_spread"],
-              "optima_hold_certify_difference": hold["certify_difference"],
-              "optima_theorem2": theorem2["value"], "optima_theorem2_spread": theorem2["solver_spread"],
-              "optima_theorem2_certify_difference": theorem2["certify_difference"],
+              **{f"optima_{rt}{suffix}": r[key] for rt, r in (("hold", hold), ("theorem2", theorem2)) for suffix, key
+                 in (("", "value"), ("_spread", "solver_spread"), ("_certify_difference", "certify_difference"))},
               "worst_time": hold["worst_time"], "agree_until": optima["agree_until"],
               "solver_optima": each(ev["by_solver"], texts["solver_optimum"]),
               "terminal_theorem2": optima["terminal_theorem2"]["value"],
               "recover_theorem2": optima["recover_theorem2"]["value"],
               "recover_theorem2_terminal": optima["recover_theorem2"]["terminal"]}
-    note = ["among_optima"]
-    if (abs(hold["value"] - theorem2["value"]) <= ev["mu2_tol"] and hold["worst_time"] <= optima["agree_until"]
-            and hold["exact"]):
-        note.append("same_worst_time")
-    if not optima["agree"]:
-        note.append("unsettled")
-    note.append("solver_optima")
-    if optima["terminal_theorem2"]["value"] <= ev["M1"]:
-        note.append("recover")
+    same_worst_time = (abs(hold["value"] - theorem2["value"]) <= ev["mu2_tol"]
+                       and hold["worst_time"] <= optima["agree_until"] and hold["exact"])
     if heatmap["certified_min"] is not None:
-        note.append("heatmap")
-        fields.update(heatmap_certified_min=heatmap["certified_min"],
-                      heatmap_certified_low=heatmap["certified_at_min"][0],
-                      heatmap_certified_high=heatmap["certified_at_min"][1],
-                      heatmap_certified_terminal_min=heatmap["certified_terminal_min"])
+        low, high = heatmap["certified_at_min"]
+        fields.update(heatmap_certified_min=heatmap["certified_min"], heatmap_certified_low=low,
+                      heatmap_certified_high=high, heatmap_certified_terminal_min=heatmap["certified_terminal_min"])
+    note = [name for name, shown in (("among_optima", True), ("same_worst_time", same_worst_time),
+                                     ("unsettled", not optima["agree"]), ("solver_optima", True),
+                                     ("recover", optima["terminal_theorem2"]["value"] <= ev["M1"]),
+                                     ("heatmap", heatmap["certified_min"] is not None)) if shown]
     as_run = (abs(ev["masked_gain_mu2"] - ev["paper"]) <= ev["tol"] and optima["agree"]
               and ev["value"] > ev["time_mu2"] + ev["mu2_tol"])
     return Reason(fields=fields, note=note, explanation={"as_run": as_run})

@@ -13,19 +13,14 @@ from eqrec.studies.pipeline.outputs import save_figure
 from eqrec.studies.plotting import paper_style, pyplot, same_scale_per_row, trajectory_panel
 
 
-def _levels(T: int, mu1: float, mu2: float) -> np.ndarray:
-    lev = np.full(T + 1, mu2)
-    lev[0] = lev[-1] = mu1
-    return lev
-
-
 #: The readings of the paper's text (:mod:`eqrec.studies.p2.readings`) in words, for titles and legends.
 READING_NAMES = {"theorem2": "Theorem 2 as stated", "one_based": "word read with 1-based times",
                  "leak": "constant $L$ kept at missing steps", "masked_gain": "Appendix, gain masked when missing"}
 
-
-def _missing_times(word: str) -> str:
-    return ", ".join(str(k) for k, c in enumerate(word) if c == "0")
+#: The paper's value, dashed (plot and legend).
+PAPER_LINE = {"color": "k", "ls": (0, (4, 2)), "lw": 1.0}
+#: The star of an exact nilpotent ``L`` (eigenvalue 0).
+STAR = {"mec": "k", "mew": 0.4, "ms": 9}
 
 
 def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
@@ -46,26 +41,26 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     if fig == "f2" and "f2/one_based" in sim.files:
         ob = d["one_based"]["word"]
         c = d["one_based"]["certified_on_true_words"][d["worst_case_word"]]
-        cols.append(("one_based", f"designed for missing $k$ = {_missing_times(ob)} ({ob}),\n"
-                                  f"run on the true words", c, "C3"))
+        missing = ", ".join(str(k) for k, ch in enumerate(ob) if ch == "0")
+        cols.append(("one_based", f"designed for missing $k$ = {missing} ({ob}),\nrun on the true words", c, "C3"))
     errs0 = sim[f"{fig}/time"]
     T = errs0.shape[1] - 1
     f, axes = plt.subplots(3, len(cols), figsize=(2.25 * len(cols) + 0.5, 6.6), sharex=True, sharey="row",
                            squeeze=False, layout="constrained")
     for j, (name, title, mu2, color) in enumerate(cols):
-        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], _levels(T, mu1, mu2),
+        levels = np.r_[mu1, np.full(T - 1, mu2), mu1]  # mu1 at the start and the end, mu2 in between
+        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], levels,
                          f"{title}\ncertified $\\mu_2$ = {mu2:.4g}", color=color, ylabels=(j == 0))
         for ax in axes[:, j]:
             for sign in (1, -1):
-                ax.plot([0.5, T - 0.5], [sign * paper] * 2, color="k", ls=(0, (4, 2)), lw=1.0)
+                ax.plot([0.5, T - 0.5], [sign * paper] * 2, **PAPER_LINE)
     same_scale_per_row(axes)
     # one legend entry per estimator, in its own colour, the bars and the paper's value
-    handles = [plt.Line2D([], [], color=color, lw=1.2) for _, _, _, color in cols]
-    labels = [f"error: {title.split(chr(10))[0].split(' (')[0]}" for _, title, _, _ in cols]
-    bars = axes[0, 0].get_legend_handles_labels()[0][-1]
-    handles += [bars, plt.Line2D([], [], color="k", ls=(0, (4, 2)), lw=1.0)]
-    labels += ["certified guarantee", f"$\\pm\\mu_2$ reported by the paper: {paper:g}"]
-    f.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3))
+    entries = [(plt.Line2D([], [], color=color, lw=1.2), f"error: {title.split(chr(10))[0].split(' (')[0]}")
+               for _, title, _, color in cols]
+    entries += [(axes[0, 0].get_legend_handles_labels()[0][-1], "certified guarantee"),
+                (plt.Line2D([], [], **PAPER_LINE), f"$\\pm\\mu_2$ reported by the paper: {paper:g}")]
+    f.legend(*zip(*entries), loc="outside lower center", ncol=min(len(entries), 3))
     what = ("no missing data" if fig == "f1" else
             f"language {{{', '.join(d['language'])}}} (worst case {d['worst_case_word']})")
     f.suptitle(f"{what[0].upper()}{what[1:]}, {errs0.shape[0]} runs, the same draws for every estimator")
@@ -76,6 +71,17 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
 #: is no colour of any map): class -> (hatch, label).
 CLASS_STYLE = {"infeasible": ("////", "LP infeasible"), "solver_failed": ("xxxx", "solver failure (both solvers)"),
                "placement_failed": ("....", "pole placement failure")}
+
+
+def _sweep_inputs(inputs):
+    """Pyplot in the paper style, a sweep's CSV (text columns as strings, ``""`` where empty) and ``printed.json``."""
+    paper_style()
+    plt = pyplot()
+    df = pd.read_csv(inputs.csv, keep_default_na=False, na_values=["nan", "NaN", ""])
+    for col in ("status", "observer", "status_second"):
+        if col in df:
+            df[col] = df[col].fillna("").astype(str)
+    return plt, df, json.loads(Path(inputs.printed).read_text())
 
 
 def _edges(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -101,11 +107,14 @@ def _class_cells(ax, X, Y, mask, hatch: str) -> None:
     ax.add_collection(PolyCollection(quads, facecolor="white", edgecolor="0.35", linewidth=0.0, hatch=hatch))
 
 
-def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=None, interval=None):
+def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, legend: dict, outline_tol=None, interval=None):
     """One filled polar map in the complex plane: optimal points coloured by ``column``, every other class
-    hatched; returns the mappable, the legend handles (by label) and the count of each class."""
+    hatched, their legend handles added to ``legend`` (by label); returns the mappable and the count of each class."""
     from matplotlib import patheffects
     from matplotlib.patches import Patch
+
+    def key(label: str, **style) -> None:
+        legend[label] = plt.Line2D([], [], label=label, **style)
 
     R, TH = np.meshgrid(_edges(r_grid, 0.0, r_grid[-1]), _edges(th_grid, 0.0, np.pi))
     X, Y = R * np.cos(TH), R * np.sin(TH)
@@ -113,18 +122,16 @@ def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=Non
     val = _polar_grid(g, r_grid, th_grid, column).astype(float)
     ok = status == "optimal"
     pm = ax.pcolormesh(X, Y, np.ma.masked_where(~ok, val), cmap=cmap, norm=norm, shading="flat")
-    handles, counts = {}, {"optimal": int(ok.sum())}
+    counts = {"optimal": int(ok.sum())}
     for cls, (hatch, label) in CLASS_STYLE.items():
         m = status == cls
         counts[cls] = int(m.sum())
         if m.any():
             _class_cells(ax, X, Y, m, hatch)
-            handles[label] = Patch(facecolor="white", edgecolor="0.35", hatch=hatch, label=label)
+            legend[label] = Patch(facecolor="white", edgecolor="0.35", hatch=hatch, label=label)
     if "observer" in g and (g["observer"] == "deadbeat").any():
-        label = "$r$ = 0: an exact nilpotent $L$"
-        handles[label] = plt.Line2D([], [], marker="*", ls="", color="magenta", mec="k", mew=0.4, ms=9,
-                                    label=label)
-        ax.plot([0], [0], "*", color="magenta", mec="k", mew=0.4, ms=9, zorder=7, clip_on=False)
+        key("$r$ = 0: an exact nilpotent $L$", marker="*", ls="", color="magenta", **STAR)
+        ax.plot([0], [0], "*", color="magenta", **STAR, zorder=7, clip_on=False)
     if outline_tol is not None and ok.any():
         at_min = np.ma.masked_where(~ok, np.where(ok, val <= np.nanmin(np.where(ok, val, np.nan)) + outline_tol,
                                                   False).astype(float))
@@ -133,19 +140,15 @@ def _heat_panel(ax, plt, g, r_grid, th_grid, column, norm, cmap, outline_tol=Non
             halo = [patheffects.withStroke(linewidth=2.4, foreground="black")]
             cs = ax.contour(Rc * np.cos(THc), Rc * np.sin(THc), at_min, levels=[0.5], colors="white", linewidths=1.2)
             cs.set(path_effects=halo)
-            label = "edge of the region at the minimum"
-            handles[label] = plt.Line2D([], [], color="white", lw=1.2, label=label, path_effects=halo)
+            key("edge of the region at the minimum", color="white", lw=1.2, path_effects=halo)
     if interval is not None:
         ax.plot(interval, [0, 0], color="red", lw=3, solid_capstyle="butt", zorder=6, clip_on=False)
-        label = "published Fig. 3b interval"
-        handles[label] = plt.Line2D([], [], color="red", lw=3, label=label)
+        key("published Fig. 3b interval", color="red", lw=3)
     ax.set_aspect("equal")
     ax.set_xlim(-r_grid[-1] * 1.04, r_grid[-1] * 1.04)
     ax.set_ylim(-r_grid[-1] * 0.08, r_grid[-1] * 1.04)  # the star and the interval on y = 0 fully inside
-    ax.set_xlabel(r"Re $\lambda$")
-    ax.set_ylabel(r"Im $\lambda$")
-    ax.set_facecolor("white")
-    return pm, handles, counts
+    ax.set(xlabel=r"Re $\lambda$", ylabel=r"Im $\lambda$", facecolor="white")
+    return pm, counts
 
 
 def _optimal_values(g: pd.DataFrame, column: str = "mu2") -> tuple[pd.Series, bool]:
@@ -154,37 +157,14 @@ def _optimal_values(g: pd.DataFrame, column: str = "mu2") -> tuple[pd.Series, bo
     return vals, bool(len(vals)) and float(vals.max() - vals.min()) <= 1e-6 * max(1.0, abs(float(vals.max())))
 
 
-def _panel_title(name: str, word: str, g: pd.DataFrame, counts: dict, column: str = "mu2") -> str:
+def _panel_title(name: str, word: str, vals: pd.Series, flat: bool, counts: dict) -> str:
     """Reading and word, then what the panel shows in words: a flat map, else the range; the other classes."""
-    n = int(sum(counts.values()))
-    vals, flat = _optimal_values(g, column)
     lines = [name, f"word {word}: " + (f"one value at all {counts['optimal']} points" if flat else
                                        f"from {float(vals.min()):.4g} to {float(vals.max()):.4g}")]
     other = [f"{CLASS_STYLE[c][1]} at {k}" for c, k in counts.items() if c != "optimal" and k]
     if other:
-        lines.append(", ".join(other) + f" of {n} points")
+        lines.append(", ".join(other) + f" of {int(sum(counts.values()))} points")
     return "\n".join(lines)
-
-
-def _flat_value_label(ax, g: pd.DataFrame, r_max: float) -> None:
-    """Print the value inside a flat panel (one colour says little on its own)."""
-    vals, flat = _optimal_values(g)
-    if flat and (g["status"] == "optimal").all():
-        ax.text(0.0, 0.55 * r_max, f"$\\mu_2$ = {float(vals.iloc[0]):.4g}\neverywhere", ha="center", va="center",
-                fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.5", "boxstyle": "round,pad=0.3"})
-
-
-def _colorbar_with_paper(f, pm, axes, label: str, paper: float | None) -> None:
-    """A colour bar whose ticks include the paper's value (labelled as such)."""
-    from matplotlib.ticker import MaxNLocator
-
-    cb = f.colorbar(pm, ax=axes, label=label, shrink=0.7)
-    lo, hi = pm.norm.vmin, pm.norm.vmax
-    ticks = [t for t in MaxNLocator(6).tick_values(lo, hi) if lo <= t <= hi]
-    if paper is not None and lo <= paper <= hi:
-        ticks = [t for t in ticks if abs(t - paper) > 0.06 * (hi - lo)] + [paper]
-    cb.set_ticks(sorted(ticks), labels=[f"{t:g} (paper)" if paper is not None and t == paper else f"{t:g}"
-                                        for t in sorted(ticks)])
 
 
 def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
@@ -193,18 +173,12 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     classes of the other grid points hatched; last panel: the masked-gain gains certified as the estimator that
     runs (own logarithmic scale, nothing clipped)."""
     from matplotlib.colors import LogNorm, Normalize
+    from matplotlib.ticker import MaxNLocator
 
     from eqrec.studies.p2.grids import heatmap_grid
 
-    paper_style()
-    plt = pyplot()
-    df = pd.read_csv(inputs.csv, keep_default_na=False, na_values=["nan", "NaN", ""])
-    for col in ("status", "observer", "status_second"):
-        if col in df:
-            df[col] = df[col].fillna("").astype(str)
-    printed = json.loads(Path(inputs.printed).read_text())
+    plt, df, printed = _sweep_inputs(inputs)
     r_grid, th_grid = heatmap_grid(cfg)
-    tol = float(cfg["mu2_tol"])
     paper = float(cfg["published"]["mu2"])
     variants = [v for v in cfg["heatmap"]["variants"] if v in set(df["variant"])]
     ok = df["status"] == "optimal"
@@ -217,28 +191,34 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     nrows = (npanel + 2) // 2  # two columns, and one more cell for the legend
     f, axes = plt.subplots(nrows, 2, figsize=(7.2, 2.05 * nrows + 0.2), squeeze=False, layout="constrained")
     axes = axes.ravel()
-    pm = None
     legend: dict[str, object] = {}
     for ax, var in zip(axes, variants):
         g = df[df["variant"] == var]
         mg = var == "masked_gain"  # the reading with a region: its edge and the published interval drawn
-        pm, handles, counts = _heat_panel(ax, plt, g, r_grid, th_grid, "mu2", norm, plt.get_cmap("viridis"),
-                                          outline_tol=tol if mg else None,
-                                          interval=printed.get("published_interval") if mg else None)
-        ax.set_title(_panel_title(READING_NAMES.get(var, var), g["word"].iloc[0], g, counts), fontsize=8)
-        _flat_value_label(ax, g, r_grid[-1])
-        legend.update(handles)
-    _colorbar_with_paper(f, pm, list(axes[:len(variants)]), r"design LP optimum $\mu_2$ (all four maps)", paper)
+        pm, counts = _heat_panel(ax, plt, g, r_grid, th_grid, "mu2", norm, plt.get_cmap("viridis"), legend,
+                                 outline_tol=float(cfg["mu2_tol"]) if mg else None,
+                                 interval=printed.get("published_interval") if mg else None)
+        vals, flat = _optimal_values(g)
+        ax.set_title(_panel_title(READING_NAMES.get(var, var), g["word"].iloc[0], vals, flat, counts), fontsize=8)
+        if flat and (g["status"] == "optimal").all():  # the value printed inside (one colour says little)
+            ax.text(0.0, 0.55 * r_grid[-1], f"$\\mu_2$ = {float(vals.iloc[0]):.4g}\neverywhere", ha="center",
+                    va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.5",
+                                                   "boxstyle": "round,pad=0.3"})
+    # one colour bar for the maps, its ticks including the paper's value (labelled as such; the norm includes it)
+    cb = f.colorbar(pm, ax=list(axes[:len(variants)]), label=r"design LP optimum $\mu_2$ (all four maps)", shrink=0.7)
+    lo, hi = pm.norm.vmin, pm.norm.vmax
+    ticks = sorted([t for t in MaxNLocator(6).tick_values(lo, hi)
+                    if lo <= t <= hi and abs(t - paper) > 0.06 * (hi - lo)] + [paper])
+    cb.set_ticks(ticks, labels=[f"{t:g} (paper)" if t == paper else f"{t:g}" for t in ticks])
     if extra:
         ax = axes[len(variants)]
         g = df[df["variant"] == "masked_gain"]
-        c = g.loc[g["status"] == "optimal", "certified_mu2"].astype(float)
+        c, _ = _optimal_values(g, "certified_mu2")
         lo, hi = float(c.min()), float(c.max())
-        pm2, handles, counts = _heat_panel(ax, plt, g, r_grid, th_grid, "certified_mu2", LogNorm(lo, hi),
-                                           plt.get_cmap("magma"))
+        pm2, _ = _heat_panel(ax, plt, g, r_grid, th_grid, "certified_mu2", LogNorm(lo, hi), plt.get_cmap("magma"),
+                             legend)
         ax.set_title(f"the Appendix gains as run (constant $L$ kept)\ncertified worst case from {lo:.3g} to "
                      f"{hi:.3g}", fontsize=8)
-        legend.update(handles)
         cax = ax.inset_axes((1.06, 0.0, 0.06, 1.0))  # as tall as the map (the axes keep their aspect)
         cb = f.colorbar(pm2, cax=cax, label="certified worst case\n(log scale)")
         ticks = [lo] + [t for t in (5, 10, 20, 50, 100) if 1.3 * lo < t < hi / 1.8] + [hi]
@@ -262,12 +242,8 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
     """P2-F3b: optimal μ2 against a real double eigenvalue λ (third at 0), every reading; λ = 0 uses a
     nilpotent L (starred); where a reading's LP has no solution is shown in a strip below (no value); the
     published interval shaded."""
-    paper_style()
-    plt = pyplot()
-    df = pd.read_csv(inputs.csv, keep_default_na=False, na_values=["nan", "NaN", ""])
-    df["status"] = df["status"].astype(str)
-    printed = json.loads(Path(inputs.printed).read_text())
-    groups = list(df.groupby("variant", sort=False))
+    plt, df, printed = _sweep_inputs(inputs)
+    groups = [(var, g.sort_values("lam")) for var, g in df.groupby("variant", sort=False)]
     unsolved = [(v, g) for v, g in groups if (g["status"] != "optimal").any()]
     f, axs = plt.subplots(2 if unsolved else 1, 1, figsize=(6.4, 4.9 if unsolved else 4.2), sharex=True,
                           squeeze=False, layout="constrained",
@@ -276,40 +252,36 @@ def step_figure_realaxis(cfg, inputs, outputs, wildcards) -> None:
     lo, hi = printed["published_interval"]
     for a in axs[:, 0]:
         a.axvspan(lo, hi, color="red", alpha=0.08, lw=0)
-    handles = [plt.Rectangle((0, 0), 1, 1, color="red", alpha=0.15, lw=0)]
-    labels = [f"published interval (Fig. 3b): [{lo:g}, {hi:g}]"]
+    entries = [(plt.Rectangle((0, 0), 1, 1, color="red", alpha=0.15, lw=0),
+                f"published interval (Fig. 3b): [{lo:g}, {hi:g}]")]
     for i, (var, g) in enumerate(groups):
-        g = g.sort_values("lam")
         style = REALAXIS_STYLE.get(var, {"color": f"C{i}", "lw": 1.2})
         mu = np.where(g["status"] == "optimal", g["mu2"].astype(float), np.nan)
         (line,) = ax.plot(g["lam"], mu, solid_capstyle="butt", **style)
-        handles.append(line)
-        labels.append(f"{READING_NAMES.get(var, var)} ({g['word'].iloc[0]})")
+        entries.append((line, f"{READING_NAMES.get(var, var)} ({g['word'].iloc[0]})"))
         if "observer" in g:
             z = (g["observer"] == "deadbeat").to_numpy() & (g["status"] == "optimal").to_numpy()
-            ax.plot(g["lam"][z], mu[z], "*", color=style["color"], mec="k", mew=0.4, ms=9, zorder=6)
-    handles.append(plt.Line2D([], [], marker="*", ls="", color="0.6", mec="k", mew=0.4, ms=9))
-    labels.append(r"$\lambda = 0$: an exact nilpotent $L$ (one of many)")
-    ax.set_ylabel(r"optimal $\mu_2$ of the design LP")
-    ax.set_title(r"Optimal $\mu_2$ against a real double eigenvalue $\lambda$ of $A - LC$ (third at 0)")
+            ax.plot(g["lam"][z], mu[z], "*", color=style["color"], **STAR, zorder=6)
+    entries.append((plt.Line2D([], [], marker="*", ls="", color="0.6", **STAR),
+                    r"$\lambda = 0$: an exact nilpotent $L$ (one of many)"))
+    ax.set(ylabel=r"optimal $\mu_2$ of the design LP",
+           title=r"Optimal $\mu_2$ against a real double eigenvalue $\lambda$ of $A - LC$ (third at 0)")
     if unsolved:
         st = axs[1, 0]
         for row, (var, g) in enumerate(unsolved):
-            lam = g.sort_values("lam")
-            bad = (lam["status"] != "optimal").to_numpy()
-            x = lam["lam"].to_numpy(float)
+            bad = (g["status"] != "optimal").to_numpy()
+            x = g["lam"].to_numpy(float)
             step = float(np.median(np.diff(x))) if len(x) > 1 else 0.01
             color = REALAXIS_STYLE.get(var, {}).get("color", "0.4")
             st.broken_barh([(xi - step / 2, step) for xi in x[bad]], (row - 0.45, 0.4), facecolor="white",
                            edgecolor=color, hatch="////", linewidth=0.0)
-            what = "LP infeasible" if (lam["status"][bad] == "infeasible").all() else "no solution"
+            what = "LP infeasible" if (g["status"][bad] == "infeasible").all() else "no solution"
             st.text(float(np.mean(x[bad][[0, -1]])), row + 0.22, f"{READING_NAMES.get(var, var)}: {what} "
                     f"for $\\lambda$ from {float(x[bad].min()):g} to {float(x[bad].max()):g}",
                     ha="center", va="center", fontsize=8)
-        st.set_yticks([])
-        st.set_ylim(-0.55, len(unsolved) - 0.45)
+        st.set(yticks=[], ylim=(-0.55, len(unsolved) - 0.45))
         st.set_title(r"where the LP has no solution (no $\mu_2$)", fontsize=8)
         st.grid(False, axis="y")
     axs[-1, 0].set_xlabel(r"real eigenvalue $\lambda$ (double) of $A - LC$, third eigenvalue at 0")
-    f.legend(handles, labels, loc="outside lower center", ncol=2, frameon=False)
+    f.legend(*zip(*entries), loc="outside lower center", ncol=2, frameon=False)
     save_figure(f, outputs.pdf, outputs.png)

@@ -16,7 +16,8 @@ def heatmap_grid(cfg: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def realaxis_grid(cfg: dict) -> np.ndarray:
-    """Real double eigenvalues ``λ`` of Fig. 3b: ``n`` points on ``[-lam_max, lam_max]``, plus ``k / grid_denominator``."""
+    """Real double eigenvalues ``λ`` of Fig. 3b: ``n`` points on ``[-lam_max, lam_max]``, plus
+    ``k / grid_denominator``."""
     ra = cfg["realaxis"]
     lam_max = float(ra["lam_max"])
     lam = np.linspace(-lam_max, lam_max, int(ra["n"]))
@@ -32,15 +33,8 @@ def constant_interval(lam: np.ndarray, mu2: np.ndarray, tol: float) -> list[floa
     finite = np.isfinite(mu2)
     if not finite.any():
         return None
-    best = np.nanmin(np.where(finite, mu2, np.nan))
-    at_min = finite & (np.abs(mu2 - best) <= tol)
-    runs, start = [], None
-    for i, ok in enumerate(at_min):
-        if ok and start is None:
-            start = i
-        if (not ok or i == len(at_min) - 1) and start is not None:
-            end = i if ok else i - 1
-            runs.append((start, end))
-            start = None
-    s, e = max(runs, key=lambda se: lam[se[1]] - lam[se[0]])
-    return [float(lam[s]), float(lam[e])]
+    at_min = finite & (np.abs(mu2 - mu2[finite].min()) <= tol)
+    edges = np.diff(np.concatenate([[0], at_min.astype(int), [0]]))  # +1 where a run starts, -1 after it ends
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    k = np.argmax(lam[ends] - lam[starts])  # the widest run (the first of equally wide ones)
+    return [float(lam[starts[k]]), float(lam[ends[k]])]

@@ -147,8 +147,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     is nonzero: then ``u_e(s)`` enters ``e = ξ - s`` at no later step, so no ``z(i)`` depends on ``cols``.
     """
     n, p, T = system.n, system.p, design.T
-    cols = np.asarray(cols, dtype=np.int64)
-    keep = np.asarray(keep, dtype=np.int64)
+    cols, keep = (np.asarray(a, dtype=np.int64) for a in (cols, keep))
     # each column's step s, source i (None for ν) and entry (b, π)
     info = {int(col): (s_, i_, k // p, k % p) for (s_, i_), mc in design.m_cols.items() for k, col in enumerate(mc)}
     info.update({int(col): (k // n, None, k % n, None) for k, col in enumerate(design.nu_cols)})
@@ -156,8 +155,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
         raise AssertionError("the free columns must be gain columns (M, nu) of the design LP")
     L = runtime_L(design.L, T, n, p, design.word, runtime)
     q = arrival_indicator(design.word)
-    coupled = [k for k in range(T) if q[k] == 0 and np.any(L[k])]
-    k_c = max(coupled, default=0)
+    k_c = max((k for k in range(T) if q[k] == 0 and np.any(L[k])), default=0)  # the last coupled missing step
     early = sorted({info[int(j)][0] for j in cols if info[int(j)][0] < k_c})
     if early:
         raise AssertionError(f"the {runtime} running error is not affine in the free gains: gains of steps {early} "
@@ -166,27 +164,26 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     x_f[cols] = 0.0
     Gt, ct, Z, zc = running_error_maps(system, design.gains_from_x(x_f), runtime)
     D = Gt.shape[-1]
-    Gc, cc = Gt.reshape(-1, D), ct.reshape(-1)
-    dG = np.zeros(((T + 1) * n, D, cols.size))
-    dc = np.zeros(((T + 1) * n, cols.size))
+    dG = np.zeros((T + 1, n, D, cols.size))  # the coefficients of the free columns, by time
+    dc = np.zeros((T + 1, n, cols.size))
     phi = design.st.transition
     for j, col in enumerate(cols):
         s_, i_, b, pi = info[int(col)]
         for t in range(s_ + 1, T + 1):
             P = phi[t][s_ + 1][:, b]
-            if i_ is None:
-                dc[t * n:(t + 1) * n, j] = P
-            else:
-                dG[t * n:(t + 1) * n, :, j] = np.outer(P, Z[i_, pi])
-                dc[t * n:(t + 1) * n, j] = P * zc[i_, pi]
-    G0, c0, dG, dc = Gc[keep], cc[keep], dG[keep], dc[keep]
-    struct = (G0 != 0) | np.any(dG != 0, axis=-1)
-    er, ed = np.nonzero(struct)
-    Gx = sp.coo_matrix(dG[er, ed].reshape(er.size, -1))
-    Gx = sp.csr_matrix((Gx.data, (Gx.row, cols[Gx.col])), shape=(er.size, x_base.size))
-    cxc = sp.coo_matrix(dc)
-    cx = sp.csr_matrix((cxc.data, (cxc.row, cols[cxc.col])), shape=(keep.size, x_base.size))
-    return UncertainAffineRows(entry_row=er, entry_coord=ed, G0=G0[er, ed], Gx=Gx, c0=c0, cx=cx)
+            dc[t, :, j] = P if i_ is None else P * zc[i_, pi]
+            if i_ is not None:
+                dG[t, :, :, j] = np.outer(P, Z[i_, pi])
+    G0, c0 = Gt.reshape(-1, D)[keep], ct.reshape(-1)[keep]
+    dG, dc = dG.reshape(-1, D, cols.size)[keep], dc.reshape(-1, cols.size)[keep]
+    er, ed = np.nonzero((G0 != 0) | np.any(dG != 0, axis=-1))
+
+    def on_x(m) -> sp.csr_matrix:  # column j of m is column cols[j] of x
+        m = sp.coo_matrix(m)
+        return sp.csr_matrix((m.data, (m.row, cols[m.col])), shape=(m.shape[0], x_base.size))
+
+    return UncertainAffineRows(entry_row=er, entry_coord=ed, G0=G0[er, ed], Gx=on_x(dG[er, ed].reshape(er.size, -1)),
+                               c0=c0, cx=on_x(dc))
 
 
 def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray, *,
@@ -277,8 +274,8 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
     opt = float(design.solve(solver, options).require_optimal(f"{design_mode} design LP ({solver})").objective)
     level = opt * (1.0 + rel_tol) + abs_tol
     n, T = system.n, design.T
-    rows_all = np.arange((T + 1) * n)
-    rows_bound = rows_all if bound == "all" else rows_all[T * n:]
+    terminal = np.arange(T * n, (T + 1) * n)
+    rows_bound = np.arange((T + 1) * n) if bound == "all" else terminal
     agree = runtimes_agree_until(design.word)
     rows_d, _ = design.robust_rows(L)  # the design reading's rows, shared by every LP below
 
@@ -310,7 +307,6 @@ def best_guarantee_among_optima(system: AffineSystem, word: "str | ArrivalPatter
         raise AssertionError("design and runtime LPs do not share their columns")  # pragma: no cover
     rows_t2, _ = run.robust_rows(L)
     keep = rows_bound if runtime == "theorem2" else rows_bound[rows_bound < (agree + 1) * n]
-    terminal = rows_all[T * n:]
     rec_t2 = _select_rows(rows_t2, terminal) if (recover and runtime == "theorem2") else None
     sol, lower, mu2v = optima_lp(_select_rows(rows_t2, keep), recover_rows=rec_t2)
     x = sol.x[: design.num_columns]

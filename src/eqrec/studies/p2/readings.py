@@ -57,8 +57,6 @@ def retarget(schedule: GainSchedule, designed: str, actual: str) -> GainSchedule
     those columns (what the running estimator really does).
     """
     F, u0 = schedule.word_matrices(designed)
-    p = schedule.p
-    q = np.repeat(~as_pattern(actual).mask.diagonal(), p)  # the measurements ``actual`` lacks
-    F = F.copy()
-    F[:, q] = 0.0
-    return schedule_from_word_gains(PrefixTree([actual]), {actual: (F, u0)}, schedule.n, p, time_based=True)
+    lacks = np.repeat(~as_pattern(actual).mask.diagonal(), schedule.p)  # the measurements ``actual`` lacks
+    return schedule_from_word_gains(PrefixTree([actual]), {actual: (np.where(lacks, 0.0, F), u0)}, schedule.n,
+                                    schedule.p, time_based=True)

@@ -25,7 +25,7 @@ import numpy as np
 
 from eqrec.arrivals.draws import ArrivalTrace, uniform_words
 from eqrec.bounds.certify import certify_schedule
-from eqrec.bounds.gains import GainSchedule, schedule_from_word_gains
+from eqrec.bounds.gains import schedule_from_word_gains
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import validate_language, worst_case_word
 from eqrec.simulate.loop import closed_loop, monte_carlo, sample_uncertainty, simulate_run
@@ -57,39 +57,27 @@ def _eig(system: AffineSystem, L: np.ndarray) -> list[list[float]]:
 
 def _gains_npz(prefix: str, system: AffineSystem, g: AugmentedGains, runtime: str | None = None) -> dict:
     """The gains and their converted time-based form (``runtime`` as in ``augmented_to_time_based``)."""
-    F, u0 = augmented_to_time_based(system, g, runtime)
-    return {f"{prefix}/M": g.M, f"{prefix}/nu": g.nu, f"{prefix}/L": g.L, f"{prefix}/s0": g.s0,
-            f"{prefix}/F": F, f"{prefix}/u0": u0, f"{prefix}/word": np.array(g.word),
+    return {**{f"{prefix}/{k}": getattr(g, k) for k in ("M", "nu", "L", "s0")},
+            **_schedule_npz(prefix, g.word, *augmented_to_time_based(system, g, runtime)),
             f"{prefix}/mode": np.array(g.mode)}
 
 
 def _schedule_npz(prefix: str, word: str, F: np.ndarray, u0: np.ndarray) -> dict:
+    """A time-based schedule ``(F, u0)`` of one word."""
     return {f"{prefix}/F": F, f"{prefix}/u0": u0, f"{prefix}/word": np.array(word)}
-
-
-def _schedule_from(npz, prefix: str, n: int, p: int) -> GainSchedule:
-    word = str(npz[f"{prefix}/word"])
-    return schedule_from_word_gains(PrefixTree([word]), {word: (npz[f"{prefix}/F"], npz[f"{prefix}/u0"])}, n, p,
-                                    time_based=True)
-
-
-def _gains_from(npz, prefix: str) -> AugmentedGains:
-    return AugmentedGains(word=str(npz[f"{prefix}/word"]), L=npz[f"{prefix}/L"], s0=npz[f"{prefix}/s0"],
-                          M=npz[f"{prefix}/M"], nu=npz[f"{prefix}/nu"], mode=str(npz[f"{prefix}/mode"]))
 
 
 # --------------------------------------------------------------------------- designs
 
 def _augmented_entry(system, d) -> dict:
     g: AugmentedGains = d.extra["gains"]
-    cert = d.certificate
+    cert, x = d.certificate, d.extra
     return {"design_mu2": d.mu2, "certified_mu2": cert.mu2, "certified_terminal": cert.terminal,
-            "worst_case_word": d.extra["worst_case_word"], "mode": d.extra["mode"],
-            "L": g.L[0].tolist(), "eig_A_minus_LC": _eig(system, g.L[0]), "s0": g.s0.tolist(),
-            "solver": d.solution.solver, "iterations": d.solution.iterations, "solve_time": d.solution.solve_time,
-            "ipopt_status": d.extra.get("ipopt_status"), "initial_mu2": d.extra.get("initial_mu2"),
-            "initial_guess": d.extra.get("initial_guess"), "poles": [[p.real, p.imag] for p in d.extra.get("poles", [])],
-            "certified_words": list(cert.words)}
+            "worst_case_word": x["worst_case_word"], "mode": x["mode"], "L": g.L[0].tolist(),
+            "eig_A_minus_LC": _eig(system, g.L[0]), "s0": g.s0.tolist(), "solver": d.solution.solver,
+            "iterations": d.solution.iterations, "solve_time": d.solution.solve_time,
+            **{k: x.get(k) for k in ("ipopt_status", "initial_mu2", "initial_guess")},
+            "poles": [[p.real, p.imag] for p in x.get("poles", [])], "certified_words": list(cert.words)}
 
 
 def step_designs(cfg, inputs, outputs, wildcards) -> dict:
@@ -101,11 +89,11 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
     for fig, key in (("f1", "f1_words"), ("f2", "f2_words")):
         language = validate_language(cfg[key], length=int(cfg["T"]))
         wc = worst_case_word(language)
-        res: dict[str, Any] = {"language": list(language), "worst_case_word": wc}
         tb = design_time_based(system, language, mu1, engine="tree")  # the paper-comparison row: the papers' LP
         arrays.update(_schedule_npz(f"{fig}/time", wc, *tb.schedule.word_matrices(wc)))
-        res["time"] = {"mu2": tb.mu2, "certified_mu2": tb.certificate.mu2, "solve_time": tb.solve_time,
-                       "iterations": tb.solution.iterations}
+        res: dict[str, Any] = {"language": list(language), "worst_case_word": wc, "time": {
+            "mu2": tb.mu2, "certified_mu2": tb.certificate.mu2, "solve_time": tb.solve_time,
+            "iterations": tb.solution.iterations}}
         for name, Lspec in (("augmented_lp", None), ("augmented_free", "free")):
             t0 = time.perf_counter()
             d = design_augmented(system, language, mu1, L=Lspec, poles=poles)
@@ -115,34 +103,29 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
         if fig == "f2":
             # Reading 1: word positions read as 1-based time indices (caption: k = 2 and 3).
             w1 = one_based_word(wc)
-            tb1 = design_time_based(system, [w1], mu1)
             d1 = design_augmented(system, [w1], mu1, L="free", poles=poles)
             g1 = d1.extra["gains"]
             arrays.update(_gains_npz("f2/one_based", system, g1))
             # What the 1-based design really guarantees on the true worst-case word.
             on_true = certify_schedule(system, retarget(schedule_from_augmented(system, g1), w1, wc), [wc], mu1)
-            res["one_based"] = {"word": w1, "time_mu2": tb1.mu2, "augmented_free": _augmented_entry(system, d1),
+            res["one_based"] = {"word": w1, "time_mu2": design_time_based(system, [w1], mu1).mu2,
+                                "augmented_free": _augmented_entry(system, d1),
                                 "certified_on_true_words": {wc: float(on_true.words[wc].bounds.max())}}
             # Reading 2: constant L kept at the missing steps with the measurement in the s-dynamics (leak).
-            leak = {}
+            res["leak"] = {}
             for name, Lspec in (("leak_lp", None), ("leak_free", "free")):
                 try:
                     dl = design_augmented(system, language, mu1, L=Lspec, poles=poles, mode="leak")
-                    e = _augmented_entry(system, dl)
                     gl = dl.extra["gains"]
-                    e["certified_mu2_theorem2_runtime"] = certify_schedule(
-                        system, schedule_from_augmented(system, gl, "theorem2"), [wc], mu1).mu2
+                    res["leak"][name] = {**_augmented_entry(system, dl), "certified_mu2_theorem2_runtime":
+                                         _certified(system, gl, [wc], mu1, "theorem2")["mu2"]}
                     arrays.update(_gains_npz(f"f2/{name}", system, gl, "hold"))
-                    leak[name] = e
                 except EqrecError as exc:
-                    leak[name] = {"status": f"{type(exc).__name__}: {exc}"}
-            res["leak"] = leak
+                    res["leak"][name] = {"status": f"{type(exc).__name__}: {exc}"}
         if fig == "f1":
             # Reading 3: injection without the current measurement (M(k, k) = 0).
-            pp = place_observer(system.A, system.C, poles)
-            m = AugmentedLP(system, wc, mu1, pp.L, strictly_causal=True)
-            s = m.solve().require_optimal("strictly causal augmented design")
-            res["strictly_causal_mu2"] = float(s.objective)
+            m = AugmentedLP(system, wc, mu1, place_observer(system.A, system.C, poles).L, strictly_causal=True)
+            res["strictly_causal_mu2"] = float(m.solve().require_optimal("strictly causal augmented design").objective)
             # Reading 4: process noise entering every state (W = I_n) instead of E = [0, Ts^2/2, Ts]^T.
             sysI = AffineSystem(A=system.A, B=system.B, f=system.f, C=system.C, E=np.eye(system.n),
                                 eta_w=system.eta_w, eta_v=system.eta_v, name="ACC, W = I")
@@ -165,20 +148,24 @@ def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
     summary = {}
     for fig, key in (("f1", "f1_words"), ("f2", "f2_words")):
         language = list(validate_language(cfg[key]))
+        wc = worst_case_word(language)
         names = ["time", "augmented_lp", "augmented_free"]
         if fig == "f2":
             names += [n for n in ("one_based", "leak_lp", "leak_free") if f"f2/{n}/F" in npz.files]
         for name in names:
-            sch = _schedule_from(npz, f"{fig}/{name}", system.n, system.p)
-            designed = str(npz[f"{fig}/{name}/word"])
-            if designed != worst_case_word(language):  # reading variants run on the true data
-                sch = retarget(sch, designed, worst_case_word(language))
+            pre = f"{fig}/{name}"
+            designed = str(npz[f"{pre}/word"])
+            sch = schedule_from_word_gains(PrefixTree([designed]), {designed: (npz[f"{pre}/F"], npz[f"{pre}/u0"])},
+                                           system.n, system.p, time_based=True)
+            if designed != wc:  # reading variants run on the true data
+                sch = retarget(sch, designed, wc)
             errs, used = monte_carlo(system, sch, language, mu1, runs, seed, kind=cfg["noise"], x0=x0)
             out[f"{fig}/{name}"] = errs
             summary[f"{fig}/{name}"] = float(np.abs(errs).max())
         out[f"{fig}/words"] = np.array(used)
         # the runtime augmented estimator reproduces the converted one on the first runs
-        g = _gains_from(npz, f"{fig}/augmented_free")
+        g = AugmentedGains(**{k: npz[f"{fig}/augmented_free/{k}"] for k in ("L", "s0", "M", "nu")},
+                           word=str(npz[f"{fig}/augmented_free/word"]), mode=str(npz[f"{fig}/augmented_free/mode"]))
         out[f"{fig}/runtime_max_diff"] = np.array(_runtime_check(system, g, language, mu1, seed, cfg["noise"], x0, 20))
     write_npz(outputs.npz, **out)
     return summary
@@ -191,8 +178,7 @@ def _runtime_check(system, gains, language, mu1, seed, kind, x0, runs) -> float:
     included) on the same words and draws as the Monte Carlo (seed ``seed``)."""
     sch = schedule_from_augmented(system, gains)
     rng = np.random.default_rng(seed)
-    T = gains.T
-    lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
+    lay = UncertaintyLayout(gains.T, system.nw, system.nv, system.n)
     rad = lay.radius(system.eta_w, system.eta_v, mu1)
     worst = 0.0
     for _ in range(runs):
@@ -215,9 +201,9 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
     wc = worst_case_word(validate_language(cfg["f2_words"]))
     pp = place_observer(system.A, system.C, np.asarray(cfg["init_poles"], float))
     lay = UncertaintyLayout(len(wc), system.nw, system.nv, system.n)
-    rad = lay.radius(system.eta_w, system.eta_v, mu1)
     rng = np.random.default_rng(int(cfg["seed"]))
-    deltas = sample_uncertainty(lay, rad, rng, cfg["noise"], size=int(cfg["runs"]))
+    deltas = sample_uncertainty(lay, lay.radius(system.eta_w, system.eta_v, mu1), rng, cfg["noise"],
+                                size=int(cfg["runs"]))
     x0 = np.asarray(cfg["x0"], float)
 
     def errors(sch):
@@ -229,23 +215,23 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
     sol0 = base.solve().require_optimal("s0 = 0")
     g0 = base.gains(sol0)
     err0 = errors(schedule_from_augmented(system, g0))
+    F0 = augmented_to_time_based(system, g0)
+    Zs = AugmentedStacking(system, wc, pp.L, "theorem2").Zs.reshape(-1, system.n)
     s0_rows = []
     for s0 in cfg["s0_samples"]:
         s0 = np.asarray(s0, float)
         m = AugmentedLP(system, wc, mu1, pp.L, s0=s0)
         sol = m.solve().require_optimal(f"s0 = {s0}")
         g = m.gains(sol)
-        err = errors(schedule_from_augmented(system, g))
         # the exact correspondence: same M, ν shifted by M (z0(0) - z0(s0)) gives the identical estimator
-        z0 = AugmentedStacking(system, wc, pp.L, "theorem2").Zs.reshape(-1, system.n) @ s0
-        gm = AugmentedGains(wc, g0.L, s0, g0.M, g0.nu - g0.M @ z0, "theorem2")
-        F0, u00 = augmented_to_time_based(system, g0)
-        Fm, u0m = augmented_to_time_based(system, gm)
+        gm = AugmentedGains(wc, g0.L, s0, g0.M, g0.nu - g0.M @ (Zs @ s0), "theorem2")
+        Fm = augmented_to_time_based(system, gm)
         s0_rows.append({"s0": s0.tolist(), "mu2": float(sol.objective),
-                        "certified_mu2": certify_schedule(system, schedule_from_augmented(system, g), [wc], mu1).mu2,
-                        "max_error_difference_solver_pick": float(np.abs(err - err0).max()),
+                        "certified_mu2": _certified(system, g, [wc], mu1)["mu2"],
+                        "max_error_difference_solver_pick": float(np.abs(
+                            errors(schedule_from_augmented(system, g)) - err0).max()),
                         "max_gain_difference_M": float(np.abs(g.M - g0.M).max()),
-                        "mapped_solution_F_difference": float(max(np.abs(Fm - F0).max(), np.abs(u0m - u00).max()))})
+                        "mapped_solution_F_difference": float(max(np.abs(a - b).max() for a, b in zip(Fm, F0)))})
     out["s0"] = {"mu2_s0_zero": float(sol0.objective), "rows": s0_rows,
                  "mu2_spread": float(max(abs(r["mu2"] - sol0.objective) for r in s0_rows))}
     # --- P2-SOLVER: same LP (L, s0 = 0 fixed) with HiGHS, Clarabel, IPOPT
@@ -260,26 +246,25 @@ def step_checks(cfg, inputs, outputs, wildcards) -> dict:
         else:
             sol = base.solve(solver).require_optimal(solver)
             sols[solver] = (base.gains(sol), float(sol.objective), sol.iterations, sol.solve_time)
-    rows = {}
+    out["solver"] = {}
     ref_F = None
     for name, (g, mu2, it, tt) in sols.items():
         sch = schedule_from_augmented(system, g)
-        F, _ = sch.word_matrices(wc)
-        err = errors(sch)
+        F = sch.word_matrices(wc)[0]
         ref_F = F if ref_F is None else ref_F
-        rows[name] = {"mu2": mu2, "certified_mu2": certify_schedule(system, sch, [wc], mu1).mu2,
-                      "iterations": it, "solve_time": tt, "max_abs_error": float(np.abs(err).max()),
-                      "rms_error": float(np.sqrt(np.mean(err ** 2))),
-                      "M_difference_to_first": float(np.abs(g.M - sols[cfg["solvers"][0]][0].M).max()),
-                      "F_difference_to_first": float(np.abs(F - ref_F).max())}
-    out["solver"] = rows
+        err = errors(sch)
+        out["solver"][name] = {"mu2": mu2, "certified_mu2": certify_schedule(system, sch, [wc], mu1).mu2,
+                               "iterations": it, "solve_time": tt, "max_abs_error": float(np.abs(err).max()),
+                               "rms_error": float(np.sqrt(np.mean(err ** 2))),
+                               "M_difference_to_first": float(np.abs(g.M - sols[cfg["solvers"][0]][0].M).max()),
+                               "F_difference_to_first": float(np.abs(F - ref_F).max())}
     write_json(outputs.json, out, timings=outputs.timings)
     return out
 
 
 # --------------------------------------------------------------------------- the printed L and the masked_gain reading
 
-def _certified(system, gains, words, mu1, runtime, per_time: bool = False) -> dict:
+def _certified(system, gains, words, mu1, runtime: str | None = None, per_time: bool = False) -> dict:
     cert = certify_schedule(system, schedule_from_augmented(system, gains, runtime), words, mu1)
     out = {"mu2": cert.mu2, "terminal": cert.terminal,
            "per_word": {w: float(c.bounds.max()) for w, c in cert.words.items()}}
@@ -317,25 +302,24 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
     out: dict[str, Any] = {"word": wc, "words": words, "L_claim": pc["L_claim"], "eig_A_minus_LC": _eig(system, L),
                            "time_mu2": design_time_based(system, language, mu1).mu2}
     # the LP's optimal gains are not unique: certify the optimum each LP solver returns
-    lp_solvers = [cfg["heatmap"]["solver"]] + [s for s in cfg["solvers"] if s in ("highs", "clarabel", "scipy")
-                                               and s != cfg["heatmap"]["solver"]]
+    first = cfg["heatmap"]["solver"]
+    lp_solvers = [first] + [s for s in cfg["solvers"] if s in ("highs", "clarabel", "scipy") and s != first]
     for mode in ("theorem2", "masked_gain"):
         m = AugmentedLP(system, wc, mu1, L, mode=mode)
         by_solver = {}
         for solver in lp_solvers:
             sol = m.solve(solver).require_optimal(f"{mode} LP at the printed L ({solver})")
             g = m.gains(sol)
-            by_solver[solver] = {"mu2": float(sol.objective),
-                                 **{f"certified_{rt}": _certified(system, g, words, mu1, rt) for rt in ("hold", "theorem2")}}
-        e: dict[str, Any] = {**by_solver[lp_solvers[0]], "solver": lp_solvers[0], "by_solver": by_solver}
-        out[mode] = e
-        log.info("printed L, %s: LP mu2 = %.9g, certified as run (hold) %s", mode, e["mu2"],
+            by_solver[solver] = {"mu2": float(sol.objective), **{
+                f"certified_{rt}": _certified(system, g, words, mu1, rt) for rt in ("hold", "theorem2")}}
+        out[mode] = {**by_solver[first], "solver": first, "by_solver": by_solver}
+        log.info("printed L, %s: LP mu2 = %.9g, certified as run (hold) %s", mode, out[mode]["mu2"],
                  {k: round(b["certified_hold"]["mu2"], 6) for k, b in by_solver.items()})
     # ... so the solver-independent quantity: the best guarantee any masked_gain optimum gives as run (an LP over
     # the optima, solved by each LP solver), its gains certified; the smallest end-of-horizon bound; recovery
     def per_solver(**options) -> dict:
-        return {solver: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, solver=solver, **options),
-                                      words, mu1) for solver in lp_solvers}
+        return {s: _among_optima(system, best_guarantee_among_optima(system, wc, mu1, L, solver=s, **options),
+                                 words, mu1) for s in lp_solvers}
 
     among = {"rel_tol": OPTIMUM_RTOL, "abs_tol": OPTIMUM_ATOL,
              "runtimes": {rt: per_solver(runtime=rt) for rt in ("hold", "theorem2")},
@@ -344,7 +328,7 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
     log.info("printed L, masked_gain: best guarantee among the optima as run %s",
              {rt: {k: round(e["upper"], 9) for k, e in per.items()} for rt, per in among["runtimes"].items()})
     # r = 0: the nilpotent L is not unique and the masked_gain value depends on which one
-    r0 = []
+    out["r0_deadbeat"] = []
     for seed in pc["deadbeat_seeds"]:
         d = deadbeat_observer(system.A, system.C, seed=seed)
         row: dict[str, Any] = {"seed": int(seed), "ok": bool(d.ok)}
@@ -352,8 +336,7 @@ def step_printed(cfg, inputs, outputs, wildcards) -> dict:
             for mode in ("theorem2", "masked_gain"):
                 sol = AugmentedLP(system, wc, mu1, d.L, mode=mode).solve(cfg["heatmap"]["solver"])
                 row[mode] = float(sol.objective) if sol.optimal else sol.status
-        r0.append(row)
-    out["r0_deadbeat"] = r0
+        out["r0_deadbeat"].append(row)
     # for the figures only (not evidence): the published Fig. 3b interval, drawn on the heat map
     out["published_interval"] = [float(x) for x in published_value(inputs.claims, pc["interval_claim"])]
     write_json(outputs.json, out)

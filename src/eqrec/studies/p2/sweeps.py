@@ -16,6 +16,8 @@ observer gain is placed once for all variants.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 import pandas as pd
 
@@ -32,8 +34,8 @@ from eqrec.studies.p2.grids import heatmap_grid, realaxis_grid
 log = get_logger("p2")
 
 
-def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> list[tuple[str, str, str, list[dict]]]:
-    """Every configured variant over the same pole sets: ``(variant, mode, word, records)``.
+def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> Iterator[tuple]:
+    """Every configured variant over the same pole sets, one after the other: ``(variant, mode, word, records)``.
 
     The observer gain of a pole set does not depend on the variant, so each
     ``L`` is placed once (:func:`eqrec.studies.searches.observer_for`) and
@@ -43,15 +45,12 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> li
     """
     h = cfg["heatmap"]
     observers = [observer_for(system, p) for p in poles]
-    out = []
     for variant in h["variants"]:
         mode, word = variant_word(h["word"], variant)
-        prog = Progress(log, len(poles), f"{what} {variant}")
-        recs = fixed_L_sweep(system, word, float(cfg["mu1"]), mode, poles, h["solver"], on_point=prog.advance,
-                             second_solver=h["second_solver"], certify_runtime=default_runtime(mode),
-                             observers=observers)
-        out.append((variant, mode, word, recs))
-    return out
+        yield variant, mode, word, fixed_L_sweep(
+            system, word, float(cfg["mu1"]), mode, poles, h["solver"], second_solver=h["second_solver"],
+            on_point=Progress(log, len(poles), f"{what} {variant}").advance, certify_runtime=default_runtime(mode),
+            observers=observers)
 
 
 def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
