@@ -80,7 +80,7 @@ def _sweep_inputs(inputs):
     df = pd.read_csv(inputs.csv, keep_default_na=False, na_values=["nan", "NaN", ""])
     for col in ("status", "observer", "status_second"):
         if col in df:
-            df[col] = df[col].fillna("").astype(str)
+            df[col] = df[col].astype(object).fillna("").astype(str)
     return plt, df, json.loads(Path(inputs.printed).read_text())
 
 
