@@ -141,18 +141,9 @@ def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: 
     with the ``keys`` columns that identify a row; the rest to ``path``.
     """
     kwargs.setdefault("index", False)
-    if timings == INTERMEDIATE:
-        with atomic_path(path) as tmp:
-            frame.to_csv(tmp, **kwargs)
-        return
-    timing_columns = [c for c in frame.columns if c in TIMING_KEYS]
-    rest, timed = frame.drop(columns=timing_columns), frame[[*keys, *timing_columns]]
-    if timings is None and timed.shape[1] > len(keys):
-        raise StepError(f"{path}: timing columns {list(timed.columns[len(keys):])} need a timings output")
-    if timings is not None:
-        with atomic_path(timings) as tmp:
-            timed.to_csv(tmp, **kwargs)
-    with atomic_path(path) as tmp:
-        rest.to_csv(tmp, **kwargs)
-
-
+    timing_columns = [] if timings == INTERMEDIATE else [c for c in frame.columns if c in TIMING_KEYS]
+    if timing_columns and timings is None:
+        raise StepError(f"{path}: timing columns {timing_columns} need a timings output")
+    if timings not in (None, INTERMEDIATE):
+        write_text(timings, frame[[*keys, *timing_columns]].to_csv(**kwargs))
+    write_text(path, frame.drop(columns=timing_columns).to_csv(**kwargs))
