@@ -80,10 +80,7 @@ def merge_timings(data: Any, timings: Any) -> Any:
         return data
     if isinstance(timings, Mapping) and isinstance(data, dict):
         for key, val in timings.items():
-            if key in TIMING_KEYS or key not in data:
-                data[key] = val
-            else:
-                data[key] = merge_timings(data[key], val)
+            data[key] = val if key in TIMING_KEYS or key not in data else merge_timings(data[key], val)
         return data
     if isinstance(timings, list) and isinstance(data, list) and len(timings) == len(data):
         return [merge_timings(d, t) for d, t in zip(data, timings)]
