@@ -300,9 +300,7 @@ def render_markdown(table: pd.DataFrame) -> str:
     for paper, group in table.groupby(table["id"].str.split("-").str[0], sort=True):
         lines += [f"## {paper}", "", "| id | quantity | paper | ours | status | reason | source |",
                   "|---|---|---|---|---|---|---|"]
-        for _, r in group.iterrows():
-            cells = [r["id"], r["quantity"], r["paper_value"], r["our_value"], f"**{r['status']}**",
-                     r["reason"], r["source"]]
+        for cells in group.assign(status="**" + group["status"] + "**")[[*COLUMNS, "source"]].itertuples(index=False):
             lines.append("| " + " | ".join(str(c).replace("|", "\\|").replace("\n", " ") for c in cells) + " |")
         lines.append("")
     return "\n".join(lines)
