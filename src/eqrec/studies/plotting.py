@@ -109,8 +109,7 @@ def trajectory_panel(axes_column, errors: np.ndarray, levels: Sequence[float],
         ax.set_xlim(-0.6, errors.shape[1] - 0.4)
         if ylabels:
             ax.set_ylabel(state_labels[i] if i < len(state_labels) else rf"$\xi_{i + 1}$")
-        if i == 0:
-            ax.set_title(title)
+    axes_column[0].set_title(title)
     axes_column[-1].set_xlabel("time step $t$")
 
 

@@ -68,12 +68,9 @@ def lower_bound_probe(system: AffineSystem, words, mu1: float, mu2_opt: float, g
     dict of str to str
         Solver name -> LP status (``"infeasible"`` expected from each).
     """
-    out = {}
-    for s in solvers:
-        model = build_prefix_lp(system, words, mu1)
-        model.lp.col_upper[model.mu2_col] = mu2_opt - gap
-        out[s] = solve_lp(model.lp, s).status
-    return out
+    model = build_prefix_lp(system, words, mu1)
+    model.lp.col_upper[model.mu2_col] = mu2_opt - gap
+    return {s: solve_lp(model.lp, s).status for s in solvers}
 
 
 def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> MinRecoveryLevel:
@@ -267,7 +264,7 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
         observers = [observer_for(system, poles, deadbeat_seed) for poles in poles_list]
     if len(observers) != len(poles_list):
         raise InputError(f"{len(observers)} observers for {len(poles_list)} pole sets", None, "observers")
-    for poles, (pp, how) in zip(poles_list, observers):
+    for pp, how in observers:
         t0 = time.perf_counter()
         rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message, "observer": how,
                "solver": "", "status_first": "", "status_second": ""}

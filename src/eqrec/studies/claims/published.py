@@ -49,10 +49,8 @@ def check_template(template: Any, where: str) -> None:
         parsed = list(string.Formatter().parse(template))
     except ValueError as exc:
         raise InputError(f"{where}: {exc} in {template!r}") from None
-    for _, name, spec, conversion in parsed:
-        if name is None:
-            continue
-        if not _FIELD.fullmatch(name) or conversion or "{" in (spec or ""):
+    for _, name, spec, conversion in parsed:  # name None: text after the last field
+        if name is not None and (not _FIELD.fullmatch(name) or conversion or "{" in (spec or "")):
             field = name + (f"!{conversion}" if conversion else "") + (f":{spec}" if spec else "")
             raise InputError(f"{where}: field {{{field}}} is not a plain name with a format spec; "
                              "derive it in the claim's reason function (eqrec.studies.p*_claims)")
@@ -103,7 +101,6 @@ def read_claims(path: str | Path) -> list[dict]:
     data = yaml.safe_load(path.read_text())
     if not isinstance(data, list):
         raise InputError("must be a list of claim entries", str(path))
-    seen = set()
     for i, entry in enumerate(data):
         cid = entry.get("id", f"entry {i}")
         for key in ("id", "quantity", "paper_value", "source", "compare", "value"):
@@ -112,9 +109,8 @@ def read_claims(path: str | Path) -> list[dict]:
         if set(entry) - set(KEYS):
             raise InputError(f"claim {cid}: unknown keys {sorted(set(entry) - set(KEYS))} (the keys are {KEYS}; "
                              "conditions are the claim's reason function's)", str(path), "id")
-        if entry["id"] in seen:
+        if entry["id"] in (earlier["id"] for earlier in data[:i]):
             raise InputError(f"duplicate claim id {entry['id']}", str(path), "id")
-        seen.add(entry["id"])
         kind = entry["compare"].get("kind")
         if kind not in KINDS:
             raise InputError(f"claim {cid}: unknown compare kind {kind!r}", str(path), "compare")

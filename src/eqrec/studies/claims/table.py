@@ -62,7 +62,7 @@ from eqrec.studies.p1 import claims as p1_claims
 from eqrec.studies.p2 import claims as p2_claims
 from eqrec.studies.p3 import claims as p3_claims
 from eqrec.studies.p4 import claims as p4_claims
-from eqrec.studies.claims.reasons import Reason, merged
+from eqrec.studies.claims.reasons import Reason, fmtlist, merged
 from eqrec.studies.claims.published import named_texts, read_claims
 from eqrec.studies.pipeline.logs import get_logger
 from eqrec.studies.pipeline.outputs import write_csv, write_text
@@ -109,8 +109,7 @@ def load_claims(path: str | Path, reasons: Mapping[str, Callable] | None = None)
 
 def default_atol(paper_value: Any) -> float:
     """Half a unit in the last printed digit of a published number."""
-    d = Decimal(str(paper_value))
-    exponent = d.as_tuple().exponent
+    exponent = Decimal(str(paper_value)).as_tuple().exponent
     return 0.5 * 10.0 ** int(exponent) if isinstance(exponent, int) else 0.0
 
 
@@ -125,41 +124,28 @@ def _tolerance(entry: dict) -> float | None:
 
 
 def compare_one(entry: dict, ours: Any) -> tuple[str, str]:
-    """Status and the tolerance wording of one claim."""
-    cmp = entry["compare"]
-    kind = cmp["kind"]
-    paper = entry["paper_value"]
-    if kind == "none":
+    """Status and the tolerance wording of one claim (of a kind :func:`load_claims` accepts)."""
+    cmp, paper = entry["compare"], entry["paper_value"]
+    if cmp["kind"] == "none":
         return "not comparable", cmp.get("why", "")
     if ours is None or (isinstance(ours, float) and math.isnan(ours)):
         return "differs", "our computation produced no value"
-    if kind == "text":
-        same = str(ours).strip().lower() == str(paper).strip().lower()
-        return ("reproduced" if same else "differs"), "exact match" if same else ""
-    if kind == "number":
-        atol, rtol = float(cmp.get("atol", default_atol(paper))), float(cmp.get("rtol", 0.0))
+    if cmp["kind"] == "text":
+        ok = str(ours).strip().lower() == str(paper).strip().lower()
+        wording = "exact match" if ok else ""
+    elif cmp["kind"] == "number":
         ok = abs(float(ours) - float(paper)) <= _tolerance(entry)
-        return ("reproduced" if ok else "differs"), f"tolerance {atol:g} + {rtol:g}|paper|"
-    if kind == "array":
-        a, b = np.asarray(ours, float), np.asarray(paper, float)
-        atol = float(cmp.get("atol", 0.0))
+        wording = f"tolerance {float(cmp.get('atol', default_atol(paper))):g} + {float(cmp.get('rtol', 0.0)):g}|paper|"
+    elif cmp["kind"] == "array":
+        a, b, atol = np.asarray(ours, float), np.asarray(paper, float), float(cmp.get("atol", 0.0))
         if a.shape != b.shape:
             return "differs", f"shape {a.shape} vs published {b.shape}"
         gap = float(np.max(np.abs(a - b))) if a.size else 0.0
-        return ("reproduced" if gap <= atol else "differs"), f"largest entry gap {gap:.2g} (tolerance {atol:g})"
-    if kind == "interval":
-        atol = _tolerance(entry)
-        ok = all(abs(float(a) - float(b)) <= atol for a, b in zip(ours, paper))
-        return ("reproduced" if ok else "differs"), f"endpoint tolerance {atol:g}"
-    raise AssertionError(kind)
-
-
-def _format(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_format(v) for v in value) + "]"
-    return str(value)
+        ok, wording = gap <= atol, f"largest entry gap {gap:.2g} (tolerance {atol:g})"
+    else:  # interval
+        ok = all(abs(float(a) - float(b)) <= _tolerance(entry) for a, b in zip(ours, paper))
+        wording = f"endpoint tolerance {_tolerance(entry):g}"
+    return ("reproduced" if ok else "differs"), wording
 
 
 def _number(x: Any) -> Any:
@@ -179,9 +165,7 @@ def _fill(template: str, fields: Mapping[str, Any], cid: str) -> str:
 def _join_pieces(texts: list[str]) -> str:
     """Pieces separated by a space, except before a piece that starts with punctuation."""
     joined = ""
-    for t in texts:
-        if not t:
-            continue
+    for t in filter(None, texts):
         joined += t if (not joined or t[0] in ",;:.)") else " " + t
     return joined
 
@@ -197,45 +181,42 @@ def _reason(entry: dict, ctx: Mapping[str, Any], reasons: Mapping[str, Callable]
         except KeyError as exc:
             raise InputError(f"claim {cid}: its reason function reads {exc.args[0]!r}, which neither the evidence "
                              "nor the claim's texts have") from None
-    fields = {**ctx, **chosen.fields}
-    names = chosen.note if chosen.note is not None else list(notes)
     if isinstance(entry.get("note"), Mapping) and chosen.note is None:
         raise InputError(f"claim {cid}: its reason function must choose among the named notes {list(notes)}")
+    names = list(notes) if chosen.note is None else chosen.note
     if set(names) - set(notes) or set(chosen.explanation) != set(explanations):
         raise InputError(f"claim {cid}: its reason function chose notes {list(names)} of {list(notes)} and "
                          f"judged explanations {list(chosen.explanation)} of {list(explanations)}")
+    fields = {**ctx, **chosen.fields}
     note = _join_pieces([_fill(notes[n], fields, cid) for n in names])
     text = _join_pieces([_fill(t, fields, cid) for n, t in explanations.items() if chosen.explanation[n]])
     withdrawn = [n for n in explanations if not chosen.explanation[n]]
     if withdrawn:
-        text = (text + " " if text else "") + (f"[explanation withdrawn: its evidence no longer holds "
-                                               f"({'; '.join(withdrawn)})]")
+        text = _join_pieces([text, f"[explanation withdrawn: its evidence no longer holds ({'; '.join(withdrawn)})]"])
     return fields, note, text
 
 
-def _values_file(values: Mapping[str, str | Path] | str | Path, ref_file: str) -> Path:
+def _values_file(values: Sequence[str | Path] | str | Path, ref_file: str) -> Path:
     """The declared values file a claim refers to (``p1/values.json`` -> ``.../p1/values.json``)."""
     if isinstance(values, (str, Path)):
         path = Path(values) / ref_file
         if not path.is_file():
             raise FileNotFoundError(f"results file {path} needed by a claim does not exist")
         return path
-    for p in values:  # ``p1/values.json`` is results/p1/values.json, not results/timings/p1/values.json
-        pos = Path(p).as_posix()
-        if pos == ref_file or (pos.endswith("/" + ref_file)
-                               and not pos[: -len(ref_file)].endswith("/" + TIMINGS_PREFIX)):
-            return Path(p)
+    ref = Path(ref_file).parts
+    for path in map(Path, values):  # ``p1/values.json`` is results/p1/values.json, not results/timings/p1/values.json
+        if path.parts[-len(ref):] == ref and path.parts[-len(ref) - 1:-len(ref)] != ("timings",):
+            return path
     raise FileNotFoundError(f"values file {ref_file} needed by a claim is not among the inputs {list(values)}")
 
 
-def _lookup_value(values, ref: str, cache: dict) -> tuple[Any, dict]:
+def _lookup_value(values: Sequence[str | Path] | str | Path, ref: str) -> tuple[Any, dict]:
+    """Our value and its evidence (``ref``: ``p1/values.json#key``)."""
     file, _, key = ref.partition("#")
-    fpath = _values_file(values, file)
-    if fpath not in cache:
-        cache[fpath] = json.loads(fpath.read_text())
-    data = cache[fpath]
+    path = _values_file(values, file)
+    data = json.loads(path.read_text())
     if key not in data:
-        raise KeyError(f"{fpath} has no value '{key}'")
+        raise KeyError(f"{path} has no value '{key}'")
     item = data[key]
     if isinstance(item, dict) and "value" in item:
         return item["value"], dict(item.get("evidence") or {})
@@ -273,29 +254,29 @@ def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | s
         ``fixed_reason``.  Raises if a referenced result is missing: a table with holes would be a
         partial result presented as whole.
     """
+    import pandas as pd  # here, not at the top: the Snakefile reads published values at every start
+
     reasons = REASONS if reasons is None else reasons
-    rows = []
-    cache: dict = {}
     claims = load_claims(claims_path, reasons)
     published = {e["id"]: _number(e["paper_value"]) for e in claims}  # for a reason that cites another claim's
+    rows = []
     for entry in claims:
-        ours, evidence = _lookup_value(values, entry["value"], cache)
+        ours, evidence = _lookup_value(values, entry["value"])
         status, tol = compare_one(entry, ours)
         ctx = {**evidence, "value": ours, "paper": _number(entry["paper_value"]), "tol": _tolerance(entry),
                "published": published}
         fields, note, explanation = _reason(entry, ctx, reasons)
         if status == "differs":
-            parts = [t for t in (note, explanation) if t] or ["unexplained"]
+            reason = " ".join(t for t in (note, explanation) if t) or "unexplained"
         elif status == "reproduced":
-            parts = [("within " if tol != "exact match" else "") + tol + (f"; {note}" if note else "")]
+            reason = ("within " if tol != "exact match" else "") + tol + (f"; {note}" if note else "")
         else:
-            parts = [p for p in (tol, note) if p]
-        shown = _fill(entry["shown_as"], fields, entry["id"]) if entry.get("shown_as") else _format(ours)
-        rows.append({"id": entry["id"], "quantity": entry["quantity"], "paper_value": _format(entry["paper_value"]),
-                     "our_value": shown, "status": status, "reason": " ".join(parts), "source": entry["source"],
-                     "timing": is_timing_claim(entry), "fixed_reason": tol})
-    import pandas as pd  # here, not at the top: the Snakefile reads published values at every start
-
+            reason = " ".join(p for p in (tol, note) if p)
+        shown = _fill(entry["shown_as"], fields, entry["id"]) if entry.get("shown_as") else fmtlist(ours, ".6g")
+        rows.append({"id": entry["id"], "quantity": entry["quantity"],
+                     "paper_value": fmtlist(entry["paper_value"], ".6g"), "our_value": shown, "status": status,
+                     "reason": reason, "source": entry["source"], "timing": is_timing_claim(entry),
+                     "fixed_reason": tol})
     return pd.DataFrame(rows)
 
 
@@ -315,37 +296,24 @@ def render_markdown(table: pd.DataFrame) -> str:
     lines = ["# Reproduction report", "",
              "Every published number of the papers next to the value this pipeline computed "
              "(`results/claims.csv`). Generated by `snakemake`; do not edit by hand.", "",
-             "| status | count |", "|---|---|"]
-    for s in STATUSES:
-        lines.append(f"| {s} | {int(counts.get(s, 0))} |")
-    lines.append("")
+             "| status | count |", "|---|---|", *(f"| {s} | {int(counts.get(s, 0))} |" for s in STATUSES), ""]
     for paper, group in table.groupby(table["id"].str.split("-").str[0], sort=True):
         lines += [f"## {paper}", "", "| id | quantity | paper | ours | status | reason | source |",
                   "|---|---|---|---|---|---|---|"]
-        for _, r in group.iterrows():
-            cells = [r["id"], r["quantity"], r["paper_value"], r["our_value"], f"**{r['status']}**",
-                     r["reason"], r["source"]]
+        for cells in group.assign(status="**" + group["status"] + "**")[[*COLUMNS, "source"]].itertuples(index=False):
             lines.append("| " + " | ".join(str(c).replace("|", "\\|").replace("\n", " ") for c in cells) + " |")
         lines.append("")
     return "\n".join(lines)
 
 
-def write_claims(claims_path: str | Path, values, csv_out: str | Path, md_out: str | Path,
-                 timings_out: str | Path | None = None) -> pd.DataFrame:
-    """Write ``claims.csv`` and ``REPRODUCTION.md`` (atomically), and the timing rows in full to ``timings_out``."""
-    table = build_claims_table(claims_path, values)
-    fixed = without_timings(table)
-    write_csv(csv_out, fixed[COLUMNS])
-    write_text(md_out, render_markdown(fixed))
-    if timings_out is not None:
-        write_csv(timings_out, table.loc[table["timing"].astype(bool), COLUMNS])
-    return table
-
-
 def step_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
-    """The claims table from ``config/claims.yaml`` and the studies' declared ``values.json`` files."""
-    table = write_claims(inputs.claims, [*inputs["values"], *inputs["timings"]], outputs.csv, outputs.md,
-                         outputs.timings)
+    """The claims table from ``config/claims.yaml`` and the studies' declared ``values.json`` files:
+    ``claims.csv`` and ``REPRODUCTION.md`` without the measured values, the timing rows in full beside."""
+    table = build_claims_table(inputs.claims, [*inputs["values"], *inputs["timings"]])
+    fixed = without_timings(table)
+    write_csv(outputs.csv, fixed[COLUMNS])
+    write_text(outputs.md, render_markdown(fixed))
+    write_csv(outputs.timings, table.loc[table["timing"].astype(bool), COLUMNS])
     for status, n in table["status"].value_counts().items():
         log.info("%s: %d", status, n)
     return table

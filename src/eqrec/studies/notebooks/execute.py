@@ -81,30 +81,22 @@ class NotebookError(StepError):
     """A notebook cell raised; the message names the notebook and the cell."""
 
 
-def _merge_streams(outputs: list) -> list:
-    """Consecutive stream outputs of one stream as one output (the kernel's split depends on timing)."""
-    merged: list = []
-    for out in outputs:
-        prev = merged[-1] if merged else None
-        if (out.get("output_type") == "stream" and prev is not None and prev.get("output_type") == "stream"
-                and prev.get("name") == out.get("name")):
-            prev["text"] = prev["text"] + out["text"]
-        else:
-            merged.append(out)
-    return merged
-
-
 def normalise(nb) -> None:
-    """Make an executed notebook depend only on its source and outputs (in place)."""
+    """Make an executed notebook depend only on its source and outputs (in place).
+
+    Consecutive outputs of one stream become one (how a kernel splits printed text into messages depends on
+    timing: nbconvert's ``CoalesceStreamsPreprocessor``).
+    """
+    from nbconvert.preprocessors import CoalesceStreamsPreprocessor
+
+    CoalesceStreamsPreprocessor().preprocess(nb, {})
     nb.metadata = {"kernelspec": dict(KERNELSPEC), "language_info": dict(LANGUAGE_INFO)}
     for i, cell in enumerate(nb.cells):
         cell["id"] = f"cell-{i}"
         for key in ("execution", "jupytext", "ExecuteTime", "collapsed", "scrolled"):
             cell.metadata.pop(key, None)
-        if cell.cell_type == "code":
-            cell.outputs = _merge_streams(cell.outputs)
-            for out in cell.outputs:
-                out.get("metadata", {}).pop("execution", None)
+        for out in cell.get("outputs", []):
+            out.get("metadata", {}).pop("execution", None)
     nb.nbformat, nb.nbformat_minor = 4, 5
 
 
@@ -122,7 +114,6 @@ def execute(source: str | Path, workdir: str | Path | None = None, timeout: int 
     source = Path(source)
     workdir = Path(workdir or Path.cwd()).resolve()
     nb = jupytext.read(source)
-    nb.metadata["kernelspec"] = dict(KERNELSPEC)
     client = NotebookClient(nb, timeout=timeout, kernel_name="python3", record_timing=False,
                             resources={"metadata": {"path": str(workdir)}})
     # the kernel inherits this environment
@@ -145,11 +136,9 @@ def _run(client, nb, source: Path) -> None:
         client.execute()
     except (CellExecutionError, CellTimeoutError, DeadKernelError) as exc:
         where = _cell_line(nb, current[-1]) if current else "before the first cell"
-        errors = [o for o in nb.cells[current[-1]].get("outputs", []) if o.get("output_type") == "error"] \
-            if current else []
-        if errors:
-            what = f"{errors[0]['ename']}: {errors[0]['evalue']}"
-        else:  # a timeout or a dead kernel records no error output
+        if isinstance(exc, CellExecutionError):
+            what = f"{exc.ename}: {exc.evalue}"
+        else:  # a timeout or a dead kernel: the last line of its message
             what = f"{type(exc).__name__}: {(str(exc).strip().splitlines() or [''])[-1]}"
         raise NotebookError(f"notebook {source}, {where}: {what}") from None
 

@@ -65,12 +65,9 @@ def tex_to_mathml(tex: str, display: bool = False) -> str:
 
 def markdown_maths(text: str) -> str:
     """Markdown with every ``$…$`` and ``$$…$$`` outside code spans replaced by MathML."""
-    def repl(m: re.Match) -> str:
-        if m.group("code") is not None:
-            return m.group("code")
-        if m.group("display") is not None:
-            return tex_to_mathml(m.group("display"), display=True)
-        return tex_to_mathml(m.group("inline"))
+    def repl(m: re.Match) -> str:  # one group of code, display, inline matched: m.lastgroup
+        kind = m.lastgroup
+        return m[kind] if kind == "code" else tex_to_mathml(m[kind], display=kind == "display")
 
     return _MATH.sub(repl, text)
 
@@ -84,8 +81,7 @@ def with_mathml(nb):
         for out in cell.get("outputs", []):
             data = out.get("data", {})
             if "text/markdown" in data:
-                md = data["text/markdown"]
-                data["text/markdown"] = markdown_maths(md if isinstance(md, str) else "".join(md))
+                data["text/markdown"] = markdown_maths(data["text/markdown"])
     return nb
 
 

@@ -20,10 +20,7 @@ from eqrec.lmv.plant import plant_of
 
 def check_p1(cfg: dict) -> None:
     """What the schema cannot say: one word length in L1, ordered M1 ranges."""
-    try:
-        validate_language(cfg["language"])
-    except InputError as exc:
-        raise InputError(str(exc), field="language") from None
+    validate_language(cfg["language"], field_name="language")
     ext = cfg["extensions"]
     if not ext["M1_min_plot"] < ext["M1_max"]:
         raise InputError("must be below extensions.M1_max", field="extensions.M1_min_plot")
@@ -33,10 +30,7 @@ def check_p2(cfg: dict) -> None:
     """What the schema cannot say: words of length T, at most one heat-map chunk per θ."""
     T = int(cfg["T"])
     for key in ("f1_words", "f2_words"):
-        try:
-            validate_language(cfg[key], length=T)
-        except InputError as exc:
-            raise InputError(str(exc), field=key) from None
+        validate_language(cfg[key], length=T, field_name=key)
     if len(cfg["heatmap"]["word"]) != T:
         raise InputError(f"word length {len(cfg['heatmap']['word'])}, expected T = {T}", field="heatmap.word")
     if int(cfg["heatmap"]["chunks"]) > int(cfg["heatmap"]["n_theta"]):

@@ -105,12 +105,11 @@ def merge_npz(files: Sequence[str | Path], num: int, out_npz: str | Path,
             raise InputError(f"chunk {f} is of a {int(p['num'])}-point grid, the configuration has {num} points",
                              str(f), "num")
     parts.sort(key=lambda p: int(p["idx"][0]) if len(p["idx"]) else -1)
-    keep = set(shared) | {"num"}
-    merged = {key: parts[0][key] if key in keep else np.concatenate([p[key] for p in parts], axis=0)
-              for key in parts[0]}
+    shared = set(shared)
+    merged = {key: parts[0][key] if key in shared else np.concatenate([p[key] for p in parts])
+              for key in parts[0] if key != "num"}
     check_coverage(merged["idx"], num, source=str(out_npz))
     if not np.array_equal(merged["idx"], np.arange(num)):  # each point once, yet chunks that interleave
         raise InputError("chunks interleave: the merged grid indices are not increasing", str(out_npz), "chunks")
-    merged.pop("num", None)
     write_npz(out_npz, **merged)
     return merged

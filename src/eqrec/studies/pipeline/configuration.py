@@ -20,7 +20,7 @@ import contextlib
 import copy
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterator, Mapping, Sequence
 
 import yaml
 
@@ -39,13 +39,9 @@ class Section:
 
 
 #: The configuration sections; the Snakefile loads the same files (``configfile:``).
-SECTIONS: dict[str, Section] = {
-    "p1": Section("p1", "config/config.yaml"),
-    "p2": Section("p2", "config/p2.yaml"),
-    "p3": Section("p3", "config/p3.yaml"),
-    "p4": Section("p4", "config/p4.yaml"),
-    "compare": Section("compare", "config/compare.yaml"),
-}
+SECTIONS: dict[str, Section] = {s.name: s for s in (
+    Section("p1", "config/config.yaml"), Section("p2", "config/p2.yaml"), Section("p3", "config/p3.yaml"),
+    Section("p4", "config/p4.yaml"), Section("compare", "config/compare.yaml"))}
 
 
 class ConfigError(InputError):
@@ -76,37 +72,36 @@ def type_cli_config(config: dict, cli_config: Mapping | None, root: str | Path =
     quoted ``"0.1"`` there is text and is rejected.
     """
     wrong = [tuple(e.absolute_path) for e in _schema_errors(config, root) if e.validator in ("type", "anyOf", "oneOf")]
-
-    def walk(cli: Any, cur: Any, path: tuple) -> None:
-        if isinstance(cli, Mapping) and isinstance(cur, dict):
-            keys: Any = [k for k in cli if k in cur]
-        elif isinstance(cli, list) and isinstance(cur, list) and len(cli) == len(cur):
-            keys = range(len(cli))
-        else:
-            return
-        for k in keys:
-            at = (*path, k)
-            if not (isinstance(cli[k], str) and cur[k] == cli[k]):
-                walk(cli[k], cur[k], at)
-            elif any(at[:len(w)] == w for w in wrong):
-                with contextlib.suppress(yaml.YAMLError):
-                    val = yaml.safe_load(cli[k])
-                    if val is None or isinstance(val, (int, float)):  # a bool is an int
-                        cur[k] = val
-
-    walk(cli_config or {}, config, ())
+    for path, text in _leaves(cli_config or {}):
+        if isinstance(text, str) and _at(config, path) == text and any(path[:len(w)] == w for w in wrong):
+            with contextlib.suppress(yaml.YAMLError):
+                val = yaml.safe_load(text)
+                if val is None or isinstance(val, (int, float)):  # a bool is an int
+                    _at(config, path[:-1])[path[-1]] = val
     return config
 
 
-def _has_path(data: Any, path: Sequence[Any]) -> bool:
+def _leaves(data: Any, path: tuple = ()) -> Iterator[tuple[tuple, Any]]:
+    """``(path, value)`` of every leaf of nested mappings and lists."""
+    if not isinstance(data, (Mapping, list)):
+        yield path, data
+        return
+    for key, val in (data.items() if isinstance(data, Mapping) else enumerate(data)):
+        yield from _leaves(val, (*path, key))
+
+
+#: What :func:`_at` gives for a path the data does not have.
+_ABSENT = object()
+
+
+def _at(data: Any, path: Sequence[Any]) -> Any:
+    """The value at ``path`` of nested mappings and lists, or :data:`_ABSENT`."""
     for p in path:
-        if isinstance(data, Mapping) and p in data:
+        try:
             data = data[p]
-        elif isinstance(data, list) and isinstance(p, int) and p < len(data):
-            data = data[p]
-        else:
-            return False
-    return True
+        except (KeyError, IndexError, TypeError):
+            return _ABSENT
+    return data
 
 
 def _display(path: str | Path) -> str:
@@ -119,11 +114,11 @@ def _display(path: str | Path) -> str:
 def field_source(path: Sequence[Any], configfiles: Sequence[str | Path] = (), overrides: Mapping | None = None) -> str:
     """Where the value at ``path`` (section first) comes from: ``--config``, the last ``--configfile`` setting it,
     or the section's default file."""
-    if overrides and _has_path(overrides, path):
+    if overrides and _at(overrides, path) is not _ABSENT:
         return "--config"
     for f in reversed(list(configfiles)):
         with contextlib.suppress(OSError, yaml.YAMLError):
-            if _has_path(yaml.safe_load(Path(f).read_text()) or {}, path):
+            if _at(yaml.safe_load(Path(f).read_text()) or {}, path) is not _ABSENT:
                 return _display(f)
     return SECTIONS[path[0]].config_file if path and path[0] in SECTIONS else "the configuration"
 
@@ -231,13 +226,13 @@ def step_params(config: Mapping, section: str, *keys: str) -> dict:
 
     out: dict = {}
     for key in keys:
-        src, dst, path = config[section], out, key.split(".")
-        for i, part in enumerate(path):
-            if not isinstance(src, Mapping) or part not in src:
-                raise ConfigError(f"a rule asks for configuration key '{section}.{key}', which the section has not",
-                                  SECTIONS[section].config_file, f"{section}.{key}")
-            src = src[part]
-            if i < len(path) - 1:
-                dst = dst.setdefault(part, {})
-        dst[path[-1]] = src
+        *parents, leaf = key.split(".")
+        value = _at(config[section], (*parents, leaf))
+        if value is _ABSENT:
+            raise ConfigError(f"a rule asks for configuration key '{section}.{key}', which the section has not",
+                              SECTIONS[section].config_file, f"{section}.{key}")
+        dst = out
+        for part in parents:
+            dst = dst.setdefault(part, {})
+        dst[leaf] = value
     return canon(out)

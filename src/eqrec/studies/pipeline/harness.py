@@ -34,6 +34,7 @@ import os
 import pkgutil
 import sys
 import time
+import traceback
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
@@ -46,7 +47,7 @@ Step = Callable[[dict, "Files", "Files", "Wildcards"], Any]
 
 # --------------------------------------------------------------------------- files and wildcards
 
-class Files(Sequence[str]):
+class Files(list):
     """A step's inputs or outputs: positional paths plus named entries (a path or a list of paths).
 
     ``files.json``, ``files["json"]`` and ``files[0]`` work as on Snakemake's
@@ -54,31 +55,26 @@ class Files(Sequence[str]):
     """
 
     def __init__(self, items: Iterable[str] = (), **named: str | Sequence[str]):
+        super().__init__(map(str, items))
         self._named: dict[str, str | list[str]] = {}
-        self._items = [str(p) for p in items]
         for key, val in named.items():
-            if isinstance(val, (str, os.PathLike)):
-                self._named[key] = str(val)
-                self._items.append(str(val))
-            else:
-                self._named[key] = [str(v) for v in val]
-                self._items.extend(self._named[key])
+            one = isinstance(val, (str, os.PathLike))
+            paths = [str(v) for v in ([val] if one else val)]
+            self._named[key] = paths[0] if one else paths
+            self.extend(paths)
 
     @classmethod
     def of(cls, obj: "Files | Mapping[str, Any] | Sequence[str] | None") -> "Files":
         """Files from a mapping (named), a sequence (positional), a Snakemake ``Namedlist`` or ``None``."""
-        if obj is None:
-            return cls()
+        if obj is None or isinstance(obj, (str, os.PathLike)):
+            return cls([] if obj is None else [obj])
         if isinstance(obj, Files):
             return obj
         if isinstance(obj, Mapping):
             return cls(**obj)
-        if hasattr(obj, "_names"):  # snakemake.io.Namedlist
+        if hasattr(obj, "_names"):  # snakemake.io.Namedlist: its named entries, the others positional
             named = {k: (v if isinstance(v, str) else list(v)) for k, v in obj.items()}
-            seen = {p for v in named.values() for p in ([v] if isinstance(v, str) else v)}
-            return cls([p for p in obj if p not in seen], **named)
-        if isinstance(obj, (str, os.PathLike)):
-            return cls([obj])
+            return cls([p for p in obj if p not in Files(**named)], **named)
         return cls(obj)
 
     def __getattr__(self, name: str) -> str | list[str]:
@@ -90,18 +86,7 @@ class Files(Sequence[str]):
             raise AttributeError(f"no file named {name!r} (declared: {sorted(self._named)})") from None
 
     def __getitem__(self, key):  # type: ignore[override]
-        if isinstance(key, str):
-            return self.__getattr__(key)
-        return self._items[key]
-
-    def __len__(self) -> int:
-        return len(self._items)
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._items)
-
-    def __repr__(self) -> str:
-        return f"Files({self._items!r}, named={sorted(self._named)})"
+        return self.__getattr__(key) if isinstance(key, str) else super().__getitem__(key)
 
 
 class Wildcards(dict):
@@ -146,40 +131,32 @@ class StepConfig(dict):
 # --------------------------------------------------------------------------- logging
 
 class _StudyFormatter(logging.Formatter):
-    def format(self, record: logging.LogRecord) -> str:
-        parts = record.name.split(".")
-        study = parts[2] if len(parts) > 2 and parts[:2] == ["eqrec", "studies"] else parts[-1]
-        msg = record.getMessage()
-        if record.exc_info:
-            msg += "\n" + self.formatException(record.exc_info)
-        return f"[{study}] {msg}"
+    """``[p1] message``: the study is the folder of :mod:`eqrec.studies` whose logger wrote the record."""
+
+    def formatMessage(self, record: logging.LogRecord) -> str:
+        return f"[{record.name.removeprefix('eqrec.studies.').split('.')[0]}] {record.message}"
 
 
 @contextlib.contextmanager
 def _log_handler(stream) -> Iterator[None]:
+    """The studies' log records to ``stream`` as ``[study] message``; every logger as it was afterwards."""
     root = logging.getLogger("eqrec.studies")
     handler = logging.StreamHandler(stream)
     handler.setFormatter(_StudyFormatter())
-    old_level, old_propagate = root.level, root.propagate
-    # a logging.config call elsewhere in this process (dictConfig's disable_existing_loggers, e.g. Snakemake's
-    # API) may have disabled the studies' loggers: a step's log lines go out whatever ran before it
-    studies = [logger for name, logger in logging.root.manager.loggerDict.items()
-               if name.startswith("eqrec.studies") and isinstance(logger, logging.Logger)]
-    disabled = {logger: logger.disabled for logger in studies}
-    for logger in studies:
-        logger.disabled = False
-    root.addHandler(handler)
-    root.setLevel(logging.INFO)
-    root.propagate = False
-    try:
+    with contextlib.ExitStack() as restore:  # its callbacks run last first
+        # a logging.config call elsewhere in this process (dictConfig's disable_existing_loggers, e.g. Snakemake's
+        # API) may have disabled the studies' loggers: a step's log lines go out whatever ran before it
+        for name, logger in list(logging.root.manager.loggerDict.items()):
+            if name.startswith("eqrec.studies") and isinstance(logger, logging.Logger):
+                restore.callback(setattr, logger, "disabled", logger.disabled)
+                logger.disabled = False
+        restore.callback(setattr, root, "propagate", root.propagate)
+        restore.callback(root.setLevel, root.level)
+        restore.callback(root.removeHandler, handler)
+        root.addHandler(handler)
+        root.setLevel(logging.INFO)
+        root.propagate = False
         yield
-    finally:
-        handler.flush()
-        root.removeHandler(handler)
-        root.setLevel(old_level)
-        root.propagate = old_propagate
-        for logger, was in disabled.items():
-            logger.disabled = was
 
 
 @contextlib.contextmanager
@@ -194,28 +171,19 @@ def _fds_to(log_path: str | Path | None) -> Iterator[Any]:
         yield sys.stderr
         return
     Path(log_path).parent.mkdir(parents=True, exist_ok=True)
-    Path(log_path).write_text("")
     sys.stdout.flush()
     sys.stderr.flush()
-    saved_fds = os.dup(1), os.dup(2)
-    saved_streams = sys.stdout, sys.stderr
-    fd = os.open(log_path, os.O_WRONLY | os.O_APPEND)
-    stream = open(log_path, "a", buffering=1)
-    terminal = os.fdopen(os.dup(saved_fds[1]), "w")
-    try:
-        os.dup2(fd, 1)
-        os.dup2(fd, 2)
-        sys.stdout = sys.stderr = stream
+    with contextlib.ExitStack() as stack:  # its callbacks run last first: Python's streams, fds, files
+        stream = stack.enter_context(open(log_path, "w", buffering=1))
+        terminal = stack.enter_context(os.fdopen(os.dup(2), "w"))
+        for fd in (1, 2):
+            saved = os.dup(fd)
+            stack.callback(os.close, saved)
+            stack.callback(os.dup2, saved, fd)
+            os.dup2(stream.fileno(), fd)
+        stack.enter_context(contextlib.redirect_stdout(stream))
+        stack.enter_context(contextlib.redirect_stderr(stream))
         yield terminal
-    finally:
-        stream.flush()
-        sys.stdout, sys.stderr = saved_streams
-        os.dup2(saved_fds[0], 1)
-        os.dup2(saved_fds[1], 2)
-        for f in (*saved_fds, fd):
-            os.close(f)
-        stream.close()
-        terminal.close()
 
 
 # --------------------------------------------------------------------------- running a step
@@ -256,16 +224,16 @@ def run_step(step: str, cfg: Mapping[str, Any] | None = None, inputs=None, outpu
     """
     fn = resolve_step(step, rule)
     study, name = step_names(step)
-    ins, outs = Files.of(inputs), Files.of(outputs)
+    outs = Files.of(outputs)
     wc = Wildcards({k: str(v) for k, v in (wildcards or {}).items()})
     for p in outs:
         Path(p).parent.mkdir(parents=True, exist_ok=True)
     log_ = get_logger(study)
-    with _fds_to(log) as _, _log_handler(sys.stderr):
+    with _fds_to(log), _log_handler(sys.stderr):
         t0 = time.perf_counter()
         log_.info("step %s%s", name, "".join(f" {k}={v}" for k, v in wc.items()))
         given = StepConfig(cfg or {}, f"{study}.{name}", (study,) if study in SECTIONS else ())
-        result = fn(given, ins, outs, wc)
+        result = fn(given, Files.of(inputs), outs, wc)
         missing = [p for p in outs if not Path(p).exists()]
         if missing:
             raise StepError(f"step {study}.{name} did not write its declared outputs {missing}")
@@ -291,14 +259,11 @@ def run_from_snakemake(smk) -> None:
     one line (step, and for a configuration problem the file and field).
     """
     step = smk.params.step
-    cfg = smk.params.cfg if "cfg" in smk.params.keys() else {}
-    log = smk.log[0] if len(smk.log) else None
-    with _fds_to(log) as terminal:
+    with _fds_to(smk.log[0] if len(smk.log) else None) as terminal:
         try:
-            run_step(step, cfg, smk.input, smk.output, dict(smk.wildcards.items()), rule=getattr(smk, "rule", None))
+            run_step(step, getattr(smk.params, "cfg", {}), smk.input, smk.output, dict(smk.wildcards.items()),
+                     rule=getattr(smk, "rule", None))
         except Exception as exc:
-            import traceback
-
             msg = failure_message(*step_names(step), exc)
             traceback.print_exc()
             print(msg, file=sys.stderr, flush=True)

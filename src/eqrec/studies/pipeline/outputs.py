@@ -80,10 +80,7 @@ def merge_timings(data: Any, timings: Any) -> Any:
         return data
     if isinstance(timings, Mapping) and isinstance(data, dict):
         for key, val in timings.items():
-            if key in TIMING_KEYS or key not in data:
-                data[key] = val
-            else:
-                data[key] = merge_timings(data[key], val)
+            data[key] = val if key in TIMING_KEYS or key not in data else merge_timings(data[key], val)
         return data
     if isinstance(timings, list) and isinstance(data, list) and len(timings) == len(data):
         return [merge_timings(d, t) for d, t in zip(data, timings)]
@@ -141,18 +138,9 @@ def write_csv(path: str | Path, frame, timings: str | Path | None = None, keys: 
     with the ``keys`` columns that identify a row; the rest to ``path``.
     """
     kwargs.setdefault("index", False)
-    if timings == INTERMEDIATE:
-        with atomic_path(path) as tmp:
-            frame.to_csv(tmp, **kwargs)
-        return
-    timing_columns = [c for c in frame.columns if c in TIMING_KEYS]
-    rest, timed = frame.drop(columns=timing_columns), frame[[*keys, *timing_columns]]
-    if timings is None and timed.shape[1] > len(keys):
-        raise StepError(f"{path}: timing columns {list(timed.columns[len(keys):])} need a timings output")
-    if timings is not None:
-        with atomic_path(timings) as tmp:
-            timed.to_csv(tmp, **kwargs)
-    with atomic_path(path) as tmp:
-        rest.to_csv(tmp, **kwargs)
-
-
+    timing_columns = [] if timings == INTERMEDIATE else [c for c in frame.columns if c in TIMING_KEYS]
+    if timing_columns and timings is None:
+        raise StepError(f"{path}: timing columns {timing_columns} need a timings output")
+    if timings not in (None, INTERMEDIATE):
+        write_text(timings, frame[[*keys, *timing_columns]].to_csv(**kwargs))
+    write_text(path, frame.drop(columns=timing_columns).to_csv(**kwargs))
