@@ -59,7 +59,7 @@ def measure_free(system: AffineSystem, tau: int, T: int, config: str) -> dict:
     -------
     dict
         ``tau``, ``T``, ``config``, ``classes``, ``mu1``, ``J``, ``mu2``, ``lower_bound``, ``wall_time`` (the
-        design from the window rule on, worker start included) and ``peak_mb``.
+        design from the window rule on, worker start included), ``peak_mb`` and ``status`` (``"optimal"``).
     """
     from eqrec.design.classes import blocks as class_blocks
     from eqrec.design.delay.design import delay_classes, design_delay_global
@@ -75,7 +75,7 @@ def measure_free(system: AffineSystem, tau: int, T: int, config: str) -> dict:
     peak = max(peak_memory_mb(), _peak_mb_of_children())
     return {"tau": int(tau), "T": int(T), "config": config, "classes": len(classes), "mu1": float(res.mu1),
             "J": float(res.J), "mu2": float(res.mu2), "lower_bound": float(res.lower_bound), "wall_time": wall,
-            "peak_mb": peak}
+            "peak_mb": peak, "status": "optimal"}
 
 
 def run_free(system: AffineSystem, tau: int, T: int, config: str, timeout: float = 1800.0) -> dict:
@@ -93,16 +93,11 @@ def run_free(system: AffineSystem, tau: int, T: int, config: str, timeout: float
     Returns
     -------
     dict
-        :func:`measure_free`'s fields and ``status`` (``"optimal"``, ``"wall-clock kill"`` or
-        ``"crashed (...)"``).
+        :func:`measure_free`'s fields, or ``tau``, ``T``, ``config`` and the ``status`` of a failure
+        (:func:`eqrec.studies.p3.size_run.run_fresh`).
     """
     base = {"tau": int(tau), "T": int(T), "config": config}
-    proc, result = run_fresh("eqrec.studies.p3.free_size_run", {"system": system.to_dict(), **base}, timeout)
-    if proc is None:
-        return {**base, "status": "wall-clock kill"}
-    if proc.returncode:
-        return {**base, "status": f"crashed ({proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else ''})"}
-    return {**result, "status": "optimal"}
+    return {**base, **run_fresh("eqrec.studies.p3.free_size_run", {"system": system.to_dict(), **base}, timeout)}
 
 
 def main(argv: list[str] | None = None) -> None:
