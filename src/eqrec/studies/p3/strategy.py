@@ -121,10 +121,6 @@ def _ratio_evidence(runs: dict[str, LongRun], T: int | None) -> dict:
     return ev
 
 
-def _within(ratio: float) -> str:
-    return "inside" if ratio <= 1.0 + RATIO_TOL else "outside"
-
-
 def _long_runs(st: dict, seed_offset: int, what: str, run) -> tuple[dict[str, LongRun], float]:
     """One long run ``run(rng, kind=kind)`` per noise kind of ``st["noise"]`` (its own random stream) and the longest
     run time."""
@@ -166,8 +162,6 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     rc, ac, sw = st["reactor"], st["acc"], st["switching"]
     cost = st["cost"]
     t_start = time.perf_counter()
-    arrays: dict = {}
-    values: dict = {}
 
     # --- batch reactor, periodic reuse
     reactor = batch_reactor()
@@ -225,11 +219,12 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
                  run_time_s=sw_time)
 
     # --- values
-    ev_r, ev_a = per_r["evidence"], per_a["evidence"]
-    for name, ev, keys in (("periodic_reactor", ev_r, ("max_ratio_after_start_uniform", "model_gap")),
-                           ("periodic_acc", ev_a, ("model_gap",)),
+    values: dict = {}
+    for name, ev, keys in (("periodic_reactor", per_r["evidence"], ("max_ratio_after_start_uniform", "model_gap")),
+                           ("periodic_acc", per_a["evidence"], ("model_gap",)),
                            ("switching", sw_ev, ("max_ratio_performance", "max_ratio_recovery"))):
-        values[f"{name}_within"] = {"value": _within(ev["max_ratio"]), "evidence": ev}
+        values[f"{name}_within"] = {"value": "inside" if ev["max_ratio"] <= 1.0 + RATIO_TOL else "outside",
+                                    "evidence": ev}
         values[f"{name}_max_ratio"] = {"value": ev["max_ratio"], "evidence": {
             k: ev[k] for k in ("steps", "ratio_tol", *keys) if k in ev}}
     values["performance_period1_status"] = {"value": status_at_mu1, "evidence": {
@@ -243,18 +238,15 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     values["strategy_time_s"] = {"value": time.perf_counter() - t_start, "evidence": {"steps": int(st["steps"])}}
 
     # --- arrays for the figure
+    arrays: dict = {}
     for label, runs, Ts, T_ in (("reactor_periodic", per_r["runs"], BATCH_REACTOR_TS, T),
                                 ("acc_periodic", per_a["runs"], float(ACC_CONSTANTS["Ts"]), d_a.T),
                                 ("reactor_switching", sw_runs, BATCH_REACTOR_TS, T)):
         for kind, r in runs.items():
-            key = f"{label}_{kind}"
-            arrays[f"{key}_error"] = r.error
-            arrays[f"{key}_level"] = r.level
-            arrays[f"{key}_recovering"] = r.recovering
-            arrays[f"{key}_switch"] = np.asarray(r.switch_times, int)
-            arrays[f"{key}_revert"] = np.asarray(r.revert_times, int)
-        arrays[f"{label}_T"] = T_
-        arrays[f"{label}_Ts"] = Ts
+            arrays.update({f"{label}_{kind}_{name}": a for name, a in (
+                ("error", r.error), ("level", r.level), ("recovering", r.recovering),
+                ("switch", np.asarray(r.switch_times, int)), ("revert", np.asarray(r.revert_times, int)))})
+        arrays.update({f"{label}_T": T_, f"{label}_Ts": Ts})
     write_npz(outputs.npz, compressed=True, noise=np.array(list(st["noise"])), reactor_mu1=mu1, acc_mu1=d_a.mu1,
               switching_mu1=mu1_s, **arrays)
     write_json(outputs.values, values, timings=outputs.timings)
