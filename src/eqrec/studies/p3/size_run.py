@@ -207,9 +207,7 @@ def _measure_classes(system: AffineSystem, T: int, tau: int, mu1: float, opts: d
     except SolverFailure as exc:
         out.update(status=_status(str(exc)), detail=f"SolverFailure: {exc}")
         return out
-    rows, cols = sol.model_shape
-    cert = sol.certificate
-    lp = sol.solution
+    (rows, cols), cert, lp = sol.model_shape, sol.certificate, sol.solution
     out.update(rows=int(rows), cols=int(cols), nnz=int(sol.nonzeros), build_time=float(sol.build_time),
                solve_time=float(sol.solve_time), iterations=int(lp.iterations) if lp is not None else None,
                objective=float(lp.objective) if lp is not None else None,
