@@ -16,6 +16,7 @@ its workers' (``VmHWM``).  The target ``p3_scale`` tabulates and plots them
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import time
@@ -36,11 +37,8 @@ def _peak_mb_of_children() -> float:
         return 0.0
     peak = 0.0
     for child in psutil.Process().children(recursive=True):
-        try:
-            with open(f"/proc/{child.pid}/status") as f:
-                peak = max([peak, *(int(line.split()[1]) / 1024 for line in f if line.startswith("VmHWM:"))])
-        except OSError:
-            continue
+        with contextlib.suppress(OSError), open(f"/proc/{child.pid}/status") as f:  # a worker may have ended
+            peak = max([peak, *(int(line.split()[1]) / 1024 for line in f if line.startswith("VmHWM:"))])
     return peak
 
 

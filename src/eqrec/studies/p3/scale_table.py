@@ -89,10 +89,9 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
                 and r.get("objective") is not None and r.get("sequences") is not None):
             r["J"] = tree_J(r["objective"], r["sequences"], r["mu1"])
     frame = pd.DataFrame(rows).reindex(columns=list(FIELDS))
-    order = {e: i for i, e in enumerate(ENGINES)}
-    frame = frame.assign(_e=frame["engine"].map(order).fillna(len(order)))
-    frame = frame.sort_values(["T", "tau", "_e", "method"], kind="stable").drop(columns="_e")
-    return frame.reset_index(drop=True)
+    order = frame["engine"].map({e: i for i, e in enumerate(ENGINES)}).fillna(len(ENGINES))  # then unknown engines
+    frame = frame.assign(_e=order).sort_values(["T", "tau", "_e", "method"], kind="stable")
+    return frame.drop(columns="_e").reset_index(drop=True)
 
 
 def _md_cell(v, col: str = "") -> str:

@@ -115,10 +115,8 @@ def _ratio_evidence(runs: dict[str, LongRun], T: int | None) -> dict:
         ev[f"max_ratio_after_start_{kind}"] = float(r.ratio[1:].max())
         if T:
             ev[f"max_ratio_boundary_{kind}"] = float(r.ratio[::T].max())
-    ev["max_ratio"] = max(r.max_ratio for r in runs.values())
-    ev["steps"] = int(min(r.delays.size for r in runs.values()))
-    ev["ratio_tol"] = RATIO_TOL
-    return ev
+    return {**ev, "max_ratio": max(r.max_ratio for r in runs.values()),
+            "steps": int(min(r.delays.size for r in runs.values())), "ratio_tol": RATIO_TOL}
 
 
 def _long_runs(st: dict, seed_offset: int, what: str, run) -> tuple[dict[str, LongRun], float]:
@@ -143,8 +141,7 @@ def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset
                   path_levels=partial(path_levels, design), x0=x0, **drive)
     runs, run_time = _long_runs(st, seed_offset, f"periodic {system.name}", run)
     gap = max(periodic_model_gap(r, system, design.schedule) for r in runs.values())
-    ev = _ratio_evidence(runs, T)
-    ev.update(T=T, periods=periods, mu1=design.mu1, max_mu2=design.mu2, words=len(words),
+    ev = dict(_ratio_evidence(runs, T), T=T, periods=periods, mu1=design.mu1, max_mu2=design.mu2, words=len(words),
               sequences=len(design.patterns), model_gap=gap, dropped_late=sum(len(r.dropped) for r in runs.values()),
               certificate_excess=certificate_excess(design), run_time_s=run_time)
     return {"runs": runs, "evidence": ev}
@@ -205,12 +202,11 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
         long_run_switching, reactor, d_p.schedule, d_s.schedule, int(st["steps"]), mu1=mu1_s,
         recovery_level=partial(node_level, d_s), max_delay=tb, p_on_time=float(sw["p_on_time"]), x0=x0_r,
         controller=controller))
-    sw_ev = _ratio_evidence(sw_runs, None)
     perf = [float(r.ratio[1:][~r.recovering].max()) for r in sw_runs.values() if (~r.recovering).any()]
     rec = [float(r.ratio[1:][r.recovering].max()) for r in sw_runs.values() if r.recovering.any()]
-    sw_ev.update(mu1=mu1_s, performance_mu2=d_p.mu2, recovery_max_mu2=d_s.mu2, recovery_words=len(rec_words),
-                 recovery_sequences=len(d_s.patterns), T=T, p_on_time=float(sw["p_on_time"]),
-                 switches=int(sum(len(r.switch_times) for r in sw_runs.values())),
+    sw_ev = dict(_ratio_evidence(sw_runs, None), mu1=mu1_s, performance_mu2=d_p.mu2, recovery_max_mu2=d_s.mu2,
+                 recovery_words=len(rec_words), recovery_sequences=len(d_s.patterns), T=T,
+                 p_on_time=float(sw["p_on_time"]), switches=int(sum(len(r.switch_times) for r in sw_runs.values())),
                  reverts=int(sum(len(r.revert_times) for r in sw_runs.values())),
                  recovery_fraction=float(np.mean([r.recovering.mean() for r in sw_runs.values()])),
                  max_ratio_performance=max(perf, default=0.0), max_ratio_recovery=max(rec, default=0.0),

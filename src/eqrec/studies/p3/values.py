@@ -130,9 +130,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     fs, fm = acc["fixed"]["sum"], acc["fixed"]["max"]
     p1_mu2 = acc["p1_prefix"]["mu2"]
     acc_ev = {"p1_prefix_mu2": p1_mu2, "max_cost_mu2": fm["mu2"], "difference_sum": fs["difference_to_p1"],
-              "difference_max": fm["difference_to_p1"], "certified_mu2": fs["certified_mu2"],
-              "certified_terminal": fs["certified_terminal"], "missing_data_language": acc["missing_data_language"],
-              "mu1": acc["mu1"]}
+              "difference_max": fm["difference_to_p1"], **_pick(fs, "certified_mu2", "certified_terminal"),
+              **_pick(acc, "missing_data_language", "mu1")}
     v["acc_mu2"] = {"value": fs["mu2"], "evidence": acc_ev}
     same = max(fs["difference_to_p1"], fm["difference_to_p1"]) <= SAME_RTOL * p1_mu2
     v["acc_same_as_prefix"] = {"value": "same" if same else "different", "evidence": acc_ev}
