@@ -213,8 +213,7 @@ def _free_summary(res: FreeMu1Result) -> dict:
                           "lower_margin": res.mu1_min.lower_margin, "binding": res.mu1_min.binding}
     if res.route == "ipopt":
         pol = res.extra.get("polished", {})
-        out.update(status=res.extra["status"], iterations=res.extra["iterations"],
-                   mu1_of_gains=res.extra["mu1_of_gains"], start_mu1=res.extra["start_mu1"],
+        out.update({key: res.extra[key] for key in ("status", "iterations", "mu1_of_gains", "start_mu1")},
                    polished={"mu1": pol.get("mu1"), "J": pol.get("J")})
     return out
 
@@ -397,14 +396,12 @@ def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
                                 size=int(sim["runs"]))
     x0 = np.asarray(sim["x0"], float)
     u = np.full((T, system.m), float(sim["input_force"]))
-    errs = {name: np.stack([simulate_run(system, d.schedule, pat, dl, x0, u).error for dl in deltas])
-            for name, d in (("proposed", proposed), ("prefix", prefix))}
-    b_prop = word_certificate(proposed, pat).bounds
-    b_pref = next(iter(certify_schedule(system, prefix.schedule, [pat], mu1).words.values())).bounds
-    arrays = {"proposed_errors": errs["proposed"], "prefix_errors": errs["prefix"],
-              "proposed_levels": path_levels(proposed, pat),
-              "prefix_levels": np.array([mu1] + [prefix.mu2] * (T - 1) + [mu1]),
-              "proposed_bounds": b_prop, "prefix_bounds": b_pref, "mu1": mu1,
-              "proposed_mu2": proposed.mu2, "prefix_mu2": prefix.mu2}
+    arrays = {f"{name}_errors": np.stack([simulate_run(system, d.schedule, pat, dl, x0, u).error for dl in deltas])
+              for name, d in (("proposed", proposed), ("prefix", prefix))}
+    arrays.update(proposed_levels=path_levels(proposed, pat),
+                  prefix_levels=np.array([mu1] + [prefix.mu2] * (T - 1) + [mu1]),
+                  proposed_bounds=word_certificate(proposed, pat).bounds,
+                  prefix_bounds=next(iter(certify_schedule(system, prefix.schedule, [pat], mu1).words.values())).bounds,
+                  mu1=mu1, proposed_mu2=proposed.mu2, prefix_mu2=prefix.mu2)
     write_npz(outputs.npz, compressed=True, **arrays)
     return arrays
