@@ -11,7 +11,7 @@ engine in one of :data:`CONFIGS`:
 :func:`run_free` runs :func:`measure_free` in a fresh Python process (``python -m eqrec.studies.p3.free_size_run
 '<json>'``) so that the peak memory is that size's: ``peak_mb`` is the largest of the process's own peak and
 its workers' (``VmHWM``).  The target ``p3_scale`` tabulates and plots them
-(:func:`eqrec.studies.p3.scale_table.step_scale_free`).
+(:func:`eqrec.studies.p3.free_table.step_scale_free`).
 """
 
 from __future__ import annotations

@@ -97,9 +97,7 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
 def _md_cell(v, col: str = "") -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
-    if isinstance(v, bool):
-        return str(v)
-    if isinstance(v, int):
+    if isinstance(v, int):  # a bool too: str
         return f"{v:.3e}" if abs(v) >= 10**10 else str(v)  # (τ̄+1)^T: 9.313e+20 words at (30, 4)
     if isinstance(v, float):
         if col in ("max_level", "terminal_level"):
