@@ -32,33 +32,32 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     data = np.load(inputs.npz)
     res = json.loads(Path(inputs.json).read_text())
     levels = data["levels"]
-    # (name, title, errors, exact worst case, colour) per column
-    cols = [("proposed", "Proposed estimator", data["proposed_errors"], data["proposed_bounds"], "C0")]
-    cols += [(n, FILTER_TITLES.get(n, n), data[f"{n}_prediction_errors"], data[f"{n}_prediction_worst"], "C3")
-             for n in res["filters"]]
+    def verdict(n: str) -> str:  # whether the runs of filter n stay inside the levels; its exact worst case's verdict
+        inside = np.all(np.abs(data[f"{n}_prediction_errors"]) <= levels[None, :, None] + 1e-12)
+        worst = res["filters"][n]["prediction"]["verdict"]
+        return f"runs {'inside' if inside else 'OUTSIDE'}, exact worst\ncase {worst}"
+
+    # (title, errors, exact worst case, colour) per column
+    cols = [("Proposed estimator\nruns and worst case inside", data["proposed_errors"], data["proposed_bounds"], "C0")]
+    cols += [(f"{FILTER_TITLES.get(n, n)}\n{verdict(n)}", data[f"{n}_prediction_errors"], data[f"{n}_prediction_worst"],
+              "C3") for n in res["filters"]]
     fig, axes = plt.subplots(4, len(cols), figsize=(1.8 * len(cols) + 0.7, 7.4), sharex=True, sharey="row",
                              squeeze=False, layout="constrained")
-    for c, (name, title, errs, worst, color) in enumerate(cols):
-        inside = bool(np.all(np.abs(errs) <= levels[None, :, None] + 1e-12))
-        if name == "proposed":
-            verdict = "\nruns and worst case inside"
-        else:
-            verdict = (f"\nruns {'inside' if inside else 'OUTSIDE'}, exact worst\n"
-                       f"case {res['filters'][name]['prediction']['verdict']}")
-        trajectory_panel(axes[:, c], errs, levels, title + verdict, state_labels=STATE_LABELS_REACTOR,
-                         color=color, ylabels=(c == 0))
+    for c, (title, errs, worst, color) in enumerate(cols):
+        trajectory_panel(axes[:, c], errs, levels, title, state_labels=STATE_LABELS_REACTOR, color=color,
+                         ylabels=(c == 0))
         worst_case_lines(axes[:, c], worst, "exact worst case")
     # one scale per state across the estimators: the same quantity, compared
     for i in range(axes.shape[0]):
         lim = 1.1 * max(max(np.max(levels), np.max(worst[:, i]), np.max(np.abs(errs[:, :, i])))
-                        for _, _, errs, worst, _ in cols)
+                        for _, errs, worst, _ in cols)
         for ax in axes[i]:
             ax.set_ylim(-lim, lim)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     labels = ["proposed estimator: error" if lab == "estimation error" else lab for lab in labels]
     labels = ["guarantee $\\mu_{2,k}$ of the proposed estimator" if lab == "guarantee" else lab for lab in labels]
     if len(cols) > 1:  # the Kalman-type filters' traces, drawn in their own colour
-        handles.insert(1, plt.Line2D([], [], color=cols[1][4], alpha=0.6, lw=1.0))
+        handles.insert(1, plt.Line2D([], [], color=cols[1][3], alpha=0.6, lw=1.0))
         labels.insert(1, "Kalman-type filter: error")
     fig.legend(handles, labels, loc="outside lower center", ncol=2)
     fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs (truncated normal, "
@@ -101,52 +100,49 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
     data = np.load(inputs.npz)
     kind = str(data["noise"][0])
     window = int(cfg["strategy"]["figure"]["window"])
-    cols = (("reactor_periodic", "Batch reactor,\ngains reused every $T$", list(STATE_LABELS_REACTOR),
+    cols = (("reactor_periodic", "Batch reactor,\ngains reused every $T$ = {T}", list(STATE_LABELS_REACTOR),
              float(data["reactor_mu1"])),
-            ("acc_periodic", "ACC,\ngains reused every $T$", [lab.replace(" error", "\nerror") for lab in
-                                                            STATE_LABELS_ACC], float(data["acc_mu1"])),
+            ("acc_periodic", "ACC,\ngains reused every $T$ = {T}", [lab.replace(" error", "\nerror") for lab in
+                                                                  STATE_LABELS_ACC], float(data["acc_mu1"])),
             ("reactor_switching", "Batch reactor,\nswitching scheme", list(STATE_LABELS_REACTOR),
              float(data["switching_mu1"])))
     fig, axes = plt.subplots(4, 3, figsize=(7.4, 8.0), sharex="col", layout="constrained")
+    # the error and the level of each run over the window
+    shown = {label: (data[f"{label}_{kind}_error"][: window + 1], data[f"{label}_{kind}_level"][: window + 1])
+             for label, *_ in cols}
 
     def limit(label: str, i: int) -> float:  # the y range of state i over the window of one run
-        err, lev = data[f"{label}_{kind}_error"], data[f"{label}_{kind}_level"]
-        N = min(window, err.shape[0] - 1)
-        return 1.15 * max(float(lev[: N + 1].max()), float(np.abs(err[: N + 1, i]).max()))
+        err, lev = shown[label]
+        return 1.15 * max(float(lev.max()), float(np.abs(err[:, i]).max()))
 
     for c, (label, title, ylabels, mu1) in enumerate(cols):
-        key = f"{label}_{kind}"
-        err, lev = data[f"{key}_error"], data[f"{key}_level"]
+        err, lev = shown[label]
+        N, n, t = len(err) - 1, err.shape[1], np.arange(len(err))
         T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
-        N = min(window, err.shape[0] - 1)
-        t = np.arange(N + 1)
-        n = err.shape[1]
-        for i in range(4):
-            ax = axes[i, c]
+        # the vertical lines: (instants, style, legend entry)
+        if label == "reactor_switching":
+            marks = [(data[f"{label}_{kind}_switch"], {"color": "C3", "ls": "--", "lw": 0.8}, "switch to recovery"),
+                     (data[f"{label}_{kind}_revert"], {"color": "C2", "ls": ":", "lw": 1.0}, "back to performance")]
+        else:
+            marks = [(range(T, N + 1, T), {"color": "C4", "ls": "-", "lw": 0.7, "alpha": 0.8},
+                      "period boundary (every $T$ steps)")]
+        for i, ax in enumerate(axes[:, c]):
             if i >= n:
                 ax.axis("off")
                 continue
             ax.grid(False, axis="x")
-            ax.fill_between(t, -lev[: N + 1], lev[: N + 1], step="mid", color="0.85", label="guarantee")
-            ax.plot(t, err[: N + 1, i], "C0.-", ms=2.5, label="estimation error")
-            if label == "reactor_switching":
-                sw, rv = data[f"{key}_switch"], data[f"{key}_revert"]
-                for j, s in enumerate(sw[sw <= N]):
-                    ax.axvline(s, color="C3", ls="--", lw=0.8, label="switch to recovery" if j == 0 else None)
-                for j, s in enumerate(rv[rv <= N]):
-                    ax.axvline(s, color="C2", ls=":", lw=1.0, label="back to performance" if j == 0 else None)
-            else:
-                for j, s in enumerate(range(T, N + 1, T)):
-                    ax.axvline(s, color="C4", ls="-", lw=0.7, alpha=0.8,
-                               label="period boundary (every $T$ steps)" if j == 0 else None)
+            ax.fill_between(t, -lev, lev, step="mid", color="0.85", label="guarantee")
+            ax.plot(t, err[:, i], "C0.-", ms=2.5, label="estimation error")
+            for instants, style, name in marks:
+                for j, s in enumerate(x for x in instants if x <= N):
+                    ax.axvline(s, **style, label=None if j else name)
             ax.set_ylabel(ylabels[i])
             # one scale per reactor state across the two reactor columns (the same quantity)
             lim = (max(limit("reactor_periodic", i), limit("reactor_switching", i)) if label.startswith("reactor")
                    else limit(label, i))
             ax.set_ylim(-lim, lim)
             if i == 0:
-                ax.set_title(f"{title} = {T}\n$\\mu_1$ = {mu1:g}" if "every" in title else
-                             f"{title}\n$\\mu_1$ = {mu1:g}")
+                ax.set_title(f"{title.format(T=T)}\n$\\mu_1$ = {mu1:g}")
         last = axes[min(n, 4) - 1, c]
         last.set_xlabel(f"time step $k$\n($T_s$ = {Ts:g} s)")
         last.tick_params(labelbottom=True)

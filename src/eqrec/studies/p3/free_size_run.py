@@ -11,11 +11,12 @@ engine in one of :data:`CONFIGS`:
 :func:`run_free` runs :func:`measure_free` in a fresh Python process (``python -m eqrec.studies.p3.free_size_run
 '<json>'``) so that the peak memory is that size's: ``peak_mb`` is the largest of the process's own peak and
 its workers' (``VmHWM``).  The target ``p3_scale`` tabulates and plots them
-(:func:`eqrec.studies.p3.scale_table.step_scale_free`).
+(:func:`eqrec.studies.p3.free_table.step_scale_free`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import time
@@ -36,11 +37,8 @@ def _peak_mb_of_children() -> float:
         return 0.0
     peak = 0.0
     for child in psutil.Process().children(recursive=True):
-        try:
-            with open(f"/proc/{child.pid}/status") as f:
-                peak = max([peak, *(int(line.split()[1]) / 1024 for line in f if line.startswith("VmHWM:"))])
-        except OSError:
-            continue
+        with contextlib.suppress(OSError), open(f"/proc/{child.pid}/status") as f:  # a worker may have ended
+            peak = max([peak, *(int(line.split()[1]) / 1024 for line in f if line.startswith("VmHWM:"))])
     return peak
 
 
@@ -59,7 +57,7 @@ def measure_free(system: AffineSystem, tau: int, T: int, config: str) -> dict:
     -------
     dict
         ``tau``, ``T``, ``config``, ``classes``, ``mu1``, ``J``, ``mu2``, ``lower_bound``, ``wall_time`` (the
-        design from the window rule on, worker start included) and ``peak_mb``.
+        design from the window rule on, worker start included), ``peak_mb`` and ``status`` (``"optimal"``).
     """
     from eqrec.design.classes import blocks as class_blocks
     from eqrec.design.delay.design import delay_classes, design_delay_global
@@ -75,7 +73,7 @@ def measure_free(system: AffineSystem, tau: int, T: int, config: str) -> dict:
     peak = max(peak_memory_mb(), _peak_mb_of_children())
     return {"tau": int(tau), "T": int(T), "config": config, "classes": len(classes), "mu1": float(res.mu1),
             "J": float(res.J), "mu2": float(res.mu2), "lower_bound": float(res.lower_bound), "wall_time": wall,
-            "peak_mb": peak}
+            "peak_mb": peak, "status": "optimal"}
 
 
 def run_free(system: AffineSystem, tau: int, T: int, config: str, timeout: float = 1800.0) -> dict:
@@ -93,16 +91,11 @@ def run_free(system: AffineSystem, tau: int, T: int, config: str, timeout: float
     Returns
     -------
     dict
-        :func:`measure_free`'s fields and ``status`` (``"optimal"``, ``"wall-clock kill"`` or
-        ``"crashed (...)"``).
+        :func:`measure_free`'s fields, or ``tau``, ``T``, ``config`` and the ``status`` of a failure
+        (:func:`eqrec.studies.p3.size_run.run_fresh`).
     """
     base = {"tau": int(tau), "T": int(T), "config": config}
-    proc, result = run_fresh("eqrec.studies.p3.free_size_run", {"system": system.to_dict(), **base}, timeout)
-    if proc is None:
-        return {**base, "status": "wall-clock kill"}
-    if proc.returncode:
-        return {**base, "status": f"crashed ({proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else ''})"}
-    return {**result, "status": "optimal"}
+    return {**base, **run_fresh("eqrec.studies.p3.free_size_run", {"system": system.to_dict(), **base}, timeout)}
 
 
 def main(argv: list[str] | None = None) -> None:

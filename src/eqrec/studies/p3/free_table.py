@@ -19,6 +19,7 @@ from __future__ import annotations
 import pandas as pd
 
 from eqrec.studies.p3.free_size_run import CONFIGS, run_free
+from eqrec.studies.p3.scale_table import md_table
 from eqrec.studies.p3.size_run import class_count
 from eqrec.systems.examples import batch_reactor
 from eqrec.studies.pipeline.logs import get_logger
@@ -70,16 +71,13 @@ def free_markdown(frame: pd.DataFrame) -> str:
     -------
     str
     """
-    lines = ["# P3 scale, mu1 free (class engine per class vs one block LP)", "",
-             "Batch reactor, full language {0..τ̄}^T, mu1 free (design_delay_global), one fresh process per row; "
-             "wall time from the window rule to the certified design, worker start included; peak memory of the "
-             "process or its largest worker.", "",
-             "| τ̄ | T | classes | configuration | time [s] | peak [MB] | μ1 | J | max μ2 | status |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in frame.itertuples(index=False):
-        lines.append(f"| {r.tau} | {r.T} | {r.classes} | {r.config} | {r.wall_time:.2f} | {r.peak_mb:.0f} | "
-                     f"{r.mu1:.9g} | {r.J:.9g} | {r.mu2:.6f} | {r.status} |")
-    return "\n".join(lines) + "\n"
+    head = ["τ̄", "T", "classes", "configuration", "time [s]", "peak [MB]", "μ1", "J", "max μ2", "status"]
+    rows = ([r.tau, r.T, r.classes, r.config, f"{r.wall_time:.2f}", f"{r.peak_mb:.0f}", f"{r.mu1:.9g}", f"{r.J:.9g}",
+             f"{r.mu2:.6f}", r.status] for r in frame.itertuples(index=False))
+    return ("# P3 scale, mu1 free (class engine per class vs one block LP)\n\nBatch reactor, full language {0..τ̄}^T, "
+            "mu1 free (design_delay_global), one fresh process per row; wall time from the window rule to the "
+            "certified design, worker start included; peak memory of the process or its largest worker.\n\n"
+            + md_table(head, rows))
 
 
 def free_figure(frame: pd.DataFrame, outputs) -> None:
@@ -104,15 +102,12 @@ def free_figure(frame: pd.DataFrame, outputs) -> None:
     for r in frame[frame["config"] == "blocks-2"].itertuples(index=False):
         ax.annotate(f"({r.tau},{r.T})", (r.classes, r.wall_time), textcoords="offset points", xytext=(3, -9),
                     fontsize=6)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
     from matplotlib.ticker import NullFormatter, ScalarFormatter
 
-    ax.set_xticks([300, 500, 1000, 2000, 4000])
+    ax.set(xscale="log", yscale="log", xticks=[300, 500, 1000, 2000, 4000], xlabel="classes (time, available data)",
+           ylabel=r"design time, $\mu_1$ free [s]",
+           title=r"Batch reactor $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
     ax.xaxis.set_major_formatter(ScalarFormatter())
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("classes (time, available data)")
-    ax.set_ylabel(r"design time, $\mu_1$ free [s]")
-    ax.set_title(r"Batch reactor $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
     ax.legend()
     save_figure(fig, outputs.pdf, outputs.png)

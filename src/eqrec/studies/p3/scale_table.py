@@ -89,18 +89,15 @@ def scale_frame(rows: list[dict]) -> pd.DataFrame:
                 and r.get("objective") is not None and r.get("sequences") is not None):
             r["J"] = tree_J(r["objective"], r["sequences"], r["mu1"])
     frame = pd.DataFrame(rows).reindex(columns=list(FIELDS))
-    order = {e: i for i, e in enumerate(ENGINES)}
-    frame = frame.assign(_e=frame["engine"].map(order).fillna(len(order)))
-    frame = frame.sort_values(["T", "tau", "_e", "method"], kind="stable").drop(columns="_e")
-    return frame.reset_index(drop=True)
+    order = frame["engine"].map({e: i for i, e in enumerate(ENGINES)}).fillna(len(ENGINES))  # then unknown engines
+    frame = frame.assign(_e=order).sort_values(["T", "tau", "_e", "method"], kind="stable")
+    return frame.drop(columns="_e").reset_index(drop=True)
 
 
 def _md_cell(v, col: str = "") -> str:
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return ""
-    if isinstance(v, bool):
-        return str(v)
-    if isinstance(v, int):
+    if isinstance(v, int):  # a bool too: str
         return f"{v:.3e}" if abs(v) >= 10**10 else str(v)  # (τ̄+1)^T: 9.313e+20 words at (30, 4)
     if isinstance(v, float):
         if col in ("max_level", "terminal_level"):
@@ -117,8 +114,10 @@ def _value(v):
     return v.item() if hasattr(v, "item") else v
 
 
-def _size_list(sizes) -> str:
-    return ", ".join(f"({int(T)}, {int(tau)})" for T, tau in sizes)
+def md_table(head: list[str], rows) -> str:
+    """A Markdown table: the header cells ``head``, then a line per row of cells (``rows``; ``str`` of each)."""
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    return "\n".join(lines + ["| " + " | ".join(map(str, cells)) + " |" for cells in rows]) + "\n"
 
 
 def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None, timings: bool = True) -> str:
@@ -137,10 +136,6 @@ def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None, timing
                ("iterations", "iterations"), ("J", "J"), ("max_level", "max μ2"), ("peak_mb", "peak [MB]"),
                ("status", "status")]
     columns = [(c, h) for c, h in columns if timings or c not in TIMING_KEYS]
-    cols, head = [c for c, _ in columns], [h for _, h in columns]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for _, row in frame.iterrows():
-        lines.append("| " + " | ".join(_md_cell(_value(row[c]), c) for c in cols) + " |")
     parts = ["# P3 scale table\n"]
     if len(frame):
         meta = frame.iloc[0]
@@ -174,9 +169,11 @@ def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None, timing
                 "`results/timings/p3/` (the same table with them, `scale_table.md` there).\n")
         if missing_tree:
             parts.append(
-                f"Tree LP at {_size_list(missing_tree)}: `results/p3/scale_table_full.md` (target `p3_scale`, "
+                f"Tree LP at {', '.join(f'({int(T)}, {int(tau)})' for T, tau in missing_tree)}: "
+                f"`results/p3/scale_table_full.md` (target `p3_scale`, "
                 f"outside the default run: minutes and up to the memory limit per size).\n")
-    parts.append("\n".join(lines) + "\n")
+    parts.append(md_table([h for _, h in columns], ([_md_cell(_value(row[c]), c) for c, _ in columns]
+                                                     for _, row in frame.iterrows())))
     side = _side_by_side(frame, timings)
     if side:
         parts.append("## Side by side (sizes both engines ran)\n\n" + side)
@@ -194,8 +191,7 @@ def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
     def total(r):  # a size that did not solve has no total (its build time is in the table above)
         if r["status"] != "optimal":
             return None
-        vals = [_value(r[c]) for c in ("tree_time", "classes_time", "build_time", "solve_time")]
-        vals = [v for v in vals if v is not None and not (isinstance(v, float) and math.isnan(v))]
+        vals = [_value(r[c]) for c in ("tree_time", "classes_time", "build_time", "solve_time") if pd.notna(r[c])]
         return float(sum(vals)) if vals else float("nan")
 
     # (header, engine of the row, field; "total" is the sum above)
@@ -206,12 +202,9 @@ def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
                ("classes peak [MB]", "classes", "peak_mb"), ("tree status", "tree", "status"),
                ("classes status", "classes", "status"), ("J (tree)", "tree", "J"), ("J (classes)", "classes", "J")]
     columns = [col for col in columns if timings or col[2] not in ("total", "peak_mb")]
-    lines = ["| " + " | ".join(h for h, *_ in columns) + " |", "|" + "---|" * len(columns)]
-    for T, tau in sizes:
-        rows = {engine: by[(T, tau, engine)] for engine in ENGINES}
-        cells = [total(rows[e]) if f == "total" else _value(rows[e][f]) for _, e, f in columns]
-        lines.append("| " + " | ".join(_md_cell(v, f) for v, (_, _, f) in zip(cells, columns)) + " |")
-    return "\n".join(lines) + "\n"
+    rows = ([_md_cell(total(by[T, tau, e]) if f == "total" else _value(by[T, tau, e][f]), f) for _, e, f in columns]
+            for T, tau in sizes)
+    return md_table([h for h, *_ in columns], rows)
 
 
 def step_scale_table(cfg, inputs, outputs, wildcards) -> pd.DataFrame:

@@ -104,11 +104,7 @@ def _size_fields(engine: str, T: int, tau: int, method: str, builder: str, mu1: 
 
 def _status(raw: str) -> str:
     low = raw.lower()
-    if "time limit" in low:
-        return "time limit"
-    if "memory" in low:
-        return "memory limit"
-    return raw
+    return "time limit" if "time limit" in low else "memory limit" if "memory" in low else raw
 
 
 def peak_memory_mb() -> float:
@@ -211,9 +207,7 @@ def _measure_classes(system: AffineSystem, T: int, tau: int, mu1: float, opts: d
     except SolverFailure as exc:
         out.update(status=_status(str(exc)), detail=f"SolverFailure: {exc}")
         return out
-    rows, cols = sol.model_shape
-    cert = sol.certificate
-    lp = sol.solution
+    (rows, cols), cert, lp = sol.model_shape, sol.certificate, sol.solution
     out.update(rows=int(rows), cols=int(cols), nnz=int(sol.nonzeros), build_time=float(sol.build_time),
                solve_time=float(sol.solve_time), iterations=int(lp.iterations) if lp is not None else None,
                objective=float(lp.objective) if lp is not None else None,
@@ -267,20 +261,14 @@ def measure_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu
     return _measure_tree(system, T, tau, method, float(mu1), opts, out)
 
 
-def _import_all() -> None:
-    """Load every module (and shared library) of a measurement before the memory limit is set."""
+def _worker(args: dict) -> dict:
     for module in ("highspy", "scipy.linalg", "scipy.sparse", "eqrec.bounds.data_classes", "eqrec.lp.solvers",
                    "eqrec.design.classes.engine", "eqrec.design.delay.design", "eqrec.design.prefix.tree_lp"):
-        importlib.import_module(module)
-
-
-def _worker(args: dict) -> dict:
-    _import_all()
+        importlib.import_module(module)  # every module (and shared library) loaded before the memory limit is set
     system, _ = system_from_mapping(args["system"], "scale worker")
     mem_gb = float(args.get("mem_limit_gb", 0.0))
     if mem_gb > 0:
-        lim = int(mem_gb * 2**30)
-        resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
+        resource.setrlimit(resource.RLIMIT_AS, (int(mem_gb * 2**30),) * 2)
     out: dict = {}
     try:
         measure_size(system, args["T"], args["tau"], args["method"], args["mu1"], args["time_limit"],
@@ -292,8 +280,8 @@ def _worker(args: dict) -> dict:
     return out
 
 
-def run_fresh(module: str, payload: dict, timeout: float, *flags: str,
-              env: dict | None = None) -> tuple[subprocess.CompletedProcess | None, dict | None]:
+def run_fresh(module: str, payload: dict, timeout: float, *flags: str, env: dict | None = None,
+              limited: bool = False) -> dict:
     """``python -m module '<payload as JSON>' *flags`` in a fresh process (its own peak memory).
 
     Parameters
@@ -308,20 +296,29 @@ def run_fresh(module: str, payload: dict, timeout: float, *flags: str,
         Further command-line arguments.
     env : dict or None, optional
         The process's environment (default: this one's).
+    limited : bool, optional
+        The worker runs under an address-space limit: an abort that names an allocation is that limit.
 
     Returns
     -------
-    tuple
-        The finished process and its last output line that is a JSON object (``None`` if none);
-        ``(None, None)`` when it was killed at ``timeout``.
+    dict
+        The last output line that is a JSON object of a process that exited normally; otherwise ``{"status": s}``
+        with ``s`` ``"wall-clock kill"`` (killed at ``timeout``), ``"memory limit"`` (an allocation failed) or
+        ``"crashed (exit n | signal n): <the end of its error output>"``.
     """
     try:
         proc = subprocess.run([sys.executable, "-m", module, json.dumps(payload), *flags], capture_output=True,
                               text=True, timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
-        return None, None
+        return {"status": "wall-clock kill"}
     lines = [ln for ln in proc.stdout.strip().splitlines() if ln.startswith("{")]
-    return proc, (json.loads(lines[-1]) if lines else None)
+    err, code = proc.stderr, proc.returncode
+    if code == 0 and lines:
+        return json.loads(lines[-1])
+    if any(m in err for m in _MEMORY_MARKERS) or (limited and code == -signal.SIGABRT and "alloc" in err):
+        return {"status": "memory limit"}
+    how = f"signal {-code}" if code < 0 else f"exit {code}"
+    return {"status": f"crashed ({how}): {' | '.join(err.strip().splitlines()[-3:])}"}
 
 
 def run_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: float = 0.5,
@@ -360,27 +357,12 @@ def run_size(system: AffineSystem, T: int, tau: int, method: str = "ipm", mu1: f
         status, or ``"crashed (...)"``.
     """
     _check(method, builder, engine)
-    args = {"system": system.to_dict(), "T": int(T), "tau": int(tau), "method": method, "mu1": float(mu1),
-            "time_limit": float(time_limit), "mem_limit_gb": float(mem_limit_gb), "builder": builder,
-            "options": dict(options or {}), "engine": engine}
     base = {**_size_fields(engine, T, tau, method, builder, mu1, time_limit), "mem_limit_gb": float(mem_limit_gb)}
+    args = {"system": system.to_dict(), **base, "builder": builder, "options": dict(options or {})}
     t0 = time.perf_counter()
-    p, result = run_fresh("eqrec.studies.p3.size_run", args, 1.5 * float(time_limit) + wall_margin, "--engine",
-                          engine, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
-    wall = time.perf_counter() - t0
-    if p is None:
-        return {**base, "status": "wall-clock kill", "wall_time": wall}
-    if p.returncode == 0 and result is not None:
-        return {**base, **result, "mem_limit_gb": float(mem_limit_gb), "wall_time": wall}
-    tail = p.stderr.strip().splitlines()[-3:]
-    if any(m in p.stderr for m in _MEMORY_MARKERS) or (mem_limit_gb > 0 and p.returncode == -signal.SIGABRT
-                                                       and "alloc" in p.stderr):
-        status = "memory limit"
-    elif p.returncode < 0:
-        status = f"crashed (signal {-p.returncode}): {' | '.join(tail)}"
-    else:
-        status = f"crashed (exit {p.returncode}): {' | '.join(tail)}"
-    return {**base, "status": status, "wall_time": wall}
+    result = run_fresh("eqrec.studies.p3.size_run", args, 1.5 * float(time_limit) + wall_margin, "--engine", engine,
+                       env={**os.environ, "OPENBLAS_NUM_THREADS": "1"}, limited=mem_limit_gb > 0)
+    return {**base, **result, "wall_time": time.perf_counter() - t0}
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -40,7 +40,6 @@ from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import full_delay_language, parse_delay_word
 from eqrec.simulate.loop import sample_uncertainty, simulate_run
 from eqrec.bounds.stacking import UncertaintyLayout
-from eqrec.systems.examples import acc_system
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.cost import cost_weights
 from eqrec.design.delay.design import FreeMu1Result, delay_language, design_delay, design_delay_global
@@ -53,7 +52,7 @@ from eqrec.design.prefix.design import design_prefix
 from eqrec.design.result import Design
 from eqrec.estimators.kalman import GaussianDesign, make_filter
 from eqrec.simulate.filter_runs import compare_with_bounds, error_maps, truncated_normal_deltas
-from eqrec.systems.examples import BATCH_REACTOR_AC, BATCH_REACTOR_BC, batch_reactor, batch_reactor_matrices
+from eqrec.systems.examples import BATCH_REACTOR_AC, BATCH_REACTOR_BC, acc_system, batch_reactor, batch_reactor_matrices
 from eqrec.studies.pipeline.logs import Progress, get_logger
 from eqrec.studies.pipeline.outputs import write_csv, write_json, write_npz, write_text
 
@@ -196,14 +195,14 @@ def _design_summary(design: Design) -> dict:
     worst cases per node (from the gains alone) against the designed levels."""
     rows = level_table(design)
     inner = [r for r in rows if 0 < r["k"] < design.T]
-    top = max(inner, key=lambda r: r["level"]) if inner else None
-    ratio = max(r["certified"] / r["level"] for r in inner) if inner else 1.0
+    top = max(inner, key=lambda r: r["level"], default={"prefix": None, "k": None})
     return {"mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"), "cost": design.extra.get("cost"),
             "sequences": design.extra.get("sequences"), "nodes": len(rows) - 1, "classes": design.extra.get("classes"),
             "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
-            "argmax_prefix": None if top is None else top["prefix"], "argmax_depth": None if top is None else top["k"],
+            "argmax_prefix": top["prefix"], "argmax_depth": top["k"],
             "certified_mu2": design.certificate.mu2, "certified_terminal": design.certificate.terminal,
-            "J_certified": design.extra.get("J_certified"), "max_certified_over_level": float(ratio)}
+            "J_certified": design.extra.get("J_certified"),
+            "max_certified_over_level": float(max((r["certified"] / r["level"] for r in inner), default=1.0))}
 
 
 def _free_summary(res: FreeMu1Result) -> dict:
@@ -214,8 +213,7 @@ def _free_summary(res: FreeMu1Result) -> dict:
                           "lower_margin": res.mu1_min.lower_margin, "binding": res.mu1_min.binding}
     if res.route == "ipopt":
         pol = res.extra.get("polished", {})
-        out.update(status=res.extra["status"], iterations=res.extra["iterations"],
-                   mu1_of_gains=res.extra["mu1_of_gains"], start_mu1=res.extra["start_mu1"],
+        out.update({key: res.extra[key] for key in ("status", "iterations", "mu1_of_gains", "start_mu1")},
                    polished={"mu1": pol.get("mu1"), "J": pol.get("J")})
     return out
 
@@ -234,17 +232,16 @@ def step_reactor_designs(cfg, inputs, outputs, wildcards) -> dict:
     ip = design_delay_ipopt(system, words, kind="delay", cost=cost, start_mu1=float(br["ipopt_start_mu1"]))
     log.info("ipopt: mu1 = %.6f, J = %.6f, max mu2 = %.6f", ip.mu1, ip.J, ip.mu2)
     A2_norm = no_data_growth(system, 2)
-    res: dict = {"words": len(words), "cost": cost, "global": _free_summary(g), "ipopt": _free_summary(ip),
-                 "compare": compare_free_routes(g, ip), "A2_inf_norm": A2_norm}
-    res["global"]["vertex_attainment"] = vertex_attainment(system, g.design, x0)
-    res["global"]["levels"] = level_table(g.design)
-    readings = []
+    res: dict = {"words": len(words), "cost": cost,
+                 "global": {**_free_summary(g), "vertex_attainment": vertex_attainment(system, g.design, x0),
+                            "levels": level_table(g.design)},
+                 "ipopt": _free_summary(ip), "compare": compare_free_routes(g, ip), "A2_inf_norm": A2_norm,
+                 "readings": []}
     for mu1 in br["mu1_readings"]:
         log.info("reading mu1 = %g (fixed, LP)", mu1)
         d = design_delay(system, words, float(mu1), kind="delay", cost=cost)
-        readings.append({"mu1": float(mu1), **_design_summary(d), "A2_bound": A2_norm * float(mu1),
-                         "vertex_attainment": vertex_attainment(system, d, x0)})
-    res["readings"] = readings
+        res["readings"].append({"mu1": float(mu1), **_design_summary(d), "A2_bound": A2_norm * float(mu1),
+                                "vertex_attainment": vertex_attainment(system, d, x0)})
     # no data at times 0 and 1 (a word starting with delays >= 2, >= 1): ξ(2) = A² ξ0 for every estimator
     res["no_data_prefix"] = {"exists": any(parse_delay_word(w).available(1) == () for w in words),
                              "bound_over_mu1": A2_norm, "global_mu2_over_mu1": g.mu2 / g.mu1}
@@ -308,12 +305,11 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
     design = design_for_f1(cfg, system)
     mu1 = design.mu1
     pat = parse_delay_word(f1["true_pattern"])
-    T = pat.T
     x0 = np.asarray(f1["x0"], float)
-    lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
-    radius = lay.radius(system.eta_w, system.eta_v, mu1)
+    lay = UncertaintyLayout(pat.T, system.nw, system.nv, system.n)
     rng = np.random.default_rng(int(f1["seed"]))
-    deltas = truncated_normal_deltas(lay, radius, rng, int(f1["runs"]), sigmas=float(f1["sigmas"]))
+    deltas = truncated_normal_deltas(lay, lay.radius(system.eta_w, system.eta_v, mu1), rng, int(f1["runs"]),
+                                     sigmas=float(f1["sigmas"]))
     levels = path_levels(design, pat)
     wc = word_certificate(design, pat)
     proposed = np.stack([simulate_run(system, design.schedule, pat, d, x0).error for d in deltas])
@@ -328,10 +324,10 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
     gd = GaussianDesign.from_box(system, mu1, float(f1["sigmas"]))
     for name in f1["filters"]:
         log.info("filter %s: exact worst case and %d runs", name, len(deltas))
-        filt = make_filter(name, system, gd, horizon=T, max_delay=int(cfg["batch_reactor"]["max_delay"]),
+        filt = make_filter(name, system, gd, horizon=pat.T, max_delay=int(cfg["batch_reactor"]["max_delay"]),
                            x0_mean=x0)
         maps = error_maps(filt, system, pat, x0, mu1)
-        entry = {}
+        entry = res["filters"][name] = {}
         for est in ("prediction", "filtered"):
             cmp = compare_with_bounds(maps, wc.bounds, levels, deltas, estimate=est)
             errors = arrays[f"{name}_{est}_errors"] = maps.errors(deltas, est)
@@ -347,11 +343,9 @@ def step_kalman(cfg, inputs, outputs, wildcards) -> dict:
             # the worst-case vertex of the largest excess attains the exact bound
             t = int(np.argmax(np.asarray(cmp["worst_norm"]) / levels[:n_t]))
             i = int(np.argmax(cmp["worst"][t]))
-            v = maps.worst_vertex(t, i, est)
-            entry[est]["vertex"] = {"t": t, "i": i, "attain_gap": float(abs(abs(maps.errors(v, est)[0, t, i])
-                                                                           - cmp["worst"][t, i]))}
+            attained = maps.errors(maps.worst_vertex(t, i, est), est)[0, t, i]
+            entry[est]["vertex"] = {"t": t, "i": i, "attain_gap": float(abs(abs(attained) - cmp["worst"][t, i]))}
             arrays[f"{name}_{est}_worst"] = cmp["worst"]
-        res["filters"][name] = entry
     write_json(outputs.json, res)
     write_npz(outputs.npz, compressed=True, **arrays)
     return res
@@ -375,12 +369,9 @@ def step_acc(cfg, inputs, outputs, wildcards) -> dict:
                  "p1_prefix": {"mu2": p1.mu2, "certified_mu2": p1.certificate.mu2}, "fixed": {}, "free": {}}
     for cost in ("sum", "max"):
         d = design_delay(system, words, mu1, kind="delay", cost=cost)
-        s = _design_summary(d)
-        lv = d.levels or {}
-        s["levels_at_max"] = sum(1 for v in lv.values() if v >= d.mu2 * (1 - 1e-6))
-        s["levels_below_max"] = sum(1 for v in lv.values() if v < d.mu2 * (1 - 1e-6))
-        s["difference_to_p1"] = abs(d.mu2 - p1.mu2)
-        out["fixed"][cost] = s
+        at_max = [v >= d.mu2 * (1 - 1e-6) for v in (d.levels or {}).values()]
+        out["fixed"][cost] = {**_design_summary(d), "levels_at_max": sum(at_max),
+                              "levels_below_max": len(at_max) - sum(at_max), "difference_to_p1": abs(d.mu2 - p1.mu2)}
     for cost in cfg["acc"]["free_costs"]:
         log.info("ACC, mu1 free, cost %s (global route)", cost)
         g = design_delay_global(system, words, kind="delay", cost=cost)
@@ -400,20 +391,17 @@ def step_acc_simulate(cfg, inputs, outputs, wildcards) -> dict:
     pat = parse_delay_word(ac["true_pattern"])
     T = pat.T
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
-    radius = lay.radius(system.eta_w, system.eta_v, mu1)
     rng = np.random.default_rng(int(sim["seed"]))
-    deltas = sample_uncertainty(lay, radius, rng, sim["noise"], size=int(sim["runs"]))
+    deltas = sample_uncertainty(lay, lay.radius(system.eta_w, system.eta_v, mu1), rng, sim["noise"],
+                                size=int(sim["runs"]))
     x0 = np.asarray(sim["x0"], float)
     u = np.full((T, system.m), float(sim["input_force"]))
-    errs = {name: np.stack([simulate_run(system, d.schedule, pat, dl, x0, u).error for dl in deltas])
-            for name, d in (("proposed", proposed), ("prefix", prefix))}
-    b_prop = word_certificate(proposed, pat).bounds
-    cert_p = certify_schedule(system, prefix.schedule, [pat], mu1)
-    b_pref = next(iter(cert_p.words.values())).bounds
-    arrays = {"proposed_errors": errs["proposed"], "prefix_errors": errs["prefix"],
-              "proposed_levels": path_levels(proposed, pat),
-              "prefix_levels": np.array([mu1] + [prefix.mu2] * (T - 1) + [mu1]),
-              "proposed_bounds": b_prop, "prefix_bounds": b_pref, "mu1": mu1,
-              "proposed_mu2": proposed.mu2, "prefix_mu2": prefix.mu2}
+    arrays = {f"{name}_errors": np.stack([simulate_run(system, d.schedule, pat, dl, x0, u).error for dl in deltas])
+              for name, d in (("proposed", proposed), ("prefix", prefix))}
+    arrays.update(proposed_levels=path_levels(proposed, pat),
+                  prefix_levels=np.array([mu1] + [prefix.mu2] * (T - 1) + [mu1]),
+                  proposed_bounds=word_certificate(proposed, pat).bounds,
+                  prefix_bounds=next(iter(certify_schedule(system, prefix.schedule, [pat], mu1).words.values())).bounds,
+                  mu1=mu1, proposed_mu2=proposed.mu2, prefix_mu2=prefix.mu2)
     write_npz(outputs.npz, compressed=True, **arrays)
     return arrays

@@ -115,14 +115,8 @@ def _ratio_evidence(runs: dict[str, LongRun], T: int | None) -> dict:
         ev[f"max_ratio_after_start_{kind}"] = float(r.ratio[1:].max())
         if T:
             ev[f"max_ratio_boundary_{kind}"] = float(r.ratio[::T].max())
-    ev["max_ratio"] = max(r.max_ratio for r in runs.values())
-    ev["steps"] = int(min(r.delays.size for r in runs.values()))
-    ev["ratio_tol"] = RATIO_TOL
-    return ev
-
-
-def _within(ratio: float) -> str:
-    return "inside" if ratio <= 1.0 + RATIO_TOL else "outside"
+    return {**ev, "max_ratio": max(r.max_ratio for r in runs.values()),
+            "steps": int(min(r.delays.size for r in runs.values())), "ratio_tol": RATIO_TOL}
 
 
 def _long_runs(st: dict, seed_offset: int, what: str, run) -> tuple[dict[str, LongRun], float]:
@@ -147,8 +141,7 @@ def _periodic(system: AffineSystem, design: Design, words, st: dict, seed_offset
                   path_levels=partial(path_levels, design), x0=x0, **drive)
     runs, run_time = _long_runs(st, seed_offset, f"periodic {system.name}", run)
     gap = max(periodic_model_gap(r, system, design.schedule) for r in runs.values())
-    ev = _ratio_evidence(runs, T)
-    ev.update(T=T, periods=periods, mu1=design.mu1, max_mu2=design.mu2, words=len(words),
+    ev = dict(_ratio_evidence(runs, T), T=T, periods=periods, mu1=design.mu1, max_mu2=design.mu2, words=len(words),
               sequences=len(design.patterns), model_gap=gap, dropped_late=sum(len(r.dropped) for r in runs.values()),
               certificate_excess=certificate_excess(design), run_time_s=run_time)
     return {"runs": runs, "evidence": ev}
@@ -166,8 +159,6 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     rc, ac, sw = st["reactor"], st["acc"], st["switching"]
     cost = st["cost"]
     t_start = time.perf_counter()
-    arrays: dict = {}
-    values: dict = {}
 
     # --- batch reactor, periodic reuse
     reactor = batch_reactor()
@@ -211,12 +202,11 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
         long_run_switching, reactor, d_p.schedule, d_s.schedule, int(st["steps"]), mu1=mu1_s,
         recovery_level=partial(node_level, d_s), max_delay=tb, p_on_time=float(sw["p_on_time"]), x0=x0_r,
         controller=controller))
-    sw_ev = _ratio_evidence(sw_runs, None)
     perf = [float(r.ratio[1:][~r.recovering].max()) for r in sw_runs.values() if (~r.recovering).any()]
     rec = [float(r.ratio[1:][r.recovering].max()) for r in sw_runs.values() if r.recovering.any()]
-    sw_ev.update(mu1=mu1_s, performance_mu2=d_p.mu2, recovery_max_mu2=d_s.mu2, recovery_words=len(rec_words),
-                 recovery_sequences=len(d_s.patterns), T=T, p_on_time=float(sw["p_on_time"]),
-                 switches=int(sum(len(r.switch_times) for r in sw_runs.values())),
+    sw_ev = dict(_ratio_evidence(sw_runs, None), mu1=mu1_s, performance_mu2=d_p.mu2, recovery_max_mu2=d_s.mu2,
+                 recovery_words=len(rec_words), recovery_sequences=len(d_s.patterns), T=T,
+                 p_on_time=float(sw["p_on_time"]), switches=int(sum(len(r.switch_times) for r in sw_runs.values())),
                  reverts=int(sum(len(r.revert_times) for r in sw_runs.values())),
                  recovery_fraction=float(np.mean([r.recovering.mean() for r in sw_runs.values()])),
                  max_ratio_performance=max(perf, default=0.0), max_ratio_recovery=max(rec, default=0.0),
@@ -225,11 +215,12 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
                  run_time_s=sw_time)
 
     # --- values
-    ev_r, ev_a = per_r["evidence"], per_a["evidence"]
-    for name, ev, keys in (("periodic_reactor", ev_r, ("max_ratio_after_start_uniform", "model_gap")),
-                           ("periodic_acc", ev_a, ("model_gap",)),
+    values: dict = {}
+    for name, ev, keys in (("periodic_reactor", per_r["evidence"], ("max_ratio_after_start_uniform", "model_gap")),
+                           ("periodic_acc", per_a["evidence"], ("model_gap",)),
                            ("switching", sw_ev, ("max_ratio_performance", "max_ratio_recovery"))):
-        values[f"{name}_within"] = {"value": _within(ev["max_ratio"]), "evidence": ev}
+        values[f"{name}_within"] = {"value": "inside" if ev["max_ratio"] <= 1.0 + RATIO_TOL else "outside",
+                                    "evidence": ev}
         values[f"{name}_max_ratio"] = {"value": ev["max_ratio"], "evidence": {
             k: ev[k] for k in ("steps", "ratio_tol", *keys) if k in ev}}
     values["performance_period1_status"] = {"value": status_at_mu1, "evidence": {
@@ -243,18 +234,15 @@ def step_strategy(cfg, inputs, outputs, wildcards) -> dict:
     values["strategy_time_s"] = {"value": time.perf_counter() - t_start, "evidence": {"steps": int(st["steps"])}}
 
     # --- arrays for the figure
+    arrays: dict = {}
     for label, runs, Ts, T_ in (("reactor_periodic", per_r["runs"], BATCH_REACTOR_TS, T),
                                 ("acc_periodic", per_a["runs"], float(ACC_CONSTANTS["Ts"]), d_a.T),
                                 ("reactor_switching", sw_runs, BATCH_REACTOR_TS, T)):
         for kind, r in runs.items():
-            key = f"{label}_{kind}"
-            arrays[f"{key}_error"] = r.error
-            arrays[f"{key}_level"] = r.level
-            arrays[f"{key}_recovering"] = r.recovering
-            arrays[f"{key}_switch"] = np.asarray(r.switch_times, int)
-            arrays[f"{key}_revert"] = np.asarray(r.revert_times, int)
-        arrays[f"{label}_T"] = T_
-        arrays[f"{label}_Ts"] = Ts
+            arrays.update({f"{label}_{kind}_{name}": a for name, a in (
+                ("error", r.error), ("level", r.level), ("recovering", r.recovering),
+                ("switch", np.asarray(r.switch_times, int)), ("revert", np.asarray(r.revert_times, int)))})
+        arrays.update({f"{label}_T": T_, f"{label}_Ts": Ts})
     write_npz(outputs.npz, compressed=True, noise=np.array(list(st["noise"])), reactor_mu1=mu1, acc_mu1=d_a.mu1,
               switching_mu1=mu1_s, **arrays)
     write_json(outputs.values, values, timings=outputs.timings)

@@ -22,15 +22,8 @@ SAME_RTOL = 1e-6
 
 def _compare_bounds(a: np.ndarray, b: np.ndarray, rtol: float = SAME_RTOL) -> str:
     """``"first"`` if ``a <= b`` at every time and lower somewhere, ``"second"`` the reverse, ``"equal"`` or ``"mixed"``."""
-    lower = a < b * (1 - rtol)
-    higher = a > b * (1 + rtol)
-    if not lower.any() and not higher.any():
-        return "equal"
-    if lower.any() and not higher.any():
-        return "first"
-    if higher.any() and not lower.any():
-        return "second"
-    return "mixed"
+    lower, higher = bool((a < b * (1 - rtol)).any()), bool((a > b * (1 + rtol)).any())
+    return {(False, False): "equal", (True, False): "first", (False, True): "second"}.get((lower, higher), "mixed")
 
 
 def _pick(entry: dict, *keys: str, prefix: str = "") -> dict:
@@ -62,23 +55,18 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
         "count": len(seqs), "sequences": [r["event_sequence"] for r in seqs]}}
     v["lang_reduced_count"] = {"value": len(seqs), "evidence": {"from_words": ex["sizes"]["L"]}}
     v["lang_prefixes_1"] = {"value": ", ".join(seqs[0]["prefixes"]), "evidence": {"alpha": 1}}
-    shared = [s for s in ex["shared_prefixes"] if s["alphas"][:2] == [1, 2]]
-    v["lang_shared_prefix_12"] = {"value": shared[0]["prefix"] if shared else "none", "evidence": {
-        "length": shared[0]["length"] if shared else 0, "all_shared": ex["shared_prefixes"]}}
-    for k in (0, 1):
-        s = seqs[k]
-        v[f"lang_E{k + 1}"] = {"value": s["event_matrix"], "evidence": {"sequence": s["event_sequence"]}}
-        v[f"lang_M{k + 1}_pattern"] = {"value": pattern_text(s["M_pattern"]), "evidence": {
+    shared = next((s for s in ex["shared_prefixes"] if s["alphas"][:2] == [1, 2]), {"prefix": "none", "length": 0})
+    v["lang_shared_prefix_12"] = {"value": shared["prefix"], "evidence": {
+        "length": shared["length"], "all_shared": ex["shared_prefixes"]}}
+    for k, s in enumerate(seqs[:2], 1):
+        v[f"lang_E{k}"] = {"value": s["event_matrix"], "evidence": {"sequence": s["event_sequence"]}}
+        v[f"lang_M{k}_pattern"] = {"value": pattern_text(s["M_pattern"]), "evidence": {
             "L_pattern": pattern_text(s["L_pattern"]), "sequence": s["event_sequence"]}}
-    counts = {f"{c['T']},{c['max_delay']}": c for c in lang["counts"]}
-    T_br, tb_br = cfg["batch_reactor"]["horizon"], cfg["batch_reactor"]["max_delay"]
-    v["br_classes"] = {"value": br["global"]["classes"], "evidence": {
-        "words": br["words"], "sequences": br["global"]["sequences"], "nodes": br["global"]["nodes"],
-        "T": T_br, "max_delay": tb_br}}
-    v["br_words"] = {"value": br["words"], "evidence": {
-        "sequences": br["global"]["sequences"], "nodes": br["global"]["nodes"], "T": T_br, "max_delay": tb_br,
-        "counts": {k: {"words": c["words"], "sequences": c["sequences"], "nodes": c["nodes"]}
-                   for k, c in counts.items()}}}
+    language = {**_pick(br["global"], "sequences", "nodes"), "T": cfg["batch_reactor"]["horizon"],
+                "max_delay": cfg["batch_reactor"]["max_delay"]}
+    v["br_classes"] = {"value": br["global"]["classes"], "evidence": {"words": br["words"], **language}}
+    v["br_words"] = {"value": br["words"], "evidence": {**language, "counts": {
+        f"{c['T']},{c['max_delay']}": _pick(c, "words", "sequences", "nodes") for c in lang["counts"]}}}
 
     # P3-BR: discretisation
     for name in ("A", "B"):
@@ -87,22 +75,18 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
 
     # P3-BR: designs
     g, ip, cmp = br["global"], br["ipopt"], br["compare"]
-    readings = br["readings"]
-    rd = readings[0] if readings else {}
-    A2 = br["A2_inf_norm"]
     design_ev = {
-        **_pick(g, "J", "lower_bound", "gap"), "mu1_min_lower": g["mu1_min"]["lower"],
-        "mu1_min_upper": g["mu1_min"]["upper"], "binding_class": g["mu1_min"]["binding"]["class"],
-        "binding_row": g["mu1_min"]["binding"]["row"], "classes": g["classes"],
+        **_pick(g, "J", "lower_bound", "gap"), **_pick(g["mu1_min"], "lower", "upper", prefix="mu1_min_"),
+        **_pick(g["mu1_min"]["binding"], "class", "row", prefix="binding_"), "classes": g["classes"],
         **_pick(ip, "mu1", "J", "mu2", "status", prefix="ipopt_"), **_pick(cmp, "better", "tolerance"),
         **_pick(g, "certified_mu2", "certified_terminal", "max_certified_over_level", "nodes"),
         "vertex_gap": g["vertex_attainment"]["max_gap"], "vertex_runs": g["vertex_attainment"]["runs"],
-        "sequences": g["sequences"], "A2_inf_norm": A2, "mu2_over_mu1": g["mu2"] / g["mu1"],
+        "sequences": g["sequences"], "A2_inf_norm": br["A2_inf_norm"], "mu2_over_mu1": g["mu2"] / g["mu1"],
         **_pick(g, "argmax_prefix", "argmax_depth"), "no_data_prefix": br["no_data_prefix"]["exists"],
-        **_pick(rd, "mu1", "mu2", "A2_bound", "certified_mu2", prefix="reading_")}
+        **_pick((br["readings"] or [{}])[0], "mu1", "mu2", "A2_bound", "certified_mu2", prefix="reading_")}
     for key, value in (("br_mu1", g["mu1"]), ("br_max_mu2", g["mu2"]), ("br_J", g["J"])):
         v[key] = {"value": value, "evidence": design_ev}
-    for k, r in enumerate(readings):  # the configured readings of μ1, in config order
+    for k, r in enumerate(br["readings"]):  # the configured readings of μ1, in config order
         v[f"br_reading_{k}_max_mu2"] = {"value": r["mu2"], "evidence": {
             **_pick(r, "mu1", "A2_bound", "certified_mu2", "certified_terminal"),
             "vertex_gap": r["vertex_attainment"]["max_gap"], **_pick(r, "argmax_prefix", "J")}}
@@ -146,9 +130,8 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
     fs, fm = acc["fixed"]["sum"], acc["fixed"]["max"]
     p1_mu2 = acc["p1_prefix"]["mu2"]
     acc_ev = {"p1_prefix_mu2": p1_mu2, "max_cost_mu2": fm["mu2"], "difference_sum": fs["difference_to_p1"],
-              "difference_max": fm["difference_to_p1"], "certified_mu2": fs["certified_mu2"],
-              "certified_terminal": fs["certified_terminal"], "missing_data_language": acc["missing_data_language"],
-              "mu1": acc["mu1"]}
+              "difference_max": fm["difference_to_p1"], **_pick(fs, "certified_mu2", "certified_terminal"),
+              **_pick(acc, "missing_data_language", "mu1")}
     v["acc_mu2"] = {"value": fs["mu2"], "evidence": acc_ev}
     same = max(fs["difference_to_p1"], fm["difference_to_p1"]) <= SAME_RTOL * p1_mu2
     v["acc_same_as_prefix"] = {"value": "same" if same else "different", "evidence": acc_ev}
@@ -164,8 +147,7 @@ def step_values(cfg, inputs, outputs, wildcards) -> dict:
 
     # P3-F2
     b_prop, b_pref = sim["proposed_bounds"].max(axis=1), sim["prefix_bounds"].max(axis=1)
-    e_prop = np.abs(sim["proposed_errors"]).max(axis=2)
-    e_pref = np.abs(sim["prefix_errors"]).max(axis=2)
+    e_prop, e_pref = (np.abs(sim[f"{name}_errors"]).max(axis=2) for name in ("proposed", "prefix"))
     v["f2_better"] = {"value": _f2_verdict(b_prop, b_pref), "evidence": {
         "proposed_bound": b_prop.tolist(), "prefix_bound": b_pref.tolist(),
         "proposed_levels": sim["proposed_levels"].tolist(), "prefix_levels": sim["prefix_levels"].tolist(),
