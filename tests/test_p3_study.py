@@ -201,6 +201,12 @@ def test_bad_config_names_file_and_field(override, field):
     assert field in str(err.value) and "config/p3.yaml" in str(err.value).replace("--config", "config/p3.yaml")
 
 
+def test_a_schema_error_says_what_the_field_is_for():
+    """The schema's description of the failing field is part of the message (a pole set needs n = 4 poles)."""
+    with pytest.raises(configuration.ConfigError, match=r"poles\.1.*too long: a pole set of L needs 4 poles"):
+        configuration.load_config("p3", root=ROOT, overrides={"p3": {"augmented": {"poles": [[0.1] * 4, [0.1] * 5]}}})
+
+
 def test_strategy_and_scale_sections_are_validated_with_defaults():
     """strategy (P3-IMPL) and scale sections: defaults filled in, a misspelt top-level key names itself."""
     cfg = configuration.load_config("p3", root=ROOT, overrides={"p3": {"strategy": {"steps": 10}}})

@@ -54,9 +54,6 @@ def check_p3(cfg: dict) -> None:
         raise InputError("must have the length of the words of acc.language", field="acc.true_pattern")
     if parse_delay_word(acc["true_pattern"]) not in set(map(parse_delay_word, acc["language"])):
         raise InputError("is not a word of acc.language (up to its event sequence)", field="acc.true_pattern")
-    for k, poles in enumerate(cfg["augmented"]["poles"]):
-        if len(poles) != 4:
-            raise InputError("needs 4 poles (the batch reactor has n = 4)", field=f"augmented.poles.{k}")
 
 
 def check_p4(cfg: dict) -> None:

@@ -124,12 +124,15 @@ def field_source(path: Sequence[Any], configfiles: Sequence[str | Path] = (), ov
 
 
 def _config_error(err: Any, configfiles: Sequence[str | Path], overrides: Mapping | None) -> ConfigError:
-    """The jsonschema error ``err`` as a :class:`ConfigError` naming the file and the field (an unknown key's own)."""
+    """The jsonschema error ``err`` as a :class:`ConfigError` naming the file and the field (an unknown key's own),
+    with the failing field's ``description`` from the schema when it has one."""
     path, msg = list(err.absolute_path), err.message
     if err.validator == "additionalProperties":
         known = list(err.schema.get("properties", {}))
         path.append(min((k for k in err.instance if k not in known), key=str))
         msg = f"unknown {'configuration section' if len(path) == 1 else 'key'} {path[-1]!r} (known: {', '.join(known)})"
+    elif "description" in err.schema:  # what the failing field is for, from the schema
+        msg = f"{msg}: {err.schema['description']}"
     schema = f"config/schemas/{path[0]}.schema.yaml" if path and path[0] in SECTIONS else SCHEMA
     return ConfigError(f"{msg} (schema {schema})", field_source(path, configfiles, overrides), ".".join(map(str, path)))
 
