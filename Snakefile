@@ -51,13 +51,13 @@ except configuration.ConfigError as exc:
 # The template of every rule that runs a step (`use rule step as p1_model with:`
 # gives the files, log and params): the one script, which runs the step named by
 # the params through eqrec.studies.pipeline.harness. Not a target of its own.
-# The script's path is relative to the rules files, where the inheriting rules are.
+# The script by its full path (a relative one would be read from each rules file).
 rule step:
     """Template of the step rules: runs the step its params name (not a target)."""
     log:
         "logs/step.log",
     script:
-        "../scripts/run_step.py"
+        f"{workflow.basedir}/workflow/scripts/run_step.py"
 
 
 include: "workflow/rules/common.smk"

@@ -52,9 +52,16 @@ def test_every_rule_names_a_step_function_and_runs_it_through_the_one_script():
     for smk in RULES.glob("*.smk"):
         assert "shell:" not in smk.read_text() and "python -m" not in smk.read_text(), smk.name
     template = re.search(r"^rule step:\n(.*?)\n\n", (ROOT / "Snakefile").read_text(), flags=re.S | re.M).group(1)
-    assert "output:" not in template and 'script:\n        "../scripts/run_step.py"' in template
+    assert "output:" not in template and 'script:\n        f"{workflow.basedir}/workflow/scripts/run_step.py"' in template
     script = (ROOT / "workflow" / "scripts" / "run_step.py").read_text()
     assert "run_from_snakemake(snakemake)" in script
+
+
+def test_the_template_rule_asked_for_by_name_says_what_it_is(tmp_path):
+    """`snakemake step` (the Snakefile's template) stops with a one-line explanation, not a traceback."""
+    smk = SimpleNamespace(params=SimpleNamespace(), rule="step", log=[str(tmp_path / "step.log")])
+    with pytest.raises(SystemExit, match="template of the rules that do"):
+        harness.run_from_snakemake(smk)
 
 
 def test_study_modules_have_no_command_line_and_no_defaults_table():

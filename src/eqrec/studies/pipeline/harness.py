@@ -258,7 +258,10 @@ def run_from_snakemake(smk) -> None:
     a failure is logged with its traceback and reported on the terminal in
     one line (step, and for a configuration problem the file and field).
     """
-    step = smk.params.step
+    step = getattr(smk.params, "step", None)
+    if step is None:  # the Snakefile's template, asked for by name (snakemake step)
+        sys.exit(f"rule {smk.rule} runs no step of its own: it is the template of the rules that do "
+                 "(use rule step as ... with:); ask for one of them, e.g. `snakemake p1`")
     with _fds_to(smk.log[0] if len(smk.log) else None) as terminal:
         try:
             run_step(step, getattr(smk.params, "cfg", {}), smk.input, smk.output, dict(smk.wildcards.items()),
