@@ -60,6 +60,25 @@ def same_scale_per_row(axes) -> None:
             ax.set_ylim(-lim, lim)
 
 
+def equalized_levels(T: int, mu1: float, mu2: float) -> np.ndarray:
+    """The guarantee of an equalized-recovery design along ``t = 0..T``: ``mu1`` at ``t = 0`` and ``t = T``,
+    ``mu2`` in between (Definition 2 of the prefix-based paper).
+
+    Parameters
+    ----------
+    T : int
+        The horizon.
+    mu1, mu2 : float
+        The recovery and intermediate levels.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(T+1,)``.
+    """
+    return np.r_[mu1, np.full(T - 1, mu2), mu1]
+
+
 def guarantee_bars(ax, levels: Sequence[float], label: str | None = "guarantee") -> None:
     """Draw the guarantee ``|ξ_i(t)| <= level(t)`` as clear bars, one per time step.
 

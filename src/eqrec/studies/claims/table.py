@@ -49,6 +49,7 @@ to ``results/timings/claims.csv``.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from decimal import Decimal
@@ -210,11 +211,12 @@ def _values_file(values: Sequence[str | Path] | str | Path, ref_file: str) -> Pa
     raise FileNotFoundError(f"values file {ref_file} needed by a claim is not among the inputs {list(values)}")
 
 
-def _lookup_value(values: Sequence[str | Path] | str | Path, ref: str) -> tuple[Any, dict]:
-    """Our value and its evidence (``ref``: ``p1/values.json#key``)."""
+def _lookup_value(values: Sequence[str | Path] | str | Path, ref: str,
+                  read: Callable[[Path], Any]) -> tuple[Any, dict]:
+    """Our value and its evidence (``ref``: ``p1/values.json#key``); ``read`` parses a values file."""
     file, _, key = ref.partition("#")
     path = _values_file(values, file)
-    data = json.loads(path.read_text())
+    data = read(path)
     if key not in data:
         raise KeyError(f"{path} has no value '{key}'")
     item = data[key]
@@ -259,9 +261,10 @@ def build_claims_table(claims_path: str | Path, values: Sequence[str | Path] | s
     reasons = REASONS if reasons is None else reasons
     claims = load_claims(claims_path, reasons)
     published = {e["id"]: _number(e["paper_value"]) for e in claims}  # for a reason that cites another claim's
+    read = functools.cache(lambda path: json.loads(path.read_text()))  # each values file parsed once
     rows = []
     for entry in claims:
-        ours, evidence = _lookup_value(values, entry["value"])
+        ours, evidence = _lookup_value(values, entry["value"], read)
         status, tol = compare_one(entry, ours)
         ctx = {**evidence, "value": ours, "paper": _number(entry["paper_value"]), "tol": _tolerance(entry),
                "published": published}

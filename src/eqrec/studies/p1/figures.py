@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from eqrec.studies.pipeline.outputs import save_figure
-from eqrec.studies.plotting import paper_style, pyplot, same_scale_per_row, trajectory_panel
+from eqrec.studies.plotting import equalized_levels, paper_style, pyplot, same_scale_per_row, trajectory_panel
 
 
 def step_figure1(cfg, inputs, outputs, wildcards) -> None:
@@ -25,8 +25,7 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     for col, method, name in ((0, "prefix", "Prefix-based"), (1, "time", "Time-based")):
         errs = data[f"{method}_errors"]
         mu2 = float(data[f"{method}_mu2"])
-        levels = [mu1] + [mu2] * (errs.shape[1] - 2) + [mu1]  # M1 at t = 0 and T, M2 at the times between
-        trajectory_panel(axes[:, col], errs, levels,
+        trajectory_panel(axes[:, col], errs, equalized_levels(errs.shape[1] - 1, mu1, mu2),
                          f"{name} estimator\n$M_1$ = {mu1:g}, $M_2^*$ = {mu2:.4f}", ylabels=(col == 0))
     same_scale_per_row(axes)
     handles, labels = axes[0, 0].get_legend_handles_labels()

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from eqrec.studies.pipeline.outputs import save_figure
-from eqrec.studies.plotting import paper_style, pyplot, same_scale_per_row, trajectory_panel
+from eqrec.studies.plotting import equalized_levels, paper_style, pyplot, same_scale_per_row, trajectory_panel
 
 
 #: The readings of the paper's text (:mod:`eqrec.studies.p2.readings`) in words, for titles and legends.
@@ -48,8 +48,7 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
     f, axes = plt.subplots(3, len(cols), figsize=(2.25 * len(cols) + 0.5, 6.6), sharex=True, sharey="row",
                            squeeze=False, layout="constrained")
     for j, (name, title, mu2, color) in enumerate(cols):
-        levels = np.r_[mu1, np.full(T - 1, mu2), mu1]  # mu1 at the start and the end, mu2 in between
-        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], levels,
+        trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], equalized_levels(T, mu1, mu2),
                          f"{title}\ncertified $\\mu_2$ = {mu2:.4g}", color=color, ylabels=(j == 0))
         for ax in axes[:, j]:
             for sign in (1, -1):

@@ -74,7 +74,8 @@ class Files(list):
             return cls(**obj)
         if hasattr(obj, "_names"):  # snakemake.io.Namedlist: its named entries, the others positional
             named = {k: (v if isinstance(v, str) else list(v)) for k, v in obj.items()}
-            return cls([p for p in obj if p not in Files(**named)], **named)
+            in_named = set(Files(**named))
+            return cls([p for p in obj if p not in in_named], **named)
         return cls(obj)
 
     def __getattr__(self, name: str) -> str | list[str]:
