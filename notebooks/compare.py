@@ -36,8 +36,8 @@
 #   re-filtering) and `Kalman, delay-unaware` (a packet used as a measurement of
 #   the time it arrives).
 # * `LMV, zero-input` and `LMV, hold-input`: the LMV companion study's one-step
-#   predictor for Bernoulli arrivals at the on-time rate $\bar\eta = (1 -
-#   \text{loss})/(D+1)$; a late packet counts as lost.
+#   predictor for Bernoulli arrivals at the on-time rate $\bar\eta = (1 - \text{loss})/(D+1)$;
+#   a late packet counts as lost.
 #
 # **Traces.** Each measurement is lost with the setting's probability
 # (independently, or in Gilbert bursts of the given mean length with the same

@@ -223,7 +223,8 @@ def test_cli_jobs_and_scheduler(tmp_path, capsys):
 
 
 def test_scale_free_step_writes_values_timings_and_figure(tmp_path, monkeypatch):
-    """The p3_scale target's mu1-free scaling: values in results, times and memory in the timings, a figure."""
+    """The p3_scale target's mu1-free scaling: values in results, times and memory in the timings, and the figure
+    drawn from those two by its own step."""
     from types import SimpleNamespace
 
     import eqrec.studies.p3.free_table as free
@@ -237,6 +238,9 @@ def test_scale_free_step_writes_values_timings_and_figure(tmp_path, monkeypatch)
     assert len({line.split(",", 4)[-1] for line in values[1:]}) == 1  # the same values for every configuration
     assert (tmp_path / "timings_csv.csv").read_text().startswith("tau,T,config,wall_time,peak_mb")
     assert "| 2 | 5 | 18 | blocks-2 |" in (tmp_path / "timings_md.md").read_text()
+    from eqrec.studies.p3.figures import step_scale_free_figure
+
+    step_scale_free_figure({}, SimpleNamespace(csv=out.csv, timings=out.timings_csv), out, None)
     assert (tmp_path / "png.png").stat().st_size > 0 and (tmp_path / "pdf.pdf").stat().st_size > 0
 
 

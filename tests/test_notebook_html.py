@@ -49,3 +49,39 @@ def test_the_stored_html_has_no_raw_tex_in_its_text(path):
     html = path.read_text()
     prose = re.sub(r"<(pre|code|math)\b.*?</\1>", "", html, flags=re.S)  # code and maths aside
     assert not re.search(r"(?<![\\$])\$[^$<>\n]*\\[A-Za-z]+[^$<>\n]*\$", prose), "TeX left for a script to render"
+
+
+def _prose(html: str) -> str:
+    """The page's text outside code, maths, style sheets and embedded images."""
+    html = re.sub(r"<(pre|code|math|style)\b.*?</\1>", "", html, flags=re.S)
+    return re.sub(r"data:image/[a-z]+;base64,[A-Za-z0-9+/=]*", "", html)
+
+
+@pytest.mark.parametrize("path", HTML, ids=[p.name for p in HTML])
+def test_the_stored_html_has_its_maths_as_mathml_and_no_dollar_left(path):
+    html = path.read_text()
+    body = _prose(html.split("<body", 1)[1])
+    assert "$" not in body, body[max(0, body.index("$") - 80):body.index("$") + 80]
+    source = (ROOT / "notebooks" / f"{path.stem}.py").read_text()
+    if re.search(r"^#.*\$[^$\n]+\$", source, flags=re.M):  # maths in a markdown cell: drawn as MathML
+        assert html.count("<math") >= 5
+
+
+@pytest.mark.parametrize("path", HTML, ids=[p.name for p in HTML])
+def test_every_image_of_the_stored_html_has_a_caption_as_alt_text(path):
+    imgs = re.findall(r"<img\b[^>]*>", path.read_text())
+    assert imgs
+    for img in imgs:
+        alt = re.search(r"""\balt=(["'])(.*?)\1""", img)  # the page's HTML quotes with ' a value holding a "
+        assert alt and len(alt.group(2)) > 80 and "No description" not in alt.group(2), img[:120]
+
+
+def test_an_image_output_with_alt_metadata_gets_it_as_its_alt():
+    png = ("iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==")
+    out = nbformat.v4.new_output("display_data", data={"image/png": png, "text/plain": "<Figure>"},
+                                 metadata={"image/png": {"alt": 'Fig. 1 & "its" caption'}})
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("1", outputs=[out])])
+    html = offline_html(nb, "alt")
+    assert """alt='Fig. 1 &amp; "its" caption'""" in html and "No description" not in html  # escaped, quoted
+    del out.metadata["image/png"]
+    assert "No description has been provided" in offline_html(nb, "alt")  # nbconvert's default, without one

@@ -82,7 +82,7 @@ use rule step as p1_figure_ext with:
         "logs/p1/figure_ext.log",
     params:
         step="eqrec.studies.p1.figures:step_figure_ext",
-        cfg=step_config("p1", "extensions.T_max"),
+        cfg=step_config("p1", "extensions.T_max language"),
 
 
 use rule step as p1_values with:

@@ -262,8 +262,6 @@ use rule step as p3_scale_free with:
         csv="results/p3/scale_free.csv",
         timings_csv="results/timings/p3/scale_free.csv",
         timings_md="results/timings/p3/scale_free.md",
-        pdf="results/p3/fig_scale_free.pdf",
-        png="results/p3/fig_scale_free.png",
     log:
         "logs/p3/scale_free.log",
     threads: 2
@@ -272,11 +270,27 @@ use rule step as p3_scale_free with:
         cfg=step_config("p3", "scale.time_limit"),
 
 
+use rule step as p3_scale_free_figure with:
+    """The mu1-free scaling figure: design time against the number of classes, from its values and timings."""
+    input:
+        csv=rules.p3_scale_free.output.csv,
+        timings=rules.p3_scale_free.output.timings_csv,
+        code=code_inputs("eqrec.studies.p3.figures:step_scale_free_figure"),
+    output:
+        **figure("results/p3/fig_scale_free", "p3_scale_free", "P3"),
+    log:
+        "logs/p3/scale_free_figure.log",
+    params:
+        step="eqrec.studies.p3.figures:step_scale_free_figure",
+        cfg=step_config("p3"),
+
+
 rule p3_scale:
     """Full P3 scale table with the slow tree sizes and the mu1-free scaling (outside `all`; up to 16 GB)."""
     input:
         rules.p3_scale_table_full.output,
         rules.p3_scale_free.output,
+        rules.p3_scale_free_figure.output,
 
 
 rule p3:

@@ -10,6 +10,9 @@ working directory, and write
   ``snakemake --report``), readable offline: its maths is MathML made at build
   time and it loads no script from the network (:mod:`eqrec.studies.notebooks.html`).
 
+Every figure of the report a notebook shows carries the report's caption
+(``workflow/report/``) as its alt text (:func:`add_alt_text`).
+
 Both files depend only on the notebook and the results it reads: cell ids are
 ``cell-0``, ``cell-1``, ...; no execution timestamps, kernel ids or jupytext
 versions; consecutive stream outputs are merged (how a kernel splits printed
@@ -24,7 +27,9 @@ A cell that raises fails the step with one line naming the notebook, the cell
 
 from __future__ import annotations
 
+import base64
 import os
+import re
 import tempfile
 import time
 from pathlib import Path
@@ -59,7 +64,7 @@ READS: dict[str, list[str]] = {
     "p3_delayed": [*(f"results/p3/{f}" for f in (
         "languages.json", "reactor_model.json", "reactor_designs.json", "augmented.json", "kalman.json", "acc.json",
         "values.json", "examples.md", "language_counts.csv", "fig1_kalman.png", "fig2_acc.png", "scale_table.csv",
-        "fig_strategy.png", "strategy_values.json"))],
+        "fig_scale_free.png", "fig_strategy.png", "strategy_values.json"))],
     "p4_lmv": [*(f"results/p4/{f}" for f in (
         "values.json", "mc_ex1.json", "mc_ex2.json", "fig1_filter.png", "fig2_predictor.png", "fig3_smoother.png",
         "fig4_variances.png", "fig5_eta.png", "fig6_q.png", "regions.png", "fig7_compare_ex1.png",
@@ -72,9 +77,102 @@ for _files in READS.values():  # every notebook reads the claims table
     _files.append("results/claims.csv")
 
 
+#: The report captions (``<name>.rst``) and the rules that attach them to figures.
+CAPTIONS_DIR, RULES_DIR = Path("workflow") / "report", Path("workflow") / "rules"
+# a figure in the report: ``figure("<stem>", "<caption>", ...)`` or ``in_report("<path>.png", "<caption>", ...)``
+_REPORTED = re.compile(r'(?:\bfigure\(\s*"(?P<stem>[^"]+)"|\bin_report\(\s*"(?P<path>[^"]+\.png)")\s*,\s*"(?P<caption>\w+)"')
+
+
+def reported_figures(root: str | Path = ".") -> dict[str, str]:
+    """The PNG figures the report shows, as ``{path pattern: caption name}``, read from the workflow's rules.
+
+    Parameters
+    ----------
+    root : str or Path, optional
+        The repository root.
+
+    Returns
+    -------
+    dict
+        Keys are paths under ``results/`` with the rule's wildcards (``results/p2/{fig}_trajectories.png``),
+        values the names of their captions in :data:`CAPTIONS_DIR`.
+    """
+    found = {}
+    for rules in sorted((Path(root) / RULES_DIR).glob("*.smk")):
+        for m in _REPORTED.finditer(rules.read_text()):
+            found[m["path"] or f"{m['stem']}.png"] = m["caption"]
+    return found
+
+
+def figure_caption(png: str, root: str | Path = ".") -> str | None:
+    """The report's caption of figure ``png`` (a path under ``results/``) as plain text, or ``None``.
+
+    The caption's Jinja (``{% if snakemake.wildcards.x == ... %}``) is rendered with the wildcards the path
+    matches, and its reStructuredText literals (````x````) become plain text.
+
+    Parameters
+    ----------
+    png : str
+        The figure's path relative to the repository root.
+    root : str or Path, optional
+        The repository root.
+
+    Returns
+    -------
+    str or None
+        The caption, or ``None`` when the report does not show the figure.
+    """
+    from types import SimpleNamespace
+
+    import jinja2
+
+    for pattern, caption in reported_figures(root).items():
+        regex = re.sub(r"\\\{(\w+)\\\}", r"(?P<\1>[^/]+?)", re.escape(pattern))
+        m = re.fullmatch(regex, png)
+        if m:
+            text = (Path(root) / CAPTIONS_DIR / f"{caption}.rst").read_text()
+            text = jinja2.Template(text).render(snakemake=SimpleNamespace(wildcards=SimpleNamespace(**m.groupdict())))
+            return " ".join(text.replace("``", "").split())
+    return None
+
+
+def add_alt_text(nb, figures: list[str], root: str | Path = ".") -> int:
+    """Give every PNG output that shows one of ``figures`` its report caption as alt text (in place).
+
+    An output shows a figure when its bytes are the file's (``IPython.display.Image(filename=...)``).
+
+    Parameters
+    ----------
+    nb : nbformat.NotebookNode
+        The executed notebook.
+    figures : list of str
+        Paths (relative to ``root``) of the figures the notebook may show.
+    root : str or Path, optional
+        The repository root.
+
+    Returns
+    -------
+    int
+        The number of images given a caption.
+    """
+    by_bytes = {(Path(root) / f).read_bytes(): f for f in figures if f.endswith(".png")}
+    done = 0
+    for cell in nb.cells:
+        for out in cell.get("outputs", []):
+            data = out.get("data", {})
+            path = by_bytes.get(base64.b64decode(data["image/png"])) if "image/png" in data else None
+            caption = figure_caption(path, root) if path else None
+            if caption:
+                out.setdefault("metadata", {}).setdefault("image/png", {})["alt"] = caption
+                done += 1
+    return done
+
+
 def rule_inputs(wildcards) -> dict[str, str | list[str]]:
-    """The inputs of the rule running notebook ``wildcards.name``: its source and the result files it reads."""
-    return {"notebook": f"notebooks/{wildcards.name}.py", "results": list(READS[wildcards.name])}
+    """The inputs of the rule running notebook ``wildcards.name``: its source, the result files it reads, and the
+    report's captions and rules (the alt text of its figures)."""
+    return {"notebook": f"notebooks/{wildcards.name}.py", "results": list(READS[wildcards.name]),
+            "captions": sorted(str(p) for p in (*CAPTIONS_DIR.glob("*.rst"), *RULES_DIR.glob("*.smk")))}
 
 
 class NotebookError(StepError):
@@ -153,6 +251,8 @@ def step_execute(cfg, inputs, outputs, wildcards):
     t0 = time.perf_counter()
     nb = execute(inputs.notebook, workdir=Path.cwd())
     log.info("%s executed in %.1f s", inputs.notebook, time.perf_counter() - t0)
+    captioned = add_alt_text(nb, list(getattr(inputs, "results", None) or []))
+    log.info("%s: %d figures carry their caption as alt text", inputs.notebook, captioned)
     nbformat.validate(nb)
     write_text(outputs.ipynb, nbformat.writes(nb, version=4) + "\n")
     write_text(outputs.html, offline_html(nb, Path(inputs.notebook).stem))

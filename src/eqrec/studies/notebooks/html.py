@@ -14,11 +14,20 @@ from __future__ import annotations
 import copy
 import re
 
-#: nbconvert's ``lab`` page without the blocks that load require.js, MathJax and mermaid from the network.
+#: nbconvert's ``lab`` page without the blocks that load require.js, MathJax and mermaid from the network; a PNG
+#: output's ``alt`` metadata (the figure's caption, :func:`eqrec.studies.notebooks.execute.add_alt_text`) becomes
+#: the ``alt`` of its image.
 OFFLINE_TEMPLATE = """{%- extends 'index.html.j2' -%}
 {%- block html_head_js -%}{%- endblock html_head_js -%}
 {%- block html_head_js_mathjax -%}{%- endblock html_head_js_mathjax -%}
 {%- block html_head_js_mermaidjs -%}{%- endblock html_head_js_mermaidjs -%}
+{% block data_png scoped %}
+<div class="jp-RenderedImage jp-OutputArea-output {{ extra_class }}">
+{%- set alttext = output | get_metadata('alt', 'image/png') %}
+<img src="data:image/png;base64,{{ output.data['image/png'] | escape_html }}"
+{%- if alttext %} alt="{{ alttext | escape_html }}"{% endif %}>
+</div>
+{%- endblock data_png %}
 """
 
 # code spans (left alone), display maths, inline maths; a dollar escaped as \$ is text

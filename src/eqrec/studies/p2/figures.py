@@ -188,8 +188,11 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
     extra = "masked_gain" in variants and "certified_mu2" in df
     npanel = len(variants) + int(extra)
     nrows = (npanel + 2) // 2  # two columns, and one more cell for the legend
-    f, axes = plt.subplots(nrows, 2, figsize=(7.2, 2.05 * nrows + 0.2), squeeze=False, layout="constrained")
+    # "compressed": the maps (equal aspect) packed together, the colour bar next to them, not a column away
+    f, axes = plt.subplots(nrows, 2, figsize=(7.2, 2.3 * nrows + 0.2), squeeze=False, layout="compressed")
     axes = axes.ravel()
+    for ax in axes:
+        ax.tick_params(labelsize=9)
     legend: dict[str, object] = {}
     for ax, var in zip(axes, variants):
         g = df[df["variant"] == var]
@@ -204,7 +207,9 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
                     va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.5",
                                                    "boxstyle": "round,pad=0.3"})
     # one colour bar for the maps, its ticks including the paper's value (labelled as such; the norm includes it)
-    cb = f.colorbar(pm, ax=list(axes[:len(variants)]), label=r"design LP optimum $\mu_2$ (all four maps)", shrink=0.7)
+    cb = f.colorbar(pm, ax=list(axes[:len(variants)]), label=r"design LP optimum $\mu_2$ (all four maps)", shrink=0.7,
+                    pad=0.01)
+    cb.ax.tick_params(labelsize=9)
     lo, hi = pm.norm.vmin, pm.norm.vmax
     ticks = sorted([t for t in MaxNLocator(6).tick_values(lo, hi)
                     if lo <= t <= hi and abs(t - paper) > 0.06 * (hi - lo)] + [paper])
@@ -220,6 +225,7 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
                      f"{hi:.3g}", fontsize=8)
         cax = ax.inset_axes((1.06, 0.0, 0.06, 1.0))  # as tall as the map (the axes keep their aspect)
         cb = f.colorbar(pm2, cax=cax, label="certified worst case\n(log scale)")
+        cb.ax.tick_params(labelsize=9)
         ticks = [lo] + [t for t in (5, 10, 20, 50, 100) if 1.3 * lo < t < hi / 1.8] + [hi]
         cb.set_ticks(ticks, labels=[f"{t:.3g}" for t in ticks])
         cb.minorticks_off()

@@ -19,8 +19,7 @@ from eqrec.studies.plotting import STATE_LABELS_ACC, paper_style, pyplot, trajec
 
 # the linearised batch reactor's states are dimensionless deviations (Sec. IV-A of the delayed-data paper)
 STATE_LABELS_REACTOR = tuple(rf"$\tilde x_{i}$ [–]" for i in range(1, 5))
-FILTER_TITLES = {"timestamped": "Time-stamped Kalman\n(re-filtering)", "unaware": "Delay-unaware\nKalman",
-                 "random_delay_lmv": "Random-delay LMV\n(ref. [9])"}
+FILTER_TITLES = {"timestamped": "Time-stamped KF", "unaware": "Delay-unaware KF", "random_delay_lmv": "Random-delay LMV"}
 
 
 def step_figure1(cfg, inputs, outputs, wildcards) -> None:
@@ -35,18 +34,21 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     def verdict(n: str) -> str:  # whether the runs of filter n stay inside the levels; its exact worst case's verdict
         inside = np.all(np.abs(data[f"{n}_prediction_errors"]) <= levels[None, :, None] + 1e-12)
         worst = res["filters"][n]["prediction"]["verdict"]
-        return f"runs {'inside' if inside else 'OUTSIDE'}, exact worst\ncase {worst}"
+        return f"runs {'in' if inside else 'OUT'}, worst {'in' if worst == 'inside' else 'out'}"
 
     # (title, errors, exact worst case, colour) per column
-    cols = [("Proposed estimator\nruns and worst case inside", data["proposed_errors"], data["proposed_bounds"], "C0")]
+    cols = [("Proposed estimator\nruns in, worst in", data["proposed_errors"], data["proposed_bounds"], "C0")]
     cols += [(f"{FILTER_TITLES.get(n, n)}\n{verdict(n)}", data[f"{n}_prediction_errors"], data[f"{n}_prediction_worst"],
               "C3") for n in res["filters"]]
-    fig, axes = plt.subplots(4, len(cols), figsize=(1.8 * len(cols) + 0.7, 7.4), sharex=True, sharey="row",
-                             squeeze=False, layout="constrained")
+    fig, axes = plt.subplots(4, len(cols), figsize=(min(7.0, 1.6 * len(cols) + 0.6), 7.4), sharex=True,
+                             sharey="row", squeeze=False, layout="constrained")
     for c, (title, errs, worst, color) in enumerate(cols):
         trajectory_panel(axes[:, c], errs, levels, title, state_labels=STATE_LABELS_REACTOR, color=color,
                          ylabels=(c == 0))
         worst_case_lines(axes[:, c], worst, "exact worst case")
+        for ax in axes[:, c]:
+            ax.tick_params(labelsize=9)
+    axes[-1, 0].xaxis.set_major_locator(pyplot().MaxNLocator(integer=True))
     # one scale per state across the estimators: the same quantity, compared
     for i in range(axes.shape[0]):
         lim = 1.1 * max(max(np.max(levels), np.max(worst[:, i]), np.max(np.abs(errs[:, :, i])))
@@ -62,7 +64,8 @@ def step_figure1(cfg, inputs, outputs, wildcards) -> None:
     fig.legend(handles, labels, loc="outside lower center", ncol=2)
     fig.suptitle(f"Batch reactor, true delay pattern {res['true_pattern']}, {res['runs']} runs (truncated normal, "
                  f"bound = {res['sigmas']:g} sigma):\nerrors and the guarantees $\\mu_{{2,k}}$ "
-                 f"($\\mu_1$ = {res['mu1']:.4f}); the same scale in each row")
+                 f"($\\mu_1$ = {res['mu1']:.4f}); the same scale in each row;\ntitles: runs and exact worst case in or "
+                 "out of the guarantee; KF: Kalman filter, LMV: ref. [9]")
     save_figure(fig, outputs.pdf, outputs.png)
 
 
@@ -154,4 +157,54 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
     fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncol=3)
     fig.suptitle(f"P3 implementation strategy: estimation errors and per-time guarantees\n({kind} noise, first "
                  f"{window} steps of each run)")
+    save_figure(fig, outputs.pdf, outputs.png)
+
+
+def step_scale_free_figure(cfg, inputs, outputs, wildcards) -> None:
+    """P3 scale, ``μ1`` free: design time against the number of classes (log-log), one line per configuration
+    of :func:`eqrec.studies.p3.free_table.step_scale_free`, from its values (``inputs.csv``) and measured times
+    (``inputs.timings``).
+
+    Each point of the two-worker line is labelled ``(τ̄, T)``, the language ``{0..τ̄}^T`` (largest delay, then
+    horizon), below the line; the one block LP ends at
+    :data:`eqrec.studies.p3.free_table.FREE_MONOLITHIC_MAX_CLASSES` classes (it takes minutes beyond), which its
+    legend entry says.
+    """
+    import pandas as pd
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    from eqrec.studies.p3.free_table import FREE_MONOLITHIC_MAX_CLASSES
+
+    paper_style()
+    plt = pyplot()
+    keys = ["tau", "T", "config"]
+    frame = pd.read_csv(inputs.csv).merge(pd.read_csv(inputs.timings), on=keys, validate="one_to_one")
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    styles = {"monolithic": (f"one block LP (1 core; run up to {FREE_MONOLITHIC_MAX_CLASSES:,} classes only)",
+                             "s--"),
+              "blocks-1": ("per class, 1 worker", "o-"), "blocks-2": ("per class, 2 workers", "^-")}
+    for config, (label, style) in styles.items():
+        part = frame[(frame["config"] == config) & (frame["status"] == "optimal")].sort_values("classes")
+        if len(part):
+            ax.plot(part["classes"], part["wall_time"], style, label=label, ms=4)
+    # labels under the lowest line; two sizes with close class counts: one label to the left, one to the right
+    low = frame[frame["config"] == "blocks-2"].sort_values("classes").reset_index(drop=True)
+    for k, r in low.iterrows():
+        close_next = k + 1 < len(low) and low["classes"][k + 1] < 1.25 * r["classes"]
+        close_prev = k > 0 and r["classes"] < 1.25 * low["classes"][k - 1]
+        ha, dx = ("right", -1) if close_next else ("left", 1) if close_prev else ("center", 0)
+        ax.annotate(f"({r['tau']}, {r['T']})", (r["classes"], r["wall_time"]), textcoords="offset points",
+                    xytext=(dx, -11), ha=ha, va="center", fontsize=8)
+    lo, hi = frame["classes"].min(), frame["classes"].max()
+    ax.set(xscale="log", yscale="log", xlim=(lo / 1.2, hi * 1.4),
+           ylim=(frame["wall_time"].min() / 2.5, frame["wall_time"].max() * 1.6),
+           xticks=[300, 500, 1000, 2000, 4000], xlabel="number of classes (time, available data)",
+           ylabel=r"design time, $\mu_1$ free [s]",
+           title=r"Batch reactor, language $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(plt.Line2D([], [], ls=""))
+    labels.append(r"point labels: $(\bar\tau, T)$, largest delay and horizon")
+    fig.legend(handles, labels, loc="outside lower center", ncol=2)
     save_figure(fig, outputs.pdf, outputs.png)

@@ -9,7 +9,7 @@ language ``{0..τ̄}^T`` (:func:`eqrec.design.delay.design.design_delay_global`)
 * ``results/p3/scale_free.csv``: ``μ1``, ``J``, ``μ2`` and the lower bound of ``J`` per size and configuration
   (1 and 2 workers: the same bytes; the one block LP: the same optimum to the last digits);
 * ``results/timings/p3/scale_free.csv`` and ``.md``: the wall time and peak memory of each (measurements);
-* ``results/p3/fig_scale_free.{pdf,png}``: time against classes, log-log, one line per configuration.
+(the figure, time against classes, is drawn from these by :func:`eqrec.studies.p3.figures.step_scale_free_figure`).
 
 ``cfg``: the ``p3`` section; ``scale.time_limit`` bounds each process (three times it, wall clock).
 """
@@ -23,8 +23,7 @@ from eqrec.studies.p3.scale_table import md_table
 from eqrec.studies.p3.size_run import class_count
 from eqrec.systems.examples import batch_reactor
 from eqrec.studies.pipeline.logs import get_logger
-from eqrec.studies.pipeline.outputs import save_figure, write_csv, write_text
-from eqrec.studies.plotting import paper_style, pyplot
+from eqrec.studies.pipeline.outputs import write_csv, write_text
 
 log = get_logger("p3")
 
@@ -55,7 +54,6 @@ def step_scale_free(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     frame = pd.DataFrame(rows).reindex(columns=list(FREE_FIELDS))
     write_csv(outputs.csv, frame, timings=outputs.timings_csv, keys=["tau", "T", "config"])
     write_text(outputs.timings_md, free_markdown(frame))
-    free_figure(frame, outputs)
     return frame
 
 
@@ -78,36 +76,3 @@ def free_markdown(frame: pd.DataFrame) -> str:
             "mu1 free (design_delay_global), one fresh process per row; wall time from the window rule to the "
             "certified design, worker start included; peak memory of the process or its largest worker.\n\n"
             + md_table(head, rows))
-
-
-def free_figure(frame: pd.DataFrame, outputs) -> None:
-    """Time against classes (log-log), one line per configuration: ``outputs.pdf`` and ``outputs.png``.
-
-    Parameters
-    ----------
-    frame : pandas.DataFrame
-        Columns :data:`FREE_FIELDS`.
-    outputs : snakemake.io.Namedlist
-        ``pdf`` and ``png`` paths.
-    """
-    plt = pyplot()
-    paper_style()
-    fig, ax = plt.subplots(figsize=(5.0, 3.4))
-    styles = {"monolithic": ("one block LP (1 core)", "s--"), "blocks-1": ("per class, 1 worker", "o-"),
-              "blocks-2": ("per class, 2 workers", "^-")}
-    for config, (label, style) in styles.items():
-        part = frame[(frame["config"] == config) & (frame["status"] == "optimal")].sort_values("classes")
-        if len(part):
-            ax.plot(part["classes"], part["wall_time"], style, label=label, ms=4)
-    for r in frame[frame["config"] == "blocks-2"].itertuples(index=False):
-        ax.annotate(f"({r.tau},{r.T})", (r.classes, r.wall_time), textcoords="offset points", xytext=(3, -9),
-                    fontsize=6)
-    from matplotlib.ticker import NullFormatter, ScalarFormatter
-
-    ax.set(xscale="log", yscale="log", xticks=[300, 500, 1000, 2000, 4000], xlabel="classes (time, available data)",
-           ylabel=r"design time, $\mu_1$ free [s]",
-           title=r"Batch reactor $\{0..\bar\tau\}^T$, $\mu_1$ free: the class engine")
-    ax.xaxis.set_major_formatter(ScalarFormatter())
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.legend()
-    save_figure(fig, outputs.pdf, outputs.png)

@@ -22,6 +22,10 @@ def _plt():
 UNIT = "[–]"
 #: Half-width of the Monte Carlo bands in standard errors (a 95 % normal interval).
 Z_BAND = 1.96
+#: Colour (Okabe-Ito, told apart with every common colour-vision deficiency), line style and marker of each
+#: estimator or mechanism: a curve is recognised by its style and marker as well as its colour (Figs. 4, 5, 7, 8).
+STYLE = {"pred": ("#D55E00", "--", "s"), "filt": ("#0072B2", "-", "o"), "smooth": ("#009E73", "-.", "^"),
+         "zero": ("#0072B2", "-", "o"), "hold": ("#D55E00", "--", "s")}
 
 
 def _time_panels(n: int, width: float, per_panel: float, extra: float):
@@ -45,49 +49,54 @@ def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: floa
     save_figure(fig, pdf, png)
 
 
-def _mc_band(ax, t: np.ndarray, mc: np.ndarray, se: np.ndarray, color: str, every: int = 4) -> None:
-    """Monte Carlo estimates (markers, every ``every``-th step) with their ``± Z_BAND`` standard-error band."""
+def _mc_band(ax, t: np.ndarray, mc: np.ndarray, se: np.ndarray, style: tuple, every: int = 4) -> None:
+    """Monte Carlo estimates (markers, every ``every``-th step) with their ``± Z_BAND`` standard-error band,
+    in the ``(colour, line style, marker)`` ``style`` of their curve."""
+    color, _, marker = style
     ax.fill_between(t, mc - Z_BAND * se, mc + Z_BAND * se, color=color, alpha=0.18, lw=0)
-    ax.plot(t[::every], mc[::every], "o", ms=2.6, color=color, mfc="none", mew=0.8)
+    ax.plot(t[::every], mc[::every], marker, ls="", ms=2.8, color=color, mfc="none", mew=0.8)
 
 
-def _mc_legend(fig, rows: list[tuple[str, str]], runs: int) -> None:
-    """One entry per curve (its colour: line, markers and band together), then what line, markers and band are."""
+def _mc_legend(fig, rows: list[tuple[str, tuple]], runs: int) -> None:
+    """One entry per curve (its style: line, markers and band together), then what line, markers and band are."""
     from matplotlib.legend_handler import HandlerTuple
     from matplotlib.patches import Patch
 
     Line2D = pyplot().Line2D
 
-    def keys(col):  # band, line, markers of one colour
-        return (Patch(color=col, alpha=0.18, lw=0), Line2D([], [], color=col),
-                Line2D([], [], ls="", marker="o", ms=2.6, color=col, mfc="none"))
+    def keys(style):  # band, line, markers of one curve
+        col, ls, marker = style
+        return (Patch(color=col, alpha=0.18, lw=0), Line2D([], [], color=col, ls=ls),
+                Line2D([], [], ls="", marker=marker, ms=2.8, color=col, mfc="none"))
 
-    band, line, markers = keys("0.3")
+    band, line, markers = keys(("0.3", "-", "o"))
     labels = [label for label, _ in rows] + [
         "line: theory", f"markers: Monte Carlo, {runs} runs (every 4th step);\n"
                         f"band: its 95 % interval (± {Z_BAND:g} standard errors)"]
-    fig.legend([keys(col) for _, col in rows] + [line, (band, markers)], labels, loc="outside lower center", ncol=2,
-               handler_map={tuple: HandlerTuple(ndivide=1)})
+    fig.legend([keys(style) for _, style in rows] + [line, (band, markers)], labels, loc="outside lower center",
+               ncol=2, handler_map={tuple: HandlerTuple(ndivide=1)})
 
 
 def _theory_mc_figure(d, se, rows: tuple, what: str, width: float, per_panel: float, extra: float):
     """Theory (lines) and Monte Carlo (markers, 95 % band) against time, one panel per component, one curve per
-    row ``(mechanism, estimator, label, colour)`` of ``rows``; returns the figure and its panels."""
+    row ``(mechanism, estimator, label, style)`` of ``rows`` (``style``: colour, line style, marker); returns the
+    figure and its panels."""
     fig, axes = _time_panels(d["zero/theory_filt"].shape[1], width, per_panel, extra)
     t = d["t"]
     for i, ax in enumerate(axes):
-        for mech, est, _, col in rows:
-            ax.plot(t, d[f"{mech}/theory_{est}"][:, i], color=col)
-            _mc_band(ax, t, d[f"{mech}/mc_{est}"][:, i], se[f"{mech}/se_{est}"][:, i], col)
+        for mech, est, _, style in rows:
+            ax.plot(t, d[f"{mech}/theory_{est}"][:, i], color=style[0], ls=style[1])
+            _mc_band(ax, t, d[f"{mech}/mc_{est}"][:, i], se[f"{mech}/se_{est}"][:, i], style)
         ax.set_ylabel(rf"{what} of $x_{i + 1}$ {UNIT}")
-    _mc_legend(fig, [(label, col) for *_, label, col in rows], int(se["runs"]))
+    _mc_legend(fig, [(label, style) for *_, label, style in rows], int(se["runs"]))
     return fig, axes
 
 
 def fig_variances(d, se, N: int, eta: float, pdf: str, png: str) -> None:
     """Fig. 4: theoretical (lines) and Monte Carlo (markers, 95 % band) error variances, zero-input."""
-    rows = (("zero", "pred", "one-step predictor $P(t|t-1)$", "C3"), ("zero", "filt", "filter $P(t|t)$", "C0"),
-            ("zero", f"smooth{N}", f"{N}-step smoother $P(t|t+{N})$", "C2"))
+    rows = (("zero", "pred", "one-step predictor $P(t|t-1)$", STYLE["pred"]),
+            ("zero", "filt", "filter $P(t|t)$", STYLE["filt"]),
+            ("zero", f"smooth{N}", f"{N}-step smoother $P(t|t+{N})$", STYLE["smooth"]))
     fig, axes = _theory_mc_figure(d, se, rows, "error variance", 5.4, 2.0, 1.2)
     axes[0].set_title(rf"Estimation error variances, zero-input, $\bar\eta$ = {eta:g}")
     save_figure(fig, pdf, png)
@@ -100,9 +109,10 @@ def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None
     n = d[f"{ex}/zero/filt"].shape[1]
     fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.3), layout="constrained", squeeze=False)
     for i, ax in enumerate(axes[0]):
-        for key, label, col in (("pred", "one-step predictor", "C3"), ("filt", "filter", "C0"),
-                                ("smooth", f"{N}-step smoother", "C2")):
-            ax.plot(etas, d[f"{ex}/zero/{key}"][:, i], color=col, label=label)
+        for key, label in (("pred", "one-step predictor"), ("filt", "filter"), ("smooth", f"{N}-step smoother")):
+            col, ls, marker = STYLE[key]
+            ax.plot(etas, d[f"{ex}/zero/{key}"][:, i], color=col, ls=ls, marker=marker, ms=3.2, mfc="none",
+                    mew=0.8, markevery=max(1, len(etas) // 8), label=label)
         ax.set_xlabel(r"arrival probability $\bar\eta$")
         ax.set_ylabel(rf"steady error variance of $x_{i + 1}$ {UNIT}")
         ax.set_ylim(0, None)
@@ -113,51 +123,67 @@ def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None
 
 
 def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
-    """Fig. 6: steady filter variance surfaces over (Q_xi, Q_lambda), zero-input."""
+    """Fig. 6: steady filter variance surfaces over (Q_xi, Q_lambda), zero-input; the variance is the height and
+    the colour of a surface, read on the colour bar beside it (the z axis carries only ticks)."""
     plt = _plt()
     F = d[f"{ex}/zero/filt"]
     n = F.shape[-1]
     XI, LA = np.meshgrid(d["qxi"], d["qlam"], indexing="ij")
-    fig = plt.figure(figsize=(3.4 * n, 3.0))
-    for i in range(n):
-        ax = fig.add_subplot(1, n, i + 1, projection="3d")
-        ax.plot_surface(XI, LA, F[..., i], cmap="viridis", linewidth=0.2, edgecolor="k", alpha=0.9)
-        ax.set_xlabel(r"$Q_\xi$")
-        ax.set_ylabel(r"$Q_\lambda$")
-        ax.set_zlabel(rf"filter variance of $x_{i + 1}$ {UNIT}")
+    fig, axes = plt.subplots(1, n, figsize=(3.6 * n, 3.3), layout="constrained", squeeze=False,
+                             subplot_kw={"projection": "3d"})
+    for i, ax in enumerate(axes[0]):
+        surf = ax.plot_surface(XI, LA, F[..., i], cmap="viridis", linewidth=0.2, edgecolor="k", alpha=0.9)
+        ax.set_xlabel(r"$Q_\xi$", labelpad=2)
+        ax.set_ylabel(r"$Q_\lambda$", labelpad=6)
+        ax.tick_params(axis="both", pad=0)
+        ax.set_title(rf"component $x_{i + 1}$", y=0.98)
+        fig.colorbar(surf, ax=ax, shrink=0.65, pad=0.1, label=rf"filter variance of $x_{i + 1}$ {UNIT}")
     fig.suptitle(rf"Steady filtering error variances (zero-input), $0 \leq Q_\xi, Q_\lambda \leq {d['qxi'][-1]:g}$, "
                  rf"$\bar\eta$ = {eta:g}", fontsize=9)
     save_figure(fig, pdf, png)
 
 
+def _ratio_ticks(m: float) -> list[float]:
+    """Colour-bar ticks of a ratio scale from ``1/m`` to ``m``: round values, at most about nine."""
+    grid = (0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98, 1.0, 1.02, 1.05, 1.1, 1.25, 1.5, 1.75, 2.0)
+    ticks = [t for t in grid if 1.0 / m <= t <= m]
+    return ticks if len(ticks) <= 9 else [t for t in ticks if t not in (0.95, 0.98, 1.02, 1.05)]
+
+
 def fig_regions(d: dict, examples: dict, eta_bar: float, pdf: str, png: str) -> None:
     """Extra: where hold-input beats zero-input (trace of the steady filter variance), per example.
 
-    One colour scale for every panel (the same quantity), logarithmic and symmetric about 1, so a ratio ``r``
-    and ``1/r`` are equally strong; the working point of Figs. 7/8 (``Qxi``, ``Qlam`` of ``examples[ex]``, the
-    configured examples, titled by their ``name``) marked.
+    Each panel has its own colour bar (the examples' ratios differ by a decade in spread: on one scale Example 2's
+    variation would not show), logarithmic and symmetric about 1, so a ratio ``r`` and ``1/r`` are equally strong;
+    the working point of Figs. 7/8 (``Qxi``, ``Qlam`` of ``examples[ex]``, the configured examples, titled by their
+    ``name``) marked, the axes reaching a little past the grid so that it sits inside the frame (grey: no data).
     """
     from matplotlib.colors import LogNorm
 
     plt = _plt()
     exs = list(examples)
-    ratios = {ex: d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1) for ex in exs}
-    m = max(1.25, *(max(float(np.nanmax(r)), 1.0 / float(np.nanmin(r))) for r in ratios.values()))
-    # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
-    norm = LogNorm(vmin=1.0 / m, vmax=m)
-    fig, axes = plt.subplots(1, len(exs), figsize=(3.1 * len(exs) + 0.9, 3.4), layout="constrained", squeeze=False)
+    fig, axes = plt.subplots(1, len(exs), figsize=(3.6 * len(exs), 3.6), layout="constrained", squeeze=False)
+    pad = 0.07 * (d["qlam"][-1] - d["qlam"][0]), 0.07 * (d["qxi"][-1] - d["qxi"][0])
     for ax, ex in zip(axes[0], exs):
-        im = ax.pcolormesh(d["qlam"], d["qxi"], ratios[ex], cmap="RdBu_r", norm=norm, shading="auto")
-        ax.contour(d["qlam"], d["qxi"], ratios[ex], levels=[1.0], colors="k", linewidths=1.0)
+        ratio = d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1)
+        m = max(1.02, float(np.nanmax(ratio)), 1.0 / float(np.nanmin(ratio)))
+        # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
+        im = ax.pcolormesh(d["qlam"], d["qxi"], ratio, cmap="RdBu_r", norm=LogNorm(vmin=1.0 / m, vmax=m),
+                           shading="auto")
+        ax.contour(d["qlam"], d["qxi"], ratio, levels=[1.0], colors="k", linewidths=1.0)
         ax.plot([float(examples[ex]["Qlam"])], [float(examples[ex]["Qxi"])], "*", color="gold", mec="k", mew=0.6,
-                ms=11, clip_on=False, zorder=5, label="working point of Figs. 7 and 8")
+                ms=11, zorder=5, label="working point of Figs. 7 and 8")
+        ax.set_xlim(d["qlam"][0] - pad[0], d["qlam"][-1] + pad[0])
+        ax.set_ylim(d["qxi"][0] - pad[1], d["qxi"][-1] + pad[1])
+        ax.set_facecolor("0.75")
+        ax.grid(False)
         ax.set_xlabel(r"$Q_\lambda$ (variance of $\lambda$)")
         ax.set_ylabel(r"$Q_\xi$ (variance of $\xi$)")
         ax.set_title(examples[ex].get("name", ex))
-    cb = fig.colorbar(im, ax=list(axes[0]), label=r"tr $P_{\mathrm{hold}}$ / tr $P_{\mathrm{zero}}$ (filter)")
-    ticks = [t for t in (0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5, 1.75, 2.0) if 1.0 / m <= t <= m]
-    cb.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
-    cb.minorticks_off()
+        cb = fig.colorbar(im, ax=ax, label=r"tr $P_{\mathrm{hold}}$ / tr $P_{\mathrm{zero}}$, log scale")
+        ticks = _ratio_ticks(m)
+        cb.set_ticks(ticks, labels=[f"{t:g}" for t in ticks])
+        cb.minorticks_off()
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend([*handles, plt.Line2D([], [], color="k", lw=1.0)], [*labels, "equal variances (ratio 1)"],
                loc="outside lower center", ncol=2)
@@ -177,7 +203,7 @@ def _verdict(d, T: int) -> tuple[str, float]:
 def fig_compare(d, se, name: str, eta: float, paper: str | None, pdf: str, png: str) -> None:
     """Figs. 7-8: filter error variances of zero- and hold-input, theory (lines) and Monte Carlo (markers, 95 %
     band); the title gives the theoretical verdict and the paper's (``paper``, from ``config/claims.yaml``)."""
-    rows = (("zero", "filt", "zero-input", "C0"), ("hold", "filt", "hold-input", "C3"))
+    rows = (("zero", "filt", "zero-input", STYLE["zero"]), ("hold", "filt", "hold-input", STYLE["hold"]))
     fig, axes = _theory_mc_figure(d, se, rows, "filter variance", 5.6, 1.9, 1.5)
     T = int(np.flatnonzero(np.isfinite(d["zero/theory_filt"][:, 0]))[-1])
     who, gap = _verdict(d, T)
