@@ -1,7 +1,8 @@
 """The class LPs per class (eqrec.design.classes.blocks): same optimum as the one block LP, the same bytes whatever the
-workers, the batching and the backend (local processes or a real Dask cluster), inputs checked, progress quiet off a
-terminal."""
+workers, the batching and the backend (local processes or a real Dask cluster), inputs checked, progress as one line per
+stage off a terminal."""
 import io
+import re
 import json
 
 import numpy as np
@@ -193,11 +194,16 @@ def test_run_tasks_keeps_task_order_and_counts_progress():
     finally:
         parallel.sys.stderr = progress_stream
     assert out == [0, 1, 4, 9, 16]
-    assert buf.getvalue().endswith("items: 10 / 10\n")
+    assert re.search(r"\ritems: 10 / 10 \[#{24}\] 100% \(\d+ s\)\n$", buf.getvalue())
 
 
-def test_progress_quiet_off_a_terminal(capsys):
-    Progress(3, "classes").advance(3)  # pytest's stderr is not a terminal
+def test_progress_one_line_per_stage_off_a_terminal(capsys):
+    progress = Progress(3, "classes")  # pytest's stderr is not a terminal: a line at the start and one at the end
+    progress.advance(2)
+    assert capsys.readouterr().err == "classes: 0 / 3 ...\n"
+    progress.advance(1)
+    assert re.fullmatch(r"classes: 3 / 3 in \d+\.\d s\n", capsys.readouterr().err)
+    Progress(3, "classes", enabled=False).advance(3)
     assert capsys.readouterr().err == ""
 
 

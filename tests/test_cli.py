@@ -313,7 +313,10 @@ def test_delay_mu1_free_engines_agree(capsys):
     base = ["design", str(SYSTEM), "--method", "delay", "--delays", ACC_DELAYS, "--mu1", "free"]
     d = _run_json(capsys, base)
     t = _run_json(capsys, [*base, "--engine", "tree"])
-    assert t["engine"] == "tree" and t["mu1"] == d["mu1"]
+    # the same μ1,min; the tree LP's round-off may leave a terminal worst case a few ulps above it, and μ1 is then
+    # raised to what its gains certify (eqrec.bounds.certify): equal to 1e-12, never below μ1,min
+    assert t["engine"] == "tree" and t["mu1"] == pytest.approx(d["mu1"], rel=1e-12)
+    assert min(t["mu1"], d["mu1"]) >= d["mu1_free"]["mu1_min"]["upper"] * (1 - 1e-15)
     assert t["J"] == pytest.approx(d["J"], rel=1e-6) and t["mu2"] == pytest.approx(d["mu2"], rel=1e-6)
     assert t["mu1_free"]["lower_bound"] <= t["J"] <= t["mu1_free"]["lower_bound"] * (1 + 1e-4)
 

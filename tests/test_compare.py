@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from eqrec.compare.families import BOUNDED
 from eqrec.compare import COLUMNS, FAMILIES, CompareSetup, compare_families, draw_trace, write_table
 from eqrec.arrivals.draws import NEVER
 from eqrec.errors import InputError
@@ -18,18 +19,22 @@ def reactor_result():
                                                           seed=3))
 
 
-def test_every_family_has_a_row_and_the_guaranteed_ones_hold(reactor_result):
+def test_every_family_has_a_row_and_every_bound_holds(reactor_result):
     table = reactor_result.table
     assert list(table["estimator"]) == list(FAMILIES)
     assert list(table.columns[:len(COLUMNS)]) == list(COLUMNS)
-    guaranteed = table[table["estimator"].str.startswith("guaranteed")]
-    assert (guaranteed["violations"] == 0).all()
-    assert (guaranteed["max_error"] <= guaranteed["bound"]).all()
-    assert (guaranteed["outside_design"] > 0).any()  # the traces did leave the language at loss 0.2
-    others = table[~table["estimator"].str.startswith("guaranteed")]
+    bounded = table[table["estimator"].isin(BOUNDED) & table["rms"].notna()]
+    assert len(bounded) >= 4  # the zonotope, both Kalman filters and at least one design
+    assert (bounded["violations"] == 0).all()
+    assert (bounded["max_error"] <= bounded["bound"]).all()
+    assert (bounded["bound_over_limit_median"] >= 1 - 1e-9).all()  # no bound below the information limit
+    missing = table[table["rms"].isna()]  # a design that does not exist is a row saying why
+    assert missing["design"].str.startswith("no design").all()
+    others = table[~table["estimator"].isin(BOUNDED)]
     assert others["bound"].isna().all() and others["violations"].isna().all()
     for family, err in reactor_result.errors.items():
         assert err.shape == (12, 20) and np.all(np.isfinite(err))
+    assert reactor_result.limit.shape == (12, 20) and np.all(reactor_result.limit > 0)
 
 
 def test_the_table_is_the_errors_it_summarises(reactor_result):
@@ -44,6 +49,7 @@ def test_in_the_language_the_class_engine_stays_in_design():
     row = result.table.set_index("estimator").loc[FAMILIES[0]]
     assert row["outside_design"] == 0 and row["violations"] == 0
     assert row["bound"] <= result.mu1[FAMILIES[0]] * 10
+    assert row["design"] == "delays 0..1, at most 0 of 4 lost"
 
 
 def test_traces_follow_the_settings():
@@ -65,7 +71,7 @@ def test_results_are_reproducible_byte_for_byte(tmp_path):
         write_table(compare_families(batch_reactor(), setup), str(tmp_path / name))
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     table = pd.read_csv(tmp_path / "a.csv")
-    assert table.loc[2:, "bound"].isna().all()
+    assert table.loc[5:, "bound"].isna().all() and table.loc[2:4, "bound"].notna().all()
 
 
 @pytest.mark.parametrize("kwargs,field", [

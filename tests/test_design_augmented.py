@@ -152,7 +152,7 @@ def printed_L(published):
 def test_runtimes_agree_until(acc, printed_L):
     """The hold and theorem2 runtimes have the same error up to t = 3 on 100111 for any gains, not after."""
     from eqrec.bounds.certify import closed_loop_maps
-    from eqrec.studies.p2.guarantee import runtimes_agree_until
+    from eqrec.design.augmented.guarantee import runtimes_agree_until
     from eqrec.design.augmented.runtime import schedule_from_augmented
 
     assert runtimes_agree_until("100111") == 3 and runtimes_agree_until("111111") == 6
@@ -171,7 +171,7 @@ def test_best_guarantee_among_optima(acc, printed_L, runtime):
     gains, which are optimal for the masked_gain LP; HiGHS and Clarabel agree."""
     from eqrec.lp.robust import worst_case_abs
     from eqrec.design.augmented.design import certify_augmented
-    from eqrec.studies.p2.guarantee import best_guarantee_among_optima
+    from eqrec.design.augmented.guarantee import best_guarantee_among_optima
 
     words = ["100111", "101111", "110111"]
     m = AugmentedLP(acc, "100111", 1.0, printed_L, mode="masked_gain")
@@ -195,7 +195,7 @@ def test_best_guarantee_among_optima(acc, printed_L, runtime):
 
 def test_best_terminal_among_optima_and_inputs(acc, printed_L):
     from eqrec.design.augmented.design import certify_augmented
-    from eqrec.studies.p2.guarantee import best_guarantee_among_optima
+    from eqrec.design.augmented.guarantee import best_guarantee_among_optima
 
     r = best_guarantee_among_optima(acc, "100111", 1.0, printed_L, bound="terminal")
     cert = certify_augmented(acc, r.gains, ["100111"], 1.0, "theorem2")[1]

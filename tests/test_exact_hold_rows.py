@@ -12,9 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from eqrec.errors import InputError
 from eqrec.bounds.certify import certify_schedule, closed_loop_maps
 from eqrec.arrivals.words import validate_language, worst_case_word
-from eqrec.studies.p2 import guarantee as ag
+from eqrec.design.augmented import guarantee as ag
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.augmented.model import arrival_indicator
 from eqrec.design.augmented.runtime import running_error_maps, schedule_from_augmented
@@ -170,9 +171,9 @@ def test_affinity_is_checked(acc, printed_L):
     x = np.random.default_rng(5).normal(size=d.num_columns)
     keep = np.arange((d.T + 1) * acc.n)
     all_gains = np.arange(1, d.num_columns)
-    with pytest.raises(AssertionError, match="not affine"):
+    with pytest.raises(InputError, match="not affine"):
         ag._running_rows(acc, d, x.copy(), all_gains, "hold", keep)
-    with pytest.raises(AssertionError, match="gain columns"):
+    with pytest.raises(InputError, match="gain columns"):
         ag._running_rows(acc, d, x.copy(), np.array([0]), "hold", keep)  # the μ2 column
     G0, Gx, c0, cx = _dense(ag._running_rows(acc, d, x.copy(), all_gains, "theorem2", keep), d.st.layout.size)
     y = np.random.default_rng(6).normal(size=d.num_columns)

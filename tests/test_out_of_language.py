@@ -60,8 +60,9 @@ def test_inside_the_language_strict_false_gives_the_designed_bounds(plant, desig
     for k in range(30):
         y = None if k % 3 == 1 else rng.normal(size=1)
         a, b = strict.step(y), relaxed.step(y)
-        assert np.array_equal(a[0], b[0]) and a[1] == b[1] and relaxed.in_design
-        assert np.all(relaxed.error_box <= a[1] * (1 + 1e-12))
+        # the same estimate; the exact bound keeps what earlier periods told, so it is never above the level
+        assert np.array_equal(a[0], b[0]) and b[1] <= a[1] and relaxed.in_design
+        assert np.all(relaxed.state_bounds <= a[1])
 
 
 def test_leaving_the_language_reports_it_and_the_box(design):
@@ -69,7 +70,7 @@ def test_leaving_the_language_reports_it_and_the_box(design):
     est.step(None)
     assert est.in_design
     _, bound = est.step(None)  # a second loss in the block: outside the language
-    assert not est.in_design and bound == pytest.approx(est.error_box.max()) and bound > design.mu2
+    assert not est.in_design and bound == est.state_bounds.max() and np.isfinite(bound)
     with pytest.raises(InputError, match="strict=False"):
         design.estimator().reset(np.zeros(2)).error_box
 
@@ -103,23 +104,13 @@ def test_time_varying_model_is_read_at_the_period_time_over_several_periods():
     assert worst <= 1 + 1e-12 and outside > 0
 
 
-def test_python_control_system_matches_the_estimator_outside_the_language(plant, design):
-    control = pytest.importorskip("control")
+def test_python_control_system_runs_inside_the_language_only(plant, design):
+    """Outside the language the estimator carries a zonotope of varying size: no fixed I/O state holds it."""
+    pytest.importorskip("control")
     from eqrec.interop.python_control import estimator_iosys
 
-    io = estimator_iosys(design, strict=False)
-    rng = np.random.default_rng(0)
-    N = 60
-    U = np.vstack([np.sin(np.arange(N)), rng.normal(size=N), (rng.random(N) > 0.4).astype(float)])
-    r = control.input_output_response(io, np.arange(N), U, io.initial_state(np.zeros(2)))
-    est = design.estimator(strict=False).reset(np.zeros(2))
-    outside = 0
-    for k in range(N - 1):
-        xhat, bound = est.step(None if U[2, k] == 0 else U[1, k:k + 1], U[0, k:k + 1])
-        assert np.array_equal(xhat, r.outputs[:2, k + 1]) and bound == r.outputs[2, k + 1]
-        assert est.in_design == bool(r.outputs[3, k + 1])
-        outside += not est.in_design
-    assert outside > 0
+    with pytest.raises(InputError, match=r"strict=False"):
+        estimator_iosys(design, strict=False)
 
 
 def test_python_control_system_refuses_bad_arrivals_and_non_finite_data(plant, design):

@@ -21,20 +21,23 @@ The user-facing functions are in this namespace, as in python-control's
     estimator = design.estimator()
 
 Systems
-    :class:`AffineSystem`, :func:`acc_system`, :func:`batch_reactor`, :func:`load_system`
+    :class:`AffineSystem`, :func:`acc_system`, :func:`batch_reactor`, :func:`two_mass`, :func:`load_system`
 Arrival patterns (languages)
     :func:`missing_words`, :func:`delay_words` (a 0/1 string reads both ways: say which),
     :func:`as_language`, :func:`validate_language`, :func:`parse_delay_word`,
-    :func:`full_delay_language`, :func:`delay_classes` (a full delay language's classes, no word listed),
-    :class:`PrefixTree`
+    :func:`full_delay_language`, :func:`delay_classes` (a full delay language's classes, no word listed;
+    ``max_lost=`` at most that many lost per block), :func:`missing_words_at_most`, :func:`loss_coverage`
+    (the smallest loss budget whose block probability reaches a coverage),
+    :class:`PrefixTree`, :class:`ArrivalTrace` (a run's arrivals: each measurement's delay, or lost)
 Designs (each returns a certified :class:`Design`)
     :func:`design_time_based`, :func:`design_prefix`, :func:`design_delay`,
     :func:`design_delay_global`, :func:`design_augmented`, :func:`min_recovery_level`
 Certificates
-    :func:`certify_schedule`
+    :func:`certify_schedule`, :func:`information_limit` (the smallest bound any estimator can guarantee on a trace)
 Estimators and simulation
     :class:`GuaranteedEstimator` (``Design.estimator()``), :class:`Packet` (a time-stamped
-    measurement for ``step``), :class:`ClassEstimator`, :func:`simulate_run`, :func:`monte_carlo`
+    measurement for ``step``), :class:`ClassEstimator`,
+    :class:`ZonotopeEstimator` (set-membership, no language), :func:`simulate_run`, :func:`monte_carlo`
 Errors
     :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
     :class:`SolverFailure`, :class:`CertificationFailure`
@@ -67,8 +70,10 @@ _PUBLIC: dict[str, str] = {
     "acc_system": "eqrec.systems.examples",
     "load_system": "eqrec.systems.files",
     "batch_reactor": "eqrec.systems.examples",
+    "two_mass": "eqrec.systems.examples",
     # arrival patterns
     "missing_words": "eqrec.design.inputs",
+    "missing_words_at_most": "eqrec.design.inputs",
     "delay_words": "eqrec.design.inputs",
     "as_language": "eqrec.arrivals.words",
     "validate_language": "eqrec.arrivals.words",
@@ -76,20 +81,26 @@ _PUBLIC: dict[str, str] = {
     "full_delay_language": "eqrec.arrivals.words",
     "delay_classes": "eqrec.design.delay.design",
     "PrefixTree": "eqrec.arrivals.prefix_tree",
+    "ArrivalTrace": "eqrec.arrivals.traces",
+    "loss_coverage": "eqrec.arrivals.draws",
     # designs
     "Design": "eqrec.design.result",
     "design_time_based": "eqrec.design.prefix.time_based",
     "design_prefix": "eqrec.design.prefix.design",
+    "load_design": "eqrec.design.saved",
     "design_delay": "eqrec.design.delay.design",
     "design_delay_global": "eqrec.design.delay.design",
     "design_augmented": "eqrec.design.augmented.design",
     "min_recovery_level": "eqrec.design.mu1_min",
     # certificates
     "certify_schedule": "eqrec.bounds.certify",
+    "information_limit": "eqrec.bounds.information",
     # estimators and simulation
     "GuaranteedEstimator": "eqrec.estimators.guaranteed",
     "Packet": "eqrec.arrivals.packets",
     "ClassEstimator": "eqrec.estimators.causal",
+    "ZonotopeEstimator": "eqrec.estimators.zonotope",
+    "exact_bound": "eqrec.estimators.exact",
     "simulate_run": "eqrec.simulate.loop",
     "monte_carlo": "eqrec.simulate.loop",
     # errors

@@ -24,17 +24,27 @@ import argparse
 import json
 import os
 import sys
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
-from eqrec.lp.solvers import SOLVER_NAMES
+from eqrec.arrivals.words import MAX_DELAY
+from eqrec.lp.solvers import SOLVER_NAMES, retry_log
+from eqrec.design.inputs import MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
-#: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).
+#: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
+#: design's message blames the horizon (a marginally stable plant, ``ρ = 1`` up to rounding, is not blamed).
+UNSTABLE_GROWTH = 1e3
+#: Estimated seconds from which the size estimate of a ``--max-delay`` design is printed.
+ESTIMATE_PRINT_SECONDS = 10.0
+#: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).  The class engine certifies
+#: designs up to it (class levels raised by the LP's round-off times mu1: under 0.5 % at 1e12 on the example
+#: plants); the tree LP may stop earlier (a solver failure naming the class engine).
 MAX_MU1 = 1e12
 #: Largest full delay language ``{0..D}^T`` (words) that ``--node-gains`` or ``--engine tree`` enumerate.
 MAX_ENUMERATED_WORDS = 20_000
@@ -50,7 +60,9 @@ EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usa
 
 
 def _system_help() -> str:
-    return SYSTEM_HELP % {"limit": MAX_ENUMERATED_WORDS, "seq": JSON_NODE_GAINS_SEQUENCES}
+    return SYSTEM_HELP % {"limit": MAX_ENUMERATED_WORDS, "seq": JSON_NODE_GAINS_SEQUENCES,
+                          "print": ESTIMATE_PRINT_SECONDS, "minutes": MAX_ESTIMATED_SECONDS / 60,
+                          "mem": 100 * MAX_MEMORY_FRACTION}
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -88,8 +100,13 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--delays", default=None,
                    help="delay only: comma-separated delay words, e.g. 21210,00000")
     d.add_argument("--max-delay", type=int, default=None,
-                   help="delay only: with --horizon, design for all delay words with delays 0..D")
+                   help=f"delay only: with --horizon, design for all delay words with delays 0..D (D <= {MAX_DELAY}: "
+                        "one digit per delay, as in delay words)")
     d.add_argument("--horizon", type=int, default=None, help="delay only: word length T for --max-delay")
+    d.add_argument("--max-lost", type=int, default=None,
+                   help="delay only, with --max-delay and --horizon: at most m (0..T) measurements lost per block "
+                        "besides the delays 0..D (a lost one never arrives; a delay past the block's end is not a "
+                        "loss); default: none lost")
     d.add_argument("--engine", choices=ENGINES, default=None,
                    help="prefix and delay only: classes = one small LP per (time, available data) class "
                         "(default; --max-delay languages without enumerating words); tree = one LP over the "
@@ -120,15 +137,22 @@ def _parser() -> argparse.ArgumentParser:
                    help="prefix and delay: a Dask scheduler address, e.g. tcp://host:8786, whose workers solve the "
                         "class LPs instead (needs pip install 'eqrec[dask]'); the same result as on this machine")
     d.add_argument("--out", default=None, help="output JSON file (default: print to stdout)")
+    d.add_argument("--force", action="store_true",
+                   help="delay with --max-delay: run a design past the documented size (estimated time over "
+                        f"{MAX_ESTIMATED_SECONDS / 60:.0f} min or memory over {100 * MAX_MEMORY_FRACTION:.0f}%% of the "
+                        "available; the estimate is printed either way, and refused otherwise with exit 1)")
     return ap
 
 
 def _parallel(args: argparse.Namespace) -> dict:
     """``--jobs`` and ``--scheduler`` as the design functions' ``n_jobs`` and ``scheduler`` (checked)."""
-    from eqrec.lp.parallel import check_jobs, check_scheduler
+    from eqrec.lp.parallel import check_jobs, check_reachable, check_scheduler
+
+    def check_address(scheduler):  # reachable whatever the size of the design (a small one never contacts it)
+        check_reachable(check_scheduler(scheduler))
 
     par = {"n_jobs": args.jobs, "scheduler": args.scheduler}
-    for flag, key, check in (("--jobs", "n_jobs", check_jobs), ("--scheduler", "scheduler", check_scheduler)):
+    for flag, key, check in (("--jobs", "n_jobs", check_jobs), ("--scheduler", "scheduler", check_address)):
         if par[key] is not None and args.method not in ("prefix", "delay"):
             raise InputError(f"{flag} applies to --method prefix and delay only", "command line", flag)
         try:
@@ -136,6 +160,19 @@ def _parallel(args: argparse.Namespace) -> dict:
         except InputError as exc:
             raise InputError(str(exc).split(": ", 1)[-1], "command line", flag) from None
     return par
+
+
+def _split_words(text: str, flag: str) -> list[str]:
+    """``--words`` / ``--delays``: comma-separated words, none empty (a stray comma) and none given twice."""
+    words = [w.strip() for w in text.split(",")]
+    empty = [i + 1 for i, w in enumerate(words) if not w]
+    if empty:
+        raise InputError(f"word {empty[0]} of {len(words)} is empty (a stray comma?) in {text!r}", "command line",
+                         flag)
+    twice = sorted({w for w in words if words.count(w) > 1})
+    if twice:
+        raise InputError(f"{', '.join(twice)} given more than once in {text!r}", "command line", flag)
+    return words
 
 
 def _parse_json_array(text: str, field: str) -> np.ndarray:
@@ -176,7 +213,8 @@ def run_design(args: argparse.Namespace) -> dict:
     if args.method == "delay":
         return run_delay_design(args, system, T_file, mu1, weights, par)
     for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
-                        ("--cost", args.cost), ("--node-gains", args.node_gains or None)):
+                        ("--max-lost", args.max_lost), ("--cost", args.cost),
+                        ("--node-gains", args.node_gains or None), ("--force", getattr(args, "force", None) or None)):
         if value is not None:
             raise InputError(f"{flag} applies to --method delay only" +
                              (" (the other methods always write their gains)" if flag == "--node-gains" else ""),
@@ -187,8 +225,7 @@ def run_design(args: argparse.Namespace) -> dict:
     if args.words is None:
         raise InputError(f"--method {args.method} needs --words", "command line", "--words")
     args.mu1 = mu1
-    words = validate_language([w for w in args.words.split(",") if w.strip()], source="command line",
-                              field_name="--words")
+    words = validate_language(_split_words(args.words, "--words"), source="command line", field_name="--words")
     T = T_file if T_file is not None else len(words[0])
     validate_language(words, length=T, source="command line" if T_file is None else args.system,
                       field_name="--words" if T_file is None else "T")
@@ -219,11 +256,14 @@ def run_design(args: argparse.Namespace) -> dict:
         design = design_augmented(system, words, args.mu1, L=L, poles=poles, s0=s0, solver=args.solver)
         extra = {k: (np.asarray(v).tolist() if v is not None else None) for k, v in design.extra.items()
                  if k in ("L", "s0", "M", "nu")}
-    cert = design.certificate
-    out = {"method": args.method, "mu1": design.mu1, "mu2": design.mu2, "certified_mu2": cert.mu2,
+    cert = design.certificate if design.certificate is not None else design.class_certificate
+    out = {"method": args.method, "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "certified_mu2": cert.mu2,
            "certified_terminal": cert.terminal, "solver": design.solution.solver, "status": design.solution.status,
-           "words": list(words), "designed_words": list(design.schedule.designed_words),
-           "gains": design.schedule.to_json(), **extra}
+           "words": list(words), **extra}
+    if "mu1_requested" in design.extra:  # mu1 raised to the fixed point the gains certify (eqrec.bounds.certify)
+        out["mu1_requested"] = design.extra["mu1_requested"]
+    if design.schedule is not None:  # none for a class-engine language too large for node gains
+        out.update(designed_words=list(design.schedule.designed_words), gains=design.schedule.to_json())
     if args.method == "time":
         out["worst_case_word"] = design.extra["worst_case_word"]
     if design.extra.get("mu1_free") is not None:
@@ -240,6 +280,7 @@ def run_design(args: argparse.Namespace) -> dict:
         from eqrec.design.report import original_coordinates
 
         original_coordinates(out, weights)
+    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
     return out
 
 
@@ -280,6 +321,9 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
     engine = args.engine or "classes"
     full = args.max_delay is not None or args.horizon is not None
+    if args.max_lost is not None and not full:
+        raise InputError("--max-lost goes with --max-delay and --horizon (delay words given in --delays write a "
+                         "loss as a delay past the horizon)", "command line", "--max-lost")
     if (args.delays is None) == (not full):
         raise InputError("give either --delays W1,W2,... or both --max-delay and --horizon", "command line",
                          "--delays")
@@ -287,16 +331,21 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         if args.max_delay is None or args.horizon is None:
             raise InputError("--max-delay and --horizon go together", "command line",
                              "--horizon" if args.horizon is None else "--max-delay")
-        if not 0 <= args.max_delay <= 9:
-            raise InputError(f"must be 0..9 (one digit per delay), got {args.max_delay}", "command line",
+        if not 0 <= args.max_delay <= MAX_DELAY:
+            raise InputError(f"must be 0..{MAX_DELAY} (one digit per delay), got {args.max_delay}", "command line",
                              "--max-delay")
         if args.horizon < 1:
             raise InputError(f"must be at least 1, got {args.horizon}", "command line", "--horizon")
         if T_file is not None and T_file != args.horizon:
             raise InputError(f"T = {T_file} in the system file but --horizon {args.horizon}", args.system, "T")
-        n_words = (args.max_delay + 1) ** args.horizon
-        size = (f"{{0..{args.max_delay}}}^{args.horizon} has {Decimal(n_words):.3g} words, more than the "
-                f"{MAX_ENUMERATED_WORDS} that can be enumerated")
+        lost = args.max_lost
+        if lost is not None and not 0 <= lost <= args.horizon:
+            raise InputError(f"must be 0..{args.horizon} (the horizon), got {lost}", "command line", "--max-lost")
+        if lost is None and engine == "classes":
+            _check_size(args, system, mu1 == "free", par or {})
+        n_words = full_language_counts(args.horizon, args.max_delay, lost)["words"]
+        size = (f"{{0..{args.max_delay}}}^{args.horizon}" + (f" with at most {lost} lost" if lost is not None else "")
+                + f" has {Decimal(n_words):.3g} words, more than the {MAX_ENUMERATED_WORDS} that can be enumerated")
         if args.node_gains and n_words > MAX_ENUMERATED_WORDS:
             raise InputError(f"node gains need the prefix tree of every word: {size}; drop --node-gains (the "
                              "JSON holds the class gains K)", "command line", "--node-gains")
@@ -307,15 +356,19 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         # gains are written by default (to_json); otherwise the classes come from the window rule
         enumerate_words = (args.node_gains or engine == "tree" or (
             n_words <= MAX_ENUMERATED_WORDS
-            and full_language_counts(args.horizon, args.max_delay)["sequences"] <= JSON_NODE_GAINS_LIMIT))
+            and full_language_counts(args.horizon, args.max_delay, lost)["sequences"] <= JSON_NODE_GAINS_LIMIT))
         if enumerate_words:
-            patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, source="command line")
+            patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost,
+                                      source="command line")
         else:
-            patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon)
+            patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost)
     else:
-        words = [w.strip() for w in args.delays.split(",") if w.strip()]
-        if not words:
+        if getattr(args, "force", False):
+            raise InputError("--force applies to --max-delay and --horizon (delay words given in --delays are "
+                             "solved whatever their number)", "command line", "--force")
+        if not args.delays.strip():
             raise InputError("no delay words given", "command line", "--delays")
+        words = _split_words(args.delays, "--delays")
         patterns = as_language(words, kind="delay", field_name="--delays", source="command line")
         if T_file is not None and patterns[0].T != T_file:
             raise InputError(f"T = {T_file} in the system file but the delay words have length {patterns[0].T}",
@@ -334,6 +387,8 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     out.update(solver=design.solution.solver, status=design.solution.status)
     if full:
         out.update(max_delay=args.max_delay, horizon=args.horizon)
+        if args.max_lost is not None:
+            out["max_lost"] = args.max_lost
     if isinstance(patterns, ClassSet):  # classes from the window rule: no word enumerated
         out["words"] = int(patterns.words)
     else:
@@ -342,7 +397,78 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
             out["designed_words"] = [p.label for p in design.schedule.designed]
     if weights is not None:
         original_coordinates(out, weights)
+    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
     return out
+
+
+def _check_size(args: argparse.Namespace, system, mu1_free: bool, par: dict) -> None:
+    """Print the estimate of a long ``--max-delay`` design; refuse one past the documented size unless ``--force``."""
+    from eqrec.design.inputs import estimate_delay_design
+    from eqrec.lp.parallel import check_jobs
+
+    workers = 1 if par.get("scheduler") is not None else check_jobs(par.get("n_jobs"))
+    est = estimate_delay_design(system, args.max_delay, args.horizon, mu1_free=mu1_free, workers=workers)
+    reason = est.too_large()
+    if est.seconds >= ESTIMATE_PRINT_SECONDS or reason is not None:
+        print(f"eqrec: estimate: {est.summary()}", file=sys.stderr)
+    if reason is not None and not args.force:
+        raise InputError(f"refused: {reason} ({est.summary()}); shorten --horizon or --max-delay, or pass --force "
+                         "to run it anyway", "command line", "--horizon")
+
+
+def _unstable_hint(args: argparse.Namespace, max_tries: int = 8) -> str:
+    """For a failed ``--horizon`` design of an unstable plant: the longest horizon that solves, found by bisection.
+
+    Every error map of the horizon grows like ``ρ^T`` (``ρ`` the spectral radius of ``A``): past about
+    ``log(1e8) / log ρ`` steps its entries span more than a double-precision LP resolves.  The search starts
+    there and halves the interval between a horizon that solved and one that did not (at most ``max_tries``
+    designs, each printed).  Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with
+    ``T`` in the system file.
+    """
+    import copy
+
+    from eqrec.systems.files import load_system
+
+    if getattr(args, "command", None) != "design" or getattr(args, "horizon", None) is None:
+        return ""
+    try:
+        system, T_file = load_system(args.system)
+        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A, float)))))
+    except (InputError, np.linalg.LinAlgError, ValueError):
+        return ""
+    if T_file is not None or not rho ** args.horizon > UNSTABLE_GROWTH:
+        return ""
+
+    def solves(T: int) -> bool:
+        probe = copy.copy(args)
+        probe.horizon, probe.out = T, None
+        try:
+            with retry_log():
+                run_design(probe)
+            ok = True
+        except (InfeasibleDesign, SolverFailure, CertificationFailure, InputError):
+            ok = False
+        print(f"eqrec: trying --horizon {T}: {'solves' if ok else 'fails'}", file=sys.stderr)
+        return ok
+
+    lo, hi = 0, int(args.horizon)  # lo: solves (0: none found yet), hi: fails
+    guess = min(hi - 1, max(1, int(np.log(1e8) / np.log(rho))))
+    tries = 0
+    while hi - lo > 1 and tries < max_tries:
+        T = guess if tries == 0 else (lo + hi) // 2
+        tries += 1
+        if solves(T):
+            lo = T
+        else:
+            hi = T
+    head = (f"the horizon {args.horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so "
+            f"the error maps grow like {rho:.4g}^T = {rho ** args.horizon:.3g}, past what a double-precision LP "
+            "resolves")
+    if lo == 0:
+        return head + f"; no horizon below {hi} solved either"
+    exact = hi - lo == 1
+    return head + (f"; --horizon {lo} solves" + (f" and {hi} does not" if exact else
+                                                 f" (the longest found in {max_tries} tries; {hi} does not)"))
 
 
 def _check_out(out: str | None) -> Path | None:
@@ -373,7 +499,10 @@ def main(argv: list[str] | None = None) -> int:
             print(run_compare(args))
             return 0
         out_path = _check_out(args.out)
-        result = run_design(args)
+        with retry_log() as retried:
+            result = run_design(args)
+        if retried:  # which solve answered the LPs the first one did not (solve_lp's retries)
+            result["solver_retries"] = dict(Counter(retried))
         text = json.dumps(result, indent=2)
         if out_path is not None:
             _write_atomic(out_path, text + "\n")
@@ -385,10 +514,19 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INFEASIBLE
     except (SolverFailure, CertificationFailure) as exc:
         print(f"eqrec: failed: {exc}", file=sys.stderr)
+        hint = _unstable_hint(args)
+        if hint:
+            print(f"eqrec: {hint}", file=sys.stderr)
         return EXIT_SOLVER
+    if "mu1_requested" in result:
+        print(f"eqrec: note: mu1 raised from the requested {result['mu1_requested']:.9g} to {result['mu1']:.9g}, the "
+              "smallest level these gains certify (the LP meets its bound only to its tolerance)", file=sys.stderr)
+    if retried:
+        print(f"eqrec: note: {len(retried)} LP(s) had no usable status at the first solve and were answered by "
+              + ", ".join(f"{k} ({v})" for k, v in result["solver_retries"].items()), file=sys.stderr)
     if out_path is not None:
-        print(f"mu2 = {result['mu2']:.6g} (certified {result['certified_mu2']:.6g}); wrote {out_path}",
-              file=sys.stderr)
+        print(f"mu1 = {result['mu1']:.6g}, mu2 = {result['mu2']:.6g} (certified {result['certified_mu2']:.6g}); "
+              f"wrote {out_path}", file=sys.stderr)
     else:
         try:
             print(text)

@@ -1,7 +1,7 @@
 """The long help text of ``eqrec design`` (the system-file keys, the word conventions, the JSON keys).
 
-Kept apart from :mod:`eqrec.cli` so that the command's code reads on one screen; ``%(limit)d`` and ``%(seq)d``
-are filled in by :func:`eqrec.cli._system_help`.
+Kept apart from :mod:`eqrec.cli` so that the command's code reads on one screen; ``%(limit)d``, ``%(seq)d``,
+``%(print)d``, ``%(minutes)d`` and ``%(mem)d`` are filled in by :func:`eqrec.cli._system_help`.
 """
 
 SYSTEM_HELP = """\
@@ -23,8 +23,15 @@ Delay words (--delays, --method delay) are digit strings: character t is the
 delay of the measurement of time t (0 = on time); a delay that reaches past
 the horizon (t + delay >= T) means missing. --max-delay D --horizon T designs
 for all (D+1)^T delay words. Words with equal event sequences are merged.
+--max-lost m (with --max-delay D --horizon T; 0..T) is the loss-aware
+language: each measurement has a delay 0..D or is lost (never arrives), at
+most m lost per block; a delay past the horizon is missing in the block but
+is not a loss (m = 0: no loss, m = T: every arrival pattern). The class
+engine builds it without listing its words (window rule: at time k at most m
+of the measurements of times <= k - D are missing); listed words (small
+languages, --node-gains, --engine tree) write a lost measurement as x.
 
-Output JSON: method, mu1, mu2 (optimum), certified_mu2 (worst case recomputed
+Output JSON: method, T, mu1, mu2 (optimum), certified_mu2 (worst case recomputed
 from the gains alone), certified_terminal (the worst case of the error norm
 ||x(T) - xhat(T)||_inf at the end of the horizon, over every word, recomputed
 from the gains alone: equalized recovery holds when it is at most mu1, so the
@@ -39,6 +46,9 @@ designed word
 classes (below), and with --mu1 free (mu1 = the smallest feasible mu1)
 mu1_free {route, mu1_min {upper (attained by certified gains), lower (proven
 infeasible), binding (the terminal class and row that set it)}}.
+Last, system: the system file's matrices (E and V with per-channel bounds
+folded in), so that eqrec.load_design(path) reads the design back into
+Python, its estimator giving the same estimates and bounds.
 
 State weights (--state-weights w1,...,wn; methods time, prefix, delay): the
 design is made on z = W x, W = diag(w), so mu1, mu2, every level and every
@@ -81,6 +91,23 @@ events e_0.e_1...) and event_sequences (per designed sequence, for each time
 t a 0/1 string over y(0..t): character tau is 1 if y(tau) is available at
 time t).  words lists the delay words (designed_words the designed ones),
 except for a --max-delay language left unenumerated: then words is the
-number of words and designed_words is omitted (max_delay and horizon name
-the language).
+number of words and designed_words is omitted (max_delay, horizon and, with
+--max-lost, max_lost name the language).
+
+Size and solves (--max-delay D --horizon T, class engine): before solving,
+the design is estimated from its class sizes alone (classes, LP rows, time
+and memory on this machine's cores; eqrec.design.inputs.estimate_delay_design)
+and the estimate is printed when it exceeds %(print)d s.  A design estimated
+past %(minutes)d min or past %(mem)d%% of the available memory is refused
+(exit 1) unless --force.  The work grows about as T^3 (a class at time d
+solves LPs of d measurements over d noise samples): on 2 cores D = 1 takes
+seconds at T = 100 and minutes at T = 400 (benchmarks/bench_horizon.py).
+Long stages show a progress bar on a terminal, one line each otherwise.
+An LP that ends without a usable status (HiGHS 'Not Set' or 'Unknown' after
+a numerical breakdown) is solved again with other settings (HiGHS defaults,
+presolve off, primal simplex, interior point, a scaled model), then with
+Clarabel; the summary and the JSON key solver_retries say which answered.
+When all fail on a plant with spectral radius above 1 and a long --horizon,
+the message says the horizon is too long for so unstable a plant and names
+the longest horizon that solves (a few smaller designs, by bisection).
 """

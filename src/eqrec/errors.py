@@ -69,8 +69,29 @@ class InfeasibleDesign(EqrecError):
     Raised when the design LP is infeasible: no estimator of the chosen
     structure achieves equalized recovery at the requested level ``μ1``
     (exit status 3 on the command line).  The message names the terminal
-    class that cannot reach ``μ1`` where the class engine knows it.
+    class that cannot reach ``μ1`` where the class engine knows it, and the
+    smallest feasible ``μ1`` where it is known (then also :attr:`mu1_min`).
+
+    Parameters
+    ----------
+    message : str
+        What is infeasible, and what to do.
+    mu1_min : float or None, optional
+        The smallest feasible recovery level, as printed in the message
+        (rounded up, so a retry at it succeeds), or ``None`` if unknown.
+
+    Attributes
+    ----------
+    mu1_min : float or None
+        As given.
     """
+
+    def __init__(self, message: str = "", mu1_min: float | None = None):
+        self.mu1_min = None if mu1_min is None else float(mu1_min)
+        super().__init__(message)
+
+    def __reduce__(self):  # keep mu1_min across processes (an error raised in a worker)
+        return type(self), (str(self), self.mu1_min)
 
 
 class SolverFailure(EqrecError):

@@ -19,6 +19,7 @@ use rule step as compare_run with:
         csv="results/compare/{system}_{setting}.csv",
         json="results/compare/{system}_{setting}.json",
         pdf="results/compare/{system}_{setting}.pdf",
+        timings="results/timings/compare/{system}_{setting}.json",
         png=in_report(
             "results/compare/{system}_{setting}.png",
             "compare",

@@ -282,7 +282,6 @@ use rule step as p3_scale_free_figure with:
         "logs/p3/scale_free_figure.log",
     params:
         step="eqrec.studies.p3.figures:step_scale_free_figure",
-        cfg=step_config("p3"),
 
 
 rule p3_scale:

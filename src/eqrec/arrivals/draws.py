@@ -22,6 +22,13 @@ Every random arrival of the package is drawn here, from a
   ``1..τ̄``), with the draw order of the stored results;
 * :func:`gilbert_elliott_trace` — bursts: a two-state (good/bad) Markov
   channel with its own loss probability in each state (Gilbert–Elliott).
+
+And the block law of the comparison's trace model (losses independent or in
+Gilbert bursts, delays uniform ``0..D``, :func:`eqrec.compare.families.draw_trace`):
+:func:`block_loss_probabilities` (the law of the number of losses in a block of
+``T`` measurements) and :func:`loss_coverage` (the smallest loss budget ``m`` of
+the loss-aware language :func:`eqrec.delay_classes` whose block probability
+reaches a coverage).
 """
 
 from __future__ import annotations
@@ -287,3 +294,148 @@ def with_uniform_delays(rng: np.random.Generator, trace: ArrivalTrace, max_delay
         raise InputError(f"the largest delay must be an integer >= 0, got {max_delay!r}", field="max_delay")
     delays = rng.integers(0, int(max_delay) + 1, trace.steps)
     return ArrivalTrace(np.where(trace.lost, NEVER, delays))
+
+
+# ------------------------------------------------------------------------------ the block law of the trace model
+
+def _gilbert_rates(loss: float, burst: float) -> tuple[float, float]:
+    """``(p_gb, p_bg)`` of the Gilbert channel with stationary loss ``loss`` and mean burst ``burst`` (as drawn)."""
+    if loss >= 1.0:
+        raise InputError(f"a Gilbert channel needs a loss below 1, got {loss}", field="loss")
+    try:
+        b = float(burst)
+    except (TypeError, ValueError):
+        raise InputError(f"the mean burst length must be a number, got {burst!r}", field="burst") from None
+    if not (np.isfinite(b) and b >= 1.0):
+        raise InputError(f"the mean burst length must be a number >= 1 (steps), got {burst!r}", field="burst")
+    p_bg = 1.0 / b
+    p_gb = loss * p_bg / (1.0 - loss)
+    if p_gb > 1.0:
+        raise InputError(f"a mean burst of {b} steps cannot give an average loss of {loss} (the channel would have "
+                         "to enter a burst with probability > 1)", field="burst")
+    return p_gb, p_bg
+
+
+def block_loss_probabilities(horizon: int, loss: float, burst: float | None = None) -> np.ndarray:
+    r"""The law of the number of measurements lost in a block of ``T`` under the comparison's trace model.
+
+    Independent losses (``burst=None``): binomial,
+    :math:`P(j) = \binom{T}{j}\,\ell^j (1-\ell)^{T-j}`.  Gilbert bursts: the
+    channel of :func:`gilbert_elliott_trace` (every packet lost in the bad
+    state, none in the good one) with ``p_bg = 1/burst`` and
+    ``p_gb = ℓ p_bg / (1 − ℓ)``, so the stationary loss is ``ℓ`` (the
+    parameters of :func:`eqrec.compare.families.draw_trace`).  The trace
+    starts in the stationary law, so every block does; the law is computed
+    exactly by a dynamic programme over the block on (channel state, losses
+    so far), started from the stationary distribution.  The delays of the
+    packets kept do not count: a delay is never a loss.
+
+    Parameters
+    ----------
+    horizon : int
+        ``T``, the measurements of a block, at least 1.
+    loss : float
+        Average loss probability ``ℓ`` in ``[0, 1]`` (below 1 with ``burst``).
+    burst : float or None, optional
+        Mean length of a burst of losses, ``>= 1`` (``None``: independent losses).
+
+    Returns
+    -------
+    ndarray, shape (T + 1,)
+        ``P(j lost)`` for ``j = 0..T`` (sums to 1 up to rounding).
+
+    Raises
+    ------
+    InputError
+        ``horizon`` not an integer >= 1, ``loss`` not a probability, or a ``burst`` that is not a number
+        >= 1 or cannot give the loss (the field is named).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from eqrec.arrivals.draws import block_loss_probabilities
+    >>> np.round(block_loss_probabilities(3, 0.5), 3)
+    array([0.125, 0.375, 0.375, 0.125])
+    """
+    T = _steps(horizon, "horizon")
+    if T < 1:
+        raise InputError(f"the horizon must be an integer >= 1, got {horizon!r}", field="horizon")
+    p = _probability(loss, "loss")
+    if burst is None:
+        # one measurement at a time: j lost among the first t, then lost or not
+        law = np.zeros(T + 1)
+        law[0] = 1.0
+        for t in range(T):
+            law[1:t + 2] = law[1:t + 2] * (1.0 - p) + law[:t + 1] * p
+            law[0] *= 1.0 - p
+        return law
+    p_gb, p_bg = _gilbert_rates(p, burst)
+    pi_bad = p_gb / (p_gb + p_bg) if p_gb + p_bg > 0 else 0.0
+    good, bad = np.zeros(T + 1), np.zeros(T + 1)  # P(state at t, j lost among 0..t-1)
+    good[0], bad[0] = 1.0 - pi_bad, pi_bad
+    for _ in range(T):
+        bad = np.concatenate(([0.0], bad[:-1]))  # the packet of a bad step is lost
+        good, bad = good * (1.0 - p_gb) + bad * p_bg, good * p_gb + bad * (1.0 - p_bg)
+    return good + bad
+
+
+def loss_coverage(max_delay: int, horizon: int, loss: float, coverage: float = 0.99,
+                  burst: float | None = None) -> int:
+    """The smallest loss budget ``m`` whose block probability under the trace model reaches ``coverage``.
+
+    The block probability of ``m`` is the probability that a block of ``T``
+    measurements of a trace drawn as :func:`eqrec.compare.families.draw_trace`
+    draws it (losses independent with probability ``loss``, or in Gilbert
+    bursts of mean length ``burst`` with the same average loss; delays uniform
+    ``0..D``) is a word of the loss-aware language of
+    :func:`eqrec.delay_classes` with ``max_lost = m``: at most ``m`` lost
+    (:func:`block_loss_probabilities`).  The delays never make a word leave
+    that language (a delay past the block's end is not a loss), so
+    ``max_delay`` is only checked.  ``m = T`` always qualifies; with
+    ``coverage = 1`` it is the smallest ``m`` whose tail probability is 0 in
+    floating point.
+
+    Parameters
+    ----------
+    max_delay : int
+        ``D``, the largest delay, ``>= 0``.
+    horizon : int
+        ``T``, the block length, ``>= 1``.
+    loss : float
+        Average loss probability in ``[0, 1]``.
+    coverage : float, optional
+        Required block probability in ``(0, 1]`` (default 0.99).
+    burst : float or None, optional
+        Mean burst length ``>= 1`` (``None``: independent losses).
+
+    Returns
+    -------
+    int
+        ``m`` in ``0..T``: ``P(at most m lost in a block) >= coverage``, and ``m − 1`` does not reach it.
+
+    Raises
+    ------
+    InputError
+        A value out of range (the field is named).
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> eqrec.loss_coverage(2, 20, 0.1), eqrec.loss_coverage(2, 20, 0.1, burst=4.0)
+    (6, 13)
+    """
+    if isinstance(max_delay, (bool, np.bool_)) or not isinstance(max_delay, (int, np.integer)) or max_delay < 0:
+        raise InputError(f"the largest delay must be an integer >= 0, got {max_delay!r}", field="max_delay")
+    try:
+        c = float(coverage)
+    except (TypeError, ValueError):
+        raise InputError(f"the coverage must be a number in (0, 1], got {coverage!r}", field="coverage") from None
+    if not 0.0 < c <= 1.0:
+        raise InputError(f"the coverage must be a number in (0, 1], got {coverage!r}", field="coverage")
+    law = block_loss_probabilities(horizon, loss, burst)
+    tail = np.cumsum(law[::-1])[::-1]  # tail[j] = P(at least j lost)
+    T = law.size - 1
+    for m in range(T):
+        if tail[m + 1] <= 1.0 - c:  # P(more than m lost) <= 1 - coverage
+            return m
+    return T

@@ -218,11 +218,25 @@ def check_input(u, m: int) -> np.ndarray:
     Raises
     ------
     InputError
-        (field ``u``) a string, the wrong number of entries, or NaN/inf.
+        (field ``u``) a string, the wrong number of entries, a nested array (a column ``(m, 1)`` or
+        ``(1, 1)``: give a flat vector), or NaN/inf.
     """
     if u is None:
         return np.zeros(m)
-    return finite_array(u, (m,), "u", "the input u", "m")
+    return _flat(u, finite_array(u, (m,), "u", "the input u", "m"), "u", "the input u")
+
+
+def _flat(value, checked: np.ndarray, field: str, what: str) -> np.ndarray:
+    """``checked`` if ``value`` was a flat vector (or a number, for one entry), else an :class:`InputError`.
+
+    A column ``(k, 1)`` or a ``(1, 1)`` array has the right number of entries but is not the vector the
+    estimator's protocol takes (and a matrix input usually means a mistake upstream), so it is refused.
+    """
+    shape = np.shape(value)
+    if len(shape) > 1 or (len(shape) == 0 and checked.size != 1):
+        raise InputError(f"{what} must be a flat vector of {checked.size} entries (shape ({checked.size},)), got "
+                         f"shape {shape}", field=field)
+    return checked
 
 
 def check_estimate(xhat0, n: int, field: str = "xhat0") -> np.ndarray:
@@ -245,6 +259,7 @@ def check_estimate(xhat0, n: int, field: str = "xhat0") -> np.ndarray:
     Raises
     ------
     InputError
-        A string, the wrong number of entries, or NaN/inf.
+        A string, the wrong number of entries, a nested array (a column ``(n, 1)``: give a flat
+        vector), or NaN/inf.
     """
-    return finite_array(xhat0, (n,), field, "the initial estimate", "n")
+    return _flat(xhat0, finite_array(xhat0, (n,), field, "the initial estimate", "n"), field, "the initial estimate")

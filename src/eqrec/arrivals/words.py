@@ -34,6 +34,9 @@ from eqrec.errors import InputError
 
 MISSING_ALPHABET = frozenset("01")
 KINDS = ("missing", "delay")
+#: Largest delay ``τ̄`` of a delay language: one digit per delay in a word.  The one limit of every entry that
+#: takes a maximum delay (:func:`full_delay_language`, :func:`eqrec.delay_classes`, ``eqrec design --max-delay``).
+MAX_DELAY = 9
 
 
 def validate_word(word: str, *, field_name: str = "word", source: str | None = None) -> str:
@@ -337,7 +340,7 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     T : int
         Word length (horizon), at least 1.
     max_delay : int
-        Largest delay ``τ̄``, ``0..9`` (one digit per delay).
+        Largest delay ``τ̄``, ``0..9`` (:data:`MAX_DELAY`: one digit per delay).
 
     Returns
     -------
@@ -357,7 +360,7 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     >>> len(eqrec.as_language(eqrec.full_delay_language(2, 2), kind="delay"))
     6
     """
-    T, max_delay = integer(T, "T", low=1), integer(max_delay, "max_delay", high=9)
+    T, max_delay = integer(T, "T", low=1), integer(max_delay, "max_delay", high=MAX_DELAY)
     digits = np.indices((max_delay + 1,) * T).reshape(T, -1).T
     return tuple("".join(map(str, row)) for row in digits)
 

@@ -9,4 +9,8 @@ classes of a language and their error maps, and the certificate computed from th
     The (time, available data) classes of a prefix tree and the class error map ``E_d − K Z_S``.
 :mod:`~eqrec.bounds.certify`
     Worst cases recomputed from the gains alone (the independent certificate of every design).
+:mod:`~eqrec.bounds.zonotope`
+    The error set of a linear estimator carried online: error maps, the exact bound, outer order reduction.
+:mod:`~eqrec.bounds.information`
+    The information limit: per step, the smallest error bound any estimator can guarantee on an arrival trace.
 """

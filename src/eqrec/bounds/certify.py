@@ -9,13 +9,39 @@ estimator (5), (7) along a word is affine in the uncertainty
 Propagating the affine maps :math:`\xi(t) = G_t\delta + c_t` forward in time
 (no Q-parametrisation, no LP) gives the exact worst case over the noise box
 of every component at every time, :math:`|c_t| + |G_t| b`, attained at a box
-vertex.  A design is accepted only if these bounds confirm the optimiser's
-levels: at most ``M2`` everywhere and at most ``M1`` at each pattern's end.
+vertex.  A design is accepted only if every one of these bounds is at most
+its stored level, exactly in floating point (no tolerance on the guarantee
+side): at most ``M2`` everywhere, at most a node's level after its prefix and
+at most ``M1`` at each pattern's end.
+
+Exact levels
+------------
+An LP optimum meets its constraints only to the solver's tolerance, so the
+gains may give a worst case a little above the level the LP reports.
+:func:`certify_design` then **raises the stored level to the certified
+value**: ``mu2``, the node and class levels to their worst cases, and the
+recovery level ``μ1`` to a fixed point of its terminal worst case.  Raising
+``μ1`` widens the initial-error box, so every bound moves with it; each
+terminal row's worst case is affine in ``μ1``, :math:`a_r\mu_1 + b_r` with
+:math:`a_r < 1` for gains that contract, and
+:math:`\mu_1' = \max_r b_r / (1 - a_r)` (then a few ulps up until the
+recomputed certificate is at most ``μ1'`` in floating point) is the
+smallest level these gains recover to (:func:`recovery_fixed_point`).  The
+returned design's ``mu1`` may therefore exceed the requested one by the
+LP's round-off (``extra["mu1_requested"]`` keeps the request); its
+estimator reports the raised levels, which its error never exceeds.
+
+``rtol`` is not a tolerance on the guarantee: it bounds how far above the
+optimiser's levels the gains may sit before the design is refused as wrong
+(:class:`~eqrec.errors.CertificationFailure`), relative to the scale of the
+LP's coefficients (``max(1, level, μ1)``: with ``μ1 = 1e9`` an absolute
+round-off of ``1e-5`` on a level of ``0.6`` is the LP's normal accuracy).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Callable
 
 import numpy as np
 
@@ -23,12 +49,15 @@ from eqrec.errors import CertificationFailure, InputError
 from eqrec.checks import positive
 from eqrec.bounds.gains import GainSchedule
 from eqrec.arrivals.patterns import ArrivalPattern
+from eqrec.bounds.data_classes import ClassGains, class_error_map
 from eqrec.arrivals.words import as_language, as_pattern
 from eqrec.lp.robust import worst_case_abs, worst_case_vertex
 from eqrec.bounds.stacking import Stacking, UncertaintyLayout
 from eqrec.systems.affine import AffineSystem
 
-#: Relative tolerance for accepting an LP optimum (solver feasibility tolerances are ~1e-7..1e-9).
+#: How far (relative to ``max(1, level, μ1)``) the gains may give more than the optimiser's level before the design
+#: is refused as wrong; below it the stored level is raised to the certified value (module docstring).  Never a
+#: tolerance on the guarantee side.
 CERT_RTOL = 1e-6
 
 
@@ -264,48 +293,247 @@ def certify_schedule(system: AffineSystem, schedule: GainSchedule, words, mu1: f
     return cert
 
 
-def certify_design(design, words=None, rtol: float = CERT_RTOL) -> Certificate:
-    """Certify a :class:`eqrec.design.result.Design` from its gains alone and attach the certificate.
+def class_bounds(system: AffineSystem, gains: ClassGains, mu1: float, stacking: Stacking | None = None,
+                 only=None) -> np.ndarray:
+    r"""Exact worst case :math:`\sum_c \beta_c |(E_d - K Z_S)[r, c]|` of every class row, from the gains ``K`` alone.
+
+    The class engine's certificate (:func:`eqrec.design.classes.gains.certify_classes` returns it as a
+    ``ClassCertificate``): the worst case of the class-form estimator's error over the box of radii
+    :math:`\beta = (\eta_w, \eta_v, \mu_1)`.
 
     Parameters
     ----------
-    design : Design
-        A design result (its system, schedule, ``mu1``, ``mu2`` and levels).
-    words : iterable of str or ArrivalPattern, optional
-        Patterns to certify (default the design's patterns).
-    rtol : float, optional
-        Relative tolerance on the optimised levels.
+    system : AffineSystem
+        The system.
+    gains : ClassGains
+        One gain ``K`` per class of ``gains.classes``.
+    mu1 : float
+        Recovery level ``μ1`` (radius of ``ξ0``).
+    stacking : Stacking, optional
+        Stacked maps over the classes' horizon; built when omitted.
+    only : sequence of int, optional
+        Compute these classes only (the other rows stay 0).
 
     Returns
     -------
-    Certificate
-        The certificate, also stored as ``design.certificate``.
+    numpy.ndarray
+        Shape ``(len(gains.classes), n)``.
+    """
+    st = stacking or Stacking(system, gains.classes.horizon)
+    beta = st.layout.radius(system.eta_w, system.eta_v, mu1)
+    bounds = np.zeros((len(gains.classes), system.n))
+    for i in range(len(gains.classes)) if only is None else only:
+        bounds[i] = np.abs(class_error_map(st, gains, i)) @ beta
+    return bounds
+
+
+def _affine_rows(G: np.ndarray, c: np.ndarray, radius: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of ``ξ = G δ + c``: the worst case ``a μ1 + b`` split into ``a`` (``ξ0``, the last ``n`` coordinates)
+    and ``b`` (noise and offset)."""
+    R = np.abs(G)
+    return R[:, -n:].sum(axis=1), np.abs(c) + R[:, :-n] @ radius[:-n]
+
+
+def recovery_fixed_point(terminal_at: Callable[[float], float],
+                         rows: Callable[[], tuple[np.ndarray, np.ndarray]], mu1: float) -> float:
+    r"""The smallest ``μ ≥ mu1`` (to a few ulps) whose terminal worst case ``terminal_at(μ)`` is at most ``μ``, exactly.
+
+    Each terminal row's worst case is :math:`a_r\mu + b_r` (``slopes``, ``intercepts``), so with every
+    :math:`a_r < 1` the fixed point is :math:`\max_r b_r/(1 - a_r)`; from there ``μ`` moves up by
+    ``(terminal_at(μ) − μ) / (1 − max a)`` (at least one ulp) until the certificate recomputed in floating point
+    is at most ``μ`` (module docstring).
+
+    Parameters
+    ----------
+    terminal_at : callable
+        ``μ -> `` the largest terminal worst case at recovery level ``μ`` (the certificate itself).
+    rows : callable
+        ``() -> (a, b)``: the slopes ``a_r`` and intercepts ``b_r`` of every terminal row (called only if
+        ``mu1`` itself is not certified).
+    mu1 : float
+        The level to start from.
+
+    Returns
+    -------
+    float
+        ``mu1`` itself if its certificate holds, else the raised level.
 
     Raises
     ------
     CertificationFailure
-        If a bound exceeds the designed ``M2`` (or ``M1`` at a word's end) by
-        more than ``rtol`` relative, or exceeds a node's level after a prefix.
+        If the gains do not contract the initial error (some ``a_r >= 1``), or no level is found.
+    """
+    term = terminal_at(mu1)
+    if term <= mu1:
+        return mu1
+    slopes, intercepts = rows()
+    amax = float(np.max(slopes, initial=0.0))
+    if not amax < 1.0:
+        raise CertificationFailure(f"the gains do not contract the initial error (a terminal row's worst case grows "
+                                   f"by {amax:.9g} per unit of mu1): no recovery level is certified; terminal "
+                                   f"worst case {term:.9g} > mu1 = {mu1:.9g}")
+    mu = max(mu1, float(np.max(intercepts / (1.0 - slopes))))
+    for _ in range(200):
+        term = terminal_at(mu)
+        if term <= mu:
+            return mu
+        mu = max(float(np.nextafter(mu, np.inf)), mu + (term - mu) / (1.0 - amax))
+    raise CertificationFailure(f"no recovery level certified near mu1 = {mu1:.9g} (terminal worst case {term:.9g})")
+
+
+def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool = True) -> "Certificate | None":
+    """Certify a :class:`eqrec.design.result.Design` from its gains alone; make its stored levels exact.
+
+    Recomputes every worst case from the gains (the node gains along each word,
+    :func:`certify_schedule`, and for a class-engine design every class row,
+    :func:`class_bounds`), then raises each stored level that a worst case
+    exceeds to that worst case: ``mu1`` to the fixed point of its terminal
+    worst case (:func:`recovery_fixed_point`; the request is kept in
+    ``extra["mu1_requested"]``), then ``mu2``, the node levels, the class
+    levels (``extra["class_levels"]``) and the class certificate at the final
+    ``mu1`` (module docstring).  On return every certified worst case is at most
+    its stored level, exactly in floating point.
+
+    Parameters
+    ----------
+    design : Design
+        A design result (its system, gains, ``mu1``, ``mu2`` and levels); changed in place.
+    words : iterable of str or ArrivalPattern, optional
+        Patterns to certify (default the design's patterns).
+    rtol : float, optional
+        How far above an optimised level (relative to ``max(1, level, μ1)``) a worst case may be before the
+        gains are refused as not the optimiser's; below it the level is raised.  Never a tolerance on the guarantee.
+    nodes : bool, optional
+        Certify the node gains (``design.schedule``; default).  ``False``: the class certificate only.
+
+    Returns
+    -------
+    Certificate or None
+        The node-gain certificate at the final ``mu1``, also stored as ``design.certificate``
+        (``None`` without node gains).
+
+    Raises
+    ------
+    CertificationFailure
+        If a worst case exceeds ``M2``, a node's level or ``M1`` by more than ``rtol`` (scaled as above), or the
+        gains do not contract the initial error.
     """
     words = list(design.patterns if words is None else words)
-    cert = certify_schedule(design.system, design.schedule, words, design.mu1)
-    tol_2 = rtol * max(1.0, design.mu2)
-    tol_1 = rtol * max(1.0, design.mu1)
-    if cert.mu2 > design.mu2 + tol_2:
-        raise CertificationFailure(f"{design.method} design: gains give worst-case error {cert.mu2:.9g} "
-                                   f"> optimised mu2 = {design.mu2:.9g}")
-    if cert.terminal > design.mu1 + tol_1:
-        raise CertificationFailure(f"{design.method} design: terminal worst-case error {cert.terminal:.9g} "
-                                   f"> mu1 = {design.mu1:.9g}")
-    for wc in cert.words.values():  # per-node levels: the bound after each prefix stays below that node's level
-        pattern = wc.pattern
-        for t in range(1, pattern.T):
-            level = design.levels.get(pattern.prefix(t).label)
-            if level is not None and wc.bounds[t].max() > level + rtol * max(1.0, level):
-                raise CertificationFailure(f"{design.method} design: worst-case error {wc.bounds[t].max():.9g} after "
-                                           f"prefix {pattern.prefix(t).label!r} > its level {level:.9g}")
-    design.certificate = cert
+    nodes = nodes and design.schedule is not None
+    system, mu1, n = design.system, float(design.mu1), design.system.n
+    cg = design.class_gains if isinstance(design.class_gains, ClassGains) else None
+    st = Stacking(system, cg.classes.horizon) if cg is not None else None
+    term_cls = [i for i, c in enumerate(cg.classes.classes) if c.terminal] if cg is not None else []
+    cc = design.class_certificate if cg is not None else None
+    cache: dict = {}
+
+    def certs(mu: float):  # the node certificate and the class bounds (terminal classes at least) at μ
+        if mu not in cache:
+            cache.clear()
+            cb = None
+            if cg is not None:
+                cb = cc.bounds if cc is not None and cc.mu1 == mu else class_bounds(system, cg, mu, st, term_cls)
+            cache[mu] = (certify_schedule(system, design.schedule, words, mu) if nodes else None, cb)
+        return cache[mu]
+
+    def terminal_at(mu: float) -> float:
+        cert, cb = certs(mu)
+        return max(cert.terminal if cert is not None else -np.inf,
+                   float(cb[term_cls].max()) if term_cls else -np.inf)
+
+    cert, _ = certs(mu1)
+    if cert is not None:  # the gains are the optimiser's, up to its accuracy (else refused: a wrong design)
+        def too_far(bound: float, level: float) -> bool:
+            return bound - level > rtol * max(1.0, abs(level), mu1)
+
+        if too_far(cert.mu2, design.mu2):
+            raise CertificationFailure(f"{design.method} design: gains give worst-case error {cert.mu2:.9g} "
+                                       f"> optimised mu2 = {design.mu2:.9g}")
+        if too_far(cert.terminal, mu1):
+            raise CertificationFailure(f"{design.method} design: terminal worst-case error {cert.terminal:.9g} "
+                                       f"> mu1 = {mu1:.9g}")
+        for wc in cert.words.values():
+            for t in range(1, wc.pattern.T):
+                level = design.levels.get(wc.pattern.prefix(t).label)
+                if level is not None and too_far(wc.bounds[t].max(), level):
+                    raise CertificationFailure(f"{design.method} design: worst-case error {wc.bounds[t].max():.9g} "
+                                               f"after prefix {wc.pattern.prefix(t).label!r} > its level {level:.9g}")
+
+    def rows() -> tuple[np.ndarray, np.ndarray]:  # every terminal row's worst case as a μ1 + b
+        out = [(np.zeros(0), np.zeros(0))]
+        if cert is not None:
+            out += [_affine_rows(wc.G[-1], wc.c[-1], wc.radius, n) for wc in cert.words.values()]
+        if term_cls:
+            beta = st.layout.radius(system.eta_w, system.eta_v, mu1)
+            out += [_affine_rows(class_error_map(st, cg, i), np.zeros(n), beta, n) for i in term_cls]
+        return np.concatenate([a for a, _ in out]), np.concatenate([b for _, b in out])
+
+    # the recovery level: the fixed point of the terminal worst case (affine in μ1 row by row)
+    mu = recovery_fixed_point(terminal_at, rows, mu1) if (cert is not None or term_cls) else mu1
+    cert, _ = certs(mu)
+    old = {"mu1": mu1, "mu2": float(design.mu2)}
+    if mu != mu1:
+        design.extra.setdefault("mu1_requested", mu1)
+        design.mu1 = mu
+    # every stored level at least the worst case the gains give at the final μ1
+    mu2 = max(float(design.mu2), mu)
+    if cert is not None:
+        mu2 = max(mu2, cert.mu2)
+        for wc in cert.words.values():
+            for t in range(1, wc.pattern.T):
+                lab = wc.pattern.prefix(t).label
+                if lab in design.levels:
+                    design.levels[lab] = max(design.levels[lab], float(wc.bounds[t].max()))
+    if cg is not None:
+        cb = cc.bounds if cc is not None and cc.mu1 == mu else class_bounds(system, cg, mu, st)
+        if cc is not None and cc.mu1 != mu:  # the class certificate (the class-form estimator's bounds) at μ
+            design.class_certificate = cc = replace(cc, mu1=mu, bounds=cb)
+        cls_levels = cb.max(axis=1) if cb.size else np.zeros(0)
+        inner = np.array([c.inner for c in cg.classes.classes], bool)
+        mu2 = max(mu2, float(cls_levels[inner].max(initial=mu)))
+        if "class_levels" in design.extra:
+            design.extra["class_levels"] = np.maximum(np.asarray(design.extra["class_levels"], float), cls_levels)
+        tree = cg.classes.tree
+        if design.levels and tree is not None:
+            for node in tree:
+                if not node.terminal and node.label in design.levels:
+                    design.levels[node.label] = max(design.levels[node.label],
+                                                    float(cls_levels[cg.classes.node_class[node.index]]))
+    if mu != mu1 and design.levels:  # the convention μ2 >= μ1 of the node levels, kept at the raised μ1
+        design.levels = {k: (max(v, mu) if v >= mu1 else v) for k, v in design.levels.items()}
+    design.mu2 = mu2
+    design.extra["level_raise"] = max((design.mu1 - old["mu1"]) / old["mu1"],
+                                      (design.mu2 - old["mu2"]) / max(old["mu2"], np.finfo(float).tiny))
+    _check_exact(design, cert)
+    if cert is not None:
+        design.certificate = cert
     return cert
+
+
+def _check_exact(design, cert: "Certificate | None") -> None:
+    """:class:`CertificationFailure` unless every certified worst case is at most its stored level (no tolerance)."""
+    bad = []
+    if cert is not None:
+        if not cert.mu2 <= design.mu2:
+            bad.append(f"mu2: {cert.mu2!r} > {design.mu2!r}")
+        if not cert.terminal <= design.mu1:
+            bad.append(f"terminal: {cert.terminal!r} > mu1 = {design.mu1!r}")
+        for wc in cert.words.values():
+            for t in range(1, wc.pattern.T):
+                level = design.levels.get(wc.pattern.prefix(t).label)
+                if level is not None and not wc.bounds[t].max() <= level:
+                    bad.append(f"prefix {wc.pattern.prefix(t).label!r}: {wc.bounds[t].max()!r} > {level!r}")
+    cc = design.class_certificate
+    if cc is not None and design.class_gains is not None:
+        if not cc.mu1 == design.mu1:
+            bad.append(f"class certificate at mu1 = {cc.mu1!r}, design at {design.mu1!r}")
+        if not cc.terminal <= design.mu1:
+            bad.append(f"terminal class: {cc.terminal!r} > mu1 = {design.mu1!r}")
+        if not cc.mu2 <= design.mu2:
+            bad.append(f"inner class: {cc.mu2!r} > mu2 = {design.mu2!r}")
+    if bad:
+        raise CertificationFailure(f"{design.method} design: a certified worst case exceeds its stored level: "
+                                   + "; ".join(bad[:3]))
 
 
 def no_data_growth(system: AffineSystem, steps: int) -> float:

@@ -26,6 +26,10 @@ Two ways to get them
   9.3\cdot 10^{20}` words).  The counts the sum cost needs follow in closed
   form because the arrival times of different measurements are independent
   (:func:`full_language_counts`).
+* the same with ``max_lost=m``: the **loss-aware** language of delays
+  ``0..τ̄`` and at most ``m`` measurements *lost* per block (a lost
+  measurement never arrives), still from a window rule, with a counting
+  rule for the weights (:func:`classes_of_full_language`).
 
 The error maps of a class, :math:`E_d` (open loop) and :math:`Z_S` (the
 stacked output maps of the measurements in ``S``), come from
@@ -36,7 +40,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from itertools import combinations
-from math import prod
+from math import comb, prod
 
 import numpy as np
 
@@ -212,13 +216,19 @@ def _arrived_by(i: int, k: int, max_delay: int) -> int:
     return min(max_delay, k - i) + 1
 
 
-def full_language_counts(T: int, max_delay: int) -> dict[str, int]:
-    """Words, sequences (distinct event sequences) and prefix-tree nodes of ``{0..τ̄}^T``, in closed form.
+def full_language_counts(T: int, max_delay: int, max_lost: int | None = None) -> dict[str, int]:
+    r"""Words, sequences (distinct event sequences) and prefix-tree nodes of ``{0..τ̄}^T``, in closed form.
 
     The arrival outcome of each measurement (a time, or never) is independent
     of the others', so the reduced language is the product of the outcome
     sets; a node of depth ``d`` is a choice, per ``i < d``, of an arrival
     time ``<= d-1`` or 'not yet' (possible when ``i + τ̄ > d-1``).
+
+    With ``max_lost = m`` (the loss-aware language, :func:`classes_of_full_language`)
+    a word is a delay ``0..τ̄`` or 'lost' per measurement with at most ``m``
+    lost: :math:`\sum_{j \le m} \binom{T}{j} (\bar\tau+1)^{T-j}` words.  The
+    sequences and nodes are counted with one polynomial per measurement, in a
+    variable ``z`` marking a loss (:func:`_lossy`), truncated at degree ``m``.
 
     Parameters
     ----------
@@ -226,12 +236,16 @@ def full_language_counts(T: int, max_delay: int) -> dict[str, int]:
         Horizon (word length).
     max_delay : int
         Largest delay ``τ̄``.
+    max_lost : int or None, optional
+        At most this many measurements lost per block (``None``: none lost, the full delay language).
 
     Returns
     -------
     dict of str to int
-        ``{"words": (τ̄+1)^T, "sequences": ..., "nodes": ...}``.
+        ``{"words": ..., "sequences": ..., "nodes": ...}`` (``(τ̄+1)^T`` words without losses).
     """
+    if max_lost is not None:
+        return _loss_counts(int(T), int(max_delay), int(max_lost))
     T, D = int(T), int(max_delay)
     sequences = prod(_arrival_values(i, T, D) for i in range(T))
     nodes = sum(prod(_arrived_by(i, d - 1, D) + (1 if i + D > d - 1 else 0) for i in range(d))
@@ -239,13 +253,53 @@ def full_language_counts(T: int, max_delay: int) -> dict[str, int]:
     return {"words": (D + 1) ** T, "sequences": sequences, "nodes": nodes}
 
 
-def classes_of_full_language(T: int, max_delay: int) -> ClassSet:
-    """The classes of ``{0..τ̄}^T`` from the window rule (module docstring), never enumerating words.
+def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None) -> ClassSet:
+    r"""The classes of ``{0..τ̄}^T`` from the window rule (module docstring), never enumerating words.
 
     The weight of the inner class ``(d, S)`` (``d < T``) is the number of
     sequences whose data at ``d-1`` is ``S``: per ``i < d``, the outcomes
     arriving by ``d-1`` if ``i ∈ S`` and the others if not, times all the
     outcomes of ``i >= d``.
+
+    **Loss-aware language** (``max_lost = m``).  A word gives each
+    measurement ``i`` of the block a delay ``τ(i) ∈ {0..τ̄}`` or *lost*, with at
+    most ``m`` lost.  A lost measurement never arrives; a delay with
+    ``i + τ(i) >= T`` is, as without losses, "not available in this block"
+    and is *not* a loss.  So the outcome "never" of ``i`` costs one loss
+    exactly when ``i + τ̄ < T`` (every delay would land in the block), and is
+    free otherwise; ``m = T`` allows every arrival pattern.
+
+    *Window rule with losses.*  At ``k = d-1`` split the times ``i <= k``
+    into the old ones ``O = {i <= k - τ̄}`` and the window
+    ``W = (k - τ̄, k]``.  The classes of depth ``d`` are exactly the
+    :math:`S \subseteq \{0..k\}` with :math:`|O \setminus S| \le m`, so
+    :math:`2^{|W|} \sum_{j \le m} inom{|O|}{j}` of them
+    (:func:`full_language_class_count`).
+    Proof sketch: an old ``i`` missing at ``k`` was not delivered although
+    ``i + τ̄ <= k < T``, so it is lost (one loss each): no word of the
+    language gives more than ``m`` old times missing.  Conversely, for such
+    an ``S``, the word with the old missing times lost, the other old times
+    and the window times of ``S`` on time, the window times outside ``S``
+    delayed by ``τ̄`` (they arrive after ``k``, or never: no loss), and the
+    times after ``k`` on time, has ``|O \ S| <= m`` losses and data ``S`` at
+    ``k``.  The prefix-tree nodes of the class are the choices of an arrival
+    time ``<= k`` for each ``i ∈ S`` (the 'not yet' of ``i ∉ S`` is one
+    node), all of them reachable by the same construction, so their number
+    is the formula without losses.
+
+    *Counting rule for the weights.*  Outcomes of different measurements are
+    chosen independently except for the loss budget, so the number of
+    sequences with data ``S`` at ``k`` is the sum of the coefficients of
+    ``z^0..z^m`` of the product, over all ``i``, of one polynomial per
+    measurement whose coefficient of ``z^ℓ`` counts its outcomes with ``ℓ``
+    losses: ``i ∈ S``: the arrival times ``<= k`` (no ``z``); ``i <= k``,
+    ``i ∉ S``: the arrival times after ``k`` plus the free 'never', and
+    ``z`` for the lost 'never' (:func:`_lossy`); ``i > k``: all its
+    outcomes, ``z`` for the lost one.  An old missing time contributes just
+    ``z``, an old time of ``S`` the constant ``τ̄ + 1``, so the product is
+    :math:`(ar	au+1)^{|O \cap S|} z^{|O \setminus S|}` times one
+    polynomial per (depth, window subset), computed once.  With ``m = 0`` the
+    rule and the counts are those of the full language ``{0..τ̄}^T``.
 
     Parameters
     ----------
@@ -253,16 +307,26 @@ def classes_of_full_language(T: int, max_delay: int) -> ClassSet:
         Horizon, ``>= 1``.
     max_delay : int
         Largest delay ``τ̄``, ``>= 0``.
+    max_lost : int or None, optional
+        At most this many measurements lost per block, ``0..T`` (``None``, default: the language without
+        losses, today's classes bit for bit).
 
     Returns
     -------
     ClassSet
         The classes (``source="window"``, no tree) and the counts of :func:`full_language_counts`.
+
+    Raises
+    ------
+    InputError
+        ``T < 1``, ``max_delay < 0``, or ``max_lost`` outside ``0..T`` (the field is named).
     """
     T, D = int(T), int(max_delay)
     if T < 1 or D < 0:
         raise InputError(f"the full language needs horizon >= 1 and max delay >= 0, got ({T}, {D})",
                          field="max_delay")
+    if max_lost is not None:
+        return _classes_with_losses(T, D, _check_lost(max_lost, T))
     counts = full_language_counts(T, D)
     classes = []
     for d in range(1, T + 1):
@@ -282,6 +346,123 @@ def classes_of_full_language(T: int, max_delay: int) -> ClassSet:
                     weight = tail * prod(_arrived_by(i, k, D) if i in s
                                          else _arrival_values(i, T, D) - _arrived_by(i, k, D) for i in range(d))
                 classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight, nodes=nodes))
+    return ClassSet(classes=_ordered({c.key: c for c in classes}), horizon=T, source="window", **counts)
+
+
+# ---------------------------------------------------------------------------------------------- with losses
+
+def _check_lost(max_lost, T: int) -> int:
+    """``max_lost`` as an int in ``0..T``, else an :class:`InputError` naming ``max_lost``."""
+    ok = isinstance(max_lost, (int, np.integer)) and not isinstance(max_lost, (bool, np.bool_))
+    if not ok or not 0 <= max_lost <= T:
+        raise InputError(f"the number of measurements lost per block must be an integer in 0..{T} (the horizon), "
+                         f"got {max_lost!r}", field="max_lost")
+    return int(max_lost)
+
+
+def _lossy(i: int, T: int, max_delay: int) -> int:
+    """1 if the outcome 'never' of measurement ``i`` is a loss (``i + τ̄ < T``: every delay lands in the block)."""
+    return 1 if i + max_delay < T else 0
+
+
+def _times(a: list[int], b: list[int], m: int) -> list[int]:
+    """The product of two integer polynomials (coefficient ``ℓ`` of ``z^ℓ``), truncated at degree ``m``."""
+    out = [0] * min(len(a) + len(b) - 1, m + 1)
+    for i, x in enumerate(a[:m + 1]):
+        if x:
+            for j, y in enumerate(b[:m + 1 - i]):
+                out[i + j] += x * y
+    return out
+
+
+def _outcomes(i: int, T: int, max_delay: int) -> list[int]:
+    """All outcomes of measurement ``i``: ``[free, lost]`` (arrival times and the free 'never'; the lost 'never')."""
+    return [_arrival_values(i, T, max_delay), _lossy(i, T, max_delay)]
+
+
+def _loss_counts(T: int, D: int, m: int) -> dict[str, int]:
+    """:func:`full_language_counts` of the loss-aware language (polynomials in the loss marker ``z``)."""
+    m = _check_lost(m, T)
+    words = sum(comb(T, j) * (D + 1) ** (T - j) for j in range(m + 1))
+    seq = [1]
+    for i in range(T):
+        seq = _times(seq, _outcomes(i, T, D), m)
+    nodes = 0
+    for d in range(1, T + 1):
+        k, poly = d - 1, [1]
+        for i in range(d):  # an arrival time <= k, or 'not yet': free in the window, a loss for an old time
+            window = i + D > k
+            poly = _times(poly, [_arrived_by(i, k, D) + window, 0 if window else 1], m)
+        nodes += sum(poly)
+    return {"words": words, "sequences": sum(seq), "nodes": nodes}
+
+
+def full_language_class_count(T: int, max_delay: int, max_lost: int | None = None) -> int:
+    r"""Number of classes of :func:`classes_of_full_language`, without building them.
+
+    :math:`\sum_{d=1}^{T} 2^{|W_d|} \sum_{j \le m} inom{|O_d|}{j}` with
+    ``|W_d| = min(τ̄, d)`` window times and ``|O_d| = d - |W_d|`` old ones
+    (``m = ∞`` without losses: :math:`\sum_d 2^{\min(ar	au, d)}`).
+
+    Parameters
+    ----------
+    T : int
+        Horizon, ``>= 1``.
+    max_delay : int
+        Largest delay ``τ̄``, ``>= 0``.
+    max_lost : int or None, optional
+        At most this many lost per block (``None``: no loss).
+
+    Returns
+    -------
+    int
+        The number of classes ``(d, S)``.
+
+    Examples
+    --------
+    >>> from eqrec.bounds.data_classes import full_language_class_count
+    >>> full_language_class_count(30, 4), full_language_class_count(100, 4, 1)
+    (446, 76062)
+    """
+    T, D = int(T), int(max_delay)
+    m = 0 if max_lost is None else _check_lost(max_lost, T)
+    total = 0
+    for d in range(1, T + 1):
+        w = min(D, d)
+        total += 2 ** w * sum(comb(d - w, j) for j in range(min(m, d - w) + 1))
+    return total
+
+
+def _classes_with_losses(T: int, D: int, m: int) -> ClassSet:
+    """The classes of the loss-aware language: the window rule with losses (:func:`classes_of_full_language`)."""
+    counts = _loss_counts(T, D, m)
+    # suffix[d]: the polynomial of the outcomes of the times d..T-1 (the tail of every class of depth d)
+    suffix = [[1] for _ in range(T + 1)]
+    for i in range(T - 1, -1, -1):
+        suffix[i] = _times(suffix[i + 1], _outcomes(i, T, D), m)
+    classes = []
+    for d in range(1, T + 1):
+        k = d - 1
+        old = tuple(range(0, k - D + 1))
+        window = tuple(range(max(0, k - D + 1), k + 1))
+        inner = d < T
+        for r in range(len(window) + 1):
+            for chosen in combinations(window, r):
+                s = set(chosen)
+                # the window times: in S an arrival time <= k; else a later arrival or the free 'never', or lost
+                poly = suffix[d]
+                for i in window:
+                    here = [_arrived_by(i, k, D)] if i in s else [_arrival_values(i, T, D) - _arrived_by(i, k, D),
+                                                                     _lossy(i, T, D)]
+                    poly = _times(poly, here, m)
+                window_nodes = prod(_arrived_by(i, k, D) for i in chosen)
+                for j in range(min(m, len(old)) + 1):  # j old times missing: each one lost
+                    scale = (D + 1) ** (len(old) - j)
+                    weight = scale * sum(poly[:m - j + 1]) if inner else 0
+                    for lost in combinations(old, j):
+                        S = tuple(sorted(set(old).difference(lost))) + chosen
+                        classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight,
+                                                 nodes=scale * window_nodes))
     return ClassSet(classes=_ordered({c.key: c for c in classes}), horizon=T, source="window", **counts)
 
 

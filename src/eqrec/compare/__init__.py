@@ -2,16 +2,17 @@
 
 :mod:`~eqrec.compare.families`
     The settings (:class:`CompareSetup`), the traces, the families and the
-    Monte Carlo (:func:`compare_families`), the table (:func:`write_table`).
+    Monte Carlo (:func:`compare_families`), the table (:func:`write_table`) and its violation count
+    (:func:`count_violations`).
 :mod:`~eqrec.compare.figure`
     The figure (:func:`compare_figure`).
 :mod:`~eqrec.compare.command`
     The ``eqrec compare`` subcommand.
 """
 
-from eqrec.compare.families import (COLUMNS, FAMILIES, CompareResult, CompareSetup, compare_families, draw_trace,
-                                    write_table)
+from eqrec.compare.families import (COLUMNS, FAMILIES, CompareResult, CompareSetup, compare_families,
+                                    count_violations, draw_trace, write_table)
 from eqrec.compare.figure import compare_figure
 
 __all__ = ["COLUMNS", "FAMILIES", "CompareResult", "CompareSetup", "compare_families", "compare_figure",
-           "draw_trace", "write_table"]
+           "count_violations", "draw_trace", "write_table"]

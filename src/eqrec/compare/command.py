@@ -19,25 +19,34 @@ from eqrec.errors import InputError
 
 COMPARE_HELP = """\
 Families (rows of compare.csv, in words):
-  guaranteed, class engine   the delayed-data paper's estimator for {0..D}^T (mu1 free), strict=False:
-                             a true bound also when the traces leave the language
-  guaranteed, prefix (P1)    the prefix-based paper's estimator for "at most one of T lost" (mu1 free),
+  guaranteed, class engine   the delayed-data paper's estimator (mu1 free) for the loss-aware language:
+                             delays 0..D and at most m of the T measurements of a block lost; strict=False:
+                             the exact bound of its error also when the traces leave the language
+  guaranteed, prefix (P1)    the prefix-based paper's estimator for "at most m of T lost" (mu1 free),
                              strict=False; a late packet counts as lost
-  Kalman, time-stamped       every packet used at its own time stamp (re-filtering)
-  Kalman, delay-unaware      a packet used as a measurement of the time it arrives
+  set-membership, zonotope   eqrec.ZonotopeEstimator: no language, a guaranteed set on any trace
+  Kalman, time-stamped       every packet used at its own time stamp (re-filtering), with its exact bound
+  Kalman, delay-unaware      a packet used as a measurement of the time it arrives, with its exact bound
   LMV, zero-input / hold-input   the companion study's LMV predictor (arrival rate = on-time rate);
-                             a late packet counts as lost
+                             a late packet counts as lost; no bound (the LMV predictors do not run on columns)
+m: the smallest loss budget whose block probability under the trace model reaches --coverage (default
+0.99; eqrec.loss_coverage). A design that does not exist (e.g. T too short for m losses) is a row saying why.
+Horizon: --horizon is 1..30 (the languages grow quickly with T, D and m).
 Traces: each measurement lost with probability --loss (independently, or in bursts of mean length --burst
 with the same average loss); a packet kept is delayed uniformly by 0..D steps. Noise and initial error:
 normal with 5 sigma = the bound, truncated at it (the delayed-data paper's Fig. 1); the Kalman and LMV
 filters are designed with those statistics, or with the system file's optional section
   gaussian: {Qw: [[...]], Qv: [[...]], x0_cov: [[...]]}   (any of them; the others from the box).
 Every family runs on the same traces, noise and initial errors; each reports x^(t+1) after the data of t.
+The information limit of each run (eqrec.information_limit, initial radius mu1) is the smallest bound any
+estimator can guarantee on its arrivals.
 
-compare.csv columns: estimator, rms (over runs, steps and states), max_error (largest ||x - x^||_inf),
-bound and median_bound (the guaranteed families' largest and median bound; empty otherwise), violations
-(steps with an error above the bound; empty without a guarantee), outside_design (fraction of steps whose
-data left the design's language), rms_x1 .. rms_xn.  compare.png / compare.pdf: the errors over time.
+compare.csv columns: estimator, design (the language in words), rms (over runs, steps and states),
+max_error (largest ||x - x^||_inf), bound and median_bound (largest and median bound), violations (steps
+with an error above the bound), outside_design (fraction of steps outside the design's language),
+limit_median, bound_over_limit_median / _p95 / _max (bound / information limit, per step), rms_x1 .. rms_xn.
+The printed table adds us_per_step (microseconds per step with the bound; a timing, not in the CSV).
+compare.png / compare.pdf: the errors, the bounds, the limit and mu1 over time.
 """
 
 
@@ -66,6 +75,8 @@ def add_parser(sub: Any, exit_help: str) -> None:
     c.add_argument("--burst", type=float, default=None,
                    help="mean length of a burst of losses (Gilbert channel with the same average loss)")
     c.add_argument("--seed", type=int, default=0, help="seed of every draw (default 0)")
+    c.add_argument("--coverage", type=float, default=0.99,
+                   help="block probability the designs' loss budget m must reach (default 0.99)")
     c.add_argument("--solver", default="highs", help="LP solver of the guaranteed designs (default highs)")
     c.add_argument("--out", required=True, help="output folder (created if missing; its parent must exist)")
 
@@ -105,7 +116,7 @@ def run(args: argparse.Namespace) -> str:
 
     out = _out_dir(args.out)
     setup = CompareSetup(loss=args.loss, max_delay=args.max_delay, horizon=args.horizon, runs=args.runs,
-                         periods=args.periods, burst=args.burst, seed=args.seed)
+                         periods=args.periods, burst=args.burst, seed=args.seed, coverage=args.coverage)
     system, _ = load_system(args.system)
     with open(args.system, encoding="utf-8") as fh:
         gaussian = (yaml.safe_load(fh) or {}).get("gaussian")
@@ -117,5 +128,9 @@ def run(args: argparse.Namespace) -> str:
     out.mkdir(exist_ok=True)
     write_table(result, str(out / "compare.csv"))
     compare_figure(result, str(out / "compare.png"), str(out / "compare.pdf"))
-    shown = result.table.iloc[:, :7].astype(object)
+    shown = result.table[["estimator", "rms", "max_error", "bound", "violations", "outside_design",
+                          "bound_over_limit_median", "bound_over_limit_p95"]].astype(object)
+    shown = shown.assign(us_per_step=[round(result.us_per_step.get(f, float("nan")), 1)
+                                      for f in result.table["estimator"]])
+    shown = shown.rename(columns={"bound_over_limit_median": "b/lim_med", "bound_over_limit_p95": "b/lim_p95"})
     return shown.where(shown.notna(), "-").to_string(index=False, float_format=lambda v: f"{v:.4g}")

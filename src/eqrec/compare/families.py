@@ -55,14 +55,43 @@ from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 #: The families, in the order of the table, in words.
-FAMILIES = ("guaranteed, class engine", "guaranteed, prefix (P1)", "Kalman, time-stamped", "Kalman, delay-unaware",
-            "LMV, zero-input", "LMV, hold-input")
+FAMILIES = ("guaranteed, class engine", "guaranteed, prefix (P1)", "set-membership, zonotope", "Kalman, time-stamped",
+            "Kalman, delay-unaware", "LMV, zero-input", "LMV, hold-input")
+
+#: The families that carry an exact worst-case bound on every step (the LMV predictors do not run on columns).
+BOUNDED = FAMILIES[:5]
+
+#: Reduction order of the zonotopes (set-membership estimator, and the error sets of ``strict=False``).
+ORDER = 40
 
 #: The columns of ``compare.csv`` (then ``rms_x1 ... rms_xn``).
-COLUMNS = ("estimator", "rms", "max_error", "bound", "median_bound", "violations", "outside_design")
+COLUMNS = ("estimator", "design", "rms", "max_error", "bound", "median_bound", "violations", "outside_design",
+           "limit_median", "bound_over_limit_median", "bound_over_limit_p95", "bound_over_limit_max")
 
 #: A violation is an error above the bound by more than this relative margin (rounding of the bound's arithmetic).
 VIOLATION_RTOL = 1e-9
+
+
+def count_violations(errors: np.ndarray, bounds: np.ndarray, rtol: float = VIOLATION_RTOL) -> int:
+    """The number of steps whose error is above its bound by more than the relative margin ``rtol``.
+
+    ``sum(errors > bounds · (1 + rtol))``: the ``violations`` column of ``compare.csv``.
+
+    Parameters
+    ----------
+    errors : numpy.ndarray
+        The errors ``‖x(t+1) − x̂(t+1)‖∞`` (any shape, e.g. ``(runs, steps)``).
+    bounds : numpy.ndarray
+        The bound of each step, of the same shape.
+    rtol : float, optional
+        Relative margin for the rounding of the bound's arithmetic (default :data:`VIOLATION_RTOL`).
+
+    Returns
+    -------
+    int
+        The steps in violation.
+    """
+    return int(np.sum(np.asarray(errors) > np.asarray(bounds) * (1 + rtol)))
 
 
 def _number(value: Any, field_name: str, low: float, high: float, integer: bool = False,
@@ -99,6 +128,9 @@ class CompareSetup:
         Seed of the draws (default 0).
     sigmas : float, optional
         Bounds in standard deviations of the normals drawn (default 5).
+    coverage : float, optional
+        The loss budget ``m`` of the guaranteed designs' languages is the smallest whose block probability
+        under this trace model reaches ``coverage`` (:func:`eqrec.arrivals.draws.loss_coverage`; default 0.99).
 
     Raises
     ------
@@ -114,6 +146,7 @@ class CompareSetup:
     burst: float | None = None
     seed: int = 0
     sigmas: float = 5.0
+    coverage: float = 0.99
 
     def __post_init__(self) -> None:
         checked = {"loss": _number(self.loss, "loss", 0.0, 0.99),
@@ -122,7 +155,8 @@ class CompareSetup:
                    "runs": _number(self.runs, "runs", 1, 100_000, integer=True),
                    "periods": _number(self.periods, "periods", 1, 10_000, integer=True),
                    "seed": _number(self.seed, "seed", 0, 2**63 - 1, integer=True),
-                   "sigmas": _number(self.sigmas, "sigmas", 0.0, 100.0, low_open=True)}
+                   "sigmas": _number(self.sigmas, "sigmas", 0.0, 100.0, low_open=True),
+                   "coverage": _number(self.coverage, "coverage", 0.0, 1.0, low_open=True)}
         if self.burst is not None:
             checked["burst"] = _number(self.burst, "burst", 1.0, 1e6)
             if checked["loss"] == 0:
@@ -138,6 +172,13 @@ class CompareSetup:
     def steps(self) -> int:
         """Steps of a run: ``periods · T``."""
         return self.periods * self.horizon
+
+    @property
+    def max_lost(self) -> int:
+        """``m``: losses per block of the guaranteed designs' languages (``coverage`` of the blocks)."""
+        from eqrec.arrivals.draws import loss_coverage
+
+        return loss_coverage(self.max_delay, self.horizon, self.loss, self.coverage, burst=self.burst)
 
     @property
     def on_time_rate(self) -> float:
@@ -181,13 +222,20 @@ class CompareResult:
     table : pandas.DataFrame
         One row per family (:data:`COLUMNS` and the per-state RMS).
     errors : dict of str to ndarray
-        Per family, ``‖x(t+1) − x̂(t+1)‖∞``, shape ``(runs, steps)``.
+        Per family that ran, ``‖x(t+1) − x̂(t+1)‖∞``, shape ``(runs, steps)``.
     bounds : dict of str to ndarray
-        Per guaranteed family, the bound of each step, shape ``(runs, steps)``.
+        Per family with a bound (:data:`BOUNDED`), the bound of each step, shape ``(runs, steps)``.
     mu1 : dict of str to float
-        The recovery level of each guaranteed design.
+        The recovery level of each guaranteed design that exists.
     outside : dict of str to ndarray
-        Per guaranteed family, whether each step was outside the design, shape ``(runs, steps)``.
+        Per guaranteed design, whether each step was outside the design, shape ``(runs, steps)``.
+    limit : ndarray
+        The information limit ``max_i r_i(t+1)`` of each run and step (:func:`eqrec.information_limit`),
+        shape ``(runs, steps)``.
+    designs : dict of str to str
+        Per family, its design in words (the language, or ``"none needed"``), or why there is none.
+    us_per_step : dict of str to float
+        Per family, the wall time of a step with its bound, in microseconds (a timing: not in the table).
     """
 
     setup: CompareSetup
@@ -196,42 +244,72 @@ class CompareResult:
     bounds: dict[str, np.ndarray]
     mu1: dict[str, float]
     outside: dict[str, np.ndarray] = field(default_factory=dict)
-
-
-def _missing_data_words(T: int) -> list[str]:
-    """Every 0/1 word of length ``T`` with at most one ``0`` (at most one measurement of ``T`` lost)."""
-    return ["1" * T] + ["1" * i + "0" + "1" * (T - 1 - i) for i in range(T)]
+    limit: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    designs: dict[str, str] = field(default_factory=dict)
+    us_per_step: dict[str, float] = field(default_factory=dict)
 
 
 def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs") -> dict[str, Any]:
-    """The two guaranteed designs of the comparison, each at its smallest feasible ``μ1``.
+    """The two guaranteed designs of the comparison on the loss-aware language, each at its smallest ``μ1``.
+
+    The class engine designs for delays ``0..D`` and at most ``m = setup.max_lost`` of the ``T`` measurements
+    of a block lost (:func:`eqrec.delay_classes` with ``max_lost``); the prefix design for the missing-data
+    words with at most ``m`` zeros (:func:`eqrec.missing_words_at_most`; its language has no delays).  A
+    design that does not exist (infeasible, e.g. ``T`` too short for so many losses) is a string saying why.
 
     Parameters
     ----------
     system : AffineSystem
         The plant.
     setup : CompareSetup
-        ``D`` and ``T``.
+        ``D``, ``T`` and the coverage of the loss budget.
     solver : str, optional
         LP solver (default HiGHS).
 
     Returns
     -------
     dict
-        ``{family: Design}`` for the class engine on ``{0..D}^T`` and the prefix
-        design on "at most one of ``T`` lost".
-
-    Raises
-    ------
-    InfeasibleDesign, SolverFailure, CertificationFailure
-        As the designs.
+        ``{family: Design or str}``.
     """
     from eqrec.design.delay.design import delay_classes, design_delay_global
+    from eqrec.design.inputs import missing_words_at_most
     from eqrec.design.prefix.design import design_prefix
+    from eqrec.errors import CertificationFailure, InfeasibleDesign, SolverFailure
 
-    classes = delay_classes(max_delay=setup.max_delay, horizon=setup.horizon)
-    return {FAMILIES[0]: design_delay_global(system, classes, solver=solver).design,
-            FAMILIES[1]: design_prefix(system, _missing_data_words(setup.horizon), "free", solver=solver)}
+    m, T, D = setup.max_lost, setup.horizon, setup.max_delay
+    out: dict[str, Any] = {}
+    for family, make in ((FAMILIES[0], lambda: design_delay_global(
+            system, delay_classes(max_delay=D, horizon=T, max_lost=m), solver=solver).design),
+                         (FAMILIES[1], lambda: design_prefix(system, missing_words_at_most(T, m), "free",
+                                                             solver=solver))):
+        try:
+            out[family] = make()
+        except (InfeasibleDesign, SolverFailure, CertificationFailure) as exc:
+            out[family] = f"no design: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
+    return out
+
+
+def design_in_words(family: str, setup: CompareSetup) -> str:
+    """The language a family is designed for, in words (the ``design`` column).
+
+    Parameters
+    ----------
+    family : str
+        One of :data:`FAMILIES`.
+    setup : CompareSetup
+        The settings.
+
+    Returns
+    -------
+    str
+        E.g. ``"delays 0..1, at most 2 of 6 lost"``.
+    """
+    m, T, D = setup.max_lost, setup.horizon, setup.max_delay
+    if family == FAMILIES[0]:
+        return f"delays 0..{D}, at most {m} of {T} lost"
+    if family == FAMILIES[1]:
+        return f"on time, at most {m} of {T} lost (late = lost)"
+    return "none needed"
 
 
 def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar: float, steps: int) -> Any:
@@ -253,50 +331,68 @@ def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar:
 
 def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "GaussianNoise | dict | None" = None,
                      solver: str = "highs", progress: Callable[[str], None] | None = None) -> CompareResult:
-    """Run every family (module docstring) on the same traces, noise and initial errors.
+    """Run every family (module docstring) on the same traces, noise and initial errors, with the information limit.
+
+    Every family with a bound (:data:`BOUNDED`) reports the exact worst case of its own error on the run's
+    arrivals: the guaranteed designs with ``strict=False`` (:mod:`eqrec.estimators.guaranteed`), the
+    set-membership estimator its set, the Kalman filters :func:`eqrec.exact_bound`.  The information limit of
+    each run (:func:`eqrec.information_limit`, initial radius ``μ1``) is the smallest bound any estimator can
+    guarantee there; every bound is compared with it.
 
     Parameters
     ----------
     system : AffineSystem
         The plant (time-invariant).
     setup : CompareSetup
-        Traces and Monte Carlo size.
+        Traces, coverage of the loss budget and Monte Carlo size.
     gaussian : GaussianNoise, dict or None, optional
         Second moments of the noise and of the initial error (``None``: from
-        the box, ``5σ`` = bound, with ``μ1`` the smaller of the two designs';
+        the box, ``5σ`` = bound, with ``μ1`` the smallest of the designs';
         a dict with some of ``Qw``, ``Qv``, ``x0_cov``, as a system file's
         ``gaussian`` section, takes the others from the box).
     solver : str, optional
-        LP solver of the guaranteed designs.
+        LP solver of the guaranteed designs and of the information limit.
     progress : callable or None, optional
         Called with a line of text per family done.
 
     Returns
     -------
     CompareResult
-        The table, the errors, the bounds.
+        The table, the errors, the bounds, the limit, the designs in words and the time per step.
 
     Raises
     ------
     InputError
         A time-varying system, or a Gaussian description that does not fit it.
     """
+    import time
+
+    from eqrec.bounds.information import information_limit
+    from eqrec.estimators.exact import exact_bound
     from eqrec.estimators.kalman import DelayUnawareKalman, TimestampedKalman
+    from eqrec.estimators.zonotope import ZonotopeEstimator
 
     if system.is_time_varying:
         raise InputError("the comparison runs on a time-invariant system", system.source, "A")
-    designs = guaranteed_designs(system, setup, solver)
-    mu1 = min(d.mu1 for d in designs.values())
+    found = guaranteed_designs(system, setup, solver)
+    designs = {f: d for f, d in found.items() if not isinstance(d, str)}
+    if designs:
+        mu1 = min(d.mu1 for d in designs.values())
+    else:  # no guaranteed design: the initial error of the runs from the open-loop box of one period
+        mu1 = float(max(np.abs(system.C).sum(), 1.0))
     gaussian = _gaussian(system, gaussian, mu1, setup.sigmas)
     kalman = gaussian.design(system)  # P0, Q = E Qw Eᵀ, R = V Qv Vᵀ
     N, n, p = setup.steps, system.n, system.p
     makers: dict[str, Callable[[], Any]] = {
-        FAMILIES[0]: lambda: designs[FAMILIES[0]].estimator(strict=False),
-        FAMILIES[1]: lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p),
-        FAMILIES[2]: lambda: TimestampedKalman(system, kalman),
-        FAMILIES[3]: lambda: DelayUnawareKalman(system, kalman),
+        FAMILIES[2]: lambda: ZonotopeEstimator(system, x0_radius=mu1, max_delay=setup.max_delay, order=ORDER),
+        FAMILIES[3]: lambda: exact_bound(TimestampedKalman(system, kalman), system, mu1, steps=N),
+        FAMILIES[4]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, mu1, steps=N),
     }
-    for family, mechanism in ((FAMILIES[4], "zero-input"), (FAMILIES[5], "hold-input")):
+    if FAMILIES[0] in designs:
+        makers[FAMILIES[0]] = lambda: designs[FAMILIES[0]].estimator(strict=False)
+    if FAMILIES[1] in designs:
+        makers[FAMILIES[1]] = lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p)
+    for family, mechanism in ((FAMILIES[5], "zero-input"), (FAMILIES[6], "hold-input")):
         make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)
         makers[family] = (lambda make=make: OnTimeOnly(make(), p))
     # the draws, in order, per run: the trace, then the noise and the initial error
@@ -311,34 +407,54 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         z = _truncated_normal(rng, lay.size, setup.sigmas)
         delta = np.clip(z * scale, -radius, radius)  # within the box, so every guarantee applies
         runs.append((trace, *lay.split(delta)))
-    errors, bounds, outside, rows = {}, {}, {}, []
+    limit = np.stack([information_limit(system, trace, mu1, solver=solver).max(axis=1) for trace, *_ in runs])
+    if progress is not None:
+        progress(f"information limit: median {np.median(limit):.4g} ({setup.runs} runs x {N} steps)")
+    errors, bounds, outside, rows, us = {}, {}, {}, [], {}
     x0 = np.zeros(n)
     for family in FAMILIES:
+        row: dict[str, Any] = {"estimator": family, "design": design_in_words(family, setup)}
+        if family not in makers:  # a guaranteed design that does not exist: a row that says so
+            row.update(design=found[family], rms=np.nan, max_error=np.nan, bound=np.nan, median_bound=np.nan,
+                       violations=pd.NA, outside_design=np.nan, limit_median=np.nan,
+                       **{c: np.nan for c in COLUMNS[9:]}, **{f"rms_x{i + 1}": np.nan for i in range(n)})
+            rows.append(row)
+            continue
         err = np.zeros((setup.runs, N))
         sq = np.zeros(n)
         bnd = np.full((setup.runs, N), np.nan)
         out = np.zeros((setup.runs, N), bool)
+        elapsed = 0.0
         for r, (trace, w, v, xi0) in enumerate(runs):
             est = makers[family]()
             flags: list[bool] = []
             after = (lambda _k, est=est, flags=flags: flags.append(not est.in_design)) if family in designs else None
+            t_start = time.perf_counter()
             run = closed_loop(system, est, trace, x0, xi0, w, v, after_step=after)
+            elapsed += time.perf_counter() - t_start
             e = run.error[1:]
             err[r] = np.abs(e).max(axis=1)
             sq += (e ** 2).sum(axis=0)
-            if family in designs:
+            if family in BOUNDED:
                 bnd[r] = run.spread
+            if family in designs:
                 out[r] = flags
         errors[family] = err
-        row = {"estimator": family, "rms": float(np.sqrt(sq.sum() / (setup.runs * N * n))),
-               "max_error": float(err.max())}
-        if family in designs:
-            bounds[family], outside[family] = bnd, out
+        us[family] = 1e6 * elapsed / (setup.runs * N)
+        row.update(rms=float(np.sqrt(sq.sum() / (setup.runs * N * n))), max_error=float(err.max()))
+        if family in BOUNDED:
+            bounds[family] = bnd
+            ratio = bnd / limit
             row.update(bound=float(bnd.max()), median_bound=float(np.median(bnd)),
-                       violations=int(np.sum(err > bnd * (1 + VIOLATION_RTOL))),
-                       outside_design=float(out.mean()))
+                       violations=count_violations(err, bnd),
+                       outside_design=float(out.mean()) if family in designs else np.nan,
+                       limit_median=float(np.median(limit)), bound_over_limit_median=float(np.median(ratio)),
+                       bound_over_limit_p95=float(np.quantile(ratio, 0.95)), bound_over_limit_max=float(ratio.max()))
         else:
-            row.update(bound=np.nan, median_bound=np.nan, violations=pd.NA, outside_design=np.nan)
+            row.update(bound=np.nan, median_bound=np.nan, violations=pd.NA, outside_design=np.nan,
+                       limit_median=float(np.median(limit)), **{c: np.nan for c in COLUMNS[9:]})
+        if family in designs:
+            outside[family] = out
         row.update({f"rms_x{i + 1}": float(np.sqrt(sq[i] / (setup.runs * N))) for i in range(n)})
         rows.append(row)
         if progress is not None:
@@ -346,7 +462,9 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     table = pd.DataFrame(rows, columns=[*COLUMNS, *[f"rms_x{i + 1}" for i in range(n)]])
     table["violations"] = table["violations"].astype("Int64")
     return CompareResult(setup=setup, table=table, errors=errors, bounds=bounds,
-                         mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside)
+                         mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside, limit=limit,
+                         designs={f: (found[f] if isinstance(found.get(f), str) else design_in_words(f, setup))
+                                  for f in FAMILIES}, us_per_step=us)
 
 
 def _gaussian(system: AffineSystem, given: "GaussianNoise | dict | None", mu1: float, sigmas: float) -> GaussianNoise:

@@ -28,4 +28,7 @@ What every engine shares:
     Per-state weights of the bound: the design on ``z = W x`` and its estimator in the original state.
 :mod:`~eqrec.design.result`, :mod:`~eqrec.design.report`
     :class:`~eqrec.design.result.Design`, what every design returns, and how to read it (tables, JSON).
+:mod:`~eqrec.design.saved`
+    A design JSON of ``eqrec design --out`` read back into a :class:`~eqrec.design.result.Design`
+    (:func:`~eqrec.design.saved.load_design`).
 """

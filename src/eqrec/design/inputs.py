@@ -13,10 +13,14 @@ word and a delay word, so :func:`missing_words` and :func:`delay_words` make the
 from __future__ import annotations
 
 import numbers
+import os
+from dataclasses import dataclass
+from itertools import combinations
 from typing import Any, Iterable
 
 import numpy as np
 
+from eqrec.checks import integer
 from eqrec.bounds.data_classes import ClassSet, classes_of_tree
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
@@ -64,6 +68,48 @@ def missing_words(words: Iterable["str | ArrivalPattern"], *, field_name: str = 
     (ArrivalPattern('0111', arrivals=(None, 1, 2, 3)), ArrivalPattern('1011', arrivals=(0, None, 2, 3)))
     """
     return as_language(words, kind="missing", fixed_length=False, field_name=field_name, source=source)
+
+
+def missing_words_at_most(T: int, m: int) -> tuple[ArrivalPattern, ...]:
+    r"""Every missing-data word of length ``T`` with at most ``m`` zeros: at most ``m`` measurements lost per block.
+
+    The prefix design's language for the loss-aware rule of :func:`eqrec.delay_classes` without delays
+    (``max_delay=0``: the same arrival patterns, so the same classes).  Ordered by the number of zeros,
+    then by the positions of the zeros (``111..1``, then ``011..1``, ``101..1``, ...).
+
+    Parameters
+    ----------
+    T : int
+        Word length (the horizon), at least 1.
+    m : int
+        Largest number of zeros, ``0..T`` (``T``: all ``2^T`` words).
+
+    Returns
+    -------
+    tuple of ArrivalPattern
+        :math:`\sum_{j \le m} \binom{T}{j}` typed missing-data patterns (no reading needed).
+
+    Raises
+    ------
+    InputError
+        ``T`` not an integer >= 1 or ``m`` not one in ``0..T`` (the field is named).
+
+    Examples
+    --------
+    >>> import eqrec
+    >>> [p.label for p in eqrec.missing_words_at_most(4, 1)]
+    ['1111', '0111', '1011', '1101', '1110']
+    """
+    T = integer(T, "T", low=1)
+    m = integer(m, "m", high=T)
+    words = []
+    for j in range(m + 1):
+        for zeros in combinations(range(T), j):
+            word = ["1"] * T
+            for i in zeros:
+                word[i] = "0"
+            words.append("".join(word))
+    return missing_words(words)
 
 
 def delay_words(words: Iterable["str | ArrivalPattern"], max_delay: int | None = None, *,
@@ -299,3 +345,163 @@ def check_fraction(value: Any, field_name: str) -> float:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not 0 < float(value) < 1:
         raise InputError(f"must be a number strictly between 0 and 1, got {value!r}", field=field_name)
     return float(value)
+
+
+# ---------------------------------------------------------------------------
+# The size of a --max-delay design, before solving (issue 33 §2)
+# ---------------------------------------------------------------------------
+
+#: Estimated seconds above which ``eqrec design`` refuses a ``--max-delay`` design unless ``--force`` (10 min).
+MAX_ESTIMATED_SECONDS = 600.0
+#: Fraction of the machine's available memory above which it refuses (unless ``--force``).
+MAX_MEMORY_FRACTION = 0.8
+#: The time model of :func:`estimate_delay_design`: a class's level LPs at both μ1 of a μ1-free design take about
+#: ``SECONDS_PER_RUN`` per LP plus ``SECONDS_PER_WORK * n * work**WORK_EXPONENT`` (``work`` = rows x columns,
+#: :func:`eqrec.design.classes.blocks.class_work`; the exponent from one class's LPs alone, 0.014 s at time 100,
+#: 0.047 s at 200, 0.14 s at 400), the factor fit on the whole two-mass (1, T) designs of
+#: ``benchmarks/bench_horizon.py`` (2.9 s at T = 100, 16 s at 200, 67 s at 400) on this project's 2-core machine
+#: shared with other jobs (HiGHS 1.15): maps, models and certificates included.
+SECONDS_PER_RUN, SECONDS_PER_WORK, WORK_EXPONENT = 1.1e-3, 1.5e-6, 0.85
+
+
+@dataclass(frozen=True)
+class WorkEstimate:
+    """The estimated size of a class-engine design, from the class sizes alone (nothing solved).
+
+    Parameters
+    ----------
+    classes : int
+        (time, available data) classes.
+    lp_rows : int
+        Rows of all the class LPs (``n`` LPs of ``|S| p`` rows per class).
+    nonzeros : int
+        Upper bound of their nonzeros (dense ``Z_S``).
+    seconds : float
+        Expected wall-clock seconds on ``workers`` processes of this machine.
+    memory : float
+        Expected peak memory in bytes (the stacked maps of every worker and the largest class).
+    workers : int
+        Worker processes assumed.
+    """
+
+    classes: int
+    lp_rows: int
+    nonzeros: int
+    seconds: float
+    memory: float
+    workers: int
+
+    def summary(self) -> str:
+        """One line: classes, LP rows, time and memory.
+
+        Returns
+        -------
+        str
+        """
+        t = self.seconds
+        when = f"{t:.0f} s" if t < 120 else f"{t / 60:.0f} min" if t < 7200 else f"{t / 3600:.3g} h"
+        return (f"{self.classes} classes, {self.lp_rows:.3g} LP rows ({self.nonzeros:.3g} nonzeros); about {when} "
+                f"and {self.memory / 2**30:.2g} GiB on {self.workers} core{'s' * (self.workers > 1)}")
+
+    def too_large(self, available_memory: float | None = None) -> str | None:
+        """Why this design is past the documented size (:data:`MAX_ESTIMATED_SECONDS`, :data:`MAX_MEMORY_FRACTION`).
+
+        Parameters
+        ----------
+        available_memory : float or None, optional
+            Bytes available (default: read from the system; ``None`` there: the memory is not checked).
+
+        Returns
+        -------
+        str or None
+            The reason, or ``None`` when it is within the limits.
+        """
+        mem = _available_memory() if available_memory is None else available_memory
+        if mem is not None and self.memory > MAX_MEMORY_FRACTION * mem:
+            return f"it needs about {self.memory / 2**30:.3g} GiB, more than {MAX_MEMORY_FRACTION:.0%} of the " \
+                   f"{mem / 2**30:.3g} GiB available"
+        if self.seconds > MAX_ESTIMATED_SECONDS:
+            return f"it would take about {self.seconds / 60:.0f} min, more than {MAX_ESTIMATED_SECONDS / 60:.0f} min"
+        return None
+
+
+def _available_memory() -> float | None:
+    """Bytes of memory available (Linux ``/proc/meminfo``), or ``None``."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return None
+
+
+def _class_sizes(max_delay: int, horizon: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(depth, |S|, terminal)`` of every class of ``{0..D}^T``, without building them past a short horizon.
+
+    Past the first ``2D + 4`` times the window rule repeats: every depth ``d < T`` has the classes of depth
+    ``T0 - 1`` of the horizon ``T0``, with the same numbers of measurements missing, and the terminal
+    classes (``d = T``) those of ``T0``; the classes of depth ``< T0 - 1`` are built.
+    """
+    from eqrec.bounds.data_classes import classes_of_full_language
+
+    T0 = min(horizon, 2 * max_delay + 4)
+    built = classes_of_full_language(T0, max_delay).classes
+    depth = np.array([c.depth for c in built], np.int64)
+    size = np.array([len(c.available) for c in built], np.int64)
+    if horizon == T0:
+        return depth, size, depth == T0
+    inner = depth < T0 - 1
+    gap_mid = depth[depth == T0 - 1] - size[depth == T0 - 1]  # measurements missing at an inner depth
+    gap_end = depth[depth == T0] - size[depth == T0]
+    mid = np.arange(T0 - 1, horizon)
+    d = np.concatenate([depth[inner], np.repeat(mid, gap_mid.size), np.full(gap_end.size, horizon)])
+    s = np.concatenate([size[inner], (mid[:, None] - gap_mid[None, :]).ravel(), horizon - gap_end])
+    return d, s, d == horizon
+
+
+def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *, mu1_free: bool = False,
+                          workers: int = 1) -> WorkEstimate:
+    """Estimate the size, time and memory of the class-engine design of ``{0..max_delay}^horizon``.
+
+    From the class sizes alone (:func:`eqrec.bounds.data_classes.classes_of_full_language` on a short horizon,
+    extended by the window rule), in the time model of :data:`SECONDS_PER_RUN`, :data:`SECONDS_PER_WORK` and
+    :data:`WORK_EXPONENT`; the memory is the stacked maps of the horizon (``(T+1) n`` state and ``T p``
+    output rows over ``T (nw + nv) + n`` uncertain coordinates) held by every worker, plus the largest class.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    max_delay : int
+        Largest delay ``D``.
+    horizon : int
+        Horizon ``T``.
+    mu1_free : bool, optional
+        A μ1-free design (level LPs at two μ1 and the Charnes–Cooper LPs of the terminal classes).
+    workers : int, optional
+        Worker processes.
+
+    Returns
+    -------
+    WorkEstimate
+        The estimate.
+    """
+    n, p, nw, nv = system.n, system.p, system.nw, system.nv
+    depth, size, terminal = _class_sizes(int(max_delay), int(horizon))
+    m = size.astype(float) * p
+    cols = depth * nw + size * nv + n
+    work = np.maximum(1.0, m * cols)
+    runs = 2 if mu1_free else 1
+    per_class = n * (runs * SECONDS_PER_RUN + runs / 2 * SECONDS_PER_WORK * work ** WORK_EXPONENT)
+    if mu1_free:  # the Charnes-Cooper LPs of the terminal classes, about one level LP each
+        per_class = per_class + terminal * n * (SECONDS_PER_RUN + SECONDS_PER_WORK / 2 * work ** WORK_EXPONENT)
+    cores = max(1, min(int(workers), os.cpu_count() or 1))
+    seconds = 1.0 + float(per_class.sum()) / cores
+    coords = horizon * (nw + nv) + n
+    stacked = 8.0 * coords * ((horizon + 1) * n + horizon * p)
+    largest = 8.0 * 3 * float(m.max(initial=0)) * coords
+    memory = 2e8 + (cores + 1) * (stacked + largest)  # every worker and this process; the interpreter
+    return WorkEstimate(classes=int(depth.size), lp_rows=int(n * m.sum()), nonzeros=int(n * (m * cols).sum()),
+                        seconds=seconds, memory=memory, workers=cores)

@@ -327,8 +327,13 @@ def round_up(value: float, digits: int = 6) -> float:
     return math.ceil(value * scale) / scale
 
 
+#: What to retry with in Python, per design method (the μ1-free entry each method has).
+FREE_HINTS = {"prefix": "design_prefix(..., mu1='free')", "time": "design_time_based(..., mu1='free')",
+              "delay": "design_delay_global(...)"}
+
+
 def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: InfeasibleDesign, *,
-                  solver: str = "highs", n_jobs=None, scheduler=None) -> InfeasibleDesign:
+                  solver: str = "highs", n_jobs=None, scheduler=None, method: str = "prefix") -> InfeasibleDesign:
     """The error to raise for a design infeasible at ``mu1``: it names the true smallest feasible ``μ1``.
 
     A terminal class's worst case at the requested ``mu1`` is not the level to
@@ -351,13 +356,17 @@ def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: In
     n_jobs : int or None, optional
     scheduler : str, distributed.Client or None, optional
         Where its LPs run (:func:`min_recovery_level`).
+    method : str, optional
+        The design method that failed (``Design.method``): the hint names its own
+        μ1-free entry (:data:`FREE_HINTS`; ``--mu1 free`` on the command line).
 
     Returns
     -------
     InfeasibleDesign
         ``error`` itself if ``μ1,min`` cannot be computed or does not exceed
         ``mu1``; the error of :func:`min_recovery_level` if no ``μ1`` is
-        feasible; else a new error naming ``μ1,min``.
+        feasible; else a new error naming ``μ1,min``, with it as
+        :attr:`InfeasibleDesign.mu1_min` (the printed value, a float).
     """
     try:
         mm = min_recovery_level(system, classes, solver=solver, n_jobs=n_jobs, scheduler=scheduler)
@@ -368,5 +377,6 @@ def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: In
     if not mm.upper > mu1:
         return error
     shown = f"{round_up(mm.upper):.6g}"
-    return InfeasibleDesign(f"{error}; the smallest feasible mu1 is {shown} (retry with mu1 >= {shown} or --mu1 "
-                            "free; in Python mu1='free' or design_delay_global)")
+    hint = FREE_HINTS.get(method, "mu1='free'")
+    return InfeasibleDesign(f"{error}; the smallest feasible mu1 is {shown} (retry with mu1 >= {shown} or --mu1 free; "
+                            f"in Python {hint})", mu1_min=float(shown))

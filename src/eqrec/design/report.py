@@ -112,7 +112,7 @@ def class_table(design: Design) -> list[dict]:
     Returns
     -------
     list of dict
-        One row per class: ``class``, ``k``, ``data``, ``terminal``, ``sequences``,
+        One row per class: ``class``, ``k``, ``data``, ``terminal``, ``inner``, ``sequences``,
         ``nodes``, ``level``, ``certified``, ``K``.
     """
     cc = design.class_certificate
@@ -121,7 +121,7 @@ def class_table(design: Design) -> list[dict]:
     rows = []
     for i, cls in enumerate(gains.classes.classes):
         rows.append({"class": cls.label, "k": cls.depth, "data": list(cls.available), "terminal": cls.terminal,
-                     "sequences": int(cls.weight), "nodes": int(cls.nodes),
+                     "inner": cls.inner, "sequences": int(cls.weight), "nodes": int(cls.nodes),
                      "level": float(max(design.mu1, levels[i])) if cls.inner else float(levels[i]),
                      "certified": float(cc.levels[i]), "K": gains.K[i].tolist()})
     return rows
@@ -167,11 +167,13 @@ def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
                          "tree: use the class gains K)", field="node-gains")
     certified = cert if cert is not None else ccert
     out = {"method": "delay", "engine": design.extra.get("engine", "tree"), "cost": design.extra.get("cost"),
-           "mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"),
+           "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"),
            "J_certified": design.extra.get("J_certified"),
            "certified_mu2": None if certified is None else certified.mu2,
            "certified_terminal": None if certified is None else certified.terminal,
            "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes")}
+    if "mu1_requested" in design.extra:  # mu1 raised to what the gains certify (eqrec.bounds.certify)
+        out["mu1_requested"] = design.extra["mu1_requested"]
     if design.class_gains is not None:
         out["classes"] = class_table(design)
     if node_gains:

@@ -8,10 +8,14 @@
     The causal equalized-recovery estimators on time-stamped packets (class and node gains).
 :mod:`~eqrec.estimators.switching`
     The switching strategy of the delayed-data paper (Section III-B3).
-:mod:`~eqrec.estimators.error_boxes`
-    The error boxes of an estimator outside its language (``strict=False``).
+:mod:`~eqrec.estimators.error_maps`
+    The error maps of the class form, carried by the exact run-time bound (``strict=False``).
 :mod:`~eqrec.estimators.guaranteed`
     :class:`~eqrec.estimators.guaranteed.GuaranteedEstimator`: each step returns the estimate and its guarantee.
 :mod:`~eqrec.estimators.kalman`
     Kalman-type filters for delayed and missing measurements (time-stamped, delay-unaware, random-delay LMV).
+:mod:`~eqrec.estimators.exact`
+    :func:`~eqrec.estimators.exact.exact_bound`: the exact worst-case bound of any linear estimator, per step.
+:mod:`~eqrec.estimators.zonotope`
+    :class:`~eqrec.estimators.zonotope.ZonotopeEstimator`: set-membership by zonotopes, guaranteed on any trace.
 """

@@ -46,6 +46,8 @@ import numpy as np
 
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
+from eqrec.bounds.zonotope import ErrorMap
+from eqrec.estimators.error_maps import ClassErrorMaps
 from eqrec.estimators.intake import _Opened, _StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -216,6 +218,30 @@ class ClassEstimator(_StampedEstimator):
         super().__init__(system, gains.horizon, xhat0, periodic, t0)
         self.gains = gains
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
+        self._maps: ClassErrorMaps | None = None
+
+    def error_map(self) -> ErrorMap:
+        r"""How the error of the current estimate depends on the period's initial error and noise.
+
+        :math:`\xi(s+d) = G^{\xi_0}_{d,S}\,\xi(s) + G^{w,v}_{d,S}\,\mathrm{diag}(r)\,\varepsilon`
+        for the class ``(d, S)`` of the last step, anchored at the period's start ``s``
+        (:mod:`eqrec.estimators.error_maps`; the maps are computed on first use and kept).
+
+        Returns
+        -------
+        ErrorMap
+            The map of the current estimate (:mod:`eqrec.bounds.zonotope`).
+
+        Raises
+        ------
+        InputError
+            Before the first step of a period (the estimate is the period's initial one).
+        """
+        if self._t == 0:
+            raise InputError("no step of the period has been taken: the current estimate is its initial one")
+        if self._maps is None:
+            self._maps = ClassErrorMaps(self.system, self.gains)
+        return self._maps.error_map(self._start, self._t, tuple(sorted(self._yxi)))
 
     @property
     def prediction(self) -> np.ndarray:
@@ -249,39 +275,6 @@ class ClassEstimator(_StampedEstimator):
         """
         step = self._open(y, u)
         return step.t + 1, tuple(sorted(step.yxi))
-
-    def coast(self, y, u: np.ndarray | None = None) -> np.ndarray:
-        r"""Process time ``t`` on the model alone: :math:`\hat x(t+1) = A\hat x(t) + B u(t) + f`.
-
-        The packets are checked and recorded as :meth:`step` does but not used
-        (the step of :class:`eqrec.estimators.guaranteed.GuaranteedEstimator` with
-        ``strict=False`` when the data have left the design's language).
-
-        Parameters
-        ----------
-        y : ndarray, Packet, iterable of Packet, or None
-            What arrived at ``t`` (as in :meth:`step`).
-        u : ndarray, shape (m,), or None, optional
-            The input ``u(t)`` (``None``: zero).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-            The prediction ``x̂(t+1)`` (a copy).
-
-        Raises
-        ------
-        InputError
-            As :meth:`step`, except for a class the gains lack (nothing changes).
-        """
-        return self._coast(self._open(y, u))
-
-    def _coast(self, step: _Opened) -> np.ndarray:
-        sys = self.system
-        xhat = sys.A_at(step.t) @ self.xhat + sys.B_at(step.t) @ step.u + sys.f
-        self._commit(step)
-        self._xbar = self.xhat = xhat
-        return xhat.copy()
 
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
         r"""Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.

@@ -25,55 +25,66 @@ are checked (shapes, types, NaN/inf) before anything changes, so a call that
 raises leaves the estimator exactly as it was.
 
 **Outside the designed language** (``strict=False``, class gains): the papers
-assume the arrivals stay in the language; a real network does not.  The
-estimator then keeps a true bound: it tracks a box :math:`\beta(k) \in
-\mathbb R^n` with :math:`|\xi_i(k)| \le \beta_i(k)` for every noise in the
-box.  In a period that starts with :math:`|\xi(0)| \le \beta_0` and whose
-data stay in the language, the class maps are linear in :math:`\delta =
-(w, v, \xi_0)`, so the exact worst case of class ``(d, S)`` is
+assume the arrivals stay in the language; a real network does not.  With
+``strict=False`` the estimator carries the *exact* error set of its estimate,
+a zonotope (:mod:`eqrec.bounds.zonotope`), and returns its worst case: the
+bound is never inf or NaN for finite data, it is at least the information
+limit (:func:`eqrec.bounds.information.information_limit`: no estimator can
+guarantee less) and at least the error for every noise in the box, and it
+never exceeds the designed level while the arrivals stay in the language.
 
-.. math:: \beta(d) = |G^{w,v}_{d,S}|\, r + |G^{\xi_0}_{d,S}|\, \beta_0,
-    \qquad G_{d,S} = E_d - K_{d,S} Z_S,
+* *In the design* (the period started with an error set inside the ``μ1``
+  box and its data have stayed in the language): the class step of the
+  design, whose error is :math:`\xi(s+d) = G^{\xi_0}_{d,S}\xi(s) +
+  G^{w,v}_{d,S}\operatorname{diag}(r)\varepsilon`
+  (:mod:`eqrec.estimators.error_maps`), applied to the zonotope of
+  :math:`\xi(s)`: no box reset at the period's start, so what earlier periods
+  told is kept.  The bound is the smaller of that exact worst case and the
+  designed level (both are guarantees; in exact arithmetic the first never
+  exceeds the second, since the zonotope lies in the ``μ1`` box).
+* *Out of the design* (a step whose data has no class: one loss too many, a
+  packet later than designed): the estimator falls back to the set-membership
+  estimator :class:`eqrec.estimators.zonotope.ZonotopeEstimator`, started at
+  the period's start from the exact error set there and fed again the
+  packets of the period so far, so that every packet that arrives is used.
+* *The return.*  At each period start while out of the design, if the
+  zonotope's interval hull lies in the ``μ1`` box (every state bound
+  :math:`\le \mu_1`, exactly in floating point), the designed gains take over
+  again from the set-membership centre.  Proof that the designed guarantee
+  then holds: the design's certificate bounds the error of every class of the
+  language for every initial error with :math:`\|\xi(s)\|_\infty \le \mu_1`,
+  and the true error lies in the zonotope, hence in that box.  The
+  set-membership bound tracks the information limit (within a factor close to
+  one, ``benchmarks/bench_zonotope.py``), so the return comes at the first
+  period start after the arrivals give enough data for a bound below ``μ1``.
 
-(``r`` the noise radii), which is the designed level when :math:`\beta_0 \le
-\mu_1`.  When a step's data has no class in the design (one loss too many, a
-packet later than designed), the estimator *coasts* to the period's end on the
-model, :math:`\hat x(k+1) = A\hat x(k) + Bu(k) + f`, with
-:math:`\beta(k+1) = |A|\,\beta(k) + |E|\, r_w` (packets are not used until
-the next period), and the next period starts from :math:`\beta_0 =
-\beta(\text{end})`.
-
-*When the designed guarantee returns.*  :attr:`GuaranteedEstimator.in_design`
-is true exactly when the current period started with :math:`\beta_0 \le
-\mu_1` (componentwise) and its data have stayed in the language; the bounds
-are then the designed levels.  After an excursion, let :math:`e = \max_i
-\beta_{0,i}/\mu_1 - 1 > 0`.  The certificate of every terminal class gives
-:math:`c_T + M_T \mu_1 \mathbf 1 \le (\mu_1 - \varepsilon)\mathbf 1`
-(:math:`c_T = |G^{w,v}_T| r`, :math:`M_T = |G^{\xi_0}_T|`,
-:math:`\varepsilon \ge 0` the design's slack at the period's end), hence
-:math:`\|M_T\|_\infty \le \rho := 1 - \min_i c_{T,i}/\mu_1 \le 1` and, after
-one period in the language, :math:`e' \le \rho\, e - \varepsilon/\mu_1`.
-So with slack (:math:`\varepsilon > 0`) the designed guarantee is back after at
-most :math:`\lceil e\,\mu_1/\varepsilon \rceil` periods in the language; without
-it the bounds converge to the designed levels geometrically (ratio
-:math:`\rho < 1` when noise reaches every state by the period's end).
+:attr:`GuaranteedEstimator.in_design` says which of the two applies;
+:attr:`GuaranteedEstimator.state_bounds` holds the per-state bounds.
+``strict=True`` keeps the a priori guarantee of the design (the level of the
+observed prefix or class) and refuses data outside the language.
 """
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Callable, Iterable
 
 import numpy as np
 
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate
+from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.bounds.data_classes import ClassGains
-from eqrec.estimators.error_boxes import BoundRule, BoxState, ClassBoxes
-from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
-from eqrec.arrivals.packets import Packet, check_estimate
 from eqrec.bounds.gains import GainSchedule
-from eqrec.arrivals.packets import as_packets
-from eqrec.systems.affine import AffineSystem
+from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
 from eqrec.errors import InputError
+from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, _has_class, make_estimator
+from eqrec.estimators.zonotope import ZonotopeEstimator
+from eqrec.systems.affine import AffineSystem
 
+#: ``bound_of(prefix)``: the guarantee on ``ξ(t+1)`` after the observed arrival prefix of length ``t + 1``.
+BoundRule = Callable[[ArrivalPattern], float]
+
+#: Default reduction order of the error set carried with ``strict=False`` (generators per state).
+DEFAULT_ORDER = 40
 
 
 class GuaranteedEstimator:
@@ -109,11 +120,14 @@ class GuaranteedEstimator:
     strict : bool, optional
         ``True`` (default): data outside the design's language raise
         :class:`InputError` (nothing changes).  ``False`` (class gains only):
-        the estimator keeps running with a true, possibly larger bound and
-        says in :attr:`in_design` whether the designed guarantee applies
-        (module docstring).
+        the estimator carries the exact error set of its estimate and returns
+        its worst case, falls back to set-membership outside the language and
+        says in :attr:`in_design` whether the designed gains apply (module docstring).
     name : str or None, optional
         The family in words (:mod:`eqrec.estimators.protocol`).
+    order : float or None, optional
+        ``strict=False``: the error set is reduced (outer, Girard) to ``order · n`` generators at each
+        period start and in the fallback (default :data:`DEFAULT_ORDER`; ``None``: exact, growing).
 
     Attributes
     ----------
@@ -144,7 +158,8 @@ class GuaranteedEstimator:
     kind = "guaranteed"
 
     def __init__(self, system: AffineSystem, gains: "GainSchedule | ClassGains", bound_of: BoundRule, mu1: float,
-                 periodic: bool = True, strict: bool = True, name: str | None = None):
+                 periodic: bool = True, strict: bool = True, name: str | None = None,
+                 order: "float | None" = DEFAULT_ORDER):
         for key, flag in (("strict", strict), ("periodic", periodic)):
             if not isinstance(flag, (bool, np.bool_)):
                 raise InputError(f"{key} must be True or False, got {flag!r}", field=key)
@@ -156,26 +171,57 @@ class GuaranteedEstimator:
         self.periodic = bool(periodic)
         self.strict = bool(strict)
         self.name = name or ("guaranteed, class engine" if isinstance(gains, ClassGains) else "guaranteed, node gains")
+        if not strict and not periodic:
+            raise InputError("strict=False runs periodically (periodic=True): the set-membership fallback returns "
+                             "to the designed gains at a period start", field="periodic")
+        self.order = check_order(order)
         self._est: "RecoveryEstimator | ClassEstimator | None" = None
         self.bound = np.nan
-        self._boxes = None if strict else ClassBoxes(system, gains, self.mu1)
-        self._box = BoxState(np.zeros(0), np.zeros(0), False, True)  # strict=False: the error boxes
+        # strict=False: the error set, the fallback (None while in the design), the period's record
+        self._set: ErrorSet | None = None
+        self._fallback: ZonotopeEstimator | None = None
+        self._period: tuple[int, np.ndarray, list] = (0, np.zeros(system.n), [])
+        self._t0 = 0
+        self._bounds = np.full(system.n, np.nan)
 
     @property
     def in_design(self) -> bool:
-        """Whether the designed guarantee applies to the current estimate (always true with ``strict=True``).
+        """Whether the designed gains and guarantee apply to the current estimate (always true with ``strict=True``).
 
-        False from a step whose data leave the design's language until a period
-        starts again with an error box within ``μ1`` (module docstring).
+        False from a step whose data leave the design's language until a
+        period starts with an error set inside the ``μ1`` box (module docstring).
         """
-        return self._box.in_design
+        return self._fallback is None
+
+    def error_map(self):
+        """The error map of the current estimate (class gains, inside the design; :mod:`eqrec.bounds.zonotope`).
+
+        Returns
+        -------
+        ErrorMap
+            :meth:`eqrec.estimators.causal.ClassEstimator.error_map` of the running class estimator.
+
+        Raises
+        ------
+        InputError
+            Node gains, or ``strict=False`` outside the design (the set-membership fallback carries its own set).
+        """
+        est = self._running()
+        if not isinstance(est, ClassEstimator) or self._fallback is not None:
+            raise InputError("error maps are those of the class form inside the design", field="gains")
+        return est.error_map()
+
+    @property
+    def state_bounds(self) -> np.ndarray:
+        """Per-state bounds ``|x_i − x̂_i| <= state_bounds[i]`` of the current estimate (``strict=False`` only)."""
+        if self.strict:
+            raise InputError("the per-state bounds are tracked with strict=False only", field="strict")
+        return self._bounds.copy()
 
     @property
     def error_box(self) -> np.ndarray:
-        """``β``: per-state bounds ``|x_i − x̂_i| <= β_i`` of the current estimate (``strict=False`` only)."""
-        if self.strict:
-            raise InputError("the per-state error box is tracked with strict=False only", field="strict")
-        return self._box.beta.copy()
+        """The same as :attr:`state_bounds` (the name of earlier versions)."""
+        return self.state_bounds
 
     def reset(self, xhat0, t0: int = 0) -> "GuaranteedEstimator":
         """Start from ``x̂(t0) = xhat0`` (shape ``(n,)``); the guarantee assumes its error is within ``μ1``.
@@ -206,17 +252,24 @@ class GuaranteedEstimator:
         self._est = make_estimator(self.system, self.gains, x0, periodic=self.periodic, t0=t0)
         self.bound = self.mu1
         if not self.strict:
-            self._box = self._boxes.start()
+            self._t0 = int(t0)
+            self._set = ErrorSet.box(self.mu1, self.system.n, self._t0, self.order)
+            self._fallback = None
+            self._bounds = np.full(self.system.n, self.mu1)
         return self
 
     @property
     def x(self) -> np.ndarray:
         """A copy of the current estimate ``x̂`` (of time :attr:`time`)."""
+        if self._fallback is not None:
+            return self._fallback.x
         return self._running().xhat.copy()
 
     @property
     def time(self) -> int:
         """Absolute time of the current estimate."""
+        if self._fallback is not None:
+            return self._fallback.time
         return self._running().time
 
     def _running(self) -> "RecoveryEstimator | ClassEstimator":
@@ -259,23 +312,75 @@ class GuaranteedEstimator:
             a non-periodic estimator.
         """
         est = self._running()
-        packets = as_packets(y, est.time, self.system.p)
+        packets = as_packets(y, self.time, self.system.p)
         if not self.strict:
             return self._relaxed_step(est, packets, u)
-        xhat = est.step(packets, u)
+        try:
+            xhat = est.step(packets, u)
+        except InputError as err:
+            if "outside the design" not in str(err):
+                raise
+            what = str(err).removeprefix("field 'y': ")
+            raise InputError(f"{what}. design.estimator(strict=False) keeps running outside the language "
+                             "with an exact bound; or call reset(x̂0) to start again inside it", field="y") from None
         done = est.period_time == est.T
         self.bound = self.mu1 if done else float(self.bound_of(est.observed_prefix))
         return xhat, self.bound
 
-    def _relaxed_step(self, est: ClassEstimator, packets: list[Packet], u) -> tuple[np.ndarray, float]:
-        """A step with ``strict=False`` (module docstring): the class step, or coasting with a growing box."""
+    def _relaxed_step(self, est: ClassEstimator, packets: list, u) -> tuple[np.ndarray, float]:
+        """A step with ``strict=False`` (module docstring): the class step with its exact bound, or the fallback."""
+        T, now = self.gains.horizon, est.time if self._fallback is None else self._fallback.time
+        if self._fallback is not None:
+            if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._fallback.carried_set[1]) <= self.mu1):
+                est = self._return_to_design(now, packets, u)  # checked first: nothing changes if it raises
+            else:
+                xhat, _ = self._fallback.step(packets, u)
+                return self._fallback_bounds(xhat)
+        new_period = est.period_time in (0, T)
         opened = est._open(packets, u)  # every input checked; nothing changes
         t, S = opened.t, tuple(sorted(opened.yxi))
-        boxes, coasting = self._boxes.advance(self._box, t, S)
-        xhat = est._coast(opened) if coasting else est._advance(opened)
-        self._box = boxes
-        self.bound = self._boxes.bound(boxes, t, S, self.bound_of, est.observed_prefix)
+        if new_period:  # the period's start: its time, its initial estimate, and the steps taken (replayed on exit)
+            self._period = (opened.k, est.xhat.copy(), [])
+        if not _has_class(self.gains, t + 1, S):
+            return self._leave_design(opened, packets)
+        xhat = est._advance(opened)
+        self._period[2].append((packets, opened.u))
+        beta = self._set.advance(est.error_map())
+        level = self.mu1 if t + 1 == T else float(self.bound_of(est.observed_prefix))
+        self._bounds = np.minimum(beta, level)
+        self.bound = float(self._bounds.max())
         return xhat, self.bound
+
+    def _new_fallback(self) -> ZonotopeEstimator:
+        return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
+                                 order=self.order).periodic_model(self.gains.horizon, self._t0)
+
+    def _leave_design(self, opened, packets: list) -> tuple[np.ndarray, float]:
+        """Start the set-membership estimator at the period's start and feed it the period's packets again."""
+        start, xhat_start, record = self._period
+        if est_period_starts := (self._est.period_time in (0, self.gains.horizon)):
+            start, xhat_start, record = opened.k, self._est.xhat.copy(), []
+        del est_period_starts
+        fallback = self._new_fallback().start_from(xhat_start, self._set.at(start), start)
+        for old_packets, old_u in record:
+            fallback.step(old_packets, old_u)
+        xhat, _ = fallback.step(packets, opened.u)
+        self._fallback = fallback
+        return self._fallback_bounds(xhat)
+
+    def _fallback_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
+        self._bounds = self._fallback.state_bounds
+        self.bound = float(self._bounds.max())
+        return xhat, self.bound
+
+    def _return_to_design(self, now: int, packets, u) -> ClassEstimator:
+        """The designed gains again from the set-membership centre (its set lies in the ``μ1`` box)."""
+        centre, generators = self._fallback.carried_set
+        est = make_estimator(self.system, self.gains, centre, periodic=True, t0=now)
+        est._open(packets, u)  # raises before anything changes
+        self._set = ErrorSet(generators, now, self.order)
+        self._est, self._fallback = est, None
+        return est
 
     def update(self, y=None, u=None) -> np.ndarray:
         """The filterpy spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.

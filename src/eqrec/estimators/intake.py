@@ -31,6 +31,7 @@ class _Opened:
     yxi: dict  # period time -> residual
     restarted: bool  # a new period starts at this step
     u: np.ndarray  # the checked input
+    dropped: int = 0  # packets stamped before the period: not used (counted in dropped_packets)
 
 
 class _StampedEstimator:
@@ -50,6 +51,13 @@ class _StampedEstimator:
     *period time* ``t = k − period_start`` (the time of the design, whose
     time 0 is the period's start), so a time-varying model describes one
     period of a ``T``-periodic plant, as the design assumes.
+
+    A packet stamped before the current period (or before ``t0``) is not
+    refused, with ``strict=True`` as with ``strict=False``: its period's
+    gains are no longer in use, and the language counts it as missing there
+    (a delay past the period's end means missing), so dropping it keeps the
+    guarantee.  It is counted in :attr:`dropped_packets` (since the start,
+    as :attr:`eqrec.estimators.zonotope.ZonotopeEstimator.dropped_packets`).
     """
 
     T: int
@@ -68,6 +76,7 @@ class _StampedEstimator:
         self._arrivals: list[int | None] = []  # per period time τ: arrival time (period time) or None
         self._history: list[np.ndarray] = []  # reference state at the period times 0..t
         self._yxi: dict[int, np.ndarray] = {}  # period time τ -> y(τ) - C ref(τ)
+        self.dropped_packets = 0  # packets stamped before their step's period: not used (class docstring)
 
     @property
     def observed_prefix(self) -> ArrivalPattern:
@@ -102,7 +111,8 @@ class _StampedEstimator:
         Raises :class:`InputError` when the horizon is over (not periodic),
         for malformed packets (:func:`as_packets`), a packet whose stamp
         was already received in this period, or a malformed input.  Packets
-        stamped before the current period are dropped.
+        stamped before the current period are dropped and counted in
+        :attr:`dropped_packets` when the step commits.
         """
         sys = self.system
         packets = self._packets(y)
@@ -118,17 +128,20 @@ class _StampedEstimator:
             arrivals, history, yxi = list(self._arrivals), list(self._history), dict(self._yxi)
         history.append(self._reference(restarted).copy())
         arrivals.append(None)
+        dropped = 0
         for pk in packets:
             tau = pk.time - start
             if tau < 0:
-                continue  # stamped before this period: its gains are no longer in use
+                dropped += 1  # stamped before this period: its gains are no longer in use (counted, not used)
+                continue
             if arrivals[tau] is not None:
                 raise InputError(f"a second packet stamped {pk.time} received at time {k}", field="y")
             arrivals[tau] = t
             yxi[tau] = pk.y - sys.C_at(tau) @ history[tau]
-        return _Opened(k, t, start, arrivals, history, yxi, restarted, u)
+        return _Opened(k, t, start, arrivals, history, yxi, restarted, u, dropped)
 
     def _commit(self, step: _Opened) -> None:
         """Install the state of a step that succeeded."""
         self._t, self._start, self._k = step.t + 1, step.start, step.k + 1
         self._arrivals, self._history, self._yxi = step.arrivals, step.history, step.yxi
+        self.dropped_packets += step.dropped

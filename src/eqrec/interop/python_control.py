@@ -17,7 +17,16 @@ Requires the optional extra ``pip install -e ".[control]"`` (python-control).
   arrived (T) and the time in the period (1); every ``T`` steps it restarts
   from its estimate (periodic reuse).  A signal carries one ``y`` per time,
   so this form covers missing-data languages (on time or lost); late
-  packets need :meth:`eqrec.design.result.Design.estimator`.
+  packets need :meth:`eqrec.design.result.Design.estimator`.  A weighted
+  design (``state_weights``) runs in ``z = W x`` inside and takes and gives
+  the original state ``x``, as :class:`eqrec.design.weighted.WeightedEstimator`.
+
+**One step apart.**  Column ``k`` of the response's ``xhat`` output is
+``x̂(k)``, computed from the data of times ``0..k-1`` (an output of the state
+at ``k``); :meth:`GuaranteedEstimator.step <eqrec.estimators.guaranteed.GuaranteedEstimator.step>`
+called with the data of time ``k`` returns ``x̂(k+1)``.  So the ``k``-th
+value returned by ``step`` (counting from 0) equals column ``k + 1`` of the
+response, and column 0 is ``x̂(0)`` itself.
 """
 
 from __future__ import annotations
@@ -26,7 +35,6 @@ import numpy as np
 
 from eqrec.checks import instance, positive
 from eqrec.arrivals.packets import check_estimate
-from eqrec.estimators.error_boxes import BoxState, ClassBoxes
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
@@ -89,24 +97,28 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
     Parameters
     ----------
     design : eqrec.design.result.Design
-        A design of the class engine (``design.class_gains`` set).
+        A design of the class engine (``design.class_gains`` set), weighted
+        (``state_weights``) or not: ``x̂`` is always in the original state, the
+        bound on ``max_i w_i |x_i − x̂_i|`` for a weighted one.
     name : str, optional
         Name of the returned I/O system.
     dt : float, True or None, optional
         Sampling time of the I/O system (``None``: the plant's ``dt`` when the
         system came from :func:`system_from_statespace`, else ``True``).
     strict : bool, optional
-        ``True`` (default): arrivals outside the language raise.  ``False``:
-        the estimator keeps a true bound outside the language, as
-        ``design.estimator(strict=False)`` (the same transition,
-        :class:`eqrec.estimators.error_boxes.ClassBoxes`), and has a third output
-        ``in_design`` (1 when the designed guarantee applies).
+        ``True`` (the default and the only value): arrivals outside the language raise.  Outside the
+        language ``design.estimator(strict=False)`` carries the exact error set, a zonotope whose number
+        of generators varies, and a set-membership fallback: no fixed-size I/O state holds them, so
+        ``False`` is refused (run ``design.estimator(strict=False)``).
 
     Returns
     -------
     control.NonlinearIOSystem
-        Inputs ``u[i]``, ``y[j]``, ``arrived``; outputs ``xhat[k]``, ``bound``;
-        the initial state for an initial estimate ``x̂(0)`` is
+        Inputs ``u[i]``, ``y[j]``, ``arrived``; outputs ``xhat[k]``, ``bound``.
+        Output column ``k`` is ``x̂(k)`` and its bound, from the inputs of
+        times ``0..k-1``: one step behind ``design.estimator().step``, whose
+        call with the data of time ``k`` returns ``x̂(k+1)`` (module docstring).
+        The initial state for an initial estimate ``x̂(0)`` is
         ``sys.initial_state(xhat0)`` (an attribute set on the returned system).
         ``arrived`` must be 0 or 1 exactly; ``y`` is not read when it is 0;
         ``u`` and an arrived ``y`` must be finite.  Give a lost packet a
@@ -130,26 +142,20 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
     if gains is None:
         raise InputError("estimator_iosys needs a class-engine design (design_prefix or design_delay); "
                          "for other designs use design.estimator()", field="design")
-    if getattr(design, "state_weights", None) is not None:
-        raise InputError("estimator_iosys runs designs without state weights (a weighted design's gains act on "
-                         "z = W x); use design.estimator(), which maps back to x", field="design")
-    if not isinstance(strict, bool):
-        raise InputError(f"strict must be True or False, got {strict!r}", field="strict")
+    weights = getattr(design, "state_weights", None)  # the state inside is z = W x; x̂ = ẑ / w outside
+    if strict is not True:
+        raise InputError(f"estimator_iosys runs inside the language only (strict=True), got strict={strict!r}: "
+                         "outside it, run design.estimator(strict=False), which carries the exact error set",
+                         field="strict")
     system, cert = design.system, design.class_certificate
     classes = gains.classes
     n, p, m, T = system.n, system.p, system.m, classes.horizon
     ix_bar, ix_inn = slice(0, n), slice(n, n + T * p)
     ix_arr, ix_t = slice(n + T * p, n + T * p + T), n + T * p + T
-    base = n + T * p + T + 1  # strict=False: x̂, β0, β, coasting, in design follow
-    boxes = None if strict else ClassBoxes(system, gains, design.mu1)
 
     def unpack(x):
         t = int(round(x[ix_t]))
         return x[ix_bar], x[ix_inn].reshape(T, p), x[ix_arr] > 0.5, t
-
-    def unpack_boxes(x):
-        xhat, beta0, beta = x[base:base + n], x[base + n:base + 2 * n], x[base + 2 * n:base + 3 * n]
-        return xhat, BoxState(beta0, beta, bool(x[base + 3 * n] > 0.5), bool(x[base + 3 * n + 1] > 0.5))
 
     def level(t, S):
         return design.mu1 if t == 0 else float(cert.levels[classes.index(t, S)])
@@ -163,8 +169,8 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
             xhat = gains.estimate(t, S, xbar, innov[list(S)])
         except InputError:
             raise InputError(f"the measurements {list(S)} of the first {t} steps of a period are not an arrival "
-                             "pattern of the design's language (estimator_iosys(design, strict=False) keeps a "
-                             "true bound outside it)", field="arrived") from None
+                             "pattern of the design's language (design.estimator(strict=False) keeps an exact "
+                             "bound outside it)", field="arrived") from None
         return xhat, level(t, S)
 
     def checked(t, u):
@@ -190,48 +196,28 @@ def estimator_iosys(design, *, name: str = "eqrec_estimator", dt: "float | bool 
             innov[t] = y - system.C_at(t) @ xbar
             arrived[t] = True
         nxt = system.A_at(t) @ xbar + system.B_at(t) @ uu + system.f
-        if boxes is None:
-            if t + 1 == T:  # period end: restart from the estimate of time T
-                xhat_T, _ = estimate(nxt, innov, arrived, T)
-                return initial_state(xhat_T)
-            return np.concatenate([nxt, innov.reshape(-1), arrived.astype(float), [t + 1]])
-        xhat, box = unpack_boxes(x)
-        S = tuple(int(i) for i in np.flatnonzero(arrived[:t + 1]))
-        box, coasting = boxes.advance(box, t, S)
-        if coasting:  # the model alone (the one transition of eqrec.estimators.error_boxes.ClassBoxes)
-            nxt = xhat_next = system.A_at(t) @ xhat + system.B_at(t) @ uu + system.f
-        else:
-            xhat_next = gains.estimate(t + 1, S, nxt, innov[list(S)])
-        if t + 1 == T:
-            return _relaxed_state(xhat_next, np.zeros(T * p + T), 0, xhat_next, box)
-        return _relaxed_state(nxt, np.concatenate([innov.reshape(-1), arrived.astype(float)]), t + 1, xhat_next, box)
-
-    def _relaxed_state(xbar, record, t, xhat, box):
-        return np.concatenate([xbar, record, [t], xhat, box.beta0, box.beta, [float(box.coasting),
-                                                                              float(box.in_design)]])
+        if t + 1 == T:  # period end: restart from the estimate of time T
+            xhat_T, _ = estimate(nxt, innov, arrived, T)
+            return start(xhat_T)
+        return np.concatenate([nxt, innov.reshape(-1), arrived.astype(float), [t + 1]])
 
     def output(_t, x, _u, _params):
         x = np.asarray(x, float)
-        if boxes is None:
-            xhat, bound = estimate(*unpack(x))
-            return np.concatenate([xhat, [bound]])
-        _, _, arrived, t = unpack(x)
-        xhat, box = unpack_boxes(x)
-        S = tuple(int(i) for i in np.flatnonzero(arrived[:t]))
-        bound = level(t, S) if box.in_design else float(box.beta.max())
-        return np.concatenate([xhat, [bound, float(box.in_design)]])
+        xhat, bound = estimate(*unpack(x))
+        return np.concatenate([xhat if weights is None else xhat / weights, [bound]])
+
+    def start(zhat):  # the state at a period's start, from the estimate inside (ẑ = W x̂ for a weighted design)
+        return np.concatenate([zhat, np.zeros(T * p + T), [0.0]])
 
     def initial_state(xhat0):
         xhat0 = check_estimate(xhat0, n)
-        if boxes is None:
-            return np.concatenate([xhat0, np.zeros(T * p + T), [0.0]])
-        return _relaxed_state(xhat0, np.zeros(T * p + T), 0, xhat0, boxes.start())
+        return start(xhat0 if weights is None else weights * xhat0)
 
     if dt is None:
         dt = system.dt or True
-    outputs = [f"xhat[{k}]" for k in range(n)] + ["bound"] + ([] if strict else ["in_design"])
+    outputs = [f"xhat[{k}]" for k in range(n)] + ["bound"]
     sys_io = control.nlsys(update, output, dt=dt, name=name,
                            inputs=[f"u[{i}]" for i in range(m)] + [f"y[{j}]" for j in range(p)] + ["arrived"],
-                           outputs=outputs, states=base + (0 if strict else 3 * n + 2))
+                           outputs=outputs, states=n + T * p + T + 1)
     sys_io.initial_state = initial_state
     return sys_io

@@ -293,6 +293,11 @@ class LPSolution:
         Column indices of the named blocks (from :attr:`LinearProgram.blocks`).
     row_dual : ndarray or None
         Row multipliers ``y``, shape (M,), in the convention above.
+    attempts : tuple of str, optional
+        The solves tried before this answer that ended without a usable status, each ``"what: status"``
+        (:func:`eqrec.lp.solvers.solve_lp`'s retries; empty when the first solve answered).
+    solved_by : str, optional
+        The solve that gave this answer, e.g. ``"highs"`` or ``"highs, primal simplex"`` (empty: ``solver``).
     """
 
     status: str  # "optimal", "infeasible", "unbounded", or a solver message
@@ -303,6 +308,8 @@ class LPSolution:
     solve_time: float  # seconds spent inside the solver call
     blocks: dict[str, np.ndarray] = field(default_factory=dict)
     row_dual: np.ndarray | None = None
+    attempts: tuple[str, ...] = ()
+    solved_by: str = ""
 
     @property
     def optimal(self) -> bool:
@@ -344,5 +351,6 @@ class LPSolution:
         if self.status == "unbounded":
             raise InfeasibleDesign(f"{what} is unbounded ({self.solver})")
         if not self.optimal:
-            raise SolverFailure(f"{what}: solver {self.solver} stopped with status '{self.status}'")
+            tried = f" (tried: {'; '.join(self.attempts)})" if self.attempts else ""
+            raise SolverFailure(f"{what}: solver {self.solver} stopped with status '{self.status}'{tried}")
         return self

@@ -113,6 +113,39 @@ def _distributed():
     return distributed
 
 
+def check_reachable(scheduler, timeout: float = 5.0) -> None:
+    """Raise now if a ``tcp://`` scheduler address does not accept connections (a design may not need it later).
+
+    A small language is solved in this process whatever ``scheduler`` says, so an address that is
+    never contacted would go unnoticed; a caller that was given one (``eqrec design --scheduler``)
+    checks it up front.  Only ``tcp://host:port`` is probed (a TCP connection, closed at once);
+    other schemes and clients are left to Dask.
+
+    Parameters
+    ----------
+    scheduler : str, distributed.Client or None
+        As :func:`check_scheduler` (``None``: nothing to check).
+    timeout : float, optional
+        Seconds to wait for the connection.
+
+    Raises
+    ------
+    InputError
+        The address cannot be reached (field ``scheduler``).
+    """
+    if not isinstance(scheduler, str) or not scheduler.strip().startswith("tcp://"):
+        return
+    import socket
+
+    address = scheduler.strip()
+    host, _, port = address[len("tcp://"):].rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot reach the Dask scheduler {address} ({exc})", field="scheduler") from None
+
+
 @contextlib.contextmanager
 def connected(scheduler) -> Iterator:
     """A ``dask.distributed.Client`` for ``scheduler`` while the block runs (``None`` stays ``None``).
@@ -144,7 +177,8 @@ def connected(scheduler) -> Iterator:
 
 
 class Progress:
-    """``label: done / total`` on stderr, rewritten in place, only when stderr is a terminal.
+    """Progress of a long stage on stderr: a bar rewritten in place on a terminal, else one line at its start and
+    one at its end.
 
     Parameters
     ----------
@@ -153,16 +187,24 @@ class Progress:
     label : str
         What is counted.
     enabled : bool or None, optional
-        ``None`` (default): when ``sys.stderr`` is a terminal.
+        ``None`` (default): a bar when ``sys.stderr`` is a terminal, the two lines otherwise; ``True``: the bar;
+        ``False``: nothing.
     """
+
+    WIDTH = 24  # characters of the bar
 
     def __init__(self, total: int, label: str, enabled: bool | None = None):
         self.total, self.label, self.done = int(total), label, 0
         self.enabled = _isatty(sys.stderr) if enabled is None else bool(enabled)
+        self.lines = enabled is None and not self.enabled
         self._last = 0.0
+        self._start = time.monotonic()
+        if self.lines:
+            sys.stderr.write(f"{self.label}: 0 / {self.total} ...\n")
+            sys.stderr.flush()
 
     def advance(self, units: int) -> None:
-        """Count ``units`` more done (printed at most 10 times a second, and at the end).
+        """Count ``units`` more done (the bar redrawn at most 10 times a second, and at the end).
 
         Parameters
         ----------
@@ -170,10 +212,19 @@ class Progress:
         """
         self.done += int(units)
         now = time.monotonic()
-        if self.enabled and (now - self._last > 0.1 or self.done >= self.total):
+        end = self.done >= self.total
+        if self.lines and end:
+            sys.stderr.write(f"{self.label}: {self.done} / {self.total} in {now - self._start:.1f} s\n")
+            sys.stderr.flush()
+        if self.enabled and (now - self._last > 0.1 or end):
             self._last = now
-            sys.stderr.write(f"\r{self.label}: {self.done} / {self.total}")
-            if self.done >= self.total:
+            frac = self.done / max(1, self.total)
+            bar = "#" * int(frac * self.WIDTH)
+            elapsed = now - self._start
+            eta = f", {elapsed * (1 - frac) / frac:.0f} s left" if 0 < frac < 1 else ""
+            sys.stderr.write(f"\r{self.label}: {self.done} / {self.total} [{bar:<{self.WIDTH}}] {frac:4.0%}"
+                             f" ({elapsed:.0f} s{eta})")
+            if end:
                 sys.stderr.write("\n")
             sys.stderr.flush()
 

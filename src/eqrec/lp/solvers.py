@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import re
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable
 
@@ -312,8 +313,140 @@ def solver_info(name: str) -> SolverInfo:
     return SOLVERS[name]
 
 
-def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None) -> LPSolution:
-    """Solve a :class:`LinearProgram` with a registered solver.
+#: Statuses that end the search for an answer: a definitive outcome, or a limit or stop (HiGHS sets no time or
+#: iteration limit of its own: a limit is the caller's) (:func:`solve_lp` retries every other status).
+FINAL_STATUSES = frozenset({"optimal", "infeasible", "unbounded", "Time limit reached", "Iteration limit reached",
+                            "Interrupted by user", "Memory limit reached"})
+
+#: The retries of :func:`solve_lp` after a solve ends without a usable status, in order: ``(solver, what,
+#: options)``.  The HiGHS settings start from HiGHS's defaults (the caller's options may be what failed);
+#: ``"scaled"`` is HiGHS on the model equilibrated by :func:`scaled_lp`; the last resort is another solver.
+#: A retry with the caller's own solver and options is skipped (it would repeat the same run).  Measured on the
+#: two-mass plant's (4, 100) design: a warm-started dual simplex that stalls on "basis change is taboo"
+#: (status 'Unknown') and a dual phase 1 that meets a spurious unbounded ray on an ill-scaled Charnes-Cooper
+#: LP (matrix entries over 3.5e7, status 'Not Set') both answer at the first retry.
+RETRIES: tuple[tuple[str, str, dict | str], ...] = (
+    ("highs", "defaults, cold start", {}),
+    ("highs", "presolve off", {"presolve": "off"}),
+    ("highs", "primal simplex", {"simplex_strategy": 4}),
+    ("highs", "interior point", {"solver": "ipm"}),
+    ("highs", "scaled model", "scaled"),
+    ("clarabel", "", {}),
+)
+
+
+def scaled_lp(lp: LinearProgram, passes: int = 8) -> tuple[LinearProgram, np.ndarray, np.ndarray]:
+    """``lp`` with its rows and columns scaled by powers of 2 (geometric equilibration of ``A``).
+
+    With ``A' = R A S`` (``R``, ``S`` diagonal, powers of two so that the scaling itself is exact), the LP in
+    ``x' = S^{-1} x`` has cost ``S c``, column bounds ``S^{-1}`` times ``lp``'s and row bounds ``R`` times; an
+    optimum ``x'``, ``y'`` of it gives ``x = S x'`` and ``y = R y'`` for ``lp`` (same objective).
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The model.
+    passes : int, optional
+        Alternating row and column passes.
+
+    Returns
+    -------
+    tuple
+        The scaled :class:`LinearProgram`, the row factors ``R`` ``(M,)`` and the column factors ``S`` ``(N,)``.
+    """
+    A = sp.csc_matrix(lp.A, copy=True)
+    A.data = np.abs(A.data)
+    A.eliminate_zeros()
+    nr, nc = A.shape
+    R, S = np.ones(nr), np.ones(nc)
+    logA = A.copy()
+    logA.data = np.log2(logA.data)
+    for _ in range(passes):
+        # each row (column): bring the geometric mean of its largest and smallest entry to 1
+        M = logA.tocsr()
+        B = M.copy()
+        B.data = B.data + np.log2(R)[np.repeat(np.arange(nr), np.diff(M.indptr))] + \
+            np.log2(S)[M.indices]
+        R *= _mid_scale(B.data, B.indptr)
+        Bc = logA.copy()
+        Bc.data = Bc.data + np.log2(R)[Bc.indices] + np.log2(S)[np.repeat(np.arange(nc), np.diff(Bc.indptr))]
+        S *= _mid_scale(Bc.data, Bc.indptr)
+    As = sp.diags(R) @ lp.A @ sp.diags(S)
+    out = LinearProgram(c=lp.c * S, A=sp.csc_matrix(As), row_lower=lp.row_lower * R, row_upper=lp.row_upper * R,
+                        col_lower=lp.col_lower / S, col_upper=lp.col_upper / S, blocks=lp.blocks)
+    return out, R, S
+
+
+def _mid_scale(logs: np.ndarray, indptr: np.ndarray) -> np.ndarray:
+    """Per segment of ``logs`` (log2 of the entries of a row or column): ``2^-round((max + min) / 2)``; 1 if empty."""
+    has = np.diff(indptr) > 0
+    out = np.ones(indptr.size - 1)
+    if has.any():
+        starts = indptr[:-1][has]  # the nonempty segments, delimited by each other's starts
+        mid = (np.maximum.reduceat(logs, starts) + np.minimum.reduceat(logs, starts)) / 2
+        out[has] = np.exp2(-np.round(mid))
+    return out
+
+
+def _solve_scaled(name: str, lp: LinearProgram, options: dict) -> LPSolution:
+    """Solve :func:`scaled_lp` of ``lp`` with solver ``name`` and map its answer back to ``lp``."""
+    model, R, S = scaled_lp(lp)
+    sol = SOLVERS[name].solve(model, options)
+    if sol.x is None:
+        return sol
+    x = sol.x * S
+    return LPSolution(sol.status, x, float(lp.c @ x), sol.solver, sol.iterations, sol.solve_time, lp.blocks,
+                      row_dual=None if sol.row_dual is None else sol.row_dual * R)
+
+
+#: The active retry logs of :func:`retry_log`, innermost last.
+_LOGS: list[list[str]] = []
+
+
+@contextmanager
+def retry_log():
+    """Collect, while active, the LP solves of this process that needed a retry of :func:`solve_lp`.
+
+    Each entry is the :attr:`LPSolution.solved_by` of a retried solve (``"failed"`` when every attempt failed),
+    recorded in the innermost active log only; :func:`record_retries` adds the entries of solves made elsewhere
+    (worker processes).
+
+    Yields
+    ------
+    list of str
+        The entries, in the order of the solves.
+    """
+    entries: list[str] = []
+    _LOGS.append(entries)
+    try:
+        yield entries
+    finally:
+        del _LOGS[next(i for i, log in enumerate(_LOGS) if log is entries)]  # by identity: logs compare equal
+
+
+def record_retries(entries) -> None:
+    """Add ``entries`` (from another process's :func:`retry_log`) to the innermost active log, if any.
+
+    Parameters
+    ----------
+    entries : iterable of str
+    """
+    if _LOGS:
+        _LOGS[-1].extend(entries)
+
+
+def _attempt_name(solver: str, what: str) -> str:
+    return f"{solver}, {what}" if what else solver
+
+
+def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = None, *,
+             retry: bool = True, tried: tuple[str, ...] = ()) -> LPSolution:
+    """Solve a :class:`LinearProgram` with a registered solver, retrying other settings when it gives no answer.
+
+    When the solve ends without a usable status (any status outside :data:`FINAL_STATUSES`, e.g. HiGHS's
+    'Not Set' or 'Unknown' after a numerical breakdown), the solves of :data:`RETRIES` are tried in order
+    until one answers; :attr:`LPSolution.attempts` lists the ones that did not and
+    :attr:`LPSolution.solved_by` the one that did.  The model is never changed.
 
     Parameters
     ----------
@@ -323,14 +456,44 @@ def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = No
         A name of :data:`SOLVER_NAMES` (default ``"highs"``).
     options : dict or None, optional
         Passed to the solver (HiGHS option names, Clarabel settings, IPOPT
-        options; ``x0`` is IPOPT's starting point).
+        options; ``x0`` is IPOPT's starting point); not to the retries.
+    retry : bool, optional
+        Whether to retry (default); ``False``: the one solve's answer, whatever its status.
+    tried : tuple of str, optional
+        Attempts already made by the caller (e.g. a warm-started HiGHS run), each ``"what: status"``; they are
+        listed first in :attr:`LPSolution.attempts`.
 
     Returns
     -------
     LPSolution
-        Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.
+        Never raises for infeasibility; call :meth:`LPSolution.require_optimal`.  When every attempt fails:
+        the first one's answer, with every attempt in ``attempts`` (the message of
+        :meth:`~LPSolution.require_optimal` names them).
     """
-    return solver_info(solver).solve(lp, dict(options or {}))
+    options = dict(options or {})
+    first = solver_info(solver).solve(lp, dict(options))
+    if not retry or first.status in FINAL_STATUSES:
+        if tried:
+            first.attempts, first.solved_by = tuple(tried), _attempt_name(solver, "cold start")
+            record_retries([first.solved_by])
+        return first
+    mine = ", ".join(f"{k}={v}" for k, v in options.items() if k != "x0")
+    attempts = list(tried) + [f"{_attempt_name(solver, mine)}: {first.status}"]
+    for name, what, opts in RETRIES:
+        if name == solver and opts == options:
+            continue  # the same solve again
+        if opts == "scaled":
+            sol = _solve_scaled(name, lp, {})
+        else:
+            sol = SOLVERS[name].solve(lp, dict(opts))
+        if sol.status in FINAL_STATUSES:
+            sol.attempts, sol.solved_by = tuple(attempts), _attempt_name(name, what)
+            record_retries([sol.solved_by])
+            return sol
+        attempts.append(f"{_attempt_name(name, what)}: {sol.status}")
+    first.attempts = tuple(attempts)
+    record_retries(["failed"])
+    return first
 
 
 def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
@@ -360,12 +523,12 @@ def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
     list of list of LPSolution
         ``out[j][i]``: bounds ``j``, objective ``i`` (never raises for infeasibility).
     """
-    info = solver_info(solver)
+    solver_info(solver)
     bounds = [(lp.col_lower, lp.col_upper)] if bounds is None else list(bounds)
     variant = lambda c, lo, hi: LinearProgram(c=np.asarray(c, float), A=lp.A, row_lower=lp.row_lower,  # noqa: E731
-                                              row_upper=lp.row_upper, col_lower=lo, col_upper=hi)
+                                              row_upper=lp.row_upper, col_lower=lo, col_upper=hi, blocks=lp.blocks)
     if solver != "highs":
-        return [[info.solve(variant(c, lo, hi), dict(options or {})) for c in costs] for lo, hi in bounds]
+        return [[solve_lp(variant(c, lo, hi), solver, options) for c in costs] for lo, hi in bounds]
     out: list[list[LPSolution]] = []
     h = None
     cols = np.arange(lp.A.shape[1], dtype=np.int32)
@@ -379,6 +542,12 @@ def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
                 h = _highs_model(variant(c, lo, hi), dict(options or {}))
             else:
                 h.changeColsCost(c.size, cols, c)
-            row.append(_highs_run(h, lp, c))
+            sol = _highs_run(h, lp, c)
+            if sol.status not in FINAL_STATUSES:
+                # a warm start that broke down (e.g. 'Unknown' after "basis change is taboo"): this variant from
+                # scratch with the retries of solve_lp, and the next one from scratch too
+                h.clearSolver()
+                sol = solve_lp(variant(c, lo, hi), solver, options, tried=(f"highs, warm start: {sol.status}",))
+            row.append(sol)
         out.append(row)
     return out

@@ -8,5 +8,5 @@ papers' example plants (one home for them).
 :mod:`~eqrec.systems.files`
     System files (YAML or a mapping) to an ``AffineSystem``.
 :mod:`~eqrec.systems.examples`
-    The example plants: the ACC model (P1), the batch reactor (P3).
+    The example plants: the ACC model (P1), the batch reactor (P3), two carts and a spring (``two_mass``).
 """

@@ -4,6 +4,8 @@ r"""The example plants of the papers, built from first principles: one home for 
     The adaptive-cruise-control plant of Section VI of the prefix-based paper (P1), from its Table I constants.
 :func:`batch_reactor`
     The batch reactor of the delayed/missing-data paper (P3).
+:func:`two_mass`
+    Two carts and a lightly damped spring, one position measured (a user's kind of plant, not from a paper).
 
 The batch reactor
 -----------------
@@ -235,3 +237,71 @@ def acc_system(m: float = ACC_CONSTANTS["m"], k0: float = ACC_CONSTANTS["k0"],
     C = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     E = np.array([[0.0], [Ts**2 / 2.0], [Ts]])
     return AffineSystem(A=A, B=B, f=f, C=C, E=E, eta_w=eta_w, eta_v=eta_v, name="ACC")
+
+
+#: The two-cart plant of :func:`two_mass` (SI units; ``eta_w`` per velocity channel).
+TWO_MASS_CONSTANTS = {"m1": 1.0, "m2": 1.0, "k": 1.0, "c": 0.02, "Ts": 0.1, "eta_w": (0.01, 0.02), "eta_v": 0.05}
+
+
+def two_mass(m1: float = 1.0, m2: float = 1.0, k: float = 1.0, c: float = 0.02, Ts: float = 0.1,
+             eta_w=(0.01, 0.02), eta_v: float = 0.05) -> AffineSystem:
+    r"""Two carts coupled by a lightly damped spring, only the first position measured (a user's kind of plant).
+
+    States :math:`x = (x_1, v_1, x_2, v_2)` (positions and velocities), a force ``u`` on cart 1,
+
+    .. math::
+        m_1 \dot v_1 = -k(x_1 - x_2) - c(v_1 - v_2) + u, \qquad
+        m_2 \dot v_2 = k(x_1 - x_2) + c(v_1 - v_2),
+
+    discretised with a zero-order hold at ``Ts`` (:func:`zoh`); process noise added to both velocities after
+    the step, :math:`E = [e_2, e_4]` with one bound per channel (``|w_1| <= eta_w[0]``, ``|w_2| <= eta_w[1]``,
+    folded into ``E`` by :class:`AffineSystem`), ``y = x_1 + v``, ``|v| <= eta_v``.  ``A`` has a double
+    eigenvalue 1 (the free rigid-body motion), a lightly damped complex pair near the unit circle and negative
+    entries: the hard case for set-membership estimation (``examples/two_mass.yaml`` is the same plant).
+
+    Parameters
+    ----------
+    m1 : float, optional
+        Mass of cart 1 [kg].
+    m2 : float, optional
+        Mass of cart 2 [kg].
+    k : float, optional
+        Spring constant [N/m].
+    c : float, optional
+        Damping of the spring [N s/m].
+    Ts : float, optional
+        Sampling time [s].
+    eta_w : float or sequence of two floats, optional
+        Bounds of the velocity noise (one per cart, or one for both).
+    eta_v : float, optional
+        Bound of the position measurement noise.
+
+    Returns
+    -------
+    AffineSystem
+        Named ``"two carts"``, ``n = 4``, ``p = 1``, ``m = 1``, ``nw = 2``, ``dt = Ts``.
+
+    Raises
+    ------
+    InputError
+        If ``Ts`` is not a positive number, or the noise bounds are malformed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> carts = eqrec.two_mass()
+    >>> carts.n, carts.p, carts.m, carts.nw, float(carts.E[1, 0]), float(carts.E[3, 1])
+    (4, 1, 1, 2, 0.01, 0.02)
+    >>> bool(np.abs(np.linalg.eigvals(carts.A)).max() <= 1.0 + 1e-6)  # a double eigenvalue 1 (rounding splits it)
+    True
+    """
+    Ac = np.array([[0.0, 1.0, 0.0, 0.0],
+                   [-k / m1, -c / m1, k / m1, c / m1],
+                   [0.0, 0.0, 0.0, 1.0],
+                   [k / m2, c / m2, -k / m2, -c / m2]])
+    Bc = np.array([[0.0], [1.0 / m1], [0.0], [0.0]])
+    A, B = zoh(Ac, Bc, Ts)
+    E = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0], [0.0, 1.0]])
+    return AffineSystem(A=A, B=B, C=[[1.0, 0.0, 0.0, 0.0]], E=E, eta_w=list(np.broadcast_to(eta_w, (2,))),
+                        eta_v=eta_v, name="two carts", dt=Ts)

@@ -7,6 +7,7 @@ a finite number of a size the double-precision design LPs solve reliably.
 
 from __future__ import annotations
 
+import difflib
 import os
 from pathlib import Path
 from typing import Any
@@ -46,12 +47,17 @@ def system_from_mapping(data: Any, source: str = "<mapping>") -> tuple[AffineSys
     """
     if not isinstance(data, dict):
         raise InputError("top level must be a mapping with keys A, C, E, eta_w, eta_v", source)
+    unknown = sorted(set(data) - SYSTEM_KEYS, key=str)
     for key in ("A", "C", "E", "eta_w", "eta_v"):
         if key not in data:
-            raise InputError("missing required field", source, key)
-    unknown = set(data) - SYSTEM_KEYS
+            # a misspelt key (eta_W, Eta_w) is the usual cause: name it with the missing one
+            near = [k for k in unknown if str(k).lower() == key.lower()] or \
+                difflib.get_close_matches(key, [str(k) for k in unknown], n=1)
+            also = f"; unknown field(s) {unknown}" if unknown else ""
+            hint = f" (keys are case-sensitive: write {key!r}, not {near[0]!r})" if near else ""
+            raise InputError(f"missing required field{also}{hint}", source, key)
     if unknown:
-        raise InputError(f"unknown field(s) {sorted(unknown)}; allowed: {sorted(SYSTEM_KEYS)}", source)
+        raise InputError(f"unknown field(s) {unknown}; allowed: {sorted(SYSTEM_KEYS)}", source)
 
     def check_numbers(value: Any, key: str, where: str = "") -> None:
         # every leaf a finite YAML number (no quoted numbers, booleans or nulls) of usable size

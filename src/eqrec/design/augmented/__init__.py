@@ -11,6 +11,8 @@ paper's form (4).
     The LP with gains per event prefix of a delay language (P3 form (4)).
 :mod:`~eqrec.design.augmented.nlp`
     ``L`` and ``s0`` free (P2 Proposition 1), by IPOPT through CasADi.
+:mod:`~eqrec.design.augmented.guarantee`
+    The guarantee of the running estimator among the optima of P2's LP (the masked-gain reading), an LP.
 :mod:`~eqrec.design.augmented.design`
     The entry point :func:`~eqrec.design.augmented.design.design_augmented`.
 """

@@ -42,7 +42,7 @@ import scipy.sparse as sp
 from eqrec.bounds.data_classes import ClassSet, DataClass, class_maps
 from eqrec.lp.model import LinearProgram
 from eqrec.lp.parallel import Progress, check_jobs, pool_ready, prestart, run_tasks
-from eqrec.lp.solvers import solve_lp, solve_lp_grid
+from eqrec.lp.solvers import record_retries, retry_log, solve_lp, solve_lp_grid
 from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.gains import box_radius
@@ -66,6 +66,14 @@ BATCHES_PER_WORKER, MIN_BATCH_WORK = 6, 400_000
 #: weight: a HiGHS model per class and a run per row and ``μ1`` cost about 1.1 ms, its maps and certificate
 #: 0.3 ms, where a unit costs about 3.5e-8 s (fit on the reactor's (4, 60), one core, μ1 free).
 CLASS_OVERHEAD = 40_000
+#: Work (:func:`class_work`) above which a class's level LPs run HiGHS's primal simplex without presolve
+#: (:data:`LARGE_CLASS_OPTIONS`) instead of the caller's settings: on the dense LPs of a deep class (hundreds of
+#: measurements) the warm-started dual simplex takes 2-3 times the iterations (the two-mass plant's class at
+#: time 400: 0.63 s against 0.14 s for its 8 LPs).  Above every class of the papers' studies and of every example
+#: plant up to T = 100 (at most 6.1e4: the reactor's and the ACC's (τ̄, 100)), whose bytes therefore do not change.
+LARGE_CLASS_WORK = 100_000
+#: The HiGHS settings of a class above :data:`LARGE_CLASS_WORK`.
+LARGE_CLASS_OPTIONS = {"presolve": "off", "simplex_strategy": 4}
 
 
 def check_path(path: str) -> str:
@@ -218,8 +226,9 @@ def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1s:
         if C:
             lp = LinearProgram(c=np.zeros(C), A=_csc(Z), row_lower=np.zeros(m), row_upper=np.zeros(m),
                                col_lower=-betas[0][act], col_upper=betas[0][act])
+            large = solver == "highs" and class_work(cls, system) > LARGE_CLASS_WORK
             grid = solve_lp_grid(lp, [-E[r] for r in range(system.n)], [(-b[act], b[act]) for b in betas], solver,
-                                 options)
+                                 {**options, **LARGE_CLASS_OPTIONS} if large else options)
             for j, sols in enumerate(grid):
                 for r, sol in enumerate(sols):
                     if not sol.optimal:
@@ -297,15 +306,22 @@ def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: 
     local = scheduler is None and total < POOL_MIN_WORK and not pool_ready(n_jobs)  # no pool to start for this
     workers = 1 if local else check_jobs(n_jobs)
     runs = plan_batches(weights, workers)
-    tasks = [(system, classes.horizon, [classes.classes[which[j]] for j in run], *args) for run in runs]
+    tasks = [(task, system, classes.horizon, [classes.classes[which[j]] for j in run], *args) for run in runs]
     progress = Progress(len(which), label) if total >= POOL_MIN_WORK else None
-    results = run_tasks(task, tasks, n_jobs=workers, scheduler=scheduler, progress=progress,
+    results = run_tasks(_logged, tasks, n_jobs=workers, scheduler=scheduler, progress=progress,
                         units=[len(run) for run in runs])
     per_class: list = [None] * len(which)
-    for run, res in zip(runs, results):
+    for run, (res, retried) in zip(runs, results):
+        record_retries(retried)  # the solves a worker had to retry, into this process's log
         for j, r in zip(run, res):
             per_class[j] = r
     return per_class
+
+
+def _logged(task, *args) -> tuple:
+    """``task(*args)`` and the LP solves it had to retry (:func:`eqrec.lp.solvers.retry_log`)."""
+    with retry_log() as retried:
+        return task(*args), list(retried)
 
 
 def prestart_workers(system: AffineSystem, classes: ClassSet, n_jobs=None, scheduler=None) -> bool:

@@ -238,10 +238,15 @@ def solve_classes_at(system: AffineSystem, classes: ClassSet, mu1s, *, solver: s
 def _certified(classes: ClassSet, mu1: float, gains: ClassGains, lp_levels: np.ndarray, cert: ClassCertificate,
                sol: LPSolution, shape, nnz: int, build_time: float, solve_time: float, solver: str,
                rtol: float | None) -> ClassSolution:
-    """The :class:`ClassSolution`, once every certified worst case is within ``rtol`` of its LP level."""
+    """The :class:`ClassSolution`, its levels raised to the certified worst cases.
+
+    ``rtol`` (relative to ``max(1, level, μ1)``, the scale of the LP's coefficients) only refuses gains that are
+    not the LP's; a worst case above its LP level by less is the LP's round-off, and the level becomes it
+    (exactly: no tolerance on the guarantee side, :mod:`eqrec.bounds.certify`).
+    """
     rtol = CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol
     excess = cert.bounds - lp_levels
-    scale = np.maximum(1.0, np.abs(lp_levels))
+    scale = np.maximum(max(1.0, mu1), np.abs(lp_levels))
     if np.any(excess > rtol * scale):
         i, r = np.unravel_index(np.argmax(excess / scale), excess.shape)
         raise CertificationFailure(f"class {classes.classes[i].label} row {r}: the gains give worst case "
@@ -260,7 +265,10 @@ def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTO
     classes : ClassSet
     sol : ClassSolution
     rtol : float, optional
-        Relative tolerance on ``μ1``.
+        Relative distance above ``μ1`` at which a terminal level shows infeasibility.  This is the infeasible
+        side only: a level above ``μ1`` by less is accepted, and :func:`class_design` then raises ``μ1`` to the
+        fixed point the gains certify (at most ``rtol`` above the request), never keeping a level below its
+        certificate.
     """
     mu1 = sol.mu1
     for i, cls in enumerate(classes.classes):
@@ -342,7 +350,7 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
         check_terminal(classes, sol)
     except InfeasibleDesign as exc:  # name the true smallest feasible μ1, not a class's worst case at this μ1
         raise infeasible_at(system, classes, sol.mu1, exc, solver=solver, n_jobs=n_jobs,
-                            scheduler=scheduler) from None
+                            scheduler=scheduler, method=method) from None
     mu1 = sol.mu1
     inner = np.array([c.inner for c in classes.classes], bool)
     mu2 = float(max(mu1, sol.levels[inner].max(initial=mu1)))
@@ -360,10 +368,16 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     design.extra.update(engine="classes", classes=len(classes), sequences=classes.sequences, nodes=classes.nodes,
                         lp_rows=sol.model_shape[0], lp_cols=sol.model_shape[1], lp_nonzeros=sol.nonzeros,
                         class_levels=sol.levels)
+    # every stored level at least its certified worst case, exactly (μ1 raised to the terminal fixed point if the
+    # LP's round-off left a terminal class above it; eqrec.bounds.certify); node gains certified when asked
+    certify_design(design, rtol=CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol,
+                   nodes=certify and schedule is not None)
+    if design.mu1 > mu1 * (1 + CERT_RTOL):  # the gains recover only to a level well above the request
+        exc = InfeasibleDesign(f"no estimator recovers to mu1 = {mu1:g}: the gains certify mu1 = {design.mu1:.9g}")
+        raise infeasible_at(system, classes, mu1, exc, solver=solver, n_jobs=n_jobs, scheduler=scheduler,
+                            method=method) from None
     if cost is not None:
-        design.extra.update(cost=cost, J=class_cost(classes, mu1, sol.levels, cost))
-    if certify and schedule is not None:
-        certify_design(design, rtol=CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol)
+        design.extra.update(cost=cost, J=class_cost(classes, design.mu1, design.extra["class_levels"], cost))
     design.extra["total_time"] = time.perf_counter() - t0
     return design
 

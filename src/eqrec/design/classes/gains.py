@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eqrec.bounds.data_classes import ClassGains, ClassSet, class_error_map
+from eqrec.bounds.certify import class_bounds
+from eqrec.bounds.data_classes import ClassGains, ClassSet
 from eqrec.bounds.gains import GainSchedule, q_to_f, schedule_from_word_gains
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.bounds.stacking import Stacking
@@ -103,13 +104,8 @@ def certify_classes(system: AffineSystem, gains: ClassGains, mu1: float,
     ClassCertificate
         ``bounds[i, r] = Σ_c β_c |(E_d - K Z_S)[r, c]|`` for every class ``i`` and row ``r``.
     """
-    classes = gains.classes
-    st = stacking or Stacking(system, classes.horizon)
-    beta = box_radius(st, mu1)
-    bounds = np.zeros((len(classes), system.n))
-    for i in range(len(classes)):
-        bounds[i] = np.abs(class_error_map(st, gains, i)) @ beta
-    return ClassCertificate(mu1=float(mu1), classes=classes, bounds=bounds)
+    # the one formula of the certificate (eqrec.bounds.certify.class_bounds), so that a recertification agrees
+    return ClassCertificate(mu1=float(mu1), classes=gains.classes, bounds=class_bounds(system, gains, mu1, stacking))
 
 
 def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | None = None,

@@ -60,7 +60,7 @@ from eqrec.bounds.data_classes import classes_of_tree
 from eqrec.lp.model import LPSolution
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.lp.parallel import check_jobs, check_scheduler, connected, settle
-from eqrec.lp.solvers import solve_lp, solver_info
+from eqrec.lp.solvers import solver_info
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.blocks import choose_path, prestart_workers
 from eqrec.design.classes.engine import check_terminal, class_design, solve_classes, solve_classes_at
@@ -69,7 +69,7 @@ from eqrec.design.delay.languages import _classes, _tree, delay_classes, delay_l
 from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system
 from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
-from eqrec.design.prefix.design import check_engine, tree_design
+from eqrec.design.prefix.design import check_engine, solve_tree_lp, tree_design
 from eqrec.design.prefix.tree_lp import PrefixLP, build_prefix_lp
 from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
@@ -82,13 +82,17 @@ from eqrec.errors import InfeasibleDesign, InputError
 def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSystem, x: np.ndarray, mu1: float,
                           cost: str, sol: LPSolution, *, build_time: float = 0.0, certify: bool = True,
                           rtol: float = 1e-6, method: str = "delay") -> Design:
-    """The delayed-data design of a tree-LP point ``x`` (levels at least ``μ1``), its ``J`` and certificate."""
+    """The delayed-data design of a tree-LP point ``x`` (levels at least ``μ1``), its ``J`` and certificate.
+
+    Certification raises any level (``μ1`` included) that the gains exceed to their worst case
+    (:func:`eqrec.bounds.certify.certify_design`); ``J`` is counted at the levels as stored.
+    """
     design = tree_design(model, system, x, sol, mu1=mu1, method=method, floor=True, build_time=build_time)
+    cert = certify_design(design, rtol=rtol) if certify else None
     levels = design.levels if cost == "sum" else {"*": design.mu2}
-    design.extra.update(cost=cost, J=paper_cost(tree, mu1, levels, cost), sequences=len(tree.patterns),
+    design.extra.update(cost=cost, J=paper_cost(tree, design.mu1, levels, cost), sequences=len(tree.patterns),
                         nodes=len(tree))
-    if certify:
-        cert = certify_design(design, rtol=rtol)
+    if cert is not None:
         design.extra["J_certified"] = certified_cost(design, tree, cost, cert)
     return design
 
@@ -128,7 +132,10 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
         (:func:`delay_classes`, class engine only).  The language must have
         a fixed length.
     mu1 : float
-        Recovery level ``μ1``, positive.
+        Recovery level ``μ1``, positive.  The design's ``mu1`` may be raised
+        above it by the LP's round-off, to the level its gains certify
+        (``extra["mu1_requested"]`` keeps the request; every level is at least
+        its certified worst case, exactly: :func:`eqrec.bounds.certify.certify_design`).
     kind : {"missing", "delay"} or None, optional
         Reading of string words: delay words (digits, eq. (1)) or 0/1
         missing-data words.  ``None`` (default): delay words when a word has a
@@ -216,14 +223,14 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
         if design.certificate is not None and classes.tree is not None:
             design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
         elif design.class_certificate is not None:
-            design.extra["J_certified"] = class_cost(classes, mu1, design.class_certificate.levels, cost)
+            design.extra["J_certified"] = class_cost(classes, design.mu1, design.class_certificate.levels, cost)
     else:
         tree = _tree(patterns, kind)
         model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
         try:
-            sol = solve_lp(model.lp, solver, solver_options).require_optimal(f"delay design (mu1 = {mu1:g})")
+            sol = solve_tree_lp(model, solver, f"delay design (mu1 = {mu1:g})", solver_options)
         except InfeasibleDesign as exc:
-            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver) from None
+            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver, method="delay") from None
         design = _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
                                        certify=certify, rtol=rtol)
     design.state_weights = weights
@@ -360,7 +367,8 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     Returns
     -------
     FreeMu1Result
-        ``design`` at ``μ1,min`` (certified), ``mu1`` (``= μ1,min``), ``J``,
+        ``design`` at ``μ1,min`` (certified), ``mu1`` (the design's: ``μ1,min``, or a few ulps above
+        it where the LP's round-off left a terminal worst case above ``μ1,min``), ``J``,
         ``lower_bound`` and ``gap``, ``mu1_min`` (bracket, binding terminal
         class and row).  Not a :class:`Design` itself: the design is its
         ``design`` attribute.
@@ -418,6 +426,6 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     design.state_weights = weights
     design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,
                         mu1_binding=mm.binding)
-    return FreeMu1Result(design=design, route="global", cost=cost, mu1=mm.upper, J=J, lower_bound=float(lower_bound),
+    return FreeMu1Result(design=design, route="global", cost=cost, mu1=design.mu1, J=J, lower_bound=float(lower_bound),
                          lps=mm.lps + 2, time=time.perf_counter() - t_start, mu1_min=mm,
                          extra={"binding": mm.binding, "lower_margin": mm.lower_margin})

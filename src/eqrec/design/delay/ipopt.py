@@ -171,7 +171,10 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, kind: str | None = Non
     Returns
     -------
     FreeMu1Result
-        Route ``"ipopt"``: the design at IPOPT's ``μ1``, its ``J``; no lower bound (``nan``).
+        Route ``"ipopt"``: ``mu1`` and ``J`` as IPOPT reports them (accurate to its tolerance only, kept for
+        the route comparison); ``design`` with its levels raised to what its gains certify
+        (:func:`eqrec.bounds.certify.certify_design`: ``design.mu1`` may exceed IPOPT's ``μ1`` by that
+        tolerance); no lower bound (``nan``).
 
     Raises
     ------

@@ -5,18 +5,71 @@ Re-exported by :mod:`eqrec.design.delay.design` (:func:`delay_language`, :func:`
 
 from __future__ import annotations
 
+from itertools import product
+
 from eqrec.checks import integer
 from eqrec.bounds.data_classes import ClassSet, classes_of_full_language
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
-from eqrec.arrivals.words import as_language, full_delay_language
+from eqrec.arrivals.words import MAX_DELAY, as_language, full_delay_language
 from eqrec.design.inputs import language_classes, language_tree
 from eqrec.errors import InputError
 
 
+#: The letter of a lost measurement in the words of a loss-aware language (:func:`delay_loss_words`).
+LOST = "x"
+
+
+def delay_loss_words(horizon: int, max_delay: int, max_lost: int) -> tuple[ArrivalPattern, ...]:
+    r"""Every word of the loss-aware language: delays ``0..τ̄`` or lost (``x``), at most ``max_lost`` lost.
+
+    The words (not reduced) in lexicographic order over ``0 < 1 < ... < τ̄ < x``, each as the pattern it
+    gives, labelled by the word: a lost measurement never arrives; a delay reaching past the horizon is
+    missing in the block without being a loss (:func:`eqrec.bounds.data_classes.classes_of_full_language`).
+    There are :math:`\sum_{j \le m} \binom{T}{j}(\bar\tau+1)^{T-j}` of them: for small languages only
+    (the class engine builds the classes without them, :func:`delay_classes`).
+
+    Parameters
+    ----------
+    horizon : int
+        ``T``, at least 1.
+    max_delay : int
+        ``τ̄``, ``0..9``.
+    max_lost : int
+        ``m``, ``0..T``.
+
+    Returns
+    -------
+    tuple of ArrivalPattern
+        One pattern per word.
+
+    Raises
+    ------
+    InputError
+        A value out of range (the field is named).
+
+    Examples
+    --------
+    >>> from eqrec.design.delay.languages import delay_loss_words
+    >>> [p.label for p in delay_loss_words(2, 1, 1)]
+    ['00', '01', '0x', '10', '11', '1x', 'x0', 'x1']
+    """
+    T = integer(horizon, "horizon", low=1)
+    D = integer(max_delay, "max_delay", high=MAX_DELAY)
+    m = integer(max_lost, "max_lost", high=T)
+    letters = [*range(D + 1), LOST]
+    out = []
+    for word in product(letters, repeat=T):
+        if word.count(LOST) <= m:
+            arrivals = tuple(None if c == LOST or i + c >= T else i + c for i, c in enumerate(word))
+            out.append(ArrivalPattern(arrivals, "".join(map(str, word))))
+    return tuple(out)
+
+
 def delay_language(words=None, *, max_delay: int | None = None, horizon: int | None = None,
-                   source: str | None = None) -> tuple[ArrivalPattern, ...]:
-    """The reduced event language ``L^{E'}`` of delay words, or of the full language ``{0..τ̄}^T``.
+                   max_lost: int | None = None, source: str | None = None) -> tuple[ArrivalPattern, ...]:
+    """The reduced event language ``L^{E'}`` of delay words, of the full language ``{0..τ̄}^T``, or of its
+    loss-aware version (at most ``max_lost`` lost per block).
 
     Parameters
     ----------
@@ -24,13 +77,29 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
         Delay words (digit strings; a delay reaching past the horizon means missing) or patterns.
     max_delay, horizon : int or None, optional
         ``τ̄`` and ``T``: without ``words`` the full language (all ``(τ̄+1)^T`` words), else limits checked.
+    max_lost : int or None, optional
+        Without ``words``: at most this many measurements lost per block, ``0..T``
+        (:func:`delay_loss_words`; ``None``: no loss).  Not with ``words``.
     source : str or None, optional
 
     Returns
     -------
     tuple of ArrivalPattern
-        The distinct event sequences (equal ones merged, the first word kept as label).
+        The distinct event sequences (equal ones merged, the first word kept as label; a lost measurement
+        is the letter ``x`` of the label).
+
+    Raises
+    ------
+    InputError
+        Malformed words, missing limits, or ``max_lost`` with ``words`` or out of range (the field is named).
     """
+    if max_lost is not None:
+        if words is not None:
+            raise InputError("max_lost builds a language from max_delay and horizon; it does not apply to given "
+                             "words (write a lost measurement as a delay past the horizon)", source, "max_lost")
+        if max_delay is None or horizon is None:
+            raise InputError("max_lost needs both the maximum delay and the horizon", source, "max_lost")
+        return as_language(delay_loss_words(horizon, max_delay, max_lost), kind="delay", source=source)
     if words is None:
         if max_delay is None or horizon is None:
             raise InputError("give delay words, or both the maximum delay and the horizon", source, "delays")
@@ -38,13 +107,23 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
     return as_language(words, kind="delay", max_delay=max_delay, length=horizon, source=source)
 
 
-def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
+def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None) -> ClassSet:
     """The classes of the full language ``{0..τ̄}^T`` from the window rule (no word enumerated).
+
+    With ``max_lost = m``: the loss-aware language, delays ``0..τ̄`` and at most ``m`` measurements lost
+    per block (a lost measurement never arrives; a delay past the block's end is, as without losses, only
+    "not available in this block" and not a loss), from the window rule with losses and its counting rule
+    (:func:`eqrec.bounds.data_classes.classes_of_full_language`, where both are proved).  ``m = 0`` is the
+    language without losses, ``m = T`` every arrival pattern.
 
     Parameters
     ----------
     max_delay, horizon : int
-        The largest delay ``τ̄`` and the horizon ``T``.
+        The largest delay ``τ̄`` (``0..9``, :data:`eqrec.arrivals.words.MAX_DELAY`: one digit per delay, the
+        limit of delay words and of ``eqrec design --max-delay``) and the horizon ``T``.
+    max_lost : int or None, optional
+        At most this many measurements lost per block, ``0..T`` (``None``, default: no loss, the full
+        delay language as before).
 
     Returns
     -------
@@ -54,7 +133,8 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     Raises
     ------
     InputError
-        ``horizon`` not an integer >= 1 or ``max_delay`` not one >= 0 (the field is named).
+        ``horizon`` not an integer >= 1, ``max_delay`` not one in ``0..9`` or ``max_lost`` not one in
+        ``0..T`` (the field is named).
 
     Examples
     --------
@@ -62,8 +142,15 @@ def delay_classes(*, max_delay: int, horizon: int) -> ClassSet:
     >>> classes = eqrec.delay_classes(max_delay=4, horizon=30)
     >>> len(classes), classes.words
     (446, 931322574615478515625)
+    >>> lossy = eqrec.delay_classes(max_delay=4, horizon=100, max_lost=1)
+    >>> len(lossy)
+    76062
     """
-    return classes_of_full_language(integer(horizon, "horizon", low=1), integer(max_delay, "max_delay"))
+    T = integer(horizon, "horizon", low=1)
+    D = integer(max_delay, "max_delay", high=MAX_DELAY)
+    if max_lost is None:
+        return classes_of_full_language(T, D)
+    return classes_of_full_language(T, D, integer(max_lost, "max_lost", high=T))
 
 
 def _tree(patterns, kind: str | None = None) -> PrefixTree:

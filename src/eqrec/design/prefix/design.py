@@ -22,7 +22,7 @@ from eqrec.design.mu1_min import infeasible_at, min_recovery_level
 from eqrec.design.prefix.tree_lp import PrefixLP, build_prefix_lp, read_schedule
 from eqrec.design.result import Design
 from eqrec.design.weighted import weigh
-from eqrec.errors import InfeasibleDesign, InputError
+from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 
 #: The class engine (:mod:`eqrec.design.classes.engine`) or this module's tree LP.
@@ -45,6 +45,45 @@ def check_engine(engine: str) -> str:
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {list(ENGINES)}", field="engine")
     return engine
+
+
+def solve_tree_lp(model: PrefixLP, solver: str, what: str, options: dict | None = None) -> LPSolution:
+    """Solve a built tree LP; its optimum, else :class:`InfeasibleDesign` or :class:`~eqrec.errors.SolverFailure`.
+
+    The tree LP is bounded (every level is at least ``μ1 > 0``), so a solver's "unbounded" is numerical trouble:
+    with ``μ1`` many orders above the noise bounds the robust rows mix coefficients ``μ1`` and ``η`` (HiGHS
+    stops so at ``μ1 = 3e11`` on ``examples/two_mass.yaml``).  That is a :class:`~eqrec.errors.SolverFailure`
+    naming the class engine, which solves each class row on its own and takes ``μ1`` up to ``1e12``.
+
+    Parameters
+    ----------
+    model : PrefixLP
+        The built LP (:func:`eqrec.design.prefix.tree_lp.build_prefix_lp`).
+    solver : str
+        LP solver.
+    what : str
+        What is solved, for the messages.
+    options : dict or None, optional
+        Solver options.
+
+    Returns
+    -------
+    LPSolution
+        The optimal solution.
+
+    Raises
+    ------
+    InfeasibleDesign
+        If the LP is infeasible.
+    SolverFailure
+        If the solver stops without an optimum, or calls the LP unbounded.
+    """
+    sol = solve_lp(model.lp, solver, options)
+    if sol.status == "unbounded":
+        raise SolverFailure(f"{what}: {solver} calls the tree LP unbounded, which it is not (every level is at least "
+                            f"mu1): numerical trouble with mu1 = {model.mu1:g} far above the noise bounds; the class "
+                            "engine (the default: engine='classes', --engine classes) solves this design")
+    return sol.require_optimal(what)
 
 
 def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: LPSolution, *, mu1: float,
@@ -126,7 +165,13 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         covers every prefix tree).  Every level is nondecreasing in ``μ1``,
         so the design there also has the smallest ``M2`` over all ``μ1``;
         ``extra`` records ``mu1_free``, ``mu1_min``, ``mu1_min_lower`` (proven
-        infeasible) and ``mu1_binding``.
+        infeasible) and ``mu1_binding``.  Where the LP meets the recovery
+        constraint only to its tolerance, the returned ``mu1`` is raised to the
+        smallest level its gains certify (a few ulps up, or up to ``1e-6``
+        relative for a request just below ``μ1,min``; ``extra["mu1_requested"]``
+        keeps the request), and every other level to its certified worst case
+        (:func:`eqrec.bounds.certify.certify_design`): the estimator reports
+        these levels, which its error never exceeds.
     solver : str, optional
         LP solver, a name of :data:`eqrec.lp.solvers.SOLVER_NAMES`
         (default ``"highs"``).
@@ -240,9 +285,9 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     else:
         model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
         try:
-            sol = solve_lp(model.lp, solver).require_optimal(f"{method} design (mu1 = {mu1:g})")
+            sol = solve_tree_lp(model, solver, f"{method} design (mu1 = {mu1:g})")
         except InfeasibleDesign as exc:
-            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver) from None
+            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver, method=method) from None
         design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
         if certify:
             certify_design(design)

@@ -6,6 +6,4 @@
     Our value of every published number, the figures, and the claims' evidence.
 :mod:`~eqrec.studies.p2.sweeps`, :mod:`~eqrec.studies.p2.grids`, :mod:`~eqrec.studies.p2.readings`
     The pole and level sweeps (chunked), their grids, the design readings of the paper's words.
-:mod:`~eqrec.studies.p2.guarantee`
-    The best guarantee, as the estimator that runs, among the optima of a design reading (Fig. 2).
 """

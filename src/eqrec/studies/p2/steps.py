@@ -33,7 +33,7 @@ from eqrec.bounds.stacking import UncertaintyLayout
 from eqrec.systems.examples import acc_system
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.design import design_augmented
-from eqrec.studies.p2.guarantee import OPTIMUM_ATOL, OPTIMUM_RTOL, best_guarantee_among_optima
+from eqrec.design.augmented.guarantee import OPTIMUM_ATOL, OPTIMUM_RTOL, best_guarantee_among_optima
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.augmented.model import AugmentedGains, AugmentedStacking
 from eqrec.design.augmented.runtime import AugmentedEstimator, augmented_to_time_based, schedule_from_augmented

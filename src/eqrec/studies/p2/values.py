@@ -61,7 +61,7 @@ def _rel(a: float, b: float) -> float:
 
 def _solver_spread(per_solver: dict) -> float:
     """Relative spread over the solvers of the ``upper`` bound of
-    :func:`eqrec.studies.p2.guarantee.best_guarantee_among_optima` (one result per solver)."""
+    :func:`eqrec.design.augmented.guarantee.best_guarantee_among_optima` (one result per solver)."""
     values = [e["upper"] for e in per_solver.values()]
     return _rel(max(values), min(values))
 

@@ -166,21 +166,20 @@ def step_scale_free_figure(cfg, inputs, outputs, wildcards) -> None:
     (``inputs.timings``).
 
     Each point of the two-worker line is labelled ``(τ̄, T)``, the language ``{0..τ̄}^T`` (largest delay, then
-    horizon), below the line; the one block LP ends at
-    :data:`eqrec.studies.p3.free_table.FREE_MONOLITHIC_MAX_CLASSES` classes (it takes minutes beyond), which its
-    legend entry says.
+    horizon), below the line; the one block LP is run only up to
+    :data:`eqrec.studies.p3.free_table.FREE_MONOLITHIC_MAX_CLASSES` classes (it takes minutes beyond): its legend
+    entry names the largest size it ran (read from the values, so that this module imports no design code).
     """
     import pandas as pd
     from matplotlib.ticker import NullFormatter, ScalarFormatter
-
-    from eqrec.studies.p3.free_table import FREE_MONOLITHIC_MAX_CLASSES
 
     paper_style()
     plt = pyplot()
     keys = ["tau", "T", "config"]
     frame = pd.read_csv(inputs.csv).merge(pd.read_csv(inputs.timings), on=keys, validate="one_to_one")
     fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
-    styles = {"monolithic": (f"one block LP (1 core; run up to {FREE_MONOLITHIC_MAX_CLASSES:,} classes only)",
+    ran = frame[(frame["config"] == "monolithic") & (frame["status"] == "optimal")]["classes"]
+    styles = {"monolithic": (f"one block LP (1 core; run up to {int(ran.max()) if len(ran) else 0:,} classes only)",
                              "s--"),
               "blocks-1": ("per class, 1 worker", "o-"), "blocks-2": ("per class, 2 workers", "^-")}
     for config, (label, style) in styles.items():

@@ -142,7 +142,7 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     With ``x_f``: ``x_base`` with ``cols`` set to 0, the innovations ``z(i) = Z_i δ + z_i`` and the error
     ``ξ(t) = G^0_t δ + c^0_t`` are those of the gains of ``x_f``, and a column of ``M(s, i)[b, π]`` or
     ``ν_s[b]`` adds ``Φ(t, s+1)[:, b] (Z_i[π] δ + z_i[π])`` or ``Φ(t, s+1)[:, b]`` to ``ξ(t)``, ``t > s``
-    (``Φ(t, s+1) = A_{t-1} ... A_{s+1}``).  Valid (checked, else ``AssertionError``) when every column of
+    (``Φ(t, s+1) = A_{t-1} ... A_{s+1}``).  Valid (checked, else :class:`~eqrec.errors.InputError`) when every column of
     ``cols`` is a gain column of a step ``s >= k_c``, ``k_c`` the last missing step whose runtime gain ``L_k``
     is nonzero: then ``u_e(s)`` enters ``e = ξ - s`` at no later step, so no ``z(i)`` depends on ``cols``.
     """
@@ -152,14 +152,14 @@ def _running_rows(system: AffineSystem, design: AugmentedLP, x_base: np.ndarray,
     info = {int(col): (s_, i_, k // p, k % p) for (s_, i_), mc in design.m_cols.items() for k, col in enumerate(mc)}
     info.update({int(col): (k // n, None, k % n, None) for k, col in enumerate(design.nu_cols)})
     if any(int(j) not in info for j in cols):
-        raise AssertionError("the free columns must be gain columns (M, nu) of the design LP")
+        raise InputError("the free columns must be gain columns (M, nu) of the design LP", field="cols")
     L = runtime_L(design.L, T, n, p, design.word, runtime)
     q = arrival_indicator(design.word)
     k_c = max((k for k in range(T) if q[k] == 0 and np.any(L[k])), default=0)  # the last coupled missing step
     early = sorted({info[int(j)][0] for j in cols if info[int(j)][0] < k_c})
     if early:
-        raise AssertionError(f"the {runtime} running error is not affine in the free gains: gains of steps {early} "
-                             f"are free and feed the auxiliary state's error at missing step {k_c}")
+        raise InputError(f"the {runtime} running error is not affine in the free gains: gains of steps {early} "
+                         f"are free and feed the auxiliary state's error at missing step {k_c}", field="cols")
     x_f = np.array(x_base, dtype=float)
     x_f[cols] = 0.0
     Gt, ct, Z, zc = running_error_maps(system, design.gains_from_x(x_f), runtime)

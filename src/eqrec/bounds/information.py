@@ -1,0 +1,595 @@
+r"""The information limit: the smallest error bound *any* estimator can guarantee on an arrival trace.
+
+Setting
+-------
+The plant of :class:`eqrec.systems.affine.AffineSystem` (eq. (3) of the prefix-based paper with the noise
+gains of its Remark 1),
+
+.. math::
+    x(k+1) = A(k)x(k) + B(k)u(k) + f + E(k)w(k), \qquad y(\tau) = C(\tau)x(\tau) + V(\tau)v(\tau),
+
+with :math:`\|w(k)\|_\infty \le \eta_w`, :math:`\|v(\tau)\|_\infty \le \eta_v` and the initial error in the box
+:math:`|x_i(0) - \hat x_i(0)| \le \rho_i` (``x0_radius``).  A measurement :math:`y(\tau)` with delay ``d`` is
+delivered at step :math:`\tau + d` (:class:`eqrec.arrivals.traces.ArrivalTrace`, :data:`NEVER`: lost).  The
+estimate an estimator's ``step`` returns at step ``t`` is :math:`\hat x(t+1)`, computed from the data delivered
+at steps ``<= t``: the set :math:`\mathcal D_t = \{\tau : \tau + d(\tau) \le t\}`.
+
+Subtracting the noise-free prediction (inputs, ``f`` and :math:`\hat x(0)` are known and enter linearly) leaves
+the *zero-data* problem, one linear program per state ``i`` and step ``t``:
+
+.. math::
+    r_i(t+1) = \max\Big\{ x_i(t+1) \;:\; x(k+1) = A(k)x(k) + E(k)w(k),\
+        C(\tau)x(\tau) + V(\tau)v(\tau) = 0 \ (\tau \in \mathcal D_t),\
+        |x(0)| \le \rho,\ \|w\|_\infty \le \eta_w,\ \|v\|_\infty \le \eta_v \Big\},
+
+the per-state *radius of information* (Traub, Wasilkowski, Woźniakowski) of :math:`x(t+1)` given the delivered
+data.  :func:`information_limit` returns these radii, row ``t`` for step ``t``.
+
+:func:`information_limit` proves (Notes) that no estimator, linear or not, with any memory, guarantees less
+at that step, and that inside one block the limit equals the class engine's class level.
+
+Time
+----
+Matrices are read at absolute time: :math:`A(k)` = ``system.A_at(k)``, and likewise ``E_at``, ``C_at``,
+``V_at``; the trace starts at time 0 with the box :math:`\rho`.  A time-varying system must cover
+``trace.steps`` steps.
+
+Computation
+-----------
+The trace's whole LP is built once (:func:`trace_lp`), sparse and ordered by time, so the LP of the steps
+``< t1`` is a leading block of its rows and columns.  The state is a variable every :data:`SEGMENT` ``= K``
+steps and eliminated in between (:math:`x(k)` is linear in :math:`x(jK)` and :math:`w(jK..k-1)`): eliminating
+it over the whole trace instead, as :math:`x(k)` linear in :math:`x(0), w(0..k-1)`, would give a dense
+lower-triangular block of :math:`O(N^2)` entries and powers :math:`A^k` that ruin the scaling of an unstable
+plant; keeping it at every step doubles the LP (``K = 8`` is 1.9 times faster than ``K = 1`` on ACC and 2.7
+times on the batch reactor at 400 steps, with the same values to 4e-11).  A measurement's rows
+:math:`C(\tau)x(\tau) + V(\tau)v(\tau)` are free until it is delivered and fixed to 0 from then on: going from
+step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps one model per chunk of
+:data:`CHUNK` steps (the LP up to the chunk's last step) and starts every solve from the previous optimal basis
+(primal simplex, :data:`HIGHS_OPTIONS`); other solvers solve each LP from scratch.  The cost of a step grows
+with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).  Rows are cached
+by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree, and repeated
+calls on one trace, share their LPs (:func:`cache_info`).
+
+Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity with the class levels holds to
+1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.
+
+Window (``window=W``): the rows ``kW .. (k+1)W - 1`` use the box :math:`[-r(s), r(s)]` at the start
+``s = (k-1)W`` rounded down to a multiple of ``K`` (:math:`r(s)` is row ``s - 1``) and the data of times
+``>= s`` only: each row keeps at least the last ``W`` steps.  Both *enlarge* the feasible set.  The past
+(:math:`x(0)`, :math:`w(<s)`, :math:`v(<s)`) and the present (:math:`w(\ge s)`, :math:`v(\ge s)`) are
+independent boxes linked only through :math:`x(s)`, whose set given the old data delivered by ``t`` lies in its
+set given the data delivered by ``s - 1``, hence in the box of radius :math:`r(s)` (by induction over the
+chunks, the windowed :math:`r(s)` is itself at least the exact one); and dropping the old measurements drops
+constraints.  The windowed value is therefore **larger than or equal to** the exact limit (up to the LP
+tolerance): an upper estimate, no longer a lower bound on what an estimator can guarantee.  It is the limit
+of an estimator that keeps a box at ``s`` (as the class engine does at its block starts) and is exact for
+``t < W``.  Where the
+past matters for long (the batch reactor has no process noise: what ``x(0)`` was stays informative forever) it
+is far from exact: at 100-400 steps ``W = 40`` gives up to 1.06 times the limit there and ``W = 20`` up to 1.3,
+against 1 + 1e-12 on ACC (``benchmarks/bench_information_limit.py``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from eqrec.arrivals.traces import NEVER, ArrivalTrace
+from eqrec.checks import floats, instance, integer
+from eqrec.errors import InputError, SolverFailure
+from eqrec.lp.model import INF, LinearProgram, LPBuilder
+from eqrec.lp.solvers import _highs_model, highs_status, solve_lp, solver_info
+from eqrec.systems.affine import AffineSystem
+
+#: Largest number of cached rows (one row: ``n`` floats and a key of ``t/8`` bytes); the oldest go first.
+CACHE_SIZE = 500_000
+
+_CACHE: "OrderedDict[tuple, np.ndarray]" = OrderedDict()
+_STATS = {"hits": 0, "misses": 0}
+
+
+def cache_info() -> dict[str, int]:
+    """Rows served from the cache and rows solved since the last :func:`clear_cache`.
+
+    Returns
+    -------
+    dict of str to int
+        ``{"hits": ..., "misses": ..., "size": ...}`` (``size``: rows held).
+    """
+    return {**_STATS, "size": len(_CACHE)}
+
+
+def clear_cache() -> None:
+    """Forget every cached row and reset the counts of :func:`cache_info`.
+
+    Returns
+    -------
+    None
+        The cache is emptied in place.
+    """
+    _CACHE.clear()
+    _STATS.update(hits=0, misses=0)
+
+
+# ---------------------------------------------------------------------------
+# Inputs
+# ---------------------------------------------------------------------------
+
+def _radius(x0_radius, n: int) -> np.ndarray:
+    """``x0_radius`` as ``n`` finite non-negative floats (a number is broadcast)."""
+    if isinstance(x0_radius, (bool, np.bool_, str)):
+        raise InputError(f"must be a number or one number per state, got {x0_radius!r}", field="x0_radius")
+    r = floats(x0_radius, "x0_radius")
+    if r.ndim == 0:
+        r = np.full(n, float(r))
+    if r.shape != (n,):
+        raise InputError(f"one radius per state (n = {n}) or one number, got shape {r.shape}", field="x0_radius")
+    if not np.all(np.isfinite(r)) or np.any(r < 0):
+        raise InputError(f"radii must be finite and >= 0, got {r.tolist()}", field="x0_radius")
+    return r
+
+
+def _check(system, trace, x0_radius, solver: str, window, options) -> tuple[np.ndarray, int | None]:
+    instance(system, AffineSystem, "system")
+    instance(trace, ArrivalTrace, "trace", "an ArrivalTrace (eqrec.ArrivalTrace)")
+    r0 = _radius(x0_radius, system.n)
+    solver_info(solver)
+    if options is not None:
+        instance(options, dict, "solver_options")
+    if window is not None:
+        window = integer(window, "window", low=1)
+    lim = system.horizon_limit
+    if lim is not None and lim < trace.steps:
+        raise InputError(f"the time-varying system covers {lim} steps, the trace has {trace.steps}", field="trace")
+    return r0, window
+
+
+def _fingerprint(system: AffineSystem, r0: np.ndarray, solver: str, options: dict | None) -> bytes:
+    """What a cached row depends on besides ``(t, D_t)``: the matrices, noise bounds, radii and solver."""
+    h = hashlib.sha1()
+    for arr in (system.A, system.C, system.E, system.V, r0, np.array([system.eta_w, system.eta_v], float)):
+        a = np.ascontiguousarray(arr, float)
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    h.update(f"{solver}|{sorted((options or {}).items())!r}".encode())
+    return h.digest()
+
+
+# ---------------------------------------------------------------------------
+# The trace's LP, ordered by time
+# ---------------------------------------------------------------------------
+
+@dataclass
+class TraceLP:
+    r"""The zero-data LP of a whole trace, columns and rows ordered by time (module docstring, Computation).
+
+    The state is a variable at the segment starts ``k = 0, K, 2K, ...`` only; inside a segment
+    :math:`x(k) = \Phi(k, jK)\,x(jK) + \sum_{l} \Phi(k, l{+}1)E(l)w(l)` (:attr:`xmap`).  Block ``k`` of columns:
+    ``x(k)`` (segment starts), ``w(k)``, then ``v(k)`` if ``y(k)`` arrives within the trace.  Block ``k`` of
+    rows: the measurement rows :math:`C(k)x(k) + V(k)v(k)` of ``y(k)`` (if any; free here, a step fixes those
+    of its delivered data to 0), then, at a segment's end, the dynamics rows linking ``x((j+1)K)``.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        Objective 0, ``x(0)`` in the box ``±ρ``, every measurement row free.
+    xmap : list of tuple
+        ``xmap[k] = (cols, M)``: :math:`x(k) = M\,z_{cols}` for ``k = 0..N``.
+    meas : dict of int to ndarray
+        Rows of ``y(τ)`` per measurement ``τ`` arriving within the trace.
+    col_start, row_start : ndarray of int, shape (N+2,)
+        First column and row of block ``k`` (entry ``N+1``: the totals).
+    segment : int
+        ``K``.
+    n : int
+        State dimension.
+    """
+
+    lp: LinearProgram
+    xmap: list
+    meas: dict
+    col_start: np.ndarray
+    row_start: np.ndarray
+    segment: int
+    n: int
+
+    def window(self, start: int, stop: int) -> tuple[LinearProgram, int, int]:
+        """The LP of blocks ``start .. stop-1`` (and the columns of ``x(stop)`` if ``stop`` starts a segment).
+
+        Parameters
+        ----------
+        start, stop : int
+            ``0 <= start <= stop <= N``; ``start`` a segment start.
+
+        Returns
+        -------
+        lp : LinearProgram
+            Rows of blocks ``start..stop-1`` and their columns, with the trace LP's bounds (a copy).
+        col_offset, row_offset : int
+            Index of its first column and row in the whole LP.
+        """
+        c0 = int(self.col_start[start])
+        c1 = int(self.col_start[stop]) + (self.n if stop % self.segment == 0 else 0)
+        r0, r1 = int(self.row_start[start]), int(self.row_start[stop])
+        A = sp.csc_matrix(self.lp.A[r0:r1, c0:c1])
+        return LinearProgram(c=self.lp.c[c0:c1].copy(), A=A, row_lower=self.lp.row_lower[r0:r1].copy(),
+                             row_upper=self.lp.row_upper[r0:r1].copy(), col_lower=self.lp.col_lower[c0:c1].copy(),
+                             col_upper=self.lp.col_upper[c0:c1].copy()), c0, r0
+
+
+def _triplets(M: np.ndarray, cols: np.ndarray, rows_offset: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Local rows, global columns and values of the nonzeros of ``M`` (columns ``cols``)."""
+    r, c = np.nonzero(M)
+    return r + rows_offset, cols[c], M[r, c]
+
+
+def trace_lp(system: AffineSystem, trace: ArrivalTrace, x0_radius: np.ndarray, segment: int = 1) -> TraceLP:
+    """Build the zero-data LP of ``trace`` (module docstring): variables ``x`` (segment starts), ``w``, ``v``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant; matrices read at absolute time (``A_at(k)`` ...).
+    trace : ArrivalTrace
+        The arrivals; a measurement arriving at or after ``trace.steps`` gets no columns or rows.
+    x0_radius : ndarray, shape (n,)
+        Radii of the box of ``x(0)``.
+    segment : int, optional
+        ``K``: the state is a variable every ``K`` steps (default 1: every step).
+
+    Returns
+    -------
+    TraceLP
+        The LP, its column and row blocks and the maps of ``x(k)``.
+    """
+    N, n, K = trace.steps, system.n, int(segment)
+    arrival = trace.arrival_times()
+    b = LPBuilder()
+    xmap: list = [None] * (N + 1)
+    meas: dict[int, np.ndarray] = {}
+    col_start = np.zeros(N + 2, np.int64)
+    row_start = np.zeros(N + 2, np.int64)
+    eye = np.eye(n)
+    for k in range(N + 1):
+        col_start[k] = b.num_variables
+        if k % K == 0:
+            xk = b.add_variables(n, -x0_radius, x0_radius) if k == 0 else b.add_variables(n)
+            if k > 0:  # close the segment: x(k) - M z = 0 (rows of block k-1, with the columns of x(k))
+                cols, M = xmap[k]
+                r, c, v = _triplets(-M, cols)
+                b.add_rows(np.concatenate([np.arange(n), r]), np.concatenate([xk, c]),
+                           np.concatenate([np.ones(n), v]), 0.0, 0.0, count=n)
+            xmap[k] = (xk, eye)
+        row_start[k] = b.num_rows
+        if k == N:
+            break
+        cols, M = xmap[k]
+        E = system.E_at(k)
+        wc = b.add_variables(E.shape[1], -system.eta_w, system.eta_w)
+        if arrival[k] != NEVER and arrival[k] < N:
+            C, V = system.C_at(k), system.V_at(k)
+            vc = b.add_variables(V.shape[1], -system.eta_v, system.eta_v)
+            r1, c1, v1 = _triplets(C @ M, cols)
+            r2, c2, v2 = _triplets(V, vc)
+            meas[k] = b.add_rows(np.concatenate([r1, r2]), np.concatenate([c1, c2]), np.concatenate([v1, v2]),
+                                 -INF, INF, count=C.shape[0])
+        xmap[k + 1] = (np.concatenate([cols, wc]), np.hstack([system.A_at(k) @ M, E]))
+    col_start[N + 1], row_start[N + 1] = b.num_variables, b.num_rows
+    return TraceLP(b.build(), xmap, meas, col_start, row_start, K, n)
+
+
+# ---------------------------------------------------------------------------
+# Solving: a growing, warm-started HiGHS model, or one LP at a time
+# ---------------------------------------------------------------------------
+
+#: Steps per HiGHS model: the model of a chunk holds the LP up to its last step and its solves start from the
+#: previous optimal basis.  Measured at 400 steps: fresh models every 32 steps beat one model grown a block at a
+#: time (``addCols``/``addRows``) by 2-5x, 4-step chunks by 2x, and 16 or 64 by 0-25 %.
+CHUNK = 32
+
+#: ``K``: the state is a variable every ``K`` steps of the trace LP (:func:`trace_lp`); inside a segment it is
+#: eliminated (module docstring, Computation: measured against 1, 2, 4 and 16).
+SEGMENT = 8
+
+#: HiGHS settings of the limit's LPs (the caller's ``solver_options`` override them): primal simplex, since a
+#: new objective leaves the previous optimal basis primal feasible (5-13 iterations per LP against 30-40 for
+#: the dual simplex on ACC and the batch reactor), and feasibility tolerances of 1e-9 (the default 1e-7 acts
+#: like a process noise of that size at every step: on the batch reactor, which has none, 400-step values then
+#: move by 1e-7 to 2e-5 between solve orders; at 1e-9, by 1e-9).
+HIGHS_OPTIONS = {"simplex_strategy": 4, "primal_feasibility_tolerance": 1e-9, "dual_feasibility_tolerance": 1e-9}
+
+
+class _HighsModel:
+    """One HiGHS model of a window of the trace LP; objectives and delivered rows change between warm solves.
+
+    A warm solve that ends without an optimum (HiGHS has answered 'Unknown' once in thousands of warm primal
+    solves, not reproducibly) is solved again cold by :func:`eqrec.lp.solvers.solve_lp` (with its retries), and
+    the model is loaded afresh.
+    """
+
+    def __init__(self, lp: LinearProgram, col_offset: int, row_offset: int, options: dict | None):
+        self.lp, self.c0, self.r0 = lp, col_offset, row_offset
+        self.cost_cols = np.zeros(0, np.int32)
+        self.options = {**HIGHS_OPTIONS, **(options or {})}
+        self.h = _highs_model(lp, self.options)
+        self.retries = 0
+
+    def deliver(self, rows: np.ndarray) -> None:
+        """Fix the measurement rows ``rows`` (global indices) to 0."""
+        idx = (np.asarray(rows) - self.r0).astype(np.int32)
+        self.lp.row_lower[idx] = self.lp.row_upper[idx] = 0.0
+        self.h.changeRowsBounds(idx.size, idx, np.zeros(idx.size), np.zeros(idx.size))
+
+    def maximise(self, cols: np.ndarray, coef: np.ndarray, what: str) -> float:
+        """``max coef · z[cols]`` (global columns) over the current LP."""
+        j = (cols - self.c0).astype(np.int32)
+        if self.cost_cols.size:
+            self.h.changeColsCost(self.cost_cols.size, self.cost_cols, np.zeros(self.cost_cols.size))
+            self.lp.c[self.cost_cols] = 0.0
+        self.h.changeColsCost(j.size, j, -coef)
+        self.lp.c[j] = -coef
+        self.cost_cols = j
+        self.h.run()
+        status, _ = highs_status(int(self.h.getModelStatus()))
+        if status == "optimal":
+            return -float(self.h.getInfo().objective_function_value)
+        self.retries += 1
+        sol = solve_lp(self.lp, "highs", self.options).require_optimal(f"{what} (warm HiGHS: {status!r})")
+        self.h = _highs_model(self.lp, self.options)
+        return -float(sol.objective)
+
+
+def _window_lp(tlp: TraceLP, start: int, stop: int, fixed: list, box: np.ndarray | None) -> tuple:
+    """The LP of blocks ``start..stop-1`` with the rows ``fixed`` set to 0 and ``x(start)`` in ``±box``."""
+    lp, c0, r0 = tlp.window(start, stop)
+    n = tlp.n
+    if box is not None:
+        lp.col_lower[:n], lp.col_upper[:n] = -box, box
+    if fixed:
+        idx = np.concatenate(fixed) - r0
+        lp.row_lower[idx] = lp.row_upper[idx] = 0.0
+    return lp, c0, r0
+
+
+def _solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
+                 solver: str, options: dict | None) -> dict[int, np.ndarray]:
+    """``r(t+1)`` for the steps ``rows`` (increasing, all ``>= start``) on the LP from block ``start`` on.
+
+    Row ``t`` fixes the measurement rows of the ``τ >= start`` delivered by ``t``; ``box`` (if given) replaces
+    the box of ``x(start)``.  HiGHS: one model per chunk of :data:`CHUNK` steps, warm solves inside; other
+    solvers: one LP at a time.
+    """
+    n = tlp.n
+    by_step: dict[int, list] = {}
+    for tau, r in tlp.meas.items():
+        if tau >= start:
+            by_step.setdefault(int(delivered_at[tau]), []).append(r)
+    out: dict[int, np.ndarray] = {}
+    fixed: list = []  # measurement rows delivered before the step being processed
+    t_next = start
+    for c0 in range(start, rows[-1] + 1, CHUNK if solver == "highs" else 1):
+        chunk = [t for t in rows if c0 <= t < c0 + CHUNK] if solver == "highs" else [t for t in rows if t == c0]
+        if not chunk:
+            continue
+        for t in range(t_next, chunk[0]):
+            fixed += by_step.get(t, [])
+        t_next = chunk[0]
+        if solver == "highs":
+            model = _HighsModel(*_window_lp(tlp, start, chunk[-1] + 1, fixed, box), options)
+            for t in range(chunk[0], chunk[-1] + 1):
+                if t in by_step:
+                    model.deliver(np.concatenate(by_step[t]))
+                fixed += by_step.get(t, [])
+                if t in chunk:
+                    cols, M = tlp.xmap[t + 1]
+                    out[t] = np.array([model.maximise(cols[M[i] != 0], M[i][M[i] != 0],
+                                                      f"information limit, step {t}, state {i}") for i in range(n)])
+            t_next = chunk[-1] + 1
+        else:
+            t = chunk[0]
+            fixed += by_step.get(t, [])
+            t_next = t + 1
+            lp, col0, _ = _window_lp(tlp, start, t + 1, fixed, box)
+            vals = np.empty(n)
+            cols, M = tlp.xmap[t + 1]
+            for i in range(n):
+                lp.c[:] = 0.0
+                lp.c[cols - col0] = -M[i]
+                vals[i] = -solve_lp(lp, solver, options).require_optimal(
+                    f"information limit, step {t}, state {i}").objective
+            out[t] = vals
+    # the set is symmetric, so the maximum is >= 0 (a solver's -0.0 or -1e-17 reads as 0)
+    return {t: np.maximum(v, 0.0) for t, v in out.items()}
+
+
+def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, solver: str = "highs",
+                      window: int | None = None, cache: bool = True,
+                      solver_options: dict | None = None) -> np.ndarray:
+    r"""Per step and state, the smallest worst-case error any estimator can guarantee on ``trace``.
+
+    Row ``t`` is :math:`r(t+1)`, the radius of information of the estimate :math:`\hat x(t+1)` that an
+    estimator's ``step`` returns at step ``t``, from the data delivered at steps ``<= t`` (the LP: module
+    docstring).  No estimator, linear or not, with any memory, guarantees less (Notes, Theorem 1); inside one
+    block the limit is the class engine's class level (Theorem 2).  One LP per state and step, through
+    :mod:`eqrec.lp`.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant; matrices read at absolute time ``A_at(k)``, ``E_at(k)``, ``C_at(τ)``, ``V_at(τ)`` with the
+        trace starting at time 0.  Inputs and ``f`` do not matter (they are known).
+    trace : ArrivalTrace
+        The arrivals: ``y(τ)`` with delay ``d`` is delivered at step ``τ + d``; :data:`NEVER` is lost.
+    x0_radius : float or array_like, shape (n,)
+        Radius of the box of the initial error :math:`x(0) - \hat x(0)` (one number, or one per state).
+    solver : str, optional
+        LP solver, a name of :data:`eqrec.lp.solvers.SOLVER_NAMES` (default ``"highs"``, warm-started).
+    window : int or None, optional
+        ``None`` (default): exact.  ``W >= 1``: each row forgets the data older than ``W`` to
+        ``2W + SEGMENT`` steps and keeps a box there instead; the value is then **>= the exact limit**
+        (module docstring), an upper estimate and not a lower bound.  Exact for the rows ``t < W``.
+    cache : bool, optional
+        Reuse rows of earlier calls with the same system, radius, solver, step and delivered data (default
+        ``True``; :func:`cache_info`, :func:`clear_cache`).
+    solver_options : dict or None, optional
+        Passed to the solver.
+
+    Returns
+    -------
+    numpy.ndarray, shape (trace.steps, n)
+        ``out[t, i] = r_i(t+1) >= 0``.
+
+    Raises
+    ------
+    InputError
+        ``system`` not an :class:`AffineSystem`, ``trace`` not an :class:`ArrivalTrace` or longer than a
+        time-varying system (field ``system``, ``trace``); ``x0_radius`` negative, NaN, infinite or of the wrong
+        length (field ``x0_radius``); unknown ``solver``; ``window`` not an integer ``>= 1``; ``solver_options``
+        not a dict.
+    SolverFailure
+        An LP without an optimal solution (it is feasible and bounded, so a solver fault).
+
+    Notes
+    -----
+    **Theorem 1 (no estimator guarantees less).**  *For every estimator* :math:`\varphi` *(linear or not, any
+    memory, any use of the stamps), every step* ``t`` *and state* ``i``, :math:`\sup_{\delta \in \mathcal B}
+    |x_i(t+1) - \varphi_i(\text{data})| \ge r_i(t+1)`.
+
+    *Proof.* The uncertainty :math:`\delta = (x(0) - \hat x(0), w, v)` ranges over a box :math:`\mathcal B`:
+    convex and symmetric (:math:`\delta \in \mathcal B \Rightarrow -\delta \in \mathcal B`).  The delivered data
+    and the state are affine in it, data :math:`= \bar y + Z\delta` and :math:`x(t+1) = \bar x + G\delta`, with
+    :math:`\bar y, \bar x` known (the prediction from :math:`\hat x(0)`, the inputs and ``f``): the information
+    is linear.  The LP's maximum :math:`r_i` is attained (a compact feasible set) at some :math:`\delta^\star`:
+    :math:`Z\delta^\star = 0`, :math:`G_i\delta^\star = r_i`.  Both :math:`\pm\delta^\star` lie in
+    :math:`\mathcal B` and give the same data :math:`\bar y`, hence the same estimate :math:`e =
+    \varphi_i(\bar y)`, whatever :math:`\varphi` does with it, while the states are :math:`\bar x_i \pm r_i`.  The
+    larger of the two errors is :math:`\max(|\bar x_i + r_i - e|, |\bar x_i - r_i - e|) \ge r_i`.  ∎
+
+    The bound is attained state by state (Smolyak's theorem: for a linear functional on a symmetric convex set
+    with linear information, some linear estimator attains the radius of information): with the optimal
+    multipliers :math:`k_i` of the dual below, :math:`\hat x_i = \bar x_i + k_i^\top(\text{data} - \bar y)` has
+    error :math:`(G_i - k_i^\top Z)\delta`, whose worst case over the box is
+    :math:`\sum_c \beta_c |(G_i - k_i^\top Z)_c| = r_i`.  Different states and steps may need different
+    :math:`k_i`, so no single recursive estimator need attain every row at once.
+
+    **Theorem 2 (inside one block the class engine reaches the limit).**  For a block of the class engine
+    (:mod:`eqrec.design.classes.engine`), with a box of radius ``μ1`` at its start (``x0_radius = μ1``, time 0)
+    and the data ``S`` available at ``d - 1``, the class level is :math:`\ell(d, S) = \max_i r_i(d)` with
+    :math:`\mathcal D_{d-1} = S`, and row by row the class's worst case is :math:`r_i(d)`.
+
+    *Proof.* The class LP of row ``i`` (:mod:`eqrec.design.classes.engine`, theorem "separation") is
+    :math:`\min_k \sum_c \beta_c |(E_d - k^\top Z_S)_{ic}|` with :math:`\beta = (\eta_w, \eta_v, \mu_1)` per
+    coordinate of :math:`\delta`.  It is the LP dual of :math:`\max\{E_{d,i}\delta : Z_S\delta = 0,
+    |\delta_c| \le \beta_c\}`: for any ``k`` the Lagrangian :math:`E_{d,i}\delta - k^\top Z_S\delta` maximised
+    over the box is :math:`\sum_c \beta_c |(E_{d,i} - k^\top Z_S)_c|` (weak duality), and strong duality holds
+    (the primal is feasible, at :math:`\delta = 0`, and bounded).  That primal is :math:`r_i(d)`: the same box
+    and the same constraints, the rows of :math:`Z_S` being :math:`C(\tau)x(\tau) + V(\tau)v(\tau)` for
+    :math:`\tau \in S`, delivered by ``d - 1``.  ∎
+
+    So every class level is the information limit of its class, and a class-engine estimator is optimal within
+    a block; what it loses against the limit on a long run is what the box reset at each block start forgets.
+    The identity holds for every class, inner or terminal: the engine stores each row's LP minimum
+    (``design.class_certificate.bounds``, the gains' exact worst case, and their largest row in
+    ``design.extra["class_levels"]``), never a value capped at ``μ1``; ``tests/test_information_limit.py``
+    checks it on every class of two designs to 1e-9 (measured: 1e-14).  With ``state_weights`` the design's
+    system is the weighted one (:meth:`AffineSystem.scaled`), and the identity holds for ``design.system``.
+
+    Examples
+    --------
+    A scalar random walk measured directly, ``y(1)`` lost:
+
+    >>> import eqrec
+    >>> walk = eqrec.AffineSystem(A=[[1.0]], C=[[1.0]], E=[[1.0]], eta_w=0.1, eta_v=0.5)
+    >>> trace = eqrec.ArrivalTrace([0, eqrec.arrivals.traces.NEVER, 0])
+    >>> eqrec.information_limit(walk, trace, 1.0).ravel().round(3).tolist()
+    [0.6, 0.7, 0.6]
+    """
+    r0, window = _check(system, trace, x0_radius, solver, window, solver_options)
+    N, n = trace.steps, system.n
+    out = np.zeros((N, n))
+    if N == 0:
+        return out
+    arrival = trace.arrival_times()
+    delivered_at = np.where(arrival == NEVER, N, arrival)  # step at which y(τ) is delivered (N: not within)
+    ctx = (_fingerprint(system, r0, solver, solver_options), window)
+    keys: list = [None] * N
+    todo: list[int] = []
+    for t in range(N):
+        if window is None:  # the value depends on (t, D_t) only
+            key = (ctx, t, np.packbits(delivered_at[: t + 1] <= t).tobytes())
+        else:  # on the arrival times up to t (the boxes of earlier rows)
+            key = (ctx, t, np.minimum(delivered_at[: t + 1], t + 1).astype(np.int32).tobytes())
+        keys[t] = key
+        hit = _CACHE.get(key) if cache else None
+        if hit is not None:
+            out[t] = hit
+            _STATS["hits"] += 1
+            _CACHE.move_to_end(key)
+        else:
+            todo.append(t)
+    if todo:
+        tlp = trace_lp(system, trace, r0, SEGMENT)
+        _STATS["misses"] += len(todo)
+        if window is None:  # one growing model from time 0
+            for t, v in _solve_range(tlp, 0, todo, delivered_at, None, solver, solver_options).items():
+                out[t] = v
+        else:
+            # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
+            pending = set(todo)
+            for c0 in range(0, N, window):
+                rows = [t for t in range(c0, min(N, c0 + window)) if t in pending]
+                if not rows:
+                    continue
+                s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
+                box = None if s == 0 else out[s - 1]
+                for t, v in _solve_range(tlp, s, rows, delivered_at, box, solver, solver_options).items():
+                    out[t] = v
+        if cache:
+            for t in todo:
+                _CACHE[keys[t]] = out[t].copy()
+            while len(_CACHE) > CACHE_SIZE:
+                _CACHE.popitem(last=False)
+    return out
+
+
+def block_limit(system: AffineSystem, depth: int, available, x0_radius) -> np.ndarray:
+    r"""The information limit of one block: depth ``d``, data ``S`` available at ``d - 1``, box ``x0_radius``.
+
+    The radius :math:`r(d)` with :math:`\mathcal D_{d-1} = S` (measurements of ``S`` on time, the others lost):
+    the class ``(d, S)`` of the class engine, whose level is :math:`\max_i r_i(d)` when ``x0_radius = μ1``
+    (module docstring, second theorem).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant (from time 0).
+    depth : int
+        ``d >= 1``.
+    available : iterable of int
+        ``S``: measurement times in ``0..d-1``.
+    x0_radius : float or array_like, shape (n,)
+        Radius of the box at the block start (``μ1``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        :math:`r_i(d)` per state.
+
+    Raises
+    ------
+    InputError
+        ``depth < 1`` (field ``depth``), a time of ``available`` outside ``0..d-1`` (field ``available``), or
+        the errors of :func:`information_limit`.
+    """
+    d = integer(depth, "depth", low=1)
+    S = sorted({integer(i, "available") for i in available})
+    if S and S[-1] >= d:
+        raise InputError(f"available times lie in 0..{d - 1}, got {S}", field="available")
+    delays = np.full(d, NEVER, np.int64)
+    delays[S] = 0
+    return information_limit(system, ArrivalTrace(delays), x0_radius)[d - 1]

@@ -1,0 +1,290 @@
+r"""The error set of a linear estimator carried online: a zonotope, its exact bound and its outer reduction.
+
+Given the arrivals, every estimator of the package is linear in the initial
+error, the process noise and the measurement noise: its error is
+:math:`\xi(t) = G(t)\,\varepsilon` with :math:`\varepsilon` in the unit box
+(each column of ``G`` one noise variable scaled by its radius), a centred
+zonotope.  Its exact worst case per state is the row sum
+:math:`\beta_i(t) = \sum_j |G_{ij}(t)|`, attained at the vertex
+:math:`\varepsilon = \operatorname{sign}(G_{i\cdot})`.
+
+**One representation of an estimator's error.**  After a step, an estimator
+says how the error of its new estimate :math:`\hat x(t+1)` depends on the
+error of an earlier estimate, its *anchor* ``s``, and on the noise that entered
+since (:class:`ErrorMap`):
+
+.. math:: \xi(t+1) = \Phi\,\xi(s) + N\,\varepsilon_{s..t},
+
+where the variables :math:`\varepsilon_{s..t}` (the process noise ``w(s..t)``
+and the measurement noise of the packets stamped ``s..t``, each in its box) are
+independent of those of :math:`\xi(s)`.  A Kalman-type recursion anchors at
+the previous step; the class form of the equalized-recovery estimator anchors
+at the start of its period (its map is the class map :math:`E_d - K Z_S` of
+:func:`eqrec.bounds.data_classes.class_error_map`).  :class:`ErrorSet` keeps the
+zonotope of every anchor still in use and forms
+
+.. math:: G(t+1) = [\,\Phi\, G(s)\;\; N\,],
+
+the exact error set, carried across period boundaries with no box reset: the
+zonotope at a period's end is the next period's initial set, so what the
+earlier periods told is kept.
+
+**Order reduction** (:func:`reduce_order`, only when ``order`` is given)
+replaces the smallest generators by the box that contains them (Girard,
+*Reachability of uncertain linear systems using zonotopes*, HSCC 2005): the
+reduced zonotope contains the original one, so the bound stays a guarantee and
+is exact up to the reduction.
+
+**Floating point.**  The row sums are rounded outward
+(:func:`outer_row_sums`): the computed value is at least the exact sum of the
+stored generators, so no tolerance is needed on the guarantee side.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eqrec.errors import InputError
+
+#: Unit roundoff of float64.
+_U = np.finfo(float).eps / 2
+
+
+@dataclass(frozen=True)
+class ErrorMap:
+    r"""How an estimate's error depends on an earlier error and on the noise since (module docstring).
+
+    :math:`\xi(t+1) = \Phi\,\xi(s) + N\,\varepsilon` with ``s = anchor`` and
+    :math:`\varepsilon` in the unit box, independent of :math:`\xi(s)`.
+
+    Parameters
+    ----------
+    anchor : int
+        Absolute time ``s`` of the estimate whose error the map starts from.
+    state : ndarray, shape (n, n)
+        :math:`\Phi`.
+    noise : ndarray, shape (n, q)
+        :math:`N`: one column per noise variable entered since ``s``, scaled by its radius.
+    """
+
+    anchor: int
+    state: np.ndarray
+    noise: np.ndarray
+
+
+def outer_row_sums(G: np.ndarray) -> np.ndarray:
+    r"""Per row, :math:`\sum_j |G_{ij}|` rounded outward: never below the exact sum of the stored entries.
+
+    A floating-point sum of ``q`` non-negative terms is within a relative
+    :math:`(q-1)u` of the exact one (Higham, *Accuracy and Stability of
+    Numerical Algorithms*, eq. (4.4)); the result is multiplied by
+    :math:`1 + (q+1)u` and rounded up once more.
+
+    Parameters
+    ----------
+    G : ndarray, shape (n, q)
+        Generators.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Upper bounds of the exact row sums of ``|G|``.
+    """
+    q = G.shape[1]
+    s = np.abs(G).sum(axis=1)
+    return np.nextafter(s * (1.0 + (q + 2) * _U), np.inf)
+
+
+def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:
+    r"""An outer reduction of the zonotope ``G ε`` to at most ``order · n`` generators (Girard 2005).
+
+    The generators with the smallest :math:`\|g\|_1 - \|g\|_\infty` are
+    replaced by the ``n`` axis-aligned generators of their interval hull,
+    :math:`\operatorname{diag}(\sum_j |g_j|)`; the result contains the
+    original zonotope (each removed segment lies in that box), and its row
+    sums are never smaller.
+
+    Parameters
+    ----------
+    G : ndarray, shape (n, q)
+        Generators.
+    order : float or None
+        The largest ratio ``columns / n`` kept (``>= 1``); ``None``: no reduction.
+
+    Returns
+    -------
+    ndarray, shape (n, q')
+        ``G`` itself when it is small enough, else the reduced generators (``q' <= order · n``).
+    """
+    if order is None:
+        return G
+    n, q = G.shape
+    keep_max = int(np.floor(order * n))
+    if q <= keep_max:
+        return G
+    A = np.abs(G)
+    # cost of boxing a generator: how much its box is larger than the segment itself
+    cost = A.sum(axis=0) - A.max(axis=0, initial=0.0)
+    keep = keep_max - n  # leave room for the n box generators
+    order_idx = np.argsort(cost, kind="stable")
+    boxed, kept = order_idx[: q - keep], np.sort(order_idx[q - keep:])
+    box = np.nextafter(A[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2) * _U), np.inf)
+    return np.concatenate([G[:, kept], np.diag(box)], axis=1)
+
+
+def check_order(order: "float | None") -> "float | None":
+    """Check ``order`` (``None`` or a number ``>= 1``).
+
+    Parameters
+    ----------
+    order : float or None
+        The reduction order.
+
+    Returns
+    -------
+    float or None
+        ``order`` as a float.
+
+    Raises
+    ------
+    InputError
+        Not ``None`` and not a finite number ``>= 1`` (field ``order``).
+    """
+    if order is None:
+        return None
+    if isinstance(order, (bool, np.bool_)) or not isinstance(order, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(order) or order < 1:
+        raise InputError(f"order is None or a number >= 1 (generators per state), got {order!r}", field="order")
+    return float(order)
+
+
+class ErrorSet:
+    r"""The zonotope of an estimator's error, advanced by the estimator's error maps (module docstring).
+
+    Parameters
+    ----------
+    generators : ndarray, shape (n, q)
+        The initial error set at time ``t0`` (e.g. ``radius · I`` for a box).
+    t0 : int
+        Its absolute time.
+    order : float or None, optional
+        Outer reduction of every stored set to ``order · n`` generators (``None``: exact).
+
+    Attributes
+    ----------
+    time : int
+        Absolute time of the current set.
+    generators : ndarray
+        The current set's generators.
+    """
+
+    def __init__(self, generators: np.ndarray, t0: int, order: "float | None" = None):
+        self.order = check_order(order)
+        G = np.asarray(generators, float)
+        self.time = int(t0)
+        self.generators = reduce_order(G, self.order)
+        self._stored: dict[int, np.ndarray] = {self.time: self.generators}
+
+    @classmethod
+    def box(cls, radius: "float | np.ndarray", n: int, t0: int, order: "float | None" = None) -> "ErrorSet":
+        """The set ``|ξ_i| <= radius_i`` at ``t0``.
+
+        Parameters
+        ----------
+        radius : float or ndarray, shape (n,)
+            Per-state radius.
+        n : int
+            State dimension.
+        t0 : int
+            Absolute time.
+        order : float or None, optional
+            Reduction order.
+
+        Returns
+        -------
+        ErrorSet
+            The box as a zonotope of ``n`` generators.
+        """
+        return cls(np.diag(np.broadcast_to(np.asarray(radius, float), (n,)).copy()), t0, order)
+
+    def at(self, time: int) -> np.ndarray:
+        """The stored set of an earlier time (an anchor).
+
+        Parameters
+        ----------
+        time : int
+            Absolute time.
+
+        Returns
+        -------
+        ndarray
+            Its generators.
+
+        Raises
+        ------
+        InputError
+            No set is kept for that time.
+        """
+        try:
+            return self._stored[int(time)]
+        except KeyError:
+            raise InputError(f"no error set is kept for time {time} (kept: {sorted(self._stored)})",
+                             field="anchor") from None
+
+    def propose(self, emap: ErrorMap) -> np.ndarray:
+        """The exact set after a step with this map (nothing changes).
+
+        Parameters
+        ----------
+        emap : ErrorMap
+            The step's map.
+
+        Returns
+        -------
+        ndarray
+            ``[Φ G(s), N]``.
+        """
+        return np.concatenate([emap.state @ self.at(emap.anchor), emap.noise], axis=1)
+
+    def advance(self, emap: ErrorMap, generators: "np.ndarray | None" = None) -> np.ndarray:
+        """Move to the next time: the set ``[Φ G(s), N]`` (or ``generators``, from :meth:`propose`).
+
+        Sets older than the map's anchor are dropped (an estimator's anchor never moves back).
+
+        Parameters
+        ----------
+        emap : ErrorMap
+            The step's map.
+        generators : ndarray or None, optional
+            The result of :meth:`propose` for this map, if already computed.
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The exact per-state bound of the new set (before reduction), rounded outward.
+        """
+        G = self.propose(emap) if generators is None else generators
+        bounds = outer_row_sums(G)
+        self.time += 1
+        self.generators = reduce_order(G, self.order)
+        self._stored = {s: g for s, g in self._stored.items() if s >= emap.anchor}
+        self._stored[self.time] = self.generators
+        return bounds
+
+    def replace(self, generators: np.ndarray) -> None:
+        """Set the current set (a set-membership update made elsewhere, e.g. a fallback estimator's).
+
+        Parameters
+        ----------
+        generators : ndarray, shape (n, q)
+            The new generators of the current time.
+        """
+        self.generators = reduce_order(np.asarray(generators, float), self.order)
+        self._stored = {self.time: self.generators}
+
+    @property
+    def state_bounds(self) -> np.ndarray:
+        """Per-state bounds of the current set (rounded outward)."""
+        return outer_row_sums(self.generators)

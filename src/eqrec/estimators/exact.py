@@ -1,0 +1,276 @@
+r"""The exact run-time bound of any linear estimator of the protocol: :func:`exact_bound`.
+
+Given the arrivals, every estimator of the package is affine in the initial
+estimate, the inputs and the measurements, so its error
+:math:`\xi(t) = x(t) - \hat x(t)` is affine in the uncertainty
+:math:`\delta = (\xi(t_0), w, v)`:
+
+.. math:: \xi(t) = c(t) + G(t)\,\delta, \qquad
+    \max_{|\delta| \le r} |\xi_i(t)| = |c_i(t)| + \sum_j |G_{ij}(t)|\, r_j .
+
+:func:`exact_bound` wraps an estimator and returns, with each estimate, that
+worst case (the infinity norm over the states, and :attr:`ExactBound.state_bounds`),
+in one of two ways:
+
+* **Error maps** (estimators with ``error_map()``, e.g. the class form
+  :class:`eqrec.estimators.causal.ClassEstimator`): the estimator says how its
+  error depends on an earlier error and the noise since
+  (:class:`eqrec.bounds.zonotope.ErrorMap`); :class:`eqrec.bounds.zonotope.ErrorSet`
+  carries the zonotope, reduced to ``order · n`` generators if ``order`` is
+  given (outer, so still a guarantee).  ``c = 0``: these estimators are unbiased.
+* **Columns** (the filters of :mod:`eqrec.estimators.kalman`, whose ``reset``
+  takes an ``(n, K)`` estimate and a ``one`` vector): the wrapper runs the
+  estimator once on *affine data*, arrays whose columns are, in order, the
+  data actually received, the nominal data (no noise, ``x(t0) = x̂(t0)``) and
+  the coefficient of each entry of ``δ`` (``steps`` steps of ``w`` and ``v``
+  allocated at :meth:`ExactBound.reset`); it simulates the same columns of
+  the true state.  Column 0 is the estimate; the nominal column gives ``c``
+  (a filter that reads a late packet as a measurement of the present is
+  biased: ``c ≠ 0``); the others give ``G``.  Exact, with no reduction: the
+  cost of a step grows with the number of steps allocated.
+
+Both are exact: the bound equals the largest error of the wrapped estimator
+over every noise in the box and every initial error within ``x0_radius``,
+given the arrivals (up to the reduction), rounded outward in floating point.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from eqrec.arrivals.packets import Packet, as_packets, check_input
+from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
+from eqrec.errors import InputError
+from eqrec.systems.affine import AffineSystem
+
+
+def _radius(x0_radius: Any, n: int) -> np.ndarray:
+    try:
+        r = np.array(np.broadcast_to(np.asarray(x0_radius, dtype=float), (n,)))
+    except (TypeError, ValueError):
+        raise InputError(f"one radius, or one per state (n = {n}), got {x0_radius!r:.60}", field="x0_radius") \
+            from None
+    if isinstance(x0_radius, (bool, str)) or not np.all(np.isfinite(r)) or np.any(r < 0):
+        raise InputError(f"radii must be finite and >= 0, got {x0_radius!r:.60}", field="x0_radius")
+    return r
+
+
+class ExactBound:
+    r"""A linear estimator with its exact worst-case bound at every step (module docstring).
+
+    Parameters
+    ----------
+    estimator : object
+        An estimator of the protocol with ``error_map()``, or one that runs on columns
+        (``reset(xhat0, t0, one=...)`` with ``(n, K)`` estimates).
+    system : AffineSystem
+        The true system (its noise bounds are the box).
+    x0_radius : float or array_like
+        Bound on the initial error, one number or one per state.
+    order : float or None, optional
+        Reduction order of the error set (error-map estimators only; ``None``: exact).
+    steps : int or None, optional
+        Steps allocated for a column run (required for column estimators).
+
+    Attributes
+    ----------
+    kind : str
+        ``"guaranteed"``.
+    name : str
+        The wrapped estimator's name with ``", exact bound"``.
+    bound : float
+        The bound of the current estimate.
+    """
+
+    kind = "guaranteed"
+
+    def __init__(self, estimator: Any, system: AffineSystem, x0_radius: Any, order: "float | None" = None,
+                 steps: "int | None" = None):
+        if not isinstance(system, AffineSystem):
+            raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
+        self.estimator, self.system = estimator, system
+        self.x0_radius = _radius(x0_radius, system.n)
+        self.order = check_order(order)
+        self.name = f"{getattr(estimator, 'name', type(estimator).__name__)}, exact bound"
+        self.mode = "maps" if callable(getattr(estimator, "error_map", None)) else "columns"
+        if self.mode == "columns":
+            if not callable(getattr(estimator, "reset", None)):
+                raise InputError("the estimator has neither error_map() nor a reset that takes columns",
+                                 field="estimator")
+            if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or steps < 1:
+                raise InputError(f"a column run needs the number of steps to allocate (an integer >= 1), got "
+                                 f"{steps!r}", field="steps")
+        self.steps = None if steps is None else int(steps)
+        self.bound = np.nan
+        self._bounds = np.full(system.n, np.nan)
+        self._set: ErrorSet | None = None
+
+    # -- protocol ---------------------------------------------------------------------------------------------
+    def reset(self, xhat0: Any, t0: int = 0) -> "ExactBound":
+        """Start the wrapped estimator at ``x̂(t0) = xhat0``; the initial error is within ``x0_radius``.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            Initial estimate.
+        t0 : int, optional
+            Absolute time of the first step.
+
+        Returns
+        -------
+        ExactBound
+            ``self``.
+
+        Raises
+        ------
+        InputError
+            What the wrapped estimator refuses.
+        """
+        n, sysm = self.system.n, self.system
+        if self.mode == "maps":
+            self.estimator.reset(xhat0, t0)
+            self._set = ErrorSet.box(self.x0_radius, n, int(t0), self.order)
+        else:
+            x = np.asarray(xhat0, dtype=float)
+            if x.shape != (n,) or not np.all(np.isfinite(x)):
+                raise InputError(f"need {n} finite entries, got {xhat0!r:.60}", field="xhat0")
+            K = 2 + n + self.steps * (sysm.nw + sysm.nv)
+            X = np.zeros((n, K))
+            X[:, 0] = X[:, 1] = x
+            one = np.zeros(K)
+            one[:2] = 1.0
+            self.estimator.reset(X, t0, one=one)
+            truth = np.zeros((n, K))  # the true state's columns (column 0 unknown: left at zero, never read)
+            truth[:, 1] = x
+            truth[:, 2:2 + n] = np.diag(self.x0_radius)
+            self._truth, self._one, self._K, self._t0 = truth, one, K, int(t0)
+            self._sent: dict[int, np.ndarray] = {}
+        self._bounds = self.x0_radius.copy()
+        self.bound = float(self._bounds.max())
+        return self
+
+    @property
+    def time(self) -> int:
+        """Absolute time of the current estimate."""
+        return self.estimator.time
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate."""
+        x = self.estimator.x
+        return x[:, 0].copy() if x.ndim == 2 else x
+
+    @property
+    def state_bounds(self) -> np.ndarray:
+        """Per-state exact worst case of the current estimate's error."""
+        return self._bounds.copy()
+
+    def step(self, y: Any = None, u: Any = None) -> tuple[np.ndarray, float]:
+        """Step the wrapped estimator; return its estimate and the exact worst case of its error.
+
+        Parameters
+        ----------
+        y : array_like, Packet, sequence of packets, or None, optional
+            What arrived (any protocol form).
+        u : array_like or None, optional
+            The input.
+
+        Returns
+        -------
+        xhat : ndarray, shape (n,)
+            The wrapped estimator's estimate.
+        bound : float
+            ``max_i`` of :attr:`state_bounds`.
+
+        Raises
+        ------
+        InputError
+            What the wrapped estimator refuses; a column run past its allocated steps.
+        """
+        if self.mode == "maps":
+            out = self.estimator.step(y, u)
+            xhat = out[0] if isinstance(out, tuple) else out
+            self._bounds = self._set.advance(self.estimator.error_map())
+        else:
+            xhat = self._column_step(y, u)
+        self.bound = float(self._bounds.max())
+        return xhat, self.bound
+
+    def _column_step(self, y: Any, u: Any) -> np.ndarray:
+        sysm, t = self.system, self.time
+        k = t - self._t0
+        if k >= self.steps:
+            raise InputError(f"the column run was allocated {self.steps} steps (exact_bound(..., steps=))",
+                             field="steps")
+        packets = as_packets(y, t, sysm.p)
+        u = check_input(u, sysm.m)
+        nw, nv, n = sysm.nw, sysm.nv, sysm.n
+        base = 2 + n + k * (nw + nv)
+        # the columns of y(t) = C x(t) + V v(t), sent now and read when its packet arrives
+        v_cols = np.zeros((nv, self._K))
+        v_cols[:, base + nw: base + nw + nv] = sysm.eta_v * np.eye(nv)
+        sent = dict(self._sent)
+        sent[t] = sysm.C_at(t) @ self._truth + sysm.V_at(t) @ v_cols
+        cols = []
+        for pk in packets:
+            if pk.time not in sent:
+                raise InputError(f"a packet stamped {pk.time} before the run started at {self._t0}", field="y")
+            Y = sent[pk.time].copy()
+            Y[:, 0] = pk.y
+            cols.append(Packet(pk.time, Y))
+        out = self.estimator.step(cols, u)
+        xhat_cols = out[0] if isinstance(out, tuple) else out
+        w_cols = np.zeros((nw, self._K))
+        w_cols[:, base: base + nw] = sysm.eta_w * np.eye(nw)
+        drive = sysm.B_at(t) @ u + sysm.f
+        truth = sysm.A_at(t) @ self._truth + np.outer(drive, self._one) + sysm.E_at(t) @ w_cols
+        err = truth[:, 1:] - xhat_cols[:, 1:]
+        self._truth, self._sent = truth, sent
+        self._bounds = outer_row_sums(err)
+        return xhat_cols[:, 0].copy()
+
+
+def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "float | None" = None,
+                steps: "int | None" = None) -> ExactBound:
+    r"""Give a linear estimator of the protocol its exact worst-case bound at every step (module docstring).
+
+    Parameters
+    ----------
+    estimator : object
+        The estimator (not yet reset): one with ``error_map()`` (the class form) or one that runs on
+        columns (the Kalman-type filters of :mod:`eqrec.estimators.kalman`).
+    system : AffineSystem
+        The true system; its noise box and ``x0_radius`` are the uncertainty.
+    x0_radius : float or array_like
+        Bound on ``|ξ(t0)|``, one number or one per state.
+    order : float or None, optional
+        Outer reduction of the error set to ``order · n`` generators (error-map estimators).
+    steps : int or None, optional
+        Steps to allocate for a column run.
+
+    Returns
+    -------
+    ExactBound
+        A protocol estimator: ``reset``, then ``step -> (x̂, exact bound)``.
+
+    Raises
+    ------
+    InputError
+        A bad ``system``, ``x0_radius``, ``order`` or ``steps``, or an estimator that offers neither way.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import eqrec
+    >>> from eqrec.estimators.kalman import DelayUnawareKalman
+    >>> from eqrec.systems.noise import GaussianNoise
+    >>> acc = eqrec.acc_system()
+    >>> noise = GaussianNoise(Qw=np.eye(1) * 0.01, Qv=np.eye(2) * 0.001, x0_cov=np.eye(3) * 0.04)
+    >>> est = eqrec.exact_bound(DelayUnawareKalman(acc, noise.design(acc)), acc, 0.5, steps=10).reset(np.zeros(3))
+    >>> xhat, bound = est.step(np.array([0.1, 0.2]))
+    >>> bool(np.isfinite(bound)) and bound > 0
+    True
+    """
+    return ExactBound(estimator, system, x0_radius, order=order, steps=steps)

@@ -1,0 +1,105 @@
+"""An answer for every size (issue 33 §2): the estimate before solving, the refusal past the documented size
+unless --force, and the message naming a horizon that works for an unstable plant."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from eqrec import cli
+from eqrec.design import inputs
+from eqrec.design.delay.design import delay_classes
+from eqrec.design.inputs import _class_sizes, estimate_delay_design
+from eqrec.errors import SolverFailure
+from eqrec.systems.files import load_system
+
+ROOT = Path(__file__).resolve().parents[1]
+ACC = ROOT / "examples" / "acc_system.yaml"
+
+
+@pytest.mark.parametrize("D,T", [(0, 5), (1, 3), (1, 30), (2, 33), (4, 9), (4, 41)])
+def test_class_sizes_without_building_them(D, T):
+    """The window rule extended from a short horizon gives exactly the classes' (time, |S|) of the full build."""
+    depth, size, terminal = _class_sizes(D, T)
+    built = delay_classes(max_delay=D, horizon=T).classes
+    assert sorted(zip(depth.tolist(), size.tolist())) == sorted((c.depth, len(c.available)) for c in built)
+    assert terminal.sum() == sum(c.depth == T for c in built)
+
+
+def test_estimate_grows_and_flags_the_huge():
+    system, _ = load_system(ROOT / "examples" / "two_mass.yaml")
+    small = estimate_delay_design(system, 1, 100, mu1_free=True, workers=2)
+    big = estimate_delay_design(system, 1, 1000, mu1_free=True, workers=2)
+    assert small.classes == 200 and big.classes == 2000
+    assert small.lp_rows == 4 * sum(range(1, 101)) + 4 * sum(range(0, 100))  # n rows per measurement per class
+    assert small.seconds < big.seconds and small.memory < big.memory
+    assert small.too_large(available_memory=16 * 2**30) is None
+    huge = estimate_delay_design(system, 1, 100_000, mu1_free=True, workers=2)
+    assert "GiB" in huge.too_large(available_memory=16 * 2**30)
+    assert "min" in huge.too_large(available_memory=1e30)  # time, when memory is no limit
+    assert "200000 classes" in huge.summary()
+
+
+def test_cli_refuses_a_huge_horizon_at_once(capsys):
+    rc = cli.main(["design", str(ROOT / "examples" / "two_mass.yaml"), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100000", "--mu1", "free"])
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INPUT
+    assert "eqrec: estimate: 200000 classes" in err
+    assert "'--horizon': refused: it needs about" in err and "pass --force" in err
+
+
+def test_cli_force_runs_past_the_limit(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(inputs, "MAX_ESTIMATED_SECONDS", 0.0)  # every design is "too long"
+    args = ["design", str(ACC), "--method", "delay", "--max-delay", "1", "--horizon", "6", "--mu1", "1",
+            "--jobs", "1", "--out", str(tmp_path / "d.json")]
+    assert cli.main(args) == cli.EXIT_INPUT and not (tmp_path / "d.json").exists()
+    assert "refused: it would take about" in capsys.readouterr().err
+    assert cli.main(args + ["--force"]) == 0
+    assert json.loads((tmp_path / "d.json").read_text())["horizon"] == 6
+
+
+def _unstable_system(tmp_path, rho=1.3):
+    path = tmp_path / "unstable.yaml"
+    path.write_text(f"A: [[{rho}, 0.1], [0, 0.5]]\nC: [[1, 0]]\nE: [[1], [0]]\neta_w: 0.1\neta_v: 0.1\n")
+    return path
+
+
+def test_unstable_plant_names_a_horizon_that_works(tmp_path, monkeypatch, capsys):
+    """A failed long design of an unstable plant: the message says why and which horizon solves (bisection)."""
+    tried = []
+
+    def fake_design(args):
+        tried.append(args.horizon)
+        if args.horizon > 37:
+            raise SolverFailure("the class LPs: solver highs stopped with status 'Unknown'")
+        return {}
+
+    monkeypatch.setattr(cli, "run_design", fake_design)
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100", "--mu1", "free"])
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_SOLVER
+    assert "the horizon 100 is too long for so unstable a plant: A has spectral radius 1.3" in err
+    assert "--horizon 37 solves and 38 does not" in err
+    assert tried[0] == 100 and tried[1] == int(np.log(1e8) / np.log(1.3))  # the first guess: where ρ^T = 1e8
+    assert "eqrec: trying --horizon 37: solves" in err
+
+
+def test_stable_plant_gets_no_horizon_hint(tmp_path, monkeypatch, capsys):
+    def fake_design(args):
+        raise SolverFailure("stopped")
+
+    monkeypatch.setattr(cli, "run_design", fake_design)
+    rc = cli.main(["design", str(_unstable_system(tmp_path, rho=0.9)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100", "--mu1", "free"])
+    assert rc == cli.EXIT_SOLVER and "too long" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("extra,field", [(["--method", "prefix", "--words", "101111,110111"], "--force"),
+                                         (["--method", "delay", "--delays", "000000,100000"], "--force")])
+def test_force_without_a_max_delay_language_is_refused(extra, field, capsys):
+    assert cli.main(["design", str(ACC), *extra, "--force"]) == cli.EXIT_INPUT
+    err = capsys.readouterr().err
+    assert f"field '{field}'" in err and "--force applies to" in err

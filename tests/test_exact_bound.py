@@ -1,0 +1,183 @@
+"""The exact run-time bound (issue 32 §2): the zonotope of the error carried online, ``strict=False`` and
+``eqrec.exact_bound``, checked against the worst case computed from unit perturbations, against the noise
+played back at that worst case, and against the designed levels inside the language."""
+import numpy as np
+import pytest
+
+import eqrec
+from eqrec.arrivals.traces import NEVER, ArrivalTrace
+from eqrec.bounds.zonotope import ErrorMap, ErrorSet, outer_row_sums, reduce_order
+from eqrec.design.delay.design import design_delay_global
+from eqrec.errors import InputError
+from eqrec.estimators.exact import exact_bound
+from eqrec.estimators.kalman import DelayUnawareKalman, TimestampedKalman
+from eqrec.simulate.loop import closed_loop
+from eqrec.systems.affine import AffineSystem
+from eqrec.systems.noise import GaussianNoise
+
+
+def _oscillator() -> AffineSystem:
+    """Lightly damped, complex eigenvalues, negative entries in A (|A| != A)."""
+    th = 0.3
+    A = 0.995 * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    return AffineSystem(A=A, C=[[1.0, 0.0]], E=0.1 * np.eye(2), eta_w=0.1, eta_v=0.05, name="oscillator")
+
+
+@pytest.fixture(scope="module")
+def oscillator():
+    return _oscillator()
+
+
+@pytest.fixture(scope="module")
+def osc_design(oscillator):
+    # at most one loss per block of three, delays 0
+    return design_delay_global(oscillator, ["000", "300", "030", "003"]).design
+
+
+def _unit_responses(system, make, trace, xhat0, radius_x0):
+    """The error of a (linear) estimator run as ``c + G δ``: one run at δ = 0 and one per unit perturbation.
+
+    The initial estimate is ``xhat0`` in every run and the true initial state ``xhat0 + ξ0`` (what a run-time
+    bound knows: the estimate, not the state)."""
+    N, n = trace.steps, system.n
+    D = n + N * (system.nw + system.nv)
+    r = np.concatenate([np.broadcast_to(radius_x0, (n,)), np.full(N * system.nw, system.eta_w),
+                        np.full(N * system.nv, system.eta_v)])
+
+    def run(delta):
+        xi0, w, v = delta[:n], delta[n:n + N * system.nw].reshape(N, system.nw), delta[n + N * system.nw:].reshape(
+            N, system.nv)
+        out = closed_loop(system, make(), trace, xhat0 + xi0, xi0, w, v)
+        return out.error[1:], np.array(out.spread)
+
+    c, spread = run(np.zeros(D))
+    G = np.stack([run(r * np.eye(D)[j])[0] - c for j in range(D)], axis=-1)  # (N, n, D)
+    return c, G, r, spread
+
+
+def _trace(seed, N, loss, max_delay):
+    rng = np.random.default_rng(seed)
+    d = rng.integers(0, max_delay + 1, N)
+    d[rng.random(N) < loss] = NEVER
+    return ArrivalTrace(d)
+
+
+# -- the zonotope mathematics -----------------------------------------------------------------------------------
+def test_reduction_is_outer_and_bounded():
+    rng = np.random.default_rng(0)
+    G = rng.normal(size=(3, 200)) * rng.random(200) ** 3
+    R = reduce_order(G, 5)
+    assert R.shape[1] <= 15
+    assert np.all(outer_row_sums(R) >= np.abs(G).sum(axis=1))
+    for d in rng.normal(size=(200, 3)):  # support functions never smaller
+        assert np.abs(d @ R).sum() >= np.abs(d @ G).sum() * (1 - 1e-12)
+
+
+def test_error_set_carries_anchored_maps_exactly():
+    es = ErrorSet.box(1.0, 2, t0=5)
+    b = es.advance(ErrorMap(5, np.array([[1.0, -1.0], [0.0, 1.0]]), np.array([[0.1], [0.0]])))
+    assert b.tolist() == pytest.approx([2.1, 1.0])
+    assert np.all(b >= [2.1, 1.0])
+    with pytest.raises(InputError, match="anchor"):
+        es.propose(ErrorMap(3, np.eye(2), np.zeros((2, 0))))
+
+
+# -- strict=False ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("loss", [0.0, 0.1, 0.4])
+def test_strict_false_is_tight_and_holds_with_the_worst_case_played_back(oscillator, osc_design, loss):
+    design, sysm = osc_design, oscillator
+    trace = _trace(11, 24, loss, 0)
+    x0 = np.array([0.7, -0.3])
+    c, G, r, spread = _unit_responses(sysm, lambda: design.estimator(strict=False), trace, x0, design.mu1)
+    exact = np.abs(G).sum(axis=-1).max(axis=1)  # per step, the exact worst case of this estimator
+    assert np.abs(c).max() < 1e-12  # unbiased
+    assert np.all(np.isfinite(spread))
+    ratio = spread / exact
+    assert ratio.min() >= 1 - 1e-9 and np.quantile(ratio, 0.95) <= 1.1
+    # the noise at the worst row of the worst step, played back: error <= bound, and it is attained
+    t, i = np.unravel_index(np.argmax(np.abs(G).sum(axis=-1) / spread[:, None]), G.shape[:2])
+    delta = np.sign(G[t, i]) * r
+    n, N = sysm.n, trace.steps
+    run = closed_loop(sysm, design.estimator(strict=False), trace, x0 + delta[:n], delta[:n],
+                      delta[n:n + N * sysm.nw].reshape(N, sysm.nw), delta[n + N * sysm.nw:].reshape(N, sysm.nv))
+    err = np.abs(run.error[1:]).max(axis=1)
+    # the played-back error attains the bound; the simulated error itself is rounded (x and x̂ are computed in
+    # floating point), so it may pass an attained bound by a few ulps: 1e-12 is that simulation's margin
+    assert np.all(err <= np.array(run.spread) * (1 + 1e-12))
+    assert err[t] >= (1 - 1e-9) * exact[t]
+
+
+def test_strict_false_stays_below_the_designed_levels_inside_the_language(oscillator, osc_design):
+    trace = ArrivalTrace.from_arrived([1, 0, 1, 1, 1, 0, 1, 1, 1] * 4)
+    strict = closed_loop(oscillator, osc_design.estimator(), trace, np.zeros(2), np.zeros(2), np.zeros((36, 2)),
+                         np.zeros((36, 1)))
+    relaxed_est = osc_design.estimator(strict=False)
+    flags = []
+    relaxed = closed_loop(oscillator, relaxed_est, trace, np.zeros(2), np.zeros(2), np.zeros((36, 2)),
+                          np.zeros((36, 1)), after_step=lambda k: flags.append(relaxed_est.in_design))
+    assert all(flags)
+    assert np.all(np.array(relaxed.spread) <= np.array(strict.spread))
+    assert np.array(relaxed.spread)[-1] < osc_design.mu1  # what earlier periods told is kept
+
+
+def test_strict_false_never_overflows_and_comes_back(oscillator, osc_design):
+    rng = np.random.default_rng(5)
+    N = 3000
+    d = np.where(rng.random(N) < 0.4, NEVER, 0)
+    d[2000:2100] = 0  # 100 good steps
+    trace = ArrivalTrace(d)
+    est = osc_design.estimator(strict=False)
+    flags = []
+    run = closed_loop(oscillator, est, trace, np.zeros(2), rng.uniform(-1, 1, 2) * osc_design.mu1,
+                      rng.choice([-1, 1], (N, 2)) * 0.1, rng.choice([-1, 1], (N, 1)) * 0.05,
+                      after_step=lambda k: flags.append(est.in_design))
+    spread = np.array(run.spread)
+    assert np.all(np.isfinite(spread)) and spread.max() < 10 * osc_design.mu1
+    assert np.all(np.abs(run.error[1:]).max(axis=1) <= spread)
+    assert any(flags[2010:2100])  # the designed gains are back during the good stretch
+
+
+def test_strict_true_names_strict_false_and_reset(oscillator, osc_design):
+    est = osc_design.estimator().reset(np.zeros(2))
+    est.step(None)
+    with pytest.raises(InputError, match=r"strict=False.*reset"):
+        est.step(None)
+
+
+# -- eqrec.exact_bound --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("family", [TimestampedKalman, DelayUnawareKalman])
+def test_exact_bound_of_the_kalman_filters_equals_the_unit_perturbation_worst_case(family, oscillator):
+    sysm = oscillator
+    design = GaussianNoise(Qw=np.eye(2) * 0.002, Qv=np.eye(1) * 0.0004, x0_cov=np.eye(2) * 0.04).design(sysm)
+    trace = _trace(3, 20, 0.2, 2)
+    x0 = np.array([1.0, -2.0])
+    c, G, r, spread = _unit_responses(sysm, lambda: exact_bound(family(sysm, design), sysm, 0.5, steps=20),
+                                      trace, x0, 0.5)
+    exact = (np.abs(c) + np.abs(G).sum(axis=-1)).max(axis=1)
+    assert np.all(spread >= exact * (1 - 1e-12)) and np.all(spread <= exact * (1 + 1e-9))
+
+
+def test_exact_bound_of_a_design_equals_strict_false_inside_the_language(oscillator, osc_design):
+    trace = ArrivalTrace.from_arrived([1, 0, 1, 1, 1, 0] * 3)
+    rng = np.random.default_rng(2)
+    w, v = rng.uniform(-0.1, 0.1, (18, 2)), rng.uniform(-0.05, 0.05, (18, 1))
+    a = closed_loop(oscillator, exact_bound(osc_design.estimator(), oscillator, osc_design.mu1, order=40), trace,
+                    np.zeros(2), np.zeros(2), w, v)
+    b = closed_loop(oscillator, osc_design.estimator(strict=False), trace, np.zeros(2), np.zeros(2), w, v)
+    assert np.array_equal(a.xhat, b.xhat)
+    assert np.all(np.array(b.spread) <= np.array(a.spread))
+
+
+def test_exact_bound_refuses_bad_arguments(oscillator):
+    design = GaussianNoise(Qw=np.eye(2) * 0.002, Qv=np.eye(1) * 0.0004, x0_cov=np.eye(2)).design(oscillator)
+    with pytest.raises(InputError, match="steps"):
+        exact_bound(TimestampedKalman(oscillator, design), oscillator, 0.5)
+    with pytest.raises(InputError, match="x0_radius"):
+        exact_bound(TimestampedKalman(oscillator, design), oscillator, -1.0, steps=3)
+    with pytest.raises(InputError, match="order"):
+        exact_bound(TimestampedKalman(oscillator, design), oscillator, 1.0, order=0.5, steps=3)
+    est = exact_bound(TimestampedKalman(oscillator, design), oscillator, 1.0, steps=1).reset(np.zeros(2))
+    est.step(None)
+    with pytest.raises(InputError, match="steps"):
+        est.step(None)
+    assert eqrec.exact_bound is exact_bound

@@ -1,0 +1,219 @@
+"""The information limit (issue 32 §1): shape, hand-checked values, monotonicity, the identity with the class
+engine's class levels, the window's direction, the cache and bad input.
+
+Tolerances: the limit is an LP optimum to HiGHS's feasibility tolerance (1e-9, ``HIGHS_OPTIONS``) and the class
+levels are LP optima too, so comparisons between them carry a relative 1e-9; values checked by hand carry 1e-12
+(the LP's vertex is exact up to rounding there).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import eqrec
+from eqrec.arrivals.traces import NEVER, ArrivalTrace
+from eqrec.bounds.information import block_limit, cache_info, clear_cache, information_limit
+
+REL = 1e-9  # two LP optima of the same problem (module docstring of the test)
+
+
+def _random_trace(N: int, loss: float, max_delay: int, seed: int) -> ArrivalTrace:
+    rng = np.random.default_rng(seed)
+    d = rng.integers(0, max_delay + 1, N)
+    return ArrivalTrace(np.where(rng.random(N) < loss, NEVER, d))
+
+
+@pytest.fixture(scope="module")
+def acc():
+    return eqrec.acc_system()
+
+
+@pytest.fixture(scope="module")
+def acc_design(acc):
+    return eqrec.design_delay(acc, eqrec.delay_classes(max_delay=1, horizon=4), mu1=0.4)
+
+
+@pytest.fixture(scope="module")
+def reactor_design():
+    return eqrec.design_prefix(eqrec.batch_reactor(), ["11111", "01111", "10111", "11011"], mu1=1.0,
+                               state_weights=[1, 2, 1, 0.5])
+
+
+def test_public_names():
+    assert eqrec.information_limit is information_limit
+    assert eqrec.ArrivalTrace is ArrivalTrace
+
+
+def test_shape_and_sign(acc):
+    trace = _random_trace(25, 0.3, 2, 0)
+    r = information_limit(acc, trace, 0.5)
+    assert r.shape == (25, acc.n)
+    assert np.all(np.isfinite(r)) and np.all(r >= 0)
+    assert information_limit(acc, ArrivalTrace([]), 0.5).shape == (0, acc.n)
+
+
+def test_scalar_by_hand():
+    # x(t+1) = x + w, y = x + v, |w| <= 0.1, |v| <= 0.5, |x(0)| <= 1
+    walk = eqrec.AffineSystem(A=[[1.0]], C=[[1.0]], E=[[1.0]], eta_w=0.1, eta_v=0.5)
+    # y(0) on time: |x0| <= 0.5, x(1) = x0 + w0 -> 0.6; y(1) lost: 0.7; y(2) on time: |x(2)| <= 0.5 -> 0.6
+    r = information_limit(walk, ArrivalTrace([0, NEVER, 0]), 1.0)[:, 0]
+    np.testing.assert_allclose(r, [0.6, 0.7, 0.6], rtol=0, atol=1e-12)
+    # y(0) delayed by 2: nothing before step 2 (1.1, 1.2); at step 2 |x0| <= 0.5, x(3) = x0 + w0 + w1 + w2 -> 0.8
+    r = information_limit(walk, ArrivalTrace([2, NEVER, NEVER]), 1.0)[:, 0]
+    np.testing.assert_allclose(r, [1.1, 1.2, 0.8], rtol=0, atol=1e-12)
+
+
+def test_time_varying_reads_absolute_time():
+    # A(0) = 2, A(1) = 3, A(2) = 0.5; y(2) on time: 2.1, 6.4, then |x(2)| <= 0.5 and x(3) = 0.5 x(2) + w -> 0.35
+    tv = eqrec.AffineSystem(A=np.array([2.0, 3.0, 0.5]).reshape(3, 1, 1), C=[[1.0]], E=[[1.0]], eta_w=0.1,
+                            eta_v=0.5)
+    r = information_limit(tv, ArrivalTrace([NEVER, NEVER, 0]), 1.0)[:, 0]
+    np.testing.assert_allclose(r, [2.1, 6.4, 0.35], rtol=0, atol=1e-12)
+    with pytest.raises(eqrec.InputError) as err:
+        information_limit(tv, ArrivalTrace([0, 0, 0, 0]), 1.0)
+    assert err.value.field == "trace"
+
+
+def test_more_data_never_increases_the_limit(acc):
+    trace = _random_trace(40, 0.4, 1, 3)
+    base = information_limit(acc, trace, 0.5)
+    lost = np.flatnonzero(trace.lost)
+    tau = int(lost[len(lost) // 2])
+    more = trace.delays.copy()
+    more[tau] = 1  # the lost y(τ) now arrives at τ + 1
+    richer = information_limit(acc, ArrivalTrace(more), 0.5)
+    assert np.all(richer <= base * (1 + REL))
+    np.testing.assert_array_equal(richer[:tau + 1], base[:tau + 1])  # same delivered sets: the same rows (cache)
+    assert richer[tau + 1:].sum() < base[tau + 1:].sum()  # the extra measurement tells something
+    wider = information_limit(acc, trace, 0.8)  # a larger initial box never decreases it
+    assert np.all(wider >= base * (1 - REL))
+
+
+@pytest.mark.parametrize("which", ["acc_design", "reactor_design"])
+def test_class_levels_are_information_limits(which, request):
+    """Every class (d, S), inner or terminal: its certified per-row worst case = the one-block limit."""
+    design = request.getfixturevalue(which)
+    classes = design.class_gains.classes.classes
+    bounds = design.class_certificate.bounds
+    levels = design.extra["class_levels"]
+    assert len(classes) >= 8
+    for cls, row_bounds, level in zip(classes, bounds, levels):
+        limit = block_limit(design.system, cls.depth, cls.available, design.mu1)
+        np.testing.assert_allclose(limit, row_bounds, rtol=0, atol=REL * row_bounds.max(), err_msg=cls.label)
+        assert abs(limit.max() - level) <= REL * level, cls.label
+
+
+def test_limit_below_the_class_bound_on_a_long_run(acc, acc_design):
+    """In the language, the class estimator guarantees its class level at every step: the limit is below it
+    (equal in the first block, which starts from the same box)."""
+    T, gains = acc_design.T, acc_design.class_gains
+    trace = _random_trace(6 * T, 0.0, 1, 7)
+    limit = information_limit(acc, trace, acc_design.mu1)
+    arrival = trace.arrival_times()
+    for t in range(trace.steps):
+        b, d = divmod(t, T)
+        S = tuple(int(tau) - b * T for tau in range(b * T, t + 1) if arrival[tau] <= t)
+        level = acc_design.extra["class_levels"][gains.classes.index(d + 1, S)]
+        assert limit[t].max() <= level * (1 + REL)
+        if b == 0:
+            assert limit[t].max() >= level * (1 - REL)
+
+
+def test_window_errs_upward(acc):
+    trace = _random_trace(60, 0.3, 2, 11)
+    exact = information_limit(acc, trace, 0.5, cache=False)
+    for W in (3, 10):
+        windowed = information_limit(acc, trace, 0.5, window=W, cache=False)
+        assert np.all(windowed >= exact * (1 - REL))
+        np.testing.assert_allclose(windowed[:W], exact[:W], rtol=REL)  # the same LPs in other models
+    np.testing.assert_allclose(information_limit(acc, trace, 0.5, window=60, cache=False), exact, rtol=REL)
+    # the batch reactor has no process noise: the box forgets what x(0) was, visibly
+    reactor = eqrec.batch_reactor()
+    trace = _random_trace(40, 0.2, 1, 5)
+    exact = information_limit(reactor, trace, 1.0)
+    assert np.max(information_limit(reactor, trace, 1.0, window=4) / exact) > 1.01
+
+
+def test_cache_shares_rows(acc):
+    clear_cache()
+    trace = _random_trace(30, 0.3, 1, 2)
+    first = information_limit(acc, trace, 0.5)
+    assert cache_info()["misses"] == 30 and cache_info()["hits"] == 0
+    np.testing.assert_array_equal(information_limit(acc, trace, 0.5), first)
+    assert cache_info()["hits"] == 30
+    # another run with the same deliveries up to step 19 (only the later delays differ)
+    other = trace.delays.copy()
+    other[25:] = NEVER
+    information_limit(acc, ArrivalTrace(other), 0.5)
+    assert cache_info()["hits"] >= 30 + 20
+    information_limit(acc, trace, [0.5, 0.5, 0.6])  # another radius: no hit
+    assert cache_info()["misses"] >= 30 + 30
+
+
+def test_other_solver_agrees(acc):
+    trace = _random_trace(10, 0.3, 1, 4)
+    np.testing.assert_allclose(information_limit(acc, trace, 0.5, solver="scipy", cache=False),
+                               information_limit(acc, trace, 0.5, cache=False), rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    ({"trace": [0, 1]}, "trace"),
+    ({"system": "acc"}, "system"),
+    ({"x0_radius": -1.0}, "x0_radius"),
+    ({"x0_radius": float("nan")}, "x0_radius"),
+    ({"x0_radius": [1.0, 1.0]}, "x0_radius"),
+    ({"x0_radius": np.inf}, "x0_radius"),
+    ({"solver": "gurobi"}, "solver"),
+    ({"window": 0}, "window"),
+    ({"solver_options": 3}, "solver_options"),
+])
+def test_bad_input(acc, kwargs, field):
+    args = {"system": acc, "trace": ArrivalTrace([0, 1]), "x0_radius": 0.5, **kwargs}
+    with pytest.raises(eqrec.InputError) as err:
+        information_limit(args.pop("system"), args.pop("trace"), args.pop("x0_radius"), **args)
+    assert err.value.field == field
+
+
+def test_block_limit_bad_input(acc):
+    with pytest.raises(eqrec.InputError) as err:
+        block_limit(acc, 0, (), 1.0)
+    assert err.value.field == "depth"
+    with pytest.raises(eqrec.InputError) as err:
+        block_limit(acc, 3, (0, 3), 1.0)
+    assert err.value.field == "available"
+
+
+def test_a_failed_warm_solve_is_solved_again(acc, monkeypatch):
+    """A warm HiGHS solve without an optimum (forced here: an iteration limit of 0 on the first model) is solved
+    cold by solve_lp and the model reloaded; the values do not change."""
+    import eqrec.bounds.information as info
+
+    trace = _random_trace(12, 0.3, 1, 9)
+    reference = information_limit(acc, trace, 0.5, cache=False)
+    loaded = []
+
+    def crippled(lp, options):
+        h = original(lp, options)
+        if not loaded:
+            h.setOptionValue("simplex_iteration_limit", 0)
+        loaded.append(lp.shape)
+        return h
+
+    original = info._highs_model
+    monkeypatch.setattr(info, "_highs_model", crippled)
+    np.testing.assert_allclose(information_limit(acc, trace, 0.5, cache=False), reference, rtol=REL)
+    assert len(loaded) >= 2  # the first model failed and was replaced
+
+
+@pytest.mark.parametrize("segment", [1, 3])
+def test_segment_length_does_not_change_the_values(acc, segment, monkeypatch):
+    """The state eliminated inside segments of K steps: the same LP optimum as with x at every step."""
+    import eqrec.bounds.information as info
+
+    trace = _random_trace(30, 0.3, 2, 13)
+    reference = information_limit(acc, trace, 0.5, cache=False)
+    monkeypatch.setattr(info, "SEGMENT", segment)
+    np.testing.assert_allclose(information_limit(acc, trace, 0.5, cache=False), reference, rtol=REL, atol=1e-15)
+    windowed = information_limit(acc, trace, 0.5, cache=False, window=7)
+    assert np.all(windowed >= reference * (1 - REL))

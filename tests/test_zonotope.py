@@ -1,0 +1,267 @@
+"""The zonotopic set-membership estimator (:mod:`eqrec.estimators.zonotope`): guarantee, replay, reduction, atomicity."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+import eqrec
+from eqrec.arrivals.draws import bernoulli_trace, with_uniform_delays
+from eqrec.arrivals.packets import Packet
+from eqrec.arrivals.traces import NEVER, ArrivalTrace
+from eqrec.errors import InputError
+from eqrec.estimators.protocol import Estimator
+from eqrec.estimators.zonotope import ZonotopeEstimator, reduce_girard, reduce_pca
+from eqrec.simulate.loop import closed_loop
+
+
+def rotating_plant() -> eqrec.AffineSystem:
+    """A lightly damped rotation with negative entries, two outputs sharing one noise channel (V not diagonal)."""
+    th = 0.3
+    A = 0.99 * np.array([[np.cos(th), -np.sin(th), 0.0], [np.sin(th), np.cos(th), 0.0], [0.0, 0.2, -0.8]])
+    return eqrec.AffineSystem(A=A, C=[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], E=[[0.1, 0.0], [0.0, 0.05], [0.02, 0.0]],
+                              eta_w=1.0, eta_v=0.05, V=[[1.0, 0.5], [0.0, 1.0]], B=[[0.0], [1.0], [0.0]])
+
+
+PLANTS = {"two_mass": eqrec.two_mass, "rotation": rotating_plant}
+
+
+def lossy_trace(seed: int, steps: int, loss: float = 0.3, max_delay: int = 2) -> ArrivalTrace:
+    rng = np.random.default_rng(seed)
+    return with_uniform_delays(rng, bernoulli_trace(rng, steps, loss), max_delay)
+
+
+def run(system, est, trace, xi0, w, v, x0=None):
+    """``closed_loop`` recording the per-state bounds after every step."""
+    bounds = []
+    x0 = np.zeros(system.n) if x0 is None else x0
+    out = closed_loop(system, est, trace, x0, xi0, w, v, after_step=lambda k: bounds.append(est.state_bounds),
+                      u_at=lambda k, xhat: np.array([np.sin(0.1 * k)] * system.m))
+    return out, np.array(bounds)
+
+
+def test_protocol_and_names():
+    est = ZonotopeEstimator(eqrec.two_mass(), x0_radius=0.5, max_delay=2, order=20)
+    assert (est.kind, est.name) == ("guaranteed", "set-membership, zonotope")
+    assert est.reset(np.zeros(4)) is est and est.time == 0
+    assert isinstance(est, Estimator)  # after reset: before it, reading time or x raises InputError, as the filters'
+    xhat, bound = est.step(np.array([0.1]), np.array([0.0]))
+    assert xhat.shape == (4,) and isinstance(bound, float) and est.time == 1
+    assert bound == est.state_bounds.max() and np.array_equal(est.x, xhat)
+    assert eqrec.ZonotopeEstimator is ZonotopeEstimator
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+@pytest.mark.parametrize("gain", ["hybrid", "fradius", "interval"])
+def test_guarantee_at_random_box_corners_with_losses_and_delays(plant, gain):
+    system = PLANTS[plant]()
+    assert np.any(system.A < 0) and np.any(np.abs(np.linalg.eigvals(system.A).imag) > 0)
+    N, r0 = 80, 0.5
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        trace = lossy_trace(seed, N)
+        w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
+        v = system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv))
+        xi0 = r0 * rng.choice([-1.0, 1.0], system.n)
+        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=3, gain=gain)
+        out, beta = run(system, est, trace, xi0, w, v, x0=rng.normal(size=system.n))
+        err = np.abs(out.error[1:])
+        assert np.all(err <= beta)  # exact, per state: no tolerance on the guarantee side
+        assert np.all(err.max(axis=1) <= out.bound)
+
+
+def error_map(system, trace, make, N):
+    """The exact linear map from the unit noise ``(ξ0, w, v)`` to the final error (unit perturbations)."""
+    n, nw, nv = system.n, system.nw, system.nv
+    cols, radii = [], []
+    for kind, size, radius in (("x0", n, 0.5), ("w", N * nw, system.eta_w), ("v", N * nv, system.eta_v)):
+        for k in range(size):
+            xi0, w, v = np.zeros(n), np.zeros((N, nw)), np.zeros((N, nv))
+            {"x0": xi0.reshape(-1), "w": w.reshape(-1), "v": v.reshape(-1)}[kind][k] = radius
+            out = closed_loop(system, make(), trace, xi0, xi0, w, v)
+            cols.append(out.error[-1])
+            radii.append((kind, k, radius))
+    return np.array(cols).T, radii
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+@pytest.mark.parametrize("order", [None, 10])
+def test_played_back_worst_case(plant, order):
+    """The worst state's bound is attained (no reduction) or not exceeded (with reduction) by its worst vertex."""
+    system = PLANTS[plant]()
+    N = 25
+    trace = lossy_trace(7, N)
+
+    def make():
+        return ZonotopeEstimator(system, x0_radius=0.5, max_delay=2, order=order)
+
+    M, radii = error_map(system, trace, make, N)
+    est = make()
+    out = closed_loop(system, est, trace, np.zeros(system.n), np.zeros(system.n), np.zeros((N, system.nw)),
+                      np.zeros((N, system.nv)))
+    beta = est.state_bounds
+    i = int(np.argmax(beta))
+    s = np.sign(M[i])  # the vertex that maximises error i
+    xi0, w, v = np.zeros(system.n), np.zeros((N, system.nw)), np.zeros((N, system.nv))
+    for sign, (kind, k, radius) in zip(s, radii):
+        {"x0": xi0.reshape(-1), "w": w.reshape(-1), "v": v.reshape(-1)}[kind][k] = sign * radius
+    est = make()
+    out = closed_loop(system, est, trace, xi0, xi0, w, v)
+    err = abs(out.error[-1][i])
+    assert err <= est.state_bounds[i]  # exact
+    if order is None:  # tolerance: the bound carries a rounding allowance of a few ulps (module docstring)
+        assert err >= est.state_bounds[i] * (1 - 1e-9)
+    else:  # the reduction is outer: the bound may be loose, but not absurdly
+        assert err >= 0.5 * est.state_bounds[i]
+
+
+def test_late_packet_replay_equals_on_time_use():
+    """A packet used late (replayed over the buffer) gives bit for bit the set it would have given on time."""
+    system = eqrec.two_mass()
+    ys = [np.array([0.1 * k]) for k in range(6)]
+    late = ZonotopeEstimator(system, 0.5, max_delay=2, order=None).reset(np.zeros(4))
+    ontime = ZonotopeEstimator(system, 0.5, max_delay=2, order=None).reset(np.zeros(4))
+    for k in range(6):
+        if k == 2:
+            late.step(None)
+        elif k == 4:
+            late.step([Packet(2, ys[2]), Packet(4, ys[4])])
+        else:
+            late.step(ys[k])
+        ontime.step(ys[k])
+    assert late.replays == 1 and late.dropped_packets == 0
+    assert np.array_equal(late.x, ontime.x) and np.array_equal(late.generators, ontime.generators)
+
+
+def test_old_packet_is_dropped_counted_and_ignored():
+    system = eqrec.two_mass()
+    ys = [np.array([0.05 * k]) for k in range(6)]
+    est = ZonotopeEstimator(system, 0.5, max_delay=1, order=None).reset(np.zeros(4))
+    ref = ZonotopeEstimator(system, 0.5, max_delay=1, order=None).reset(np.zeros(4))
+    for k in range(6):
+        arrived = None if k == 1 else ys[k]
+        est.step([Packet(1, ys[1]), Packet(4, ys[4])] if k == 4 else arrived)  # y(1) three steps late: D = 1
+        ref.step(arrived)
+    assert est.dropped_packets == 1 and est.replays == 0
+    assert np.array_equal(est.x, ref.x) and np.array_equal(est.state_bounds, ref.state_bounds)
+    # and the run stays guaranteed when old packets are dropped (D = 0 with delays up to 2)
+    N = 60
+    rng = np.random.default_rng(3)
+    trace = lossy_trace(3, N)
+    est = ZonotopeEstimator(system, 0.5, max_delay=0, order=10)
+    out, beta = run(system, est, trace, 0.5 * rng.choice([-1.0, 1.0], 4), rng.choice([-1.0, 1.0], (N, 2)),
+                    0.05 * rng.choice([-1.0, 1.0], (N, 1)))
+    assert est.dropped_packets == int(np.sum((trace.delays > 0) & (np.arange(N) + trace.delays < N)))
+    assert np.all(np.abs(out.error[1:]) <= beta)
+
+
+@pytest.mark.parametrize("reduce", [reduce_girard, reduce_pca])
+def test_reduction_is_outer(reduce):
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        n = int(rng.integers(2, 6))
+        G = rng.normal(size=(n, 40)) * rng.exponential(size=40)
+        R = reduce(G, 3 * n)
+        assert R.shape[1] <= 3 * n
+        assert np.all(np.abs(R).sum(axis=1) >= np.abs(G).sum(axis=1))  # interval hull not smaller
+        D = rng.normal(size=(200, n))
+        assert np.all(np.abs(D @ R).sum(axis=1) >= np.abs(D @ G).sum(axis=1))  # support functions not smaller
+    assert reduce(G, 100) is G
+
+
+def state_of(est):
+    return (est.time, est.x, est.generators, est.state_bounds, est.dropped_packets, est.replays,
+            [(e.s, None if e.y is None else e.y.copy()) for e in est._buffer])
+
+
+def same(a, b):
+    return all(np.array_equal(p, q) if isinstance(p, np.ndarray) else p == q for p, q in zip(a, b))
+
+
+def test_atomic_errors():
+    system = eqrec.two_mass()
+    est = ZonotopeEstimator(system, 0.5, max_delay=2, order=10)
+    with pytest.raises(InputError):
+        est.step(None)  # before reset
+    est.reset(np.zeros(4))
+    est.step(np.array([0.1]))
+    est.step(None)
+    before = state_of(est)
+    bad = [
+        (dict(y=np.array([np.nan])), "y"),
+        (dict(y=np.array([0.1]), u=np.array([np.inf])), "u"),
+        (dict(y=[Packet(5, np.array([0.1]))]), "y"),  # from the future
+        (dict(y=[Packet(0, np.array([0.1]))]), "y"),  # stamp 0 received twice
+        (dict(y=[Packet(1, np.array([0.1])), Packet(2, np.array([np.nan]))]), "y"),
+        (dict(y=np.array([0.1, 0.2])), "y"),
+    ]
+    for kwargs, field in bad:
+        with pytest.raises(InputError) as info:
+            est.step(**kwargs)
+        assert info.value.field == field
+        assert same(state_of(est), before)
+    with pytest.raises(InputError) as info:
+        est.reset(np.array([0.0, np.nan, 0.0, 0.0]))
+    assert info.value.field == "xhat0" and same(state_of(est), before)
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(x0_radius=-1.0), "x0_radius"), (dict(x0_radius=[1.0, 2.0]), "x0_radius"),
+    (dict(x0_radius=np.nan), "x0_radius"), (dict(max_delay=-1), "max_delay"), (dict(max_delay=1.5), "max_delay"),
+    (dict(order=0.5), "order"), (dict(order=True), "order"), (dict(gain="kalman"), "gain"),
+    (dict(reduction="none"), "reduction"),
+])
+def test_constructor_checks(kwargs, field):
+    with pytest.raises(InputError) as info:
+        ZonotopeEstimator(eqrec.two_mass(), **kwargs)
+    assert info.value.field == field
+
+
+def reference_limit(system, trace, r0):
+    """The information limit by one scipy LP per state and step (the zero-data problem), a small independent check."""
+    n, nw, nv, N = system.n, system.nw, system.nv, trace.steps
+    arrival = trace.arrival_times()
+    out = np.zeros((N, n))
+    for t in range(N):
+        T = t + 1  # x(0..T); variables: x(0) (n), w(0..t) (T nw), v(0..t) (T nv)
+        nvar = n + T * nw + T * nv
+        Phi = [np.hstack([np.eye(n), np.zeros((n, nvar - n))])]
+        for k in range(T):
+            row = system.A @ Phi[-1]
+            row[:, n + k * nw:n + (k + 1) * nw] += system.eta_w * system.E
+            Phi.append(row)
+        eq = []
+        for tau in range(T):
+            if arrival[tau] != NEVER and arrival[tau] <= t:
+                row = system.C @ Phi[tau]
+                row[:, n + T * nw + tau * nv:n + T * nw + (tau + 1) * nv] += system.eta_v * system.V
+                eq.append(row)
+        A_eq = np.vstack(eq) if eq else None
+        bounds = [(-r0, r0)] * n + [(-1, 1)] * (T * (nw + nv))
+        for i in range(n):
+            res = linprog(-Phi[T][i], A_eq=A_eq, b_eq=None if A_eq is None else np.zeros(A_eq.shape[0]),
+                          bounds=bounds, method="highs")
+            out[t, i] = -res.fun
+    return out
+
+
+@pytest.mark.parametrize("gain", ["hybrid", "fradius"])
+def test_bound_never_below_the_information_limit(gain):
+    system, N, r0 = eqrec.two_mass(), 20, 0.5
+    trace = lossy_trace(11, N)
+    lim = reference_limit(system, trace, r0)
+    est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=10, gain=gain)
+    out, beta = run(system, est, trace, np.zeros(4), np.zeros((N, 2)), np.zeros((N, 1)))
+    # tolerance on the limit's side only: the LP is solved to ~1e-9 (at step 0 the hybrid bound equals the limit)
+    assert np.all(out.bound >= lim.max(axis=1) * (1 - 1e-7))
+    assert np.all(beta >= lim * (1 - 1e-7) - 1e-12)
+
+
+def test_two_mass_file_is_the_constructor():
+    loaded, T = eqrec.load_system("examples/two_mass.yaml")
+    built = eqrec.two_mass()
+    assert T is None and loaded.n == 4 and loaded.p == 1
+    for key in ("A", "B", "C", "E", "V"):
+        assert np.allclose(getattr(loaded, key), getattr(built, key), rtol=0, atol=1e-15), key
+    assert (loaded.eta_w, loaded.eta_v) == (built.eta_w, built.eta_v)
