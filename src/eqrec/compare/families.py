@@ -234,6 +234,9 @@ class CompareResult:
         shape ``(runs, steps)``.
     designs : dict of str to str
         Per family, its design in words (the language, or ``"none needed"``), or why there is none.
+    identity : dict
+        The class engine's class levels against the one-block information limit
+        (:func:`class_limit_identity`; empty without that design).
     us_per_step : dict of str to float
         Per family, the wall time of a step with its bound, in microseconds (a timing: not in the table).
     """
@@ -246,16 +249,19 @@ class CompareResult:
     outside: dict[str, np.ndarray] = field(default_factory=dict)
     limit: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     designs: dict[str, str] = field(default_factory=dict)
+    identity: dict[str, Any] = field(default_factory=dict)
     us_per_step: dict[str, float] = field(default_factory=dict)
 
 
 def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs") -> dict[str, Any]:
-    """The two guaranteed designs of the comparison on the loss-aware language, each at its smallest ``μ1``.
+    """The two guaranteed designs of the comparison on a loss-aware language, each at its smallest ``μ1``.
 
-    The class engine designs for delays ``0..D`` and at most ``m = setup.max_lost`` of the ``T`` measurements
-    of a block lost (:func:`eqrec.delay_classes` with ``max_lost``); the prefix design for the missing-data
-    words with at most ``m`` zeros (:func:`eqrec.missing_words_at_most`; its language has no delays).  A
-    design that does not exist (infeasible, e.g. ``T`` too short for so many losses) is a string saying why.
+    The class engine designs for delays ``0..D`` and at most ``m`` of the ``T`` measurements of a block lost
+    (:func:`eqrec.delay_classes` with ``max_lost``); the prefix design for the missing-data words with at most
+    ``m`` zeros (:func:`eqrec.missing_words_at_most`; its language has no delays).  ``m`` starts at
+    ``setup.max_lost`` (the coverage of the blocks) and goes down while the design does not exist (a language
+    with too many losses in a block has no estimator that recovers): the largest feasible ``m`` is used, and a
+    design that exists for no ``m`` is a string saying why.
 
     Parameters
     ----------
@@ -269,27 +275,61 @@ def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = 
     Returns
     -------
     dict
-        ``{family: Design or str}``.
+        ``{family: (Design or str, m)}``: the design (or why there is none) and the loss budget it was made for.
     """
     from eqrec.design.delay.design import delay_classes, design_delay_global
     from eqrec.design.inputs import missing_words_at_most
     from eqrec.design.prefix.design import design_prefix
     from eqrec.errors import CertificationFailure, InfeasibleDesign, SolverFailure
 
-    m, T, D = setup.max_lost, setup.horizon, setup.max_delay
+    T, D = setup.horizon, setup.max_delay
+    makers = {FAMILIES[0]: lambda m: design_delay_global(system, delay_classes(max_delay=D, horizon=T, max_lost=m),
+                                                         solver=solver).design,
+              FAMILIES[1]: lambda m: design_prefix(system, missing_words_at_most(T, m), "free", solver=solver)}
     out: dict[str, Any] = {}
-    for family, make in ((FAMILIES[0], lambda: design_delay_global(
-            system, delay_classes(max_delay=D, horizon=T, max_lost=m), solver=solver).design),
-                         (FAMILIES[1], lambda: design_prefix(system, missing_words_at_most(T, m), "free",
-                                                             solver=solver))):
-        try:
-            out[family] = make()
-        except (InfeasibleDesign, SolverFailure, CertificationFailure) as exc:
-            out[family] = f"no design: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
+    for family, make in makers.items():
+        first = None
+        for m in range(setup.max_lost, -1, -1):
+            try:
+                out[family] = (make(m), m)
+                break
+            except (InfeasibleDesign, SolverFailure, CertificationFailure) as exc:
+                first = first or f"no design: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
+        else:
+            out[family] = (first, None)
     return out
 
 
-def design_in_words(family: str, setup: CompareSetup) -> str:
+def class_limit_identity(design: Any) -> dict[str, Any]:
+    """The class levels of a class-engine design against the one-block information limit (issue 32 §1).
+
+    For every class ``(d, S)``: its stored level and the largest per-state radius of information of
+    ``x(d)`` given the data ``S`` and a box of radius ``μ1`` at the block's start
+    (:func:`eqrec.bounds.information.block_limit`); the two are equal (LP duality, Smolyak's theorem: the
+    docstring of :func:`eqrec.information_limit`).
+
+    Parameters
+    ----------
+    design : Design
+        A class-engine design (``design.class_gains`` and ``design.extra["class_levels"]``).
+
+    Returns
+    -------
+    dict
+        ``classes`` (how many), ``largest_relative_difference`` and ``rows``: per class ``label``, ``level``,
+        ``limit``.
+    """
+    from eqrec.bounds.information import block_limit
+
+    rows = []
+    for cls, level in zip(design.class_gains.classes.classes, design.extra["class_levels"]):
+        limit = float(block_limit(design.system, cls.depth, cls.available, design.mu1).max())
+        rows.append({"label": cls.label, "level": float(level), "limit": limit})
+    worst = max((abs(r["level"] - r["limit"]) / r["level"] for r in rows if r["level"] > 0), default=0.0)
+    return {"classes": len(rows), "largest_relative_difference": worst, "rows": rows}
+
+
+def design_in_words(family: str, setup: CompareSetup, m: "int | None" = None) -> str:
     """The language a family is designed for, in words (the ``design`` column).
 
     Parameters
@@ -298,17 +338,22 @@ def design_in_words(family: str, setup: CompareSetup) -> str:
         One of :data:`FAMILIES`.
     setup : CompareSetup
         The settings.
+    m : int or None, optional
+        The loss budget of the design (default: ``setup.max_lost``).
 
     Returns
     -------
     str
-        E.g. ``"delays 0..1, at most 2 of 6 lost"``.
+        E.g. ``"delays 0..1, at most 2 of 6 lost"`` (with ``", m = 3 has no design"`` when the coverage's
+        budget had to be lowered).
     """
-    m, T, D = setup.max_lost, setup.horizon, setup.max_delay
+    target, T, D = setup.max_lost, setup.horizon, setup.max_delay
+    m = target if m is None else m
+    lowered = f" ({setup.coverage:g} of the blocks needs m = {target}: no design)" if m < target else ""
     if family == FAMILIES[0]:
-        return f"delays 0..{D}, at most {m} of {T} lost"
+        return f"delays 0..{D}, at most {m} of {T} lost{lowered}"
     if family == FAMILIES[1]:
-        return f"on time, at most {m} of {T} lost (late = lost)"
+        return f"on time, at most {m} of {T} lost (late = lost){lowered}"
     return "none needed"
 
 
@@ -375,7 +420,9 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     if system.is_time_varying:
         raise InputError("the comparison runs on a time-invariant system", system.source, "A")
     found = guaranteed_designs(system, setup, solver)
-    designs = {f: d for f, d in found.items() if not isinstance(d, str)}
+    designs = {f: d for f, (d, _) in found.items() if not isinstance(d, str)}
+    words = {f: (d if isinstance(d, str) else design_in_words(f, setup, m)) for f, (d, m) in found.items()}
+    words.update({f: design_in_words(f, setup) for f in FAMILIES if f not in found})
     if designs:
         mu1 = min(d.mu1 for d in designs.values())
     else:  # no guaranteed design: the initial error of the runs from the open-loop box of one period
@@ -413,9 +460,9 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     errors, bounds, outside, rows, us = {}, {}, {}, [], {}
     x0 = np.zeros(n)
     for family in FAMILIES:
-        row: dict[str, Any] = {"estimator": family, "design": design_in_words(family, setup)}
+        row: dict[str, Any] = {"estimator": family, "design": words[family]}
         if family not in makers:  # a guaranteed design that does not exist: a row that says so
-            row.update(design=found[family], rms=np.nan, max_error=np.nan, bound=np.nan, median_bound=np.nan,
+            row.update(rms=np.nan, max_error=np.nan, bound=np.nan, median_bound=np.nan,
                        violations=pd.NA, outside_design=np.nan, limit_median=np.nan,
                        **{c: np.nan for c in COLUMNS[9:]}, **{f"rms_x{i + 1}": np.nan for i in range(n)})
             rows.append(row)
@@ -463,8 +510,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     table["violations"] = table["violations"].astype("Int64")
     return CompareResult(setup=setup, table=table, errors=errors, bounds=bounds,
                          mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside, limit=limit,
-                         designs={f: (found[f] if isinstance(found.get(f), str) else design_in_words(f, setup))
-                                  for f in FAMILIES}, us_per_step=us)
+                         designs=words, us_per_step=us,
+                         identity=class_limit_identity(designs[FAMILIES[0]]) if FAMILIES[0] in designs else {})
 
 
 def _gaussian(system: AffineSystem, given: "GaussianNoise | dict | None", mu1: float, sigmas: float) -> GaussianNoise:

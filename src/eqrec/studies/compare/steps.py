@@ -95,7 +95,8 @@ def summary_of(result: CompareResult) -> dict[str, Any]:
     -------
     dict
         ``designs``: per family its language in words (or why there is no design); ``max_lost``, ``coverage``
-        and ``limit_median`` (the information limit); ``guaranteed``: per family with a bound, its largest
+        and ``limit_median`` (the information limit); ``class_limit_identity``: how many class levels of the
+        class engine were compared with the one-block information limit and their largest relative difference; ``guaranteed``: per family with a bound, its largest
         bound and largest error / bound (at most 1: the guarantee), and for the designs their ``mu1`` and the
         median bound of the steps inside and outside the design (``None`` where there is none);
         ``against_class_bound``: per other family the steps (of ``runs · steps``) whose error
@@ -118,9 +119,10 @@ def summary_of(result: CompareResult) -> dict[str, Any]:
             above = result.errors[family] > reference
             against[family] = {"steps_above": int(above.sum()), "fraction_above": float(above.mean()),
                                "largest_error_over_bound": float((result.errors[family] / reference).max())}
+    identity = {k: v for k, v in result.identity.items() if k != "rows"}
     return {"designs": result.designs, "max_lost": result.setup.max_lost, "coverage": result.setup.coverage,
-            "limit_median": float(np.median(result.limit)), "guaranteed": guaranteed,
-            "against_class_bound": against}
+            "limit_median": float(np.median(result.limit)), "class_limit_identity": identity,
+            "guaranteed": guaranteed, "against_class_bound": against}
 
 
 def title_of(name: str, setup: CompareSetup) -> str:
