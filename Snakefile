@@ -9,8 +9,15 @@
 #   snakemake --cores 2 p3_scale                 # the P3 scale table (slow, up to 16 GB; not in `all`)
 #   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
 #   snakemake --report report.html               # browsable report with figure captions
+import os
+
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import min_version
+
+# One set of BLAS kernels on every x86-64 machine (OpenBLAS picks them by CPU otherwise, and an AVX-512 Intel
+# and an AMD machine then differ in the last bits, enough to change printed results): the jobs, started from
+# here, inherit it. The tests set the same (tests/conftest.py).
+os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 
 from eqrec.studies.pipeline import configuration
 

@@ -160,7 +160,7 @@ ratios.round(3).set_index(["system", "setting", "family"])
 # %%
 pd.DataFrame([{"system": p["name"], "setting": p["setting"], "classes compared":
                p["class_limit_identity"].get("classes", 0),
-               "largest relative difference": p["class_limit_identity"].get("largest_relative_difference")}
+               "level = limit within 1e-9 (relative)": p["class_limit_identity"].get("all_within_1e-9_relative")}
               for p in pairs])
 
 # %% [markdown]

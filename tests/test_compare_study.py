@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from eqrec.compare import CompareSetup
+from eqrec.compare import FAMILIES, CompareSetup
 from eqrec.errors import InputError
 from eqrec.studies.compare import steps as compare
 from eqrec.studies.pipeline import configuration, harness
@@ -39,7 +39,7 @@ def test_the_default_configuration_has_the_settings_of_the_issue():
     assert {(s["model"], s["horizon"], s["max_delay"]) for s in CFG["systems"].values()} == {
         ("acc", 6, 1), ("batch_reactor", 5, 2)}
     settings = sorted((s["loss"], s.get("burst", 0)) for s in CFG["settings"].values())
-    assert settings == [(0.1, 0), (0.1, 4), (0.3, 0)]  # 0: independent losses
+    assert settings == [(0.1, 0), (0.1, 4), (0.3, 0), (0.4, 0)]  # 0: independent losses; 0.4: heavy loss
 
 
 def test_setup_errors_name_the_field_of_the_section():
@@ -70,8 +70,10 @@ def test_the_merged_table_puts_system_and_setting_first():
 
     table = pd.read_csv(RES / "compare.csv")
     assert list(table.columns[:7]) == [*compare.KEYS, "estimator"]
-    assert len(table) == 6 * len(CFG["systems"]) * len(CFG["settings"])
-    guaranteed = table[table["estimator"].str.startswith("guaranteed")]
-    assert (guaranteed["violations"] == 0).all() and guaranteed["bound"].notna().all()
-    others = table[~table["estimator"].str.startswith("guaranteed")]
-    assert others[["bound", "violations", "outside_design"]].isna().all().all()
+    assert len(table) == len(FAMILIES) * len(CFG["systems"]) * len(CFG["settings"])
+    bounded = table[~table["estimator"].str.startswith("LMV") & table["rms"].notna()]
+    assert (bounded["violations"] == 0).all() and bounded["bound"].notna().all()
+    lmv = table[table["estimator"].str.startswith("LMV")]
+    assert lmv[["bound", "violations", "outside_design"]].isna().all().all()
+    missing = table[table["rms"].isna()]  # a design that does not exist: the row says why
+    assert missing["design"].str.startswith("no design").all()

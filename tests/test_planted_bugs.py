@@ -316,6 +316,9 @@ class _Unsound:
     def estimator(self, **kw):
         return _UnsoundEstimator(self.design.estimator(**kw), self.scale)
 
+    def __getattr__(self, name: str):  # the design's gains and levels (the class-limit identity reads them)
+        return getattr(self.__dict__["design"], name)
+
 
 class _UnsoundEstimator:
     def __init__(self, inner, scale: float):
@@ -344,8 +347,8 @@ def test_compare_counts_the_violations_of_a_bound_made_unsound(monkeypatch):
 
     real = families.guaranteed_designs
     monkeypatch.setattr(families, "guaranteed_designs",
-                        lambda *a, **kw: {f: d if isinstance(d, str) else _Unsound(d, 0.1)  # str: infeasible
-                                          for f, d in real(*a, **kw).items()})
+                        lambda *a, **kw: {f: (d if isinstance(d, str) else _Unsound(d, 0.1), m)  # str: infeasible
+                                          for f, (d, m) in real(*a, **kw).items()})
     result = compare_families(batch_reactor(), CompareSetup(loss=0.1, max_delay=1, horizon=4, runs=6, periods=4,
                                                             seed=3))
     table = result.table.set_index("estimator")

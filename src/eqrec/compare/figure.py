@@ -41,7 +41,7 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
     style = {"font.family": "serif", "font.size": 9, "axes.titlesize": 9, "legend.fontsize": 8, "axes.grid": True,
              "grid.alpha": 0.3, "savefig.bbox": "tight", "figure.dpi": 150}
     with plt.style.context("default"), plt.rc_context(style):
-        fig, axes = plt.subplots(2, 4, figsize=(9.0, 5.0), sharex=True, sharey=True)
+        fig, axes = plt.subplots(2, 4, figsize=(7.5, 5.0), sharex=True, sharey=True)
         arrays = [*result.errors.values(), *result.bounds.values(), result.limit]
         positive = [a[a > 0] for a in arrays]
         low = min(float(np.quantile(a, 0.01)) for a in positive if a.size)
@@ -68,14 +68,13 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
                 ax.plot(t, bnd.max(axis=0), color="C3", linewidth=0.8, linestyle=":", label="bound, largest")
                 row = table.loc[family]
                 outside = "" if np.isnan(row["outside_design"]) else f", {100 * row['outside_design']:.0f} % out"
-                ax.set_title(f"{family}\n{int(row['violations'])} violations{outside}, "
-                             f"bound/limit {row['bound_over_limit_median']:.2f}", fontsize=8)
+                ax.set_title(f"{family}\n{int(row['violations'])} viol.{outside}\nbound/limit {row['bound_over_limit_median']:.2f}",
+                             fontsize=8)
             else:
                 ax.set_title(f"{family}\n(no bound)", fontsize=8)
             ax.set_yscale("log")
             ax.set_ylim(low / 2, high * 2)
             ax.yaxis.set_minor_locator(NullLocator())  # the decades are the grid (and the layout is faster)
-        axes.flat[len(FAMILIES)].set_visible(False)  # its place holds the legend
         for ax in axes[1]:
             ax.set_xlabel("time step t + 1")
         for ax in axes[:, 0]:
@@ -83,7 +82,9 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
         handles, labels = axes[0, 2].get_legend_handles_labels()
         handles.append(matplotlib.lines.Line2D([], [], color="C7", linewidth=1.2))
         labels.append("period end (tick on the top edge)")
-        fig.legend(handles, labels, loc="lower right", ncol=1, bbox_to_anchor=(0.99, 0.07), frameon=False)
+        spare = axes.flat[len(FAMILIES)]  # the eighth panel holds the legend
+        spare.axis("off")
+        spare.legend(handles, labels, loc="center", frameon=False, fontsize=8)
         burst = "independent losses" if s.burst is None else f"bursts of {s.burst:g} steps on average"
         fig.suptitle(title or f"loss {s.loss:g} ({burst}), delays up to {s.max_delay}, T = {s.horizon}, "
                      f"{s.runs} runs", fontsize=9)

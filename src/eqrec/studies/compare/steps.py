@@ -96,7 +96,8 @@ def summary_of(result: CompareResult) -> dict[str, Any]:
     dict
         ``designs``: per family its language in words (or why there is no design); ``max_lost``, ``coverage``
         and ``limit_median`` (the information limit); ``class_limit_identity``: how many class levels of the
-        class engine were compared with the one-block information limit and their largest relative difference; ``guaranteed``: per family with a bound, its largest
+        class engine were compared with the one-block information limit and whether all agree within 1e-9
+        relative; ``guaranteed``: per family with a bound, its largest
         bound and largest error / bound (at most 1: the guarantee), and for the designs their ``mu1`` and the
         median bound of the steps inside and outside the design (``None`` where there is none);
         ``against_class_bound``: per other family the steps (of ``runs · steps``) whose error
@@ -105,21 +106,16 @@ def summary_of(result: CompareResult) -> dict[str, Any]:
     """
     guaranteed = {}
     for family, bound in result.bounds.items():
-        err = result.errors[family]
-        entry = {"largest_bound": float(bound.max()), "largest_error_over_bound": float((err / bound).max())}
-        if family in result.outside:
-            out = result.outside[family]
-            entry.update(mu1=result.mu1[family], median_bound_in_design=_median(bound[~out]),
-                         median_bound_outside=_median(bound[out]))
-        guaranteed[family] = entry
-    against = {}
-    reference = result.bounds.get(FAMILIES[0])
-    if reference is not None:
-        for family in (f for f in FAMILIES[1:] if f in result.errors):
-            above = result.errors[family] > reference
-            against[family] = {"steps_above": int(above.sum()), "fraction_above": float(above.mean()),
-                               "largest_error_over_bound": float((result.errors[family] / reference).max())}
-    identity = {k: v for k, v in result.identity.items() if k != "rows"}
+        err, out = result.errors[family], result.outside.get(family)
+        guaranteed[family] = {"largest_bound": float(bound.max()),
+                              "largest_error_over_bound": float((err / bound).max()), **({} if out is None else {"mu1": result.mu1[family], "median_bound_outside": _median(
+                                  bound[out]), "median_bound_in_design": _median(bound[~out])})}
+    reference, against = result.bounds.get(FAMILIES[0]), {}
+    for family in (f for f in FAMILIES[1:] if f in result.errors and reference is not None):
+        above = result.errors[family] > reference
+        against[family] = {"steps_above": int(above.sum()), "fraction_above": float(above.mean()),
+                           "largest_error_over_bound": float((result.errors[family] / reference).max())}
+    identity = {k: result.identity[k] for k in ("classes", "all_within_1e-9_relative") if k in result.identity}
     return {"designs": result.designs, "max_lost": result.setup.max_lost, "coverage": result.setup.coverage,
             "limit_median": float(np.median(result.limit)), "class_limit_identity": identity,
             "guaranteed": guaranteed, "against_class_bound": against}

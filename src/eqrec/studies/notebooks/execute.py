@@ -71,7 +71,7 @@ READS: dict[str, list[str]] = {
         "fig8_compare_ex2.png"))],
     "compare": ["results/compare/compare.csv", "results/compare/summary.json",
                 *(f"results/compare/{system}_{setting}.png" for system in ("acc", "reactor")
-                  for setting in ("loss01", "loss03", "burst"))],
+                  for setting in ("loss01", "loss03", "burst", "loss04"))],
 }
 for _files in READS.values():  # every notebook reads the claims table
     _files.append("results/claims.csv")
