@@ -27,7 +27,7 @@ def _images() -> dict[bytes, str]:
 
 
 def test_the_figures_are_found():
-    assert len(FIGURES) >= 25 and "results/p3/fig_scale_free.png" in FIGURES
+    assert len(FIGURES) >= 25 and "results/p3/fig_strategy.png" in FIGURES
 
 
 @pytest.mark.parametrize("png", FIGURES)

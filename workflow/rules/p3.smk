@@ -277,7 +277,7 @@ use rule step as p3_scale_free_figure with:
         timings=rules.p3_scale_free.output.timings_csv,
         code=code_inputs("eqrec.studies.p3.figures:step_scale_free_figure"),
     output:
-        **figure("results/p3/fig_scale_free", "p3_scale_free", "P3"),
+        **figure("results/timings/p3/fig_scale_free", "p3_scale_free", "P3"),
     log:
         "logs/p3/scale_free_figure.log",
     params:

@@ -64,7 +64,7 @@ READS: dict[str, list[str]] = {
     "p3_delayed": [*(f"results/p3/{f}" for f in (
         "languages.json", "reactor_model.json", "reactor_designs.json", "augmented.json", "kalman.json", "acc.json",
         "values.json", "examples.md", "language_counts.csv", "fig1_kalman.png", "fig2_acc.png", "scale_table.csv",
-        "fig_scale_free.png", "fig_strategy.png", "strategy_values.json"))],
+        "fig_strategy.png", "strategy_values.json"))],
     "p4_lmv": [*(f"results/p4/{f}" for f in (
         "values.json", "mc_ex1.json", "mc_ex2.json", "fig1_filter.png", "fig2_predictor.png", "fig3_smoother.png",
         "fig4_variances.png", "fig5_eta.png", "fig6_q.png", "regions.png", "fig7_compare_ex1.png",
