@@ -43,7 +43,7 @@
 #   run's arrivals (`eqrec.exact_bound`).
 # * `LMV, zero-input` and `LMV, hold-input`: the LMV companion study's one-step
 #   predictor for Bernoulli arrivals at the on-time rate $\bar\eta = (1 - \text{loss})/(D+1)$;
-#   a late packet counts as lost (no bound: these predictors do not run on affine columns yet).
+#   a late packet counts as lost; with the exact worst case of its error (`eqrec.exact_bound`).
 #
 # The **information limit** of a run (`eqrec.information_limit`, initial radius
 # the smallest design's $\mu_1$) is, at each step, the smallest bound that *any*
@@ -106,7 +106,8 @@ pd.DataFrame([{
 # * **largest error**: the largest $\|x(t+1) - \hat x(t+1)\|_\infty$ of all
 #   runs and steps;
 # * **largest bound**, **median bound**: the bound of the family (largest and
-#   median over runs and steps); empty for the LMV rows;
+#   median over runs and steps): the guaranteed designs' own, the set-membership
+#   set's, and for the Kalman and LMV filters the exact worst case of their error;
 # * **violations**: steps whose error is above the bound;
 # * **outside design (%)**: the share of steps whose data had left the
 #   design's language (the guaranteed designs only).

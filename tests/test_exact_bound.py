@@ -181,3 +181,18 @@ def test_exact_bound_refuses_bad_arguments(oscillator):
     with pytest.raises(InputError, match="steps"):
         est.step(None)
     assert eqrec.exact_bound is exact_bound
+
+
+@pytest.mark.parametrize("mechanism", ["zero-input", "hold-input"])
+def test_exact_bound_of_the_lmv_predictors_equals_the_unit_perturbation_worst_case(mechanism):
+    """The LMV predictors run on affine columns too (``LMVEstimator.reset(..., one=)``), held measurement included."""
+    from eqrec.compare.families import _lmv
+    from eqrec.systems.examples import acc_system
+
+    acc = acc_system()
+    make = _lmv(acc, GaussianNoise.from_box(acc, 0.5, 5.0), mechanism, 0.35, 20)
+    trace = _trace(3, 20, 0.3, 1)
+    c, G, r, spread = _unit_responses(acc, lambda: exact_bound(make(), acc, 0.5, steps=20), trace,
+                                      np.array([1.0, 2.0, 3.0]), 0.5)
+    exact = (np.abs(c) + np.abs(G).sum(axis=-1)).max(axis=1)
+    assert np.all(spread >= exact * (1 - 1e-12)) and np.all(spread <= exact * (1 + 1e-9))

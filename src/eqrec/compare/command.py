@@ -28,7 +28,7 @@ Families (rows of compare.csv, in words):
   Kalman, time-stamped       every packet used at its own time stamp (re-filtering), with its exact bound
   Kalman, delay-unaware      a packet used as a measurement of the time it arrives, with its exact bound
   LMV, zero-input / hold-input   the companion study's LMV predictor (arrival rate = on-time rate);
-                             a late packet counts as lost; no bound (the LMV predictors do not run on columns)
+                             a late packet counts as lost; with its exact bound
 m: the smallest loss budget whose block probability under the trace model reaches --coverage (default
 0.99; eqrec.loss_coverage). A design that does not exist (e.g. T too short for m losses) is a row saying why.
 Horizon: --horizon is 1..30 (the languages grow quickly with T, D and m).

@@ -7,20 +7,27 @@ designs, Gaussian statistics for the others) and, run by run, on one arrival
 trace, one noise realisation and one initial error shared by every family:
 
 ``guaranteed, class engine``
-    The delayed-data paper's estimator for the full language ``{0..D}^T``
-    (:func:`eqrec.design.delay.design.design_delay_global`, ``μ1`` free), run with
-    ``strict=False`` (:mod:`eqrec.estimators.guaranteed`): a true bound also when
-    the traces leave the language.
+    The delayed-data paper's estimator (:func:`eqrec.design.delay.design.design_delay_global`, ``μ1`` free)
+    for the *loss-aware* language: delays ``0..D`` and at most ``m`` of the ``T`` measurements of a block lost,
+    ``m`` the smallest whose block probability under the trace model reaches ``coverage``
+    (:func:`eqrec.arrivals.draws.loss_coverage`), lowered while no design exists.  Run with ``strict=False``
+    (:mod:`eqrec.estimators.guaranteed`): the exact worst case of its error, also when the traces leave the
+    language (then the set-membership fallback).
 ``guaranteed, prefix (P1)``
-    The prefix-based paper's estimator for "at most one of ``T`` measurements
-    lost" (missing-data words, ``μ1`` free), ``strict=False``; a late packet
-    counts as lost (its language has no delays).
+    The prefix-based paper's estimator for "at most ``m`` of ``T`` measurements lost" (missing-data words,
+    ``μ1`` free), ``strict=False``; a late packet counts as lost (its language has no delays).
+``set-membership, zonotope``
+    :class:`eqrec.estimators.zonotope.ZonotopeEstimator`: no language, a guaranteed set on every trace.
 ``Kalman, time-stamped`` and ``Kalman, delay-unaware``
     :mod:`eqrec.estimators.kalman`, designed from the Gaussian statistics.
 ``LMV, zero-input`` and ``LMV, hold-input``
     The companion study's LMV one-step predictor (:mod:`eqrec.lmv.estimator`)
     for Bernoulli arrivals of rate ``η̄`` = the probability that a packet
     arrives on time; a late packet counts as lost.
+
+The Kalman and LMV filters carry the exact worst case of their error given the arrivals
+(:func:`eqrec.exact_bound`, run on affine columns), and every bound is read against the information limit of
+the run (:func:`eqrec.information_limit`): the smallest bound any estimator can guarantee there.
 
 Every estimator reports the one-step prediction ``x̂(t+1)`` after the data of
 time ``t`` (the protocol of :mod:`eqrec.estimators.protocol`), so the errors
@@ -58,8 +65,9 @@ from eqrec.errors import InputError
 FAMILIES = ("guaranteed, class engine", "guaranteed, prefix (P1)", "set-membership, zonotope", "Kalman, time-stamped",
             "Kalman, delay-unaware", "LMV, zero-input", "LMV, hold-input")
 
-#: The families that carry an exact worst-case bound on every step (the LMV predictors do not run on columns).
-BOUNDED = FAMILIES[:5]
+#: The families that carry an exact worst-case bound on every step: all of them (the guaranteed designs their own,
+#: the others :func:`eqrec.exact_bound`).
+BOUNDED = FAMILIES
 
 #: Reduction order of the zonotopes (set-membership estimator, and the error sets of ``strict=False``).
 ORDER = 40
@@ -383,8 +391,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
 
     Every family with a bound (:data:`BOUNDED`) reports the exact worst case of its own error on the run's
     arrivals: the guaranteed designs with ``strict=False`` (:mod:`eqrec.estimators.guaranteed`), the
-    set-membership estimator its set, the Kalman filters :func:`eqrec.exact_bound`.  The information limit of
-    each run (:func:`eqrec.information_limit`, initial radius ``μ1``) is the smallest bound any estimator can
+    set-membership estimator its set, the Kalman and LMV filters :func:`eqrec.exact_bound` (affine columns).
+    The information limit of each run (:func:`eqrec.information_limit`, initial radius ``μ1``) is the smallest bound any estimator can
     guarantee there; every bound is compared with it.
 
     Parameters
@@ -443,8 +451,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     if FAMILIES[1] in designs:
         makers[FAMILIES[1]] = lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p)
     for family, mechanism in ((FAMILIES[5], "zero-input"), (FAMILIES[6], "hold-input")):
-        make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)
-        makers[family] = (lambda make=make: OnTimeOnly(make(), p))
+        make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)  # a late packet counts as lost
+        makers[family] = (lambda make=make: exact_bound(make(), system, mu1, steps=N))
     # the draws, in order, per run: the trace, then the noise and the initial error
     rng = np.random.default_rng(setup.seed)
     lay = UncertaintyLayout(N, system.nw, system.nv, n)

@@ -112,6 +112,7 @@ class LMVEstimator:
             self._q, self._P = list(result.q), list(result.P_pred)
             self._L, self._Qe = list(result.L), list(result.Qe)
         self._X: np.ndarray | None = None
+        self._one: np.ndarray | None = None
         self.filtered: np.ndarray | None = None
         self.P_filtered: np.ndarray | None = None
 
@@ -131,15 +132,20 @@ class LMVEstimator:
         return self._L[k], self._Qe[k]
 
     # -- the protocol -----------------------------------------------------------
-    def reset(self, xhat0: "np.ndarray | None" = None, t0: int = 0) -> "LMVEstimator":
+    def reset(self, xhat0: "np.ndarray | None" = None, t0: int = 0, one: "np.ndarray | None" = None) -> "LMVEstimator":
         """Start from ``x̂(t0|t0−1) = xhat0`` (the plant state; ``None``: its mean ``E[x(0)]``).
 
         Parameters
         ----------
         xhat0 : numpy.ndarray or None, optional
-            Initial estimate, ``(n_x,)``, or ``(..., n_x)`` for runs advanced together (:meth:`advance`).
+            Initial estimate, ``(n_x,)``, or ``(..., n_x)`` for runs advanced together (:meth:`advance`), or
+            ``(n_x, K)`` columns with ``one`` (affine runs, as the filters of :mod:`eqrec.estimators.kalman`).
         t0 : int, optional
             Absolute time of the first step (default 0); the gains count from it.
+        one : numpy.ndarray or None, optional
+            ``(K,)``: an affine run, whose ``K`` columns carry a constant with these weights (the known input,
+            ``f`` and the initial held measurement enter as ``outer(·, one)``); :meth:`step` then takes and
+            returns columns (``eqrec.exact_bound`` runs it so).
 
         Returns
         -------
@@ -157,13 +163,23 @@ class LMVEstimator:
             x = np.asarray(x, dtype=float)
         except (TypeError, ValueError):
             raise InputError(f"not numeric: {xhat0!r}", sys.name, "xhat0") from None
+        if one is not None and x.ndim == 2:  # columns (n_x, K): checked as runs (K, n_x)
+            x = x.T
         if x.ndim == 0 or x.shape[-1] != nx or not np.all(np.isfinite(x)):
             raise InputError(f"need {nx} finite entries (last axis), got shape {x.shape}", sys.name, "xhat0")
         if isinstance(t0, (bool, np.bool_)) or not isinstance(t0, (int, np.integer)):
             raise InputError(f"the start time is an integer, got {t0!r}", sys.name, "t0")
-        rest = np.broadcast_to(sys.x0_mean[nx:], x.shape[:-1] + (sys.n - nx,))
+        if one is not None:  # an affine run: the columns are kept as runs (K, n_x) inside
+            one = np.asarray(one, dtype=float)
+            if x.ndim != 2 or one.shape != (x.shape[0],) or not np.all(np.isfinite(one)):
+                raise InputError(f"columns need xhat0 of shape ({nx}, K) and one of shape (K,), got "
+                                 f"{np.shape(xhat0)} and {one.shape}", sys.name, "one")
+        rest = (np.broadcast_to(sys.x0_mean[nx:], x.shape[:-1] + (sys.n - nx,)) if one is None
+                else np.outer(one, sys.x0_mean[nx:]))
         self._X = np.concatenate([x, rest], axis=-1)
-        self._held = np.array(sys.x0_mean[nx:], float)  # y_h(-1) of the hold-input register
+        # y_h(-1) of the hold-input register (per column in an affine run)
+        self._held = np.array(sys.x0_mean[nx:], float) if one is None else np.outer(one, sys.x0_mean[nx:])
+        self._one = None if one is None else one.copy()
         self._k, self._t0 = 0, int(t0)
         self.filtered = self.P_filtered = None
         return self
@@ -181,8 +197,9 @@ class LMVEstimator:
 
     @property
     def x(self) -> np.ndarray:
-        """A copy of the current prediction ``x̂(t|t−1)`` of the plant state."""
-        return self._running()[..., : self.sys.n_x].copy()
+        """A copy of the current prediction ``x̂(t|t−1)`` of the plant state (``(n_x, K)`` for an affine run)."""
+        X = self._running()[..., : self.sys.n_x]
+        return (X if getattr(self, "_one", None) is None else X.T).copy()
 
     @property
     def augmented(self) -> np.ndarray:
@@ -191,13 +208,15 @@ class LMVEstimator:
 
     def _compensated(self, y, t: int) -> tuple[np.ndarray, bool]:
         """``(y_c(t), arrived)`` from what arrived (checked; late packets count as lost)."""
-        m = self.sys.m
-        on_time = [pk.y for pk in as_packets(y, t, (m,)) if pk.time == t]
+        m, one = self.sys.m, self._one
+        shape = (m,) if one is None else (m, one.size)
+        on_time = [pk.y if one is None else pk.y.T for pk in as_packets(y, t, shape) if pk.time == t]
         if on_time:
             return on_time[0], True
         if self.compensation == "none":
             raise InputError(f"no compensation: the measurement of time {t} must be given", self.sys.name, "y")
-        return (np.zeros(m) if self.compensation == "zero-input" else self._held.copy()), False
+        zero = np.zeros(m) if one is None else np.zeros((one.size, m))
+        return (zero if self.compensation == "zero-input" else self._held.copy()), False
 
     def _drive(self, t: int, u) -> np.ndarray | None:
         """``B(t) u + f`` (checked) or ``None`` without a known part."""
@@ -226,7 +245,7 @@ class LMVEstimator:
         eps = y_c - X @ sys.C.T
         X_next = X @ sys.A.T + eps @ L.T
         if drive is not None:
-            X_next[..., : sys.n_x] += drive
+            X_next[..., : sys.n_x] += drive if self._one is None else np.outer(self._one, drive)
         return eps, X_next
 
     def step(self, y=None, u=None) -> tuple[np.ndarray, np.ndarray]:
@@ -253,7 +272,7 @@ class LMVEstimator:
             wrong shape or not finite, a packet from the future; nothing changes.
         """
         X, sys = self._running(), self.sys
-        if X.ndim != 1:
+        if X.ndim != 1 and self._one is None:
             raise InputError("several runs were reset together: step them with advance()", sys.name, "y")
         t, k, nx = self.time, self._k, sys.n_x
         y_c, arrived = self._compensated(y, t)
@@ -261,12 +280,14 @@ class LMVEstimator:
         eps, X_next = self._predict(X, y_c, k, drive)
         L, Qe = self._gains(k)
         K, P_filt, _ = smoother_step(sys, self._P[k], self._P[k], Qe, sys.A - L @ sys.C)
-        self.filtered = (X + np.einsum("ij,...j->...i", K, eps))[:nx]
+        filtered = (X + np.einsum("ij,...j->...i", K, eps))[..., :nx]
+        self.filtered = filtered if self._one is None else filtered.T
         self.P_filtered = P_filt[:nx, :nx]
         if arrived and self.compensation == "hold-input":
             self._held = y_c.copy()
         self._X, self._k = X_next, k + 1
-        return X_next[:nx].copy(), self._P[k + 1][:nx, :nx].copy()
+        prediction = X_next[..., :nx] if self._one is None else X_next[:, :nx].T
+        return prediction.copy(), self._P[k + 1][:nx, :nx].copy()
 
     def advance(self, y_c: np.ndarray) -> np.ndarray:
         """One step of runs advanced together on compensated measurements (no input): returns ``ε(t)``.
