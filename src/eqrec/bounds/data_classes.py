@@ -273,7 +273,7 @@ def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None
     into the old ones ``O = {i <= k - τ̄}`` and the window
     ``W = (k - τ̄, k]``.  The classes of depth ``d`` are exactly the
     :math:`S \subseteq \{0..k\}` with :math:`|O \setminus S| \le m`, so
-    :math:`2^{|W|} \sum_{j \le m} inom{|O|}{j}` of them
+    :math:`2^{|W|} \sum_{j \le m} \binom{|O|}{j}` of them
     (:func:`full_language_class_count`).
     Proof sketch: an old ``i`` missing at ``k`` was not delivered although
     ``i + τ̄ <= k < T``, so it is lost (one loss each): no word of the
@@ -297,7 +297,7 @@ def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None
     ``z`` for the lost 'never' (:func:`_lossy`); ``i > k``: all its
     outcomes, ``z`` for the lost one.  An old missing time contributes just
     ``z``, an old time of ``S`` the constant ``τ̄ + 1``, so the product is
-    :math:`(ar	au+1)^{|O \cap S|} z^{|O \setminus S|}` times one
+    :math:`(\bar\tau+1)^{|O \cap S|} z^{|O \setminus S|}` times one
     polynomial per (depth, window subset), computed once.  With ``m = 0`` the
     rule and the counts are those of the full language ``{0..τ̄}^T``.
 
@@ -400,9 +400,9 @@ def _loss_counts(T: int, D: int, m: int) -> dict[str, int]:
 def full_language_class_count(T: int, max_delay: int, max_lost: int | None = None) -> int:
     r"""Number of classes of :func:`classes_of_full_language`, without building them.
 
-    :math:`\sum_{d=1}^{T} 2^{|W_d|} \sum_{j \le m} inom{|O_d|}{j}` with
+    :math:`\sum_{d=1}^{T} 2^{|W_d|} \sum_{j \le m} \binom{|O_d|}{j}` with
     ``|W_d| = min(τ̄, d)`` window times and ``|O_d| = d - |W_d|`` old ones
-    (``m = ∞`` without losses: :math:`\sum_d 2^{\min(ar	au, d)}`).
+    (``m = ∞`` without losses: :math:`\sum_d 2^{\min(\bar\tau, d)}`).
 
     Parameters
     ----------
