@@ -1,5 +1,6 @@
 """``eqrec compare``: every estimator family on the same traces (issue 24, section 4)."""
 import subprocess
+from pathlib import Path
 import sys
 
 import numpy as np
@@ -122,3 +123,32 @@ def test_cli_refuses_an_output_folder_without_parent_and_a_bad_gaussian_section(
     r = _cli(str(system), "--loss", "0.1", "--max-delay", "1", "--horizon", "3", "--runs", "2", "--periods", "2",
              "--out", str(tmp_path / "g"))
     assert r.returncode == 1 and "Qw" in r.stderr and not (tmp_path / "g").exists()
+
+
+def test_state_weights_measure_every_error_bound_and_limit_in_the_weighted_norm():
+    """``state_weights``: errors, bounds and limit as ``max_i w_i |·_i|``; every bound still holds."""
+    from eqrec.systems.examples import acc_system
+
+    w = np.array([1.0, 0.2, 4.0])
+    setup = CompareSetup(loss=0.1, max_delay=1, horizon=6, runs=3, periods=3, seed=2)
+    weighted = compare_families(acc_system(), setup, state_weights=w)
+    plain = compare_families(acc_system(), setup)
+    table = weighted.table.set_index("estimator")
+    ran = table[table["rms"].notna()]
+    assert (ran["violations"] == 0).all() and (ran["bound_over_limit_median"] >= 1 - 1e-9).all()
+    assert weighted.state_weights.tolist() == w.tolist() and plain.state_weights is None
+    assert not np.allclose(weighted.limit, plain.limit)  # a different norm
+    with pytest.raises(InputError) as exc:
+        compare_families(acc_system(), setup, state_weights=[1.0, -1.0, 1.0])
+    assert exc.value.field == "state_weights"
+
+
+def test_cli_compare_takes_state_weights(tmp_path):
+    from eqrec.cli import main
+
+    acc = str(Path(__file__).resolve().parents[1] / "examples" / "acc_system.yaml")
+    assert main(["compare", acc, "--loss", "0.1", "--max-delay", "1", "--horizon", "6", "--runs", "2", "--periods",
+                 "2", "--state-weights", "1,0.2,4", "--out", str(tmp_path / "w")]) == 0
+    assert (tmp_path / "w" / "compare.csv").exists()
+    assert main(["compare", acc, "--loss", "0.1", "--max-delay", "1", "--horizon", "6", "--runs", "2",
+                 "--state-weights", "1,2", "--out", str(tmp_path / "bad")]) == 1

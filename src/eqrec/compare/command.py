@@ -75,6 +75,9 @@ def add_parser(sub: Any, exit_help: str) -> None:
     c.add_argument("--burst", type=float, default=None,
                    help="mean length of a burst of losses (Gilbert channel with the same average loss)")
     c.add_argument("--seed", type=int, default=0, help="seed of every draw (default 0)")
+    c.add_argument("--state-weights", default=None, dest="state_weights",
+                   help="w1,...,wn: measure errors, bounds and the limit as max_i w_i |e_i| (states of mixed units); "
+                        "the designs are made on z = W x")
     c.add_argument("--coverage", type=float, default=0.99,
                    help="block probability the designs' loss budget m must reach (default 0.99)")
     c.add_argument("--solver", default="highs", help="LP solver of the guaranteed designs (default highs)")
@@ -123,7 +126,16 @@ def run(args: argparse.Namespace) -> str:
     if gaussian is not None and not isinstance(gaussian, dict):
         raise InputError("must be a mapping with some of Qw, Qv, x0_cov", args.system, "gaussian")
     talk = sys.stderr.isatty()
-    result = compare_families(system, setup, gaussian=gaussian, solver=args.solver,
+    weights = None
+    if args.state_weights is not None:
+        try:
+            weights = [float(x) for x in args.state_weights.split(",")]
+        except ValueError:
+            raise InputError(f"comma-separated numbers, got {args.state_weights!r}", field="--state-weights") \
+                from None
+        if len(weights) != system.n:
+            raise InputError(f"{system.n} weights (one per state), got {len(weights)}", field="--state-weights")
+    result = compare_families(system, setup, gaussian=gaussian, solver=args.solver, state_weights=weights,
                               progress=(lambda line: print(f"  {line}", file=sys.stderr)) if talk else None)
     out.mkdir(exist_ok=True)
     write_table(result, str(out / "compare.csv"))

@@ -247,6 +247,8 @@ class CompareResult:
         (:func:`class_limit_identity`; empty without that design).
     us_per_step : dict of str to float
         Per family, the wall time of a step with its bound, in microseconds (a timing: not in the table).
+    state_weights : ndarray or None
+        The weights of the norm (``None``: the infinity norm).
     """
 
     setup: CompareSetup
@@ -259,9 +261,11 @@ class CompareResult:
     designs: dict[str, str] = field(default_factory=dict)
     identity: dict[str, Any] = field(default_factory=dict)
     us_per_step: dict[str, float] = field(default_factory=dict)
+    state_weights: "np.ndarray | None" = None
 
 
-def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs") -> dict[str, Any]:
+def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs",
+                       state_weights: "np.ndarray | None" = None) -> dict[str, Any]:
     """The two guaranteed designs of the comparison on a loss-aware language, each at its smallest ``μ1``.
 
     The class engine designs for delays ``0..D`` and at most ``m`` of the ``T`` measurements of a block lost
@@ -279,6 +283,8 @@ def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = 
         ``D``, ``T`` and the coverage of the loss budget.
     solver : str, optional
         LP solver (default HiGHS).
+    state_weights : ndarray or None, optional
+        Designs on ``z = W x`` (every level bounds ``max_i w_i |x_i − x̂_i|``); ``None``: unweighted.
 
     Returns
     -------
@@ -291,9 +297,11 @@ def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = 
     from eqrec.errors import CertificationFailure, InfeasibleDesign, SolverFailure
 
     T, D = setup.horizon, setup.max_delay
+    w = state_weights
     makers = {FAMILIES[0]: lambda m: design_delay_global(system, delay_classes(max_delay=D, horizon=T, max_lost=m),
-                                                         solver=solver).design,
-              FAMILIES[1]: lambda m: design_prefix(system, missing_words_at_most(T, m), "free", solver=solver)}
+                                                         solver=solver, state_weights=w).design,
+              FAMILIES[1]: lambda m: design_prefix(system, missing_words_at_most(T, m), "free", solver=solver,
+                                                   state_weights=w)}
     out: dict[str, Any] = {}
     for family, make in makers.items():
         first = None
@@ -386,7 +394,8 @@ def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar:
 
 
 def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "GaussianNoise | dict | None" = None,
-                     solver: str = "highs", progress: Callable[[str], None] | None = None) -> CompareResult:
+                     solver: str = "highs", progress: Callable[[str], None] | None = None,
+                     state_weights: Any = None) -> CompareResult:
     """Run every family (module docstring) on the same traces, noise and initial errors, with the information limit.
 
     Every family with a bound (:data:`BOUNDED`) reports the exact worst case of its own error on the run's
@@ -410,6 +419,10 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         LP solver of the guaranteed designs and of the information limit.
     progress : callable or None, optional
         Called with a line of text per family done.
+    state_weights : array_like or None, optional
+        ``w`` (``n`` positive numbers): every error, bound and limit is measured as ``max_i w_i |·_i|`` (a state
+        vector of mixed units), the guaranteed designs are made on ``z = W x`` and the initial error is drawn in
+        the box ``|ξ_i(0)| <= μ1 / w_i``; ``None``: the infinity norm.
 
     Returns
     -------
@@ -430,7 +443,16 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
 
     if system.is_time_varying:
         raise InputError("the comparison runs on a time-invariant system", system.source, "A")
-    found = guaranteed_designs(system, setup, solver)
+    w = None
+    if state_weights is not None:
+        try:
+            w = np.array(np.broadcast_to(np.asarray(state_weights, dtype=float), (system.n,)))
+        except (TypeError, ValueError):
+            raise InputError(f"{system.n} positive numbers, got {state_weights!r:.60}", field="state_weights") \
+                from None
+        if not np.all(np.isfinite(w)) or np.any(w <= 0):
+            raise InputError(f"weights must be finite and > 0, got {w.tolist()}", field="state_weights")
+    found = guaranteed_designs(system, setup, solver, state_weights=w)
     designs = {f: d for f, (d, _) in found.items() if not isinstance(d, str)}
     words = {f: (d if isinstance(d, str) else design_in_words(f, setup, m)) for f, (d, m) in found.items()}
     words.update({f: design_in_words(f, setup) for f in FAMILIES if f not in found})
@@ -438,13 +460,16 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         mu1 = min(d.mu1 for d in designs.values())
     else:  # no guaranteed design: the initial error of the runs from the open-loop box of one period
         mu1 = float(max(np.abs(system.C).sum(), 1.0))
+    r0 = mu1 if w is None else mu1 / w  # the initial error's box: |w_i ξ_i(0)| <= μ1
+    if w is not None and (gaussian is None or (isinstance(gaussian, dict) and "x0_cov" not in gaussian)):
+        gaussian = {**(gaussian or {}), "x0_cov": np.diag((r0 / setup.sigmas) ** 2)}
     gaussian = _gaussian(system, gaussian, mu1, setup.sigmas)
     kalman = gaussian.design(system)  # P0, Q = E Qw Eᵀ, R = V Qv Vᵀ
     N, n, p = setup.steps, system.n, system.p
     makers: dict[str, Callable[[], Any]] = {
-        FAMILIES[2]: lambda: ZonotopeEstimator(system, x0_radius=mu1, max_delay=setup.max_delay, order=ORDER),
-        FAMILIES[3]: lambda: exact_bound(TimestampedKalman(system, kalman), system, mu1, steps=N),
-        FAMILIES[4]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, mu1, steps=N),
+        FAMILIES[2]: lambda: ZonotopeEstimator(system, x0_radius=r0, max_delay=setup.max_delay, order=ORDER),
+        FAMILIES[3]: lambda: exact_bound(TimestampedKalman(system, kalman), system, r0, steps=N),
+        FAMILIES[4]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, r0, steps=N),
     }
     if FAMILIES[0] in designs:
         makers[FAMILIES[0]] = lambda: designs[FAMILIES[0]].estimator(strict=False)
@@ -452,11 +477,12 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         makers[FAMILIES[1]] = lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p)
     for family, mechanism in ((FAMILIES[5], "zero-input"), (FAMILIES[6], "hold-input")):
         make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)  # a late packet counts as lost
-        makers[family] = (lambda make=make: exact_bound(make(), system, mu1, steps=N))
+        makers[family] = (lambda make=make: exact_bound(make(), system, r0, steps=N))
     # the draws, in order, per run: the trace, then the noise and the initial error
     rng = np.random.default_rng(setup.seed)
     lay = UncertaintyLayout(N, system.nw, system.nv, n)
     radius = lay.radius(system.eta_w, system.eta_v, mu1)
+    radius[lay.xi0] = r0
     scale = np.concatenate([np.tile(np.sqrt(np.diag(gaussian.Qw)), N), np.tile(np.sqrt(np.diag(gaussian.Qv)), N),
                             np.sqrt(np.diag(gaussian.x0_cov))])
     runs = []
@@ -465,7 +491,9 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         z = _truncated_normal(rng, lay.size, setup.sigmas)
         delta = np.clip(z * scale, -radius, radius)  # within the box, so every guarantee applies
         runs.append((trace, *lay.split(delta)))
-    limit = np.stack([information_limit(system, trace, mu1, solver=solver).max(axis=1) for trace, *_ in runs])
+    scale_of = np.ones(n) if w is None else w  # the norm of every error, bound and limit: max_i w_i |·_i|
+    limit = np.stack([(information_limit(system, trace, r0, solver=solver) * scale_of).max(axis=1)
+                      for trace, *_ in runs])
     if progress is not None:
         progress(f"information limit: median {np.median(limit):.4g} ({setup.runs} runs x {N} steps)")
     errors, bounds, outside, rows, us = {}, {}, {}, [], {}
@@ -483,18 +511,24 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         bnd = np.full((setup.runs, N), np.nan)
         out = np.zeros((setup.runs, N), bool)
         elapsed = 0.0
-        for r, (trace, w, v, xi0) in enumerate(runs):
+        for r, (trace, w_noise, v, xi0) in enumerate(runs):
             est = makers[family]()
             flags: list[bool] = []
-            after = (lambda _k, est=est, flags=flags: flags.append(not est.in_design)) if family in designs else None
+            per_state: list[float] = []  # weighted: max_i w_i β_i per step (a design's own bound is weighted already)
+
+            def after(_k, est=est, flags=flags, per_state=per_state, design=family in designs):
+                if design:
+                    flags.append(not est.in_design)
+                elif w is not None:
+                    per_state.append(float((w * est.state_bounds).max()))
             t_start = time.perf_counter()
-            run = closed_loop(system, est, trace, x0, xi0, w, v, after_step=after)
+            run = closed_loop(system, est, trace, x0, xi0, w_noise, v, after_step=after)
             elapsed += time.perf_counter() - t_start
             e = run.error[1:]
-            err[r] = np.abs(e).max(axis=1)
+            err[r] = (np.abs(e) * scale_of).max(axis=1)
             sq += (e ** 2).sum(axis=0)
             if family in BOUNDED:
-                bnd[r] = run.spread
+                bnd[r] = per_state if per_state else run.spread
             if family in designs:
                 out[r] = flags
         errors[family] = err
@@ -521,7 +555,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     table["violations"] = table["violations"].astype("Int64")
     return CompareResult(setup=setup, table=table, errors=errors, bounds=bounds,
                          mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside, limit=limit,
-                         designs=words, us_per_step=us,
+                         designs=words, us_per_step=us, state_weights=w,
                          identity=class_limit_identity(designs[FAMILIES[0]]) if FAMILIES[0] in designs else {})
 
 

@@ -78,7 +78,8 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
         for ax in axes[1]:
             ax.set_xlabel("time step t + 1")
         for ax in axes[:, 0]:
-            ax.set_ylabel(r"$\|x - \hat x\|_\infty$ (largest state error)")
+            ax.set_ylabel(r"$\|x - \hat x\|_\infty$ (largest state error)" if result.state_weights is None
+                          else r"$\max_i w_i |x_i - \hat x_i|$ (weighted)")
         handles, labels = axes[0, 2].get_legend_handles_labels()
         handles.append(matplotlib.lines.Line2D([], [], color="C7", linewidth=1.2))
         labels.append("period end (tick on the top edge)")

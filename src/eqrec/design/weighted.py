@@ -176,10 +176,13 @@ class WeightedEstimator:
 
     @property
     def state_bounds(self) -> np.ndarray:
-        """Per state, ``|x_i − x̂_i| <= bound / w_i``."""
-        return self.estimator.bound / self.weights
+        """Per state, ``|x_i − x̂_i| <= state_bounds[i]``: the exact per-state bounds of ``z = W x`` divided by ``w_i``
+        with ``strict=False``, else ``bound / w_i``."""
+        if self.estimator.strict:
+            return self.estimator.bound / self.weights
+        return self.estimator.state_bounds / self.weights
 
     @property
     def error_box(self) -> np.ndarray:
-        """Per state, ``|x_i − x̂_i| <= box_i`` (``strict=False``: the tracked box of ``z = W x``, divided by ``w_i``)."""
+        """The same as :attr:`state_bounds` (``strict=False``; the name of earlier versions)."""
         return self.estimator.error_box / self.weights
