@@ -129,7 +129,7 @@ def part_b(repeats: int, ipopt_repeats: int, verdicts: list) -> None:
           f"max mu2 = {g.mu2:.6f}, {g.lps} LPs")
     mi, bi, ip = _median_time(lambda: design_delay_ipopt(system, words, start_mu1=1.0), ipopt_repeats)
     print(f"   design_delay_ipopt   {1e3 * mi:9.1f} ms | {1e3 * bi:8.1f} ms   mu1 = {ip.mu1:.8f} (its gains reach "
-          f"{ip.extra['mu1_of_gains']:.8f}), J = {ip.J:.6f}, {ip.extra['iterations']} IPOPT iterations")
+          f"{ip.ipopt.mu1_of_gains:.8f}), J = {ip.J:.6f}, {ip.ipopt.iterations} IPOPT iterations")
     cmp = compare_free_routes(g, ip)
     print(f"   better: {cmp['better']}; IPOPT / global time = {mi / mg:.0f}x; old global route (Dinkelbach + "
           f"branch and bound, git history, not measured): {HISTORICAL_GLOBAL_S:.1f} s = "

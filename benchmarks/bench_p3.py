@@ -41,7 +41,7 @@ from eqrec.systems.examples import batch_reactor
 def part_fixed(repeats: int) -> None:
     from eqrec.bounds.certify import certify_design
     from eqrec.lp.solvers import solve_lp
-    from eqrec.design.delay.design import _design_from_solution, delay_language, design_delay
+    from eqrec.design.delay.design import design_from_solution, delay_language, design_delay
     from eqrec.design.prefix.tree_lp import build_prefix_lp
     from eqrec.arrivals.prefix_tree import PrefixTree
     from eqrec.systems.examples import batch_reactor
@@ -56,7 +56,7 @@ def part_fixed(repeats: int) -> None:
         t1 = time.perf_counter()
         sol = solve_lp(model.lp, "highs").require_optimal()
         t2 = time.perf_counter()
-        d = _design_from_solution(model, tree, system, sol.x, 0.33, "sum", sol, certify=False)
+        d = design_from_solution(model, tree, sol.x, 0.33, "sum", sol, certify=False)
         t3 = time.perf_counter()
         certify_design(d)
         t4 = time.perf_counter()
@@ -94,10 +94,10 @@ def part_free() -> None:
     print(f"   {'global':13} mu1 = {g.mu1:.8f} (certified smallest in ({mm.lower:.8f}, {mm.upper:.8f}]), "
           f"J = {g.J:.6f} >= {g.lower_bound:.6f} (gap {g.gap:.1e}), max mu2 = {g.mu2:.6f}, "
           f"{g.lps} LPs ({mm.lps} for mu1_min), {g.time:.3f} s")
-    pol = ip.extra.get("polished", {})
-    print(f"   {'ipopt (10)':13} mu1 = {ip.mu1:.8f} (its gains reach {ip.extra['mu1_of_gains']:.8f}), "
-          f"J = {ip.J:.6f}, max mu2 = {ip.mu2:.6f}, {ip.extra['iterations']} iterations, "
-          f"IPOPT {ip.extra['ipopt_time']:.2f} s, total {ip.time:.2f} s; LP polish at its mu1: J = {pol.get('J'):.6f}")
+    pol = (ip.ipopt.polished or {})
+    print(f"   {'ipopt (10)':13} mu1 = {ip.mu1:.8f} (its gains reach {ip.ipopt.mu1_of_gains:.8f}), "
+          f"J = {ip.J:.6f}, max mu2 = {ip.mu2:.6f}, {ip.ipopt.iterations} iterations, "
+          f"IPOPT {ip.ipopt.ipopt_time:.2f} s, total {ip.time:.2f} s; LP polish at its mu1: J = {pol.get('J'):.6f}")
     cmp = compare_free_routes(g, ip)
     print(f"   better: {cmp['better']} (tolerance {cmp['tolerance']:.1e}); IPOPT consistent with the global bound: "
           f"{cmp['ipopt_consistent_with_bound']}; goal <= 20 s: {'met' if g.time <= 20 else 'NOT met'}")

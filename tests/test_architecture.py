@@ -1,7 +1,8 @@
 """The import graph of ``src/eqrec`` and the shape of its folders.
 
 The layer rules are import-linter contracts in ``pyproject.toml`` (``[tool.importlinter]``: the rooms' layers, the
-design engines' layers, nothing imports the studies, the LMV study does not import the designs); they are run here
+design engines' layers, the class engine's modules (``mu1_min`` among them) one way, what the engines share imports
+no engine, nothing imports the studies, the LMV study does not import the designs); they are run here
 as ``lint-imports`` would run them.  The graph is grimp's, imports inside functions included (a lazy import is still
 a dependency).  No circle between modules is checked on the same graph.
 """
@@ -28,7 +29,7 @@ def _lint(config: Path, capsys) -> tuple[int, str]:
 def test_the_import_contracts_are_kept(capsys):
     code, report = _lint(PYPROJECT, capsys)
     assert code == 0, report
-    assert "4 kept, 0 broken" in report, report
+    assert "6 kept, 0 broken" in report, report
 
 
 def test_a_broken_contract_fails(tmp_path, capsys):
@@ -41,6 +42,18 @@ def test_a_broken_contract_fails(tmp_path, capsys):
     code, report = _lint(config, capsys)
     assert code != 0, report
     assert "0 kept, 1 broken" in report and "eqrec.estimators.kalman -> eqrec.lmv.model (l.345)" in report, report
+
+
+def test_the_class_engine_contract_sees_mu1_min(tmp_path, capsys):
+    """``mu1_min`` is inside the class engine's contract: with its layers turned over (the engine below ``mu1_min``),
+    the engine's import of ``infeasible_at`` breaks it (the loop between design folders is gone, not unseen)."""
+    config = tmp_path / "turned.toml"
+    config.write_text('[tool.importlinter]\nroot_package = "eqrec"\n\n[[tool.importlinter.contracts]]\n'
+                      'name = "turned over"\ntype = "layers"\ncontainers = ["eqrec.design.classes"]\n'
+                      'layers = ["mu1_min", "engine"]\n')
+    code, report = _lint(config, capsys)
+    assert code != 0, report
+    assert "eqrec.design.classes.engine -> eqrec.design.classes.mu1_min" in report, report
 
 
 # ---------------------------------------------------------------------------
@@ -76,6 +89,55 @@ def test_no_import_circle_between_modules():
     # a lazy import (inside RandomDelayLMV.__init__) is in the graph
     assert graph.direct_import_exists(importer="eqrec.estimators.kalman", imported="eqrec.lmv.recursion")
     assert not circles(graph), f"import circles: {circles(graph)}"
+
+
+# ---------------------------------------------------------------------------
+# No private name imported across modules
+# ---------------------------------------------------------------------------
+
+#: Private names still imported across modules (issue 34): the estimators' intake helpers, being refactored
+#: beside this check.  The list may only shrink.
+PRIVATE_IMPORTS_LEFT = {
+    ("eqrec.estimators.augmented", "eqrec.estimators.intake", "_StampedEstimator"),
+    ("eqrec.estimators.causal", "eqrec.estimators.intake", "_Opened"),
+    ("eqrec.estimators.causal", "eqrec.estimators.intake", "_StampedEstimator"),
+    ("eqrec.estimators.guaranteed", "eqrec.estimators.causal", "_has_class"),
+    ("eqrec.estimators.intake", "eqrec.arrivals.packets", "_is_stamp"),
+    ("eqrec.estimators.switching", "eqrec.estimators.causal", "_has_class"),
+    ("eqrec.estimators.zonotope", "eqrec.arrivals.packets", "_is_stamp"),
+}
+
+
+def private_imports(root: Path) -> set[tuple[str, str, str]]:
+    """``(importer, module, name)`` of every ``from eqrec.x import _name`` between two modules under ``root``."""
+    found = set()
+    for path in sorted(root.rglob("*.py")):
+        module = ".".join(path.relative_to(root.parent).with_suffix("").parts).removesuffix(".__init__")
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("eqrec") and node.module != module:
+                found |= {(module, node.module, a.name) for a in node.names
+                          if a.name.startswith("_") and not a.name.startswith("__")}
+    return found
+
+
+def test_no_private_name_is_imported_across_modules(tmp_path):
+    found = private_imports(PKG)
+    assert found <= PRIVATE_IMPORTS_LEFT, sorted(found - PRIVATE_IMPORTS_LEFT)
+    (tmp_path / "eqrec").mkdir()  # the check can fail
+    (tmp_path / "eqrec" / "a.py").write_text("from eqrec.b import _helper, public\n")
+    assert private_imports(tmp_path / "eqrec") == {("eqrec.a", "eqrec.b", "_helper")}
+
+
+EXTRA_READ = re.compile(r"\.extra\b")
+
+
+def test_no_design_detail_is_read_from_a_free_form_dict():
+    """Every detail of a design is a typed field (``Design``, ``Mu1Free``, ``AugmentedDetails``, ``IpoptRoute``):
+    the library reads no ``.extra`` (only :func:`eqrec.load_design` fills it, with the file's other entries)."""
+    reads = [f"{p.relative_to(PKG)}:{i}" for p in sorted(PKG.rglob("*.py"))
+             for i, line in enumerate(p.read_text().splitlines(), 1) if EXTRA_READ.search(line)]
+    assert not reads, reads
+    assert EXTRA_READ.search('J = design.extra["J"]') and not EXTRA_READ.search("extra=extra, levels=levels")
 
 
 # ---------------------------------------------------------------------------

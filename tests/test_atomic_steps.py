@@ -114,8 +114,8 @@ def test_guaranteed_estimator_steps_are_all_or_nothing(class_design, strict, nam
 @pytest.mark.parametrize("name,bad_y,bad_u", BAD_CALLS, ids=[c[0] for c in BAD_CALLS])
 def test_class_estimator_steps_are_all_or_nothing(plant, class_design, name, bad_y, bad_u):
     good = [(y, u) for y, u in _good_steps(np.random.default_rng(1), 1, 10)]
-    _check_atomic(lambda: ClassEstimator(plant, class_design.class_gains, np.zeros(2), periodic=True), bad_y, bad_u,
-                  good)
+    _check_atomic(lambda: ClassEstimator(plant, class_design.class_gains, periodic=True).reset(np.zeros(2)), bad_y,
+                  bad_u, good)
 
 
 SWITCHING_BAD = [c for c in BAD_CALLS if c[0] != "a stamp received before"]  # stale in performance mode: dropped
@@ -142,7 +142,7 @@ def test_switching_estimator_steps_are_all_or_nothing(name, bad_y, bad_u):
                                         (np.concatenate([bad_u, bad_u]) if isinstance(bad_u, np.ndarray) else bad_u))
     good = [(None, np.zeros(2)), ([(1, np.full(2, 0.2)), (2, np.full(2, 0.1))], np.zeros(2)),
             (np.ones(2), np.ones(2)), (np.ones(2), None)]
-    est, twin = (SwitchingEstimator(reactor, perf, rec, np.zeros(4)) for _ in range(2))
+    est, twin = (SwitchingEstimator(reactor, perf, rec).reset(np.zeros(4)) for _ in range(2))
     for e in (est, twin):
         e.step(np.full(2, 0.3), np.full(2, 0.1))
     before = state_of(est)
@@ -150,7 +150,8 @@ def test_switching_estimator_steps_are_all_or_nothing(name, bad_y, bad_u):
         est.step(bad_y, bad_u)
     assert state_of(est) == before
     for y, u in good:
-        assert np.array_equal(est.step(y, u), twin.step(y, u))
+        (xa, ba), (xb, bb) = est.step(y, u), twin.step(y, u)
+        assert np.array_equal(xa, xb) and ba == bb
     assert (est.mode, est.switch_times, est.revert_times) == (twin.mode, twin.switch_times, twin.revert_times)
 
 
@@ -168,7 +169,7 @@ def test_the_outside_of_the_language_is_refused_atomically(class_design):
 
 
 def test_recovery_estimator_and_node_gains_refuse_atomically(acc, node_design):
-    est, twin = (RecoveryEstimator(acc, node_design.schedule, np.zeros(3), periodic=True) for _ in range(2))
+    est, twin = (RecoveryEstimator(acc, node_design.schedule, periodic=True).reset(np.zeros(3)) for _ in range(2))
     for e in (est, twin):
         e.step(np.ones(2))
     for bad in (np.array([np.nan, 0.0]), np.zeros(3), "x", [(7, np.zeros(2))]):
@@ -179,7 +180,7 @@ def test_recovery_estimator_and_node_gains_refuse_atomically(acc, node_design):
     with pytest.raises(InputError, match="strict=False needs class gains"):
         node_design.estimator(strict=False)
     for y in (np.ones(2), None, np.ones(2)):
-        assert np.array_equal(est.step(y), twin.step(y))
+        assert np.array_equal(est.step(y)[0], twin.step(y)[0])
 
 
 @pytest.mark.parametrize("bad", [np.array([np.nan, 0.0]), np.array([0.0, np.inf]), np.zeros(3), "ab", None])
@@ -211,8 +212,8 @@ def test_a_horizon_that_is_over_is_refused_atomically(class_design):
 ])
 def test_augmented_estimator_steps_are_all_or_nothing(acc, bad_y, bad_u):
     """The state-augmented estimator (one word): every refused step leaves (x̂, s, the record) as they were."""
-    from eqrec.design.augmented.model import AugmentedGains, as_time_varying_L
-    from eqrec.design.augmented.runtime import AugmentedEstimator
+    from eqrec.design.augmented.model import AugmentedGains
+    from eqrec.estimators.augmented import AugmentedEstimator, as_time_varying_L
 
     rng = np.random.default_rng(4)
     word, n, p = "110111", 3, 2
@@ -223,7 +224,7 @@ def test_augmented_estimator_steps_are_all_or_nothing(acc, bad_y, bad_u):
                 M[k * n:(k + 1) * n, i * p:(i + 1) * p] = rng.normal(size=(n, p)) * 0.3
     gains = AugmentedGains(word, as_time_varying_L(rng.normal(size=(n, p)) * 0.5, 6, n, p), rng.normal(size=n), M,
                            rng.normal(size=6 * n) * 0.1, "theorem2")
-    est, twin = (AugmentedEstimator(acc, gains, np.ones(3)) for _ in range(2))
+    est, twin = (AugmentedEstimator(acc, gains).reset(np.ones(3)) for _ in range(2))
     for e in (est, twin):
         e.step(np.array([0.5, 0.2]))
     before = state_of(est)
@@ -231,9 +232,13 @@ def test_augmented_estimator_steps_are_all_or_nothing(acc, bad_y, bad_u):
         est.step(bad_y, bad_u)
     assert state_of(est) == before
     for y in (None, np.array([0.1, 0.3]), np.array([0.0, 1.0])):
-        assert np.array_equal(est.step(y), twin.step(y))
+        assert np.array_equal(est.step(y)[0], twin.step(y)[0])
     with pytest.raises(InputError, match="xhat0"):
         AugmentedEstimator(acc, gains, np.array([np.nan, 0.0, 0.0]))
+    before = state_of(est)
+    with pytest.raises(InputError, match="xhat0"):
+        est.reset(np.array([np.nan, 0.0, 0.0]))
+    assert state_of(est) == before
 
 
 def test_weighted_estimator_reset_and_steps_are_all_or_nothing(plant):

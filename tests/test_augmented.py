@@ -6,8 +6,9 @@ from eqrec.bounds.gains import schedule_from_word_gains
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import as_pattern
 from eqrec.design.augmented.model import AugmentedGains, AugmentedStacking, as_time_varying_L
-from eqrec.design.augmented.runtime import (AugmentedEstimator, augmented_to_prefix, augmented_to_time_based,
-                                            prefix_to_augmented, schedule_from_augmented)
+from eqrec.design.augmented.runtime import (augmented_to_prefix, augmented_to_time_based, prefix_to_augmented,
+                                            schedule_from_augmented)
+from eqrec.estimators.augmented import AugmentedEstimator
 from eqrec.bounds.certify import closed_loop_maps
 from eqrec.errors import InputError
 from eqrec.simulate.loop import sample_uncertainty, simulate_run
@@ -111,11 +112,11 @@ def test_runtime_estimator_equals_converted(acc, rng, runtime):
         delta = sample_uncertainty(lay, rad, rng)
         tr = simulate_run(acc, sch, actual, delta, x0)
         w, v, xi0 = lay.split(delta)
-        est = AugmentedEstimator(acc, g, x0 - xi0, runtime)
+        est = AugmentedEstimator(acc, g, runtime=runtime).reset(x0 - xi0)
         x = x0.copy()
         for t in range(6):
             y = acc.C @ x + v[t] if actual[t] == "1" else None
-            xh = est.step(y)
+            xh, _ = est.step(y)
             x = acc.A @ x + acc.f + acc.E @ w[t]
             assert np.allclose(xh, tr.xhat[t + 1], atol=1e-10)
     with pytest.raises(InputError):
@@ -180,8 +181,8 @@ def test_runtime_on_packets_equals_the_converted_prefix_schedule(acc, rng, runti
         delta = sample_uncertainty(lay, rad, rng)
         tr = simulate_run(acc, sch, pat, delta, x0)
         _, v, xi0 = lay.split(delta)
-        est = AugmentedEstimator(acc, gains, x0 - xi0, runtime)
+        est = AugmentedEstimator(acc, gains, runtime=runtime).reset(x0 - xi0)
         y = [acc.C @ tr.x[t] + v[t] for t in range(T)]
-        xh = [est.step([(tau, y[tau]) for tau in pat.arriving_at(t)]) for t in range(T)]
+        xh = [est.step([(tau, y[tau]) for tau in pat.arriving_at(t)])[0] for t in range(T)]
         assert np.allclose(np.array(xh), tr.xhat[1:], atol=1e-9)
     assert late > 0

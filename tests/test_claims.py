@@ -180,6 +180,28 @@ def test_reason_functions_are_found_by_their_claim_id():
         assert re.search(r'@reason\([^)]*"' + re.escape(cid) + '"', text), cid
 
 
+def test_the_table_finds_the_reasons_through_the_registry():
+    """The claims table imports no study (no arrow back up inside ``studies/``): it imports each configured study's
+    ``claims`` module by name, whose ``@reason`` functions fill the one registry; the claims rule's code inputs still
+    list those modules (a changed reason function re-runs the table)."""
+    import ast
+
+    from eqrec.studies.claims import reasons
+    from eqrec.studies.claims.table import load_reasons
+    from eqrec.studies.pipeline import code
+
+    tree = ast.parse((ROOT / "src" / "eqrec" / "studies" / "claims" / "table.py").read_text())
+    imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert not [m for m in imported if m and re.match(r"eqrec\.studies\.(p\d|compare)", m)], sorted(imported)
+    assert REASONS is reasons.REASONS and {cid.split("-")[0] for cid in REASONS} == {"P1", "P2", "P3", "P4"}
+    assert load_reasons(["compare"]) is REASONS  # a study without a claims module adds nothing
+    with pytest.raises(ValueError, match="two reason functions"):
+        reasons.reason(next(iter(REASONS)))(lambda ev, texts: Reason())
+    inputs = code.code_inputs("eqrec.studies.claims.table:step_table")
+    assert all(f"src/eqrec/studies/p{n}/claims.py" in inputs for n in range(1, 5)), inputs
+
+
 def test_claims_file_has_plain_templates_only():
     """No text of the claims file has an expression field; no entry has a condition key."""
     raw = yaml.safe_load(CLAIMS_FILE.read_text())

@@ -18,7 +18,7 @@ from eqrec.design.classes import blocks as class_blocks
 from eqrec.design.classes.blocks import choose_path, plan_batches
 from eqrec.design.classes.engine import solve_classes
 from eqrec.design.delay.design import delay_classes, design_delay, design_delay_global
-from eqrec.design.mu1_min import min_recovery_level
+from eqrec.design.classes.mu1_min import min_recovery_level
 from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InfeasibleDesign, InputError
 from eqrec.systems.examples import batch_reactor
@@ -48,7 +48,7 @@ def _free_bytes(res) -> bytes:
 
 def _bytes_of_design(d) -> bytes:
     return b"".join([d.class_certificate.bounds.tobytes(), *(k.tobytes() for k in d.class_gains.K),
-                     np.asarray(d.extra["class_levels"]).tobytes()])
+                     np.asarray(d.class_levels).tobytes()])
 
 
 @pytest.fixture(scope="module")
@@ -124,9 +124,9 @@ def test_large_design_per_class_matches_the_block_lp(reactor, monkeypatch):
     for a, b in ((mono.mu1, blocks.mu1), (mono.J, blocks.J), (mono.mu2, blocks.mu2),
                  (mono.lower_bound, blocks.lower_bound)):
         assert b == pytest.approx(a, rel=1e-9)
-    np.testing.assert_allclose(blocks.design.extra["class_levels"], mono.design.extra["class_levels"], rtol=1e-9)
+    np.testing.assert_allclose(blocks.design.class_levels, mono.design.class_levels, rtol=1e-9)
     fixed = design_delay(reactor, classes, 0.5, n_jobs=1)
-    assert fixed.extra["J"] == pytest.approx(design_delay(reactor, classes, 0.5, n_jobs=2).extra["J"], rel=0)
+    assert fixed.J == pytest.approx(design_delay(reactor, classes, 0.5, n_jobs=2).J, rel=0)
     words = ["101111", "110111", "111011", "111101"]
     from eqrec.systems.examples import acc_system
 

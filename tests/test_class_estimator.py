@@ -106,13 +106,15 @@ def test_stepwise_state_matches_the_recovery_estimator(cases, name):
     rng = np.random.default_rng(5)
     for pat in design.patterns[:10]:
         x0 = rng.normal(size=system.n)
-        a = RecoveryEstimator(system, design.schedule, x0, t0=7)
-        b = ClassEstimator(system, design.class_gains, x0, t0=7)
+        a = RecoveryEstimator(system, design.schedule).reset(x0, t0=7)
+        b = ClassEstimator(system, design.class_gains).reset(x0, t0=7)
         ys = rng.normal(size=(pat.T, system.p))
         for t in range(pat.T):
             packets = [Packet(7 + tau, ys[tau]) for tau in pat.arriving_at(t)]
             u = rng.normal(size=system.m)
-            np.testing.assert_allclose(b.step(packets, u), a.step(packets, u), rtol=0, atol=1e-8)
+            (xb, bound_b), (xa, bound_a) = b.step(packets, u), a.step(packets, u)
+            np.testing.assert_allclose(xb, xa, rtol=0, atol=1e-8)
+            assert bound_a == bound_b == np.inf  # built without the design's levels: no bound
             assert b.observed_prefix == a.observed_prefix
             assert (b.time, b.period_time, b.period_start) == (a.time, a.period_time, a.period_start)
 
@@ -247,18 +249,19 @@ def test_periodic_restart_reanchors_the_prediction(cases):
     system, design, mu1 = cases["reactor_delay"]
     rng = np.random.default_rng(1)
     pats = [design.patterns[3], design.patterns[17]]
-    est = ClassEstimator(system, design.class_gains, np.zeros(4), periodic=True)
+    est = ClassEstimator(system, design.class_gains, periodic=True).reset(np.zeros(4))
     ys = rng.normal(size=(8, system.p))
     us = rng.normal(size=(8, system.m))
     out = []
     for k, pat in enumerate(pats):
         for t in range(4):
             out.append(est.step([Packet(4 * k + tau, ys[4 * k + tau]) for tau in pat.arriving_at(t)]
-                                + ([Packet(0, ys[0])] if k == 1 and t == 0 else []), us[4 * k + t]))
+                                + ([Packet(0, ys[0])] if k == 1 and t == 0 else []), us[4 * k + t])[0])
         if k == 0:
             fresh = ClassEstimator(system, design.class_gains, est.xhat, t0=4)
     assert est.period_start == 4 and est.period_time == 4
-    again = [fresh.step([Packet(4 + tau, ys[4 + tau]) for tau in pats[1].arriving_at(t)], us[4 + t]) for t in range(4)]
+    again = [fresh.step([Packet(4 + tau, ys[4 + tau]) for tau in pats[1].arriving_at(t)], us[4 + t])[0]
+             for t in range(4)]
     np.testing.assert_array_equal(np.array(out[4:]), np.array(again))  # the stale Packet(0) was dropped
 
 
@@ -316,6 +319,10 @@ def test_make_estimator_picks_by_the_kind_of_gains(cases):
     assert type(make_estimator(system, design.schedule, np.zeros(3))) is RecoveryEstimator
     est = make_estimator(system, design.class_gains, np.zeros(3), periodic=True, t0=5)
     assert type(est) is ClassEstimator and est.periodic and est.time == 5 and est.T == 6
+    later = make_estimator(system, design.class_gains, periodic=True)  # no x̂0: reset before the first step
+    with pytest.raises(InputError, match="reset"):
+        later.step(np.zeros(2))
+    np.testing.assert_array_equal(later.reset(np.zeros(3), t0=5).step(np.ones(2))[0], est.step(np.ones(2))[0])
     with pytest.raises(InputError, match="GainSchedule or ClassGains"):  # an eqrec error naming the field
         make_estimator(system, design, np.zeros(3))
 

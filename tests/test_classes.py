@@ -18,7 +18,7 @@ from eqrec.design.classes.block_lp import build_class_lp
 from eqrec.design.classes.engine import class_design, solve_classes
 from eqrec.design.cost import class_cost
 from eqrec.design.delay.design import delay_language, design_delay, design_delay_global
-from eqrec.design.mu1_min import min_recovery_level
+from eqrec.design.classes.mu1_min import min_recovery_level
 from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InfeasibleDesign
 from eqrec.systems.examples import batch_reactor
@@ -61,7 +61,7 @@ def node_levels_equal(system, words, mu1, kind="delay"):
             assert ref.levels[node.label] == pytest.approx(max(mu1, cls.levels[classes.node_class[node.index]]),
                                                            rel=1e-7, abs=1e-9)
     d = design_delay(system, tree, mu1, cost="sum")
-    assert d.extra["J"] == pytest.approx(ref.extra["J"], rel=1e-8)
+    assert d.J == pytest.approx(ref.J, rel=1e-8)
     for cost in ("max",):
         dm = design_delay(system, tree, mu1, cost=cost)
         rm = design_delay(system, tree, mu1, cost=cost, engine="tree", certify=False)
@@ -108,7 +108,7 @@ def test_acc_prefix_design_is_p1_optimum(acc, L1_words):
 @pytest.mark.parametrize("T", [5, 6])
 def test_reactor_classes_equal_tree_node_by_node(reactor, T):
     d = node_levels_equal(reactor, full_delay_language(T, 2), 0.5)
-    assert d.extra["classes"] == 18 if T == 5 else d.extra["classes"] == 22
+    assert d.classes == 18 if T == 5 else d.classes == 22
 
 
 def test_missing_only_language(acc):
@@ -200,7 +200,7 @@ def test_dual_certificate_is_a_true_lower_bound(reactor):
     """The dual point behind ``lower`` is feasible for the LAD dual: Z λ = 0, |λ| <= β (checked here again)."""
     from eqrec.bounds.data_classes import class_maps
     from eqrec.bounds.stacking import Stacking
-    from eqrec.design.mu1_min import _dual_lower_certificate
+    from eqrec.design.classes.mu1_min import _dual_lower_certificate
 
     classes = classes_of_full_language(5, 2)
     st = Stacking(reactor, 5)
@@ -230,7 +230,7 @@ def test_full_language_30_4_without_enumeration(reactor):
     assert d.schedule is None and d.patterns == ()
     assert d.class_certificate.terminal <= d.mu1 * (1 + 1e-6)
     assert d.class_certificate.mu2 <= d.mu2 * (1 + 1e-6)
-    assert np.isfinite(d.extra["J"])
+    assert np.isfinite(d.J)
 
 
 def test_block_lp_has_one_block_per_class_and_row(reactor):

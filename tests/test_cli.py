@@ -425,3 +425,20 @@ def test_augmented_on_an_unobservable_system_is_infeasible_and_says_observabilit
     rc = main(["design", str(system), "--words", "1111", "--method", "augmented", "--mu1", "1"])
     err = capsys.readouterr().err
     assert rc == 3 and "not observable" in err and "controllab" not in err
+
+
+def test_design_dispatches_through_the_table_of_methods(monkeypatch, capsys):
+    """``--method`` names an entry of ``DESIGN_METHODS`` (the parser's choices are its keys); ``run_design`` does the
+    shared checks, then calls that entry with the loaded system, its ``T``, ``μ1``, weights and parallel options."""
+    import eqrec.cli as cli
+
+    assert list(cli.DESIGN_METHODS) == ["time", "prefix", "augmented", "delay"]
+    called = []
+    monkeypatch.setitem(cli.DESIGN_METHODS, "time", lambda args, system, T, mu1, weights, par:
+                        called.append((system.n, T, mu1, weights, par)) or {"method": "time", "mu1": mu1})
+    assert cli.run_design(cli._parser().parse_args(["design", str(SYSTEM), "--method", "time", "--mu1", "free"])) == \
+        {"method": "time", "mu1": "free"}
+    assert called == [(3, 6, "free", None, {"n_jobs": None, "scheduler": None})]  # the file gives T = 6
+    with pytest.raises(SystemExit):  # a method outside the table is a usage error (exit 2)
+        cli._parser().parse_args(["design", str(SYSTEM), "--method", "nope"])
+    assert "invalid choice: 'nope'" in capsys.readouterr().err

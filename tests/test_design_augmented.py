@@ -79,14 +79,16 @@ def test_design_augmented_certified(acc, tb_100111, published):
     assert d.schedule.time_based
     assert d.certificate.mu2 == pytest.approx(tb_100111, rel=1e-7)
     assert d.certificate.terminal <= 1.0 + 1e-7
-    assert set(d.extra) >= {"L", "s0", "M", "nu"}
+    aug = d.augmented  # the typed record: L, s0, M, nu as the JSON writes them, from the gains
+    assert (aug.s0, aug.M, aug.nu) == (aug.gains.s0.tolist(), aug.gains.M.tolist(), aug.gains.nu.tolist())
+    assert aug.mode == "theorem2" and d.worst_case_word == "100111" and aug.poles is not None and d.extra == {}
     d2 = design_augmented(acc, ["111111"], 1.0, L=np.zeros((3, 2)), solver="clarabel")
     assert d2.certificate.mu2 == pytest.approx(published("P2-F1:mu2-time"), abs=1e-6)  # no missing data
 
 
 def test_ipopt_free_design(acc, tb_100111):
     d = design_augmented(acc, ["100111"], 1.0, L="free")
-    assert d.solution.solver == "ipopt" and d.extra["ipopt_iterations"] > 0
+    assert d.solution.solver == "ipopt" and d.augmented.ipopt_iterations > 0
     assert d.certificate.mu2 == pytest.approx(tb_100111, rel=1e-6)  # cannot beat the time-based bound
 
 
@@ -130,7 +132,7 @@ def test_masked_gain_reading_reproduces_fig2_and_the_fig3b_interval(acc, publish
             flat.append(k)
     assert flat == [k for k in range(-10, 14) if k != 0]
     d = design_augmented(acc, ["101111", "110111"], 1.0, L=Lp, mode="masked_gain")
-    assert d.extra["certified_runtime"] == "hold" and d.certificate.mu2 > 10  # what the design really guarantees
+    assert d.augmented.certified_runtime == "hold" and d.certificate.mu2 > 10  # what the design really guarantees
 
 
 def test_deadbeat_observer_where_place_poles_refuses(acc):

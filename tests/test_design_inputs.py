@@ -199,7 +199,7 @@ def test_per_channel_bounds_are_the_design_of_the_rescaled_system():
     assert vec.eta_w == vec.eta_v == 1.0
     d_vec = eqrec.design_prefix(vec, ["1011", "1101"], 3.0)
     d_rescaled = eqrec.design_prefix(rescaled, ["1011", "1101"], 3.0)
-    assert np.array_equal(d_vec.extra["class_levels"], d_rescaled.extra["class_levels"])
+    assert np.array_equal(d_vec.class_levels, d_rescaled.class_levels)
     assert d_vec.certificate.mu2 == d_rescaled.certificate.mu2
     # the box lies strictly between the scalar boxes of the smallest and the largest bound
     levels = [eqrec.min_recovery_level(plant, ["1011", "1101"], kind="missing").upper for plant in (
@@ -353,8 +353,8 @@ def test_prefix_mu1_free_is_the_class_engines_global_optimum(acc):
     free = eqrec.design_prefix(acc, L1, "free")
     mm = eqrec.min_recovery_level(acc, L1, kind="missing")
     # the stored μ1 is the LP's upper end raised, if at all, to what the gains certify (no tolerance on that side)
-    assert mm.upper <= free.mu1 <= mm.upper * (1 + 1e-12) and free.extra["mu1_min_lower"] == mm.lower
-    assert free.extra["mu1_free"] == "global" and free.extra["mu1_binding"] == mm.binding
+    assert mm.upper <= free.mu1 <= mm.upper * (1 + 1e-12) and free.mu1_free.mu1_min_lower == mm.lower
+    assert free.mu1_free.route == "global" and free.mu1_free.binding == mm.binding
     assert free.mu2 == eqrec.design_prefix(acc, L1, mm.upper).mu2
     assert free.mu2 == pytest.approx(0.3991, abs=5e-5)  # the delayed-data paper's footnote on the same language
     # the same μ1 as the delayed-data route on the same language, and nothing below it is feasible
@@ -365,7 +365,7 @@ def test_prefix_mu1_free_is_the_class_engines_global_optimum(acc):
     tree = eqrec.design_prefix(acc, L1, "free", engine="tree")
     assert tree.mu1 == pytest.approx(free.mu1, rel=1e-12) and tree.mu2 == pytest.approx(free.mu2, rel=1e-7)
     time_based = eqrec.design_time_based(acc, L1, "free")
-    assert time_based.mu1 == eqrec.min_recovery_level(acc, [time_based.extra["worst_case_word"]], kind="missing").upper
+    assert time_based.mu1 == eqrec.min_recovery_level(acc, [time_based.worst_case_word], kind="missing").upper
 
 
 def test_cli_prefix_mu1_free(tmp_path, capsys):

@@ -6,7 +6,7 @@ from eqrec.errors import InputError
 
 def test_time_based_is_designed_for_the_worst_case_word(acc, L1_words):
     d = design_time_based(acc, L1_words, 1.0)
-    assert d.extra["worst_case_word"] == "100001"
+    assert d.worst_case_word == "100001"
     assert d.schedule.time_based and d.schedule.designed_words == ("100001",)
     # certified on every word of the language and on the worst-case word itself
     assert set(d.certificate.words) == set(L1_words) | {"100001"}

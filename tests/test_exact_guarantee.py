@@ -74,7 +74,7 @@ def assert_exact(design) -> None:
         cc = certify_classes(design.system, design.class_gains, mu1)
         stored = design.class_certificate
         assert stored.mu1 == mu1 and np.array_equal(cc.bounds, stored.bounds)
-        levels = np.asarray(design.extra["class_levels"])
+        levels = np.asarray(design.class_levels)
         for i, cls in enumerate(cc.classes.classes):
             assert cc.levels[i] <= levels[i]
             if cls.terminal:
@@ -141,7 +141,7 @@ def test_prefix_just_below_mu1_min_raises_mu1_to_what_the_gains_certify(plant):
     name, system, words, mu1_min = plant
     asked = mu1_min * (1 - 3e-7)
     design = eqrec.design_prefix(system, words, asked)
-    assert design.mu1 > asked and design.extra["mu1_requested"] == asked
+    assert design.mu1 > asked and design.mu1_requested == asked
     assert design.mu1 <= mu1_min * (1 + 1e-6)
     assert_exact(design)
     assert play_back(design) <= 1 + 1e-12

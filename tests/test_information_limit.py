@@ -96,7 +96,7 @@ def test_class_levels_are_information_limits(which, request):
     design = request.getfixturevalue(which)
     classes = design.class_gains.classes.classes
     bounds = design.class_certificate.bounds
-    levels = design.extra["class_levels"]
+    levels = design.class_levels
     assert len(classes) >= 8
     for cls, row_bounds, level in zip(classes, bounds, levels):
         limit = block_limit(design.system, cls.depth, cls.available, design.mu1)
@@ -114,7 +114,7 @@ def test_limit_below_the_class_bound_on_a_long_run(acc, acc_design):
     for t in range(trace.steps):
         b, d = divmod(t, T)
         S = tuple(int(tau) - b * T for tau in range(b * T, t + 1) if arrival[tau] <= t)
-        level = acc_design.extra["class_levels"][gains.classes.index(d + 1, S)]
+        level = acc_design.class_levels[gains.classes.index(d + 1, S)]
         assert limit[t].max() <= level * (1 + REL)
         if b == 0:
             assert limit[t].max() >= level * (1 - REL)
@@ -200,8 +200,8 @@ def test_a_failed_warm_solve_is_solved_again(acc, monkeypatch):
         loaded.append(lp.shape)
         return h
 
-    original = info._highs_model
-    monkeypatch.setattr(info, "_highs_model", crippled)
+    original = info.highs_model
+    monkeypatch.setattr(info, "highs_model", crippled)
     np.testing.assert_allclose(information_limit(acc, trace, 0.5, cache=False), reference, rtol=REL)
     assert len(loaded) >= 2  # the first model failed and was replaced
 

@@ -117,8 +117,8 @@ def test_class_engine_on_the_rule_equals_the_tree_lp_on_the_words():
     assert free.mu1 == pytest.approx(ref.mu1, rel=1e-12)
     assert free.J == pytest.approx(ref.J, rel=1e-7)  # the weights of the sum cost (tree LP: one solver tolerance)
     mu1 = 1.2 * free.mu1
-    assert design_delay(system, rule, mu1).extra["J"] == pytest.approx(
-        design_delay(system, words, mu1, engine="tree", certify=False).extra["J"], rel=1e-7)
+    assert design_delay(system, rule, mu1).J == pytest.approx(
+        design_delay(system, words, mu1, engine="tree", certify=False).J, rel=1e-7)
 
 
 @pytest.fixture(scope="module")

@@ -73,7 +73,7 @@ def test_performance_design_is_infeasible_at_the_papers_mu1(reactor):
 
 def test_switches_at_a_late_packet_and_reverts_after_T(reactor, switching_designs):
     perf, rec = switching_designs
-    est = SwitchingEstimator(reactor, perf.schedule, rec.schedule, np.zeros(4))
+    est = SwitchingEstimator(reactor, perf.schedule, rec.schedule).reset(np.zeros(4))
     y = np.zeros(2)
     modes = []
     # y(3) is late by 2 (arrives at 5), y(7) by 2 (arrives at 9: after the phase 3..7, dropped);
@@ -95,24 +95,23 @@ def test_switches_at_a_late_packet_and_reverts_after_T(reactor, switching_design
 
 def test_a_stale_packet_in_performance_mode_is_dropped(reactor, switching_designs):
     perf, rec = switching_designs
-    a = SwitchingEstimator(reactor, perf.schedule, rec.schedule, np.zeros(4))
-    b = SwitchingEstimator(reactor, perf.schedule, rec.schedule, np.zeros(4))
+    a = SwitchingEstimator(reactor, perf.schedule, rec.schedule).reset(np.zeros(4))
+    b = SwitchingEstimator(reactor, perf.schedule, rec.schedule).reset(np.zeros(4))
     rng = np.random.default_rng(0)
     ys = rng.normal(size=(4, 2))
     for k in range(4):
         a.step([Packet(k, ys[k])])
         b.step([Packet(k, ys[k])] + ([Packet(0, ys[0] + 5.0)] if k == 2 else []))  # a stray old packet
         np.testing.assert_array_equal(a.xhat, b.xhat)
-    assert a.switch_times == b.switch_times == []
+    assert a.switch_times == b.switch_times == [] and (a.dropped_packets, b.dropped_packets) == (0, 1)
 
 
 def test_recovery_language_must_start_late(reactor, switching_designs):
     perf, _ = switching_designs
     with pytest.raises(InputError, match="first measurement late"):
-        SwitchingEstimator(reactor, perf.schedule, design_delay(reactor, ["00000", "10000"], 0.5, kind="delay").schedule,
-                           np.zeros(4))
+        SwitchingEstimator(reactor, perf.schedule, design_delay(reactor, ["00000", "10000"], 0.5, kind="delay").schedule)
     with pytest.raises(InputError, match="horizon 1"):
-        SwitchingEstimator(reactor, switching_designs[1].schedule, switching_designs[1].schedule, np.zeros(4))
+        SwitchingEstimator(reactor, switching_designs[1].schedule, switching_designs[1].schedule)
 
 
 def test_switching_long_run_inside_the_guarantees(reactor, switching_designs):
@@ -153,12 +152,13 @@ def test_late_across_a_period_boundary_counts_as_missing(reactor, periodic_desig
     assert ArrivalTrace(np.array([0, 0, 0, 0, 2, 0, 0, 0, 0, 0])).schedule()[6] == [4, 6]
     rng = np.random.default_rng(5)
     ys = rng.normal(size=(10, 2))
-    with_late = RecoveryEstimator(reactor, d.schedule, np.zeros(4), periodic=True)
-    without = RecoveryEstimator(reactor, d.schedule, np.zeros(4), periodic=True)
+    with_late = RecoveryEstimator(reactor, d.schedule, periodic=True).reset(np.zeros(4))
+    without = RecoveryEstimator(reactor, d.schedule, periodic=True).reset(np.zeros(4))
     for t in range(10):
         late = [Packet(4, ys[4])] if t == 6 else []
         on = [] if t == 4 else [Packet(t, ys[t])]
-        np.testing.assert_array_equal(with_late.step(on + late), without.step(on))
+        np.testing.assert_array_equal(with_late.step(on + late)[0], without.step(on)[0])
+    assert (with_late.dropped_packets, without.dropped_packets) == (1, 0)
     r = long_run_periodic(reactor, d.schedule, [], 0, np.random.default_rng(3), mu1=0.33,
                           path_levels=lambda w: path_levels(d, w), kind="vertex", sequence=["00002", "00000", "22222", "00000"])
     assert sorted(r.dropped) == [(4, 6), (13, 15), (14, 16)]  # y(12) arrives at 14, inside its period

@@ -13,7 +13,8 @@ import pytest
 import eqrec
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import full_delay_language
-from eqrec.design.augmented.runtime import AugmentedEstimator, prefix_to_augmented
+from eqrec.design.augmented.runtime import prefix_to_augmented
+from eqrec.estimators.augmented import AugmentedEstimator
 from eqrec.design.delay.design import delay_classes, design_delay, design_delay_global
 from eqrec.design.observers import place_observer
 from eqrec.design.prefix.design import design_prefix
@@ -45,7 +46,7 @@ T0 = 5  # the start time of the estimators that take one: stamps are absolute ti
 
 
 class Way(NamedTuple):
-    """One way of building an estimator: ``make(xhat0)`` returns it at time ``T0`` (0 without a clock), ready to step.
+    """One way of building an estimator: ``make(xhat0)`` returns it at time ``T0``, ready to step.
 
     ``resets``: the initial estimate goes through ``reset`` (else through the constructor)."""
 
@@ -79,19 +80,27 @@ def ways() -> dict[str, Way]:
         "guaranteed, class engine, not periodic": Way(reset(lambda: classes.estimator(periodic=False)), True),
         "guaranteed, node gains": Way(reset(lambda: node.estimator()), True),
         "guaranteed, on time only": Way(reset(lambda: OnTimeOnly(classes.estimator(), 1)), True),
-        "ClassEstimator": Way(lambda x0: ClassEstimator(PLANT, classes.class_gains, x0, periodic=True, t0=T0), False),
-        "ClassEstimator, not periodic": Way(lambda x0: ClassEstimator(PLANT, classes.class_gains, x0, t0=T0), False),
-        "RecoveryEstimator": Way(lambda x0: RecoveryEstimator(PLANT, node.schedule, x0, periodic=True, t0=T0), False),
-        "make_estimator, class gains": Way(lambda x0: make_estimator(PLANT, classes.class_gains, x0, t0=T0), False),
-        "make_estimator, node gains": Way(lambda x0: make_estimator(PLANT, node.schedule, x0, t0=T0), False),
-        "SwitchingEstimator, node gains": Way(lambda x0: SwitchingEstimator(PLANT, perf.schedule, rec.schedule, x0,
-                                                                            t0=T0), False),
-        "SwitchingEstimator, class gains": Way(lambda x0: SwitchingEstimator(PLANT, perf.class_gains, rec.class_gains,
-                                                                             x0, t0=T0), False),
-        "AugmentedEstimator, one word": Way(lambda x0: AugmentedEstimator(PLANT, aug.extra["gains"], x0), False),
-        "AugmentedEstimator, one word, hold": Way(lambda x0: AugmentedEstimator(PLANT, aug.extra["gains"], x0, "hold"),
-                                                  False),
-        "AugmentedEstimator, prefix gains": Way(lambda x0: AugmentedEstimator(PLANT, aug_prefix, x0), False),
+        "ClassEstimator": Way(reset(lambda: ClassEstimator(PLANT, classes.class_gains, periodic=True)), True),
+        "ClassEstimator, not periodic": Way(reset(lambda: ClassEstimator(PLANT, classes.class_gains)), True),
+        "ClassEstimator, x̂0 to the constructor": Way(lambda x0: ClassEstimator(PLANT, classes.class_gains, x0,
+                                                                                periodic=True, t0=T0), False),
+        "RecoveryEstimator": Way(reset(lambda: RecoveryEstimator(PLANT, node.schedule, periodic=True)), True),
+        "RecoveryEstimator, x̂0 to the constructor": Way(lambda x0: RecoveryEstimator(PLANT, node.schedule, x0,
+                                                                                      periodic=True, t0=T0), False),
+        "make_estimator, class gains": Way(reset(lambda: make_estimator(PLANT, classes.class_gains)), True),
+        "make_estimator, node gains": Way(reset(lambda: make_estimator(PLANT, node.schedule)), True),
+        "SwitchingEstimator, node gains": Way(reset(lambda: SwitchingEstimator(PLANT, perf.schedule, rec.schedule)),
+                                              True),
+        "SwitchingEstimator, class gains": Way(reset(lambda: SwitchingEstimator(PLANT, perf.class_gains,
+                                                                                rec.class_gains)), True),
+        "SwitchingEstimator, x̂0 to the constructor": Way(lambda x0: SwitchingEstimator(
+            PLANT, perf.schedule, rec.schedule, x0, t0=T0), False),
+        "AugmentedEstimator, one word": Way(reset(lambda: AugmentedEstimator(PLANT, aug.augmented.gains)), True),
+        "AugmentedEstimator, one word, hold": Way(reset(lambda: AugmentedEstimator(PLANT, aug.augmented.gains,
+                                                                                   runtime="hold")), True),
+        "AugmentedEstimator, prefix gains": Way(reset(lambda: AugmentedEstimator(PLANT, aug_prefix)), True),
+        "AugmentedEstimator, x̂0 to the constructor": Way(lambda x0: AugmentedEstimator(PLANT, aug_prefix, x0, t0=T0),
+                                                         False),
         "Kalman, time-stamped": Way(reset(lambda: make_filter("timestamped", PLANT, kalman)), True),
         "Kalman, delay-unaware": Way(reset(lambda: make_filter("unaware", PLANT, kalman)), True),
         "Kalman, time-stamped, by hand": Way(reset(lambda: TimestampedKalman(PLANT, kalman)), True),
@@ -112,9 +121,11 @@ def ways() -> dict[str, Way]:
 
 WAYS = ["guaranteed, class engine", "guaranteed, class engine, strict=False", "guaranteed, class engine, not periodic",
         "guaranteed, node gains", "guaranteed, on time only", "ClassEstimator", "ClassEstimator, not periodic",
-        "RecoveryEstimator", "make_estimator, class gains", "make_estimator, node gains",
-        "SwitchingEstimator, node gains", "SwitchingEstimator, class gains", "AugmentedEstimator, one word",
-        "AugmentedEstimator, one word, hold", "AugmentedEstimator, prefix gains", "Kalman, time-stamped",
+        "ClassEstimator, x̂0 to the constructor", "RecoveryEstimator", "RecoveryEstimator, x̂0 to the constructor",
+        "make_estimator, class gains", "make_estimator, node gains",
+        "SwitchingEstimator, node gains", "SwitchingEstimator, class gains", "SwitchingEstimator, x̂0 to the constructor",
+        "AugmentedEstimator, one word", "AugmentedEstimator, one word, hold", "AugmentedEstimator, prefix gains",
+        "AugmentedEstimator, x̂0 to the constructor", "Kalman, time-stamped",
         "Kalman, delay-unaware", "Kalman, time-stamped, by hand", "Kalman, delay-unaware, by hand",
         "LMV, random delay", "LMV, zero-input", "LMV, zero-input, gains given", "LMV, hold-input",
         "LMV, zero-input, system=", "LMV, zero-input, gains given, system=", "LMV, hold-input, system=",
@@ -139,8 +150,7 @@ def _started(way: Way):
 
 def _now(est) -> int:
     """The absolute time of the estimator's next step."""
-    t = getattr(est, "time", None)
-    return int(t) if t is not None else len(est._arrivals)  # AugmentedEstimator: no clock but its record
+    return int(est.time)
 
 
 BAD = {"NaN": np.nan, "inf": np.inf, "-inf": -np.inf}

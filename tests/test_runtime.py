@@ -61,9 +61,10 @@ def test_same_estimates_as_the_node_gain_estimator(plant):
 
     design = design_delay(plant, LOSS_LANGUAGE, 1.5, cost="sum")
     est = design.estimator(periodic=False).reset(np.ones(2))
-    ref = RecoveryEstimator(plant, design.schedule, np.ones(2))
+    ref = RecoveryEstimator(plant, design.schedule).reset(np.ones(2))
     for y in (np.array([0.3]), None, np.array([-0.2])):
-        np.testing.assert_allclose(est.step(y, np.array([0.5]))[0], ref.step(y, np.array([0.5])), atol=1e-12)
+        np.testing.assert_allclose(est.step(y, np.array([0.5]))[0], ref.step(y, np.array([0.5]))[0],
+                                   atol=1e-12)
 
 
 def test_late_packets_and_tree_designs(acc):

@@ -30,8 +30,9 @@ def _acc_run_data(acc, rng, N):
 
 
 def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, rng):
-    """The same design run as GuaranteedEstimator (reset/step -> (x̂, bound)) and as the raw RecoveryEstimator
-    (step -> x̂): the one loop gives the same estimates, and the bounds the protocol estimator returns hold."""
+    """The same design run as GuaranteedEstimator and as the raw RecoveryEstimator, both reset/step -> (x̂, bound),
+    in the one loop: the same estimates; the raw one built with the design's levels returns the same bounds, which
+    hold, and built without them it returns inf."""
     from eqrec.arrivals.draws import uniform_words, ArrivalTrace
     from eqrec.estimators.causal import make_estimator
     from eqrec.simulate.loop import closed_loop
@@ -43,11 +44,14 @@ def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, r
     w, v, x0, xi0 = _acc_run_data(acc, rng, N)
     u_at = lambda k, xh: np.array([206.0 + np.sin(k)])  # noqa: E731
     guaranteed = d.estimator()
-    raw = closed_loop(acc, make_estimator(acc, guaranteed.gains, x0 - xi0, periodic=True), trace, x0, xi0, w, v, u_at)
+    raw = closed_loop(acc, make_estimator(acc, guaranteed.gains, periodic=True), trace, x0, xi0, w, v, u_at)
+    leveled = closed_loop(acc, make_estimator(acc, guaranteed.gains, periodic=True, bound_of=guaranteed.bound_of,
+                                              mu1=guaranteed.mu1), trace, x0, xi0, w, v, u_at)
     prot = closed_loop(acc, guaranteed, trace, x0, xi0, w, v, u_at)
-    assert raw.spread == [] and len(prot.spread) == N
+    assert raw.spread == [np.inf] * N and len(prot.spread) == N and leveled.spread == prot.spread
     np.testing.assert_array_equal(prot.xhat, raw.xhat)
     np.testing.assert_array_equal(prot.x, raw.x)
+    np.testing.assert_array_equal(leveled.xhat, raw.xhat)
     assert np.all(np.abs(prot.error[1:]).max(axis=1) <= prot.bound * (1 + 1e-9))
     assert abs(prot.bound.max() - d.mu2) <= 1e-9 and prot.bound[5] == 1.0  # mu1 = 1 at the end of each period
 

@@ -91,7 +91,7 @@ _PUBLIC: dict[str, str] = {
     "design_delay": "eqrec.design.delay.design",
     "design_delay_global": "eqrec.design.delay.design",
     "design_augmented": "eqrec.design.augmented.design",
-    "min_recovery_level": "eqrec.design.mu1_min",
+    "min_recovery_level": "eqrec.design.classes.mu1_min",
     # certificates
     "certify_schedule": "eqrec.bounds.certify",
     "information_limit": "eqrec.bounds.information",

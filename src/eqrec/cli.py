@@ -25,7 +25,9 @@ import json
 import os
 import sys
 from collections import Counter
+from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,6 +37,9 @@ from eqrec.design.inputs import MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
+
+if TYPE_CHECKING:
+    from eqrec.design.result import Design
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
 #: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
@@ -87,7 +92,7 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--words", default=None,
                    help="comma-separated words of the missing-data language, e.g. 101111,110111 "
                         "(methods time, prefix, augmented)")
-    d.add_argument("--method", choices=("time", "prefix", "augmented", "delay"), default="prefix",
+    d.add_argument("--method", choices=tuple(DESIGN_METHODS), default="prefix",
                    help="time: one gain sequence for the worst-case word (bitwise AND); prefix: gains chosen "
                         "by the observed prefix (prefix-based paper); augmented: state-augmented estimator "
                         "(augmented paper); delay: delayed and missing data, gains per event prefix and a "
@@ -197,10 +202,8 @@ def _parse_weights(text: str | None, n: int) -> np.ndarray | None:
 
 
 def run_design(args: argparse.Namespace) -> dict:
-    """Design, certify and describe one estimator (the ``design`` subcommand)."""
-    from eqrec.design.prefix.design import design_prefix
-    from eqrec.design.prefix.time_based import design_time_based
-    from eqrec.arrivals.words import validate_language
+    """Design, certify and describe one estimator (the ``design`` subcommand): the checks every method shares, then
+    the method's entry of :data:`DESIGN_METHODS`."""
     from eqrec.systems.files import load_system
 
     system, T_file = load_system(args.system)
@@ -210,8 +213,75 @@ def run_design(args: argparse.Namespace) -> dict:
                          "--state-weights")
     weights = _parse_weights(args.state_weights, system.n)
     par = _parallel(args)
-    if args.method == "delay":
-        return run_delay_design(args, system, T_file, mu1, weights, par)
+    return DESIGN_METHODS[args.method](args, system, T_file, mu1, weights, par)
+
+
+def _design_prefix(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
+                   par: dict) -> tuple[Design, dict, dict]:
+    """``--method prefix``: the prefix-based design (class engine or tree LP); no entries of its own before the
+    gains, the class engine's after them."""
+    from eqrec.design.prefix.design import design_prefix
+
+    design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
+                           state_weights=weights, **par)
+    return design, {}, _class_engine_entries(design)
+
+
+def _design_time(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
+                 par: dict) -> tuple[Design, dict, dict]:
+    """``--method time``: one gain sequence for the worst-case word, named after the gains."""
+    from eqrec.design.prefix.time_based import design_time_based
+
+    design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
+    return design, {}, {"worst_case_word": design.worst_case_word, **_class_engine_entries(design)}
+
+
+def _design_augmented(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
+                      par: dict) -> tuple[Design, dict, dict]:
+    """``--method augmented``: the state-augmented design (``--L``, ``--poles``, ``--s0`` read here); its ``L``,
+    ``s0``, ``M``, ``nu`` written after the words."""
+    from eqrec.design.augmented.design import design_augmented
+
+    L = None
+    if args.L is not None:
+        L = "free" if args.L.strip() == "free" else _parse_json_array(args.L, "--L")
+    poles = None
+    if args.poles is not None:
+        try:
+            poles = [complex(p) for p in args.poles.split(",")]
+        except ValueError:
+            raise InputError("poles must be numbers, e.g. 0,0.5,-0.2", "command line", "--poles") from None
+    s0 = None if args.s0 is None else _parse_json_array(args.s0, "--s0")
+    design = design_augmented(system, words, args.mu1, L=L, poles=poles, s0=s0, solver=args.solver)
+    aug = design.augmented
+    head = {k: np.asarray(v).tolist() for k, v in (("L", aug.L), ("s0", aug.s0), ("M", aug.M), ("nu", aug.nu))}
+    return design, head, {}
+
+
+def _class_engine_entries(design: Design) -> dict:
+    """What ``--method prefix`` and ``time`` write after the gains: μ1 free, the engine, the class table."""
+    out = {}
+    free = design.mu1_free
+    if free is not None:
+        out["mu1_free"] = {"route": free.route, "mu1_min": {
+            "upper": free.mu1_min, "lower": free.mu1_min_lower, "binding": free.binding}}
+    out["engine"] = design.engine
+    if design.class_gains is not None:
+        from eqrec.design.report import class_table
+
+        out["classes"] = class_table(design)
+    return out
+
+
+def run_word_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str,
+                    weights: np.ndarray | None, par: dict, method) -> dict:
+    """A design of a missing-data language given in ``--words`` (``--method prefix``, ``time``, ``augmented``).
+
+    The checks these methods share, then ``method(args, system, words, weights, par)``, which returns the design
+    and the JSON entries of its own: ``head`` (after the words) and ``tail`` (after the gains).
+    """
+    from eqrec.arrivals.words import validate_language
+
     for flag, value in (("--delays", args.delays), ("--max-delay", args.max_delay), ("--horizon", args.horizon),
                         ("--max-lost", args.max_lost), ("--cost", args.cost),
                         ("--node-gains", args.node_gains or None), ("--force", getattr(args, "force", None) or None)):
@@ -231,51 +301,16 @@ def run_design(args: argparse.Namespace) -> dict:
                       field_name="--words" if T_file is None else "T")
     if args.method != "augmented" and (args.L or args.poles or args.s0):
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
-    extra = {}
-    if args.method == "prefix":
-        design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
-                               state_weights=weights, **par)
-    elif args.method == "time":
-        design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
-    else:
-        try:
-            from eqrec.design.augmented.design import design_augmented
-        except ImportError:  # pragma: no cover - depends on the P2 module being present
-            raise InputError("the augmented design is not available in this installation",
-                             "command line", "--method") from None
-        L = None
-        if args.L is not None:
-            L = "free" if args.L.strip() == "free" else _parse_json_array(args.L, "--L")
-        poles = None
-        if args.poles is not None:
-            try:
-                poles = [complex(p) for p in args.poles.split(",")]
-            except ValueError:
-                raise InputError("poles must be numbers, e.g. 0,0.5,-0.2", "command line", "--poles") from None
-        s0 = None if args.s0 is None else _parse_json_array(args.s0, "--s0")
-        design = design_augmented(system, words, args.mu1, L=L, poles=poles, s0=s0, solver=args.solver)
-        extra = {k: (np.asarray(v).tolist() if v is not None else None) for k, v in design.extra.items()
-                 if k in ("L", "s0", "M", "nu")}
+    design, head, tail = method(args, system, words, weights, par)
     cert = design.certificate if design.certificate is not None else design.class_certificate
     out = {"method": args.method, "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "certified_mu2": cert.mu2,
            "certified_terminal": cert.terminal, "solver": design.solution.solver, "status": design.solution.status,
-           "words": list(words), **extra}
-    if "mu1_requested" in design.extra:  # mu1 raised to the fixed point the gains certify (eqrec.bounds.certify)
-        out["mu1_requested"] = design.extra["mu1_requested"]
+           "words": list(words), **head}
+    if design.mu1_requested is not None:  # mu1 raised to the fixed point the gains certify (eqrec.bounds.certify)
+        out["mu1_requested"] = design.mu1_requested
     if design.schedule is not None:  # none for a class-engine language too large for node gains
         out.update(designed_words=list(design.schedule.designed_words), gains=design.schedule.to_json())
-    if args.method == "time":
-        out["worst_case_word"] = design.extra["worst_case_word"]
-    if design.extra.get("mu1_free") is not None:
-        out["mu1_free"] = {"route": design.extra["mu1_free"], "mu1_min": {
-            "upper": design.extra["mu1_min"], "lower": design.extra["mu1_min_lower"],
-            "binding": design.extra["mu1_binding"]}}
-    if args.method in ("prefix", "time"):
-        out["engine"] = design.extra.get("engine", "tree")
-        if design.class_gains is not None:
-            from eqrec.design.report import class_table
-
-            out["classes"] = class_table(design)
+    out.update(tail)
     if weights is not None:
         from eqrec.design.report import original_coordinates
 
@@ -399,6 +434,16 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         original_coordinates(out, weights)
     out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
     return out
+
+
+#: ``--method``: the function that designs with it, from the loaded system, its ``T`` (or ``None``), the parsed
+#: ``--mu1``, ``--state-weights`` and the parallel options; it returns the JSON of the design.
+DESIGN_METHODS = {
+    "time": partial(run_word_design, method=_design_time),
+    "prefix": partial(run_word_design, method=_design_prefix),
+    "augmented": partial(run_word_design, method=_design_augmented),
+    "delay": run_delay_design,
+}
 
 
 def _check_size(args: argparse.Namespace, system, mu1_free: bool, par: dict) -> None:

@@ -28,7 +28,7 @@ terminal row's worst case is affine in ``μ1``, :math:`a_r\mu_1 + b_r` with
 recomputed certificate is at most ``μ1'`` in floating point) is the
 smallest level these gains recover to (:func:`recovery_fixed_point`).  The
 returned design's ``mu1`` may therefore exceed the requested one by the
-LP's round-off (``extra["mu1_requested"]`` keeps the request); its
+LP's round-off (``design.mu1_requested`` keeps the request); its
 estimator reports the raised levels, which its error never exceeds.
 
 ``rtol`` is not a tolerance on the guarantee: it bounds how far above the
@@ -381,7 +381,8 @@ def recovery_fixed_point(terminal_at: Callable[[float], float],
     raise CertificationFailure(f"no recovery level certified near mu1 = {mu1:.9g} (terminal worst case {term:.9g})")
 
 
-def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool = True) -> "Certificate | None":
+def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool = True,
+                   stacking: Stacking | None = None) -> "Certificate | None":
     """Certify a :class:`eqrec.design.result.Design` from its gains alone; make its stored levels exact.
 
     Recomputes every worst case from the gains (the node gains along each word,
@@ -389,8 +390,8 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
     :func:`class_bounds`), then raises each stored level that a worst case
     exceeds to that worst case: ``mu1`` to the fixed point of its terminal
     worst case (:func:`recovery_fixed_point`; the request is kept in
-    ``extra["mu1_requested"]``), then ``mu2``, the node levels, the class
-    levels (``extra["class_levels"]``) and the class certificate at the final
+    ``design.mu1_requested``), then ``mu2``, the node levels, the class
+    levels (``design.class_levels``) and the class certificate at the final
     ``mu1`` (module docstring).  On return every certified worst case is at most
     its stored level, exactly in floating point.
 
@@ -405,6 +406,10 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
         gains are refused as not the optimiser's; below it the level is raised.  Never a tolerance on the guarantee.
     nodes : bool, optional
         Certify the node gains (``design.schedule``; default).  ``False``: the class certificate only.
+    stacking : Stacking, optional
+        The design's stacked model over its classes' horizon, which the class bounds read (default: built
+        from ``design.system``).  The node gains are certified by their own forward recursion
+        (:func:`certify_schedule`), without it.
 
     Returns
     -------
@@ -417,12 +422,22 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
     CertificationFailure
         If a worst case exceeds ``M2``, a node's level or ``M1`` by more than ``rtol`` (scaled as above), or the
         gains do not contract the initial error.
+    InputError
+        A ``stacking`` of another system than ``design.system`` (nothing changed).
     """
     words = list(design.patterns if words is None else words)
     nodes = nodes and design.schedule is not None
     system, mu1, n = design.system, float(design.mu1), design.system.n
+    if stacking is not None and stacking.system is not system:
+        raise InputError("the stacking is of another system than the design's", field="stacking")
     cg = design.class_gains if isinstance(design.class_gains, ClassGains) else None
-    st = Stacking(system, cg.classes.horizon) if cg is not None else None
+    stacked: list = []  # the class maps' stacking: the design's, or built on first use (a recertification at the
+    # certified μ1 reads the stored class certificate and needs none)
+
+    def st() -> Stacking:
+        if not stacked:
+            stacked.append(Stacking.of(stacking or system, cg.classes.horizon))
+        return stacked[0]
     term_cls = [i for i, c in enumerate(cg.classes.classes) if c.terminal] if cg is not None else []
     cc = design.class_certificate if cg is not None else None
     cache: dict = {}
@@ -432,7 +447,7 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
             cache.clear()
             cb = None
             if cg is not None:
-                cb = cc.bounds if cc is not None and cc.mu1 == mu else class_bounds(system, cg, mu, st, term_cls)
+                cb = cc.bounds if cc is not None and cc.mu1 == mu else class_bounds(system, cg, mu, st(), term_cls)
             cache[mu] = (certify_schedule(system, design.schedule, words, mu) if nodes else None, cb)
         return cache[mu]
 
@@ -464,8 +479,8 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
         if cert is not None:
             out += [_affine_rows(wc.G[-1], wc.c[-1], wc.radius, n) for wc in cert.words.values()]
         if term_cls:
-            beta = st.layout.radius(system.eta_w, system.eta_v, mu1)
-            out += [_affine_rows(class_error_map(st, cg, i), np.zeros(n), beta, n) for i in term_cls]
+            beta = st().layout.radius(system.eta_w, system.eta_v, mu1)
+            out += [_affine_rows(class_error_map(st(), cg, i), np.zeros(n), beta, n) for i in term_cls]
         return np.concatenate([a for a, _ in out]), np.concatenate([b for _, b in out])
 
     # the recovery level: the fixed point of the terminal worst case (affine in μ1 row by row)
@@ -473,7 +488,8 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
     cert, _ = certs(mu)
     old = {"mu1": mu1, "mu2": float(design.mu2)}
     if mu != mu1:
-        design.extra.setdefault("mu1_requested", mu1)
+        if design.mu1_requested is None:  # the first request, through repeated certifications
+            design.mu1_requested = mu1
         design.mu1 = mu
     # every stored level at least the worst case the gains give at the final μ1
     mu2 = max(float(design.mu2), mu)
@@ -485,14 +501,14 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
                 if lab in design.levels:
                     design.levels[lab] = max(design.levels[lab], float(wc.bounds[t].max()))
     if cg is not None:
-        cb = cc.bounds if cc is not None and cc.mu1 == mu else class_bounds(system, cg, mu, st)
+        cb = cc.bounds if cc is not None and cc.mu1 == mu else class_bounds(system, cg, mu, st())
         if cc is not None and cc.mu1 != mu:  # the class certificate (the class-form estimator's bounds) at μ
             design.class_certificate = cc = replace(cc, mu1=mu, bounds=cb)
         cls_levels = cb.max(axis=1) if cb.size else np.zeros(0)
         inner = np.array([c.inner for c in cg.classes.classes], bool)
         mu2 = max(mu2, float(cls_levels[inner].max(initial=mu)))
-        if "class_levels" in design.extra:
-            design.extra["class_levels"] = np.maximum(np.asarray(design.extra["class_levels"], float), cls_levels)
+        if design.class_levels is not None:
+            design.class_levels = np.maximum(np.asarray(design.class_levels, float), cls_levels)
         tree = cg.classes.tree
         if design.levels and tree is not None:
             for node in tree:
@@ -502,8 +518,8 @@ def certify_design(design, words=None, rtol: float = CERT_RTOL, *, nodes: bool =
     if mu != mu1 and design.levels:  # the convention μ2 >= μ1 of the node levels, kept at the raised μ1
         design.levels = {k: (max(v, mu) if v >= mu1 else v) for k, v in design.levels.items()}
     design.mu2 = mu2
-    design.extra["level_raise"] = max((design.mu1 - old["mu1"]) / old["mu1"],
-                                      (design.mu2 - old["mu2"]) / max(old["mu2"], np.finfo(float).tiny))
+    design.level_raise = max((design.mu1 - old["mu1"]) / old["mu1"],
+                             (design.mu2 - old["mu2"]) / max(old["mu2"], np.finfo(float).tiny))
     _check_exact(design, cert)
     if cert is not None:
         design.certificate = cert

@@ -83,7 +83,7 @@ from eqrec.arrivals.traces import NEVER, ArrivalTrace
 from eqrec.checks import floats, instance, integer
 from eqrec.errors import InputError, SolverFailure
 from eqrec.lp.model import INF, LinearProgram, LPBuilder
-from eqrec.lp.solvers import _highs_model, highs_status, solve_lp, solver_info
+from eqrec.lp.solvers import highs_model, highs_status, solve_lp, solver_info
 from eqrec.systems.affine import AffineSystem
 
 #: Largest number of cached rows (one row: ``n`` floats and a key of ``t/8`` bytes); the oldest go first.
@@ -316,7 +316,7 @@ class _HighsModel:
         self.lp, self.c0, self.r0 = lp, col_offset, row_offset
         self.cost_cols = np.zeros(0, np.int32)
         self.options = {**HIGHS_OPTIONS, **(options or {})}
-        self.h = _highs_model(lp, self.options)
+        self.h = highs_model(lp, self.options)
         self.retries = 0
 
     def deliver(self, rows: np.ndarray) -> None:
@@ -340,7 +340,7 @@ class _HighsModel:
             return -float(self.h.getInfo().objective_function_value)
         self.retries += 1
         sol = solve_lp(self.lp, "highs", self.options).require_optimal(f"{what} (warm HiGHS: {status!r})")
-        self.h = _highs_model(self.lp, self.options)
+        self.h = highs_model(self.lp, self.options)
         return -float(sol.objective)
 
 
@@ -495,7 +495,7 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     a block; what it loses against the limit on a long run is what the box reset at each block start forgets.
     The identity holds for every class, inner or terminal: the engine stores each row's LP minimum
     (``design.class_certificate.bounds``, the gains' exact worst case, and their largest row in
-    ``design.extra["class_levels"]``), never a value capped at ``μ1``; ``tests/test_information_limit.py``
+    ``design.class_levels``), never a value capped at ``μ1``; ``tests/test_information_limit.py``
     checks it on every class of two designs to 1e-9 (measured: 1e-14).  With ``state_weights`` the design's
     system is the weighted one (:meth:`AffineSystem.scaled`), and the identity holds for ``design.system``.
 

@@ -15,6 +15,10 @@ The uncertainty is collected in one vector
 :math:`\delta = [w(0); \dots; w(T-1); v(0); \dots; v(T-1); \xi_0]` whose box
 radii are :math:`(\eta_w, \eta_v, M_1)`; :class:`UncertaintyLayout` gives its
 index ranges.
+
+A design builds one :class:`Stacking` and hands it down: its LPs, gains, certificate and cost read the
+maps from there, each computed once (:meth:`Stacking.of` takes a stacking or builds one from a bare
+system; a worker process receives the system and the horizon and rebuilds the maps it needs).
 """
 
 from __future__ import annotations
@@ -149,6 +153,35 @@ class Stacking:
         self.system = system
         self.T = T
         self.layout = UncertaintyLayout(T, system.nw, system.nv, system.n)
+
+    @classmethod
+    def of(cls, source: "AffineSystem | Stacking", T: int) -> "Stacking":
+        """The stacked model of ``source`` over the horizon ``T``: ``source`` itself when it is one of that horizon.
+
+        A design builds its :class:`Stacking` once and hands it down (the LPs, the gains, the certificate and
+        the cost read it from there, with its maps computed once); a function called with a bare system
+        builds its own here.  A stacking of another horizon is rebuilt on its system: the layout of ``δ``,
+        hence every map, depends on ``T``.
+
+        Parameters
+        ----------
+        source : AffineSystem or Stacking
+            The system, or a stacked model of it.
+        T : int
+            Horizon.
+
+        Returns
+        -------
+        Stacking
+            ``source`` if it is a stacking of horizon ``T``, else a new one.
+        """
+        if isinstance(source, Stacking):
+            return source if source.T == T else cls(source.system, T)
+        return cls(source, T)
+
+    def __reduce__(self):
+        """Pickled as its system and horizon: a worker process rebuilds the cached maps it needs."""
+        return (type(self), (self.system, self.T))
 
     # -- transitions ---------------------------------------------------------
     @cached_property

@@ -327,7 +327,7 @@ def class_limit_identity(design: Any) -> dict[str, Any]:
     Parameters
     ----------
     design : Design
-        A class-engine design (``design.class_gains`` and ``design.extra["class_levels"]``).
+        A class-engine design (``design.class_gains`` and ``design.class_levels``).
 
     Returns
     -------
@@ -338,7 +338,7 @@ def class_limit_identity(design: Any) -> dict[str, Any]:
     from eqrec.bounds.information import block_limit
 
     rows = []
-    for cls, level in zip(design.class_gains.classes.classes, design.extra["class_levels"]):
+    for cls, level in zip(design.class_gains.classes.classes, design.class_levels):
         limit = float(block_limit(design.system, cls.depth, cls.available, design.mu1).max())
         rows.append({"label": cls.label, "level": float(level), "limit": limit})
     worst = max((abs(r["level"] - r["limit"]) / r["level"] for r in rows if r["level"] > 0), default=0.0)

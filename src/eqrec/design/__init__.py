@@ -6,7 +6,8 @@ One subpackage per engine:
 :mod:`~eqrec.design.prefix`
     The prefix-tree LP of Theorem 3 of the prefix-based paper, and the time-based comparison design.
 :mod:`~eqrec.design.classes`
-    The class engine: independent LPs per (time, available data) class, on every core or a Dask cluster.
+    The class engine: independent LPs per (time, available data) class, on every core or a Dask cluster, and
+    μ1 free (:mod:`~eqrec.design.classes.mu1_min`: the smallest feasible μ1 in closed form).
 :mod:`~eqrec.design.delay`
     The delayed-data paper's designs (Theorem 1 / Proposition 1), μ1 fixed or free, and its IPOPT route.
 :mod:`~eqrec.design.augmented`
@@ -18,8 +19,6 @@ What every engine shares:
 :mod:`~eqrec.design.inputs`
     What the design entries take, checked: typed word lists (:func:`~eqrec.design.inputs.missing_words`,
     :func:`~eqrec.design.inputs.delay_words`), languages, the system, ``μ1``, the solver.
-:mod:`~eqrec.design.mu1_min`
-    μ1 free: the μ1-free theorem, the smallest feasible μ1 in closed form (Charnes–Cooper), certified.
 :mod:`~eqrec.design.cost`
     The delayed-data paper's cost ``J``, from node levels, class levels or a certificate.
 :mod:`~eqrec.design.observers`

@@ -117,7 +117,7 @@ def class_table(design: Design) -> list[dict]:
     """
     cc = design.class_certificate
     gains = design.class_gains
-    levels = design.extra.get("class_levels")
+    levels = design.class_levels
     rows = []
     for i, cls in enumerate(gains.classes.classes):
         rows.append({"class": cls.label, "k": cls.depth, "data": list(cls.available), "terminal": cls.terminal,
@@ -166,14 +166,14 @@ def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
         raise InputError("node gains were asked for but the design has none (a language too large for its prefix "
                          "tree: use the class gains K)", field="node-gains")
     certified = cert if cert is not None else ccert
-    out = {"method": "delay", "engine": design.extra.get("engine", "tree"), "cost": design.extra.get("cost"),
-           "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"),
-           "J_certified": design.extra.get("J_certified"),
+    out = {"method": "delay", "engine": design.engine, "cost": design.cost,
+           "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "J": design.J,
+           "J_certified": design.J_certified,
            "certified_mu2": None if certified is None else certified.mu2,
            "certified_terminal": None if certified is None else certified.terminal,
-           "sequences": design.extra.get("sequences"), "nodes": design.extra.get("nodes")}
-    if "mu1_requested" in design.extra:  # mu1 raised to what the gains certify (eqrec.bounds.certify)
-        out["mu1_requested"] = design.extra["mu1_requested"]
+           "sequences": design.sequences, "nodes": design.nodes}
+    if design.mu1_requested is not None:  # mu1 raised to what the gains certify (eqrec.bounds.certify)
+        out["mu1_requested"] = design.mu1_requested
     if design.class_gains is not None:
         out["classes"] = class_table(design)
     if node_gains:

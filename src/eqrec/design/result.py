@@ -21,6 +21,34 @@ if TYPE_CHECKING:
 
 
 @dataclass
+class Mu1Free:
+    """How the recovery level of a ``μ1``-free design was found (the μ1-free theorem,
+    :mod:`eqrec.design.classes.mu1_min`).
+
+    Parameters
+    ----------
+    route : {"global", "ipopt"}
+        ``"global"``: the design at ``μ1,min`` in closed form (certified); ``"ipopt"``: IPOPT on problem (10)
+        of the delayed-data paper (:mod:`eqrec.design.delay.ipopt`), ``μ1`` a variable.
+    mu1_min : float or None, optional
+        ``μ1,min`` attained by the recovered gains (global route).
+    mu1_min_lower : float or None, optional
+        A level proven infeasible below it (global route).
+    binding : dict or None, optional
+        The terminal class and row that set ``μ1,min`` (global route).
+    lower_bound : float or None, optional
+        The delay design's certified lower bound of ``J`` over every ``μ1`` (global route; ``nan`` when no level
+        below ``μ1,min`` was solved).
+    """
+
+    route: str
+    mu1_min: float | None = None
+    mu1_min_lower: float | None = None
+    binding: dict | None = None
+    lower_bound: float | None = None
+
+
+@dataclass
 class Design:
     """A solved (and, once :func:`eqrec.bounds.certify.certify_design` ran, certified) design.
 
@@ -60,8 +88,9 @@ class Design:
         The independent worst-case certificate of the node gains
         (:class:`eqrec.bounds.certify.Certificate`), attached by certification.
     extra : dict, optional
-        Method-specific details (engine, problem sizes, cost ``J``, worst-case
-        word, ...).
+        Only a loaded design's (:func:`eqrec.load_design`): the file's entries that the design does not run on and
+        that have no field below (``certified_mu2``, ``certified_terminal``, ``mu1_free``, ``L``, ``s0``, ``M``,
+        ``nu``), as the file wrote them.  Every design computed here leaves it empty.
     levels : dict of str to float, optional
         Optional per-node levels ``μ2`` keyed by the node's prefix label.
     class_gains : ClassGains or None, optional
@@ -78,6 +107,42 @@ class Design:
         ``z = W x`` (:meth:`AffineSystem.scaled`), every level and certificate
         bounds ``max_i w_i |x_i − x̂_i|``, and :meth:`estimator` runs in the
         original state (:class:`eqrec.design.weighted.WeightedEstimator`).
+    engine : {"tree", "classes"}, optional
+        The engine that solved it: the prefix-tree LP (default; also the time-based, delay-tree and augmented
+        designs) or the class engine (:mod:`eqrec.design.classes.engine`).
+    cost : {"sum", "max"} or None, optional
+        The delayed-data paper's cost the design minimised (:func:`eqrec.design.cost.paper_cost`), where counted.
+    J : float or None, optional
+        That cost at the stored levels (the delayed-data paper's ``J``, eq. (8)); ``None``: not counted.
+    J_certified : float or None, optional
+        ``J`` at the certified worst cases of the gains (:func:`eqrec.design.cost.certified_cost`).
+    sequences, nodes : int or None, optional
+        Distinct event sequences of the language and nodes of its prefix tree (delay and class-engine designs).
+    classes : int or None, optional
+        Class engine: the number of (time, available data) classes.
+    class_levels : numpy.ndarray or None, optional
+        Class engine: the level of every class, the LP's optimum raised to at least its certified worst case
+        (:func:`eqrec.bounds.certify.certify_design`), shape ``(classes,)``.
+    lp_rows, lp_cols, lp_nonzeros : int or None, optional
+        Class engine: the size of its LP (one block LP, or the blocks together).
+    total_time : float or None, optional
+        Class engine: seconds from the call to the certified design.
+    mu1_requested : float or None, optional
+        The ``μ1`` asked for, where certification raised ``mu1`` to the fixed point the gains certify
+        (:mod:`eqrec.bounds.certify`); ``None``: ``mu1`` is the request.
+    level_raise : float or None, optional
+        After certification: the largest relative raise of ``μ1`` or ``μ2`` it made (0 when none).
+    language : tuple of str or None, optional
+        Time-based and augmented designs: the words of the language the design covers.
+    worst_case_word : str or None, optional
+        Time-based and augmented designs: the language's worst-case word (bitwise AND), the word designed for.
+    mu1_free : Mu1Free or None, optional
+        A design at the smallest feasible ``μ1`` (``μ1`` free): how it was found; ``None``: ``μ1`` was given.
+    augmented : AugmentedDetails or None, optional
+        The augmented design's own record (:class:`eqrec.design.augmented.design.AugmentedDetails`: gains,
+        ``L, s0, M, nu``, runtime mode, IPOPT's record).
+    loaded_from : str or None, optional
+        The file a loaded design was read from (:func:`eqrec.load_design`).
 
     Attributes
     ----------
@@ -111,6 +176,25 @@ class Design:
     class_gains: "object | None" = None
     class_certificate: "object | None" = None
     state_weights: "np.ndarray | None" = None
+    engine: str = "tree"
+    cost: str | None = None
+    J: float | None = None
+    J_certified: float | None = None
+    sequences: int | None = None
+    nodes: int | None = None
+    classes: int | None = None
+    class_levels: "np.ndarray | None" = None
+    lp_rows: int | None = None
+    lp_cols: int | None = None
+    lp_nonzeros: int | None = None
+    total_time: float | None = None
+    mu1_requested: float | None = None
+    level_raise: float | None = None
+    language: tuple[str, ...] | None = None
+    worst_case_word: str | None = None
+    mu1_free: "Mu1Free | None" = None
+    augmented: "object | None" = None
+    loaded_from: str | None = None
 
     def __post_init__(self) -> None:
         self.patterns = tuple(as_pattern(p) for p in self.patterns)

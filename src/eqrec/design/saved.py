@@ -202,9 +202,10 @@ def load_design(path: "str | os.PathLike") -> Design:
         patterns = tuple(_pattern(w, kind, source) for w in words) if isinstance(words, list) else ()
     solution = LPSolution(status=str(data.get("status", "optimal")), x=None, objective=mu2,
                           solver=str(data.get("solver", "")), iterations=0, solve_time=0.0)
-    extra = {k: data[k] for k in ("engine", "cost", "J", "J_certified", "certified_mu2", "certified_terminal",
-                                  "worst_case_word", "mu1_free", "L", "s0", "M", "nu") if k in data}
-    extra["loaded_from"] = source
+    # the file's records that have a field of the design, and (extra) those that have none, as written
+    fields = {k: data[k] for k in ("engine", "cost", "J", "J_certified", "worst_case_word") if k in data}
+    extra = {k: data[k] for k in ("certified_mu2", "certified_terminal", "mu1_free", "L", "s0", "M", "nu")
+             if k in data}
     return Design(method=method, system=system, patterns=patterns, T=T, mu1=mu1, mu2=mu2, schedule=schedule,
                   solution=solution, build_time=0.0, extra=extra, levels=levels, class_gains=class_gains,
-                  class_certificate=class_certificate, state_weights=weights)
+                  class_certificate=class_certificate, state_weights=weights, loaded_from=source, **fields)

@@ -3,11 +3,13 @@
 :mod:`~eqrec.estimators.protocol`
     The estimator protocol and the on-time-only adapter.
 :mod:`~eqrec.estimators.intake`
-    The packet intake and the period clock of the causal estimators (all-or-nothing steps).
+    The packet intake, the period clock and the protocol of the causal estimators (all-or-nothing steps).
 :mod:`~eqrec.estimators.causal`
     The causal equalized-recovery estimators on time-stamped packets (class and node gains).
 :mod:`~eqrec.estimators.switching`
     The switching strategy of the delayed-data paper (Section III-B3).
+:mod:`~eqrec.estimators.augmented`
+    The augmented estimator as it runs (P2 eqs. (2)-(3), P3 eqs. (4)-(5)), on the shared intake.
 :mod:`~eqrec.estimators.error_maps`
     The error maps of the class form, carried by the exact run-time bound (``strict=False``).
 :mod:`~eqrec.estimators.guaranteed`

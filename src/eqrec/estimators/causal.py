@@ -36,11 +36,19 @@ class instead of one gain row per prefix-tree node,
 with :math:`\bar x` the noise-free prediction from the period's first
 estimate.  Both take the same packets and raise the same errors;
 :func:`make_estimator` picks one from the kind of gains.
+
+Both follow the protocol of :mod:`eqrec.estimators.protocol`: ``reset(xhat0,
+t0=0)``, then ``step(y, u) -> (x̂(t+1), bound)``.  The bound is the design's
+level of the observed prefix (or class) when the estimator is built with the
+levels (``bound_of``, ``mu1``), else ``inf``: a raw estimator knows its gains,
+not its levels (:mod:`eqrec.estimators.intake`).  ``xhat0`` may still be given
+to the constructor (then it is reset at once); without it, call
+:meth:`~RecoveryEstimator.reset` first.
 """
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -48,7 +56,7 @@ from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
 from eqrec.estimators.error_maps import ClassErrorMaps
-from eqrec.estimators.intake import _Opened, _StampedEstimator
+from eqrec.estimators.intake import BoundRule, _Opened, _StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
@@ -64,30 +72,76 @@ class RecoveryEstimator(_StampedEstimator):
         The model (``A, B, C, f``) used by the estimator.
     schedule : GainSchedule
         Prefix-based or time-based gains.
-    xhat0 : array_like, shape (n,)
-        Initial estimate ``x̂(0)``.
+    xhat0 : array_like, shape (n,), or None, optional
+        Initial estimate ``x̂(t0)`` (then the estimator is reset at once);
+        ``None`` (default): call :meth:`reset` before the first step.
     periodic : bool, optional
         Restart the horizon every ``T`` steps instead of stopping.
     t0 : int, optional
         Absolute time of the first step (the time stamp of the first
         measurement; ``0`` by default).  Packets stamped before ``t0`` are
         dropped like packets of an earlier period.
+    bound_of : callable or None, optional
+        ``bound_of(prefix) -> level``: the design's guarantee after an observed
+        arrival prefix (with ``mu1``; :func:`eqrec.estimators.intake.check_levels`).
+    mu1 : float or None, optional
+        The design's recovery level: the bound at :meth:`reset` and at each period's end.
+
+    Attributes
+    ----------
+    kind : str
+        ``"guaranteed"``: the second value of :meth:`step` is a bound.
+    name : str
+        ``"causal, node gains"``.
+    bound : float
+        The bound of the current estimate: the level of the observed prefix
+        with the levels, else ``inf`` (module docstring).
+    dropped_packets : int
+        Packets stamped before their step's period, not used (since :meth:`reset`).
     """
 
-    def __init__(self, system: AffineSystem, schedule: GainSchedule, xhat0: np.ndarray, periodic: bool = False,
-                 t0: int = 0):
-        super().__init__(system, schedule.horizon, xhat0, periodic, t0)
+    name = "causal, node gains"
+
+    def __init__(self, system: AffineSystem, schedule: GainSchedule, xhat0: "np.ndarray | None" = None,
+                 periodic: bool = False, t0: int = 0, *, bound_of: "BoundRule | None" = None,
+                 mu1: "float | None" = None):
         self.schedule = schedule
+        super().__init__(system, schedule.horizon, xhat0, periodic, t0, bound_of, mu1)
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "RecoveryEstimator":
+        """Start a run (a new period) from ``x̂(t0) = xhat0``, discarding any run in progress.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            The initial estimate (finite).
+        t0 : int, optional
+            Absolute time of the first step (the time stamp of the first measurement; default 0).
+            Packets stamped before it are dropped like packets of an earlier period.
+
+        Returns
+        -------
+        RecoveryEstimator
+            ``self``, so that ``est.reset(x0).step(...)`` chains; :attr:`bound` is ``μ1`` (``inf`` without levels).
+
+        Raises
+        ------
+        InputError
+            ``xhat0`` without ``n`` finite entries (field ``xhat0``), ``t0`` not an integer (field ``t0``);
+            nothing changes.
+        """
+        return self._reset(xhat0, t0)
 
     def _reference(self, restarted: bool) -> np.ndarray:
         return self.xhat  # y_ξ(τ) = y(τ) − C x̂(τ), with the estimate of the packet's own time
 
-    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None" = None,
+             u: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         """Process time ``t``: the packets arriving at ``t`` and the input ``u(t)`` (eqs. (5), (7)).
 
         Parameters
         ----------
-        y : ndarray, Packet, iterable of Packet, or None
+        y : ndarray, Packet, iterable of Packet, or None, optional
             ``None`` (nothing arrives), an array (``y(t)`` arriving on time) or
             :class:`Packet` objects stamped with their own (absolute) times ``τ <= t``.
         u : ndarray, shape (m,), or None, optional
@@ -95,8 +149,18 @@ class RecoveryEstimator(_StampedEstimator):
 
         Returns
         -------
-        ndarray, shape (n,)
+        xhat : ndarray, shape (n,)
             The prediction ``x̂(t+1)`` (a copy).
+        bound : float
+            Its bound: the level of the observed prefix (``μ1`` at the period's
+            end) with the levels, else ``inf`` (module docstring).
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`; when the horizon is over (not periodic), for a
+            packet from the future, a second packet with one stamp, a malformed
+            measurement or input, or an observed prefix the schedule lacks (nothing changes).
         """
         sys = self.system
         step = self._open(y, u)
@@ -109,7 +173,8 @@ class RecoveryEstimator(_StampedEstimator):
         xhat = sys.A_at(t) @ self.xhat + sys.B_at(t) @ step.u - ue + sys.f
         self._commit(step)
         self.xhat = xhat
-        return self.xhat.copy()
+        self.bound = self._level()
+        return self.xhat.copy(), self.bound
 
 
 class ClassEstimator(_StampedEstimator):
@@ -161,16 +226,32 @@ class ClassEstimator(_StampedEstimator):
     gains : ClassGains
         One ``K`` per class (:class:`eqrec.bounds.data_classes.ClassGains`, e.g.
         ``design.class_gains`` of the class engine).
-    xhat0 : array_like, shape (n,)
-        Initial estimate ``x̂(0)``.
+    xhat0 : array_like, shape (n,), or None, optional
+        Initial estimate ``x̂(t0)`` (then the estimator is reset at once);
+        ``None`` (default): call :meth:`reset` before the first step.
     periodic : bool, optional
         Restart the horizon every ``T`` steps instead of stopping (default
         ``False``).
     t0 : int, optional
         Absolute time of the first step; packets stamped before it are dropped.
+    bound_of : callable or None, optional
+        ``bound_of(prefix) -> level``: the design's guarantee after an observed
+        arrival prefix, i.e. its class's level (with ``mu1``).
+    mu1 : float or None, optional
+        The design's recovery level: the bound at :meth:`reset` and at each period's end.
 
     Attributes
     ----------
+    kind : str
+        ``"guaranteed"``: the second value of :meth:`step` is a bound.
+    name : str
+        ``"causal, class gains"``.
+    bound : float
+        The bound of the current estimate: the level of its class with the
+        levels, else ``inf`` (module docstring; :func:`eqrec.exact_bound` gives
+        the exact worst case from :meth:`error_map`).
+    dropped_packets : int
+        Packets stamped before their step's period, not used (since :meth:`reset`).
     xhat : ndarray, shape (n,)
         The current estimate (of time :attr:`time`).
     time : int
@@ -200,14 +281,18 @@ class ClassEstimator(_StampedEstimator):
     >>> import eqrec
     >>> acc = eqrec.acc_system()
     >>> words = ["101111", "110111", "111011", "111101"]  # the prefix-based paper's L1
-    >>> estimator = eqrec.ClassEstimator(acc, eqrec.design_prefix(acc, words, mu1=1.0).class_gains, np.zeros(3))
-    >>> xhat = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives on time
-    >>> xhat.shape, estimator.time, estimator.observed_prefix.label
-    ((3,), 1, '1')
+    >>> design = eqrec.design_prefix(acc, words, mu1=1.0)
+    >>> estimator = eqrec.ClassEstimator(acc, design.class_gains).reset(np.zeros(3))
+    >>> xhat, bound = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives on time
+    >>> xhat.shape, bound, estimator.time, estimator.observed_prefix.label  # no levels given: no bound
+    ((3,), inf, 1, '1')
     """
 
-    def __init__(self, system: AffineSystem, gains: ClassGains, xhat0: np.ndarray, periodic: bool = False,
-                 t0: int = 0):
+    name = "causal, class gains"
+
+    def __init__(self, system: AffineSystem, gains: ClassGains, xhat0: "np.ndarray | None" = None,
+                 periodic: bool = False, t0: int = 0, *, bound_of: "BoundRule | None" = None,
+                 mu1: "float | None" = None):
         if (gains.n, gains.p) != (system.n, system.p):
             raise InputError(f"class gains for n = {gains.n}, p = {gains.p} do not fit the system "
                              f"(n = {system.n}, p = {system.p})")
@@ -215,10 +300,37 @@ class ClassEstimator(_StampedEstimator):
             if np.shape(K) != (system.n, len(cls.available) * system.p):
                 raise InputError(f"the gain of class {cls.label} has shape {np.shape(K)}, expected "
                                  f"{(system.n, len(cls.available) * system.p)}")
-        super().__init__(system, gains.horizon, xhat0, periodic, t0)
         self.gains = gains
-        self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
         self._maps: ClassErrorMaps | None = None
+        self._xbar: "np.ndarray | None" = None
+        super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "ClassEstimator":
+        """Start a run (a new period, the prediction anchored at ``xhat0``) from ``x̂(t0) = xhat0``, discarding any run in progress.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            The initial estimate (finite).
+        t0 : int, optional
+            Absolute time of the first step (the time stamp of the first measurement; default 0).
+            Packets stamped before it are dropped like packets of an earlier period.
+
+        Returns
+        -------
+        ClassEstimator
+            ``self``, so that ``est.reset(x0).step(...)`` chains; :attr:`bound` is ``μ1`` (``inf`` without levels).
+
+        Raises
+        ------
+        InputError
+            ``xhat0`` without ``n`` finite entries (field ``xhat0``), ``t0`` not an integer (field ``t0``);
+            nothing changes.
+        """
+        return self._reset(xhat0, t0)
+
+    def _on_reset(self) -> None:
+        self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
 
     def error_map(self) -> ErrorMap:
         r"""How the error of the current estimate depends on the period's initial error and noise.
@@ -276,7 +388,8 @@ class ClassEstimator(_StampedEstimator):
         step = self._open(y, u)
         return step.t + 1, tuple(sorted(step.yxi))
 
-    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None" = None,
+             u: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         r"""Process time ``t``: the packets arriving at ``t`` and the input ``u(t)``.
 
         Advances the noise-free prediction
@@ -286,7 +399,7 @@ class ClassEstimator(_StampedEstimator):
 
         Parameters
         ----------
-        y : ndarray, Packet, iterable of Packet, or None
+        y : ndarray, Packet, iterable of Packet, or None, optional
             As in :meth:`RecoveryEstimator.step`: ``None`` (nothing arrives),
             an array (``y(t)`` arriving on time) or :class:`Packet` objects
             stamped with their own (absolute) times ``τ <= t``.
@@ -295,20 +408,23 @@ class ClassEstimator(_StampedEstimator):
 
         Returns
         -------
-        ndarray, shape (n,)
+        xhat : ndarray, shape (n,)
             The prediction ``x̂(t+1)`` (a copy).
+        bound : float
+            Its bound: the level of its class (``μ1`` at the period's end) with
+            the levels, else ``inf`` (module docstring).
 
         Raises
         ------
         InputError
-            When the horizon is over (not periodic), for a packet from the
+            Before :meth:`reset`; when the horizon is over (not periodic), for a packet from the
             future, a second packet with one stamp, a measurement of the
             wrong length, or observed data whose class ``(t+1, S)`` the
             gains do not have.
         """
         return self._advance(self._open(y, u))
 
-    def _advance(self, step: _Opened) -> np.ndarray:
+    def _advance(self, step: _Opened) -> tuple[np.ndarray, float]:
         """The step of :meth:`step` from its checked state (the class lookup may still raise; nothing changes)."""
         sys = self.system
         k, t = step.k, step.t
@@ -324,11 +440,13 @@ class ClassEstimator(_StampedEstimator):
                              f"no class ({t + 1}, {list(S)})", field="y") from None
         self._commit(step)
         self._xbar, self.xhat = xbar, xhat
-        return self.xhat.copy()
+        self.bound = self._level()
+        return self.xhat.copy(), self.bound
 
 
-def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: np.ndarray,
-                   periodic: bool = False, t0: int = 0) -> "RecoveryEstimator | ClassEstimator":
+def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,
+                   periodic: bool = False, t0: int = 0, *, bound_of: "BoundRule | None" = None,
+                   mu1: "float | None" = None) -> "RecoveryEstimator | ClassEstimator":
     """The runtime estimator of a design's gains.
 
     Parameters
@@ -340,17 +458,21 @@ def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xha
         :class:`RecoveryEstimator`, eqs. (5)-(7)) or class gains
         (:class:`eqrec.bounds.data_classes.ClassGains`: a :class:`ClassEstimator`,
         the class form).
-    xhat0 : array_like, shape (n,)
-        Initial estimate ``x̂(0)``.
+    xhat0 : array_like, shape (n,), or None, optional
+        Initial estimate ``x̂(t0)`` (``None``: call ``reset`` before the first step).
     periodic : bool, optional
         Restart the horizon every ``T`` steps.
     t0 : int, optional
         Absolute time of the first step.
+    bound_of : callable or None, optional
+        The design's levels by observed prefix (with ``mu1``; module docstring).
+    mu1 : float or None, optional
+        The design's recovery level.
 
     Returns
     -------
     RecoveryEstimator or ClassEstimator
-        The estimator, at time ``t0`` with estimate ``xhat0``.
+        The estimator, at time ``t0`` with estimate ``xhat0`` (if given).
 
     Raises
     ------
@@ -358,9 +480,9 @@ def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xha
         For gains of any other kind (field ``gains``).
     """
     if isinstance(gains, GainSchedule):
-        return RecoveryEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
+        return RecoveryEstimator(system, gains, xhat0, periodic=periodic, t0=t0, bound_of=bound_of, mu1=mu1)
     if isinstance(gains, ClassGains):
-        return ClassEstimator(system, gains, xhat0, periodic=periodic, t0=t0)
+        return ClassEstimator(system, gains, xhat0, periodic=periodic, t0=t0, bound_of=bound_of, mu1=mu1)
     raise InputError(f"expected a GainSchedule or ClassGains, got {type(gains).__name__}", field="gains")
 
 

@@ -190,8 +190,7 @@ class ExactBound:
             What the wrapped estimator refuses; a column run past its allocated steps.
         """
         if self.mode == "maps":
-            out = self.estimator.step(y, u)
-            xhat = out[0] if isinstance(out, tuple) else out
+            xhat, _ = self.estimator.step(y, u)
             self._bounds = self._set.advance(self.estimator.error_map())
         else:
             xhat = self._column_step(y, u)
@@ -220,8 +219,7 @@ class ExactBound:
             Y = sent[pk.time].copy()
             Y[:, 0] = pk.y
             cols.append(Packet(pk.time, Y))
-        out = self.estimator.step(cols, u)
-        xhat_cols = out[0] if isinstance(out, tuple) else out
+        xhat_cols, _ = self.estimator.step(cols, u)
         w_cols = np.zeros((nw, self._K))
         w_cols[:, base: base + nw] = sysm.eta_w * np.eye(nw)
         drive = sysm.B_at(t) @ u + sysm.f

@@ -66,22 +66,19 @@ observed prefix or class) and refuses data outside the language.
 
 from __future__ import annotations
 
-from typing import Callable, Iterable
+from typing import Iterable
 
 import numpy as np
 
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
-from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, _has_class, make_estimator
+from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
-
-#: ``bound_of(prefix)``: the guarantee on ``ξ(t+1)`` after the observed arrival prefix of length ``t + 1``.
-BoundRule = Callable[[ArrivalPattern], float]
 
 #: Default reduction order of the error set carried with ``strict=False`` (generators per state).
 DEFAULT_ORDER = 40
@@ -249,7 +246,8 @@ class GuaranteedEstimator:
             (nothing changes).
         """
         x0 = check_estimate(xhat0, self.system.n)
-        self._est = make_estimator(self.system, self.gains, x0, periodic=self.periodic, t0=t0)
+        self._est = make_estimator(self.system, self.gains, x0, periodic=self.periodic, t0=t0,
+                                   bound_of=self.bound_of, mu1=self.mu1)
         self.bound = self.mu1
         if not self.strict:
             self._t0 = int(t0)
@@ -316,15 +314,14 @@ class GuaranteedEstimator:
         if not self.strict:
             return self._relaxed_step(est, packets, u)
         try:
-            xhat = est.step(packets, u)
+            xhat, bound = est.step(packets, u)  # bound: μ1 at the period's end, else the observed prefix's level
         except InputError as err:
             if "outside the design" not in str(err):
                 raise
             what = str(err).removeprefix("field 'y': ")
             raise InputError(f"{what}. design.estimator(strict=False) keeps running outside the language "
                              "with an exact bound; or call reset(x̂0) to start again inside it", field="y") from None
-        done = est.period_time == est.T
-        self.bound = self.mu1 if done else float(self.bound_of(est.observed_prefix))
+        self.bound = bound
         return xhat, self.bound
 
     def _relaxed_step(self, est: ClassEstimator, packets: list, u) -> tuple[np.ndarray, float]:
@@ -343,10 +340,9 @@ class GuaranteedEstimator:
             self._period = (opened.k, est.xhat.copy(), [])
         if not _has_class(self.gains, t + 1, S):
             return self._leave_design(opened, packets)
-        xhat = est._advance(opened)
+        xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
         self._period[2].append((packets, opened.u))
         beta = self._set.advance(est.error_map())
-        level = self.mu1 if t + 1 == T else float(self.bound_of(est.observed_prefix))
         self._bounds = np.minimum(beta, level)
         self.bound = float(self._bounds.max())
         return xhat, self.bound
@@ -376,7 +372,8 @@ class GuaranteedEstimator:
     def _return_to_design(self, now: int, packets, u) -> ClassEstimator:
         """The designed gains again from the set-membership centre (its set lies in the ``μ1`` box)."""
         centre, generators = self._fallback.carried_set
-        est = make_estimator(self.system, self.gains, centre, periodic=True, t0=now)
+        est = make_estimator(self.system, self.gains, centre, periodic=True, t0=now, bound_of=self.bound_of,
+                             mu1=self.mu1)
         est._open(packets, u)  # raises before anything changes
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._fallback = est, None

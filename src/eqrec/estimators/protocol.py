@@ -33,6 +33,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 
 from eqrec.arrivals.packets import as_packets
+from eqrec.errors import InputError
 
 #: What a step returns besides the estimate: a float bound (guaranteed) or a covariance (stochastic).
 Spread = "float | np.ndarray"
@@ -102,6 +103,36 @@ class Estimator(Protocol):
     def x(self) -> np.ndarray:
         """A copy of the current estimate."""
         ...
+
+
+def check_estimator(est: Any, field: str = "est") -> Any:
+    """``est`` if it can be run by the protocol (callable ``reset`` and ``step``), else an :class:`InputError`.
+
+    Checked before a run starts (:func:`eqrec.simulate.loop.closed_loop`); it
+    says nothing about the estimator's kind, only that it can be reset and stepped.
+
+    Parameters
+    ----------
+    est : object
+        The estimator.
+    field : str, optional
+        The field named in the error.
+
+    Returns
+    -------
+    object
+        ``est`` unchanged.
+
+    Raises
+    ------
+    InputError
+        An object without a callable ``reset`` or ``step``.
+    """
+    missing = [m for m in ("reset", "step") if not callable(getattr(est, m, None))]
+    if missing:
+        raise InputError(f"expected an estimator of the protocol (reset, step), got {type(est).__name__} without "
+                         f"{' and '.join(missing)}", field=field)
+    return est
 
 
 class OnTimeOnly:

@@ -3,17 +3,23 @@
 Equalized performance (a period-1 design) runs while measurements arrive on
 time; when one is late or missing, an equalized-recovery estimator takes over
 for ``T`` steps, then performance resumes.  Built on the estimators of
-:mod:`eqrec.estimators.causal`.
+:mod:`eqrec.estimators.causal`, and like them a protocol estimator
+(:mod:`eqrec.estimators.protocol`): ``reset(xhat0, t0=0)``, then
+``step(y, u) -> (x̂(t+1), bound)``, the bound being the designs' level when
+the estimator is built with the levels (else ``inf``,
+:mod:`eqrec.estimators.intake`).
 """
 
 from __future__ import annotations
 
-from typing import Iterable
+import math
+from typing import Any, Iterable
 
 import numpy as np
 
 from eqrec.bounds.data_classes import ClassGains
-from eqrec.estimators.causal import Packet, _has_class, make_estimator
+from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator, _has_class, make_estimator
+from eqrec.estimators.intake import BoundRule, check_levels
 from eqrec.bounds.gains import GainSchedule
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
@@ -55,22 +61,41 @@ class SwitchingEstimator:
         Gains of the recovery design (horizon ``T``, ``.horizon``) on a
         language whose words all have their first measurement late or
         missing: a schedule, or class gains without the class ``(1, (0,))``.
-    xhat0 : ndarray, shape (n,)
-        Initial estimate (``‖ξ(t0)‖ <= μ1`` for the guarantees to hold).
+    xhat0 : ndarray, shape (n,), or None, optional
+        Initial estimate (``‖ξ(t0)‖ <= μ1`` for the guarantees to hold); the
+        estimator is reset at once.  ``None`` (default): call :meth:`reset` first.
     t0 : int, optional
         Absolute time of the first step (default 0).
+    bound_of : callable or None, optional
+        ``bound_of(prefix) -> level``: the recovery design's guarantee after an
+        observed recovery prefix (with ``mu1``).
+    mu1 : float or None, optional
+        The common level of both designs: the bound in performance mode and at
+        the end of each recovery phase.
 
     Attributes
     ----------
+    kind : str
+        ``"guaranteed"``: the second value of :meth:`step` is a bound.
+    name : str
+        ``"switching"``.
+    bound : float
+        The bound of the current estimate: ``μ1`` in performance mode and at the
+        end of a recovery phase, the recovery level of the observed prefix in
+        between; ``inf`` without the levels.
     mode
         ``"performance"`` or ``"recovery"`` (the mode of the last step).
     switch_times, revert_times
         Absolute times at which recovery phases started, and at which
-        performance mode resumed.
+        performance mode resumed (since :meth:`reset`).
     """
 
+    kind = "guaranteed"
+    name = "switching"
+
     def __init__(self, system: AffineSystem, performance: "GainSchedule | ClassGains",
-                 recovery: "GainSchedule | ClassGains", xhat0: np.ndarray, t0: int = 0):
+                 recovery: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None, t0: int = 0, *,
+                 bound_of: "BoundRule | None" = None, mu1: "float | None" = None):
         for name, g in (("performance", performance), ("recovery", recovery)):
             if not isinstance(g, (GainSchedule, ClassGains)):
                 raise TypeError(f"the {name} gains must be a GainSchedule or ClassGains, got {type(g).__name__}")
@@ -95,15 +120,53 @@ class SwitchingEstimator:
         self.performance = performance
         self.recovery = recovery
         self.T = recovery.horizon
+        self.bound_of, self.mu1 = check_levels(bound_of, mu1)
         self.mode = "performance"
         self.switch_times: list[int] = []
         self.revert_times: list[int] = []
-        self._est = make_estimator(system, performance, xhat0, periodic=True, t0=t0)
+        self.bound = math.nan
+        self._dropped = 0  # packets dropped by the phases that ended
+        self._est: "RecoveryEstimator | ClassEstimator" = make_estimator(system, performance, None, periodic=True,
+                                                                          t0=t0)
+        if xhat0 is not None:
+            self.reset(xhat0, t0)
+
+    def reset(self, xhat0: Any, t0: int = 0) -> "SwitchingEstimator":
+        """Start a run in performance mode from ``x̂(t0) = xhat0``, discarding any run in progress.
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            The initial estimate (``‖ξ(t0)‖ <= μ1`` for the guarantees to hold).
+        t0 : int, optional
+            Absolute time of the first step (default 0).
+
+        Returns
+        -------
+        SwitchingEstimator
+            ``self``.
+
+        Raises
+        ------
+        InputError
+            ``xhat0`` without ``n`` finite entries, ``t0`` not an integer (nothing changes).
+        """
+        est = make_estimator(self.system, self.performance, xhat0, periodic=True, t0=t0)  # checked first
+        self._est, self.mode = est, "performance"
+        self.switch_times, self.revert_times = [], []
+        self._dropped = 0
+        self.bound = self.mu1
+        return self
 
     @property
     def xhat(self) -> np.ndarray:
         """The current estimate (of time :attr:`time`)."""
         return self._est.xhat
+
+    @property
+    def x(self) -> np.ndarray:
+        """A copy of the current estimate (of time :attr:`time`)."""
+        return self._est.x
 
     @property
     def time(self) -> int:
@@ -116,6 +179,11 @@ class SwitchingEstimator:
         return self._est.period_start
 
     @property
+    def dropped_packets(self) -> int:
+        """Packets stamped before their step's phase, not used (since :meth:`reset`)."""
+        return self._dropped + self._est.dropped_packets
+
+    @property
     def recovery_prefix(self) -> ArrivalPattern | None:
         """In recovery mode, the arrival prefix observed since the switch (events ``0..j``); else ``None``."""
         return self._est.observed_prefix if self.mode == "recovery" else None
@@ -125,12 +193,13 @@ class SwitchingEstimator:
         """In recovery mode, the steps taken since the switch (``1..T``); else ``None``."""
         return self._est.period_time if self.mode == "recovery" else None
 
-    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None", u: np.ndarray | None = None) -> np.ndarray:
+    def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None" = None,
+             u: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         """Process time ``k``: the packets arriving at ``k`` (see :meth:`RecoveryEstimator.step`) and ``u(k)``.
 
         Parameters
         ----------
-        y : ndarray, Packet, iterable of Packet, or None
+        y : ndarray, Packet, iterable of Packet, or None, optional
             ``None`` (nothing arrives), an array (``y(k)`` on time) or packets
             stamped with their absolute times ``τ <= k``.
         u : ndarray, shape (m,), or None, optional
@@ -138,10 +207,18 @@ class SwitchingEstimator:
 
         Returns
         -------
-        ndarray, shape (n,)
+        xhat : ndarray, shape (n,)
             The prediction ``x̂(k+1)``.
+        bound : float
+            Its bound (:attr:`bound`).
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`, or what the running estimator refuses (nothing changes).
         """
         est, mode = self._est, self.mode
+        est._running()  # before reset: refused
         k = est.time
         packets = est._packets(y)  # checked before anything changes
         switched, reverted = False, False
@@ -151,10 +228,21 @@ class SwitchingEstimator:
         if mode == "performance" and not any(int(pk.time) == k for pk in packets):
             mode, switched = "recovery", True
             est = make_estimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
-        xhat = est.step(packets, u)  # all-or-nothing; a new estimator is dropped if it raises
+        xhat, _ = est.step(packets, u)  # all-or-nothing; a new estimator is dropped if it raises
+        if est is not self._est:
+            self._dropped += self._est.dropped_packets  # the phase that ended
         self._est, self.mode = est, mode
         if reverted:
             self.revert_times.append(k)
         if switched:
             self.switch_times.append(k)
-        return xhat
+        self.bound = self._level()
+        return xhat, self.bound
+
+    def _level(self) -> float:
+        """The bound of the current estimate (class docstring)."""
+        if self.bound_of is None:
+            return math.inf
+        if self.mode == "recovery" and self._est.period_time < self.T:
+            return float(self.bound_of(self._est.observed_prefix))
+        return self.mu1

@@ -39,7 +39,7 @@ from eqrec.arrivals.packets import as_packets
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 from eqrec.lmv.model import MultNoiseSystem, check_ms_stable
-from eqrec.lmv.recursion import LMVResult, SmootherResult, _moment_step, lmv_step, smoother_step
+from eqrec.lmv.recursion import LMVResult, SmootherResult, lmv_step, moment_step, smoother_step
 
 __all__ = ["COMPENSATIONS", "LMVEstimator", "apply_estimator"]
 
@@ -122,7 +122,7 @@ class LMVEstimator:
         while len(self._L) <= k:
             j = len(self._L)
             Qe, L, P_next = lmv_step(self.sys, self._P[j], self._q[j])
-            q_next = _moment_step(self.sys, self._q[j]) if len(self._q) <= j + 1 else self._q[j + 1]
+            q_next = moment_step(self.sys, self._q[j]) if len(self._q) <= j + 1 else self._q[j + 1]
             self._Qe.append(Qe)
             self._L.append(L)
             if len(self._P) <= j + 1:

@@ -105,8 +105,22 @@ def lmv_step(sys: MultNoiseSystem, P: np.ndarray, q: np.ndarray) -> tuple[np.nda
     return Qe, L, symmetric_part(_propagate(sys, P, q) - L @ Qe @ L.T)                                    # (9)
 
 
-def _moment_step(sys: MultNoiseSystem, q: np.ndarray) -> np.ndarray:
-    """``q(t+1)`` from ``q(t)``, eq. (8)."""
+def moment_step(sys: MultNoiseSystem, q: np.ndarray) -> np.ndarray:
+    """The second moment one step on, ``q(t+1)`` from ``q(t)``, eq. (8) (shared by the recursions and
+    :class:`eqrec.lmv.estimator.LMVEstimator`).
+
+    Parameters
+    ----------
+    sys : MultNoiseSystem
+        The system in the common description.
+    q : numpy.ndarray
+        ``q(t) = E[x(t) x(t)^T]``, shape ``(n, n)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``q(t+1)``, eq. (8), shape ``(n, n)``.
+    """
     return symmetric_part(_propagate(sys, q, q))
 
 
@@ -206,7 +220,7 @@ def lmv_recursion(sys: MultNoiseSystem, T: int, check_stability: bool = True) ->
     q, P, L, Qe = _histories(T, sys.n, sys.m, sys.x0_mean, sys.x0_cov)
     for t in range(T + 1):
         Qe[t], L[t], P[t + 1] = lmv_step(sys, P[t], q[t])
-        q[t + 1] = _moment_step(sys, q[t])
+        q[t + 1] = moment_step(sys, q[t])
     return LMVResult(sys, q, P, L, Qe)
 
 
@@ -284,7 +298,7 @@ def n_step_predictor(res: LMVResult, N: int) -> np.ndarray:
     sys, T = res.sys, res.T
     q = list(res.q)
     while len(q) < T + N + 1:
-        q.append(_moment_step(sys, q[-1]))
+        q.append(moment_step(sys, q[-1]))
     out = np.empty((T + 1, sys.n, sys.n))
     for t in range(T + 1):
         Pk = res.P_pred[t + 1]

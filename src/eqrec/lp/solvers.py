@@ -67,8 +67,22 @@ def highs_status(code: int, fallback: str = "") -> tuple[str, float]:
     return status, {"infeasible": INF, "unbounded": -INF}.get(status, np.nan)
 
 
-def _highs_model(lp: LinearProgram, options: dict):
-    """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet)."""
+def highs_model(lp: LinearProgram, options: dict):
+    """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet), for callers that keep the model and change it
+    between runs (warm starts).
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The LP, its matrix column-wise (CSC) as :class:`~eqrec.lp.model.LinearProgram` stores it.
+    options : dict
+        HiGHS options, set one by one (``output_flag`` is set ``False`` first).
+
+    Returns
+    -------
+    highspy.Highs
+        The solver holding the model, not yet run.
+    """
     import highspy
 
     h = highspy.Highs()
@@ -112,7 +126,7 @@ def _highs_run(h, lp: LinearProgram, cost: np.ndarray) -> LPSolution:
 
 
 def _solve_highs(lp: LinearProgram, options: dict) -> LPSolution:
-    return _highs_run(_highs_model(lp, options), lp, lp.c)
+    return _highs_run(highs_model(lp, options), lp, lp.c)
 
 
 def _solve_clarabel(lp: LinearProgram, options: dict) -> LPSolution:
@@ -539,7 +553,7 @@ def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
         for c in costs:
             c = np.asarray(c, float)
             if h is None:
-                h = _highs_model(variant(c, lo, hi), dict(options or {}))
+                h = highs_model(variant(c, lo, hi), dict(options or {}))
             else:
                 h.changeColsCost(c.size, cols, c)
             sol = _highs_run(h, lp, c)

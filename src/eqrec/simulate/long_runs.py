@@ -102,9 +102,22 @@ def _drive(system: AffineSystem, est, delays: np.ndarray, x0: np.ndarray, xi0: n
     N = len(delays)
     v = draw_box(rng, system.eta_v, (N, system.nv), kind)
     w = draw_box(rng, system.eta_w, (N, system.nw), kind)
-    run = closed_loop(system, est, ArrivalTrace(delays), x0, xi0, w, v,
-                      lambda t, xh: _inputs(system, controller, inputs, t, xh), after_step)
-    return run.x, run.xhat, run.dropped, w, v
+    trace = ArrivalTrace(delays)
+    schedule = trace.schedule()  # each step's stamps in increasing order
+    dropped: list[tuple[int, int]] = []
+    counted = [0]
+
+    def after(k: int) -> None:
+        # the packets the estimator dropped at step k are those stamped before its period (or phase): the
+        # earliest of the step's stamps, as many as its counter grew
+        new = est.dropped_packets - counted[0]
+        dropped.extend((int(tau), k) for tau in schedule[k][:new])
+        counted[0] = est.dropped_packets
+        after_step(k)
+
+    run = closed_loop(system, est, trace, x0, xi0, w, v, lambda t, xh: _inputs(system, controller, inputs, t, xh),
+                      after)
+    return run.x, run.xhat, dropped, w, v
 
 
 def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains", words: Sequence[str], periods: int,
@@ -169,7 +182,7 @@ def long_run_periodic(system: AffineSystem, schedule: "GainSchedule | ClassGains
     level[N] = mu1
     xi0 = draw_box(rng, mu1, (system.n,), kind)
     x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
-    est = make_estimator(system, schedule, x0 - xi0, periodic=True)
+    est = make_estimator(system, schedule, periodic=True)  # reset by the loop at x̂(0) = x0 − ξ0
     x, xhat, dropped, w, v = _drive(system, est, delays, x0, xi0, kind, rng, controller, inputs, lambda t: None)
     return LongRun(x=x, xhat=xhat, level=level, delays=delays, recovering=np.zeros(N, bool), words=sequence,
                    dropped=dropped, w=w, v=v)
@@ -227,7 +240,7 @@ def long_run_switching(system: AffineSystem, performance: "GainSchedule | ClassG
     N = delays.size
     xi0 = draw_box(rng, mu1, (system.n,), kind)
     x0 = np.zeros(system.n) if x0 is None else np.asarray(x0, float)
-    est = SwitchingEstimator(system, performance, recovery, x0 - xi0)
+    est = SwitchingEstimator(system, performance, recovery)  # reset by the loop at x̂(0) = x0 − ξ0
     level = np.full(N + 1, float(mu1))
     recovering = np.zeros(N, bool)
     T = recovery.horizon

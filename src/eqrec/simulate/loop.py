@@ -5,9 +5,9 @@ an input sequence and noise drawn uniformly in the box, at random box
 vertices, or at the worst-case vertex of a certified bound; an estimator runs
 causally on the time-stamped packets that arrive.  :func:`closed_loop` is the
 package's one simulation loop: it runs any estimator of the protocol
-(:mod:`eqrec.estimators.protocol`: guaranteed, Kalman-type, LMV) or the raw
-estimators of :mod:`eqrec.estimators.causal` on an arrival trace
-(:mod:`eqrec.arrivals.draws`).  :func:`simulate_run` is one run along an
+(:mod:`eqrec.estimators.protocol`: guaranteed, Kalman-type, LMV, and the raw
+estimators of :mod:`eqrec.estimators.causal`) on an arrival trace
+(:mod:`eqrec.arrivals.draws`), all in one way.  :func:`simulate_run` is one run along an
 arrival pattern, :func:`monte_carlo` many runs on a language.  Runs over
 many periods (Section III-B3 of the delayed-data paper) are in
 :mod:`eqrec.simulate.long_runs`.
@@ -30,6 +30,7 @@ from eqrec.arrivals.draws import ArrivalTrace, uniform_words
 from eqrec.checks import floats, instance, integer, positive, seeded
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.estimators.causal import Packet, make_estimator
+from eqrec.estimators.protocol import check_estimator
 from eqrec.bounds.gains import GainSchedule
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.bounds.stacking import UncertaintyLayout
@@ -126,12 +127,8 @@ class LoopRun:
     xhat : ndarray, shape (N+1, n) or (N+1, n, K)
         Estimates ``x̂(t0..t0+N)`` (``x̂(t0) = x(t0) − ξ0``).
     spread : list
-        Per step, the second value of a protocol estimator's ``step`` (a float
-        bound or an ``(n, n)`` covariance for ``x̂(t+1)``); empty for an
-        estimator of the older form (``step`` returns the estimate only).
-    dropped : list of (int, int)
-        Packets ``(stamp, arrival)`` that arrived stamped before the
-        estimator's current period (estimators with ``period_start``).
+        Per step, the second value of the estimator's ``step`` (a float
+        bound or an ``(n, n)`` covariance for ``x̂(t+1)``).
     y : ndarray, shape (N, p) or (N, p, K)
         The measurements ``y(t) = C x(t) + V v(t)`` (sent, whether they arrive or not).
     """
@@ -139,7 +136,6 @@ class LoopRun:
     x: np.ndarray
     xhat: np.ndarray
     spread: list = field(default_factory=list)
-    dropped: list = field(default_factory=list)
     y: np.ndarray | None = None
 
     @property
@@ -204,15 +200,16 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
     packets); ``x(t+1) = A(t) x(t) + B(t) u + f + E(t) w(k)``.
 
     ``est`` is any estimator of the protocol (:mod:`eqrec.estimators.protocol`:
-    ``reset``, ``step(y, u) -> (x̂(t+1), spread)``): guaranteed, Kalman-type
-    or LMV; the loop resets it at ``x̂(t0) = x0 − ξ0``.  An estimator of the
-    older form (:class:`~eqrec.estimators.causal.RecoveryEstimator`,
+    ``reset``, ``step(y, u) -> (x̂(t+1), spread)``): guaranteed, Kalman-type,
+    LMV, set-membership, or the raw causal ones
+    (:class:`~eqrec.estimators.causal.RecoveryEstimator`,
     :class:`~eqrec.estimators.causal.ClassEstimator`,
     :class:`~eqrec.estimators.switching.SwitchingEstimator`,
-    :class:`~eqrec.design.augmented.runtime.AugmentedEstimator`: no
-    ``reset``, ``step(y, u) -> x̂(t+1)``) runs as built (started at
-    ``x0 − ξ0`` by its caller).  A Monte Carlo is many calls of this loop
-    (:func:`monte_carlo`, :mod:`eqrec.simulate.long_runs`).
+    :class:`~eqrec.estimators.augmented.AugmentedEstimator`); the loop resets
+    it at ``x̂(t0) = x0 − ξ0`` and runs every estimator the same way.  A
+    Monte Carlo is many calls of this loop (:func:`monte_carlo`,
+    :mod:`eqrec.simulate.long_runs`; packets an estimator drops are counted
+    by the estimator, ``dropped_packets``).
 
     **Affine runs** (``one`` given): states, noise and measurements carry a
     last axis of ``K`` columns (scenarios, or the constant and the
@@ -248,7 +245,7 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
     Returns
     -------
     LoopRun
-        States, estimates, spreads, dropped packets and measurements.
+        States, estimates, spreads and measurements.
 
     Raises
     ------
@@ -265,29 +262,20 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
         if arr.shape[:1] != (n,) or arr.shape != x0.shape or not np.all(np.isfinite(arr)):
             raise InputError(f"need finite entries, shape ({n},) (or ({n}, K) with one), got {arr.shape}",
                              field=name)
-    instance(getattr(est, "step", None), Callable, "est", "an estimator")
+    check_estimator(est)
     x = np.zeros((N + 1,) + x0.shape)
     xhat = np.zeros((N + 1,) + x0.shape)
     x[0] = x0
     xhat[0] = x0 - xi0
-    protocol = hasattr(est, "reset")
-    if protocol:
-        est.reset(xhat[0].copy(), t0) if one is None else est.reset(xhat[0].copy(), t0, one=one)
+    est.reset(xhat[0].copy(), t0) if one is None else est.reset(xhat[0].copy(), t0, one=one)
     y = np.zeros((N, system.p) + x0.shape[1:])
     run = LoopRun(x=x, xhat=xhat, y=y)
     for k in range(N):
         t = t0 + k
         u = np.zeros(system.m) if u_at is None else u_at(k, xhat[k])
         y[k] = system.C_at(t) @ x[k] + system.V_at(t) @ v[k]
-        out = est.step(what_arrived(schedule[k], k, y, t0), u)
-        if protocol:
-            xhat[k + 1], spread = out
-            run.spread.append(spread)
-        else:
-            xhat[k + 1] = out
-        start = getattr(est, "period_start", None)
-        if start is not None:
-            run.dropped += [(t0 + tau, t) for tau in schedule[k] if t0 + tau < start]  # stamped before this period
+        xhat[k + 1], spread = est.step(what_arrived(schedule[k], k, y, t0), u)
+        run.spread.append(spread)
         if one is None:
             x[k + 1] = system.A_at(t) @ x[k] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[k]
         else:
@@ -363,7 +351,7 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     w, v, xi0 = lay.split(finite_array(delta, (lay.size,), "delta", "the uncertainty delta"))
     x0 = finite_array(x0, (system.n,), "x0", "the initial state", "n")
     inputs = None if inputs is None else _noise(inputs, T, system.m, "inputs")
-    est = make_estimator(system, schedule, x0 - xi0, periodic=periodic)
+    est = make_estimator(system, schedule, periodic=periodic)  # reset by the loop at x̂(0) = x0 − ξ0
     run = closed_loop(system, est, ArrivalTrace.from_pattern(pattern), x0, xi0, w, v,
                       None if inputs is None else (lambda t, _xhat: inputs[t]))
     return Trajectory(word=pattern.label, x=run.x, xhat=run.xhat)

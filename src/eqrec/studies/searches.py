@@ -4,7 +4,7 @@
   must be infeasible (Theorem 3 of the prefix-based paper is necessary and
   sufficient, so this proves no estimator of the class does better);
 * :func:`min_feasible_mu1` — the smallest recovery level, exactly (the
-  μ1-free theorem of :mod:`eqrec.design.mu1_min`: one Charnes–Cooper LP),
+  μ1-free theorem of :mod:`eqrec.design.classes.mu1_min`: one Charnes–Cooper LP),
   where the paper suggests "an optimal M1 through line search" (Section V of
   the prefix-based paper);
 * :func:`min_recovery_time` — the shortest horizon at which a language,
@@ -31,7 +31,7 @@ from eqrec.lp.solvers import solve_lp
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.augmented.runtime import schedule_from_augmented
-from eqrec.design.mu1_min import MinRecoveryLevel, min_recovery_level
+from eqrec.design.classes.mu1_min import MinRecoveryLevel, min_recovery_level
 from eqrec.design.observers import PolePlacement, deadbeat_observer, place_observer
 from eqrec.design.prefix.design import design_prefix
 from eqrec.design.prefix.tree_lp import build_prefix_lp
@@ -79,7 +79,7 @@ def min_feasible_mu1(system: AffineSystem, words, method: str = "prefix") -> Min
     Feasibility is monotone in ``M1`` (gains recovering from ``M1`` recover
     from any larger level) and, by the separation theorem, a prefix design is
     feasible iff every terminal class reaches ``M1``: the smallest level is
-    :func:`eqrec.design.mu1_min.min_recovery_level` on the language's classes.
+    :func:`eqrec.design.classes.mu1_min.min_recovery_level` on the language's classes.
     The time-based design is the prefix design on the worst-case word alone.
 
     Parameters

@@ -4,7 +4,8 @@ paper's form (4).
 :mod:`~eqrec.design.augmented.model`
     The model of the state-augmented estimator (modes, gains, arrival indicators).
 :mod:`~eqrec.design.augmented.runtime`
-    What runs: P2 eqs. (2)-(3), P3 eqs. (4)-(5), the conversions to gain schedules.
+    The conversions to and from gain schedules and the error maps of the running estimator (which is
+    :class:`eqrec.estimators.augmented.AugmentedEstimator`).
 :mod:`~eqrec.design.augmented.word_lp`
     The LP of one missing-data word at fixed ``L`` and ``s0`` (P2 Remark 1).
 :mod:`~eqrec.design.augmented.tree_lp`

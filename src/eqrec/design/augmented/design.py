@@ -10,6 +10,8 @@ Every design is certified from its converted time-based gains with
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from eqrec.bounds.certify import CERT_RTOL, certify_design, certify_schedule
@@ -17,6 +19,7 @@ from eqrec.checks import instance
 from eqrec.lp.model import LPSolution
 from eqrec.arrivals.words import as_language, worst_case_pattern
 from eqrec.lp.solvers import solver_info
+from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.inputs import check_flags, check_mu1, check_solver, check_system, real_array
@@ -55,6 +58,52 @@ def certify_augmented(system: AffineSystem, gains: AugmentedGains, words, mu1: f
     """
     schedule = schedule_from_augmented(system, gains, runtime)
     return schedule, certify_schedule(system, schedule, list(words), mu1)
+
+
+@dataclass
+class AugmentedDetails:
+    """What an augmented design adds to its :class:`~eqrec.design.result.Design` (its ``augmented`` field).
+
+    Parameters
+    ----------
+    mode : str
+        The runtime the LP designed for (:data:`~eqrec.design.augmented.model.DESIGN_MODES`).
+    gains : AugmentedGains
+        The augmented gains ``(L, s0, M, nu)`` (:mod:`eqrec.design.augmented.model`).
+    L : list
+        ``L`` as nested lists: one ``n x p`` matrix when constant over time, else ``T x n x p``.
+    s0, M, nu : list
+        ``s0``, ``M`` and ``nu`` as nested lists.
+    eig_A_minus_LC : list of complex
+        The eigenvalues of ``A - L(0) C``.
+    poles : list of complex or None, optional
+        The poles ``L`` was placed at (``L`` by pole placement or free); ``None``: ``L`` given.
+    ipopt_status : str or None, optional
+        ``L="free"``: IPOPT's status (``None`` otherwise, as the three below).
+    ipopt_iterations : int or None, optional
+        IPOPT's iterations.
+    initial_mu2 : float or None, optional
+        The LP's ``μ2`` IPOPT started from.
+    initial_guess : str or None, optional
+        That starting point in words.
+    certified_runtime : str or None, optional
+        A ``"leak"`` or ``"masked_gain"`` design: the runtime its certificate is of (``"hold"``); ``None`` for
+        ``"theorem2"``, certified as designed.
+    """
+
+    mode: str
+    gains: AugmentedGains
+    L: list
+    s0: list
+    M: list
+    nu: list
+    eig_A_minus_LC: list
+    poles: list | None = None
+    ipopt_status: str | None = None
+    ipopt_iterations: int | None = None
+    initial_mu2: float | None = None
+    initial_guess: str | None = None
+    certified_runtime: str | None = None
 
 
 def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=None, s0=None,
@@ -114,7 +163,8 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     -------
     Design
         ``method="augmented"``, ``schedule`` the converted time-based gains,
-        ``certificate`` attached, ``extra`` with ``L, s0, M, nu`` and solver details.
+        ``certificate`` attached, ``language`` and ``worst_case_word``, ``augmented`` (an
+        :class:`AugmentedDetails`: ``L, s0, M, nu`` and solver details).
 
     Raises
     ------
@@ -140,7 +190,7 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
 
     >>> import eqrec
     >>> design = eqrec.design_augmented(eqrec.acc_system(), ["101111", "110111"], mu1=1.0)
-    >>> design.extra["worst_case_word"], round(design.mu2, 4)
+    >>> design.worst_case_word, round(design.mu2, 4)
     ('100111', 1.7371)
     """
     check_mode(mode, DESIGN_MODES)
@@ -155,7 +205,8 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
     wc = wc_pattern.label
     accuracy = solver_info(solver).accuracy
     T, n, p = len(wc), system.n, system.p
-    extra: dict = {"language": language, "worst_case_word": wc, "mode": mode}
+    ipopt: dict = {}  # L free: IPOPT's record (AugmentedDetails)
+    placed = None
     free = isinstance(L, str)
     if free and L != "free":
         raise InputError(f"L must be None, an array or 'free', got {L!r}", field="L")
@@ -175,14 +226,15 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
         if not pp.ok:
             raise InputError(f"pole placement at {poles} failed: {pp.message}", field="poles")
         L_fixed = pp.L
-        extra["poles"] = [complex(x) for x in poles]
+        placed = [complex(x) for x in poles]
     else:
         L_fixed = real_array(L, "L")
         if L_fixed.shape not in ((n, p), (T, n, p)):
             raise InputError(f"L must be an n x p = {n} x {p} matrix (or T x n x p), got shape {L_fixed.shape}",
                              field="L")
     s0v = np.zeros(n) if s0 is None else real_array(s0, "s0").reshape(n)
-    model = AugmentedLP(system, wc, mu1, L_fixed, s0=s0v, mode=mode)
+    st = Stacking(system, T)  # the design's one stacked model: the LP and its augmented maps read it
+    model = AugmentedLP(st, wc, mu1, L_fixed, s0=s0v, mode=mode)
     sol = model.solve(solver).require_optimal(f"augmented design (M1 = {mu1:g})")
     gains = model.gains(sol)
     mu2 = float(sol.x[model.mu2_col])
@@ -193,21 +245,24 @@ def design_augmented(system: AffineSystem, words, mu1: float, *, L=None, poles=N
             raise SolverFailure(f"IPOPT stopped with status {res.status} after {res.iterations} iterations")
         gains, mu2 = res.gains, res.mu2
         solution = LPSolution("optimal", None, mu2, "ipopt", res.iterations, res.solve_time, {})
-        extra.update(ipopt_status=res.status, ipopt_iterations=res.iterations, initial_mu2=res.initial_mu2,
-                     initial_guess=f"LP ({solver}) at the pole-placement L")
+        ipopt = {"ipopt_status": res.status, "ipopt_iterations": res.iterations, "initial_mu2": res.initial_mu2,
+                 "initial_guess": f"LP ({solver}) at the pole-placement L"}
         accuracy = max(accuracy, solver_info("ipopt").accuracy)
-    extra.update(L=gains.L[0].tolist() if np.allclose(gains.L, gains.L[0]) else gains.L.tolist(),
-                 s0=gains.s0.tolist(), M=gains.M.tolist(), nu=gains.nu.tolist(), gains=gains,
-                 eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))])
+    details = AugmentedDetails(
+        mode=mode, gains=gains, L=gains.L[0].tolist() if np.allclose(gains.L, gains.L[0]) else gains.L.tolist(),
+        s0=gains.s0.tolist(), M=gains.M.tolist(), nu=gains.nu.tolist(),
+        eig_A_minus_LC=[complex(x) for x in np.linalg.eigvals(system.A_at(0) - gains.L[0] @ system.C_at(0))],
+        poles=placed, **ipopt)
     runtime = default_runtime(mode)
     schedule = schedule_from_augmented(system, gains, runtime)
     design = Design(method="augmented", system=system, patterns=(wc,), T=T, mu1=float(mu1), mu2=mu2,
-                    schedule=schedule, solution=solution, build_time=model.build_time, extra=extra)
+                    schedule=schedule, solution=solution, build_time=model.build_time, language=language,
+                    worst_case_word=wc, augmented=details)
     if certify:
         cert_words = sorted(set(language) | {wc})
         if mode == "theorem2":  # every stored level at least its certified worst case, exactly (M1 raised if need be)
             certify_design(design, words=cert_words, rtol=CERT_RTOL + accuracy)
         else:
             design.certificate = certify_schedule(system, schedule, cert_words, mu1)
-            extra["certified_runtime"] = runtime
+            details.certified_runtime = runtime
     return design

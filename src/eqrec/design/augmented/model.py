@@ -18,7 +18,8 @@ gains are its path, :class:`AugmentedGains`).  With :math:`e = \xi - s`,
 
 so for fixed ``L`` and ``s0`` the error is affine in ``(M, ν)``
 (:func:`innovation_maps`; the LPs of :mod:`eqrec.design.augmented.word_lp`).  What runs, and its
-equivalence with the prefix-based estimator: :mod:`eqrec.design.augmented.runtime`.
+equivalence with the prefix-based estimator: :mod:`eqrec.estimators.augmented` and
+:mod:`eqrec.design.augmented.runtime`.
 
 Readings of a missing step (``mode``)
 -------------------------------------
@@ -44,27 +45,12 @@ from eqrec.arrivals.words import as_pattern
 from eqrec.bounds.stacking import Stacking, UncertaintyLayout
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
+# what the running estimator needs lives with it, one layer down (re-exported here)
+from eqrec.estimators.augmented import RUNTIME_MODES, as_time_varying_L, default_runtime  # noqa: F401
 
 MODES = ("theorem2", "hold", "leak", "masked_gain")
-RUNTIME_MODES = ("theorem2", "hold")
 #: Readings whose error ``e`` of ``s`` does not depend on ``M`` (an LP for fixed ``L``).
 DESIGN_MODES = ("theorem2", "leak", "masked_gain")
-
-
-def default_runtime(mode: str) -> str:
-    """The runtime a design reading's gains run in unless told otherwise.
-
-    Parameters
-    ----------
-    mode : str
-        The design reading.
-
-    Returns
-    -------
-    str
-        ``"theorem2"`` for the ``"theorem2"`` reading, ``"hold"`` (the constant ``L`` kept) for the others.
-    """
-    return "theorem2" if mode == "theorem2" else "hold"
 
 
 def check_mode(mode: str, allowed: tuple[str, ...] = MODES) -> str:
@@ -85,32 +71,6 @@ def check_mode(mode: str, allowed: tuple[str, ...] = MODES) -> str:
     if mode not in allowed:
         raise InputError(f"unknown augmented-estimator mode {mode!r}; choose one of {list(allowed)}", field="mode")
     return mode
-
-
-def as_time_varying_L(L: np.ndarray, T: int, n: int, p: int) -> np.ndarray:
-    """Broadcast an observer gain ``L`` (``n x p`` or ``T x n x p``) to shape ``(T, n, p)``.
-
-    Parameters
-    ----------
-    L : array_like
-        ``(n, p)`` constant or ``(T, n, p)`` time-varying observer gain.
-    T, n, p : int
-        Horizon, state and output dimensions.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(T, n, p)`` copy of ``L``.
-    """
-    try:
-        L = np.asarray(L, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError("the observer gain L is not numeric", field="L") from None
-    if L.shape == (n, p):
-        return np.broadcast_to(L, (T, n, p)).copy()
-    if L.shape == (T, n, p):
-        return L.copy()
-    raise InputError(f"L must have shape ({n}, {p}) or ({T}, {n}, {p}), got {L.shape}", field="L")
 
 
 def effective_L(L: np.ndarray, word: "ArrivalPattern | str", mode: str) -> np.ndarray:
@@ -297,8 +257,8 @@ class AugmentedStacking:
 
     Parameters
     ----------
-    system : AffineSystem
-        The system (time-varying allowed).
+    system : AffineSystem or Stacking
+        The system (time-varying allowed), or the design's stacked model over ``T`` (read from there).
     word : str
         Missing-data word of length ``T`` (``q_k``).
     L : numpy.ndarray
@@ -306,16 +266,18 @@ class AugmentedStacking:
     mode : str, optional
         One of :data:`DESIGN_MODES` (the readings whose ``e`` is independent of ``M``).
     stacking : Stacking, optional
-        Core stacking to reuse (when its horizon is ``T``).
+        Core stacking to reuse (when its horizon is ``T``; as ``system`` may be).
     """
 
-    def __init__(self, system: AffineSystem, word: str, L: np.ndarray, mode: str = "theorem2",
+    def __init__(self, system: "AffineSystem | Stacking", word: str, L: np.ndarray, mode: str = "theorem2",
                  stacking: Stacking | None = None):
         word = missing_data_pattern(word).label
         check_mode(mode, DESIGN_MODES)
+        T = len(word)
+        st = Stacking.of(stacking if stacking is not None and stacking.T == T else system, T)
+        system = st.system
         self.system, self.word, self.mode = system, word, mode
-        self.T = T = len(word)
-        self.st = stacking if stacking is not None and stacking.T == T else Stacking(system, T)
+        self.T, self.st = T, st
         n, p = system.n, system.p
         self.L = as_time_varying_L(L, T, n, p)
         self.L_eff = effective_L(self.L, word, mode)

@@ -1,4 +1,7 @@
-r"""What runs: the augmented estimator (P2 eqs. (2)-(3); P3 eqs. (4)-(5)) and its prefix-based form.
+r"""The augmented estimator's prefix-based form and its error maps (P2 eqs. (2)-(3); P3 eqs. (4)-(5)).
+
+What runs is :class:`eqrec.estimators.augmented.AugmentedEstimator`; this module converts its gains to and from
+gain schedules and gives its error as affine maps of the uncertainty.
 
 Equivalence with the prefix-based (time-based) estimator
 --------------------------------------------------------
@@ -15,8 +18,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from eqrec.arrivals.packets import check_estimate, check_input
-from eqrec.arrivals.packets import as_packets
 from eqrec.bounds.gains import GainRow, GainSchedule, schedule_from_word_gains
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
@@ -25,7 +26,6 @@ from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.model import (RUNTIME_MODES, AugmentedGains, AugmentedPrefixGains, arrival_indicator,
                                           as_time_varying_L, check_mode, default_runtime, effective_L,
                                           missing_data_pattern)
-from eqrec.errors import InputError
 
 
 def _innovation_recursion(system: AffineSystem, pattern: ArrivalPattern, L: np.ndarray, s0, injection) -> None:
@@ -241,7 +241,7 @@ def running_error_maps(system: AffineSystem, gains: AugmentedGains, runtime: str
 
     from ``ξ(0) = ξ0``, ``e(0) = ξ0 - s0`` (``u_e`` cancels in ``e``; it enters ``e`` only through
     ``-L_k z(k)`` at a missing step with ``L_k ≠ 0``: the ``"hold"`` runtime).  The same estimator as
-    :class:`AugmentedEstimator` and, through :func:`schedule_from_augmented`, as
+    :class:`eqrec.estimators.augmented.AugmentedEstimator` and, through :func:`schedule_from_augmented`, as
     :func:`eqrec.bounds.certify.closed_loop_maps` (equal up to rounding).
 
     Parameters
@@ -288,90 +288,3 @@ def running_error_maps(system: AffineSystem, gains: AugmentedGains, runtime: str
         Ge[:, lay.w(k)] += system.E_at(k)
         ce = A @ ce - L[k] @ zc[k]
     return G, c, Z, zc
-
-
-class AugmentedEstimator:
-    """The causal augmented estimator running both recursions (P2 eqs. (2)-(3); P3 eqs. (4)-(5)).
-
-    Parameters
-    ----------
-    system : AffineSystem
-        The model.
-    gains : AugmentedGains or AugmentedPrefixGains
-        Designed gains (one word: measurements the designed word lacks are ignored).
-    xhat0 : array_like, shape (n,)
-        Initial estimate.
-    runtime : {"theorem2", "hold"} or None, optional
-        Treatment of a step whose measurement is not on time (``L_k = 0``, or ``L`` kept with ``ỹ = 0``);
-        default ``"theorem2"``, or for one word its design mode's runtime.
-    """
-
-    def __init__(self, system: AffineSystem, gains, xhat0: np.ndarray, runtime: str | None = None):
-        self.word = gains.word if isinstance(gains, AugmentedGains) else None
-        self.runtime = check_mode(runtime or ("theorem2" if self.word is None else default_runtime(gains.mode)),
-                                  RUNTIME_MODES)
-        self.system, self.gains = system, gains
-        self.T = len(self.word) if self.word is not None else len(gains.L)
-        self.L = as_time_varying_L(gains.L, self.T, system.n, system.p)
-        self.xhat = check_estimate(xhat0, system.n)
-        self.s = np.asarray(gains.s0, float).reshape(system.n).copy()
-        self._arrivals: list[int | None] = []
-        self._xs: list[tuple[np.ndarray, np.ndarray]] = []
-        self._z: dict[int, np.ndarray] = {}
-
-    def step(self, y, u: np.ndarray | None = None) -> np.ndarray:
-        """Process time ``t`` and return ``x̂(t+1)``.
-
-        Parameters
-        ----------
-        y : array_like, None or list of (int, array_like)
-            One word's gains: the measurement of ``t`` (``None`` if missing); prefix gains: the
-            time-stamped packets ``(τ, y(τ))`` arriving at ``t``.
-        u : array_like or None, optional
-            Known input ``u(t)`` (default zero).
-
-        Returns
-        -------
-        ndarray, shape (n,)
-        """
-        sysm, t = self.system, len(self._arrivals)
-        n, p = sysm.n, sysm.p
-        if t >= self.T:
-            raise InputError(f"the estimator's horizon T = {self.T} is over")
-        u = check_input(u, sysm.m)  # everything is checked before anything changes
-        if self.word is not None:
-            y = as_packets(y, t, p)
-            if any(pk.time != t for pk in y):
-                raise InputError("an estimator of one word takes y(t) itself (or None), not time-stamped packets",
-                                 field="y")
-            y = [] if (not y or self.word[t] != "1") else [(t, y[0].y)]
-        else:
-            y = [(pk.time, pk.y) for pk in as_packets(y, t, p)]
-        xs = self._xs + [(self.xhat.copy(), self.s.copy())]
-        arrivals, z = self._arrivals + [None], dict(self._z)
-        for tau, yt in y:
-            if tau < 0 or arrivals[tau] is not None:
-                raise InputError(f"packet stamped {tau} at time {t}: " + ("before the horizon's start" if tau < 0
-                                 else "a second packet with this stamp"), field="y")
-            arrivals[tau] = t
-            C = sysm.C_at(tau)
-            z[tau] = (yt - C @ xs[tau][0]) - C @ xs[tau][1]
-        C = sysm.C_at(t)
-        on_time = arrivals[t] == t
-        if not on_time:  # the innovation with ỹ(t) = 0
-            z_missing = np.zeros(p) - C @ self.s
-        if self.word is not None:  # ue(t) = ν_t + M(t, 0..t) z(0..t), zero columns at the missing steps
-            z.setdefault(t, z_missing if not on_time else None)
-            M, nu = self.gains.M[t * n:(t + 1) * n, : (t + 1) * p], self.gains.nu[t * n:(t + 1) * n]
-            ue = nu + M @ np.concatenate([z[tau] for tau in range(t + 1)])
-        else:
-            pre = ArrivalPattern(tuple(arrivals))
-            if pre not in self.gains.rows:
-                raise InputError(f"arrival prefix {pre.label!r} at time {t} is not in the design", field="y")
-            (M, nu), taus = self.gains.rows[pre], pre.available(t)
-            ue = nu + M @ (np.concatenate([z[tau] for tau in taus]) if taus else np.zeros(0))
-        Lt = self.L[t] if (on_time or self.runtime == "hold") else np.zeros((n, p))
-        s_next = sysm.A_at(t) @ self.s + ue + Lt @ (z[t] if on_time else z_missing)
-        xhat = sysm.A_at(t) @ self.xhat + sysm.B_at(t) @ u - ue + sysm.f
-        self._xs, self._arrivals, self._z, self.s, self.xhat = xs, arrivals, z, s_next, xhat
-        return self.xhat.copy()

@@ -38,8 +38,9 @@ class AugmentedLP:
 
     Parameters
     ----------
-    system : AffineSystem
-        The model.
+    system : AffineSystem or Stacking
+        The model, or the design's stacked model over the word's length (the LP and every
+        :class:`~eqrec.design.augmented.model.AugmentedStacking` it builds read it).
     word : str or ArrivalPattern
         The worst-case missing-data word.
     mu1 : float
@@ -67,7 +68,7 @@ class AugmentedLP:
         Radii of the uncertainty box.
     """
 
-    def __init__(self, system: AffineSystem, word: "str | ArrivalPattern", mu1: float, L: np.ndarray,
+    def __init__(self, system: "AffineSystem | Stacking", word: "str | ArrivalPattern", mu1: float, L: np.ndarray,
                  s0: np.ndarray | None = None, mode: str = "theorem2", strictly_causal: bool = False,
                  pattern_seed: int = 12345):
         t0 = time.perf_counter()
@@ -76,11 +77,13 @@ class AugmentedLP:
         if not np.isfinite(mu1) or mu1 <= 0:
             raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
         word = missing_data_pattern(word).label
+        T = len(word)
+        self.st = Stacking.of(system, T)  # the one stacked model of the LP and its augmented maps
+        system = self.st.system
         self.system, self.word, self.mu1, self.mode = system, word, mu1, mode
         self.strictly_causal = strictly_causal
-        self.T = T = len(word)
+        self.T = T
         n, p = system.n, system.p
-        self.st = Stacking(system, T)
         self.s0 = np.zeros(n) if s0 is None else np.asarray(s0, float).reshape(n)
         lay = self.st.layout
         D = lay.size
@@ -89,7 +92,7 @@ class AugmentedLP:
         # structural (boolean) propagation would also count entries that cancel in the products of A, so it may
         # differ from the pattern the stored results were computed with.
         rng = np.random.default_rng(pattern_seed)
-        generic = AugmentedStacking(system, word, rng.normal(size=(T, n, p)), mode, self.st)
+        generic = AugmentedStacking(self.st, word, rng.normal(size=(T, n, p)), mode)
         zpat = generic.Z != 0  # (T, p, D)
         self.mu2_col = 0
         self.m_cols: dict[tuple[int, int], np.ndarray] = {}
@@ -213,7 +216,7 @@ class AugmentedLP:
         aug : AugmentedStacking
             The stacked maps at ``L``.
         """
-        aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
+        aug = AugmentedStacking(self.st, self.word, L, self.mode)
         n, p, T = self.system.n, self.system.p, self.T
         R = (T + 1) * n
         cr, cc, cv = self._cx_fixed
@@ -256,7 +259,7 @@ class AugmentedLP:
             return self.lp
         if not self.updatable:
             raise InputError("fast L updates need s0 = 0; build a new AugmentedLP for s0 ≠ 0", field="s0")
-        self.aug = AugmentedStacking(self.system, self.word, L, self.mode, self.st)
+        self.aug = AugmentedStacking(self.st, self.word, L, self.mode)
         self._robust_index.update_gx(self.lp, self._gx_values(self.aug)[self._gx_order])
         self.L = self.aug.L
         return self.lp

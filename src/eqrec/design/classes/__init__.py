@@ -8,4 +8,7 @@
     The class LPs one class at a time, in batches, on every core or a Dask cluster.
 :mod:`~eqrec.design.classes.gains`
     What the class gains ``K`` give: their exact worst case and the node gains of the recursive estimator.
+:mod:`~eqrec.design.classes.mu1_min`
+    μ1 free: the μ1-free theorem, the smallest feasible μ1 in closed form (Charnes–Cooper), certified; the
+    engine asks it where ``μ1`` is infeasible.
 """

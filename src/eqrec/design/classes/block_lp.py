@@ -6,7 +6,7 @@ least-absolute-deviations LP per (class, state row ``r``),
 .. math:: \ell(d, S) = \max_r \min_{k} \sum_c \beta_c\, \big|E_d[r, c] - (k^\top Z_S)[c]\big|,
 
 and :func:`build_class_lp` writes them as independent blocks of one LP (``kind="level"``; the
-Charnes–Cooper ratio LP of μ1 free, :mod:`eqrec.design.mu1_min`, is :func:`build_ratio_lp`, on the same blocks).
+Charnes–Cooper ratio LP of μ1 free, :mod:`eqrec.design.classes.mu1_min`, is :func:`build_ratio_lp`, on the same blocks).
 Building and reading are separate steps; :func:`eqrec.design.classes.engine.solve_classes` solves it.
 """
 
@@ -132,7 +132,7 @@ class ClassBlocks:
                        build_time=time.perf_counter() - t0)
 
 
-def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which: list[int] | None = None,
+def build_class_lp(system: "AffineSystem | Stacking", classes: ClassSet, mu1: float, *, which: list[int] | None = None,
                    stacking: Stacking | None = None) -> ClassLP:
     r"""Assemble the level LPs of the classes ``which`` (default all) and every state row as one block-diagonal LP.
 
@@ -143,22 +143,23 @@ def build_class_lp(system: AffineSystem, classes: ClassSet, mu1: float, *, which
 
     Parameters
     ----------
-    system : AffineSystem
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the classes' horizon.
     classes : ClassSet
     mu1 : float
         Recovery level ``μ1`` (radius of ``ξ0``).
     which : list of int, optional
         Indices of the classes to include (default all).
     stacking : Stacking, optional
-        Stacked maps over the classes' horizon; built when omitted.
+        Stacked maps over the classes' horizon (as ``system`` may be); built when neither is one.
 
     Returns
     -------
     ClassLP
     """
     t0 = time.perf_counter()
-    st = stacking or Stacking(system, classes.horizon)
-    n = system.n
+    st = Stacking.of(stacking or system, classes.horizon)
+    n = st.system.n
     beta = box_radius(st, float(mu1))
     bl = ClassBlocks()
     for ci in range(len(classes)) if which is None else which:
@@ -192,7 +193,7 @@ def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], st
     columns ``y`` (``|S| p``), ``t``, ``s^+``, ``s^-``; rows
     :math:`Z_S^\top y - t E_d[r] + s^+ - s^- = 0` and
     :math:`\sum_{c \in \xi_0} (s^+_c + s^-_c) - t \le -1`; cost the noise
-    coordinates' radii times :math:`s^+ + s^-` (:mod:`eqrec.design.mu1_min`).  The
+    coordinates' radii times :math:`s^+ + s^-` (:mod:`eqrec.design.classes.mu1_min`).  The
     optimum of a block is its ratio ``m_r``, its gain row ``y / t``.
 
     Parameters

@@ -185,7 +185,7 @@ class LevelBlock:
     nonzeros: int
 
 
-def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1s: list[float], solver: str,
+def level_task(stacking: Stacking, chunk: list[DataClass], mu1s: list[float], solver: str,
                options: dict) -> list[list[LevelBlock]]:
     """Solve the level LP of every state row of each class of ``chunk`` at each ``μ1`` and certify its gains.
 
@@ -194,9 +194,8 @@ def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1s:
 
     Parameters
     ----------
-    system : AffineSystem
-    horizon : int
-        ``T`` of the class set.
+    stacking : Stacking
+        The design's stacked model over the classes' horizon (rebuilt from its system in a worker process).
     chunk : list of DataClass
         The classes of this task.
     mu1s : list of float
@@ -215,7 +214,7 @@ def level_task(system: AffineSystem, horizon: int, chunk: list[DataClass], mu1s:
     SolverFailure
         A row's LP without an optimum, or without row multipliers.
     """
-    st = Stacking(system, horizon)
+    st, system = stacking, stacking.system
     betas = [box_radius(st, float(mu1)) for mu1 in mu1s]
     out = []
     for cls in chunk:
@@ -253,14 +252,13 @@ def _csc(Z: np.ndarray) -> sp.csc_matrix:
     return sp.csc_matrix((Z[rows, cols], rows, indptr), shape=Z.shape)
 
 
-def ratio_task(system: AffineSystem, horizon: int, chunk: list[DataClass], solver: str,
-               options: dict) -> list[list[tuple]]:
+def ratio_task(stacking: Stacking, chunk: list[DataClass], solver: str, options: dict) -> list[list[tuple]]:
     """The Charnes–Cooper LP of every state row of each terminal class of ``chunk``, and its ratio recomputed.
 
     Parameters
     ----------
-    system : AffineSystem
-    horizon : int
+    stacking : Stacking
+        The design's stacked model over the classes' horizon (rebuilt from its system in a worker process).
     chunk : list of DataClass
         Terminal classes.
     solver : str
@@ -273,7 +271,7 @@ def ratio_task(system: AffineSystem, horizon: int, chunk: list[DataClass], solve
         ``k`` the gain row ``y / t`` and ``recomputed`` the ratio :math:`b(k) / (1 - a(k))` from ``k``
         alone (``inf`` if ``a(k) >= 1``); ``k`` and the ratios are ``None`` when the LP has no optimum.
     """
-    st = Stacking(system, horizon)
+    st, system, horizon = stacking, stacking.system, stacking.T
     xi0 = np.zeros(st.layout.size, bool)
     xi0[st.layout.xi0] = True
     noise_beta = np.where(xi0, 0.0, box_radius(st, 1.0))
@@ -297,16 +295,20 @@ def ratio_task(system: AffineSystem, horizon: int, chunk: list[DataClass], solve
     return out
 
 
-def _run(task, system: AffineSystem, classes: ClassSet, which: list[int], args: tuple, *, n_jobs, scheduler,
+def _run(task, stacking: Stacking, classes: ClassSet, which: list[int], args: tuple, *, n_jobs, scheduler,
          label: str) -> list:
-    """``task`` over the classes ``which`` in batches; its per-class results in the order of ``which``."""
+    """``task`` over the classes ``which`` in batches; its per-class results in the order of ``which``.
+
+    Each batch carries the design's stacking (to a worker process as its system and horizon, the maps rebuilt
+    there: :meth:`eqrec.bounds.stacking.Stacking.__reduce__`)."""
+    system = stacking.system
     work = [system.n * class_work(classes.classes[i], system) for i in which]  # n LPs per class
     total = sum(work)
     weights = [CLASS_OVERHEAD + w for w in work]  # what a batch costs
     local = scheduler is None and total < POOL_MIN_WORK and not pool_ready(n_jobs)  # no pool to start for this
     workers = 1 if local else check_jobs(n_jobs)
     runs = plan_batches(weights, workers)
-    tasks = [(task, system, classes.horizon, [classes.classes[which[j]] for j in run], *args) for run in runs]
+    tasks = [(task, stacking, [classes.classes[which[j]] for j in run], *args) for run in runs]
     progress = Progress(len(which), label) if total >= POOL_MIN_WORK else None
     results = run_tasks(_logged, tasks, n_jobs=workers, scheduler=scheduler, progress=progress,
                         units=[len(run) for run in runs])
@@ -349,13 +351,14 @@ def prestart_workers(system: AffineSystem, classes: ClassSet, n_jobs=None, sched
     return True
 
 
-def solve_level_blocks(system: AffineSystem, classes: ClassSet, mu1s: list[float], *, solver: str, options: dict,
-                       n_jobs=None, scheduler=None) -> tuple[list[list[LevelBlock]], float]:
+def solve_level_blocks(system: "AffineSystem | Stacking", classes: ClassSet, mu1s: list[float], *, solver: str,
+                       options: dict, n_jobs=None, scheduler=None) -> tuple[list[list[LevelBlock]], float]:
     """:func:`level_task` over every class, in batches (:func:`eqrec.lp.parallel.run_tasks`).
 
     Parameters
     ----------
-    system : AffineSystem
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the classes' horizon.
     classes : ClassSet
     mu1s : list of float
         Recovery levels, solved one after the other per class.
@@ -372,19 +375,20 @@ def solve_level_blocks(system: AffineSystem, classes: ClassSet, mu1s: list[float
         Per ``μ1``, the :class:`LevelBlock` of each class in order; and the wall-clock seconds.
     """
     t0 = time.perf_counter()
-    per_class = _run(level_task, system, classes, list(range(len(classes))),
+    per_class = _run(level_task, Stacking.of(system, classes.horizon), classes, list(range(len(classes))),
                      ([float(mu) for mu in mu1s], solver, dict(options)), n_jobs=n_jobs, scheduler=scheduler,
                      label="eqrec: classes solved")
     return [[blocks[j] for blocks in per_class] for j in range(len(mu1s))], time.perf_counter() - t0
 
 
-def solve_ratio_blocks(system: AffineSystem, classes: ClassSet, which: list[int], *, solver: str, n_jobs=None,
-                       scheduler=None) -> dict:
+def solve_ratio_blocks(system: "AffineSystem | Stacking", classes: ClassSet, which: list[int], *, solver: str,
+                       n_jobs=None, scheduler=None) -> dict:
     """:func:`ratio_task` over the terminal classes ``which``; :class:`InfeasibleDesign` names one without a ratio.
 
     Parameters
     ----------
-    system : AffineSystem
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the classes' horizon.
     classes : ClassSet
     which : list of int
         The terminal classes.
@@ -398,7 +402,9 @@ def solve_ratio_blocks(system: AffineSystem, classes: ClassSet, which: list[int]
         ``block_class``, ``block_row`` (per (class, row) LP), ``ratios``, ``recomputed``, ``gains`` (per class
         index, ``(n, |S| p)``), ``lps`` (LPs solved) and ``iterations``.
     """
-    per_class = _run(ratio_task, system, classes, which, (solver, block_lp_options(solver)), n_jobs=n_jobs,
+    st = Stacking.of(system, classes.horizon)
+    system = st.system
+    per_class = _run(ratio_task, st, classes, which, (solver, block_lp_options(solver)), n_jobs=n_jobs,
                      scheduler=scheduler, label="eqrec: terminal classes solved")
     bc, br, ratios, recomputed, gains, iters = [], [], [], [], {}, 0
     for i, rows in zip(which, per_class):

@@ -60,7 +60,7 @@ eqs. (1)-(2) of the prefix-based paper.
 
 μ1 free.  Every class level is nondecreasing in ``μ1``, so the global optimum
 over ``μ1`` and the gains is the smallest feasible ``μ1``: the μ1-free theorem
-and its Charnes–Cooper LP are in :mod:`eqrec.design.mu1_min`.
+and its Charnes–Cooper LP are in :mod:`eqrec.design.classes.mu1_min`.
 
 Which designs separate.  Prefix-tree designs only: a **time-based** design
 shares one gain row among all words at a time, and an **augmented** one
@@ -87,7 +87,7 @@ from eqrec.design.classes.blocks import choose_path, solve_level_blocks
 from eqrec.design.classes.gains import ClassCertificate, certify_classes, node_schedule
 from eqrec.design.classes.block_lp import block_lp_options, block_objectives, build_class_lp, read_class_gains
 from eqrec.design.cost import class_cost
-from eqrec.design.mu1_min import infeasible_at
+from eqrec.design.classes.mu1_min import infeasible_at
 from eqrec.design.result import Design
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError
 
@@ -130,7 +130,7 @@ class ClassSolution:
         return self.lp_levels.max(axis=1) if self.lp_levels.size else np.zeros(0)
 
 
-def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver: str = "highs",
+def solve_classes(system: "AffineSystem | Stacking", classes: ClassSet, mu1: float, *, solver: str = "highs",
                   solver_options: dict | None = None, rtol: float | None = None, n_jobs=None, scheduler=None,
                   path: str = "auto") -> ClassSolution:
     """Solve the LAD LP of every (class, row) at ``μ1`` and certify the gains from themselves.
@@ -140,7 +140,9 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
 
     Parameters
     ----------
-    system : AffineSystem
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the classes' horizon (the LPs, the gains and the
+        certificate read it; built here from a system).
     classes : ClassSet
     mu1 : float
         Recovery level ``μ1`` (positive).
@@ -171,7 +173,7 @@ def solve_classes(system: AffineSystem, classes: ClassSet, mu1: float, *, solver
                             n_jobs=n_jobs, scheduler=scheduler, path=path)[0]
 
 
-def solve_classes_at(system: AffineSystem, classes: ClassSet, mu1s, *, solver: str = "highs",
+def solve_classes_at(system: "AffineSystem | Stacking", classes: ClassSet, mu1s, *, solver: str = "highs",
                      solver_options: dict | None = None, rtol: float | None = None, n_jobs=None, scheduler=None,
                      path: str = "auto") -> list[ClassSolution]:
     """:func:`solve_classes` at several ``μ1`` (μ1 free: at ``μ1,min`` and at the level proven infeasible).
@@ -181,7 +183,8 @@ def solve_classes_at(system: AffineSystem, classes: ClassSet, mu1s, *, solver: s
 
     Parameters
     ----------
-    system : AffineSystem
+    system : AffineSystem or Stacking
+        As :func:`solve_classes`.
     classes : ClassSet
     mu1s : sequence of float
         Recovery levels (positive).
@@ -205,9 +208,11 @@ def solve_classes_at(system: AffineSystem, classes: ClassSet, mu1s, *, solver: s
     check_jobs(n_jobs)
     scheduler = check_scheduler(scheduler)
     options = block_lp_options(solver) if solver_options is None else solver_options
+    st = Stacking.of(system, classes.horizon)  # the one stacked model of these LPs, their gains and certificates
+    system = st.system
     n, N = system.n, len(classes)
     if choose_path(path, classes, None, system) == "blocks":
-        per_mu1, solve_time = solve_level_blocks(system, classes, mu1s, solver=solver, options=options,
+        per_mu1, solve_time = solve_level_blocks(st, classes, mu1s, solver=solver, options=options,
                                                  n_jobs=n_jobs, scheduler=scheduler)
         out = []
         for mu1, blocks in zip(mu1s, per_mu1):
@@ -220,17 +225,16 @@ def solve_classes_at(system: AffineSystem, classes: ClassSet, mu1s, *, solver: s
                 sol, (sum(b.rows for b in blocks), sum(b.cols for b in blocks)), sum(b.nonzeros for b in blocks),
                 0.0, sol.solve_time, solver, rtol))
         return out
-    st = Stacking(system, classes.horizon)
     out = []
     for mu1 in mu1s:
-        model = build_class_lp(system, classes, mu1, stacking=st)
+        model = build_class_lp(st, classes, mu1)
         t0 = time.perf_counter()
         sol = solve_lp(model.lp, solver, options).require_optimal(f"class LPs (mu1 = {mu1:g})")
         solve_time = time.perf_counter() - t0
         gains = read_class_gains(system, classes, model, sol)
         lp_levels = np.zeros((N, n))
         lp_levels[model.block_class, model.block_row] = block_objectives(model, sol)
-        out.append(_certified(classes, mu1, gains, lp_levels, certify_classes(system, gains, mu1, st), sol,
+        out.append(_certified(classes, mu1, gains, lp_levels, certify_classes(st, gains, mu1), sol,
                               model.lp.shape, int(model.lp.A.nnz), model.build_time, solve_time, solver, rtol))
     return out
 
@@ -285,7 +289,8 @@ NODE_GAINS_LIMIT = 20000
 LEVELS = ("common", "max", "sum")
 
 
-def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "common", cost: str | None = None,
+def class_design(system: "AffineSystem | Stacking", language, mu1: float, *, levels: str = "common",
+                 cost: str | None = None,
                  solver: str = "highs", solver_options: dict | None = None, method: str = "prefix",
                  certify: bool = True, node_gains: bool | None = None, time_based: bool = False,
                  rtol: float | None = None, n_jobs=None, scheduler=None, solved: ClassSolution | None = None):
@@ -293,7 +298,9 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
 
     Parameters
     ----------
-    system : AffineSystem
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the language's horizon: the class LPs, the node gains,
+        the certificate and the fallback to ``μ1,min`` all read it (built here once from a system).
     language : PrefixTree or ClassSet
         The language's prefix tree, or its classes (a full language from the
         window rule: then no node gains, no words).
@@ -303,7 +310,7 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
         As :func:`eqrec.design.prefix.tree_lp.build_prefix_lp`: one ``μ2`` (``common``),
         or per-node levels (``max``, ``sum``; node ``levels`` filled).
     cost : {"sum", "max"} or None
-        The delayed-data paper's ``J`` in ``extra["J"]`` (``None``: not computed).
+        The delayed-data paper's ``J`` in :attr:`Design.J <eqrec.design.result.Design.J>` (``None``: not computed).
     solver : str, optional
     solver_options : dict, optional
         LP solver and its options (default: HiGHS without presolve).
@@ -333,7 +340,7 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     ------
     InfeasibleDesign
         A terminal class cannot reach ``μ1`` (named, with the smallest
-        feasible ``μ1``, :func:`eqrec.design.mu1_min.infeasible_at`).
+        feasible ``μ1``, :func:`eqrec.design.classes.mu1_min.infeasible_at`).
     CertificationFailure
         The gains do not give the levels.
     """
@@ -344,12 +351,13 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
     tree = classes.tree
     if solved is not None and (solved.gains.classes is not classes or solved.mu1 != float(mu1)):
         raise InputError("the given class solution is of other classes or another mu1", field="solved")
-    sol = solved or solve_classes(system, classes, mu1, solver=solver, solver_options=solver_options, rtol=rtol,
+    st = Stacking.of(system, classes.horizon)  # handed down: LPs, node gains, certificate
+    sol = solved or solve_classes(st, classes, mu1, solver=solver, solver_options=solver_options, rtol=rtol,
                                   n_jobs=n_jobs, scheduler=scheduler)
     try:
         check_terminal(classes, sol)
     except InfeasibleDesign as exc:  # name the true smallest feasible μ1, not a class's worst case at this μ1
-        raise infeasible_at(system, classes, sol.mu1, exc, solver=solver, n_jobs=n_jobs,
+        raise infeasible_at(st, classes, sol.mu1, exc, solver=solver, n_jobs=n_jobs,
                             scheduler=scheduler, method=method) from None
     mu1 = sol.mu1
     inner = np.array([c.inner for c in classes.classes], bool)
@@ -360,25 +368,25 @@ def class_design(system: AffineSystem, language, mu1: float, *, levels: str = "c
                        for node in tree if not node.terminal}
     if node_gains is None:
         node_gains = tree is not None and classes.nodes <= NODE_GAINS_LIMIT
-    schedule = node_schedule(system, sol.gains, tree, time_based=time_based) if node_gains else None
+    schedule = node_schedule(st, sol.gains, tree, time_based=time_based) if node_gains else None
     patterns = tree.patterns if tree is not None else ()
-    design = Design(method=method, system=system, patterns=patterns, T=classes.horizon, mu1=mu1, mu2=mu2,
+    design = Design(method=method, system=st.system, patterns=patterns, T=classes.horizon, mu1=mu1, mu2=mu2,
                     schedule=schedule, solution=sol.solution, build_time=sol.build_time, levels=node_levels,
-                    class_gains=sol.gains, class_certificate=sol.certificate)
-    design.extra.update(engine="classes", classes=len(classes), sequences=classes.sequences, nodes=classes.nodes,
-                        lp_rows=sol.model_shape[0], lp_cols=sol.model_shape[1], lp_nonzeros=sol.nonzeros,
-                        class_levels=sol.levels)
+                    class_gains=sol.gains, class_certificate=sol.certificate, engine="classes",
+                    classes=len(classes), sequences=classes.sequences, nodes=classes.nodes,
+                    lp_rows=sol.model_shape[0], lp_cols=sol.model_shape[1], lp_nonzeros=sol.nonzeros,
+                    class_levels=sol.levels)
     # every stored level at least its certified worst case, exactly (μ1 raised to the terminal fixed point if the
     # LP's round-off left a terminal class above it; eqrec.bounds.certify); node gains certified when asked
     certify_design(design, rtol=CERT_RTOL + solver_info(solver).accuracy if rtol is None else rtol,
-                   nodes=certify and schedule is not None)
+                   nodes=certify and schedule is not None, stacking=st)
     if design.mu1 > mu1 * (1 + CERT_RTOL):  # the gains recover only to a level well above the request
         exc = InfeasibleDesign(f"no estimator recovers to mu1 = {mu1:g}: the gains certify mu1 = {design.mu1:.9g}")
-        raise infeasible_at(system, classes, mu1, exc, solver=solver, n_jobs=n_jobs, scheduler=scheduler,
+        raise infeasible_at(st, classes, mu1, exc, solver=solver, n_jobs=n_jobs, scheduler=scheduler,
                             method=method) from None
     if cost is not None:
-        design.extra.update(cost=cost, J=class_cost(classes, design.mu1, design.extra["class_levels"], cost))
-    design.extra["total_time"] = time.perf_counter() - t0
+        design.cost, design.J = cost, class_cost(classes, design.mu1, design.class_levels, cost)
+    design.total_time = time.perf_counter() - t0
     return design
 
 

@@ -84,31 +84,32 @@ class ClassCertificate:
         return float(max([self.mu1, *(lv for lv, c in zip(self.levels, self.classes) if c.inner)]))
 
 
-def certify_classes(system: AffineSystem, gains: ClassGains, mu1: float,
+def certify_classes(system: "AffineSystem | Stacking", gains: ClassGains, mu1: float,
                     stacking: Stacking | None = None) -> ClassCertificate:
     """Exact worst case of every class row from the gains ``K`` alone (no LP, no solver).
 
     Parameters
     ----------
-    system : AffineSystem
-        The system.
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the classes' horizon (read from there).
     gains : ClassGains
         One gain ``K`` per class of ``gains.classes``.
     mu1 : float
         Recovery level ``μ1`` (radius of ``ξ0``).
     stacking : Stacking, optional
-        Stacked maps over the classes' horizon; built when omitted.
+        Stacked maps over the classes' horizon (as ``system`` may be); built when neither is one.
 
     Returns
     -------
     ClassCertificate
         ``bounds[i, r] = Σ_c β_c |(E_d - K Z_S)[r, c]|`` for every class ``i`` and row ``r``.
     """
+    st = Stacking.of(stacking or system, gains.classes.horizon)
     # the one formula of the certificate (eqrec.bounds.certify.class_bounds), so that a recertification agrees
-    return ClassCertificate(mu1=float(mu1), classes=gains.classes, bounds=class_bounds(system, gains, mu1, stacking))
+    return ClassCertificate(mu1=float(mu1), classes=gains.classes, bounds=class_bounds(st.system, gains, mu1, st))
 
 
-def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | None = None,
+def node_schedule(system: "AffineSystem | Stacking", gains: ClassGains, tree: PrefixTree | None = None,
                   time_based: bool = False) -> GainSchedule:
     r"""Node gains ``(F, u0 = 0)`` per prefix of ``tree`` that realise the class-form errors.
 
@@ -121,8 +122,8 @@ def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | No
 
     Parameters
     ----------
-    system : AffineSystem
-        The system.
+    system : AffineSystem or Stacking
+        The system, or the design's stacked model over the tree's depth (its ``C̄ S`` blocks read from there).
     gains : ClassGains
         One gain ``K`` per class.
     tree : PrefixTree, optional
@@ -141,8 +142,9 @@ def node_schedule(system: AffineSystem, gains: ClassGains, tree: PrefixTree | No
     if tree is None:
         raise InputError("node gains need the prefix tree of the language (a small language); this class set "
                          "was built from the window rule")
+    st = Stacking.of(system, tree.depth)
+    system = st.system
     n, p = system.n, system.p
-    st = Stacking(system, tree.depth)
     word_gains = {}
     for word in tree.patterns:
         Tw = word.T

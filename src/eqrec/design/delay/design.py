@@ -32,9 +32,9 @@ it and ``k = 0``, ``k = T`` at ``μ1`` (counted in :mod:`eqrec.design.cost`);
 ``μ1`` free: the problem (10) is bilinear (the ``|G_ξ0| μ1`` terms).  Two routes:
 
 * :func:`design_delay_global` — the global optimum by the μ1-free theorem of
-  :mod:`eqrec.design.mu1_min`: every class level is nondecreasing in ``μ1``,
+  :mod:`eqrec.design.classes.mu1_min`: every class level is nondecreasing in ``μ1``,
   so ``J`` is, and the optimum is the smallest feasible ``μ1``, one
-  Charnes–Cooper LP (:func:`eqrec.design.mu1_min.min_recovery_level`),
+  Charnes–Cooper LP (:func:`eqrec.design.classes.mu1_min.min_recovery_level`),
   certified by the ratio recomputed from the gains (upper end) and a dual
   point (lower end);
 * :func:`eqrec.design.delay.ipopt.design_delay_ipopt` — the paper's: IPOPT through CasADi on (10) in
@@ -61,17 +61,19 @@ from eqrec.lp.model import LPSolution
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.lp.parallel import check_jobs, check_scheduler, connected, settle
 from eqrec.lp.solvers import solver_info
+from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.blocks import choose_path, prestart_workers
 from eqrec.design.classes.engine import check_terminal, class_design, solve_classes, solve_classes_at
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
-from eqrec.design.delay.languages import _classes, _tree, delay_classes, delay_language  # noqa: F401 (re-exported)
+from eqrec.design.delay.languages import delay_classes, delay_language  # noqa: F401 (re-exported)
+from eqrec.design.delay.languages import patterns_classes, patterns_tree
 from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system
-from eqrec.design.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
-from eqrec.design.mu1_min import min_recovery_level as _class_min_recovery_level
+from eqrec.design.classes.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
+from eqrec.design.classes.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix.design import check_engine, solve_tree_lp, tree_design
 from eqrec.design.prefix.tree_lp import PrefixLP, build_prefix_lp
-from eqrec.design.result import Design
+from eqrec.design.result import Design, Mu1Free
 from eqrec.design.weighted import weigh
 from eqrec.errors import InfeasibleDesign, InputError
 
@@ -79,21 +81,50 @@ from eqrec.errors import InfeasibleDesign, InputError
 # Designs from LP solutions
 # ---------------------------------------------------------------------------
 
-def _design_from_solution(model: PrefixLP, tree: PrefixTree, system: AffineSystem, x: np.ndarray, mu1: float,
-                          cost: str, sol: LPSolution, *, build_time: float = 0.0, certify: bool = True,
-                          rtol: float = 1e-6, method: str = "delay") -> Design:
+def design_from_solution(model: PrefixLP, tree: PrefixTree, x: np.ndarray, mu1: float, cost: str, sol: LPSolution,
+                         *, build_time: float = 0.0, certify: bool = True, rtol: float = 1e-6,
+                         method: str = "delay") -> Design:
     """The delayed-data design of a tree-LP point ``x`` (levels at least ``μ1``), its ``J`` and certificate.
 
     Certification raises any level (``μ1`` included) that the gains exceed to their worst case
-    (:func:`eqrec.bounds.certify.certify_design`); ``J`` is counted at the levels as stored.
+    (:func:`eqrec.bounds.certify.certify_design`); ``J`` is counted at the levels as stored.  Shared by the LP
+    route (:func:`design_delay`, engine ``tree``) and the IPOPT route (:mod:`eqrec.design.delay.ipopt`).
+
+    Parameters
+    ----------
+    model : PrefixLP
+        The tree LP (or NLP) whose variables ``x`` holds; its stacked model holds the system.
+    tree : PrefixTree
+        The language's prefix tree (the cost counts its sequences).
+    x : numpy.ndarray
+        The solver's point: gains and levels.
+    mu1 : float
+        The recovery level (the floor of every level).
+    cost : {"sum", "max"}
+        The cost ``J`` (:func:`eqrec.design.cost.paper_cost`).
+    sol : LPSolution
+        The solver's answer (status, timings), kept in the design.
+    build_time : float, optional
+        Seconds spent building the model.
+    certify : bool, optional
+        Certify the gains (default ``True``).
+    rtol : float, optional
+        Relative tolerance of the certificate.
+    method : str, optional
+        The design's method name.
+
+    Returns
+    -------
+    Design
+        The design, with its cost ``J`` (and ``J_certified`` when certified), sequences and nodes.
     """
-    design = tree_design(model, system, x, sol, mu1=mu1, method=method, floor=True, build_time=build_time)
+    design = tree_design(model, x, sol, mu1=mu1, method=method, floor=True, build_time=build_time)
     cert = certify_design(design, rtol=rtol) if certify else None
     levels = design.levels if cost == "sum" else {"*": design.mu2}
-    design.extra.update(cost=cost, J=paper_cost(tree, design.mu1, levels, cost), sequences=len(tree.patterns),
-                        nodes=len(tree))
+    design.cost, design.J = cost, paper_cost(tree, design.mu1, levels, cost)
+    design.sequences, design.nodes = len(tree.patterns), len(tree)
     if cert is not None:
-        design.extra["J_certified"] = certified_cost(design, tree, cost, cert)
+        design.J_certified = certified_cost(design, tree, cost, cert)
     return design
 
 
@@ -134,7 +165,7 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     mu1 : float
         Recovery level ``μ1``, positive.  The design's ``mu1`` may be raised
         above it by the LP's round-off, to the level its gains certify
-        (``extra["mu1_requested"]`` keeps the request; every level is at least
+        (``mu1_requested`` keeps the request; every level is at least
         its certified worst case, exactly: :func:`eqrec.bounds.certify.certify_design`).
     kind : {"missing", "delay"} or None, optional
         Reading of string words: delay words (digits, eq. (1)) or 0/1
@@ -174,8 +205,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     -------
     Design
         ``method="delay"``, ``mu2`` the largest level, ``levels`` per
-        non-terminal event-prefix node (``"sum"``), ``extra["J"]`` the cost
-        (``extra["J_certified"]`` from the certificate).
+        non-terminal event-prefix node (``"sum"``), ``J`` the cost
+        (``J_certified`` from the certificate).
 
     Raises
     ------
@@ -214,26 +245,42 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     check_flags(certify=certify, node_gains=node_gains)
     instance(solver_options, (dict, type(None)), "solver_options", "a dict or None")
     mu1 = check_mu1(mu1)
+    language = patterns_classes(patterns, kind) if engine == "classes" else patterns_tree(patterns, kind)
+    st = Stacking(system, language.horizon if engine == "classes" else language.depth)  # the design's one stacking
+    design = _design_on(st, language, mu1, cost=cost, solver=solver, form=form, certify=certify,
+                        solver_options=solver_options, engine=engine, node_gains=node_gains, n_jobs=n_jobs,
+                        scheduler=scheduler, solved=solved)
+    design.state_weights = weights
+    return design
+
+
+def _design_on(st: Stacking, language, mu1: float, *, cost: str, solver: str, form: str, certify: bool,
+               solver_options: dict | None, engine: str, node_gains: bool | None, n_jobs, scheduler,
+               solved) -> Design:
+    """:func:`design_delay` on the design's stacked model ``st``, its inputs checked.
+
+    ``language`` is the class set (class engine) or the prefix tree (tree LP) over the horizon of ``st``; the LPs,
+    the gains, the certificate and the fallback to ``μ1,min`` read ``st``, and the cost reads the design.
+    """
     rtol = 1e-6 + solver_info(solver).accuracy
     if engine == "classes":
-        classes = _classes(patterns, kind)
-        design = class_design(system, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
+        classes = language
+        design = class_design(st, classes, mu1, levels="sum" if cost == "sum" else "common", cost=cost,
                               solver=solver, solver_options=solver_options, method="delay", certify=certify,
                               node_gains=node_gains, rtol=rtol, n_jobs=n_jobs, scheduler=scheduler, solved=solved)
         if design.certificate is not None and classes.tree is not None:
-            design.extra["J_certified"] = certified_cost(design, classes.tree, cost)
+            design.J_certified = certified_cost(design, classes.tree, cost)
         elif design.class_certificate is not None:
-            design.extra["J_certified"] = class_cost(classes, design.mu1, design.class_certificate.levels, cost)
+            design.J_certified = class_cost(classes, design.mu1, design.class_certificate.levels, cost)
     else:
-        tree = _tree(patterns, kind)
-        model = build_prefix_lp(system, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
+        tree = language
+        model = build_prefix_lp(st, tree, mu1, levels="sum" if cost == "sum" else "common", form=form)
         try:
             sol = solve_tree_lp(model, solver, f"delay design (mu1 = {mu1:g})", solver_options)
         except InfeasibleDesign as exc:
-            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver, method="delay") from None
-        design = _design_from_solution(model, tree, system, sol.x, mu1, cost, sol, build_time=model.build_time,
-                                       certify=certify, rtol=rtol)
-    design.state_weights = weights
+            raise infeasible_at(st, classes_of_tree(tree), mu1, exc, solver=solver, method="delay") from None
+        design = design_from_solution(model, tree, sol.x, mu1, cost, sol, build_time=model.build_time,
+                                      certify=certify, rtol=rtol)
     return design
 
 
@@ -263,7 +310,7 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
         :func:`eqrec.design.classes.engine.check_terminal`), else ``"infeasible"`` (never raised).
     """
     check_cost(cost)
-    classes = _classes(patterns, kind)
+    classes = patterns_classes(patterns, kind)
     try:
         check_terminal(classes, solve_classes(check_system(system), classes, check_mu1(mu1), solver=solver,
                                               n_jobs=n_jobs, scheduler=scheduler))
@@ -272,7 +319,7 @@ def design_lp_status(system: AffineSystem, patterns, mu1: float, cost: str = "su
     return "optimal"
 
 
-# -------- μ1 free: the global optimum (the μ1-free theorem of eqrec.design.mu1_min)
+# -------- μ1 free: the global optimum (the μ1-free theorem of eqrec.design.classes.mu1_min)
 
 def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = None, solver: str = "highs",
                        rtol: float = MU1_LOWER_RTOL, n_jobs=None, scheduler=None) -> MinRecoveryLevel:
@@ -295,9 +342,9 @@ def min_recovery_level(system: AffineSystem, patterns, *, kind: str | None = Non
     Returns
     -------
     MinRecoveryLevel
-        ``upper`` attained by certified gains, ``lower = upper (1 - rtol)`` infeasible (:mod:`eqrec.design.mu1_min`).
+        ``upper`` attained by certified gains, ``lower = upper (1 - rtol)`` infeasible (:mod:`eqrec.design.classes.mu1_min`).
     """
-    return _class_min_recovery_level(system, _classes(patterns, kind), solver=solver, lower_rtol=rtol, n_jobs=n_jobs,
+    return _class_min_recovery_level(system, patterns_classes(patterns, kind), solver=solver, lower_rtol=rtol, n_jobs=n_jobs,
                                      scheduler=scheduler)
 
 
@@ -321,10 +368,10 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     The delayed-data paper's problem with ``μ1`` a decision variable
     (Theorem 1 / Proposition 1, eq. (10)), which is bilinear and which the
     paper solves locally with IPOPT.  By the μ1-free theorem
-    (:mod:`eqrec.design.mu1_min`) ``J`` is nondecreasing on the feasible set
+    (:mod:`eqrec.design.classes.mu1_min`) ``J`` is nondecreasing on the feasible set
     ``[μ1,min, ∞)``, so the global optimum is the design at ``μ1,min``,
     which comes from one Charnes–Cooper LP
-    (:func:`eqrec.design.mu1_min.min_recovery_level`).  ``rtol`` places the
+    (:func:`eqrec.design.classes.mu1_min.min_recovery_level`).  ``rtol`` places the
     certified infeasible level ``lower = μ1,min (1 - rtol)``;
     ``lower_bound`` is ``J`` with every class at its optimum there (no
     feasible ``μ1`` gives less).  ``engine`` designs at ``μ1,min`` with the
@@ -346,7 +393,7 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
         (default ``"highs"``).
     rtol : float, optional
         Relative distance below ``μ1,min`` of the level proven infeasible
-        (default :data:`eqrec.design.mu1_min.MU1_LOWER_RTOL`).
+        (default :data:`eqrec.design.classes.mu1_min.MU1_LOWER_RTOL`).
     certify : bool, optional
         Certify the design's gains independently (default).
     node_gains : bool or None, optional
@@ -402,30 +449,31 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_solver(solver)
     check_flags(certify=certify, node_gains=node_gains)
     rtol = check_fraction(rtol, "rtol")
-    classes = _classes(patterns, kind)
+    classes = patterns_classes(patterns, kind)
     check_jobs(n_jobs)
     scheduler = check_scheduler(scheduler)
+    st = Stacking(system, classes.horizon)  # the one stacked model of μ1,min, both level LPs and the design
     large = choose_path("auto", classes, None, system) == "blocks"  # else no class LP runs on the scheduler
     with connected(scheduler if large else None) as client, _workers_ahead(system, classes, n_jobs, client):
         par = {"n_jobs": n_jobs, "scheduler": client}  # one connection, one pool, for the three steps
-        mm = _class_min_recovery_level(system, classes, solver=solver, lower_rtol=rtol, **par)
+        mm = _class_min_recovery_level(st, classes, solver=solver, lower_rtol=rtol, **par)
         # the levels at μ1,min (the design) and at the level proven infeasible (the bound), in one pass per class
         at = [mm.upper] + ([mm.lower] if np.isfinite(mm.lower) else [])
         if engine == "tree":
             if classes.tree is None:
                 raise InputError("the tree engine needs the language's words (a prefix tree)", field="engine")
-            sols = [None, *solve_classes_at(system, classes, at[1:], solver=solver, **par)]
-            design = design_delay(system, classes.tree, mm.upper, cost=cost, solver=solver, certify=certify,
-                                  engine="tree")
+            sols = [None, *solve_classes_at(st, classes, at[1:], solver=solver, **par)]
+            design = _design_on(st, classes.tree, mm.upper, cost=cost, solver=solver, form="split", certify=certify,
+                                solver_options=None, engine="tree", node_gains=None, n_jobs=None, scheduler=None,
+                                solved=None)
         else:
-            sols = solve_classes_at(system, classes, at, solver=solver, **par)
-            design = design_delay(system, classes, mm.upper, cost=cost, solver=solver, certify=certify,
-                                  node_gains=node_gains, solved=sols[0], **par)
+            sols = solve_classes_at(st, classes, at, solver=solver, **par)
+            design = _design_on(st, classes, mm.upper, cost=cost, solver=solver, form="split", certify=certify,
+                                solver_options=None, engine="classes", node_gains=node_gains, solved=sols[0], **par)
         lower_bound = class_cost(classes, mm.lower, sols[1].levels, cost) if len(at) > 1 else np.nan
-    J = float(design.extra["J"])
+    J = float(design.J)
     design.state_weights = weights
-    design.extra.update(mu1_free="global", lower_bound=lower_bound, mu1_min=mm.upper, mu1_min_lower=mm.lower,
-                        mu1_binding=mm.binding)
+    design.mu1_free = Mu1Free("global", mu1_min=mm.upper, mu1_min_lower=mm.lower, binding=mm.binding,
+                              lower_bound=lower_bound)
     return FreeMu1Result(design=design, route="global", cost=cost, mu1=design.mu1, J=J, lower_bound=float(lower_bound),
-                         lps=mm.lps + 2, time=time.perf_counter() - t_start, mu1_min=mm,
-                         extra={"binding": mm.binding, "lower_margin": mm.lower_margin})
+                         lps=mm.lps + 2, time=time.perf_counter() - t_start, mu1_min=mm)

@@ -7,7 +7,7 @@ affine in it, one sparsity pattern); :func:`design_delay_ipopt` solves it with
 IPOPT from an LP solution (a local method: its point is certified as is and,
 polished, at the level its gains reach); :func:`compare_free_routes` judges it
 against the global optimum of :func:`eqrec.design.delay.design.design_delay_global`
-(the μ1-free theorem of :mod:`eqrec.design.mu1_min`).  Kept for the
+(the μ1-free theorem of :mod:`eqrec.design.classes.mu1_min`).  Kept for the
 comparison row of the batch-reactor example (P3-BR).
 """
 
@@ -22,10 +22,13 @@ from eqrec.bounds.certify import closed_loop_maps
 from eqrec.lp.model import LinearProgram, LPSolution
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.lp.solvers import ipopt_options, solve_lp, solver_info
+from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.cost import check_cost, cost_weights
-from eqrec.design.delay.design import _design_from_solution, _tree, design_delay
-from eqrec.design.mu1_min import FreeMu1Result
+from eqrec.design.delay.design import design_delay, design_from_solution
+from eqrec.design.delay.languages import patterns_tree
+from eqrec.design.classes.mu1_min import FreeMu1Result, IpoptRoute
+from eqrec.design.result import Mu1Free
 from eqrec.design.prefix.tree_lp import build_prefix_lp
 from eqrec.errors import InfeasibleDesign, SolverFailure
 
@@ -61,8 +64,9 @@ def bilinear_problem(system: AffineSystem, tree: PrefixTree, cost: str = "sum", 
     levels = "sum" if cost == "sum" else "common"
     mu1_cost, _ = cost_weights(tree, cost)
     kw = dict(levels=levels, mu1_range=(1.0, 1.0), mu1_cost=mu1_cost, form=form)
-    ma = build_prefix_lp(system, tree, r_a, **kw)
-    mb = build_prefix_lp(system, tree, r_b, **kw)
+    st = Stacking.of(system, tree.depth)  # one stacked model for both LPs (they differ in the radius only)
+    ma = build_prefix_lp(st, tree, r_a, **kw)
+    mb = build_prefix_lp(st, tree, r_b, **kw)
     Aa, Ab = ma.lp.A, mb.lp.A
     if not (np.array_equal(Aa.indptr, Ab.indptr) and np.array_equal(Aa.indices, Ab.indices)):
         raise AssertionError("the design LP's sparsity pattern depends on the radius")
@@ -143,7 +147,7 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, kind: str | None = Non
     the start LP is feasible.  IPOPT is a local method: its point is certified
     as is (tolerance widened by IPOPT's accuracy) and, with ``polish``, the
     design at IPOPT's ``μ1`` gives the exact optimum for that ``μ1``
-    (``extra["polished"]``).
+    (``ipopt.polished``).
 
     Parameters
     ----------
@@ -162,7 +166,7 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, kind: str | None = Non
     options : dict or None, optional
         IPOPT options (:func:`eqrec.lp.solvers.ipopt_options`).
     polish : bool, optional
-        Also solve the LP at the level IPOPT's gains reach (``extra["polished"]``).
+        Also solve the LP at the level IPOPT's gains reach (``ipopt.polished``).
     certify : bool, optional
         Certify the gains independently.
     solver : str, optional
@@ -187,7 +191,7 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, kind: str | None = Non
 
     check_cost(cost)
     t_start = time.perf_counter()
-    tree = _tree(patterns, kind)
+    tree = patterns_tree(patterns, kind)
     t_build = time.perf_counter()
     bl = bilinear_problem(system, tree, cost, form=form)
     build_time = time.perf_counter() - t_build
@@ -242,22 +246,22 @@ def design_delay_ipopt(system: AffineSystem, patterns, *, kind: str | None = Non
     mu1 = float(xv[mu1_col])
     sol = LPSolution("optimal", xv, float(c @ xv), "ipopt", int(stats.get("iter_count", 0)), t_ip, base.blocks)
     rtol = 1e-6 + solver_info("ipopt").accuracy
-    design = _design_from_solution(bl["model"], tree, system, xv, mu1, cost, sol, build_time=build_time,
-                                   certify=certify, rtol=rtol)
-    extra = {"status": status, "iterations": sol.iterations, "ipopt_time": t_ip, "start_mu1": mu0,
-             "start_J": float(sol0.objective), "J_ipopt": float(c @ xv)}
+    design = design_from_solution(bl["model"], tree, xv, mu1, cost, sol, build_time=build_time,
+                                  certify=certify, rtol=rtol)
     f, b = terminal_ratios(system, design.schedule, tree)
-    extra["mu1_of_gains"] = _fixed_point(f, b)  # the smallest level IPOPT's gains recover to
+    record = IpoptRoute(status=status, iterations=sol.iterations, ipopt_time=t_ip, start_mu1=mu0,
+                        start_J=float(sol0.objective), J_ipopt=float(c @ xv),
+                        mu1_of_gains=_fixed_point(f, b))  # the smallest level IPOPT's gains recover to
     if polish:  # the exact optimum at a level IPOPT's gains certainly reach
-        mu_p = max(mu1, extra["mu1_of_gains"])
+        mu_p = max(mu1, record.mu1_of_gains)
         try:
             pol = design_delay(system, tree, mu_p, cost=cost, solver=solver, certify=certify)
-            extra["polished"] = {"mu1": mu_p, "J": float(pol.extra["J"]), "design": pol}
+            record.polished = {"mu1": mu_p, "J": float(pol.J), "design": pol}
         except InfeasibleDesign:
-            extra["polished"] = {"mu1": mu_p, "J": np.nan, "status": "infeasible"}
-    design.extra.update(mu1_free="ipopt")
+            record.polished = {"mu1": mu_p, "J": np.nan, "status": "infeasible"}
+    design.mu1_free = Mu1Free("ipopt")
     return FreeMu1Result(design=design, route="ipopt", cost=cost, mu1=mu1, J=float(c @ xv), lower_bound=np.nan,
-                         lps=lps, time=time.perf_counter() - t_start, extra=extra)
+                         lps=lps, time=time.perf_counter() - t_start, ipopt=record)
 
 
 def compare_free_routes(global_result: FreeMu1Result, ipopt_result: FreeMu1Result) -> dict:
@@ -283,12 +287,12 @@ def compare_free_routes(global_result: FreeMu1Result, ipopt_result: FreeMu1Resul
         ``"tie"``), the times and IPOPT's gap to the bound.
     """
     Jg, Ji = global_result.J, ipopt_result.J
-    Jc = ipopt_result.extra.get("polished", {}).get("J", np.nan)
+    Jc = (ipopt_result.ipopt.polished or {}).get("J", np.nan)
     Jcmp = Jc if np.isfinite(Jc) else Ji
     lb = global_result.lower_bound
     rtol = max(global_result.gap, 1e-6) if np.isfinite(global_result.gap) else 1e-6
     return {"J_global": Jg, "J_ipopt": Ji, "J_ipopt_polished": Jc, "mu1_global": global_result.mu1,
-            "mu1_ipopt": ipopt_result.mu1, "mu1_of_ipopt_gains": ipopt_result.extra.get("mu1_of_gains", np.nan),
+            "mu1_ipopt": ipopt_result.mu1, "mu1_of_ipopt_gains": ipopt_result.ipopt.mu1_of_gains,
             "lower_bound": lb, "tolerance": rtol,
             "better": ("global" if Jg < Jcmp - rtol * abs(Jg) else
                        ("ipopt" if Jcmp < Jg - rtol * abs(Jg) else "tie")),

@@ -153,13 +153,40 @@ def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None) 
     return classes_of_full_language(T, D, integer(max_lost, "max_lost", high=T))
 
 
-def _tree(patterns, kind: str | None = None) -> PrefixTree:
-    """The prefix tree of a fixed-length language of delay (or, with ``kind``, missing-data) words or patterns."""
+def patterns_tree(patterns, kind: str | None = None) -> PrefixTree:
+    """The prefix tree of a fixed-length language of delay (or, with ``kind``, missing-data) words or patterns.
+
+    Parameters
+    ----------
+    patterns : sequence of str or ArrivalPattern, or PrefixTree
+        The language, as the delayed-data designs take it (argument ``patterns``).
+    kind : str or None, optional
+        How words are read (``"delay"`` or ``"missing"``; ``None``: as :func:`eqrec.design.inputs.language_tree`).
+
+    Returns
+    -------
+    PrefixTree
+        Its prefix tree; bad input raises :class:`~eqrec.errors.InputError` naming ``patterns``.
+    """
     return language_tree(patterns, kind=kind, field_name="patterns")
 
 
-def _classes(patterns, kind: str | None = None) -> ClassSet:
-    """Classes of a fixed-length language given as words, patterns, a tree or already as classes."""
+def patterns_classes(patterns, kind: str | None = None) -> ClassSet:
+    """The (time, available data) classes of a fixed-length language given as words, patterns, a tree or classes.
+
+    Parameters
+    ----------
+    patterns : sequence of str or ArrivalPattern, PrefixTree or ClassSet
+        The language, as the delayed-data designs take it (argument ``patterns``).
+    kind : str or None, optional
+        How words are read (``"delay"`` or ``"missing"``; ``None``: as
+        :func:`eqrec.design.inputs.language_classes`).
+
+    Returns
+    -------
+    ClassSet
+        Its classes; bad input raises :class:`~eqrec.errors.InputError` naming ``patterns``.
+    """
     return language_classes(patterns, kind=kind, field_name="patterns")
 
 

@@ -15,12 +15,13 @@ from eqrec.bounds.certify import certify_design
 from eqrec.bounds.data_classes import classes_of_tree
 from eqrec.lp.model import LPSolution
 from eqrec.lp.solvers import solve_lp
+from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.engine import class_design
 from eqrec.design.inputs import FREE, check_flags, check_mu1, check_solver, check_system, language_tree
-from eqrec.design.mu1_min import infeasible_at, min_recovery_level
+from eqrec.design.classes.mu1_min import infeasible_at, min_recovery_level
 from eqrec.design.prefix.tree_lp import PrefixLP, build_prefix_lp, read_schedule
-from eqrec.design.result import Design
+from eqrec.design.result import Design, Mu1Free
 from eqrec.design.weighted import weigh
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
@@ -86,16 +87,14 @@ def solve_tree_lp(model: PrefixLP, solver: str, what: str, options: dict | None 
     return sol.require_optimal(what)
 
 
-def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: LPSolution, *, mu1: float,
+def tree_design(model: PrefixLP, x: np.ndarray, solution: LPSolution, *, mu1: float,
                 method: str, floor: bool = False, build_time: float | None = None) -> Design:
     """The :class:`Design` of a tree-LP point ``x``: node gains, node levels and the largest level ``mu2``.
 
     Parameters
     ----------
     model : PrefixLP
-        The built LP.
-    system : AffineSystem
-        The system.
+        The built LP (its stacked model holds the system the design is for).
     x : numpy.ndarray
         The LP point.
     solution : LPSolution
@@ -113,15 +112,15 @@ def tree_design(model: PrefixLP, system: AffineSystem, x: np.ndarray, solution: 
     Returns
     -------
     Design
-        Uncertified (``extra["engine"] = "tree"``).
+        Uncertified (``engine = "tree"``).
     """
     lv = (lambda v: float(max(v, mu1))) if floor else float
     levels = {model.tree.nodes[i].label: lv(x[c]) for i, c in model.level_cols.items()}
     mu2 = max(levels.values(), default=mu1) if model.levels == "sum" else lv(x[model.mu2_col])
-    design = Design(method=method, system=system, patterns=model.tree.patterns, T=model.stacking.T, mu1=float(mu1),
+    design = Design(method=method, system=model.stacking.system, patterns=model.tree.patterns, T=model.stacking.T,
+                    mu1=float(mu1),
                     mu2=mu2, schedule=read_schedule(model, x, time_based=(method == "time")), solution=solution,
                     build_time=model.build_time if build_time is None else build_time, levels=levels)
-    design.extra["engine"] = "tree"
     return design
 
 
@@ -164,11 +163,11 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         engine's μ1-free theorem, :func:`eqrec.min_recovery_level`, which
         covers every prefix tree).  Every level is nondecreasing in ``μ1``,
         so the design there also has the smallest ``M2`` over all ``μ1``;
-        ``extra`` records ``mu1_free``, ``mu1_min``, ``mu1_min_lower`` (proven
-        infeasible) and ``mu1_binding``.  Where the LP meets the recovery
+        ``mu1_free`` (a :class:`~eqrec.design.result.Mu1Free`) records
+        ``mu1_min``, ``mu1_min_lower`` (proven infeasible) and the binding class.  Where the LP meets the recovery
         constraint only to its tolerance, the returned ``mu1`` is raised to the
         smallest level its gains certify (a few ulps up, or up to ``1e-6``
-        relative for a request just below ``μ1,min``; ``extra["mu1_requested"]``
+        relative for a request just below ``μ1,min``; ``mu1_requested``
         keeps the request), and every other level to its certified worst case
         (:func:`eqrec.bounds.certify.certify_design`): the estimator reports
         these levels, which its error never exceeds.
@@ -264,14 +263,6 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
     check_flags(certify=certify, zero_offset=zero_offset, node_gains=node_gains, fixed_length=fixed_length)
     tree = language_tree(words, kind="missing", fixed_length=fixed_length, field_name="words")
     mu1 = check_mu1(mu1, allow_free=True)
-    if mu1 == FREE:  # the class engine's global optimum over μ1 (eqrec.design.mu1_min), then the design there
-        mm = min_recovery_level(system, classes_of_tree(tree), solver=solver, n_jobs=n_jobs, scheduler=scheduler)
-        design = design_prefix(system, tree, mm.upper, solver=solver, T=T, form=form, certify=certify, method=method,
-                               zero_offset=zero_offset, levels=levels, engine=engine, node_gains=node_gains,
-                               fixed_length=fixed_length, n_jobs=n_jobs, scheduler=scheduler)
-        design.extra.update(mu1_free="global", mu1_min=mm.upper, mu1_min_lower=mm.lower, mu1_binding=mm.binding)
-        design.state_weights = weights
-        return design
     if engine == "classes":
         if T is not None and T != tree.depth:
             raise InputError(f"the class engine designs on the words' own horizon {tree.depth}, got T = {T}",
@@ -279,17 +270,27 @@ def design_prefix(system: AffineSystem, words, mu1: float, *, solver: str = "hig
         if form != "split" or not zero_offset:
             raise InputError("form and zero_offset choose the tree LP's formulation: use engine='tree'",
                              field="engine")
-        design = class_design(system, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
+    # the design's one stacked model, over the words' horizon: μ1,min, the LPs, the gains and the certificate read
+    # it (the tree LP on a longer horizon T builds its own: eqrec.bounds.stacking.Stacking.of)
+    st = Stacking(system, tree.depth)
+    mm = None
+    if mu1 == FREE:  # the class engine's global optimum over μ1 (eqrec.design.classes.mu1_min), then the design there
+        mm = min_recovery_level(st, classes_of_tree(tree), solver=solver, n_jobs=n_jobs, scheduler=scheduler)
+        mu1 = mm.upper
+    if engine == "classes":
+        design = class_design(st, classes_of_tree(tree), mu1, levels=levels, solver=solver, method=method,
                               certify=certify, node_gains=node_gains, time_based=(method == "time"), n_jobs=n_jobs,
                               scheduler=scheduler)
     else:
-        model = build_prefix_lp(system, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
+        model = build_prefix_lp(st, tree, mu1, T=T, form=form, zero_offset=zero_offset, levels=levels)
         try:
             sol = solve_tree_lp(model, solver, f"{method} design (mu1 = {mu1:g})")
         except InfeasibleDesign as exc:
-            raise infeasible_at(system, classes_of_tree(tree), mu1, exc, solver=solver, method=method) from None
-        design = tree_design(model, system, sol.x, sol, mu1=model.mu1, method=method)
+            raise infeasible_at(st, classes_of_tree(tree), mu1, exc, solver=solver, method=method) from None
+        design = tree_design(model, sol.x, sol, mu1=model.mu1, method=method)
         if certify:
             certify_design(design)
+    if mm is not None:
+        design.mu1_free = Mu1Free("global", mu1_min=mm.upper, mu1_min_lower=mm.lower, binding=mm.binding)
     design.state_weights = weights
     return design

@@ -65,7 +65,7 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     -------
     Design
         ``method="time"``, one pattern (the worst case), ``mu2`` the
-        optimal ``M2``; ``extra["language"]`` and ``extra["worst_case_word"]``.
+        optimal ``M2``; ``language`` and ``worst_case_word``.
 
     Raises
     ------
@@ -88,7 +88,7 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     >>> import eqrec
     >>> words = ["101111", "110111", "111011", "111101"]
     >>> design = eqrec.design_time_based(eqrec.acc_system(), words, mu1=1.0)
-    >>> worst = design.extra["worst_case_word"]
+    >>> worst = design.worst_case_word
     >>> bool(design.mu2 == eqrec.design_prefix(eqrec.acc_system(), [worst], mu1=1.0).mu2)
     True
     """
@@ -99,8 +99,8 @@ def design_time_based(system: AffineSystem, words, mu1: float, *, solver: str = 
     design = design_prefix(system, [wc], mu1, solver=solver, form=form, certify=False, method="time",
                            engine=engine)
     design.state_weights = weights
-    design.extra["language"] = tuple(p.label for p in language)
-    design.extra["worst_case_word"] = wc.label
+    design.language = tuple(p.label for p in language)
+    design.worst_case_word = wc.label
     if certify:
         certify_design(design, words=sorted(set(language) | {wc}, key=lambda p: p.label))
     return design

@@ -213,15 +213,16 @@ class NodeRows:
                              shape=(self.rows, nx)))
 
 
-def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = None,
+def build_prefix_lp(system: "AffineSystem | Stacking", words, mu1: float, *, T: int | None = None,
                     form: str = "split", zero_offset: bool = True, levels: str = "common",
                     mu1_range: tuple[float, float] | None = None, mu1_cost: float = 1.0) -> PrefixLP:
     """Build the LP of Theorem 3 (minimise ``M2`` for given ``M1``) over a prefix tree.
 
     Parameters
     ----------
-    system : AffineSystem
-        The affine system.
+    system : AffineSystem or Stacking
+        The affine system, or the design's stacked model over the horizon (kept as ``PrefixLP.stacking``,
+        which the gains and the certificate then read; built here from a system).
     words : sequence of str or ArrivalPattern, or PrefixTree
         The language (words may differ in length: Section V extension; the
         recovery level ``M1`` is then imposed at each word's end).
@@ -270,7 +271,8 @@ def build_prefix_lp(system: AffineSystem, words, mu1: float, *, T: int | None = 
     mu1 = float(mu1)
     if not np.isfinite(mu1) or mu1 <= 0:
         raise InputError(f"the recovery level mu1 must be positive, got {mu1}", field="mu1")
-    st = Stacking(system, T)
+    st = Stacking.of(system, T)
+    system = st.system
     n, p = system.n, system.p
     lay = st.layout
     phi, Ol, Y = st.transition, st.open_loop, st.output_maps

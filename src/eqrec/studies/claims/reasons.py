@@ -4,10 +4,10 @@ A row of ``config/claims.yaml`` holds the paper's value and our wording as
 ``str.format`` templates with plain named fields (``{mu2:.6f}``).  When the
 wording depends on the evidence (which alternative text, whether an
 explanation still holds, a joined list, a count), a function of the study's
-``p1_claims`` ... ``p4_claims`` module decides, registered under the claim's
-id::
+``claims`` module (:mod:`eqrec.studies.p1.claims` ... :mod:`eqrec.studies.p4.claims`)
+decides, registered under the claim's id in the one registry :data:`REASONS`::
 
-    REASONS, reason = registry()
+    from eqrec.studies.claims.reasons import reason
 
     @reason("P1-M2:prefix-L1")
     def prefix_l1(ev, texts):
@@ -76,24 +76,9 @@ def registry() -> tuple[dict[str, ReasonFunction], Callable[..., Callable[[Reaso
     return table, reason
 
 
-def merged(*tables: Mapping[str, ReasonFunction]) -> dict[str, ReasonFunction]:
-    """The studies' tables of reason functions in one, refusing an id registered twice.
-
-    Parameters
-    ----------
-    *tables : Mapping[str, callable]
-        Claim id -> reason function, one table per study.
-
-    Returns
-    -------
-    dict[str, callable]
-    """
-    out: dict[str, ReasonFunction] = {}
-    for table in tables:
-        if set(out) & set(table):
-            raise ValueError(f"claims with two reason functions: {sorted(set(out) & set(table))}")
-        out.update(table)
-    return out
+#: Every study's reason functions by claim id, filled by the ``@reason`` decorators of the studies' ``claims``
+#: modules when they are imported (the claims table imports them by name: it reads the studies through this table).
+REASONS, reason = registry()
 
 
 def fmtlist(xs: Any, spec: str = ".4g") -> str:

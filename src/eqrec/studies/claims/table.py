@@ -23,8 +23,8 @@ evidence's keys, ``value`` (ours), ``paper`` (the published value, a number
 where it reads as one) and ``tol`` (the comparison tolerance), plus what the
 claim's reason function adds.  The reason functions (one per claim id, or
 shared by ids of one shape) are in :mod:`eqrec.studies.p1.claims` ...
-:mod:`eqrec.studies.p4.claims`, registered by id (the contract is in
-:mod:`eqrec.studies.claims.reasons`); a claim with named texts or an
+:mod:`eqrec.studies.p4.claims`, registered by id in one registry (the contract is in
+:mod:`eqrec.studies.claims.reasons`; :func:`load_reasons` imports those modules by name); a claim with named texts or an
 explanation must have one, and a claim without one shows its single ``note``
 filled from the evidence.
 
@@ -50,21 +50,20 @@ to ``results/timings/claims.csv``.
 from __future__ import annotations
 
 import functools
+import importlib.util
 import json
 import math
 from decimal import Decimal
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from eqrec.errors import InputError
-from eqrec.studies.p1 import claims as p1_claims
-from eqrec.studies.p2 import claims as p2_claims
-from eqrec.studies.p3 import claims as p3_claims
-from eqrec.studies.p4 import claims as p4_claims
-from eqrec.studies.claims.reasons import Reason, fmtlist, merged
+from eqrec.studies.claims import reasons as claim_reasons
+from eqrec.studies.claims.reasons import Reason, fmtlist
 from eqrec.studies.claims.published import named_texts, read_claims
+from eqrec.studies.pipeline.configuration import CLAIMS_MODULE, SECTIONS
 from eqrec.studies.pipeline.logs import get_logger
 from eqrec.studies.pipeline.outputs import write_csv, write_text
 
@@ -77,8 +76,30 @@ STATUSES = ("reproduced", "differs", "not comparable")
 COLUMNS = ["id", "quantity", "paper_value", "our_value", "status", "reason"]
 
 
+def load_reasons(studies: Iterable[str] = SECTIONS) -> dict[str, Callable]:
+    """Every study's reason functions by claim id, from the registry :data:`eqrec.studies.claims.reasons.REASONS`.
+
+    Each study's ``claims`` module (:data:`~eqrec.studies.pipeline.configuration.CLAIMS_MODULE`), where there is one, is
+    imported by name, and its ``@reason`` decorators fill the registry: the table imports no study.
+
+    Parameters
+    ----------
+    studies : Iterable[str]
+        The studies' names (default: the configuration's sections).
+
+    Returns
+    -------
+    dict[str, callable]
+        The registry, claim id -> reason function.
+    """
+    for name in (CLAIMS_MODULE.format(study) for study in studies):
+        if importlib.util.find_spec(name) is not None:
+            importlib.import_module(name)
+    return claim_reasons.REASONS
+
+
 #: The reason functions of every study by claim id (see :mod:`eqrec.studies.claims.reasons`).
-REASONS: dict[str, Callable] = merged(p1_claims.REASONS, p2_claims.REASONS, p3_claims.REASONS, p4_claims.REASONS)
+REASONS: dict[str, Callable] = load_reasons()
 
 
 # --------------------------------------------------------------------------- claims file
@@ -104,7 +125,7 @@ def load_claims(path: str | Path, reasons: Mapping[str, Callable] | None = None)
     for entry in data:
         if (isinstance(entry.get("note"), Mapping) or "explanation" in entry) and entry["id"] not in reasons:
             raise InputError(f"claim {entry['id']}: named texts and explanations are chosen by a reason function, "
-                             "and none is registered for this id (eqrec.studies.p*_claims)", str(path), "id")
+                             "and none is registered for this id (eqrec.studies.p*.claims)", str(path), "id")
     return data
 
 

@@ -10,9 +10,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, Mapping
 
-from eqrec.studies.claims.reasons import Reason, all_are, join, registry
-
-REASONS, reason = registry()
+from eqrec.studies.claims.reasons import Reason, all_are, join, reason
 
 
 @reason("P1-M2:time-L1")

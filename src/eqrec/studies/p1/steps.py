@@ -94,7 +94,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
                 # the class engine on the same problem (eqrec.design.classes.engine): same optimum, one LP per class
                 dc, timing_c = _timed_design(lambda: fn(system, L1, mu1, solver=solver), int(cfg["timing_repeats"]))
                 entry["class_engine"] = {"mu2": dc.mu2, "certified_mu2": dc.certificate.mu2,
-                                         "classes": dc.extra.get("classes"), **timing_c}
+                                         "classes": dc.classes, **timing_c}
         entry["solver_spread"] = float(np.ptp([v["mu2"] for v in entry["solvers"].values()]))
         result["designs"][method] = entry
     result["variants"] = design_variants(cfg)

@@ -10,9 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from eqrec.studies.claims.reasons import Reason, each, fmtcomplex, fmtlist, join, registry
-
-REASONS, reason = registry()
+from eqrec.studies.claims.reasons import Reason, each, fmtcomplex, fmtlist, join, reason
 
 
 def _solver_name(solver: str) -> str:

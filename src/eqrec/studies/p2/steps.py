@@ -36,7 +36,8 @@ from eqrec.design.augmented.design import design_augmented
 from eqrec.design.augmented.guarantee import OPTIMUM_ATOL, OPTIMUM_RTOL, best_guarantee_among_optima
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.augmented.model import AugmentedGains, AugmentedStacking
-from eqrec.design.augmented.runtime import AugmentedEstimator, augmented_to_time_based, schedule_from_augmented
+from eqrec.design.augmented.runtime import augmented_to_time_based, schedule_from_augmented
+from eqrec.estimators.augmented import AugmentedEstimator
 from eqrec.design.augmented.nlp import solve_free_ipopt
 from eqrec.design.observers import deadbeat_observer, place_observer
 from eqrec.design.prefix.time_based import design_time_based
@@ -70,14 +71,14 @@ def _schedule_npz(prefix: str, word: str, F: np.ndarray, u0: np.ndarray) -> dict
 # --------------------------------------------------------------------------- designs
 
 def _augmented_entry(system, d) -> dict:
-    g: AugmentedGains = d.extra["gains"]
-    cert, x = d.certificate, d.extra
+    g: AugmentedGains = d.augmented.gains
+    cert, x = d.certificate, d.augmented
     return {"design_mu2": d.mu2, "certified_mu2": cert.mu2, "certified_terminal": cert.terminal,
-            "worst_case_word": x["worst_case_word"], "mode": x["mode"], "L": g.L[0].tolist(),
+            "worst_case_word": d.worst_case_word, "mode": x.mode, "L": g.L[0].tolist(),
             "eig_A_minus_LC": _eig(system, g.L[0]), "s0": g.s0.tolist(), "solver": d.solution.solver,
             "iterations": d.solution.iterations, "solve_time": d.solution.solve_time,
-            **{k: x.get(k) for k in ("ipopt_status", "initial_mu2", "initial_guess")},
-            "poles": [[p.real, p.imag] for p in x.get("poles", [])], "certified_words": list(cert.words)}
+            **{k: getattr(x, k) for k in ("ipopt_status", "initial_mu2", "initial_guess")},
+            "poles": [[p.real, p.imag] for p in x.poles or []], "certified_words": list(cert.words)}
 
 
 def step_designs(cfg, inputs, outputs, wildcards) -> dict:
@@ -98,13 +99,13 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
             t0 = time.perf_counter()
             d = design_augmented(system, language, mu1, L=Lspec, poles=poles)
             res[name] = {**_augmented_entry(system, d), "wall_time": time.perf_counter() - t0}
-            arrays.update(_gains_npz(f"{fig}/{name}", system, d.extra["gains"]))
+            arrays.update(_gains_npz(f"{fig}/{name}", system, d.augmented.gains))
             log.info("%s %s: mu2 = %.9g (certified %.9g)", fig, name, d.mu2, d.certificate.mu2)
         if fig == "f2":
             # Reading 1: word positions read as 1-based time indices (caption: k = 2 and 3).
             w1 = one_based_word(wc)
             d1 = design_augmented(system, [w1], mu1, L="free", poles=poles)
-            g1 = d1.extra["gains"]
+            g1 = d1.augmented.gains
             arrays.update(_gains_npz("f2/one_based", system, g1))
             # What the 1-based design really guarantees on the true worst-case word.
             on_true = certify_schedule(system, retarget(schedule_from_augmented(system, g1), w1, wc), [wc], mu1)
@@ -116,7 +117,7 @@ def step_designs(cfg, inputs, outputs, wildcards) -> dict:
             for name, Lspec in (("leak_lp", None), ("leak_free", "free")):
                 try:
                     dl = design_augmented(system, language, mu1, L=Lspec, poles=poles, mode="leak")
-                    gl = dl.extra["gains"]
+                    gl = dl.augmented.gains
                     res["leak"][name] = {**_augmented_entry(system, dl), "certified_mu2_theorem2_runtime":
                                          _certified(system, gl, [wc], mu1, "theorem2")["mu2"]}
                     arrays.update(_gains_npz(f"f2/{name}", system, gl, "hold"))
@@ -186,8 +187,7 @@ def _runtime_check(system, gains, language, mu1, seed, kind, x0, runs) -> float:
         delta = sample_uncertainty(lay, rad, rng, kind)
         tr = simulate_run(system, sch, word, delta, x0)
         w, v, xi0 = lay.split(delta)
-        run = closed_loop(system, AugmentedEstimator(system, gains, x0 - xi0), ArrivalTrace.from_pattern(word),
-                          x0, xi0, w, v)
+        run = closed_loop(system, AugmentedEstimator(system, gains), ArrivalTrace.from_pattern(word), x0, xi0, w, v)
         worst = max(worst, float(np.abs(run.xhat[1:] - tr.xhat[1:]).max()))
     return worst
 

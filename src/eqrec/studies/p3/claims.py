@@ -10,9 +10,8 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from eqrec.studies.claims.reasons import Reason, each, fmtlist, fmtlists, join, registry
+from eqrec.studies.claims.reasons import Reason, each, fmtlist, fmtlists, join, reason
 
-REASONS, reason = registry()
 
 #: A causal run at a worst-case vertex attains a bound when it is within this gap.
 VERTEX_GAP = 1e-9

@@ -196,12 +196,12 @@ def _design_summary(design: Design) -> dict:
     rows = level_table(design)
     inner = [r for r in rows if 0 < r["k"] < design.T]
     top = max(inner, key=lambda r: r["level"], default={"prefix": None, "k": None})
-    return {"mu1": design.mu1, "mu2": design.mu2, "J": design.extra.get("J"), "cost": design.extra.get("cost"),
-            "sequences": design.extra.get("sequences"), "nodes": len(rows) - 1, "classes": design.extra.get("classes"),
+    return {"mu1": design.mu1, "mu2": design.mu2, "J": design.J, "cost": design.cost,
+            "sequences": design.sequences, "nodes": len(rows) - 1, "classes": design.classes,
             "min_level": float(min(r["level"] for r in inner)) if inner else design.mu2,
             "argmax_prefix": top["prefix"], "argmax_depth": top["k"],
             "certified_mu2": design.certificate.mu2, "certified_terminal": design.certificate.terminal,
-            "J_certified": design.extra.get("J_certified"),
+            "J_certified": design.J_certified,
             "max_certified_over_level": float(max((r["certified"] / r["level"] for r in inner), default=1.0))}
 
 
@@ -212,8 +212,8 @@ def _free_summary(res: FreeMu1Result) -> dict:
         out["mu1_min"] = {"upper": res.mu1_min.upper, "lower": res.mu1_min.lower,
                           "lower_margin": res.mu1_min.lower_margin, "binding": res.mu1_min.binding}
     if res.route == "ipopt":
-        pol = res.extra.get("polished", {})
-        out.update({key: res.extra[key] for key in ("status", "iterations", "mu1_of_gains", "start_mu1")},
+        pol = res.ipopt.polished or {}
+        out.update({key: getattr(res.ipopt, key) for key in ("status", "iterations", "mu1_of_gains", "start_mu1")},
                    polished={"mu1": pol.get("mu1"), "J": pol.get("J")})
     return out
 
@@ -272,7 +272,7 @@ def step_augmented(cfg, inputs, outputs, wildcards) -> dict:
             prog.advance()
     objs = [r["objective"] for r in rows]
     # the fixed-μ1 LP's objective: Σ_nodes w μ2,node (sum cost, J without its μ1 term) or μ2 (max cost)
-    prefix_objective = ref.extra["J"] - cost_weights(tree, cost)[0] * mu1 if cost == "sum" else ref.mu2
+    prefix_objective = ref.J - cost_weights(tree, cost)[0] * mu1 if cost == "sum" else ref.mu2
     res = {"mu1": mu1, "cost": cost, "sequences": len(tree.patterns), "prefix_objective": float(prefix_objective),
            "rows": rows, "spread": float(np.ptp(objs)),
            "max_difference_to_prefix": float(max(abs(o - prefix_objective) for o in objs))}

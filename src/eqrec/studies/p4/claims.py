@@ -10,9 +10,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, Mapping
 
-from eqrec.studies.claims.reasons import Reason, each, fmtlist, fmtlists, registry
-
-REASONS, reason = registry()
+from eqrec.studies.claims.reasons import Reason, each, fmtlist, fmtlists, reason
 
 
 @reason("P4-F1:tracking")

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import eqrec
 from eqrec.errors import StepError
+from eqrec.studies.pipeline.configuration import CLAIMS_MODULE, SECTIONS
 
 #: Imports the walk does not follow: the configuration's cross-field checks run when the workflow is planned,
 #: never inside a step through the harness (a changed check re-validates the configuration at the next start;
@@ -25,6 +26,10 @@ from eqrec.errors import StepError
 NOT_FOLLOWED = {("eqrec.studies.pipeline.configuration", "eqrec.studies.pipeline.checks")}
 
 HARNESS = "eqrec.studies.pipeline.harness"
+
+#: The claims table imports each study's :data:`~eqrec.studies.pipeline.configuration.CLAIMS_MODULE` by name
+#: (:func:`eqrec.studies.claims.table.load_reasons`); the walk follows these imports as if they were written.
+CLAIMS_TABLE = "eqrec.studies.claims.table"
 
 
 @functools.cache
@@ -36,6 +41,8 @@ def _graph():
         graph.add_import(importer=module, imported=module.rpartition(".")[0])
     for importer, imported in NOT_FOLLOWED:  # (no error if the import is not there)
         graph.remove_import(importer=importer, imported=imported)
+    for name in {CLAIMS_MODULE.format(study) for study in SECTIONS} & graph.modules:  # the table's imports by name
+        graph.add_import(importer=CLAIMS_TABLE, imported=name)
     return graph
 
 

@@ -43,6 +43,10 @@ SECTIONS: dict[str, Section] = {s.name: s for s in (
     Section("p1", "config/config.yaml"), Section("p2", "config/p2.yaml"), Section("p3", "config/p3.yaml"),
     Section("p4", "config/p4.yaml"), Section("compare", "config/compare.yaml"))}
 
+#: The module of a study (a section) whose ``@reason`` functions word its claims, where it has one
+#: (:mod:`eqrec.studies.claims.reasons`; the claims table imports it by name).
+CLAIMS_MODULE = "eqrec.studies.{}.claims"
+
 
 class ConfigError(InputError):
     """A configuration value that is invalid; the message names the file and the field."""

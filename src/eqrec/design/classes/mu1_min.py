@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Iterable
 
 import numpy as np
@@ -97,6 +97,40 @@ class MinRecoveryLevel:
 
 
 @dataclass
+class IpoptRoute:
+    """What IPOPT did on problem (10) of the delayed-data paper, ``μ1`` a variable (the IPOPT route of a ``μ1``-free
+    delay design, :func:`eqrec.design.delay.ipopt.design_delay_ipopt`).
+
+    Parameters
+    ----------
+    status : str
+        IPOPT's return status.
+    iterations : int
+        IPOPT's iterations.
+    ipopt_time : float
+        Seconds inside IPOPT.
+    start_mu1, start_J : float
+        The starting level and the LP's ``J`` there (the starting point).
+    J_ipopt : float
+        ``J`` at IPOPT's point.
+    mu1_of_gains : float
+        The smallest level IPOPT's gains recover to (their terminal fixed point).
+    polished : dict or None, optional
+        The LP at ``max(μ1, mu1_of_gains)``: ``mu1``, ``J`` and ``design`` (or ``J = nan``, ``status =
+        "infeasible"``); ``None``: not asked.
+    """
+
+    status: str
+    iterations: int
+    ipopt_time: float
+    start_mu1: float
+    start_J: float
+    J_ipopt: float
+    mu1_of_gains: float
+    polished: dict | None = None
+
+
+@dataclass
 class FreeMu1Result:
     """A design with ``μ1`` free, and what certifies it.
 
@@ -114,8 +148,9 @@ class FreeMu1Result:
     time : float
         Number of LPs solved; wall-clock seconds.
     mu1_min : MinRecoveryLevel or None, optional
-    extra : dict, optional
-        Global route: the bracket of ``μ1,min``; route-specific details.
+        Global route: the bracket of ``μ1,min`` and the terminal class that sets it.
+    ipopt : IpoptRoute or None, optional
+        IPOPT route: IPOPT's record.
     """
 
     design: Design
@@ -127,7 +162,7 @@ class FreeMu1Result:
     lps: int
     time: float
     mu1_min: MinRecoveryLevel | None = None
-    extra: dict = field(default_factory=dict)
+    ipopt: IpoptRoute | None = None
 
     @property
     def mu2(self) -> float:
@@ -164,8 +199,9 @@ def _dual_lower_certificate(E_row: np.ndarray, Z: np.ndarray, beta: np.ndarray, 
     return float(E_row @ lam)
 
 
-def _monolithic_ratios(system: AffineSystem, classes: ClassSet, term: list[int], st: Stacking, solver: str) -> tuple:
+def _monolithic_ratios(st: Stacking, classes: ClassSet, term: list[int], solver: str) -> tuple:
     """The terminal ratio LPs as one block LP: gains, ratios, recomputed ratios, LPs solved, block class and row."""
+    system = st.system
     model = build_ratio_lp(system, classes, term, st)
     sol = solve_lp(model.lp, solver, block_lp_options(solver))
     lps = 1
@@ -195,7 +231,7 @@ def _monolithic_ratios(system: AffineSystem, classes: ClassSet, term: list[int],
     return gains, block_objectives(model, sol), recomputed, lps, model.block_class, model.block_row
 
 
-def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | Iterable", *,
+def min_recovery_level(system: "AffineSystem | Stacking", classes: "ClassSet | PrefixTree | Iterable", *,
                        kind: str | None = None, solver: str = "highs", lower_rtol: float = MU1_LOWER_RTOL,
                        n_jobs=None, scheduler=None, path: str = "auto") -> MinRecoveryLevel:
     r"""``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
@@ -215,8 +251,9 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
 
     Parameters
     ----------
-    system : AffineSystem
-        The system.
+    system : AffineSystem or Stacking
+        The system, or a design's stacked model over the classes' horizon (read from there; built here from a
+        system).
     classes : ClassSet, PrefixTree or sequence of str or ArrivalPattern
         The language's (time, available data) classes:
         :func:`eqrec.bounds.data_classes.classes_of_tree` of its
@@ -269,23 +306,24 @@ def min_recovery_level(system: AffineSystem, classes: "ClassSet | PrefixTree | I
     0.2493
     """
     t_start = time.perf_counter()
-    system = check_system(system)
+    stacked = system if isinstance(system, Stacking) else None  # a design's stacked model, handed down
+    system = stacked.system if stacked is not None else check_system(system)
     check_solver(solver)
     lower_rtol = check_fraction(lower_rtol, "lower_rtol")
     classes = language_classes(classes, kind=kind, fixed_length=False, field_name="classes")
     check_jobs(n_jobs)
     scheduler = check_scheduler(scheduler)
-    st = Stacking(system, classes.horizon)
+    st = Stacking.of(stacked or system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
     if choose_path(path, classes, term, system) == "blocks":
-        res = solve_ratio_blocks(system, classes, term, solver=solver, n_jobs=n_jobs, scheduler=scheduler)
+        res = solve_ratio_blocks(st, classes, term, solver=solver, n_jobs=n_jobs, scheduler=scheduler)
         K = [res["gains"].get(i, np.zeros((system.n, len(c.available) * system.p)))
              for i, c in enumerate(classes.classes)]
         gains = ClassGains(classes=classes, K=K, n=system.n, p=system.p)
         ratios, recomputed, lps = res["ratios"], res["recomputed"], res["lps"]
         block_class, block_row = res["block_class"], res["block_row"]
     else:
-        gains, ratios, recomputed, lps, block_class, block_row = _monolithic_ratios(system, classes, term, st, solver)
+        gains, ratios, recomputed, lps, block_class, block_row = _monolithic_ratios(st, classes, term, solver)
     if not np.all(np.isfinite(recomputed)):
         raise SolverFailure("the ratio LP returned gains that do not contract the initial error")
     bmax = int(np.argmax(recomputed))
@@ -332,7 +370,7 @@ FREE_HINTS = {"prefix": "design_prefix(..., mu1='free')", "time": "design_time_b
               "delay": "design_delay_global(...)"}
 
 
-def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: InfeasibleDesign, *,
+def infeasible_at(system: "AffineSystem | Stacking", classes: ClassSet, mu1: float, error: InfeasibleDesign, *,
                   solver: str = "highs", n_jobs=None, scheduler=None, method: str = "prefix") -> InfeasibleDesign:
     """The error to raise for a design infeasible at ``mu1``: it names the true smallest feasible ``μ1``.
 
@@ -343,8 +381,8 @@ def infeasible_at(system: AffineSystem, classes: ClassSet, mu1: float, error: In
 
     Parameters
     ----------
-    system : AffineSystem
-        The system designed for.
+    system : AffineSystem or Stacking
+        The system designed for, or the design's stacked model (:func:`min_recovery_level` reads it).
     classes : ClassSet
         The language's classes.
     mu1 : float
