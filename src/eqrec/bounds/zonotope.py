@@ -31,9 +31,12 @@ earlier periods told is kept.
 
 **Order reduction** (:func:`reduce_order`, only when ``order`` is given)
 replaces the smallest generators by the box that contains them (Girard,
-*Reachability of uncertain linear systems using zonotopes*, HSCC 2005): the
-reduced zonotope contains the original one, so the bound stays a guarantee and
-is exact up to the reduction.
+*Reachability of uncertain linear systems using zonotopes*, HSCC 2005,
+:func:`reduce_girard`), or by the box in the principal axes of the set
+(:func:`reduce_pca`): the reduced zonotope contains the original one, so the
+bound stays a guarantee and is exact up to the reduction.  These are the one
+implementation of the reductions, also used by the set-membership estimator
+(:mod:`eqrec.estimators.zonotope`).
 
 **Floating point.**  The row sums are rounded outward
 (:func:`outer_row_sums`): the computed value is at least the exact sum of the
@@ -97,14 +100,70 @@ def outer_row_sums(G: np.ndarray) -> np.ndarray:
     return np.nextafter(s * (1.0 + (q + 2) * _U), np.inf)
 
 
-def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:
-    r"""An outer reduction of the zonotope ``G ε`` to at most ``order · n`` generators (Girard 2005).
+def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
+    """An outer reduction to at most ``limit`` generators: Girard's box of the smallest (module docstring).
 
-    The generators with the smallest :math:`\|g\|_1 - \|g\|_\infty` are
-    replaced by the ``n`` axis-aligned generators of their interval hull,
-    :math:`\operatorname{diag}(\sum_j |g_j|)`; the result contains the
-    original zonotope (each removed segment lies in that box), and its row
-    sums are never smaller.
+    Parameters
+    ----------
+    G : numpy.ndarray, shape (n, q)
+        Generators of a centred zonotope.
+    limit : int
+        Largest number of generators kept, ``>= n``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, q')
+        ``G`` itself when ``q <= limit``, else the kept generators followed by the diagonal box
+        (``q' <= limit``); the zonotope it spans contains that of ``G``.
+    """
+    n, q = G.shape
+    if q <= limit:
+        return G
+    absG = np.abs(G)
+    cost = absG.sum(axis=0) - absG.max(axis=0)
+    keep = limit - n
+    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
+    boxed, kept = part[: q - keep], np.sort(part[q - keep:])
+    box = np.nextafter(absG[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2) * _U), np.inf)
+    nz = box > 0
+    return np.concatenate([G[:, kept], np.diag(box)[:, nz]], axis=1)
+
+
+def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
+    """An outer reduction to at most ``limit`` generators: the smallest boxed in the principal axes of ``G``.
+
+    As :func:`reduce_girard`, in the orthonormal basis ``U`` of the eigenvectors of :math:`GG^\top` (Kopetzki,
+    Schürmann, Althoff, "Methods for order reduction of zonotopes", CDC 2017): the removed generators are
+    replaced by ``U diag(sum_j |U^T g_j|)``, a parallelotope that contains their zonotope.
+
+    Parameters
+    ----------
+    G : numpy.ndarray, shape (n, q)
+        Generators of a centred zonotope.
+    limit : int
+        Largest number of generators kept, ``>= n``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, q')
+        ``G`` itself when ``q <= limit``, else the kept generators followed by the ``n`` new ones.
+    """
+    n, q = G.shape
+    if q <= limit:
+        return G
+    U = np.linalg.eigh(G @ G.T)[1]
+    absT = np.abs(U.T @ G)
+    cost = absT.sum(axis=0) - absT.max(axis=0)
+    keep = limit - n
+    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
+    boxed, kept = part[: q - keep], np.sort(part[q - keep:])
+    # the box in U's axes, rounded outward (the sums and the products U^T g, Higham eqs. (3.4), (4.4))
+    box = np.nextafter(absT[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2 * n + 4) * _U), np.inf)
+    return np.concatenate([G[:, kept], U * box], axis=1)
+
+
+def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:
+    r"""An outer reduction of the zonotope ``G ε`` to at most ``order · n`` generators (:func:`reduce_girard`).
 
     Parameters
     ----------
@@ -120,18 +179,8 @@ def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:
     """
     if order is None:
         return G
-    n, q = G.shape
-    keep_max = int(np.floor(order * n))
-    if q <= keep_max:
-        return G
-    A = np.abs(G)
-    # cost of boxing a generator: how much its box is larger than the segment itself
-    cost = A.sum(axis=0) - A.max(axis=0, initial=0.0)
-    keep = keep_max - n  # leave room for the n box generators
-    order_idx = np.argsort(cost, kind="stable")
-    boxed, kept = order_idx[: q - keep], np.sort(order_idx[q - keep:])
-    box = np.nextafter(A[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2) * _U), np.inf)
-    return np.concatenate([G[:, kept], np.diag(box)], axis=1)
+    n = G.shape[0]
+    return reduce_girard(G, max(n, int(np.floor(order * n))))
 
 
 def check_order(order: "float | None") -> "float | None":

@@ -115,6 +115,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from eqrec.arrivals.packets import _is_stamp, as_packets, check_estimate, check_input
+from eqrec.bounds.zonotope import outer_row_sums, reduce_girard, reduce_pca
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
@@ -133,85 +134,6 @@ class _Entry(NamedTuple):
     G: np.ndarray
     drive: np.ndarray
     y: "np.ndarray | None"
-
-
-def outer_row_sums(G: np.ndarray) -> np.ndarray:
-    """Per row, the sum of ``|G_ij|`` rounded outward (never below the exact sum of the stored entries).
-
-    Parameters
-    ----------
-    G : numpy.ndarray, shape (n, q)
-        Generators.
-
-    Returns
-    -------
-    numpy.ndarray, shape (n,)
-        Upper bounds of the exact row sums (Higham eq. (4.4), module docstring).
-    """
-    q = G.shape[1]
-    return np.nextafter(np.abs(G).sum(axis=1) * (1.0 + (q + 2) * _U), np.inf)
-
-
-def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
-    """An outer reduction to at most ``limit`` generators: Girard's box of the smallest (module docstring).
-
-    Parameters
-    ----------
-    G : numpy.ndarray, shape (n, q)
-        Generators of a centred zonotope.
-    limit : int
-        Largest number of generators kept, ``>= n``.
-
-    Returns
-    -------
-    numpy.ndarray, shape (n, q')
-        ``G`` itself when ``q <= limit``, else the kept generators followed by the diagonal box
-        (``q' <= limit``); the zonotope it spans contains that of ``G``.
-    """
-    n, q = G.shape
-    if q <= limit:
-        return G
-    absG = np.abs(G)
-    cost = absG.sum(axis=0) - absG.max(axis=0)
-    keep = limit - n
-    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
-    boxed, kept = part[: q - keep], np.sort(part[q - keep:])
-    box = np.nextafter(absG[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2) * _U), np.inf)
-    nz = box > 0
-    return np.concatenate([G[:, kept], np.diag(box)[:, nz]], axis=1)
-
-
-def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
-    """An outer reduction to at most ``limit`` generators: the smallest boxed in the principal axes of ``G``.
-
-    As :func:`reduce_girard`, in the orthonormal basis ``U`` of the eigenvectors of :math:`GG^\top` (Kopetzki,
-    Schürmann, Althoff, "Methods for order reduction of zonotopes", CDC 2017): the removed generators are
-    replaced by ``U diag(sum_j |U^T g_j|)``, a parallelotope that contains their zonotope.
-
-    Parameters
-    ----------
-    G : numpy.ndarray, shape (n, q)
-        Generators of a centred zonotope.
-    limit : int
-        Largest number of generators kept, ``>= n``.
-
-    Returns
-    -------
-    numpy.ndarray, shape (n, q')
-        ``G`` itself when ``q <= limit``, else the kept generators followed by the ``n`` new ones.
-    """
-    n, q = G.shape
-    if q <= limit:
-        return G
-    U = np.linalg.eigh(G @ G.T)[1]
-    absT = np.abs(U.T @ G)
-    cost = absT.sum(axis=0) - absT.max(axis=0)
-    keep = limit - n
-    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
-    boxed, kept = part[: q - keep], np.sort(part[q - keep:])
-    # the box in U's axes, rounded outward (the sums and the products U^T g, Higham eqs. (3.4), (4.4))
-    box = np.nextafter(absT[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2 * n + 4) * _U), np.inf)
-    return np.concatenate([G[:, kept], U * box], axis=1)
 
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
