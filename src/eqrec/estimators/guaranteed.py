@@ -43,10 +43,10 @@ never exceeds the designed level while the arrivals stay in the language.
   designed level (both are guarantees; in exact arithmetic the first never
   exceeds the second, since the zonotope lies in the ``μ1`` box).
 * *Out of the design* (a step whose data has no class: one loss too many, a
-  packet later than designed): the estimator falls back to the set-membership
-  estimator :class:`eqrec.estimators.zonotope.ZonotopeEstimator`, started at
-  the period's start from the exact error set there and fed again the
-  packets of the period so far, so that every packet that arrives is used.
+  packet later than designed): the estimator reports the set-membership
+  estimator :class:`eqrec.estimators.zonotope.ZonotopeEstimator`, which runs
+  beside the designed gains on every step from :meth:`reset` (the same packets
+  and inputs), so that at the fallback it holds every packet that has arrived.
 * *The return.*  At each period start while out of the design, if the
   zonotope's interval hull lies in the ``μ1`` box (every state bound
   :math:`\le \mu_1`, exactly in floating point), the designed gains take over
@@ -176,8 +176,8 @@ class GuaranteedEstimator:
         self.bound = np.nan
         # strict=False: the error set, the fallback (None while in the design), the period's record
         self._set: ErrorSet | None = None
-        self._fallback: ZonotopeEstimator | None = None
-        self._period: tuple[int, np.ndarray, list] = (0, np.zeros(system.n), [])
+        self._fallback: ZonotopeEstimator | None = None  # the set-membership estimator while out of the design
+        self._sm: ZonotopeEstimator | None = None  # the set-membership estimator, run on every step
         self._t0 = 0
         self._bounds = np.full(system.n, np.nan)
 
@@ -253,6 +253,7 @@ class GuaranteedEstimator:
             self._t0 = int(t0)
             self._set = ErrorSet.box(self.mu1, self.system.n, self._t0, self.order)
             self._fallback = None
+            self._sm = self._new_fallback().reset(x0, self._t0)
             self._bounds = np.full(self.system.n, self.mu1)
         return self
 
@@ -325,23 +326,27 @@ class GuaranteedEstimator:
         return xhat, self.bound
 
     def _relaxed_step(self, est: ClassEstimator, packets: list, u) -> tuple[np.ndarray, float]:
-        """A step with ``strict=False`` (module docstring): the class step with its exact bound, or the fallback."""
-        T, now = self.gains.horizon, est.time if self._fallback is None else self._fallback.time
+        """A step with ``strict=False`` (module docstring): the class step with its exact bound, or the fallback.
+
+        The set-membership estimator runs on every step (every packet reaches it), so on leaving the language
+        it is ready, with all the information of the run.
+        """
+        T = self.gains.horizon
         if self._fallback is not None:
+            now = self._fallback.time
             if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._fallback.carried_set[1]) <= self.mu1):
                 est = self._return_to_design(now, packets, u)  # checked first: nothing changes if it raises
             else:
                 xhat, _ = self._fallback.step(packets, u)
                 return self._fallback_bounds(xhat)
-        new_period = est.period_time in (0, T)
         opened = est._open(packets, u)  # every input checked; nothing changes
         t, S = opened.t, tuple(sorted(opened.yxi))
-        if new_period:  # the period's start: its time, its initial estimate, and the steps taken (replayed on exit)
-            self._period = (opened.k, est.xhat.copy(), [])
-        if not _has_class(self.gains, t + 1, S):
-            return self._leave_design(opened, packets)
+        if not _has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
+            self._fallback = self._sm
+            xhat, _ = self._fallback.step(packets, opened.u)
+            return self._fallback_bounds(xhat)
+        self._sm.step(packets, opened.u)  # all-or-nothing; the class step below cannot raise (its class exists)
         xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
-        self._period[2].append((packets, opened.u))
         beta = self._set.advance(est.error_map())
         self._bounds = np.minimum(beta, level)
         self.bound = float(self._bounds.max())
@@ -350,19 +355,6 @@ class GuaranteedEstimator:
     def _new_fallback(self) -> ZonotopeEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
-
-    def _leave_design(self, opened, packets: list) -> tuple[np.ndarray, float]:
-        """Start the set-membership estimator at the period's start and feed it the period's packets again."""
-        start, xhat_start, record = self._period
-        if est_period_starts := (self._est.period_time in (0, self.gains.horizon)):
-            start, xhat_start, record = opened.k, self._est.xhat.copy(), []
-        del est_period_starts
-        fallback = self._new_fallback().start_from(xhat_start, self._set.at(start), start)
-        for old_packets, old_u in record:
-            fallback.step(old_packets, old_u)
-        xhat, _ = fallback.step(packets, opened.u)
-        self._fallback = fallback
-        return self._fallback_bounds(xhat)
 
     def _fallback_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
         self._bounds = self._fallback.state_bounds
