@@ -22,7 +22,7 @@ from eqrec.design.prefix.design import design_prefix
 from eqrec.errors import InputError
 from eqrec.estimators.augmented import AugmentedEstimator
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
-from eqrec.estimators.intake import _StampedEstimator
+from eqrec.estimators.intake import StampedEstimator
 from eqrec.estimators.kalman import make_filter
 from eqrec.estimators.protocol import Estimator, OnTimeOnly
 from eqrec.estimators.switching import SwitchingEstimator
@@ -216,7 +216,7 @@ def test_the_augmented_estimator_lives_in_estimators_on_the_shared_intake(design
     import eqrec.estimators.augmented as moved
 
     assert not hasattr(runtime, "AugmentedEstimator")
-    assert issubclass(AugmentedEstimator, _StampedEstimator)
+    assert issubclass(AugmentedEstimator, StampedEstimator)
     assert (model.RUNTIME_MODES, model.as_time_varying_L, model.default_runtime) == (
         moved.RUNTIME_MODES, moved.as_time_varying_L, moved.default_runtime)  # re-exported, one definition
     # the converted time-based estimator: the same affine map computed in another order, so equal to rounding

@@ -47,12 +47,24 @@ def _is_packet(item: Any) -> bool:
     return hasattr(item, "time") and hasattr(item, "y") and not isinstance(item, np.ndarray)
 
 
-def _is_stamp(value: Any) -> bool:
+def is_stamp(value: Any) -> bool:
+    """Whether ``value`` is a time stamp: an integer (Python or NumPy), not a bool.
+
+    Parameters
+    ----------
+    value : object
+        The value to test.
+
+    Returns
+    -------
+    bool
+        ``True`` for ``3`` or ``np.int64(3)``, ``False`` for ``True``, ``3.0`` or ``"3"``.
+    """
     return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
 
 
 def _is_pair(item: Any) -> bool:
-    return isinstance(item, (tuple, list)) and len(item) == 2 and _is_stamp(item[0]) and not np.isscalar(item[1])
+    return isinstance(item, (tuple, list)) and len(item) == 2 and is_stamp(item[0]) and not np.isscalar(item[1])
 
 
 def _is_number(value: Any) -> bool:
@@ -162,7 +174,7 @@ def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y
             tau, val = item
         else:
             raise InputError(f"a packet is (time stamp, y), got {item!r:.80}", field=field)
-        if not _is_stamp(tau):
+        if not is_stamp(tau):
             raise InputError(f"a time stamp is an integer, got {tau!r}", field=field)
         if tau > now:
             raise InputError(f"packet stamped {tau} received at time {now}: a packet cannot come from the future",

@@ -30,7 +30,7 @@ import numpy as np
 from eqrec.arrivals.packets import Stamped
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.errors import InputError
-from eqrec.estimators.intake import BoundRule, _StampedEstimator
+from eqrec.estimators.intake import BoundRule, StampedEstimator
 from eqrec.systems.affine import AffineSystem
 
 #: The readings of a missing step that can run (:mod:`eqrec.design.augmented.model`).
@@ -84,7 +84,7 @@ def as_time_varying_L(L: np.ndarray, T: int, n: int, p: int) -> np.ndarray:
     raise InputError(f"L must have shape ({n}, {p}) or ({T}, {n}, {p}), got {L.shape}", field="L")
 
 
-class AugmentedEstimator(_StampedEstimator):
+class AugmentedEstimator(StampedEstimator):
     """The causal augmented estimator running both recursions (module docstring; P2 eqs. (2)-(3); P3 eqs. (4)-(5)).
 
     Parameters

@@ -56,14 +56,14 @@ from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
 from eqrec.estimators.error_maps import ClassErrorMaps
-from eqrec.estimators.intake import BoundRule, _Opened, _StampedEstimator
+from eqrec.estimators.intake import BoundRule, OpenedStep, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 
-class RecoveryEstimator(_StampedEstimator):
+class RecoveryEstimator(StampedEstimator):
     """Causal estimator of eqs. (5)-(7) on time-stamped packets.
 
     Parameters
@@ -177,7 +177,7 @@ class RecoveryEstimator(_StampedEstimator):
         return self.xhat.copy(), self.bound
 
 
-class ClassEstimator(_StampedEstimator):
+class ClassEstimator(StampedEstimator):
     r"""The equalized-recovery estimator in class form: one gain per (time, available data) class.
 
     The class form of the delayed-data paper's estimator (its eqs. (5)-(7)
@@ -424,7 +424,7 @@ class ClassEstimator(_StampedEstimator):
         """
         return self._advance(self._open(y, u))
 
-    def _advance(self, step: _Opened) -> tuple[np.ndarray, float]:
+    def _advance(self, step: OpenedStep) -> tuple[np.ndarray, float]:
         """The step of :meth:`step` from its checked state (the class lookup may still raise; nothing changes)."""
         sys = self.system
         k, t = step.k, step.t
@@ -486,7 +486,23 @@ def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xha
     raise InputError(f"expected a GainSchedule or ClassGains, got {type(gains).__name__}", field="gains")
 
 
-def _has_class(gains: ClassGains, depth: int, available: tuple[int, ...]) -> bool:
+def has_class(gains: ClassGains, depth: int, available: tuple[int, ...]) -> bool:
+    """Whether the design's language has the class ``(depth, available)`` (the data of a step are in it).
+
+    Parameters
+    ----------
+    gains : ClassGains
+        The class gains of a design.
+    depth : int
+        Period time of the estimate.
+    available : tuple of int
+        Period times of the measurements received.
+
+    Returns
+    -------
+    bool
+        ``True`` when the class exists.
+    """
     try:
         gains.classes.index(depth, available)
     except InputError:

@@ -75,7 +75,7 @@ from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
 from eqrec.errors import InputError
-from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, _has_class, make_estimator
+from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, has_class, make_estimator
 from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
@@ -341,7 +341,7 @@ class GuaranteedEstimator:
                 return self._fallback_bounds(xhat)
         opened = est._open(packets, u)  # every input checked; nothing changes
         t, S = opened.t, tuple(sorted(opened.yxi))
-        if not _has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
+        if not has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
             self._fallback = self._sm
             xhat, _ = self._fallback.step(packets, opened.u)
             return self._fallback_bounds(xhat)

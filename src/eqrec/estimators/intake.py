@@ -3,9 +3,9 @@ r"""The packet intake, the period clock and the protocol of the causal estimator
 Shared by :class:`~eqrec.estimators.causal.RecoveryEstimator`,
 :class:`~eqrec.estimators.causal.ClassEstimator` and
 :class:`~eqrec.estimators.augmented.AugmentedEstimator`.
-:class:`_StampedEstimator` keeps the observed arrivals of the current period,
+:class:`StampedEstimator` keeps the observed arrivals of the current period,
 a reference state per period time and the residuals of the packets received;
-a step is opened aside (:class:`_Opened`, every input checked, nothing
+a step is opened aside (:class:`OpenedStep`, every input checked, nothing
 changed), the estimator computes its estimate from it, and only then is it
 committed, so a step that raises leaves the estimator as it was.
 
@@ -34,7 +34,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from eqrec.arrivals.packets import Stamped, _is_stamp, as_packets, check_estimate, check_input
+from eqrec.arrivals.packets import Stamped, is_stamp, as_packets, check_estimate, check_input
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
@@ -76,8 +76,30 @@ def check_levels(bound_of: "BoundRule | None", mu1: Any) -> "tuple[BoundRule | N
 
 
 @dataclass
-class _Opened:
-    """The state of a step under way, not yet committed (module docstring of :class:`_StampedEstimator`)."""
+class OpenedStep:
+    """The state of a step under way, not yet committed (module docstring of :class:`StampedEstimator`).
+
+    Parameters
+    ----------
+    k : int
+        Absolute time of the step.
+    t : int
+        Its period time.
+    start : int
+        Absolute time of the period's start.
+    arrivals : list
+        Per period time: the arrival time (period time) or ``None``.
+    history : list
+        Reference states at the period times ``0..t``.
+    yxi : dict
+        Period time -> residual of the packet received.
+    restarted : bool
+        A new period starts at this step.
+    u : numpy.ndarray
+        The checked input.
+    dropped : int, optional
+        Packets stamped before the period: not used (counted in ``dropped_packets``).
+    """
 
     k: int  # absolute time of the step
     t: int  # its period time
@@ -90,7 +112,7 @@ class _Opened:
     dropped: int = 0  # packets stamped before the period: not used (counted in dropped_packets)
 
 
-class _StampedEstimator:
+class StampedEstimator:
     """Packet intake and protocol shared by the causal estimators (module docstring).
 
     Keeps the period clock, the observed arrivals of the current period, a
@@ -99,7 +121,7 @@ class _StampedEstimator:
     ``y(τ) − C(τ) ref(τ)`` of the packets received in the period.
 
     A step is all-or-nothing: :meth:`_open` checks everything and builds the
-    new state aside (:class:`_Opened`), the subclass computes the estimate
+    new state aside (:class:`OpenedStep`), the subclass computes the estimate
     from it, and only then :meth:`_commit` installs it; a step that raises
     leaves the estimator exactly as it was.  :meth:`_reset` (the protocol's
     ``reset``) too checks its arguments before anything changes.
@@ -115,6 +137,23 @@ class _StampedEstimator:
     (a delay past the period's end means missing), so dropping it keeps the
     guarantee.  It is counted in :attr:`dropped_packets` (since the last
     ``reset``, as :attr:`eqrec.estimators.zonotope.ZonotopeEstimator.dropped_packets`).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model the estimator runs on.
+    horizon : int
+        ``T``, the period of the gains.
+    xhat0 : numpy.ndarray or None
+        Initial estimate (``None``: call ``reset`` first).
+    periodic : bool
+        Restart the horizon every ``T`` steps.
+    t0 : int
+        Absolute time of the first step.
+    bound_of : callable or None, optional
+        The design's level of an observed prefix (with ``mu1``; the second value of ``step``).
+    mu1 : float or None, optional
+        The recovery level (with ``bound_of``).
     """
 
     T: int
@@ -124,7 +163,7 @@ class _StampedEstimator:
 
     def __init__(self, system: AffineSystem, horizon: int, xhat0: "np.ndarray | None", periodic: bool, t0: int,
                  bound_of: "BoundRule | None" = None, mu1: "float | None" = None):
-        if not _is_stamp(t0):
+        if not is_stamp(t0):
             raise InputError(f"the start time must be an integer, got {t0!r}", field="t0")
         self.system = system
         self.T = int(horizon)
@@ -146,14 +185,14 @@ class _StampedEstimator:
         self._yxi: dict[int, np.ndarray] = {}  # period time τ -> y(τ) - C ref(τ)
         self.dropped_packets = 0  # packets stamped before their step's period: not used (class docstring)
 
-    def _reset(self, xhat0: Any, t0: int = 0) -> "_StampedEstimator":
+    def _reset(self, xhat0: Any, t0: int = 0) -> "StampedEstimator":
         """Start a run (a new period) from ``x̂(t0) = xhat0``, discarding any run in progress; return ``self``.
 
         The ``reset`` of the protocol (each subclass documents its own).  ``xhat0``
         must have ``n`` finite entries (field ``xhat0``) and ``t0`` be an integer
         (field ``t0``), checked before anything changes.
         """
-        if not _is_stamp(t0):
+        if not is_stamp(t0):
             raise InputError(f"the start time must be an integer, got {t0!r}", field="t0")
         x = check_estimate(xhat0, self.system.n)
         self._clear(int(t0))
@@ -213,7 +252,7 @@ class _StampedEstimator:
         """The residual ``y(τ) − C(τ) ref(τ)`` of a packet stamped at period time ``τ``."""
         return y - self.system.C_at(tau) @ reference
 
-    def _open(self, y, u, restart_at_now: bool = False) -> _Opened:
+    def _open(self, y, u, restart_at_now: bool = False) -> OpenedStep:
         """Check what arrived at the current time and ``u``, and build the step's state aside (nothing changes).
 
         Raises :class:`InputError` when the horizon is over (not periodic),
@@ -247,9 +286,9 @@ class _StampedEstimator:
                 raise InputError(f"a second packet stamped {pk.time} received at time {k}", field="y")
             arrivals[tau] = t
             yxi[tau] = self._residual(tau, pk.y, history[tau])
-        return _Opened(k, t, start, arrivals, history, yxi, restarted, u, dropped)
+        return OpenedStep(k, t, start, arrivals, history, yxi, restarted, u, dropped)
 
-    def _commit(self, step: _Opened) -> None:
+    def _commit(self, step: OpenedStep) -> None:
         """Install the state of a step that succeeded."""
         self._t, self._start, self._k = step.t + 1, step.start, step.k + 1
         self._arrivals, self._history, self._yxi = step.arrivals, step.history, step.yxi

@@ -18,7 +18,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from eqrec.bounds.data_classes import ClassGains
-from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator, _has_class, make_estimator
+from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator, has_class, make_estimator
 from eqrec.estimators.intake import BoundRule, check_levels
 from eqrec.bounds.gains import GainSchedule
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -106,14 +106,14 @@ class SwitchingEstimator:
             if performance.horizon != 1 or performance.time_based and performance.designed[0] != on_time:
                 raise InputError(perf_msg)
             performance.row(on_time)  # raises if there is no on-time row
-        elif performance.horizon != 1 or not _has_class(performance, 1, (0,)):
+        elif performance.horizon != 1 or not has_class(performance, 1, (0,)):
             raise InputError(perf_msg + " (the class (1, (0,)))")
         if isinstance(recovery, GainSchedule):
             bad = [p.label for p in recovery.designed if p.arrivals[0] == 0]
             if bad:
                 raise InputError(f"the recovery language must have its first measurement late or missing; "
                                  f"words {bad[:5]} have it on time")
-        elif _has_class(recovery, 1, (0,)):
+        elif has_class(recovery, 1, (0,)):
             raise InputError("the recovery language must have its first measurement late or missing; its "
                              "classes include (1, (0,)): y(0) on time")
         self.system = system

@@ -114,7 +114,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from eqrec.arrivals.packets import _is_stamp, as_packets, check_estimate, check_input
+from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.zonotope import outer_row_sums, reduce_girard, reduce_pca
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
@@ -243,7 +243,7 @@ class ZonotopeEstimator:
                              field="x0_radius") from None
         if isinstance(x0_radius, (bool, str)) or not np.all(np.isfinite(r0)) or np.any(r0 < 0):
             raise InputError(f"radii must be finite and >= 0, got {x0_radius!r:.60}", field="x0_radius")
-        if not _is_stamp(max_delay) or max_delay < 0:
+        if not is_stamp(max_delay) or max_delay < 0:
             raise InputError(f"the largest delay is an integer >= 0, got {max_delay!r}", field="max_delay")
         if order is not None and (isinstance(order, (bool, np.bool_))
                                   or not isinstance(order, (int, float, np.integer, np.floating))
@@ -283,7 +283,7 @@ class ZonotopeEstimator:
         InputError
             ``period`` not an integer ``>= 1`` (field ``period``).
         """
-        if not _is_stamp(period) or period < 1:
+        if not is_stamp(period) or period < 1:
             raise InputError(f"the period is an integer >= 1, got {period!r}", field="period")
         self._period = (int(period), int(start))
         return self
@@ -314,7 +314,7 @@ class ZonotopeEstimator:
             A non-finite or wrongly sized ``xhat0``, a ``t0`` that is not an integer (nothing changes).
         """
         c = check_estimate(xhat0, self.system.n)
-        if not _is_stamp(t0):
+        if not is_stamp(t0):
             raise InputError(f"the start time is an integer, got {t0!r}", field="t0")
         nz = self.x0_radius > 0
         self._c = self._xhat = c
@@ -356,7 +356,7 @@ class ZonotopeEstimator:
         G = np.asarray(generators, dtype=float)
         if G.ndim != 2 or G.shape[0] != n or not np.all(np.isfinite(G)):
             raise InputError(f"generators need shape ({n}, q) and finite entries, got {G.shape}", field="generators")
-        if not _is_stamp(t0):
+        if not is_stamp(t0):
             raise InputError(f"the start time is an integer, got {t0!r}", field="t0")
         G = G[:, np.any(G != 0, axis=0)]
         if self._limit is not None:
