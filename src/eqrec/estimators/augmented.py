@@ -154,30 +154,6 @@ class AugmentedEstimator(StampedEstimator):
         self.s: "np.ndarray | None" = None
         super().__init__(system, T, xhat0, False, t0, bound_of, mu1)
 
-    def reset(self, xhat0: Any, t0: int = 0) -> "AugmentedEstimator":
-        """Start a run (``s`` from the gains' ``s0``) from ``x̂(t0) = xhat0``, discarding any run in progress.
-
-        Parameters
-        ----------
-        xhat0 : array_like, shape (n,)
-            The initial estimate (finite).
-        t0 : int, optional
-            Absolute time of the first step (the time stamp of the first measurement; default 0).
-            Packets stamped before it are dropped like packets of an earlier period.
-
-        Returns
-        -------
-        AugmentedEstimator
-            ``self``, so that ``est.reset(x0).step(...)`` chains; :attr:`bound` is ``μ1`` (``inf`` without levels).
-
-        Raises
-        ------
-        InputError
-            ``xhat0`` without ``n`` finite entries (field ``xhat0``), ``t0`` not an integer (field ``t0``);
-            nothing changes.
-        """
-        return self._reset(xhat0, t0)
-
     def _on_reset(self) -> None:
         self.s = self._s0.copy()
 

@@ -108,30 +108,6 @@ class RecoveryEstimator(StampedEstimator):
         self.schedule = schedule
         super().__init__(system, schedule.horizon, xhat0, periodic, t0, bound_of, mu1)
 
-    def reset(self, xhat0: Any, t0: int = 0) -> "RecoveryEstimator":
-        """Start a run (a new period) from ``x̂(t0) = xhat0``, discarding any run in progress.
-
-        Parameters
-        ----------
-        xhat0 : array_like, shape (n,)
-            The initial estimate (finite).
-        t0 : int, optional
-            Absolute time of the first step (the time stamp of the first measurement; default 0).
-            Packets stamped before it are dropped like packets of an earlier period.
-
-        Returns
-        -------
-        RecoveryEstimator
-            ``self``, so that ``est.reset(x0).step(...)`` chains; :attr:`bound` is ``μ1`` (``inf`` without levels).
-
-        Raises
-        ------
-        InputError
-            ``xhat0`` without ``n`` finite entries (field ``xhat0``), ``t0`` not an integer (field ``t0``);
-            nothing changes.
-        """
-        return self._reset(xhat0, t0)
-
     def _reference(self, restarted: bool) -> np.ndarray:
         return self.xhat  # y_ξ(τ) = y(τ) − C x̂(τ), with the estimate of the packet's own time
 
@@ -304,30 +280,6 @@ class ClassEstimator(StampedEstimator):
         self._maps: ClassErrorMaps | None = None
         self._xbar: "np.ndarray | None" = None
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
-
-    def reset(self, xhat0: Any, t0: int = 0) -> "ClassEstimator":
-        """Start a run (a new period, the prediction anchored at ``xhat0``) from ``x̂(t0) = xhat0``, discarding any run in progress.
-
-        Parameters
-        ----------
-        xhat0 : array_like, shape (n,)
-            The initial estimate (finite).
-        t0 : int, optional
-            Absolute time of the first step (the time stamp of the first measurement; default 0).
-            Packets stamped before it are dropped like packets of an earlier period.
-
-        Returns
-        -------
-        ClassEstimator
-            ``self``, so that ``est.reset(x0).step(...)`` chains; :attr:`bound` is ``μ1`` (``inf`` without levels).
-
-        Raises
-        ------
-        InputError
-            ``xhat0`` without ``n`` finite entries (field ``xhat0``), ``t0`` not an integer (field ``t0``);
-            nothing changes.
-        """
-        return self._reset(xhat0, t0)
 
     def _on_reset(self) -> None:
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)

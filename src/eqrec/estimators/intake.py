@@ -123,7 +123,7 @@ class StampedEstimator:
     A step is all-or-nothing: :meth:`_open` checks everything and builds the
     new state aside (:class:`OpenedStep`), the subclass computes the estimate
     from it, and only then :meth:`_commit` installs it; a step that raises
-    leaves the estimator exactly as it was.  :meth:`_reset` (the protocol's
+    leaves the estimator exactly as it was.  :meth:`reset` (the protocol's
     ``reset``) too checks its arguments before anything changes.
 
     Time convention: the model's time-varying matrices are read at the
@@ -174,7 +174,7 @@ class StampedEstimator:
         self.bound = math.nan  # nan until reset (then μ1, or inf without levels)
         self._clear(int(t0))
         if xhat0 is not None:
-            self._reset(xhat0, t0)
+            self.reset(xhat0, t0)
 
     def _clear(self, t0: int) -> None:
         self._t = 0  # time since the start of the current period
@@ -185,12 +185,31 @@ class StampedEstimator:
         self._yxi: dict[int, np.ndarray] = {}  # period time τ -> y(τ) - C ref(τ)
         self.dropped_packets = 0  # packets stamped before their step's period: not used (class docstring)
 
-    def _reset(self, xhat0: Any, t0: int = 0) -> "StampedEstimator":
-        """Start a run (a new period) from ``x̂(t0) = xhat0``, discarding any run in progress; return ``self``.
+    def reset(self, xhat0: Any, t0: int = 0) -> "StampedEstimator":
+        """Start a run (a new period) from ``x̂(t0) = xhat0``, discarding any run in progress.
 
-        The ``reset`` of the protocol (each subclass documents its own).  ``xhat0``
-        must have ``n`` finite entries (field ``xhat0``) and ``t0`` be an integer
-        (field ``t0``), checked before anything changes.
+        The ``reset`` of the protocol, shared by the causal estimators (each
+        subclass starts what it carries besides the estimate in ``_on_reset``:
+        the prediction of the class form, the auxiliary state of the augmented one).
+
+        Parameters
+        ----------
+        xhat0 : array_like, shape (n,)
+            The initial estimate (finite).
+        t0 : int, optional
+            Absolute time of the first step (the time stamp of the first measurement; default 0).
+            Packets stamped before it are dropped like packets of an earlier period.
+
+        Returns
+        -------
+        StampedEstimator
+            ``self``, so that ``est.reset(x0).step(...)`` chains; :attr:`bound` is ``μ1`` (``inf`` without levels).
+
+        Raises
+        ------
+        InputError
+            ``xhat0`` without ``n`` finite entries (field ``xhat0``), ``t0`` not an integer (field ``t0``);
+            nothing changes.
         """
         if not is_stamp(t0):
             raise InputError(f"the start time must be an integer, got {t0!r}", field="t0")
@@ -202,7 +221,7 @@ class StampedEstimator:
         return self
 
     def _on_reset(self) -> None:
-        """What a subclass starts besides the estimate (after :meth:`_reset` has set it)."""
+        """What a subclass starts besides the estimate (after :meth:`reset` has set it)."""
 
     def _level(self) -> float:
         """The bound of the current estimate (module docstring): ``μ1`` at the period's end, else the level of
