@@ -137,6 +137,46 @@ def floats(value: Any, field: str) -> np.ndarray:
         raise InputError(f"must be numbers, got {value!r:.60}", field=field) from None
 
 
+def radii(value: Any, n: int, field: str = "x0_radius") -> np.ndarray:
+    """``value`` as ``n`` finite non-negative radii (one number is used for every state).
+
+    Parameters
+    ----------
+    value : float or array_like
+        One radius, or one per state.
+    n : int
+        State dimension.
+    field : str, optional
+        The field named in the error (default ``x0_radius``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The radii as floats (a new array).
+
+    Raises
+    ------
+    InputError
+        A bool or a string, non-numeric data, a wrong number of entries, NaN, inf or a negative radius.
+
+    Examples
+    --------
+    >>> from eqrec.checks import radii
+    >>> radii(0.5, 3)
+    array([0.5, 0.5, 0.5])
+    """
+    if isinstance(value, (bool, np.bool_, str)):
+        raise InputError(f"must be a number or one number per state, got {value!r}", field=field)
+    r = floats(value, field)
+    if r.ndim == 0:
+        r = np.full(n, float(r))
+    if r.shape != (n,):
+        raise InputError(f"one radius per state (n = {n}) or one number, got shape {r.shape}", field=field)
+    if not np.all(np.isfinite(r)) or np.any(r < 0):
+        raise InputError(f"radii must be finite and >= 0, got {r.tolist()}", field=field)
+    return np.array(r)
+
+
 def seeded(seed: Any, field: str = "seed") -> np.random.Generator:
     """``numpy.random.default_rng(seed)``, else an :class:`InputError` naming ``field``.
 

@@ -80,8 +80,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
-from eqrec.checks import floats, instance, integer
-from eqrec.errors import InputError, SolverFailure
+from eqrec.checks import instance, integer, radii
+from eqrec.errors import InputError
 from eqrec.lp.model import INF, LinearProgram, LPBuilder
 from eqrec.lp.solvers import highs_model, highs_status, solve_lp, solver_info
 from eqrec.systems.affine import AffineSystem
@@ -120,24 +120,10 @@ def clear_cache() -> None:
 # Inputs
 # ---------------------------------------------------------------------------
 
-def _radius(x0_radius, n: int) -> np.ndarray:
-    """``x0_radius`` as ``n`` finite non-negative floats (a number is broadcast)."""
-    if isinstance(x0_radius, (bool, np.bool_, str)):
-        raise InputError(f"must be a number or one number per state, got {x0_radius!r}", field="x0_radius")
-    r = floats(x0_radius, "x0_radius")
-    if r.ndim == 0:
-        r = np.full(n, float(r))
-    if r.shape != (n,):
-        raise InputError(f"one radius per state (n = {n}) or one number, got shape {r.shape}", field="x0_radius")
-    if not np.all(np.isfinite(r)) or np.any(r < 0):
-        raise InputError(f"radii must be finite and >= 0, got {r.tolist()}", field="x0_radius")
-    return r
-
-
 def _check(system, trace, x0_radius, solver: str, window, options) -> tuple[np.ndarray, int | None]:
     instance(system, AffineSystem, "system")
     instance(trace, ArrivalTrace, "trace", "an ArrivalTrace (eqrec.ArrivalTrace)")
-    r0 = _radius(x0_radius, system.n)
+    r0 = radii(x0_radius, system.n)
     solver_info(solver)
     if options is not None:
         instance(options, dict, "solver_options")

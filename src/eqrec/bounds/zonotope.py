@@ -100,6 +100,14 @@ def outer_row_sums(G: np.ndarray) -> np.ndarray:
     return np.nextafter(s * (1.0 + (q + 2) * _U), np.inf)
 
 
+def _boxed_and_kept(absT: np.ndarray, limit: int) -> tuple[np.ndarray, np.ndarray]:
+    """The generators to box (smallest ``‖g‖_1 − ‖g‖_∞`` in the axes of ``absT``) and those kept, in order."""
+    q, keep = absT.shape[1], limit - absT.shape[0]  # room for the n box generators
+    cost = absT.sum(axis=0) - absT.max(axis=0)
+    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
+    return part[: q - keep], np.sort(part[q - keep:])
+
+
 def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
     """An outer reduction to at most ``limit`` generators: Girard's box of the smallest (module docstring).
 
@@ -120,17 +128,14 @@ def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
     if q <= limit:
         return G
     absG = np.abs(G)
-    cost = absG.sum(axis=0) - absG.max(axis=0)
-    keep = limit - n
-    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
-    boxed, kept = part[: q - keep], np.sort(part[q - keep:])
+    boxed, kept = _boxed_and_kept(absG, limit)
     box = np.nextafter(absG[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2) * _U), np.inf)
     nz = box > 0
     return np.concatenate([G[:, kept], np.diag(box)[:, nz]], axis=1)
 
 
 def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
-    """An outer reduction to at most ``limit`` generators: the smallest boxed in the principal axes of ``G``.
+    r"""An outer reduction to at most ``limit`` generators: the smallest boxed in the principal axes of ``G``.
 
     As :func:`reduce_girard`, in the orthonormal basis ``U`` of the eigenvectors of :math:`GG^\top` (Kopetzki,
     Schürmann, Althoff, "Methods for order reduction of zonotopes", CDC 2017): the removed generators are
@@ -153,10 +158,7 @@ def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
         return G
     U = np.linalg.eigh(G @ G.T)[1]
     absT = np.abs(U.T @ G)
-    cost = absT.sum(axis=0) - absT.max(axis=0)
-    keep = limit - n
-    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
-    boxed, kept = part[: q - keep], np.sort(part[q - keep:])
+    boxed, kept = _boxed_and_kept(absT, limit)
     # the box in U's axes, rounded outward (the sums and the products U^T g, Higham eqs. (3.4), (4.4))
     box = np.nextafter(absT[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2 * n + 4) * _U), np.inf)
     return np.concatenate([G[:, kept], U * box], axis=1)

@@ -48,7 +48,7 @@ to the constructor (then it is reset at once); without it, call
 
 from __future__ import annotations
 
-from typing import Any, Iterable
+from typing import Iterable
 
 import numpy as np
 
@@ -304,7 +304,7 @@ class ClassEstimator(StampedEstimator):
         if self._t == 0:
             raise InputError("no step of the period has been taken: the current estimate is its initial one")
         if self._maps is None:
-            self._maps = ClassErrorMaps(self.system, self.gains)
+            self._maps = ClassErrorMaps.of(self.system, self.gains)
         return self._maps.error_map(self._start, self._t, tuple(sorted(self._yxi)))
 
     @property

@@ -46,6 +46,28 @@ class ClassErrorMaps:
         self.radius = lay.radius(system.eta_w, system.eta_v, 0.0)[: self._cut]
         self._parts: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
+    @classmethod
+    def of(cls, system: AffineSystem, gains: ClassGains) -> "ClassErrorMaps":
+        """The maps of these gains on this system, built once and kept on the gains (every estimator of a
+        design, every reset and every return to the design share them).
+
+        Parameters
+        ----------
+        system : AffineSystem
+            The model.
+        gains : ClassGains
+            The design's class gains.
+
+        Returns
+        -------
+        ClassErrorMaps
+            The shared maps.
+        """
+        kept = gains.__dict__.get("_error_maps")
+        if kept is None or kept.system is not system:
+            kept = gains.__dict__["_error_maps"] = cls(system, gains)
+        return kept
+
     def parts(self, depth: int, available: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
         r"""``(Φ, N)`` of the class ``(depth, available)``.
 

@@ -42,19 +42,9 @@ import numpy as np
 
 from eqrec.arrivals.packets import Packet, as_packets, check_input
 from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
+from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
-
-
-def _radius(x0_radius: Any, n: int) -> np.ndarray:
-    try:
-        r = np.array(np.broadcast_to(np.asarray(x0_radius, dtype=float), (n,)))
-    except (TypeError, ValueError):
-        raise InputError(f"one radius, or one per state (n = {n}), got {x0_radius!r:.60}", field="x0_radius") \
-            from None
-    if isinstance(x0_radius, (bool, str)) or not np.all(np.isfinite(r)) or np.any(r < 0):
-        raise InputError(f"radii must be finite and >= 0, got {x0_radius!r:.60}", field="x0_radius")
-    return r
 
 
 class ExactBound:
@@ -91,7 +81,7 @@ class ExactBound:
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         self.estimator, self.system = estimator, system
-        self.x0_radius = _radius(x0_radius, system.n)
+        self.x0_radius = radii(x0_radius, system.n)
         self.order = check_order(order)
         self.name = f"{getattr(estimator, 'name', type(estimator).__name__)}, exact bound"
         self.mode = "maps" if callable(getattr(estimator, "error_map", None)) else "columns"

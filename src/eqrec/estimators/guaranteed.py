@@ -176,7 +176,7 @@ class GuaranteedEstimator:
         self.bound = np.nan
         # strict=False: the error set, the fallback (None while in the design), the period's record
         self._set: ErrorSet | None = None
-        self._fallback: ZonotopeEstimator | None = None  # the set-membership estimator while out of the design
+        self._outside = False  # out of the design: the set-membership estimator's estimate is reported
         self._sm: ZonotopeEstimator | None = None  # the set-membership estimator, run on every step
         self._t0 = 0
         self._bounds = np.full(system.n, np.nan)
@@ -188,7 +188,7 @@ class GuaranteedEstimator:
         False from a step whose data leave the design's language until a
         period starts with an error set inside the ``μ1`` box (module docstring).
         """
-        return self._fallback is None
+        return not self._outside
 
     def error_map(self):
         """The error map of the current estimate (class gains, inside the design; :mod:`eqrec.bounds.zonotope`).
@@ -204,7 +204,7 @@ class GuaranteedEstimator:
             Node gains, or ``strict=False`` outside the design (the set-membership fallback carries its own set).
         """
         est = self._running()
-        if not isinstance(est, ClassEstimator) or self._fallback is not None:
+        if not isinstance(est, ClassEstimator) or self._outside:
             raise InputError("error maps are those of the class form inside the design", field="gains")
         return est.error_map()
 
@@ -252,23 +252,23 @@ class GuaranteedEstimator:
         if not self.strict:
             self._t0 = int(t0)
             self._set = ErrorSet.box(self.mu1, self.system.n, self._t0, self.order)
-            self._fallback = None
-            self._sm = self._new_fallback().reset(x0, self._t0)
+            self._outside = False
+            self._sm = self._new_set_membership().reset(x0, self._t0)
             self._bounds = np.full(self.system.n, self.mu1)
         return self
 
     @property
     def x(self) -> np.ndarray:
         """A copy of the current estimate ``x̂`` (of time :attr:`time`)."""
-        if self._fallback is not None:
-            return self._fallback.x
+        if self._outside:
+            return self._sm.x
         return self._running().xhat.copy()
 
     @property
     def time(self) -> int:
         """Absolute time of the current estimate."""
-        if self._fallback is not None:
-            return self._fallback.time
+        if self._outside:
+            return self._sm.time
         return self._running().time
 
     def _running(self) -> "RecoveryEstimator | ClassEstimator":
@@ -332,19 +332,19 @@ class GuaranteedEstimator:
         it is ready, with all the information of the run.
         """
         T = self.gains.horizon
-        if self._fallback is not None:
-            now = self._fallback.time
-            if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._fallback.carried_set[1]) <= self.mu1):
+        if self._outside:
+            now = self._sm.time
+            if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._sm.carried_set[1]) <= self.mu1):
                 est = self._return_to_design(now, packets, u)  # checked first: nothing changes if it raises
             else:
-                xhat, _ = self._fallback.step(packets, u)
-                return self._fallback_bounds(xhat)
+                xhat, _ = self._sm.step(packets, u)
+                return self._outside_bounds(xhat)
         opened = est._open(packets, u)  # every input checked; nothing changes
         t, S = opened.t, tuple(sorted(opened.yxi))
         if not has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
-            self._fallback = self._sm
-            xhat, _ = self._fallback.step(packets, opened.u)
-            return self._fallback_bounds(xhat)
+            xhat, _ = self._sm.step(packets, opened.u)
+            self._outside = True
+            return self._outside_bounds(xhat)
         self._sm.step(packets, opened.u)  # all-or-nothing; the class step below cannot raise (its class exists)
         xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
         beta = self._set.advance(est.error_map())
@@ -352,23 +352,23 @@ class GuaranteedEstimator:
         self.bound = float(self._bounds.max())
         return xhat, self.bound
 
-    def _new_fallback(self) -> ZonotopeEstimator:
+    def _new_set_membership(self) -> ZonotopeEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
 
-    def _fallback_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
-        self._bounds = self._fallback.state_bounds
+    def _outside_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
+        self._bounds = self._sm.state_bounds
         self.bound = float(self._bounds.max())
         return xhat, self.bound
 
     def _return_to_design(self, now: int, packets, u) -> ClassEstimator:
         """The designed gains again from the set-membership centre (its set lies in the ``μ1`` box)."""
-        centre, generators = self._fallback.carried_set
+        centre, generators = self._sm.carried_set
         est = make_estimator(self.system, self.gains, centre, periodic=True, t0=now, bound_of=self.bound_of,
                              mu1=self.mu1)
         est._open(packets, u)  # raises before anything changes
         self._set = ErrorSet(generators, now, self.order)
-        self._est, self._fallback = est, None
+        self._est, self._outside = est, False
         return est
 
     def update(self, y=None, u=None) -> np.ndarray:

@@ -115,7 +115,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
-from eqrec.bounds.zonotope import outer_row_sums, reduce_girard, reduce_pca
+from eqrec.bounds.zonotope import check_order, outer_row_sums, reduce_girard, reduce_pca
+from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
@@ -236,19 +237,10 @@ class ZonotopeEstimator:
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         n = system.n
-        try:
-            r0 = np.array(np.broadcast_to(np.asarray(x0_radius, dtype=float), (n,)))
-        except (TypeError, ValueError):
-            raise InputError(f"one radius, or one per state (n = {n}), got {x0_radius!r:.60}",
-                             field="x0_radius") from None
-        if isinstance(x0_radius, (bool, str)) or not np.all(np.isfinite(r0)) or np.any(r0 < 0):
-            raise InputError(f"radii must be finite and >= 0, got {x0_radius!r:.60}", field="x0_radius")
+        r0 = radii(x0_radius, n)
         if not is_stamp(max_delay) or max_delay < 0:
             raise InputError(f"the largest delay is an integer >= 0, got {max_delay!r}", field="max_delay")
-        if order is not None and (isinstance(order, (bool, np.bool_))
-                                  or not isinstance(order, (int, float, np.integer, np.floating))
-                                  or not np.isfinite(order) or order < 1):
-            raise InputError(f"order is None or a number >= 1 (generators per state), got {order!r}", field="order")
+        order = check_order(order)
         if gain not in GAINS:
             raise InputError(f"unknown gain {gain!r}; choose one of {list(GAINS)}", field="gain")
         if reduction not in _REDUCTIONS:
@@ -313,24 +305,13 @@ class ZonotopeEstimator:
         InputError
             A non-finite or wrongly sized ``xhat0``, a ``t0`` that is not an integer (nothing changes).
         """
-        c = check_estimate(xhat0, self.system.n)
-        if not is_stamp(t0):
-            raise InputError(f"the start time is an integer, got {t0!r}", field="t0")
-        nz = self.x0_radius > 0
-        self._c = self._xhat = c
-        self._G = np.diag(self.x0_radius)[:, nz]
-        self._beta = outer_row_sums(self._G)
-        self._buffer: tuple[_Entry, ...] = ()
-        self._time = self._t0 = int(t0)
-        self.dropped_packets = 0
-        self.replays = 0
-        return self
+        return self.start_from(xhat0, np.diag(self.x0_radius), t0)
 
     def start_from(self, xhat0: Any, generators: Any, t0: int = 0) -> "ZonotopeEstimator":
         """Start a run from a given set: centre ``xhat0``, error zonotope ``generators ε``, ``|ε| <= 1``.
 
-        The fallback of :class:`eqrec.estimators.guaranteed.GuaranteedEstimator` outside its language starts
-        here from the exact error set of the designed estimator.
+        :meth:`reset` starts here from the box of radius ``x0_radius``; another estimator's exact error set
+        can be handed over the same way.
 
         Parameters
         ----------
@@ -360,8 +341,9 @@ class ZonotopeEstimator:
             raise InputError(f"the start time is an integer, got {t0!r}", field="t0")
         G = G[:, np.any(G != 0, axis=0)]
         if self._limit is not None:
-            G = reduce_girard(G, self._limit)
-        self._c, self._G = c, G.copy()
+            G = _REDUCTIONS[self.reduction](G, self._limit)
+        self._c = self._xhat = c
+        self._G = G.copy()
         self._beta = outer_row_sums(self._G)
         self._buffer = ()
         self._time = self._t0 = int(t0)
