@@ -196,3 +196,39 @@ def test_exact_bound_of_the_lmv_predictors_equals_the_unit_perturbation_worst_ca
                                       np.array([1.0, 2.0, 3.0]), 0.5)
     exact = (np.abs(c) + np.abs(G).sum(axis=-1)).max(axis=1)
     assert np.all(spread >= exact * (1 - 1e-12)) and np.all(spread <= exact * (1 + 1e-9))
+
+
+def _played_back(system, make, trace, xhat0, delta):
+    """One run with the uncertainty ``δ = (ξ0, w, v)`` played back; returns per step ``(error, bound)``."""
+    n, N = system.n, trace.steps
+    w = delta[n:n + N * system.nw].reshape(N, system.nw)
+    v = delta[n + N * system.nw:].reshape(N, system.nv)
+    run = closed_loop(system, make(), trace, xhat0 + delta[:n], delta[:n], w, v)
+    return np.abs(run.error[1:]).max(axis=1), np.array(run.spread)
+
+
+@pytest.mark.parametrize("loss", [0.0, 0.1, 0.4])
+@pytest.mark.parametrize("family", ["strict=False", "zonotope", "Kalman, time-stamped"])
+def test_every_worst_case_played_back_stays_inside_and_no_bound_is_below_the_information_limit(
+        oscillator, osc_design, family, loss):
+    """For every step ``t``: the noise at the sign of the worst row of the error map at ``t`` (initial error at
+    its box corner) played back gives error <= bound at every step (1e-12: the simulated error is rounded),
+    and the bound is never below the information limit (1e-9 relative: the limit is an LP optimum)."""
+    from eqrec.bounds.information import information_limit
+    from eqrec.estimators.zonotope import ZonotopeEstimator
+
+    sysm, mu1 = oscillator, osc_design.mu1
+    kalman = GaussianNoise(Qw=np.eye(2) * 0.002, Qv=np.eye(1) * 0.0004, x0_cov=np.eye(2) * 0.04).design(sysm)
+    make = {"strict=False": lambda: osc_design.estimator(strict=False),
+            "zonotope": lambda: ZonotopeEstimator(sysm, x0_radius=mu1, max_delay=0, order=None),
+            "Kalman, time-stamped": lambda: exact_bound(TimestampedKalman(sysm, kalman), sysm, mu1, steps=18)}[family]
+    trace = _trace(7, 18, loss, 0)
+    xhat0 = np.array([0.4, -0.2])
+    c, G, r, spread = _unit_responses(sysm, make, trace, xhat0, mu1)
+    limit = information_limit(sysm, trace, mu1).max(axis=1)
+    assert np.all(spread >= limit * (1 - 1e-9))
+    for t in range(trace.steps):
+        i = int(np.argmax(np.abs(G[t]).sum(axis=-1)))
+        err, bound = _played_back(sysm, make, trace, xhat0, np.sign(G[t, i]) * r)
+        assert np.all(err <= bound * (1 + 1e-12)), (t, float((err / bound).max()))
+        assert np.all(bound >= limit * (1 - 1e-9))
