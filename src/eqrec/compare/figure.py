@@ -68,8 +68,8 @@ def compare_figure(result: CompareResult, *paths: str, title: str | None = None)
                 ax.plot(t, bnd.max(axis=0), color="C3", linewidth=0.8, linestyle=":", label="bound, largest")
                 row = table.loc[family]
                 outside = "" if np.isnan(row["outside_design"]) else f", {100 * row['outside_design']:.0f} % out"
-                ax.set_title(f"{family}\n{int(row['violations'])} viol.{outside}\nbound/limit {row['bound_over_limit_median']:.2f}",
-                             fontsize=8)
+                ax.set_title(f"{family}\n{int(row['violations'])} viol.{outside}\n"
+                             f"bound/limit {row['bound_over_limit_median']:.2f} (median)", fontsize=8)
             else:
                 ax.set_title(f"{family}\n(no bound)", fontsize=8)
             ax.set_yscale("log")
