@@ -113,17 +113,21 @@ def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
 
     Parameters
     ----------
-    G : numpy.ndarray, shape (n, q)
-        Generators of a centred zonotope.
+    G : numpy.ndarray, shape (n, q) or (K, n, q)
+        Generators of a centred zonotope, or a stack of ``K`` of them with as many generators each (reduced one
+        by one, in one pass; the stack keeps the ``n`` box columns even when some are zero, so that all ``K``
+        keep one shape).
     limit : int
         Largest number of generators kept, ``>= n``.
 
     Returns
     -------
-    numpy.ndarray, shape (n, q')
+    numpy.ndarray, shape (n, q') or (K, n, q')
         ``G`` itself when ``q <= limit``, else the kept generators followed by the diagonal box
         (``q' <= limit``); the zonotope it spans contains that of ``G``.
     """
+    if G.ndim == 3:
+        return _reduce_stack(G, limit, principal_axes=False)
     n, q = G.shape
     if q <= limit:
         return G
@@ -143,16 +147,18 @@ def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
 
     Parameters
     ----------
-    G : numpy.ndarray, shape (n, q)
-        Generators of a centred zonotope.
+    G : numpy.ndarray, shape (n, q) or (K, n, q)
+        Generators of a centred zonotope, or a stack of ``K`` of them with as many generators each.
     limit : int
         Largest number of generators kept, ``>= n``.
 
     Returns
     -------
-    numpy.ndarray, shape (n, q')
+    numpy.ndarray, shape (n, q') or (K, n, q')
         ``G`` itself when ``q <= limit``, else the kept generators followed by the ``n`` new ones.
     """
+    if G.ndim == 3:
+        return _reduce_stack(G, limit, principal_axes=True)
     n, q = G.shape
     if q <= limit:
         return G
@@ -162,6 +168,33 @@ def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
     # the box in U's axes, rounded outward (the sums and the products U^T g, Higham eqs. (3.4), (4.4))
     box = np.nextafter(absT[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2 * n + 4) * _U), np.inf)
     return np.concatenate([G[:, kept], U * box], axis=1)
+
+
+def _reduce_stack(G: np.ndarray, limit: int, principal_axes: bool) -> np.ndarray:
+    """:func:`reduce_girard` (or :func:`reduce_pca`) on each of a stack ``(K, n, q)`` of zonotopes, in one pass.
+
+    The same choice and the same outward rounding as the two-dimensional path, per member of the stack.
+    """
+    K, n, q = G.shape
+    if q <= limit:
+        return G
+    if principal_axes:
+        U = np.linalg.eigh(G @ G.transpose(0, 2, 1))[1]
+        absT = np.abs(U.transpose(0, 2, 1) @ G)
+    else:
+        absT = np.abs(G)
+    keep = max(limit - n, 0)  # room for the n box generators
+    cost = absT.sum(axis=1) - absT.max(axis=1)
+    boxed = np.zeros((K, q), dtype=bool)  # a mask keeps the order of the kept generators
+    if keep > 0:
+        boxed[np.arange(K)[:, None], np.argpartition(cost, q - keep - 1, axis=1)[:, : q - keep]] = True
+    else:
+        boxed[:] = True
+    slack = q - keep + 2 + (2 * n + 2 if principal_axes else 0)
+    box = np.nextafter((absT * boxed[:, None, :]).sum(axis=2) * (1.0 + slack * _U), np.inf)
+    new = U * box[:, None, :] if principal_axes else box[:, :, None] * np.eye(n)
+    kept = G.transpose(0, 2, 1)[~boxed].reshape(K, keep, n).transpose(0, 2, 1)
+    return np.concatenate([kept, new], axis=2)
 
 
 def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:
