@@ -122,3 +122,21 @@ def test_mapping_with_arrays_still_loads():
     s, _ = system_from_mapping(dict(A=np.eye(2), C=np.array([[1.0, 0.0]]), E=np.ones((2, 1)),
                                     eta_w=np.float64(0.1), eta_v=np.int64(0)))
     assert s.n == 2 and s.eta_v == 0.0
+
+
+def test_per_channel_noise_bounds_are_kept_as_given():
+    """Issue 33 §3: ``load_system`` keeps the per-channel ``eta_w``/``eta_v`` as given (read-only), next to the
+    folded description every computation uses; a scalar bound leaves them ``None``; ``scaled`` keeps them."""
+    import eqrec
+
+    plant, _ = eqrec.load_system("examples/two_mass.yaml")
+    assert plant.eta_w_channels.tolist() == [0.01, 0.02] and plant.eta_v_channels is None
+    assert plant.eta_w == 1.0 and np.array_equal(plant.E[[1, 3]], np.diag([0.01, 0.02]))  # the folded form
+    assert not plant.eta_w_channels.flags.writeable
+    assert plant.scaled([1.0, 2.0, 3.0, 4.0]).eta_w_channels.tolist() == [0.01, 0.02]
+    both = eqrec.AffineSystem(A=np.eye(2), C=[[1.0, 0.0], [0.0, 1.0]], E=np.eye(2), eta_w=0.1,
+                              eta_v=[0.05, 0.2])
+    assert both.eta_w_channels is None and both.eta_v_channels.tolist() == [0.05, 0.2]
+    assert both.eta_v == 1.0 and np.array_equal(both.V, np.diag([0.05, 0.2]))
+    same = eqrec.AffineSystem(A=np.eye(2), C=[[1.0, 0.0]], E=np.eye(2), eta_w=[0.3, 0.3], eta_v=0.1)
+    assert same.eta_w == 0.3 and same.eta_w_channels is None  # equal entries: the scalar bound

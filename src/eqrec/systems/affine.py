@@ -50,6 +50,13 @@ def _as_vector(value: Any, name: str, source: str | None) -> np.ndarray:
     return arr.reshape(-1)
 
 
+def _read_only(arr: np.ndarray) -> np.ndarray:
+    """A read-only copy of ``arr`` (a frozen system's arrays do not change)."""
+    out = np.array(arr, dtype=float)
+    out.flags.writeable = False
+    return out
+
+
 def _noise_bound(value: Any, key: str, channels: int, what: str,
                  source: str | None) -> tuple[float, np.ndarray | None]:
     """A noise bound: a number, or one bound per channel as the scale of the channels and the bound 1.
@@ -141,7 +148,8 @@ class AffineSystem:
         are stored as the equivalent scalar description: ``E`` becomes
         ``E diag(eta_w)`` and ``eta_w`` becomes 1 (the same noise set, so
         every design, certificate and simulation uses it unchanged); equal
-        entries are the scalar bound.
+        entries are the scalar bound.  The bounds as given stay readable in
+        :attr:`eta_w_channels` and :attr:`eta_v_channels`.
     B : array_like, shape (n, m) or (T, n, m), optional
         Input matrix (does not enter the error dynamics); ``None``: no input.
     f : array_like, shape (n,), optional
@@ -163,6 +171,12 @@ class AffineSystem:
         State, output, input, process-noise and measurement-noise dimensions.
     horizon_limit : int or None
         Length of the time-varying data, ``None`` if time-invariant.
+    eta_w_channels, eta_v_channels : numpy.ndarray or None
+        The per-channel bounds as given (read-only, one per column of ``E``
+        or ``V``), ``None`` when one bound was given.  Informative only:
+        ``E`` and ``V`` already carry them (``E = E_given diag(eta_w)``,
+        ``eta_w = 1``), which every computation uses; not part of equality
+        nor of :meth:`to_dict`.
 
     Raises
     ------
@@ -189,6 +203,8 @@ class AffineSystem:
     >>> plant.E, plant.eta_w
     (array([[0.1, 0. ],
            [0. , 0.5]]), 1.0)
+    >>> plant.eta_w_channels, plant.eta_v_channels
+    (array([0.1, 0.5]), None)
     """
 
     A: np.ndarray
@@ -202,6 +218,8 @@ class AffineSystem:
     name: str = "system"
     source: str | None = field(default=None, compare=False)
     dt: float | None = field(default=None, compare=False)
+    eta_w_channels: np.ndarray | None = field(default=None, compare=False, repr=False)
+    eta_v_channels: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     def __init__(self, A: Any = None, C: Any = None, E: Any = None, eta_w: Any = None, eta_v: Any = None,
                  B: Any = None, f: Any = None, V: Any = None, name: str = "system", source: str | None = None,
@@ -247,7 +265,10 @@ class AffineSystem:
         if not isinstance(name, str):
             raise InputError(f"must be a string, got {name!r}", src, "name")
         dt = None if dt is None else float(dt)
-        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, dt=dt, **bounds).items():
+        given = {f"{key}_channels": None if scale is None else _read_only(scale)
+                 for key, scale in (("eta_w", w_scale), ("eta_v", v_scale))}
+        for key, val in dict(A=A, C=C, E=E, V=V, B=B, f=f, name=name, source=source, dt=dt, **bounds,
+                             **given).items():
             object.__setattr__(self, key, val)
 
     def __eq__(self, other: object) -> bool:
@@ -350,9 +371,12 @@ class AffineSystem:
             raise InputError(f"need n = {self.n} positive weights, one per state, got {w.tolist()}", self.source,
                              "state_weights")
         col = w[:, None]
-        return AffineSystem(A=self.A * col / w, C=self.C / w, E=self.E * col, eta_w=self.eta_w, eta_v=self.eta_v,
-                            B=None if self.B is None else self.B * col, f=self.f * w, V=self.V, name=self.name,
-                            source=self.source, dt=self.dt)
+        out = AffineSystem(A=self.A * col / w, C=self.C / w, E=self.E * col, eta_w=self.eta_w, eta_v=self.eta_v,
+                           B=None if self.B is None else self.B * col, f=self.f * w, V=self.V, name=self.name,
+                           source=self.source, dt=self.dt)
+        for key in ("eta_w_channels", "eta_v_channels"):  # the noise is the same: its bounds as given too
+            object.__setattr__(out, key, getattr(self, key))
+        return out
 
     def to_dict(self) -> dict:
         """JSON-serialisable description (matrices as nested lists).
