@@ -14,7 +14,7 @@ from eqrec.arrivals.words import full_delay_language
 from eqrec.lp.solvers import SOLVER_NAMES, solve_lp
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.gains import node_schedule
-from eqrec.design.classes.block_lp import build_class_lp
+from eqrec.design.classes.block_lp import active_columns, active_maps, build_class_lp
 from eqrec.design.classes.engine import class_design, solve_classes
 from eqrec.design.cost import class_cost
 from eqrec.design.delay.design import delay_language, design_delay, design_delay_global
@@ -238,3 +238,24 @@ def test_block_lp_has_one_block_per_class_and_row(reactor):
     model = build_class_lp(reactor, classes, 0.5)
     assert model.blocks == len(classes) * reactor.n
     assert isinstance(model.lp, LinearProgram) and sp.issparse(model.lp.A)
+
+
+def test_active_maps_are_the_class_maps_on_the_active_columns(reactor):
+    """active_maps keeps exactly the coordinates E_d or Z_S touches (active_columns), in order; the others are
+    zero in both."""
+    from eqrec.bounds.data_classes import class_maps
+    from eqrec.bounds.stacking import Stacking
+    from eqrec.design.delay.languages import delay_classes
+
+    classes = delay_classes(max_delay=2, horizon=5)
+    st = Stacking(reactor, classes.horizon)
+    for cls in classes.classes:
+        E, Z = class_maps(st, cls)
+        act = active_columns(E, Z)
+        Ea, Za, act2 = active_maps(st, cls)
+        np.testing.assert_array_equal(act2, act)
+        assert np.all(np.diff(act) > 0)
+        assert Ea.tobytes() == E[:, act].tobytes() and Za.tobytes() == Z[:, act].tobytes()
+        rest = np.setdiff1d(np.arange(E.shape[1]), act)
+        assert not np.any(E[:, rest]) and not np.any(Z[:, rest])
+        assert np.all(np.any(E[:, act] != 0, axis=0) | np.any(Z[:, act] != 0, axis=0))

@@ -82,3 +82,56 @@ def test_highs_status_table():
     status, objective = highs_status(15)
     assert status == "Unknown" and np.isnan(objective)
     assert highs_status(99, "odd")[0] == "odd" and highs_status(99)[0] == "HiGHS model status 99"
+
+
+def _highs_lp_model(lp, options):
+    """The LP loaded field by field in a ``highspy.HighsLp`` (how :func:`highs_model` loaded it before)."""
+    import highspy
+
+    h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    for key, val in options.items():
+        h.setOptionValue(key, val)
+    model = highspy.HighsLp()
+    nr, nc = lp.A.shape
+    model.num_col_, model.num_row_ = nc, nr
+    model.col_cost_, model.col_lower_, model.col_upper_ = lp.c, lp.col_lower, lp.col_upper
+    model.row_lower_, model.row_upper_ = lp.row_lower, lp.row_upper
+    model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    model.a_matrix_.start_, model.a_matrix_.index_, model.a_matrix_.value_ = lp.A.indptr, lp.A.indices, lp.A.data
+    model.a_matrix_.num_col_, model.a_matrix_.num_row_ = nc, nr
+    h.passModel(model)
+    return h
+
+
+@pytest.mark.parametrize("options", [{}, {"presolve": "off", "simplex_strategy": 4}])
+def test_highs_model_loads_the_lp_entry_for_entry(options):
+    """highs_model passes NumPy buffers to HiGHS: the model it holds is the LP's, entry for entry, and its runs
+    give the bytes of the same LP loaded through highspy.HighsLp (values, multipliers and iterations)."""
+    import scipy.sparse as sp
+
+    from eqrec.lp.model import LinearProgram
+    from eqrec.lp.solvers import highs_model
+
+    rng = np.random.default_rng(7)
+    A = sp.random(30, 80, density=0.4, format="csc", random_state=3)
+    lp = LinearProgram(c=rng.standard_normal(80), A=A, row_lower=np.zeros(30), row_upper=np.r_[np.zeros(20),
+                       np.full(10, np.inf)], col_lower=-rng.random(80), col_upper=np.r_[rng.random(79), np.inf])
+    h = highs_model(lp, options)
+    held = h.getLp()
+    for mine, theirs in [(lp.c, held.col_cost_), (lp.col_lower, held.col_lower_), (lp.col_upper, held.col_upper_),
+                         (lp.row_lower, held.row_lower_), (lp.row_upper, held.row_upper_),
+                         (A.indptr, held.a_matrix_.start_), (A.indices, held.a_matrix_.index_),
+                         (A.data, held.a_matrix_.value_)]:
+        np.testing.assert_array_equal(np.asarray(theirs), mine)
+    reference = _highs_lp_model(lp, options)
+    for k in range(3):  # a cold run, then warm runs after a change of objective, as solve_lp_grid does
+        cost = lp.c if k == 0 else rng.standard_normal(80)
+        for model in (h, reference):
+            model.changeColsCost(80, np.arange(80, dtype=np.int32), cost)
+            model.run()
+        a, b = h.getSolution(), reference.getSolution()
+        assert h.getModelStatus() == reference.getModelStatus()
+        assert h.getInfo().simplex_iteration_count == reference.getInfo().simplex_iteration_count
+        for x, y in [(a.col_value, b.col_value), (a.row_dual, b.row_dual), (a.col_dual, b.col_dual)]:
+            assert np.asarray(x).tobytes() == np.asarray(y).tobytes()

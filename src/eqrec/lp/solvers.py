@@ -71,6 +71,11 @@ def highs_model(lp: LinearProgram, options: dict):
     """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet), for callers that keep the model and change it
     between runs (warm starts).
 
+    The arrays go to HiGHS through its array form of ``passModel`` (NumPy buffers, read at C speed): the same model,
+    entry for entry, as one filled in a ``highspy.HighsLp``, whose vector fields pybind11 converts one Python
+    element at a time (seconds for the dense class LPs of a long horizon).  What HiGHS says of the model is
+    read from the run, as before.
+
     Parameters
     ----------
     lp : LinearProgram
@@ -89,22 +94,13 @@ def highs_model(lp: LinearProgram, options: dict):
     h.setOptionValue("output_flag", False)
     for key, val in options.items():
         h.setOptionValue(key, val)
-    model = highspy.HighsLp()
     nr, nc = lp.A.shape
-    model.num_col_ = nc
-    model.num_row_ = nr
-    model.col_cost_ = lp.c
-    model.col_lower_ = lp.col_lower
-    model.col_upper_ = lp.col_upper
-    model.row_lower_ = lp.row_lower
-    model.row_upper_ = lp.row_upper
-    model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    model.a_matrix_.start_ = lp.A.indptr
-    model.a_matrix_.index_ = lp.A.indices
-    model.a_matrix_.value_ = lp.A.data
-    model.a_matrix_.num_col_ = nc
-    model.a_matrix_.num_row_ = nr
-    h.passModel(model)
+    f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731  (HighsInt: 32 bits)
+    h.passModel(nc, nr, int(lp.A.nnz), int(highspy.MatrixFormat.kColwise),
+                 int(highspy.ObjSense.kMinimize), 0.0, f64(lp.c), f64(lp.col_lower), f64(lp.col_upper),
+                 f64(lp.row_lower), f64(lp.row_upper), i32(lp.A.indptr), i32(lp.A.indices), f64(lp.A.data),
+                 np.zeros(nc, np.int32))  # every column continuous
     return h
 
 

@@ -94,8 +94,26 @@ def active_maps(stacking: Stacking, cls) -> tuple[np.ndarray, np.ndarray, np.nda
         ``E`` ``(n, k)``, ``Z`` ``(|S| p, k)`` on the ``k`` active coordinates, and their ``(k,)`` indices.
     """
     E, Z = class_maps(stacking, cls)
-    act = np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
+    act = active_columns(E, Z)
     return E[:, act], Z[:, act], act
+
+
+def active_columns(E: np.ndarray, Z: np.ndarray) -> np.ndarray:
+    """The uncertain coordinates that ``E_d`` or ``Z_S`` touches (a column with a nonzero in either).
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        ``(n, D)`` open-loop error map of the class's time.
+    Z : numpy.ndarray
+        ``(|S| p, D)`` output maps of its data.
+
+    Returns
+    -------
+    numpy.ndarray
+        Increasing column indices.
+    """
+    return np.flatnonzero(np.any(E != 0, axis=0) | np.any(Z != 0, axis=0))
 
 
 class ClassBlocks:

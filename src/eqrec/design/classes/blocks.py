@@ -46,7 +46,7 @@ from eqrec.lp.solvers import record_retries, retry_log, solve_lp, solve_lp_grid
 from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.gains import box_radius
-from eqrec.design.classes.block_lp import active_maps, block_lp_options, build_ratio_lp
+from eqrec.design.classes.block_lp import active_columns, block_lp_options, build_ratio_lp
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 #: The ways to solve the class LPs: by size, the one block LP, or per class.
@@ -218,15 +218,17 @@ def level_task(stacking: Stacking, chunk: list[DataClass], mu1s: list[float], so
     betas = [box_radius(st, float(mu1)) for mu1 in mu1s]
     out = []
     for cls in chunk:
-        E, Z, act = active_maps(st, cls)
-        m, C = Z.shape
+        E, Z = class_maps(st, cls)  # full width: the LPs read the active columns, the certificate all of them
+        act = active_columns(E, Z)
+        m, C = Z.shape[0], act.size
         K = [np.zeros((system.n, m)) for _ in mu1s]
         levels, iters = np.zeros((len(mu1s), system.n)), np.zeros(len(mu1s), np.int64)
         if C:
-            lp = LinearProgram(c=np.zeros(C), A=_csc(Z), row_lower=np.zeros(m), row_upper=np.zeros(m),
+            Ea = E[:, act]
+            lp = LinearProgram(c=np.zeros(C), A=_csc(Z[:, act]), row_lower=np.zeros(m), row_upper=np.zeros(m),
                                col_lower=-betas[0][act], col_upper=betas[0][act])
             large = solver == "highs" and class_work(cls, system) > LARGE_CLASS_WORK
-            grid = solve_lp_grid(lp, [-E[r] for r in range(system.n)], [(-b[act], b[act]) for b in betas], solver,
+            grid = solve_lp_grid(lp, [-Ea[r] for r in range(system.n)], [(-b[act], b[act]) for b in betas], solver,
                                  {**options, **LARGE_CLASS_OPTIONS} if large else options)
             for j, sols in enumerate(grid):
                 for r, sol in enumerate(sols):
@@ -236,7 +238,6 @@ def level_task(stacking: Stacking, chunk: list[DataClass], mu1s: list[float], so
                         raise SolverFailure(f"solver {sol.solver} returned no row multipliers (the class gains are "
                                             "read from them)")
                     K[j][r], levels[j, r], iters[j] = -sol.row_dual, -sol.objective, iters[j] + sol.iterations
-        E, Z = class_maps(st, cls)
         size = {"rows": system.n * m, "cols": system.n * C, "nonzeros": system.n * int(np.count_nonzero(Z))}
         out.append([LevelBlock(K=K[j], levels=levels[j], iterations=int(iters[j]), **size,
                                bounds=np.abs(E - K[j] @ Z) @ betas[j])
