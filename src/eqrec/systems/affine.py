@@ -176,7 +176,8 @@ class AffineSystem:
         or ``V``), ``None`` when one bound was given.  Informative only:
         ``E`` and ``V`` already carry them (``E = E_given diag(eta_w)``,
         ``eta_w = 1``), which every computation uses; not part of equality
-        nor of :meth:`to_dict`.
+        nor of :meth:`to_dict` (a copy made with ``dataclasses.replace`` is
+        built from the folded form and has ``None``).
 
     Raises
     ------
@@ -218,8 +219,8 @@ class AffineSystem:
     name: str = "system"
     source: str | None = field(default=None, compare=False)
     dt: float | None = field(default=None, compare=False)
-    eta_w_channels: np.ndarray | None = field(default=None, compare=False, repr=False)
-    eta_v_channels: np.ndarray | None = field(default=None, compare=False, repr=False)
+    eta_w_channels: np.ndarray | None = field(default=None, init=False, compare=False, repr=False)
+    eta_v_channels: np.ndarray | None = field(default=None, init=False, compare=False, repr=False)
 
     def __init__(self, A: Any = None, C: Any = None, E: Any = None, eta_w: Any = None, eta_v: Any = None,
                  B: Any = None, f: Any = None, V: Any = None, name: str = "system", source: str | None = None,
