@@ -127,7 +127,7 @@ def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
         (``q' <= limit``); the zonotope it spans contains that of ``G``.
     """
     if G.ndim == 3:
-        return _reduce_stack(G, limit, principal_axes=False)
+        return _reduce_stack(G, limit, principal=False)
     n, q = G.shape
     if q <= limit:
         return G
@@ -138,7 +138,23 @@ def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
     return np.concatenate([G[:, kept], np.diag(box)[:, nz]], axis=1)
 
 
-def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
+def principal_axes(G: np.ndarray) -> np.ndarray:
+    r"""The orthonormal eigenvectors of :math:`GG^\top` (columns), per member of a stack ``(K, n, q)`` too.
+
+    Parameters
+    ----------
+    G : numpy.ndarray, shape (n, q) or (K, n, q)
+        Generators.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n) or (K, n, n)
+        The axes :func:`reduce_pca` boxes in.
+    """
+    return np.linalg.eigh(G @ np.swapaxes(G, -1, -2))[1]
+
+
+def reduce_pca(G: np.ndarray, limit: int, axes: "np.ndarray | None" = None) -> np.ndarray:
     r"""An outer reduction to at most ``limit`` generators: the smallest boxed in the principal axes of ``G``.
 
     As :func:`reduce_girard`, in the orthonormal basis ``U`` of the eigenvectors of :math:`GG^\top` (Kopetzki,
@@ -151,6 +167,9 @@ def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
         Generators of a centred zonotope, or a stack of ``K`` of them with as many generators each.
     limit : int
         Largest number of generators kept, ``>= n``.
+    axes : numpy.ndarray, shape (n, n) or (K, n, n), optional
+        Orthonormal axes to box in instead of :func:`principal_axes` of ``G`` (say, those of a recent set: any
+        orthonormal ``U`` gives an outer reduction, the principal ones the tightest).
 
     Returns
     -------
@@ -158,11 +177,11 @@ def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
         ``G`` itself when ``q <= limit``, else the kept generators followed by the ``n`` new ones.
     """
     if G.ndim == 3:
-        return _reduce_stack(G, limit, principal_axes=True)
+        return _reduce_stack(G, limit, principal=True, axes=axes)
     n, q = G.shape
     if q <= limit:
         return G
-    U = np.linalg.eigh(G @ G.T)[1]
+    U = principal_axes(G) if axes is None else axes
     absT = np.abs(U.T @ G)
     boxed, kept = _boxed_and_kept(absT, limit)
     # the box in U's axes, rounded outward (the sums and the products U^T g, Higham eqs. (3.4), (4.4))
@@ -170,7 +189,7 @@ def reduce_pca(G: np.ndarray, limit: int) -> np.ndarray:
     return np.concatenate([G[:, kept], U * box], axis=1)
 
 
-def _reduce_stack(G: np.ndarray, limit: int, principal_axes: bool) -> np.ndarray:
+def _reduce_stack(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None" = None) -> np.ndarray:
     """:func:`reduce_girard` (or :func:`reduce_pca`) on each of a stack ``(K, n, q)`` of zonotopes, in one pass.
 
     The same choice and the same outward rounding as the two-dimensional path, per member of the stack.
@@ -178,8 +197,8 @@ def _reduce_stack(G: np.ndarray, limit: int, principal_axes: bool) -> np.ndarray
     K, n, q = G.shape
     if q <= limit:
         return G
-    if principal_axes:
-        U = np.linalg.eigh(G @ G.transpose(0, 2, 1))[1]
+    if principal:
+        U = principal_axes(G) if axes is None else axes
         absT = np.abs(U.transpose(0, 2, 1) @ G)
     else:
         absT = np.abs(G)
@@ -190,9 +209,9 @@ def _reduce_stack(G: np.ndarray, limit: int, principal_axes: bool) -> np.ndarray
         boxed[np.arange(K)[:, None], np.argpartition(cost, q - keep - 1, axis=1)[:, : q - keep]] = True
     else:
         boxed[:] = True
-    slack = q - keep + 2 + (2 * n + 2 if principal_axes else 0)
+    slack = q - keep + 2 + (2 * n + 2 if principal else 0)
     box = np.nextafter((absT * boxed[:, None, :]).sum(axis=2) * (1.0 + slack * _U), np.inf)
-    new = U * box[:, None, :] if principal_axes else box[:, :, None] * np.eye(n)
+    new = U * box[:, None, :] if principal else box[:, :, None] * np.eye(n)
     kept = G.transpose(0, 2, 1)[~boxed].reshape(K, keep, n).transpose(0, 2, 1)
     return np.concatenate([kept, new], axis=2)
 

@@ -93,7 +93,9 @@ At the end of every step, when a set has more than ``order · n`` generators, th
 :math:`\|g\|_1 - \|g\|_\infty` (the increase of the interval hull's perimeter when a segment is replaced by its
 box) are replaced by the ``n`` generators of their interval hull, :math:`\operatorname{diag}(\sum_j |g_j|)`
 (Girard, "Reachability of uncertain linear systems using zonotopes", HSCC 2005; Combastel's 2003 reduction
-boxes the smallest in 2-norm instead): ``reduction="girard"``.  ``reduction="pca"`` (default) does the same in the orthonormal principal axes ``U``
+boxes the smallest in 2-norm instead): ``reduction="girard"``.  ``reduction="pca"`` (default; the axes computed
+again every :data:`PCA_AXES_EVERY` steps from the set being reduced, in between those last computed: any
+orthonormal axes give an outer reduction, and the principal ones move slowly) does the same in the orthonormal principal axes ``U``
 of :math:`GG^\top` (Kopetzki, Schürmann, Althoff, CDC 2017), a parallelotope :math:`U\operatorname{diag}(\sum_j
 |U^\top g_j|)`; the same containment argument holds in the rotated axes.  Each removed segment :math:`[-g, g]` lies in its box, and a Minkowski
 sum of supersets is a superset, so the reduced zonotope contains the original one: every support function
@@ -125,7 +127,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
-from eqrec.bounds.zonotope import check_order, outer_row_sums, reduce_girard, reduce_pca
+from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
 from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
@@ -151,6 +153,9 @@ class _Entry(NamedTuple):
 
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
+
+#: With ``reduction="pca"``, the principal axes are computed again every this many steps (module docstring).
+PCA_AXES_EVERY = 4
 
 
 def _row_gains(P: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -372,6 +377,7 @@ class ZonotopeEstimator:
         self._c = np.tile(c, (K, 1))  # every filter starts from the same set
         self._G = np.tile(G, (K, 1, 1))
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
+        self._axes: "np.ndarray | None" = None  # the principal axes last computed (reduction="pca")
         self._buffer = ()
         self._time = self._t0 = int(t0)
         self.dropped_packets = 0
@@ -424,6 +430,7 @@ class ZonotopeEstimator:
             entries[i] = entries[i]._replace(y=pk.y)
             start = min(start, pk.time)
         c, G = entries[start - first].c, entries[start - first].G
+        self._axes_due, self._new_axes = (t - self._t0) % PCA_AXES_EVERY == 0, None
         for s in range(start, t + 1):
             e = entries[s - first]
             if s > start:
@@ -434,6 +441,8 @@ class ZonotopeEstimator:
         # commit
         self._c, self._G, self._xhat, self._beta = c, G, xhat, beta
         self._buffer = keep
+        if self._new_axes is not None:
+            self._axes = self._new_axes
         self._time = t + 1
         self.dropped_packets += dropped
         self.replays += sum(1 for pk in packets if first <= pk.time < t)
@@ -479,8 +488,11 @@ class ZonotopeEstimator:
         if S.shape[1] == 1:
             s00 = S[:, 0, :]
             Lam = num / np.where(s00 > 0, s00, np.inf)[:, None, :]  # a zero gain where nothing is measured
-        else:  # S symmetric; least squares when singular
-            Lam = np.stack([np.linalg.lstsq(S[k], num[k].T, rcond=None)[0].T for k in range(S.shape[0])])
+        else:  # S symmetric, positive definite when V has full row rank; least squares when singular
+            try:
+                Lam = np.linalg.solve(S, num.transpose(0, 2, 1)).transpose(0, 2, 1)
+            except np.linalg.LinAlgError:
+                Lam = np.stack([np.linalg.lstsq(S[k], num[k].T, rcond=None)[0].T for k in range(S.shape[0])])
         ALam = A @ Lam  # (K, n, p)
         P = np.concatenate([AG - ALam @ CG, -ALam @ Vn], axis=2)
         cp = Ac + (ALam @ r[:, :, None])[:, :, 0]
@@ -500,8 +512,13 @@ class ZonotopeEstimator:
         mag = mag + np.abs(cp) + np.abs(P).sum(axis=2) + sEw
         pad = np.nextafter(4.0 * q * _U * mag, np.inf)  # (K, n)
         G = np.concatenate([P, Ew, pad[:, :, None] * self._eye], axis=2)
-        if reduce and self._limit is not None:
-            G = _REDUCTIONS[self.reduction](G, self._limit)
+        if reduce and self._limit is not None and G.shape[2] > self._limit:
+            if self.reduction == "pca":
+                if self._axes_due or self._axes is None:
+                    self._new_axes = principal_axes(G)  # committed with the step
+                G = reduce_pca(G, self._limit, axes=self._new_axes if self._new_axes is not None else self._axes)
+            else:
+                G = reduce_girard(G, self._limit)
         return cp, G
 
     def _report(self, c: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
