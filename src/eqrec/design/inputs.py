@@ -363,6 +363,19 @@ MAX_MEMORY_FRACTION = 0.8
 #: included), between a quiet machine (2.0 s at T = 100, 6.3 s at 200, 26 s at 400, 94 s at 600) and one shared
 #: with other jobs (2.9 s, 16 s, 67 s): the estimate is meant to within a factor 2.
 SECONDS_PER_RUN, SECONDS_PER_WORK, WORK_EXPONENT = 1.1e-3, 9e-7, 0.85
+#: Work (``eqrec.design.classes.blocks.class_work``) above which a class's level LPs run HiGHS's primal simplex
+#: without presolve (``LARGE_CLASS_OPTIONS`` of the class engine) instead of the caller's settings: on the dense
+#: LPs of a deep class (hundreds of measurements) the warm-started dual simplex takes 2-3 times the iterations
+#: (the two-mass plant's class at time 400: 0.63 s against 0.14 s for its 8 LPs); with HiGHS and a largest delay
+#: of 1 these classes follow one chain instead (:mod:`eqrec.design.classes.chains`).  Above every class of the
+#: papers' studies and of every example plant up to T = 100 (at most 6.1e4: the reactor's and the ACC's (τ̄, 100)),
+#: whose bytes therefore do not change.
+LARGE_CLASS_WORK = 100_000
+#: The time model of a chained class (``max_delay = 1``, work above :data:`LARGE_CLASS_WORK`): its warm-started
+#: level LPs, at both μ1, and its certificate take about this many seconds per state row and per step of its time
+#: ``d`` (the chain's LP grows by one step per class, and a warm start needs a few dozen simplex iterations): the
+#: two-mass (1, 1000) design's chained classes, 62 core-seconds for 3.9e6 row-steps.
+SECONDS_PER_CHAIN_STEP = 1.6e-5
 
 
 @dataclass(frozen=True)
@@ -468,7 +481,8 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
 
     From the class sizes alone (:func:`eqrec.bounds.data_classes.classes_of_full_language` on a short horizon,
     extended by the window rule), in the time model of :data:`SECONDS_PER_RUN`, :data:`SECONDS_PER_WORK` and
-    :data:`WORK_EXPONENT`; the memory is the stacked maps of the horizon (``(T+1) n`` state and ``T p``
+    :data:`WORK_EXPONENT` (with a largest delay of 1, :data:`SECONDS_PER_CHAIN_STEP` for the classes above
+    :data:`LARGE_CLASS_WORK`, which follow one chain); the memory is the stacked maps of the horizon (``(T+1) n`` state and ``T p``
     output rows over ``T (nw + nv) + n`` uncertain coordinates) held by every worker, plus the largest class.
 
     Parameters
@@ -496,6 +510,9 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
     work = np.maximum(1.0, m * cols)
     runs = 2 if mu1_free else 1
     per_class = n * (runs * SECONDS_PER_RUN + runs / 2 * SECONDS_PER_WORK * work ** WORK_EXPONENT)
+    if int(max_delay) == 1:  # the large classes follow one chain (HiGHS, the default solver)
+        chained = work > LARGE_CLASS_WORK
+        per_class = np.where(chained, n * SECONDS_PER_CHAIN_STEP * depth, per_class)
     if mu1_free:  # the Charnes-Cooper LPs of the terminal classes, about one level LP each
         per_class = per_class + terminal * n * (SECONDS_PER_RUN + SECONDS_PER_WORK / 2 * work ** WORK_EXPONENT)
     cores = max(1, min(int(workers), os.cpu_count() or 1))

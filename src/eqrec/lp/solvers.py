@@ -561,3 +561,110 @@ def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
             row.append(sol)
         out.append(row)
     return out
+
+
+
+def leading_lp(lp: LinearProgram, rows: int, cols: int, cost: np.ndarray, bounds=None) -> LinearProgram:
+    """The LP on the first ``rows`` rows and ``cols`` columns of ``lp``, with objective ``cost``.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+    rows, cols : int
+        Size of the leading block (its rows must not touch a later column).
+    cost : numpy.ndarray
+        Objective, length ``cols``.
+    bounds : tuple of numpy.ndarray, optional
+        ``(col_lower, col_upper)`` of every column of ``lp`` (default ``lp``'s own).
+
+    Returns
+    -------
+    LinearProgram
+    """
+    lo, hi = (lp.col_lower, lp.col_upper) if bounds is None else bounds
+    return LinearProgram(c=np.asarray(cost, float), A=sp.csc_matrix(lp.A[:rows, :cols]),
+                         row_lower=lp.row_lower[:rows], row_upper=lp.row_upper[:rows],
+                         col_lower=np.asarray(lo, float)[:cols], col_upper=np.asarray(hi, float)[:cols],
+                         blocks=lp.blocks)
+
+
+def solve_lp_chain(lp: LinearProgram, prefixes, costs, bounds=None, solver: str = "highs",
+                   options: dict | None = None) -> list[list[LPSolution]]:
+    """Solve the growing leading blocks of ``lp`` in order, under each column-bound pair, each run warm-started.
+
+    Block ``k`` is the LP on the first ``prefixes[k] = (rows, cols)`` rows and columns of ``lp`` (sizes
+    nondecreasing; a block's rows touch none of the later columns) with objective ``costs[k]``, solved under
+    every ``(col_lower, col_upper)`` of ``bounds``.  With HiGHS one model grows: the new columns are appended
+    (nonbasic at a bound), then the new rows (their slacks basic), and each run starts from the basis of the
+    run before, the bounds taken in the order ``0, 1, ...`` for even ``k`` and in reverse for odd ``k``, so that a
+    block starts under the bounds the one before ended with (only the objective and the new rows change) and a
+    change of bounds keeps the basis dual feasible.  The order is fixed, so the answers depend only on the
+    arguments.  A run that ends without a usable status is solved again from scratch with the retries of
+    :func:`solve_lp`, and the chain goes on from scratch.  The other solvers solve every variant from scratch.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The largest block (its own ``c`` is ignored; its column bounds are used when ``bounds`` is ``None``).
+    prefixes : sequence of tuple of int
+        ``(rows, cols)`` of each block.
+    costs : sequence of numpy.ndarray
+        The objective of each block, of length its ``cols``.
+    bounds : sequence of tuple of numpy.ndarray, optional
+        ``(col_lower, col_upper)`` pairs over every column of ``lp`` (default: ``lp``'s own, once).
+    solver : str, optional
+        A name of :data:`SOLVER_NAMES` (default ``"highs"``).
+    options : dict or None, optional
+        Passed to the solver, as :func:`solve_lp`.
+
+    Returns
+    -------
+    list of list of LPSolution
+        ``out[k][j]``: block ``k`` under bounds ``j`` (``x`` of its columns, ``row_dual`` of its rows; never raises
+        for infeasibility).
+    """
+    solver_info(solver)
+    bounds = [(lp.col_lower, lp.col_upper)] if bounds is None else [tuple(np.asarray(b, float) for b in pair)
+                                                                    for pair in bounds]
+    if solver != "highs":
+        return [[solve_lp(leading_lp(lp, r, c, cost, b), solver, options) for b in bounds]
+                for (r, c), cost in zip(prefixes, costs)]
+    A_cols, A_rows = sp.csc_matrix(lp.A), sp.csr_matrix(lp.A)
+    lo0, hi0 = bounds[0]
+    vary = np.flatnonzero(np.any([(lo != lo0) | (hi != hi0) for lo, hi in bounds], axis=0)).astype(np.int32)
+    f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
+    out: list[list[LPSolution]] = []
+    h, r0, c0, prev, cur = None, 0, 0, np.zeros(0), 0  # cur: the bounds the model holds
+    for k, ((r1, c1), cost) in enumerate(zip(prefixes, costs)):
+        cost = np.asarray(cost, float)
+        order = list(range(len(bounds))) if k % 2 == 0 else list(range(len(bounds)))[::-1]
+        row: list = [None] * len(bounds)
+        for j in order:
+            lo, hi = bounds[j]
+            if h is None:  # the first block, or after a breakdown
+                h = highs_model(leading_lp(lp, r1, c1, cost, bounds[j]), dict(options or {}))
+            else:
+                if j != cur:  # switch the bounds that differ between the variants
+                    sw = vary[vary < c0]
+                    h.changeColsBounds(sw.size, sw, f64(lo[sw]), f64(hi[sw]))
+                if c1 > c0:  # new columns, with their entries in the rows already there (cost set below)
+                    new = A_cols[:r0, c0:c1].tocsc()
+                    h.addCols(c1 - c0, np.zeros(c1 - c0), f64(lo[c0:c1]), f64(hi[c0:c1]), int(new.nnz),
+                              i32(new.indptr[:-1]), i32(new.indices), f64(new.data))
+                if r1 > r0:  # new rows over every column so far
+                    new = A_rows[r0:r1, :c1].tocsr()
+                    h.addRows(r1 - r0, f64(lp.row_lower[r0:r1]), f64(lp.row_upper[r0:r1]), int(new.nnz),
+                              i32(new.indptr[:-1]), i32(new.indices), f64(new.data))
+                changed = np.flatnonzero(np.concatenate([prev, np.zeros(c1 - prev.size)]) != cost).astype(np.int32)
+                if changed.size:
+                    h.changeColsCost(changed.size, changed, f64(cost[changed]))
+            r0, c0, prev, cur = r1, c1, cost, j
+            sol = _highs_run(h, lp, cost)
+            if sol.status not in FINAL_STATUSES:
+                h = None  # the next run from scratch too
+                sol = solve_lp(leading_lp(lp, r1, c1, cost, bounds[j]), solver, options,
+                               tried=(f"highs, warm start: {sol.status}",))
+            row[j] = sol
+        out.append(row)
+    return out

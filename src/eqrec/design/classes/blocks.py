@@ -46,6 +46,7 @@ from eqrec.lp.solvers import record_retries, retry_log, solve_lp, solve_lp_grid
 from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.gains import box_radius
+from eqrec.design.inputs import LARGE_CLASS_WORK
 from eqrec.design.classes.block_lp import active_columns, block_lp_options, build_ratio_lp
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
@@ -66,12 +67,9 @@ BATCHES_PER_WORKER, MIN_BATCH_WORK = 6, 400_000
 #: weight: a HiGHS model per class and a run per row and ``μ1`` cost about 1.1 ms, its maps and certificate
 #: 0.3 ms, where a unit costs about 3.5e-8 s (fit on the reactor's (4, 60), one core, μ1 free).
 CLASS_OVERHEAD = 40_000
-#: Work (:func:`class_work`) above which a class's level LPs run HiGHS's primal simplex without presolve
-#: (:data:`LARGE_CLASS_OPTIONS`) instead of the caller's settings: on the dense LPs of a deep class (hundreds of
-#: measurements) the warm-started dual simplex takes 2-3 times the iterations (the two-mass plant's class at
-#: time 400: 0.63 s against 0.14 s for its 8 LPs).  Above every class of the papers' studies and of every example
-#: plant up to T = 100 (at most 6.1e4: the reactor's and the ACC's (τ̄, 100)), whose bytes therefore do not change.
-LARGE_CLASS_WORK = 100_000
+# LARGE_CLASS_WORK (imported above from eqrec.design.inputs, which estimates the time with it): the work
+# (:func:`class_work`) above which a class's level LPs run HiGHS's primal simplex without presolve
+# (:data:`LARGE_CLASS_OPTIONS`), or follow one chain (:mod:`eqrec.design.classes.chains`).
 #: The HiGHS settings of a class above :data:`LARGE_CLASS_WORK`.
 LARGE_CLASS_OPTIONS = {"presolve": "off", "simplex_strategy": 4}
 
@@ -353,7 +351,8 @@ def prestart_workers(system: AffineSystem, classes: ClassSet, n_jobs=None, sched
 
 
 def solve_level_blocks(system: "AffineSystem | Stacking", classes: ClassSet, mu1s: list[float], *, solver: str,
-                       options: dict, n_jobs=None, scheduler=None) -> tuple[list[list[LevelBlock]], float]:
+                       options: dict, n_jobs=None, scheduler=None,
+                       which: list[int] | None = None) -> tuple[list[list[LevelBlock]], float]:
     """:func:`level_task` over every class, in batches (:func:`eqrec.lp.parallel.run_tasks`).
 
     Parameters
@@ -369,14 +368,17 @@ def solve_level_blocks(system: "AffineSystem | Stacking", classes: ClassSet, mu1
         Worker processes (default every core).
     scheduler : str, distributed.Client or None, optional
         A Dask scheduler.
+    which : list of int or None, optional
+        Only these classes (default all; :func:`eqrec.design.classes.chains.solve_levels` leaves out a chain).
 
     Returns
     -------
     tuple
-        Per ``μ1``, the :class:`LevelBlock` of each class in order; and the wall-clock seconds.
+        Per ``μ1``, the :class:`LevelBlock` of each class of ``which`` in order; and the wall-clock seconds.
     """
     t0 = time.perf_counter()
-    per_class = _run(level_task, Stacking.of(system, classes.horizon), classes, list(range(len(classes))),
+    per_class = _run(level_task, Stacking.of(system, classes.horizon), classes,
+                     list(range(len(classes))) if which is None else list(which),
                      ([float(mu) for mu in mu1s], solver, dict(options)), n_jobs=n_jobs, scheduler=scheduler,
                      label="eqrec: classes solved")
     return [[blocks[j] for blocks in per_class] for j in range(len(mu1s))], time.perf_counter() - t0

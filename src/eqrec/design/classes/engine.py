@@ -83,7 +83,8 @@ from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.lp.solvers import solve_lp, solver_info
 from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
-from eqrec.design.classes.blocks import choose_path, solve_level_blocks
+from eqrec.design.classes.blocks import choose_path
+from eqrec.design.classes.chains import solve_levels
 from eqrec.design.classes.gains import ClassCertificate, certify_classes, node_schedule
 from eqrec.design.classes.block_lp import block_lp_options, block_objectives, build_class_lp, read_class_gains
 from eqrec.design.cost import class_cost
@@ -136,7 +137,8 @@ def solve_classes(system: "AffineSystem | Stacking", classes: ClassSet, mu1: flo
     """Solve the LAD LP of every (class, row) at ``μ1`` and certify the gains from themselves.
 
     Small languages are one block-diagonal LP; large ones are solved per class, in batches on every core or a
-    Dask cluster (:mod:`eqrec.design.classes.blocks`; the same bytes whatever the workers and the batching).
+    Dask cluster (:mod:`eqrec.design.classes.blocks`; the same bytes whatever the workers and the batching), and
+    their large classes along a chain when they form one (:mod:`eqrec.design.classes.chains`: maximum delay 1).
 
     Parameters
     ----------
@@ -212,8 +214,8 @@ def solve_classes_at(system: "AffineSystem | Stacking", classes: ClassSet, mu1s,
     system = st.system
     n, N = system.n, len(classes)
     if choose_path(path, classes, None, system) == "blocks":
-        per_mu1, solve_time = solve_level_blocks(st, classes, mu1s, solver=solver, options=options,
-                                                 n_jobs=n_jobs, scheduler=scheduler)
+        per_mu1, solve_time = solve_levels(st, classes, mu1s, solver=solver, options=options, n_jobs=n_jobs,
+                                           scheduler=scheduler)
         out = []
         for mu1, blocks in zip(mu1s, per_mu1):
             lp_levels = np.array([b.levels for b in blocks]).reshape(N, n)
