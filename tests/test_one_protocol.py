@@ -288,3 +288,41 @@ def test_closed_loop_resets_and_steps_every_estimator_the_same_way(designs):
     with pytest.raises(InputError) as exc:  # no reset: not an estimator of the protocol
         closed_loop(PLANT, type("StepOnly", (), {"step": lambda self, y, u: None})(), trace, x0, xi0, w, v)
     assert exc.value.field == "est" and "reset" in str(exc.value)
+
+
+NO_MAPS = ("RecoveryEstimator", "SwitchingEstimator", "AugmentedEstimator, one word",
+           "AugmentedEstimator, prefix gains")
+
+
+@pytest.mark.parametrize("name", NO_MAPS)
+def test_exact_bound_runs_copies_of_an_estimator_without_error_maps(families, name):
+    """Issue 32 §2: the node-gain, switching and augmented estimators get their exact worst case too
+    (``exact_bound`` runs copies of them on the columns of the uncertainty): it equals the worst case read from
+    unit perturbations of closed-loop runs (1e-9), the estimates are the estimator's own, and the worst-case
+    noise of the last step played back reaches the bound and stays inside it."""
+    N, r0, n = (4 if name.startswith("Augmented") else 8), 0.3, PLANT.n  # the augmented ones run one horizon
+    trace = ArrivalTrace([0] * N)  # every packet on time: in every design's language
+    xhat0 = np.array([0.1, -0.2])
+    wrapped = eqrec.exact_bound(families[name](), PLANT, r0, steps=N)
+    assert wrapped.mode == "copies"
+    out = closed_loop(PLANT, wrapped, trace, xhat0, np.zeros(n), np.zeros((N, PLANT.nw)), np.zeros((N, PLANT.nv)))
+    plain = closed_loop(PLANT, families[name](), trace, xhat0, np.zeros(n), np.zeros((N, PLANT.nw)),
+                        np.zeros((N, PLANT.nv)))
+    assert np.array_equal(out.xhat, plain.xhat)  # copy 0 is the estimator itself
+    D = n + N * (PLANT.nw + PLANT.nv)
+    r = np.concatenate([np.full(n, r0), np.full(N * PLANT.nw, PLANT.eta_w), np.full(N * PLANT.nv, PLANT.eta_v)])
+
+    def error(delta, make):
+        xi0, w, v = delta[:n], delta[n:n + N * PLANT.nw].reshape(N, -1), delta[n + N * PLANT.nw:].reshape(N, -1)
+        run = closed_loop(PLANT, make(), trace, xhat0 + xi0, xi0, w, v)
+        return run.error[1:], np.array(run.spread)
+
+    c, _ = error(np.zeros(D), families[name])
+    G = np.stack([error(r * np.eye(D)[j], families[name])[0] - c for j in range(D)], axis=-1)
+    worst = (np.abs(c) + np.abs(G).sum(axis=-1)).max(axis=1)
+    assert np.allclose(np.array(out.spread), worst, rtol=1e-9, atol=0)
+    i = int(np.argmax(np.abs(c[-1]) + np.abs(G[-1]).sum(axis=-1)))  # the worst state (c: a biased estimator)
+    side = 1.0 if c[-1, i] >= 0 else -1.0
+    err, bound = error(side * np.sign(G[-1, i]) * r, lambda: eqrec.exact_bound(families[name](), PLANT, r0, steps=N))
+    assert np.all(np.abs(err).max(axis=1) <= bound * (1 + 1e-12))
+    assert np.abs(err[-1]).max() >= bound[-1] * (1 - 1e-9)

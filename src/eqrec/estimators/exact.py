@@ -28,14 +28,26 @@ in one of two ways:
   (a filter that reads a late packet as a measurement of the present is
   biased: ``c ≠ 0``); the others give ``G``.  Exact, with no reduction: the
   cost of a step grows with the number of steps allocated.
+* **Copies** (any other estimator of the protocol: the node-gain
+  :class:`eqrec.estimators.causal.RecoveryEstimator`, the
+  :class:`eqrec.estimators.switching.SwitchingEstimator`, the
+  :class:`eqrec.estimators.augmented.AugmentedEstimator`): the same columns,
+  each run on its own copy of the estimator with ordinary data.  Copy 0 gets
+  the data received, copy 1 the nominal data, copy ``j >= 2`` the nominal
+  data plus the coefficients of entry ``j`` of ``δ``; since the estimator is
+  affine, ``x̂_j − x̂_1`` is the response to that entry alone (the inputs and
+  ``f`` cancel).  Copy 0 steps first, so a step it refuses changes nothing.
+  The cost of a step is that of the estimator times the number of columns.
 
-Both are exact: the bound equals the largest error of the wrapped estimator
+All three are exact: the bound equals the largest error of the wrapped estimator
 over every noise in the box and every initial error within ``x0_radius``,
 given the arrivals (up to the reduction), rounded outward in floating point.
 """
 
 from __future__ import annotations
 
+import copy
+import inspect
 from typing import Any
 
 import numpy as np
@@ -53,8 +65,8 @@ class ExactBound:
     Parameters
     ----------
     estimator : object
-        An estimator of the protocol with ``error_map()``, or one that runs on columns
-        (``reset(xhat0, t0, one=...)`` with ``(n, K)`` estimates).
+        An estimator of the protocol: with ``error_map()``, one that runs on columns
+        (``reset(xhat0, t0, one=...)`` with ``(n, K)`` estimates), or any other (run as copies).
     system : AffineSystem
         The true system (its noise bounds are the box).
     x0_radius : float or array_like
@@ -62,7 +74,7 @@ class ExactBound:
     order : float or None, optional
         Reduction order of the error set (error-map estimators only; ``None``: exact).
     steps : int or None, optional
-        Steps allocated for a column run (required for column estimators).
+        Steps allocated for a column or copy run (required unless the estimator has ``error_map()``).
 
     Attributes
     ----------
@@ -84,11 +96,14 @@ class ExactBound:
         self.x0_radius = radii(x0_radius, system.n)
         self.order = check_order(order)
         self.name = f"{getattr(estimator, 'name', type(estimator).__name__)}, exact bound"
-        self.mode = "maps" if callable(getattr(estimator, "error_map", None)) else "columns"
-        if self.mode == "columns":
-            if not callable(getattr(estimator, "reset", None)):
-                raise InputError("the estimator has neither error_map() nor a reset that takes columns",
-                                 field="estimator")
+        if callable(getattr(estimator, "error_map", None)):
+            self.mode = "maps"
+        elif not callable(getattr(estimator, "reset", None)) or not callable(getattr(estimator, "step", None)):
+            raise InputError("the estimator follows no protocol: it has neither error_map() nor reset() and "
+                             "step()", field="estimator")
+        else:
+            self.mode = "columns" if "one" in inspect.signature(estimator.reset).parameters else "copies"
+        if self.mode != "maps":
             if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or steps < 1:
                 raise InputError(f"a column run needs the number of steps to allocate (an integer >= 1), got "
                                  f"{steps!r}", field="steps")
@@ -127,11 +142,15 @@ class ExactBound:
             if x.shape != (n,) or not np.all(np.isfinite(x)):
                 raise InputError(f"need {n} finite entries, got {xhat0!r:.60}", field="xhat0")
             K = 2 + n + self.steps * (sysm.nw + sysm.nv)
-            X = np.zeros((n, K))
-            X[:, 0] = X[:, 1] = x
             one = np.zeros(K)
             one[:2] = 1.0
-            self.estimator.reset(X, t0, one=one)
+            if self.mode == "columns":
+                X = np.zeros((n, K))
+                X[:, 0] = X[:, 1] = x
+                self.estimator.reset(X, t0, one=one)
+            else:  # copy 0 is the estimator itself; every copy starts at x̂(t0) (the nominal start)
+                self.estimator.reset(x, t0)
+                self._copies = [copy.deepcopy(self.estimator) for _ in range(K - 1)]
             truth = np.zeros((n, K))  # the true state's columns (column 0 unknown: left at zero, never read)
             truth[:, 1] = x
             truth[:, 2:2 + n] = np.diag(self.x0_radius)
@@ -209,7 +228,10 @@ class ExactBound:
             Y = sent[pk.time].copy()
             Y[:, 0] = pk.y
             cols.append(Packet(pk.time, Y))
-        xhat_cols, _ = self.estimator.step(cols, u)
+        if self.mode == "columns":
+            xhat_cols, _ = self.estimator.step(cols, u)
+        else:
+            xhat_cols = self._copies_step(cols, u)
         w_cols = np.zeros((nw, self._K))
         w_cols[:, base: base + nw] = sysm.eta_w * np.eye(nw)
         drive = sysm.B_at(t) @ u + sysm.f
@@ -219,6 +241,17 @@ class ExactBound:
         self._bounds = outer_row_sums(err)
         return xhat_cols[:, 0].copy()
 
+    def _copies_step(self, cols: list, u: np.ndarray) -> np.ndarray:
+        """The columns of the estimate from the copies (module docstring): ``(n, K)``, column 1 nominal."""
+        x0, _ = self.estimator.step([Packet(pk.time, pk.y[:, 0]) for pk in cols], u)  # raises first, if at all
+        out = np.empty((self.system.n, self._K))
+        out[:, 0] = x0
+        for j, est in enumerate(self._copies, start=1):
+            data = [Packet(pk.time, pk.y[:, j] + (pk.y[:, 1] if j > 1 else 0.0)) for pk in cols]
+            out[:, j] = est.step(data, u)[0]
+        out[:, 2:] -= out[:, 1:2]  # the response to entry j alone (the estimator is affine)
+        return out
+
 
 def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "float | None" = None,
                 steps: "int | None" = None) -> ExactBound:
@@ -227,8 +260,9 @@ def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "fl
     Parameters
     ----------
     estimator : object
-        The estimator (not yet reset): one with ``error_map()`` (the class form) or one that runs on
-        columns (the Kalman-type filters of :mod:`eqrec.estimators.kalman`).
+        The estimator (not yet reset): one with ``error_map()`` (the class form), one that runs on
+        columns (the Kalman-type filters of :mod:`eqrec.estimators.kalman`), or any other linear estimator of
+        the protocol (run as copies: the node-gain, switching and augmented estimators).
     system : AffineSystem
         The true system; its noise box and ``x0_radius`` are the uncertainty.
     x0_radius : float or array_like
@@ -236,7 +270,7 @@ def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "fl
     order : float or None, optional
         Outer reduction of the error set to ``order · n`` generators (error-map estimators).
     steps : int or None, optional
-        Steps to allocate for a column run.
+        Steps to allocate for a column or copy run.
 
     Returns
     -------
