@@ -37,7 +37,7 @@ from typing import Sequence, TypeVar
 
 import numpy as np
 
-from eqrec.checks import generator
+from eqrec.checks import generator, integer
 from eqrec.arrivals.traces import NEVER, ArrivalTrace  # noqa: F401  (the trace type, re-exported with its samplers)
 from eqrec.errors import InputError
 
@@ -424,8 +424,7 @@ def loss_coverage(max_delay: int, horizon: int, loss: float, coverage: float = 0
     >>> eqrec.loss_coverage(2, 20, 0.1), eqrec.loss_coverage(2, 20, 0.1, burst=4.0)
     (6, 13)
     """
-    if isinstance(max_delay, (bool, np.bool_)) or not isinstance(max_delay, (int, np.integer)) or max_delay < 0:
-        raise InputError(f"the largest delay must be an integer >= 0, got {max_delay!r}", field="max_delay")
+    integer(max_delay, "max_delay")
     try:
         c = float(coverage)
     except (TypeError, ValueError):

@@ -46,6 +46,7 @@ import numpy as np
 
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.bounds.stacking import Stacking
+from eqrec.checks import integer
 from eqrec.errors import InputError
 
 
@@ -353,11 +354,7 @@ def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None
 
 def _check_lost(max_lost, T: int) -> int:
     """``max_lost`` as an int in ``0..T``, else an :class:`InputError` naming ``max_lost``."""
-    ok = isinstance(max_lost, (int, np.integer)) and not isinstance(max_lost, (bool, np.bool_))
-    if not ok or not 0 <= max_lost <= T:
-        raise InputError(f"the number of measurements lost per block must be an integer in 0..{T} (the horizon), "
-                         f"got {max_lost!r}", field="max_lost")
-    return int(max_lost)
+    return integer(max_lost, "max_lost", high=T)
 
 
 def _lossy(i: int, T: int, max_delay: int) -> int:

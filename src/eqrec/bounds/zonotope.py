@@ -87,25 +87,17 @@ def outer_row_sums(G: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    G : ndarray, shape (n, q)
-        Generators.
+    G : ndarray, shape (n, q) or (K, n, q)
+        Generators (or a stack of them).
 
     Returns
     -------
-    ndarray, shape (n,)
+    ndarray, shape (n,) or (K, n)
         Upper bounds of the exact row sums of ``|G|``.
     """
-    q = G.shape[1]
-    s = np.abs(G).sum(axis=1)
+    q = G.shape[-1]
+    s = np.abs(G).sum(axis=-1)
     return np.nextafter(s * (1.0 + (q + 2) * _U), np.inf)
-
-
-def _boxed_and_kept(absT: np.ndarray, limit: int) -> tuple[np.ndarray, np.ndarray]:
-    """The generators to box (smallest ``‖g‖_1 − ‖g‖_∞`` in the axes of ``absT``) and those kept, in order."""
-    q, keep = absT.shape[1], limit - absT.shape[0]  # room for the n box generators
-    cost = absT.sum(axis=0) - absT.max(axis=0)
-    part = np.argpartition(cost, q - keep - 1) if keep > 0 else np.arange(q)
-    return part[: q - keep], np.sort(part[q - keep:])
 
 
 def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
@@ -126,16 +118,11 @@ def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
         ``G`` itself when ``q <= limit``, else the kept generators followed by the diagonal box
         (``q' <= limit``); the zonotope it spans contains that of ``G``.
     """
-    if G.ndim == 3:
-        return _reduce_stack(G, limit, principal=False)
-    n, q = G.shape
-    if q <= limit:
-        return G
-    absG = np.abs(G)
-    boxed, kept = _boxed_and_kept(absG, limit)
-    box = np.nextafter(absG[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2) * _U), np.inf)
-    nz = box > 0
-    return np.concatenate([G[:, kept], np.diag(box)[:, nz]], axis=1)
+    if G.ndim == 3 or G.shape[1] <= limit:
+        return _reduce(G, limit, principal=False) if G.ndim == 3 else G
+    out = _reduce(G[None], limit, principal=False)[0]
+    kept = out.shape[1] - G.shape[0]
+    return np.concatenate([out[:, :kept], out[:, kept:][:, np.any(out[:, kept:] != 0, axis=0)]], axis=1)  # no zero box
 
 
 def principal_axes(G: np.ndarray) -> np.ndarray:
@@ -176,23 +163,18 @@ def reduce_pca(G: np.ndarray, limit: int, axes: "np.ndarray | None" = None) -> n
     numpy.ndarray, shape (n, q') or (K, n, q')
         ``G`` itself when ``q <= limit``, else the kept generators followed by the ``n`` new ones.
     """
-    if G.ndim == 3:
-        return _reduce_stack(G, limit, principal=True, axes=axes)
-    n, q = G.shape
-    if q <= limit:
-        return G
-    U = principal_axes(G) if axes is None else axes
-    absT = np.abs(U.T @ G)
-    boxed, kept = _boxed_and_kept(absT, limit)
-    # the box in U's axes, rounded outward (the sums and the products U^T g, Higham eqs. (3.4), (4.4))
-    box = np.nextafter(absT[:, boxed].sum(axis=1) * (1.0 + (boxed.size + 2 * n + 4) * _U), np.inf)
-    return np.concatenate([G[:, kept], U * box], axis=1)
+    if G.ndim == 3 or G.shape[1] <= limit:
+        return _reduce(G, limit, principal=True, axes=axes) if G.ndim == 3 else G
+    return _reduce(G[None], limit, principal=True, axes=None if axes is None else axes[None])[0]
 
 
-def _reduce_stack(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None" = None) -> np.ndarray:
-    """:func:`reduce_girard` (or :func:`reduce_pca`) on each of a stack ``(K, n, q)`` of zonotopes, in one pass.
+def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None" = None) -> np.ndarray:
+    r""":func:`reduce_girard` (or :func:`reduce_pca`) on each of a stack ``(K, n, q)`` of zonotopes, in one pass
+    (the one implementation: a single zonotope is a stack of one).
 
-    The same choice and the same outward rounding as the two-dimensional path, per member of the stack.
+    Per member, the ``q - (limit - n)`` generators of smallest :math:`\|g\|_1 - \|g\|_\infty` in the axes (the
+    state axes, or ``U``) are boxed; the box sums run over the boxed entries (the others masked to zero, which adds
+    no rounding) and are rounded outward.
     """
     K, n, q = G.shape
     if q <= limit:

@@ -54,7 +54,7 @@ import numpy as np
 
 from eqrec.arrivals.packets import Packet, as_packets, check_input
 from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
-from eqrec.checks import radii
+from eqrec.checks import integer, radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
@@ -104,9 +104,10 @@ class ExactBound:
         else:
             self.mode = "columns" if "one" in inspect.signature(estimator.reset).parameters else "copies"
         if self.mode != "maps":
-            if isinstance(steps, (bool, np.bool_)) or not isinstance(steps, (int, np.integer)) or steps < 1:
-                raise InputError(f"a column run needs the number of steps to allocate (an integer >= 1), got "
-                                 f"{steps!r}", field="steps")
+            if steps is None:
+                raise InputError("a column or copy run needs the number of steps to allocate (an integer >= 1)",
+                                 field="steps")
+            integer(steps, "steps", low=1)
         self.steps = None if steps is None else int(steps)
         self.bound = np.nan
         self._bounds = np.full(system.n, np.nan)

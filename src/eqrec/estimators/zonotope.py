@@ -430,19 +430,18 @@ class ZonotopeEstimator:
             entries[i] = entries[i]._replace(y=pk.y)
             start = min(start, pk.time)
         c, G = entries[start - first].c, entries[start - first].G
-        self._axes_due, self._new_axes = (t - self._t0) % PCA_AXES_EVERY == 0, None
         for s in range(start, t + 1):
             e = entries[s - first]
             if s > start:
                 entries[s - first] = e = e._replace(c=c, G=G)
-            c, G = self._advance(s, e.c, e.G, e.drive, e.y, reduce=s == t)
+            c, G = self._advance(s, e.c, e.G, e.drive, e.y)
+        G, axes = self._reduced(G, (t - self._t0) % PCA_AXES_EVERY == 0)  # only the newest set is reduced
         keep = tuple(entries[len(entries) - self.max_delay:]) if self.max_delay else ()
         xhat, beta = self._report(c, G)
         # commit
         self._c, self._G, self._xhat, self._beta = c, G, xhat, beta
         self._buffer = keep
-        if self._new_axes is not None:
-            self._axes = self._new_axes
+        self._axes = axes
         self._time = t + 1
         self.dropped_packets += dropped
         self.replays += sum(1 for pk in packets if first <= pk.time < t)
@@ -466,16 +465,16 @@ class ZonotopeEstimator:
             self._models[key] = hit
         return hit
 
-    def _advance(self, s: int, c: np.ndarray, G: np.ndarray, drive: np.ndarray, y: "np.ndarray | None",
-                 reduce: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """The sets of ``x(s+1)`` (one per gain, stacked) from the priors of ``x(s)``; reduced when asked."""
+    def _advance(self, s: int, c: np.ndarray, G: np.ndarray, drive: np.ndarray,
+                 y: "np.ndarray | None") -> tuple[np.ndarray, np.ndarray]:
+        """The sets of ``x(s+1)`` (one per gain, stacked, not reduced) from the priors of ``x(s)``."""
         A, At, absAt, C, Ct, Ew, sEw, Vn, VWV = self._model(s)  # Ew stacked: (K, n, nw)
         AG = A @ G  # (K, n, q): every filter at once
         Ac = c @ At + drive
         absG = np.abs(G)
         mag = (np.abs(c) + absG.sum(axis=2)) @ absAt + np.abs(drive)
         if y is None:
-            return self._finish(AG, Ac, Ew, sEw, mag, reduce)
+            return self._finish(AG, Ac, Ew, sEw, mag)
         r = y - c @ Ct  # (K, p)
         CG = C @ G  # (K, p, q)
         CGt = CG.transpose(0, 2, 1)
@@ -502,29 +501,31 @@ class ZonotopeEstimator:
         for k in self._interval:  # the per-row weighted-median gain (greedy; module docstring)
             P[k], cp[k], m2 = _interval_update(AG[k], Ac[k], CG[k], Vn, r[k], y)
             mag[k] = (np.abs(c[k]) + absG[k].sum(axis=1)) @ absAt + np.abs(drive) + m2
-        return self._finish(P, cp, Ew, sEw, mag, reduce)
+        return self._finish(P, cp, Ew, sEw, mag)
 
-    def _finish(self, P: np.ndarray, cp: np.ndarray, Ew: np.ndarray, sEw: np.ndarray, mag: np.ndarray,
-                reduce: bool) -> tuple[np.ndarray, np.ndarray]:
-        """Append the process noise and the rounding allowance (module docstring); reduce when asked."""
+    def _finish(self, P: np.ndarray, cp: np.ndarray, Ew: np.ndarray, sEw: np.ndarray,
+                mag: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Append the process noise and the rounding allowance (module docstring)."""
         K, n, k = P.shape
         q = k + Ew.shape[2] + n + 4
         mag = mag + np.abs(cp) + np.abs(P).sum(axis=2) + sEw
         pad = np.nextafter(4.0 * q * _U * mag, np.inf)  # (K, n)
-        G = np.concatenate([P, Ew, pad[:, :, None] * self._eye], axis=2)
-        if reduce and self._limit is not None and G.shape[2] > self._limit:
-            if self.reduction == "pca":
-                if self._axes_due or self._axes is None:
-                    self._new_axes = principal_axes(G)  # committed with the step
-                G = reduce_pca(G, self._limit, axes=self._new_axes if self._new_axes is not None else self._axes)
-            else:
-                G = reduce_girard(G, self._limit)
-        return cp, G
+        return cp, np.concatenate([P, Ew, pad[:, :, None] * self._eye], axis=2)
+
+    def _reduced(self, G: np.ndarray, new_axes: bool) -> tuple[np.ndarray, "np.ndarray | None"]:
+        """``G`` reduced to ``order · n`` generators per filter, and the principal axes used (``reduction="pca"``:
+        computed again from ``G`` when ``new_axes`` or none yet, else those last computed; module docstring)."""
+        if self._limit is None or G.shape[2] <= self._limit:
+            return G, self._axes
+        if self.reduction == "girard":
+            return reduce_girard(G, self._limit), self._axes
+        axes = principal_axes(G) if new_axes or self._axes is None else self._axes
+        return reduce_pca(G, self._limit, axes=axes), axes
 
     def _report(self, c: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The estimate and per-state bound: per state, the centre and hull radius of the filter whose radius is
         the smallest (the first on a tie); module docstring."""
-        beta = np.nextafter(np.abs(G).sum(axis=2) * (1.0 + (G.shape[2] + 2) * _U), np.inf)  # outer row sums
+        beta = outer_row_sums(G)
         if c.shape[0] == 1:
             return c[0], beta[0]
         k, states = np.argmin(beta, axis=0), np.arange(c.shape[1])

@@ -67,6 +67,16 @@ def highs_status(code: int, fallback: str = "") -> tuple[str, float]:
     return status, {"infeasible": INF, "unbounded": -INF}.get(status, np.nan)
 
 
+def _f64(a) -> np.ndarray:
+    """``a`` as a contiguous float64 array (a buffer HiGHS reads as is)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _i32(a) -> np.ndarray:
+    """``a`` as a contiguous int32 array (HighsInt: 32 bits)."""
+    return np.ascontiguousarray(a, dtype=np.int32)
+
+
 def highs_model(lp: LinearProgram, options: dict):
     """A ``highspy.Highs`` holding ``lp`` with ``options`` set (quiet), for callers that keep the model and change it
     between runs (warm starts).
@@ -95,11 +105,9 @@ def highs_model(lp: LinearProgram, options: dict):
     for key, val in options.items():
         h.setOptionValue(key, val)
     nr, nc = lp.A.shape
-    f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
-    i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731  (HighsInt: 32 bits)
     h.passModel(nc, nr, int(lp.A.nnz), int(highspy.MatrixFormat.kColwise),
-                 int(highspy.ObjSense.kMinimize), 0.0, f64(lp.c), f64(lp.col_lower), f64(lp.col_upper),
-                 f64(lp.row_lower), f64(lp.row_upper), i32(lp.A.indptr), i32(lp.A.indices), f64(lp.A.data),
+                 int(highspy.ObjSense.kMinimize), 0.0, _f64(lp.c), _f64(lp.col_lower), _f64(lp.col_upper),
+                 _f64(lp.row_lower), _f64(lp.row_upper), _i32(lp.A.indptr), _i32(lp.A.indices), _f64(lp.A.data),
                  np.zeros(nc, np.int32))  # every column continuous
     return h
 
@@ -632,8 +640,6 @@ def solve_lp_chain(lp: LinearProgram, prefixes, costs, bounds=None, solver: str 
     A_cols, A_rows = sp.csc_matrix(lp.A), sp.csr_matrix(lp.A)
     lo0, hi0 = bounds[0]
     vary = np.flatnonzero(np.any([(lo != lo0) | (hi != hi0) for lo, hi in bounds], axis=0)).astype(np.int32)
-    f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
-    i32 = lambda a: np.ascontiguousarray(a, dtype=np.int32)  # noqa: E731
     out: list[list[LPSolution]] = []
     h, r0, c0, prev, cur = None, 0, 0, np.zeros(0), 0  # cur: the bounds the model holds
     for k, ((r1, c1), cost) in enumerate(zip(prefixes, costs)):
@@ -647,18 +653,18 @@ def solve_lp_chain(lp: LinearProgram, prefixes, costs, bounds=None, solver: str 
             else:
                 if j != cur:  # switch the bounds that differ between the variants
                     sw = vary[vary < c0]
-                    h.changeColsBounds(sw.size, sw, f64(lo[sw]), f64(hi[sw]))
+                    h.changeColsBounds(sw.size, sw, _f64(lo[sw]), _f64(hi[sw]))
                 if c1 > c0:  # new columns, with their entries in the rows already there (cost set below)
                     new = A_cols[:r0, c0:c1].tocsc()
-                    h.addCols(c1 - c0, np.zeros(c1 - c0), f64(lo[c0:c1]), f64(hi[c0:c1]), int(new.nnz),
-                              i32(new.indptr[:-1]), i32(new.indices), f64(new.data))
+                    h.addCols(c1 - c0, np.zeros(c1 - c0), _f64(lo[c0:c1]), _f64(hi[c0:c1]), int(new.nnz),
+                              _i32(new.indptr[:-1]), _i32(new.indices), _f64(new.data))
                 if r1 > r0:  # new rows over every column so far
                     new = A_rows[r0:r1, :c1].tocsr()
-                    h.addRows(r1 - r0, f64(lp.row_lower[r0:r1]), f64(lp.row_upper[r0:r1]), int(new.nnz),
-                              i32(new.indptr[:-1]), i32(new.indices), f64(new.data))
+                    h.addRows(r1 - r0, _f64(lp.row_lower[r0:r1]), _f64(lp.row_upper[r0:r1]), int(new.nnz),
+                              _i32(new.indptr[:-1]), _i32(new.indices), _f64(new.data))
                 changed = np.flatnonzero(np.concatenate([prev, np.zeros(c1 - prev.size)]) != cost).astype(np.int32)
                 if changed.size:
-                    h.changeColsCost(changed.size, changed, f64(cost[changed]))
+                    h.changeColsCost(changed.size, changed, _f64(cost[changed]))
             r0, c0, prev, cur = r1, c1, cost, j
             sol = _highs_run(h, lp, cost)
             if sol.status not in FINAL_STATUSES:

@@ -271,6 +271,53 @@ def build_ratio_lp(system: AffineSystem, classes: ClassSet, which: list[int], st
     return bl.model("ratio", t0)
 
 
+def row_multipliers(solution: LPSolution) -> np.ndarray:
+    """The row multipliers of a level LP's solution, which the class gains are read from.
+
+    Parameters
+    ----------
+    solution : LPSolution
+
+    Returns
+    -------
+    numpy.ndarray
+        ``solution.row_dual``.
+
+    Raises
+    ------
+    SolverFailure
+        The solver returned none.
+    """
+    if solution.row_dual is None:
+        raise SolverFailure(f"solver {solution.solver} returned no row multipliers (the class gains are read "
+                            "from them)")
+    return solution.row_dual
+
+
+def level_and_gain(solution: LPSolution, what: str) -> tuple[float, np.ndarray]:
+    r"""The level (minus the optimum) and the gain row (minus the row multipliers) of one row's level LP.
+
+    Parameters
+    ----------
+    solution : LPSolution
+        The solution of :math:`\max E_d[r]\delta` s.t. :math:`Z_S\delta = 0` in the box (as a minimum of the
+        negated objective).
+    what : str
+        The LP, for the error message.
+
+    Returns
+    -------
+    tuple of (float, numpy.ndarray)
+
+    Raises
+    ------
+    InfeasibleDesign, SolverFailure
+        No optimum (:meth:`eqrec.lp.model.LPSolution.require_optimal`), or no row multipliers.
+    """
+    solution.require_optimal(what)
+    return -solution.objective, -row_multipliers(solution)
+
+
 def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, solution: LPSolution) -> ClassGains:
     """The gains ``K`` per class from an optimal solution: minus the row multipliers (``"level"``) or
     ``y / t`` (``"ratio"``).
@@ -289,9 +336,8 @@ def read_class_gains(system: AffineSystem, classes: ClassSet, model: ClassLP, so
     """
     n, p = system.n, system.p
     K = [np.zeros((n, len(c.available) * p)) for c in classes.classes]
-    if model.kind == "level" and solution.row_dual is None:
-        raise SolverFailure(f"solver {solution.solver} returned no row multipliers (the class gains are read "
-                            "from them)")
+    if model.kind == "level":
+        row_multipliers(solution)
     for b in range(model.blocks):
         if model.kind == "level":
             k = -solution.row_dual[model.gain_index[b]]

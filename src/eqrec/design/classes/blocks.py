@@ -47,7 +47,7 @@ from eqrec.bounds.stacking import Stacking
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.classes.gains import box_radius
 from eqrec.design.inputs import LARGE_CLASS_WORK
-from eqrec.design.classes.block_lp import active_columns, block_lp_options, build_ratio_lp
+from eqrec.design.classes.block_lp import active_columns, block_lp_options, build_ratio_lp, level_and_gain
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 
 #: The ways to solve the class LPs: by size, the one block LP, or per class.
@@ -230,12 +230,8 @@ def level_task(stacking: Stacking, chunk: list[DataClass], mu1s: list[float], so
                                  {**options, **LARGE_CLASS_OPTIONS} if large else options)
             for j, sols in enumerate(grid):
                 for r, sol in enumerate(sols):
-                    if not sol.optimal:
-                        sol.require_optimal(f"class {cls.label} row {r} (mu1 = {mu1s[j]:g})")
-                    if sol.row_dual is None:
-                        raise SolverFailure(f"solver {sol.solver} returned no row multipliers (the class gains are "
-                                            "read from them)")
-                    K[j][r], levels[j, r], iters[j] = -sol.row_dual, -sol.objective, iters[j] + sol.iterations
+                    levels[j, r], K[j][r] = level_and_gain(sol, f"class {cls.label} row {r} (mu1 = {mu1s[j]:g})")
+                    iters[j] += sol.iterations
         size = {"rows": system.n * m, "cols": system.n * C, "nonzeros": system.n * int(np.count_nonzero(Z))}
         out.append([LevelBlock(K=K[j], levels=levels[j], iterations=int(iters[j]), **size,
                                bounds=np.abs(E - K[j] @ Z) @ betas[j])

@@ -54,8 +54,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains, ClassSet, DataClass, class_error_map
 from eqrec.bounds.stacking import Stacking
 from eqrec.design.classes import blocks
+from eqrec.design.classes.block_lp import level_and_gain
 from eqrec.design.classes.gains import box_radius
-from eqrec.errors import SolverFailure
 from eqrec.systems.affine import AffineSystem
 from eqrec.lp.model import LinearProgram, LPBuilder
 from eqrec.lp.parallel import Progress, check_jobs, pool_ready, run_tasks
@@ -224,13 +224,9 @@ def chain_task(stacking: Stacking, chain: list[DataClass], row: int, mu1s: list[
     gains: list[list[np.ndarray]] = [[] for _ in mu1s]
     for i, (cls, per_mu1) in enumerate(zip(chain, sols)):  # read
         for j, sol in enumerate(per_mu1):
-            if not sol.optimal:
-                sol.require_optimal(f"class {cls.label} row {row} (mu1 = {mu1s[j]:g}, chain)")
-            if sol.row_dual is None:
-                raise SolverFailure(f"solver {sol.solver} returned no row multipliers (the class gains are read "
-                                    "from them)")
-            levels[j, i], iters[j, i] = -sol.objective, sol.iterations
-            gains[j].append(-sol.row_dual[model.outputs[i]])
+            levels[j, i], K_row = level_and_gain(sol, f"class {cls.label} row {row} (mu1 = {mu1s[j]:g}, chain)")
+            iters[j, i] = sol.iterations
+            gains[j].append(K_row[model.outputs[i]])  # the multipliers of the output rows (module docstring)
     return levels, gains, iters
 
 
