@@ -36,10 +36,11 @@
 #   $m$ of $T$ lost" ($\mu_1$ free, `strict=False`); it has no delays in its
 #   language, so a late packet counts as lost.
 # * `set-membership, zonotope`: `eqrec.ZonotopeEstimator`, which needs no
-#   language: its set contains the state on every trace.  Two filters run side
-#   by side, with Combastel's F-radius gain and with its reweighted form (each
-#   generator weighted by its inverse length); per state, the tighter is
-#   reported, so the estimate stays linear and its bound exact.
+#   language: its set contains the state on every trace.  A zonotope filter
+#   (Combastel's gain, reweighted by the generators' lengths) runs 20 steps
+#   behind the present, and each state is estimated by the best linear
+#   combination of its zonotope and the last 20 steps' packets (the exact
+#   window), so the estimate stays linear and its bound exact.
 # * `Kalman, time-stamped` (every packet used at its own time stamp,
 #   re-filtering) and `Kalman, delay-unaware` (a packet used as a measurement of
 #   the time it arrives), each with the exact worst case of its error on the

@@ -1,4 +1,5 @@
-"""The zonotopic set-membership estimator (:mod:`eqrec.estimators.zonotope`): guarantee, replay, reduction, atomicity."""
+"""The zonotopic set-membership estimator (:mod:`eqrec.estimators.zonotope`) and its exact window
+(:mod:`eqrec.bounds.window`): guarantee, late packets, reduction, atomicity, the window against an LP."""
 
 from __future__ import annotations
 
@@ -53,8 +54,10 @@ def test_protocol_and_names():
 
 
 @pytest.mark.parametrize("plant", PLANTS)
-@pytest.mark.parametrize("gain", [("fradius", "reweighted"), "fradius", "reweighted", "interval"])
-def test_guarantee_at_random_box_corners_with_losses_and_delays(plant, gain):
+@pytest.mark.parametrize("gain, window, iterations", [(("fradius", "reweighted"), 20, 2), ("fradius", 20, 2),
+                                                      ("reweighted", 20, 2), ("reweighted", 1, 0),
+                                                      ("reweighted", 6, 5)])
+def test_guarantee_at_random_box_corners_with_losses_and_delays(plant, gain, window, iterations):
     system = PLANTS[plant]()
     assert np.any(system.A < 0) and np.any(np.abs(np.linalg.eigvals(system.A).imag) > 0)
     N, r0 = 80, 0.5
@@ -64,7 +67,8 @@ def test_guarantee_at_random_box_corners_with_losses_and_delays(plant, gain):
         w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
         v = system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv))
         xi0 = r0 * rng.choice([-1.0, 1.0], system.n)
-        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=3, gain=gain)
+        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=3, gain=gain, window=window,
+                                iterations=iterations)
         out, beta = run(system, est, trace, xi0, w, v, x0=rng.normal(size=system.n))
         err = np.abs(out.error[1:])
         assert np.all(err <= beta)  # exact, per state: no tolerance on the guarantee side
@@ -117,8 +121,8 @@ def test_played_back_worst_case(plant, order, gain):
         assert err >= 0.5 * est.state_bounds[i]
 
 
-def test_late_packet_replay_equals_on_time_use():
-    """A packet used late (replayed over the buffer) gives bit for bit the set it would have given on time."""
+def test_late_packet_equals_on_time_use():
+    """A packet used late (by the window) gives bit for bit the estimate it would have given on time."""
     system = eqrec.two_mass()
     ys = [np.array([0.1 * k]) for k in range(6)]
     late = ZonotopeEstimator(system, 0.5, max_delay=2, order=None).reset(np.zeros(4))
@@ -173,7 +177,7 @@ def test_reduction_is_outer(reduce):
 
 def state_of(est):
     return (est.time, est.x, est.generators, est.state_bounds, est.dropped_packets, est.replays,
-            [(e.s, None if e.y is None else e.y.copy()) for e in est._buffer])
+            est._known.copy(), est._y.copy(), est._drive.copy(), est.carried_set[1])
 
 
 def same(a, b):
@@ -212,7 +216,8 @@ def test_atomic_errors():
     (dict(x0_radius=np.nan), "x0_radius"), (dict(max_delay=-1), "max_delay"), (dict(max_delay=1.5), "max_delay"),
     (dict(order=0.5), "order"), (dict(order=True), "order"), (dict(gain="kalman"), "gain"), (dict(gain=()), "gain"),
     (dict(gain=("fradius", "fradius")), "gain"), (dict(gain=("fradius", 3)), "gain"),
-    (dict(reduction="none"), "reduction"),
+    (dict(reduction="none"), "reduction"), (dict(gain="interval"), "gain"), (dict(window=0), "window"),
+    (dict(window=2.5), "window"), (dict(iterations=-1), "iterations"), (dict(iterations="2"), "iterations"),
 ])
 def test_constructor_checks(kwargs, field):
     with pytest.raises(InputError) as info:
@@ -271,9 +276,8 @@ def test_two_mass_file_is_the_constructor():
 
 @pytest.mark.parametrize("plant", PLANTS)
 def test_two_gains_report_per_state_the_tighter_filter(plant):
-    """The default runs both filters on the same data and reports, per state, the centre and radius of the filter
-    with the smaller radius: what that filter alone gives for that state, never wider than either,
-    and (two carts) tighter than the F-radius filter on most steps."""
+    """With two gains, both filters run on the same data, the window on each, and per state the estimate and
+    bound of the tighter one are reported: bit for bit what that gain alone gives for that state."""
     system, N, r0 = PLANTS[plant](), 60, 0.5
     trace = lossy_trace(5, N)
     rng = np.random.default_rng(3)
@@ -281,15 +285,97 @@ def test_two_gains_report_per_state_the_tighter_filter(plant):
              system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)))
     runs = {}
     for gain in ("fradius", "reweighted", ("fradius", "reweighted")):
-        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=10, gain=gain)
+        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=10, gain=gain, reduction="girard")
         out, beta = run(system, est, trace, *noise)
         runs[gain] = (out.xhat[1:], beta)
     (xf, bf), (xr, br), (xb, both) = runs["fradius"], runs["reweighted"], runs[("fradius", "reweighted")]
-    # the same up to the rounding of the stacked products (NumPy's batched matmul may sum in another order)
-    assert np.allclose(both, np.minimum(bf, br), rtol=1e-12, atol=0)
-    pick = np.abs(br - bf) > 1e-9 * bf  # states where the choice is clear
-    assert np.allclose(xb[pick], np.where(br < bf, xr, xf)[pick], rtol=0, atol=1e-12)
-    if plant == "two_mass":
-        assert np.mean(both.max(axis=1) < bf.max(axis=1) * (1 - 1e-3)) > 0.5
+    assert np.array_equal(both, np.minimum(bf, br))
+    assert np.array_equal(xb, np.where(br < bf, xr, xf))
     est = ZonotopeEstimator(system, x0_radius=r0, order=10, gain="fradius").reset(np.ones(system.n))
     assert np.array_equal(est.x, np.ones(system.n)) and est.generators.shape == (1, system.n, system.n)
+
+
+def test_more_iterations_never_loosen_the_window():
+    """Every reweighted solve's estimate is valid and the tightest is kept, so more solves never widen a bound."""
+    system, N, r0 = eqrec.two_mass(), 50, 0.5
+    trace = lossy_trace(2, N)
+    zero = (np.zeros(system.n), np.zeros((N, system.nw)), np.zeros((N, system.nv)))
+    bounds = []
+    for iterations in (0, 1, 2, 4):
+        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=10, iterations=iterations)
+        bounds.append(run(system, est, trace, *zero)[1])
+    for loose, tight in zip(bounds, bounds[1:]):
+        assert np.all(tight <= loose)
+    assert np.mean(bounds[-1].max(axis=1) < bounds[0].max(axis=1) * (1 - 1e-3)) > 0.5
+
+
+def window_lp(system, G0, first, t, known):
+    """The window's radius of information by one scipy LP per state: ``max x_i(t+1)`` over the zonotope
+    ``G0 ε`` at ``first``, the noise, and zero data on the known times (independent of the kernel)."""
+    n, nw, nv, q0, L = system.n, system.nw, system.nv, G0.shape[1], t + 1 - first
+    A, C, E, V = system.A, system.C, system.eta_w * system.E, system.eta_v * system.V
+    nvar = q0 + L * nw + L * nv
+    X = np.zeros((n, nvar))
+    X[:, :q0] = G0
+    eq = []
+    for j in range(L):
+        if known[j]:
+            row = C @ X
+            row[:, q0 + L * nw + j * nv:q0 + L * nw + (j + 1) * nv] = V
+            eq.append(row)
+        X = A @ X
+        X[:, q0 + j * nw:q0 + (j + 1) * nw] += E
+    A_eq = np.vstack(eq) if eq else None
+    out = np.empty(n)
+    for i in range(n):
+        res = linprog(-X[i], A_eq=A_eq, b_eq=None if A_eq is None else np.zeros(A_eq.shape[0]), bounds=(-1, 1),
+                      method="highs")
+        out[i] = -res.fun
+    return out
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+def test_window_against_an_independent_lp(plant):
+    """The window's bound is never below the LP's radius of information over the same window and zonotope (the
+    smallest any estimate can have), and with enough reweighted solves comes within a few per cent of it."""
+    system, N, r0 = PLANTS[plant](), 40, 0.5
+    trace = lossy_trace(9, N)
+    sched = trace.schedule()
+    ys = np.zeros((N, system.p))
+    from eqrec.simulate.loop import what_arrived
+    est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=6, window=8, iterations=12).reset(np.zeros(system.n))
+    ratios = []
+    for t in range(N):
+        G0 = est.generators[0]  # the filter's set at the window's start, before the step
+        first_before = est.time - est._drive.shape[0]
+        est.step(what_arrived(sched[t], t, ys), np.zeros(system.m))
+        first = est.time - est._drive.shape[0]
+        if first != first_before:
+            G0 = est.generators[0]
+        if t % 5 == 4:
+            lp = window_lp(system, G0, first, t, est._known)
+            assert np.all(est.state_bounds >= lp * (1 - 1e-9))
+            ratios.append(est.state_bounds / lp)
+    assert np.median(np.concatenate(ratios)) < 1.01
+
+
+def test_carried_set_contains_the_state():
+    """The reported set ``x̂ + G ε`` contains the true state (an LP finds ``ε`` with ``|ε| <= 1``) and its
+    interval hull is the reported bound."""
+    system, N, r0 = rotating_plant(), 30, 0.5
+    rng = np.random.default_rng(4)
+    trace = lossy_trace(4, N)
+    est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=5, gain=("fradius", "reweighted"))
+    checked = []
+
+    def check(k):
+        c, G = est.carried_set
+        checked.append((k, c, G, est.state_bounds))
+
+    out = closed_loop(system, est, trace, np.zeros(system.n), r0 * rng.choice([-1.0, 1.0], system.n),
+                      system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw)),
+                      system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)), after_step=check)
+    for k, c, G, beta in checked[::6]:
+        assert np.all(np.abs(G).sum(axis=1) >= beta * (1 - 1e-15))
+        res = linprog(np.zeros(G.shape[1]), A_eq=G, b_eq=out.x[k + 1] - c, bounds=(-1, 1), method="highs")
+        assert res.status == 0

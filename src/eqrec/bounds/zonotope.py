@@ -47,6 +47,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from eqrec.errors import InputError
@@ -179,23 +180,57 @@ def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None
     K, n, q = G.shape
     if q <= limit:
         return G
-    if principal:
-        U = principal_axes(G) if axes is None else axes
-        absT = np.abs(U.transpose(0, 2, 1) @ G)
-    else:
-        absT = np.abs(G)
+    U = (principal_axes(G) if axes is None else np.asarray(axes, dtype=float)) if principal else np.zeros((K, n, n))
+    return _reduce_stack(np.ascontiguousarray(G, dtype=float), int(limit), bool(principal), np.ascontiguousarray(U))
+
+
+@numba.njit(cache=True)
+def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
+    """The loop of :func:`_reduce` (compiled): per member, the generators' absolute coordinates in the axes, the
+    cost, the boxed ones (the smallest costs; a stable sort, so the lower index first on a tie) and the box."""
+    K, n, q = G.shape
     keep = max(limit - n, 0)  # room for the n box generators
-    cost = absT.sum(axis=1) - absT.max(axis=1)
-    boxed = np.zeros((K, q), dtype=bool)  # a mask keeps the order of the kept generators
-    if keep > 0:
-        boxed[np.arange(K)[:, None], np.argpartition(cost, q - keep - 1, axis=1)[:, : q - keep]] = True
-    else:
-        boxed[:] = True
-    slack = q - keep + 2 + (2 * n + 2 if principal else 0)
-    box = np.nextafter((absT * boxed[:, None, :]).sum(axis=2) * (1.0 + slack * _U), np.inf)
-    new = U * box[:, None, :] if principal else box[:, :, None] * np.eye(n)
-    kept = G.transpose(0, 2, 1)[~boxed].reshape(K, keep, n).transpose(0, 2, 1)
-    return np.concatenate([kept, new], axis=2)
+    nbox = q - keep
+    slack = nbox + 2 + (2 * n + 2 if principal else 0)
+    out = np.empty((K, n, keep + n))
+    absT = np.empty((n, q))
+    cost = np.empty(q)
+    for k in range(K):
+        for a in range(n):
+            for j in range(q):
+                if principal:
+                    s = 0.0
+                    for e in range(n):
+                        s += U[k, e, a] * G[k, e, j]
+                    absT[a, j] = abs(s)
+                else:
+                    absT[a, j] = abs(G[k, a, j])
+        for j in range(q):
+            s = 0.0
+            big = 0.0
+            for a in range(n):
+                s += absT[a, j]
+                big = max(big, absT[a, j])
+            cost[j] = s - big
+        order = np.argsort(cost, kind="mergesort")
+        boxed = np.zeros(q, dtype=np.bool_)
+        for j in range(nbox):
+            boxed[order[j]] = True
+        col = 0
+        for j in range(q):  # the kept generators, in their order
+            if not boxed[j]:
+                for a in range(n):
+                    out[k, a, col] = G[k, a, j]
+                col += 1
+        for a in range(n):
+            s = 0.0
+            for j in range(q):
+                if boxed[j]:
+                    s += absT[a, j]
+            box = np.nextafter(s * (1.0 + slack * _U), np.inf)
+            for e in range(n):
+                out[k, e, keep + a] = (U[k, e, a] if principal else (1.0 if e == a else 0.0)) * box
+    return out
 
 
 def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:

@@ -7,16 +7,24 @@ of its Remark 1; per-channel bounds are already folded into ``E`` and ``V``):
     x(s+1) = A(s)x(s) + B(s)u(s) + f + E(s)w(s), \quad y(s) = C(s)x(s) + V(s)v(s),
     \quad \|w\|_\infty \le \eta_w,\ \|v\|_\infty \le \eta_v .
 
-The estimator carries a zonotope :math:`Z = \langle c, G\rangle = \{c + G\xi : \|\xi\|_\infty \le 1\}` that
-contains the state for every noise in its box (set-membership estimation by zonotopes: Alamo, Bravo, Camacho,
-"Guaranteed state estimation by zonotopes", Automatica 41, 2005; Combastel, "Zonotopes and Kalman observers: Gain
-optimality under distinct uncertainty paradigms and robust convergence", Automatica 55, 2015), one per gain
-(below).  The radius of a zonotope's interval hull is :math:`\beta_i = \sum_j |G_{ij}|`; per state, the
-estimate is the centre of the filter with the smallest radius and that radius the bound
-(:attr:`ZonotopeEstimator.state_bounds`); ``step`` returns the largest.
+The estimator has two parts (Alamo, Bravo, Camacho, "Guaranteed state estimation by zonotopes", Automatica 41,
+2005; Combastel, "Zonotopes and Kalman observers: Gain optimality under distinct uncertainty paradigms and robust
+convergence", Automatica 55, 2015):
 
-One step (time ``s``, prior set :math:`\langle c, G\rangle \ni x(s)`)
-------------------------------------------------------------------------
+* **zonotope filters** (one per gain, below) that carry a zonotope
+  :math:`Z = \langle c, G\rangle = \{c + G\xi : \|\xi\|_\infty \le 1\}` containing the state, ``L`` steps
+  behind the present: at time ``t`` they hold the set of :math:`x(s_0)`, :math:`s_0 = t + 1 - L`;
+* **the exact window** over the last :math:`L = \max(\text{window}, D + 1)` steps
+  (:func:`eqrec.bounds.window.window_estimate`): per state, the best linear estimate of :math:`x_i(t+1)` given
+  the filter's zonotope at :math:`s_0` and every packet of times :math:`s_0..t` received so far, found by
+  iteratively reweighted least squares.  Its bound :math:`\beta_i = \|X_i - \lambda_i H\|_1` is the exact worst
+  case of that estimate (:mod:`eqrec.bounds.window`).
+
+Per state, the estimate and bound of the filter whose window is the tightest are reported
+(:attr:`ZonotopeEstimator.state_bounds`); ``step`` returns the largest bound.
+
+One filter step (time ``s``, prior set :math:`\langle c, G\rangle \ni x(s)`)
+--------------------------------------------------------------------------
 *Update and prediction in one.*  With a delivered :math:`y(s)`, write :math:`r = y - Cc`; every state consistent
 with the data satisfies :math:`r = CG\xi + \eta_v V \nu` (:math:`\|\nu\|_\infty \le 1`: the exact form of the
 strip :math:`|y - Cx| \le \eta_v |V|\mathbf 1`, which keeps the noise shared by several outputs).  For **any**
@@ -26,107 +34,90 @@ gain :math:`M` (``n × p``) the zero :math:`M(r - CG\xi - \eta_v V\nu)` may be a
     x(s+1) \in \big\langle\, Ac + Bu + f + Mr,\ \ [\,AG - MCG,\ \ -\eta_v MV,\ \ \eta_w E\,] \big\rangle,
 
 valid whatever :math:`M` (Alamo et al. 2005, Property 2; Combastel 2015, eq. (9); :math:`M = A\Lambda` is the
-familiar filter gain :math:`\Lambda` followed by the prediction, but :math:`M` need not be of that form).
-
-*The gains.*  Any :math:`M` keeps the set valid; the gain only decides how tight it stays.  The estimator runs
-one filter per gain named in ``gain`` on the same data, each carrying its own zonotope, and reports per state
-the tighter one (next section).
+familiar filter gain :math:`\Lambda` followed by the prediction).  The gain only decides how tight the set stays:
 
 * ``"fradius"``: Combastel's F-radius-optimal gain (2015, Theorem 3),
   :math:`\Lambda = GG^\top C^\top (CGG^\top C^\top + \eta_v^2 VV^\top)^{-1}` (a Kalman gain with covariance
-  :math:`GG^\top`), applied to the filtered set, then the prediction (:math:`M = A\Lambda`).  It minimises the
-  filtered :math:`G'G'^\top` in the Löwner order, so every weighted sum of *squared* generator entries; the
-  interval hull is a sum of *absolute* entries.
-* ``"reweighted"``: the same formula with :math:`GG^\top` and :math:`VV^\top` replaced by :math:`GWG^\top`,
-  :math:`VW_vV^\top`, where each generator is weighted by the inverse of its length,
-  :math:`W = \operatorname{diag}(1/\|(g_j, Cg_j)\|_2)` (and :math:`1/\|v_j\|_2` for the measurement noise).
-  With these weights, :math:`\sum_j w_j\|g'_j\|_2^2` is the first iteratively-reweighted-least-squares step from
-  the current set towards minimising :math:`\sum_j \|g'_j\|_2`, the sum of the generators' lengths, which bounds
-  the interval hull (:math:`\sum_i \beta_i = \sum_j \|g_j\|_1 \le \sqrt n \sum_j \|g_j\|_2`) and, unlike the
-  squared sum, counts the many small generators the process noise adds as much as they widen the hull.  A
-  weighted least-squares problem has the same closed form, so the step costs the same.
-* ``"interval"``: per row, the weighted-median gain.  Row ``i`` of the new generator matrix depends on row ``i``
-  of :math:`M` only, so every row of the *predicted* interval hull is minimised at once.  For one scalar output,
-  with :math:`g = (AG)_{i\cdot}` extended by zeros on the noise columns and :math:`h = [CG,\ \eta_v V]`,
-  :math:`\beta_i(\mu) = \|g - \mu h\|_1 = \sum_{k:\,h_k\ne 0} |h_k|\,|g_k/h_k - \mu| + \sum_{k:\,h_k = 0}
-  |g_k|`, minimised by the weighted median of the ratios :math:`g_k/h_k` with weights :math:`|h_k|` (a sort and a
-  cumulative sum).  By LP duality this is the one-step radius of information given the prior zonotope, in the
-  worst case over the measured value; with ``p > 1`` outputs the rows are applied one after the other.  It is
-  greedy: its zeros throw away the shape of the set in the directions a later measurement or ``A`` needs.
+  :math:`GG^\top`).  It minimises the filtered :math:`G'G'^\top` in the Löwner order, so every weighted sum of
+  *squared* generator entries; the interval hull is a sum of *absolute* entries.
+* ``"reweighted"`` (default): the same formula with :math:`GG^\top` and :math:`VV^\top` replaced by
+  :math:`GWG^\top`, :math:`VW_vV^\top`, each generator weighted by the inverse of its length,
+  :math:`W = \operatorname{diag}(1/\|(g_j, Cg_j)\|_2)` (and :math:`1/\|v_j\|_2` for the measurement noise): the
+  first iteratively-reweighted-least-squares step from the current set towards minimising
+  :math:`\sum_j \|g'_j\|_2`, which bounds the interval hull (:math:`\sum_i \beta_i = \sum_j \|g_j\|_1 \le
+  \sqrt n \sum_j \|g_j\|_2`) and counts the many small generators the process noise adds as much as they widen
+  the hull.  The same closed form, at the same cost.
 
-*The default* ``gain=("fradius", "reweighted")``.  Measured (``benchmarks/bench_zonotope.py``, bound / information
-limit per step, order 40): on the two-cart plant at 30 % loss and delays 0..2, the F-radius gain alone ends at
-median 1.24, maximum 1.53, the reweighted one alone at 1.2 / 1.4, the weighted-median one at 2.4 / 4.0; the
-reweighted gain is not better everywhere (on the batch reactor, two outputs and an unstable mode, it is worse
-than the F-radius gain, 2.1 against 1.5 at the median).  Both side by side take the better of the two, state by
-state and step by step: 1.18 / 1.23 on the two carts, 1.43 / 1.80 on the reactor, for about the cost of one
-filter (the two filters' matrices are stacked, so one NumPy call serves both).
+With several gains (``gain=("fradius", "reweighted")``) each filter carries its own zonotope on the same data
+(their matrices stacked), the window runs on each, and per state the tightest is reported.
 
-The reported estimate: per state, the tighter filter
----------------------------------------------------
-Each filter's zonotope contains the state, so for every state ``i`` each filter's centre is within its hull
-radius :math:`\beta_{k,i}`.  The estimator reports, state by state, the centre and radius of the filter with the
-smallest radius.  The radii do not depend on the measured values (only on the arrivals), so the choice does not
-either: given the arrivals the estimate stays *linear* in the initial error and the noise, its bound is the exact
-worst case of its own error (with no reduction), and never below the information limit, as for every other
-linear estimator of the project (:func:`eqrec.estimators.exact.exact_bound`).  (The intersection of the hulls
-would be narrower by a few per cent more, but its midpoint depends on the data: measured, 1.169 against 1.175 at
-the median on the two carts; the linear choice is kept.)
+The window
+----------
+The filters' sets lose information in two ways: a gain is one matrix for all states, and the order reduction
+(below) replaces small generators by a box.  The window recovers most of it for the last ``L`` steps: it is the
+radius of information of :math:`x_i(t+1)` given the zonotope at :math:`s_0` (an ``L1`` problem, solved
+approximately; any weights give a valid bound, exact for the estimate it goes with), so it is never below the
+information limit of the whole trace (:func:`eqrec.bounds.information.information_limit`), and equals it when
+the zonotope at :math:`s_0` is exact and the weights optimal.  Its weights depend on the arrivals and the
+filter's generators only, never on the measured values, so the estimate is *linear* in the initial error and
+the noise given the arrivals, as every other linear estimator of the project, and its bound is the exact worst
+case of its own error (no reduction inside the window).  Measured (``benchmarks/bench_zonotope.py``, bound /
+information limit per step, two carts, 30 % loss, delays 0..2, order 40): without the window (the filters'
+own sets, replayed for late packets, the default until this version) median 1.18, with a window of 20 steps
+and 2 reweighted solves 1.13 (module :mod:`eqrec.bounds.window` for the cost).
 
-Late packets: a buffer of the last ``D`` steps and replay
---------------------------------------------------------
-The estimator keeps, for the last ``D = max_delay`` steps, the prior set of that time (before its measurement
-update), the known drive :math:`B u + f` and the measurement received for it.  A packet stamped ``τ`` arriving at
-``t`` with :math:`t - D \le \tau < t` is stored with its time and the steps ``τ..t`` are run again from the
-stored prior of ``τ`` (the later updates re-applied, the later priors replaced), so every delivered measurement
-is used at its own time.  A packet older than the buffer (``τ < t − D``, or stamped before ``reset``) is
-**dropped** and counted in :attr:`ZonotopeEstimator.dropped_packets`: ignoring a measurement never makes the
-set smaller than the true consistent set, since the set before any update already contains the state (each
-update only intersects with data that holds), so the estimator stays guaranteed; it only loses what that packet
-would have told.  Replay is exact up to the order reduction.  Only the set of the newest time is reduced: a replayed step and
-the priors it stores in the buffer keep all their generators (at most ``D`` steps more than ``order · n``), so
-a late packet costs no extra reduction and loses nothing to one.
+Late packets: the window, ``L >= D + 1``
+----------------------------------------
+A packet stamped ``τ`` arriving at ``t`` with :math:`t - D \le \tau \le t` (``D = max_delay``) is stored in the
+window and used at its own time by the next window estimate (counted in :attr:`ZonotopeEstimator.replays` when
+``τ < t``).  A time leaves the window, and the filters take it in (its measurement if it arrived), only when no
+packet of it can still come: ``L >= D + 1``.  So the filters never replay, and every delivered measurement is
+used at its own time.  A packet older than ``D`` steps (or stamped before ``reset``) is **dropped** and counted
+in :attr:`ZonotopeEstimator.dropped_packets`: ignoring a measurement never makes the set smaller than the true
+consistent set, since the set before any update already contains the state (each update only intersects with
+data that holds), so the estimator stays guaranteed; it only loses what that packet would have told.
 
 Order reduction (outer only)
 ----------------------------
-At the end of every step, when a set has more than ``order · n`` generators, the generators with the smallest
+After a filter step, when a set has more than ``order · n`` generators, the generators with the smallest
 :math:`\|g\|_1 - \|g\|_\infty` (the increase of the interval hull's perimeter when a segment is replaced by its
 box) are replaced by the ``n`` generators of their interval hull, :math:`\operatorname{diag}(\sum_j |g_j|)`
 (Girard, "Reachability of uncertain linear systems using zonotopes", HSCC 2005; Combastel's 2003 reduction
 boxes the smallest in 2-norm instead): ``reduction="girard"``.  ``reduction="pca"`` (default; the axes computed
 again every :data:`PCA_AXES_EVERY` steps from the set being reduced, in between those last computed: any
-orthonormal axes give an outer reduction, and the principal ones move slowly) does the same in the orthonormal principal axes ``U``
-of :math:`GG^\top` (Kopetzki, Schürmann, Althoff, CDC 2017), a parallelotope :math:`U\operatorname{diag}(\sum_j
-|U^\top g_j|)`; the same containment argument holds in the rotated axes.  Each removed segment :math:`[-g, g]` lies in its box, and a Minkowski
-sum of supersets is a superset, so the reduced zonotope contains the original one: every support function
+orthonormal axes give an outer reduction, and the principal ones move slowly) does the same in the orthonormal
+principal axes ``U`` of :math:`GG^\top` (Kopetzki, Schürmann, Althoff, CDC 2017), a parallelotope
+:math:`U\operatorname{diag}(\sum_j |U^\top g_j|)`; the same containment argument holds in the rotated axes.
+Each removed segment :math:`[-g, g]` lies in its box, and a Minkowski sum of supersets is a superset, so the
+reduced zonotope contains the original one: every support function
 :math:`h(d) = d^\top c + \sum_j |d^\top g_j|` can only grow, since
-:math:`\sum_{j\in S} |d^\top g_j| \le \sum_i |d_i| \sum_{j\in S} |g_{ij}|`, and the interval hull is unchanged
-at the moment of reduction (the looseness appears only once ``A`` rotates the box).  The box sums are rounded
-outward.
+:math:`\sum_{j\in S} |d^\top g_j| \le \sum_i |d_i| \sum_{j\in S} |g_{ij}|`.  The box sums are rounded outward.
 
 Floating point
 --------------
-The bound is a guarantee on the error computed in floating point, with no tolerance on the guarantee side:
-the row sums are rounded outward (Higham, *Accuracy and Stability of Numerical Algorithms*, eq. (4.4): a sum of
-``q`` non-negative terms is within :math:`(q-1)u` of the exact one), and each step appends a rounding allowance
-:math:`\kappa\,u\,(|A|(|c| + \beta) + |Bu + f| + |Mr| + \text{row sums of the products})` (``u`` the unit
-roundoff, :math:`\kappa` a few times the length of the dot products) as ``n`` axis-aligned generators, which
-covers the rounding of the centre's and the generators' products and of a simulated true state of the same
-size.  It adds a relative :math:`10^{-14}`-order to the bound.
+The bound is a guarantee on the error computed in floating point, with no tolerance on the guarantee side.  A
+filter step appends a rounding allowance :math:`\kappa\,u\,(|A|(|c| + \beta) + |Bu + f| + |Mr| + \text{row sums
+of the products})` (``u`` the unit roundoff, :math:`\kappa` four times the number of columns) as ``n``
+axis-aligned generators, which covers the rounding of the centre's and the generators' products and of a
+simulated true state of the same size; the window adds its own (:mod:`eqrec.bounds.window`).  Both are a
+relative :math:`10^{-13}`-order of the bound.  The three loops (filter step, reduction, window) are compiled
+with Numba, without ``fastmath``: IEEE arithmetic in a fixed order, so the same bytes on every machine.
 
 References: Alamo, Bravo, Camacho (Automatica 2005); Combastel (Automatica 2015); Girard (HSCC 2005); Scott,
 Raimondo, Marseglia, Braatz, "Constrained zonotopes: A new tool for set-based estimation and fault detection",
-Automatica 69, 2016 (the exact intersection this estimator over-approximates by one zonotope); CORA's
-``observe`` methods and ZETA (MATLAB) implement the same family.
+Automatica 69, 2016 (the exact intersection, an LP per state and step, which the window approaches over its
+last ``L`` steps at a fixed cost); CORA's ``observe`` methods and ZETA (MATLAB) implement the filter family.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
+import numba
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
+from eqrec.bounds.window import spd_solve, window_estimate
 from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
 from eqrec.checks import radii
 from eqrec.errors import InputError
@@ -135,21 +126,20 @@ from eqrec.systems.affine import AffineSystem
 #: Unit roundoff of float64.
 _U = np.finfo(float).eps / 2
 
-#: The gains offered (module docstring); the estimator runs one filter per gain named and intersects them.
-GAINS = ("fradius", "reweighted", "interval")
+#: The gains offered (module docstring); the estimator runs one filter per gain named.
+GAINS = ("fradius", "reweighted")
 
-#: The default: Combastel's F-radius gain and its reweighted form, side by side.
-DEFAULT_GAINS = ("fradius", "reweighted")
+#: The default: the reweighted form of Combastel's F-radius gain (module docstring).
+DEFAULT_GAINS = ("reweighted",)
 
+#: The default length of the exact window (steps; module docstring).
+DEFAULT_WINDOW = 20
 
-class _Entry(NamedTuple):
-    """One buffered step: the prior sets of time ``s`` (one per gain), its drive ``B u + f`` and its measurement."""
+#: The default number of reweighted solves after the first in the window (module docstring).
+DEFAULT_ITERATIONS = 2
 
-    s: int
-    c: np.ndarray
-    G: np.ndarray
-    drive: np.ndarray
-    y: "np.ndarray | None"
+#: Relative floor of the window's reweighting residuals (:mod:`eqrec.bounds.window`).
+_IRLS_FLOOR = 1e-2
 
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
@@ -158,35 +148,161 @@ _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
 PCA_AXES_EVERY = 4
 
 
-def _row_gains(P: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """Per row ``i``, a minimiser of ``||P_i - mu h||_1``: the weighted median of ``P_ik / h_k``, weights ``|h_k|``."""
-    nz = h != 0
-    if not nz.any():
-        return np.zeros(P.shape[0])
-    hz = h[nz]
-    z = P[:, nz] / hz
-    w = np.abs(hz)
-    order = np.argsort(z, axis=1)
-    cw = np.cumsum(w[order], axis=1)
-    k = np.argmax(cw >= 0.5 * cw[:, -1:], axis=1)  # first index where the cumulative weight reaches half
-    rows = np.arange(P.shape[0])
-    return z[rows, order[rows, k]]
+@numba.njit(cache=True)
+def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover - compiled
+    """One step of the zonotope filters (:mod:`eqrec.estimators.zonotope`): the sets of ``x(s+1)`` from those of
+    ``x(s)``, one per gain, with the rounding allowance appended (not reduced).
 
+    Parameters
+    ----------
+    A, C, Ew, Vn : ndarray, shapes (n, n), (p, n), (n, nw), (p, nv)
+        The plant at time ``s`` (noise gains scaled by their bounds).
+    drive : ndarray, shape (n,)
+        ``B u + f``.
+    y : ndarray, shape (p,)
+        The measurement (read when ``has_y``).
+    has_y : bool
+        Whether ``y(s)`` is known.
+    c : ndarray, shape (K, n)
+        Centres of the ``K`` filters.
+    G : ndarray, shape (K, n, q)
+        Their generators.
+    alpha : ndarray, shape (K,)
+        Per filter, 0 for the F-radius gain (unit generator weights) or 1 for the reweighted one (weights
+        ``1/‖(g, Cg)‖₂``).
 
-def _interval_update(AG: np.ndarray, Ac: np.ndarray, CG: np.ndarray, Vn: np.ndarray, r: np.ndarray,
-                     y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The predicted generators and centre with the per-row weighted-median gains, and a rounding magnitude."""
-    n = AG.shape[0]
-    H = np.concatenate([CG, Vn], axis=1)
-    P = np.concatenate([AG, np.zeros((n, Vn.shape[1]))], axis=1)
-    cp = Ac
-    mag = np.zeros(n)
-    for j in range(H.shape[0]):
-        mu = _row_gains(P, H[j])
-        P = P - np.outer(mu, H[j])
-        cp = cp + mu * r[j]
-        mag = mag + np.abs(mu) * (np.abs(H[j]).sum() + np.abs(r[j]) + np.abs(y[j]))
-    return P, cp, mag
+    Returns
+    -------
+    c1 : ndarray, shape (K, n)
+    G1 : ndarray, shape (K, n, q + p·[has_y]·... )
+        ``[A G − M C G, −M V, E, diag(pad)]`` (the ``V`` block only with a measurement).
+    """
+    K, n, q = G.shape
+    p, nw, nv = C.shape[0], Ew.shape[1], Vn.shape[1]
+    extra = nv if has_y else 0
+    width = q + extra + nw + n
+    c1 = np.empty((K, n))
+    G1 = np.zeros((K, n, width))
+    CG = np.empty((p, q))
+    wq = np.empty(q)
+    num = np.empty((n, p))
+    S = np.empty((p, p))
+    Lam = np.empty((n, p))
+    ALam = np.empty((n, p))
+    r = np.empty(p)
+    mag = np.empty(n)
+    rowabs = np.empty(n)
+    for k in range(K):
+        for a in range(n):  # A G, A c + drive, and the magnitudes
+            rowabs[a] = 0.0
+            for j in range(q):
+                rowabs[a] += abs(G[k, a, j])
+        for a in range(n):
+            s = drive[a]
+            sm = abs(drive[a])
+            for e in range(n):
+                f = A[a, e]
+                s += f * c[k, e]
+                sm += abs(f) * (abs(c[k, e]) + rowabs[e])
+                if f != 0.0:
+                    for j in range(q):
+                        G1[k, a, j] += f * G[k, e, j]
+            c1[k, a] = s
+            mag[a] = sm
+        if has_y:
+            for b in range(p):
+                s = y[b]
+                for e in range(n):
+                    s -= C[b, e] * c[k, e]
+                r[b] = s
+                for j in range(q):
+                    CG[b, j] = 0.0
+                for e in range(n):
+                    f = C[b, e]
+                    if f != 0.0:
+                        for j in range(q):
+                            CG[b, j] += f * G[k, e, j]
+            for j in range(q):  # generator weights (module docstring of the estimator)
+                s = 0.0
+                for a in range(n):
+                    s += G[k, a, j] * G[k, a, j]
+                for b in range(p):
+                    s += CG[b, j] * CG[b, j]
+                ln = np.sqrt(s)
+                wq[j] = 1.0 if alpha[k] == 0.0 or ln == 0.0 else 1.0 / ln
+            for a in range(n):  # G W (CG)^T
+                for b in range(p):
+                    s = 0.0
+                    for j in range(q):
+                        s += G[k, a, j] * wq[j] * CG[b, j]
+                    num[a, b] = s
+            for b in range(p):  # S = CG W CG^T + V Wv V^T
+                for d in range(b + 1):
+                    s = 0.0
+                    for j in range(q):
+                        s += CG[b, j] * wq[j] * CG[d, j]
+                    for j in range(nv):
+                        ln = 0.0
+                        for e in range(p):
+                            ln += Vn[e, j] * Vn[e, j]
+                        ln = np.sqrt(ln)
+                        wv = 1.0 if alpha[k] == 0.0 or ln == 0.0 else 1.0 / ln
+                        s += Vn[b, j] * wv * Vn[d, j]
+                    S[b, d] = s
+            # Lam = num S^-1 (a zero gain where nothing is measured; any gain keeps the set valid)
+            if p == 1:
+                for a in range(n):
+                    Lam[a, 0] = num[a, 0] / S[0, 0] if S[0, 0] > 0.0 else 0.0
+            else:
+                scale = 0.0
+                for b in range(p):
+                    scale = max(scale, S[b, b])
+                for b in range(p):
+                    S[b, b] += 1e-14 * scale + 1e-300
+                for a in range(n):
+                    M = S.copy()
+                    out = np.empty(p)
+                    spd_solve(M, num[a].copy(), out)
+                    for b in range(p):
+                        Lam[a, b] = out[b]
+            for a in range(n):
+                for b in range(p):
+                    s = 0.0
+                    for e in range(n):
+                        s += A[a, e] * Lam[e, b]
+                    ALam[a, b] = s
+            sCG = np.zeros(p)
+            for b in range(p):
+                for j in range(q):
+                    sCG[b] += abs(CG[b, j])
+            for a in range(n):
+                s = c1[k, a]
+                for b in range(p):
+                    f = ALam[a, b]
+                    s += f * r[b]
+                    mag[a] += abs(f) * (abs(r[b]) + abs(y[b]) + sCG[b])
+                    if f != 0.0:
+                        for j in range(q):
+                            G1[k, a, j] -= f * CG[b, j]
+                    for j in range(nv):
+                        G1[k, a, q + j] -= f * Vn[b, j]
+                c1[k, a] = s
+                for e in range(n):  # |A| |Lam| sCG
+                    s2 = 0.0
+                    for b in range(p):
+                        s2 += abs(Lam[e, b]) * sCG[b]
+                    mag[a] += abs(A[a, e]) * s2
+        # process noise and the rounding allowance
+        for a in range(n):
+            s = abs(c1[k, a])
+            for j in range(q + extra):
+                s += abs(G1[k, a, j])
+            for j in range(nw):
+                G1[k, a, q + extra + j] = Ew[a, j]
+                s += abs(Ew[a, j])
+            pad = 4.0 * (width + 4) * _U * (mag[a] + s)
+            G1[k, a, q + extra + nw + a] = np.nextafter(pad, np.inf)
+    return c1, G1
 
 
 def _gain_names(gain: Any) -> tuple[str, ...]:
@@ -211,19 +327,23 @@ class ZonotopeEstimator:
     x0_radius : float or array_like, shape (n,)
         Radius of the initial box around ``xhat0`` (one number, or one per state; finite, ``>= 0``).
     max_delay : int, optional
-        ``D >= 0``: packets up to ``D`` steps late are used at their own time (replay); older ones are dropped
-        and counted (default 0).
+        ``D >= 0``: packets up to ``D`` steps late are used at their own time (by the window); older ones are
+        dropped and counted (default 0).
     order : float or None, optional
-        At most ``order · n`` generators are kept per filter at the end of a step (``>= 1``; default 40);
+        At most ``order · n`` generators are kept per filter after each filter step (``>= 1``; default 40);
         ``None``: no reduction (exact sets, growing without limit).
     gain : str or tuple of str, optional
-        One filter per gain named, each of ``"fradius"`` (Combastel's F-radius gain, the Kalman-shaped
-        reference), ``"reweighted"`` (the same with generators weighted by their inverse length) and
-        ``"interval"`` (the per-row weighted-median gain; greedy, loose over time); per state the filter with
-        the smallest radius is reported.  Default ``("fradius", "reweighted")`` (module docstring).
+        One filter per gain named: ``"fradius"`` (Combastel's F-radius gain, the Kalman-shaped reference) and
+        ``"reweighted"`` (the same with generators weighted by their inverse length; default); with both, per
+        state the tightest is reported (module docstring).
     reduction : {"pca", "girard"}, optional
         The outer order reduction: the box in the principal axes of the generators (default,
         :func:`reduce_pca`) or Girard's axis-aligned box (:func:`reduce_girard`).
+    window : int, optional
+        Length of the exact window in steps (``>= 1``; default 20); the window used is
+        ``max(window, max_delay + 1)`` steps (module docstring).
+    iterations : int, optional
+        Reweighted solves of the window after the first (``>= 0``; default 2).
 
     Attributes
     ----------
@@ -232,16 +352,17 @@ class ZonotopeEstimator:
     name : str
         ``"set-membership, zonotope"``.
     dropped_packets : int
-        Packets dropped since :meth:`reset` because they were older than the buffer.
+        Packets dropped since :meth:`reset` because they were more than ``max_delay`` steps late.
     replays : int
-        Late packets used by replaying the buffer since :meth:`reset`.
+        Late packets used at their own time (by the window) since :meth:`reset`.
 
     Raises
     ------
     InputError
         A ``system`` that is not an :class:`AffineSystem`, a negative, non-finite or wrongly sized
         ``x0_radius``, ``max_delay`` not an integer ``>= 0``, ``order`` not ``None`` nor a number ``>= 1``, an
-        unknown ``gain`` (the field is named).
+        unknown ``gain`` or ``reduction``, ``window`` not an integer ``>= 1``, ``iterations`` not an integer
+        ``>= 0`` (the field is named).
 
     Examples
     --------
@@ -251,7 +372,7 @@ class ZonotopeEstimator:
     >>> est = eqrec.ZonotopeEstimator(carts, x0_radius=0.5, max_delay=2, order=20).reset(np.zeros(4))
     >>> xhat, bound = est.step(np.array([0.1]))       # y(0) on time
     >>> xhat, bound = est.step(None)                  # y(1) not (yet) arrived
-    >>> xhat, bound = est.step([eqrec.Packet(1, np.array([0.12]))])  # y(1) one step late: replayed
+    >>> xhat, bound = est.step([eqrec.Packet(1, np.array([0.12]))])  # y(1) one step late: used at time 1
     >>> est.time, est.state_bounds.shape, bool(bound == est.state_bounds.max()), est.replays
     (3, (4,), True, 1)
     """
@@ -260,7 +381,8 @@ class ZonotopeEstimator:
     name = "set-membership, zonotope"
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: "float | None" = 40,
-                 gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca"):
+                 gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca", window: int = DEFAULT_WINDOW,
+                 iterations: int = DEFAULT_ITERATIONS):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         n = system.n
@@ -271,15 +393,21 @@ class ZonotopeEstimator:
         gains = _gain_names(gain)
         if reduction not in _REDUCTIONS:
             raise InputError(f"unknown reduction {reduction!r}; choose one of {list(_REDUCTIONS)}", field="reduction")
+        if not is_stamp(window) or window < 1:
+            raise InputError(f"the window is an integer >= 1 (steps), got {window!r}", field="window")
+        if not is_stamp(iterations) or iterations < 0:
+            raise InputError(f"iterations is an integer >= 0, got {iterations!r}", field="iterations")
+        self.window, self.iterations = int(window), int(iterations)
+        # the window's length: every packet up to max_delay late reaches it before its time leaves (module docstring)
+        self._W = max(self.window, int(max_delay) + 1)
         self.reduction = reduction
         self.system, self.x0_radius, self.max_delay = system, r0, int(max_delay)
         self.order = None if order is None else float(order)
         self.gain = gains
-        # per filter: weight exponent of the gain's generator weights (0: F-radius, 1: reweighted); interval apart
+        # per filter: the exponent of the gain's generator weights (0: F-radius, 1: reweighted)
         self._alpha = np.array([1.0 if g == "reweighted" else 0.0 for g in gains])
-        self._interval = [k for k, g in enumerate(gains) if g == "interval"]
         self._models: dict[int, tuple] = {}
-        self._eye = np.eye(n)
+        self._no_y = np.zeros(system.p)
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
         self._time: int | None = None
         self.dropped_packets = 0
@@ -373,12 +501,14 @@ class ZonotopeEstimator:
         G = G[:, np.any(G != 0, axis=0)]
         if self._limit is not None:
             G = _REDUCTIONS[self.reduction](G, self._limit)
-        K = len(self.gain)
-        self._c = np.tile(c, (K, 1))  # every filter starts from the same set
-        self._G = np.tile(G, (K, 1, 1))
+        K, W, sysm = len(self.gain), self._W, self.system
+        self._c = np.tile(c, (K, 1))  # every filter starts from the same set, at the window's start
+        self._G = np.ascontiguousarray(np.tile(G, (K, 1, 1)))
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
+        self._R, self._pick = self._G[:, :, :], np.zeros(n, dtype=int)  # the reported set's error maps, per state
         self._axes: "np.ndarray | None" = None  # the principal axes last computed (reduction="pca")
-        self._buffer = ()
+        # the window, times t0 .. time-1 (at most W of them): drives, which outputs are known, their values
+        self._drive, self._known, self._y = np.zeros((0, n)), np.zeros(0, dtype=bool), np.zeros((0, sysm.p))
         self._time = self._t0 = int(t0)
         self.dropped_packets = 0
         self.replays = 0
@@ -415,102 +545,73 @@ class ZonotopeEstimator:
         lim = sysm.horizon_limit
         if lim is not None and self._model_time(t) >= lim:
             raise InputError(f"time-varying data covers times 0..{lim - 1}, not {t}", field="system")
-        drive = sysm.B_at(self._model_time(t)) @ u + sysm.f
-        entries = list(self._buffer) + [_Entry(t, self._c, self._G, drive, None)]
-        first = entries[0].s
-        dropped = 0
-        start = t
+        first = t - self._drive.shape[0]  # the window's start, time t appended
+        drive = np.concatenate([self._drive, (sysm.B_at(self._model_time(t)) @ u + sysm.f)[None]])
+        known = np.append(self._known, False)
+        ys = np.concatenate([self._y, np.zeros((1, sysm.p))])
+        dropped = late = 0
         for pk in packets:
-            if pk.time < first:
-                dropped += 1  # older than the buffer (or than the run): ignoring it stays guaranteed
+            if pk.time < max(first, t - self.max_delay):
+                dropped += 1  # later than max_delay (or stamped before the run): ignoring it stays guaranteed
                 continue
             i = pk.time - first
-            if entries[i].y is not None:
+            if known[i]:
                 raise InputError(f"a second packet stamped {pk.time} received at time {t}", field="y")
-            entries[i] = entries[i]._replace(y=pk.y)
-            start = min(start, pk.time)
-        c, G = entries[start - first].c, entries[start - first].G
-        for s in range(start, t + 1):
-            e = entries[s - first]
-            if s > start:
-                entries[s - first] = e = e._replace(c=c, G=G)
-            c, G = self._advance(s, e.c, e.G, e.drive, e.y)
-        G, axes = self._reduced(G, (t - self._t0) % PCA_AXES_EVERY == 0)  # only the newest set is reduced
-        keep = tuple(entries[len(entries) - self.max_delay:]) if self.max_delay else ()
-        xhat, beta = self._report(c, G)
+            known[i], ys[i] = True, pk.y
+            late += pk.time < t
+        c, G, axes = self._c, self._G, self._axes
+        if drive.shape[0] > self._W:  # the oldest time leaves the window: the filters take it in
+            c, G = self._advance(first, c, G, drive[0], ys[0] if known[0] else None)
+            G, axes = self._reduced(G, (first - self._t0) % PCA_AXES_EVERY == 0)
+            G = np.ascontiguousarray(G)
+            drive, known, ys, first = drive[1:], known[1:], ys[1:], first + 1
+        A, C, E, V = self._window_model(first, drive.shape[0])
+        xs, radii_, _, R = window_estimate(A, C, E, V, drive, known, ys, c, G, self.iterations, _IRLS_FLOOR)
+        pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
+        states = np.arange(sysm.n)
+        xhat, beta = xs[pick, states], radii_[pick, states]
         # commit
-        self._c, self._G, self._xhat, self._beta = c, G, xhat, beta
-        self._buffer = keep
-        self._axes = axes
+        self._c, self._G, self._axes = c, G, axes
+        self._drive, self._known, self._y = drive, known, ys
+        self._xhat, self._beta, self._R, self._pick = xhat, beta, R, pick
         self._time = t + 1
         self.dropped_packets += dropped
-        self.replays += sum(1 for pk in packets if first <= pk.time < t)
+        self.replays += late
         return xhat.copy(), float(beta.max()) if beta.size else 0.0
+
+    def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
+        """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
+        by time (C-contiguous, as the compiled window expects; cached for a time-invariant plant)."""
+        if not self.system.is_time_varying:
+            hit = self._models.get("window")
+            if hit is None:
+                hit = tuple(np.ascontiguousarray(np.broadcast_to(M, (self._W,) + M.shape)) for M in self._model(0))
+                self._models["window"] = hit
+            return tuple(M[:length] for M in hit)
+        parts = [self._model(s) for s in range(first, first + length)]
+        return tuple(np.ascontiguousarray(np.stack([p[k] for p in parts])) for k in range(4))
 
     # -- one step of the set recursion (module docstring) ------------------------------------------------------
     def _model(self, s: int) -> tuple:
-        """The model's matrices at time ``s`` and what the step derives from them (cached: one entry when the
-        plant is time-invariant, one per model time otherwise)."""
+        """The model's matrices at time ``s``: ``A``, ``C``, ``η_w E``, ``η_v V`` (C-contiguous; cached: one entry
+        when the plant is time-invariant, one per model time otherwise)."""
         m = self._model_time(s)
         key = m if self.system.is_time_varying else 0
         hit = self._models.get(key)
         if hit is None:
             sysm = self.system
-            A, C = sysm.A_at(m), sysm.C_at(m)
-            Ew, Vn = sysm.eta_w * sysm.E_at(m), sysm.eta_v * sysm.V_at(m)
-            vlen = np.sqrt((Vn * Vn).sum(axis=0))
-            wv = np.where(vlen > 0, vlen, 1.0) ** -self._alpha[:, None]  # (K, nv)
-            hit = (A, A.T.copy(), np.abs(A).T.copy(), C, C.T.copy(), np.tile(Ew, (len(self.gain), 1, 1)),
-                   np.abs(Ew).sum(axis=1), Vn, (Vn * wv[:, None, :]) @ Vn.T)
+            hit = tuple(np.ascontiguousarray(M, dtype=float) for M in
+                        (sysm.A_at(m), sysm.C_at(m), sysm.eta_w * sysm.E_at(m), sysm.eta_v * sysm.V_at(m)))
             self._models[key] = hit
         return hit
 
     def _advance(self, s: int, c: np.ndarray, G: np.ndarray, drive: np.ndarray,
                  y: "np.ndarray | None") -> tuple[np.ndarray, np.ndarray]:
-        """The sets of ``x(s+1)`` (one per gain, stacked, not reduced) from the priors of ``x(s)``."""
-        A, At, absAt, C, Ct, Ew, sEw, Vn, VWV = self._model(s)  # Ew stacked: (K, n, nw)
-        AG = A @ G  # (K, n, q): every filter at once
-        Ac = c @ At + drive
-        absG = np.abs(G)
-        mag = (np.abs(c) + absG.sum(axis=2)) @ absAt + np.abs(drive)
-        if y is None:
-            return self._finish(AG, Ac, Ew, sEw, mag)
-        r = y - c @ Ct  # (K, p)
-        CG = C @ G  # (K, p, q)
-        CGt = CG.transpose(0, 2, 1)
-        # generator weights (module docstring): 1 for the F-radius gain, 1/|(g_j, C g_j)|_2 for the reweighted one
-        lengths = np.sqrt((G * G).sum(axis=1) + (CG * CG).sum(axis=1))  # (K, q)
-        wq = np.where(lengths > 0, lengths, 1.0) ** -self._alpha[:, None]
-        CGw = CG * wq[:, None, :]
-        num = G @ CGw.transpose(0, 2, 1)  # (K, n, p): G W (CG)^T
-        S = CGw @ CGt + VWV  # (K, p, p): H W H^T
-        if S.shape[1] == 1:
-            s00 = S[:, 0, :]
-            Lam = num / np.where(s00 > 0, s00, np.inf)[:, None, :]  # a zero gain where nothing is measured
-        else:  # S symmetric, positive definite when V has full row rank; least squares when singular
-            try:
-                Lam = np.linalg.solve(S, num.transpose(0, 2, 1)).transpose(0, 2, 1)
-            except np.linalg.LinAlgError:
-                Lam = np.stack([np.linalg.lstsq(S[k], num[k].T, rcond=None)[0].T for k in range(S.shape[0])])
-        ALam = A @ Lam  # (K, n, p)
-        P = np.concatenate([AG - ALam @ CG, -ALam @ Vn], axis=2)
-        cp = Ac + (ALam @ r[:, :, None])[:, :, 0]
-        sCG = np.abs(CG).sum(axis=2)  # (K, p)
-        mag += (np.abs(ALam) @ (np.abs(r) + np.abs(y) + sCG)[:, :, None])[:, :, 0] \
-            + (np.abs(Lam) @ sCG[:, :, None])[:, :, 0] @ absAt
-        for k in self._interval:  # the per-row weighted-median gain (greedy; module docstring)
-            P[k], cp[k], m2 = _interval_update(AG[k], Ac[k], CG[k], Vn, r[k], y)
-            mag[k] = (np.abs(c[k]) + absG[k].sum(axis=1)) @ absAt + np.abs(drive) + m2
-        return self._finish(P, cp, Ew, sEw, mag)
-
-    def _finish(self, P: np.ndarray, cp: np.ndarray, Ew: np.ndarray, sEw: np.ndarray,
-                mag: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Append the process noise and the rounding allowance (module docstring)."""
-        K, n, k = P.shape
-        q = k + Ew.shape[2] + n + 4
-        mag = mag + np.abs(cp) + np.abs(P).sum(axis=2) + sEw
-        pad = np.nextafter(4.0 * q * _U * mag, np.inf)  # (K, n)
-        return cp, np.concatenate([P, Ew, pad[:, :, None] * self._eye], axis=2)
+        """The sets of ``x(s+1)`` (one per gain, stacked, not reduced) from the priors of ``x(s)``
+        (:func:`eqrec.bounds.window.filter_step`)."""
+        A, C, Ew, Vn = self._model(s)
+        has_y = y is not None
+        return filter_step(A, C, Ew, Vn, drive, y if has_y else self._no_y, has_y, c, G, self._alpha)
 
     def _reduced(self, G: np.ndarray, new_axes: bool) -> tuple[np.ndarray, "np.ndarray | None"]:
         """``G`` reduced to ``order · n`` generators per filter, and the principal axes used (``reduction="pca"``:
@@ -521,15 +622,6 @@ class ZonotopeEstimator:
             return reduce_girard(G, self._limit), self._axes
         axes = principal_axes(G) if new_axes or self._axes is None else self._axes
         return reduce_pca(G, self._limit, axes=axes), axes
-
-    def _report(self, c: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The estimate and per-state bound: per state, the centre and hull radius of the filter whose radius is
-        the smallest (the first on a tie); module docstring."""
-        beta = outer_row_sums(G)
-        if c.shape[0] == 1:
-            return c[0], beta[0]
-        k, states = np.argmin(beta, axis=0), np.arange(c.shape[1])
-        return c[k, states], beta[k, states]
 
     # -- reading ----------------------------------------------------------------------------------------------
     @property
@@ -553,19 +645,28 @@ class ZonotopeEstimator:
 
     @property
     def carried_set(self) -> tuple[np.ndarray, np.ndarray]:
-        """One carried set, ``c + G ε`` with ``|ε| <= 1`` (copies): it contains ``x`` of the current time.
+        """The reported set, ``x̂ + G ε`` with ``|ε| <= 1`` (copies): it contains ``x`` of the current time.
 
-        Of the sets the filters carry (one per gain), the one with the smallest largest row sum (the first on a
-        tie): the set to hand over to another estimator
-        (:class:`eqrec.estimators.guaranteed.GuaranteedEstimator`).  The reported :attr:`x` and
-        :attr:`state_bounds` take per state the tightest of them, which is never wider.
+        Its interval hull is :attr:`state_bounds`.  State ``i`` is the window's estimate from the zonotope of the
+        filter it was taken from (module docstring), so the generators are, per filter, the window's error maps
+        on that filter's generators (on the rows of the states taken from it, zero elsewhere; the filters'
+        zonotopes are different parametrisations of the same state), then the window's noise (shared), then
+        the rounding allowance as ``n`` axis-aligned generators.  The set to hand over to another estimator
+        (:class:`eqrec.estimators.guaranteed.GuaranteedEstimator`).
         """
         self.time  # noqa: B018 - raises before reset
-        k = int(np.argmin(np.abs(self._G).sum(axis=2).max(axis=1)))
-        return self._c[k].copy(), self._G[k].copy()
+        n, q0 = self.system.n, self._G.shape[2]
+        R, pick, states = self._R, self._pick, np.arange(n)
+        if R is self._G or R.shape[2] == q0 and not self._drive.shape[0]:  # right after reset: the filters' set
+            return self._xhat.copy(), self._G[0].copy()
+        blocks = [np.where((pick == k)[:, None], R[k, :, :q0], 0.0) for k in range(R.shape[0])]
+        G = np.concatenate(blocks + [R[pick, states, q0:]], axis=1)
+        pad = np.nextafter(np.maximum(self._beta - np.abs(G).sum(axis=1), 0.0), np.inf)
+        return self._xhat.copy(), np.concatenate([G, np.diag(pad)], axis=1)
 
     @property
     def generators(self) -> np.ndarray:
-        """A copy of the generators of every filter, shape ``(K, n, q)`` (``K`` gains, ``q <= order · n``)."""
+        """A copy of the generators of every filter at the window's start, shape ``(K, n, q)`` (``K`` gains,
+        ``q <= order · n``)."""
         self.time  # noqa: B018 - raises before reset
         return self._G.copy()
