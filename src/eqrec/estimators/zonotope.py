@@ -343,7 +343,9 @@ class ZonotopeEstimator:
         Length of the exact window in steps (``>= 1``; default 20); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
     iterations : int, optional
-        Reweighted solves of the window after the first (``>= 0``; default 2).
+        Reweighted solves of the window after the first (``>= 0``; default 2); a window of ``L`` steps shorter
+        than its full length ``W`` (the first steps after :meth:`reset`) gets ``iterations · ⌊W / L⌋``, about
+        the same work.
 
     Attributes
     ----------
@@ -565,8 +567,11 @@ class ZonotopeEstimator:
             G, axes = self._reduced(G, (first - self._t0) % PCA_AXES_EVERY == 0)
             G = np.ascontiguousarray(G)
             drive, known, ys, first = drive[1:], known[1:], ys[1:], first + 1
-        A, C, E, V = self._window_model(first, drive.shape[0])
-        xs, radii_, _, R = window_estimate(A, C, E, V, drive, known, ys, c, G, self.iterations, _IRLS_FLOOR)
+        L = drive.shape[0]
+        A, C, E, V = self._window_model(first, L)
+        # a window shorter than W (the first steps after reset) gets more solves for the same work (docstring)
+        xs, radii_, _, R = window_estimate(A, C, E, V, drive, known, ys, c, G, self.iterations * (self._W // L),
+                                           _IRLS_FLOOR)
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
         states = np.arange(sysm.n)
         xhat, beta = xs[pick, states], radii_[pick, states]
