@@ -29,8 +29,10 @@ The ``L1`` problem is solved approximately by iteratively reweighted least squar
 :math:`1/\|(X_{\cdot q}, H_{\cdot q})\|_2` of each column ``q`` (the reweighted gain of
 :mod:`eqrec.estimators.zonotope`, here over the whole window), solve
 :math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}`, then set :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
-from the residual :math:`R_i = X_i - \lambda_i H` and solve again.  Every iterate is a valid estimate; the
-one with the smallest radius is kept (so more iterations never loosen the bound).  The weights depend on the
+from the residual :math:`R_i = X_i - \lambda_i H` and solve again, ``iterations`` times; then again while the last
+solve tightened the radius by more than a relative ``gain``, at most ``extra`` more times (the first windows
+after a reset, from a box, need more solves than the later ones, from a filtered zonotope).  Every iterate is a
+valid estimate; the one with the smallest radius is kept (so more iterations never loosen the bound).  The weights depend on the
 arrivals and the zonotope only, never on the measured values, so the estimate stays linear in the data.
 
 Cost
@@ -107,7 +109,7 @@ def _dot(x: np.ndarray, y: np.ndarray, length: int) -> float:  # pragma: no cove
 
 
 @numba.njit(cache=True)
-def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta):  # pragma: no cover - compiled
+def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, extra, gain):  # pragma: no cover - compiled
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -128,6 +130,10 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta): 
         Reweighted solves after the first (``>= 0``).
     delta : float
         Relative floor of the IRLS weights' residuals.
+    extra : int
+        At most this many more solves, each while the last tightened the radius by more than ``gain``.
+    gain : float
+        Relative tightening that earns another solve.
 
     Returns
     -------
@@ -299,7 +305,8 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta): 
             if m > 0:
                 for q in range(q0 + Qn):
                     W[q] = w0[q]
-                for it in range(iterations + 1):
+                it = 0
+                while True:
                     # S = G0 W G0^T (n x n), then M = CP S CP^T + Hn W Hn^T, rhs = CP S Phi_i^T + Hn W Z_i^T
                     for a in range(n):
                         for q in range(q0):
@@ -367,9 +374,13 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta): 
                         absR[q0 + q] = s
                         rad += s
                         big = max(big, s)
+                    improved = rad < best * (1.0 - gain)
                     if rad < best:
                         best = rad
                         lam_best[:] = lam
+                    it += 1
+                    if it > iterations + extra or (it > iterations and not improved):
+                        break
                     floor = delta * big
                     for q in range(q0 + Qn):
                         W[q] = 1.0 / max(absR[q], floor) if max(absR[q], floor) > 0.0 else 0.0
