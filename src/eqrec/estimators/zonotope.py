@@ -182,8 +182,10 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
     Returns
     -------
     c1 : ndarray, shape (K, n)
-    G1 : ndarray, shape (K, n, q + p·[has_y]·... )
-        ``[A G − M C G, −M V, E, diag(pad)]`` (the ``V`` block only with a measurement).
+        The centres of the predicted sets.
+    G1 : ndarray, shape (K, n, q + nv + nw + n) with a measurement, (K, n, q + nw + n) without
+        Their generators ``[A G − M C G, −M V, E, diag(pad)]`` (``M = A Λ`` the gain, ``pad`` the rounding
+        allowance; module docstring).
     """
     K, n, q = G.shape
     p, nw, nv = C.shape[0], Ew.shape[1], Vn.shape[1]
@@ -514,7 +516,7 @@ class ZonotopeEstimator:
         self._c = np.tile(c, (K, 1))  # every filter starts from the same set, at the window's start
         self._G = np.ascontiguousarray(np.tile(G, (K, 1, 1)))
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
-        self._R, self._pick = self._G[:, :, :], np.zeros(n, dtype=int)  # the reported set's error maps, per state
+        self._R, self._pick = None, np.zeros(n, dtype=int)  # the window's error maps (none yet), its picks
         self._axes: "np.ndarray | None" = None  # the principal axes last computed (reduction="pca")
         # the window, times t0 .. time-1 (at most W of them): drives, which outputs are known, their values
         self._drive, self._known, self._y = np.zeros((0, n)), np.zeros(0, dtype=bool), np.zeros((0, sysm.p))
@@ -667,7 +669,7 @@ class ZonotopeEstimator:
         self.time  # noqa: B018 - raises before reset
         n, q0 = self.system.n, self._G.shape[2]
         R, pick, states = self._R, self._pick, np.arange(n)
-        if R is self._G or R.shape[2] == q0 and not self._drive.shape[0]:  # right after reset: the filters' set
+        if R is None:  # right after reset: the filters' common set
             return self._xhat.copy(), self._G[0].copy()
         blocks = [np.where((pick == k)[:, None], R[k, :, :q0], 0.0) for k in range(R.shape[0])]
         G = np.concatenate(blocks + [R[pick, states, q0:]], axis=1)
