@@ -163,7 +163,6 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
     Hn = np.zeros((m, Qn))  # noise columns of H: w(s0..t), then v of the measured times
     lo = np.zeros(Qn, dtype=np.int64)  # each noise column is nonzero on rows lo..hi-1
     hi = np.zeros(Qn, dtype=np.int64)
-    absA = np.empty((n, n))
     row = 0
     vcol = L * nw
     for j in range(L):

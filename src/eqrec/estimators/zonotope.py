@@ -512,7 +512,7 @@ class ZonotopeEstimator:
         G = G[:, np.any(G != 0, axis=0)]
         if self._limit is not None:
             G = _REDUCTIONS[self.reduction](G, self._limit)
-        K, W, sysm = len(self.gain), self._W, self.system
+        K, sysm = len(self.gain), self.system
         self._c = np.tile(c, (K, 1))  # every filter starts from the same set, at the window's start
         self._G = np.ascontiguousarray(np.tile(G, (K, 1, 1)))
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
