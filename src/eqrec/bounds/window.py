@@ -32,8 +32,10 @@ The ``L1`` problem is solved approximately by iteratively reweighted least squar
 from the residual :math:`R_i = X_i - \lambda_i H` and solve again, ``iterations`` times; then again while the last
 solve tightened the radius by more than a relative ``gain``, at most ``extra`` more times (the first windows
 after a reset, from a box, need more solves than the later ones, from a filtered zonotope).  Every iterate is a
-valid estimate; the one with the smallest radius is kept (so more iterations never loosen the bound).  The weights depend on the
-arrivals and the zonotope only, never on the measured values, so the estimate stays linear in the data.
+valid estimate; the one with the smallest radius is kept (so more iterations never loosen the bound).  The
+weights depend on the arrivals and the zonotope only, never on the measured values, so the estimate is linear in
+the data given the zonotope.  The relative floor :math:`\delta` of the residuals bounds the ratio of the weights
+(``1/δ``) and so the conditioning of each weighted least-squares problem.
 
 Cost
 ----
