@@ -93,6 +93,17 @@ def spd_solve(M: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:  # pragma:
 
 
 @numba.njit(cache=True)
+def accumulate_product(M: np.ndarray, G: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``out[:, :q] += M @ G`` for ``G`` of ``q`` columns, row by row, skipping the zero entries of ``M``."""
+    for a in range(M.shape[0]):
+        for e in range(M.shape[1]):
+            f = M[a, e]
+            if f != 0.0:
+                for q in range(G.shape[1]):
+                    out[a, q] += f * G[e, q]
+
+
+@numba.njit(cache=True)
 def _dot(x: np.ndarray, y: np.ndarray, length: int) -> float:  # pragma: no cover - compiled
     """``x · y`` over the first ``length`` entries with four partial sums (a fixed order: the same bytes on every
     machine, and independent chains the processor overlaps)."""
@@ -257,18 +268,8 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
         # prior columns: PX = Phi G0 (rows of X), PH = CP G0 (rows of H)
         PX = np.zeros((n, q0))
         PH = np.zeros((m, q0))
-        for a in range(n):
-            for e in range(n):
-                f = Phi[a, e]
-                if f != 0.0:
-                    for q in range(q0):
-                        PX[a, q] += f * G0[k, e, q]
-        for a in range(m):
-            for e in range(n):
-                f = CP[a, e]
-                if f != 0.0:
-                    for q in range(q0):
-                        PH[a, q] += f * G0[k, e, q]
+        accumulate_product(Phi, G0[k], PX)
+        accumulate_product(CP, G0[k], PH)
         # first weights: inverse column lengths of (X, H)
         w0 = np.zeros(q0 + Qn)
         for a in range(n):  # column sums of squares, row by row (contiguous)
@@ -288,6 +289,7 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
                 s += Hn[a, q] * Hn[a, q]
             w0[q0 + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
         W = np.empty(q0 + Qn)
+        res = np.empty(q0 + Qn)  # the residual X_i - lam H of the current solve
         absR = np.empty(q0 + Qn)
         M = np.empty((m, m))
         rhs = np.empty(m)
@@ -300,8 +302,10 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
             best = 0.0
             for q in range(q0):
                 best += abs(PX[i, q])
+                R_out[k, i, q] = PX[i, q]
             for q in range(L * nw):
                 best += abs(Z[i, q])
+                R_out[k, i, q0 + q] = Z[i, q]
             lam_best = np.zeros(m)
             if m > 0:
                 for q in range(q0 + Qn):
@@ -356,29 +360,27 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
                             s -= lam[r] * CP[r, e]
                         v[e] = s
                     for q in range(q0):
-                        absR[q] = v[0] * G0[k, 0, q]
+                        res[q] = v[0] * G0[k, 0, q]
                     for e in range(1, n):
                         for q in range(q0):
-                            absR[q] += v[e] * G0[k, e, q]
-                    rad = 0.0
-                    big = 0.0
-                    for q in range(q0):
-                        s = abs(absR[q])
-                        absR[q] = s
-                        rad += s
-                        big = max(big, s)
+                            res[q] += v[e] * G0[k, e, q]
                     for q in range(Qn):
                         s = Z[i, q] if q < L * nw else 0.0
                         for r in range(lo[q], hi[q]):
                             s -= lam[r] * Hn[r, q]
-                        s = abs(s)
-                        absR[q0 + q] = s
+                        res[q0 + q] = s
+                    rad = 0.0
+                    big = 0.0
+                    for q in range(q0 + Qn):
+                        s = abs(res[q])
+                        absR[q] = s
                         rad += s
                         big = max(big, s)
                     improved = rad < best * (1.0 - gain)
                     if rad < best:
                         best = rad
                         lam_best[:] = lam
+                        R_out[k, i, :] = res  # the error map of the kept weights
                     it += 1
                     if it > iterations + extra or (it > iterations and not improved):
                         break
@@ -395,16 +397,5 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
             kappa = 4.0 * (L + 2) * (n + m + q0 + Qn)
             radius[k, i] = np.nextafter(best + kappa * _U * (mag + best), np.inf)
             lam_out[k, i, :] = lam_best
-            for e in range(n):  # the error map of the kept weights
-                s = Phi[i, e]
-                for r in range(m):
-                    s -= lam_best[r] * CP[r, e]
-                for q in range(q0):
-                    R_out[k, i, q] += s * G0[k, e, q]
-            for q in range(Qn):
-                s = Z[i, q] if q < L * nw else 0.0
-                for r in range(lo[q], hi[q]):
-                    s -= lam_best[r] * Hn[r, q]
-                R_out[k, i, q0 + q] = s
     return xhat, radius, lam_out, R_out
 

@@ -174,8 +174,7 @@ def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None
     (the one implementation: a single zonotope is a stack of one).
 
     Per member, the ``q - (limit - n)`` generators of smallest :math:`\|g\|_1 - \|g\|_\infty` in the axes (the
-    state axes, or ``U``) are boxed; the box sums run over the boxed entries (the others masked to zero, which adds
-    no rounding) and are rounded outward.
+    state axes, or ``U``) are boxed; the box sums run over the boxed entries and are rounded outward.
     """
     K, n, q = G.shape
     if q <= limit:

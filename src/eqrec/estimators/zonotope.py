@@ -122,7 +122,7 @@ import numba
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
-from eqrec.bounds.window import spd_solve, window_estimate
+from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
 from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
 from eqrec.checks import radii
 from eqrec.errors import InputError
@@ -211,6 +211,7 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
             rowabs[a] = 0.0
             for j in range(q):
                 rowabs[a] += abs(G[k, a, j])
+        accumulate_product(A, G[k], G1[k])
         for a in range(n):
             s = drive[a]
             sm = abs(drive[a])
@@ -218,9 +219,6 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
                 f = A[a, e]
                 s += f * c[k, e]
                 sm += abs(f) * (abs(c[k, e]) + rowabs[e])
-                if f != 0.0:
-                    for j in range(q):
-                        G1[k, a, j] += f * G[k, e, j]
             c1[k, a] = s
             mag[a] = sm
         if has_y:
@@ -229,13 +227,8 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
                 for e in range(n):
                     s -= C[b, e] * c[k, e]
                 r[b] = s
-                for j in range(q):
-                    CG[b, j] = 0.0
-                for e in range(n):
-                    f = C[b, e]
-                    if f != 0.0:
-                        for j in range(q):
-                            CG[b, j] += f * G[k, e, j]
+            CG[:, :] = 0.0
+            accumulate_product(C, G[k], CG)
             for j in range(q):  # generator weights (module docstring of the estimator)
                 s = 0.0
                 for a in range(n):
@@ -422,6 +415,7 @@ class ZonotopeEstimator:
         # per filter: the exponent of the gain's generator weights (0: F-radius, 1: reweighted)
         self._alpha = np.array([1.0 if g == "reweighted" else 0.0 for g in gains])
         self._models: dict[int, tuple] = {}
+        self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
         self._no_y = np.zeros(system.p)
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
         self._time: int | None = None
@@ -599,11 +593,10 @@ class ZonotopeEstimator:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
         by time (C-contiguous, as the compiled window expects; cached for a time-invariant plant)."""
         if not self.system.is_time_varying:
-            hit = self._models.get("window")
-            if hit is None:
-                hit = tuple(np.ascontiguousarray(np.broadcast_to(M, (self._W,) + M.shape)) for M in self._model(0))
-                self._models["window"] = hit
-            return tuple(M[:length] for M in hit)
+            if self._tiles is None:
+                self._tiles = tuple(np.ascontiguousarray(np.broadcast_to(M, (self._W,) + M.shape))
+                                    for M in self._model(0))
+            return tuple(M[:length] for M in self._tiles)
         parts = [self._model(s) for s in range(first, first + length)]
         return tuple(np.ascontiguousarray(np.stack([p[k] for p in parts])) for k in range(4))
 
