@@ -208,7 +208,7 @@ def _played_back(system, make, trace, xhat0, delta):
 
 
 @pytest.mark.parametrize("loss", [0.0, 0.1, 0.4])
-@pytest.mark.parametrize("family", ["strict=False", "zonotope", "Kalman, time-stamped"])
+@pytest.mark.parametrize("family", ["strict=False", "zonotope", "zonotope, window 5, order 3", "Kalman, time-stamped"])
 def test_every_worst_case_played_back_stays_inside_and_no_bound_is_below_the_information_limit(
         oscillator, osc_design, family, loss):
     """For every step ``t``: the noise at the sign of the worst row of the error map at ``t`` (initial error at
@@ -221,6 +221,9 @@ def test_every_worst_case_played_back_stays_inside_and_no_bound_is_below_the_inf
     kalman = GaussianNoise(Qw=np.eye(2) * 0.002, Qv=np.eye(1) * 0.0004, x0_cov=np.eye(2) * 0.04).design(sysm)
     make = {"strict=False": lambda: osc_design.estimator(strict=False),
             "zonotope": lambda: ZonotopeEstimator(sysm, x0_radius=mu1, max_delay=0, order=None),
+            # the filter 5 steps behind, reduced: the window's prior is a filtered, reduced zonotope from step 5 on
+            "zonotope, window 5, order 3": lambda: ZonotopeEstimator(sysm, x0_radius=mu1, max_delay=0, order=3,
+                                                                     window=5),
             "Kalman, time-stamped": lambda: exact_bound(TimestampedKalman(sysm, kalman), sysm, mu1, steps=18)}[family]
     trace = _trace(7, 18, loss, 0)
     xhat0 = np.array([0.4, -0.2])

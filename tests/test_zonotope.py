@@ -343,7 +343,8 @@ def test_window_against_an_independent_lp(plant):
     sched = trace.schedule()
     ys = np.zeros((N, system.p))
     from eqrec.simulate.loop import what_arrived
-    est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=6, window=8, iterations=12).reset(np.zeros(system.n))
+    est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=6, window=8, iterations=12)
+    est.reset(np.zeros(system.n))
     ratios = []
     for t in range(N):
         G0 = est.generators[0]  # the filter's set at the window's start, before the step

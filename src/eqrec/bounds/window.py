@@ -122,7 +122,8 @@ def _dot(x: np.ndarray, y: np.ndarray, length: int) -> float:  # pragma: no cove
 
 
 @numba.njit(cache=True)
-def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, extra, gain):  # pragma: no cover - compiled
+def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, extra,  # pragma: no cover
+                    gain):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
