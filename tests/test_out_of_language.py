@@ -55,14 +55,22 @@ def test_the_bound_holds_outside_the_language(plant, design, loss, burst):
 
 
 def test_inside_the_language_strict_false_gives_the_designed_bounds(plant, design):
-    strict, relaxed = design.estimator().reset(np.zeros(2)), design.estimator(strict=False).reset(np.zeros(2))
+    strict = design.estimator().reset(np.zeros(2))
+    plain = design.estimator(strict=False, tight=False).reset(np.zeros(2))
+    tight = design.estimator(strict=False).reset(np.zeros(2))
     rng = np.random.default_rng(3)
+    tighter = 0
     for k in range(30):
         y = None if k % 3 == 1 else rng.normal(size=1)
-        a, b = strict.step(y), relaxed.step(y)
-        # the same estimate; the exact bound keeps what earlier periods told, so it is never above the level
-        assert np.array_equal(a[0], b[0]) and b[1] <= a[1] and relaxed.in_design
-        assert np.all(relaxed.state_bounds <= a[1])
+        a, b, c = strict.step(y), plain.step(y), tight.step(y)
+        # plain: the same estimate; the exact bound keeps what earlier periods told, so it is never above the level
+        assert np.array_equal(a[0], b[0]) and b[1] <= a[1] and plain.in_design
+        assert np.all(plain.state_bounds <= a[1])
+        # tight: per state never above the plain bound, so never above the designed level (a priori levels kept)
+        assert tight.in_design and np.all(tight.state_bounds <= plain.state_bounds) and c[1] <= a[1]
+        assert c[1] == tight.state_bounds.max() and np.array_equal(c[0], tight.x)
+        tighter += c[1] < b[1]
+    assert tighter > 10  # the set-membership estimate is the tighter one on most steps here
 
 
 def test_leaving_the_language_reports_it_and_the_box(design):
@@ -71,8 +79,12 @@ def test_leaving_the_language_reports_it_and_the_box(design):
     assert est.in_design
     _, bound = est.step(None)  # a second loss in the block: outside the language
     assert not est.in_design and bound == est.state_bounds.max() and np.isfinite(bound)
-    with pytest.raises(InputError, match="strict=False"):
-        design.estimator().reset(np.zeros(2)).error_box
+    strict = design.estimator().reset(np.zeros(2))
+    assert np.array_equal(strict.state_bounds, np.full(2, design.mu1))  # strict=True: the designed level per state
+    strict.step(None)
+    assert np.array_equal(strict.error_box, np.full(2, strict.bound))
+    with pytest.raises(InputError, match="reset"):
+        design.estimator().state_bounds
 
 
 def test_time_varying_model_is_read_at_the_period_time_over_several_periods():

@@ -303,8 +303,15 @@ class ErrorSet:
         self.order = check_order(order)
         G = np.asarray(generators, float)
         self.time = int(t0)
-        self.generators = reduce_order(G, self.order)
-        self._stored: dict[int, np.ndarray] = {self.time: self.generators}
+        # sets by time, reduced on first use as an anchor (:meth:`at`): a class map anchors at its period's start,
+        # so the sets of the steps in between are never reduced
+        self._stored: dict[int, np.ndarray] = {self.time: reduce_order(G, self.order)}
+        self._reduced: set[int] = {self.time}
+
+    @property
+    def generators(self) -> np.ndarray:
+        """The current set's generators (reduced to the order)."""
+        return self.at(self.time)
 
     @classmethod
     def box(cls, radius: "float | np.ndarray", n: int, t0: int, order: "float | None" = None) -> "ErrorSet":
@@ -346,11 +353,16 @@ class ErrorSet:
         InputError
             No set is kept for that time.
         """
+        time = int(time)
         try:
-            return self._stored[int(time)]
+            G = self._stored[time]
         except KeyError:
             raise InputError(f"no error set is kept for time {time} (kept: {sorted(self._stored)})",
                              field="anchor") from None
+        if time not in self._reduced:
+            G = self._stored[time] = reduce_order(G, self.order)
+            self._reduced.add(time)
+        return G
 
     def propose(self, emap: ErrorMap) -> np.ndarray:
         """The exact set after a step with this map (nothing changes).
@@ -387,9 +399,9 @@ class ErrorSet:
         G = self.propose(emap) if generators is None else generators
         bounds = outer_row_sums(G)
         self.time += 1
-        self.generators = reduce_order(G, self.order)
         self._stored = {s: g for s, g in self._stored.items() if s >= emap.anchor}
-        self._stored[self.time] = self.generators
+        self._reduced = {s for s in self._reduced if s >= emap.anchor}
+        self._stored[self.time] = G  # reduced when first used as an anchor (:meth:`at`)
         return bounds
 
     def replace(self, generators: np.ndarray) -> None:
@@ -400,8 +412,8 @@ class ErrorSet:
         generators : ndarray, shape (n, q)
             The new generators of the current time.
         """
-        self.generators = reduce_order(np.asarray(generators, float), self.order)
-        self._stored = {self.time: self.generators}
+        self._stored = {self.time: reduce_order(np.asarray(generators, float), self.order)}
+        self._reduced = {self.time}
 
     @property
     def state_bounds(self) -> np.ndarray:

@@ -210,7 +210,8 @@ class Design:
         """Seconds spent inside the solver call (``solution.solve_time``)."""
         return self.solution.solve_time
 
-    def estimator(self, periodic: bool = True, strict: bool = True) -> "GuaranteedEstimator | WeightedEstimator":
+    def estimator(self, periodic: bool = True, strict: bool = True,
+                  tight: bool = True) -> "GuaranteedEstimator | WeightedEstimator":
         """The designed estimator, ready to run: ``reset(x̂0)``, then ``step(y, u) -> (x̂, bound)``.
 
         Class-engine designs run in class form (:class:`eqrec.estimators.causal.ClassEstimator`,
@@ -235,6 +236,10 @@ class Design:
             :class:`InputError`.  ``False`` (class-engine designs): the
             estimator keeps a true bound outside the language and reports
             :attr:`GuaranteedEstimator.in_design` (:mod:`eqrec.estimators.guaranteed`).
+        tight : bool, optional
+            With ``strict=False``: ``True`` (default) reports, per state, the tighter of the designed estimate
+            and the set-membership one that runs beside it (each with its exact bound; the designed levels stay
+            guarantees); ``False`` reports the designed estimate alone (:mod:`eqrec.estimators.guaranteed`).
 
         Returns
         -------
@@ -273,7 +278,8 @@ class Design:
                 raise InputError("this design has no gains to run")
             gains = self.schedule
             bound_of = partial(node_level, self)
-        estimator = GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic, strict=strict)
+        estimator = GuaranteedEstimator(self.system, gains, bound_of, self.mu1, periodic=periodic, strict=strict,
+                                       tight=tight)
         if self.state_weights is None:
             return estimator
         from eqrec.design.weighted import WeightedEstimator

@@ -39,9 +39,45 @@ never exceeds the designed level while the arrivals stay in the language.
   G^{w,v}_{d,S}\operatorname{diag}(r)\varepsilon`
   (:mod:`eqrec.estimators.error_maps`), applied to the zonotope of
   :math:`\xi(s)`: no box reset at the period's start, so what earlier periods
-  told is kept.  The bound is the smaller of that exact worst case and the
-  designed level (both are guarantees; in exact arithmetic the first never
-  exceeds the second, since the zonotope lies in the ``μ1`` box).
+  told is kept.  Its bound :math:`b^{\mathrm d}_i` is the smaller of that exact
+  worst case and the designed level (both are guarantees; in exact arithmetic
+  the first never exceeds the second, since the zonotope lies in the ``μ1`` box).
+* *Tight* (``tight=True``, the default): per state, the tighter of two
+  estimates is reported, the designed one above and the set-membership one
+  (:class:`~eqrec.estimators.zonotope.ZonotopeEstimator`, which runs beside the
+  designed gains for the fallback anyway), each with its exact bound:
+  :math:`\hat x_i = \hat x^{\mathrm{sm}}_i` and :math:`b_i = b^{\mathrm{sm}}_i`
+  where :math:`b^{\mathrm{sm}}_i < b^{\mathrm d}_i`, else the designed pair.
+  And at each period start in the design, if the set-membership set lies in the
+  ``μ1`` box (every state bound :math:`\le \mu_1`, exactly in floating point),
+  the designed gains start the new period from its centre and carry its set:
+  the designed estimate then uses what the earlier periods told.
+
+  *Proof that the reported bound is the exact worst case of the reported
+  estimate, and never above the designed level.*  Given the arrivals, both
+  estimates are linear in the initial error and the noise, and both bounds are
+  functions of the arrivals only (the class maps and levels, and the
+  set-membership generators and window weights, none of which reads a measured
+  value).  So the choice of state ``i`` is fixed by the arrivals, the reported
+  :math:`\hat x_i` is one of two linear estimates, and its error is bounded by
+  the bound of the one chosen, :math:`|x_i - \hat x_i| \le \min(b^{\mathrm
+  d}_i, b^{\mathrm{sm}}_i)`; each bound is attained by its own estimate (at
+  the vertex of the noise box given by the signs of its error row), so the
+  minimum is the exact worst case of what is reported.  Since
+  :math:`\min(b^{\mathrm d}_i, b^{\mathrm{sm}}_i) \le b^{\mathrm d}_i \le`
+  the designed level, the a priori levels ``μ1``, ``μ2`` remain guarantees.
+  The restart keeps them too: the design's certificate covers every initial
+  error in the ``μ1`` box, and the true error lies in the set-membership set,
+  checked to lie in that box.  With ``tight=False`` the designed estimate is
+  reported alone (as before this option; the cost is the same, since the
+  set-membership estimator runs for the fallback either way, but its bound is
+  looser in the design: on the two-cart plant of ``benchmarks/bench_tight.py``
+  about 1.6× the information limit at the median against about 1.1× tight).
+  ``tight=True`` is the default because the reported bound is never larger,
+  the levels are kept, and the estimate stays linear in the noise given the
+  arrivals (so :func:`eqrec.estimators.exact.exact_bound` and the worst-case
+  playback apply unchanged); ``tight=False`` is for reproducing the papers'
+  estimator exactly.
 * *Out of the design* (a step whose data has no class: one loss too many, a
   packet later than designed): the estimator reports the set-membership
   estimator :class:`eqrec.estimators.zonotope.ZonotopeEstimator`, which runs
@@ -125,6 +161,10 @@ class GuaranteedEstimator:
     order : float or None, optional
         ``strict=False``: the error set is reduced (outer, Girard) to ``order · n`` generators at each
         period start and in the fallback (default :data:`DEFAULT_ORDER`; ``None``: exact, growing).
+    tight : bool, optional
+        ``strict=False``: ``True`` (default) reports, per state, the tighter of the designed estimate and the
+        set-membership one, each with its exact bound (never above the designed level); ``False`` the designed
+        estimate alone (module docstring).
 
     Attributes
     ----------
@@ -156,8 +196,8 @@ class GuaranteedEstimator:
 
     def __init__(self, system: AffineSystem, gains: "GainSchedule | ClassGains", bound_of: BoundRule, mu1: float,
                  periodic: bool = True, strict: bool = True, name: str | None = None,
-                 order: "float | None" = DEFAULT_ORDER):
-        for key, flag in (("strict", strict), ("periodic", periodic)):
+                 order: "float | None" = DEFAULT_ORDER, tight: bool = True):
+        for key, flag in (("strict", strict), ("periodic", periodic), ("tight", tight)):
             if not isinstance(flag, (bool, np.bool_)):
                 raise InputError(f"{key} must be True or False, got {flag!r}", field=key)
         if not strict and not isinstance(gains, ClassGains):
@@ -167,6 +207,7 @@ class GuaranteedEstimator:
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
         self.strict = bool(strict)
+        self.tight = bool(tight)
         self.name = name or ("guaranteed, class engine" if isinstance(gains, ClassGains) else "guaranteed, node gains")
         if not strict and not periodic:
             raise InputError("strict=False runs periodically (periodic=True): the set-membership fallback returns "
@@ -180,6 +221,7 @@ class GuaranteedEstimator:
         self._sm: ZonotopeEstimator | None = None  # the set-membership estimator, run on every step
         self._t0 = 0
         self._bounds = np.full(system.n, np.nan)
+        self._xhat: np.ndarray | None = None  # strict=False: the reported estimate
 
     @property
     def in_design(self) -> bool:
@@ -210,9 +252,15 @@ class GuaranteedEstimator:
 
     @property
     def state_bounds(self) -> np.ndarray:
-        """Per-state bounds ``|x_i − x̂_i| <= state_bounds[i]`` of the current estimate (``strict=False`` only)."""
+        """Per-state bounds ``|x_i − x̂_i| <= state_bounds[i]`` of the current estimate.
+
+        With ``strict=True`` the designed level of the current estimate for every state (the design bounds the
+        infinity norm); with ``strict=False`` the per-state exact bounds (module docstring).
+        """
         if self.strict:
-            raise InputError("the per-state bounds are tracked with strict=False only", field="strict")
+            self._running()
+            return np.full(self.system.n, self.bound)
+        self._running()
         return self._bounds.copy()
 
     @property
@@ -255,6 +303,7 @@ class GuaranteedEstimator:
             self._outside = False
             self._sm = self._new_set_membership().reset(x0, self._t0)
             self._bounds = np.full(self.system.n, self.mu1)
+            self._xhat = x0.copy()
         return self
 
     @property
@@ -262,6 +311,8 @@ class GuaranteedEstimator:
         """A copy of the current estimate ``x̂`` (of time :attr:`time`)."""
         if self._outside:
             return self._sm.x
+        if self._xhat is not None:
+            return self._xhat.copy()
         return self._running().xhat.copy()
 
     @property
@@ -329,7 +380,9 @@ class GuaranteedEstimator:
         """A step with ``strict=False`` (module docstring): the class step with its exact bound, or the fallback.
 
         The set-membership estimator runs on every step (every packet reaches it), so on leaving the language
-        it is ready, with all the information of the run.
+        it is ready, with all the information of the run.  In the design, with ``tight=True``, each state is
+        reported from whichever of the two has the smaller exact bound, and at each period start the designed
+        gains restart from the set-membership set when it lies in the ``μ1`` box (module docstring).
         """
         T = self.gains.horizon
         if self._outside:
@@ -339,6 +392,8 @@ class GuaranteedEstimator:
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
+        elif self.tight and est._t == T:
+            est = self._restart_from_set_membership(est, packets, u)
         opened = est._open(packets, u)  # every input checked; nothing changes
         t, S = opened.t, tuple(sorted(opened.yxi))
         if not has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
@@ -348,9 +403,29 @@ class GuaranteedEstimator:
         self._sm.step(packets, opened.u)  # all-or-nothing; the class step below cannot raise (its class exists)
         xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
         beta = self._set.advance(est.error_map())
-        self._bounds = np.minimum(beta, level)
+        designed = np.minimum(beta, level)
+        if self.tight:
+            # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
+            sm_bounds = self._sm._beta
+            use_sm = sm_bounds < designed
+            xhat = np.where(use_sm, self._sm._xhat, xhat)
+            self._bounds = np.where(use_sm, sm_bounds, designed)
+        else:
+            self._bounds = designed
+        self._xhat = xhat
         self.bound = float(self._bounds.max())
-        return xhat, self.bound
+        return xhat.copy(), self.bound
+
+    def _restart_from_set_membership(self, est: ClassEstimator, packets: list, u) -> ClassEstimator:
+        """At a period start in the design: the designed gains from the set-membership set if it lies in the
+        ``μ1`` box (exactly), so that they use what the earlier periods told; else they go on from their own."""
+        centre, generators = self._sm.carried_set
+        if not np.all(outer_row_sums(generators) <= self.mu1):
+            return est
+        est._open(packets, u)  # every input checked first: nothing changes if it raises
+        est.reset(centre, t0=self._sm.time)
+        self._set = ErrorSet(generators, self._sm.time, self.order)
+        return est
 
     def _new_set_membership(self) -> ZonotopeEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
@@ -369,6 +444,7 @@ class GuaranteedEstimator:
         est._open(packets, u)  # raises before anything changes
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._outside = est, False
+        self._xhat = centre
         return est
 
     def update(self, y=None, u=None) -> np.ndarray:
