@@ -86,6 +86,10 @@ from eqrec.lp.model import INF, LinearProgram, LPBuilder
 from eqrec.lp.solvers import highs_model, highs_status, solve_lp, solver_info
 from eqrec.systems.affine import AffineSystem
 
+#: Longest trace whose rows are cached: a row's key holds its delivered set, ``t/8`` bytes, so the keys of a trace
+#: take ``N²/16`` bytes (600 MiB at 10^5 steps) and as long to build as a fast row takes to solve.
+CACHE_MAX_STEPS = 10_000
+
 #: Largest number of cached rows (one row: ``n`` floats and a key of ``t/8`` bytes); the oldest go first.
 CACHE_SIZE = 500_000
 
@@ -155,7 +159,7 @@ def check_x0_radius(x0_radius, n: int) -> np.ndarray:
 
 
 def delivery_steps(trace: ArrivalTrace) -> np.ndarray:
-    """The step at which each measurement is delivered, or ``trace.steps`` when not within the trace.
+    r"""The step at which each measurement is delivered, or ``trace.steps`` when not within the trace.
 
     Computed from the delays without forming ``τ + d`` for a delay past the trace (a delay near ``2**63`` would
     overflow :meth:`ArrivalTrace.arrival_times` to a negative time); the delivered sets
@@ -261,7 +265,7 @@ class TraceLP:
         c0 = int(self.col_start[start])
         c1 = int(self.col_start[stop]) + (self.n if stop % self.segment == 0 else 0)
         r0, r1 = int(self.row_start[start]), int(self.row_start[stop])
-        A = sp.csc_matrix(self.lp.A[r0:r1, c0:c1])
+        A = sp.csc_matrix(self.lp.A[:, c0:c1][r0:r1])  # columns first: cheap on CSC, linear in the window
         return LinearProgram(c=self.lp.c[c0:c1].copy(), A=A, row_lower=self.lp.row_lower[r0:r1].copy(),
                              row_upper=self.lp.row_upper[r0:r1].copy(), col_lower=self.lp.col_lower[c0:c1].copy(),
                              col_upper=self.lp.col_upper[c0:c1].copy()), c0, r0
@@ -425,8 +429,9 @@ def _solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.nda
     from the previous one's optimal basis); other solvers: one LP at a time.
     """
     by_step: dict[int, list] = {}
-    for tau, r in tlp.meas.items():
-        if tau >= start:
+    for tau in range(start, rows[-1] + 1):  # delivered by the last row: stamped at most then
+        r = tlp.meas.get(tau)
+        if r is not None:
             by_step.setdefault(int(delivered_at[tau]), []).append(r)
     out: dict[int, np.ndarray] = {}
     fixed: list = []  # measurement rows delivered before the step being processed
@@ -567,13 +572,14 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
         (module docstring), an upper estimate and not a lower bound.  Exact for the rows ``t < W``.
     cache : bool, optional
         Reuse rows of earlier calls with the same system, radius, solver, step and delivered data (default
-        ``True``; :func:`cache_info`, :func:`clear_cache`).
+        ``True``; :func:`cache_info`, :func:`clear_cache`); traces longer than :data:`CACHE_MAX_STEPS` are not
+        cached.
     solver_options : dict or None, optional
         Passed to the solver.
     force : bool, optional
-        Run even when the rows to solve are estimated (:func:`estimate_seconds`, before anything is solved) to
-        take more than :data:`MAX_ESTIMATED_SECONDS`; default ``False``: refuse them (the message gives the
-        estimate and a window, with its own estimate, whose values err upward).
+        Run even when the trace's rows are estimated (:func:`estimate_seconds`, before anything is read or
+        solved) to take more than :data:`MAX_ESTIMATED_SECONDS`; default ``False``: refuse them (the message gives
+        the estimate and a window, with its own estimate, whose values err upward).
 
     Returns
     -------
@@ -652,27 +658,31 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     out = np.zeros((N, n))
     if N == 0:
         return out
+    if not force and estimate_seconds(system, N, window) > MAX_ESTIMATED_SECONDS:
+        # refused before the cache is read: its keys alone grow as the square of the length
+        raise InputError(_refusal(system, N, list(range(N)), window, estimate_seconds(system, N, window)),
+                         field="trace")
     delivered_at = delivery_steps(trace)  # step at which y(τ) is delivered (N: not within)
+    cache = cache and N <= CACHE_MAX_STEPS
     ctx = (_fingerprint(system, r0, solver, solver_options), window)
     keys: list = [None] * N
     todo: list[int] = []
-    for t in range(N):
+    for t in range(N if cache else 0):
         if window is None:  # the value depends on (t, D_t) only
             key = (ctx, t, np.packbits(delivered_at[: t + 1] <= t).tobytes())
         else:  # on the arrival times up to t (the boxes of earlier rows)
             key = (ctx, t, np.minimum(delivered_at[: t + 1], t + 1).astype(np.int32).tobytes())
         keys[t] = key
-        hit = _CACHE.get(key) if cache else None
+        hit = _CACHE.get(key)
         if hit is not None:
             out[t] = hit
             _STATS["hits"] += 1
             _CACHE.move_to_end(key)
         else:
             todo.append(t)
+    if not cache:
+        todo = list(range(N))
     if todo:
-        seconds = estimate_seconds(system, todo, window)
-        if seconds > MAX_ESTIMATED_SECONDS and not force:
-            raise InputError(_refusal(system, trace.steps, todo, window, seconds), field="trace")
         tlp = trace_lp(system, trace, r0, SEGMENT)
         _STATS["misses"] += len(todo)
         try:
