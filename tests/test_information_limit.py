@@ -280,6 +280,6 @@ def test_an_unbounded_answer_is_a_solver_failure_naming_x0_radius(acc, monkeypat
     def unbounded(*args, **kwargs):
         raise InfeasibleDesign("information limit, step 0, state 0 is unbounded (highs)")
 
-    monkeypatch.setattr(info, "_solve_range", unbounded)
+    monkeypatch.setattr(info, "solve_range", unbounded)
     with pytest.raises(eqrec.SolverFailure, match="x0_radius"):
         information_limit(acc, ArrivalTrace([0, 0]), 0.5, cache=False)

@@ -28,7 +28,7 @@ The data enter linearly.  With the noise-free run :math:`\bar x(k+1) = A\bar x(k
 :func:`eqrec.bounds.information.trace_lp` and a delivered measurement reads
 :math:`C(\tau)\delta x(\tau) + V(\tau)v(\tau) = y(\tau) - C(\tau)\bar x(\tau)` (its *residual*).  So the trace's
 LP of the information limit serves unchanged: the same variables, rows and warm-started HiGHS models
-(:func:`eqrec.bounds.information._solve_range`), with each delivered row fixed to its residual instead of 0.
+(:func:`eqrec.bounds.information.solve_range`), with each delivered row fixed to its residual instead of 0.
 Two LPs per state and kind (maximum and minimum of :math:`\delta x_i(t)`, and of :math:`\delta x_i(t+1)`), so
 ``4 n`` per step, each started from the previous one's optimal basis; the bounds are :math:`\bar x_i` plus the
 optima.  The values are LP optima to HiGHS's tolerances (1e-9 absolute on the rows,
@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from eqrec.arrivals.traces import ArrivalTrace
-from eqrec.bounds.information import (SEGMENT, TraceLP, _solve_range, check_x0_radius, delivery_steps,
+from eqrec.bounds.information import (SEGMENT, TraceLP, solve_range, check_x0_radius, delivery_steps,
                                       estimate_seconds, MAX_ESTIMATED_SECONDS, trace_lp)
 from eqrec.checks import instance
 from eqrec.errors import InfeasibleDesign, InputError
@@ -295,7 +295,7 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
         res = ys[tau] - system.C_at(tau) @ xbar[tau]
         rhs.update(zip(rows.tolist(), res.tolist()))
     try:
-        solved = _solve_range(tlp, 0, list(range(N)), delivered_at, None, solver, solver_options,
+        solved = solve_range(tlp, 0, list(range(N)), delivered_at, None, solver, solver_options,
                               targets=_hull_targets, rhs=rhs, what="consistent set")
     except InfeasibleDesign as exc:
         step = str(exc).split("step ")[1].split(",")[0] if "step " in str(exc) else "?"

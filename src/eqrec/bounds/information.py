@@ -51,6 +51,12 @@ with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py
 by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree, and repeated
 calls on one trace, share their LPs (:func:`cache_info`).
 
+Size.  Before anything is read or solved, :func:`estimate_seconds` estimates the call's process time from the
+trace's length and the state dimension (the sum over the rows of ``n`` LPs whose cost grows with the past they
+hold: quadratic in the length); past :data:`MAX_ESTIMATED_SECONDS` the call is refused unless ``force=True``,
+and the message offers a window (below) with its own estimate.  The same LP with the data's residuals as the
+delivered rows' values gives the exact consistent set on the data (:func:`eqrec.bounds.consistent.consistent_set`).
+
 Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity with the class levels holds to
 1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.
 
@@ -410,15 +416,15 @@ def _window_lp(tlp: TraceLP, start: int, stop: int, fixed: list, box: np.ndarray
     return lp, c0, r0
 
 
-def limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
+def _limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
     """The objectives of row ``t`` of the limit: :math:`x_i(t+1)` for every state ``i`` (columns, coefficients,
     label)."""
     cols, M = tlp.xmap[t + 1]
     return [(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}") for i in range(tlp.n)]
 
 
-def _solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
-                 solver: str, options: dict | None, targets=limit_targets, rhs: dict | None = None,
+def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
+                 solver: str, options: dict | None, targets=_limit_targets, rhs: dict | None = None,
                  what: str = "information limit") -> dict[int, np.ndarray]:
     """``max`` of each objective ``targets(tlp, t)`` for the steps ``rows`` (increasing, all ``>= start``) on the
     LP from block ``start`` on.
@@ -427,6 +433,42 @@ def _solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.nda
     data's residuals, :func:`eqrec.bounds.consistent.consistent_set`); ``box`` (if given) replaces the box of
     ``x(start)``.  HiGHS: one model per chunk of :data:`CHUNK` steps, warm solves inside (each objective starts
     from the previous one's optimal basis); other solvers: one LP at a time.
+
+    Parameters
+    ----------
+    tlp : TraceLP
+        The trace's LP (:func:`trace_lp`).
+    start : int
+        First block (a segment start); ``0``: the whole past.
+    rows : list of int
+        The steps to solve, increasing.
+    delivered_at : numpy.ndarray of int
+        :func:`delivery_steps` of the trace.
+    box : numpy.ndarray or None
+        Radii of the box of ``x(start)`` (``None``: the LP's own).
+    solver : str
+        LP solver name.
+    options : dict or None
+        Solver options.
+    targets : callable, optional
+        ``targets(tlp, t)``: the objectives of step ``t``, a list of ``(columns, coefficients, label)``
+        (default: :math:`x_i(t+1)` for every state, the limit's).
+    rhs : dict of int to float or None, optional
+        The value of each delivered measurement row (default 0: the zero-data LP).
+    what : str, optional
+        What is solved, for error messages.
+
+    Returns
+    -------
+    dict of int to numpy.ndarray
+        Per step of ``rows``, the maxima in the order of ``targets``.
+
+    Raises
+    ------
+    InfeasibleDesign
+        An LP infeasible (the data inconsistent, with ``rhs``) or unbounded.
+    SolverFailure
+        An LP without an answer.
     """
     by_step: dict[int, list] = {}
     for tau in range(start, rows[-1] + 1):  # delivered by the last row: stamped at most then
@@ -704,7 +746,7 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
     """Fill the rows ``todo`` of ``out`` (exact, or windowed: module docstring)."""
     N = out.shape[0]
     if window is None:  # one growing model from time 0
-        for t, v in _solve_range(tlp, 0, todo, delivered_at, None, solver, options).items():
+        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options).items():
             out[t] = np.maximum(v, 0.0)  # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
         return
     # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
@@ -715,7 +757,7 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
             continue
         s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
         box = None if s == 0 else out[s - 1]
-        for t, v in _solve_range(tlp, s, rows, delivered_at, box, solver, options).items():
+        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options).items():
             out[t] = np.maximum(v, 0.0)
 
 
