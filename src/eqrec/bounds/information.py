@@ -517,13 +517,14 @@ def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndar
 #: refuse to start unless ``force=True`` (10 minutes, as ``eqrec design``).
 MAX_ESTIMATED_SECONDS = 600.0
 #: The time model of :func:`estimate_seconds`: a row ``t`` of the exact limit costs about
-#: ``SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n**STATE_EXPONENT * t`` (``n`` warm LPs over the ``t``
-#: steps of the past; the simplex iterations and their cost both grow with ``t``, and the sum over the rows is
-#: quadratic in the trace's length: ACC 2.4 / 8.4 / 35.9 s at 1,000 / 2,000 / 4,000 steps).  A windowed row's
-#: LP holds ``W`` to ``2W + SEGMENT`` steps, so ``t`` is replaced by ``1.5 W + SEGMENT``.  Fit on the runs of
-#: ``benchmarks/bench_information_limit.py`` on this project's 2-core machine (process time; ACC and chains of
-#: coupled tanks, n = 3 to 30): meant to within a factor 3.
-SECONDS_PER_STATE, SECONDS_PER_STATE_STEP, STATE_EXPONENT = 2.5e-5, 1.1e-7, 2.5
+#: ``SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n**STATE_EXPONENT * t`` seconds of process time (``n``
+#: warm LPs over the ``t`` steps of the past: the simplex iterations and their cost both grow with ``t``, so the
+#: sum over the rows is quadratic in the trace's length).  A windowed row's LP holds ``W`` to ``2W + SEGMENT``
+#: steps, so ``t`` is replaced by ``1.5 W + SEGMENT`` there.  Fit on this project's 2-core machine (HiGHS 1.15):
+#: ACC exact at 1,000 steps (2.4 s) and windowed (``W = 100``, 2.3 ms per row), chains of coupled tanks
+#: (``benchmarks/bench_information_limit.py``) at n = 10, 20 and 30 (150 steps: 6.5 s, about 90 s and 420 s);
+#: the estimate is meant to within a factor 2-3 (the iterations per LP depend on the plant's memory).
+SECONDS_PER_STATE, SECONDS_PER_STATE_STEP, STATE_EXPONENT = 2.7e-4, 4.4e-8, 3.9
 
 
 def estimate_seconds(system: AffineSystem, rows, window: int | None = None) -> float:
@@ -552,8 +553,8 @@ def estimate_seconds(system: AffineSystem, rows, window: int | None = None) -> f
 
 
 def suggested_window(system: AffineSystem, steps: int) -> int:
-    """A window whose estimated cost on ``steps`` steps stays under a tenth of :data:`MAX_ESTIMATED_SECONDS`
-    (between 20 and 200 steps).
+    """The longest window (200, 100, 50 or 20 steps) whose estimated cost on ``steps`` steps stays under half
+    :data:`MAX_ESTIMATED_SECONDS` (20 if none does).
 
     Parameters
     ----------
@@ -568,7 +569,7 @@ def suggested_window(system: AffineSystem, steps: int) -> int:
         ``W``.
     """
     for W in (200, 100, 50, 20):
-        if estimate_seconds(system, steps, W) <= MAX_ESTIMATED_SECONDS / 10:
+        if estimate_seconds(system, steps, W) <= MAX_ESTIMATED_SECONDS / 2:
             return W
     return 20
 
