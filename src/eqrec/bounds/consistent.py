@@ -49,10 +49,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from eqrec.arrivals.traces import ArrivalTrace
-from eqrec.bounds.information import (SEGMENT, TraceLP, solve_range, check_x0_radius, delivery_steps,
-                                      estimate_seconds, MAX_ESTIMATED_SECONDS, trace_lp)
+from eqrec.bounds.information import (MAX_ESTIMATED_SECONDS, PROGRESS_SECONDS, SEGMENT, TraceLP,
+                                      check_x0_radius, delivery_steps, estimate_seconds, solve_range, trace_lp)
 from eqrec.checks import instance
 from eqrec.errors import InfeasibleDesign, InputError
+from eqrec.lp.parallel import Progress
 from eqrec.lp.solvers import solver_info
 from eqrec.systems.affine import AffineSystem
 
@@ -295,8 +296,9 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
         res = ys[tau] - system.C_at(tau) @ xbar[tau]
         rhs.update(zip(rows.tolist(), res.tolist()))
     try:
+        progress = Progress(N, "consistent set: steps") if seconds >= PROGRESS_SECONDS else None
         solved = solve_range(tlp, 0, list(range(N)), delivered_at, None, solver, solver_options,
-                              targets=_hull_targets, rhs=rhs, what="consistent set")
+                             targets=_hull_targets, rhs=rhs, what="consistent set", progress=progress)
     except InfeasibleDesign as exc:
         step = str(exc).split("step ")[1].split(",")[0] if "step " in str(exc) else "?"
         raise InputError(f"no state is consistent with the data delivered by step {step} ({exc}): the plant, "

@@ -89,6 +89,7 @@ from eqrec.arrivals.traces import NEVER, ArrivalTrace
 from eqrec.checks import instance, integer, radii
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 from eqrec.lp.model import INF, LinearProgram, LPBuilder
+from eqrec.lp.parallel import Progress
 from eqrec.lp.solvers import highs_model, highs_status, solve_lp, solver_info
 from eqrec.systems.affine import AffineSystem
 
@@ -424,8 +425,8 @@ def _limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, s
 
 
 def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
-                 solver: str, options: dict | None, targets=_limit_targets, rhs: dict | None = None,
-                 what: str = "information limit") -> dict[int, np.ndarray]:
+                solver: str, options: dict | None, targets=_limit_targets, rhs: dict | None = None,
+                what: str = "information limit", progress=None) -> dict[int, np.ndarray]:
     """``max`` of each objective ``targets(tlp, t)`` for the steps ``rows`` (increasing, all ``>= start``) on the
     LP from block ``start`` on.
 
@@ -457,6 +458,8 @@ def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndar
         The value of each delivered measurement row (default 0: the zero-data LP).
     what : str, optional
         What is solved, for error messages.
+    progress : eqrec.lp.parallel.Progress or None, optional
+        Advanced by one per row solved.
 
     Returns
     -------
@@ -498,6 +501,8 @@ def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndar
                 if t in chunk:
                     out[t] = np.array([model.maximise(cols, coef, f"{what}, step {t}, {label}")
                                        for cols, coef, label in targets(tlp, t)])
+                    if progress is not None:
+                        progress.advance(1)
             t_next = chunk[-1] + 1
         else:
             t = chunk[0]
@@ -510,12 +515,17 @@ def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndar
                 lp.c[cols - col0] = -coef
                 vals.append(-solve_lp(lp, solver, options).require_optimal(f"{what}, step {t}, {label}").objective)
             out[t] = np.array(vals)
+            if progress is not None:
+                progress.advance(1)
     return out
 
 
 #: Estimated seconds above which :func:`information_limit` (and :func:`eqrec.bounds.consistent.consistent_set`)
 #: refuse to start unless ``force=True`` (10 minutes, as ``eqrec design``).
 MAX_ESTIMATED_SECONDS = 600.0
+#: Estimated seconds from which a call shows its progress on stderr (:class:`eqrec.lp.parallel.Progress`: a bar
+#: on a terminal, a line at the start and one at the end otherwise).
+PROGRESS_SECONDS = 20.0
 #: The time model of :func:`estimate_seconds`: a row ``t`` of the exact limit costs about
 #: ``SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n**STATE_EXPONENT * t`` seconds of process time (``n``
 #: warm LPs over the ``t`` steps of the past: the simplex iterations and their cost both grow with ``t``, so the
@@ -728,8 +738,10 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     if todo:
         tlp = trace_lp(system, trace, r0, SEGMENT)
         _STATS["misses"] += len(todo)
+        seconds = estimate_seconds(system, todo, window)
+        progress = Progress(len(todo), "information limit: rows") if seconds >= PROGRESS_SECONDS else None
         try:
-            _solve_limit(tlp, todo, delivered_at, window, solver, solver_options, out)
+            _solve_limit(tlp, todo, delivered_at, window, solver, solver_options, out, progress)
         except InfeasibleDesign as exc:  # the zero-data LP is feasible (δ = 0) and bounded: a solver fault
             raise SolverFailure(f"{exc}, although the zero-data LP is feasible and bounded; x0_radius (largest "
                                 f"{float(r0.max()):.3g}) and the noise bounds (eta_w {system.eta_w:.3g}, eta_v "
@@ -743,11 +755,11 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
 
 
 def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window: int | None, solver: str,
-                 options: dict | None, out: np.ndarray) -> None:
+                 options: dict | None, out: np.ndarray, progress=None) -> None:
     """Fill the rows ``todo`` of ``out`` (exact, or windowed: module docstring)."""
     N = out.shape[0]
     if window is None:  # one growing model from time 0
-        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options).items():
+        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options, progress=progress).items():
             out[t] = np.maximum(v, 0.0)  # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
         return
     # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
@@ -758,7 +770,7 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
             continue
         s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
         box = None if s == 0 else out[s - 1]
-        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options).items():
+        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options, progress=progress).items():
             out[t] = np.maximum(v, 0.0)
 
 
