@@ -1,7 +1,8 @@
-"""Cost per step of the information limit (:func:`eqrec.information_limit`), its window and its cache (figures,
-not tests).
+"""Cost per step of the information limit (:func:`eqrec.information_limit`), its window and its cache, its growth
+with the state dimension, and the consistent set (:func:`eqrec.consistent_set`) (figures, not tests).
 
     python benchmarks/bench_information_limit.py [--lengths 40,100,400] [--losses 0.1,0.3] [--runs 3]
+    python benchmarks/bench_information_limit.py --only scale [--sizes 4:1,10:2,20:4,30:5] [--scale-steps 150]
 
 Rows: ACC (n = 3) and the batch reactor (n = 4), delays 0..1 with Bernoulli losses, one trace per run; each
 figure is the median over ``--runs`` traces of the time per step, exact (cache cleared before each trace) and with
@@ -9,6 +10,12 @@ figure is the median over ``--runs`` traces of the time per step, exact (cache c
 ``cpu`` the process time (HiGHS threads included; the machine is shared, so the CPU figure is the steadier).
 Then the cache: ``--runs`` distinct traces each asked three times (as three families of one comparison run
 would), its hit rate and the cost per asked step.
+
+Scale (issue 45 §4): chains of coupled tanks (:func:`tanks`) of ``n`` states and ``p`` level sensors, 30 % loss,
+delays <= 2, ``--scale-steps`` steps, one trace each, all in one run: the exact limit's wall and process time, its
+time model's estimate (:func:`eqrec.bounds.information.estimate_seconds`), and the growth exponent in ``n`` (least
+squares of log process time on log ``n``); then the consistent set of the same traces on simulated data at the
+sizes of ``--consistent-sizes``.
 """
 
 from __future__ import annotations
@@ -20,13 +27,71 @@ import time
 import numpy as np
 
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
-from eqrec.bounds.information import cache_info, clear_cache, information_limit
+from eqrec.bounds.consistent import consistent_set
+from eqrec.bounds.information import cache_info, clear_cache, estimate_seconds, information_limit
+from eqrec.systems.affine import AffineSystem
 from eqrec.systems.examples import acc_system, batch_reactor
 
 
-def _trace(N: int, loss: float, seed: int) -> ArrivalTrace:
+def _trace(N: int, loss: float, seed: int, max_delay: int = 1) -> ArrivalTrace:
     rng = np.random.default_rng(seed)
-    return ArrivalTrace(np.where(rng.random(N) < loss, NEVER, rng.integers(0, 2, N)))
+    return ArrivalTrace(np.where(rng.random(N) < loss, NEVER, rng.integers(0, max_delay + 1, N)))
+
+
+def tanks(n: int, p: int, flow: float = 0.2, leak: float = 0.05, eta_w: float = 0.01,
+          eta_v: float = 0.05) -> AffineSystem:
+    """A chain of ``n`` coupled tanks (levels ``x``): each pair of neighbours exchanges ``flow`` times their
+    difference per step, the last tank leaks ``leak`` of its level; process noise on every level (``E = I``),
+    ``p`` level sensors spread evenly along the chain (the first and the last tank among them when ``p >= 2``)."""
+    A = np.eye(n)
+    for i in range(n - 1):
+        A[i, i] -= flow
+        A[i + 1, i + 1] -= flow
+        A[i, i + 1] += flow
+        A[i + 1, i] += flow
+    A[-1, -1] -= leak
+    sensors = np.unique(np.linspace(0, n - 1, p).round().astype(int))
+    C = np.zeros((sensors.size, n))
+    C[np.arange(sensors.size), sensors] = 1.0
+    return AffineSystem(A=A, C=C, E=np.eye(n), eta_w=eta_w, eta_v=eta_v, name=f"{n} tanks")
+
+
+def scale(sizes: list[tuple[int, int]], steps: int, consistent_sizes: list[int]) -> None:
+    """The scale table (module docstring): the exact limit at every size, its growth exponent, the consistent set."""
+    print(f"scale: chains of coupled tanks, 30 % loss, delays <= 2, {steps} steps, x0_radius 1 (one run)")
+    print(f"{'n':>3s} {'p':>2s} {'wall s':>8s} {'cpu s':>8s} {'ms/step':>8s} {'estimate s':>10s} {'max limit':>10s}")
+    cpu_by_n = {}
+    for n, p in sizes:
+        plant = tanks(n, p)
+        trace = _trace(steps, 0.3, 45 + n, max_delay=2)
+        clear_cache()
+        limit, wall, cpu = _timed(lambda: information_limit(plant, trace, 1.0, cache=False, force=True))
+        cpu_by_n[n] = cpu
+        print(f"{n:3d} {p:2d} {wall:8.2f} {cpu:8.2f} {1e3 * wall / steps:8.1f} "
+              f"{estimate_seconds(plant, steps):10.2f} {float(limit.max()):10.4f}", flush=True)
+    if len(cpu_by_n) >= 2:
+        ns = np.array(sorted(cpu_by_n), float)
+        slope = np.polyfit(np.log(ns), np.log([cpu_by_n[int(v)] for v in ns]), 1)[0]
+        print(f"growth of the process time in n: about n^{slope:.2f}")
+    if consistent_sizes:
+        print()
+        print(f"consistent set on simulated data ({steps} steps; 4 n LPs per step against the limit's n)")
+        print(f"{'n':>3s} {'wall s':>8s} {'cpu s':>8s} {'ms/step':>8s} {'pred. radius / limit, median':>30s}")
+        for n, p in sizes:
+            if n not in consistent_sizes:
+                continue
+            plant = tanks(n, p)
+            trace = _trace(steps, 0.3, 45 + n, max_delay=2)
+            rng = np.random.default_rng(n)
+            x = rng.uniform(-1, 1, n)
+            y = np.empty((steps, plant.p))
+            for k in range(steps):
+                y[k] = plant.C @ x + plant.eta_v * rng.uniform(-1, 1, plant.p)
+                x = plant.A @ x + plant.eta_w * rng.uniform(-1, 1, n)
+            hull, wall, cpu = _timed(lambda: consistent_set(plant, trace, y, 1.0, force=True))
+            limit = information_limit(plant, trace, 1.0, force=True)
+            ratio = np.median(hull.predicted_radius / np.maximum(limit, 1e-300))
+            print(f"{n:3d} {wall:8.2f} {cpu:8.2f} {1e3 * wall / steps:8.1f} {ratio:30.4f}", flush=True)
 
 
 def _timed(fn):
@@ -41,10 +106,29 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--losses", default="0.1,0.3")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--window", type=int, default=20)
+    ap.add_argument("--only", choices=["plants", "cache", "scale"], action="append",
+                    help="run only these parts (repeatable; default: all)")
+    ap.add_argument("--sizes", default="4:1,10:2,20:4,30:5", help="scale: n:p pairs")
+    ap.add_argument("--scale-steps", type=int, default=150)
+    ap.add_argument("--consistent-sizes", default="4,10", help="scale: the n at which to time the consistent set")
     args = ap.parse_args(argv)
+    parts = set(args.only or ["plants", "cache", "scale"])
+    if "scale" in parts:
+        sizes = [tuple(int(v) for v in pair.split(":")) for pair in args.sizes.split(",")]
+        scale(sizes, args.scale_steps, [int(v) for v in args.consistent_sizes.split(",") if v])
+        print()
+        if parts == {"scale"}:
+            return
     lengths = [int(v) for v in args.lengths.split(",")]
     losses = [float(v) for v in args.losses.split(",")]
     plants = {"ACC": (acc_system(), 0.5), "batch reactor": (batch_reactor(), 1.0)}
+    if "plants" in parts:
+        _plants(plants, lengths, losses, args)
+    if "cache" in parts:
+        _cache(plants, lengths, args)
+
+
+def _plants(plants: dict, lengths: list[int], losses: list[float], args) -> None:
     print(f"{'plant':14s} {'N':>4s} {'loss':>5s} {'ms/step':>8s} {'cpu':>6s} {'W ms/step':>9s} {'W cpu':>6s} "
           f"{'W/exact max':>12s}")
     for name, (plant, radius) in plants.items():
@@ -66,6 +150,9 @@ def main(argv: list[str] | None = None) -> None:
                 print(f"{name:14s} {N:4d} {loss:5.2f} {med(ex):8.2f} {med(exc):6.2f} {med(win):9.2f} "
                       f"{med(winc):6.2f} {ratio:12.6f}")
     print()
+
+
+def _cache(plants: dict, lengths: list[int], args) -> None:
     print("cache: distinct traces, each asked 3 times (three families of one comparison run)")
     for name, (plant, radius) in plants.items():
         for N in lengths:

@@ -164,6 +164,8 @@ def test_other_solver_agrees(acc):
     ({"x0_radius": float("nan")}, "x0_radius"),
     ({"x0_radius": [1.0, 1.0]}, "x0_radius"),
     ({"x0_radius": np.inf}, "x0_radius"),
+    ({"x0_radius": 1e300}, "x0_radius"),  # HiGHS reads 1e20 as infinite: refused by name (MAX_X0_RADIUS)
+    ({"x0_radius": [0.5, 1e16, 0.5]}, "x0_radius"),
     ({"solver": "gurobi"}, "solver"),
     ({"window": 0}, "window"),
     ({"solver_options": 3}, "solver_options"),
@@ -217,3 +219,67 @@ def test_segment_length_does_not_change_the_values(acc, segment, monkeypatch):
     np.testing.assert_allclose(information_limit(acc, trace, 0.5, cache=False), reference, rtol=REL, atol=1e-15)
     windowed = information_limit(acc, trace, 0.5, cache=False, window=7)
     assert np.all(windowed >= reference * (1 - REL))
+
+
+def test_a_packet_past_the_end_is_not_a_delivery_and_keys_the_cache_by_the_delivered_set(acc):
+    """Issue 41 §3: a delay of 2**63 - 1 overflowed arrival_times to a negative time; the limit then cached the
+    rows of a trace that never delivers y(1) under the key of one that delivers it at step 1, and served them to
+    that trace.  The delivered sets now come from the delays alone, for the LP and the key alike."""
+    clear_cache()
+    far = information_limit(acc, ArrivalTrace([0, 2**63 - 1]), 0.5)
+    lost = information_limit(acc, ArrivalTrace([0, NEVER]), 0.5, cache=False)
+    np.testing.assert_array_equal(far, lost)
+    on_time = information_limit(acc, ArrivalTrace([0, 0]), 0.5)
+    fresh = information_limit(acc, ArrivalTrace([0, 0]), 0.5, cache=False)
+    np.testing.assert_array_equal(on_time, fresh)
+    assert on_time[1].max() < lost[1].max()  # y(1) delivered at step 1 tightens row 1
+
+
+def test_a_long_exact_limit_is_estimated_and_refused_with_the_window_offered(acc):
+    """Issue 41 §2: 10^5 steps (about hours) are refused before any LP is built, within a second; the message
+    gives the estimate, force=True and a window with its own estimate; the windowed call itself is allowed."""
+    import time
+
+    import eqrec.bounds.information as info
+
+    trace = ArrivalTrace(np.zeros(100_000, np.int64))
+    t0 = time.perf_counter()
+    with pytest.raises(eqrec.InputError) as err:
+        information_limit(acc, trace, 0.5, cache=False)
+    assert time.perf_counter() - t0 < 5
+    assert err.value.field == "trace"
+    msg = str(err.value)
+    assert "force=True" in msg and "window=" in msg and ">= the exact limit" in msg and " h " in msg
+    W = info.suggested_window(acc, 100_000)
+    assert info.estimate_seconds(acc, 100_000, W) <= info.MAX_ESTIMATED_SECONDS
+    assert info.estimate_seconds(acc, 100_000) > info.MAX_ESTIMATED_SECONDS
+    # the model: quadratic in the length exactly, linear with a window
+    e1, e2 = info.estimate_seconds(acc, 1000), info.estimate_seconds(acc, 4000)
+    assert 10 < e2 / e1 < 16
+    w1, w2 = info.estimate_seconds(acc, 1000, 20), info.estimate_seconds(acc, 4000, 20)
+    assert 3.9 < w2 / w1 < 4.1
+
+
+def test_force_runs_past_the_estimate(acc, monkeypatch):
+    import eqrec.bounds.information as info
+
+    trace = _random_trace(12, 0.3, 1, 21)
+    reference = information_limit(acc, trace, 0.5, cache=False)
+    monkeypatch.setattr(info, "MAX_ESTIMATED_SECONDS", 0.0)
+    with pytest.raises(eqrec.InputError, match="refused"):
+        information_limit(acc, trace, 0.5, cache=False)
+    np.testing.assert_array_equal(information_limit(acc, trace, 0.5, cache=False, force=True), reference)
+
+
+def test_an_unbounded_answer_is_a_solver_failure_naming_x0_radius(acc, monkeypatch):
+    """The zero-data LP is feasible and bounded: a solver's 'unbounded' is a fault, reported as SolverFailure
+    (the documented error) with the scale that set it."""
+    import eqrec.bounds.information as info
+    from eqrec.errors import InfeasibleDesign
+
+    def unbounded(*args, **kwargs):
+        raise InfeasibleDesign("information limit, step 0, state 0 is unbounded (highs)")
+
+    monkeypatch.setattr(info, "solve_range", unbounded)
+    with pytest.raises(eqrec.SolverFailure, match="x0_radius"):
+        information_limit(acc, ArrivalTrace([0, 0]), 0.5, cache=False)

@@ -33,7 +33,9 @@ Designs (each returns a certified :class:`Design`)
     :func:`design_time_based`, :func:`design_prefix`, :func:`design_delay`,
     :func:`design_delay_global`, :func:`design_augmented`, :func:`min_recovery_level`
 Certificates
-    :func:`certify_schedule`, :func:`information_limit` (the smallest bound any estimator can guarantee on a trace)
+    :func:`certify_schedule`, :func:`information_limit` (the smallest bound any estimator can guarantee on a trace),
+    :func:`consistent_set` (the exact hull of the states consistent with the measured data, filtered and
+    predicted: a :class:`ConsistentSet`)
 Estimators and simulation
     :class:`GuaranteedEstimator` (``Design.estimator()``), :class:`Packet` (a time-stamped
     measurement for ``step``), :class:`ClassEstimator`,
@@ -95,6 +97,8 @@ _PUBLIC: dict[str, str] = {
     # certificates
     "certify_schedule": "eqrec.bounds.certify",
     "information_limit": "eqrec.bounds.information",
+    "consistent_set": "eqrec.bounds.consistent",
+    "ConsistentSet": "eqrec.bounds.consistent",
     # estimators and simulation
     "GuaranteedEstimator": "eqrec.estimators.guaranteed",
     "Packet": "eqrec.arrivals.packets",

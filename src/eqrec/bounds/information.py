@@ -51,6 +51,12 @@ with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py
 by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree, and repeated
 calls on one trace, share their LPs (:func:`cache_info`).
 
+Size.  Before anything is read or solved, :func:`estimate_seconds` estimates the call's process time from the
+trace's length and the state dimension (the sum over the rows of ``n`` LPs whose cost grows with the past they
+hold: quadratic in the length); past :data:`MAX_ESTIMATED_SECONDS` the call is refused unless ``force=True``,
+and the message offers a window (below) with its own estimate.  The same LP with the data's residuals as the
+delivered rows' values gives the exact consistent set on the data (:func:`eqrec.bounds.consistent.consistent_set`).
+
 Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity with the class levels holds to
 1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.
 
@@ -81,10 +87,15 @@ import scipy.sparse as sp
 
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
 from eqrec.checks import instance, integer, radii
-from eqrec.errors import InputError
+from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 from eqrec.lp.model import INF, LinearProgram, LPBuilder
+from eqrec.lp.parallel import Progress
 from eqrec.lp.solvers import highs_model, highs_status, solve_lp, solver_info
 from eqrec.systems.affine import AffineSystem
+
+#: Longest trace whose rows are cached: a row's key holds its delivered set, ``t/8`` bytes, so the keys of a trace
+#: take ``N²/16`` bytes (600 MiB at 10^5 steps) and as long to build as a fast row takes to solve.
+CACHE_MAX_STEPS = 10_000
 
 #: Largest number of cached rows (one row: ``n`` floats and a key of ``t/8`` bytes); the oldest go first.
 CACHE_SIZE = 500_000
@@ -120,10 +131,69 @@ def clear_cache() -> None:
 # Inputs
 # ---------------------------------------------------------------------------
 
+#: Largest initial radius (``x0_radius``) the limit accepts: HiGHS reads a bound of 1e20 or more as infinite (the
+#: LP becomes unbounded), and its feasibility tolerance (1e-9, :data:`HIGHS_OPTIONS`) is absolute, so radii past
+#: about 1e15 leave the optimum below one unit in the last place of the rows' values.  Rescale the plant's units.
+MAX_X0_RADIUS = 1e15
+
+
+def check_x0_radius(x0_radius, n: int) -> np.ndarray:
+    """``x0_radius`` as ``n`` radii, each finite, ``>= 0`` and at most :data:`MAX_X0_RADIUS`.
+
+    Parameters
+    ----------
+    x0_radius : float or array_like, shape (n,)
+        The radius of the box of ``x(0)``.
+    n : int
+        State dimension.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The radii.
+
+    Raises
+    ------
+    InputError
+        Negative, NaN, infinite, of the wrong length, or above :data:`MAX_X0_RADIUS` (field ``x0_radius``).
+    """
+    r0 = radii(x0_radius, n)
+    if np.any(r0 > MAX_X0_RADIUS):
+        raise InputError(f"each radius is at most {MAX_X0_RADIUS:.0e} (the LP solver reads 1e20 as infinite and "
+                         f"its tolerances are absolute), got {float(r0.max()):.3g}; express the state in larger "
+                         "units", field="x0_radius")
+    return r0
+
+
+def delivery_steps(trace: ArrivalTrace) -> np.ndarray:
+    r"""The step at which each measurement is delivered, or ``trace.steps`` when not within the trace.
+
+    Computed from the delays without forming ``τ + d`` for a delay past the trace (a delay near ``2**63`` would
+    overflow :meth:`ArrivalTrace.arrival_times` to a negative time); the delivered sets
+    :math:`\mathcal D_t = \{\tau : s(\tau) \le t\}` of every row, its LP and its cache key are all read from
+    this one array.
+
+    Parameters
+    ----------
+    trace : ArrivalTrace
+        The arrivals.
+
+    Returns
+    -------
+    numpy.ndarray of int64, shape (trace.steps,)
+        ``τ + d(τ)`` when ``y(τ)`` arrives at a step ``< N``, else ``N``.
+    """
+    N = trace.steps
+    d = trace.delays
+    tau = np.arange(N, dtype=np.int64)
+    within = (d != NEVER) & (d < N - tau)
+    return np.where(within, tau + np.where(within, d, 0), N).astype(np.int64)
+
+
 def _check(system, trace, x0_radius, solver: str, window, options) -> tuple[np.ndarray, int | None]:
     instance(system, AffineSystem, "system")
     instance(trace, ArrivalTrace, "trace", "an ArrivalTrace (eqrec.ArrivalTrace)")
-    r0 = radii(x0_radius, system.n)
+    r0 = check_x0_radius(x0_radius, system.n)
     solver_info(solver)
     if options is not None:
         instance(options, dict, "solver_options")
@@ -202,7 +272,7 @@ class TraceLP:
         c0 = int(self.col_start[start])
         c1 = int(self.col_start[stop]) + (self.n if stop % self.segment == 0 else 0)
         r0, r1 = int(self.row_start[start]), int(self.row_start[stop])
-        A = sp.csc_matrix(self.lp.A[r0:r1, c0:c1])
+        A = sp.csc_matrix(self.lp.A[:, c0:c1][r0:r1])  # columns first: cheap on CSC, linear in the window
         return LinearProgram(c=self.lp.c[c0:c1].copy(), A=A, row_lower=self.lp.row_lower[r0:r1].copy(),
                              row_upper=self.lp.row_upper[r0:r1].copy(), col_lower=self.lp.col_lower[c0:c1].copy(),
                              col_upper=self.lp.col_upper[c0:c1].copy()), c0, r0
@@ -234,7 +304,7 @@ def trace_lp(system: AffineSystem, trace: ArrivalTrace, x0_radius: np.ndarray, s
         The LP, its column and row blocks and the maps of ``x(k)``.
     """
     N, n, K = trace.steps, system.n, int(segment)
-    arrival = trace.arrival_times()
+    delivered_at = delivery_steps(trace)
     b = LPBuilder()
     xmap: list = [None] * (N + 1)
     meas: dict[int, np.ndarray] = {}
@@ -257,7 +327,7 @@ def trace_lp(system: AffineSystem, trace: ArrivalTrace, x0_radius: np.ndarray, s
         cols, M = xmap[k]
         E = system.E_at(k)
         wc = b.add_variables(E.shape[1], -system.eta_w, system.eta_w)
-        if arrival[k] != NEVER and arrival[k] < N:
+        if delivered_at[k] < N:
             C, V = system.C_at(k), system.V_at(k)
             vc = b.add_variables(V.shape[1], -system.eta_v, system.eta_v)
             r1, c1, v1 = _triplets(C @ M, cols)
@@ -305,11 +375,12 @@ class _HighsModel:
         self.h = highs_model(lp, self.options)
         self.retries = 0
 
-    def deliver(self, rows: np.ndarray) -> None:
-        """Fix the measurement rows ``rows`` (global indices) to 0."""
+    def deliver(self, rows: np.ndarray, values: np.ndarray | None = None) -> None:
+        """Fix the measurement rows ``rows`` (global indices) to ``values`` (default 0: the zero-data LP)."""
         idx = (np.asarray(rows) - self.r0).astype(np.int32)
-        self.lp.row_lower[idx] = self.lp.row_upper[idx] = 0.0
-        self.h.changeRowsBounds(idx.size, idx, np.zeros(idx.size), np.zeros(idx.size))
+        val = np.zeros(idx.size) if values is None else np.asarray(values, float)
+        self.lp.row_lower[idx] = self.lp.row_upper[idx] = val
+        self.h.changeRowsBounds(idx.size, idx, val, val)
 
     def maximise(self, cols: np.ndarray, coef: np.ndarray, what: str) -> float:
         """``max coef · z[cols]`` (global columns) over the current LP."""
@@ -330,34 +401,90 @@ class _HighsModel:
         return -float(sol.objective)
 
 
-def _window_lp(tlp: TraceLP, start: int, stop: int, fixed: list, box: np.ndarray | None) -> tuple:
-    """The LP of blocks ``start..stop-1`` with the rows ``fixed`` set to 0 and ``x(start)`` in ``±box``."""
+def _window_lp(tlp: TraceLP, start: int, stop: int, fixed: list, box: np.ndarray | None,
+               rhs: dict | None = None) -> tuple:
+    """The LP of blocks ``start..stop-1`` with the rows ``fixed`` set to their data (0, or ``rhs[row]``) and
+    ``x(start)`` in ``±box``."""
     lp, c0, r0 = tlp.window(start, stop)
     n = tlp.n
     if box is not None:
         lp.col_lower[:n], lp.col_upper[:n] = -box, box
     if fixed:
-        idx = np.concatenate(fixed) - r0
-        lp.row_lower[idx] = lp.row_upper[idx] = 0.0
+        rows = np.concatenate(fixed)
+        idx = rows - r0
+        val = 0.0 if rhs is None else np.array([rhs[r] for r in rows.tolist()])
+        lp.row_lower[idx] = lp.row_upper[idx] = val
     return lp, c0, r0
 
 
-def _solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
-                 solver: str, options: dict | None) -> dict[int, np.ndarray]:
-    """``r(t+1)`` for the steps ``rows`` (increasing, all ``>= start``) on the LP from block ``start`` on.
+def _limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    """The objectives of row ``t`` of the limit: :math:`x_i(t+1)` for every state ``i`` (columns, coefficients,
+    label)."""
+    cols, M = tlp.xmap[t + 1]
+    return [(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}") for i in range(tlp.n)]
 
-    Row ``t`` fixes the measurement rows of the ``τ >= start`` delivered by ``t``; ``box`` (if given) replaces
-    the box of ``x(start)``.  HiGHS: one model per chunk of :data:`CHUNK` steps, warm solves inside; other
-    solvers: one LP at a time.
+
+def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
+                solver: str, options: dict | None, targets=_limit_targets, rhs: dict | None = None,
+                what: str = "information limit", progress=None) -> dict[int, np.ndarray]:
+    """``max`` of each objective ``targets(tlp, t)`` for the steps ``rows`` (increasing, all ``>= start``) on the
+    LP from block ``start`` on.
+
+    Row ``t`` fixes the measurement rows of the ``τ >= start`` delivered by ``t`` (to 0, or to ``rhs[row]``: the
+    data's residuals, :func:`eqrec.bounds.consistent.consistent_set`); ``box`` (if given) replaces the box of
+    ``x(start)``.  HiGHS: one model per chunk of :data:`CHUNK` steps, warm solves inside (each objective starts
+    from the previous one's optimal basis); other solvers: one LP at a time.
+
+    Parameters
+    ----------
+    tlp : TraceLP
+        The trace's LP (:func:`trace_lp`).
+    start : int
+        First block (a segment start); ``0``: the whole past.
+    rows : list of int
+        The steps to solve, increasing.
+    delivered_at : numpy.ndarray of int
+        :func:`delivery_steps` of the trace.
+    box : numpy.ndarray or None
+        Radii of the box of ``x(start)`` (``None``: the LP's own).
+    solver : str
+        LP solver name.
+    options : dict or None
+        Solver options.
+    targets : callable, optional
+        ``targets(tlp, t)``: the objectives of step ``t``, a list of ``(columns, coefficients, label)``
+        (default: :math:`x_i(t+1)` for every state, the limit's).
+    rhs : dict of int to float or None, optional
+        The value of each delivered measurement row (default 0: the zero-data LP).
+    what : str, optional
+        What is solved, for error messages.
+    progress : eqrec.lp.parallel.Progress or None, optional
+        Advanced by one per row solved.
+
+    Returns
+    -------
+    dict of int to numpy.ndarray
+        Per step of ``rows``, the maxima in the order of ``targets``.
+
+    Raises
+    ------
+    InfeasibleDesign
+        An LP infeasible (the data inconsistent, with ``rhs``) or unbounded.
+    SolverFailure
+        An LP without an answer.
     """
-    n = tlp.n
     by_step: dict[int, list] = {}
-    for tau, r in tlp.meas.items():
-        if tau >= start:
+    for tau in range(start, rows[-1] + 1):  # delivered by the last row: stamped at most then
+        r = tlp.meas.get(tau)
+        if r is not None:
             by_step.setdefault(int(delivered_at[tau]), []).append(r)
     out: dict[int, np.ndarray] = {}
     fixed: list = []  # measurement rows delivered before the step being processed
     t_next = start
+
+    def values(rows_: list) -> np.ndarray | None:
+        return None if rhs is None else np.array([rhs[r] for r in np.concatenate(rows_).tolist()])
+
     for c0 in range(start, rows[-1] + 1, CHUNK if solver == "highs" else 1):
         chunk = [t for t in rows if c0 <= t < c0 + CHUNK] if solver == "highs" else [t for t in rows if t == c0]
         if not chunk:
@@ -366,36 +493,116 @@ def _solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.nda
             fixed += by_step.get(t, [])
         t_next = chunk[0]
         if solver == "highs":
-            model = _HighsModel(*_window_lp(tlp, start, chunk[-1] + 1, fixed, box), options)
+            model = _HighsModel(*_window_lp(tlp, start, chunk[-1] + 1, fixed, box, rhs), options)
             for t in range(chunk[0], chunk[-1] + 1):
                 if t in by_step:
-                    model.deliver(np.concatenate(by_step[t]))
+                    model.deliver(np.concatenate(by_step[t]), values(by_step[t]))
                 fixed += by_step.get(t, [])
                 if t in chunk:
-                    cols, M = tlp.xmap[t + 1]
-                    out[t] = np.array([model.maximise(cols[M[i] != 0], M[i][M[i] != 0],
-                                                      f"information limit, step {t}, state {i}") for i in range(n)])
+                    out[t] = np.array([model.maximise(cols, coef, f"{what}, step {t}, {label}")
+                                       for cols, coef, label in targets(tlp, t)])
+                    if progress is not None:
+                        progress.advance(1)
             t_next = chunk[-1] + 1
         else:
             t = chunk[0]
             fixed += by_step.get(t, [])
             t_next = t + 1
-            lp, col0, _ = _window_lp(tlp, start, t + 1, fixed, box)
-            vals = np.empty(n)
-            cols, M = tlp.xmap[t + 1]
-            for i in range(n):
+            lp, col0, _ = _window_lp(tlp, start, t + 1, fixed, box, rhs)
+            vals = []
+            for cols, coef, label in targets(tlp, t):
                 lp.c[:] = 0.0
-                lp.c[cols - col0] = -M[i]
-                vals[i] = -solve_lp(lp, solver, options).require_optimal(
-                    f"information limit, step {t}, state {i}").objective
-            out[t] = vals
-    # the set is symmetric, so the maximum is >= 0 (a solver's -0.0 or -1e-17 reads as 0)
-    return {t: np.maximum(v, 0.0) for t, v in out.items()}
+                lp.c[cols - col0] = -coef
+                vals.append(-solve_lp(lp, solver, options).require_optimal(f"{what}, step {t}, {label}").objective)
+            out[t] = np.array(vals)
+            if progress is not None:
+                progress.advance(1)
+    return out
+
+
+#: Estimated seconds above which :func:`information_limit` (and :func:`eqrec.bounds.consistent.consistent_set`)
+#: refuse to start unless ``force=True`` (10 minutes, as ``eqrec design``).
+MAX_ESTIMATED_SECONDS = 600.0
+#: Estimated seconds from which a call shows its progress on stderr (:class:`eqrec.lp.parallel.Progress`: a bar
+#: on a terminal, a line at the start and one at the end otherwise).
+PROGRESS_SECONDS = 20.0
+#: The time model of :func:`estimate_seconds`: a row ``t`` of the exact limit costs about
+#: ``SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n**STATE_EXPONENT * t`` seconds of process time (``n``
+#: warm LPs over the ``t`` steps of the past: the simplex iterations and their cost both grow with ``t``, so the
+#: sum over the rows is at least quadratic in the trace's length).  A windowed row's LP holds ``W`` to
+#: ``2W + SEGMENT`` steps, so ``t`` is replaced by ``1.5 W + SEGMENT`` there.  Fit on this project's 2-core
+#: machine (HiGHS 1.15, process time): ACC exact at 1,000 and 4,000 steps (2.4 and 35.9 s; the model says 2.4 and
+#: 29) and windowed (``W = 100``: 2.3 ms per row; the model 1.3), chains of coupled tanks
+#: (``benchmarks/bench_information_limit.py``, 150 steps) at n = 4, 10 and 20 (0.54, 6.9 and 159 s; the model
+#: 0.3, 7.4 and 149).  The iterations per LP grow with the plant's memory, so the growth in the length lies
+#: between ``N^2`` (ACC) and ``N^2.8`` (the tanks, 60 to 150 steps): the estimate is meant to within a factor 4,
+#: high on short traces of large plants (n = 30 at 60 steps: 140 s estimated, 38 s measured).
+SECONDS_PER_STATE, SECONDS_PER_STATE_STEP, STATE_EXPONENT = 2.7e-4, 2.5e-8, 4.4
+
+
+def estimate_seconds(system: AffineSystem, rows, window: int | None = None) -> float:
+    """The estimated seconds of the rows ``rows`` of :func:`information_limit` (time model:
+    :data:`SECONDS_PER_STATE_STEP`), before anything is solved.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant (its state dimension ``n``).
+    rows : int or iterable of int
+        The steps ``t`` to solve, or a trace length ``N`` (every row ``0..N-1``).
+    window : int or None, optional
+        ``None``: exact rows; ``W``: windowed rows.
+
+    Returns
+    -------
+    float
+        Seconds of process time.
+    """
+    t = np.arange(rows, dtype=float) if np.isscalar(rows) else np.asarray(list(rows), float)
+    if window is not None:
+        t = np.minimum(t, 1.5 * window + SEGMENT)
+    n = system.n
+    return float(t.size * SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n ** STATE_EXPONENT * t.sum())
+
+
+def suggested_window(system: AffineSystem, steps: int) -> int:
+    """The longest window (200, 100, 50 or 20 steps) whose estimated cost on ``steps`` steps stays under half
+    :data:`MAX_ESTIMATED_SECONDS` (20 if none does).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    steps : int
+        The trace's length.
+
+    Returns
+    -------
+    int
+        ``W``.
+    """
+    for W in (200, 100, 50, 20):
+        if estimate_seconds(system, steps, W) <= MAX_ESTIMATED_SECONDS / 2:
+            return W
+    return 20
+
+
+def _refusal(system: AffineSystem, steps: int, todo: list, window: int | None, seconds: float) -> str:
+    when = f"{seconds / 60:.0f} min" if seconds < 7200 else f"{seconds / 3600:.3g} h"
+    if window is None:
+        W = suggested_window(system, steps)
+        return (f"refused: the exact limit of {len(todo)} rows on {steps} steps at n = {system.n} would take about "
+                f"{when} (its cost grows as the square of the length; documented limit "
+                f"{MAX_ESTIMATED_SECONDS:.0f} s); pass force=True to run it anyway, or window={W}, about "
+                f"{estimate_seconds(system, todo, W):.0f} s, whose values are >= the exact limit (each row forgets "
+                "the data older than the window and keeps a box there: a relaxation, so it errs upward)")
+    return (f"refused: {len(todo)} rows with window={window} on {steps} steps at n = {system.n} would take about "
+            f"{when} (documented limit {MAX_ESTIMATED_SECONDS:.0f} s); pass force=True, or a shorter window")
 
 
 def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, solver: str = "highs",
                       window: int | None = None, cache: bool = True,
-                      solver_options: dict | None = None) -> np.ndarray:
+                      solver_options: dict | None = None, force: bool = False) -> np.ndarray:
     r"""Per step and state, the smallest worst-case error any estimator can guarantee on ``trace``.
 
     Row ``t`` is :math:`r(t+1)`, the radius of information of the estimate :math:`\hat x(t+1)` that an
@@ -421,9 +628,14 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
         (module docstring), an upper estimate and not a lower bound.  Exact for the rows ``t < W``.
     cache : bool, optional
         Reuse rows of earlier calls with the same system, radius, solver, step and delivered data (default
-        ``True``; :func:`cache_info`, :func:`clear_cache`).
+        ``True``; :func:`cache_info`, :func:`clear_cache`); traces longer than :data:`CACHE_MAX_STEPS` are not
+        cached.
     solver_options : dict or None, optional
         Passed to the solver.
+    force : bool, optional
+        Run even when the trace's rows are estimated (:func:`estimate_seconds`, before anything is read or
+        solved) to take more than :data:`MAX_ESTIMATED_SECONDS`; default ``False``: refuse them (the message gives
+        the estimate and a window, with its own estimate, whose values err upward).
 
     Returns
     -------
@@ -434,11 +646,13 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     ------
     InputError
         ``system`` not an :class:`AffineSystem`, ``trace`` not an :class:`ArrivalTrace` or longer than a
-        time-varying system (field ``system``, ``trace``); ``x0_radius`` negative, NaN, infinite or of the wrong
-        length (field ``x0_radius``); unknown ``solver``; ``window`` not an integer ``>= 1``; ``solver_options``
-        not a dict.
+        time-varying system (field ``system``, ``trace``); ``x0_radius`` negative, NaN, infinite, of the wrong
+        length or above :data:`MAX_X0_RADIUS` (field ``x0_radius``); unknown ``solver``; ``window`` not an
+        integer ``>= 1``; ``solver_options`` not a dict; the rows estimated past :data:`MAX_ESTIMATED_SECONDS`
+        without ``force`` (field ``trace``).
     SolverFailure
-        An LP without an optimal solution (it is feasible and bounded, so a solver fault).
+        An LP without an optimal solution (it is feasible and bounded, so a solver fault; an 'infeasible' or
+        'unbounded' answer is reported so, naming ``x0_radius`` and the noise bounds that set the LP's scale).
 
     Notes
     -----
@@ -500,47 +714,67 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     out = np.zeros((N, n))
     if N == 0:
         return out
-    arrival = trace.arrival_times()
-    delivered_at = np.where(arrival == NEVER, N, arrival)  # step at which y(τ) is delivered (N: not within)
+    if not force and estimate_seconds(system, N, window) > MAX_ESTIMATED_SECONDS:
+        # refused before the cache is read: its keys alone grow as the square of the length
+        raise InputError(_refusal(system, N, list(range(N)), window, estimate_seconds(system, N, window)),
+                         field="trace")
+    delivered_at = delivery_steps(trace)  # step at which y(τ) is delivered (N: not within)
+    cache = cache and N <= CACHE_MAX_STEPS
     ctx = (_fingerprint(system, r0, solver, solver_options), window)
     keys: list = [None] * N
     todo: list[int] = []
-    for t in range(N):
+    for t in range(N if cache else 0):
         if window is None:  # the value depends on (t, D_t) only
             key = (ctx, t, np.packbits(delivered_at[: t + 1] <= t).tobytes())
         else:  # on the arrival times up to t (the boxes of earlier rows)
             key = (ctx, t, np.minimum(delivered_at[: t + 1], t + 1).astype(np.int32).tobytes())
         keys[t] = key
-        hit = _CACHE.get(key) if cache else None
+        hit = _CACHE.get(key)
         if hit is not None:
             out[t] = hit
             _STATS["hits"] += 1
             _CACHE.move_to_end(key)
         else:
             todo.append(t)
+    if not cache:
+        todo = list(range(N))
     if todo:
         tlp = trace_lp(system, trace, r0, SEGMENT)
         _STATS["misses"] += len(todo)
-        if window is None:  # one growing model from time 0
-            for t, v in _solve_range(tlp, 0, todo, delivered_at, None, solver, solver_options).items():
-                out[t] = v
-        else:
-            # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
-            pending = set(todo)
-            for c0 in range(0, N, window):
-                rows = [t for t in range(c0, min(N, c0 + window)) if t in pending]
-                if not rows:
-                    continue
-                s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
-                box = None if s == 0 else out[s - 1]
-                for t, v in _solve_range(tlp, s, rows, delivered_at, box, solver, solver_options).items():
-                    out[t] = v
+        seconds = estimate_seconds(system, todo, window)
+        progress = Progress(len(todo), "information limit: rows") if seconds >= PROGRESS_SECONDS else None
+        try:
+            _solve_limit(tlp, todo, delivered_at, window, solver, solver_options, out, progress)
+        except InfeasibleDesign as exc:  # the zero-data LP is feasible (δ = 0) and bounded: a solver fault
+            raise SolverFailure(f"{exc}, although the zero-data LP is feasible and bounded; x0_radius (largest "
+                                f"{float(r0.max()):.3g}) and the noise bounds (eta_w {system.eta_w:.3g}, eta_v "
+                                f"{system.eta_v:.3g}) set its scale") from exc
         if cache:
             for t in todo:
                 _CACHE[keys[t]] = out[t].copy()
             while len(_CACHE) > CACHE_SIZE:
                 _CACHE.popitem(last=False)
     return out
+
+
+def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window: int | None, solver: str,
+                 options: dict | None, out: np.ndarray, progress=None) -> None:
+    """Fill the rows ``todo`` of ``out`` (exact, or windowed: module docstring)."""
+    N = out.shape[0]
+    if window is None:  # one growing model from time 0
+        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options, progress=progress).items():
+            out[t] = np.maximum(v, 0.0)  # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
+        return
+    # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
+    pending = set(todo)
+    for c0 in range(0, N, window):
+        rows = [t for t in range(c0, min(N, c0 + window)) if t in pending]
+        if not rows:
+            continue
+        s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
+        box = None if s == 0 else out[s - 1]
+        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options, progress=progress).items():
+            out[t] = np.maximum(v, 0.0)
 
 
 def block_limit(system: AffineSystem, depth: int, available, x0_radius) -> np.ndarray:
