@@ -217,27 +217,26 @@ def run_design(args: argparse.Namespace) -> dict:
 
 
 def _design_prefix(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
-                   par: dict) -> tuple[Design, dict, dict]:
-    """``--method prefix``: the prefix-based design (class engine or tree LP); no entries of its own before the
-    gains, the class engine's after them."""
+                   par: dict) -> tuple[Design, dict]:
+    """``--method prefix``: the prefix-based design (class engine or tree LP); no entries of its own."""
     from eqrec.design.prefix.design import design_prefix
 
     design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
                            state_weights=weights, **par)
-    return design, {}, _class_engine_entries(design)
+    return design, {}
 
 
 def _design_time(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
-                 par: dict) -> tuple[Design, dict, dict]:
-    """``--method time``: one gain sequence for the worst-case word, named after the gains."""
+                 par: dict) -> tuple[Design, dict]:
+    """``--method time``: one gain sequence for the worst-case word."""
     from eqrec.design.prefix.time_based import design_time_based
 
     design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
-    return design, {}, {"worst_case_word": design.worst_case_word, **_class_engine_entries(design)}
+    return design, {}
 
 
 def _design_augmented(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
-                      par: dict) -> tuple[Design, dict, dict]:
+                      par: dict) -> tuple[Design, dict]:
     """``--method augmented``: the state-augmented design (``--L``, ``--poles``, ``--s0`` read here); its ``L``,
     ``s0``, ``M``, ``nu`` written after the words."""
     from eqrec.design.augmented.design import design_augmented
@@ -255,22 +254,7 @@ def _design_augmented(args: argparse.Namespace, system, words: list, weights: np
     design = design_augmented(system, words, args.mu1, L=L, poles=poles, s0=s0, solver=args.solver)
     aug = design.augmented
     head = {k: np.asarray(v).tolist() for k, v in (("L", aug.L), ("s0", aug.s0), ("M", aug.M), ("nu", aug.nu))}
-    return design, head, {}
-
-
-def _class_engine_entries(design: Design) -> dict:
-    """What ``--method prefix`` and ``time`` write after the gains: μ1 free, the engine, the class table."""
-    out = {}
-    free = design.mu1_free
-    if free is not None:
-        out["mu1_free"] = {"route": free.route, "mu1_min": {
-            "upper": free.mu1_min, "lower": free.mu1_min_lower, "binding": free.binding}}
-    out["engine"] = design.engine
-    if design.class_gains is not None:
-        from eqrec.design.report import class_table
-
-        out["classes"] = class_table(design)
-    return out
+    return design, head
 
 
 def run_word_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str,
@@ -301,22 +285,11 @@ def run_word_design(args: argparse.Namespace, system, T_file: int | None, mu1: f
                       field_name="--words" if T_file is None else "T")
     if args.method != "augmented" and (args.L or args.poles or args.s0):
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
-    design, head, tail = method(args, system, words, weights, par)
-    cert = design.certificate if design.certificate is not None else design.class_certificate
-    out = {"method": args.method, "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "certified_mu2": cert.mu2,
-           "certified_terminal": cert.terminal, "solver": design.solution.solver, "status": design.solution.status,
-           "words": list(words), **head}
-    if design.mu1_requested is not None:  # mu1 raised to the fixed point the gains certify (eqrec.bounds.certify)
-        out["mu1_requested"] = design.mu1_requested
-    if design.schedule is not None:  # none for a class-engine language too large for node gains
-        out.update(designed_words=list(design.schedule.designed_words), gains=design.schedule.to_json())
-    out.update(tail)
-    if weights is not None:
-        from eqrec.design.report import original_coordinates
+    design, head = method(args, system, words, weights, par)
+    from eqrec.design.report import design_json
 
-        original_coordinates(out, weights)
-    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
-    return out
+    # the same record as Design.save: the gains in the file's coordinates, the system as the file gave it
+    return design_json(design, words=list(words), head=head, original=system)
 
 
 def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
@@ -347,7 +320,7 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     from eqrec.bounds.data_classes import ClassSet, full_language_counts
     from eqrec.arrivals.words import as_language
     from eqrec.design.delay.design import delay_classes, delay_language, design_delay, design_delay_global
-    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, original_coordinates, to_json
+    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, design_json
 
     if args.words is not None:
         raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",
@@ -418,21 +391,17 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         free = None
         design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
                               node_gains=node_gains, state_weights=weights, **(par or {}))
-    out = to_json(design, free, node_gains=node_gains)
-    out.update(solver=design.solution.solver, status=design.solution.status)
+    words = [p.label for p in patterns] if not isinstance(patterns, ClassSet) else None
+    # the same record as Design.save (eqrec.design.report.design_json), with the command's own entries
+    out = design_json(design, free=free, node_gains=node_gains, words=words, original=system)
+    system_entry = out.pop("system")
     if full:
         out.update(max_delay=args.max_delay, horizon=args.horizon)
         if args.max_lost is not None:
             out["max_lost"] = args.max_lost
     if isinstance(patterns, ClassSet):  # classes from the window rule: no word enumerated
         out["words"] = int(patterns.words)
-    else:
-        out["words"] = [p.label for p in patterns]
-        if design.schedule is not None:
-            out["designed_words"] = [p.label for p in design.schedule.designed]
-    if weights is not None:
-        original_coordinates(out, weights)
-    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
+    out["system"] = system_entry
     return out
 
 
