@@ -285,16 +285,6 @@ def _recertify(design: Design, data: dict, words: list, file_classes: tuple | No
     if cert is not None:
         earned_mu2 = max(earned_mu2, cert.mu2)
         earned_terminal = max(earned_terminal, cert.terminal)
-    if check.below(mu1, earned_terminal):
-        check.refuse("mu1", "mu1 (at least the terminal worst case)", mu1, earned_terminal)
-    if check.off(mu2, earned_mu2):
-        check.refuse("mu2", "mu2 (the largest worst case before the horizon's end, at least mu1)", mu2, earned_mu2)
-    for key, earned in (("certified_mu2", cert.mu2 if cert is not None else cc.mu2),
-                        ("certified_terminal", cert.terminal if cert is not None else cc.terminal)):
-        if data.get(key) is not None:
-            stored_value = _number(data[key], source, key)
-            if check.off(stored_value, earned):
-                check.refuse(key, key, stored_value, earned)
     if cc is not None:
         certified, levels = file_classes
         for i, cls in enumerate(design.class_gains.classes.classes):
@@ -304,10 +294,6 @@ def _recertify(design: Design, data: dict, words: list, file_classes: tuple | No
                              float(cc.levels[i]))
             if check.below(levels[i], float(cc.levels[i])):
                 check.refuse(f"classes[{i}].level", f"{what}: level", levels[i], float(cc.levels[i]))
-            top = mu2 if cls.inner else mu1
-            if check.below(top, levels[i]):
-                raise InputError(f"{what}: level {levels[i]!r} above the design's {'mu2' if cls.inner else 'mu1'} = "
-                                 f"{top!r} (an edited file?)", source, f"classes[{i}].level")
         # the bound of a class: the file's certified level (the design's, bit for bit), never below what the
         # gains give
         bounds = cc.bounds
@@ -336,6 +322,23 @@ def _recertify(design: Design, data: dict, words: list, file_classes: tuple | No
                              max(mu1, earned))
             if lab in stored_certified and check.off(stored_certified[lab], earned):
                 check.refuse("levels", f"{what}: certified worst case", stored_certified[lab], earned)
+    if check.below(mu1, earned_terminal):
+        check.refuse("mu1", "mu1 (at least the terminal worst case)", mu1, earned_terminal)
+    if check.off(mu2, earned_mu2):
+        check.refuse("mu2", "mu2 (the largest worst case before the horizon's end, at least mu1)", mu2, earned_mu2)
+    for key, earned in (("certified_mu2", cert.mu2 if cert is not None else cc.mu2),
+                        ("certified_terminal", cert.terminal if cert is not None else cc.terminal)):
+        if data.get(key) is not None:
+            stored_value = _number(data[key], source, key)
+            if check.off(stored_value, earned):
+                check.refuse(key, key, stored_value, earned)
+    if cc is not None:  # a class level above the design's mu2 (inner) or mu1 (terminal)
+        for i, cls in enumerate(design.class_gains.classes.classes):
+            top = mu2 if cls.inner else mu1
+            if check.below(top, file_classes[1][i]):
+                raise InputError(f"class {short_label(cls.label)}: level {float(file_classes[1][i])!r} above the "
+                                 f"design's {'mu2' if cls.inner else 'mu1'} = {top!r} (an edited file?)", source,
+                                 f"classes[{i}].level")
     try:  # raise a value a few ulps below its worst case to it, exactly (design-time rule); checks exactness
         certify_design(design, words, rtol=check.rtol)
     except CertificationFailure as exc:
