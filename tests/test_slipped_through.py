@@ -97,3 +97,62 @@ def test_the_zonotope_estimators_tightness_is_the_documented_one(bench, seeded_r
         ratios.append(out.bound / limit)
     median = float(np.median(np.concatenate(ratios)))
     assert abs(median / DOCUMENTED_MEDIANS[gain] - 1) <= 0.02, (gain, median)
+
+
+# --- section 3: the last silent inputs ---------------------------------------------------------------------------
+
+def test_a_delay_whose_arrival_time_overflows_is_refused():
+    from eqrec.arrivals.traces import MAX_TRACE_DELAY, ArrivalTrace
+
+    for delays in ([0, 2 ** 63 - 1], [0, 1e300], [0, -1e300], [0, 2 ** 64 - 1]):
+        with pytest.raises(eqrec.InputError) as exc:
+            ArrivalTrace(delays)
+        assert exc.value.field == "delays"
+    far = ArrivalTrace([0, MAX_TRACE_DELAY, -1])
+    assert far.arrival_times().tolist() == [0, MAX_TRACE_DELAY + 1, -1]
+
+
+def test_a_time_varying_zonotope_run_does_not_wrap_around_its_data():
+    carts = eqrec.two_mass()
+    T = 4
+    tv = eqrec.AffineSystem(A=[carts.A] * T, C=[carts.C] * T, E=[carts.E] * T, eta_w=carts.eta_w, eta_v=carts.eta_v)
+    for t0 in (-3, -1, T):
+        with pytest.raises(eqrec.InputError) as exc:
+            ZonotopeEstimator(tv).reset(np.zeros(4), t0=t0)
+        assert exc.value.field == "t0"
+    periodic = ZonotopeEstimator(tv).periodic_model(T).reset(np.zeros(4), t0=-3)  # read at the period time
+    plain = ZonotopeEstimator(carts).reset(np.zeros(4), t0=-3)
+    assert periodic.step([0.1])[1] == plain.step([0.1])[1]
+
+
+def test_data_whose_propagation_overflows_is_refused_and_changes_nothing():
+    carts = eqrec.two_mass()
+    with pytest.raises(eqrec.InputError) as exc:
+        ZonotopeEstimator(carts).reset(np.full(4, 1e308))
+    assert exc.value.field == "xhat0"
+    est = ZonotopeEstimator(carts).reset(np.zeros(4))
+    twin = ZonotopeEstimator(carts).reset(np.zeros(4))
+    est.step([0.1]), twin.step([0.1])
+    for y in ([1e308], [-1e308], [(1, [1e308])]):
+        with pytest.raises(eqrec.InputError) as exc:
+            est.step(y)
+        assert exc.value.field == "y" and "overflow" in str(exc.value)
+    x, bound = est.step([0.2])
+    x_twin, bound_twin = twin.step([0.2])
+    assert np.array_equal(x, x_twin) and bound == bound_twin and np.isfinite(bound)
+
+
+@pytest.mark.parametrize("field", ["max_delay", "window", "iterations"])
+def test_a_window_too_long_is_refused_before_any_memory(field):
+    with pytest.raises(eqrec.InputError) as exc:
+        ZonotopeEstimator(eqrec.two_mass(), **{field: 10 ** 9})
+    assert exc.value.field == field
+
+
+def test_the_raised_mu1_note_prints_digits_that_differ():
+    from eqrec.cli import raise_note
+
+    note = raise_note(0.203903307, 0.203903307 + 3e-15)
+    requested, raised = note.split("requested ")[1].split(" (")[0].split(" to ")
+    assert requested != raised and float(raised) == 0.203903307 + 3e-15
+    assert "by 3e-15" in note

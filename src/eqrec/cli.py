@@ -64,6 +64,24 @@ EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usa
 
 
 
+def raise_note(requested: float, raised: float) -> str:
+    """``mu1 raised from the requested a to b``, with enough digits that ``a`` and ``b`` differ, and by how much.
+
+    Parameters
+    ----------
+    requested, raised : float
+        The requested and the certified recovery level.
+
+    Returns
+    -------
+    str
+        E.g. ``mu1 raised from the requested 0.203903307 to 0.203903307000003 (by 3e-15, relative 1.5e-14)``.
+    """
+    digits = next((d for d in range(9, 18) if f"{requested:.{d}g}" != f"{raised:.{d}g}"), 17)
+    return (f"mu1 raised from the requested {requested:.{digits}g} to {raised:.{digits}g} (by {raised - requested:.2g}, "
+            f"relative {(raised - requested) / requested:.2g})")
+
+
 def _system_help() -> str:
     return SYSTEM_HELP % {"limit": MAX_ENUMERATED_WORDS, "seq": JSON_NODE_GAINS_SEQUENCES,
                           "print": ESTIMATE_PRINT_SECONDS, "minutes": MAX_ESTIMATED_SECONDS / 60,
@@ -533,8 +551,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"eqrec: {hint}", file=sys.stderr)
         return EXIT_SOLVER
     if "mu1_requested" in result:
-        print(f"eqrec: note: mu1 raised from the requested {result['mu1_requested']:.9g} to {result['mu1']:.9g}, the "
-              "smallest level these gains certify (the LP meets its bound only to its tolerance)", file=sys.stderr)
+        print(f"eqrec: note: {raise_note(result['mu1_requested'], result['mu1'])}, the smallest level these gains "
+              "certify (the LP meets its bound only to its tolerance)", file=sys.stderr)
     if retried:
         print(f"eqrec: note: {len(retried)} LP(s) had no usable status at the first solve and were answered by "
               + ", ".join(f"{k} ({v})" for k, v in result["solver_retries"].items()), file=sys.stderr)
