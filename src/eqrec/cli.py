@@ -21,6 +21,7 @@ design (nothing is written), 4 for a solver or certification failure.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -33,7 +34,7 @@ import numpy as np
 
 from eqrec.arrivals.words import MAX_DELAY
 from eqrec.lp.solvers import SOLVER_NAMES, retry_log
-from eqrec.design.inputs import MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION
+from eqrec.design.inputs import ESTIMATE_PRINT_SECONDS, MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
@@ -45,8 +46,6 @@ EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
 #: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
 #: design's message blames the horizon (a marginally stable plant, ``ρ = 1`` up to rounding, is not blamed).
 UNSTABLE_GROWTH = 1e3
-#: Estimated seconds from which the size estimate of a ``--max-delay`` design is printed.
-ESTIMATE_PRINT_SECONDS = 10.0
 #: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).  The class engine certifies
 #: designs up to it (class levels raised by the LP's round-off times mu1: under 0.5 % at 1e12 on the example
 #: plants); the tree LP may stop earlier (a solver failure naming the class engine).
@@ -337,7 +336,8 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
 
     from eqrec.bounds.data_classes import ClassSet, full_language_counts
     from eqrec.arrivals.words import as_language
-    from eqrec.design.delay.design import delay_classes, delay_language, design_delay, design_delay_global
+    from eqrec.design.delay.design import delay_classes, delay_language
+    from eqrec.design.inputs import size_check_done
     from eqrec.design.report import JSON_NODE_GAINS_LIMIT, design_json
 
     if args.words is not None:
@@ -367,7 +367,7 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         lost = args.max_lost
         if lost is not None and not 0 <= lost <= args.horizon:
             raise InputError(f"must be 0..{args.horizon} (the horizon), got {lost}", "command line", "--max-lost")
-        if lost is None and engine == "classes":
+        if engine == "classes":  # with --max-lost too: the same size model (eqrec.design.inputs.class_shape)
             _check_size(args, system, mu1 == "free", par or {})
         n_words = full_language_counts(args.horizon, args.max_delay, lost)["words"]
         size = (f"{{0..{args.max_delay}}}^{args.horizon}" + (f" with at most {lost} lost" if lost is not None else "")
@@ -383,11 +383,12 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         enumerate_words = (args.node_gains or engine == "tree" or (
             n_words <= MAX_ENUMERATED_WORDS
             and full_language_counts(args.horizon, args.max_delay, lost)["sequences"] <= JSON_NODE_GAINS_LIMIT))
-        if enumerate_words:
-            patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost,
-                                      source="command line")
-        else:
-            patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost)
+        with size_check_done() if engine == "classes" else contextlib.nullcontext():  # checked above
+            if enumerate_words:  # at most MAX_ENUMERATED_WORDS words
+                patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost,
+                                          source="command line")
+            else:
+                patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost)
     else:
         if getattr(args, "force", False):
             raise InputError("--force applies to --max-delay and --horizon (delay words given in --delays are "
@@ -401,14 +402,8 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
                              args.system, "T")
     cost = args.cost or "sum"
     node_gains = True if args.node_gains else None
-    if mu1 == "free":
-        free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
-                                   node_gains=node_gains, engine=engine, state_weights=weights, **(par or {}))
-        design = free.design
-    else:
-        free = None
-        design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
-                              node_gains=node_gains, state_weights=weights, **(par or {}))
+    with size_check_done() if full and engine == "classes" else contextlib.nullcontext():  # checked above
+        design, free = _run_delay(args, system, patterns, mu1, cost, engine, node_gains, weights, par)
     words = [p.label for p in patterns] if not isinstance(patterns, ClassSet) else None
     # the same record as Design.save (eqrec.design.report.design_json), with the command's own entries
     out = design_json(design, free=free, node_gains=node_gains, words=words, original=system)
@@ -423,6 +418,20 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
     return out
 
 
+def _run_delay(args: argparse.Namespace, system, patterns, mu1, cost: str, engine: str, node_gains, weights,
+               par: dict | None):
+    """The delay design itself (μ1 fixed or free): the design and the μ1-free result (or ``None``)."""
+    from eqrec.design.delay.design import design_delay, design_delay_global
+
+    if mu1 == "free":
+        free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
+                                   node_gains=node_gains, engine=engine, state_weights=weights, **(par or {}))
+        return free.design, free
+    design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
+                          node_gains=node_gains, state_weights=weights, **(par or {}))
+    return design, None
+
+
 #: ``--method``: the function that designs with it, from the loaded system, its ``T`` (or ``None``), the parsed
 #: ``--mu1``, ``--state-weights`` and the parallel options; it returns the JSON of the design.
 DESIGN_METHODS = {
@@ -435,17 +444,14 @@ DESIGN_METHODS = {
 
 def _check_size(args: argparse.Namespace, system, mu1_free: bool, par: dict) -> None:
     """Print the estimate of a long ``--max-delay`` design; refuse one past the documented size unless ``--force``."""
-    from eqrec.design.inputs import estimate_delay_design
+    from eqrec.design.inputs import estimate_delay_design, report_size
     from eqrec.lp.parallel import check_jobs
 
     workers = 1 if par.get("scheduler") is not None else check_jobs(par.get("n_jobs"))
-    est = estimate_delay_design(system, args.max_delay, args.horizon, mu1_free=mu1_free, workers=workers)
-    reason = est.too_large()
-    if est.seconds >= ESTIMATE_PRINT_SECONDS or reason is not None:
-        print(f"eqrec: estimate: {est.summary()}", file=sys.stderr)
-    if reason is not None and not args.force:
-        raise InputError(f"refused: {reason} ({est.summary()}); shorten --horizon or --max-delay, or pass --force "
-                         "to run it anyway", "command line", "--horizon")
+    est = estimate_delay_design(system, args.max_delay, args.horizon, max_lost=args.max_lost, mu1_free=mu1_free,
+                                workers=workers)
+    report_size(est, force=args.force, field="--horizon", source="command line",
+                advice="shorten --horizon or --max-delay" + (" or lower --max-lost" if args.max_lost else ""))
 
 
 def _unstable_hint(args: argparse.Namespace, max_tries: int = 8) -> str:

@@ -41,38 +41,13 @@ from eqrec.arrivals.words import as_pattern
 from eqrec.bounds.data_classes import ClassGains, ClassSet, DataClass
 from eqrec.bounds.gains import GainRow, GainSchedule
 from eqrec.design.result import Design
+from eqrec.checks import short_label
 from eqrec.errors import CertificationFailure, InputError
 from eqrec.lp.model import LPSolution
 from eqrec.systems.affine import AffineSystem
 
 #: The methods whose JSON :func:`load_design` reads.
 METHODS = ("prefix", "time", "delay", "augmented")
-#: Longest class or word label quoted whole in a message (longer ones: first and last characters, and the length).
-LABEL_CHARS = 40
-
-
-def short_label(label: str, limit: int = LABEL_CHARS) -> str:
-    """A label for a message: whole up to ``limit`` characters, else its first and last characters and its length.
-
-    Parameters
-    ----------
-    label : str
-        A class label (``d:0110...``) or word.
-    limit : int, optional
-        The longest label quoted whole.
-
-    Returns
-    -------
-    str
-        ``label``, or e.g. ``'1000:11111111…11111111 (1005 characters)'``.
-    """
-    label = str(label)
-    if len(label) <= limit:
-        return label
-    half = max(1, (limit - 1) // 2)
-    return f"{label[:half]}…{label[-half:]} ({len(label)} characters)"
-
-
 def _need(data: dict, key: str, source: str, where: str = "") -> Any:
     """``data[key]``, else an :class:`InputError` naming the field (``where.key`` inside a row)."""
     if key not in data:
