@@ -417,7 +417,8 @@ class WorkEstimate:
         -------
         str
         """
-        return (f"{'more than ' if self.more else ''}{self.classes:.4g} classes, {self.lp_rows:.3g} LP rows "
+        count = f"{self.classes}" if self.classes < 10 ** 12 else f"{self.classes:.3g}"
+        return (f"{'more than ' if self.more else ''}{count} classes, {self.lp_rows:.3g} LP rows "
                 f"({self.nonzeros:.3g} nonzeros); about {_duration(self.seconds)} and {self.memory / 2**30:.2g} GiB "
                 f"on {self.workers} core{'s' * (self.workers > 1)}")
 
@@ -519,8 +520,22 @@ class ClassShape:
         return float((self.count * self.size).sum())
 
     def build_cost(self, horizon: int, max_delay: int) -> tuple[float, float]:
-        """Seconds and bytes to build the class set (:data:`SECONDS_PER_CLASS` and the others; the weights'
-        big integers add about ``T log2(τ̄+1) / 8`` bytes a class)."""
+        """Seconds and bytes to build the class set (:data:`SECONDS_PER_CLASS` and the others).
+
+        Parameters
+        ----------
+        horizon : int
+            ``T`` (the weights' big integers add about ``T log2(τ̄+2) / 8`` bytes a class).
+        max_delay : int
+            ``τ̄``.
+
+        Returns
+        -------
+        seconds : float
+            Expected seconds.
+        memory : float
+            Expected peak bytes.
+        """
         weight_bytes = horizon * np.log2(max_delay + 2) / 8
         return (self.classes * SECONDS_PER_CLASS + self.entries * SECONDS_PER_ENTRY,
                 2e8 + self.classes * (BYTES_PER_CLASS + weight_bytes) + self.entries * BYTES_PER_ENTRY)

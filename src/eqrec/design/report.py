@@ -14,8 +14,10 @@ import numpy as np
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import parse_delay_word
 from eqrec.design.cost import node_bounds
-from eqrec.design.result import Design, node_level
 from eqrec.errors import InputError
+
+# ``Design`` in the annotations is eqrec.design.result.Design, not imported: that module imports this one
+# (Design.save writes design_json), and the annotations are never evaluated (postponed)
 
 #: Largest reduced language (sequences) whose node gains ``to_json`` writes unless asked.
 JSON_NODE_GAINS_LIMIT = 200
@@ -42,7 +44,7 @@ def level_table(design: Design) -> list[dict]:
     bound = node_bounds(design.certificate)
     rows = [{"prefix": "", "k": 0, "level": design.mu1, "certified": design.mu1, "sequences": len(tree.patterns)}]
     for node in tree:
-        lvl = design.mu1 if node.terminal else node_level(design, node.prefix)
+        lvl = design.mu1 if node.terminal else design.level_at(node.prefix)
         rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
                      "sequences": w[node.index]})
     return rows
@@ -70,7 +72,7 @@ def path_levels(design: Design, pattern) -> np.ndarray:
     T = pat.T
     out = np.full(T + 1, design.mu1)
     for k in range(1, T):
-        out[k] = node_level(design, pat.prefix(k))
+        out[k] = design.level_at(pat.prefix(k))
     return out
 
 

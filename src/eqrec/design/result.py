@@ -282,6 +282,21 @@ class Design:
 
         return WeightedEstimator(estimator, self.state_weights)
 
+    def level_at(self, prefix: ArrivalPattern) -> float:
+        """The guaranteed level after an event prefix of length ``0 < k < T`` (:func:`node_level`).
+
+        Parameters
+        ----------
+        prefix : ArrivalPattern
+            The event prefix.
+
+        Returns
+        -------
+        float
+            Its node's level, else the common level ``mu2``.
+        """
+        return node_level(self, prefix)
+
     def save(self, path: "str | os.PathLike") -> Path:
         """Write the design file that ``eqrec design ... --out path`` writes; :func:`eqrec.load_design` reads it back.
 
