@@ -83,8 +83,50 @@ def test_unstable_plant_names_a_horizon_that_works(tmp_path, monkeypatch, capsys
     assert rc == cli.EXIT_SOLVER
     assert "the horizon 100 is too long for so unstable a plant: A has spectral radius 1.3" in err
     assert "--horizon 37 solves and 38 does not" in err
-    assert tried[0] == 100 and tried[1] == int(np.log(1e8) / np.log(1.3))  # the first guess: where ρ^T = 1e8
-    assert "eqrec: trying --horizon 37: solves" in err
+    assert tried[0] == 100  # the design itself; the search's designs run in child processes, printed:
+    first = int(np.log(1e8) / np.log(1.3))  # the first guess: where ρ^T = 1e8
+    assert err.index(f"eqrec: trying --horizon {first}: ") < err.index("eqrec: trying --horizon 37: solves")
+    assert "searching for the longest horizon that solves: at most 8 designs and 120 s" in err
+
+
+def test_the_horizon_search_is_bounded_in_time(tmp_path, monkeypatch, capsys):
+    """A design of the search that never returns (a solver stuck on a numerically hopeless LP) is stopped when the
+    search's time is up: the search ends with what it found."""
+    import time
+
+    def stuck_design(args):
+        if args.horizon > 37:
+            time.sleep(3600)  # in the search's child process: stopped
+            raise SolverFailure("stopped")
+        return {}
+
+    def failing(args):
+        raise SolverFailure("the class LPs: solver highs stopped with status 'Unknown'")
+
+    monkeypatch.setattr(cli, "HORIZON_SEARCH_SECONDS", 4.0)
+    monkeypatch.setattr(cli, "run_design", failing)
+    monkeypatch.setattr(cli, "_probe_design", _probe_with(stuck_design))
+    t0 = time.perf_counter()
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100", "--mu1", "free"])
+    spent = time.perf_counter() - t0
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_SOLVER and spent < 30
+    assert "no answer within" in err and "at most 8 designs and 4 s" in err
+
+
+def _probe_with(design):
+    """cli._probe_design running ``design`` instead of run_design (in the child process, as the CLI does)."""
+    original = cli._probe_design
+
+    def probe(args, seconds):
+        saved = cli.run_design
+        cli.run_design = design
+        try:
+            return original(args, seconds)
+        finally:
+            cli.run_design = saved
+    return probe
 
 
 def test_stable_plant_gets_no_horizon_hint(tmp_path, monkeypatch, capsys):

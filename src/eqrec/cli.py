@@ -34,7 +34,8 @@ import numpy as np
 
 from eqrec.arrivals.words import MAX_DELAY
 from eqrec.lp.solvers import SOLVER_NAMES, retry_log
-from eqrec.design.inputs import ESTIMATE_PRINT_SECONDS, MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION
+from eqrec.design.inputs import (ESTIMATE_PRINT_SECONDS, MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION, RESOLVED_GROWTH,
+                                 UNSTABLE_GROWTH)
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
@@ -43,9 +44,8 @@ if TYPE_CHECKING:
     from eqrec.design.result import Design
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
-#: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
-#: design's message blames the horizon (a marginally stable plant, ``ρ = 1`` up to rounding, is not blamed).
-UNSTABLE_GROWTH = 1e3
+#: Seconds the search for the longest horizon that solves may take in all (:func:`_unstable_hint`).
+HORIZON_SEARCH_SECONDS = 120.0
 #: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).  The class engine certifies
 #: designs up to it (class levels raised by the LP's round-off times mu1: under 0.5 % at 1e12 on the example
 #: plants); the tree LP may stop earlier (a solver failure naming the class engine).
@@ -454,59 +454,100 @@ def _check_size(args: argparse.Namespace, system, mu1_free: bool, par: dict) -> 
                 advice="shorten --horizon or --max-delay" + (" or lower --max-lost" if args.max_lost else ""))
 
 
-def _unstable_hint(args: argparse.Namespace, max_tries: int = 8) -> str:
+def _probe_design(args: argparse.Namespace, seconds: float) -> str:
+    """One design of the horizon search in a child process, stopped after ``seconds``: ``"solves"``, ``"fails"``
+    or ``"no answer"`` (a solver that does not return in time is stopped, so the search stays bounded)."""
+    import multiprocessing
+
+    def run() -> None:  # in the child: its progress lines and messages are the search's noise
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
+        except OSError:
+            pass
+        sys.stderr = open(os.devnull, "w")
+        try:
+            with retry_log():
+                run_design(args)
+        except (InfeasibleDesign, SolverFailure, CertificationFailure, InputError):
+            os._exit(1)
+        os._exit(0)
+
+    child = multiprocessing.get_context("fork").Process(target=run, daemon=True)
+    child.start()
+    child.join(seconds)
+    if child.is_alive():
+        child.kill()
+        child.join()
+        return "no answer"
+    return "solves" if child.exitcode == 0 else "fails"
+
+
+def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float | None = None) -> str:
     """For a failed ``--horizon`` design of an unstable plant: the longest horizon that solves, found by bisection.
 
     Every error map of the horizon grows like ``ρ^T`` (``ρ`` the spectral radius of ``A``): past about
-    ``log(1e8) / log ρ`` steps its entries span more than a double-precision LP resolves.  The search starts
-    there and halves the interval between a horizon that solved and one that did not (at most ``max_tries``
-    designs, each printed).  Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with
-    ``T`` in the system file.
+    ``log(1e8) / log ρ`` steps its entries span more than a double-precision LP resolves
+    (:func:`eqrec.design.inputs.growth_hint`).  The search starts there and halves the interval between a horizon
+    that solved and one that did not: at most ``max_tries`` designs and ``budget`` seconds in all, announced
+    first (default :data:`HORIZON_SEARCH_SECONDS`).  Each design is estimated first (:func:`eqrec.design.inputs.estimate_delay_design`) and skipped when
+    its estimate exceeds the time left; one that runs past the time left is stopped and counts as failed; each is
+    printed.  Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with ``T`` in the
+    system file.
     """
     import copy
+    import time
 
+    from eqrec.design.inputs import estimate_delay_design, growth_hint
     from eqrec.systems.files import load_system
 
     if getattr(args, "command", None) != "design" or getattr(args, "horizon", None) is None:
         return ""
     try:
         system, T_file = load_system(args.system)
-        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A, float)))))
+        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
     except (InputError, np.linalg.LinAlgError, ValueError):
         return ""
-    if T_file is not None or not rho ** args.horizon > UNSTABLE_GROWTH:
+    budget = HORIZON_SEARCH_SECONDS if budget is None else budget
+    head = growth_hint(system, args.horizon).split("; horizons up to")[0]
+    if T_file is not None or not head:
         return ""
+    print(f"eqrec: searching for the longest horizon that solves: at most {max_tries} designs and "
+          f"{budget:.0f} s", file=sys.stderr)
+    start = time.perf_counter()
 
     def solves(T: int) -> bool:
+        left = budget - (time.perf_counter() - start)
         probe = copy.copy(args)
-        probe.horizon, probe.out = T, None
-        try:
-            with retry_log():
-                run_design(probe)
-            ok = True
-        except (InfeasibleDesign, SolverFailure, CertificationFailure, InputError):
-            ok = False
-        print(f"eqrec: trying --horizon {T}: {'solves' if ok else 'fails'}", file=sys.stderr)
-        return ok
+        probe.horizon, probe.out, probe.jobs, probe.scheduler = T, None, 1, None
+        if probe.max_delay is not None:
+            est = estimate_delay_design(system, probe.max_delay, T, max_lost=probe.max_lost,
+                                        mu1_free=str(probe.mu1).strip().lower() == "free")
+            if est.seconds > left:
+                print(f"eqrec: trying --horizon {T}: skipped (estimated {est.seconds:.0f} s, {left:.0f} s left)",
+                      file=sys.stderr)
+                return False
+        outcome = _probe_design(probe, max(1.0, left))
+        print(f"eqrec: trying --horizon {T}: {outcome}" + (f" within {left:.0f} s" if outcome == "no answer" else ""),
+              file=sys.stderr)
+        return outcome == "solves"
 
     lo, hi = 0, int(args.horizon)  # lo: solves (0: none found yet), hi: fails
-    guess = min(hi - 1, max(1, int(np.log(1e8) / np.log(rho))))
+    guess = min(hi - 1, max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho))))
     tries = 0
-    while hi - lo > 1 and tries < max_tries:
+    while hi - lo > 1 and tries < max_tries and time.perf_counter() - start < budget:
         T = guess if tries == 0 else (lo + hi) // 2
         tries += 1
         if solves(T):
             lo = T
         else:
             hi = T
-    head = (f"the horizon {args.horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so "
-            f"the error maps grow like {rho:.4g}^T = {rho ** args.horizon:.3g}, past what a double-precision LP "
-            "resolves")
+    spent = time.perf_counter() - start
     if lo == 0:
-        return head + f"; no horizon below {hi} solved either"
+        return head + f"; no horizon below {hi} solved either ({tries} designs in {spent:.0f} s)"
     exact = hi - lo == 1
     return head + (f"; --horizon {lo} solves" + (f" and {hi} does not" if exact else
-                                                 f" (the longest found in {max_tries} tries; {hi} does not)"))
+                                                 f" (the longest found in {tries} designs and {spent:.0f} s; {hi} "
+                                                 "does not)"))
 
 
 def _check_out(out: str | None) -> Path | None:
@@ -553,6 +594,9 @@ def main(argv: list[str] | None = None) -> int:
     except (SolverFailure, CertificationFailure) as exc:
         print(f"eqrec: failed: {exc}", file=sys.stderr)
         hint = _unstable_hint(args)
+        head = hint.split("; ")[0]
+        if hint and head in str(exc):  # the design's message said why already (eqrec.design.inputs.growth_hint)
+            hint = hint[len(head) + 2:]
         if hint:
             print(f"eqrec: {hint}", file=sys.stderr)
         return EXIT_SOLVER

@@ -856,3 +856,40 @@ def _too_large(seconds: float, memory: float, available_memory: float | None) ->
     if seconds > MAX_ESTIMATED_SECONDS:
         return f"it would take about {_duration(seconds)}, more than {MAX_ESTIMATED_SECONDS / 60:.0f} min"
     return None
+
+
+#: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
+#: design is blamed on the horizon (a marginally stable plant, ``ρ = 1`` up to rounding, is not blamed).
+UNSTABLE_GROWTH = 1e3
+#: The spread of entries a double-precision LP resolves: horizons up to ``log(RESOLVED_GROWTH) / log ρ``.
+RESOLVED_GROWTH = 1e8
+
+
+def growth_hint(system: AffineSystem, horizon: int) -> str:
+    """Why a design of an unstable plant over a long horizon fails, and the horizon that usually solves.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    horizon : int
+        The horizon ``T`` that failed.
+
+    Returns
+    -------
+    str
+        Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH` (``ρ`` the spectral radius of ``A``, time-varying:
+        of its first matrix); else the reason and ``log(RESOLVED_GROWTH) / log ρ``.
+    """
+    try:
+        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
+    except (np.linalg.LinAlgError, ValueError):
+        return ""
+    with np.errstate(over="ignore"):
+        growth = rho ** int(horizon)
+    if not growth > UNSTABLE_GROWTH:
+        return ""
+    usual = max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho)))
+    return (f"the horizon {horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so the "
+            f"error maps grow like {rho:.4g}^T = {growth:.3g}, past what a double-precision LP resolves; horizons up "
+            f"to about {usual} usually solve (eqrec design --horizon searches for the longest)")

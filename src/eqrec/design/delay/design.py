@@ -68,14 +68,14 @@ from eqrec.design.classes.engine import check_terminal, class_design, solve_clas
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
 from eqrec.design.delay.languages import delay_classes, delay_language  # noqa: F401 (re-exported)
 from eqrec.design.delay.languages import patterns_classes, patterns_tree
-from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system
+from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system, growth_hint
 from eqrec.design.classes.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.classes.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix.design import check_engine, solve_tree_lp, tree_design
 from eqrec.design.prefix.tree_lp import PrefixLP, build_prefix_lp
 from eqrec.design.result import Design, Mu1Free
 from eqrec.design.weighted import weigh
-from eqrec.errors import InfeasibleDesign, InputError
+from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
 # ---------------------------------------------------------------------------
 # Designs from LP solutions
@@ -126,6 +126,19 @@ def design_from_solution(model: PrefixLP, tree: PrefixTree, x: np.ndarray, mu1: 
     if cert is not None:
         design.J_certified = certified_cost(design, tree, cost, cert)
     return design
+
+
+@contextlib.contextmanager
+def _horizon_hint(system: AffineSystem, horizon: int):
+    """A solver or certification failure of an unstable plant over a long horizon says why
+    (:func:`eqrec.design.inputs.growth_hint`)."""
+    try:
+        yield
+    except (SolverFailure, CertificationFailure) as exc:
+        hint = growth_hint(system, horizon)
+        if not hint or hint in str(exc):
+            raise
+        raise type(exc)(f"{exc}; {hint}") from exc
 
 
 def check_design_size(system: AffineSystem, classes, *, mu1_free: bool, n_jobs, scheduler, force: bool) -> None:
@@ -294,9 +307,10 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     if engine == "classes" and solved is None:
         check_design_size(system, language, mu1_free=False, n_jobs=n_jobs, scheduler=scheduler, force=force)
     st = Stacking(system, language.horizon if engine == "classes" else language.depth)  # the design's one stacking
-    design = _design_on(st, language, mu1, cost=cost, solver=solver, form=form, certify=certify,
-                        solver_options=solver_options, engine=engine, node_gains=node_gains, n_jobs=n_jobs,
-                        scheduler=scheduler, solved=solved)
+    with _horizon_hint(system, st.T):
+        design = _design_on(st, language, mu1, cost=cost, solver=solver, form=form, certify=certify,
+                            solver_options=solver_options, engine=engine, node_gains=node_gains, n_jobs=n_jobs,
+                            scheduler=scheduler, solved=solved)
     design.state_weights = weights
     return design
 
@@ -506,7 +520,8 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     check_design_size(system, classes, mu1_free=True, n_jobs=n_jobs, scheduler=scheduler, force=force)
     st = Stacking(system, classes.horizon)  # the one stacked model of μ1,min, both level LPs and the design
     large = choose_path("auto", classes, None, system) == "blocks"  # else no class LP runs on the scheduler
-    with connected(scheduler if large else None) as client, _workers_ahead(system, classes, n_jobs, client):
+    with _horizon_hint(system, classes.horizon), connected(scheduler if large else None) as client, \
+            _workers_ahead(system, classes, n_jobs, client):
         par = {"n_jobs": n_jobs, "scheduler": client}  # one connection, one pool, for the three steps
         mm = _class_min_recovery_level(st, classes, solver=solver, lower_rtol=rtol, **par)
         # the levels at μ1,min (the design) and at the level proven infeasible (the bound), in one pass per class
