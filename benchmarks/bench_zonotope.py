@@ -14,6 +14,9 @@ reduction).  The last line gives the default against the reference at order 40. 
 which loads the compiled loops, is not timed), and bound / limit per step pooled over the seeds (median, p95,
 max), where the limit is :func:`eqrec.bounds.information.information_limit` (max over states, per step).  The
 guarantee is also counted: violations of ``|x - x̂|_∞ <= bound`` with noise at random box corners (must be 0).
+
+The medians of bound / limit at the defaults (300 steps x 3 seeds), per gain: ``reweighted`` 1.124, ``fradius``
+1.133 (measured 2026-11-29; ``tests/test_slipped_through.py`` pins them within 2 %).
 """
 
 from __future__ import annotations

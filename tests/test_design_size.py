@@ -4,6 +4,9 @@ unless --force, and the message naming a horizon that works for an unstable plan
 import json
 from pathlib import Path
 
+import eqrec
+from eqrec.errors import InputError
+
 import numpy as np
 import pytest
 
@@ -83,8 +86,50 @@ def test_unstable_plant_names_a_horizon_that_works(tmp_path, monkeypatch, capsys
     assert rc == cli.EXIT_SOLVER
     assert "the horizon 100 is too long for so unstable a plant: A has spectral radius 1.3" in err
     assert "--horizon 37 solves and 38 does not" in err
-    assert tried[0] == 100 and tried[1] == int(np.log(1e8) / np.log(1.3))  # the first guess: where ρ^T = 1e8
-    assert "eqrec: trying --horizon 37: solves" in err
+    assert tried[0] == 100  # the design itself; the search's designs run in child processes, printed:
+    first = int(np.log(1e8) / np.log(1.3))  # the first guess: where ρ^T = 1e8
+    assert err.index(f"eqrec: trying --horizon {first}: ") < err.index("eqrec: trying --horizon 37: solves")
+    assert "searching for the longest horizon that solves: at most 8 designs and 120 s" in err
+
+
+def test_the_horizon_search_is_bounded_in_time(tmp_path, monkeypatch, capsys):
+    """A design of the search that never returns (a solver stuck on a numerically hopeless LP) is stopped when the
+    search's time is up: the search ends with what it found."""
+    import time
+
+    def stuck_design(args):
+        if args.horizon > 37:
+            time.sleep(3600)  # in the search's child process: stopped
+            raise SolverFailure("stopped")
+        return {}
+
+    def failing(args):
+        raise SolverFailure("the class LPs: solver highs stopped with status 'Unknown'")
+
+    monkeypatch.setattr(cli, "HORIZON_SEARCH_SECONDS", 4.0)
+    monkeypatch.setattr(cli, "run_design", failing)
+    monkeypatch.setattr(cli, "_probe_design", _probe_with(stuck_design))
+    t0 = time.perf_counter()
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100", "--mu1", "free"])
+    spent = time.perf_counter() - t0
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_SOLVER and spent < 30
+    assert "no answer within" in err and "at most 8 designs and 4 s" in err
+
+
+def _probe_with(design):
+    """cli._probe_design running ``design`` instead of run_design (in the child process, as the CLI does)."""
+    original = cli._probe_design
+
+    def probe(args, seconds):
+        saved = cli.run_design
+        cli.run_design = design
+        try:
+            return original(args, seconds)
+        finally:
+            cli.run_design = saved
+    return probe
 
 
 def test_stable_plant_gets_no_horizon_hint(tmp_path, monkeypatch, capsys):
@@ -103,3 +148,85 @@ def test_force_without_a_max_delay_language_is_refused(extra, field, capsys):
     assert cli.main(["design", str(ACC), *extra, "--force"]) == cli.EXIT_INPUT
     err = capsys.readouterr().err
     assert f"field '{field}'" in err and "--force applies to" in err
+
+
+# --- issue 41, section 2: one size model for Python and the CLI ------------------------------------------------
+
+def _refused_fast(call, field):
+    import time
+
+    t0 = time.perf_counter()
+    with pytest.raises(InputError) as exc:
+        call()
+    assert exc.value.field == field and "refused" in str(exc.value), str(exc.value)
+    assert time.perf_counter() - t0 < 5.0
+    return str(exc.value)
+
+
+def test_class_shape_counts_the_classes_of_every_language():
+    from eqrec.bounds.data_classes import classes_of_full_language, full_language_class_count
+    from eqrec.design.inputs import class_shape
+
+    for T, D, m in ((1, 0, None), (7, 2, None), (12, 3, 1), (9, 1, 3), (30, 4, None), (40, 2, 2), (6, 2, 6)):
+        shape = class_shape(D, T, m)
+        assert shape.classes == pytest.approx(full_language_class_count(T, D, m), rel=1e-12)
+        built = classes_of_full_language(T, D, m)
+        assert shape.entries == pytest.approx(sum(len(c.available) for c in built.classes), rel=1e-12)
+        from collections import Counter
+
+        counted = Counter()
+        for d, size, count in zip(shape.depth.tolist(), shape.size.tolist(), shape.count.tolist()):
+            counted[(d, size)] += count
+        exact = Counter((c.depth, len(c.available)) for c in built.classes)
+        assert counted.keys() == exact.keys()  # the counts are floats (lgamma): equal to rounding
+        assert all(counted[k] == pytest.approx(exact[k], rel=1e-12) for k in exact)
+
+
+def test_huge_class_sets_and_languages_are_estimated_and_refused_at_once(capsys):
+    from eqrec.design.delay.design import delay_classes, delay_language
+
+    _refused_fast(lambda: delay_classes(max_delay=1, horizon=100_000), "horizon")
+    _refused_fast(lambda: delay_classes(max_delay=2, horizon=10**6, max_lost=1), "horizon")
+    message = _refused_fast(lambda: delay_language(max_delay=2, horizon=30, max_lost=1), "horizon")
+    assert "force=True" in message and "delay_classes" in message
+    _refused_fast(lambda: delay_language(max_delay=3, horizon=30), "horizon")
+    assert capsys.readouterr().err.count("eqrec: estimate: ") == 4
+
+
+def test_python_and_the_cli_give_the_same_estimate(tmp_path, capsys):
+    from eqrec.design.delay.design import delay_classes, design_delay, design_delay_global
+
+    system = eqrec.load_system(ROOT / "examples" / "two_mass.yaml")[0]
+    classes = delay_classes(max_delay=4, horizon=800)
+    capsys.readouterr()
+    _refused_fast(lambda: design_delay_global(system, classes, n_jobs=2), "patterns")
+    python = capsys.readouterr().err
+    _refused_fast(lambda: design_delay(system, classes, 1.0, n_jobs=2), "patterns")
+    capsys.readouterr()
+    rc = cli.main(["design", str(ROOT / "examples" / "two_mass.yaml"), "--method", "delay", "--max-delay", "4",
+                   "--horizon", "800", "--mu1", "free", "--jobs", "2"])
+    command = capsys.readouterr().err
+    assert rc == cli.EXIT_INPUT
+    # the same classes, LP rows and time (the CLI adds the class set's construction to the memory)
+    same = python.split("; about")[0].split("estimate: ")[1]
+    assert same in command and "12766 classes" in same
+
+
+def test_max_lost_goes_through_the_size_check(capsys):
+    import time
+
+    t0 = time.perf_counter()
+    rc = cli.main(["design", str(ROOT / "examples" / "two_mass.yaml"), "--method", "delay", "--max-delay", "2",
+                   "--horizon", "1000000", "--max-lost", "1"])
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INPUT and time.perf_counter() - t0 < 5.0
+    assert "eqrec: estimate: " in err and "--max-lost" in err and "--force" in err
+
+
+@pytest.mark.parametrize("size, field", [(["--runs", "100000"], "--runs"), (["--periods", "10000"], "--periods")])
+def test_compare_estimates_and_refuses_a_long_run(tmp_path, capsys, size, field):
+    rc = cli.main(["compare", str(ROOT / "examples" / "batch_reactor.yaml"), "--loss", "0.1", "--max-delay", "2",
+                   "--horizon", "5", *size, "--out", str(tmp_path / "cmp")])
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INPUT and f"field '{field}': refused" in err and "--force" in err
+    assert not (tmp_path / "cmp").exists()

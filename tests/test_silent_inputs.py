@@ -140,7 +140,7 @@ def test_load_design_refuses_what_it_cannot_run(tmp_path):
         path.write_text(json.dumps(content))
         with pytest.raises(InputError) as exc:
             eqrec.load_design(path)
-        assert exc.value.field == field, (name, str(exc.value))
+        assert exc.value.field.split("[")[0] == field, (name, str(exc.value))
     (tmp_path / "bad.json").write_text("{not json")
     for path, field in ((tmp_path / "bad.json", None), (tmp_path / "none.json", None), (3, "path")):
         with pytest.raises(InputError) as exc:

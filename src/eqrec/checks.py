@@ -16,6 +16,39 @@ import numpy as np
 from eqrec.errors import InputError
 
 
+#: Longest label (a class ``d:0110...``, a word, a data list) quoted whole in a message; a longer one is shortened
+#: to its first and last characters and its length (:func:`short_label`).
+LABEL_CHARS = 40
+
+
+def short_label(label: Any, limit: int = LABEL_CHARS) -> str:
+    """A label for a message: whole up to ``limit`` characters, else its first and last characters and its length.
+
+    Parameters
+    ----------
+    label : object
+        A class label (``d:0110...``), a word, a list of times (its ``str``).
+    limit : int, optional
+        The longest label quoted whole.
+
+    Returns
+    -------
+    str
+        ``label``, or e.g. ``'1000:11111111111111111111…00000000000000000101 (1005 characters)'``.
+
+    Examples
+    --------
+    >>> from eqrec.checks import short_label
+    >>> short_label("3:101"), short_label("1" * 100, limit=10)
+    ('3:101', '1111…1111 (100 characters)')
+    """
+    label = str(label)
+    if len(label) <= limit:
+        return label
+    half = max(1, (limit - 1) // 2)
+    return f"{label[:half]}…{label[-half:]} ({len(label)} characters)"
+
+
 def integer(value: Any, field: str, *, low: int = 0, high: int | None = None, source: str | None = None) -> int:
     """``value`` as an ``int`` in ``low..high``, else an :class:`InputError` naming ``field``.
 

@@ -21,6 +21,7 @@ design (nothing is written), 4 for a solver or certification failure.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -33,7 +34,8 @@ import numpy as np
 
 from eqrec.arrivals.words import MAX_DELAY
 from eqrec.lp.solvers import SOLVER_NAMES, retry_log
-from eqrec.design.inputs import MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION
+from eqrec.design.inputs import (ESTIMATE_PRINT_SECONDS, MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION, RESOLVED_GROWTH,
+                                 UNSTABLE_GROWTH)
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
@@ -42,11 +44,8 @@ if TYPE_CHECKING:
     from eqrec.design.result import Design
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
-#: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
-#: design's message blames the horizon (a marginally stable plant, ``ρ = 1`` up to rounding, is not blamed).
-UNSTABLE_GROWTH = 1e3
-#: Estimated seconds from which the size estimate of a ``--max-delay`` design is printed.
-ESTIMATE_PRINT_SECONDS = 10.0
+#: Seconds the search for the longest horizon that solves may take in all (:func:`_unstable_hint`).
+HORIZON_SEARCH_SECONDS = 120.0
 #: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).  The class engine certifies
 #: designs up to it (class levels raised by the LP's round-off times mu1: under 0.5 % at 1e12 on the example
 #: plants); the tree LP may stop earlier (a solver failure naming the class engine).
@@ -62,6 +61,24 @@ JSON_NODE_GAINS_SEQUENCES = 200
 EXIT_HELP = ("Exit status: 0 ok; 1 malformed input (file and field named); 2 usage error; "
              "3 infeasible or unbounded design (no file written); 4 solver or certification failure.")
 
+
+
+def raise_note(requested: float, raised: float) -> str:
+    """``mu1 raised from the requested a to b``, with enough digits that ``a`` and ``b`` differ, and by how much.
+
+    Parameters
+    ----------
+    requested, raised : float
+        The requested and the certified recovery level.
+
+    Returns
+    -------
+    str
+        E.g. ``mu1 raised from the requested 0.203903307 to 0.203903307000003 (by 3e-15, relative 1.5e-14)``.
+    """
+    digits = next((d for d in range(9, 18) if f"{requested:.{d}g}" != f"{raised:.{d}g}"), 17)
+    return (f"mu1 raised from the requested {requested:.{digits}g} to {raised:.{digits}g} (by {raised - requested:.2g}, "
+            f"relative {(raised - requested) / requested:.2g})")
 
 
 def _system_help() -> str:
@@ -217,27 +234,26 @@ def run_design(args: argparse.Namespace) -> dict:
 
 
 def _design_prefix(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
-                   par: dict) -> tuple[Design, dict, dict]:
-    """``--method prefix``: the prefix-based design (class engine or tree LP); no entries of its own before the
-    gains, the class engine's after them."""
+                   par: dict) -> tuple[Design, dict]:
+    """``--method prefix``: the prefix-based design (class engine or tree LP); no entries of its own."""
     from eqrec.design.prefix.design import design_prefix
 
     design = design_prefix(system, words, args.mu1, solver=args.solver, engine=args.engine or "classes",
                            state_weights=weights, **par)
-    return design, {}, _class_engine_entries(design)
+    return design, {}
 
 
 def _design_time(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
-                 par: dict) -> tuple[Design, dict, dict]:
-    """``--method time``: one gain sequence for the worst-case word, named after the gains."""
+                 par: dict) -> tuple[Design, dict]:
+    """``--method time``: one gain sequence for the worst-case word."""
     from eqrec.design.prefix.time_based import design_time_based
 
     design = design_time_based(system, words, args.mu1, solver=args.solver, state_weights=weights)
-    return design, {}, {"worst_case_word": design.worst_case_word, **_class_engine_entries(design)}
+    return design, {}
 
 
 def _design_augmented(args: argparse.Namespace, system, words: list, weights: np.ndarray | None,
-                      par: dict) -> tuple[Design, dict, dict]:
+                      par: dict) -> tuple[Design, dict]:
     """``--method augmented``: the state-augmented design (``--L``, ``--poles``, ``--s0`` read here); its ``L``,
     ``s0``, ``M``, ``nu`` written after the words."""
     from eqrec.design.augmented.design import design_augmented
@@ -255,22 +271,7 @@ def _design_augmented(args: argparse.Namespace, system, words: list, weights: np
     design = design_augmented(system, words, args.mu1, L=L, poles=poles, s0=s0, solver=args.solver)
     aug = design.augmented
     head = {k: np.asarray(v).tolist() for k, v in (("L", aug.L), ("s0", aug.s0), ("M", aug.M), ("nu", aug.nu))}
-    return design, head, {}
-
-
-def _class_engine_entries(design: Design) -> dict:
-    """What ``--method prefix`` and ``time`` write after the gains: μ1 free, the engine, the class table."""
-    out = {}
-    free = design.mu1_free
-    if free is not None:
-        out["mu1_free"] = {"route": free.route, "mu1_min": {
-            "upper": free.mu1_min, "lower": free.mu1_min_lower, "binding": free.binding}}
-    out["engine"] = design.engine
-    if design.class_gains is not None:
-        from eqrec.design.report import class_table
-
-        out["classes"] = class_table(design)
-    return out
+    return design, head
 
 
 def run_word_design(args: argparse.Namespace, system, T_file: int | None, mu1: float | str,
@@ -301,22 +302,11 @@ def run_word_design(args: argparse.Namespace, system, T_file: int | None, mu1: f
                       field_name="--words" if T_file is None else "T")
     if args.method != "augmented" and (args.L or args.poles or args.s0):
         raise InputError("--L, --poles and --s0 apply to --method augmented only", "command line", "--method")
-    design, head, tail = method(args, system, words, weights, par)
-    cert = design.certificate if design.certificate is not None else design.class_certificate
-    out = {"method": args.method, "T": design.T, "mu1": design.mu1, "mu2": design.mu2, "certified_mu2": cert.mu2,
-           "certified_terminal": cert.terminal, "solver": design.solution.solver, "status": design.solution.status,
-           "words": list(words), **head}
-    if design.mu1_requested is not None:  # mu1 raised to the fixed point the gains certify (eqrec.bounds.certify)
-        out["mu1_requested"] = design.mu1_requested
-    if design.schedule is not None:  # none for a class-engine language too large for node gains
-        out.update(designed_words=list(design.schedule.designed_words), gains=design.schedule.to_json())
-    out.update(tail)
-    if weights is not None:
-        from eqrec.design.report import original_coordinates
+    design, head = method(args, system, words, weights, par)
+    from eqrec.design.report import design_json
 
-        original_coordinates(out, weights)
-    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
-    return out
+    # the same record as Design.save: the gains in the file's coordinates, the system as the file gave it
+    return design_json(design, words=list(words), head=head, original=system)
 
 
 def _parse_mu1(text: str, *, allow_free: bool) -> float | str:
@@ -346,8 +336,9 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
 
     from eqrec.bounds.data_classes import ClassSet, full_language_counts
     from eqrec.arrivals.words import as_language
-    from eqrec.design.delay.design import delay_classes, delay_language, design_delay, design_delay_global
-    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, original_coordinates, to_json
+    from eqrec.design.delay.design import delay_classes, delay_language
+    from eqrec.design.inputs import size_check_done
+    from eqrec.design.report import JSON_NODE_GAINS_LIMIT, design_json
 
     if args.words is not None:
         raise InputError("--method delay takes delay words in --delays (digits), not --words", "command line",
@@ -376,7 +367,7 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         lost = args.max_lost
         if lost is not None and not 0 <= lost <= args.horizon:
             raise InputError(f"must be 0..{args.horizon} (the horizon), got {lost}", "command line", "--max-lost")
-        if lost is None and engine == "classes":
+        if engine == "classes":  # with --max-lost too: the same size model (eqrec.design.inputs.class_shape)
             _check_size(args, system, mu1 == "free", par or {})
         n_words = full_language_counts(args.horizon, args.max_delay, lost)["words"]
         size = (f"{{0..{args.max_delay}}}^{args.horizon}" + (f" with at most {lost} lost" if lost is not None else "")
@@ -392,11 +383,12 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
         enumerate_words = (args.node_gains or engine == "tree" or (
             n_words <= MAX_ENUMERATED_WORDS
             and full_language_counts(args.horizon, args.max_delay, lost)["sequences"] <= JSON_NODE_GAINS_LIMIT))
-        if enumerate_words:
-            patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost,
-                                      source="command line")
-        else:
-            patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost)
+        with size_check_done() if engine == "classes" else contextlib.nullcontext():  # checked above
+            if enumerate_words:  # at most MAX_ENUMERATED_WORDS words
+                patterns = delay_language(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost,
+                                          source="command line")
+            else:
+                patterns = delay_classes(max_delay=args.max_delay, horizon=args.horizon, max_lost=lost)
     else:
         if getattr(args, "force", False):
             raise InputError("--force applies to --max-delay and --horizon (delay words given in --delays are "
@@ -410,30 +402,34 @@ def run_delay_design(args: argparse.Namespace, system, T_file: int | None, mu1: 
                              args.system, "T")
     cost = args.cost or "sum"
     node_gains = True if args.node_gains else None
-    if mu1 == "free":
-        free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
-                                   node_gains=node_gains, engine=engine, state_weights=weights, **(par or {}))
-        design = free.design
-    else:
-        free = None
-        design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
-                              node_gains=node_gains, state_weights=weights, **(par or {}))
-    out = to_json(design, free, node_gains=node_gains)
-    out.update(solver=design.solution.solver, status=design.solution.status)
+    with size_check_done() if full and engine == "classes" else contextlib.nullcontext():  # checked above
+        design, free = _run_delay(args, system, patterns, mu1, cost, engine, node_gains, weights, par)
+    words = [p.label for p in patterns] if not isinstance(patterns, ClassSet) else None
+    # the same record as Design.save (eqrec.design.report.design_json), with the command's own entries
+    out = design_json(design, free=free, node_gains=node_gains, words=words, original=system)
+    system_entry = out.pop("system")
     if full:
         out.update(max_delay=args.max_delay, horizon=args.horizon)
         if args.max_lost is not None:
             out["max_lost"] = args.max_lost
     if isinstance(patterns, ClassSet):  # classes from the window rule: no word enumerated
         out["words"] = int(patterns.words)
-    else:
-        out["words"] = [p.label for p in patterns]
-        if design.schedule is not None:
-            out["designed_words"] = [p.label for p in design.schedule.designed]
-    if weights is not None:
-        original_coordinates(out, weights)
-    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
+    out["system"] = system_entry
     return out
+
+
+def _run_delay(args: argparse.Namespace, system, patterns, mu1, cost: str, engine: str, node_gains, weights,
+               par: dict | None):
+    """The delay design itself (μ1 fixed or free): the design and the μ1-free result (or ``None``)."""
+    from eqrec.design.delay.design import design_delay, design_delay_global
+
+    if mu1 == "free":
+        free = design_delay_global(system, patterns, kind="delay", cost=cost, solver=args.solver,
+                                   node_gains=node_gains, engine=engine, state_weights=weights, **(par or {}))
+        return free.design, free
+    design = design_delay(system, patterns, mu1, kind="delay", cost=cost, solver=args.solver, engine=engine,
+                          node_gains=node_gains, state_weights=weights, **(par or {}))
+    return design, None
 
 
 #: ``--method``: the function that designs with it, from the loaded system, its ``T`` (or ``None``), the parsed
@@ -448,72 +444,110 @@ DESIGN_METHODS = {
 
 def _check_size(args: argparse.Namespace, system, mu1_free: bool, par: dict) -> None:
     """Print the estimate of a long ``--max-delay`` design; refuse one past the documented size unless ``--force``."""
-    from eqrec.design.inputs import estimate_delay_design
+    from eqrec.design.inputs import estimate_delay_design, report_size
     from eqrec.lp.parallel import check_jobs
 
     workers = 1 if par.get("scheduler") is not None else check_jobs(par.get("n_jobs"))
-    est = estimate_delay_design(system, args.max_delay, args.horizon, mu1_free=mu1_free, workers=workers)
-    reason = est.too_large()
-    if est.seconds >= ESTIMATE_PRINT_SECONDS or reason is not None:
-        print(f"eqrec: estimate: {est.summary()}", file=sys.stderr)
-    if reason is not None and not args.force:
-        raise InputError(f"refused: {reason} ({est.summary()}); shorten --horizon or --max-delay, or pass --force "
-                         "to run it anyway", "command line", "--horizon")
+    est = estimate_delay_design(system, args.max_delay, args.horizon, max_lost=args.max_lost, mu1_free=mu1_free,
+                                workers=workers)
+    report_size(est, force=args.force, field="--horizon", source="command line",
+                advice="shorten --horizon or --max-delay" + (" or lower --max-lost" if args.max_lost else ""))
 
 
-def _unstable_hint(args: argparse.Namespace, max_tries: int = 8) -> str:
+def _probe_design(args: argparse.Namespace, seconds: float) -> str:
+    """One design of the horizon search in a child process, stopped after ``seconds``: ``"solves"``, ``"fails"``
+    or ``"no answer"`` (a solver that does not return in time is stopped, so the search stays bounded)."""
+    import multiprocessing
+
+    def run() -> None:  # in the child: its progress lines and messages are the search's noise
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
+        except OSError:
+            pass
+        sys.stderr = open(os.devnull, "w")
+        try:
+            with retry_log():
+                run_design(args)
+        except (InfeasibleDesign, SolverFailure, CertificationFailure, InputError):
+            os._exit(1)
+        os._exit(0)
+
+    child = multiprocessing.get_context("fork").Process(target=run, daemon=True)
+    child.start()
+    child.join(seconds)
+    if child.is_alive():
+        child.kill()
+        child.join()
+        return "no answer"
+    return "solves" if child.exitcode == 0 else "fails"
+
+
+def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float | None = None) -> str:
     """For a failed ``--horizon`` design of an unstable plant: the longest horizon that solves, found by bisection.
 
     Every error map of the horizon grows like ``ρ^T`` (``ρ`` the spectral radius of ``A``): past about
-    ``log(1e8) / log ρ`` steps its entries span more than a double-precision LP resolves.  The search starts
-    there and halves the interval between a horizon that solved and one that did not (at most ``max_tries``
-    designs, each printed).  Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with
-    ``T`` in the system file.
+    ``log(1e8) / log ρ`` steps its entries span more than a double-precision LP resolves
+    (:func:`eqrec.design.inputs.growth_hint`).  The search starts there and halves the interval between a horizon
+    that solved and one that did not: at most ``max_tries`` designs and ``budget`` seconds in all, announced
+    first (default :data:`HORIZON_SEARCH_SECONDS`).  Each design is estimated first (:func:`eqrec.design.inputs.estimate_delay_design`) and skipped when
+    its estimate exceeds the time left; one that runs past the time left is stopped and counts as failed; each is
+    printed.  Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with ``T`` in the
+    system file.
     """
     import copy
+    import time
 
+    from eqrec.design.inputs import estimate_delay_design, growth_hint
     from eqrec.systems.files import load_system
 
     if getattr(args, "command", None) != "design" or getattr(args, "horizon", None) is None:
         return ""
     try:
         system, T_file = load_system(args.system)
-        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A, float)))))
+        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
     except (InputError, np.linalg.LinAlgError, ValueError):
         return ""
-    if T_file is not None or not rho ** args.horizon > UNSTABLE_GROWTH:
+    budget = HORIZON_SEARCH_SECONDS if budget is None else budget
+    head = growth_hint(system, args.horizon).split("; horizons up to")[0]
+    if T_file is not None or not head:
         return ""
+    print(f"eqrec: searching for the longest horizon that solves: at most {max_tries} designs and "
+          f"{budget:.0f} s", file=sys.stderr)
+    start = time.perf_counter()
 
     def solves(T: int) -> bool:
+        left = budget - (time.perf_counter() - start)
         probe = copy.copy(args)
-        probe.horizon, probe.out = T, None
-        try:
-            with retry_log():
-                run_design(probe)
-            ok = True
-        except (InfeasibleDesign, SolverFailure, CertificationFailure, InputError):
-            ok = False
-        print(f"eqrec: trying --horizon {T}: {'solves' if ok else 'fails'}", file=sys.stderr)
-        return ok
+        probe.horizon, probe.out, probe.jobs, probe.scheduler = T, None, 1, None
+        if probe.max_delay is not None:
+            est = estimate_delay_design(system, probe.max_delay, T, max_lost=probe.max_lost,
+                                        mu1_free=str(probe.mu1).strip().lower() == "free")
+            if est.seconds > left:
+                print(f"eqrec: trying --horizon {T}: skipped (estimated {est.seconds:.0f} s, {left:.0f} s left)",
+                      file=sys.stderr)
+                return False
+        outcome = _probe_design(probe, max(1.0, left))
+        print(f"eqrec: trying --horizon {T}: {outcome}" + (f" within {left:.0f} s" if outcome == "no answer" else ""),
+              file=sys.stderr)
+        return outcome == "solves"
 
     lo, hi = 0, int(args.horizon)  # lo: solves (0: none found yet), hi: fails
-    guess = min(hi - 1, max(1, int(np.log(1e8) / np.log(rho))))
+    guess = min(hi - 1, max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho))))
     tries = 0
-    while hi - lo > 1 and tries < max_tries:
+    while hi - lo > 1 and tries < max_tries and time.perf_counter() - start < budget:
         T = guess if tries == 0 else (lo + hi) // 2
         tries += 1
         if solves(T):
             lo = T
         else:
             hi = T
-    head = (f"the horizon {args.horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so "
-            f"the error maps grow like {rho:.4g}^T = {rho ** args.horizon:.3g}, past what a double-precision LP "
-            "resolves")
+    spent = time.perf_counter() - start
     if lo == 0:
-        return head + f"; no horizon below {hi} solved either"
+        return head + f"; no horizon below {hi} solved either ({tries} designs in {spent:.0f} s)"
     exact = hi - lo == 1
     return head + (f"; --horizon {lo} solves" + (f" and {hi} does not" if exact else
-                                                 f" (the longest found in {max_tries} tries; {hi} does not)"))
+                                                 f" (the longest found in {tries} designs and {spent:.0f} s; {hi} "
+                                                 "does not)"))
 
 
 def _check_out(out: str | None) -> Path | None:
@@ -560,12 +594,15 @@ def main(argv: list[str] | None = None) -> int:
     except (SolverFailure, CertificationFailure) as exc:
         print(f"eqrec: failed: {exc}", file=sys.stderr)
         hint = _unstable_hint(args)
+        head = hint.split("; ")[0]
+        if hint and head in str(exc):  # the design's message said why already (eqrec.design.inputs.growth_hint)
+            hint = hint[len(head) + 2:]
         if hint:
             print(f"eqrec: {hint}", file=sys.stderr)
         return EXIT_SOLVER
     if "mu1_requested" in result:
-        print(f"eqrec: note: mu1 raised from the requested {result['mu1_requested']:.9g} to {result['mu1']:.9g}, the "
-              "smallest level these gains certify (the LP meets its bound only to its tolerance)", file=sys.stderr)
+        print(f"eqrec: note: {raise_note(result['mu1_requested'], result['mu1'])}, the smallest level these gains "
+              "certify (the LP meets its bound only to its tolerance)", file=sys.stderr)
     if retried:
         print(f"eqrec: note: {len(retried)} LP(s) had no usable status at the first solve and were answered by "
               + ", ".join(f"{k} ({v})" for k, v in result["solver_retries"].items()), file=sys.stderr)

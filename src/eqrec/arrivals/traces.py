@@ -20,6 +20,8 @@ from eqrec.errors import InputError
 
 #: Delay code of a measurement that is never delivered.
 NEVER = -1
+#: Largest delay a trace stores (steps): arrival times ``τ + d`` stay 64-bit integers for any run shorter than it.
+MAX_TRACE_DELAY = 2 ** 62
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,7 +38,8 @@ class ArrivalTrace:
     Raises
     ------
     InputError
-        Not a one-dimensional array of integers ``>= 0`` or ``NEVER`` (field ``delays``).
+        Not a one-dimensional array of integers ``>= 0`` or ``NEVER`` (field ``delays``), or a delay above
+        :data:`MAX_TRACE_DELAY` (its arrival time would overflow; a packet that never arrives is ``NEVER``).
 
     Examples
     --------
@@ -56,10 +59,13 @@ class ArrivalTrace:
         if raw.ndim != 1 or (raw.size and not integral):
             raise InputError(f"delays must be a one-dimensional array of integers, got {raw.dtype} of shape "
                              f"{raw.shape}", field="delays")
+        if raw.size and np.any(raw > MAX_TRACE_DELAY):  # before the cast: τ + d must stay a 64-bit integer
+            raise InputError(f"a delay is at most {MAX_TRACE_DELAY} steps (2**62), got {raw.max().item()!r}; a "
+                             f"packet that never arrives has the delay NEVER = {NEVER}", field="delays")
+        if raw.size and np.any((raw < 0) & (raw != NEVER)):  # before the cast, which wraps a huge negative float
+            bad = sorted(set(raw[(raw < 0) & (raw != NEVER)].tolist()))
+            raise InputError(f"a delay is >= 0 or NEVER = {NEVER}, got {bad[:5]}", field="delays")
         d = np.array(raw, dtype=np.int64)
-        if np.any((d < 0) & (d != NEVER)):
-            raise InputError(f"a delay is >= 0 or NEVER = {NEVER}, got {sorted(set(d[(d < 0) & (d != NEVER)].tolist()))}",
-                             field="delays")
         d.flags.writeable = False
         object.__setattr__(self, "delays", d)
 

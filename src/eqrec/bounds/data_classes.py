@@ -249,8 +249,14 @@ def full_language_counts(T: int, max_delay: int, max_lost: int | None = None) ->
         return _loss_counts(int(T), int(max_delay), int(max_lost))
     T, D = int(T), int(max_delay)
     sequences = prod(_arrival_values(i, T, D) for i in range(T))
-    nodes = sum(prod(_arrived_by(i, d - 1, D) + (1 if i + D > d - 1 else 0) for i in range(d))
-                for d in range(1, T + 1))
+    # the nodes of depth d: per old time (i <= d-1-D) its D + 1 arrival times, per window time its arrival times
+    # by d-1 or 'not yet'; the old times' factor grows by D + 1 per depth (linear in T, not quadratic)
+    nodes, old_power = 0, 1
+    for d in range(1, T + 1):
+        n_old = max(0, d - D)
+        if n_old:
+            old_power *= D + 1
+        nodes += old_power * prod(_arrived_by(i, d - 1, D) + 1 for i in range(n_old, d))
     return {"words": (D + 1) ** T, "sequences": sequences, "nodes": nodes}
 
 
@@ -329,25 +335,35 @@ def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None
     if max_lost is not None:
         return _classes_with_losses(T, D, _check_lost(max_lost, T))
     counts = full_language_counts(T, D)
+    # suffix products of the outcomes of the times d..T-1 (the tail of every class of depth d), built once: the
+    # work per class is then its window's (at most D times) and its data tuple, linear in the classes' size
+    tail = [1] * (T + 1)
+    for i in range(T - 1, -1, -1):
+        tail[i] = tail[i + 1] * _arrival_values(i, T, D)
     classes = []
+    old_power, n_old = 1, 0  # (D + 1)^|old|: every old time arrived by k, D + 1 ways (its nodes and weight factor)
+    times = tuple(range(T))  # slices of one tuple: the classes' data share its integers
     for d in range(1, T + 1):
         k = d - 1
-        always = tuple(range(0, k - D + 1))
-        window = tuple(range(max(0, k - D + 1), k + 1))
-        tail = prod(_arrival_values(i, T, D) for i in range(d, T))
+        if k - D + 1 > n_old:  # one more old time (the old times are 0..k-D, one more per depth)
+            n_old, old_power = n_old + 1, old_power * (D + 1)
+        always = times[:n_old]
+        window = times[n_old:k + 1]
+        inner = d < T
+        by_k = {i: _arrived_by(i, k, D) for i in window}
+        not_yet = {i: _arrival_values(i, T, D) - by_k[i] for i in window}
         for r in range(len(window) + 1):
             for chosen in combinations(window, r):
-                S = tuple(sorted(always + chosen))
-                inner = d < T
-                s = set(S)
+                S = always + chosen
+                s = set(chosen)
                 # nodes: per i < d, an arrival time <= k if i ∈ S, else 'not yet' (the window makes it possible)
-                nodes = prod(_arrived_by(i, k, D) if i in s else 1 for i in range(d))
+                nodes = old_power * prod(by_k[i] for i in chosen)
                 weight = 0
                 if inner:
-                    weight = tail * prod(_arrived_by(i, k, D) if i in s
-                                         else _arrival_values(i, T, D) - _arrived_by(i, k, D) for i in range(d))
+                    weight = tail[d] * old_power * prod(by_k[i] if i in s else not_yet[i] for i in window)
                 classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight, nodes=nodes))
-    return ClassSet(classes=_ordered({c.key: c for c in classes}), horizon=T, source="window", **counts)
+    # made in the order of _ordered (depth, then |S|, then S: combinations are lexicographic), each key once
+    return ClassSet(classes=tuple(classes), horizon=T, source="window", **counts)
 
 
 # ---------------------------------------------------------------------------------------------- with losses

@@ -17,6 +17,12 @@ from typing import Any
 
 from eqrec.errors import InputError
 
+#: The time model of one Monte Carlo run of ``N`` steps, every family and its bound plus the information limit:
+#: ``SECONDS_PER_STEP · N + SECONDS_PER_STEP2 · N²`` seconds for a plant of ``n = 4`` states, scaled by ``(n/4)²``
+#: (measured 2026-11-29 on the batch reactor, T = 5, D = 2: 0.43 s a run of 50 steps, 5.1 s of 200, on the shared
+#: 2-core machine); the limit's matrices take about ``8 n N²`` bytes.  An estimate, meant to within a factor 3.
+SECONDS_PER_STEP, SECONDS_PER_STEP2 = 3e-3, 1.2e-4
+
 COMPARE_HELP = """\
 Families (rows of compare.csv, in words):
   guaranteed, class engine   the delayed-data paper's estimator (mu1 free) for the loss-aware language:
@@ -82,6 +88,10 @@ def add_parser(sub: Any, exit_help: str) -> None:
                    help="block probability the designs' loss budget m must reach (default 0.99)")
     c.add_argument("--solver", default="highs", help="LP solver of the guaranteed designs (default highs)")
     c.add_argument("--out", required=True, help="output folder (created if missing; its parent must exist)")
+    c.add_argument("--force", action="store_true",
+                   help="run a comparison past the documented size (the guaranteed designs and the runs estimated "
+                        "over 10 min or over 80%% of the available memory; the estimate is printed either way, and "
+                        "refused otherwise with exit 1)")
 
 
 def _out_dir(out: str) -> Path:
@@ -91,6 +101,47 @@ def _out_dir(out: str) -> Path:
     if not path.parent.is_dir():
         raise InputError(f"folder {path.parent} does not exist", str(path), "--out")
     return path
+
+
+def check_size(system: Any, setup: Any, *, force: bool) -> None:
+    """Print the estimate of a long comparison; refuse one past the documented size unless ``force`` (``--force``).
+
+    The guaranteed class-engine design of the loss-aware language (the size model of ``eqrec design``,
+    :func:`eqrec.design.inputs.estimate_delay_design`, μ1 free) plus ``--runs`` Monte Carlo runs of
+    ``--periods · --horizon`` steps (:data:`SECONDS_PER_STEP`, :data:`SECONDS_PER_STEP2`), answered by
+    :func:`eqrec.design.inputs.report_size`.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    setup : CompareSetup
+        The comparison's language and Monte Carlo size.
+    force : bool
+        Run past the documented size anyway.
+
+    Raises
+    ------
+    InputError
+        Past the documented size without ``force`` (field ``--runs``, ``--periods`` or ``--horizon``, whichever
+        costs most; nothing is written).
+    """
+    from eqrec.design.inputs import SetEstimate, estimate_delay_design, report_size
+
+    design = estimate_delay_design(system, setup.max_delay, setup.horizon, max_lost=setup.max_lost, mu1_free=True,
+                                   workers=1)
+    N, scale = setup.steps, (system.n / 4) ** 2
+    per_run = scale * (SECONDS_PER_STEP * N + SECONDS_PER_STEP2 * N ** 2)
+    runs_seconds = setup.runs * per_run
+    memory = max(design.memory, 2e8 + 8.0 * system.n * N ** 2 + 8.0 * 16 * setup.runs * N * system.n)
+    what = (f"the designs ({design.classes} classes) and {setup.runs} runs of {N} steps "
+            f"(about {per_run:.2g} s a run)")
+    if design.seconds > runs_seconds:
+        field = "--horizon"
+    else:
+        field = "--periods" if SECONDS_PER_STEP2 * N > SECONDS_PER_STEP * 10 and setup.periods > 10 else "--runs"
+    report_size(SetEstimate(what, design.seconds + runs_seconds, memory), force=force, field=field,
+                source="command line", advice="fewer --runs or --periods, or a shorter --horizon or --max-delay")
 
 
 def run(args: argparse.Namespace) -> str:
@@ -121,6 +172,7 @@ def run(args: argparse.Namespace) -> str:
     setup = CompareSetup(loss=args.loss, max_delay=args.max_delay, horizon=args.horizon, runs=args.runs,
                          periods=args.periods, burst=args.burst, seed=args.seed, coverage=args.coverage)
     system, _ = load_system(args.system)
+    check_size(system, setup, force=getattr(args, "force", False))
     with open(args.system, encoding="utf-8") as fh:
         gaussian = (yaml.safe_load(fh) or {}).get("gaussian")
     if gaussian is not None and not isinstance(gaussian, dict):
@@ -135,8 +187,11 @@ def run(args: argparse.Namespace) -> str:
                 from None
         if len(weights) != system.n:
             raise InputError(f"{system.n} weights (one per state), got {len(weights)}", field="--state-weights")
-    result = compare_families(system, setup, gaussian=gaussian, solver=args.solver, state_weights=weights,
-                              progress=(lambda line: print(f"  {line}", file=sys.stderr)) if talk else None)
+    from eqrec.design.inputs import size_check_done
+
+    with size_check_done():  # the designs were estimated with the runs (check_size)
+        result = compare_families(system, setup, gaussian=gaussian, solver=args.solver, state_weights=weights,
+                                  progress=(lambda line: print(f"  {line}", file=sys.stderr)) if talk else None)
     out.mkdir(exist_ok=True)
     write_table(result, str(out / "compare.csv"))
     compare_figure(result, str(out / "compare.png"), str(out / "compare.pdf"))

@@ -12,6 +12,8 @@ word and a delay word, so :func:`missing_words` and :func:`delay_words` make the
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import numbers
 import os
 from dataclasses import dataclass
@@ -396,6 +398,8 @@ class WorkEstimate:
         Expected peak memory in bytes (the stacked maps of every worker and the largest class).
     workers : int
         Worker processes assumed.
+    more : bool, optional
+        The class count stopped at :data:`MAX_COUNTED_CLASSES`: there are more (the figures are lower bounds).
     """
 
     classes: int
@@ -404,6 +408,7 @@ class WorkEstimate:
     seconds: float
     memory: float
     workers: int
+    more: bool = False
 
     def summary(self) -> str:
         """One line: classes, LP rows, time and memory.
@@ -412,10 +417,10 @@ class WorkEstimate:
         -------
         str
         """
-        t = self.seconds
-        when = f"{t:.0f} s" if t < 120 else f"{t / 60:.0f} min" if t < 7200 else f"{t / 3600:.3g} h"
-        return (f"{self.classes} classes, {self.lp_rows:.3g} LP rows ({self.nonzeros:.3g} nonzeros); about {when} "
-                f"and {self.memory / 2**30:.2g} GiB on {self.workers} core{'s' * (self.workers > 1)}")
+        count = f"{self.classes}" if self.classes < 10 ** 12 else f"{self.classes:.3g}"
+        return (f"{'more than ' if self.more else ''}{count} classes, {self.lp_rows:.3g} LP rows "
+                f"({self.nonzeros:.3g} nonzeros); about {_duration(self.seconds)} and {self.memory / 2**30:.2g} GiB "
+                f"on {self.workers} core{'s' * (self.workers > 1)}")
 
     def too_large(self, available_memory: float | None = None) -> str | None:
         """Why this design is past the documented size (:data:`MAX_ESTIMATED_SECONDS`, :data:`MAX_MEMORY_FRACTION`).
@@ -430,13 +435,7 @@ class WorkEstimate:
         str or None
             The reason, or ``None`` when it is within the limits.
         """
-        mem = _available_memory() if available_memory is None else available_memory
-        if mem is not None and self.memory > MAX_MEMORY_FRACTION * mem:
-            return f"it needs about {self.memory / 2**30:.3g} GiB, more than {MAX_MEMORY_FRACTION:.0%} of the " \
-                   f"{mem / 2**30:.3g} GiB available"
-        if self.seconds > MAX_ESTIMATED_SECONDS:
-            return f"it would take about {self.seconds / 60:.0f} min, more than {MAX_ESTIMATED_SECONDS / 60:.0f} min"
-        return None
+        return _too_large(self.seconds, self.memory, available_memory)
 
 
 def _available_memory() -> float | None:
@@ -475,15 +474,150 @@ def _class_sizes(max_delay: int, horizon: int) -> tuple[np.ndarray, np.ndarray, 
     return d, s, d == horizon
 
 
-def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *, mu1_free: bool = False,
-                          workers: int = 1) -> WorkEstimate:
+#: Estimated seconds from which a size estimate is printed (the CLI and the Python entries alike).
+ESTIMATE_PRINT_SECONDS = 10.0
+#: The time model of a class set's construction (:func:`eqrec.delay_classes`): seconds per class and per entry of
+#: its data (measured 2026-11-29: (1, 8000), 16,000 classes and 1.3e8 entries, in 3.3 to 7 s on the shared
+#: 2-core machine) and bytes per class and per entry (585 MB at (1, 8000), its weights' big integers included).
+SECONDS_PER_CLASS, SECONDS_PER_ENTRY, BYTES_PER_CLASS, BYTES_PER_ENTRY = 2e-5, 5e-8, 400.0, 9.0
+#: Depths :func:`class_shape` reads one by one; a longer horizon is sampled (an estimate within a few per cent).
+SHAPE_DEPTHS = 20_000
+#: Classes past which the closed-form count stops (the estimate then says "more than"; refused whatever the plant).
+MAX_COUNTED_CLASSES = 1e15
+
+
+@dataclass(frozen=True)
+class ClassShape:
+    """The classes of a full (loss-aware) delay language, grouped by (depth, size): ``count`` classes of depth
+    ``depth`` with ``size`` measurements available, from the window rule's closed form (nothing built).
+
+    Parameters
+    ----------
+    depth, size : numpy.ndarray
+        Depth ``d`` and ``|S|`` of each group.
+    terminal : numpy.ndarray
+        Whether the group's classes are terminal (``d = T``).
+    count : numpy.ndarray
+        Classes in the group (float: the count of a large loss-aware language exceeds 64-bit integers).
+    truncated : bool
+        The count stopped at :data:`MAX_COUNTED_CLASSES` (more classes exist).
+    """
+
+    depth: np.ndarray
+    size: np.ndarray
+    terminal: np.ndarray
+    count: np.ndarray
+    truncated: bool = False
+
+    @property
+    def classes(self) -> float:
+        """The number of classes (a float; at least it when ``truncated``)."""
+        return float(self.count.sum())
+
+    @property
+    def entries(self) -> float:
+        """The data entries of every class together, ``Σ |S|`` (the class set's size in memory)."""
+        return float((self.count * self.size).sum())
+
+    def build_cost(self, horizon: int, max_delay: int) -> tuple[float, float]:
+        """Seconds and bytes to build the class set (:data:`SECONDS_PER_CLASS` and the others).
+
+        Parameters
+        ----------
+        horizon : int
+            ``T`` (the weights' big integers add about ``T log2(τ̄+2) / 8`` bytes a class).
+        max_delay : int
+            ``τ̄``.
+
+        Returns
+        -------
+        seconds : float
+            Expected seconds.
+        memory : float
+            Expected peak bytes.
+        """
+        weight_bytes = horizon * np.log2(max_delay + 2) / 8
+        return (self.classes * SECONDS_PER_CLASS + self.entries * SECONDS_PER_ENTRY,
+                2e8 + self.classes * (BYTES_PER_CLASS + weight_bytes) + self.entries * BYTES_PER_ENTRY)
+
+
+def class_shape(max_delay: int, horizon: int, max_lost: int | None = None) -> ClassShape:
+    r"""The classes of ``{0..τ̄}^T`` (with ``max_lost``: the loss-aware language) by depth and size, in closed form.
+
+    At depth ``d`` the window holds :math:`w = \min(ar	au, d)` times and the old times are the other
+    :math:`o = d - w`; a class is a subset of the window (``r`` of them available) and, with losses, ``j <= m``
+    old times lost (:func:`eqrec.bounds.data_classes.classes_of_full_language`): :math:`inom{w}{r}inom{o}{j}`
+    classes with :math:`|S| = o - j + r`.  Linear in ``T`` (times ``m``, stopping at
+    :data:`MAX_COUNTED_CLASSES`), nothing enumerated; past :data:`SHAPE_DEPTHS` depths every
+    ``ceil(T / SHAPE_DEPTHS)``-th depth stands for its neighbours (an estimate, exact up to there).
+
+    Parameters
+    ----------
+    max_delay, horizon : int
+        ``τ̄`` and ``T``.
+    max_lost : int or None, optional
+        ``m`` (``None``: no loss).
+
+    Returns
+    -------
+    ClassShape
+    """
+    from math import comb
+
+    D, T = int(max_delay), int(horizon)
+    # every depth up to SHAPE_DEPTHS of them; past that a sample, each sampled depth standing for `stride` depths
+    # (the sizes change by one per depth: an estimate, as the time model is), the last depth T exactly
+    stride = max(1, -(-(T - 1) // SHAPE_DEPTHS))
+    d = np.append(np.arange(1, T, stride, dtype=np.int64), T)
+    per = np.append(np.full(d.size - 1, float(stride)), 1.0)
+    if stride > 1:  # the last block of sampled depths stands for the depths left before T
+        per[-2] = float(T - 1 - stride * (d.size - 2))
+    w = np.minimum(D, d)
+    o = d - w
+    window_ways = np.array([[float(comb(x, r)) for x in range(D + 1)] for r in range(D + 1)])
+    depth, size, count = [], [], []
+    for r in range(D + 1):  # window subsets of r times
+        ok = r <= w
+        depth.append(d[ok]), size.append(o[ok] + r), count.append(window_ways[r][w[ok]] * per[ok])
+    truncated = False
+    if max_lost:  # j >= 1 old times lost: C(o, j) more of each window subset, each with j fewer data
+        log_choose = _log_comb
+        total = float(sum(c.sum() for c in count))
+        for j in range(1, int(max_lost) + 1):
+            ok = o >= j
+            if not ok.any():
+                break
+            old_ways = np.exp(log_choose(o[ok], j)) * per[ok]
+            for r in range(D + 1):
+                sel = r <= w[ok]
+                ways = window_ways[r][w[ok][sel]] * old_ways[sel]
+                depth.append(d[ok][sel]), size.append(o[ok][sel] - j + r), count.append(ways)
+                total += float(ways.sum())
+            if total > MAX_COUNTED_CLASSES:
+                truncated = j < int(max_lost) and bool((o > j).any())
+                break
+    depth_a, size_a, count_a = np.concatenate(depth), np.concatenate(size), np.concatenate(count)
+    return ClassShape(depth_a, size_a, depth_a == T, count_a, truncated)
+
+
+def _log_comb(n: np.ndarray, j: int) -> np.ndarray:
+    """``log C(n, j)`` for an array ``n >= j`` (floats: the counts of large loss-aware languages)."""
+    from scipy.special import gammaln
+
+    n = np.asarray(n, float)
+    return gammaln(n + 1) - gammaln(j + 1) - gammaln(n - j + 1)
+
+
+def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *, max_lost: int | None = None,
+                          mu1_free: bool = False, workers: int = 1) -> WorkEstimate:
     """Estimate the size, time and memory of the class-engine design of ``{0..max_delay}^horizon``.
 
-    From the class sizes alone (:func:`eqrec.bounds.data_classes.classes_of_full_language` on a short horizon,
-    extended by the window rule), in the time model of :data:`SECONDS_PER_RUN`, :data:`SECONDS_PER_WORK` and
-    :data:`WORK_EXPONENT` (with a largest delay of 1, :data:`SECONDS_PER_CHAIN_STEP` for the classes above
-    :data:`LARGE_CLASS_WORK`, which follow one chain); the memory is the stacked maps of the horizon (``(T+1) n`` state and ``T p``
-    output rows over ``T (nw + nv) + n`` uncertain coordinates) held by every worker, plus the largest class.
+    From the class sizes alone (:func:`class_shape`: the window rule's closed form, also with ``max_lost``),
+    in the time model of :data:`SECONDS_PER_RUN`, :data:`SECONDS_PER_WORK` and :data:`WORK_EXPONENT` (with a
+    largest delay of 1, :data:`SECONDS_PER_CHAIN_STEP` for the classes above :data:`LARGE_CLASS_WORK`, which
+    follow one chain) plus the construction of the classes (:meth:`ClassShape.build_cost`); the memory is the
+    stacked maps of the horizon (``(T+1) n`` state and ``T p`` output rows over ``T (nw + nv) + n`` uncertain
+    coordinates) held by every worker, plus the largest class and the class set.
 
     Parameters
     ----------
@@ -493,6 +627,8 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
         Largest delay ``D``.
     horizon : int
         Horizon ``T``.
+    max_lost : int or None, optional
+        At most this many measurements lost per block (``None``: none).
     mu1_free : bool, optional
         A μ1-free design (level LPs at two μ1 and the Charnes–Cooper LPs of the terminal classes).
     workers : int, optional
@@ -503,8 +639,71 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
     WorkEstimate
         The estimate.
     """
+    if max_lost is None:
+        depth, size, terminal = _class_sizes(int(max_delay), int(horizon))
+        shape = ClassShape(depth, size, terminal, np.ones(depth.size))
+    else:
+        shape = class_shape(max_delay, horizon, max_lost)
+    return estimate_class_work(system, shape, int(horizon), int(max_delay), mu1_free=mu1_free, workers=workers)
+
+
+def estimate_classes(system: AffineSystem, classes: ClassSet, *, mu1_free: bool = False,
+                     workers: int = 1) -> WorkEstimate:
+    """:func:`estimate_delay_design` for a class set at hand (the Python entries' size check): the same model.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    classes : ClassSet
+        The classes to design for.
+    mu1_free : bool, optional
+        A μ1-free design.
+    workers : int, optional
+        Worker processes.
+
+    Returns
+    -------
+    WorkEstimate
+        The estimate (the class set already built: no construction time).
+    """
+    depth = np.array([c.depth for c in classes.classes], np.int64)
+    size = np.array([len(c.available) for c in classes.classes], np.int64)
+    shape = ClassShape(depth, size, np.array([c.terminal for c in classes.classes], bool), np.ones(depth.size))
+    # the largest delay the model needs is whether it is 1 (the large classes then follow one chain): the widest
+    # gap between a class's time and a measurement it misses, over the deepest classes
+    gap = max((c.depth - min(set(range(c.depth)).difference(c.available), default=c.depth)
+               for c in classes.classes[-64:]), default=0)
+    return estimate_class_work(system, shape, int(classes.horizon), 1 if gap == 1 else 2, mu1_free=mu1_free,
+                               workers=workers, built=True)
+
+
+def estimate_class_work(system: AffineSystem, shape: ClassShape, horizon: int, max_delay: int, *,
+                        mu1_free: bool = False, workers: int = 1, built: bool = False) -> WorkEstimate:
+    """The one time and memory model of a class-engine design (:func:`estimate_delay_design`), from its classes'
+    depths and sizes.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    shape : ClassShape
+        The classes by depth and size.
+    horizon, max_delay : int
+        ``T`` and ``τ̄`` (with ``τ̄ = 1`` the large classes follow one chain).
+    mu1_free : bool, optional
+        A μ1-free design.
+    workers : int, optional
+        Worker processes.
+    built : bool, optional
+        The class set exists already (no construction time or memory added).
+
+    Returns
+    -------
+    WorkEstimate
+    """
     n, p, nw, nv = system.n, system.p, system.nw, system.nv
-    depth, size, terminal = _class_sizes(int(max_delay), int(horizon))
+    depth, size, terminal, count = shape.depth, shape.size, shape.terminal, shape.count
     m = size.astype(float) * p
     cols = depth * nw + size * nv + n
     work = np.maximum(1.0, m * cols)
@@ -516,10 +715,181 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
     if mu1_free:  # the Charnes-Cooper LPs of the terminal classes, about one level LP each
         per_class = per_class + terminal * n * (SECONDS_PER_RUN + SECONDS_PER_WORK / 2 * work ** WORK_EXPONENT)
     cores = max(1, min(int(workers), os.cpu_count() or 1))
-    seconds = 1.0 + float(per_class.sum()) / cores
+    build_seconds, build_bytes = (0.0, 0.0) if built else shape.build_cost(horizon, max_delay)
+    seconds = 1.0 + float((per_class * count).sum()) / cores + build_seconds
     coords = horizon * (nw + nv) + n
     stacked = 8.0 * coords * ((horizon + 1) * n + horizon * p)
     largest = 8.0 * 3 * float(m.max(initial=0)) * coords
-    memory = 2e8 + (cores + 1) * (stacked + largest)  # every worker and this process; the interpreter
-    return WorkEstimate(classes=int(depth.size), lp_rows=int(n * m.sum()), nonzeros=int(n * (m * cols).sum()),
-                        seconds=seconds, memory=memory, workers=cores)
+    memory = 2e8 + (cores + 1) * (stacked + largest) + build_bytes  # every worker and this process; the classes
+    return WorkEstimate(classes=_count(shape.classes), lp_rows=_count(n * (m * count).sum()),
+                        nonzeros=_count(n * (m * cols * count).sum()), seconds=seconds, memory=memory,
+                        workers=cores, more=shape.truncated)
+
+
+def _count(value: float) -> int:
+    """A count of the estimate as an int (a float past 64 bits stays exact enough: an estimate)."""
+    return int(value) if np.isfinite(value) else 2 ** 1023
+
+
+_SIZE_CHECKED: "contextvars.ContextVar[bool]" = contextvars.ContextVar("eqrec_size_checked", default=False)
+
+
+@contextlib.contextmanager
+def size_check_done():
+    """Within it, the Python entries skip their size check: the caller (``eqrec design``) made it already.
+
+    Yields
+    ------
+    None
+    """
+    token = _SIZE_CHECKED.set(True)
+    try:
+        yield
+    finally:
+        _SIZE_CHECKED.reset(token)
+
+
+def size_checked() -> bool:
+    """Whether the size check was made already (inside :func:`size_check_done`).
+
+    Returns
+    -------
+    bool
+    """
+    return _SIZE_CHECKED.get()
+
+
+def report_size(estimate: "WorkEstimate | SetEstimate", *, force: bool, field: str, source: str | None = None,
+                advice: str = "") -> None:
+    """Print a long job's estimate (to stderr); refuse one past the documented size unless ``force``.
+
+    The one answer of the CLI and the Python entries: the estimate is printed when it is
+    :data:`ESTIMATE_PRINT_SECONDS` or more, or past the limits (:data:`MAX_ESTIMATED_SECONDS`,
+    :data:`MAX_MEMORY_FRACTION` of the available memory); past them an :class:`InputError` naming ``field``
+    unless ``force``.
+
+    Parameters
+    ----------
+    estimate : WorkEstimate or SetEstimate
+        The estimate (``summary()``, ``too_large()``, ``seconds``).
+    force : bool
+        Run past the limits anyway (the estimate is still printed).
+    field : str
+        The input to name in the refusal (e.g. ``"horizon"``, ``"--horizon"``).
+    source : str or None, optional
+        ``"command line"`` or ``None``.
+    advice : str, optional
+        What to do instead (appended to the refusal).
+
+    Raises
+    ------
+    InputError
+        Past the limits without ``force`` (nothing started).
+    """
+    import sys
+
+    if size_checked():
+        return
+    reason = estimate.too_large()
+    if estimate.seconds >= ESTIMATE_PRINT_SECONDS or reason is not None:
+        print(f"eqrec: estimate: {estimate.summary()}", file=sys.stderr)
+    if reason is not None and not force:
+        how = "--force" if source == "command line" else "force=True"
+        raise InputError(f"refused: {reason} ({estimate.summary()}); {advice + ', or ' if advice else ''}pass {how} "
+                         "to run it anyway", source, field)
+
+
+@dataclass(frozen=True)
+class SetEstimate:
+    """The estimated time and memory of a job that is not a design (a class set, a language, a comparison run).
+
+    Parameters
+    ----------
+    what : str
+        What it is (one line).
+    seconds : float
+        Expected wall-clock seconds.
+    memory : float
+        Expected peak memory in bytes.
+    """
+
+    what: str
+    seconds: float
+    memory: float
+
+    def summary(self) -> str:
+        """One line: what, time and memory.
+
+        Returns
+        -------
+        str
+        """
+        return f"{self.what}; about {_duration(self.seconds)} and {self.memory / 2**30:.2g} GiB"
+
+    def too_large(self, available_memory: float | None = None) -> str | None:
+        """Why this job is past the documented size (as :meth:`WorkEstimate.too_large`).
+
+        Parameters
+        ----------
+        available_memory : float or None, optional
+            Bytes available (default: read from the system).
+
+        Returns
+        -------
+        str or None
+        """
+        return _too_large(self.seconds, self.memory, available_memory)
+
+
+def _duration(t: float) -> str:
+    if not np.isfinite(t):
+        return "forever"
+    return f"{t:.0f} s" if t < 120 else f"{t / 60:.0f} min" if t < 7200 else f"{t / 3600:.3g} h" if t < 3.6e7 \
+        else f"{t / 3.156e7:.3g} years"
+
+
+def _too_large(seconds: float, memory: float, available_memory: float | None) -> str | None:
+    mem = _available_memory() if available_memory is None else available_memory
+    if mem is not None and memory > MAX_MEMORY_FRACTION * mem:
+        return f"it needs about {memory / 2**30:.3g} GiB, more than {MAX_MEMORY_FRACTION:.0%} of the " \
+               f"{mem / 2**30:.3g} GiB available"
+    if seconds > MAX_ESTIMATED_SECONDS:
+        return f"it would take about {_duration(seconds)}, more than {MAX_ESTIMATED_SECONDS / 60:.0f} min"
+    return None
+
+
+#: Growth ``ρ^T`` of the error maps over the horizon (``ρ`` the spectral radius of ``A``) from which a failed
+#: design is blamed on the horizon (a marginally stable plant, ``ρ = 1`` up to rounding, is not blamed).
+UNSTABLE_GROWTH = 1e3
+#: The spread of entries a double-precision LP resolves: horizons up to ``log(RESOLVED_GROWTH) / log ρ``.
+RESOLVED_GROWTH = 1e8
+
+
+def growth_hint(system: AffineSystem, horizon: int) -> str:
+    """Why a design of an unstable plant over a long horizon fails, and the horizon that usually solves.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant.
+    horizon : int
+        The horizon ``T`` that failed.
+
+    Returns
+    -------
+    str
+        Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH` (``ρ`` the spectral radius of ``A``, time-varying:
+        of its first matrix); else the reason and ``log(RESOLVED_GROWTH) / log ρ``.
+    """
+    try:
+        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
+    except (np.linalg.LinAlgError, ValueError):
+        return ""
+    with np.errstate(over="ignore"):
+        growth = rho ** int(horizon)
+    if not growth > UNSTABLE_GROWTH:
+        return ""
+    usual = max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho)))
+    return (f"the horizon {horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so the "
+            f"error maps grow like {rho:.4g}^T = {growth:.3g}, past what a double-precision LP resolves; horizons up "
+            f"to about {usual} usually solve (eqrec design --horizon searches for the longest)")

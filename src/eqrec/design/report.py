@@ -14,8 +14,10 @@ import numpy as np
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import parse_delay_word
 from eqrec.design.cost import node_bounds
-from eqrec.design.result import Design, node_level
 from eqrec.errors import InputError
+
+# ``Design`` in the annotations is eqrec.design.result.Design, not imported: that module imports this one
+# (Design.save writes design_json), and the annotations are never evaluated (postponed)
 
 #: Largest reduced language (sequences) whose node gains ``to_json`` writes unless asked.
 JSON_NODE_GAINS_LIMIT = 200
@@ -42,7 +44,7 @@ def level_table(design: Design) -> list[dict]:
     bound = node_bounds(design.certificate)
     rows = [{"prefix": "", "k": 0, "level": design.mu1, "certified": design.mu1, "sequences": len(tree.patterns)}]
     for node in tree:
-        lvl = design.mu1 if node.terminal else node_level(design, node.prefix)
+        lvl = design.mu1 if node.terminal else design.level_at(node.prefix)
         rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
                      "sequences": w[node.index]})
     return rows
@@ -70,7 +72,7 @@ def path_levels(design: Design, pattern) -> np.ndarray:
     T = pat.T
     out = np.full(T + 1, design.mu1)
     for k in range(1, T):
-        out[k] = node_level(design, pat.prefix(k))
+        out[k] = design.level_at(pat.prefix(k))
     return out
 
 
@@ -186,6 +188,96 @@ def to_json(design: Design, free=None, node_gains: bool | None = None) -> dict:
         if free.mu1_min is not None:
             out["mu1_free"]["mu1_min"] = {"upper": free.mu1_min.upper, "lower": free.mu1_min.lower,
                                           "binding": free.mu1_min.binding}
+    elif design.mu1_free is not None:  # a design (not the free result) at hand: what it keeps of the route
+        mf = design.mu1_free
+        out["mu1_free"] = {"route": mf.route, "lower_bound": mf.lower_bound}
+        if mf.mu1_min is not None:
+            out["mu1_free"]["mu1_min"] = {"upper": mf.mu1_min, "lower": mf.mu1_min_lower, "binding": mf.binding}
+    return out
+
+
+def word_design_json(design: Design, words=None, head: dict | None = None) -> dict:
+    """What ``eqrec design --method prefix | time | augmented`` writes (without ``state_weights`` and ``system``).
+
+    Parameters
+    ----------
+    design : Design
+        A certified design of a missing-data language.
+    words : list of str, optional
+        The language as given (default: the design's language, else its patterns).
+    head : dict, optional
+        Entries written after the words (the augmented design's ``L``, ``s0``, ``M``, ``nu``; default: read
+        from ``design.augmented``).
+
+    Returns
+    -------
+    dict
+        The JSON-serialisable record.
+    """
+    cert = design.certificate if design.certificate is not None else design.class_certificate
+    if words is None:
+        words = list(design.language) if design.language is not None else list(design.words)
+    if head is None:
+        aug = design.augmented
+        head = {} if aug is None else {k: np.asarray(getattr(aug, k)).tolist() for k in ("L", "s0", "M", "nu")}
+    out = {"method": design.method, "T": design.T, "mu1": design.mu1, "mu2": design.mu2,
+           "certified_mu2": cert.mu2, "certified_terminal": cert.terminal, "solver": design.solution.solver,
+           "status": design.solution.status, "words": [str(w) for w in words], **head}
+    if design.mu1_requested is not None:  # mu1 raised to the fixed point the gains certify (eqrec.bounds.certify)
+        out["mu1_requested"] = design.mu1_requested
+    if design.schedule is not None:  # none for a class-engine language too large for node gains
+        out.update(designed_words=list(design.schedule.designed_words), gains=design.schedule.to_json())
+    if design.method == "time":
+        out["worst_case_word"] = design.worst_case_word
+    if design.method in ("prefix", "time"):  # the class engine's entries
+        free = design.mu1_free
+        if free is not None:
+            out["mu1_free"] = {"route": free.route, "mu1_min": {
+                "upper": free.mu1_min, "lower": free.mu1_min_lower, "binding": free.binding}}
+        out["engine"] = design.engine
+        if design.class_gains is not None:
+            out["classes"] = class_table(design)
+    return out
+
+
+def design_json(design: Design, **entries) -> dict:
+    """The whole design file of ``eqrec design --out`` (what :func:`eqrec.load_design` reads), for every method.
+
+    The method's record (:func:`to_json` for ``delay``, :func:`word_design_json` otherwise), a weighted design's
+    gains in the system file's coordinates with its ``state_weights`` (:func:`original_coordinates`), and the
+    system as the file gave it (``system``: for a weighted design the design's system in ``z = W x`` scaled back,
+    to rounding).
+
+    Parameters
+    ----------
+    design : Design
+        A certified design (every method).
+    **entries
+        Passed to the method's record (``words``, ``head``; for ``delay``: ``free``, ``node_gains``); ``original``:
+        the system as the file gave it (the command line's; default: ``design.system``, scaled back).
+
+    Returns
+    -------
+    dict
+        The JSON-serialisable record, ``system`` last.
+    """
+    if design.method == "delay":
+        out = to_json(design, entries.get("free"), node_gains=entries.get("node_gains"))
+        out.update(solver=design.solution.solver, status=design.solution.status)
+        out["words"] = ([str(w) for w in entries["words"]] if entries.get("words") is not None
+                        else list(design.words) if design.patterns or design.class_gains is None
+                        else int(design.class_gains.classes.words))
+        if design.schedule is not None and "gains" in out:
+            out["designed_words"] = [p.label for p in design.schedule.designed]
+    else:
+        out = word_design_json(design, entries.get("words"), entries.get("head"))
+    system = design.system
+    if design.state_weights is not None:
+        weights = np.asarray(design.state_weights, float)
+        original_coordinates(out, weights)
+        original = entries.get("original")
+        system = original if original is not None else system.scaled(1.0 / weights)
+    out["system"] = system.to_dict()  # as the file gave it: eqrec.load_design reads the design back
     return out
 
 

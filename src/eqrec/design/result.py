@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from functools import partial
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -285,6 +287,72 @@ class Design:
         from eqrec.design.weighted import WeightedEstimator
 
         return WeightedEstimator(estimator, self.state_weights)
+
+    def level_at(self, prefix: ArrivalPattern) -> float:
+        """The guaranteed level after an event prefix of length ``0 < k < T`` (:func:`node_level`).
+
+        Parameters
+        ----------
+        prefix : ArrivalPattern
+            The event prefix.
+
+        Returns
+        -------
+        float
+            Its node's level, else the common level ``mu2``.
+        """
+        return node_level(self, prefix)
+
+    def save(self, path: "str | os.PathLike") -> Path:
+        """Write the design file that ``eqrec design ... --out path`` writes; :func:`eqrec.load_design` reads it back.
+
+        The same record as the command line's (:func:`eqrec.design.report.design_json`): the system, ``T``,
+        ``μ1``, ``μ2``, the certified values and the gains (class gains ``K`` and/or node gains ``(F, u0)``),
+        written atomically (a reader never sees half a file).  Loading it certifies the gains again.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The JSON file to write (its folder must exist).
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+
+        Raises
+        ------
+        InputError
+            A path that is not a str or path, a folder, a missing folder, or a file that cannot be written
+            (field ``path``; nothing is left behind).
+
+        Examples
+        --------
+        >>> import eqrec
+        >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111"], mu1=1.0)
+        >>> path = design.save("design.json")  # doctest: +SKIP
+        >>> eqrec.load_design(path).mu2 == design.mu2  # doctest: +SKIP
+        True
+        """
+        import json
+
+        from eqrec.design.report import design_json
+        from eqrec.io import write_text
+
+        if not isinstance(path, (str, os.PathLike)):
+            raise InputError(f"a design file is a path (str or pathlib.Path), got {type(path).__name__}",
+                             field="path")
+        file = Path(path)
+        if file.is_dir():
+            raise InputError("is a directory; give a file name for the JSON", str(file), "path")
+        if not file.parent.is_dir():
+            raise InputError(f"folder {file.parent} does not exist", str(file), "path")
+        text = json.dumps(design_json(self), indent=2) + "\n"
+        try:
+            write_text(file, text)
+        except OSError as exc:
+            raise InputError(f"cannot write ({exc.strerror})", str(file), "path") from None
+        return file
 
 
 def node_level(design: Design, prefix: ArrivalPattern) -> float:

@@ -143,6 +143,17 @@ DEFAULT_WINDOW = 20
 #: The default number of reweighted solves after the first in the window (module docstring).
 DEFAULT_ITERATIONS = 2
 
+#: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
+#: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
+MAX_WINDOW = 10_000
+
+#: Most reweighted solves of the window after the first (each costs about a first solve).
+MAX_ITERATIONS = 100
+
+#: Largest first prediction ``|A| (|x̂0| + radius)`` a run starts from: the window's products stay finite in floating
+#: point far above any physical state (a larger one is refused by :meth:`ZonotopeEstimator.reset`).
+MAX_SET_REACH = 1e300
+
 #: Relative floor of the window's reweighting residuals (:mod:`eqrec.bounds.window`).
 _IRLS_FLOOR = 1e-2
 
@@ -368,9 +379,9 @@ class ZonotopeEstimator:
     ------
     InputError
         A ``system`` that is not an :class:`AffineSystem`, a negative, non-finite or wrongly sized
-        ``x0_radius``, ``max_delay`` not an integer ``>= 0``, ``order`` not ``None`` nor a number ``>= 1``, an
-        unknown ``gain`` or ``reduction``, ``window`` not an integer ``>= 1``, ``iterations`` not an integer
-        ``>= 0`` (the field is named).
+        ``x0_radius``, ``max_delay`` not an integer ``0..MAX_WINDOW - 1``, ``order`` not ``None`` nor a number
+        ``>= 1``, an unknown ``gain`` or ``reduction``, ``window`` not an integer ``1..``:data:`MAX_WINDOW`,
+        ``iterations`` not an integer ``0..``:data:`MAX_ITERATIONS` (the field is named).
 
     Examples
     --------
@@ -397,14 +408,20 @@ class ZonotopeEstimator:
         r0 = radii(x0_radius, n)
         if not is_stamp(max_delay) or max_delay < 0:
             raise InputError(f"the largest delay is an integer >= 0, got {max_delay!r}", field="max_delay")
+        if max_delay >= MAX_WINDOW:  # the window holds max_delay + 1 steps (module docstring)
+            raise InputError(f"the largest delay is at most {MAX_WINDOW - 1} steps (the window holds max_delay + 1 "
+                             f"steps, at most MAX_WINDOW = {MAX_WINDOW}), got {max_delay!r}; a packet later than "
+                             "max_delay is dropped and counted, which stays guaranteed", field="max_delay")
         order = check_order(order)
         gains = _gain_names(gain)
         if reduction not in _REDUCTIONS:
             raise InputError(f"unknown reduction {reduction!r}; choose one of {list(_REDUCTIONS)}", field="reduction")
-        if not is_stamp(window) or window < 1:
-            raise InputError(f"the window is an integer >= 1 (steps), got {window!r}", field="window")
-        if not is_stamp(iterations) or iterations < 0:
-            raise InputError(f"iterations is an integer >= 0, got {iterations!r}", field="iterations")
+        if not is_stamp(window) or not 1 <= window <= MAX_WINDOW:
+            raise InputError(f"the window is an integer 1..{MAX_WINDOW} (steps; its matrices are stored per step and "
+                             f"its solve is linear in its length), got {window!r}", field="window")
+        if not is_stamp(iterations) or not 0 <= iterations <= MAX_ITERATIONS:
+            raise InputError(f"iterations is an integer 0..{MAX_ITERATIONS} (each a solve of the window per step), "
+                             f"got {iterations!r}", field="iterations")
         self.window, self.iterations = int(window), int(iterations)
         # the window's length: every packet up to max_delay late reaches it before its time leaves (module docstring)
         self._W = max(self.window, int(max_delay) + 1)
@@ -471,7 +488,8 @@ class ZonotopeEstimator:
         Raises
         ------
         InputError
-            A non-finite or wrongly sized ``xhat0``, a ``t0`` that is not an integer (nothing changes).
+            A non-finite or wrongly sized ``xhat0``, a ``t0`` that is not an integer or outside a time-varying
+            plant's data, an estimate whose first prediction overflows (nothing changes).
         """
         return self.start_from(xhat0, np.diag(self.x0_radius), t0)
 
@@ -498,7 +516,9 @@ class ZonotopeEstimator:
         Raises
         ------
         InputError
-            Non-finite or wrongly shaped ``xhat0`` or ``generators``, a non-integer ``t0`` (nothing changes).
+            Non-finite or wrongly shaped ``xhat0`` or ``generators``, a non-integer ``t0``, a ``t0`` outside a
+            time-varying plant's data (read at the period time after :meth:`periodic_model`), a set whose first
+            prediction overflows (nothing changes).
         """
         n = self.system.n
         c = check_estimate(xhat0, n)
@@ -507,6 +527,16 @@ class ZonotopeEstimator:
             raise InputError(f"generators need shape ({n}, q) and finite entries, got {G.shape}", field="generators")
         if not is_stamp(t0):
             raise InputError(f"the start time is an integer, got {t0!r}", field="t0")
+        lim = self.system.horizon_limit
+        if lim is not None and not 0 <= self._model_time(int(t0)) < lim:  # no wrap-around into A[-3]
+            raise InputError(f"the time-varying data covers times 0..{lim - 1}, not the start time {t0} (for a "
+                             "periodic plant: periodic_model(T) first)", field="t0")
+        with np.errstate(over="ignore", invalid="ignore"):  # the first prediction must stay finite
+            reach = np.abs(self.system.A_at(self._model_time(int(t0)))) @ (np.abs(c) + np.abs(G).sum(axis=1))
+        if not np.all(reach <= MAX_SET_REACH):
+            raise InputError(f"the set's first prediction |A| (|xhat0| + radius) exceeds {MAX_SET_REACH:g} (the "
+                             "window's products would overflow in floating point): scale the state, or give a "
+                             "smaller estimate or set", field="xhat0")
         G = G[:, np.any(G != 0, axis=0)]
         if self._limit is not None:
             G = _REDUCTIONS[self.reduction](G, self._limit)
@@ -544,8 +574,8 @@ class ZonotopeEstimator:
         ------
         InputError
             Before :meth:`reset`; a measurement or input of the wrong shape or with NaN/inf entries, a packet
-            stamped in the future or received twice, a time past a time-varying system's data (the estimator
-            is left unchanged).
+            stamped in the future or received twice, a time past a time-varying system's data, data whose
+            propagation overflows in floating point (the estimator is left unchanged).
         """
         t = self.time
         sysm = self.system
@@ -580,6 +610,11 @@ class ZonotopeEstimator:
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
         states = np.arange(sysm.n)
         xhat, beta = xs[pick, states], radii_[pick, states]
+        if not (np.all(np.isfinite(xhat)) and np.all(np.isfinite(beta)) and np.all(np.isfinite(c))
+                and np.all(np.isfinite(G))):  # refuse data whose propagation overflows (nothing committed)
+            raise InputError(f"the data of time {t} overflow in floating point (the estimate or its bound is not "
+                             "finite): a measurement or input too large for the plant's scale; the estimator is "
+                             "left unchanged", field="y" if packets else "u" if np.any(u) else "xhat0")
         # commit
         self._c, self._G, self._axes = c, G, axes
         self._drive, self._known, self._y = drive, known, ys

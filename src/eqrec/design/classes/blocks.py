@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from eqrec.checks import short_label
 from eqrec.bounds.data_classes import ClassSet, DataClass, class_maps
 from eqrec.lp.model import LinearProgram
 from eqrec.lp.parallel import Progress, check_jobs, pool_ready, prestart, run_tasks
@@ -230,7 +231,7 @@ def level_task(stacking: Stacking, chunk: list[DataClass], mu1s: list[float], so
                                  {**options, **LARGE_CLASS_OPTIONS} if large else options)
             for j, sols in enumerate(grid):
                 for r, sol in enumerate(sols):
-                    levels[j, r], K[j][r] = level_and_gain(sol, f"class {cls.label} row {r} (mu1 = {mu1s[j]:g})")
+                    levels[j, r], K[j][r] = level_and_gain(sol, f"class {short_label(cls.label)} row {r} (mu1 = {mu1s[j]:g})")
                     iters[j] += sol.iterations
         size = {"rows": system.n * m, "cols": system.n * C, "nonzeros": system.n * int(np.count_nonzero(Z))}
         out.append([LevelBlock(K=K[j], levels=levels[j], iterations=int(iters[j]), **size,
@@ -412,11 +413,11 @@ def solve_ratio_blocks(system: "AffineSystem | Stacking", classes: ClassSet, whi
         for r, (status, ratio, k, rec, it) in enumerate(rows):
             iters += it
             if status == "infeasible":
-                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
-                                       f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
+                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {short_label(cls.label)} "
+                                       f"(time {cls.depth}, data {short_label(list(cls.available))}) no gain makes the "
                                        "initial error contract (min_k a(k) >= 1)")
             if status != "optimal":
-                raise SolverFailure(f"the smallest recovery level (Charnes-Cooper LP of class {cls.label} row {r}): "
+                raise SolverFailure(f"the smallest recovery level (Charnes-Cooper LP of class {short_label(cls.label)} row {r}): "
                                     f"solver status {status!r}")
             K[r] = k
             bc.append(i)

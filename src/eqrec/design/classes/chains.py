@@ -51,6 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from eqrec.checks import short_label
 from eqrec.bounds.data_classes import ClassGains, ClassSet, DataClass, class_error_map
 from eqrec.bounds.stacking import Stacking
 from eqrec.design.classes import blocks
@@ -224,7 +225,7 @@ def chain_task(stacking: Stacking, chain: list[DataClass], row: int, mu1s: list[
     gains: list[list[np.ndarray]] = [[] for _ in mu1s]
     for i, (cls, per_mu1) in enumerate(zip(chain, sols)):  # read
         for j, sol in enumerate(per_mu1):
-            levels[j, i], K_row = level_and_gain(sol, f"class {cls.label} row {row} (mu1 = {mu1s[j]:g}, chain)")
+            levels[j, i], K_row = level_and_gain(sol, f"class {short_label(cls.label)} row {row} (mu1 = {mu1s[j]:g}, chain)")
             iters[j, i] = sol.iterations
             gains[j].append(K_row[model.outputs[i]])  # the multipliers of the output rows (module docstring)
     return levels, gains, iters

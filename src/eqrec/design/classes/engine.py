@@ -75,6 +75,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from eqrec.checks import short_label
 from eqrec.bounds.certify import CERT_RTOL, certify_design
 from eqrec.bounds.data_classes import ClassGains, ClassSet, classes_of_tree
 from eqrec.lp.model import LPSolution
@@ -255,7 +256,7 @@ def _certified(classes: ClassSet, mu1: float, gains: ClassGains, lp_levels: np.n
     scale = np.maximum(max(1.0, mu1), np.abs(lp_levels))
     if np.any(excess > rtol * scale):
         i, r = np.unravel_index(np.argmax(excess / scale), excess.shape)
-        raise CertificationFailure(f"class {classes.classes[i].label} row {r}: the gains give worst case "
+        raise CertificationFailure(f"class {short_label(classes.classes[i].label)} row {r}: the gains give worst case "
                                    f"{cert.bounds[i, r]:.9g} > the LP's level {lp_levels[i, r]:.9g}")
     # the certified value is the level: never below what the gains really give
     return ClassSolution(mu1=mu1, gains=gains, lp_levels=np.maximum(lp_levels, cert.bounds), certificate=cert,
@@ -280,8 +281,8 @@ def check_terminal(classes: ClassSet, sol: ClassSolution, rtol: float = CERT_RTO
     for i, cls in enumerate(classes.classes):
         if cls.terminal and sol.levels[i] > mu1 * (1 + rtol):
             r = int(np.argmax(sol.lp_levels[i]))
-            raise InfeasibleDesign(f"no estimator recovers to mu1 = {mu1:g}: terminal class {cls.label} "
-                                   f"(time {cls.depth}, data {list(cls.available)}) row {r} has smallest worst "
+            raise InfeasibleDesign(f"no estimator recovers to mu1 = {mu1:g}: terminal class {short_label(cls.label)} "
+                                   f"(time {cls.depth}, data {short_label(list(cls.available))}) row {r} has smallest worst "
                                    f"case {sol.levels[i]:.9g} at this mu1 (it grows with mu1)")
 
 

@@ -43,6 +43,7 @@ from typing import Iterable
 import numpy as np
 import scipy.sparse as sp
 
+from eqrec.checks import short_label
 from eqrec.bounds.data_classes import ClassGains, ClassSet, class_maps
 from eqrec.lp.model import LinearProgram
 from eqrec.arrivals.prefix_tree import PrefixTree
@@ -211,8 +212,8 @@ def _monolithic_ratios(st: Stacking, classes: ClassSet, term: list[int], solver:
             lps += 1
             if solve_lp(one.lp, solver, block_lp_options(solver)).status == "infeasible":
                 cls = classes.classes[i]
-                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {cls.label} "
-                                       f"(time {cls.depth}, data {list(cls.available)}) no gain makes the "
+                raise InfeasibleDesign(f"no recovery level is feasible: along the terminal class {short_label(cls.label)} "
+                                       f"(time {cls.depth}, data {short_label(list(cls.available))}) no gain makes the "
                                        "initial error contract (min_k a(k) >= 1)")
         raise InfeasibleDesign("no recovery level is feasible (the terminal ratio LP is infeasible)")
     sol.require_optimal("the smallest recovery level (Charnes-Cooper LP)")

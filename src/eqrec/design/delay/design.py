@@ -68,14 +68,14 @@ from eqrec.design.classes.engine import check_terminal, class_design, solve_clas
 from eqrec.design.cost import certified_cost, check_cost, class_cost, paper_cost
 from eqrec.design.delay.languages import delay_classes, delay_language  # noqa: F401 (re-exported)
 from eqrec.design.delay.languages import patterns_classes, patterns_tree
-from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system
+from eqrec.design.inputs import check_flags, check_fraction, check_mu1, check_solver, check_system, growth_hint
 from eqrec.design.classes.mu1_min import MU1_LOWER_RTOL, FreeMu1Result, MinRecoveryLevel, infeasible_at
 from eqrec.design.classes.mu1_min import min_recovery_level as _class_min_recovery_level
 from eqrec.design.prefix.design import check_engine, solve_tree_lp, tree_design
 from eqrec.design.prefix.tree_lp import PrefixLP, build_prefix_lp
 from eqrec.design.result import Design, Mu1Free
 from eqrec.design.weighted import weigh
-from eqrec.errors import InfeasibleDesign, InputError
+from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 
 # ---------------------------------------------------------------------------
 # Designs from LP solutions
@@ -128,12 +128,64 @@ def design_from_solution(model: PrefixLP, tree: PrefixTree, x: np.ndarray, mu1: 
     return design
 
 
+@contextlib.contextmanager
+def _horizon_hint(system: AffineSystem, horizon: int):
+    """A solver or certification failure of an unstable plant over a long horizon says why
+    (:func:`eqrec.design.inputs.growth_hint`)."""
+    try:
+        yield
+    except (SolverFailure, CertificationFailure) as exc:
+        hint = growth_hint(system, horizon)
+        if not hint or hint in str(exc):
+            raise
+        raise type(exc)(f"{exc}; {hint}") from exc
+
+
+def check_design_size(system: AffineSystem, classes, *, mu1_free: bool, n_jobs, scheduler, force: bool) -> None:
+    """The size check of a class-engine design from Python, the model and the answer of ``eqrec design``.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The plant (in the design's coordinates).
+    classes : ClassSet
+        The classes to design for.
+    mu1_free : bool
+        A μ1-free design (level LPs at two μ1).
+    n_jobs : int or None
+        Worker processes (``None``: every core).
+    scheduler : object or None
+        A Dask scheduler (the estimate then assumes one core here).
+    force : bool
+        Run past the documented size anyway.
+
+    Raises
+    ------
+    InputError
+        Past the documented size without ``force`` (field ``patterns``; nothing started).
+    """
+    from eqrec.design.inputs import estimate_classes, report_size, size_checked
+    from eqrec.lp.parallel import check_jobs
+
+    if size_checked():  # the command line checked this design already (and printed its estimate)
+        return
+    if len(classes) < SIZE_CHECK_CLASSES:  # small designs: seconds at most, no estimate needed
+        return
+    workers = 1 if scheduler is not None else check_jobs(n_jobs)
+    report_size(estimate_classes(system, classes, mu1_free=mu1_free, workers=workers), force=force,
+                field="patterns", advice="design a shorter horizon or a smaller language")
+
+
+#: Classes below which a design is not estimated (seconds at most on every plant of the project).
+SIZE_CHECK_CLASSES = 200
+
+
 # -------- μ1 fixed
 
 def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None = None, cost: str = "sum",
                  solver: str = "highs", form: str = "split", certify: bool = True, solver_options: dict | None = None,
                  engine: str = "classes", node_gains: bool | None = None, state_weights=None, n_jobs=None,
-                 scheduler=None, solved=None) -> Design:
+                 scheduler=None, solved=None, force: bool = False) -> Design:
     r"""The delayed-data design with ``μ1`` fixed (Theorem 1 / Proposition 1 of the delayed-data paper).
 
     For a language of delay words (eq. (1) of the delayed-data paper,
@@ -200,6 +252,11 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
         (:mod:`eqrec.design.classes.blocks`; the same result as on this machine).
     solved : ClassSolution or None, optional
         Class engine: the class LPs already solved at ``mu1`` (:func:`eqrec.design.classes.engine.solve_classes_at`).
+    force : bool, optional
+        Class engine: run a design past the documented size anyway.  The size model of ``eqrec design``
+        (:func:`eqrec.design.inputs.estimate_classes`) estimates its time and memory first: printed from
+        :data:`~eqrec.design.inputs.ESTIMATE_PRINT_SECONDS` on, refused past
+        :data:`~eqrec.design.inputs.MAX_ESTIMATED_SECONDS` or the memory limit unless ``force``.
 
     Returns
     -------
@@ -212,7 +269,8 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     ------
     InputError
         Malformed or ambiguous words, a language of mixed lengths, a
-        non-positive ``mu1``, or an unknown ``cost``, ``engine`` or ``solver``.
+        non-positive ``mu1``, an unknown ``cost``, ``engine`` or ``solver``, or
+        a design past the documented size without ``force`` (field ``patterns``).
     InfeasibleDesign
         If no estimator recovers to ``mu1``.
     SolverFailure
@@ -246,10 +304,13 @@ def design_delay(system: AffineSystem, patterns, mu1: float, *, kind: str | None
     instance(solver_options, (dict, type(None)), "solver_options", "a dict or None")
     mu1 = check_mu1(mu1)
     language = patterns_classes(patterns, kind) if engine == "classes" else patterns_tree(patterns, kind)
+    if engine == "classes" and solved is None:
+        check_design_size(system, language, mu1_free=False, n_jobs=n_jobs, scheduler=scheduler, force=force)
     st = Stacking(system, language.horizon if engine == "classes" else language.depth)  # the design's one stacking
-    design = _design_on(st, language, mu1, cost=cost, solver=solver, form=form, certify=certify,
-                        solver_options=solver_options, engine=engine, node_gains=node_gains, n_jobs=n_jobs,
-                        scheduler=scheduler, solved=solved)
+    with _horizon_hint(system, st.T):
+        design = _design_on(st, language, mu1, cost=cost, solver=solver, form=form, certify=certify,
+                            solver_options=solver_options, engine=engine, node_gains=node_gains, n_jobs=n_jobs,
+                            scheduler=scheduler, solved=solved)
     design.state_weights = weights
     return design
 
@@ -362,7 +423,7 @@ def _workers_ahead(system: AffineSystem, classes, n_jobs, scheduler):
 def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = None, cost: str = "sum",
                         solver: str = "highs", rtol: float = MU1_LOWER_RTOL, certify: bool = True,
                         node_gains: bool | None = None, engine: str = "classes", state_weights=None,
-                        n_jobs=None, scheduler=None) -> FreeMu1Result:
+                        n_jobs=None, scheduler=None, force: bool = False) -> FreeMu1Result:
     """The global minimum of ``J`` over ``μ1`` and the gains: the design at ``μ1 = μ1,min``.
 
     The delayed-data paper's problem with ``μ1`` a decision variable
@@ -410,6 +471,9 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     scheduler : str, distributed.Client or None, optional
         A Dask scheduler (``"tcp://host:8786"`` or a client) running those solves instead
         (:mod:`eqrec.design.classes.blocks`; the same result as on this machine).
+    force : bool, optional
+        Run a design past the documented size anyway (the size model of :func:`design_delay`, at both ``μ1``
+        of the μ1-free route: printed, then refused past the limits unless ``force``).
 
     Returns
     -------
@@ -423,8 +487,9 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     Raises
     ------
     InputError
-        Malformed words, an unknown ``cost`` or ``engine``, or
-        ``μ1,min = 0`` (no noise reaches the end of the horizon).
+        Malformed words, an unknown ``cost`` or ``engine``,
+        ``μ1,min = 0`` (no noise reaches the end of the horizon), or a design past the documented size
+        without ``force`` (field ``patterns``).
     InfeasibleDesign
         If no recovery level is feasible.
     SolverFailure, CertificationFailure
@@ -452,9 +517,11 @@ def design_delay_global(system: AffineSystem, patterns, *, kind: str | None = No
     classes = patterns_classes(patterns, kind)
     check_jobs(n_jobs)
     scheduler = check_scheduler(scheduler)
+    check_design_size(system, classes, mu1_free=True, n_jobs=n_jobs, scheduler=scheduler, force=force)
     st = Stacking(system, classes.horizon)  # the one stacked model of μ1,min, both level LPs and the design
     large = choose_path("auto", classes, None, system) == "blocks"  # else no class LP runs on the scheduler
-    with connected(scheduler if large else None) as client, _workers_ahead(system, classes, n_jobs, client):
+    with _horizon_hint(system, classes.horizon), connected(scheduler if large else None) as client, \
+            _workers_ahead(system, classes, n_jobs, client):
         par = {"n_jobs": n_jobs, "scheduler": client}  # one connection, one pool, for the three steps
         mm = _class_min_recovery_level(st, classes, solver=solver, lower_rtol=rtol, **par)
         # the levels at μ1,min (the design) and at the level proven infeasible (the bound), in one pass per class

@@ -5,16 +5,20 @@ Re-exported by :mod:`eqrec.design.delay.design` (:func:`delay_language`, :func:`
 
 from __future__ import annotations
 
-from itertools import product
 
 from eqrec.checks import integer
 from eqrec.bounds.data_classes import ClassSet, classes_of_full_language
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import MAX_DELAY, as_language, full_delay_language
-from eqrec.design.inputs import language_classes, language_tree
+from eqrec.bounds.data_classes import full_language_counts
+from eqrec.design.inputs import SetEstimate, class_shape, language_classes, language_tree, report_size
 from eqrec.errors import InputError
 
+
+#: The time model of an enumerated language (:func:`delay_language`): seconds and bytes per word (measured
+#: 2026-11-29: 85 to 120 µs a word for {0..2}^9, {0..1}^14, {0..3}^7; about 2 kB a pattern kept).
+SECONDS_PER_WORD, BYTES_PER_WORD = 1.5e-4, 2000.0
 
 #: The letter of a lost measurement in the words of a loss-aware language (:func:`delay_loss_words`).
 LOST = "x"
@@ -59,15 +63,25 @@ def delay_loss_words(horizon: int, max_delay: int, max_lost: int) -> tuple[Arriv
     m = integer(max_lost, "max_lost", high=T)
     letters = [*range(D + 1), LOST]
     out = []
-    for word in product(letters, repeat=T):
-        if word.count(LOST) <= m:
+
+    def extend(word: list, lost: int) -> None:  # lexicographic, never past the loss budget (no 4^T scan)
+        if len(word) == T:
             arrivals = tuple(None if c == LOST or i + c >= T else i + c for i, c in enumerate(word))
             out.append(ArrivalPattern(arrivals, "".join(map(str, word))))
+            return
+        for c in letters:
+            if c != LOST or lost < m:
+                word.append(c)
+                extend(word, lost + (c == LOST))
+                word.pop()
+
+    extend([], 0)
     return tuple(out)
 
 
 def delay_language(words=None, *, max_delay: int | None = None, horizon: int | None = None,
-                   max_lost: int | None = None, source: str | None = None) -> tuple[ArrivalPattern, ...]:
+                   max_lost: int | None = None, source: str | None = None,
+                   force: bool = False) -> tuple[ArrivalPattern, ...]:
     """The reduced event language ``L^{E'}`` of delay words, of the full language ``{0..τ̄}^T``, or of its
     loss-aware version (at most ``max_lost`` lost per block).
 
@@ -81,6 +95,10 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
         Without ``words``: at most this many measurements lost per block, ``0..T``
         (:func:`delay_loss_words`; ``None``: no loss).  Not with ``words``.
     source : str or None, optional
+    force : bool, optional
+        Enumerate a full language past the documented size anyway (:func:`eqrec.design.inputs.report_size`:
+        its estimate is printed from :data:`~eqrec.design.inputs.ESTIMATE_PRINT_SECONDS` on, and it is refused
+        past :data:`~eqrec.design.inputs.MAX_ESTIMATED_SECONDS` or the memory limit unless ``force``).
 
     Returns
     -------
@@ -91,7 +109,9 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
     Raises
     ------
     InputError
-        Malformed words, missing limits, or ``max_lost`` with ``words`` or out of range (the field is named).
+        Malformed words, missing limits, or ``max_lost`` with ``words`` or out of range, or a full language
+        past the documented size without ``force`` (e.g. ``{0..2}^30`` with one lost: 4^30 words to enumerate;
+        :func:`delay_classes` gives its classes without them) (the field is named).
     """
     if max_lost is not None:
         if words is not None:
@@ -99,15 +119,32 @@ def delay_language(words=None, *, max_delay: int | None = None, horizon: int | N
                              "words (write a lost measurement as a delay past the horizon)", source, "max_lost")
         if max_delay is None or horizon is None:
             raise InputError("max_lost needs both the maximum delay and the horizon", source, "max_lost")
+        _check_enumeration(horizon, max_delay, max_lost, force, source)
         return as_language(delay_loss_words(horizon, max_delay, max_lost), kind="delay", source=source)
     if words is None:
         if max_delay is None or horizon is None:
             raise InputError("give delay words, or both the maximum delay and the horizon", source, "delays")
+        _check_enumeration(horizon, max_delay, None, force, source)
         words = full_delay_language(horizon, max_delay)
     return as_language(words, kind="delay", max_delay=max_delay, length=horizon, source=source)
 
 
-def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None) -> ClassSet:
+def _check_enumeration(horizon, max_delay, max_lost, force: bool, source: str | None) -> None:
+    """The size check of a full language's enumeration (:func:`delay_language`): its words, time and memory."""
+    from decimal import Decimal
+
+    T = integer(horizon, "horizon", low=1)
+    D = integer(max_delay, "max_delay", high=MAX_DELAY)
+    m = None if max_lost is None else integer(max_lost, "max_lost", high=T)
+    words = full_language_counts(T, D, m)["words"]
+    what = (f"{{0..{D}}}^{T}" + (f" with at most {m} lost" if m is not None else "")
+            + f": {Decimal(words):.3g} words to enumerate")
+    estimate = SetEstimate(what, float(words) * SECONDS_PER_WORD, 2e8 + float(words) * BYTES_PER_WORD)
+    report_size(estimate, force=force, field="horizon", source=source,
+                advice="delay_classes(max_delay=..., horizon=...) gives its classes without enumerating a word")
+
+
+def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None, force: bool = False) -> ClassSet:
     """The classes of the full language ``{0..τ̄}^T`` from the window rule (no word enumerated).
 
     With ``max_lost = m``: the loss-aware language, delays ``0..τ̄`` and at most ``m`` measurements lost
@@ -124,6 +161,13 @@ def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None) 
     max_lost : int or None, optional
         At most this many measurements lost per block, ``0..T`` (``None``, default: no loss, the full
         delay language as before).
+    force : bool, optional
+        Build a class set past the documented size anyway.  Its size is estimated first, in closed form
+        (:func:`eqrec.design.inputs.class_shape`: ``Σ |S|`` data entries, about quadratic in ``T``, and
+        ``T^(m+1)`` classes with ``m`` lost): printed from
+        :data:`~eqrec.design.inputs.ESTIMATE_PRINT_SECONDS` on and refused past
+        :data:`~eqrec.design.inputs.MAX_ESTIMATED_SECONDS` or the memory limit unless ``force``
+        (:func:`eqrec.design.inputs.report_size`).
 
     Returns
     -------
@@ -134,7 +178,7 @@ def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None) 
     ------
     InputError
         ``horizon`` not an integer >= 1, ``max_delay`` not one in ``0..9`` or ``max_lost`` not one in
-        ``0..T`` (the field is named).
+        ``0..T``, or a class set past the documented size without ``force`` (the field is named).
 
     Examples
     --------
@@ -148,9 +192,15 @@ def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None) 
     """
     T = integer(horizon, "horizon", low=1)
     D = integer(max_delay, "max_delay", high=MAX_DELAY)
-    if max_lost is None:
-        return classes_of_full_language(T, D)
-    return classes_of_full_language(T, D, integer(max_lost, "max_lost", high=T))
+    m = None if max_lost is None else integer(max_lost, "max_lost", high=T)
+    shape = class_shape(D, T, m)
+    seconds, memory = shape.build_cost(T, D)
+    what = (f"the classes of {{0..{D}}}^{T}" + (f" with at most {m} lost" if m is not None else "")
+            + f": {'more than ' if shape.truncated else ''}{shape.classes:.4g} classes holding {shape.entries:.3g} "
+            "data entries")
+    report_size(SetEstimate(what, seconds, memory), force=force, field="horizon",
+                advice="shorten the horizon or lower max_lost")
+    return classes_of_full_language(T, D) if m is None else classes_of_full_language(T, D, m)
 
 
 def patterns_tree(patterns, kind: str | None = None) -> PrefixTree:
