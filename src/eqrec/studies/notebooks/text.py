@@ -27,7 +27,10 @@ RAW_TEX = re.compile(r"\\[A-Za-z]+|(?<!\\)\$[^$\s][^$]*\$")
 _TOKENS = [
     (re.compile(r"(?:e_\{[^{}]*\})+"), lambda m: m[0]),
     (re.compile(r"L\^E'?"), lambda m: r"\mathcal{L}^{" + m[0][2:] + "}"),
-    (re.compile(r"\b([A-Za-z])\^([0-9])\b"), lambda m: f"{m[1]}^{m[2]}"),
+    (re.compile(r"\b([A-Za-z]+)\^([0-9])\b"), lambda m: f"{m[1]}^{m[2]}"),
+    (re.compile(r"\b([A-Za-z])_(max|min|bar|hold|zero)\b"), lambda m: rf"{m[1]}_{{\mathrm{{{m[2]}}}}}"),
+    (re.compile(r"\beta_bar\b"), lambda m: r"\bar\eta"),
+    (re.compile(r"\b([A-Q])_(xi|lambda)\b"), lambda m: rf"{m[1]}_\{m[2]}"),
     (re.compile(r"\bE_alpha\b"), lambda m: r"E_\alpha"),
     (re.compile(r"\bd_0\.\.d_k\b"), lambda m: r"d_0, \ldots, d_k"),
     (re.compile(r"\b([a-z])_([a-z0-9])\b"), lambda m: f"{m[1]}_{m[2]}"),
@@ -90,3 +93,25 @@ def markdown_table(rows: Iterable[dict], columns: list[str]) -> str:
     lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
     lines += ["| " + " | ".join(cell(r.get(c)) for c in columns) + " |" for r in rows]
     return "\n".join(lines)
+
+
+def claims_markdown(claims, prefix: str, columns: tuple[str, ...] = ("id", "quantity", "paper_value", "our_value",
+                                                                   "status", "reason")) -> str:
+    """The rows of the claims table whose id starts with ``prefix``, as a whole-cell Markdown table.
+
+    Parameters
+    ----------
+    claims : pandas.DataFrame
+        ``results/claims.csv`` as read by pandas (``id`` a column, not the index).
+    prefix : str
+        ``"P1"``, ``"P3-F1:"``, …
+    columns : tuple of str, optional
+        The columns shown.
+
+    Returns
+    -------
+    str
+        :func:`markdown_table` of those rows.
+    """
+    rows = claims[claims["id"].str.startswith(prefix)]
+    return markdown_table(rows.to_dict("records"), list(columns))
