@@ -35,6 +35,7 @@ _TOKENS = [
     (re.compile(r"\bd_0\.\.d_k\b"), lambda m: r"d_0, \ldots, d_k"),
     (re.compile(r"\b([a-z])_([a-z0-9])\b"), lambda m: f"{m[1]}_{m[2]}"),
     (re.compile(r"\bmu_?([12])\b"), lambda m: rf"\mu_{m[1]}"),
+    (re.compile(r"\bs0\b"), lambda m: "s_0"),
     (re.compile(r"\b(alpha|theta|lambda|tau|sigma|eta|xi)\b"), lambda m: rf"\{m[1]}"),
 ]
 _CODE_OR_MATHS = re.compile(r"`[^`]*`|(?<!\\)\$[^$]*\$")
@@ -70,7 +71,7 @@ def _tex_tokens(text: str) -> str:
     return pattern.sub(repl, text)
 
 
-def markdown_table(rows: Iterable[dict], columns: list[str]) -> str:
+def markdown_table(rows: Iterable[dict], columns: list[str], code: tuple[str, ...] = ("id",)) -> str:
     """A Markdown table of ``rows`` with every cell in full, its ASCII maths as TeX and ``|`` escaped.
 
     Parameters
@@ -79,6 +80,8 @@ def markdown_table(rows: Iterable[dict], columns: list[str]) -> str:
         One mapping per row (``DataFrame.to_dict("records")``); a missing or NaN value is an empty cell.
     columns : list of str
         The columns shown, in order.
+    code : tuple of str, optional
+        Columns shown as code, as they are (identifiers such as the claims' ids).
 
     Returns
     -------
@@ -91,7 +94,8 @@ def markdown_table(rows: Iterable[dict], columns: list[str]) -> str:
         return ascii_to_tex(" ".join(str(v).split())).replace("|", r"\|")
 
     lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    lines += ["| " + " | ".join(cell(r.get(c)) for c in columns) + " |" for r in rows]
+    lines += ["| " + " | ".join(f"`{r.get(c)}`" if c in code else cell(r.get(c)) for c in columns) + " |"
+              for r in rows]
     return "\n".join(lines)
 
 
