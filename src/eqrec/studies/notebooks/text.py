@@ -36,6 +36,7 @@ _TOKENS = [
     (re.compile(r"\b([a-z])_([a-z0-9])\b"), lambda m: f"{m[1]}_{m[2]}"),
     (re.compile(r"\bmu_?([12])\b"), lambda m: rf"\mu_{m[1]}"),
     (re.compile(r"\bs0\b"), lambda m: "s_0"),
+    (re.compile(r"(?<=\s)(<=|>=)(?=\s)"), lambda m: r"\le" if m[0] == "<=" else r"\ge"),
     (re.compile(r"\b(alpha|theta|lambda|tau|sigma|eta|xi)\b"), lambda m: rf"\{m[1]}"),
 ]
 _CODE_OR_MATHS = re.compile(r"`[^`]*`|(?<!\\)\$[^$]*\$")
@@ -66,7 +67,7 @@ def _tex_tokens(text: str) -> str:
 
     def repl(m: re.Match) -> str:
         i = int(next(k for k, v in m.groupdict().items() if v is not None and k.startswith("t"))[1:])
-        return f"${_TOKENS[i][1](_TOKENS[i][0].fullmatch(m[0]))}$"
+        return f"${_TOKENS[i][1](_TOKENS[i][0].match(m.string, m.start()))}$"
 
     return pattern.sub(repl, text)
 
