@@ -36,15 +36,23 @@ def report_facts(root: str | Path = ".") -> dict[str, Any]:
     Returns
     -------
     dict
-        ``{study: {stem: JSON}}`` for every ``results/<study>/*.json``; ``claims``: ``{id: row}`` of
+        ``{study: {stem: JSON}}`` for every ``results/<study>/*.json``; ``figures``: constants the figures are
+        drawn with (``compare_band``, ``p4_z_band``, ``p4_band_level``); ``claims``: ``{id: row}`` of
         ``results/claims.csv``; ``compare_pairs``: ``{"<system>_<setting>": pair}`` of
         ``results/compare/summary.json``, each pair with ``families`` (the compare study's families, in
         the order its figure draws them) and ``rows`` (its rows of ``compare.csv``, by family).
     """
+    import math
+
     from eqrec.compare.families import FAMILIES
+    from eqrec.compare.figure import BAND_WORDS
+    from eqrec.studies.p4.figures import Z_BAND
 
     res = Path(root) / "results"
-    facts: dict[str, Any] = {"families": list(FAMILIES)}
+    # the constants the figures are drawn with: the compare band's quantiles, the LMV figures' Monte Carlo band
+    # (half-width in standard errors and its normal level)
+    figures = {"compare_band": BAND_WORDS, "p4_z_band": Z_BAND, "p4_band_level": 100 * math.erf(Z_BAND / math.sqrt(2))}
+    facts: dict[str, Any] = {"families": list(FAMILIES), "figures": figures}
     for study in STUDIES:
         facts[study] = {p.stem: json.loads(p.read_text()) for p in sorted((res / study).glob("*.json"))}
     claims = res / "claims.csv"
