@@ -101,7 +101,7 @@ display(pd.DataFrame({"smallest feasible M1": ext["min_M1"]})
 display(pd.DataFrame([{"finite-length language": ", ".join(ext["finite_language"]["words"]),
                        "optimal M2": ext["finite_language"]["mu2"]}]).round(6))
 min_T = pd.DataFrame(ext["min_T"])
-min_T["T"] = [f"{int(t)}" if pd.notna(t) else "none up to T_max" for t in min_T["T"]]
+min_T["T"] = [f"{int(t)}" if pd.notna(t) else "none up to the largest T tried" for t in min_T["T"]]
 min_T.rename(columns={"M1": "recovery level M1", "T": "minimum recovery time T"})
 
 # %% [markdown]

@@ -77,9 +77,9 @@ display(Image(filename=str(RES / "fig5_eta.png"), width=800))
 # %%
 display(Markdown(f"""## P4-F6: steady filter variance over the multiplicative-noise variances $(Q_\\xi, Q_\\lambda)$
 
-The steady filtering error variance of each state component over ${q["q_lo"]:g} \\le Q_\\xi, Q_\\lambda \\le
-{q["q_hi"]:g}$ (zero-input, $\\bar\\eta = {q["eta_bar"]:g}$), found "{values["q_trend"]["value"]}" in both; the colour
-bar beside each surface reads its height.
+The steady filtering error variance of each state component over
+${q["q_lo"]:g} \\le Q_\\xi, Q_\\lambda \\le {q["q_hi"]:g}$ (zero-input, $\\bar\\eta = {q["eta_bar"]:g}$), found
+"{values["q_trend"]["value"]}" in both; the colour bar beside each surface reads its height.
 """))
 display(Image(filename=str(RES / "fig6_q.png"), width=800))
 
@@ -117,7 +117,8 @@ for key, cid in (("better_ex1", "P4-F7:better-ex1"), ("better_ex2", "P4-F8:bette
 mc = {ex: json.loads((RES / f"mc_{ex}.json").read_text()) for ex in ("ex1", "ex2")}
 rows = [{"example": ex, "check": k, **{c: v[c] for c in ("passed", "max_abs_z", "z_crit", "max_rel_err_var")}}
         for ex, r in mc.items() for k, v in r["checks"].items()]
-pd.DataFrame(rows)
+pd.DataFrame(rows).rename(columns={"max_abs_z": "largest |z|", "z_crit": "critical |z|",
+                                   "max_rel_err_var": "largest relative error of the variance"})
 
 # %%
 display(Markdown(claims_markdown(claims, "P4")))

@@ -25,19 +25,29 @@ RAW_TEX = re.compile(r"\\[A-Za-z]+|(?<!\\)\$[^$\s][^$]*\$")
 # an ASCII token and its TeX: event sequences e_{0,1}e_{1,3}, the reduced language L^E', E_alpha, j_k,
 # d_0..d_k, mu1 / mu2, Greek letters spelled out
 _TOKENS = [
+    (re.compile(r"\|\|([^|\s]*)\|\|_inf"), lambda m: rf"\|{m[1]}\|_\infty"),
+    (re.compile(r"\bx\(t\|I_t(-1)?\)"), lambda m: r"x(t \mid I_{t-1})" if m[1] else r"x(t \mid I_t)"),
+    (re.compile(r"\bmu2_k\^alpha\b"), lambda m: r"\mu_{2,k}^\alpha"),
+    (re.compile(r"\bmu_?2_k\b"), lambda m: r"\mu_{2,k}"),
+    (re.compile(r"\bsum_(k|alpha)\b"), lambda m: r"\sum_" + ("k" if m[1] == "k" else r"\alpha")),
+    (re.compile(r"\bPhi\b"), lambda m: r"\Phi"),
+    (re.compile(r"\be\^\(\+-j theta\)"), lambda m: r"e^{\pm j\theta}"),
+    (re.compile(r"\b10\^(\d+)\b"), lambda m: f"10^{{{m[1]}}}"),
+    (re.compile(r"\{[\d,]+\}\^\d+"), lambda m: m[0].replace("{", r"\{").replace("}", r"\}")),
+    (re.compile(r"\b([A-Z]\d?)\^T\b"), lambda m: f"{m[1]}^T"),
     (re.compile(r"(?:e_\{[^{}]*\})+"), lambda m: m[0]),
     (re.compile(r"L\^E'?"), lambda m: r"\mathcal{L}^{" + m[0][2:] + "}"),
     (re.compile(r"\b([A-Za-z]+)\^([0-9])\b"), lambda m: f"{m[1]}^{m[2]}"),
-    (re.compile(r"\b([A-Za-z])_(max|min|bar|hold|zero)\b"), lambda m: rf"{m[1]}_{{\mathrm{{{m[2]}}}}}"),
+    (re.compile(r"\b([A-Za-z])_(max|min|bar|hold|zero|crit)\b"), lambda m: rf"{m[1]}_{{\mathrm{{{m[2]}}}}}"),
     (re.compile(r"\beta_bar\b"), lambda m: r"\bar\eta"),
     (re.compile(r"\b([A-Q])_(xi|lambda)\b"), lambda m: rf"{m[1]}_\{m[2]}"),
     (re.compile(r"\bE_alpha\b"), lambda m: r"E_\alpha"),
     (re.compile(r"\bd_0\.\.d_k\b"), lambda m: r"d_0, \ldots, d_k"),
-    (re.compile(r"\b([a-z])_([a-z0-9])\b"), lambda m: f"{m[1]}_{m[2]}"),
+    (re.compile(r"\b([A-Za-z])_([a-z0-9])\b"), lambda m: f"{m[1]}_{m[2]}"),
     (re.compile(r"\bmu_?([12])\b"), lambda m: rf"\mu_{m[1]}"),
     (re.compile(r"\bs0\b"), lambda m: "s_0"),
     (re.compile(r"(?<=\s)(<=|>=)(?=\s)"), lambda m: r"\le" if m[0] == "<=" else r"\ge"),
-    (re.compile(r"\b(alpha|theta|lambda|tau|sigma|eta|xi)\b"), lambda m: rf"\{m[1]}"),
+    (re.compile(r"\b(alpha|theta|lambda|tau|sigma|eta|xi|pi)\b"), lambda m: rf"\{m[1]}"),
 ]
 _CODE_OR_MATHS = re.compile(r"`[^`]*`|(?<!\\)\$[^$]*\$")
 
@@ -63,6 +73,7 @@ def ascii_to_tex(text: str) -> str:
 
 
 def _tex_tokens(text: str) -> str:
+    text = re.sub(r"\+-\s?(?=[\d.])|(?<=\s)\+-(?=\s)", "± ", text)  # plus-minus: a character, not maths
     pattern = re.compile("|".join(f"(?P<t{i}>{p.pattern})" for i, (p, _) in enumerate(_TOKENS)))
 
     def repl(m: re.Match) -> str:
