@@ -27,7 +27,9 @@
 # * `guaranteed, class engine`: the delayed-data paper's estimator ($\mu_1$ free)
 #   designed for a *loss-aware* language: delays $0..D$ and at most $m$ of the $T$
 #   measurements of a block lost, $m$ the smallest whose block probability under the
-#   trace model reaches 0.99 (`eqrec.loss_coverage`). It runs with `strict=False`:
+#   trace model reaches the coverage of the configuration (`eqrec.loss_coverage`; the
+#   settings table gives both); where no design exists for that $m$, the largest $m$ that
+#   has one. It runs with `strict=False`:
 #   its bound is the exact worst case of its own error given the arrivals (the
 #   zonotope of its error carried across blocks), and outside its language it falls
 #   back to the set-membership estimator until a block starts with its set inside
@@ -37,10 +39,10 @@
 #   language, so a late packet counts as lost.
 # * `set-membership, zonotope`: `eqrec.ZonotopeEstimator`, which needs no
 #   language: its set contains the state on every trace.  A zonotope filter
-#   (Combastel's gain, reweighted by the generators' lengths) runs 20 steps
-#   behind the present, and each state is estimated by the best linear
-#   combination of its zonotope and the last 20 steps' packets (the exact
-#   window), so the estimate stays linear and its bound exact.
+#   (Combastel's gain, reweighted by the generators' lengths) runs a window of
+#   steps behind the present, and each state is estimated by the best linear
+#   combination of its zonotope and the window's packets (the exact window), so
+#   the estimate stays linear and its bound exact.
 # * `Kalman, time-stamped` (every packet used at its own time stamp,
 #   re-filtering) and `Kalman, delay-unaware` (a packet used as a measurement of
 #   the time it arrives), each with the exact worst case of its error on the
@@ -57,8 +59,9 @@
 # **Traces.** Each measurement is lost with the setting's probability
 # (independently, or in Gilbert bursts of the given mean length with the same
 # average loss); a packet kept is delayed uniformly by $0..D$ steps. Noise and
-# initial error are normal with 5 standard deviations = the bound of the box,
-# truncated at it (as in the delayed-data paper's Fig. 1), so every guarantee
+# initial error are normal, truncated at the bound of the box (as in the
+# delayed-data paper's Fig. 1; the settings table gives the bound in standard
+# deviations), so every guarantee
 # applies. In a run every family sees the same arrivals, noise and initial
 # error, and each reports the one-step prediction $\hat x(t+1)$ after the data
 # of time $t$.
@@ -70,20 +73,25 @@ from pathlib import Path
 import pandas as pd
 from IPython.display import Image, Markdown, display
 
+from eqrec.studies.notebooks.text import claims_markdown
+
 ROOT = Path.cwd() if (Path.cwd() / "results").exists() else Path.cwd().parent
 RES = ROOT / "results" / "compare"
 table = pd.read_csv(RES / "compare.csv")
 pairs = json.loads((RES / "summary.json").read_text())["pairs"]
 claims = pd.read_csv(ROOT / "results" / "claims.csv").set_index("id")
-pd.set_option("display.max_colwidth", 200)
+pd.set_option("display.max_colwidth", None)
 CLASS, PREFIX = "guaranteed, class engine", "guaranteed, prefix (P1)"
 
 # %% [markdown]
 # ## The settings
 #
-# One job per (system, setting); $m$ is the loss budget of the designs' languages
-# and $\mu_1$ the smallest feasible recovery level of each guaranteed design (or
-# why there is no design).
+# One job per (system, setting). *m asked* is the loss budget the coverage asks
+# for: the smallest $m$ such that a block of $T$ steps loses at most $m$
+# measurements with the coverage's probability. The two *design* columns give
+# the languages the guaranteed designs run cover: where no design exists for the
+# $m$ asked, a design for a smaller budget runs, and the column says so. $\mu_1$
+# is the smallest feasible recovery level of each guaranteed design.
 
 # %%
 def _mu1(p, family):
@@ -94,16 +102,18 @@ def _mu1(p, family):
 pd.DataFrame([{
     "system": p["name"], "setting": p["setting"], "T": p["setup"]["horizon"], "D": p["setup"]["max_delay"],
     "loss": p["setup"]["loss"],
-    "mean burst": "independent" if p["setup"]["burst"] is None else p["setup"]["burst"], "m (of T)": p["max_lost"],
-    "runs": p["setup"]["runs"], "steps per run": p["setup"]["steps"],
-    "μ1, class engine": _mu1(p, CLASS), "μ1, prefix (P1)": _mu1(p, PREFIX),
+    "mean burst": "independent" if p["setup"]["burst"] is None else p["setup"]["burst"],
+    "runs": p["setup"]["runs"], "steps per run": p["setup"]["steps"], "noise bound (σ)": p["setup"]["sigmas"],
+    "coverage": p["coverage"], "m asked (of T)": p["max_lost"],
+    "design, class engine": p["designs"][CLASS], "design, prefix (P1)": p["designs"][PREFIX],
+    "μ₁, class engine": _mu1(p, CLASS), "μ₁, prefix (P1)": _mu1(p, PREFIX),
 } for p in pairs])
 
 # %% [markdown]
 # ## The table
 #
-# `results/compare/compare.csv`, rounded to 3 decimals (the file has 6
-# significant digits and the RMS error of each state, `rms_x1`…). Columns:
+# `results/compare/compare.csv`, rounded (the file has more digits and the
+# RMS error of each state, `rms_x1`…). Columns:
 #
 # * **RMS error**: root mean square of $x(t+1) - \hat x(t+1)$ over runs, steps
 #   and states (state units);
@@ -130,10 +140,11 @@ shown.astype(object).where(shown.notna(), "").set_index(["system", "setting", "f
 # ## The figures
 #
 # One figure per (system, setting): per family, the band of the error between
-# the 10 % and 90 % quantiles over the runs and its median, on one logarithmic
-# scale; the median (dashed) and the largest (dotted) bound; the median
-# information limit (black) and the smallest design's $\mu_1$ (dash-dot). Ticks
-# on the top edge mark the ends of the periods of $T$ steps.
+# two quantiles over the runs and its median, on one logarithmic scale; the
+# median (dashed) and the largest (dotted) bound; the median information limit
+# (black) and the smallest design's $\mu_1$ (dash-dot). Ticks on the top edge
+# mark the ends of the periods of $T$ steps. The report's caption of each figure,
+# its alt text here, gives its setting, its designs and its numbers.
 
 # %%
 for p in pairs:
@@ -143,15 +154,15 @@ for p in pairs:
 # ## How close is each guarantee to the limit
 #
 # Per step, each family's bound divided by the information limit of the same
-# run and step (median, 95th percentile and largest over runs and steps): 1 is
-# the best any estimator can do on those arrivals.
+# run and step (median, a high percentile and the largest over runs and steps):
+# one is the best any estimator can do on those arrivals.
 
 # %%
 ratios = table[table["bound_over_limit_median"].notna()][
     ["system", "setting", "estimator", "limit_median", "bound_over_limit_median", "bound_over_limit_p95",
      "bound_over_limit_max"]].rename(columns={
         "estimator": "family", "limit_median": "limit, median", "bound_over_limit_median": "bound / limit, median",
-        "bound_over_limit_p95": "p95", "bound_over_limit_max": "largest"})
+        "bound_over_limit_p95": "95th percentile", "bound_over_limit_max": "largest"})
 ratios.round(3).set_index(["system", "setting", "family"])
 
 # %% [markdown]
@@ -160,12 +171,14 @@ ratios.round(3).set_index(["system", "setting", "family"])
 # a class $(d, S)$ equals the class engine's level of that class (LP duality;
 # Smolyak: a linear estimator attains the radius of information of a linear
 # functional). Each job compared every class level of its class-engine design
-# with the one-block limit (`eqrec.compare.class_limit_identity`):
+# with the one-block limit (`eqrec.compare.class_limit_identity`), to a relative
+# tolerance:
 
 # %%
 pd.DataFrame([{"system": p["name"], "setting": p["setting"], "classes compared":
                p["class_limit_identity"].get("classes", 0),
-               "level = limit within 1e-9 (relative)": p["class_limit_identity"].get("all_within_1e-9_relative")}
+               **{f"level = limit within {k.split('_')[2]} ({k.split('_')[3]})": v
+                  for k, v in p["class_limit_identity"].items() if k.startswith("all_within_")}}
               for p in pairs])
 
 # %% [markdown]
@@ -181,18 +194,22 @@ per_pair = table.set_index(["system", "setting", "estimator"])
 keys = [(p["system"], p["setting"]) for p in pairs]
 ratio = max(g["largest_error_over_bound"] for p in pairs for g in p["guaranteed"].values())
 missing = table[table["rms"].isna()]
+short = [(p["system"], p["setting"], f) for p in pairs for f in (CLASS, PREFIX) if "no design" in p["designs"][f]]
 display(Markdown(f"""
-* **Every bound holds.** The {len(bounded)} rows with a bound have {int(bounded['violations'].sum())}
+* **{"Every bound holds" if int(bounded['violations'].sum()) == 0 else "Some bounds fail"}.** The {len(bounded)} rows with a bound have {int(bounded['violations'].sum())}
   violations in all; the largest error / bound of any step is {ratio:.3f} (at most 1: each bound is the exact
   worst case of that estimator over the whole noise box, given the arrivals).
-* **Inside its language the class engine is near the limit; outside, it falls back.** Its bound / limit has
-  a median of {guaranteed[guaranteed['estimator'] == CLASS]['bound_over_limit_median'].min():.2f} to
+* **The class engine against the limit.** Its bound / limit has a median of
+  {guaranteed[guaranteed['estimator'] == CLASS]['bound_over_limit_median'].min():.2f} to
   {guaranteed[guaranteed['estimator'] == CLASS]['bound_over_limit_median'].max():.2f} across the pairs where it
-  exists; its data left the loss-aware language on
+  runs; its data left the loss-aware language on
   {100 * guaranteed[guaranteed['estimator'] == CLASS]['outside_design'].min():.0f} to
-  {100 * guaranteed[guaranteed['estimator'] == CLASS]['outside_design'].max():.0f} % of the steps.
-  {len(missing)} design(s) do not exist ({'; '.join(f"{r.system} {r.setting} {r.estimator}" for r in missing.itertuples()) or 'none'}):
-  the row says why.
+  {100 * guaranteed[guaranteed['estimator'] == CLASS]['outside_design'].max():.0f} % of the steps, where it falls
+  back on its true bound.
+* **Designs for fewer losses than the coverage asks.** {len(short)} of the {2 * len(pairs)} guaranteed designs
+  cover a smaller loss budget than the $m$ asked, because no design exists for it
+  ({'; '.join(f"{s} {k} {f}" for s, k, f in short) or 'none'}); {len(missing)} guaranteed famil{'y does' if len(missing) == 1 else 'ies do'}
+  not run at all{': ' + '; '.join(f"{r.system} {r.setting} {r.estimator}" for r in missing.itertuples()) if len(missing) else ''}.
 * **The set-membership estimator needs no language**: bound / limit median
   {sm['bound_over_limit_median'].min():.2f} to {sm['bound_over_limit_median'].max():.2f}, largest
   {sm['bound_over_limit_max'].max():.2f}.
@@ -207,15 +224,14 @@ display(Markdown(f"""
 # %% [markdown]
 # ## What the papers say about their Kalman comparisons, next to these numbers
 #
-# **The delayed-data paper, Fig. 1** (batch reactor, true delay pattern
-# 21210, 50 runs, noise with bound = 5σ): the errors of the proposed estimator
-# "stay within the guaranteed bounds, as desired, and are much less than the
-# estimation errors from [9], which are not within the bounds". Our replication
-# of that figure (rows `P3-F1` of `results/claims.csv`):
+# **The delayed-data paper, Fig. 1** (batch reactor, its true delay pattern
+# and noise bound in the row `P3-F1` of the report): the errors of the proposed
+# estimator "stay within the guaranteed bounds, as desired, and are much less
+# than the estimation errors from [9], which are not within the bounds". Our
+# replication of that figure (rows `P3-F1` of `results/claims.csv`):
 
 # %%
-p3 = claims.loc[[i for i in claims.index if i.startswith("P3-F1:")], ["paper_value", "our_value", "status", "reason"]]
-p3
+display(Markdown(claims_markdown(claims.reset_index(), "P3-F1:", ("id", "paper_value", "our_value", "status", "reason"))))
 
 # %%
 reactor = [k for k in keys if k[0] == "reactor" and (k[0], k[1], CLASS) in per_pair.index
@@ -225,7 +241,7 @@ exact = ", ".join(f"`{i}`: {claims.loc[i, 'our_value']}"
 display(Markdown(f"""
 Replicated: the proposed estimator's errors are {claims.loc['P3-F1:proposed-inside', 'our_value']} its levels
 (`P3-F1:proposed-inside`); the Kalman-type filters' *exact* worst cases over the noise box are {exact}; their
-errors in the 50 sampled runs are {claims.loc['P3-F1:kalman-sampled', 'our_value']}
+errors in the sampled runs are {claims.loc['P3-F1:kalman-sampled', 'our_value']}
 (`P3-F1:kalman-sampled`). On the random traces here, "not within the bounds" becomes a number per step: on the
 batch reactor the time-stamped Kalman filter's exact worst case is
 {', '.join(f"{per_pair.loc[(s, k, 'Kalman, time-stamped'), 'bound_over_limit_median']:.2f}" for s, k in reactor)}
@@ -245,7 +261,8 @@ draws.
 # always outperforms the other". Our replication (rows `P4-F7`, `P4-F8`):
 
 # %%
-claims.loc[["P4-F7:better-ex1", "P4-F8:better-ex2"], ["paper_value", "our_value", "status"]]
+display(Markdown(claims_markdown(claims.reset_index()[claims.index.isin(["P4-F7:better-ex1", "P4-F8:better-ex2"])],
+                                 "P4-F", ("id", "paper_value", "our_value", "status"))))
 
 # %%
 hold_lower = [(s, k) for s, k in keys
@@ -256,6 +273,6 @@ Here the hold-input predictor has the lower RMS error in {len(hold_lower)} of th
             f"{per_pair.loc[(s, k, 'LMV, zero-input'), 'rms']:.4f}" for s, k in keys)}; hold-input vs zero-input).
 These plants have no multiplicative noise; on the paper's two examples, which have, the replication finds
 {claims.loc['P4-F7:better-ex1', 'our_value']} better in Example 1 and {claims.loc['P4-F8:better-ex2', 'our_value']}
-better in Example 2 at the paper's $Q_\\xi = Q_\\lambda = 2$. Which compensation wins depends on the plant and its
+better in Example 2 at the paper's working point. Which compensation wins depends on the plant and its
 noise, as the paper concludes ("neither of the two compensators always outperforms the other").
 """))

@@ -15,7 +15,8 @@
 # # P2 — State-augmented bounded-error estimator with missing data
 #
 # Hassaan, Shen, Yong (ACC 2019). This notebook only **reads** the pipeline's results
-# under `results/p2/` (run `snakemake --cores 2 p2` first); it recomputes nothing.
+# under `results/p2/` (run `snakemake --cores 2 p2` first); it recomputes nothing, and every number in its
+# text is read from those files.
 #
 # Key fact used throughout: for fixed $L$ and $s_0$ the augmented gains $(M, \nu)$ and the
 # time-based gains $(F, u_0)$ are in bijection (`eqrec.design.augmented.runtime`), so the augmented estimator
@@ -27,7 +28,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from IPython.display import Image, display
+from IPython.display import Image, Markdown, display
+
+from eqrec.studies.notebooks.text import claims_markdown
 
 ROOT = Path.cwd() if (Path.cwd() / "results").exists() else Path.cwd().parent
 RES = ROOT / "results" / "p2"
@@ -44,17 +47,22 @@ paper = claims.set_index("id")["paper_value"]
 READINGS = {"theorem2": "Theorem 2 as stated", "one_based": "word read with 1-based times",
             "leak": "constant L kept at missing steps", "masked_gain": "Appendix, gain masked when missing"}
 pd.set_option("display.precision", 4)
-pd.set_option("display.max_colwidth", 200)
+pd.set_option("display.max_colwidth", None)
 
 # %% [markdown]
 # ## P2-F1 and P2-F2: optimal $\mu_2$ (certified from the converted time-based gains)
 #
-# Without missing data (Fig. 1) every design reaches the paper's 1.05. On the language of Fig. 2
-# (worst-case word 100111) the augmented design (IPOPT, $L$ and $s_0$ free) reaches exactly the
-# time-based optimum, 1.737, not the paper's 1.05. Solve times are not shown here (they vary from run
-# to run): see `results/timings/`.
+# Solve times are not shown here (they vary from run to run): see `results/timings/`.
 
 # %%
+f1, f2 = designs["f1"], designs["f2"]
+display(Markdown(f"""
+Without missing data (Fig. 1) the time-based design reaches {f1["time"]["certified_mu2"]:.4g} and the augmented
+design (IPOPT, $L$ and $s_0$ free) {f1["augmented_free"]["certified_mu2"]:.4g}; the paper reports
+{paper["P2-F1:mu2-augmented"]}. On the language of Fig. 2 (worst-case word {f2["worst_case_word"]}) the augmented
+design reaches {f2["augmented_free"]["certified_mu2"]:.4g}, the time-based optimum being
+{f2["time"]["certified_mu2"]:.4g}; the paper reports {paper["P2-F2:mu2-augmented"]}.
+"""))
 rows = []
 for fig in ("f1", "f2"):
     d = designs[fig]
@@ -62,78 +70,85 @@ for fig in ("f1", "f2"):
                  "paper": float(paper[f"P2-{fig.upper()}:mu2-augmented"]),
                  "time-based": d["time"]["certified_mu2"],
                  "augmented LP (pole placement)": d["augmented_lp"]["certified_mu2"],
-                 "augmented IPOPT (L, s0 free)": d["augmented_free"]["certified_mu2"],
+                 "augmented IPOPT (L, s₀ free)": d["augmented_free"]["certified_mu2"],
                  "IPOPT iterations": d["augmented_free"]["iterations"]})
 pd.DataFrame(rows).set_index("figure").round(4)
 
 # %% [markdown]
-# Fig. 1: 500 runs on the same noise draws; the bars are the certified guarantees, dashed the paper's
-# $\mu_2$. Both estimators stay inside their bars and reach the paper's value.
+# Fig. 1: both estimators on the same noise draws; the bars are the certified guarantees, dashed the paper's
+# $\mu_2$ (rows `P2-F1` of the claims table compare them).
 
 # %%
-display(Image(filename=str(RES / "f1_trajectories.png")))
-
-# %% [markdown]
-# Fig. 2: on the word 100111 the headway error of every estimator passes 1.05 (dashed) at $t = 3$, so no
-# estimator guarantees the paper's value there. The third column is the design for the word read with
-# 1-based times (missing $k = 2, 3$ as the caption says, word 110011) run on the true data.
+display(Image(filename=str(RES / "f1_trajectories.png"), width=800))
 
 # %%
-display(Image(filename=str(RES / "f2_trajectories.png")))
+ob = designs["f2"]["one_based"]
+display(Markdown(f"""
+Fig. 2: on the word {f2["worst_case_word"]} no estimator guarantees less than the time-based optimum
+{f2["time"]["certified_mu2"]:.4g}, {"above" if f2["time"]["certified_mu2"] > float(paper["P2-F2:mu2-augmented"])
+else "not above"} the paper's {paper["P2-F2:mu2-augmented"]} (dashed). The third column is the design for the word read with 1-based times (word {ob["word"]}, its optimum
+{ob["time_mu2"]:.4g}) run on the true data.
+"""))
+display(Image(filename=str(RES / "f2_trajectories.png"), width=800))
 
 # %% [markdown]
 # Other readings of the text for Fig. 2 and Fig. 1: each design's optimal $\mu_2$, certified.
 
 # %%
-ob = designs["f2"]["one_based"]
 leak = {k: v.get("certified_mu2", v.get("status", "")) for k, v in designs["f2"]["leak"].items()}
 pd.DataFrame([
     {"figure": "Fig. 2", "reading": "word read with 1-based times (110011), augmented",
-     "optimal mu2": ob["augmented_free"]["certified_mu2"], "note": "its design word"},
+     "optimal μ₂": ob["augmented_free"]["certified_mu2"], "note": "its design word"},
     {"figure": "Fig. 2", "reading": "word read with 1-based times (110011), time-based",
-     "optimal mu2": ob["time_mu2"], "note": "its design word"},
+     "optimal μ₂": ob["time_mu2"], "note": "its design word"},
     *({"figure": "Fig. 2", "reading": f"the 1-based design's gains run on the true word {w}",
-       "optimal mu2": v, "note": "certified on the true word"} for w, v in ob["certified_on_true_words"].items()),
+       "optimal μ₂": v, "note": "certified on the true word"} for w, v in ob["certified_on_true_words"].items()),
     *({"figure": "Fig. 2", "reading": f"constant L kept at missing steps ({k.replace('leak_', '')})",
-       "optimal mu2": v if isinstance(v, float) else np.nan, "note": v if isinstance(v, str) else ""}
+       "optimal μ₂": v if isinstance(v, float) else np.nan, "note": v if isinstance(v, str) else ""}
       for k, v in leak.items()),
-    {"figure": "Fig. 1", "reading": "strictly causal measurement injection", "optimal mu2":
+    {"figure": "Fig. 1", "reading": "strictly causal measurement injection", "optimal μ₂":
      designs["f1"]["strictly_causal_mu2"], "note": ""},
-    {"figure": "Fig. 1", "reading": "process noise W = I", "optimal mu2": designs["f1"]["process_noise_identity_mu2"],
+    {"figure": "Fig. 1", "reading": "process noise W = I", "optimal μ₂": designs["f1"]["process_noise_identity_mu2"],
      "note": ""},
 ]).round(4)
 
 # %% [markdown]
 # ## P2-F3a / F3b: dependence on the eigenvalues of $A - LC$
 #
-# Fig. 3a sweeps $L$ by pole placement (eigenvalues 0 and $r e^{\pm j\theta}$). Theorem 2 as stated is
-# flat at the time-based optimum (the bijection), the 1-based reading flat at 1.05, the constant-$L$
-# reading infeasible on most of the map; only the Appendix reading (gain masked at missing steps) has the
-# published region, at 1.05 around the origin, and its gains run as the estimator guarantee far more
-# (bottom panel, logarithmic scale).
+# Fig. 3a sweeps $L$ by pole placement (eigenvalues 0 and $r e^{\pm j\theta}$), one map per reading of the
+# text; the fifth panel shows what the Appendix reading's gains guarantee when they run as the estimator
+# (logarithmic scale).
 
 # %%
-display(Image(filename=str(RES / "f3a_heatmap.png")))
+var = values["f3a_mu2_region"]["evidence"]["variants"]
+display(Markdown("Smallest and largest optimal $\\mu_2$ of each map, and its points without an optimum:\n\n"
+                 + "\n".join(f"* {READINGS[k]}: {v['min']:.4g} to {v['max']:.4g}; {v['points'] - v['optimal']} of "
+                              f"{v['points']} points without an optimum" for k, v in var.items())
+                 + f"\n\nThe paper's region is at {paper['P2-F3a:mu2-region']}."))
+display(Image(filename=str(RES / "f3a_heatmap.png"), width=800))
 
 # %%
 summary = (heat.assign(reading=heat["variant"].map(READINGS))
            .groupby(["reading", "status"])
-           .agg(points=("mu2", "size"), **{"smallest mu2": ("mu2", "min"), "largest mu2": ("mu2", "max")}))
+           .agg(points=("mu2", "size"), **{"smallest μ₂": ("mu2", "min"), "largest μ₂": ("mu2", "max")}))
 summary.round(4)
 
-# %% [markdown]
-# Fig. 3b: a real double eigenvalue $\lambda$ (third at 0). The Appendix reading is at its minimum 1.05 on
-# an interval whose grid end points ($k/14$) are the published ones; the constant-$L$ reading has no
-# solution for $\lambda \leq 0.81$ (strip below the plot).
-
 # %%
-display(Image(filename=str(RES / "f3b_realaxis.png")))
+iv = values["f3b_interval"]["evidence"]["variants"]
+no_solution = real[real["status"] != "optimal"].assign(reading=lambda d: d["variant"].map(READINGS))
+display(Markdown(f"""
+Fig. 3b: a real double eigenvalue $\\lambda$ (third at 0). The Appendix reading is at its minimum
+{iv["masked_gain"]["min_mu2"]:.4g} on the interval {np.round(values["f3b_interval_masked_gain"]["value"], 4).tolist()}
+of the grid (the paper: {paper["P2-F3b:interval-masked-gain"]}). """ + "".join(
+    f"Reading \"{r}\": no solution for $\\lambda$ from {g['lam'].min():.2f} to {g['lam'].max():.2f} "
+    "(strip below the plot). " for r, g in no_solution.groupby("reading"))))
+display(Image(filename=str(RES / "f3b_realaxis.png"), width=800))
 
 # %%
 (real.assign(reading=real["variant"].map(READINGS))
  .groupby(["reading", "status"])
- .agg(points=("mu2", "size"), **{"lambda from": ("lam", "min"), "lambda to": ("lam", "max"),
-                                  "smallest mu2": ("mu2", "min"), "largest mu2": ("mu2", "max")})
+ .agg(points=("mu2", "size"), **{"λ from": ("lam", "min"), "λ to": ("lam", "max"),
+                                  "smallest μ₂": ("mu2", "min"), "largest μ₂": ("mu2", "max")})
  .round(4))
 
 # %% [markdown]
@@ -155,7 +170,7 @@ rows = [{"quantity": "design LP optimum at the printed L (Fig. 2)", "ours": valu
           for rt, r in mg["among_optima"]["runtimes"].items() for s, v in r["by_solver"].items()),
         {"quantity": "Fig. 3a: grid points at the minimum", "ours": region["at_min"], "paper": ""},
         {"quantity": "Fig. 3a: largest r of the region at the minimum", "ours": region["at_min_r_max"], "paper": ""},
-        {"quantity": "Fig. 3a: largest mu2 of the map", "ours": region["max"], "paper": ""},
+        {"quantity": "Fig. 3a: largest μ₂ of the map", "ours": region["max"], "paper": ""},
         {"quantity": "Fig. 3b interval, grid k/14", "ours": str(np.round(values["f3b_interval_masked_gain"]["value"], 4)),
          "paper": paper["P2-F3b:interval-masked-gain"]},
         {"quantity": "Fig. 3b interval, fine grid", "ours": str(np.round(values["f3b_interval_masked_gain_fine"]["value"],
@@ -179,17 +194,17 @@ cls = ("optimal", "infeasible", "solver_failed", "placement_failed", "points", "
 
 # %%
 s0 = pd.DataFrame(checks["s0"]["rows"])
-s0["s0"] = s0["s0"].map(lambda v: "[" + ", ".join(f"{x:g}" for x in v) + "]")
-s0.set_index("s0").rename(columns=lambda c: c.replace("_", " ")).round(6)
+s0["s₀"] = s0.pop("s0").map(lambda v: "[" + ", ".join(f"{x:g}" for x in v) + "]")
+s0.set_index("s₀").rename(columns=lambda c: c.replace("_", " ").replace("mu2", "μ₂")).round(6)
 
 # %%
 solver = pd.DataFrame(checks["solver"]).T.apply(pd.to_numeric, errors="coerce")
 solver["iterations"] = solver["iterations"].astype("Int64")
-solver.rename(columns=lambda c: c.replace("_", " ")).round(4)
+solver.rename(columns=lambda c: c.replace("_", " ").replace("mu2", "μ₂")).round(4)
 
 # %% [markdown]
 # ## Values compared with the paper (see `results/claims.csv` for the statuses)
 # The wording of each row (and whether its explanation still holds) comes from `config/claims.yaml`:
 
 # %%
-claims[claims["id"].str.startswith("P2")][["id", "paper_value", "our_value", "status", "reason"]].set_index("id")
+display(Markdown(claims_markdown(claims, "P2", ("id", "quantity", "paper_value", "our_value", "status", "reason"))))

@@ -78,6 +78,15 @@ def published(**claims):
     }
 
 
+# The captions (workflow/report/*.rst) quote the results they describe, rendered
+# by Jinja from snakemake.config: the facts read from results/ when the
+# Snakefile is read (snakemake --report reads it after the results are made;
+# eqrec.studies.notebooks.captions). No step reads this key.
+from eqrec.studies.notebooks.captions import FACTS_KEY, report_facts
+
+config[FACTS_KEY] = report_facts(workflow.basedir)
+
+
 def in_report(path, caption, category, **kwargs):
     """An output shown in ``snakemake --report``: ``path`` with the caption
     ``workflow/report/<caption>.rst``, under ``category`` (``kwargs``:

@@ -30,14 +30,49 @@ def pyplot():
 #: Width (px) at which a reader sees a figure (the report, a notebook) and the smallest text height (em, px)
 #: allowed there, mathtext scripts aside; ``tests/test_figure_text.py`` measures every stored PDF against it.
 REPORT_WIDTH_PX, MIN_EM_PX = 800, 11.0
+#: The smallest height (px, at :data:`REPORT_WIDTH_PX`) of a digit's glyph, and of a script's digit (the exponent
+#: of a logarithmic axis's tick label); measured on the outlines by ``tests/test_figure_text.py``.
+MIN_DIGIT_PX, MIN_SCRIPT_DIGIT_PX = 9.0, 7.0
+
+
+#: Size of a mathtext sub- or superscript relative to its text (matplotlib's default is 0.7, TeX's at small
+#: sizes 0.75 to 0.8): at 0.8 the subscript of a 9-pt ``$\xi_1$`` stays above :data:`MIN_SCRIPT_DIGIT_PX` in a
+#: figure up to 7.5 in wide shown :data:`REPORT_WIDTH_PX` wide.
+SCRIPT_SCALE = 0.8
+
+
+def larger_scripts(scale: float = SCRIPT_SCALE) -> float:
+    """Set the size of mathtext's sub- and superscripts relative to their text; returns the previous size.
+
+    Matplotlib has no setting for it: the module constant ``matplotlib._mathtext.SHRINK_FACTOR`` is read
+    each time a formula is laid out, so setting it here changes every formula drawn afterwards in this
+    process (``tests/test_figure_text.py`` measures the result on every stored figure).
+
+    Parameters
+    ----------
+    scale : float, optional
+        The script size as a fraction of the text size.
+
+    Returns
+    -------
+    float
+        The size it replaces (to restore it).
+    """
+    from matplotlib import _mathtext
+
+    previous, _mathtext.SHRINK_FACTOR = _mathtext.SHRINK_FACTOR, scale
+    return previous
 
 
 def paper_style() -> None:
     """Matplotlib settings close to the papers' (serif, small, grid) and the maths in the text's serif font.
 
     With 8 pt for the smallest text, a figure up to 7.2 in wide (as saved, ``bbox="tight"``) shows every
-    text at least :data:`MIN_EM_PX` tall when drawn :data:`REPORT_WIDTH_PX` wide.
+    text at least :data:`MIN_EM_PX` tall and every digit at least :data:`MIN_DIGIT_PX` tall when drawn
+    :data:`REPORT_WIDTH_PX` wide; the mathtext scripts are :data:`SCRIPT_SCALE` of their text
+    (:func:`larger_scripts`), so their digits reach :data:`MIN_SCRIPT_DIGIT_PX`.
     """
+    larger_scripts()
     pyplot().rcParams.update({
         "font.family": "serif", "font.size": 9, "axes.titlesize": 9, "axes.labelsize": 9,
         "legend.fontsize": 8, "xtick.labelsize": 8, "ytick.labelsize": 8, "axes.grid": True,

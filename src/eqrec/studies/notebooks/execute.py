@@ -104,11 +104,13 @@ def reported_figures(root: str | Path = ".") -> dict[str, str]:
     return found
 
 
-def figure_caption(png: str, root: str | Path = ".") -> str | None:
+def figure_caption(png: str, root: str | Path = ".", config: dict | None = None) -> str | None:
     """The report's caption of figure ``png`` (a path under ``results/``) as plain text, or ``None``.
 
-    The caption's Jinja (``{% if snakemake.wildcards.x == ... %}``) is rendered with the wildcards the path
-    matches, and its reStructuredText literals (````x````) become plain text.
+    The caption's Jinja is rendered as ``snakemake --report`` renders it
+    (:func:`eqrec.studies.notebooks.captions.render_caption`): with the wildcards the path matches and the
+    configuration holding the facts it quotes from ``results/``; its reStructuredText literals (````x````)
+    become plain text.
 
     Parameters
     ----------
@@ -116,23 +118,24 @@ def figure_caption(png: str, root: str | Path = ".") -> str | None:
         The figure's path relative to the repository root.
     root : str or Path, optional
         The repository root.
+    config : dict or None, optional
+        The configuration with the facts (default: the default configuration and the stored results' facts).
 
     Returns
     -------
     str or None
         The caption, or ``None`` when the report does not show the figure.
     """
-    from types import SimpleNamespace
-
-    import jinja2
+    from eqrec.studies.notebooks.captions import FACTS_KEY, default_config, plain, render_caption, report_facts
 
     for pattern, caption in reported_figures(root).items():
         regex = re.sub(r"\\\{(\w+)\\\}", r"(?P<\1>[^/]+?)", re.escape(pattern))
         m = re.fullmatch(regex, png)
         if m:
+            if config is None:
+                config = {**default_config(root), FACTS_KEY: report_facts(root)}
             text = (Path(root) / CAPTIONS_DIR / f"{caption}.rst").read_text()
-            text = jinja2.Template(text).render(snakemake=SimpleNamespace(wildcards=SimpleNamespace(**m.groupdict())))
-            return " ".join(text.replace("``", "").split())
+            return plain(render_caption(text, m.groupdict(), config))
     return None
 
 
@@ -155,13 +158,16 @@ def add_alt_text(nb, figures: list[str], root: str | Path = ".") -> int:
     int
         The number of images given a caption.
     """
+    from eqrec.studies.notebooks.captions import FACTS_KEY, default_config, report_facts
+
     by_bytes = {(Path(root) / f).read_bytes(): f for f in figures if f.endswith(".png")}
+    config = {**default_config(root), FACTS_KEY: report_facts(root)}
     done = 0
     for cell in nb.cells:
         for out in cell.get("outputs", []):
             data = out.get("data", {})
             path = by_bytes.get(base64.b64decode(data["image/png"])) if "image/png" in data else None
-            caption = figure_caption(path, root) if path else None
+            caption = figure_caption(path, root, config) if path else None
             if caption:
                 out.setdefault("metadata", {}).setdefault("image/png", {})["alt"] = caption
                 done += 1

@@ -16,7 +16,8 @@ import re
 
 #: nbconvert's ``lab`` page without the blocks that load require.js, MathJax and mermaid from the network; a PNG
 #: output's ``alt`` metadata (the figure's caption, :func:`eqrec.studies.notebooks.execute.add_alt_text`) becomes
-#: the ``alt`` of its image.
+#: the ``alt`` of its image, and its ``width`` metadata (``Image(..., width=800)``) the image's width, as in
+#: Jupyter (nbconvert's own template drops it: the figure would show at its pixel size).
 OFFLINE_TEMPLATE = """{%- extends 'index.html.j2' -%}
 {%- block html_head_js -%}{%- endblock html_head_js -%}
 {%- block html_head_js_mathjax -%}{%- endblock html_head_js_mathjax -%}
@@ -24,7 +25,9 @@ OFFLINE_TEMPLATE = """{%- extends 'index.html.j2' -%}
 {% block data_png scoped %}
 <div class="jp-RenderedImage jp-OutputArea-output {{ extra_class }}">
 {%- set alttext = output | get_metadata('alt', 'image/png') %}
+{%- set width = output | get_metadata('width', 'image/png') %}
 <img src="data:image/png;base64,{{ output.data['image/png'] | escape_html }}"
+{%- if width %} width="{{ width | escape_html }}" style="max-width: 100%; height: auto"{% endif %}
 {%- if alttext %} alt="{{ alttext | escape_html }}"{% endif %}>
 </div>
 {%- endblock data_png %}

@@ -45,7 +45,7 @@ def step_figure_trajectories(cfg, inputs, outputs, wildcards) -> None:
         cols.append(("one_based", f"designed for missing $k$ = {missing} ({ob}),\nrun on the true words", c, "C3"))
     errs0 = sim[f"{fig}/time"]
     T = errs0.shape[1] - 1
-    f, axes = plt.subplots(3, len(cols), figsize=(2.25 * len(cols) + 0.5, 6.6), sharex=True, sharey="row",
+    f, axes = plt.subplots(3, len(cols), figsize=(2.05 * len(cols) + 0.4, 6.6), sharex=True, sharey="row",
                            squeeze=False, layout="constrained")
     for j, (name, title, mu2, color) in enumerate(cols):
         trajectory_panel(axes[:, j], sim[f"{fig}/{name}"], equalized_levels(T, mu1, mu2),
@@ -201,7 +201,7 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
                                  outline_tol=float(cfg["mu2_tol"]) if mg else None,
                                  interval=printed.get("published_interval") if mg else None)
         vals, flat = _optimal_values(g)
-        ax.set_title(_panel_title(READING_NAMES.get(var, var), g["word"].iloc[0], vals, flat, counts), fontsize=8)
+        ax.set_title(_panel_title(READING_NAMES.get(var, var), g["word"].iloc[0], vals, flat, counts), fontsize=9)
         if flat and (g["status"] == "optimal").all():  # the value printed inside (one colour says little)
             ax.text(0.0, 0.55 * r_grid[-1], f"$\\mu_2$ = {float(vals.iloc[0]):.4g}\neverywhere", ha="center",
                     va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.5",

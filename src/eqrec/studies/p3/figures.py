@@ -109,7 +109,7 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
                                                                   STATE_LABELS_ACC], float(data["acc_mu1"])),
             ("reactor_switching", "Batch reactor,\nswitching scheme", list(STATE_LABELS_REACTOR),
              float(data["switching_mu1"])))
-    fig, axes = plt.subplots(4, 3, figsize=(7.4, 8.0), sharex="col", layout="constrained")
+    fig, axes = plt.subplots(4, 3, figsize=(7.0, 8.0), sharex="col", layout="constrained")
     # the error and the level of each run over the window
     shown = {label: (data[f"{label}_{kind}_error"][: window + 1], data[f"{label}_{kind}_level"][: window + 1])
              for label, *_ in cols}
@@ -124,8 +124,9 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
         T, Ts = int(data[f"{label}_T"]), float(data[f"{label}_Ts"])
         # the vertical lines: (instants, style, legend entry)
         if label == "reactor_switching":
-            marks = [(data[f"{label}_{kind}_switch"], {"color": "C3", "ls": "--", "lw": 0.8}, "switch to recovery"),
-                     (data[f"{label}_{kind}_revert"], {"color": "C2", "ls": ":", "lw": 1.0}, "back to performance")]
+            # black dashed against orange dotted: told apart by colour-blind readers and in grey print
+            marks = [(data[f"{label}_{kind}_switch"], {"color": "k", "ls": "--", "lw": 0.9}, "switch to recovery"),
+                     (data[f"{label}_{kind}_revert"], {"color": "C1", "ls": ":", "lw": 1.5}, "back to performance")]
         else:
             marks = [(range(T, N + 1, T), {"color": "C4", "ls": "-", "lw": 0.7, "alpha": 0.8},
                       "period boundary (every $T$ steps)")]
@@ -147,7 +148,7 @@ def step_strategy_figure(cfg, inputs, outputs, wildcards) -> None:
             if i == 0:
                 ax.set_title(f"{title.format(T=T)}\n$\\mu_1$ = {mu1:g}")
         last = axes[min(n, 4) - 1, c]
-        last.set_xlabel(f"time step $k$\n($T_s$ = {Ts:g} s)")
+        last.set_xlabel(f"time step $t$\n($T_s$ = {Ts:g} s)")  # t, as in Figs. 1 and 2
         last.tick_params(labelbottom=True)
     # one legend under the figure (inside an axis it covers the bands)
     seen: dict[str, object] = {}

@@ -36,16 +36,22 @@ def _time_panels(n: int, width: float, per_panel: float, extra: float):
     return fig, axes[:, 0]
 
 
-def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, pdf: str, png: str) -> None:
-    """Figs. 1-3: true state components and their estimate against time (legend below the panels)."""
+def fig_tracking(x: np.ndarray, est: np.ndarray, title: str, sym: str, eta: float, pdf: str, png: str,
+                 arrived: np.ndarray | None = None) -> None:
+    """Figs. 1-3: true state components and their estimate against time (legend below the panels); the steps
+    whose packet was lost (``arrived[t] == 0``) shaded grey, so that a flat stretch of the estimate reads as the
+    dropouts it follows."""
     fig, axes = _time_panels(x.shape[1], 5.4, 1.8, 0.9)
     t = np.arange(x.shape[0])
+    lost = [] if arrived is None else [int(k) for k in np.flatnonzero(np.asarray(arrived) == 0)]
     for i, ax in enumerate(axes):
+        for j, k in enumerate(lost):
+            ax.axvspan(k - 0.5, k + 0.5, color="0.85", lw=0, zorder=0, label=None if j else "packet lost")
         ax.plot(t, x[:, i], "k-", label=r"true state $x_i(t)$")
         ax.plot(t, est[:, i], "r--", label="estimate " + sym.format(i="i"))
         ax.set_ylabel(rf"state $x_{i + 1}$ {UNIT}")
     axes[0].set_title(rf"Tracking by the LMV {title}, arrival probability $\bar\eta$ = {eta:g}")
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=2)
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=3)
     save_figure(fig, pdf, png)
 
 
@@ -124,7 +130,7 @@ def fig_eta(d: dict, ex: str, N: int, example: dict, pdf: str, png: str) -> None
 
 def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
     """Fig. 6: steady filter variance surfaces over (Q_xi, Q_lambda), zero-input; the variance is the height and
-    the colour of a surface, read on the colour bar beside it (the z axis carries only ticks)."""
+    the colour of a surface, read on the colour bar beside it and on the labelled z axis."""
     plt = _plt()
     F = d[f"{ex}/zero/filt"]
     n = F.shape[-1]
@@ -135,6 +141,7 @@ def fig_q(d: dict, ex: str, eta: float, pdf: str, png: str) -> None:
         surf = ax.plot_surface(XI, LA, F[..., i], cmap="viridis", linewidth=0.2, edgecolor="k", alpha=0.9)
         ax.set_xlabel(r"$Q_\xi$", labelpad=2)
         ax.set_ylabel(r"$Q_\lambda$", labelpad=6)
+        ax.set_zlabel("variance", labelpad=4)
         ax.tick_params(axis="both", pad=0)
         ax.set_title(rf"component $x_{i + 1}$", y=0.98)
         fig.colorbar(surf, ax=ax, shrink=0.65, pad=0.1, label=rf"filter variance of $x_{i + 1}$ {UNIT}")
@@ -162,23 +169,24 @@ def fig_regions(d: dict, examples: dict, eta_bar: float, pdf: str, png: str) -> 
 
     plt = _plt()
     exs = list(examples)
-    fig, axes = plt.subplots(1, len(exs), figsize=(3.6 * len(exs), 3.6), layout="constrained", squeeze=False)
-    pad = 0.07 * (d["qlam"][-1] - d["qlam"][0]), 0.07 * (d["qxi"][-1] - d["qxi"][0])
+    fig, axes = plt.subplots(1, len(exs), figsize=(3.4 * len(exs), 3.6), layout="constrained", squeeze=False)
+    # Q_xi on x and Q_lambda on y, as in Fig. 6
+    pad = 0.07 * (d["qxi"][-1] - d["qxi"][0]), 0.07 * (d["qlam"][-1] - d["qlam"][0])
     for ax, ex in zip(axes[0], exs):
         ratio = d[f"{ex}/hold/filt"].sum(-1) / d[f"{ex}/zero/filt"].sum(-1)
         m = max(1.02, float(np.nanmax(ratio)), 1.0 / float(np.nanmin(ratio)))
         # white = equal variances (ratio 1), blue = hold-input better, red = zero-input better
-        im = ax.pcolormesh(d["qlam"], d["qxi"], ratio, cmap="RdBu_r", norm=LogNorm(vmin=1.0 / m, vmax=m),
+        im = ax.pcolormesh(d["qxi"], d["qlam"], ratio.T, cmap="RdBu_r", norm=LogNorm(vmin=1.0 / m, vmax=m),
                            shading="auto")
-        ax.contour(d["qlam"], d["qxi"], ratio, levels=[1.0], colors="k", linewidths=1.0)
-        ax.plot([float(examples[ex]["Qlam"])], [float(examples[ex]["Qxi"])], "*", color="gold", mec="k", mew=0.6,
+        ax.contour(d["qxi"], d["qlam"], ratio.T, levels=[1.0], colors="k", linewidths=1.0)
+        ax.plot([float(examples[ex]["Qxi"])], [float(examples[ex]["Qlam"])], "*", color="gold", mec="k", mew=0.6,
                 ms=11, zorder=5, label="working point of Figs. 7 and 8")
-        ax.set_xlim(d["qlam"][0] - pad[0], d["qlam"][-1] + pad[0])
-        ax.set_ylim(d["qxi"][0] - pad[1], d["qxi"][-1] + pad[1])
+        ax.set_xlim(d["qxi"][0] - pad[0], d["qxi"][-1] + pad[0])
+        ax.set_ylim(d["qlam"][0] - pad[1], d["qlam"][-1] + pad[1])
         ax.set_facecolor("0.75")
         ax.grid(False)
-        ax.set_xlabel(r"$Q_\lambda$ (variance of $\lambda$)")
-        ax.set_ylabel(r"$Q_\xi$ (variance of $\xi$)")
+        ax.set_xlabel(r"$Q_\xi$ (variance of $\xi$)")
+        ax.set_ylabel(r"$Q_\lambda$ (variance of $\lambda$)")
         ax.set_title(examples[ex].get("name", ex))
         cb = fig.colorbar(im, ax=ax, label=r"tr $P_{\mathrm{hold}}$ / tr $P_{\mathrm{zero}}$, log scale")
         ticks = _ratio_ticks(m)

@@ -73,7 +73,8 @@ def step_tracking(cfg, inputs, outputs, wildcards) -> None:
     labels = [("filter", r"$\hat{{x}}_{i}(t|t)$"), ("one-step predictor", r"$\hat{{x}}_{i}(t|t-1)$"),
               (f"{N}-step smoother", r"$\hat{{x}}_{i}(t|t+" + str(N) + ")$")]
     for num, ((title, sym), e) in enumerate(zip(labels, est.values()), start=1):  # Figs. 1-3
-        p4_figures.fig_tracking(x, e, title, sym, eta, outputs[f"f{num}"], outputs[f"f{num}png"])
+        p4_figures.fig_tracking(x, e, title, sym, eta, outputs[f"f{num}"], outputs[f"f{num}png"],
+                                arrived=sim["eta"][0])
 
 
 def _check_record(c) -> dict:
