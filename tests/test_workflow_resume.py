@@ -17,7 +17,7 @@ Snakemake runs in a process group of its own and the whole group is killed with 
 After the resumes ``git status --porcelain --untracked-files=all -- results ':!results/timings'`` must be
 empty: no orphaned chunk, no partial file, every result byte-identical to the committed one.  A write killed
 half-way (the temporary file of eqrec.io.atomic_path, made by a real SIGKILL inside it) is left in results/
-before a resume: the resumed job removes it.
+before a resume: the resumed job removes it (eqrec.io.remove_stale_temporaries, from workflow/scripts/run_step.py).
 """
 import os
 import re
@@ -31,6 +31,7 @@ from pathlib import Path
 
 import pytest
 
+from eqrec.io import remove_stale_temporaries
 from eqrec.studies.pipeline import resume
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -206,7 +207,7 @@ def test_stale_temporaries_of_the_outputs_only_are_removed(tmp_path):
     keep = [tmp_path / ".fig.pdf.tmp", tmp_path / ".fig.pdf.abc.tmp", tmp_path / "x.fig.pdf.abcdefgh.tmp"]
     for path in keep:
         path.write_text("not a leftover of atomic_path for fig.pdf")
-    assert resume.remove_stale_temporaries([out, tmp_path / "missing" / "a.json"]) == [left]
+    assert remove_stale_temporaries([out, tmp_path / "missing" / "a.json"]) == [left]
     assert not left.exists() and other.exists() and out.read_bytes() == b"old"
     assert all(path.exists() for path in keep)
 

@@ -27,7 +27,7 @@
 # (`snakemake --delete-temp-output` removes such leftovers.) A killed write
 # inside results/ leaves the temporary file of eqrec.io.atomic_path: the job
 # runs again on resume and workflow/scripts/run_step.py removes it first
-# (eqrec.studies.pipeline.resume).
+# (eqrec.io.remove_stale_temporaries).
 #
 # The step is named twice, in `code=code_inputs(...)` and `step=...`, because
 # no directive sees the other: input functions get only the wildcards, and

@@ -1,96 +1,32 @@
-"""Resuming an interrupted workflow run: what a hard kill leaves behind, and how to get past it.
+"""After a hard kill of the workflow: is the lock it left stale, and which one command resumes.
 
-A ``kill -9`` of Snakemake and its jobs (or a lost session) can leave two things:
-
-* the temporary file of a write it cut short: every step writes through
-  :func:`eqrec.io.atomic_path` (a ``.<name>.<8 random characters>.tmp`` file in
-  the output's folder, moved onto the output when complete), and a killed process
-  cannot remove it.  The job runs again on resume (its output is missing or marked
-  incomplete) and :func:`remove_stale_temporaries`, called by
-  ``workflow/scripts/run_step.py`` before the step, removes it.  Snakemake holds the
-  lock of the job's outputs then, so no other run can be writing them;
-* Snakemake's lock (``.snakemake/locks/``): the next run of the same command stops
-  with ``LockException``.  :func:`lock_advice`, installed by the Snakefile
-  (:func:`explain_lock_errors`), adds to that error whether a Snakemake process
-  still runs in the directory on this machine and, when none does, the one command
-  that resumes: ``snakemake --unlock && <the same command>``.
-
-Snakemake's ``temp()`` files (the sweep chunks) live outside ``results/``
-(``intermediate/``, see ``workflow/rules/p2.smk``): a kill between a merge job's end
-and Snakemake's removal of its chunks leaves them there, never in ``results/``.
+A ``kill -9`` of Snakemake (or a lost session) leaves its lock in
+``.snakemake/locks/``, and the next run of the same command stops with
+``LockException``.  The Snakefile installs :class:`LockAdvice` on Snakemake's
+logger (:func:`explain_lock_errors`): it follows that error with
+:func:`lock_advice`, which says whether a Snakemake process still runs in the
+directory on this machine and, when none does, that the lock is stale and the
+one command that resumes: ``snakemake --unlock && <the same command>``.
+(The other leftovers of a kill: the temporary files of killed writes, removed by
+:func:`eqrec.io.remove_stale_temporaries` when the job runs again; the sweeps'
+temp() chunks, kept under ``intermediate/``, not ``results/``.)
 """
 
 from __future__ import annotations
 
 import logging
 import os
-import re
 import shlex
 import socket
 import sys
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Sequence
 
 #: Where Snakemake's file backend keeps its locks, relative to the working directory.
 LOCK_DIR = Path(".snakemake") / "locks"
 
-#: The random part of a :func:`tempfile.mkstemp` name (``tempfile._RandomNameSequence``: 8 characters of
-#: ``a-z0-9_``), as :func:`eqrec.io.atomic_path` names its temporary file ``.<name>.<random>.tmp``.
-_RANDOM_PART = r"[a-z0-9_]{8}"
-
 #: Options of the command line that say where the workflow is: ``snakemake --unlock`` needs them too.
 _LOCATION_OPTIONS = ("-d", "--directory", "-s", "--snakefile")
-
-
-def remove_stale_temporaries(outputs: Iterable[str | os.PathLike]) -> list[Path]:
-    """Remove the temporary files that killed writes of ``outputs`` left (:func:`eqrec.io.atomic_path`).
-
-    Only files named as :func:`eqrec.io.atomic_path` names the temporary file of one of these outputs
-    (``.<output name>.<8 characters>.tmp`` in the output's folder) are removed.  Call it only while holding
-    the outputs' lock (a Snakemake job before its step runs): a running write of the same output would lose
-    its temporary file.
-
-    Parameters
-    ----------
-    outputs : iterable of str or path-like
-        The files a job is about to write.
-
-    Returns
-    -------
-    list of Path
-        The files removed.
-    """
-    removed = []
-    by_folder: dict[Path, set[str]] = {}
-    for output in outputs:
-        path = Path(output)
-        by_folder.setdefault(path.parent, set()).add(path.name)
-    for folder, names in by_folder.items():
-        if not folder.is_dir():
-            continue
-        pattern = re.compile(rf"\.(?:{'|'.join(map(re.escape, sorted(names)))})\.{_RANDOM_PART}\.tmp")
-        for entry in folder.iterdir():
-            if pattern.fullmatch(entry.name) and entry.is_file():
-                entry.unlink(missing_ok=True)
-                removed.append(entry)
-    return sorted(removed)
-
-
-def lock_files(workdir: str | os.PathLike) -> list[Path]:
-    """The lock files Snakemake's file backend holds in ``workdir`` (empty when unlocked).
-
-    Parameters
-    ----------
-    workdir : str or path-like
-        The workflow's working directory.
-
-    Returns
-    -------
-    list of Path
-        The ``.snakemake/locks/<n>.{input,output}.lock`` files.
-    """
-    folder = Path(workdir) / LOCK_DIR
-    return sorted(folder.glob("*.lock")) if folder.is_dir() else []
 
 
 def _ancestors() -> set[int]:
@@ -98,21 +34,20 @@ def _ancestors() -> set[int]:
     pids, pid = {os.getpid()}, os.getppid()
     while pid > 1 and pid not in pids:
         pids.add(pid)
-        try:
-            stat = Path(f"/proc/{pid}/stat").read_text()
+        try:  # the field after the state in /proc/<pid>/stat: the parent's id
+            pid = int(Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[1])
         except OSError:
             break
-        pid = int(stat.rpartition(")")[2].split()[1])  # the field after the state: the parent's id
     return pids
 
 
 def snakemake_processes(workdir: str | os.PathLike, proc: str | os.PathLike = "/proc") -> list[int] | None:
     """Processes on this machine, other than this one and its ancestors, that run Snakemake in ``workdir``.
 
-    A process counts when a word of its command line contains ``snakemake`` (the ``snakemake`` command,
-    ``python -m snakemake``, and a job's script, run from ``.snakemake/scripts/``) and its working
-    directory is ``workdir`` or a folder in it.  A process whose working directory cannot be read (another
-    user's) counts too: it cannot be ruled out.
+    A process counts when its command line holds ``snakemake`` (the ``snakemake`` command, ``python -m
+    snakemake``, a job's script run from ``.snakemake/scripts/``) and its working directory is ``workdir`` or
+    a folder in it, or cannot be read (another user's: it cannot be ruled out).  A killed process not yet
+    reaped (a zombie) has an empty command line and does not count.
 
     Parameters
     ----------
@@ -129,24 +64,17 @@ def snakemake_processes(workdir: str | os.PathLike, proc: str | os.PathLike = "/
     table = Path(proc)
     if not (table / "self" / "cmdline").is_file():
         return None
-    target = os.path.realpath(workdir)
-    skip = _ancestors()
-    found = []
+    target, skip, found = os.path.realpath(workdir), _ancestors(), []
     for entry in table.iterdir():
         if not entry.name.isdigit() or int(entry.name) in skip:
             continue
         try:
-            argv = (entry / "cmdline").read_bytes()
-        except OSError:  # gone meanwhile
-            continue
-        if b"snakemake" not in argv:  # zombies (a killed process not yet reaped) have an empty command line
-            continue
-        try:
+            if b"snakemake" not in (entry / "cmdline").read_bytes():
+                continue
             cwd = os.readlink(entry / "cwd")
         except PermissionError:
-            found.append(int(entry.name))
-            continue
-        except OSError:
+            cwd = target
+        except OSError:  # gone meanwhile
             continue
         if cwd == target or cwd.startswith(target.rstrip(os.sep) + os.sep):
             found.append(int(entry.name))
@@ -159,14 +87,14 @@ def resume_command(argv: Sequence[str] | None) -> str:
     Parameters
     ----------
     argv : sequence of str or None
-        The interrupted command's arguments after the program name (``sys.argv[1:]`` of the
-        ``snakemake`` command); ``None`` when unknown.
+        The interrupted command's arguments after the program name (``sys.argv[1:]`` of ``snakemake``);
+        ``None`` when unknown.
 
     Returns
     -------
     str
-        ``snakemake --unlock && snakemake <argv>`` (the unlock with the ``--directory`` and ``--snakefile``
-        options of ``argv``); with ``argv`` unknown, the unlock followed by a placeholder.
+        ``snakemake --unlock && snakemake <argv>``, the unlock with the ``--directory`` and ``--snakefile``
+        options of ``argv``.
 
     Examples
     --------
@@ -177,14 +105,9 @@ def resume_command(argv: Sequence[str] | None) -> str:
     """
     if argv is None:
         return "snakemake --unlock && <the same snakemake command as before>"
-    location: list[str] = []
-    for k, arg in enumerate(argv):
-        if arg in _LOCATION_OPTIONS and k + 1 < len(argv):
-            location += [arg, argv[k + 1]]
-        elif arg.startswith(tuple(f"{o}=" for o in _LOCATION_OPTIONS if o.startswith("--"))):
-            location.append(arg)
-    unlock = shlex.join(["snakemake", *location, "--unlock"])
-    return f"{unlock} && {shlex.join(['snakemake', *argv])}"
+    location = [arg for k, arg in enumerate(argv)
+                if arg.split("=")[0] in _LOCATION_OPTIONS or (k > 0 and argv[k - 1] in _LOCATION_OPTIONS)]
+    return f"{shlex.join(['snakemake', *location, '--unlock'])} && {shlex.join(['snakemake', *argv])}"
 
 
 def lock_advice(workdir: str | os.PathLike, argv: Sequence[str] | None) -> str | None:
@@ -200,32 +123,33 @@ def lock_advice(workdir: str | os.PathLike, argv: Sequence[str] | None) -> str |
     Returns
     -------
     str or None
-        When no other Snakemake process runs in ``workdir`` on this machine: that the lock is stale and the
-        command that resumes.  When one does: its process ids, and to wait for it.  ``None`` when there is
-        no lock file (another persistence backend) or no way to tell (no process table).
+        With no other Snakemake process in ``workdir`` on this machine: the lock is stale, and the command
+        that resumes.  With one: its process ids, and to wait for it.  ``None`` without a lock file (another
+        persistence backend) or a process table to tell.
     """
-    if not lock_files(workdir):
-        return None
     pids = snakemake_processes(workdir)
-    if pids is None:
+    if pids is None or not any((Path(workdir) / LOCK_DIR).glob("*.lock")):
         return None
     where = os.path.realpath(workdir)
     if pids:
-        listed = ", ".join(map(str, pids))
-        return (f"The lock is held: a Snakemake process still runs in {where} (process {listed}). "
-                "Wait for it to end; do not unlock a directory a run is using.")
-    return (f"The lock is stale: no Snakemake process runs in {where} on this machine "
-            f"({socket.gethostname()}); an interrupted run (a kill, a lost session) left it. "
-            "If no run on another machine uses this directory, resume with\n"
-            f"    {resume_command(argv)}\n"
+        return (f"The lock is held: a Snakemake process still runs in {where} (process "
+                f"{', '.join(map(str, pids))}). Wait for it to end; do not unlock a directory a run is using.")
+    return (f"The lock is stale: no Snakemake process runs in {where} on this machine ({socket.gethostname()}); "
+            "an interrupted run (a kill, a lost session) left it. If no run on another machine uses this "
+            f"directory, resume with\n    {resume_command(argv)}\n"
             "(--unlock only removes the lock; the run then re-does the jobs the interruption cut short).")
 
 
 def cli_arguments() -> list[str] | None:
-    """The arguments of this process's ``snakemake`` command line (``sys.argv[1:]``), ``None`` when this
-    process is not the ``snakemake`` command (``python -m snakemake`` counts) but, say, a program using
-    Snakemake's API."""
-    program = Path(sys.argv[0]) if sys.argv and sys.argv[0] else Path()
+    """The arguments of this process's ``snakemake`` command line, if it is one.
+
+    Returns
+    -------
+    list of str or None
+        ``sys.argv[1:]`` when this process is the ``snakemake`` command (``python -m snakemake`` too);
+        ``None`` otherwise (a program using Snakemake's API).
+    """
+    program = Path(sys.argv[0] if sys.argv else "")
     if program.name == "snakemake" or (program.name == "__main__.py" and program.parent.name == "snakemake"):
         return list(sys.argv[1:])
     return None
@@ -244,7 +168,7 @@ class LockAdvice(logging.Handler):
 
     def __init__(self, workdir: str | os.PathLike, argv: Sequence[str] | None):
         super().__init__(level=logging.INFO)
-        self.workdir, self.argv, self.done = Path(workdir), argv, False
+        self.workdir, self.argv, self.done = workdir, argv, False
 
     def emit(self, record: logging.LogRecord) -> None:
         """Print the advice after the first record of a lock error.
@@ -252,18 +176,16 @@ class LockAdvice(logging.Handler):
         Parameters
         ----------
         record : logging.LogRecord
-            A record of Snakemake's logger: its ``LockException``, or the line of a dry run that finds the
-            directory locked.
+            A record of Snakemake's logger: its ``LockException``, or a dry run's line that the directory is
+            locked.
         """
-        if self.done:
-            return
-        lock_error = getattr(record, "exception", None) == "LockException"
-        if not lock_error and "Directory cannot be locked" not in str(record.msg):
+        if self.done or not (getattr(record, "exception", None) == "LockException"
+                             or "Directory cannot be locked" in str(record.msg)):
             return
         self.done = True
         try:
             advice = lock_advice(self.workdir, self.argv)
-        except Exception:  # advice must never turn into an error of its own
+        except Exception:  # advice must never become an error of its own
             return
         if advice:
             print(advice, file=sys.stderr, flush=True)
@@ -271,7 +193,7 @@ class LockAdvice(logging.Handler):
 
 def explain_lock_errors(logger: logging.Logger, workdir: str | os.PathLike,
                         argv: Sequence[str] | None) -> LockAdvice:
-    """Install :class:`LockAdvice` on Snakemake's logger (once per logger).
+    """Install :class:`LockAdvice` on Snakemake's logger, once.
 
     Parameters
     ----------
@@ -285,11 +207,10 @@ def explain_lock_errors(logger: logging.Logger, workdir: str | os.PathLike,
     Returns
     -------
     LockAdvice
-        The handler installed (the one already there, if any).
+        The handler installed (or the one already there).
     """
-    for handler in logger.handlers:
-        if isinstance(handler, LockAdvice):
-            return handler
-    handler = LockAdvice(workdir, argv)
-    logger.addHandler(handler)
+    handler = next((h for h in logger.handlers if isinstance(h, LockAdvice)), None)
+    if handler is None:
+        handler = LockAdvice(workdir, argv)
+        logger.addHandler(handler)
     return handler
