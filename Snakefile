@@ -9,6 +9,7 @@
 #   snakemake --cores 2 p3_scale                 # the P3 scale table (slow, up to 16 GB; not in `all`)
 #   snakemake --cores 2 --configfile my.yaml     # overrides (or --config p1='{mu1: 1.5}')
 #   snakemake --report report.html               # browsable report with figure captions
+import logging
 import os
 
 from snakemake.exceptions import WorkflowError
@@ -19,9 +20,18 @@ from snakemake.utils import min_version
 # here, inherit it. The tests set the same (tests/conftest.py).
 os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 
-from eqrec.studies.pipeline import configuration
+from eqrec.studies.pipeline import configuration, resume
 
 min_version("9.0")
+
+# After a hard kill (kill -9, a lost session) the next run stops with Snakemake's LockException;
+# eqrec.studies.pipeline.resume follows that error with whether a Snakemake process still runs here
+# and, when none does, the one command that resumes (snakemake --unlock && <this command>). Only in the
+# main process (not in a cluster job's own Snakemake).
+if workflow.is_main_process:
+    resume.explain_lock_errors(
+        logging.getLogger("snakemake.logging"), os.getcwd(), resume.cli_arguments()
+    )
 
 
 report: "workflow/report/workflow.rst"

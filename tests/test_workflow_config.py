@@ -187,11 +187,11 @@ def test_heatmap_chunks_follow_the_resolved_config(workdir):
     text = out.stdout + out.stderr
     assert out.returncode == 0, text[-3000:]
     for k in range(1, 5):
-        assert f"results/p2/heatmap/chunk_{k}-of-4.csv" in text
+        assert f"intermediate/p2/heatmap/chunk_{k}-of-4.csv" in text
     assert "chunk_5-of-4.csv" not in text and "-of-2.csv" not in text
     out = run(["-n", "results/p2/heatmap.csv", "--set-scatter", "heatmap=3", "--forceall"], workdir)
     text = out.stdout + out.stderr
-    assert out.returncode == 0 and "results/p2/heatmap/chunk_3-of-3.csv" in text and "-of-2.csv" not in text
+    assert out.returncode == 0 and "intermediate/p2/heatmap/chunk_3-of-3.csv" in text and "-of-2.csv" not in text
 
 
 SWEEPS = "eqrec.studies.p2.sweeps:step_"

@@ -2,16 +2,19 @@
 
 A file is written to a temporary file in its own folder and moved onto its
 name with :func:`os.replace`, so a reader never sees half a file and a failed
-write leaves nothing behind.
+write leaves nothing behind.  A killed process (SIGKILL) cannot remove its
+temporary file: :func:`remove_stale_temporaries` does, before the file is
+written again (``workflow/scripts/run_step.py``, for a job's outputs).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from pathlib import Path
-from typing import Iterator
+from typing import Iterable, Iterator
 
 _UMASK = os.umask(0)
 os.umask(_UMASK)
@@ -43,6 +46,36 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def remove_stale_temporaries(paths: Iterable[str | os.PathLike]) -> list[Path]:
+    """Remove the temporary files that killed :func:`atomic_path` writes of ``paths`` left.
+
+    Only the names :func:`atomic_path` gives (``.<name>.<8 characters of a-z0-9_>.tmp``, the random part of
+    :func:`tempfile.mkstemp`) beside each path go.  Call it only where no other process may be writing these
+    paths (a Snakemake job holds their lock).
+
+    Parameters
+    ----------
+    paths : iterable of str or path-like
+        The files about to be written.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    names: dict[Path, set[str]] = {}
+    for path in map(Path, paths):
+        names.setdefault(path.parent, set()).add(re.escape(path.name))
+    removed = []
+    for folder, escaped in names.items():
+        pattern = re.compile(rf"\.(?:{'|'.join(sorted(escaped))})\.[a-z0-9_]{{8}}\.tmp")
+        for entry in folder.iterdir() if folder.is_dir() else ():
+            if pattern.fullmatch(entry.name) and entry.is_file():
+                entry.unlink(missing_ok=True)
+                removed.append(entry)
+    return sorted(removed)
 
 
 def write_text(path: str | Path, text: str) -> None:

@@ -19,6 +19,16 @@
 # editing code a step does not import (the LP modules for a figure, eqrec/lmv
 # for P1) does not re-run its job. No mathematics here.
 #
+# Intermediate files (the sweeps' chunks, temp() outputs that a merging step
+# reads) live under intermediate/ (git-ignored), never under results/: a hard
+# kill after a merging job has ended but before Snakemake has removed its
+# chunks leaves them behind, and the merge, complete, does not run again on
+# resume to remove them; results/ holds only what an uninterrupted run writes.
+# (`snakemake --delete-temp-output` removes such leftovers.) A killed write
+# inside results/ leaves the temporary file of eqrec.io.atomic_path: the job
+# runs again on resume and workflow/scripts/run_step.py removes it first
+# (eqrec.io.remove_stale_temporaries).
+#
 # The step is named twice, in `code=code_inputs(...)` and `step=...`, because
 # no directive sees the other: input functions get only the wildcards, and
 # `input: **d` / `params: **d` (valid Snakemake) fill one directive each.

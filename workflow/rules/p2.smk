@@ -2,7 +2,8 @@
 # Each rule runs one step of eqrec.studies.p2 (steps, sweeps, values, figures) through the harness (common.smk).
 # The heat map runs in p2.heatmap.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter heatmap=N), each every configured variant;
-# the merge checks that they cover the grid exactly once.
+# the merge checks that they cover the grid exactly once. The chunks are temp()
+# files under intermediate/ (not results/; see common.smk).
 
 
 scattergather:
@@ -43,7 +44,7 @@ use rule step as p2_heatmap_chunk with:
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_chunk"),
     output:
-        csv=temp("results/p2/heatmap/chunk_{scatteritem}.csv"),
+        csv=temp("intermediate/p2/heatmap/chunk_{scatteritem}.csv"),
     log:
         "logs/p2/heatmap_chunk_{scatteritem}.log",
     params:
@@ -54,7 +55,7 @@ use rule step as p2_heatmap_chunk with:
 use rule step as p2_heatmap_merge with:
     """P2-F3a: the whole grid (every configured variant and chunk, checked to cover it exactly once)."""
     input:
-        chunks=gather.heatmap("results/p2/heatmap/chunk_{scatteritem}.csv"),
+        chunks=gather.heatmap("intermediate/p2/heatmap/chunk_{scatteritem}.csv"),
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_merge"),
     output:
         csv="results/p2/heatmap.csv",

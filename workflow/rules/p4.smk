@@ -2,7 +2,8 @@
 # Each rule runs one step of eqrec.studies.p4 (steps, figures, values) through the harness (common.smk).
 # The sweeps run in p4.sweep_*.chunks scattergather jobs (the resolved
 # configuration, or --set-scatter sweep_eta=N); the merging steps (fig5, fig6)
-# check that they cover the grid exactly once.
+# check that they cover the grid exactly once. The chunks are temp() files
+# under intermediate/ (not results/; see common.smk).
 
 P4_EXAMPLES = list(config["p4"]["examples"])
 
@@ -55,7 +56,7 @@ use rule step as p4_sweep_eta_chunk with:
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_sweep_eta_chunk"),
     output:
-        npz=temp("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
+        npz=temp("intermediate/p4/sweep_eta/chunk_{scatteritem}.npz"),
     log:
         "logs/p4/sweep_eta_{scatteritem}.log",
     params:
@@ -68,7 +69,7 @@ use rule step as p4_sweep_q_chunk with:
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_sweep_q_chunk"),
     output:
-        npz=temp("results/p4/sweep_q/chunk_{scatteritem}.npz"),
+        npz=temp("intermediate/p4/sweep_q/chunk_{scatteritem}.npz"),
     log:
         "logs/p4/sweep_q_{scatteritem}.log",
     params:
@@ -94,7 +95,7 @@ use rule step as p4_fig4 with:
 use rule step as p4_fig5 with:
     """P4-F5: merge the arrival-rate chunks; error variances against the arrival rate."""
     input:
-        chunks=gather.sweep_eta("results/p4/sweep_eta/chunk_{scatteritem}.npz"),
+        chunks=gather.sweep_eta("intermediate/p4/sweep_eta/chunk_{scatteritem}.npz"),
         code=code_inputs("eqrec.studies.p4.figures:step_fig5"),
     output:
         **figure("results/p4/fig5_eta", "p4_f5", "P4"),
@@ -109,7 +110,7 @@ use rule step as p4_fig5 with:
 use rule step as p4_fig6 with:
     """P4-F6: merge the Q chunks; filter variance against Q_xi and Q_lambda, and where each mechanism wins."""
     input:
-        chunks=gather.sweep_q("results/p4/sweep_q/chunk_{scatteritem}.npz"),
+        chunks=gather.sweep_q("intermediate/p4/sweep_q/chunk_{scatteritem}.npz"),
         code=code_inputs("eqrec.studies.p4.figures:step_fig6"),
     output:
         **figure("results/p4/fig6_q", "p4_f6", "P4"),

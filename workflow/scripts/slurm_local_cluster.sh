@@ -184,7 +184,8 @@ say "cluster up: node $NODE idle ($CPUS CPUs), munged/slurmctld/slurmd pids ${PI
 # make the two runs differ.
 SNAPSHOT="$STATE/source.tar"
 if ! git -C "$ROOT" rev-parse --git-dir >/dev/null 2>&1; then  # not a git checkout: the tree
-  tar -C "$ROOT" --exclude=./.venv --exclude=./results --exclude=./.snakemake -cf "$SNAPSHOT" .
+  tar -C "$ROOT" --exclude=./.venv --exclude=./results --exclude=./.snakemake --exclude=./intermediate \
+    -cf "$SNAPSHOT" .
 elif [ "$SOURCE" = head ]; then
   HEAD_SHA=$(git -C "$ROOT" rev-parse HEAD)
   git -C "$ROOT" archive -o "$SNAPSHOT" "$HEAD_SHA"
@@ -193,10 +194,10 @@ else
   (cd "$ROOT" && git ls-files -z --cached --others --exclude-standard \
     | tar --null --ignore-failed-read -T - -cf "$SNAPSHOT" 2>/dev/null)
 fi
-copy_repo() {  # copy_repo DEST: the snapshot without results, logs, .snakemake
+copy_repo() {  # copy_repo DEST: the snapshot without results, logs, .snakemake, intermediate chunks
   mkdir -p "$1"
   tar -x -C "$1" -f "$SNAPSHOT"
-  rm -rf "$1/results" "$1/logs" "$1/resolved" "$1/.snakemake"
+  rm -rf "$1/results" "$1/logs" "$1/resolved" "$1/.snakemake" "$1/intermediate"
 }
 run() {  # run NAME SNAKEMAKE-ARGS...: run the workflow in $STATE/NAME, set SECONDS_<NAME>
   local name=$1; shift

@@ -8,4 +8,6 @@
     Result files (JSON, CSV, timings beside), sweep chunks, job logs.
 :mod:`~eqrec.studies.pipeline.code`
     A rule's code inputs: the modules its step imports, from grimp's import graph of the package.
+:mod:`~eqrec.studies.pipeline.resume`
+    Resuming after a hard kill: the leftovers of killed writes, and whether a lock is stale.
 """
