@@ -34,12 +34,13 @@ extensions = [
     "eqrec_mathml",
     "eqrec_api",
     "eqrec_cli",
+    "eqrec_results",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "screenshots", "**.ipynb_checkpoints", "auto_examples/*.ipynb",
                     "auto_examples/*.py", "auto_examples/*.zip", "auto_examples/*.codeobj.json",
-                    "auto_examples/*.md5", "sg_execution_times.rst"]
+                    "auto_examples/*.md5", "sg_execution_times.rst", "auto_examples/sg_execution_times.rst"]
 templates_path = ["_templates"]
 nitpicky = True
 html_math_renderer = "mathml"
@@ -70,7 +71,7 @@ sphinx_gallery_conf = {
     "matplotlib_animations": False,
     "within_subsection_order": "FileNameSortKey",
     "show_memory": False,
-    "write_computation_times": True,
+    "write_computation_times": False,  # its page loads DataTables from a CDN
 }
 
 html_theme = "pydata_sphinx_theme"
@@ -82,7 +83,7 @@ html_theme_options = {
     "navigation_with_keys": False,
     "secondary_sidebar_items": ["page-toc"],
     "footer_start": ["copyright"],
-    "footer_end": ["sphinx-version"],
+    "footer_end": [],
 }
 html_sidebars = {"**": ["sidebar-nav-bs"]}
 html_show_sourcelink = False
