@@ -196,7 +196,7 @@ window.addEventListener('load', () => {
     images: Array.from(document.images).map(i => ({src: i.getAttribute('src'), ok: i.complete && i.naturalWidth > 0,
                                                    w: i.naturalWidth, h: i.naturalHeight})),
     styled: getComputedStyle(document.body).fontFamily,
-    navbar: !!document.querySelector('.bd-header') && document.querySelector('.bd-header').getBoundingClientRect().height > 0,
+    navbar: (h => !!h && h.getBoundingClientRect().height > 0)(document.querySelector('.bd-header')),
     text: document.body.innerText.length,
   };
   const pre = document.createElement('pre'); pre.id = 'eqrec-check'; pre.style.display = 'none';

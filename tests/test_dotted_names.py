@@ -1,6 +1,7 @@
 """Every dotted ``eqrec.`` name a reader meets in the texts resolves to a module or an object (issue 25).
 
-The texts: the claims file, the READMEs, the documentation's pages, the notebook sources, the report captions, and the text files under
+The texts: the claims file, the READMEs, the documentation's pages, the notebook sources, the report captions,
+and the text files under
 ``results/`` (tables, reports, JSON, executed notebooks; not the timings).
 """
 import pkgutil
