@@ -6,6 +6,14 @@
 # building the site never plans a study's job (the build fails, naming the file, if
 # one is missing).
 import glob
+import sys
+from pathlib import Path
+
+DOCS_BUILT = {
+    "_build",
+    "generated",
+    "auto_examples",
+}  # written by the build, not its sources
 
 DOCS_SOURCES = sorted(
     f
@@ -16,7 +24,7 @@ DOCS_SOURCES = sorted(
         "examples/gallery/*",
     )
     for f in glob.glob(pattern, recursive=True)
-    if "/_build/" not in f and "/generated/" not in f and "/auto_examples/" not in f
+    if not DOCS_BUILT & set(Path(f).parts)
 )
 
 
@@ -30,6 +38,7 @@ rule docs:
     log:
         "logs/docs.log",
     params:
+        python=sys.executable,
         builder="html",
     shell:
-        "{sys.executable} -m sphinx -W --keep-going -n -b {params.builder} docs docs/_build/html > {log} 2>&1"
+        "{params.python} -m sphinx -W --keep-going -n -b {params.builder} docs docs/_build/html > {log} 2>&1"
