@@ -12,6 +12,7 @@ session.  ``EQREC_SKIP_WHEEL_TEST=1`` skips it (for a machine without a package 
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -131,3 +132,9 @@ def test_the_wheel_installs_beside_the_latest_control_and_cvxpy_and_the_getting_
                          cwd=work, capture_output=True, text=True, env=env, timeout=600)
     assert cli.returncode == 0, cli.stdout + cli.stderr
     assert "mu1 = 1.13, mu2 = 1.253" in cli.stderr and (work / "design.json").is_file(), cli.stderr
+    # without --out the design is JSON on stdout, and nothing else (no solver banner)
+    piped = subprocess.run([str(env_dir / "bin" / "eqrec"), "design", "my_plant.yaml", "--method", "delay", "--delays",
+                            "000,300,030,003", "--mu1", "free"], cwd=work, capture_output=True, text=True, env=env,
+                           timeout=600)
+    assert piped.returncode == 0, piped.stderr
+    assert json.loads(piped.stdout)["mu2"] == pytest.approx(1.253), piped.stdout[:500]
