@@ -5,7 +5,8 @@
 * The wheel installs in a fresh virtual environment next to the **latest** ``control`` and ``cvxpy`` the package
   index offers (no constraints file: pip resolves the ranges), and the getting-started page's Python code runs
   there as written, outside the checkout; so does ``eqrec design`` on the page's system file.
-* ``pyproject.toml``'s ranges admit the lock's versions, and every direct requirement is in the lock.
+* ``pyproject.toml``'s ranges admit the lock's versions, every direct requirement is in the lock, and each range's
+  lower bound is the locked version (so the lower bounds are exactly what ``.ci/run`` installs and tests).
 
 The fresh environment takes a few minutes to install on 2 cores (numpy, scipy, numba, casadi, ...), once per
 session.  ``EQREC_SKIP_WHEEL_TEST=1`` skips it (for a machine without a package index).
@@ -57,6 +58,9 @@ def test_the_ranges_admit_the_lock_and_pin_nothing():
         assert key in lock, f"{req.name} is not in requirements/pipeline.lock"
         assert req.specifier.contains(lock[key], prereleases=True), f"{req} does not admit the locked {lock[key]}"
         assert not any(spec.operator == "==" for spec in req.specifier), f"{req}: a library declares ranges"
+        # each lower bound is the locked version: the lower bounds are what .ci/run installs and tests
+        lower = [spec.version for spec in req.specifier if spec.operator == ">="]
+        assert lower == [lock[key]], f"{req}: lower bound {lower} is not the locked {lock[key]}"
 
 
 def _getting_started_code() -> str:
