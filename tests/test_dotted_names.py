@@ -1,6 +1,7 @@
 """Every dotted ``eqrec.`` name a reader meets in the texts resolves to a module or an object (issue 25).
 
-The texts: the claims file, the READMEs, the notebook sources, the report captions, and the text files under
+The texts: the claims file, the READMEs, the documentation's pages, the notebook sources, the report captions,
+and the text files under
 ``results/`` (tables, reports, JSON, executed notebooks; not the timings).
 """
 import pkgutil
@@ -16,6 +17,8 @@ TEXT_SUFFIXES = {".md", ".csv", ".json", ".ipynb", ".txt", ".yaml", ".rst"}
 
 def _texts() -> list[Path]:
     files = [ROOT / "config" / "claims.yaml", ROOT / "README.md", ROOT / "config" / "README.md"]
+    files += [p for p in sorted((ROOT / "docs").rglob("*.md")) + sorted((ROOT / "docs").glob("*.rst"))
+              if not {"_build", "auto_examples", "generated"} & set(p.relative_to(ROOT / "docs").parts)]
     files += sorted((ROOT / "notebooks").glob("*.py")) + sorted((ROOT / "workflow" / "report").glob("*.rst"))
     files += [p for p in sorted((ROOT / "results").rglob("*"))
               if p.suffix in TEXT_SUFFIXES and "timings" not in p.relative_to(ROOT).parts]

@@ -75,7 +75,8 @@ def test_snakemake_uses_the_default_profile():
 
 
 @pytest.mark.skipif(importlib.util.find_spec("snakemake_executor_plugin_slurm") is None,
-                    reason='SLURM executor plugin not installed (pip install -e ".[slurm]")')
+                    reason="SLURM executor plugin not installed "
+                           '(pip install -c requirements/pipeline.lock -e ".[slurm]")')
 def test_slurm_profile_is_accepted_by_snakemake():
     out = subprocess.run([sys.executable, "-m", "snakemake", "--profile", "workflow/profiles/slurm", "-n",
                           "p1_model"], cwd=ROOT, capture_output=True, text=True, timeout=300)

@@ -31,7 +31,7 @@
 #
 # TARGETs default to the workflow's default target (`all`: every rules file,
 # p1, p2, p4 and the claims table).
-# Needs the SLURM executor plugin: pip install -e ".[slurm]".
+# Needs the SLURM executor plugin at the locked versions: pip install -c requirements/pipeline.lock -e ".[slurm]".
 # Exit status: 0 results agree; 1 a run failed or the results differ;
 # 77 skipped (not root, or slurm-wlm/munge cannot be installed with apt-get).
 set -euo pipefail
@@ -72,7 +72,7 @@ if missing; then
 fi
 PY=${PYTHON:-python}
 "$PY" -c "import snakemake_executor_plugin_slurm" 2>/dev/null \
-  || die "the SLURM executor plugin is not installed: pip install -e \".[slurm]\""
+  || die "the SLURM executor plugin is not installed: pip install -c requirements/pipeline.lock -e \".[slurm]\""
 say "$(slurmctld -V 2>/dev/null), $(munged --version 2>&1 | head -1), $("$PY" -m snakemake --version | sed 's/^/snakemake /')"
 
 # --- 2. configuration ----------------------------------------------------------
