@@ -9,14 +9,12 @@ The window of :mod:`eqrec.bounds.window` writes every state of the window as lin
     y = \hat y^{\rm pred} + H\zeta ,
 
 and there chooses, per state, weights :math:`\lambda_i` that do not look at the measured values (a linear
-estimate).  Here the measured values enter: the set of states consistent with the zonotope at :math:`s_0`, an
-optional box :math:`\ell \le x(s_0) \le h` (an earlier hull of the same state) and the data is the
-*constrained zonotope* (Scott, Raimondo, Marseglia, Braatz, "Constrained zonotopes: a new tool for set-based
-estimation and fault detection", Automatica 69, 2016)
+estimate).  Here the measured values enter: the set of states consistent with the zonotope at :math:`s_0` (or a
+constrained zonotope, ``prior_rows``) and the data is the *constrained zonotope* (Scott, Raimondo, Marseglia,
+Braatz, "Constrained zonotopes: a new tool for set-based estimation and fault detection", Automatica 69, 2016)
 
 .. math::
-    \{\hat x + X\zeta \;:\; H\zeta = r,\ \ \ell - c_0 \le G_0\varepsilon \le h - c_0,\ \ \|\zeta\|_\infty \le 1\},
-    \qquad r = y - \hat y^{\rm pred},
+    \{\hat x + X\zeta \;:\; H\zeta = r,\ \ \|\zeta\|_\infty \le 1\}, \qquad r = y - \hat y^{\rm pred},
 
 and its exact interval hull is two linear programs per state, :math:`\max` and :math:`\min` of :math:`X_i\zeta`
 (:func:`lp_hull`), solved by HiGHS through the project's LP layer (:func:`eqrec.lp.solvers.highs_model`; one
@@ -26,7 +24,7 @@ Soundness: the bound comes from the dual, not from the primal optimum
 ---------------------------------------------------------------------
 An LP optimum is accurate to the solver's tolerances only, so it is not used as the bound.  For **any** row
 multipliers :math:`y` (one per row of the LP, the ranged rows :math:`\underline b \le M\zeta \le \overline b`
-with :math:`M = [H; P]`), weak duality gives, for every feasible :math:`\zeta`,
+with :math:`M` the rows of ``prior_rows`` and :math:`H`), weak duality gives, for every feasible :math:`\zeta`,
 
 .. math::
     X_i\zeta = y^\top M\zeta + (X_i - y^\top M)\zeta
@@ -43,8 +41,8 @@ duals' accuracy and the allowance.
 
 Cost
 ----
-Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)` with NumPy; each LP has :math:`m + n` rows
-(measured outputs and the box) and :math:`q_0 + L n_w + m_v` columns, all bounded (the simplex handles the unit
+Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)` with NumPy; each LP has ``m`` rows (the
+measured outputs, and the prior's rows if any) and :math:`q_0 + L n_w + m_v` columns, all bounded (the simplex handles the unit
 box implicitly).
 """
 
@@ -76,9 +74,9 @@ class WindowSet:
     X_pred, X_filt : numpy.ndarray, shape (n, Q)
         Rows of :math:`x(t+1)` and :math:`x(t)` in :math:`\zeta`.
     M : numpy.ndarray, shape (m + k, Q)
-        The constraint rows: the measured outputs, then ``k`` box rows of :math:`x(s_0)` (``k = 0`` or ``n``).
+        The constraint rows: the prior's rows (if any), then the measured outputs.
     lower, upper : numpy.ndarray, shape (m + k,)
-        Their bounds (equal for the measured rows: :math:`r`).
+        Their bounds (equal: the prior's right-hand side, then :math:`r`).
     mag_pred, mag_filt : numpy.ndarray, shape (n,)
         Magnitudes of the computation of each state's row and nominal value (rounding allowance).
     mag_rows : numpy.ndarray, shape (m + k,)
@@ -101,8 +99,8 @@ class WindowSet:
 
 
 def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive: np.ndarray, measured: np.ndarray,
-               Y: np.ndarray, c0: np.ndarray, G0: np.ndarray, box: "tuple[np.ndarray, np.ndarray] | None" = None
-               ) -> WindowSet:
+               Y: np.ndarray, c0: np.ndarray, G0: np.ndarray,
+               prior_rows: "tuple[np.ndarray, np.ndarray] | None" = None) -> WindowSet:
     r"""The constrained zonotope of :math:`x(t)` and :math:`x(t+1)` given the zonotope at :math:`s_0` and the data.
 
     Parameters
@@ -119,8 +117,10 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         Centre of the zonotope of :math:`x(s_0)`.
     G0 : numpy.ndarray, shape (n, q0)
         Its generators.
-    box : tuple of numpy.ndarray, optional
-        ``(lo, hi)`` with :math:`lo \le x(s_0) \le hi` known (say, an earlier hull); ``None``: no box.
+    prior_rows : tuple of numpy.ndarray, optional
+        ``(A0, b0)``, shapes ``(k, q0)`` and ``(k,)``: the prior at :math:`s_0` is the constrained zonotope
+        :math:`\{c_0 + G_0\varepsilon : A_0\varepsilon = b_0\}` (:mod:`eqrec.bounds.constrained`); ``None``:
+        the zonotope.
 
     Returns
     -------
@@ -161,21 +161,19 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
     zeros_v = np.zeros((n, k_meas * nv))
     X_pred = np.concatenate([Phi @ G0, Nw, zeros_v], axis=1)
     X_filt = np.concatenate([Phi_f @ G0, Nw_f, zeros_v], axis=1)
+    blocks, rhs, mags = [], [], []
+    if prior_rows is not None and prior_rows[0].shape[0]:
+        A0, b0 = (np.asarray(a, float) for a in prior_rows)
+        blocks.append(np.concatenate([A0, np.zeros((A0.shape[0], Q - q0))], axis=1))
+        rhs.append(b0)
+        mags.append(np.abs(b0) + np.abs(A0).sum(axis=1))
     if k_meas:
-        H = np.concatenate([np.concatenate(CP) @ G0, np.concatenate(Hw), np.concatenate(Hv)], axis=1)
-        rr = np.concatenate(r)
-        mr = np.concatenate(magy)
-    else:
-        H, rr, mr = np.zeros((0, Q)), np.zeros(0), np.zeros(0)
-    lower, upper, M, mags = rr, rr, H, mr
-    if box is not None:
-        lo, hi = (np.asarray(b, float) for b in box)
-        P = np.concatenate([G0, np.zeros((n, Q - q0))], axis=1)
-        M = np.concatenate([H, P])
-        # the box rows' bounds, rounded outward (the set only grows)
-        lower = np.concatenate([rr, np.nextafter(lo - c0, -np.inf) - 2 * _U * (np.abs(lo) + np.abs(c0))])
-        upper = np.concatenate([rr, np.nextafter(hi - c0, np.inf) + 2 * _U * (np.abs(hi) + np.abs(c0))])
-        mags = np.concatenate([mr, np.abs(lo) + np.abs(hi) + np.abs(c0) + np.abs(G0).sum(axis=1)])
+        blocks.append(np.concatenate([np.concatenate(CP) @ G0, np.concatenate(Hw), np.concatenate(Hv)], axis=1))
+        rhs.append(np.concatenate(r))
+        mags.append(np.concatenate(magy))
+    M = np.concatenate(blocks) if blocks else np.zeros((0, Q))
+    lower = upper = np.concatenate(rhs) if rhs else np.zeros(0)
+    mags = np.concatenate(mags) if mags else np.zeros(0)
     kappa = 4.0 * (L + 2) * (n + M.shape[0] + Q)
     return WindowSet(xc, xf, X_pred, X_filt, M, lower, upper, zm + np.abs(xc), zf + np.abs(xf), mags, kappa)
 

@@ -579,30 +579,39 @@ class ZonotopeEstimator:
                 raise InputError(f"a second packet stamped {pk.time} received at time {t}", field="y")
             known[i], ys[i] = True, pk.y
             late += pk.time < t
-        c, G, axes = self._c, self._G, self._axes
+        carried = self._carried()
         if drive.shape[0] > self._W:  # the oldest time leaves the window: the filters take it in
-            c, G = self._advance(first, c, G, drive[0], ys[0] if known[0] else None)
-            G, axes = self._reduced(G, (first - self._t0) % PCA_AXES_EVERY == 0)
-            G = np.ascontiguousarray(G)
+            carried = self._take_in(first, drive[0], ys[0] if known[0] else None)
             drive, known, ys, first = drive[1:], known[1:], ys[1:], first + 1
-        return {"t": t, "c": c, "G": G, "axes": axes, "drive": drive, "known": known, "ys": ys, "first": first,
+        return {"t": t, "carried": carried, "drive": drive, "known": known, "ys": ys, "first": first,
                 "dropped": dropped, "late": late}
+
+    def _carried(self) -> dict:
+        """The sets carried at the window's start, by attribute name (without the leading underscore)."""
+        return {"c": self._c, "G": self._G, "axes": self._axes}
+
+    def _take_in(self, s: int, drive: np.ndarray, y: "np.ndarray | None") -> dict:
+        """The carried sets after time ``s`` leaves the window (filter step and reduction; nothing changed)."""
+        c, G = self._advance(s, self._c, self._G, drive, y)
+        G, axes = self._reduced(G, (s - self._t0) % PCA_AXES_EVERY == 0)
+        return {"c": c, "G": np.ascontiguousarray(G), "axes": axes}
 
     def _estimate(self, intake: dict) -> tuple[np.ndarray, np.ndarray, dict]:
         """The window's estimate of ``x(t+1)`` and its per-state bound from the proposed state (nothing
         changed), with what :meth:`_commit` keeps besides."""
         first, drive = intake["first"], intake["drive"]
         A, C, E, V = self._window_model(first, drive.shape[0])
-        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], intake["c"],
-                                           intake["G"], self.iterations, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES,
-                                           WINDOW_SOLVE_GAIN)
+        sets = intake["carried"]
+        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["G"],
+                                           self.iterations, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN)
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
         states = np.arange(self.system.n)
         return xs[pick, states], radii_[pick, states], {"_R": R, "_pick": pick}
 
     def _commit(self, intake: dict, xhat: np.ndarray, beta: np.ndarray, extra: dict) -> None:
         """Make the proposed state the estimator's (the only place a step changes it: atomic steps)."""
-        self._c, self._G, self._axes = intake["c"], intake["G"], intake["axes"]
+        for key, val in intake["carried"].items():
+            setattr(self, "_" + key, val)
         self._drive, self._known, self._y = intake["drive"], intake["known"], intake["ys"]
         self._xhat, self._beta = xhat, beta
         for key, val in extra.items():
