@@ -190,7 +190,8 @@ def test_exact_estimator_guarantee_at_box_corners():
         trace = lossy_trace(seed, N)
         out = eqrec.simulate.loop.closed_loop(system, ExactSetEstimator(system, 0.5, max_delay=2, window=10), trace,
                                               np.zeros(2), 0.5 * rng.choice([-1.0, 1.0], 2),
-                                              rng.choice([-1.0, 1.0], (N, 2)), rng.choice([-1.0, 1.0], (N, 1)))
+                                              system.eta_w * rng.choice([-1.0, 1.0], (N, 2)),
+                                              system.eta_v * rng.choice([-1.0, 1.0], (N, 1)))
         assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
 
 

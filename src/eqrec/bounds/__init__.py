@@ -15,4 +15,6 @@ classes of a language and their error maps, and the certificate computed from th
     The information limit: per step, the smallest error bound any estimator can guarantee on an arrival trace.
 :mod:`~eqrec.bounds.window`
     The exact window: per state, the best linear estimate over the last steps given a zonotope at their start.
+:mod:`~eqrec.bounds.window_lp`
+    The window with its data: the interval hull of the consistent states, two LPs per state, bounded by duality.
 """

@@ -67,7 +67,7 @@ HULL_OPTIONS = {"solver": "simplex", "presolve": "off", "threads": 1}
 class WindowSet:
     r"""The window's constrained zonotope (module docstring).
 
-    Attributes
+    Parameters
     ----------
     centre_pred, centre_filt : numpy.ndarray, shape (n,)
         :math:`\hat x^{\rm pred}` (nominal :math:`x(t+1)`) and :math:`\hat x^{\rm filt}` (nominal :math:`x(t)`).

@@ -70,7 +70,7 @@ _U = np.finfo(float).eps / 2
 class StateSet:
     r"""A set of states at one time, as a set-valued estimator reports it (module docstring).
 
-    Attributes
+    Parameters
     ----------
     time : int
         The absolute time ``s`` of the state :math:`x(s)` the set contains.
