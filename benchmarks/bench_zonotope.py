@@ -1,7 +1,22 @@
-"""The zonotopic set-membership estimator on the two-cart plant: cost of ``step`` and bound / information limit
-(figures, not tests).
+"""The zonotopic set-membership estimator on the two-cart plant: cost of ``step`` and bound / information limit;
+its cost at scale; the exact estimator's cost and tightness (figures, not tests).
 
     python benchmarks/bench_zonotope.py [--steps 300] [--seeds 3] [--timing-steps 5000] [--repeats 3]
+    python benchmarks/bench_zonotope.py --part scale [--scale-n 4 10 20 30] [--limit-up-to 10]
+    python benchmarks/bench_zonotope.py --part exact [--exact-steps 150]
+
+``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`tank_chain`), n = 4 / 10 / 20 / 30 with
+p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default settings; the zonotope estimator
+against the crude reference filter (order 40), µs per step measured side by side in one run, bound / limit (the
+information limit, for ``n <= --limit-up-to``: it takes minutes beyond), and the growth exponent of each cost in
+``n`` (least squares on log µs against log n).
+
+``--part exact`` (§3): the cost-tightness trade-off, zonotope estimator against the exact estimator
+(:class:`eqrec.ExactSetEstimator`) on small plants: µs per step, and the filtered and predicted hulls over the
+exact hull of the whole horizon (a direct LP, ``tests/exact_hull_reference.py``), at the last step and the
+worst over the steps checked.
+
+The two-cart part (default, ``--part carts``):
 
 Plant :func:`eqrec.two_mass` (lightly damped, n = 4, one output), Bernoulli losses 0.3, each delivered packet
 delayed uniformly by 0..2 steps, ``max_delay = 2``, initial box of radius 0.5.  Rows: the default
@@ -116,13 +131,136 @@ ROWS = [("default", {}),
         ("reduction girard", {"reduction": "girard"})]
 
 
+def tank_chain(n: int, p: int, a: float = 0.2, leak: float = 0.05, eta_w: float = 0.01, eta_v: float = 0.02):
+    """A chain of ``n`` coupled tanks: level ``i`` exchanges ``a`` times the difference with its neighbours, the
+    last leaks ``leak`` of its level, inflow to tank 1; process noise on every level, ``p`` level sensors evenly
+    spread along the chain (the first and the last included when ``p >= 2``)."""
+    from eqrec.systems.affine import AffineSystem
+
+    A = np.eye(n)
+    for i in range(n - 1):
+        A[i, i] -= a
+        A[i + 1, i + 1] -= a
+        A[i, i + 1] += a
+        A[i + 1, i] += a
+    A[-1, -1] -= leak
+    sensors = np.unique(np.round(np.linspace(0, n - 1, p)).astype(int)) if p > 1 else np.array([n - 1])
+    C = np.eye(n)[sensors]
+    B = np.zeros((n, 1))
+    B[0, 0] = 1.0
+    return AffineSystem(A=A, C=C, E=np.eye(n), eta_w=eta_w, eta_v=eta_v, B=B, name=f"tanks{n}")
+
+
+#: The chains of ``--part scale``: (n, p).
+SCALE = {4: 1, 10: 2, 20: 4, 30: 5}
+
+
+def _exponent(ns, us) -> float:
+    """The least-squares slope of log µs against log n."""
+    return float(np.polyfit(np.log(ns), np.log(us), 1)[0])
+
+
+def scale_part(args) -> None:
+    """Issue 45 §4: the zonotope estimator against the crude filter on tank chains (module docstring)."""
+    N = 150
+    print(f"tank chains, loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, default settings; crude filter: F-radius "
+          f"gain, Girard, order 40, replay of late packets, no window")
+    print(f"{'n':>3s} {'p':>2s} {'zonotope us/step':>17s} {'crude us/step':>14s} {'ratio':>6s} "
+          f"{'bound/limit median':>19s} {'max':>6s} {'viol':>4s}")
+    ns, uz, uc = [], [], []
+    for n in args.scale_n:
+        system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
+        make_z = lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)  # noqa: E731
+        make_c = lambda: PlainFilter(system, X0_RADIUS, MAX_DELAY, 40)  # noqa: E731
+        tz = _us_per_step(make_z, system, N, args.repeats)
+        tc = _us_per_step(make_c, system, N, args.repeats)
+        trace = _trace(0, N)
+        rng = np.random.default_rng(1000)
+        w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
+        v = system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv))
+        xi0 = X0_RADIUS * rng.choice([-1.0, 1.0], n)
+        out = closed_loop(system, make_z(), trace, np.zeros(n), xi0, w, v)
+        viol = int(np.sum(np.abs(out.error[1:]).max(axis=1) > out.bound))
+        if n <= args.limit_up_to:
+            r = out.bound / _limit(system, trace).max(axis=1)
+            lim = f"{np.median(r):19.3f} {r.max():6.3f}"
+        else:
+            lim = f"{'-':>19s} {'-':>6s}"
+        print(f"{n:3d} {system.p:2d} {tz:17.0f} {tc:14.0f} {tz / tc:6.2f} {lim} {viol:4d}", flush=True)
+        ns.append(n)
+        uz.append(tz)
+        uc.append(tc)
+    if len(ns) >= 2:
+        print(f"growth exponent (us/step ~ n^k): zonotope estimator k = {_exponent(ns, uz):.2f}, "
+              f"crude filter k = {_exponent(ns, uc):.2f}")
+
+
+def exact_part(args) -> None:
+    """Issue 45 §3: µs per step and hull / exact hull, zonotope against exact estimator (module docstring)."""
+    import pathlib
+    import sys
+
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "tests"))
+    from exact_hull_reference import exact_hulls, simulate  # the test-only reference LP
+
+    from eqrec.estimators.exact_set import ExactSetEstimator
+    from eqrec.systems.affine import AffineSystem
+
+    th = 0.3
+    osc = AffineSystem(A=0.995 * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]]), C=[[1.0, 0.0]],
+                       E=0.1 * np.eye(2), eta_w=0.1, eta_v=0.05, name="oscillator")
+    plants = [("oscillator n=2", osc), ("two carts n=4", two_mass()), ("tanks n=4", tank_chain(4, 1)),
+              ("tanks n=6", tank_chain(6, 2))]
+    N = args.exact_steps
+    print(f"cost and tightness: loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, uniform noise; hull / exact hull "
+          f"of the whole horizon (max over states) at the last step and the worst over every 5th step")
+    print(f"{'plant':16s} {'estimator':10s} {'us/step':>8s} {'filt last':>9s} {'filt max':>8s} {'pred last':>9s} "
+          f"{'pred max':>8s}")
+    for label, system in plants:
+        n = system.n
+        makers = {"zonotope": lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY),
+                  "exact": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY)}
+        rng = np.random.default_rng(7)
+        trace = _trace(7, N)
+        w, v = rng.uniform(-1, 1, (N, system.nw)), rng.uniform(-1, 1, (N, system.nv))
+        xi0 = X0_RADIUS * rng.uniform(-1, 1, n)
+        x, y, arrivals = simulate(system, trace, np.zeros(n), xi0, w, v)
+        checked = [t for t in range(N) if t % 5 == 4 or t == N - 1]
+        refs = {t: exact_hulls(system, trace, np.zeros(n), X0_RADIUS, y, t) for t in checked}
+        for name, make in makers.items():
+            est = make().reset(np.zeros(n))
+            est.step(None)  # loads the compiled loops
+            est = make().reset(np.zeros(n))
+            spent, ratios = 0.0, []
+            for t in range(N):
+                t0 = time.perf_counter()
+                est.step(arrivals[t])
+                spent += time.perf_counter() - t0
+                if t in refs:
+                    row = []
+                    for S, (lo, hi) in zip((est.filtered, est.predicted), refs[t]):
+                        row.append(float(np.max((S.upper - S.lower) / (hi - lo))))
+                    ratios.append(row)
+            r = np.array(ratios)
+            print(f"{label:16s} {name:10s} {spent / N * 1e6:8.0f} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
+                  f"{r[-1, 1]:9.4f} {r[:, 1].max():8.4f}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--part", choices=["carts", "scale", "exact"], default="carts")
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--timing-steps", type=int, default=5000)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--scale-n", type=int, nargs="+", default=list(SCALE))
+    ap.add_argument("--limit-up-to", type=int, default=10)
+    ap.add_argument("--exact-steps", type=int, default=150)
     args = ap.parse_args(argv)
+    if args.part == "scale":
+        return scale_part(args)
+    if args.part == "exact":
+        return exact_part(args)
     system = two_mass()
     N = args.steps
     runs = []

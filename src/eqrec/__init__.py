@@ -39,7 +39,8 @@ Certificates
 Estimators and simulation
     :class:`GuaranteedEstimator` (``Design.estimator()``), :class:`Packet` (a time-stamped
     measurement for ``step``), :class:`ClassEstimator`,
-    :class:`ZonotopeEstimator` (set-membership, no language), :func:`simulate_run`, :func:`monte_carlo`
+    :class:`ZonotopeEstimator` (set-membership, no language), :class:`ExactSetEstimator` (the hull of the
+    set consistent with the data), :func:`simulate_run`, :func:`monte_carlo`
 Errors
     :class:`EqrecError`, :class:`InputError`, :class:`InfeasibleDesign`,
     :class:`SolverFailure`, :class:`CertificationFailure`
@@ -104,6 +105,7 @@ _PUBLIC: dict[str, str] = {
     "Packet": "eqrec.arrivals.packets",
     "ClassEstimator": "eqrec.estimators.causal",
     "ZonotopeEstimator": "eqrec.estimators.zonotope",
+    "ExactSetEstimator": "eqrec.estimators.exact_set",
     "exact_bound": "eqrec.estimators.exact",
     "simulate_run": "eqrec.simulate.loop",
     "monte_carlo": "eqrec.simulate.loop",

@@ -17,4 +17,6 @@ classes of a language and their error maps, and the certificate computed from th
     The exact consistent set: the interval hull of the states consistent with the measured data, per step.
 :mod:`~eqrec.bounds.window`
     The exact window: per state, the best linear estimate over the last steps given a zonotope at their start.
+:mod:`~eqrec.bounds.window_lp`
+    The window with its data: the interval hull of the consistent states, two LPs per state, bounded by duality.
 """

@@ -20,4 +20,6 @@
     :func:`~eqrec.estimators.exact.exact_bound`: the exact worst-case bound of any linear estimator, per step.
 :mod:`~eqrec.estimators.zonotope`
     :class:`~eqrec.estimators.zonotope.ZonotopeEstimator`: set-membership by zonotopes, guaranteed on any trace.
+:mod:`~eqrec.estimators.exact_set`
+    :class:`~eqrec.estimators.exact_set.ExactSetEstimator`: the interval hull of the set consistent with the data.
 """

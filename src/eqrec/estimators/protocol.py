@@ -24,10 +24,32 @@ checked before any state changes), and non-finite data is refused with
 
 One loop, :func:`eqrec.simulate.loop.closed_loop`, runs any estimator that
 follows this protocol.
+
+Sets: predicted and filtered
+----------------------------
+An estimator that carries a *set* of states (the set-membership estimators,
+:class:`~eqrec.estimators.zonotope.ZonotopeEstimator` and
+:class:`~eqrec.estimators.exact_set.ExactSetEstimator`) also gives, after a step at
+time ``t`` (``est.time == t + 1``), two :class:`StateSet`:
+
+* ``est.predicted``: the set of :math:`x(t+1)` given the data received up to
+  ``t`` (the papers' convention, what ``step`` returns: its centre is
+  ``x̂(t+1)`` and ``max`` of its radius the bound);
+* ``est.filtered``: the set of :math:`x(t)` given the same data (the
+  convention of set-based toolboxes and of a controller that wants
+  :math:`x(t)`).
+
+Each is a centre and per-state bounds ``lower <= x <= upper`` (rounded outward:
+a guarantee in floating point), and a zonotope ``centre + generators ε``,
+:math:`\|\varepsilon\|_\infty \le 1`, where the estimator has one (``generators``
+is ``None`` otherwise, e.g. for the exact estimator, whose set is a constrained
+zonotope).  Right after ``reset`` ``predicted`` is the initial set and
+``filtered`` raises (no data yet).  ``step`` keeps returning the prediction.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
@@ -39,6 +61,70 @@ from eqrec.errors import InputError
 Spread = "float | np.ndarray"
 
 EstimatorKind = Literal["guaranteed", "stochastic"]
+
+#: Unit roundoff of float64.
+_U = np.finfo(float).eps / 2
+
+
+@dataclass(frozen=True)
+class StateSet:
+    r"""A set of states at one time, as a set-valued estimator reports it (module docstring).
+
+    Parameters
+    ----------
+    time : int
+        The absolute time ``s`` of the state :math:`x(s)` the set contains.
+    centre : numpy.ndarray, shape (n,)
+        The estimate, the centre of the set (of its zonotope, or of its interval hull).
+    lower, upper : numpy.ndarray, shape (n,)
+        Per-state bounds, :math:`\text{lower} \le x(s) \le \text{upper}` (rounded outward).
+    generators : numpy.ndarray of shape (n, q), or None
+        The zonotope :math:`\{\text{centre} + G\varepsilon : \|\varepsilon\|_\infty \le 1\}` containing
+        :math:`x(s)` (its interval hull lies inside the bounds), ``None`` when the set is not a zonotope.
+    """
+
+    time: int
+    centre: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    generators: "np.ndarray | None" = None
+
+    @property
+    def radius(self) -> np.ndarray:
+        """Per state, ``max(upper - centre, centre - lower)`` rounded upward: ``|x_i(s) - centre_i| <= radius_i``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n,)
+            The radius.
+        """
+        return np.nextafter(np.maximum(self.upper - self.centre, self.centre - self.lower), np.inf)
+
+    @classmethod
+    def around(cls, time: int, centre: np.ndarray, radius: np.ndarray,
+               generators: "np.ndarray | None" = None) -> "StateSet":
+        """The set ``|x_i - centre_i| <= radius_i`` (bounds rounded outward), with its zonotope if any.
+
+        Parameters
+        ----------
+        time : int
+            The absolute time of the state.
+        centre : numpy.ndarray, shape (n,)
+            The centre.
+        radius : numpy.ndarray, shape (n,)
+            Per-state radius (a guarantee).
+        generators : numpy.ndarray or None, optional
+            The zonotope's generators.
+
+        Returns
+        -------
+        StateSet
+            Copies of the arrays.
+        """
+        c, r = np.array(centre, dtype=float), np.asarray(radius, dtype=float)
+        slack = 2 * _U * (np.abs(c) + r)
+        return cls(int(time), c, np.nextafter(c - r - slack, -np.inf), np.nextafter(c + r + slack, np.inf),
+                   None if generators is None else np.array(generators, dtype=float))
 
 
 @runtime_checkable

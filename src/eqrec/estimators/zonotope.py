@@ -126,6 +126,7 @@ from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
 from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
 from eqrec.checks import radii
 from eqrec.errors import InputError
+from eqrec.estimators.protocol import StateSet
 from eqrec.systems.affine import AffineSystem
 
 #: Unit roundoff of float64.
@@ -545,6 +546,7 @@ class ZonotopeEstimator:
         self._G = np.ascontiguousarray(np.tile(G, (K, 1, 1)))
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
         self._R, self._pick = None, np.zeros(n, dtype=int)  # the window's error maps (none yet), its picks
+        self._filtered: "StateSet | None" = None  # the filtered set, computed on demand
         self._axes: "np.ndarray | None" = None  # the principal axes last computed (reduction="pca")
         # the window, times t0 .. time-1 (at most W of them): drives, which outputs are known, their values
         self._drive, self._known, self._y = np.zeros((0, n)), np.zeros(0, dtype=bool), np.zeros((0, sysm.p))
@@ -578,6 +580,22 @@ class ZonotopeEstimator:
             propagation overflows in floating point (the estimator is left unchanged).
         """
         t = self.time
+        intake = self._intake(y, u)
+        xhat, beta, extra = self._estimate(intake)
+        sets = intake["carried"]
+        if not (np.all(np.isfinite(xhat)) and np.all(np.isfinite(beta)) and np.all(np.isfinite(sets["c"]))
+                and np.all(np.isfinite(sets["G"]))):  # refuse data whose propagation overflows (nothing committed)
+            raise InputError(f"the data of time {t} overflow in floating point (the estimate or its bound is not "
+                             "finite): a measurement or input too large for the plant's scale; the estimator is "
+                             "left unchanged", field="y" if intake["packets"] else "u" if np.any(intake["u"])
+                             else "xhat0")
+        self._commit(intake, xhat, beta, extra)
+        return xhat.copy(), float(beta.max()) if beta.size else 0.0
+
+    def _intake(self, y: Any, u: Any) -> dict:
+        """Check what arrived at ``t`` and the input, store the packets in the window and let the filters take
+        in the time that leaves it: the proposed new state, nothing changed (raises on bad input)."""
+        t = self.time
         sysm = self.system
         packets = as_packets(y, t, (sysm.p,))
         u = check_input(u, sysm.m)
@@ -598,31 +616,47 @@ class ZonotopeEstimator:
                 raise InputError(f"a second packet stamped {pk.time} received at time {t}", field="y")
             known[i], ys[i] = True, pk.y
             late += pk.time < t
-        c, G, axes = self._c, self._G, self._axes
+        carried = self._carried()
         if drive.shape[0] > self._W:  # the oldest time leaves the window: the filters take it in
-            c, G = self._advance(first, c, G, drive[0], ys[0] if known[0] else None)
-            G, axes = self._reduced(G, (first - self._t0) % PCA_AXES_EVERY == 0)
-            G = np.ascontiguousarray(G)
+            carried = self._take_in(first, drive[0], ys[0] if known[0] else None)
             drive, known, ys, first = drive[1:], known[1:], ys[1:], first + 1
+        return {"t": t, "carried": carried, "drive": drive, "known": known, "ys": ys, "first": first,
+                "dropped": dropped, "late": late, "packets": len(packets), "u": u}
+
+    def _carried(self) -> dict:
+        """The sets carried at the window's start, by attribute name (without the leading underscore)."""
+        return {"c": self._c, "G": self._G, "axes": self._axes}
+
+    def _take_in(self, s: int, drive: np.ndarray, y: "np.ndarray | None") -> dict:
+        """The carried sets after time ``s`` leaves the window (filter step and reduction; nothing changed)."""
+        c, G = self._advance(s, self._c, self._G, drive, y)
+        G, axes = self._reduced(G, (s - self._t0) % PCA_AXES_EVERY == 0)
+        return {"c": c, "G": np.ascontiguousarray(G), "axes": axes}
+
+    def _estimate(self, intake: dict) -> tuple[np.ndarray, np.ndarray, dict]:
+        """The window's estimate of ``x(t+1)`` and its per-state bound from the proposed state (nothing
+        changed), with what :meth:`_commit` keeps besides."""
+        first, drive = intake["first"], intake["drive"]
         A, C, E, V = self._window_model(first, drive.shape[0])
-        xs, radii_, _, R = window_estimate(A, C, E, V, drive, known, ys, c, G, self.iterations, _IRLS_FLOOR,
-                                           WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN)
+        sets = intake["carried"]
+        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["G"],
+                                           self.iterations, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN)
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
-        states = np.arange(sysm.n)
-        xhat, beta = xs[pick, states], radii_[pick, states]
-        if not (np.all(np.isfinite(xhat)) and np.all(np.isfinite(beta)) and np.all(np.isfinite(c))
-                and np.all(np.isfinite(G))):  # refuse data whose propagation overflows (nothing committed)
-            raise InputError(f"the data of time {t} overflow in floating point (the estimate or its bound is not "
-                             "finite): a measurement or input too large for the plant's scale; the estimator is "
-                             "left unchanged", field="y" if packets else "u" if np.any(u) else "xhat0")
-        # commit
-        self._c, self._G, self._axes = c, G, axes
-        self._drive, self._known, self._y = drive, known, ys
-        self._xhat, self._beta, self._R, self._pick = xhat, beta, R, pick
-        self._time = t + 1
-        self.dropped_packets += dropped
-        self.replays += late
-        return xhat.copy(), float(beta.max()) if beta.size else 0.0
+        states = np.arange(self.system.n)
+        return xs[pick, states], radii_[pick, states], {"_R": R, "_pick": pick}
+
+    def _commit(self, intake: dict, xhat: np.ndarray, beta: np.ndarray, extra: dict) -> None:
+        """Make the proposed state the estimator's (the only place a step changes it: atomic steps)."""
+        for key, val in intake["carried"].items():
+            setattr(self, "_" + key, val)
+        self._drive, self._known, self._y = intake["drive"], intake["known"], intake["ys"]
+        self._xhat, self._beta = xhat, beta
+        for key, val in extra.items():
+            setattr(self, key, val)
+        self._filtered = None  # computed on demand (:attr:`filtered`)
+        self._time = intake["t"] + 1
+        self.dropped_packets += intake["dropped"]
+        self.replays += intake["late"]
 
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
@@ -699,14 +733,61 @@ class ZonotopeEstimator:
         (:class:`eqrec.estimators.guaranteed.GuaranteedEstimator`).
         """
         self.time  # noqa: B018 - raises before reset
-        n, q0 = self.system.n, self._G.shape[2]
-        R, pick, states = self._R, self._pick, np.arange(n)
-        if R is None:  # right after reset: the filters' common set
+        if self._R is None:  # right after reset: the filters' common set
             return self._xhat.copy(), self._G[0].copy()
+        return self._xhat.copy(), self._window_generators(self._R, self._pick, self._beta)
+
+    @property
+    def predicted(self) -> StateSet:
+        """The set of ``x(t+1)`` given the data received up to ``t`` (:class:`~eqrec.estimators.protocol.StateSet`):
+        centre :attr:`x`, radius :attr:`state_bounds`, zonotope :attr:`carried_set` (right after :meth:`reset`,
+        the initial set of ``x(t0)``)."""
+        c, G = self.carried_set
+        return StateSet.around(self.time, c, self._beta, G)
+
+    @property
+    def filtered(self) -> StateSet:
+        r"""The set of ``x(t)`` given the data received up to ``t`` (:class:`~eqrec.estimators.protocol.StateSet`).
+
+        The window of the last step again, ending one step earlier: the same prior zonotope at :math:`s_0` and
+        the same packets, with the last step's dynamics replaced by the identity, its drive and process noise by
+        zero, so that the window's "next state" is :math:`x(t)` itself, estimated from every packet of times
+        :math:`s_0..t` (:func:`eqrec.bounds.window.window_estimate`: per state the best of the filters, its bound
+        the exact worst case of its estimate, rounding included).  Computed on the first request after a step
+        (the cost of one more window) and kept until the next step.  The zonotope: the window's error maps on
+        the filters' generators and the noise, as :attr:`carried_set`.
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`, or right after it (no step: there is no data yet).
+        """
+        t1 = self.time
+        if self._R is None:
+            raise InputError("no step since reset: the filtered set needs the data of one step", field="filtered")
+        if self._filtered is None:
+            A, C, E, V = (np.array(M) for M in self._window_model(self._time - self._drive.shape[0],
+                                                                   self._drive.shape[0]))
+            A[-1], E[-1] = np.eye(self.system.n), 0.0
+            drive = self._drive.copy()
+            drive[-1] = 0.0
+            xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._G,
+                                               self.iterations, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN)
+            pick = np.argmin(radii_, axis=0)
+            states = np.arange(self.system.n)
+            xhat, beta = xs[pick, states], radii_[pick, states]
+            self._filtered = StateSet.around(t1 - 1, xhat, beta, self._window_generators(R, pick, beta))
+        return self._filtered
+
+    def _window_generators(self, R: np.ndarray, pick: np.ndarray, beta: np.ndarray) -> np.ndarray:
+        """The zonotope of a window's estimate: per state, the error map of the filter it was taken from, then the
+        window's noise, then an axis-aligned pad up to the bound (:attr:`carried_set`)."""
+        n, q0 = self.system.n, self._G.shape[2]
+        states = np.arange(n)
         blocks = [np.where((pick == k)[:, None], R[k, :, :q0], 0.0) for k in range(R.shape[0])]
         G = np.concatenate(blocks + [R[pick, states, q0:]], axis=1)
-        pad = np.nextafter(np.maximum(self._beta - np.abs(G).sum(axis=1), 0.0), np.inf)
-        return self._xhat.copy(), np.concatenate([G, np.diag(pad)], axis=1)
+        pad = np.nextafter(np.maximum(beta - np.abs(G).sum(axis=1), 0.0), np.inf)
+        return np.concatenate([G, np.diag(pad)], axis=1)
 
     @property
     def generators(self) -> np.ndarray:

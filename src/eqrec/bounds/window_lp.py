@@ -1,0 +1,268 @@
+r"""The window with its data: the exact interval hull of the states consistent with the measured values.
+
+The window of :mod:`eqrec.bounds.window` writes every state of the window as linear in the unit uncertainty
+:math:`\zeta = (\varepsilon, w(s_0..t), v(\text{measured}))` given a zonotope
+:math:`\langle c_0, G_0\rangle \ni x(s_0)`:
+
+.. math::
+    x(t+1) = \hat x^{\rm pred} + X\zeta, \qquad x(t) = \hat x^{\rm filt} + X^{\rm f}\zeta, \qquad
+    y = \hat y^{\rm pred} + H\zeta ,
+
+and there chooses, per state, weights :math:`\lambda_i` that do not look at the measured values (a linear
+estimate).  Here the measured values enter: the set of states consistent with the zonotope at :math:`s_0` (or a
+constrained zonotope, ``prior_rows``) and the data is the *constrained zonotope* (Scott, Raimondo, Marseglia,
+Braatz, "Constrained zonotopes: a new tool for set-based estimation and fault detection", Automatica 69, 2016)
+
+.. math::
+    \{\hat x + X\zeta \;:\; H\zeta = r,\ \ \|\zeta\|_\infty \le 1\}, \qquad r = y - \hat y^{\rm pred},
+
+and its exact interval hull is two linear programs per state, :math:`\max` and :math:`\min` of :math:`X_i\zeta`
+(:func:`lp_hull`), solved by HiGHS through the project's LP layer (:func:`eqrec.lp.solvers.highs_model`; one
+model per window, every objective warm-started from the previous optimal basis).
+
+Soundness: the bound comes from the dual, not from the primal optimum
+---------------------------------------------------------------------
+An LP optimum is accurate to the solver's tolerances only, so it is not used as the bound.  For **any** row
+multipliers :math:`y` (one per row of the LP, the ranged rows :math:`\underline b \le M\zeta \le \overline b`
+with :math:`M` the rows of ``prior_rows`` and :math:`H`), weak duality gives, for every feasible :math:`\zeta`,
+
+.. math::
+    X_i\zeta = y^\top M\zeta + (X_i - y^\top M)\zeta
+    \le \sum_j \max(y_j\underline b_j,\ y_j\overline b_j) + \|X_i - y^\top M\|_1 ,
+
+and the same with :math:`-X_i` for the lower end.  The multipliers are HiGHS's row duals of each optimum (so the
+bound is the optimum when the duals are exact), and the right-hand side is evaluated in floating point with an
+allowance :math:`\kappa u\,\mu` rounded upward (``u`` the unit roundoff, :math:`\mu` the magnitudes of every
+quantity of the computation: the propagated :math:`|c_0| + \sum|G_0|`, the drives, the noise row sums, the
+measured values, :math:`|y|` times the rows' magnitudes; :math:`\kappa = 4(L+2)(n + m + Q)` as in
+:mod:`eqrec.bounds.window`).  A solve that ends without an optimum falls back to :math:`y = 0`, the prediction's
+own bound :math:`\|X_i\|_1`.  So the hull reported always contains the exact one, and is equal to it up to the
+duals' accuracy and the allowance.
+
+Cost
+----
+Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)` with NumPy; each LP has ``m`` rows (the
+measured outputs, and the prior's rows if any) and :math:`q_0 + L n_w + m_v` columns, all bounded (the simplex handles the unit
+box implicitly).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from eqrec.lp.model import LinearProgram
+from eqrec.lp.solvers import highs_model
+
+_U = np.finfo(float).eps / 2
+
+#: HiGHS options of the hull LPs: the simplex (warm starts between objectives), no presolve (each model is solved
+#: for ``2k`` objectives; presolve would be redone every run), one thread.
+HULL_OPTIONS = {"solver": "simplex", "presolve": "off", "threads": 1}
+
+
+@dataclass(frozen=True)
+class WindowSet:
+    r"""The window's constrained zonotope (module docstring).
+
+    Parameters
+    ----------
+    centre_pred, centre_filt : numpy.ndarray, shape (n,)
+        :math:`\hat x^{\rm pred}` (nominal :math:`x(t+1)`) and :math:`\hat x^{\rm filt}` (nominal :math:`x(t)`).
+    X_pred, X_filt : numpy.ndarray, shape (n, Q)
+        Rows of :math:`x(t+1)` and :math:`x(t)` in :math:`\zeta`.
+    M : numpy.ndarray, shape (m + k, Q)
+        The constraint rows: the prior's rows (if any), then the measured outputs.
+    lower, upper : numpy.ndarray, shape (m + k,)
+        Their bounds (equal: the prior's right-hand side, then :math:`r`).
+    mag_pred, mag_filt : numpy.ndarray, shape (n,)
+        Magnitudes of the computation of each state's row and nominal value (rounding allowance).
+    mag_rows : numpy.ndarray, shape (m + k,)
+        Magnitudes of each constraint row's computation.
+    kappa : float
+        The allowance's factor :math:`4(L+2)(n + m + Q)`.
+    """
+
+    centre_pred: np.ndarray
+    centre_filt: np.ndarray
+    X_pred: np.ndarray
+    X_filt: np.ndarray
+    M: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    mag_pred: np.ndarray
+    mag_filt: np.ndarray
+    mag_rows: np.ndarray
+    kappa: float
+
+
+def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive: np.ndarray, measured: np.ndarray,
+               Y: np.ndarray, c0: np.ndarray, G0: np.ndarray,
+               prior_rows: "tuple[np.ndarray, np.ndarray] | None" = None) -> WindowSet:
+    r"""The constrained zonotope of :math:`x(t)` and :math:`x(t+1)` given the zonotope at :math:`s_0` and the data.
+
+    Parameters
+    ----------
+    A, C, E, V : numpy.ndarray, shapes (L, n, n), (L, p, n), (L, n, nw), (L, p, nv)
+        The plant over the window (``E``, ``V`` scaled by the noise bounds; eq. (3) of the prefix-based paper).
+    drive : numpy.ndarray, shape (L, n)
+        :math:`B u + f` per time.
+    measured : numpy.ndarray of bool, shape (L,)
+        Which times' outputs are known.
+    Y : numpy.ndarray, shape (L, p)
+        Their values (rows of unmeasured times ignored).
+    c0 : numpy.ndarray, shape (n,)
+        Centre of the zonotope of :math:`x(s_0)`.
+    G0 : numpy.ndarray, shape (n, q0)
+        Its generators.
+    prior_rows : tuple of numpy.ndarray, optional
+        ``(A0, b0)``, shapes ``(k, q0)`` and ``(k,)``: the prior at :math:`s_0` is the constrained zonotope
+        :math:`\{c_0 + G_0\varepsilon : A_0\varepsilon = b_0\}` (:mod:`eqrec.bounds.constrained`); ``None``:
+        the zonotope.
+
+    Returns
+    -------
+    WindowSet
+        The rows and bounds of the set (module docstring).
+    """
+    L, n = drive.shape
+    p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
+    k_meas = int(np.count_nonzero(measured))
+    Q = q0 + L * nw + k_meas * nv
+    Phi = np.eye(n)
+    Nw = np.zeros((n, L * nw))  # the process-noise columns of the current state
+    xc = np.asarray(c0, float).copy()
+    zm = np.abs(xc) + np.abs(G0).sum(axis=1)  # magnitudes of the propagation (rounding allowance)
+    CP, Hw, Hv, r, magy = [], [], [], [], []
+    col_v = q0 + L * nw
+    Phi_f = Nw_f = xf = zf = None
+    for j in range(L):
+        if j == L - 1:
+            Phi_f, Nw_f, xf, zf = Phi.copy(), Nw.copy(), xc.copy(), zm.copy()
+        if measured[j]:
+            Cj = C[j]
+            yc = Cj @ xc
+            CP.append(Cj @ Phi)
+            Hw.append(Cj @ Nw)
+            hv = np.zeros((p, k_meas * nv))
+            hv[:, col_v - q0 - L * nw:col_v - q0 - L * nw + nv] = V[j]
+            col_v += nv
+            Hv.append(hv)
+            r.append(Y[j] - yc)
+            magy.append(np.abs(Cj) @ zm + np.abs(V[j]).sum(axis=1) + np.abs(Y[j]) + np.abs(yc))
+        Aj = A[j]
+        Phi = Aj @ Phi
+        Nw = Aj @ Nw
+        Nw[:, j * nw:(j + 1) * nw] += E[j]
+        zm = np.abs(Aj) @ zm + np.abs(drive[j]) + np.abs(E[j]).sum(axis=1)
+        xc = Aj @ xc + drive[j]
+    zeros_v = np.zeros((n, k_meas * nv))
+    X_pred = np.concatenate([Phi @ G0, Nw, zeros_v], axis=1)
+    X_filt = np.concatenate([Phi_f @ G0, Nw_f, zeros_v], axis=1)
+    blocks, rhs, mags = [], [], []
+    if prior_rows is not None and prior_rows[0].shape[0]:
+        A0, b0 = (np.asarray(a, float) for a in prior_rows)
+        blocks.append(np.concatenate([A0, np.zeros((A0.shape[0], Q - q0))], axis=1))
+        rhs.append(b0)
+        mags.append(np.abs(b0) + np.abs(A0).sum(axis=1))
+    if k_meas:
+        blocks.append(np.concatenate([np.concatenate(CP) @ G0, np.concatenate(Hw), np.concatenate(Hv)], axis=1))
+        rhs.append(np.concatenate(r))
+        mags.append(np.concatenate(magy))
+    M = np.concatenate(blocks) if blocks else np.zeros((0, Q))
+    lower = upper = np.concatenate(rhs) if rhs else np.zeros(0)
+    mags = np.concatenate(mags) if mags else np.zeros(0)
+    kappa = 4.0 * (L + 2) * (n + M.shape[0] + Q)
+    return WindowSet(xc, xf, X_pred, X_filt, M, lower, upper, zm + np.abs(xc), zf + np.abs(xf), mags, kappa)
+
+
+def dual_bound(row: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndarray, y: np.ndarray,
+               mag_row: float, mag_rows: np.ndarray, kappa: float) -> float:
+    r"""An upper bound of :math:`\max\{c^\top\zeta : \underline b \le M\zeta \le \overline b, |\zeta| \le 1\}`
+    from any multipliers ``y`` (weak duality, module docstring), rounded upward.
+
+    Parameters
+    ----------
+    row : numpy.ndarray, shape (Q,)
+        The objective :math:`c`.
+    M : numpy.ndarray, shape (k, Q)
+        The constraint rows.
+    lower, upper : numpy.ndarray, shape (k,)
+        Their bounds.
+    y : numpy.ndarray, shape (k,)
+        Any multipliers.
+    mag_row : float
+        Magnitude of the objective's computation.
+    mag_rows : numpy.ndarray, shape (k,)
+        Magnitudes of the rows' computations.
+    kappa : float
+        The allowance's factor.
+
+    Returns
+    -------
+    float
+        :math:`\sum_j \max(y_j\underline b_j, y_j\overline b_j) + \|c - M^\top y\|_1 + \kappa u\mu`.
+    """
+    res = row - y @ M
+    l1 = float(np.abs(res).sum())
+    dual = float(np.maximum(y * lower, y * upper).sum())
+    ay = np.abs(y)
+    mu = mag_row + float(ay @ mag_rows) + l1 + abs(dual) + float(np.abs(row).sum()) + float(ay @ np.abs(M).sum(axis=1))
+    return float(np.nextafter(dual + l1 + kappa * _U * mu, np.inf))
+
+
+def lp_hull(ws: WindowSet, which: str = "pred") -> tuple[np.ndarray, np.ndarray, int]:
+    r"""Per state, a lower and an upper end of the window set's interval hull, each a guarantee (module docstring).
+
+    Parameters
+    ----------
+    ws : WindowSet
+        The set.
+    which : {"pred", "filt"}
+        The hull of :math:`x(t+1)` or of :math:`x(t)`.
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray, shape (n,)
+        :math:`\underline x \le x \le \overline x` for every state of the set (rounded outward).
+    fallbacks : int
+        How many of the ``2n`` LPs ended without an optimum (their end is the prediction's own bound).
+    """
+    centre, X, mag = (ws.centre_pred, ws.X_pred, ws.mag_pred) if which == "pred" else \
+        (ws.centre_filt, ws.X_filt, ws.mag_filt)
+    n, Q = X.shape
+    k = ws.M.shape[0]
+    hi = np.empty(n)
+    lo = np.empty(n)
+    fallbacks = 0
+    if k == 0:  # no constraint: the zonotope's own hull
+        for i in range(n):
+            hi[i] = dual_bound(X[i], ws.M, ws.lower, ws.upper, np.zeros(0), mag[i], ws.mag_rows, ws.kappa)
+        lo[:] = -hi
+    else:
+        lp = LinearProgram(c=np.zeros(Q), A=sp.csc_matrix(ws.M), row_lower=ws.lower, row_upper=ws.upper,
+                           col_lower=-np.ones(Q), col_upper=np.ones(Q))
+        h = highs_model(lp, HULL_OPTIONS)
+        cols = np.arange(Q, dtype=np.int32)
+        for i in range(n):
+            for sign in (-1.0, 1.0):  # min of -X_i (the upper end), then min of X_i (the lower end)
+                c = sign * X[i]
+                h.changeColsCost(Q, cols, np.ascontiguousarray(c))
+                h.run()
+                sol = h.getSolution()
+                if int(h.getModelStatus()) == 7 and sol.dual_valid:
+                    y = -np.asarray(sol.row_dual)  # HiGHS: c - M^T (row_dual) = reduced costs; we bound max(-c)
+                else:
+                    fallbacks += 1
+                    y = np.zeros(k)
+                    h.clearSolver()
+                b = dual_bound(-c, ws.M, ws.lower, ws.upper, y, mag[i], ws.mag_rows, ws.kappa)
+                if sign < 0:
+                    hi[i] = b
+                else:
+                    lo[i] = -b
+    upper = np.nextafter(centre + hi + 2 * _U * (np.abs(centre) + np.abs(hi)), np.inf)
+    lower = np.nextafter(centre + lo - 2 * _U * (np.abs(centre) + np.abs(lo)), -np.inf)
+    return lower, upper, fallbacks

@@ -1,0 +1,224 @@
+"""Filtered and predicted sets (issue 45 §1) and the exact set-membership estimator (§3), against the exact hull of
+the whole horizon computed by a direct LP (tests/exact_hull_reference.py, SciPy's HiGHS; a test-only reference).
+
+The reference is an LP optimum, accurate to HiGHS's tolerances (about 1e-9 here): containment of it is checked
+with that allowance on the reference's side only; the true state is checked with none."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import eqrec
+from eqrec.arrivals.packets import Packet
+from eqrec.bounds.window_lp import dual_bound, lp_hull, window_set
+from eqrec.errors import InputError
+from eqrec.estimators.exact_set import ExactSetEstimator
+from eqrec.estimators.protocol import StateSet
+from eqrec.estimators.zonotope import ZonotopeEstimator
+from exact_hull_reference import exact_hulls, simulate
+from test_zonotope import lossy_trace
+
+#: The reference LP's accuracy (its side only).
+REF_TOL = 1e-8
+
+
+def oscillator() -> eqrec.AffineSystem:
+    th = 0.3
+    A = 0.995 * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    return eqrec.AffineSystem(A=A, C=[[1.0, 0.0]], E=0.1 * np.eye(2), eta_w=0.1, eta_v=0.05, name="oscillator")
+
+
+def six_states(seed: int = 3) -> eqrec.AffineSystem:
+    """A random stable plant, n = 6, two outputs, negative entries."""
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(6, 6))
+    A *= 0.9 / max(abs(np.linalg.eigvals(A)))
+    return eqrec.AffineSystem(A=A, C=rng.normal(size=(2, 6)), E=0.1 * rng.normal(size=(6, 2)), eta_w=1.0,
+                              eta_v=0.05, name="six")
+
+
+def _run(system, make, steps, seed, radius=0.5, every=1):
+    """Run each estimator of ``make`` on uniform noise; per checked step the filtered and predicted sets and the
+    reference hulls."""
+    rng = np.random.default_rng(seed)
+    trace = lossy_trace(seed, steps)
+    n = system.n
+    w = rng.uniform(-1, 1, (steps, system.nw))
+    v = rng.uniform(-1, 1, (steps, system.nv))
+    xi0 = radius * rng.uniform(-1, 1, n)
+    x, y, arrivals = simulate(system, trace, np.zeros(n), xi0, w, v)
+    ests = {k: m().reset(np.zeros(n)) for k, m in make.items()}
+    _run.last = ests
+    rows = []
+    for t in range(steps):
+        out = {k: e.step(arrivals[t]) for k, e in ests.items()}
+        if t % every and t != steps - 1:
+            continue
+        ref = exact_hulls(system, trace, np.zeros(n), radius, y, t)
+        rows.append((t, {k: (e.filtered, e.predicted, out[k]) for k, e in ests.items()}, ref, x[t], x[t + 1]))
+    return rows
+
+
+def _ratio(S: StateSet, ref) -> float:
+    lo, hi = ref
+    return float(np.max((S.upper - S.lower) / (hi - lo)))
+
+
+def _check_contains(S: StateSet, ref, x):
+    lo, hi = ref
+    assert np.all(S.lower <= x) and np.all(x <= S.upper), "the set misses the true state"
+    width = hi - lo
+    assert np.all(S.lower <= lo + REF_TOL * (1 + width)) and np.all(S.upper >= hi - REF_TOL * (1 + width)), \
+        "the set misses part of the exact hull"
+
+
+@pytest.mark.parametrize("plant", [oscillator, six_states])
+def test_exact_estimator_meets_the_goals_on_small_plants(plant):
+    """Filtered hull / exact hull <= 1.01 at the last step and <= 1.05 at every step (issue 45 §3), every set
+    containing the exact hull and the true state, on a plant it was not tuned on."""
+    system = plant()
+    rows = _run(system, {"exact": lambda: ExactSetEstimator(system, 0.5, max_delay=2)}, 60, 7)
+    ratios = []
+    for t, sets, ref, x_t, x_t1 in rows:
+        filt, pred, (xhat, bound) = sets["exact"]
+        _check_contains(filt, ref[0], x_t)
+        _check_contains(pred, ref[1], x_t1)
+        assert filt.time == t and pred.time == t + 1 and filt.generators is None
+        assert np.array_equal(pred.centre, xhat) and bound == pred.radius.max() or bound >= np.max(
+            np.abs(x_t1 - xhat))
+        ratios.append(_ratio(filt, ref[0]))
+    assert _run.last["exact"].lp_fallbacks == 0  # data from the model: every hull LP has an optimum
+    assert ratios[-1] <= 1.01, ratios[-1]
+    assert max(ratios) <= 1.05, max(ratios)
+
+
+def test_exact_estimator_is_tighter_than_the_zonotope_estimator_on_two_carts():
+    """On the two-cart plant (the slowest to forget its prior; not among the goal's plants: 1.021 measured at the
+    last of these 80 steps, 1.001 after 150 on another seed) the exact estimator ends within 1.05 of the exact
+    hull, below the zonotope estimator; both contain the exact hull at every checked step."""
+    system = eqrec.two_mass()
+    rows = _run(system, {"exact": lambda: ExactSetEstimator(system, 0.5, max_delay=2),
+                         "zonotope": lambda: ZonotopeEstimator(system, 0.5, max_delay=2)}, 80, 1, every=4)
+    last = {}
+    for t, sets, ref, x_t, x_t1 in rows:
+        for k, (filt, pred, _) in sets.items():
+            _check_contains(filt, ref[0], x_t)
+            _check_contains(pred, ref[1], x_t1)
+            last[k] = (_ratio(filt, ref[0]), _ratio(pred, ref[1]))
+    assert last["exact"][0] <= 1.05 and last["exact"][1] <= 1.05, last
+    assert last["exact"][0] < last["zonotope"][0], last
+
+
+def test_zonotope_filtered_set_contains_the_exact_hull_at_every_step():
+    """§1 for the zonotope estimator: the filtered set (x(t) given data to t) and the predicted one (x(t+1))
+    contain the exact hull at every step; the prediction is what step returns; the filtered set is no wider than
+    the prediction's of the step before (it adds y(t))."""
+    system = eqrec.two_mass()
+    rows = _run(system, {"z": lambda: ZonotopeEstimator(system, 0.5, max_delay=2, window=5, order=3)}, 40, 2)
+    prev_pred = None
+    for t, sets, ref, x_t, x_t1 in rows:
+        filt, pred, (xhat, bound) = sets["z"]
+        _check_contains(filt, ref[0], x_t)
+        _check_contains(pred, ref[1], x_t1)
+        assert np.array_equal(pred.centre, xhat) and np.all(pred.radius >= 0) and pred.radius.max() >= bound
+        # the zonotope lies inside the bounds (its row sums, rounded)
+        for S in (filt, pred):
+            r = np.abs(S.generators).sum(axis=1)
+            assert np.all(S.centre - r >= S.lower - 1e-12) and np.all(S.centre + r <= S.upper + 1e-12)
+        if prev_pred is not None:
+            assert filt.time == prev_pred.time
+        prev_pred = pred
+
+
+def test_sets_right_after_reset():
+    system = eqrec.two_mass()
+    for est in (ZonotopeEstimator(system, 0.5), ExactSetEstimator(system, 0.5)):
+        with pytest.raises(InputError):
+            est.predicted  # noqa: B018 - before reset
+        est.reset(np.ones(4), t0=5)
+        S = est.predicted
+        assert S.time == 5 and np.all(S.lower <= 0.5) and np.all(S.upper >= 1.5)
+        with pytest.raises(InputError) as info:
+            est.filtered  # noqa: B018 - no data yet
+        assert info.value.field == "filtered"
+
+
+def test_exact_estimator_protocol_delays_atomic_reset():
+    """Late packets are used at their own time, too-late ones dropped; a refused call changes nothing; reset
+    starts again from scratch (the same outputs twice)."""
+    system = eqrec.two_mass()
+    est = ExactSetEstimator(system, 0.5, max_delay=2, window=5)
+    with pytest.raises(InputError):
+        est.step(None)
+    est.reset(np.zeros(4))
+    est.step(np.array([0.1]))
+    est.step(None)
+    est.step([Packet(1, np.array([0.12]))])
+    assert est.replays == 1 and est.time == 3
+    est.step([Packet(0, np.array([0.1]))])  # 3 steps late: dropped
+    assert est.dropped_packets == 1
+    before = pickle.dumps(est)
+    for bad in (dict(y=np.array([np.nan])), dict(y=[Packet(9, np.array([0.1]))]), dict(y=[Packet(2, np.array([0.0])),
+                                                                                           Packet(2, np.array([0.0]))])):
+        with pytest.raises(InputError):
+            est.step(**bad)
+        assert pickle.dumps(est) == before
+    seq = [np.array([0.1]), None, np.array([0.3]), [Packet(1, np.array([0.2])), Packet(3, np.array([0.25]))], None,
+           np.array([0.0])]
+    outs = []
+    for _ in range(2):
+        est.reset(np.zeros(4))
+        outs.append([est.step(y) for y in seq])
+    for (a, ba), (b, bb) in zip(*outs):
+        assert np.array_equal(a, b) and ba == bb
+    assert est.state_bounds.shape == (4,)
+    with pytest.raises(InputError) as info:
+        ExactSetEstimator(system, 0.5, gain=("fradius", "reweighted"))
+    assert info.value.field == "gain"
+
+
+def test_exact_estimator_guarantee_at_box_corners():
+    """error <= bound at every step with the noise at random corners of its box (the worst cases of the linear
+    estimators; the exact estimator's bound holds for every noise in the box)."""
+    system = oscillator()
+    N = 60
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        trace = lossy_trace(seed, N)
+        out = eqrec.simulate.loop.closed_loop(system, ExactSetEstimator(system, 0.5, max_delay=2, window=10), trace,
+                                              np.zeros(2), 0.5 * rng.choice([-1.0, 1.0], 2),
+                                              system.eta_w * rng.choice([-1.0, 1.0], (N, 2)),
+                                              system.eta_v * rng.choice([-1.0, 1.0], (N, 1)))
+        assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
+
+
+def test_dual_bound_is_a_bound_for_any_multipliers():
+    """Weak duality (bounds/window_lp.py): the bound from any multipliers is >= the LP's maximum; the LP hull
+    equals the full-window LP (no prior information lost) and contains a brute-force sample of the set."""
+    rng = np.random.default_rng(0)
+    system = eqrec.two_mass()
+    L, n = 6, 4
+    A = np.broadcast_to(system.A, (L, n, n)).copy()
+    C = np.broadcast_to(system.C, (L, 1, n)).copy()
+    E = np.broadcast_to(system.eta_w * system.E, (L, n, 2)).copy()
+    V = np.broadcast_to(system.eta_v * system.V, (L, 1, 1)).copy()
+    measured = np.array([True, False, True, True, False, True])
+    G0 = 0.5 * np.eye(n)
+    xi = rng.uniform(-1, 1, n + L * 2 + 4)
+    x = G0 @ xi[:n]
+    Y = np.zeros((L, 1))
+    k = 0
+    for j in range(L):
+        Y[j] = system.C @ x + (system.eta_v * system.V @ xi[n + 2 * L + k:n + 2 * L + k + 1] if measured[j] else 0)
+        k += measured[j]
+        x = system.A @ x + system.eta_w * system.E @ xi[n + 2 * j:n + 2 * j + 2]
+    ws = window_set(A, C, E, V, np.zeros((L, n)), measured, Y, np.zeros(n), G0)
+    lo, hi, fb = lp_hull(ws, "pred")
+    assert fb == 0 and np.all(lo <= x) and np.all(x <= hi)
+    for _ in range(20):
+        y = rng.normal(size=ws.M.shape[0])
+        b = dual_bound(ws.X_pred[0], ws.M, ws.lower, ws.upper, y, ws.mag_pred[0], ws.mag_rows, ws.kappa)
+        assert ws.centre_pred[0] + b >= hi[0] - 1e-12
