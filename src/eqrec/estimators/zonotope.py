@@ -102,7 +102,8 @@ Floating point
 --------------
 The bound is a guarantee on the error computed in floating point, with no tolerance on the guarantee side.  A
 filter step appends a rounding allowance :math:`\kappa\,u\,(|A|(|c| + \beta) + |Bu + f| + |Mr| + \text{row sums
-of the products})` (``u`` the unit roundoff, :math:`\kappa` four times the number of columns) as ``n``
+of the products})` (``u`` the unit roundoff, :math:`\kappa` four times the number of columns: the one formula of
+:func:`eqrec.bounds.rounding.rounding_allowance`) as ``n``
 axis-aligned generators, which covers the rounding of the centre's and the generators' products and of a
 simulated true state of the same size; the window adds its own (:mod:`eqrec.bounds.window`).  Both are a
 relative :math:`10^{-13}`-order of the bound.  The three loops (filter step, reduction, window) are compiled
@@ -122,14 +123,12 @@ import numba
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
+from eqrec.bounds.rounding import rounding_allowance_compiled
 from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
 from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
 from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
-
-#: Unit roundoff of float64.
-_U = np.finfo(float).eps / 2
 
 #: The gains offered (module docstring); the estimator runs one filter per gain named.
 GAINS = ("fradius", "reweighted")
@@ -307,8 +306,7 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
             for j in range(nw):
                 G1[k, a, q + extra + j] = Ew[a, j]
                 s += abs(Ew[a, j])
-            pad = 4.0 * (width + 4) * _U * (mag[a] + s)
-            G1[k, a, q + extra + nw + a] = np.nextafter(pad, np.inf)
+            G1[k, a, q + extra + nw + a] = rounding_allowance_compiled(0.0, width + 4, mag[a] + s)
     return c1, G1
 
 
