@@ -151,7 +151,8 @@ def test_the_constructor_still_takes_the_initial_estimate(designs):
 
 def test_with_the_levels_the_raw_estimators_return_the_guaranteed_estimators_bound(designs):
     """Built with the design's levels, ClassEstimator and RecoveryEstimator return exactly what
-    GuaranteedEstimator (strict) returns: the level of the observed prefix or class, μ1 at period ends."""
+    GuaranteedEstimator (strict) returns: the level of the observed prefix or class, μ1 at period ends, each plus the
+    rounding allowance."""
     classes, node, _, _ = designs
     rng = np.random.default_rng(3)
     for design, gains in ((classes, classes.class_gains), (node, node.schedule)):
@@ -163,7 +164,9 @@ def test_with_the_levels_the_raw_estimators_return_the_guaranteed_estimators_bou
             y = None if k % T == 1 else rng.normal(size=1)  # one loss per period: in both languages
             (xa, ba), (xb, bb) = raw.step(y), guaranteed.step(y)
             assert np.array_equal(xa, xb) and ba == bb and np.isfinite(ba)
-            assert (ba == design.mu1) == ((k + 1) % T == 0)
+            # the level plus the rounding allowance (eqrec.estimators.intake), rounded up
+            assert ba == np.nextafter(raw._level() + raw.rounding, np.inf) and ba - raw._level() < 1e-12
+            assert (raw._level() == design.mu1) == ((k + 1) % T == 0)
 
 
 def test_levels_are_both_or_neither(designs):

@@ -149,3 +149,60 @@ def test_node_gains_are_sound_too():
         run = closed_loop(acc, est, trace, x0, xi0, w, v)
         assert np.all(np.abs(run.error[1:]).max(axis=1) <= run.bound)
         assert est._est.rounding < 1e-11 * (est.bound + np.abs(est.x).max())
+
+
+def _corner_runs(system, make, traces, mu1, seeds=range(8), scale=3.0):
+    """Runs with the noise at box corners on the given traces; every step ``error <= bound`` exactly."""
+    worst = 0.0
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        trace = traces(rng)
+        N = trace.steps
+        x0 = rng.normal(size=system.n) * scale
+        xi0 = rng.choice([-1.0, 1.0], system.n) * mu1
+        w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
+        v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
+        run = closed_loop(system, make(), trace, x0, xi0, w, v)
+        err = np.abs(run.error[1:]).max(axis=1)
+        assert np.all(err <= run.bound), (seed, float((err / run.bound).max() - 1))
+        worst = max(worst, float((err / run.bound).max()))
+    return worst
+
+
+def test_switching_estimator_is_sound():
+    """Performance mode while on time, a recovery phase after a late packet: the allowance carried across (the
+    batch reactor: signed, unstable; a period-1 design needs its two outputs)."""
+    from eqrec.design.delay.design import design_delay
+    from eqrec.arrivals.words import full_delay_language
+    from eqrec.estimators.switching import SwitchingEstimator
+
+    from eqrec.systems.examples import batch_reactor
+
+    system, mu1 = batch_reactor(), 0.36
+    perf = design_delay(system, ["0"], mu1, kind="delay")
+    rec = design_delay(system, [w for w in full_delay_language(3, 1) if w[0] != "0"], mu1, kind="delay")
+    level = max(perf.mu1, rec.mu1)
+    rule = rec.estimator().bound_of
+
+    def make():
+        return SwitchingEstimator(system, perf.schedule, rec.schedule, bound_of=rule, mu1=level)
+
+    worst = _corner_runs(system, make, lambda rng: ArrivalTrace(rng.integers(0, 2, 24) * (rng.random(24) < 0.3)),
+                         level)
+    assert worst > 0.5
+
+
+def test_augmented_estimator_is_sound():
+    from eqrec.design.augmented.design import design_augmented
+    from eqrec.estimators.augmented import AugmentedEstimator
+
+    system = tanks()
+    words = ["1011111", "1101111", "1110111"]
+    design = design_augmented(system, words, 1.0)
+
+    def make():
+        return AugmentedEstimator(system, design.augmented.gains, bound_of=lambda prefix: design.mu2, mu1=design.mu1)
+
+    worst = _corner_runs(system, make, lambda rng: ArrivalTrace.from_arrived([int(c) for c in words[rng.integers(3)]]),
+                         design.mu1)
+    assert worst > 0.1
