@@ -209,6 +209,53 @@ class GuaranteedEstimator:
         return est.error_map()
 
     @property
+    def has_linear_error_model(self) -> bool:
+        """Whether :meth:`linear_error_model` answers at every step (class gains; node gains are run as copies
+        by :func:`eqrec.exact_bound`)."""
+        return isinstance(self.gains, ClassGains)
+
+    def linear_error_model(self):
+        """The error of the current estimate, as :func:`eqrec.exact_bound` reads it (class gains, every step).
+
+        The narrow interface between an estimator and the exact run-time bound
+        (:mod:`eqrec.estimators.exact`): either an
+        :class:`~eqrec.bounds.zonotope.ErrorMap` anchored at an earlier estimate of
+        the run (``exact_bound`` carries the error sets and advances them), or
+        the generators ``(n, q)`` of the error set of the current estimate
+        itself, in unit-box variables independent of the noise still to come
+        (``exact_bound`` takes them as its set).  Inside the design: the class
+        estimate's map (:meth:`eqrec.estimators.causal.ClassEstimator.error_map`);
+        outside it (``strict=False``): the set-membership estimator's carried
+        set (:attr:`eqrec.estimators.zonotope.ZonotopeEstimator.carried_set`, its
+        rounding allowance included); a return to the design anchors the next
+        maps at the period start, where that set was the last one given.
+
+        Returns
+        -------
+        ErrorMap or numpy.ndarray
+            The map, or the generators of the error set.
+
+        Raises
+        ------
+        InputError
+            Node gains (:attr:`has_linear_error_model` is false), or before the first step of a period.
+        """
+        est = self._running()
+        if self._outside:
+            return self._sm.carried_set[1]
+        if not isinstance(est, ClassEstimator):
+            raise InputError("node gains have no error maps: exact_bound runs them as copies", field="gains")
+        return est.error_map()
+
+    @property
+    def rounding_vector(self) -> np.ndarray:
+        """The rounding allowance of the current estimate beyond its error set (:mod:`eqrec.estimators.intake`;
+        zero outside the design, where the set-membership set includes its own)."""
+        if self._outside:
+            return np.zeros(self.system.n)
+        return self._running().rounding_vector
+
+    @property
     def state_bounds(self) -> np.ndarray:
         """Per-state bounds ``|x_i − x̂_i| <= state_bounds[i]`` of the current estimate (``strict=False`` only)."""
         if self.strict:

@@ -252,6 +252,11 @@ class SwitchingEstimator:
         plus it, rounded up; carried from phase to phase."""
         return self._est.rounding
 
+    @property
+    def rounding_vector(self) -> np.ndarray:
+        """The per-state rounding allowance of the current estimate (a copy)."""
+        return self._est.rounding_vector
+
     def _level(self) -> float:
         """The bound of the current estimate (class docstring)."""
         if self.bound_of is None:

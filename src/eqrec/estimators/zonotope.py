@@ -671,6 +671,17 @@ class ZonotopeEstimator:
         pad = np.nextafter(np.maximum(self._beta - np.abs(G).sum(axis=1), 0.0), np.inf)
         return self._xhat.copy(), np.concatenate([G, np.diag(pad)], axis=1)
 
+    def linear_error_model(self) -> np.ndarray:
+        """The generators of the error set of the current estimate (:attr:`carried_set`): what
+        :func:`eqrec.exact_bound` reads (:meth:`eqrec.estimators.guaranteed.GuaranteedEstimator.linear_error_model`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, q)
+            ``x − x̂ = G ε`` for some ``|ε| <= 1``; the row sums are at least :attr:`state_bounds`.
+        """
+        return self.carried_set[1]
+
     @property
     def generators(self) -> np.ndarray:
         """A copy of the generators of every filter at the window's start, shape ``(K, n, q)`` (``K`` gains,
