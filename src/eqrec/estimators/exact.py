@@ -135,6 +135,14 @@ class ExactBound:
         InputError
             What the wrapped estimator refuses.
         """
+        self.bound = float(self.x0_radius.max())  # a raw causal estimator's allowance: the initial error's size
+        try:
+            return self._sized(lambda: self._reset(xhat0, t0), [self.estimator])
+        except Exception:
+            self.bound = float(self._bounds.max()) if np.all(np.isfinite(self._bounds)) else np.nan
+            raise
+
+    def _reset(self, xhat0: Any, t0: int) -> "ExactBound":
         n, sysm = self.system.n, self.system
         if self.mode == "maps":
             self.estimator.reset(xhat0, t0)

@@ -20,6 +20,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from eqrec.bounds.data_classes import ClassGains
+from eqrec.bounds.rounding import rounding_allowance
 from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator, has_class, make_estimator
 from eqrec.estimators.intake import BoundRule, check_levels
 from eqrec.bounds.gains import GainSchedule
@@ -154,6 +155,8 @@ class SwitchingEstimator:
             ``xhat0`` without ``n`` finite entries, ``t0`` not an integer (nothing changes).
         """
         est = make_estimator(self.system, self.performance, xhat0, periodic=True, t0=t0)  # checked first
+        radius = self.mu1 if math.isfinite(self.mu1) else None
+        est.carry_rounding(rounding_allowance(0.0, 1, np.abs(est.xhat) + (radius or 0.0)), radius)
         self._est, self.mode = est, "performance"
         self.switch_times, self.revert_times = [], []
         self._dropped = 0
