@@ -144,9 +144,9 @@ class GuaranteedEstimator:
     >>> estimator = design.estimator()
     >>> estimator.reset(np.zeros(3)).time, estimator.bound  # reset returns the estimator
     (0, 1.0)
-    >>> xhat, bound = estimator.step([1.0, 2.0])  # y(0) arrives on time
-    >>> estimator.time, bound
-    (1, 1.05)
+    >>> xhat, bound = estimator.step([1.0, 2.0])  # y(0) arrives on time: the level plus the rounding allowance
+    >>> estimator.time, round(bound, 12), 0 < bound - 1.05 < 1e-12
+    (1, 1.05, True)
     >>> xhat, bound = estimator.step(None)  # y(1) is lost: the design's intermediate level
     >>> abs(bound - design.mu2) < 1e-9
     True

@@ -170,7 +170,13 @@ class RoundingRecord:
         self.maps: list = []
 
     def copy(self) -> "RoundingRecord":
-        """A copy whose arrays and lists can be extended without touching this one."""
+        """A copy whose arrays and lists can be extended without touching this one.
+
+        Returns
+        -------
+        RoundingRecord
+            The copy (``rho0`` shared: it is never written).
+        """
         out = RoundingRecord.__new__(RoundingRecord)
         out.rho0, out.w, out.v, out.true, out.maps = self.rho0, self.w.copy(), self.v.copy(), list(self.true), \
             list(self.maps)
