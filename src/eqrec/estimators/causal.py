@@ -178,9 +178,7 @@ class RecoveryEstimator(StampedEstimator):
             G += Ft @ (sysm.C_at(tau) @ record.maps[tau])
             G[:, T * n + tau * p:T * n + (tau + 1) * p] += Ft
         record.maps.append(G)
-        absG = np.abs(G)
-        rho = self._allowance(record, absG[:, T * (n + p):], absG[:, :T * n], absG[:, T * n:T * (n + p)])
-        return record, rho
+        return record, self._allowance(record, np.abs(G))
 
 
 class ClassEstimator(StampedEstimator):
@@ -309,6 +307,7 @@ class ClassEstimator(StampedEstimator):
         self.gains = gains
         self._maps: ClassErrorMaps | None = None
         self._rounding_maps: RoundingMaps | None = None  # the rounding allowance's maps (shared by the design)
+        self._abs_gains: dict = {}  # (d, S) -> |K_{d,S}|
         self._xbar: "np.ndarray | None" = None
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
 
@@ -439,13 +438,15 @@ class ClassEstimator(StampedEstimator):
         self._state_injection(step, record, step.history[step.t], 0.0, sysm.n)
         if self._rounding_maps is None:
             self._rounding_maps = RoundingMaps.of(sysm, self.gains)
-        start, noise_w, noise_v = self._rounding_maps.parts(d, S)
+        maps = self._rounding_maps.absolute(d, S)
         extra = 0.0
         if S:
-            K = self.gains.gain(d, S)
-            r = np.concatenate([np.abs(step.yxi[tau]) for tau in S])
-            extra = rounding_allowance(0.0, len(S) * sysm.p + 2, np.abs(xbar) + np.abs(K) @ r)
-        return record, self._allowance(record, start, noise_w, noise_v, extra)
+            hit = self._abs_gains.get((d, S))
+            if hit is None:
+                hit = self._abs_gains[(d, S)] = np.abs(self.gains.gain(d, S))
+            r = np.concatenate([step.yxi[tau] for tau in S])
+            extra = rounding_allowance(0.0, len(S) * sysm.p + 2, np.abs(xbar) + hit @ np.abs(r))
+        return record, self._allowance(record, maps, extra)
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,

@@ -141,7 +141,6 @@ class RoundingMaps:
         self.system = system
         unit = AffineSystem(A=system.A, C=system.C, E=np.eye(n), eta_w=1.0, eta_v=1.0, V=np.eye(p))
         self._maps = ClassErrorMaps(unit, gains)
-        self._cut = gains.horizon * n
         self._parts: dict = {}
 
     @classmethod
@@ -165,8 +164,8 @@ class RoundingMaps:
             kept = gains.__dict__["_rounding_maps"] = cls(system, gains)
         return kept
 
-    def parts(self, depth: int, available: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(|G^{ξ0}|, |G^w|, |G^v|)`` of the class ``(depth, available)`` with identity noise gains.
+    def absolute(self, depth: int, available: tuple[int, ...]) -> np.ndarray:
+        """``|G|`` of the class ``(depth, available)`` with identity noise gains, columns ``(w, v, ξ0)``.
 
         Parameters
         ----------
@@ -177,12 +176,12 @@ class RoundingMaps:
 
         Returns
         -------
-        tuple of ndarray
-            Shapes ``(n, n)``, ``(n, T n)`` and ``(n, T p)``.
+        ndarray, shape (n, T (n + p) + n)
+            The absolute class map.
         """
         key = (depth, available)
         hit = self._parts.get(key)
         if hit is None:
             state, noise = self._maps.parts(depth, available)
-            hit = self._parts[key] = (np.abs(state), np.abs(noise[:, :self._cut]), np.abs(noise[:, self._cut:]))
+            hit = self._parts[key] = np.abs(np.concatenate([noise, state], axis=1))
         return hit

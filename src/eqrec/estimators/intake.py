@@ -152,6 +152,8 @@ class RoundingRecord:
 
     Attributes
     ----------
+    z : numpy.ndarray, shape (T (n + p) + n,)
+        ``w``, ``v`` and ``rho0`` end to end (the columns of the error maps).
     w : numpy.ndarray, shape (T, n)
         Per period time ``j``, the bound of the rounding injected into ``ξ(j+1)`` (the estimator's state update
         and the simulated state's).
@@ -165,22 +167,12 @@ class RoundingRecord:
     """
 
     def __init__(self, T: int, n: int, p: int, rho0: np.ndarray):
-        self.rho0, self.w, self.v = rho0, np.zeros((T, n)), np.zeros((T, p))
+        #: all the injections in the order of the error maps' columns ``(w, v, ξ0)``: one product carries them
+        self.z = np.zeros(T * (n + p) + n)
+        self.w, self.v = self.z[:T * n].reshape(T, n), self.z[T * n:T * (n + p)].reshape(T, p)
+        self.z[T * (n + p):] = rho0
         self.true: list = []
         self.maps: list = []
-
-    def copy(self) -> "RoundingRecord":
-        """A copy whose arrays and lists can be extended without touching this one.
-
-        Returns
-        -------
-        RoundingRecord
-            The copy (``rho0`` shared: it is never written).
-        """
-        out = RoundingRecord.__new__(RoundingRecord)
-        out.rho0, out.w, out.v, out.true, out.maps = self.rho0, self.w.copy(), self.v.copy(), list(self.true), \
-            list(self.maps)
-        return out
 
 
 class StampedEstimator:
@@ -336,12 +328,13 @@ class StampedEstimator:
         return hit
 
     def _period_record(self, step: OpenedStep) -> "RoundingRecord":
-        """The period's rounding record with period time ``t`` entered (a copy: nothing changes)."""
+        """The period's rounding record with period time ``t`` entered (a new one at a period's start; called once
+        the step can no longer raise, so it is extended in place)."""
         sysm = self.system
         if step.t == 0:
             record = RoundingRecord(self.T, sysm.n, sysm.p, self._rho.copy())
         else:
-            record = self._record.copy()
+            record = self._record
         record.true.append(np.abs(self.xhat) + self._radius())  # |x(t)| <= |x̂(t)| + bound
         return record
 
@@ -351,13 +344,13 @@ class StampedEstimator:
         return [tau for tau in step.yxi if tau not in before]
 
     def _state_injection(self, step: OpenedStep, record: "RoundingRecord", reference: np.ndarray,
-                         own: np.ndarray, length: int) -> None:
+                         own: "np.ndarray | float", length: int) -> None:
         """Enter the rounding of the step's state updates, an injection into ``ξ(t+1)`` (module docstring): the
         estimator's (``own``: the magnitude of its update beyond ``|A| |reference|``, dot products of ``length``)
         and the simulated state's ``x(t+1) = A x + B u + f + E w``."""
         absA, absB, _, e, _, f = self._absolute_model(step.t)
-        drive = absB @ np.abs(step.u) + f
-        magnitude = absA @ (np.abs(reference) + record.true[step.t]) + 2.0 * drive + e + own
+        drive = absB @ np.abs(step.u) + f if absB.shape[1] else f
+        magnitude = absA @ (np.abs(reference) + record.true[step.t]) + e + own + 2.0 * drive
         record.w[step.t] = rounding_allowance(0.0, length + self.system.nw + self.system.m + 3, magnitude)
 
     def _output_injection(self, record: "RoundingRecord", tau: int, residual: np.ndarray,
@@ -368,13 +361,11 @@ class StampedEstimator:
         magnitude = np.abs(residual) + absC @ (2.0 * np.abs(reference) + record.true[tau]) + v
         record.v[tau] = rounding_allowance(0.0, self.system.n + self.system.nv + 2, magnitude)
 
-    def _allowance(self, record: "RoundingRecord", start: np.ndarray, noise_w: np.ndarray, noise_v: np.ndarray,
-                   extra: "np.ndarray | float" = 0.0) -> np.ndarray:
-        """``ρ = |G^{ξ0}| ρ(s) + |G^w| ι_w + |G^v| ι_v + extra``, rounded up (module docstring); the ``|G|`` are the
-        absolute error maps of the current estimate with identity noise gains."""
-        n = self.system.n
-        total = start @ record.rho0 + noise_w @ record.w.reshape(-1) + noise_v @ record.v.reshape(-1) + extra
-        return np.nextafter(total * (1.0 + (2 * n + 8) * UNIT_ROUNDOFF), np.inf)
+    def _allowance(self, record: "RoundingRecord", maps: np.ndarray, extra: "np.ndarray | float" = 0.0) -> np.ndarray:
+        """``ρ = |G| (ι_w, ι_v, ρ(s)) + extra``, rounded up (module docstring); ``maps`` is ``|G|``, the absolute
+        error map of the current estimate with identity noise gains, columns ``(w, v, ξ0)``."""
+        total = maps @ record.z + extra
+        return np.nextafter(total * (1.0 + (2 * self.system.n + 8) * UNIT_ROUNDOFF), np.inf)
 
     def _with_rounding(self, level: float) -> float:
         """The reported bound: the level plus the allowance, rounded up (``inf`` stays ``inf``)."""
