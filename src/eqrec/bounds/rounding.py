@@ -65,3 +65,40 @@ def rounding_allowance(bound, terms, magnitude):
 
 #: :func:`rounding_allowance` compiled with Numba (no ``fastmath``: the same IEEE operations), for the kernels.
 rounding_allowance_compiled = numba.njit(cache=True)(rounding_allowance)
+
+
+@numba.njit(cache=True)
+def injection_bound(M, a, scale, b, c, add, terms):  # pragma: no cover - compiled
+    r"""The rounding allowance of one step's update, :func:`rounding_allowance` of its magnitude
+    :math:`\mu = M(s|a| + b) + |c| + \mathrm{add}` (``M``, ``b``, ``add`` nonnegative), in one compiled call.
+
+    Parameters
+    ----------
+    M : numpy.ndarray, shape (n, k)
+        The absolute values of the update's matrix.
+    a : numpy.ndarray, shape (k,)
+        The vector it multiplies (its absolute values are taken).
+    scale : float
+        ``s``.
+    b : numpy.ndarray, shape (k,)
+        A nonnegative magnitude added to ``s |a|`` (e.g. the true state's).
+    c : numpy.ndarray, shape (n,)
+        A vector whose absolute values are added.
+    add : numpy.ndarray, shape (n,)
+        A nonnegative magnitude added.
+    terms : float
+        As in :func:`rounding_allowance`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        ``nextafter(4 · terms · u · μ, +inf)``.
+    """
+    n, k = M.shape
+    out = np.empty(n)
+    for i in range(n):
+        s = abs(c[i]) + add[i]
+        for j in range(k):
+            s += M[i, j] * (scale * abs(a[j]) + b[j])
+        out[i] = np.nextafter(4.0 * terms * UNIT_ROUNDOFF * s, np.inf)
+    return out

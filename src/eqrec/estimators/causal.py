@@ -55,7 +55,7 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.bounds.rounding import rounding_allowance
+from eqrec.bounds.rounding import injection_bound
 from eqrec.estimators.error_maps import ClassErrorMaps, RoundingMaps
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
@@ -426,6 +426,12 @@ class ClassEstimator(StampedEstimator):
         self.bound = self._with_rounding(self._level())
         return self.xhat.copy(), self.bound
 
+    def _zero_data(self, size: int) -> np.ndarray:
+        hit = self._norms.get(("zeros", size))
+        if hit is None:
+            hit = self._norms[("zeros", size)] = np.zeros(size)
+        return hit
+
     def _class_rounding(self, step: OpenedStep, S: tuple[int, ...], xbar: np.ndarray) -> tuple[RoundingRecord,
                                                                                               np.ndarray]:
         """The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
@@ -435,7 +441,7 @@ class ClassEstimator(StampedEstimator):
         record = self._period_record(step)
         for tau in self._new_packets(step):
             self._output_injection(record, tau, step.yxi[tau], step.history[tau])
-        self._state_injection(step, record, step.history[step.t], 0.0, sysm.n)
+        self._state_injection(step, record, step.history[step.t], None, sysm.n)
         if self._rounding_maps is None:
             self._rounding_maps = RoundingMaps.of(sysm, self.gains)
         maps = self._rounding_maps.absolute(d, S)
@@ -444,8 +450,8 @@ class ClassEstimator(StampedEstimator):
             hit = self._abs_gains.get((d, S))
             if hit is None:
                 hit = self._abs_gains[(d, S)] = np.abs(self.gains.gain(d, S))
-            r = np.concatenate([step.yxi[tau] for tau in S])
-            extra = rounding_allowance(0.0, len(S) * sysm.p + 2, np.abs(xbar) + hit @ np.abs(r))
+            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
+            extra = injection_bound(hit, r, 1.0, self._zero_data(r.size), xbar, self._zeros, len(S) * sysm.p + 2)
         return record, self._allowance(record, maps, extra)
 
 

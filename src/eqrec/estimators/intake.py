@@ -63,7 +63,7 @@ import numpy as np
 
 from eqrec.arrivals.packets import Stamped, is_stamp, as_packets, check_estimate, check_input
 from eqrec.arrivals.patterns import ArrivalPattern
-from eqrec.bounds.rounding import UNIT_ROUNDOFF, rounding_allowance
+from eqrec.bounds.rounding import UNIT_ROUNDOFF, injection_bound, rounding_allowance
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
@@ -238,6 +238,7 @@ class StampedEstimator:
         self._rho = np.zeros(system.n)  # the rounding allowance ρ of the current estimate, per state (module docstring)
         self.error_radius: "float | None" = None  # the true error's size, when a wrapper knows it (else the bound)
         self._norms: dict = {}
+        self._zeros = np.zeros(system.n)
         self._clear(int(t0))
         if xhat0 is not None:
             self.reset(xhat0, t0)
@@ -344,22 +345,33 @@ class StampedEstimator:
         return [tau for tau in step.yxi if tau not in before]
 
     def _state_injection(self, step: OpenedStep, record: "RoundingRecord", reference: np.ndarray,
-                         own: "np.ndarray | float", length: int) -> None:
+                         own: "np.ndarray | None", length: int) -> None:
         """Enter the rounding of the step's state updates, an injection into ``ξ(t+1)`` (module docstring): the
         estimator's (``own``: the magnitude of its update beyond ``|A| |reference|``, dot products of ``length``)
         and the simulated state's ``x(t+1) = A x + B u + f + E w``."""
         absA, absB, _, e, _, f = self._absolute_model(step.t)
-        drive = absB @ np.abs(step.u) + f if absB.shape[1] else f
-        magnitude = absA @ (np.abs(reference) + record.true[step.t]) + e + own + 2.0 * drive
-        record.w[step.t] = rounding_allowance(0.0, length + self.system.nw + self.system.m + 3, magnitude)
+        add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] else self._drift(step.t)
+        if own is not None:
+            add = add + own
+        record.w[step.t] = injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
+                                           length + self.system.nw + self.system.m + 3)
+
+    def _drift(self, t: int) -> np.ndarray:
+        """``|E| η_w 1 + 2 |f|`` at period time ``t`` (cached): the part of a state update's magnitude without input."""
+        key = ("drift", t if self.system.is_time_varying else 0)
+        hit = self._norms.get(key)
+        if hit is None:
+            _, _, _, e, _, f = self._absolute_model(t)
+            hit = self._norms[key] = e + 2.0 * f
+        return hit
 
     def _output_injection(self, record: "RoundingRecord", tau: int, residual: np.ndarray,
                           reference: np.ndarray) -> None:
         """Enter the rounding of a residual ``y(τ) − C ref(τ)`` and of the simulated ``y(τ) = C x(τ) + V v(τ)``,
         an injection into the measurement of ``τ``."""
         _, _, absC, _, v, _ = self._absolute_model(tau)
-        magnitude = np.abs(residual) + absC @ (2.0 * np.abs(reference) + record.true[tau]) + v
-        record.v[tau] = rounding_allowance(0.0, self.system.n + self.system.nv + 2, magnitude)
+        record.v[tau] = injection_bound(absC, reference, 2.0, record.true[tau], residual, v,
+                                        self.system.n + self.system.nv + 2)
 
     def _allowance(self, record: "RoundingRecord", maps: np.ndarray, extra: "np.ndarray | float" = 0.0) -> np.ndarray:
         """``ρ = |G| (ι_w, ι_v, ρ(s)) + extra``, rounded up (module docstring); ``maps`` is ``|G|``, the absolute
