@@ -460,4 +460,5 @@ def test_delay_classes_and_packet_are_public(acc):
     xhat_late, bound_late = late.step([eqrec.Packet(0, y0), eqrec.Packet(1, y1)])  # ... arrives with y(1)
     xhat, bound = on_time.step(y1)
     assert late.time == on_time.time == 2
-    assert np.allclose(xhat_late, xhat, rtol=1e-12) and bound_late == bound  # the same data by time 1: one class
+    # the same data by time 1: one class, one level (the rounding allowances differ in the last bits: they follow the data)
+    assert np.allclose(xhat_late, xhat, rtol=1e-12) and bound_late == pytest.approx(bound, rel=1e-12)

@@ -50,7 +50,7 @@ def test_bounds_are_the_class_levels_and_mu1_at_period_ends(plant):
     _, b2 = est.step(None)
     assert b2 == pytest.approx(cert.levels[classes.index(2, (0,))])
     _, b3 = est.step(np.zeros(1))
-    assert b3 == design.mu1 and est.time == 3
+    assert b3 == pytest.approx(design.mu1) and b3 >= design.mu1 and est.time == 3  # plus the rounding allowance
     _, b4 = est.step(None)  # next period
     assert b4 == pytest.approx(cert.levels[classes.index(1, ())])
 

@@ -207,7 +207,8 @@ def test_estimator_iosys_runs_a_weighted_design_as_its_estimator():
     assert np.array_equal(out[:3, 0], weights * x0 / weights)  # x̂(0), through z = W x as the estimator
     for k in range(N - 1):  # column k + 1 of the response is what step(data of time k) returns
         xhat, bound = est.step(y[:, k] if arrived[k] else None, u[:, k])
-        assert np.array_equal(out[:3, k + 1], xhat) and out[3, k + 1] == bound
+        # the iosys reports the class level; the estimator adds its rounding allowance (issue 40 §2)
+        assert np.array_equal(out[:3, k + 1], xhat) and out[3, k + 1] <= bound <= out[3, k + 1] * (1 + 1e-9)
 
 
 # --- 4. the inputs that were accepted silently: the census ---------------------------------------------------------

@@ -53,7 +53,8 @@ def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, r
     np.testing.assert_array_equal(prot.x, raw.x)
     np.testing.assert_array_equal(leveled.xhat, raw.xhat)
     assert np.all(np.abs(prot.error[1:]).max(axis=1) <= prot.bound * (1 + 1e-9))
-    assert abs(prot.bound.max() - d.mu2) <= 1e-9 and prot.bound[5] == 1.0  # mu1 = 1 at the end of each period
+    # mu1 = 1 at the end of each period, plus the rounding allowance
+    assert abs(prot.bound.max() - d.mu2) <= 1e-9 and 1.0 <= prot.bound[5] <= 1.0 + 1e-9
 
 
 def test_what_arrived_is_the_protocol_form():

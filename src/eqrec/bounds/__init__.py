@@ -15,6 +15,8 @@ classes of a language and their error maps, and the certificate computed from th
     The information limit: per step, the smallest error bound any estimator can guarantee on an arrival trace.
 :mod:`~eqrec.bounds.consistent`
     The exact consistent set: the interval hull of the states consistent with the measured data, per step.
+:mod:`~eqrec.bounds.rounding`
+    The rounding allowance: the one formula by which every reported bound covers the floating-point arithmetic.
 :mod:`~eqrec.bounds.window`
     The exact window: per state, the best linear estimate over the last steps given a zonotope at their start.
 :mod:`~eqrec.bounds.window_lp`

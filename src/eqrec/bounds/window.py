@@ -51,7 +51,8 @@ Floating point
 The reported radius adds :math:`\kappa u\,\mu_i` (``u`` the unit roundoff), where :math:`\mu` bounds the
 magnitudes of every quantity of the computation: the propagation of :math:`|c_0| + \sum_q |G_0|` through
 :math:`|A|` with the drives and the noise row sums, the measured values, and :math:`|\lambda_i|` times the
-magnitudes of the measured rows; :math:`\kappa = 4(L + 2)(n + m + Q)` covers the ``L`` chained products, the
+magnitudes of the measured rows; :math:`\kappa = 4(L + 2)(n + m + Q)` (:func:`eqrec.bounds.rounding.rounding_allowance`
+with ``terms = (L + 2)(n + m + Q)``) covers the ``L`` chained products, the
 dot products of length at most ``n + m + Q`` (``Q`` the columns of ``X``), the sums of the radius (Higham,
 *Accuracy and Stability of Numerical Algorithms*, eqs. (3.4), (4.4)) and a simulated true state of the same size.
 """
@@ -61,7 +62,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-_U = np.finfo(float).eps / 2
+from eqrec.bounds.rounding import rounding_allowance_compiled
 
 
 @numba.njit(cache=True)
@@ -395,8 +396,7 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
                 est += lam_best[r] * resid[r]
                 mag += abs(lam_best[r]) * (magy[r] + abs(resid[r]))
             xhat[k, i] = est
-            kappa = 4.0 * (L + 2) * (n + m + q0 + Qn)
-            radius[k, i] = np.nextafter(best + kappa * _U * (mag + best), np.inf)
+            radius[k, i] = rounding_allowance_compiled(best, (L + 2) * (n + m + q0 + Qn), mag)
             lam_out[k, i, :] = lam_best
     return xhat, radius, lam_out, R_out
 

@@ -313,6 +313,11 @@ class ErrorSet:
         """The current set's generators (reduced to the order)."""
         return self.at(self.time)
 
+    @property
+    def current(self) -> np.ndarray:
+        """The current set's generators as the last step made them (not reduced unless used as an anchor)."""
+        return self._stored[self.time]
+
     @classmethod
     def box(cls, radius: "float | np.ndarray", n: int, t0: int, order: "float | None" = None) -> "ErrorSet":
         """The set ``|ξ_i| <= radius_i`` at ``t0``.

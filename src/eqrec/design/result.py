@@ -259,8 +259,8 @@ class Design:
         >>> import eqrec
         >>> design = eqrec.design_prefix(eqrec.acc_system(), ["101111", "110111", "111011", "111101"], mu1=1.0)
         >>> estimator = design.estimator().reset(np.zeros(3))
-        >>> xhat, bound = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives
-        >>> xhat.shape, bound
+        >>> xhat, bound = estimator.step(np.array([1.0, 2.0]))  # y(0) arrives: its level plus the rounding allowance
+        >>> xhat.shape, round(bound, 12)
         ((3,), 1.05)
         >>> xhat = estimator.update(None)  # y(1) is lost: the intermediate level
         >>> abs(estimator.bound - design.mu2) < 1e-9

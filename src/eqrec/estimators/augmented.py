@@ -30,6 +30,7 @@ import numpy as np
 from eqrec.arrivals.packets import Stamped
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.errors import InputError
+from eqrec.bounds.rounding import rounding_allowance
 from eqrec.estimators.intake import BoundRule, StampedEstimator
 from eqrec.systems.affine import AffineSystem
 
@@ -219,7 +220,35 @@ class AugmentedEstimator(StampedEstimator):
         Lt = self.L[t] if (on_time or self.runtime == "hold") else np.zeros((n, p))
         s_next = sysm.A_at(t) @ self.s + ue + Lt @ (z[t] if on_time else z_missing)
         xhat = sysm.A_at(t) @ self.xhat + sysm.B_at(t) @ step.u - ue + sysm.f
-        self._commit(step)
+        rounding = self._rounding(step, M, nu, Lt, z if self.word is not None else
+                                  {tau: z[tau] for tau in pre.available(t)}, None if on_time else z_missing)
+        self._commit(step, rounding)
         self.s, self.xhat = s_next, xhat
-        self.bound = self._level()
+        self.bound = self._with_rounding(self._level())
         return self.xhat.copy(), self.bound
+
+    def _rounding(self, step, M: np.ndarray, nu: np.ndarray, Lt: np.ndarray, used: dict,
+                  z_missing: "np.ndarray | None"):
+        """The allowance of the augmented estimate (:mod:`eqrec.estimators.intake`), a priori over the horizon
+        (the estimator runs one horizon): the magnitudes of ``x``, ``x̂``, ``s`` and of the innovations,
+        propagated with absolute values (``record.maps``, per period time; the estimator's rounding at
+        :meth:`reset` counts as one more step), and :func:`eqrec.bounds.rounding.rounding_allowance` of their
+        sum with ``terms = (t + 3)(2n + m + (t+1) p + n_w + n_v + 4)``."""
+        sysm, t, n, p = self.system, step.t, self.system.n, self.system.p
+        record = self._period_record(step)
+        if t == 0:
+            record.maps = [(record.true[0], np.abs(self.xhat), np.abs(self.s))]
+        absA, absB, absC, e, v, f = self._absolute_model(t)
+        mx, mxhat, ms = record.maps[t]
+
+        def innovation(tau: int, value: np.ndarray) -> np.ndarray:
+            cx, cxh, cs = record.maps[tau]
+            return np.abs(value) + self._absolute_model(tau)[2] @ (2.0 * cxh + 2.0 * cs + cx) + v
+
+        mz = np.concatenate([innovation(tau, used[tau]) for tau in sorted(used)]) if used else np.zeros(0)
+        mue = np.abs(nu) + (np.abs(M) @ mz if mz.size else 0.0)
+        mzt = innovation(t, used[t]) if t in used and z_missing is None else absC @ ms
+        drive = absB @ np.abs(step.u) + f
+        record.maps.append((absA @ mx + drive + e, absA @ mxhat + drive + mue, absA @ ms + mue + np.abs(Lt) @ mzt))
+        terms = (t + 3) * (2 * n + sysm.m + (t + 1) * p + sysm.nw + sysm.nv + 4)
+        return record, rounding_allowance(0.0, terms, sum(record.maps[t + 1]))

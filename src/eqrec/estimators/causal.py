@@ -55,8 +55,9 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.estimators.error_maps import ClassErrorMaps
-from eqrec.estimators.intake import BoundRule, OpenedStep, StampedEstimator
+from eqrec.bounds.rounding import injection_bound
+from eqrec.estimators.error_maps import ClassErrorMaps, RoundingMaps
+from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.systems.affine import AffineSystem
@@ -147,10 +148,37 @@ class RecoveryEstimator(StampedEstimator):
             yxi[tau] = v
         ue = gain.u0 + gain.F @ yxi.reshape(-1)
         xhat = sys.A_at(t) @ self.xhat + sys.B_at(t) @ step.u - ue + sys.f
-        self._commit(step)
+        self._commit(step, self._node_rounding(step, gain))
         self.xhat = xhat
-        self.bound = self._level()
+        self.bound = self._with_rounding(self._level())
         return self.xhat.copy(), self.bound
+
+    def _node_rounding(self, step: OpenedStep, gain) -> tuple[RoundingRecord, np.ndarray]:
+        """The allowance of the node estimate (:mod:`eqrec.estimators.intake`): the period's error maps with
+        identity noise gains, ``G(t+1) = A G(t) + I_w(t) + Σ_τ F_τ (C(τ) G(τ) + I_v(τ))`` over ``(w, v, ξ(s))``
+        (``τ`` received; ``ξ`` gains ``+u_e``), carry the roundings injected into the state and the measurements."""
+        sysm, t, p, n, T = self.system, step.t, self.system.p, self.system.n, self.T
+        record = self._period_record(step)
+        if t == 0:
+            G0 = np.zeros((n, T * (n + p) + n))
+            G0[:, T * (n + p):] = np.eye(n)
+            record.maps = [G0]
+        for tau in self._new_packets(step):
+            self._output_injection(record, tau, step.yxi[tau], step.history[tau])
+        F = np.asarray(gain.F, float)
+        yxi = np.zeros((t + 1) * p)
+        for tau, v in step.yxi.items():
+            yxi[tau * p:(tau + 1) * p] = np.abs(v)
+        own = np.abs(gain.u0) + np.abs(F) @ yxi
+        self._state_injection(step, record, self.xhat, own, n + (t + 1) * p)
+        G = sysm.A_at(t) @ record.maps[t]
+        G[:, t * n:(t + 1) * n] += np.eye(n)
+        for tau in sorted(step.yxi):
+            Ft = F[:, tau * p:(tau + 1) * p]
+            G += Ft @ (sysm.C_at(tau) @ record.maps[tau])
+            G[:, T * n + tau * p:T * n + (tau + 1) * p] += Ft
+        record.maps.append(G)
+        return record, self._allowance(record, np.abs(G))
 
 
 class ClassEstimator(StampedEstimator):
@@ -278,6 +306,8 @@ class ClassEstimator(StampedEstimator):
                                  f"{(system.n, len(cls.available) * system.p)}")
         self.gains = gains
         self._maps: ClassErrorMaps | None = None
+        self._rounding_maps: RoundingMaps | None = None  # the rounding allowance's maps (shared by the design)
+        self._abs_gains: dict = {}  # (d, S) -> |K_{d,S}|
         self._xbar: "np.ndarray | None" = None
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
 
@@ -390,10 +420,39 @@ class ClassEstimator(StampedEstimator):
                              f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
                              f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains have "
                              f"no class ({t + 1}, {list(S)})", field="y") from None
-        self._commit(step)
+        rounding = self._class_rounding(step, S, xbar)
+        self._commit(step, rounding)
         self._xbar, self.xhat = xbar, xhat
-        self.bound = self._level()
+        self.bound = self._with_rounding(self._level())
         return self.xhat.copy(), self.bound
+
+    def _zero_data(self, size: int) -> np.ndarray:
+        hit = self._norms.get(("zeros", size))
+        if hit is None:
+            hit = self._norms[("zeros", size)] = np.zeros(size)
+        return hit
+
+    def _class_rounding(self, step: OpenedStep, S: tuple[int, ...], xbar: np.ndarray) -> tuple[RoundingRecord,
+                                                                                              np.ndarray]:
+        """The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
+        residuals and of the simulated state and measurements, carried by the class map with identity noise
+        gains (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself."""
+        sysm, d = self.system, step.t + 1
+        record = self._period_record(step)
+        for tau in self._new_packets(step):
+            self._output_injection(record, tau, step.yxi[tau], step.history[tau])
+        self._state_injection(step, record, step.history[step.t], None, sysm.n)
+        if self._rounding_maps is None:
+            self._rounding_maps = RoundingMaps.of(sysm, self.gains)
+        maps = self._rounding_maps.absolute(d, S)
+        extra = 0.0
+        if S:
+            hit = self._abs_gains.get((d, S))
+            if hit is None:
+                hit = self._abs_gains[(d, S)] = np.abs(self.gains.gain(d, S))
+            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
+            extra = injection_bound(hit, r, 1.0, self._zero_data(r.size), xbar, self._zeros, len(S) * sysm.p + 2)
+        return record, self._allowance(record, maps, extra)
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,

@@ -116,3 +116,72 @@ class ClassErrorMaps:
         """
         state, noise = self.parts(depth, available)
         return ErrorMap(int(start), state, noise)
+
+
+class RoundingMaps:
+    r"""The absolute class maps with identity noise gains: how a rounding injected into the state or a measurement
+    reaches the class estimate's error (the rounding allowance of :mod:`eqrec.estimators.intake`).
+
+    A rounding error of the prediction :math:`\bar x(j+1)` or of a simulated :math:`x(j+1)` enters the error
+    :math:`\xi = x - \hat x` exactly as a process noise with ``E = I`` would, and one of a residual or of a
+    simulated :math:`y(\tau)` as a measurement noise with ``V = I``; so the class map of the system with
+    identity noise gains, :math:`G = E_d - K Z_S` over ``(w, v, ξ0)``, carries them (and the previous period's
+    allowance through its :math:`\xi_0` columns) exactly.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : ClassGains
+        The design's class gains.
+    """
+
+    def __init__(self, system: AffineSystem, gains: ClassGains):
+        n, p = system.n, system.p
+        self.system = system
+        unit = AffineSystem(A=system.A, C=system.C, E=np.eye(n), eta_w=1.0, eta_v=1.0, V=np.eye(p))
+        self._maps = ClassErrorMaps(unit, gains)
+        self._parts: dict = {}
+
+    @classmethod
+    def of(cls, system: AffineSystem, gains: ClassGains) -> "RoundingMaps":
+        """The maps of these gains on this system, built once and kept on the gains.
+
+        Parameters
+        ----------
+        system : AffineSystem
+            The model.
+        gains : ClassGains
+            The design's class gains.
+
+        Returns
+        -------
+        RoundingMaps
+            The shared maps.
+        """
+        kept = gains.__dict__.get("_rounding_maps")
+        if kept is None or kept.system is not system:
+            kept = gains.__dict__["_rounding_maps"] = cls(system, gains)
+        return kept
+
+    def absolute(self, depth: int, available: tuple[int, ...]) -> np.ndarray:
+        """``|G|`` of the class ``(depth, available)`` with identity noise gains, columns ``(w, v, ξ0)``.
+
+        Parameters
+        ----------
+        depth : int
+            Period time of the estimate.
+        available : tuple of int
+            Period times of the measurements received.
+
+        Returns
+        -------
+        ndarray, shape (n, T (n + p) + n)
+            The absolute class map.
+        """
+        key = (depth, available)
+        hit = self._parts.get(key)
+        if hit is None:
+            state, noise = self._maps.parts(depth, available)
+            hit = self._parts[key] = np.abs(np.concatenate([noise, state], axis=1))
+        return hit

@@ -183,9 +183,9 @@ class GuaranteedEstimator:
     >>> estimator = design.estimator()
     >>> estimator.reset(np.zeros(3)).time, estimator.bound  # reset returns the estimator
     (0, 1.0)
-    >>> xhat, bound = estimator.step([1.0, 2.0])  # y(0) arrives on time
-    >>> estimator.time, bound
-    (1, 1.05)
+    >>> xhat, bound = estimator.step([1.0, 2.0])  # y(0) arrives on time: the level plus the rounding allowance
+    >>> estimator.time, round(bound, 12), 0 < bound - 1.05 < 1e-12
+    (1, 1.05, True)
     >>> xhat, bound = estimator.step(None)  # y(1) is lost: the design's intermediate level
     >>> abs(bound - design.mu2) < 1e-9
     True
@@ -222,6 +222,7 @@ class GuaranteedEstimator:
         self._bounds = np.full(system.n, np.nan)
         self._xhat: np.ndarray | None = None  # strict=False: the reported estimate
         self._spare: ClassEstimator | None = None  # strict=False: the class estimator not in use (returns)
+        self._use_sm: np.ndarray | None = None  # tight, in the design: the states reported from the set-membership
 
     @property
     def in_design(self) -> bool:
@@ -249,6 +250,64 @@ class GuaranteedEstimator:
         if not isinstance(est, ClassEstimator) or self._outside:
             raise InputError("error maps are those of the class form inside the design", field="gains")
         return est.error_map()
+
+    @property
+    def has_linear_error_model(self) -> bool:
+        """Whether :meth:`linear_error_model` answers at every step (class gains; node gains are run as copies
+        by :func:`eqrec.exact_bound`)."""
+        return isinstance(self.gains, ClassGains)
+
+    def linear_error_model(self):
+        """The error of the current estimate, as :func:`eqrec.exact_bound` reads it (class gains, every step).
+
+        The narrow interface between an estimator and the exact run-time bound
+        (:mod:`eqrec.estimators.exact`): either an
+        :class:`~eqrec.bounds.zonotope.ErrorMap` anchored at an earlier estimate of
+        the run (``exact_bound`` carries the error sets and advances them), or
+        the generators ``(n, q)`` of the error set of the current estimate
+        itself, in unit-box variables independent of the noise still to come
+        (``exact_bound`` takes them as its set).  Inside the design: the class
+        estimate's map (:meth:`eqrec.estimators.causal.ClassEstimator.error_map`),
+        or with ``tight=True`` (``strict=False``) the reported estimate's set, row by
+        row: the designed set's rows for the states reported from the designed
+        estimate, the set-membership carried set's rows for the others (each row
+        zero on the other's generators: an outer set whose row sums are exact);
+        outside it (``strict=False``): the set-membership estimator's carried
+        set (:attr:`eqrec.estimators.zonotope.ZonotopeEstimator.carried_set`, its
+        rounding allowance included); a return to the design anchors the next
+        maps at the period start, where that set was the last one given.
+
+        Returns
+        -------
+        ErrorMap or numpy.ndarray
+            The map, or the generators of the error set.
+
+        Raises
+        ------
+        InputError
+            Node gains (:attr:`has_linear_error_model` is false), or before the first step of a period.
+        """
+        est = self._running()
+        if self._outside:
+            return self._sm.carried_set[1]
+        if not isinstance(est, ClassEstimator):
+            raise InputError("node gains have no error maps: exact_bound runs them as copies", field="gains")
+        if self._use_sm is not None:  # tight: the reported estimate's rows
+            m = self._use_sm[:, None]
+            return np.concatenate([np.where(m, 0.0, self._set.current), np.where(m, self._sm.carried_set[1], 0.0)],
+                                  axis=1)
+        return est.error_map()
+
+    @property
+    def rounding_vector(self) -> np.ndarray:
+        """The rounding allowance of the current estimate beyond its error set (:mod:`eqrec.estimators.intake`;
+        zero outside the design, where the set-membership set includes its own)."""
+        if self._outside:
+            return np.zeros(self.system.n)
+        rho = self._running().rounding_vector
+        if self._use_sm is not None:  # tight: the set-membership rows carry their own allowance
+            return np.where(self._use_sm, 0.0, rho)
+        return rho
 
     @property
     def state_bounds(self) -> np.ndarray:
@@ -304,6 +363,7 @@ class GuaranteedEstimator:
             self._sm = self._new_set_membership().reset(x0, self._t0)
             self._bounds = np.full(self.system.n, self.mu1)
             self._xhat = x0.copy()
+            self._use_sm = None
         return self
 
     @property
@@ -399,7 +459,9 @@ class GuaranteedEstimator:
             return self._outside_bounds(xhat)
         self._sm.step(packets, opened.u)  # all-or-nothing; the class step below cannot raise (its class exists)
         xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
-        beta = self._set.advance(est.error_map())
+        # the exact worst case of the designed estimate's error set, plus the rounding allowance of its arithmetic
+        # (:mod:`eqrec.estimators.intake`); the level carries the allowance already
+        beta = np.nextafter(self._set.advance(est.error_map()) + est.rounding_vector, np.inf)
         designed = np.minimum(beta, level)
         if self.tight:
             # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
@@ -407,6 +469,7 @@ class GuaranteedEstimator:
             use_sm = sm_bounds < designed
             xhat = np.where(use_sm, self._sm._xhat, xhat)
             self._bounds = np.where(use_sm, sm_bounds, designed)
+            self._use_sm = use_sm
         else:
             self._bounds = designed
         self._xhat = xhat
@@ -418,6 +481,7 @@ class GuaranteedEstimator:
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
 
     def _outside_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
+        self._use_sm = None
         self._bounds = self._sm.state_bounds
         self.bound = float(self._bounds.max())
         return xhat, self.bound
@@ -433,6 +497,7 @@ class GuaranteedEstimator:
         est._open(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
+        self._use_sm = None
         self._xhat = centre
         return est
 

@@ -7,7 +7,9 @@ for ``T`` steps, then performance resumes.  Built on the estimators of
 (:mod:`eqrec.estimators.protocol`): ``reset(xhat0, t0=0)``, then
 ``step(y, u) -> (x̂(t+1), bound)``, the bound being the designs' level when
 the estimator is built with the levels (else ``inf``,
-:mod:`eqrec.estimators.intake`).
+:mod:`eqrec.estimators.intake`), plus the rounding allowance of the running
+estimator, carried across the switches (the new phase's estimator starts with
+the allowance of the estimate it starts from).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from eqrec.bounds.data_classes import ClassGains
+from eqrec.bounds.rounding import rounding_allowance
 from eqrec.estimators.causal import ClassEstimator, Packet, RecoveryEstimator, has_class, make_estimator
 from eqrec.estimators.intake import BoundRule, check_levels
 from eqrec.bounds.gains import GainSchedule
@@ -152,6 +155,8 @@ class SwitchingEstimator:
             ``xhat0`` without ``n`` finite entries, ``t0`` not an integer (nothing changes).
         """
         est = make_estimator(self.system, self.performance, xhat0, periodic=True, t0=t0)  # checked first
+        radius = self.mu1 if math.isfinite(self.mu1) else None
+        est.carry_rounding(rounding_allowance(0.0, 1, np.abs(est.xhat) + (radius or 0.0)), radius)
         self._est, self.mode = est, "performance"
         self.switch_times, self.revert_times = [], []
         self._dropped = 0
@@ -228,6 +233,11 @@ class SwitchingEstimator:
         if mode == "performance" and not any(int(pk.time) == k for pk in packets):
             mode, switched = "recovery", True
             est = make_estimator(self.system, self.recovery, est.xhat, periodic=False, t0=k)
+        radius = self.bound if math.isfinite(self.bound) else None  # the true error's size, for the allowance
+        if est is not self._est:  # a new phase starts from the estimate, with its rounding allowance
+            est.carry_rounding(self._est.rounding_vector, radius)
+        else:
+            est.error_radius = radius
         xhat, _ = est.step(packets, u)  # all-or-nothing; a new estimator is dropped if it raises
         if est is not self._est:
             self._dropped += self._est.dropped_packets  # the phase that ended
@@ -236,8 +246,19 @@ class SwitchingEstimator:
             self.revert_times.append(k)
         if switched:
             self.switch_times.append(k)
-        self.bound = self._level()
+        self.bound = est._with_rounding(self._level())
         return xhat, self.bound
+
+    @property
+    def rounding(self) -> float:
+        """The rounding allowance of the current estimate (:mod:`eqrec.estimators.intake`): the bound is the level
+        plus it, rounded up; carried from phase to phase."""
+        return self._est.rounding
+
+    @property
+    def rounding_vector(self) -> np.ndarray:
+        """The per-state rounding allowance of the current estimate (a copy)."""
+        return self._est.rounding_vector
 
     def _level(self) -> float:
         """The bound of the current estimate (class docstring)."""

@@ -102,7 +102,8 @@ Floating point
 --------------
 The bound is a guarantee on the error computed in floating point, with no tolerance on the guarantee side.  A
 filter step appends a rounding allowance :math:`\kappa\,u\,(|A|(|c| + \beta) + |Bu + f| + |Mr| + \text{row sums
-of the products})` (``u`` the unit roundoff, :math:`\kappa` four times the number of columns) as ``n``
+of the products})` (``u`` the unit roundoff, :math:`\kappa` four times the number of columns: the one formula of
+:func:`eqrec.bounds.rounding.rounding_allowance`) as ``n``
 axis-aligned generators, which covers the rounding of the centre's and the generators' products and of a
 simulated true state of the same size; the window adds its own (:mod:`eqrec.bounds.window`).  Both are a
 relative :math:`10^{-13}`-order of the bound.  The three loops (filter step, reduction, window) are compiled
@@ -122,15 +123,13 @@ import numba
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
+from eqrec.bounds.rounding import rounding_allowance_compiled
 from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
 from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
 from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
 from eqrec.systems.affine import AffineSystem
-
-#: Unit roundoff of float64.
-_U = np.finfo(float).eps / 2
 
 #: The gains offered (module docstring); the estimator runs one filter per gain named.
 GAINS = ("fradius", "reweighted")
@@ -319,8 +318,7 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
             for j in range(nw):
                 G1[k, a, q + extra + j] = Ew[a, j]
                 s += abs(Ew[a, j])
-            pad = 4.0 * (width + 4) * _U * (mag[a] + s)
-            G1[k, a, q + extra + nw + a] = np.nextafter(pad, np.inf)
+            G1[k, a, q + extra + nw + a] = rounding_allowance_compiled(0.0, width + 4, mag[a] + s)
     return c1, G1
 
 
@@ -788,6 +786,17 @@ class ZonotopeEstimator:
         G = np.concatenate(blocks + [R[pick, states, q0:]], axis=1)
         pad = np.nextafter(np.maximum(beta - np.abs(G).sum(axis=1), 0.0), np.inf)
         return np.concatenate([G, np.diag(pad)], axis=1)
+
+    def linear_error_model(self) -> np.ndarray:
+        """The generators of the error set of the current estimate (:attr:`carried_set`): what
+        :func:`eqrec.exact_bound` reads (:meth:`eqrec.estimators.guaranteed.GuaranteedEstimator.linear_error_model`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, q)
+            ``x − x̂ = G ε`` for some ``|ε| <= 1``; the row sums are at least :attr:`state_bounds`.
+        """
+        return self.carried_set[1]
 
     @property
     def generators(self) -> np.ndarray:
