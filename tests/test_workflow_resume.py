@@ -197,6 +197,7 @@ def test_kills_and_resumes_leave_results_as_an_uninterrupted_run(repo):
     assert results_status(repo) == ""
     code, text, _, _ = snakemake(repo, ["--delete-temp-output", *TARGETS])  # what removes such a leftover
     assert code == 0 and not (repo / ETA_CHUNK).exists(), text[-3000:]
+    assert results_status(repo) == ""
 
 
 def test_stale_temporaries_of_the_outputs_only_are_removed(tmp_path):
