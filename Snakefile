@@ -85,7 +85,6 @@ include: "workflow/rules/p4.smk"
 include: "workflow/rules/compare.smk"
 include: "workflow/rules/notebooks.smk"
 include: "workflow/rules/claims.smk"
-include: "workflow/rules/docs.smk"
 
 
 rule all:

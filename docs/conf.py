@@ -1,5 +1,5 @@
-"""Sphinx configuration of the eqrec documentation (``snakemake --cores 2 docs``, or
-``sphinx-build -W --keep-going -n docs docs/_build/html``).
+"""Sphinx configuration of the eqrec documentation: ``sphinx-build -W --keep-going -n docs docs/_build/html``
+(from the repository root, after ``pip install -c requirements/pipeline.lock -e ".[docs]"``).
 
 Built offline: the PyData theme ships its fonts and scripts, the maths is MathML written at build time
 (``_ext/eqrec_mathml.py``), the examples gallery runs every example (sphinx-gallery), the API reference is

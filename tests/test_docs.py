@@ -252,7 +252,7 @@ def test_the_readme_is_short_and_names_the_commands():
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
     test_command = next(line for line in lines[:12] if "pytest" in line).split("#")[0].strip()
     assert test_command in ci, "the README's test command is what .ci/run runs"
-    assert "snakemake --cores 2 docs" in readme
+    assert "sphinx-build -W --keep-going -n docs docs/_build/html" in readme  # the one command for the site
     assert "requirements/pipeline.lock" in readme
     for page in ("getting-started", "guide/own-system", "replication", "api"):
         assert page in readme, page

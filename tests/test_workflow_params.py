@@ -75,7 +75,7 @@ def test_every_rule_names_a_step_that_resolves(default_rules):
     (:func:`pkgutil.resolve_name`); its code inputs are that step's (and the rule carries no other name)."""
     steps = {rule: p["step"] for rule, (p, _) in default_rules.items() if "step" in p}
     assert len(steps) >= 27 and set(default_rules) - set(steps) == {"all", "p1", "p2", "p3", "p4", "p3_scale",
-                                                                    "compare", "notebooks", "step", "docs"}
+                                                                    "compare", "notebooks", "step"}
     for rule, step in steps.items():
         fn = harness.resolve_step(step, rule)
         assert f"{fn.__module__}:{fn.__name__}" == step, rule
