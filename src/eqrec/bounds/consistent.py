@@ -31,7 +31,10 @@ LP of the information limit serves unchanged: the same variables, rows and warm-
 (:func:`eqrec.bounds.information.solve_range`), with each delivered row fixed to its residual instead of 0.
 Two LPs per state and kind (maximum and minimum of :math:`\delta x_i(t)`, and of :math:`\delta x_i(t+1)`), so
 ``4 n`` per step, each started from the previous one's optimal basis; the bounds are :math:`\bar x_i` plus the
-optima.  The values are LP optima to HiGHS's tolerances (1e-9 absolute on the rows,
+optima.  The order matters: the maxima of a step, then its minima in reverse, reversed again on the next step
+(a maximum and the minimum of the same state share no optimal vertex; a state and its neighbour in that order
+share most of it): 5-6 times less time than state by state, max then min (tanks, n = 4 and 10), about 4 times
+the limit's LPs on the same trace.  The values are LP optima to HiGHS's tolerances (1e-9 absolute on the rows,
 :data:`eqrec.bounds.information.HIGHS_OPTIONS`): like the limit, a ruler, not a guarantee.
 
 Data
@@ -150,8 +153,20 @@ def _inputs(inputs, N: int, m: int) -> np.ndarray:
     return u
 
 
+def _hull_order(t: int, n: int) -> np.ndarray:
+    """The order of step ``t``'s ``4n`` objectives, as indices into (kind, state, max/min) flattened: the maxima
+    of the filtered then the predicted states, then the minima in reverse, and the reverse of that on odd steps
+    (a warm solve starts from the previous objective's optimum: neighbouring objectives share most of their
+    optimal vertex, a maximum and the minimum of the same state share none)."""
+    idx = np.arange(4 * n).reshape(2, n, 2)  # (kind, state, max/min)
+    maxima = idx[:, :, 0].ravel()
+    order = np.concatenate([maxima, idx[:, :, 1].ravel()[::-1]])
+    return order if t % 2 == 0 else order[::-1]
+
+
 def _hull_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
-    """Per step ``t``: max and min of every :math:`\\delta x_i(t)`, then of every :math:`\\delta x_i(t+1)`."""
+    """Per step ``t``: max and min of every :math:`\\delta x_i(t)` and :math:`\\delta x_i(t+1)`, in the order of
+    :func:`_hull_order`."""
     out = []
     for k, kind in ((t, "filtered"), (t + 1, "predicted")):
         cols, M = tlp.xmap[k]
@@ -159,7 +174,7 @@ def _hull_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, st
             nz = M[i] != 0
             out.append((cols[nz], M[i][nz], f"{kind} x{i} max"))
             out.append((cols[nz], -M[i][nz], f"{kind} x{i} min"))
-    return out
+    return [out[j] for j in _hull_order(t, tlp.n)]
 
 
 def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x0_centre=None, *,
@@ -304,6 +319,9 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
         raise InputError(f"no state is consistent with the data delivered by step {step} ({exc}): the plant, "
                          "its noise bounds, x0_radius or x0_centre do not describe these measurements",
                          field="data") from exc
-    vals = np.array([solved[t] for t in range(N)]).reshape(N, 2, n, 2)  # (step, kind, state, max/min)
+    vals = np.empty((N, 4 * n))
+    for t in range(N):
+        vals[t, _hull_order(t, n)] = solved[t]
+    vals = vals.reshape(N, 2, n, 2)  # (step, kind, state, max/min)
     return ConsistentSet(filtered_lower=xbar[:N] - vals[:, 0, :, 1], filtered_upper=xbar[:N] + vals[:, 0, :, 0],
                          predicted_lower=xbar[1:] - vals[:, 1, :, 1], predicted_upper=xbar[1:] + vals[:, 1, :, 0])

@@ -533,8 +533,8 @@ PROGRESS_SECONDS = 20.0
 #: ``2W + SEGMENT`` steps, so ``t`` is replaced by ``1.5 W + SEGMENT`` there.  Fit on this project's 2-core
 #: machine (HiGHS 1.15, process time): ACC exact at 1,000 and 4,000 steps (2.4 and 35.9 s; the model says 2.4 and
 #: 29) and windowed (``W = 100``: 2.3 ms per row; the model 1.3), chains of coupled tanks
-#: (``benchmarks/bench_information_limit.py``, 150 steps) at n = 4, 10 and 20 (0.54, 6.9 and 159 s; the model
-#: 0.3, 7.4 and 149).  The iterations per LP grow with the plant's memory, so the growth in the length lies
+#: (``benchmarks/bench_information_limit.py``, 150 steps) at n = 4, 10, 20 and 30 (0.54, 6.9, 159 and 559 s; the
+#: model 0.3, 7.4, 149 and 883).  The iterations per LP grow with the plant's memory, so the growth in the length lies
 #: between ``N^2`` (ACC) and ``N^2.8`` (the tanks, 60 to 150 steps): the estimate is meant to within a factor 4,
 #: high on short traces of large plants (n = 30 at 60 steps: 140 s estimated, 38 s measured).
 SECONDS_PER_STATE, SECONDS_PER_STATE_STEP, STATE_EXPONENT = 2.7e-4, 2.5e-8, 4.4
