@@ -44,7 +44,7 @@ def level_table(design: Design) -> list[dict]:
     bound = node_bounds(design.certificate)
     rows = [{"prefix": "", "k": 0, "level": design.mu1, "certified": design.mu1, "sequences": len(tree.patterns)}]
     for node in tree:
-        lvl = design.mu1 if node.terminal else design.level_at(node.prefix)
+        lvl = design.mu1 if node.terminal else node_level(design, node.prefix)
         rows.append({"prefix": node.label, "k": node.depth, "level": float(lvl), "certified": bound[node.label],
                      "sequences": w[node.index]})
     return rows
@@ -72,7 +72,7 @@ def path_levels(design: Design, pattern) -> np.ndarray:
     T = pat.T
     out = np.full(T + 1, design.mu1)
     for k in range(1, T):
-        out[k] = design.level_at(pat.prefix(k))
+        out[k] = node_level(design, pat.prefix(k))
     return out
 
 
@@ -312,3 +312,24 @@ def original_coordinates(out: dict, weights: np.ndarray) -> dict:
     out["state_weights"] = w.tolist()
     return out
 
+
+def node_level(design: Design, prefix) -> float:
+    """The guaranteed level ``μ2,k^α`` on ``ξ(k)`` after the event prefix of length ``k`` (``0 < k < T``).
+
+    With per-node levels (the delayed-data paper's sum cost, Theorem 1 /
+    Proposition 1, :mod:`eqrec.design.cost`) that of the prefix's node; with
+    one common level (the prefix-based paper's ``M2``) ``mu2``.
+
+    Parameters
+    ----------
+    design : Design
+        The design whose levels are read.
+    prefix : ArrivalPattern
+        The event prefix (length ``k``) ending at the node.
+
+    Returns
+    -------
+    float
+        The node's level, else the design's common level ``mu2``.
+    """
+    return float(design.levels.get(prefix.label, design.mu2)) if design.levels else float(design.mu2)

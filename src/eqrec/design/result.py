@@ -16,6 +16,7 @@ from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.words import as_pattern
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
+from eqrec.design.report import node_level  # the level the estimator reports (its one implementation)
 
 if TYPE_CHECKING:
     from eqrec.estimators.guaranteed import GuaranteedEstimator
@@ -288,21 +289,6 @@ class Design:
 
         return WeightedEstimator(estimator, self.state_weights)
 
-    def level_at(self, prefix: ArrivalPattern) -> float:
-        """The guaranteed level after an event prefix of length ``0 < k < T`` (:func:`node_level`).
-
-        Parameters
-        ----------
-        prefix : ArrivalPattern
-            The event prefix.
-
-        Returns
-        -------
-        float
-            Its node's level, else the common level ``mu2``.
-        """
-        return node_level(self, prefix)
-
     def save(self, path: "str | os.PathLike") -> Path:
         """Write the design file that ``eqrec design ... --out path`` writes; :func:`eqrec.load_design` reads it back.
 
@@ -353,25 +339,3 @@ class Design:
         except OSError as exc:
             raise InputError(f"cannot write ({exc.strerror})", str(file), "path") from None
         return file
-
-
-def node_level(design: Design, prefix: ArrivalPattern) -> float:
-    """The guaranteed level ``μ2,k^α`` on ``ξ(k)`` after the event prefix of length ``k`` (``0 < k < T``).
-
-    With per-node levels (the delayed-data paper's sum cost, Theorem 1 /
-    Proposition 1, :mod:`eqrec.design.cost`) that of the prefix's node; with
-    one common level (the prefix-based paper's ``M2``) ``mu2``.
-
-    Parameters
-    ----------
-    design : Design
-        The design whose levels are read.
-    prefix : ArrivalPattern
-        The event prefix (length ``k``) ending at the node.
-
-    Returns
-    -------
-    float
-        The node's level, else the design's common level ``mu2``.
-    """
-    return float(design.levels.get(prefix.label, design.mu2)) if design.levels else float(design.mu2)
