@@ -63,10 +63,7 @@ class ClassErrorMaps:
         ClassErrorMaps
             The shared maps.
         """
-        kept = gains.__dict__.get("_error_maps")
-        if kept is None or kept.system is not system:
-            kept = gains.__dict__["_error_maps"] = cls(system, gains)
-        return kept
+        return _kept_on(gains, "_error_maps", system, cls)
 
     def parts(self, depth: int, available: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
         r"""``(Φ, N)`` of the class ``(depth, available)``.
@@ -159,10 +156,7 @@ class RoundingMaps:
         RoundingMaps
             The shared maps.
         """
-        kept = gains.__dict__.get("_rounding_maps")
-        if kept is None or kept.system is not system:
-            kept = gains.__dict__["_rounding_maps"] = cls(system, gains)
-        return kept
+        return _kept_on(gains, "_rounding_maps", system, cls)
 
     def absolute(self, depth: int, available: tuple[int, ...]) -> np.ndarray:
         """``|G|`` of the class ``(depth, available)`` with identity noise gains, columns ``(w, v, ξ0)``.
@@ -185,3 +179,11 @@ class RoundingMaps:
             state, noise = self._maps.parts(depth, available)
             hit = self._parts[key] = np.abs(np.concatenate([noise, state], axis=1))
         return hit
+
+
+def _kept_on(gains: ClassGains, key: str, system: AffineSystem, make):
+    """``make(system, gains)``, built once per system and kept on the gains under ``key``."""
+    kept = gains.__dict__.get(key)
+    if kept is None or kept.system is not system:
+        kept = gains.__dict__[key] = make(system, gains)
+    return kept
