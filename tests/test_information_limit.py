@@ -224,9 +224,12 @@ def test_segment_length_does_not_change_the_values(acc, segment, monkeypatch):
 def test_a_packet_past_the_end_is_not_a_delivery_and_keys_the_cache_by_the_delivered_set(acc):
     """Issue 41 §3: a delay of 2**63 - 1 overflowed arrival_times to a negative time; the limit then cached the
     rows of a trace that never delivers y(1) under the key of one that delivers it at step 1, and served them to
-    that trace.  The delivered sets now come from the delays alone, for the LP and the key alike."""
+    that trace.  Such a delay is now refused by ArrivalTrace (at most 2**62); the largest one allowed arrives
+    past the end, and the delivered sets come from the delays alone, for the LP and the key alike."""
+    with pytest.raises(eqrec.InputError, match="delays"):
+        ArrivalTrace([0, 2**63 - 1])
     clear_cache()
-    far = information_limit(acc, ArrivalTrace([0, 2**63 - 1]), 0.5)
+    far = information_limit(acc, ArrivalTrace([0, 2**62]), 0.5)
     lost = information_limit(acc, ArrivalTrace([0, NEVER]), 0.5, cache=False)
     np.testing.assert_array_equal(far, lost)
     on_time = information_limit(acc, ArrivalTrace([0, 0]), 0.5)
