@@ -17,8 +17,9 @@ Braatz, "Constrained zonotopes: a new tool for set-based estimation and fault de
     \{\hat x + X\zeta \;:\; H\zeta = r,\ \ \|\zeta\|_\infty \le 1\}, \qquad r = y - \hat y^{\rm pred},
 
 and its exact interval hull is two linear programs per state, :math:`\max` and :math:`\min` of :math:`X_i\zeta`
-(:func:`lp_hull`), solved by HiGHS through the project's LP layer (:func:`eqrec.lp.solvers.highs_model`; one
-model per window, every objective warm-started from the previous optimal basis).
+(:func:`lp_hull`), solved through the project's LP layer (:func:`eqrec.lp.box_simplex.box_lp_multipliers`: a
+compiled dense dual simplex on small windows, a HiGHS model on large ones; every objective warm-started from the
+previous one's basis).
 
 Soundness: the bound comes from the dual, not from the primal optimum
 ---------------------------------------------------------------------
@@ -30,37 +31,33 @@ with :math:`M` the rows of ``prior_rows`` and :math:`H`), weak duality gives, fo
     X_i\zeta = y^\top M\zeta + (X_i - y^\top M)\zeta
     \le \sum_j \max(y_j\underline b_j,\ y_j\overline b_j) + \|X_i - y^\top M\|_1 ,
 
-and the same with :math:`-X_i` for the lower end.  The multipliers are HiGHS's row duals of each optimum (so the
-bound is the optimum when the duals are exact), and the right-hand side is evaluated in floating point with an
-allowance :math:`\kappa u\,\mu` rounded upward (``u`` the unit roundoff, :math:`\mu` the magnitudes of every
-quantity of the computation: the propagated :math:`|c_0| + \sum|G_0|`, the drives, the noise row sums, the
-measured values, :math:`|y|` times the rows' magnitudes; :math:`\kappa = 4(L+2)(n + m + Q)` as in
-:mod:`eqrec.bounds.window`).  A solve that ends without an optimum falls back to :math:`y = 0`, the prediction's
-own bound :math:`\|X_i\|_1`.  So the hull reported always contains the exact one, and is equal to it up to the
-duals' accuracy and the allowance.
+and the same with :math:`-X_i` for the lower end. The multipliers are the row duals of each optimum (the dense
+solver's :math:`B^{-\top}c_B`, or HiGHS's; so the bound is the optimum when the duals are exact), and the right-hand
+side is evaluated in floating point with an allowance :math:`\kappa u\,\mu` rounded upward (``u`` the unit roundoff,
+:math:`\mu` the magnitudes of every quantity of the computation: the propagated :math:`|c_0| + \sum|G_0|`, the
+drives, the noise row sums, the measured values, :math:`|y|` times the rows' magnitudes; :math:`\kappa =
+4(L+2)(n + m + Q)` as in :mod:`eqrec.bounds.window`). A solve that ends without an optimum keeps the multipliers it ended with
+(any :math:`y` gives a bound; :math:`y = 0` gives the prediction's own bound :math:`\|X_i\|_1`). So the hull
+reported always contains the exact one, and is equal to it up to the duals' accuracy and the allowance.
 
 Cost
 ----
-Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)` with NumPy; each LP has ``m`` rows (the
-measured outputs, and the prior's rows if any) and :math:`q_0 + L n_w + m_v` columns, all bounded (the simplex handles the unit
-box implicitly).
+Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)`, compiled (:func:`_window_kernel`); each LP has
+``m`` rows (the measured outputs, and the prior's rows if any) and :math:`q_0 + L n_w + m_v` columns, all bounded
+(the simplex handles the unit box implicitly).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
-import scipy.sparse as sp
 
-from eqrec.lp.model import LinearProgram
-from eqrec.lp.solvers import highs_model
+from eqrec.lp.box_simplex import box_lp_multipliers
 
 _U = np.finfo(float).eps / 2
 
-#: HiGHS options of the hull LPs: the simplex (warm starts between objectives), no presolve (each model is solved
-#: for ``2k`` objectives; presolve would be redone every run), one thread.
-HULL_OPTIONS = {"solver": "simplex", "presolve": "off", "threads": 1}
 
 
 @dataclass(frozen=True)
@@ -129,38 +126,13 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
     """
     L, n = drive.shape
     p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
+    measured = np.asarray(measured, dtype=np.bool_)
     k_meas = int(np.count_nonzero(measured))
     Q = q0 + L * nw + k_meas * nv
-    Phi = np.eye(n)
-    Nw = np.zeros((n, L * nw))  # the process-noise columns of the current state
-    xc = np.asarray(c0, float).copy()
-    zm = np.abs(xc) + np.abs(G0).sum(axis=1)  # magnitudes of the propagation (rounding allowance)
-    CP, Hw, Hv, r, magy = [], [], [], [], []
-    col_v = q0 + L * nw
-    Phi_f = Nw_f = xf = zf = None
-    for j in range(L):
-        if j == L - 1:
-            Phi_f, Nw_f, xf, zf = Phi.copy(), Nw.copy(), xc.copy(), zm.copy()
-        if measured[j]:
-            Cj = C[j]
-            yc = Cj @ xc
-            CP.append(Cj @ Phi)
-            Hw.append(Cj @ Nw)
-            hv = np.zeros((p, k_meas * nv))
-            hv[:, col_v - q0 - L * nw:col_v - q0 - L * nw + nv] = V[j]
-            col_v += nv
-            Hv.append(hv)
-            r.append(Y[j] - yc)
-            magy.append(np.abs(Cj) @ zm + np.abs(V[j]).sum(axis=1) + np.abs(Y[j]) + np.abs(yc))
-        Aj = A[j]
-        Phi = Aj @ Phi
-        Nw = Aj @ Nw
-        Nw[:, j * nw:(j + 1) * nw] += E[j]
-        zm = np.abs(Aj) @ zm + np.abs(drive[j]) + np.abs(E[j]).sum(axis=1)
-        xc = Aj @ xc + drive[j]
-    zeros_v = np.zeros((n, k_meas * nv))
-    X_pred = np.concatenate([Phi @ G0, Nw, zeros_v], axis=1)
-    X_filt = np.concatenate([Phi_f @ G0, Nw_f, zeros_v], axis=1)
+    xc, xf, X_pred, X_filt, Mm, r, magy, zm, zf = _window_kernel(
+        *(np.ascontiguousarray(a, dtype=float) for a in (A, C, E, V, drive)), measured,
+        np.ascontiguousarray(Y, dtype=float), np.ascontiguousarray(c0, dtype=float),
+        np.ascontiguousarray(G0, dtype=float))
     blocks, rhs, mags = [], [], []
     if prior_rows is not None and prior_rows[0].shape[0]:
         A0, b0 = (np.asarray(a, float) for a in prior_rows)
@@ -168,14 +140,70 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         rhs.append(b0)
         mags.append(np.abs(b0) + np.abs(A0).sum(axis=1))
     if k_meas:
-        blocks.append(np.concatenate([np.concatenate(CP) @ G0, np.concatenate(Hw), np.concatenate(Hv)], axis=1))
-        rhs.append(np.concatenate(r))
-        mags.append(np.concatenate(magy))
+        blocks.append(Mm)
+        rhs.append(r)
+        mags.append(magy)
     M = np.concatenate(blocks) if blocks else np.zeros((0, Q))
     lower = upper = np.concatenate(rhs) if rhs else np.zeros(0)
     mags = np.concatenate(mags) if mags else np.zeros(0)
     kappa = 4.0 * (L + 2) * (n + M.shape[0] + Q)
     return WindowSet(xc, xf, X_pred, X_filt, M, lower, upper, zm + np.abs(xc), zf + np.abs(xf), mags, kappa)
+
+
+@numba.njit(cache=True)
+def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
+    r"""The propagation of :func:`window_set` (compiled): the nominal states, the rows of ``x(t+1)`` and ``x(t)`` in
+    :math:`\zeta`, the measured rows and residuals, and the magnitudes of their computation."""
+    L, n = drive.shape
+    p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
+    k_meas = 0
+    for j in range(L):
+        k_meas += measured[j]
+    Q = q0 + L * nw + k_meas * nv
+    Phi = np.eye(n)
+    NwT = np.zeros((L * nw, n))  # the process-noise columns of the current state, transposed (rows: columns)
+    xc = c0.copy()
+    zm = np.abs(c0) + np.abs(G0).sum(axis=1)
+    Mm = np.zeros((k_meas * p, Q))
+    r = np.zeros(k_meas * p)
+    magy = np.zeros(k_meas * p)
+    Phi_f = Phi.copy()
+    NwT_f = NwT.copy()
+    xf = xc.copy()
+    zf = zm.copy()
+    ri = 0
+    col_v = q0 + L * nw
+    for j in range(L):
+        if j == L - 1:
+            Phi_f = Phi.copy()
+            NwT_f = NwT.copy()
+            xf = xc.copy()
+            zf = zm.copy()
+        if measured[j]:
+            Cj = np.ascontiguousarray(C[j])
+            yc = Cj @ xc
+            Mm[ri:ri + p, :q0] = (Cj @ Phi) @ G0
+            if j:
+                Mm[ri:ri + p, q0:q0 + j * nw] = (NwT[:j * nw] @ np.ascontiguousarray(Cj.T)).T
+            Mm[ri:ri + p, col_v:col_v + nv] = V[j]
+            col_v += nv
+            r[ri:ri + p] = Y[j] - yc
+            magy[ri:ri + p] = np.abs(Cj) @ zm + np.abs(V[j]).sum(axis=1) + np.abs(Y[j]) + np.abs(yc)
+            ri += p
+        Aj = np.ascontiguousarray(A[j])
+        Phi = Aj @ Phi
+        if j:
+            NwT[:j * nw] = NwT[:j * nw] @ np.ascontiguousarray(Aj.T)
+        NwT[j * nw:(j + 1) * nw] = E[j].T
+        zm = np.abs(Aj) @ zm + np.abs(drive[j]) + np.abs(E[j]).sum(axis=1)
+        xc = Aj @ xc + drive[j]
+    X_pred = np.zeros((n, Q))
+    X_filt = np.zeros((n, Q))
+    X_pred[:, :q0] = Phi @ G0
+    X_pred[:, q0:q0 + L * nw] = NwT.T
+    X_filt[:, :q0] = Phi_f @ G0
+    X_filt[:, q0:q0 + L * nw] = NwT_f.T
+    return xc, xf, X_pred, X_filt, Mm, r, magy, zm, zf
 
 
 def dual_bound(row: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndarray, y: np.ndarray,
@@ -213,7 +241,41 @@ def dual_bound(row: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndar
     return float(np.nextafter(dual + l1 + kappa * _U * mu, np.inf))
 
 
-def lp_hull(ws: WindowSet, which: str = "pred") -> tuple[np.ndarray, np.ndarray, int]:
+def bounds_from_multipliers(rows: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndarray, y: np.ndarray,
+                            mag_rows_obj: np.ndarray, mag_rows: np.ndarray, kappa: float) -> np.ndarray:
+    r""":func:`dual_bound` of several objectives at once (the same sums, row by row).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray, shape (K, Q)
+        The objectives.
+    M : numpy.ndarray, shape (k, Q)
+        The constraint rows.
+    lower, upper : numpy.ndarray, shape (k,)
+        Their bounds.
+    y : numpy.ndarray, shape (K, k)
+        Multipliers per objective (any).
+    mag_rows_obj : numpy.ndarray, shape (K,)
+        Magnitude of each objective's computation.
+    mag_rows : numpy.ndarray, shape (k,)
+        Magnitudes of the rows' computations.
+    kappa : float
+        The allowance's factor.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K,)
+        Per objective, the bound of :func:`dual_bound`, rounded upward.
+    """
+    res = rows - y @ M
+    l1 = np.abs(res).sum(axis=1)
+    dual = np.maximum(y * lower, y * upper).sum(axis=1)
+    ay = np.abs(y)
+    mu = mag_rows_obj + ay @ mag_rows + l1 + np.abs(dual) + np.abs(rows).sum(axis=1) + ay @ np.abs(M).sum(axis=1)
+    return np.nextafter(dual + l1 + kappa * _U * mu, np.inf)
+
+
+def lp_hull(ws: WindowSet, which: str = "pred", solver: str = "auto") -> tuple[np.ndarray, np.ndarray, int]:
     r"""Per state, a lower and an upper end of the window set's interval hull, each a guarantee (module docstring).
 
     Parameters
@@ -222,13 +284,18 @@ def lp_hull(ws: WindowSet, which: str = "pred") -> tuple[np.ndarray, np.ndarray,
         The set.
     which : {"pred", "filt"}
         The hull of :math:`x(t+1)` or of :math:`x(t)`.
+    solver : str, optional
+        The box-LP solver of :func:`eqrec.lp.box_simplex.box_lp_multipliers` (default ``"auto"``: the compiled
+        dense dual simplex on small windows, one warm-started HiGHS model on large ones).  Either way each end is
+        the weak-duality bound of the multipliers the solve ended with, so the choice changes the tightness only.
 
     Returns
     -------
     lower, upper : numpy.ndarray, shape (n,)
         :math:`\underline x \le x \le \overline x` for every state of the set (rounded outward).
     fallbacks : int
-        How many of the ``2n`` LPs ended without an optimum (their end is the prediction's own bound).
+        How many of the ``2n`` LPs ended without an optimum (their end is the bound of the multipliers the solve
+        ended with, still a guarantee).
     """
     centre, X, mag = (ws.centre_pred, ws.X_pred, ws.mag_pred) if which == "pred" else \
         (ws.centre_filt, ws.X_filt, ws.mag_filt)
@@ -242,27 +309,17 @@ def lp_hull(ws: WindowSet, which: str = "pred") -> tuple[np.ndarray, np.ndarray,
             hi[i] = dual_bound(X[i], ws.M, ws.lower, ws.upper, np.zeros(0), mag[i], ws.mag_rows, ws.kappa)
         lo[:] = -hi
     else:
-        lp = LinearProgram(c=np.zeros(Q), A=sp.csc_matrix(ws.M), row_lower=ws.lower, row_upper=ws.upper,
-                           col_lower=-np.ones(Q), col_upper=np.ones(Q))
-        h = highs_model(lp, HULL_OPTIONS)
-        cols = np.arange(Q, dtype=np.int32)
-        for i in range(n):
-            for sign in (-1.0, 1.0):  # min of -X_i (the upper end), then min of X_i (the lower end)
-                c = sign * X[i]
-                h.changeColsCost(Q, cols, np.ascontiguousarray(c))
-                h.run()
-                sol = h.getSolution()
-                if int(h.getModelStatus()) == 7 and sol.dual_valid:
-                    y = -np.asarray(sol.row_dual)  # HiGHS: c - M^T (row_dual) = reduced costs; we bound max(-c)
-                else:
-                    fallbacks += 1
-                    y = np.zeros(k)
-                    h.clearSolver()
-                b = dual_bound(-c, ws.M, ws.lower, ws.upper, y, mag[i], ws.mag_rows, ws.kappa)
-                if sign < 0:
-                    hi[i] = b
-                else:
-                    lo[i] = -b
+        # the maxima of the states in order, then the minima in reverse: each objective starts from the basis of
+        # the one before, and neighbouring states share more of their optimal vertex than a state's
+        # maximum and minimum do
+        objectives = np.concatenate([X, -X[::-1]])
+        ones = np.ones(Q)
+        y, optimal = box_lp_multipliers(ws.M, ws.lower, ws.upper, -ones, ones, objectives, solver)
+        fallbacks = int(np.count_nonzero(~optimal))
+        bounds = bounds_from_multipliers(objectives, ws.M, ws.lower, ws.upper, y,
+                                         np.concatenate([mag, mag[::-1]]), ws.mag_rows, ws.kappa)
+        hi[:] = bounds[:n]
+        lo[:] = -bounds[n:][::-1]
     upper = np.nextafter(centre + hi + 2 * _U * (np.abs(centre) + np.abs(hi)), np.inf)
     lower = np.nextafter(centre + lo - 2 * _U * (np.abs(centre) + np.abs(lo)), -np.inf)
     return lower, upper, fallbacks

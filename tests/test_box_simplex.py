@@ -1,0 +1,101 @@
+"""The box-LP solvers of eqrec.lp.box_simplex: the compiled dense dual simplex against HiGHS on random box LPs
+(the optimum its multipliers certify), the window LPs of the exact estimator, and their failure modes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+from eqrec.bounds.window_lp import bounds_from_multipliers, dual_bound, lp_hull, window_set
+from eqrec.errors import InputError
+from eqrec.lp.box_simplex import box_lp_multipliers
+
+
+def weak_dual(g, M, lo, hi, y):
+    """The weak-duality bound of max g·z over lo <= Mz <= hi, |z| <= 1, from multipliers y (no rounding)."""
+    return float(np.maximum(y * lo, y * hi).sum() + np.abs(g - y @ M).sum())
+
+
+def random_box_lp(rng, m, Q, ranged):
+    M = rng.normal(size=(m, Q)) * (rng.random((m, Q)) < 0.6)
+    z = rng.uniform(-1, 1, Q)  # a feasible point
+    b = M @ z
+    width = rng.uniform(0, 0.5, m) if ranged else np.zeros(m)
+    return M, b - width, b + width
+
+
+@pytest.mark.parametrize("m,Q,ranged", [(3, 8, False), (12, 40, False), (12, 40, True), (30, 126, False),
+                                        (50, 200, True)])
+def test_dense_multipliers_certify_the_optimum(m, Q, ranged):
+    """Each objective's multipliers give a weak-duality bound equal to the LP's optimum (SciPy's HiGHS) to 1e-7,
+    for every objective of a chain; the HiGHS backend agrees."""
+    rng = np.random.default_rng(m * 1000 + Q + ranged)
+    M, lo, hi = random_box_lp(rng, m, Q, ranged)
+    G = rng.normal(size=(6, Q))
+    ones = np.ones(Q)
+    for solver in ("dense", "highs"):
+        y, optimal = box_lp_multipliers(M, lo, hi, -ones, ones, G, solver)
+        assert optimal.all(), solver
+        for g, yk in zip(G, y):
+            ref = scipy.optimize.linprog(-g, A_ub=np.vstack([M, -M]), b_ub=np.concatenate([hi, -lo]),
+                                         bounds=(-1, 1), method="highs")
+            best = -ref.fun
+            bound = weak_dual(g, M, lo, hi, yk)
+            assert bound >= best - 1e-7 * (1 + abs(best))  # weak duality (up to the reference's accuracy)
+            assert bound <= best + 1e-7 * (1 + abs(best)), (solver, bound, best)  # optimal multipliers
+
+
+def test_infeasible_and_iteration_limit_still_give_bounds():
+    """Rows no point satisfies: the dense solve ends without an optimum (HiGHS too) and reports it; an iteration
+    limit of one pivot falls back to HiGHS for the objectives left without an optimum."""
+    M = np.array([[1.0, 1.0], [1.0, -1.0]])
+    lo = hi = np.array([3.0, 0.0])  # z1 + z2 = 3 is outside the box
+    y, optimal = box_lp_multipliers(M, lo, hi, -np.ones(2), np.ones(2), np.eye(2), "dense")
+    assert not optimal.any()
+    rng = np.random.default_rng(5)
+    M, lo, hi = random_box_lp(rng, 20, 60, False)
+    G = rng.normal(size=(3, 60))
+    y, optimal = box_lp_multipliers(M, lo, hi, -np.ones(60), np.ones(60), G, "dense", max_iterations=1)
+    assert optimal.all()  # the objectives the dense solver left were solved by HiGHS
+    y0, _ = box_lp_multipliers(M, lo, hi, -np.ones(60), np.ones(60), G, "highs")
+    for g, a, b in zip(G, y, y0):
+        assert weak_dual(g, M, lo, hi, a) == pytest.approx(weak_dual(g, M, lo, hi, b), rel=1e-7)
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="unknown box-LP solver"):
+        box_lp_multipliers(np.ones((1, 1)), [0.0], [0.0], [-1.0], [1.0], [[1.0]], "simplex")
+    with pytest.raises(InputError, match="finite bounds"):
+        box_lp_multipliers(np.ones((1, 1)), [0.0], [np.inf], [-1.0], [1.0], [[1.0]])
+
+
+def test_window_hull_dense_equals_highs_and_vectorised_bound_is_dual_bound():
+    """The window set's hull by the dense solver and by HiGHS agree to 1e-7 (both optimal), each end at least the
+    other's optimum up to that; the vectorised bound is dual_bound's to rounding."""
+    rng = np.random.default_rng(11)
+    L, n, p, nw, nv = 25, 4, 1, 2, 1
+    A = np.broadcast_to(0.9 * np.linalg.qr(rng.normal(size=(n, n)))[0], (L, n, n)).copy()
+    C = rng.normal(size=(L, p, n))
+    E = 0.1 * rng.normal(size=(L, n, nw))
+    V = 0.05 * np.ones((L, p, nv))
+    measured = rng.random(L) < 0.7
+    G0 = 0.5 * np.eye(n)
+    x = G0 @ rng.uniform(-1, 1, n)
+    Y = np.zeros((L, p))
+    for j in range(L):
+        Y[j] = C[j] @ x + V[j] @ rng.uniform(-1, 1, nv)
+        x = A[j] @ x + E[j] @ rng.uniform(-1, 1, nw)
+    ws = window_set(A, C, E, V, np.zeros((L, n)), measured, Y, np.zeros(n), G0)
+    lo_d, hi_d, fb_d = lp_hull(ws, "pred", "dense")
+    lo_h, hi_h, fb_h = lp_hull(ws, "pred", "highs")
+    assert fb_d == fb_h == 0
+    assert np.all(lo_d <= x) and np.all(x <= hi_d)
+    np.testing.assert_allclose(hi_d, hi_h, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(lo_d, lo_h, rtol=0, atol=1e-7)
+    y = rng.normal(size=(3, ws.M.shape[0]))
+    rows = ws.X_pred[:3]
+    vec = bounds_from_multipliers(rows, ws.M, ws.lower, ws.upper, y, ws.mag_pred[:3], ws.mag_rows, ws.kappa)
+    one = [dual_bound(r, ws.M, ws.lower, ws.upper, yk, mg, ws.mag_rows, ws.kappa)
+           for r, yk, mg in zip(rows, y, ws.mag_pred[:3])]
+    np.testing.assert_allclose(vec, one, rtol=1e-12)
