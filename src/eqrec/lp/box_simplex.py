@@ -390,6 +390,7 @@ def box_lp_multipliers(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarr
         Dense solver: solve each objective first with its costs perturbed by about 1e-7 of their size (breaks
         the ties on which the dual simplex can stall), then from that basis with the true costs.  Default
         ``False``: on the exact estimator's windows (n = 4) it costs a third more pivots and time.
+
     Returns
     -------
     y : numpy.ndarray, shape (K, m)
