@@ -199,10 +199,10 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb):
                     f[j] += -e if (not is_basic[j] and nb_value[j] == hi[j]) else e
         _reduced_costs(M, basis, f, Q, Binv, d, y)
         for j in range(nv):  # every nonbasic variable at the bound its reduced cost asks for: dual feasible
-            if not is_basic[j]:
-                if d[j] > 0.0:
+            if not is_basic[j]:  # (a reduced cost within the tolerance of zero leaves its variable where it is)
+                if d[j] > _DUAL_TOL:
                     nb_value[j] = lo[j]
-                elif d[j] < 0.0:
+                elif d[j] < -_DUAL_TOL:
                     nb_value[j] = hi[j]
         _primal_values(M, basis, nb_value, is_basic, Q, Binv, x)
         st = 1
@@ -351,9 +351,9 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb):
                 _reduced_costs(M, basis, f, Q, Binv, d, y)
                 for j in range(nv):  # the fresh reduced costs may disagree in sign: move to the other bound
                     if not is_basic[j]:
-                        if d[j] > 0.0:
+                        if d[j] > _DUAL_TOL:
                             nb_value[j] = lo[j]
-                        elif d[j] < 0.0:
+                        elif d[j] < -_DUAL_TOL:
                             nb_value[j] = hi[j]
                 _primal_values(M, basis, nb_value, is_basic, Q, Binv, x)
         if perturbed:
