@@ -14,7 +14,35 @@ information limit, for ``n <= --limit-up-to``: it takes minutes beyond), and the
 ``--part exact`` (§3): the cost-tightness trade-off, zonotope estimator against the exact estimator
 (:class:`eqrec.ExactSetEstimator`) on small plants: µs per step, and the filtered and predicted hulls over the
 exact hull of the whole horizon (a direct LP, ``tests/exact_hull_reference.py``), at the last step and the
-worst over the steps checked.
+worst over the steps checked.  Then ``--exact-scale-n`` (default 30): both estimators on the tank chain of that
+size, process time per step over ``--exact-scale-steps`` steps (no reference: its LP takes minutes there).
+
+Measured 2026-11-29 in one run (issue 45 §3-4; process time, 2 shared cores, 150 steps; hull / exact: filtered at
+the last step and worst, predicted at the last step and worst):
+
+=====================  =========  ==========  =======================  =======================
+plant                  estimator  µs / step   filtered last / worst    predicted last / worst
+=====================  =========  ==========  =======================  =======================
+oscillator n = 2       zonotope   330         1.110 / 1.591            1.113 / 1.627
+oscillator n = 2       exact      7,287       1.0000 / 1.0000          1.0000 / 1.0000
+two carts n = 4        zonotope   429         1.273 / 1.981            1.260 / 1.947
+two carts n = 4        exact      1,587       1.0122 / 1.0288          1.0105 / 1.0283
+tanks n = 4            zonotope   530         1.344 / 1.344            1.273 / 1.273
+tanks n = 4            exact      1,134       1.0009 / 1.0047          1.0008 / 1.0044
+tanks n = 6            zonotope   1,013       1.210 / 1.475            1.179 / 1.377
+tanks n = 6            exact      5,121       1.0001 / 1.0001          1.0001 / 1.0001
+tanks n = 30, p = 5    zonotope   56,920      (60 steps, time only)
+tanks n = 30, p = 5    exact      798,379     (60 steps, time only)
+=====================  =========  ==========  =======================  =======================
+
+The exact estimator's LPs go to the compiled dense dual simplex (:mod:`eqrec.lp.box_simplex`) up to 64 measured rows
+(n <= 6 here) and to HiGHS beyond (n = 30: 145 rows, 1,465 columns). Before (HiGHS for every window, the window
+built in NumPy; separate runs, process time): 9.0 ms per step on the two carts, 11.2 on tanks n = 4, 763 on tanks n
+= 30 (45 steps): the dense solver and the compiled window help at n <= 6, where HiGHS's fixed cost per run
+dominated; at n = 30 the LPs themselves (200-500 simplex iterations each, 60 per step) are the cost, and it is
+unchanged (the issue's goal there, 20 ms per step, is not met). The oscillator's windows are degenerate for the
+dense solver (hundreds of pivots per objective, some objectives handed to HiGHS after its pivot budget): 7.3 ms in
+this run, 6.8 after the dual-tolerance change of the same day (separate run).
 
 The two-cart part (default, ``--part carts``):
 
