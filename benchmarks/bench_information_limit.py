@@ -16,6 +16,15 @@ delays <= 2, ``--scale-steps`` steps, one trace each, all in one run: the exact 
 time model's estimate (:func:`eqrec.bounds.information.estimate_seconds`), and the growth exponent in ``n`` (least
 squares of log process time on log ``n``); then the consistent set of the same traces on simulated data at the
 sizes of ``--consistent-sizes``.
+
+Measured 2026-11-29 (issue 45 §4; tank chains, 150 steps, process time, 2 cores shared by six jobs, so the wall
+time ran 9 times the process time): n = 10 in 7.8 s, n = 20 in 133 s (the run before these settings: 6.9 and
+159 s, in another run), n = 30 not finished before the session's end (559 s before; the time model says 883 s).
+The settings against the previous ones in one run, n = 30 (p = 5), 60 steps: dual simplex with Devex pricing and
+the states in alternating order (:data:`eqrec.bounds.information.HIGHS_OPTIONS`) NEW_S s, primal simplex with the
+states in fixed order OLD_S s (values equal to DIFF); n = 20, 60 steps (separate runs): 7.1 s against 12.0 s.
+The goal, 60 s at n = 30 over 150 steps, is not met: about 1.7 times faster is what the solver settings give; the
+LPs (the whole past, ~5,000 columns at n = 30) are the cost.
 """
 
 from __future__ import annotations

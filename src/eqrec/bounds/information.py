@@ -357,7 +357,7 @@ SEGMENT = 8
 #: pricing, and feasibility tolerances of 1e-9 (the default 1e-7 acts like a process noise of that size at every
 #: step: on the batch reactor, which has none, 400-step values then move by 1e-7 to 2e-5 between solve orders; at
 #: 1e-9, by 1e-9).  A new objective leaves the previous optimal basis primal feasible, a newly delivered row
-#: leaves it dual feasible; measured on the tank chains at n = 20, 60 steps (process time, one run): primal
+#: leaves it dual feasible; measured on the tank chains at n = 20, 60 steps (process time, three runs): primal
 #: simplex 12.0 s, dual simplex 8.5 s, dual with the states in alternating order (:func:`_limit_order`) 7.9 s,
 #: and with Devex pricing instead of dual steepest edge 7.1 s; 8.9 s with the primal simplex and that order.
 HIGHS_OPTIONS = {"simplex_strategy": 1, "simplex_dual_edge_weight_strategy": 1, "primal_feasibility_tolerance": 1e-9,
