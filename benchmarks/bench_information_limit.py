@@ -18,13 +18,14 @@ squares of log process time on log ``n``); then the consistent set of the same t
 sizes of ``--consistent-sizes``.
 
 Measured 2026-11-29 (issue 45 §4; tank chains, 150 steps, process time, 2 cores shared by six jobs, so the wall
-time ran 9 times the process time): n = 10 in 7.8 s, n = 20 in 133 s (the run before these settings: 6.9 and
-159 s, in another run), n = 30 not finished before the session's end (559 s before; the time model says 883 s).
-The settings against the previous ones in one run, n = 30 (p = 5), 60 steps: dual simplex with Devex pricing and
-the states in alternating order (:data:`eqrec.bounds.information.HIGHS_OPTIONS`) NEW_S s, primal simplex with the
-states in fixed order OLD_S s (values equal to DIFF); n = 20, 60 steps (separate runs): 7.1 s against 12.0 s.
-The goal, 60 s at n = 30 over 150 steps, is not met: about 1.7 times faster is what the solver settings give; the
-LPs (the whole past, ~5,000 columns at n = 30) are the cost.
+time ran 9 times the process time): n = 10 in 7.8 s, n = 20 in 133 s (the previous session: 6.9 and 159 s), n = 30
+not finished before the session's end (559 s the session before; the time model says 883 s).  Those two rows ran
+with the dual simplex, Devex pricing and the states in alternating order from step to step; against the current
+settings (primal simplex, states in fixed order) in one run at n = 30 (p = 5), 60 steps: 27.8 s against 34.8 s
+(values equal to 8e-11), and at n = 20, 60 steps: 7.1 s against 12.0 s (separate runs).  Not adopted: the limit's
+trailing digits move (1e-14 on ACC), so ``results/compare/*.json`` (``limit_median`` at full precision) would need
+regenerating, for 1.25-1.7 times.  The goal, 60 s at n = 30 over 150 steps, is not met: the LPs (the whole past,
+about 5,000 columns at n = 30, a few hundred simplex iterations each) are the cost.
 """
 
 from __future__ import annotations

@@ -46,8 +46,7 @@ times on the batch reactor at 400 steps, with the same values to 4e-11).  A meas
 :math:`C(\tau)x(\tau) + V(\tau)v(\tau)` are free until it is delivered and fixed to 0 from then on: going from
 step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps one model per chunk of
 :data:`CHUNK` steps (the LP up to the chunk's last step) and starts every solve from the previous optimal basis
-(dual simplex, :data:`HIGHS_OPTIONS`; the states in alternating order from step to step, :func:`_limit_order`);
-other solvers solve each LP from scratch.  The cost of a step grows
+(primal simplex, :data:`HIGHS_OPTIONS`); other solvers solve each LP from scratch.  The cost of a step grows
 with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).  Rows are cached
 by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree, and repeated
 calls on one trace, share their LPs (:func:`cache_info`).
@@ -353,15 +352,12 @@ CHUNK = 32
 #: eliminated (module docstring, Computation: measured against 1, 2, 4 and 16).
 SEGMENT = 8
 
-#: HiGHS settings of the limit's LPs (the caller's ``solver_options`` override them): the dual simplex with Devex
-#: pricing, and feasibility tolerances of 1e-9 (the default 1e-7 acts like a process noise of that size at every
-#: step: on the batch reactor, which has none, 400-step values then move by 1e-7 to 2e-5 between solve orders; at
-#: 1e-9, by 1e-9).  A new objective leaves the previous optimal basis primal feasible, a newly delivered row
-#: leaves it dual feasible; measured on the tank chains at n = 20, 60 steps (process time, three runs): primal
-#: simplex 12.0 s, dual simplex 8.5 s, dual with the states in alternating order (:func:`_limit_order`) 7.9 s,
-#: and with Devex pricing instead of dual steepest edge 7.1 s; 8.9 s with the primal simplex and that order.
-HIGHS_OPTIONS = {"simplex_strategy": 1, "simplex_dual_edge_weight_strategy": 1, "primal_feasibility_tolerance": 1e-9,
-                 "dual_feasibility_tolerance": 1e-9}
+#: HiGHS settings of the limit's LPs (the caller's ``solver_options`` override them): primal simplex, since a
+#: new objective leaves the previous optimal basis primal feasible (5-13 iterations per LP against 30-40 for
+#: the dual simplex on ACC and the batch reactor), and feasibility tolerances of 1e-9 (the default 1e-7 acts
+#: like a process noise of that size at every step: on the batch reactor, which has none, 400-step values then
+#: move by 1e-7 to 2e-5 between solve orders; at 1e-9, by 1e-9).
+HIGHS_OPTIONS = {"simplex_strategy": 4, "primal_feasibility_tolerance": 1e-9, "dual_feasibility_tolerance": 1e-9}
 
 
 class _HighsModel:
@@ -421,18 +417,11 @@ def _window_lp(tlp: TraceLP, start: int, stop: int, fixed: list, box: np.ndarray
     return lp, c0, r0
 
 
-def _limit_order(t: int, n: int) -> np.ndarray:
-    """The states in the order row ``t`` solves them: ``0..n-1`` on even steps, ``n-1..0`` on odd ones, so that
-    each step starts from the basis of the state the step before ended with (the same state one step later
-    shares most of its optimal vertex; state ``n-1`` and state ``0`` share little)."""
-    return np.arange(n) if t % 2 == 0 else np.arange(n)[::-1]
-
-
 def _limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
     """The objectives of row ``t`` of the limit: :math:`x_i(t+1)` for every state ``i`` (columns, coefficients,
-    label), in the order of :func:`_limit_order`."""
+    label)."""
     cols, M = tlp.xmap[t + 1]
-    return [(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}") for i in _limit_order(t, tlp.n)]
+    return [(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}") for i in range(tlp.n)]
 
 
 def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
@@ -774,7 +763,7 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
     N = out.shape[0]
     if window is None:  # one growing model from time 0
         for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options, progress=progress).items():
-            out[t, _limit_order(t, tlp.n)] = np.maximum(v, 0.0)  # the set is symmetric: the maximum is >= 0
+            out[t] = np.maximum(v, 0.0)  # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
         return
     # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
     pending = set(todo)
@@ -785,7 +774,7 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
         s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
         box = None if s == 0 else out[s - 1]
         for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options, progress=progress).items():
-            out[t, _limit_order(t, tlp.n)] = np.maximum(v, 0.0)
+            out[t] = np.maximum(v, 0.0)
 
 
 def block_limit(system: AffineSystem, depth: int, available, x0_radius) -> np.ndarray:
