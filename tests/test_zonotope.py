@@ -337,7 +337,9 @@ def window_lp(system, G0, first, t, known):
 @pytest.mark.parametrize("plant", PLANTS)
 def test_window_against_an_independent_lp(plant):
     """The window's bound is never below the LP's radius of information over the same window and zonotope (the
-    smallest any estimate can have), and with enough reweighted solves comes within a few per cent of it."""
+    smallest any estimate can have), per state; with enough reweighted solves the reported bound (the largest,
+    whose states are solved one by one) comes within one per cent of the LP's, and every state (the others from
+    the shared solves) within a few per cent."""
     system, N, r0 = PLANTS[plant](), 40, 0.5
     trace = lossy_trace(9, N)
     sched = trace.schedule()
@@ -345,7 +347,7 @@ def test_window_against_an_independent_lp(plant):
     from eqrec.simulate.loop import what_arrived
     est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=6, window=8, iterations=12)
     est.reset(np.zeros(system.n))
-    ratios = []
+    ratios, tops = [], []
     for t in range(N):
         G0 = est.generators[0]  # the filter's set at the window's start, before the step
         first_before = est.time - est._drive.shape[0]
@@ -357,7 +359,9 @@ def test_window_against_an_independent_lp(plant):
             lp = window_lp(system, G0, first, t, est._known)
             assert np.all(est.state_bounds >= lp * (1 - 1e-9))
             ratios.append(est.state_bounds / lp)
-    assert np.median(np.concatenate(ratios)) < 1.01
+            tops.append(est.state_bounds.max() / lp.max())
+    assert np.median(tops) < 1.01
+    assert np.median(np.concatenate(ratios)) < 1.05
 
 
 def test_carried_set_contains_the_state():

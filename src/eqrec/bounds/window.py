@@ -25,26 +25,38 @@ never below the information limit of the whole trace and reaches it when the zon
 The weights: iteratively reweighted least squares
 -------------------------------------------------
 The ``L1`` problem is solved approximately by iteratively reweighted least squares (IRLS; e.g. Björck,
-*Numerical Methods for Least Squares Problems*, SIAM 1996, §4.5): start from the weights
-:math:`1/\|(X_{\cdot q}, H_{\cdot q})\|_2` of each column ``q`` (the reweighted gain of
-:mod:`eqrec.estimators.zonotope`, here over the whole window), solve
-:math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}`, then set :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
-from the residual :math:`R_i = X_i - \lambda_i H` and solve again, ``iterations`` times; then again while the last
-solve tightened the radius by more than a relative ``gain``, at most ``extra`` more times (the first windows
-after a reset, from a box, need more solves than the later ones, from a filtered zonotope).  Every iterate is a
-valid estimate; the one with the smallest radius is kept (so more iterations never loosen the bound).  The
-weights depend on the arrivals and the zonotope only, never on the measured values, so the estimate is linear in
-the data given the zonotope.  The relative floor :math:`\delta` of the residuals bounds the ratio of the weights
-(``1/δ``) and so the conditioning of each weighted least-squares problem.
+*Numerical Methods for Least Squares Problems*, SIAM 1996, §4.5), in two stages.
+
+* **Shared solves.**  One weight per column ``q``, the same for every state: first the inverse generator
+  lengths :math:`1/\|g_q\|_2` of the prior and :math:`1/\|(X_{\cdot q}, H_{\cdot q})\|_2` of the noise columns,
+  then, ``shared`` times, :math:`W_q = 1/\max(a_q, \delta\max_q a_q)` with
+  :math:`a_q = \sum_i |R_{iq}| / \|R_i\|_1` (each state's residual relative to its radius, summed over the
+  states), then again while the last solve tightened the largest radius by more than a relative ``gain``, at most
+  ``extra`` more times.  With shared weights, :math:`\Lambda = X W H^\top (H W H^\top)^{-1}` for all states at
+  once: one matrix :math:`HWH^\top`, one Cholesky factorization, ``n`` right-hand sides.
+* **Per-state solves** for the states whose radius is within a relative ``margin`` of the largest (the states
+  that set the reported bound :math:`\max_i \beta_i`): from :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
+  of the state's best residual, solve :math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}` and reweight,
+  ``iterations`` times, then again while the last solve tightened the radius by more than ``gain``, at most
+  ``extra`` more times.
+
+Every iterate is a valid estimate; per state the one with the smallest radius is kept (so more iterations never
+loosen the bound: the shared solves do not depend on ``iterations``, and the per-state sequence with more
+iterations extends the one with fewer).  The weights depend on the arrivals and the zonotope only, never on the
+measured values, so the estimate is linear in the data given the zonotope.  The relative floor :math:`\delta` of
+the residuals bounds the ratio of the weights (``1/δ``) and so the conditioning of each weighted least-squares
+problem.
 
 Cost
 ----
-The ``q_0`` generators of :math:`G_0` enter only through the rank-``n`` products
-:math:`[A^L; C\Phi] G_0 W G_0^\top [\,\cdot\,]^\top` (``n × n`` per state), and each noise column of ``H`` is
-nonzero on a contiguous range of rows (a process noise acts on the later measurements only, a measurement noise
-on its own time), so one iteration costs :math:`O(n(n q_0 + \sum_q r_q^2 + m^3))` per state, ``r_q`` the rows
-of column ``q``.  The kernel is compiled with Numba (no ``fastmath``: IEEE arithmetic, the same bytes on every
-machine).
+The ``q_0`` generators of :math:`G_0` enter only through the rank-``n`` product :math:`G_0 W G_0^\top`
+(``n × n``) and the residual :math:`(\Phi_i - \lambda_i C\Phi) G_0`, and each noise column of ``H`` is nonzero on
+a contiguous range of rows (a process noise acts on the later measurements only, a measurement noise on its own
+time).  A shared solve costs :math:`O(n^2 q_0 + \sum_q r_q^2 + n\sum_q r_q + m^3 + n m^2)` for all ``n`` states
+together (``r_q`` the rows of column ``q``), a per-state solve :math:`O(n^2 q_0 + \sum_q r_q^2 + m^3)` for one;
+the products with :math:`G_0` go through BLAS (``numpy.dot`` in the compiled kernel), the rest is compiled with
+Numba (no ``fastmath``).  The bytes are those of the machine's BLAS (the same on one machine; the rounding
+allowance below holds for any order of the sums).
 
 Floating point
 --------------
@@ -54,7 +66,8 @@ magnitudes of every quantity of the computation: the propagation of :math:`|c_0|
 magnitudes of the measured rows; :math:`\kappa = 4(L + 2)(n + m + Q)` (:func:`eqrec.bounds.rounding.rounding_allowance`
 with ``terms = (L + 2)(n + m + Q)``) covers the ``L`` chained products, the
 dot products of length at most ``n + m + Q`` (``Q`` the columns of ``X``), the sums of the radius (Higham,
-*Accuracy and Stability of Numerical Algorithms*, eqs. (3.4), (4.4)) and a simulated true state of the same size.
+*Accuracy and Stability of Numerical Algorithms*, eqs. (3.4), (4.4): bounds that hold for any order of the sums,
+BLAS's included) and a simulated true state of the same size.
 """
 
 from __future__ import annotations
@@ -123,8 +136,71 @@ def _dot(x: np.ndarray, y: np.ndarray, length: int) -> float:  # pragma: no cove
 
 
 @numba.njit(cache=True)
-def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, extra,  # pragma: no cover
-                    gain):
+def _cholesky(M: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Overwrite the lower triangle of a symmetric positive definite ``M`` by its Cholesky factor (compiled)."""
+    m = M.shape[0]
+    for a in range(m):
+        s = M[a, a]
+        for c in range(a):
+            s -= M[a, c] * M[a, c]
+        d = np.sqrt(s) if s > 0.0 else 1e-300
+        M[a, a] = d
+        for e in range(a + 1, m):
+            s = M[e, a]
+            for c in range(a):
+                s -= M[e, c] * M[a, c]
+            M[e, a] = s / d
+
+
+@numba.njit(cache=True)
+def _cholesky_solve(F: np.ndarray, B: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Solve ``F F^T X = B`` in place for the ``k`` columns of ``B`` (shape ``(m, k)``), ``F`` the lower factor of
+    :func:`_cholesky` (forward and back substitution, row operations on contiguous rows)."""
+    m, k = B.shape
+    for a in range(m):
+        for c in range(a):
+            f = F[a, c]
+            for j in range(k):
+                B[a, j] -= f * B[c, j]
+        d = F[a, a]
+        for j in range(k):
+            B[a, j] /= d
+    for a in range(m - 1, -1, -1):
+        for c in range(a + 1, m):
+            f = F[c, a]
+            for j in range(k):
+                B[a, j] -= f * B[c, j]
+        d = F[a, a]
+        for j in range(k):
+            B[a, j] /= d
+
+
+@numba.njit(cache=True)
+def _noise_normal(M, rhsT, W, q0, HnT, ZT, lo, hi, Lnw, i):  # pragma: no cover - compiled
+    """Add the noise columns of the weighted normal equations: ``M += Hn W Hn^T`` (lower triangle) and
+    ``rhsT += Hn W Z^T`` (all states when ``i < 0``, else column 0 for state ``i``), each column on its rows."""
+    n = ZT.shape[1]
+    for q in range(HnT.shape[0]):
+        wq = W[q0 + q]
+        if wq == 0.0:
+            continue
+        for r in range(lo[q], hi[q]):
+            hr = HnT[q, r] * wq
+            if hr == 0.0:
+                continue
+            for c in range(lo[q], r + 1):
+                M[r, c] += hr * HnT[q, c]
+            if q < Lnw:
+                if i < 0:
+                    for e in range(n):
+                        rhsT[r, e] += hr * ZT[q, e]
+                else:
+                    rhsT[r, 0] += hr * ZT[q, i]
+
+
+@numba.njit(cache=True)
+def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
+                    gain, iterations, margin):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -141,14 +217,20 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
         Centres of the ``K`` zonotopes at the window start.
     G0 : ndarray, shape (K, n, q0)
         Their generators.
-    iterations : int
-        Reweighted solves after the first (``>= 0``).
+    shared : int
+        Shared reweighted solves after the first (``>= 0``; one factorization for all states).
     delta : float
         Relative floor of the IRLS weights' residuals.
     extra : int
-        At most this many more solves, each while the last tightened the radius by more than ``gain``.
+        At most this many more solves, shared and per state, each while the last tightened the radius (the
+        largest, for the shared ones) by more than ``gain``.
     gain : float
         Relative tightening that earns another solve.
+    iterations : int
+        Per-state reweighted solves (``>= 0``, then at most ``extra`` more while they tighten) for the states whose
+        radius after the shared solves is within ``margin`` of the largest.
+    margin : float
+        Relative margin of the states solved one by one (``< 0``: none).
 
     Returns
     -------
@@ -170,16 +252,17 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
         if measured[j]:
             times += 1
     m = times * p
-    Qn = L * nw + times * nv
+    Lnw = L * nw
+    Qn = Lnw + times * nv
     # --- propagation over the window: Phi = Phi(s, s0), Z = effect of w on x(s), rows of H ---------------------
     Phi = np.eye(n)
-    Z = np.zeros((n, L * nw))
+    Z = np.zeros((n, Lnw))
     CP = np.zeros((m, n))  # C(s) Phi(s, s0) for the measured rows
     Hn = np.zeros((m, Qn))  # noise columns of H: w(s0..t), then v of the measured times
     lo = np.zeros(Qn, dtype=np.int64)  # each noise column is nonzero on rows lo..hi-1
     hi = np.zeros(Qn, dtype=np.int64)
     row = 0
-    vcol = L * nw
+    vcol = Lnw
     for j in range(L):
         if measured[j]:
             for a in range(p):
@@ -188,11 +271,11 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
                     for e in range(n):
                         s += C[j, a, e] * Phi[e, b]
                     CP[row + a, b] = s
-                for q in range(j * nw):
-                    s = 0.0
-                    for e in range(n):
-                        s += C[j, a, e] * Z[e, q]
-                    Hn[row + a, q] = s
+                for e in range(n):
+                    f = C[j, a, e]
+                    if f != 0.0:
+                        for q in range(j * nw):
+                            Hn[row + a, q] += f * Z[e, q]
                 for q in range(nv):
                     Hn[row + a, vcol + q] = V[j, a, q]
             for q in range(nv):
@@ -202,7 +285,7 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
             row += p
         # Phi <- A Phi ; Z <- A Z, then the new process noise
         newPhi = np.zeros((n, n))
-        newZ = np.zeros((n, L * nw))
+        newZ = np.zeros((n, Lnw))
         for a in range(n):
             for e in range(n):
                 aij = A[j, a, e]
@@ -224,18 +307,33 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
             hi[j * nw + q] = m
         if measured[j]:
             row += p
+    HnT = np.ascontiguousarray(Hn.T)  # one noise column per row: contiguous inner loops
+    ZT = np.ascontiguousarray(Z.T)
+    PhiT = np.ascontiguousarray(Phi.T)
+    CPT = np.ascontiguousarray(CP.T)
+    # noise columns' first weights: inverse lengths of the columns of (X, H)
+    wn = np.zeros(Qn)
+    for q in range(Qn):
+        s = 0.0
+        if q < Lnw:
+            for a in range(n):
+                s += ZT[q, a] * ZT[q, a]
+        for a in range(lo[q], hi[q]):
+            s += HnT[q, a] * HnT[q, a]
+        wn[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
     xhat = np.empty((K, n))
     radius = np.empty((K, n))
     lam_out = np.zeros((K, n, m))
     R_out = np.zeros((K, n, q0 + Qn))
     for k in range(K):
+        Gk = np.ascontiguousarray(G0[k])
         # centre and magnitudes over the window
         xc = c0[k].copy()
         zm = np.empty(n)
         for a in range(n):
             s = 0.0
             for q in range(q0):
-                s += abs(G0[k, a, q])
+                s += abs(Gk[a, q])
             zm[a] = abs(xc[a]) + s
         resid = np.zeros(m)
         magy = np.zeros(m)
@@ -267,136 +365,176 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
                 nm[a] = sm
             xc = nx
             zm = nm
-        # prior columns: PX = Phi G0 (rows of X), PH = CP G0 (rows of H)
-        PX = np.zeros((n, q0))
-        PH = np.zeros((m, q0))
-        accumulate_product(Phi, G0[k], PX)
-        accumulate_product(CP, G0[k], PH)
-        # first weights: inverse column lengths of (X, H)
-        w0 = np.zeros(q0 + Qn)
-        for a in range(n):  # column sums of squares, row by row (contiguous)
-            for q in range(q0):
-                w0[q] += PX[a, q] * PX[a, q]
-        for a in range(m):
-            for q in range(q0):
-                w0[q] += PH[a, q] * PH[a, q]
-        for q in range(q0):
-            w0[q] = 1.0 / np.sqrt(w0[q]) if w0[q] > 0.0 else 0.0
-        for q in range(Qn):
-            s = 0.0
-            if q < L * nw:
+        best = np.full(n, np.inf)
+        lam_best = np.zeros((n, m))
+        if m == 0:  # nothing measured: the prediction alone
+            RP = np.dot(Phi, Gk)
+            for i in range(n):
+                s = 0.0
+                for q in range(q0):
+                    R_out[k, i, q] = RP[i, q]
+                    s += abs(RP[i, q])
+                for q in range(Lnw):
+                    R_out[k, i, q0 + q] = Z[i, q]
+                    s += abs(Z[i, q])
+                best[i] = s
+        else:
+            # --- shared solves: one factorization for every state -------------------------------------------
+            W = np.empty(q0 + Qn)
+            for q in range(q0):  # first weights of the prior: inverse generator lengths
+                s = 0.0
                 for a in range(n):
-                    s += Z[a, q] * Z[a, q]
-            for a in range(lo[q], hi[q]):
-                s += Hn[a, q] * Hn[a, q]
-            w0[q0 + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
-        W = np.empty(q0 + Qn)
-        res = np.empty(q0 + Qn)  # the residual X_i - lam H of the current solve
-        absR = np.empty(q0 + Qn)
-        M = np.empty((m, m))
-        rhs = np.empty(m)
-        lam = np.zeros(m)
-        S = np.empty((n, n))
-        GW = np.empty((n, q0))
-        SCt = np.empty((n, m))
-        for i in range(n):
-            # lambda = 0: the prediction alone
-            best = 0.0
-            for q in range(q0):
-                best += abs(PX[i, q])
-                R_out[k, i, q] = PX[i, q]
-            for q in range(L * nw):
-                best += abs(Z[i, q])
-                R_out[k, i, q0 + q] = Z[i, q]
-            lam_best = np.zeros(m)
-            if m > 0:
-                for q in range(q0 + Qn):
-                    W[q] = w0[q]
-                it = 0
-                while True:
-                    # S = G0 W G0^T (n x n), then M = CP S CP^T + Hn W Hn^T, rhs = CP S Phi_i^T + Hn W Z_i^T
-                    for a in range(n):
-                        for q in range(q0):
-                            GW[a, q] = G0[k, a, q] * W[q]
-                    for a in range(n):
-                        for b in range(a + 1):
-                            s = _dot(GW[a], G0[k, b], q0)
-                            S[a, b] = s
-                            S[b, a] = s
-                    for a in range(n):
-                        for r in range(m):
-                            s = 0.0
-                            for e in range(n):
-                                s += S[a, e] * CP[r, e]
-                            SCt[a, r] = s
-                    for r in range(m):
-                        for c in range(r + 1):
-                            s = 0.0
-                            for e in range(n):
-                                s += CP[r, e] * SCt[e, c]
-                            M[r, c] = s
-                        s = 0.0
-                        for e in range(n):
-                            s += Phi[i, e] * SCt[e, r]
-                        rhs[r] = s
-                    for q in range(Qn):
-                        wq = W[q0 + q]
-                        if wq == 0.0:
-                            continue
-                        for r in range(lo[q], hi[q]):
-                            hr = Hn[r, q] * wq
-                            if hr == 0.0:
-                                continue
-                            for c in range(lo[q], r + 1):
-                                M[r, c] += hr * Hn[c, q]
-                            if q < L * nw:
-                                rhs[r] += hr * Z[i, q]
-                    for r in range(m):  # a relative ridge: M is singular when two measured rows coincide
-                        M[r, r] += 1e-14 * M[r, r] + 1e-300
-                    spd_solve(M, rhs, lam)
-                    # residual R_i = X_i - lam H and its 1-norm
-                    v = np.empty(n)
-                    for e in range(n):
-                        s = Phi[i, e]
-                        for r in range(m):
-                            s -= lam[r] * CP[r, e]
-                        v[e] = s
+                    s += Gk[a, q] * Gk[a, q]
+                W[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+            for q in range(Qn):
+                W[q0 + q] = wn[q]
+            GW = np.empty((n, q0))
+            resT = np.empty((Qn, n))
+            rad = np.empty(n)
+            agg = np.empty(q0 + Qn)
+            it = 0
+            top = np.inf
+            while True:
+                for a in range(n):
                     for q in range(q0):
-                        res[q] = v[0] * G0[k, 0, q]
-                    for e in range(1, n):
+                        GW[a, q] = Gk[a, q] * W[q]
+                S = np.dot(GW, Gk.T)  # G0 W G0^T
+                SCt = np.dot(S, CPT)  # S CP^T, (n, m)
+                M = np.dot(CP, SCt)
+                rhsT = np.dot(SCt.T, PhiT)  # CP S Phi^T, (m, n)
+                _noise_normal(M, rhsT, W, q0, HnT, ZT, lo, hi, Lnw, -1)
+                for r in range(m):  # a relative ridge: M is singular when two measured rows coincide
+                    M[r, r] += 1e-14 * M[r, r] + 1e-300
+                _cholesky(M)
+                _cholesky_solve(M, rhsT)  # now the weights, lam^T (m, n)
+                Vm = Phi - np.dot(rhsT.T, CP)  # Phi - lam CP, (n, n)
+                RP = np.dot(Vm, Gk)  # residual on the prior generators, (n, q0)
+                for q in range(Qn):  # residual on the noise columns, transposed
+                    for e in range(n):
+                        resT[q, e] = ZT[q, e] if q < Lnw else 0.0
+                    for r in range(lo[q], hi[q]):
+                        f = HnT[q, r]
+                        if f != 0.0:
+                            for e in range(n):
+                                resT[q, e] -= rhsT[r, e] * f
+                for i in range(n):
+                    s = 0.0
+                    for q in range(q0):
+                        s += abs(RP[i, q])
+                    rad[i] = s
+                for q in range(Qn):
+                    for e in range(n):
+                        rad[e] += abs(resT[q, e])
+                for i in range(n):
+                    if rad[i] < best[i]:  # keep the best solve per state (every solve is a valid estimate)
+                        best[i] = rad[i]
                         for q in range(q0):
-                            res[q] += v[e] * G0[k, e, q]
-                    for q in range(Qn):
-                        s = Z[i, q] if q < L * nw else 0.0
-                        for r in range(lo[q], hi[q]):
-                            s -= lam[r] * Hn[r, q]
-                        res[q0 + q] = s
-                    rad = 0.0
+                            R_out[k, i, q] = RP[i, q]
+                        for q in range(Qn):
+                            R_out[k, i, q0 + q] = resT[q, i]
+                        for r in range(m):
+                            lam_best[i, r] = rhsT[r, i]
+                newtop = 0.0
+                for i in range(n):
+                    newtop = max(newtop, best[i])
+                improved = newtop < top * (1.0 - gain)
+                top = newtop
+                it += 1
+                if it > shared + extra or (it > shared and not improved):
+                    break
+                # shared weights: each state's residual, relative to its radius, summed over the states
+                for q in range(q0 + Qn):
+                    agg[q] = 0.0
+                for i in range(n):
+                    inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
+                    for q in range(q0):
+                        agg[q] += abs(RP[i, q]) * inv
+                for q in range(Qn):
+                    for e in range(n):
+                        inv = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
+                        agg[q0 + q] += abs(resT[q, e]) * inv
+                big = 0.0
+                for q in range(q0 + Qn):
+                    big = max(big, agg[q])
+                floor = delta * big
+                for q in range(q0 + Qn):
+                    W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
+            # --- per-state solves for the states near the largest radius ------------------------------------
+            if margin >= 0.0:
+                Mi = np.empty((m, m))
+                rhs1 = np.empty((m, 1))
+                res = np.empty(q0 + Qn)
+                Wi = np.empty(q0 + Qn)
+                v = np.empty((1, n))
+                for i in range(n):
+                    if best[i] < (1.0 - margin) * top:
+                        continue
                     big = 0.0
                     for q in range(q0 + Qn):
-                        s = abs(res[q])
-                        absR[q] = s
-                        rad += s
-                        big = max(big, s)
-                    improved = rad < best * (1.0 - gain)
-                    if rad < best:
-                        best = rad
-                        lam_best[:] = lam
-                        R_out[k, i, :] = res  # the error map of the kept weights
-                    it += 1
-                    if it > iterations + extra or (it > iterations and not improved):
-                        break
+                        big = max(big, abs(R_out[k, i, q]))
                     floor = delta * big
                     for q in range(q0 + Qn):
-                        W[q] = 1.0 / max(absR[q], floor) if max(absR[q], floor) > 0.0 else 0.0
+                        s = max(abs(R_out[k, i, q]), floor)
+                        Wi[q] = 1.0 / s if s > 0.0 else 0.0
+                    sol = 0
+                    while True:
+                        for a in range(n):
+                            for q in range(q0):
+                                GW[a, q] = Gk[a, q] * Wi[q]
+                        S = np.dot(GW, Gk.T)
+                        SCt = np.dot(S, CPT)
+                        M = np.dot(CP, SCt)
+                        for r in range(m):
+                            Mi[r, :] = M[r, :]
+                            s = 0.0
+                            for e in range(n):
+                                s += Phi[i, e] * SCt[e, r]
+                            rhs1[r, 0] = s
+                        _noise_normal(Mi, rhs1, Wi, q0, HnT, ZT, lo, hi, Lnw, i)
+                        for r in range(m):
+                            Mi[r, r] += 1e-14 * Mi[r, r] + 1e-300
+                        _cholesky(Mi)
+                        _cholesky_solve(Mi, rhs1)
+                        for e in range(n):
+                            s = Phi[i, e]
+                            for r in range(m):
+                                s -= rhs1[r, 0] * CP[r, e]
+                            v[0, e] = s
+                        rp = np.dot(v, Gk)
+                        r1 = 0.0
+                        big = 0.0
+                        for q in range(q0):
+                            res[q] = rp[0, q]
+                        for q in range(Qn):
+                            s = ZT[q, i] if q < Lnw else 0.0
+                            for r in range(lo[q], hi[q]):
+                                s -= rhs1[r, 0] * HnT[q, r]
+                            res[q0 + q] = s
+                        for q in range(q0 + Qn):
+                            a1 = abs(res[q])
+                            r1 += a1
+                            big = max(big, a1)
+                        improved = r1 < best[i] * (1.0 - gain)
+                        if r1 < best[i]:
+                            best[i] = r1
+                            R_out[k, i, :] = res
+                            for r in range(m):
+                                lam_best[i, r] = rhs1[r, 0]
+                        sol += 1
+                        if sol > iterations + extra or (sol > iterations and not improved):
+                            break
+                        floor = delta * big
+                        for q in range(q0 + Qn):
+                            s = max(abs(res[q]), floor)
+                            Wi[q] = 1.0 / s if s > 0.0 else 0.0
+        for i in range(n):
             # the estimate, its magnitude and the rounding allowance (module docstring)
             est = xc[i]
             mag = zm[i] + abs(xc[i])
             for r in range(m):
-                est += lam_best[r] * resid[r]
-                mag += abs(lam_best[r]) * (magy[r] + abs(resid[r]))
+                est += lam_best[i, r] * resid[r]
+                mag += abs(lam_best[i, r]) * (magy[r] + abs(resid[r]))
             xhat[k, i] = est
-            radius[k, i] = rounding_allowance_compiled(best, (L + 2) * (n + m + q0 + Qn), mag)
-            lam_out[k, i, :] = lam_best
+            radius[k, i] = rounding_allowance_compiled(best[i], (L + 2) * (n + m + q0 + Qn), mag)
+            lam_out[k, i, :] = lam_best[i]
     return xhat, radius, lam_out, R_out
-
