@@ -20,13 +20,14 @@ The two-cart part (default, ``--part carts``):
 
 Plant :func:`eqrec.two_mass` (lightly damped, n = 4, one output), Bernoulli losses 0.3, each delivered packet
 delayed uniformly by 0..2 steps, ``max_delay = 2``, initial box of radius 0.5.  Rows: the default
-(``reweighted`` gain, PCA reduction, order 40, a window of 20 steps with 2 reweighted solves), then one setting
-changed at a time (gain, window, iterations, order, reduction), and the crude reference: a plain zonotope filter
+(``reweighted`` gain, PCA reduction, order 40, a window of 30 steps: shared reweighted solves, then 2 per-state
+solves for the states near the largest bound), then one setting changed at a time (gain, window, iterations,
+order, reduction), and the crude reference: a plain zonotope filter
 with Combastel's F-radius (Kalman-shaped) gain and Girard's box reduction, each late packet replayed over a buffer
 of the last ``D`` steps, no window (:class:`PlainFilter` below, built from the package's own filter step and
 reduction).  The last line gives the default against the reference at order 40.  Columns: µs per ``step``
-(median over ``--repeats`` timed runs on a pre-built arrival list, no simulation in the loop; the first call,
-which loads the compiled loops, is not timed), and bound / limit per step pooled over the seeds (median, p95,
+(CPU time of the process, median over ``--repeats`` timed runs on a pre-built arrival list, no simulation in
+the loop; the first call, which loads the compiled loops, is not timed), and bound / limit per step pooled over the seeds (median, p95,
 max), where the limit is :func:`eqrec.bounds.information.information_limit` (max over states, per step).  The
 guarantee is also counted: violations of ``|x - x̂|_∞ <= bound`` with noise at random box corners (must be 0).
 

@@ -176,26 +176,157 @@ def _cholesky_solve(F: np.ndarray, B: np.ndarray) -> None:  # pragma: no cover -
 
 
 @numba.njit(cache=True)
-def _noise_normal(M, rhsT, W, q0, HnT, ZT, lo, hi, Lnw, i):  # pragma: no cover - compiled
-    """Add the noise columns of the weighted normal equations: ``M += Hn W Hn^T`` (lower triangle) and
-    ``rhsT += Hn W Z^T`` (all states when ``i < 0``, else column 0 for state ``i``), each column on its rows."""
-    n = ZT.shape[1]
-    for q in range(HnT.shape[0]):
-        wq = W[q0 + q]
-        if wq == 0.0:
-            continue
-        for r in range(lo[q], hi[q]):
-            hr = HnT[q, r] * wq
-            if hr == 0.0:
-                continue
-            for c in range(lo[q], r + 1):
-                M[r, c] += hr * HnT[q, c]
-            if q < Lnw:
-                if i < 0:
+def _symmetric_ridge(M: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Copy the lower triangle of ``M`` to the upper and add a relative ridge to the diagonal (``M`` is singular when
+    two measured rows coincide)."""
+    m = M.shape[0]
+    for r in range(m):
+        M[r, r] += 1e-14 * M[r, r] + 1e-300
+        for c in range(r):
+            M[c, r] = M[r, c]
+
+
+@numba.njit(cache=True)
+def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cover - compiled
+    r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
+
+    With the column weights ``W`` read as variances (prior :math:`S = G_0 W G_0^\top`, process noise
+    :math:`E\,\mathrm{diag}(W)E^\top`, measurement noise :math:`V\,\mathrm{diag}(W)V^\top`), :math:`HWH^\top` is the
+    covariance of the measured outputs and :math:`XWH^\top` that of ``x(t+1)`` with them.  Forward in time,
+    :math:`\Sigma(s+1) = A\Sigma A^\top + E D E^\top`; the rows of a measured time ``s`` are
+    :math:`C\Sigma(s)`, carried to the later times by :math:`A^\top` (``BT``, transposed: ``n × m``).  Fills the lower
+    triangle of ``M`` (``m × m``) and ``BT`` (``n × m``, :math:`XWH^\top`)."""
+    L, n = A.shape[0], A.shape[1]
+    p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
+    Lnw = L * nw
+    Sig = S.copy()
+    tmp = np.empty((n, n))
+    newB = np.empty((n, BT.shape[1]))
+    rows = 0
+    tt = 0
+    for j in range(L):
+        if measured[j]:
+            for a in range(p):
+                for r in range(rows + a + 1):
+                    M[rows + a, r] = 0.0
+                for e in range(n):  # rows of earlier times: C_j (their rows carried to j)
+                    f = C[j, a, e]
+                    if f != 0.0:
+                        for r in range(rows):
+                            M[rows + a, r] += f * BT[e, r]
+                for b in range(n):  # the new row C_j Sigma(j), stored as a column of BT
+                    s = 0.0
                     for e in range(n):
-                        rhsT[r, e] += hr * ZT[q, e]
-                else:
-                    rhsT[r, 0] += hr * ZT[q, i]
+                        s += C[j, a, e] * Sig[e, b]
+                    BT[b, rows + a] = s
+            for a in range(p):
+                for c in range(a + 1):
+                    s = 0.0
+                    for e in range(n):
+                        s += C[j, c, e] * BT[e, rows + a]
+                    for q in range(nv):
+                        s += V[j, a, q] * W[q0 + Lnw + tt * nv + q] * V[j, c, q]
+                    M[rows + a, rows + c] = s
+            rows += p
+            tt += 1
+        # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T
+        for a in range(n):
+            for r in range(rows):
+                newB[a, r] = 0.0
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    for r in range(rows):
+                        newB[a, r] += f * BT[e, r]
+        for a in range(n):
+            for r in range(rows):
+                BT[a, r] = newB[a, r]
+        for a in range(n):  # tmp = (A Sigma)^T = Sigma A^T (Sigma symmetric)
+            for b in range(n):
+                tmp[b, a] = 0.0
+        for a in range(n):
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    for b in range(n):
+                        tmp[b, a] += f * Sig[e, b]
+        for a in range(n):  # Sigma = A tmp
+            for b in range(n):
+                Sig[a, b] = 0.0
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    for b in range(n):
+                        Sig[a, b] += f * tmp[e, b]
+        for q in range(nw):
+            w = W[q0 + j * nw + q]
+            if w == 0.0:
+                continue
+            for a in range(n):
+                fa = E[j, a, q] * w
+                if fa != 0.0:
+                    for b in range(n):
+                        Sig[a, b] += fa * E[j, b, q]
+
+
+@numba.njit(cache=True)
+def _residuals(A, C, E, V, measured, lamT, TT, RTn):  # pragma: no cover - compiled
+    r"""The noise columns of the residuals :math:`X_i - \lambda_i H` of ``k`` states, backwards in time.
+
+    :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
+    :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`; the residual on :math:`w(s)` is :math:`T(s+1)E(s)`, on :math:`v(s)`
+    :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
+    on return).  ``lamT`` (``m × k``): the weights of the states, by measured row; ``RTn`` (``Q × k``): the
+    residuals on the noise columns (process noise by time, then the measurement noise of the measured times)."""
+    L, n = A.shape[0], A.shape[1]
+    p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
+    k = TT.shape[1]
+    Lnw = L * nw
+    m = lamT.shape[0]
+    times = m // p if p > 0 else 0
+    newT = np.empty((n, k))
+    rows = m
+    tt = times
+    for j in range(L - 1, -1, -1):
+        for q in range(nw):  # w(j): T(j+1) E(j)
+            col = j * nw + q
+            for i in range(k):
+                RTn[col, i] = 0.0
+            for a in range(n):
+                f = E[j, a, q]
+                if f != 0.0:
+                    for i in range(k):
+                        RTn[col, i] += f * TT[a, i]
+        for a in range(n):  # T <- T A(j), transposed: TT <- A^T TT
+            for i in range(k):
+                newT[a, i] = 0.0
+        for e in range(n):
+            for a in range(n):
+                f = A[j, e, a]
+                if f != 0.0:
+                    for i in range(k):
+                        newT[a, i] += f * TT[e, i]
+        for a in range(n):
+            for i in range(k):
+                TT[a, i] = newT[a, i]
+        if measured[j]:
+            rows -= p
+            tt -= 1
+            for c in range(p):
+                for a in range(n):
+                    f = C[j, c, a]
+                    if f != 0.0:
+                        for i in range(k):
+                            TT[a, i] -= f * lamT[rows + c, i]
+            for q in range(nv):  # v(j): -lambda_j V(j)
+                col = Lnw + tt * nv + q
+                for i in range(k):
+                    RTn[col, i] = 0.0
+                for c in range(p):
+                    f = V[j, c, q]
+                    if f != 0.0:
+                        for i in range(k):
+                            RTn[col, i] -= f * lamT[rows + c, i]
 
 
 @numba.njit(cache=True)
@@ -254,77 +385,57 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     m = times * p
     Lnw = L * nw
     Qn = Lnw + times * nv
-    # --- propagation over the window: Phi = Phi(s, s0), Z = effect of w on x(s), rows of H ---------------------
-    Phi = np.eye(n)
-    Z = np.zeros((n, Lnw))
-    CP = np.zeros((m, n))  # C(s) Phi(s, s0) for the measured rows
-    Hn = np.zeros((m, Qn))  # noise columns of H: w(s0..t), then v of the measured times
-    lo = np.zeros(Qn, dtype=np.int64)  # each noise column is nonzero on rows lo..hi-1
-    hi = np.zeros(Qn, dtype=np.int64)
-    row = 0
-    vcol = Lnw
-    for j in range(L):
-        if measured[j]:
-            for a in range(p):
-                for b in range(n):
-                    s = 0.0
-                    for e in range(n):
-                        s += C[j, a, e] * Phi[e, b]
-                    CP[row + a, b] = s
-                for e in range(n):
-                    f = C[j, a, e]
-                    if f != 0.0:
-                        for q in range(j * nw):
-                            Hn[row + a, q] += f * Z[e, q]
-                for q in range(nv):
-                    Hn[row + a, vcol + q] = V[j, a, q]
-            for q in range(nv):
-                lo[vcol + q] = row
-                hi[vcol + q] = row + p
-            vcol += nv
-            row += p
-        # Phi <- A Phi ; Z <- A Z, then the new process noise
-        newPhi = np.zeros((n, n))
-        newZ = np.zeros((n, Lnw))
+    # first weights of the noise columns: inverse lengths of the columns of (X, H), by the backward Gramian
+    # O(s) = A^T O(s+1) A + C^T C [measured s], O(L) = I: the column of w(s, q) has length^2 E_q^T O(s+1) E_q
+    wn = np.zeros(Qn)
+    O = np.eye(n)
+    tmp = np.empty((n, n))
+    tt = times
+    for j in range(L - 1, -1, -1):
+        for q in range(nw):
+            s = 0.0
+            for a in range(n):
+                fa = E[j, a, q]
+                if fa != 0.0:
+                    for b in range(n):
+                        s += fa * O[a, b] * E[j, b, q]
+            wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+        for a in range(n):  # O <- A^T O A + C^T C
+            for b in range(n):
+                tmp[a, b] = 0.0
+            for e in range(n):
+                f = A[j, e, a]
+                if f != 0.0:
+                    for b in range(n):
+                        tmp[a, b] += f * O[e, b]
+        for a in range(n):
+            for b in range(n):
+                O[a, b] = 0.0
         for a in range(n):
             for e in range(n):
-                aij = A[j, a, e]
-                if aij != 0.0:
+                f = tmp[a, e]
+                if f != 0.0:
                     for b in range(n):
-                        newPhi[a, b] += aij * Phi[e, b]
-                    for q in range(j * nw):
-                        newZ[a, q] += aij * Z[e, q]
-        for a in range(n):
-            for q in range(nw):
-                newZ[a, j * nw + q] = E[j, a, q]
-        Phi = newPhi
-        Z = newZ
-    # rows of the process noise columns: the measured rows after its time
-    row = 0
-    for j in range(L):
-        for q in range(nw):
-            lo[j * nw + q] = row + (p if measured[j] else 0)
-            hi[j * nw + q] = m
+                        O[a, b] += f * A[j, e, b]
         if measured[j]:
-            row += p
-    HnT = np.ascontiguousarray(Hn.T)  # one noise column per row: contiguous inner loops
-    ZT = np.ascontiguousarray(Z.T)
-    PhiT = np.ascontiguousarray(Phi.T)
-    CPT = np.ascontiguousarray(CP.T)
-    # noise columns' first weights: inverse lengths of the columns of (X, H)
-    wn = np.zeros(Qn)
-    for q in range(Qn):
-        s = 0.0
-        if q < Lnw:
-            for a in range(n):
-                s += ZT[q, a] * ZT[q, a]
-        for a in range(lo[q], hi[q]):
-            s += HnT[q, a] * HnT[q, a]
-        wn[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+            tt -= 1
+            for c in range(p):
+                for a in range(n):
+                    f = C[j, c, a]
+                    if f != 0.0:
+                        for b in range(n):
+                            O[a, b] += f * C[j, c, b]
+            for q in range(nv):
+                s = 0.0
+                for c in range(p):
+                    s += V[j, c, q] * V[j, c, q]
+                wn[Lnw + tt * nv + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
     xhat = np.empty((K, n))
     radius = np.empty((K, n))
     lam_out = np.zeros((K, n, m))
     R_out = np.zeros((K, n, q0 + Qn))
+    M = np.empty((m, m))
+    BT = np.empty((n, m))
     for k in range(K):
         Gk = np.ascontiguousarray(G0[k])
         # centre and magnitudes over the window
@@ -367,166 +478,130 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
             zm = nm
         best = np.full(n, np.inf)
         lam_best = np.zeros((n, m))
-        if m == 0:  # nothing measured: the prediction alone
-            RP = np.dot(Phi, Gk)
-            for i in range(n):
-                s = 0.0
-                for q in range(q0):
-                    R_out[k, i, q] = RP[i, q]
-                    s += abs(RP[i, q])
-                for q in range(Lnw):
-                    R_out[k, i, q0 + q] = Z[i, q]
-                    s += abs(Z[i, q])
-                best[i] = s
-        else:
-            # --- shared solves: one factorization for every state -------------------------------------------
-            W = np.empty(q0 + Qn)
-            for q in range(q0):  # first weights of the prior: inverse generator lengths
-                s = 0.0
-                for a in range(n):
-                    s += Gk[a, q] * Gk[a, q]
-                W[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
-            for q in range(Qn):
-                W[q0 + q] = wn[q]
-            GW = np.empty((n, q0))
-            resT = np.empty((Qn, n))
-            rad = np.empty(n)
-            agg = np.empty(q0 + Qn)
-            it = 0
-            top = np.inf
-            while True:
+        W = np.empty(q0 + Qn)
+        for q in range(q0):  # first weights of the prior: inverse generator lengths
+            s = 0.0
+            for a in range(n):
+                s += Gk[a, q] * Gk[a, q]
+            W[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+        for q in range(Qn):
+            W[q0 + q] = wn[q]
+        GW = np.empty((n, q0))
+        resT = np.empty((Qn, n))
+        lamT = np.zeros((m, n))
+        rad = np.empty(n)
+        agg = np.empty(q0 + Qn)
+        it = 0
+        top = np.inf
+        # --- shared solves: one factorization for every state (nothing measured: the prediction alone) ----------
+        while True:
+            if m > 0:
                 for a in range(n):
                     for q in range(q0):
                         GW[a, q] = Gk[a, q] * W[q]
                 S = np.dot(GW, Gk.T)  # G0 W G0^T
-                SCt = np.dot(S, CPT)  # S CP^T, (n, m)
-                M = np.dot(CP, SCt)
-                rhsT = np.dot(SCt.T, PhiT)  # CP S Phi^T, (m, n)
-                _noise_normal(M, rhsT, W, q0, HnT, ZT, lo, hi, Lnw, -1)
-                for r in range(m):  # a relative ridge: M is singular when two measured rows coincide
-                    M[r, r] += 1e-14 * M[r, r] + 1e-300
-                _cholesky(M)
-                _cholesky_solve(M, rhsT)  # now the weights, lam^T (m, n)
-                Vm = Phi - np.dot(rhsT.T, CP)  # Phi - lam CP, (n, n)
-                RP = np.dot(Vm, Gk)  # residual on the prior generators, (n, q0)
-                for q in range(Qn):  # residual on the noise columns, transposed
-                    for e in range(n):
-                        resT[q, e] = ZT[q, e] if q < Lnw else 0.0
-                    for r in range(lo[q], hi[q]):
-                        f = HnT[q, r]
-                        if f != 0.0:
-                            for e in range(n):
-                                resT[q, e] -= rhsT[r, e] * f
-                for i in range(n):
-                    s = 0.0
+                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT)
+                _symmetric_ridge(M)
+                lamT[:, :] = np.linalg.solve(M, BT.T)  # the weights of every state, (m, n): one factorization (LAPACK)
+            TT = np.eye(n)
+            _residuals(A, C, E, V, measured, lamT, TT, resT)
+            RP = np.dot(TT.T, Gk)  # residual on the prior generators, (n, q0)
+            for i in range(n):
+                s = 0.0
+                for q in range(q0):
+                    s += abs(RP[i, q])
+                rad[i] = s
+            for q in range(Qn):
+                for e in range(n):
+                    rad[e] += abs(resT[q, e])
+            for i in range(n):
+                if rad[i] < best[i]:  # keep the best solve per state (every solve is a valid estimate)
+                    best[i] = rad[i]
                     for q in range(q0):
-                        s += abs(RP[i, q])
-                    rad[i] = s
-                for q in range(Qn):
-                    for e in range(n):
-                        rad[e] += abs(resT[q, e])
-                for i in range(n):
-                    if rad[i] < best[i]:  # keep the best solve per state (every solve is a valid estimate)
-                        best[i] = rad[i]
-                        for q in range(q0):
-                            R_out[k, i, q] = RP[i, q]
-                        for q in range(Qn):
-                            R_out[k, i, q0 + q] = resT[q, i]
-                        for r in range(m):
-                            lam_best[i, r] = rhsT[r, i]
-                newtop = 0.0
-                for i in range(n):
-                    newtop = max(newtop, best[i])
-                improved = newtop < top * (1.0 - gain)
-                top = newtop
-                it += 1
-                if it > shared + extra or (it > shared and not improved):
-                    break
-                # shared weights: each state's residual, relative to its radius, summed over the states
-                for q in range(q0 + Qn):
-                    agg[q] = 0.0
-                for i in range(n):
-                    inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
-                    for q in range(q0):
-                        agg[q] += abs(RP[i, q]) * inv
-                for q in range(Qn):
-                    for e in range(n):
-                        inv = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
-                        agg[q0 + q] += abs(resT[q, e]) * inv
+                        R_out[k, i, q] = RP[i, q]
+                    for q in range(Qn):
+                        R_out[k, i, q0 + q] = resT[q, i]
+                    for r in range(m):
+                        lam_best[i, r] = lamT[r, i]
+            newtop = 0.0
+            for i in range(n):
+                newtop = max(newtop, best[i])
+            improved = it > 0 and newtop < top * (1.0 - gain)  # a reweighting tightened the largest radius
+            top = newtop
+            it += 1
+            if m == 0 or it > shared + extra or (it > shared and not improved):
+                break
+            # shared weights: each state's residual, relative to its radius, summed over the states
+            for q in range(q0 + Qn):
+                agg[q] = 0.0
+            for i in range(n):
+                inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
+                for q in range(q0):
+                    agg[q] += abs(RP[i, q]) * inv
+            for q in range(Qn):
+                for e in range(n):
+                    inv = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
+                    agg[q0 + q] += abs(resT[q, e]) * inv
+            big = 0.0
+            for q in range(q0 + Qn):
+                big = max(big, agg[q])
+            floor = delta * big
+            for q in range(q0 + Qn):
+                W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
+        # --- per-state solves for the states near the largest radius ----------------------------------------
+        if m > 0 and margin >= 0.0:
+            lam1 = np.empty((m, 1))
+            res1 = np.empty((Qn, 1))
+            res = np.empty(q0 + Qn)
+            Wi = np.empty(q0 + Qn)
+            for i in range(n):
+                if best[i] < (1.0 - margin) * top:
+                    continue
                 big = 0.0
                 for q in range(q0 + Qn):
-                    big = max(big, agg[q])
+                    big = max(big, abs(R_out[k, i, q]))
                 floor = delta * big
                 for q in range(q0 + Qn):
-                    W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
-            # --- per-state solves for the states near the largest radius ------------------------------------
-            if margin >= 0.0:
-                Mi = np.empty((m, m))
-                rhs1 = np.empty((m, 1))
-                res = np.empty(q0 + Qn)
-                Wi = np.empty(q0 + Qn)
-                v = np.empty((1, n))
-                for i in range(n):
-                    if best[i] < (1.0 - margin) * top:
-                        continue
+                    s = max(abs(R_out[k, i, q]), floor)
+                    Wi[q] = 1.0 / s if s > 0.0 else 0.0
+                sol = 0
+                while True:
+                    for a in range(n):
+                        for q in range(q0):
+                            GW[a, q] = Gk[a, q] * Wi[q]
+                    S = np.dot(GW, Gk.T)
+                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT)
+                    _symmetric_ridge(M)
+                    for r in range(m):
+                        lam1[r, 0] = BT[i, r]
+                    lam1[:, :] = np.linalg.solve(M, lam1)
+                    T1 = np.zeros((n, 1))
+                    T1[i, 0] = 1.0
+                    _residuals(A, C, E, V, measured, lam1, T1, res1)
+                    rp = np.dot(T1.T, Gk)
+                    r1 = 0.0
                     big = 0.0
+                    for q in range(q0):
+                        res[q] = rp[0, q]
+                    for q in range(Qn):
+                        res[q0 + q] = res1[q, 0]
                     for q in range(q0 + Qn):
-                        big = max(big, abs(R_out[k, i, q]))
+                        a1 = abs(res[q])
+                        r1 += a1
+                        big = max(big, a1)
+                    improved = r1 < best[i] * (1.0 - gain)
+                    if r1 < best[i]:
+                        best[i] = r1
+                        R_out[k, i, :] = res
+                        for r in range(m):
+                            lam_best[i, r] = lam1[r, 0]
+                    sol += 1
+                    if sol > iterations + extra or (sol > iterations and not improved):
+                        break
                     floor = delta * big
                     for q in range(q0 + Qn):
-                        s = max(abs(R_out[k, i, q]), floor)
+                        s = max(abs(res[q]), floor)
                         Wi[q] = 1.0 / s if s > 0.0 else 0.0
-                    sol = 0
-                    while True:
-                        for a in range(n):
-                            for q in range(q0):
-                                GW[a, q] = Gk[a, q] * Wi[q]
-                        S = np.dot(GW, Gk.T)
-                        SCt = np.dot(S, CPT)
-                        M = np.dot(CP, SCt)
-                        for r in range(m):
-                            Mi[r, :] = M[r, :]
-                            s = 0.0
-                            for e in range(n):
-                                s += Phi[i, e] * SCt[e, r]
-                            rhs1[r, 0] = s
-                        _noise_normal(Mi, rhs1, Wi, q0, HnT, ZT, lo, hi, Lnw, i)
-                        for r in range(m):
-                            Mi[r, r] += 1e-14 * Mi[r, r] + 1e-300
-                        _cholesky(Mi)
-                        _cholesky_solve(Mi, rhs1)
-                        for e in range(n):
-                            s = Phi[i, e]
-                            for r in range(m):
-                                s -= rhs1[r, 0] * CP[r, e]
-                            v[0, e] = s
-                        rp = np.dot(v, Gk)
-                        r1 = 0.0
-                        big = 0.0
-                        for q in range(q0):
-                            res[q] = rp[0, q]
-                        for q in range(Qn):
-                            s = ZT[q, i] if q < Lnw else 0.0
-                            for r in range(lo[q], hi[q]):
-                                s -= rhs1[r, 0] * HnT[q, r]
-                            res[q0 + q] = s
-                        for q in range(q0 + Qn):
-                            a1 = abs(res[q])
-                            r1 += a1
-                            big = max(big, a1)
-                        improved = r1 < best[i] * (1.0 - gain)
-                        if r1 < best[i]:
-                            best[i] = r1
-                            R_out[k, i, :] = res
-                            for r in range(m):
-                                lam_best[i, r] = rhs1[r, 0]
-                        sol += 1
-                        if sol > iterations + extra or (sol > iterations and not improved):
-                            break
-                        floor = delta * big
-                        for q in range(q0 + Qn):
-                            s = max(abs(res[q]), floor)
-                            Wi[q] = 1.0 / s if s > 0.0 else 0.0
         for i in range(n):
             # the estimate, its magnitude and the rounding allowance (module docstring)
             est = xc[i]

@@ -160,7 +160,7 @@ _IRLS_FLOOR = 1e-2
 
 #: After its ``iterations`` reweighted solves, the window solves again while the last solve tightened a state's bound
 #: by more than :data:`WINDOW_SOLVE_GAIN` (relative), at most this many more times (:mod:`eqrec.bounds.window`).
-WINDOW_EXTRA_SOLVES = 8
+WINDOW_EXTRA_SOLVES = 2
 
 #: The relative tightening that earns another solve of the window (see :data:`WINDOW_EXTRA_SOLVES`).
 WINDOW_SOLVE_GAIN = 0.03
@@ -169,7 +169,7 @@ WINDOW_SOLVE_GAIN = 0.03
 #: Reweighted solves of the window shared by all states (one factorization each) after the first, then at most
 #: :data:`WINDOW_EXTRA_SOLVES` more while the largest bound tightens by more than :data:`WINDOW_SOLVE_GAIN`
 #: (:mod:`eqrec.bounds.window`).
-SHARED_SOLVES = 2
+SHARED_SOLVES = 1
 
 #: After the shared solves, the states whose bound is within this relative margin of the largest are solved one by
 #: one (``iterations`` reweighted solves each, then more while they tighten; :mod:`eqrec.bounds.window`).
