@@ -68,8 +68,8 @@ estimate is linear to about :math:`10^{-12}` relative (:math:`1.6\cdot 10^{-12}`
 worst cases of ``tests/test_planted_bugs.py``, against :math:`3.5\cdot 10^{-13}` without the window); the bound
 holds for the weights each run uses, exactly.  Measured (``benchmarks/bench_zonotope.py``, bound /
 information limit per step, two carts, 30 % loss, delays 0..2, order 40): without the window (the filters'
-own sets, replayed for late packets) median 1.18, with a window of 20 steps 1.13, with the default window of 30
-steps 1.07 (:mod:`eqrec.bounds.window` for the cost; ``benchmarks/bench_zonotope.py`` for the figures).
+own sets, replayed for late packets) median 1.18, with a window of 20 steps 1.12, with the default window of 30
+steps 1.055 (:mod:`eqrec.bounds.window` for the cost; ``benchmarks/bench_zonotope.py`` for the figures).
 
 Late packets: the window, ``L >= D + 1``
 ----------------------------------------
@@ -173,7 +173,7 @@ SHARED_SOLVES = 1
 
 #: After the shared solves, the states whose bound is within this relative margin of the largest are solved one by
 #: one (``iterations`` reweighted solves each, then more while they tighten; :mod:`eqrec.bounds.window`).
-PER_STATE_MARGIN = 0.05
+PER_STATE_MARGIN = 0.0
 
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
