@@ -27,7 +27,7 @@ with Combastel's F-radius (Kalman-shaped) gain and Girard's box reduction, each 
 of the last ``D`` steps, no window (:class:`PlainFilter` below, built from the package's own filter step and
 reduction).  The last line gives the default against the reference at order 40.  Columns: µs per ``step``
 (CPU time of the process, median over ``--repeats`` timed runs on a pre-built arrival list, no simulation in
-the loop; the first call, which loads the compiled loops, is not timed), and bound / limit per step pooled over the seeds (median, p95,
+the loop; a first untimed run loads the compiled loops), and bound / limit per step pooled over the seeds (median, p95,
 max), where the limit is :func:`eqrec.bounds.information.information_limit` (max over states, per step).  The
 guarantee is also counted: violations of ``|x - x̂|_∞ <= bound`` with noise at random box corners (must be 0).
 
