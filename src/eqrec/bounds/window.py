@@ -34,8 +34,9 @@ The ``L1`` problem is solved approximately by iteratively reweighted least squar
   states), then again while the last solve tightened the largest radius by more than a relative ``gain``, at most
   ``extra`` more times.  With shared weights, :math:`\Lambda = X W H^\top (H W H^\top)^{-1}` for all states at
   once: one matrix :math:`HWH^\top`, one factorization (LAPACK), ``n`` right-hand sides.
-* **Per-state solves** for the states whose radius is within a relative ``margin`` of the largest (the states
-  that set the reported bound :math:`\max_i \beta_i`): from :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
+* **Per-state solves**, greedily: the state of largest radius (the one that sets the reported bound
+  :math:`\max_i \beta_i`), then the state of largest radius among those not yet solved while its radius is within
+  a relative ``margin`` of the largest, at most ``states`` of them: from :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
   of the state's best residual, solve :math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}` and reweight,
   ``iterations`` times, then again while the last solve tightened the radius by more than ``gain``, at most
   ``extra`` more times.
@@ -280,7 +281,7 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn):  # pragma: no cover - compi
 
 @numba.njit(cache=True)
 def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
-                    gain, iterations, margin):
+                    gain, iterations, margin, states):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -307,10 +308,12 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     gain : float
         Relative tightening that earns another solve.
     iterations : int
-        Per-state reweighted solves (``>= 0``, then at most ``extra`` more while they tighten) for the states whose
-        radius after the shared solves is within ``margin`` of the largest.
+        Per-state reweighted solves (``>= 0``, then at most ``extra`` more while they tighten) for the states
+        solved one by one (module docstring).
     margin : float
         Relative margin of the states solved one by one (``< 0``: none).
+    states : int
+        At most this many states solved one by one per filter.
 
     Returns
     -------
@@ -504,7 +507,8 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
             res = np.empty(q0 + Qn)
             Wi = np.empty(q0 + Qn)
             refined = np.zeros(n, dtype=np.bool_)
-            while True:  # the unrefined state of largest radius, while within the margin of the largest radius
+            count = 0
+            while count < states:  # the unrefined state of largest radius, while within the margin of the largest radius
                 i = -1
                 top = 0.0
                 for e in range(n):
@@ -514,6 +518,7 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                 if i < 0 or best[i] < (1.0 - margin) * top:
                     break
                 refined[i] = True
+                count += 1
                 big = 0.0
                 for q in range(q0 + Qn):
                     big = max(big, abs(R_out[k, i, q]))

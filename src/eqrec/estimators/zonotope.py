@@ -171,9 +171,14 @@ WINDOW_SOLVE_GAIN = 0.03
 #: (:mod:`eqrec.bounds.window`).
 SHARED_SOLVES = 1
 
-#: After the shared solves, the states whose bound is within this relative margin of the largest are solved one by
-#: one (``iterations`` reweighted solves each, then more while they tighten; :mod:`eqrec.bounds.window`).
+#: After the shared solves, states are solved one by one, the largest bound first, while the unsolved state of
+#: largest bound is within this relative margin of the largest (0: while it is the largest; ``iterations``
+#: reweighted solves each, then more while they tighten; :mod:`eqrec.bounds.window`).
 PER_STATE_MARGIN = 0.0
+
+#: At most this many states are solved one by one per step and filter (the cost of a per-state solve is about that
+#: of a shared one, which solves all states).
+PER_STATE_STATES = 2
 
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
@@ -371,9 +376,10 @@ class ZonotopeEstimator:
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
     iterations : int, optional
-        Reweighted solves of the window per state (``>= 0``; default 2), for the states whose bound after the
-        :data:`SHARED_SOLVES` shared solves is within :data:`PER_STATE_MARGIN` of the largest; then, per state, at
-        most :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
+        Reweighted solves of the window per state (``>= 0``; default 2), after the :data:`SHARED_SOLVES` shared
+        solves, for the state of the largest bound and, while the largest is not yet solved so, the next (at most
+        :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
+        :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
 
     Attributes
     ----------
@@ -651,7 +657,7 @@ class ZonotopeEstimator:
         sets = intake["carried"]
         xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["G"],
                                            SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                           self.iterations, PER_STATE_MARGIN)
+                                           self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
         states = np.arange(self.system.n)
         return xs[pick, states], radii_[pick, states], {"_R": R, "_pick": pick}
@@ -784,7 +790,7 @@ class ZonotopeEstimator:
             drive[-1] = 0.0
             xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._G,
                                                SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                               self.iterations, PER_STATE_MARGIN)
+                                               self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
             pick = np.argmin(radii_, axis=0)
             states = np.arange(self.system.n)
             xhat, beta = xs[pick, states], radii_[pick, states]
