@@ -25,26 +25,46 @@ never below the information limit of the whole trace and reaches it when the zon
 The weights: iteratively reweighted least squares
 -------------------------------------------------
 The ``L1`` problem is solved approximately by iteratively reweighted least squares (IRLS; e.g. Björck,
-*Numerical Methods for Least Squares Problems*, SIAM 1996, §4.5): start from the weights
-:math:`1/\|(X_{\cdot q}, H_{\cdot q})\|_2` of each column ``q`` (the reweighted gain of
-:mod:`eqrec.estimators.zonotope`, here over the whole window), solve
-:math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}`, then set :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
-from the residual :math:`R_i = X_i - \lambda_i H` and solve again, ``iterations`` times; then again while the last
-solve tightened the radius by more than a relative ``gain``, at most ``extra`` more times (the first windows
-after a reset, from a box, need more solves than the later ones, from a filtered zonotope).  Every iterate is a
-valid estimate; the one with the smallest radius is kept (so more iterations never loosen the bound).  The
-weights depend on the arrivals and the zonotope only, never on the measured values, so the estimate is linear in
-the data given the zonotope.  The relative floor :math:`\delta` of the residuals bounds the ratio of the weights
-(``1/δ``) and so the conditioning of each weighted least-squares problem.
+*Numerical Methods for Least Squares Problems*, SIAM 1996, §4.5), in two stages.
+
+* **Shared solves.**  One weight per column ``q``, the same for every state: first the inverse generator
+  lengths :math:`1/\|g_q\|_2` of the prior and :math:`1/\|(X_{\cdot q}, H_{\cdot q})\|_2` of the noise columns,
+  then, ``shared`` times, :math:`W_q = 1/\max(a_q, \delta\max_q a_q)` with
+  :math:`a_q = \sum_i |R_{iq}| / \|R_i\|_1` (each state's residual relative to its radius, summed over the
+  states), then again while the last solve tightened the largest radius by more than a relative ``gain``, at most
+  ``extra`` more times.  With shared weights, :math:`\Lambda = X W H^\top (H W H^\top)^{-1}` for all states at
+  once: one matrix :math:`HWH^\top`, one factorization (LAPACK), ``n`` right-hand sides.
+* **Per-state solves**, greedily: the state of largest radius (the one that sets the reported bound
+  :math:`\max_i \beta_i`), then the state of largest radius among those not yet solved while its radius is within
+  a relative ``margin`` of the largest, at most ``states`` of them: from :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
+  of the state's best residual, solve :math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}` and reweight,
+  ``iterations`` times, then again while the last solve tightened the radius by more than ``gain``, at most
+  ``extra`` more times.
+
+Every iterate is a valid estimate; per state the one with the smallest radius is kept (so more iterations never
+loosen the bound: the shared solves do not depend on ``iterations``, and the per-state sequence with more
+iterations extends the one with fewer).  The weights depend on the arrivals and the zonotope only, never on the
+measured values, so the estimate is linear in the data given the zonotope.  The relative floor :math:`\delta` of
+the residuals bounds the ratio of the weights (``1/δ``) and so the conditioning of each weighted least-squares
+problem.
 
 Cost
 ----
-The ``q_0`` generators of :math:`G_0` enter only through the rank-``n`` products
-:math:`[A^L; C\Phi] G_0 W G_0^\top [\,\cdot\,]^\top` (``n × n`` per state), and each noise column of ``H`` is
-nonzero on a contiguous range of rows (a process noise acts on the later measurements only, a measurement noise
-on its own time), so one iteration costs :math:`O(n(n q_0 + \sum_q r_q^2 + m^3))` per state, ``r_q`` the rows
-of column ``q``.  The kernel is compiled with Numba (no ``fastmath``: IEEE arithmetic, the same bytes on every
-machine).
+No column of ``H`` is formed.  Read as variances, the weights make :math:`HWH^\top` the covariance of the
+measured outputs and :math:`XWH^\top` their covariance with :math:`x(t+1)`, for the prior covariance
+:math:`S = G_0 W G_0^\top`, process noise :math:`E\,\mathrm{diag}(W)E^\top` and measurement noise
+:math:`V\,\mathrm{diag}(W)V^\top`: a covariance recursion forward in time fills both
+(:func:`_normal_equations`, the rows of each measured time carried forward by :math:`A`).  The residuals come
+backwards: :math:`T(L) = I`, :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`, the residual on :math:`w(s)` is
+:math:`T(s+1)E(s)`, on :math:`v(s)` :math:`-\lambda_s V(s)`, on the prior :math:`T(0)G_0` (:func:`_residuals`).
+A shared solve for all ``n`` states then costs :math:`O(n^2 q_0)` (the two products with :math:`G_0`, BLAS),
+:math:`O(L(n\,\mathrm{nnz}(A) + n m + p n^2))` for the recursions and one LAPACK solve with ``n`` right-hand sides
+(:math:`O(m^3 + n m^2)`); a per-state solve the same with one right-hand side.  Measured on the tank chains of
+``benchmarks/bench_zonotope.py --part scale`` (n = 30, p = 5, a window of 30 steps: m ≈ 110 measured rows,
+:math:`q_0 = 1200`): about 1 ms a shared solve, against about 7 ms for the explicit normal equations of the earlier
+per-state kernel, which solved every state 3 to 11 times.  The rest is compiled with Numba (no ``fastmath``); the
+bytes are those of the machine's BLAS and LAPACK (the same on one machine; the rounding allowance below holds for
+any order of the sums).
 
 Floating point
 --------------
@@ -54,7 +74,8 @@ magnitudes of every quantity of the computation: the propagation of :math:`|c_0|
 magnitudes of the measured rows; :math:`\kappa = 4(L + 2)(n + m + Q)` (:func:`eqrec.bounds.rounding.rounding_allowance`
 with ``terms = (L + 2)(n + m + Q)``) covers the ``L`` chained products, the
 dot products of length at most ``n + m + Q`` (``Q`` the columns of ``X``), the sums of the radius (Higham,
-*Accuracy and Stability of Numerical Algorithms*, eqs. (3.4), (4.4)) and a simulated true state of the same size.
+*Accuracy and Stability of Numerical Algorithms*, eqs. (3.4), (4.4): bounds that hold for any order of the sums,
+BLAS's included) and a simulated true state of the same size.
 """
 
 from __future__ import annotations
@@ -105,26 +126,162 @@ def accumulate_product(M: np.ndarray, G: np.ndarray, out: np.ndarray) -> None:  
 
 
 @numba.njit(cache=True)
-def _dot(x: np.ndarray, y: np.ndarray, length: int) -> float:  # pragma: no cover - compiled
-    """``x · y`` over the first ``length`` entries with four partial sums (a fixed order: the same bytes on every
-    machine, and independent chains the processor overlaps)."""
-    s0 = s1 = s2 = s3 = 0.0
-    q = 0
-    while q + 4 <= length:
-        s0 += x[q] * y[q]
-        s1 += x[q + 1] * y[q + 1]
-        s2 += x[q + 2] * y[q + 2]
-        s3 += x[q + 3] * y[q + 3]
-        q += 4
-    while q < length:
-        s0 += x[q] * y[q]
-        q += 1
-    return (s0 + s1) + (s2 + s3)
+def _symmetric_ridge(M: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Copy the lower triangle of ``M`` to the upper and add a relative ridge to the diagonal (``M`` is singular when
+    two measured rows coincide)."""
+    m = M.shape[0]
+    for r in range(m):
+        M[r, r] += 1e-14 * M[r, r] + 1e-300
+        for c in range(r):
+            M[c, r] = M[r, c]
 
 
 @numba.njit(cache=True)
-def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, extra,  # pragma: no cover
-                    gain):
+def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cover - compiled
+    r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
+
+    With the column weights ``W`` read as variances (prior :math:`S = G_0 W G_0^\top`, process noise
+    :math:`E\,\mathrm{diag}(W)E^\top`, measurement noise :math:`V\,\mathrm{diag}(W)V^\top`), :math:`HWH^\top` is the
+    covariance of the measured outputs and :math:`XWH^\top` that of ``x(t+1)`` with them.  Forward in time,
+    :math:`\Sigma(s+1) = A\Sigma A^\top + E D E^\top`; the rows of a measured time ``s`` are
+    :math:`C\Sigma(s)`, carried to the later times by :math:`A^\top` (``BT``, transposed: ``n × m``).  Fills the lower
+    triangle of ``M`` (``m × m``) and ``BT`` (``n × m``, :math:`XWH^\top`)."""
+    L, n = A.shape[0], A.shape[1]
+    p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
+    Lnw = L * nw
+    Sig = S.copy()
+    tmp = np.empty((n, n))
+    newB = np.empty((n, BT.shape[1]))
+    rows = 0
+    tt = 0
+    for j in range(L):
+        if measured[j]:
+            for a in range(p):
+                for r in range(rows + a + 1):
+                    M[rows + a, r] = 0.0
+                for e in range(n):  # rows of earlier times: C_j (their rows carried to j)
+                    f = C[j, a, e]
+                    if f != 0.0:
+                        for r in range(rows):
+                            M[rows + a, r] += f * BT[e, r]
+                for b in range(n):  # the new row C_j Sigma(j), stored as a column of BT
+                    s = 0.0
+                    for e in range(n):
+                        s += C[j, a, e] * Sig[e, b]
+                    BT[b, rows + a] = s
+            for a in range(p):
+                for c in range(a + 1):
+                    s = 0.0
+                    for e in range(n):
+                        s += C[j, c, e] * BT[e, rows + a]
+                    for q in range(nv):
+                        s += V[j, a, q] * W[q0 + Lnw + tt * nv + q] * V[j, c, q]
+                    M[rows + a, rows + c] = s
+            rows += p
+            tt += 1
+        # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T
+        for a in range(n):
+            for r in range(rows):
+                newB[a, r] = 0.0
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    for r in range(rows):
+                        newB[a, r] += f * BT[e, r]
+        for a in range(n):
+            for r in range(rows):
+                BT[a, r] = newB[a, r]
+        for a in range(n):  # tmp = (A Sigma)^T = Sigma A^T (Sigma symmetric)
+            for b in range(n):
+                tmp[b, a] = 0.0
+        for a in range(n):
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    for b in range(n):
+                        tmp[b, a] += f * Sig[e, b]
+        for a in range(n):  # Sigma = A tmp
+            for b in range(n):
+                Sig[a, b] = 0.0
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    for b in range(n):
+                        Sig[a, b] += f * tmp[e, b]
+        for q in range(nw):
+            w = W[q0 + j * nw + q]
+            if w == 0.0:
+                continue
+            for a in range(n):
+                fa = E[j, a, q] * w
+                if fa != 0.0:
+                    for b in range(n):
+                        Sig[a, b] += fa * E[j, b, q]
+
+
+@numba.njit(cache=True)
+def _residuals(A, C, E, V, measured, lamT, TT, RTn):  # pragma: no cover - compiled
+    r"""The noise columns of the residuals :math:`X_i - \lambda_i H` of ``k`` states, backwards in time.
+
+    :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
+    :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`; the residual on :math:`w(s)` is :math:`T(s+1)E(s)`, on :math:`v(s)`
+    :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
+    on return).  ``lamT`` (``m × k``): the weights of the states, by measured row; ``RTn`` (``Q × k``): the
+    residuals on the noise columns (process noise by time, then the measurement noise of the measured times)."""
+    L, n = A.shape[0], A.shape[1]
+    p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
+    k = TT.shape[1]
+    Lnw = L * nw
+    m = lamT.shape[0]
+    times = m // p if p > 0 else 0
+    newT = np.empty((n, k))
+    rows = m
+    tt = times
+    for j in range(L - 1, -1, -1):
+        for q in range(nw):  # w(j): T(j+1) E(j)
+            col = j * nw + q
+            for i in range(k):
+                RTn[col, i] = 0.0
+            for a in range(n):
+                f = E[j, a, q]
+                if f != 0.0:
+                    for i in range(k):
+                        RTn[col, i] += f * TT[a, i]
+        for a in range(n):  # T <- T A(j), transposed: TT <- A^T TT
+            for i in range(k):
+                newT[a, i] = 0.0
+        for e in range(n):
+            for a in range(n):
+                f = A[j, e, a]
+                if f != 0.0:
+                    for i in range(k):
+                        newT[a, i] += f * TT[e, i]
+        for a in range(n):
+            for i in range(k):
+                TT[a, i] = newT[a, i]
+        if measured[j]:
+            rows -= p
+            tt -= 1
+            for c in range(p):
+                for a in range(n):
+                    f = C[j, c, a]
+                    if f != 0.0:
+                        for i in range(k):
+                            TT[a, i] -= f * lamT[rows + c, i]
+            for q in range(nv):  # v(j): -lambda_j V(j)
+                col = Lnw + tt * nv + q
+                for i in range(k):
+                    RTn[col, i] = 0.0
+                for c in range(p):
+                    f = V[j, c, q]
+                    if f != 0.0:
+                        for i in range(k):
+                            RTn[col, i] -= f * lamT[rows + c, i]
+
+
+@numba.njit(cache=True)
+def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
+                    gain, iterations, margin, states):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -141,14 +298,22 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
         Centres of the ``K`` zonotopes at the window start.
     G0 : ndarray, shape (K, n, q0)
         Their generators.
-    iterations : int
-        Reweighted solves after the first (``>= 0``).
+    shared : int
+        Shared reweighted solves after the first (``>= 0``; one factorization for all states).
     delta : float
         Relative floor of the IRLS weights' residuals.
     extra : int
-        At most this many more solves, each while the last tightened the radius by more than ``gain``.
+        At most this many more solves, shared and per state, each while the last tightened the radius (the
+        largest, for the shared ones) by more than ``gain``.
     gain : float
         Relative tightening that earns another solve.
+    iterations : int
+        Per-state reweighted solves (``>= 0``, then at most ``extra`` more while they tighten) for the states
+        solved one by one (module docstring).
+    margin : float
+        Relative margin of the states solved one by one (``< 0``: none).
+    states : int
+        At most this many states solved one by one per filter.
 
     Returns
     -------
@@ -170,72 +335,68 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
         if measured[j]:
             times += 1
     m = times * p
-    Qn = L * nw + times * nv
-    # --- propagation over the window: Phi = Phi(s, s0), Z = effect of w on x(s), rows of H ---------------------
-    Phi = np.eye(n)
-    Z = np.zeros((n, L * nw))
-    CP = np.zeros((m, n))  # C(s) Phi(s, s0) for the measured rows
-    Hn = np.zeros((m, Qn))  # noise columns of H: w(s0..t), then v of the measured times
-    lo = np.zeros(Qn, dtype=np.int64)  # each noise column is nonzero on rows lo..hi-1
-    hi = np.zeros(Qn, dtype=np.int64)
-    row = 0
-    vcol = L * nw
-    for j in range(L):
-        if measured[j]:
-            for a in range(p):
-                for b in range(n):
-                    s = 0.0
-                    for e in range(n):
-                        s += C[j, a, e] * Phi[e, b]
-                    CP[row + a, b] = s
-                for q in range(j * nw):
-                    s = 0.0
-                    for e in range(n):
-                        s += C[j, a, e] * Z[e, q]
-                    Hn[row + a, q] = s
-                for q in range(nv):
-                    Hn[row + a, vcol + q] = V[j, a, q]
-            for q in range(nv):
-                lo[vcol + q] = row
-                hi[vcol + q] = row + p
-            vcol += nv
-            row += p
-        # Phi <- A Phi ; Z <- A Z, then the new process noise
-        newPhi = np.zeros((n, n))
-        newZ = np.zeros((n, L * nw))
+    Lnw = L * nw
+    Qn = Lnw + times * nv
+    # first weights of the noise columns: inverse lengths of the columns of (X, H), by the backward Gramian
+    # O(s) = A^T O(s+1) A + C^T C [measured s], O(L) = I: the column of w(s, q) has length^2 E_q^T O(s+1) E_q
+    wn = np.zeros(Qn)
+    O = np.eye(n)
+    tmp = np.empty((n, n))
+    tt = times
+    for j in range(L - 1, -1, -1):
+        for q in range(nw):
+            s = 0.0
+            for a in range(n):
+                fa = E[j, a, q]
+                if fa != 0.0:
+                    for b in range(n):
+                        s += fa * O[a, b] * E[j, b, q]
+            wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+        for a in range(n):  # O <- A^T O A + C^T C
+            for b in range(n):
+                tmp[a, b] = 0.0
+            for e in range(n):
+                f = A[j, e, a]
+                if f != 0.0:
+                    for b in range(n):
+                        tmp[a, b] += f * O[e, b]
+        for a in range(n):
+            for b in range(n):
+                O[a, b] = 0.0
         for a in range(n):
             for e in range(n):
-                aij = A[j, a, e]
-                if aij != 0.0:
+                f = tmp[a, e]
+                if f != 0.0:
                     for b in range(n):
-                        newPhi[a, b] += aij * Phi[e, b]
-                    for q in range(j * nw):
-                        newZ[a, q] += aij * Z[e, q]
-        for a in range(n):
-            for q in range(nw):
-                newZ[a, j * nw + q] = E[j, a, q]
-        Phi = newPhi
-        Z = newZ
-    # rows of the process noise columns: the measured rows after its time
-    row = 0
-    for j in range(L):
-        for q in range(nw):
-            lo[j * nw + q] = row + (p if measured[j] else 0)
-            hi[j * nw + q] = m
+                        O[a, b] += f * A[j, e, b]
         if measured[j]:
-            row += p
+            tt -= 1
+            for c in range(p):
+                for a in range(n):
+                    f = C[j, c, a]
+                    if f != 0.0:
+                        for b in range(n):
+                            O[a, b] += f * C[j, c, b]
+            for q in range(nv):
+                s = 0.0
+                for c in range(p):
+                    s += V[j, c, q] * V[j, c, q]
+                wn[Lnw + tt * nv + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
     xhat = np.empty((K, n))
     radius = np.empty((K, n))
     lam_out = np.zeros((K, n, m))
     R_out = np.zeros((K, n, q0 + Qn))
+    M = np.empty((m, m))
+    BT = np.empty((n, m))
     for k in range(K):
+        Gk = np.ascontiguousarray(G0[k])
         # centre and magnitudes over the window
         xc = c0[k].copy()
         zm = np.empty(n)
         for a in range(n):
             s = 0.0
             for q in range(q0):
-                s += abs(G0[k, a, q])
+                s += abs(Gk[a, q])
             zm[a] = abs(xc[a]) + s
         resid = np.zeros(m)
         magy = np.zeros(m)
@@ -267,136 +428,150 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, iterations, delta, e
                 nm[a] = sm
             xc = nx
             zm = nm
-        # prior columns: PX = Phi G0 (rows of X), PH = CP G0 (rows of H)
-        PX = np.zeros((n, q0))
-        PH = np.zeros((m, q0))
-        accumulate_product(Phi, G0[k], PX)
-        accumulate_product(CP, G0[k], PH)
-        # first weights: inverse column lengths of (X, H)
-        w0 = np.zeros(q0 + Qn)
-        for a in range(n):  # column sums of squares, row by row (contiguous)
-            for q in range(q0):
-                w0[q] += PX[a, q] * PX[a, q]
-        for a in range(m):
-            for q in range(q0):
-                w0[q] += PH[a, q] * PH[a, q]
-        for q in range(q0):
-            w0[q] = 1.0 / np.sqrt(w0[q]) if w0[q] > 0.0 else 0.0
-        for q in range(Qn):
-            s = 0.0
-            if q < L * nw:
-                for a in range(n):
-                    s += Z[a, q] * Z[a, q]
-            for a in range(lo[q], hi[q]):
-                s += Hn[a, q] * Hn[a, q]
-            w0[q0 + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+        best = np.full(n, np.inf)
+        lam_best = np.zeros((n, m))
         W = np.empty(q0 + Qn)
-        res = np.empty(q0 + Qn)  # the residual X_i - lam H of the current solve
-        absR = np.empty(q0 + Qn)
-        M = np.empty((m, m))
-        rhs = np.empty(m)
-        lam = np.zeros(m)
-        S = np.empty((n, n))
+        for q in range(q0):  # first weights of the prior: inverse generator lengths
+            s = 0.0
+            for a in range(n):
+                s += Gk[a, q] * Gk[a, q]
+            W[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+        for q in range(Qn):
+            W[q0 + q] = wn[q]
         GW = np.empty((n, q0))
-        SCt = np.empty((n, m))
-        for i in range(n):
-            # lambda = 0: the prediction alone
-            best = 0.0
-            for q in range(q0):
-                best += abs(PX[i, q])
-                R_out[k, i, q] = PX[i, q]
-            for q in range(L * nw):
-                best += abs(Z[i, q])
-                R_out[k, i, q0 + q] = Z[i, q]
-            lam_best = np.zeros(m)
+        resT = np.empty((Qn, n))
+        lamT = np.zeros((m, n))
+        rad = np.empty(n)
+        agg = np.empty(q0 + Qn)
+        it = 0
+        top = np.inf
+        # --- shared solves: one factorization for every state (nothing measured: the prediction alone) ----------
+        while True:
             if m > 0:
-                for q in range(q0 + Qn):
-                    W[q] = w0[q]
-                it = 0
-                while True:
-                    # S = G0 W G0^T (n x n), then M = CP S CP^T + Hn W Hn^T, rhs = CP S Phi_i^T + Hn W Z_i^T
-                    for a in range(n):
-                        for q in range(q0):
-                            GW[a, q] = G0[k, a, q] * W[q]
-                    for a in range(n):
-                        for b in range(a + 1):
-                            s = _dot(GW[a], G0[k, b], q0)
-                            S[a, b] = s
-                            S[b, a] = s
-                    for a in range(n):
-                        for r in range(m):
-                            s = 0.0
-                            for e in range(n):
-                                s += S[a, e] * CP[r, e]
-                            SCt[a, r] = s
-                    for r in range(m):
-                        for c in range(r + 1):
-                            s = 0.0
-                            for e in range(n):
-                                s += CP[r, e] * SCt[e, c]
-                            M[r, c] = s
-                        s = 0.0
-                        for e in range(n):
-                            s += Phi[i, e] * SCt[e, r]
-                        rhs[r] = s
-                    for q in range(Qn):
-                        wq = W[q0 + q]
-                        if wq == 0.0:
-                            continue
-                        for r in range(lo[q], hi[q]):
-                            hr = Hn[r, q] * wq
-                            if hr == 0.0:
-                                continue
-                            for c in range(lo[q], r + 1):
-                                M[r, c] += hr * Hn[c, q]
-                            if q < L * nw:
-                                rhs[r] += hr * Z[i, q]
-                    for r in range(m):  # a relative ridge: M is singular when two measured rows coincide
-                        M[r, r] += 1e-14 * M[r, r] + 1e-300
-                    spd_solve(M, rhs, lam)
-                    # residual R_i = X_i - lam H and its 1-norm
-                    v = np.empty(n)
-                    for e in range(n):
-                        s = Phi[i, e]
-                        for r in range(m):
-                            s -= lam[r] * CP[r, e]
-                        v[e] = s
+                for a in range(n):
                     for q in range(q0):
-                        res[q] = v[0] * G0[k, 0, q]
-                    for e in range(1, n):
-                        for q in range(q0):
-                            res[q] += v[e] * G0[k, e, q]
+                        GW[a, q] = Gk[a, q] * W[q]
+                S = np.dot(GW, Gk.T)  # G0 W G0^T
+                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT)
+                _symmetric_ridge(M)
+                lamT[:, :] = np.linalg.solve(M, BT.T)  # the weights of every state, (m, n): one factorization (LAPACK)
+            TT = np.eye(n)
+            _residuals(A, C, E, V, measured, lamT, TT, resT)
+            RP = np.dot(TT.T, Gk)  # residual on the prior generators, (n, q0)
+            for i in range(n):
+                s = 0.0
+                for q in range(q0):
+                    s += abs(RP[i, q])
+                rad[i] = s
+            for q in range(Qn):
+                for e in range(n):
+                    rad[e] += abs(resT[q, e])
+            for i in range(n):
+                if rad[i] < best[i]:  # keep the best solve per state (every solve is a valid estimate)
+                    best[i] = rad[i]
+                    for q in range(q0):
+                        R_out[k, i, q] = RP[i, q]
                     for q in range(Qn):
-                        s = Z[i, q] if q < L * nw else 0.0
-                        for r in range(lo[q], hi[q]):
-                            s -= lam[r] * Hn[r, q]
-                        res[q0 + q] = s
-                    rad = 0.0
+                        R_out[k, i, q0 + q] = resT[q, i]
+                    for r in range(m):
+                        lam_best[i, r] = lamT[r, i]
+            newtop = 0.0
+            for i in range(n):
+                newtop = max(newtop, best[i])
+            improved = it > 0 and newtop < top * (1.0 - gain)  # a reweighting tightened the largest radius
+            top = newtop
+            it += 1
+            if m == 0 or it > shared + extra or (it > shared and not improved):
+                break
+            # shared weights: each state's residual, relative to its radius, summed over the states
+            for q in range(q0 + Qn):
+                agg[q] = 0.0
+            for i in range(n):
+                inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
+                for q in range(q0):
+                    agg[q] += abs(RP[i, q]) * inv
+            for q in range(Qn):
+                for e in range(n):
+                    inv = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
+                    agg[q0 + q] += abs(resT[q, e]) * inv
+            big = 0.0
+            for q in range(q0 + Qn):
+                big = max(big, agg[q])
+            floor = delta * big
+            for q in range(q0 + Qn):
+                W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
+        # --- per-state solves for the states near the largest radius ----------------------------------------
+        if m > 0 and margin >= 0.0:
+            lam1 = np.empty((m, 1))
+            res1 = np.empty((Qn, 1))
+            res = np.empty(q0 + Qn)
+            Wi = np.empty(q0 + Qn)
+            refined = np.zeros(n, dtype=np.bool_)
+            count = 0
+            while count < states:  # the unrefined state of largest radius, while within the margin of the largest radius
+                i = -1
+                top = 0.0
+                for e in range(n):
+                    top = max(top, best[e])
+                    if not refined[e] and (i < 0 or best[e] > best[i]):
+                        i = e
+                if i < 0 or best[i] < (1.0 - margin) * top:
+                    break
+                refined[i] = True
+                count += 1
+                big = 0.0
+                for q in range(q0 + Qn):
+                    big = max(big, abs(R_out[k, i, q]))
+                floor = delta * big
+                for q in range(q0 + Qn):
+                    s = max(abs(R_out[k, i, q]), floor)
+                    Wi[q] = 1.0 / s if s > 0.0 else 0.0
+                sol = 0
+                while True:
+                    for a in range(n):
+                        for q in range(q0):
+                            GW[a, q] = Gk[a, q] * Wi[q]
+                    S = np.dot(GW, Gk.T)
+                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT)
+                    _symmetric_ridge(M)
+                    for r in range(m):
+                        lam1[r, 0] = BT[i, r]
+                    lam1[:, :] = np.linalg.solve(M, lam1)
+                    T1 = np.zeros((n, 1))
+                    T1[i, 0] = 1.0
+                    _residuals(A, C, E, V, measured, lam1, T1, res1)
+                    rp = np.dot(T1.T, Gk)
+                    r1 = 0.0
                     big = 0.0
+                    for q in range(q0):
+                        res[q] = rp[0, q]
+                    for q in range(Qn):
+                        res[q0 + q] = res1[q, 0]
                     for q in range(q0 + Qn):
-                        s = abs(res[q])
-                        absR[q] = s
-                        rad += s
-                        big = max(big, s)
-                    improved = rad < best * (1.0 - gain)
-                    if rad < best:
-                        best = rad
-                        lam_best[:] = lam
-                        R_out[k, i, :] = res  # the error map of the kept weights
-                    it += 1
-                    if it > iterations + extra or (it > iterations and not improved):
+                        a1 = abs(res[q])
+                        r1 += a1
+                        big = max(big, a1)
+                    improved = r1 < best[i] * (1.0 - gain)
+                    if r1 < best[i]:
+                        best[i] = r1
+                        R_out[k, i, :] = res
+                        for r in range(m):
+                            lam_best[i, r] = lam1[r, 0]
+                    sol += 1
+                    if sol > iterations + extra or (sol > iterations and not improved):
                         break
                     floor = delta * big
                     for q in range(q0 + Qn):
-                        W[q] = 1.0 / max(absR[q], floor) if max(absR[q], floor) > 0.0 else 0.0
+                        s = max(abs(res[q]), floor)
+                        Wi[q] = 1.0 / s if s > 0.0 else 0.0
+        for i in range(n):
             # the estimate, its magnitude and the rounding allowance (module docstring)
             est = xc[i]
             mag = zm[i] + abs(xc[i])
             for r in range(m):
-                est += lam_best[r] * resid[r]
-                mag += abs(lam_best[r]) * (magy[r] + abs(resid[r]))
+                est += lam_best[i, r] * resid[r]
+                mag += abs(lam_best[i, r]) * (magy[r] + abs(resid[r]))
             xhat[k, i] = est
-            radius[k, i] = rounding_allowance_compiled(best, (L + 2) * (n + m + q0 + Qn), mag)
-            lam_out[k, i, :] = lam_best
+            radius[k, i] = rounding_allowance_compiled(best[i], (L + 2) * (n + m + q0 + Qn), mag)
+            lam_out[k, i, :] = lam_best[i]
     return xhat, radius, lam_out, R_out
-

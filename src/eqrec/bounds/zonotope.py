@@ -195,14 +195,14 @@ def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
     absT = np.empty((n, q))
     cost = np.empty(q)
     for k in range(K):
-        for a in range(n):
-            for j in range(q):
-                if principal:
-                    s = 0.0
-                    for e in range(n):
-                        s += U[k, e, a] * G[k, e, j]
-                    absT[a, j] = abs(s)
-                else:
+        if principal:
+            T = np.dot(np.ascontiguousarray(U[k].T), np.ascontiguousarray(G[k]))  # U^T G, the coordinates in the axes
+            for a in range(n):
+                for j in range(q):
+                    absT[a, j] = abs(T[a, j])
+        else:
+            for a in range(n):
+                for j in range(q):
                     absT[a, j] = abs(G[k, a, j])
         for j in range(q):
             s = 0.0

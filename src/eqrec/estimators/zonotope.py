@@ -17,7 +17,8 @@ convergence", Automatica 55, 2015):
 * **the exact window** over the last :math:`L = \max(\text{window}, D + 1)` steps
   (:func:`eqrec.bounds.window.window_estimate`): per state, the best linear estimate of :math:`x_i(t+1)` given
   the filter's zonotope at :math:`s_0` and every packet of times :math:`s_0..t` received so far, found by
-  iteratively reweighted least squares.  Its bound :math:`\beta_i = \|X_i - \lambda_i H\|_1` is the exact worst
+  iteratively reweighted least squares: solves whose weights all states share (one factorization for all), then
+  solves one state at a time for the states whose bound is near the largest.  Its bound :math:`\beta_i = \|X_i - \lambda_i H\|_1` is the exact worst
   case of that estimate (:mod:`eqrec.bounds.window`).
 
 Per state, the estimate and bound of the filter whose window is the tightest are reported
@@ -67,9 +68,8 @@ estimate is linear to about :math:`10^{-12}` relative (:math:`1.6\cdot 10^{-12}`
 worst cases of ``tests/test_planted_bugs.py``, against :math:`3.5\cdot 10^{-13}` without the window); the bound
 holds for the weights each run uses, exactly.  Measured (``benchmarks/bench_zonotope.py``, bound /
 information limit per step, two carts, 30 % loss, delays 0..2, order 40): without the window (the filters'
-own sets, replayed for late packets, the default until this version) median 1.18, with a window of 20 steps
-and 2 reweighted solves (more while they tighten) 1.12, at about 85 µs a step (:mod:`eqrec.bounds.window` for the
-cost).
+own sets, replayed for late packets) median 1.18, with a window of 20 steps 1.12, with the default window of 30
+steps 1.055 (:mod:`eqrec.bounds.window` for the cost; ``benchmarks/bench_zonotope.py`` for the figures).
 
 Late packets: the window, ``L >= D + 1``
 ----------------------------------------
@@ -107,7 +107,8 @@ of the products})` (``u`` the unit roundoff, :math:`\kappa` four times the numbe
 axis-aligned generators, which covers the rounding of the centre's and the generators' products and of a
 simulated true state of the same size; the window adds its own (:mod:`eqrec.bounds.window`).  Both are a
 relative :math:`10^{-13}`-order of the bound.  The three loops (filter step, reduction, window) are compiled
-with Numba, without ``fastmath``: IEEE arithmetic in a fixed order, so the same bytes on every machine.
+with Numba, without ``fastmath``; their products with the generators go through BLAS (``numpy.dot``), so the bytes
+are the same on one machine, and the allowances hold for any order of the sums.
 
 References: Alamo, Bravo, Camacho (Automatica 2005); Combastel (Automatica 2015); Girard (HSCC 2005); Scott,
 Raimondo, Marseglia, Braatz, "Constrained zonotopes: A new tool for set-based estimation and fault detection",
@@ -138,9 +139,9 @@ GAINS = ("fradius", "reweighted")
 DEFAULT_GAINS = ("reweighted",)
 
 #: The default length of the exact window (steps; module docstring).
-DEFAULT_WINDOW = 20
+DEFAULT_WINDOW = 30
 
-#: The default number of reweighted solves after the first in the window (module docstring).
+#: The default number of per-state reweighted solves of the window (module docstring).
 DEFAULT_ITERATIONS = 2
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
@@ -159,10 +160,25 @@ _IRLS_FLOOR = 1e-2
 
 #: After its ``iterations`` reweighted solves, the window solves again while the last solve tightened a state's bound
 #: by more than :data:`WINDOW_SOLVE_GAIN` (relative), at most this many more times (:mod:`eqrec.bounds.window`).
-WINDOW_EXTRA_SOLVES = 8
+WINDOW_EXTRA_SOLVES = 2
 
 #: The relative tightening that earns another solve of the window (see :data:`WINDOW_EXTRA_SOLVES`).
 WINDOW_SOLVE_GAIN = 0.03
+
+
+#: Reweighted solves of the window shared by all states (one factorization each) after the first, then at most
+#: :data:`WINDOW_EXTRA_SOLVES` more while the largest bound tightens by more than :data:`WINDOW_SOLVE_GAIN`
+#: (:mod:`eqrec.bounds.window`).
+SHARED_SOLVES = 1
+
+#: After the shared solves, states are solved one by one, the largest bound first, while the unsolved state of
+#: largest bound is within this relative margin of the largest (0: while it is the largest; ``iterations``
+#: reweighted solves each, then more while they tighten; :mod:`eqrec.bounds.window`).
+PER_STATE_MARGIN = 0.0
+
+#: At most this many states are solved one by one per step and filter (the cost of a per-state solve is about that
+#: of a shared one, which solves all states).
+PER_STATE_STATES = 2
 
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
@@ -357,10 +373,12 @@ class ZonotopeEstimator:
         The outer order reduction: the box in the principal axes of the generators (default,
         :func:`reduce_pca`) or Girard's axis-aligned box (:func:`reduce_girard`).
     window : int, optional
-        Length of the exact window in steps (``>= 1``; default 20); the window used is
+        Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
     iterations : int, optional
-        Reweighted solves of the window after the first (``>= 0``; default 2); then, per state, at most
+        Reweighted solves of the window per state (``>= 0``; default 2), after the :data:`SHARED_SOLVES` shared
+        solves, for the state of the largest bound and, while the largest is not yet solved so, the next (at most
+        :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
         :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
 
     Attributes
@@ -638,7 +656,8 @@ class ZonotopeEstimator:
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
         xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["G"],
-                                           self.iterations, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN)
+                                           SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
+                                           self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
         states = np.arange(self.system.n)
         return xs[pick, states], radii_[pick, states], {"_R": R, "_pick": pick}
@@ -770,7 +789,8 @@ class ZonotopeEstimator:
             drive = self._drive.copy()
             drive[-1] = 0.0
             xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._G,
-                                               self.iterations, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN)
+                                               SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
+                                               self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
             pick = np.argmin(radii_, axis=0)
             states = np.arange(self.system.n)
             xhat, beta = xs[pick, states], radii_[pick, states]
