@@ -71,8 +71,8 @@ def setup_of(cfg: dict, system: str, setting: str) -> CompareSetup:
     plant, traces = cfg["systems"][system], cfg["settings"][setting]
     try:
         return CompareSetup(loss=traces["loss"], max_delay=plant["max_delay"], horizon=plant["horizon"],
-                            runs=cfg["runs"], periods=cfg["periods"],
-                            burst=traces.get("burst"), seed=cfg["seed"])
+                            runs=cfg["runs"], periods=cfg["periods"], burst=traces.get("burst"), seed=cfg["seed"],
+                            exact_runs=cfg.get("exact_runs", 4))
     except InputError as exc:
         field = _FIELDS.get(exc.field or "", exc.field or "").format(system=system, setting=setting)
         raise InputError(str(exc).removeprefix(f"field '{exc.field}': "), field=field) from None
@@ -141,10 +141,10 @@ def step_run(cfg, inputs, outputs, wildcards) -> dict:
         write_table(result, str(tmp))
     compare_figure(result, outputs.png, outputs.pdf, title=title_of(plant["name"], setup))
     write_json(outputs.timings, {"us_per_step": {f: round(v, 1) for f, v in result.us_per_step.items()}})
-    report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
-              "n": model.n, "p": model.p,
-              "setup": {key: getattr(setup, key) for key in ("loss", "burst", "max_delay", "horizon", "runs",
-                                                             "periods", "steps", "seed", "sigmas", "on_time_rate")},
+    report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"], "n": model.n,
+              "p": model.p, "setup": {key: getattr(setup, key) for key in (
+                  "loss", "burst", "max_delay", "horizon", "runs", "periods", "steps", "seed", "sigmas",
+                  "on_time_rate", "exact_subset")},
               **summary_of(result)}
     write_json(outputs.json, report)
     log.info("%s %s: %d runs x %d steps, %d families", system, setting, setup.runs, setup.steps, len(FAMILIES))
