@@ -81,6 +81,7 @@ table = pd.read_csv(RES / "compare.csv")
 pairs = json.loads((RES / "summary.json").read_text())["pairs"]
 claims = pd.read_csv(ROOT / "results" / "claims.csv").set_index("id")
 pd.set_option("display.max_colwidth", None)
+pd.set_option("display.max_rows", 200)  # every row of the per-family tables (eight families x the pairs)
 CLASS, PREFIX, EXACT = "guaranteed, class engine", "guaranteed, prefix (P1)", "set-membership, exact"
 
 # %% [markdown]
