@@ -63,8 +63,8 @@ def _kalman_update(x, P, y, C, R, dev=None, allowance=None):
     if allowance is not None:  # the rounding of x + K (y - C x), column by column, summed (module docstring)
         aK, aC = np.abs(K), np.abs(C)
         mag = np.abs(x).sum(axis=1)
-        dev = np.abs(IKC) @ dev + allowance(0.0, C.shape[1] + C.shape[0] + 2,
-                                            mag + aK @ (np.abs(y).sum(axis=1) + aC @ mag))
+        dev = _carry(dev, IKC, allowance(0.0, C.shape[1] + C.shape[0] + 2, mag + aK @ (np.abs(y).sum(axis=1)
+                                                                                      + aC @ mag)))
     x = x + K @ (y - C @ x)
     P = IKC @ P @ IKC.T + K @ R @ K.T  # Joseph form
     return x, P, dev
@@ -74,8 +74,28 @@ def _predict_rounding(dev, x, A, drive, one, allowance):
     """The rounding allowance carried through ``A x + drive·oneᵀ`` (``None`` without an allowance)."""
     if allowance is None:
         return None
-    aA = np.abs(A)
-    return aA @ dev + allowance(0.0, A.shape[1] + 1, aA @ np.abs(x).sum(axis=1) + np.abs(drive) * np.abs(one).sum())
+    return _carry(dev, A, allowance(0.0, A.shape[1] + 1, np.abs(A) @ np.abs(x).sum(axis=1)
+                                    + np.abs(drive) * np.abs(one).sum()))
+
+
+def _no_rounding(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rounding history of a fresh estimate: none (see :func:`_carry`)."""
+    return np.zeros((0, n, n)), np.zeros((0, n))
+
+
+def _carry(dev, M, rho):
+    """The rounding history ``(Φ, ρ)`` carried through the exact linear map ``M`` of a step, with that step's
+    allowance ``rho`` added: each earlier rounding ``ρ_s`` reaches the estimate through the product ``Φ_s`` of
+    the maps since, so the deviation is at most ``Σ_s |Φ_s| ρ_s`` (:func:`_deviation_of`), far below carrying
+    the bound itself by ``|M|`` step by step (whose growth ignores the maps' cancellations)."""
+    Phi, R = dev
+    return np.concatenate([M @ Phi, np.eye(M.shape[0])[None]]), np.concatenate([R, rho[None]])
+
+
+def _deviation_of(dev) -> np.ndarray:
+    """``Σ_s |Φ_s| ρ_s``: the bound on the estimate's rounding from its history (:func:`_carry`)."""
+    Phi, R = dev
+    return np.einsum("kij,kj->i", np.abs(Phi), R)
 
 
 def _finite(value, shape: tuple[int, ...], field: str) -> np.ndarray:
@@ -268,14 +288,14 @@ class TimestampedKalman(_Filter):
         self.received: dict[int, np.ndarray] = {}
         self._drives: list[np.ndarray] = []
         # the prediction of t0 + k before its update, its covariance and its rounding (None: not carried)
-        dev0 = None if self._allowance is None else np.zeros(self.system.n)
+        dev0 = None if self._allowance is None else _no_rounding(self.system.n)
         self._pre = [(self.xhat0.copy(), self.design.P0.copy(), dev0)]
 
     def _prediction(self) -> np.ndarray:
         return self._pre[-1][0]
 
     def _deviation(self) -> np.ndarray:
-        return self._pre[-1][2]
+        return _deviation_of(self._pre[-1][2])
 
     def _advance(self, t, packets, drive):
         sysm, d, t0 = self.system, self.design, self._t0
@@ -326,13 +346,13 @@ class DelayUnawareKalman(_Filter):
 
     def _start(self) -> None:
         self.X, self.P = self.xhat0.copy(), self.design.P0.copy()
-        self._dev = None if self._allowance is None else np.zeros(self.system.n)
+        self._dev = None if self._allowance is None else _no_rounding(self.system.n)
 
     def _prediction(self) -> np.ndarray:
         return self.X
 
     def _deviation(self) -> np.ndarray:
-        return self._dev
+        return _deviation_of(self._dev)
 
     def _advance(self, t, packets, drive):
         sysm, d = self.system, self.design
