@@ -41,7 +41,7 @@ def test_a_broken_contract_fails(tmp_path, capsys):
                       'forbidden_modules = ["eqrec.lmv"]\n')
     code, report = _lint(config, capsys)
     assert code != 0, report
-    assert "0 kept, 1 broken" in report and "eqrec.estimators.kalman -> eqrec.lmv.model (l.345)" in report, report
+    assert "0 kept, 1 broken" in report and "eqrec.estimators.kalman -> eqrec.lmv.model (l." in report, report
 
 
 def test_the_class_engine_contract_sees_mu1_min(tmp_path, capsys):

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eqrec.compare.families import BOUNDED
+from eqrec.compare.families import BOUNDED, EXACT
 from eqrec.compare import COLUMNS, FAMILIES, CompareSetup, compare_families, draw_trace, write_table
 from eqrec.arrivals.draws import NEVER
 from eqrec.errors import InputError
@@ -28,13 +28,43 @@ def test_every_family_has_a_row_and_every_bound_holds(reactor_result):
     assert len(bounded) >= 6  # the zonotope, both Kalman and both LMV filters, and at least one design
     assert (bounded["violations"] == 0).all()
     assert (bounded["max_error"] <= bounded["bound"]).all()
-    assert (bounded["bound_over_limit_median"] >= 1 - 1e-9).all()  # no bound below the information limit
+    # no data-independent bound below the information limit; the exact family's hull reads the data, and can be
+    linear = bounded[bounded["estimator"] != EXACT]
+    assert (linear["bound_over_limit_median"] >= 1 - 1e-9).all()
     missing = table[table["rms"].isna()]  # a design that does not exist is a row saying why
     assert missing["design"].str.startswith("no design").all()
     assert set(BOUNDED) == set(FAMILIES)  # every family with a bound: the LMV ones too (exact_bound)
-    for family, err in reactor_result.errors.items():
-        assert err.shape == (12, 20) and np.all(np.isfinite(err))
+    for family, err in reactor_result.errors.items():  # the exact family on the first exact_runs (4) runs only
+        assert err.shape == ((4 if family == EXACT else 12), 20) and np.all(np.isfinite(err))
     assert reactor_result.limit.shape == (12, 20) and np.all(reactor_result.limit > 0)
+
+
+def test_every_set_holds_the_exact_consistent_set_and_the_exact_family_reaches_it(reactor_result):
+    """Issue 45 §5: hull_over_exact, each family's set over the exact consistent set of the runs' own data, on the
+    first exact_runs runs; every sound set contains that set (eqrec.consistent_set, Theorem 2), the exact
+    estimator's hull equals it up to its window's prior, and the exact set is never wider than the limit."""
+    table = reactor_result.table.set_index("estimator")
+    hull = reactor_result.exact_hull
+    assert hull.shape == (4, 20) and np.all(hull > 0)
+    assert np.all(hull <= reactor_result.limit[:4] * (1 + 1e-9))  # the limit is the worst case over data
+    ran = table[table["rms"].notna()]
+    assert ran["hull_over_exact_median"].notna().all() and ran["hull_over_exact_p95"].notna().all()
+    assert (ran["hull_over_exact_median"] >= 1 - 1e-9).all()  # no sound set is smaller than the exact one
+    assert (ran["hull_over_exact_p95"] >= ran["hull_over_exact_median"]).all()
+    for family, bound in reactor_result.bounds.items():  # the column is what it says, recomputed here
+        over = bound[:4] / hull
+        assert table.loc[family, "hull_over_exact_median"] == np.median(over)
+    assert table.loc[EXACT, "hull_over_exact_median"] <= 1.05  # the exact estimator: at the exact set
+    assert table.loc[EXACT, "hull_over_exact_median"] <= table.loc[FAMILIES[2], "hull_over_exact_median"]
+    assert table.loc[EXACT, "violations"] == 0
+
+
+def test_no_exact_runs_gives_no_exact_row_and_no_hull_columns():
+    result = compare_families(batch_reactor(), CompareSetup(loss=0.2, max_delay=1, horizon=4, runs=2, periods=2,
+                                                            exact_runs=0))
+    table = result.table.set_index("estimator")
+    assert np.isnan(table.loc[EXACT, "rms"]) and EXACT not in result.errors
+    assert table["hull_over_exact_median"].isna().all() and result.exact_hull.shape == (0, 8)
 
 
 def test_the_table_is_the_errors_it_summarises(reactor_result):
@@ -78,6 +108,7 @@ def test_results_are_reproducible_byte_for_byte(tmp_path):
     (dict(loss=1.2), "loss"), (dict(loss="0.1"), "loss"), (dict(max_delay=-1), "max_delay"),
     (dict(horizon=0), "horizon"), (dict(runs=2.5), "runs"), (dict(burst=0.5), "burst"),
     (dict(loss=0.9, burst=2.0), "burst"), (dict(loss=0.0, burst=3.0), "burst"), (dict(seed=-1), "seed"),
+    (dict(exact_runs=-1), "exact_runs"), (dict(exact_runs=1.5), "exact_runs"),
 ])
 def test_bad_settings_name_the_field(kwargs, field):
     base = dict(loss=0.1, max_delay=1, horizon=4)
@@ -135,7 +166,8 @@ def test_state_weights_measure_every_error_bound_and_limit_in_the_weighted_norm(
     plain = compare_families(acc_system(), setup)
     table = weighted.table.set_index("estimator")
     ran = table[table["rms"].notna()]
-    assert (ran["violations"] == 0).all() and (ran["bound_over_limit_median"] >= 1 - 1e-9).all()
+    assert (ran["violations"] == 0).all() and (ran.drop(index=EXACT)["bound_over_limit_median"] >= 1 - 1e-9).all()
+    assert (ran["hull_over_exact_median"] >= 1 - 1e-9).all()  # the exact set in the weighted norm too
     assert weighted.state_weights.tolist() == w.tolist() and plain.state_weights is None
     assert not np.allclose(weighted.limit, plain.limit)  # a different norm
     with pytest.raises(InputError) as exc:

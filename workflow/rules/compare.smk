@@ -35,7 +35,7 @@ use rule step as compare_run with:
         setting="|".join(COMPARE_PAIRS["setting"]),
     params:
         step="eqrec.studies.compare.steps:step_run",
-        cfg=step_config("compare", "periods runs seed settings systems"),
+        cfg=step_config("compare", "periods runs seed settings systems exact_runs"),
 
 
 use rule step as compare_table with:

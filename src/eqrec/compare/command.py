@@ -50,7 +50,10 @@ estimator can guarantee on its arrivals.
 compare.csv columns: estimator, design (the language in words), rms (over runs, steps and states),
 max_error (largest ||x - x^||_inf), bound and median_bound (largest and median bound), violations (steps
 with an error above the bound), outside_design (fraction of steps outside the design's language),
-limit_median, bound_over_limit_median / _p95 / _max (bound / information limit, per step), rms_x1 .. rms_xn.
+limit_median, bound_over_limit_median / _p95 / _max (bound / information limit, per step),
+hull_over_exact_median / _p95 (each family's set x^ +- bound over the half-width of the exact consistent set
+of the run's own data, eqrec.consistent_set, per step, on the first --exact-runs runs), rms_x1 .. rms_xn.
+The family "set-membership, exact" (eqrec.ExactSetEstimator, LPs at every step) runs on those runs only.
 The printed table adds us_per_step (microseconds per step with the bound; a timing, not in the CSV).
 compare.png / compare.pdf: the errors, the bounds, the limit and mu1 over time.
 """
@@ -81,6 +84,9 @@ def add_parser(sub: Any, exit_help: str) -> None:
     c.add_argument("--burst", type=float, default=None,
                    help="mean length of a burst of losses (Gilbert channel with the same average loss)")
     c.add_argument("--seed", type=int, default=0, help="seed of every draw (default 0)")
+    c.add_argument("--exact-runs", type=int, default=4, dest="exact_runs",
+                   help="the first runs on which the exact set-membership estimator runs and every family's set is "
+                        "compared with the exact consistent set of the data (hull_over_exact; default 4, 0: none)")
     c.add_argument("--state-weights", default=None, dest="state_weights",
                    help="w1,...,wn: measure errors, bounds and the limit as max_i w_i |e_i| (states of mixed units); "
                         "the designs are made on z = W x")
@@ -170,7 +176,8 @@ def run(args: argparse.Namespace) -> str:
 
     out = _out_dir(args.out)
     setup = CompareSetup(loss=args.loss, max_delay=args.max_delay, horizon=args.horizon, runs=args.runs,
-                         periods=args.periods, burst=args.burst, seed=args.seed, coverage=args.coverage)
+                         periods=args.periods, burst=args.burst, seed=args.seed, coverage=args.coverage,
+                         exact_runs=getattr(args, "exact_runs", 4))
     system, _ = load_system(args.system)
     check_size(system, setup, force=getattr(args, "force", False))
     with open(args.system, encoding="utf-8") as fh:
@@ -196,8 +203,9 @@ def run(args: argparse.Namespace) -> str:
     write_table(result, str(out / "compare.csv"))
     compare_figure(result, str(out / "compare.png"), str(out / "compare.pdf"))
     shown = result.table[["estimator", "rms", "max_error", "bound", "violations", "outside_design",
-                          "bound_over_limit_median", "bound_over_limit_p95"]].astype(object)
+                          "bound_over_limit_median", "bound_over_limit_p95", "hull_over_exact_median"]].astype(object)
     shown = shown.assign(us_per_step=[round(result.us_per_step.get(f, float("nan")), 1)
                                       for f in result.table["estimator"]])
-    shown = shown.rename(columns={"bound_over_limit_median": "b/lim_med", "bound_over_limit_p95": "b/lim_p95"})
+    shown = shown.rename(columns={"bound_over_limit_median": "b/lim_med", "bound_over_limit_p95": "b/lim_p95",
+                                  "hull_over_exact_median": "hull/exact_med"})
     return shown.where(shown.notna(), "-").to_string(index=False, float_format=lambda v: f"{v:.4g}")

@@ -18,6 +18,10 @@ trace, one noise realisation and one initial error shared by every family:
     ``μ1`` free), ``strict=False``; a late packet counts as lost (its language has no delays).
 ``set-membership, zonotope``
     :class:`eqrec.estimators.zonotope.ZonotopeEstimator`: no language, a guaranteed set on every trace.
+``set-membership, exact``
+    :class:`eqrec.estimators.exact_set.ExactSetEstimator`: the interval hull of the states consistent with the
+    data (its window solved as LPs with the measured values), on the first ``exact_runs`` runs only (its cost,
+    :class:`CompareSetup`); its estimate is not linear in the data and its bound is its own hull.
 ``Kalman, time-stamped`` and ``Kalman, delay-unaware``
     :mod:`eqrec.estimators.kalman`, designed from the Gaussian statistics.
 ``LMV, zero-input`` and ``LMV, hold-input``
@@ -27,7 +31,11 @@ trace, one noise realisation and one initial error shared by every family:
 
 The Kalman and LMV filters carry the exact worst case of their error given the arrivals
 (:func:`eqrec.exact_bound`, run on affine columns), and every bound is read against the information limit of
-the run (:func:`eqrec.information_limit`): the smallest bound any estimator can guarantee there.
+the run (:func:`eqrec.information_limit`): the smallest bound any estimator can guarantee there.  On the first
+``exact_runs`` runs every bound is also read against the exact consistent set of the run's own data
+(:func:`eqrec.consistent_set`, predicted hull): ``hull_over_exact``, each family's set ``x̂ ± bound`` (sound,
+so it contains that set) over the set's half-width, both the largest over the states; one is the smallest set
+any guaranteed estimator can report on those data (below the limit when the data are kind).
 
 Every estimator reports the one-step prediction ``x̂(t+1)`` after the data of
 time ``t`` (the protocol of :mod:`eqrec.estimators.protocol`), so the errors
@@ -62,8 +70,12 @@ from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 #: The families, in the order of the table, in words.
-FAMILIES = ("guaranteed, class engine", "guaranteed, prefix (P1)", "set-membership, zonotope", "Kalman, time-stamped",
-            "Kalman, delay-unaware", "LMV, zero-input", "LMV, hold-input")
+FAMILIES = ("guaranteed, class engine", "guaranteed, prefix (P1)", "set-membership, zonotope",
+            "set-membership, exact", "Kalman, time-stamped", "Kalman, delay-unaware", "LMV, zero-input",
+            "LMV, hold-input")
+
+#: The family run on the first ``exact_runs`` runs only (:class:`CompareSetup`).
+EXACT = FAMILIES[3]
 
 #: The families that carry an exact worst-case bound on every step: all of them (the guaranteed designs their own,
 #: the others :func:`eqrec.exact_bound`).
@@ -74,7 +86,8 @@ ORDER = 40
 
 #: The columns of ``compare.csv`` (then ``rms_x1 ... rms_xn``).
 COLUMNS = ("estimator", "design", "rms", "max_error", "bound", "median_bound", "violations", "outside_design",
-           "limit_median", "bound_over_limit_median", "bound_over_limit_p95", "bound_over_limit_max")
+           "limit_median", "bound_over_limit_median", "bound_over_limit_p95", "bound_over_limit_max",
+           "hull_over_exact_median", "hull_over_exact_p95")
 
 #: A violation is an error above the bound by more than this relative margin (rounding of the bound's arithmetic).
 VIOLATION_RTOL = 1e-9
@@ -139,6 +152,10 @@ class CompareSetup:
     coverage : float, optional
         The loss budget ``m`` of the guaranteed designs' languages is the smallest whose block probability
         under this trace model reaches ``coverage`` (:func:`eqrec.arrivals.draws.loss_coverage`; default 0.99).
+    exact_runs : int, optional
+        The first runs (at most ``runs``) on which the exact set-membership estimator runs and every family's
+        set is compared with the exact consistent set of the data (default 4: the LPs of every step cost
+        about ten times a zonotope step; 0: neither).
 
     Raises
     ------
@@ -155,6 +172,7 @@ class CompareSetup:
     seed: int = 0
     sigmas: float = 5.0
     coverage: float = 0.99
+    exact_runs: int = 4
 
     def __post_init__(self) -> None:
         checked = {"loss": _number(self.loss, "loss", 0.0, 0.99),
@@ -164,7 +182,8 @@ class CompareSetup:
                    "periods": _number(self.periods, "periods", 1, 10_000, integer=True),
                    "seed": _number(self.seed, "seed", 0, 2**63 - 1, integer=True),
                    "sigmas": _number(self.sigmas, "sigmas", 0.0, 100.0, low_open=True),
-                   "coverage": _number(self.coverage, "coverage", 0.0, 1.0, low_open=True)}
+                   "coverage": _number(self.coverage, "coverage", 0.0, 1.0, low_open=True),
+                   "exact_runs": _number(self.exact_runs, "exact_runs", 0, 100_000, integer=True)}
         if self.burst is not None:
             checked["burst"] = _number(self.burst, "burst", 1.0, 1e6)
             if checked["loss"] == 0:
@@ -175,6 +194,11 @@ class CompareSetup:
                                  field="burst")
         for key, value in checked.items():
             object.__setattr__(self, key, value)
+
+    @property
+    def exact_subset(self) -> int:
+        """The runs of the exact family and of the consistent set: ``min(exact_runs, runs)``."""
+        return min(self.exact_runs, self.runs)
 
     @property
     def steps(self) -> int:
@@ -249,6 +273,9 @@ class CompareResult:
         Per family, the wall time of a step with its bound, in microseconds (a timing: not in the table).
     state_weights : ndarray or None
         The weights of the norm (``None``: the infinity norm).
+    exact_hull : ndarray
+        The predicted half-width of the exact consistent set (:func:`eqrec.consistent_set`; largest over the
+        states, weighted), on the first ``setup.exact_subset`` runs, shape ``(exact_subset, steps)``.
     """
 
     setup: CompareSetup
@@ -262,6 +289,7 @@ class CompareResult:
     identity: dict[str, Any] = field(default_factory=dict)
     us_per_step: dict[str, float] = field(default_factory=dict)
     state_weights: "np.ndarray | None" = None
+    exact_hull: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
 
 def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs",
@@ -437,7 +465,9 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     import time
 
     from eqrec.bounds.information import information_limit
+    from eqrec.bounds.consistent import consistent_set
     from eqrec.estimators.exact import exact_bound
+    from eqrec.estimators.exact_set import ExactSetEstimator
     from eqrec.estimators.kalman import DelayUnawareKalman, TimestampedKalman
     from eqrec.estimators.zonotope import ZonotopeEstimator
 
@@ -468,14 +498,15 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     N, n, p = setup.steps, system.n, system.p
     makers: dict[str, Callable[[], Any]] = {
         FAMILIES[2]: lambda: ZonotopeEstimator(system, x0_radius=r0, max_delay=setup.max_delay, order=ORDER),
-        FAMILIES[3]: lambda: exact_bound(TimestampedKalman(system, kalman), system, r0, steps=N),
-        FAMILIES[4]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, r0, steps=N),
+        EXACT: lambda: ExactSetEstimator(system, x0_radius=r0, max_delay=setup.max_delay),
+        FAMILIES[4]: lambda: exact_bound(TimestampedKalman(system, kalman), system, r0, steps=N),
+        FAMILIES[5]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, r0, steps=N),
     }
     if FAMILIES[0] in designs:
         makers[FAMILIES[0]] = lambda: designs[FAMILIES[0]].estimator(strict=False)
     if FAMILIES[1] in designs:
         makers[FAMILIES[1]] = lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p)
-    for family, mechanism in ((FAMILIES[5], "zero-input"), (FAMILIES[6], "hold-input")):
+    for family, mechanism in ((FAMILIES[6], "zero-input"), (FAMILIES[7], "hold-input")):
         make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)  # a late packet counts as lost
         makers[family] = (lambda make=make: exact_bound(make(), system, r0, steps=N))
     # the draws, in order, per run: the trace, then the noise and the initial error
@@ -498,6 +529,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         progress(f"information limit: median {np.median(limit):.4g} ({setup.runs} runs x {N} steps)")
     errors, bounds, outside, rows, us = {}, {}, {}, [], {}
     x0 = np.zeros(n)
+    K = setup.exact_subset
+    data: dict[int, np.ndarray] = {}  # the measurements of the first K runs (the same for every family)
     for family in FAMILIES:
         row: dict[str, Any] = {"estimator": family, "design": words[family]}
         if family not in makers:  # a guaranteed design that does not exist: a row that says so
@@ -506,12 +539,19 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
                        **{c: np.nan for c in COLUMNS[9:]}, **{f"rms_x{i + 1}": np.nan for i in range(n)})
             rows.append(row)
             continue
-        err = np.zeros((setup.runs, N))
+        mine = runs[:K] if family == EXACT else runs  # the exact family: the first K runs only
+        if not mine:
+            row.update(rms=np.nan, max_error=np.nan, bound=np.nan, median_bound=np.nan, violations=pd.NA,
+                       outside_design=np.nan, limit_median=np.nan, **{c: np.nan for c in COLUMNS[9:]},
+                       **{f"rms_x{i + 1}": np.nan for i in range(n)})
+            rows.append(row)
+            continue
+        err = np.zeros((len(mine), N))
         sq = np.zeros(n)
-        bnd = np.full((setup.runs, N), np.nan)
-        out = np.zeros((setup.runs, N), bool)
+        bnd = np.full((len(mine), N), np.nan)
+        out = np.zeros((len(mine), N), bool)
         elapsed = 0.0
-        for r, (trace, w_noise, v, xi0) in enumerate(runs):
+        for r, (trace, w_noise, v, xi0) in enumerate(mine):
             est = makers[family]()
             flags: list[bool] = []
             per_state: list[float] = []  # weighted: max_i w_i β_i per step (a design's own bound is weighted already)
@@ -524,6 +564,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
             t_start = time.perf_counter()
             run = closed_loop(system, est, trace, x0, xi0, w_noise, v, after_step=after)
             elapsed += time.perf_counter() - t_start
+            if r < K and r not in data:
+                data[r] = run.y
             e = run.error[1:]
             err[r] = (np.abs(e) * scale_of).max(axis=1)
             sq += (e ** 2).sum(axis=0)
@@ -532,30 +574,44 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
             if family in designs:
                 out[r] = flags
         errors[family] = err
-        us[family] = 1e6 * elapsed / (setup.runs * N)
-        row.update(rms=float(np.sqrt(sq.sum() / (setup.runs * N * n))), max_error=float(err.max()))
+        us[family] = 1e6 * elapsed / (len(mine) * N)
+        row.update(rms=float(np.sqrt(sq.sum() / (len(mine) * N * n))), max_error=float(err.max()))
         if family in BOUNDED:
             bounds[family] = bnd
-            ratio = bnd / limit
+            ratio = bnd / limit[:len(mine)]
             row.update(bound=float(bnd.max()), median_bound=float(np.median(bnd)),
                        violations=count_violations(err, bnd),
                        outside_design=float(out.mean()) if family in designs else np.nan,
-                       limit_median=float(np.median(limit)), bound_over_limit_median=float(np.median(ratio)),
+                       limit_median=float(np.median(limit[:len(mine)])),
+                       bound_over_limit_median=float(np.median(ratio)),
                        bound_over_limit_p95=float(np.quantile(ratio, 0.95)), bound_over_limit_max=float(ratio.max()))
         else:
             row.update(bound=np.nan, median_bound=np.nan, violations=pd.NA, outside_design=np.nan,
                        limit_median=float(np.median(limit)), **{c: np.nan for c in COLUMNS[9:]})
         if family in designs:
             outside[family] = out
-        row.update({f"rms_x{i + 1}": float(np.sqrt(sq[i] / (setup.runs * N))) for i in range(n)})
+        row.update({f"rms_x{i + 1}": float(np.sqrt(sq[i] / (len(mine) * N))) for i in range(n)})
         rows.append(row)
         if progress is not None:
             progress(f"{family}: rms {row['rms']:.4g}, max error {row['max_error']:.4g}")
+    # the exact consistent set of each of the first K runs' data (the same initial box as the estimators': centre
+    # x̂(0) = x(0) − ξ(0) = −ξ(0), radius r0), and each family's hull over it
+    hull = np.stack([(consistent_set(system, runs[r][0], data[r], r0, x0 - runs[r][3], solver=solver)
+                      .predicted_radius * scale_of).max(axis=1) for r in range(K)]) if K else np.zeros((0, N))
+    for row in rows:
+        if row["estimator"] in bounds and K:
+            over = bounds[row["estimator"]][:K] / hull
+            row.update(hull_over_exact_median=float(np.median(over)),
+                       hull_over_exact_p95=float(np.quantile(over, 0.95)))
+        else:
+            row.update(hull_over_exact_median=np.nan, hull_over_exact_p95=np.nan)
+    if progress is not None and K:
+        progress(f"exact consistent set: median half-width {np.median(hull):.4g} ({K} runs x {N} steps)")
     table = pd.DataFrame(rows, columns=[*COLUMNS, *[f"rms_x{i + 1}" for i in range(n)]])
     table["violations"] = table["violations"].astype("Int64")
     return CompareResult(setup=setup, table=table, errors=errors, bounds=bounds,
                          mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside, limit=limit,
-                         designs=words, us_per_step=us, state_weights=w,
+                         designs=words, us_per_step=us, state_weights=w, exact_hull=hull,
                          identity=class_limit_identity(designs[FAMILIES[0]]) if FAMILIES[0] in designs else {})
 
 

@@ -67,7 +67,7 @@ def _draw(result: CompareResult, title: str | None, paths: tuple[str, ...]) -> N
 
     s = result.setup
     t = np.arange(1, s.steps + 1)
-    fig, axes = plt.subplots(2, 4, figsize=(7.0, 5.2), sharex=True, sharey=True)
+    fig, axes = plt.subplots(3, 3, figsize=(7.0, 7.2), sharex=True, sharey=True)
     arrays = [*result.errors.values(), *result.bounds.values(), result.limit]
     positive = [a[a > 0] for a in arrays]
     low = min(float(np.quantile(a, 0.01)) for a in positive if a.size)
@@ -98,7 +98,8 @@ def _draw(result: CompareResult, title: str | None, paths: tuple[str, ...]) -> N
             ax.plot(t, bnd.max(axis=0), color="C3", linewidth=0.8, linestyle=":", label="bound, largest")
             row = table.loc[family]
             outside = "" if np.isnan(row["outside_design"]) else f", {100 * row['outside_design']:.0f} % out"
-            ax.set_title(f"{family}\n{int(row['violations'])} viol.{outside}\n"
+            name = family if len(err) == s.runs else f"{family}, first {len(err)} runs"
+            ax.set_title(f"{name}\n{int(row['violations'])} viol.{outside}\n"
                          f"bound/limit {row['bound_over_limit_median']:.2f} (median)", fontsize=8)
         else:
             ax.set_title(f"{family}\n(no bound)", fontsize=8)
@@ -108,7 +109,7 @@ def _draw(result: CompareResult, title: str | None, paths: tuple[str, ...]) -> N
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         # x ticks at period ends, at most five labels
         ax.xaxis.set_major_locator(MultipleLocator(s.horizon * max(1, int(np.ceil(s.steps / s.horizon / 4)))))
-    for ax in axes[1]:
+    for ax in axes[-1]:
         ax.set_xlabel("time step t + 1")
     for ax in axes[:, 0]:
         ax.set_ylabel(r"$\|x - \hat x\|_\infty$ (largest state error)" if result.state_weights is None
@@ -116,7 +117,7 @@ def _draw(result: CompareResult, title: str | None, paths: tuple[str, ...]) -> N
     handles, labels = axes[0, 2].get_legend_handles_labels()
     handles.append(matplotlib.lines.Line2D([], [], color="C7", linewidth=1.2))
     labels.append("period end (tick on the top edge)")
-    spare = axes.flat[len(FAMILIES)]  # the eighth panel holds the legend
+    spare = axes.flat[len(FAMILIES)]  # the ninth panel holds the legend
     spare.axis("off")
     if result.state_weights is None:  # the states' errors compared as they are, each in its own unit
         handles.append(matplotlib.lines.Line2D([], [], linestyle=""))

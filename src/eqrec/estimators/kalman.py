@@ -56,13 +56,46 @@ from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
 
-def _kalman_update(x, P, y, C, R):
+def _kalman_update(x, P, y, C, R, dev=None, allowance=None):
     S = C @ P @ C.T + R
     K = np.linalg.solve(S.T, (P @ C.T).T).T
-    x = x + K @ (y - C @ x)
     IKC = np.eye(P.shape[0]) - K @ C
+    if allowance is not None:  # the rounding of x + K (y - C x), column by column, summed (module docstring)
+        aK, aC = np.abs(K), np.abs(C)
+        mag = np.abs(x).sum(axis=1)
+        dev = _carry(dev, IKC, allowance(0.0, C.shape[1] + C.shape[0] + 2, mag + aK @ (np.abs(y).sum(axis=1)
+                                                                                      + aC @ mag)))
+    x = x + K @ (y - C @ x)
     P = IKC @ P @ IKC.T + K @ R @ K.T  # Joseph form
-    return x, P
+    return x, P, dev
+
+
+def _predict_rounding(dev, x, A, drive, one, allowance):
+    """The rounding allowance carried through ``A x + drive·oneᵀ`` (``None`` without an allowance)."""
+    if allowance is None:
+        return None
+    return _carry(dev, A, allowance(0.0, A.shape[1] + 1, np.abs(A) @ np.abs(x).sum(axis=1)
+                                    + np.abs(drive) * np.abs(one).sum()))
+
+
+def _no_rounding(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rounding history of a fresh estimate: none (see :func:`_carry`)."""
+    return np.zeros((0, n, n)), np.zeros((0, n))
+
+
+def _carry(dev, M, rho):
+    """The rounding history ``(Φ, ρ)`` carried through the exact linear map ``M`` of a step, with that step's
+    allowance ``rho`` added: each earlier rounding ``ρ_s`` reaches the estimate through the product ``Φ_s`` of
+    the maps since, so the deviation is at most ``Σ_s |Φ_s| ρ_s`` (:func:`_deviation_of`), far below carrying
+    the bound itself by ``|M|`` step by step (whose growth ignores the maps' cancellations)."""
+    Phi, R = dev
+    return np.concatenate([M @ Phi, np.eye(M.shape[0])[None]]), np.concatenate([R, rho[None]])
+
+
+def _deviation_of(dev) -> np.ndarray:
+    """``Σ_s |Φ_s| ρ_s``: the bound on the estimate's rounding from its history (:func:`_carry`)."""
+    Phi, R = dev
+    return np.einsum("kij,kj->i", np.abs(Phi), R)
 
 
 def _finite(value, shape: tuple[int, ...], field: str) -> np.ndarray:
@@ -92,6 +125,9 @@ class _Filter:
     kind = "stochastic"
     name = ""
     key = ""
+    #: With an ``allowance`` given to :meth:`reset`: per state, a bound on the rounding of the current
+    #: prediction's columns, summed over the columns (``None`` otherwise).
+    rounding_vector: "np.ndarray | None" = None
 
     def __init__(self, system: AffineSystem, design: GaussianDesign, inputs: np.ndarray | None = None):
         for key, value, kind in (("system", system, AffineSystem), ("design", design, GaussianDesign)):
@@ -103,7 +139,8 @@ class _Filter:
         self._time: int | None = None
         self.filtered: np.ndarray | None = None
 
-    def reset(self, xhat0: np.ndarray, t0: int = 0, one: np.ndarray | None = None) -> "_Filter":
+    def reset(self, xhat0: np.ndarray, t0: int = 0, one: np.ndarray | None = None,
+              allowance=None) -> "_Filter":
         """Start a run from the initial estimate ``x̂(t0)``.
 
         Parameters
@@ -114,6 +151,10 @@ class _Filter:
             Absolute time of the first step (default 0).
         one : numpy.ndarray or None, optional
             ``(K,)``: how a constant enters the columns (module docstring); default ones.
+        allowance : callable or None, optional
+            The rounding formula (:func:`eqrec.bounds.rounding.rounding_allowance`): given, the filter carries
+            :attr:`rounding_vector`, a bound on the rounding of its own arithmetic, summed over the columns
+            (``eqrec.exact_bound`` passes it); ``None``: not carried.
 
         Returns
         -------
@@ -140,6 +181,8 @@ class _Filter:
         self._vector = x.ndim == 1
         self.xhat0 = x.reshape(n, 1) if self._vector else x
         self.one = one
+        self._allowance = allowance
+        self.rounding_vector = None if allowance is None else np.zeros(n)
         self._time, self._t0 = int(t0), int(t0)
         self.filtered = None
         self._start()
@@ -152,6 +195,9 @@ class _Filter:
         raise NotImplementedError
 
     def _prediction(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _deviation(self) -> np.ndarray:
         raise NotImplementedError
 
     @property
@@ -215,6 +261,8 @@ class _Filter:
         drive = self._drive(t, u)
         filt, pred, P, commit = self._advance(t, packets, drive)
         commit()
+        if self._allowance is not None:
+            self.rounding_vector = self._deviation()
         self._time = t + 1
         self.filtered = self._out(filt).copy()
         return self._out(pred).copy(), P.copy()
@@ -239,10 +287,15 @@ class TimestampedKalman(_Filter):
     def _start(self) -> None:
         self.received: dict[int, np.ndarray] = {}
         self._drives: list[np.ndarray] = []
-        self._pre = [(self.xhat0.copy(), self.design.P0.copy())]  # the prediction of t0 + k before its update
+        # the prediction of t0 + k before its update, its covariance and its rounding (None: not carried)
+        dev0 = None if self._allowance is None else _no_rounding(self.system.n)
+        self._pre = [(self.xhat0.copy(), self.design.P0.copy(), dev0)]
 
     def _prediction(self) -> np.ndarray:
         return self._pre[-1][0]
+
+    def _deviation(self) -> np.ndarray:
+        return _deviation_of(self._pre[-1][2])
 
     def _advance(self, t, packets, drive):
         sysm, d, t0 = self.system, self.design, self._t0
@@ -256,18 +309,19 @@ class TimestampedKalman(_Filter):
         received = {**self.received, **new}
         drives = self._drives + [drive]
         s = min([*new, t])
-        x, P = self._pre[s - t0]
+        x, P, dev = self._pre[s - t0]
         pre = self._pre[: s - t0 + 1]
         filt = x
         for tau in range(s, t + 1):
             if tau in received:
-                x, P = _kalman_update(x, P, received[tau], sysm.C_at(tau), d.R)
+                x, P, dev = _kalman_update(x, P, received[tau], sysm.C_at(tau), d.R, dev, self._allowance)
             if tau == t:
                 filt = x
             A = sysm.A_at(tau)
+            dev = _predict_rounding(dev, x, A, drives[tau - t0], self.one, self._allowance)
             x = A @ x + np.outer(drives[tau - t0], self.one)
             P = A @ P @ A.T + d.Q
-            pre.append((x, P))
+            pre.append((x, P, dev))
 
         def commit():
             self.received, self._drives, self._pre = received, drives, pre
@@ -292,22 +346,27 @@ class DelayUnawareKalman(_Filter):
 
     def _start(self) -> None:
         self.X, self.P = self.xhat0.copy(), self.design.P0.copy()
+        self._dev = None if self._allowance is None else _no_rounding(self.system.n)
 
     def _prediction(self) -> np.ndarray:
         return self.X
 
+    def _deviation(self) -> np.ndarray:
+        return _deviation_of(self._dev)
+
     def _advance(self, t, packets, drive):
         sysm, d = self.system, self.design
-        x, P = self.X, self.P
+        x, P, dev = self.X, self.P, self._dev
         for _, y in sorted(packets, key=lambda pk: pk[0]):
-            x, P = _kalman_update(x, P, y, sysm.C_at(t), d.R)
+            x, P, dev = _kalman_update(x, P, y, sysm.C_at(t), d.R, dev, self._allowance)
         filt = x
         A = sysm.A_at(t)
+        dev = _predict_rounding(dev, x, A, drive, self.one, self._allowance)
         x = A @ x + np.outer(drive, self.one)
         P = A @ P @ A.T + d.Q
 
         def commit():
-            self.X, self.P = x, P
+            self.X, self.P, self._dev = x, P, dev
         return filt, x, P, commit
 
 
@@ -387,9 +446,13 @@ class RandomDelayLMV(_Filter):
     def _start(self) -> None:
         self.X = np.zeros((self.N, self.xhat0.shape[1]))
         self.X[: self.system.n] = self.xhat0
+        self._dev = None if self._allowance is None else np.zeros(self.N)
 
     def _prediction(self) -> np.ndarray:
         return self.X[: self.system.n]
+
+    def _deviation(self) -> np.ndarray:
+        return self._dev[: self.system.n]
 
     def _advance(self, t, packets, drive):
         n, p, k = self.system.n, self.system.p, t - self._t0
@@ -405,9 +468,16 @@ class RandomDelayLMV(_Filter):
         full[:n] = drive
         X = self.model.A @ self.X + self.res.L[k] @ eps + np.outer(full, self.one)
         P = self.res.P_pred[k + 1][:n, :n]
+        dev = self._dev
+        if self._allowance is not None:  # A X + L (y - C X) + drive, column by column, summed
+            aA, aL, aC = np.abs(self.model.A), np.abs(self.res.L[k]), np.abs(self.model.C)
+            mag = np.abs(self.X).sum(axis=1)
+            dev = np.abs(self.model.A - self.res.L[k] @ self.model.C) @ dev + self._allowance(
+                0.0, self.N + p + 3 + len(packets), aA @ mag + aL @ (np.abs(yr).sum(axis=1) + aC @ mag)
+                + np.abs(full) * np.abs(self.one).sum())
 
         def commit():
-            self.X = X
+            self.X, self._dev = X, dev
         return filt, X[:n], P, commit
 
 

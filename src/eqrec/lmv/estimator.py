@@ -132,7 +132,8 @@ class LMVEstimator:
         return self._L[k], self._Qe[k]
 
     # -- the protocol -----------------------------------------------------------
-    def reset(self, xhat0: "np.ndarray | None" = None, t0: int = 0, one: "np.ndarray | None" = None) -> "LMVEstimator":
+    def reset(self, xhat0: "np.ndarray | None" = None, t0: int = 0, one: "np.ndarray | None" = None,
+              allowance=None) -> "LMVEstimator":
         """Start from ``x̂(t0|t0−1) = xhat0`` (the plant state; ``None``: its mean ``E[x(0)]``).
 
         Parameters
@@ -146,6 +147,11 @@ class LMVEstimator:
             ``(K,)``: an affine run, whose ``K`` columns carry a constant with these weights (the known input,
             ``f`` and the initial held measurement enter as ``outer(·, one)``); :meth:`step` then takes and
             returns columns (``eqrec.exact_bound`` runs it so).
+        allowance : callable or None, optional
+            The rounding formula (:func:`eqrec.bounds.rounding.rounding_allowance`, given by
+            ``eqrec.exact_bound`` to an affine run): the estimator then carries :attr:`rounding_vector`, per plant
+            state a bound on the rounding of its own arithmetic (eqs. (4)-(5) on every column, summed over the
+            columns; the same linear maps on absolute values carry it, :mod:`eqrec.bounds.rounding`).
 
         Returns
         -------
@@ -180,6 +186,8 @@ class LMVEstimator:
         # y_h(-1) of the hold-input register (per column in an affine run)
         self._held = np.array(sys.x0_mean[nx:], float) if one is None else np.outer(one, sys.x0_mean[nx:])
         self._one = None if one is None else one.copy()
+        self._allowance = allowance
+        self._dev = None if allowance is None else np.zeros(sys.n)
         self._k, self._t0 = 0, int(t0)
         self.filtered = self.P_filtered = None
         return self
@@ -200,6 +208,13 @@ class LMVEstimator:
         """A copy of the current prediction ``x̂(t|t−1)`` of the plant state (``(n_x, K)`` for an affine run)."""
         X = self._running()[..., : self.sys.n_x]
         return (X if getattr(self, "_one", None) is None else X.T).copy()
+
+    @property
+    def rounding_vector(self) -> "np.ndarray | None":
+        """With an ``allowance`` given to :meth:`reset`: per plant state, a bound on the rounding of the current
+        prediction's columns, summed over the columns (``None`` otherwise)."""
+        dev = getattr(self, "_dev", None)
+        return None if dev is None else dev[: self.sys.n_x].copy()
 
     @property
     def augmented(self) -> np.ndarray:
@@ -248,6 +263,19 @@ class LMVEstimator:
             X_next[..., : sys.n_x] += drive if self._one is None else np.outer(self._one, drive)
         return eps, X_next
 
+    def _rounding(self, X: np.ndarray, y_c: np.ndarray, k: int, drive) -> np.ndarray:
+        """The rounding allowance carried through eqs. (4)-(5) on the columns ``X`` (``(K, n)``): the deviation
+        through ``|A − L C|`` (the map that carries an error of the estimate), plus the allowance of this step's products and sums on the columns'
+        magnitudes."""
+        sys = self.sys
+        L, _ = self._gains(k)
+        aA, aL, aC = np.abs(sys.A), np.abs(L), np.abs(sys.C)
+        mag = np.abs(X).reshape(-1, sys.n).sum(axis=0)  # a plain run is one column
+        mu = aA @ mag + aL @ (np.abs(y_c).reshape(-1, sys.m).sum(axis=0) + aC @ mag)
+        if drive is not None:
+            mu[: sys.n_x] += np.abs(drive) * (1.0 if self._one is None else np.abs(self._one).sum())
+        return np.abs(sys.A - L @ sys.C) @ self._dev + self._allowance(0.0, sys.n + sys.m + 3, mu)
+
     def step(self, y=None, u=None) -> tuple[np.ndarray, np.ndarray]:
         """Process time ``t``: ``y(t)`` or ``None`` (lost), and the input; return ``(x̂(t+1|t), P(t+1|t))``.
 
@@ -285,6 +313,8 @@ class LMVEstimator:
         self.P_filtered = P_filt[:nx, :nx]
         if arrived and self.compensation == "hold-input":
             self._held = y_c.copy()
+        if self._dev is not None:
+            self._dev = self._rounding(X, y_c, k, drive)
         self._X, self._k = X_next, k + 1
         prediction = X_next[..., :nx] if self._one is None else X_next[:, :nx].T
         return prediction.copy(), self._P[k + 1][:nx, :nx].copy()
