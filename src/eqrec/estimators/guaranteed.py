@@ -108,9 +108,9 @@ import numpy as np
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
-from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
+from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
 from eqrec.errors import InputError
-from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, has_class, make_estimator
+from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
@@ -451,17 +451,20 @@ class GuaranteedEstimator:
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
-        opened = est._open(packets, u)  # every input checked; nothing changes
-        t, S = opened.t, tuple(sorted(opened.yxi))
-        if not has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
-            xhat, _ = self._sm.step(packets, opened.u)
+        opened = est._open(packets, u)  # every input checked once, for both estimators; nothing changes
+        entry = est._class(opened)  # the class (t+1, S) and what it needs, kept per class (ClassSteps)
+        # the set-membership estimator takes the checked packets and input as they are (one intake)
+        checked_u = None if u is None else opened.u
+        if entry is None:  # out of the language: the set-membership estimate from now on
+            xhat, _ = self._sm.step(packets, checked_u)
             self._outside = True
             return self._outside_bounds(xhat)
-        self._sm.step(packets, opened.u)  # all-or-nothing; the class step below cannot raise (its class exists)
-        xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
+        self._sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
+        xhat, level = est._advance(opened, entry)  # level: μ1 at the period's end, else the class's level
         # the exact worst case of the designed estimate's error set, plus the rounding allowance of its arithmetic
         # (:mod:`eqrec.estimators.intake`); the level carries the allowance already
-        beta = np.nextafter(self._set.advance(est.error_map()) + est.rounding_vector, np.inf)
+        state, noise = entry.parts
+        beta = np.nextafter(self._set.advance(ErrorMap(est.period_start, state, noise)) + est._rho, np.inf)
         designed = np.minimum(beta, level)
         if self.tight:
             # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
