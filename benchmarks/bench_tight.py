@@ -247,9 +247,15 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--losses", default="0,0.2,0.4", help="loss rates of the cost table (comma-separated)")
     ap.add_argument("--cost-steps", default="120,120,60",
                     help="steps of the cost table per plant: two carts, cart-pole, chain of five carts")
+    ap.add_argument("--plants", default="carts,cart-pole,chain",
+                    help="plants to run (comma-separated): carts (two carts), cart-pole, chain (five carts)")
     args = ap.parse_args(argv)
     plants = []
-    for system, steps in zip((two_mass(), cart_pole(), cart_chain(5)), (int(x) for x in args.cost_steps.split(","))):
+    chosen = args.plants.split(",")
+    for key, system, steps in zip(("carts", "cart-pole", "chain"), (two_mass(), cart_pole(), cart_chain(5)),
+                                  (int(x) for x in args.cost_steps.split(","))):
+        if key not in chosen:
+            continue
         t0 = time.perf_counter()
         try:
             design = design_delay_global(system, delay_classes(max_delay=MAX_DELAY, horizon=HORIZON,

@@ -179,3 +179,19 @@ def test_a_refused_strict_step_changes_nothing_with_the_cache(design):
         pytest.fail("the language was not left")
     assert est.time == twin.time and est.bound == twin.bound and np.array_equal(est.x, twin.x)
     assert np.array_equal(est._est.rounding_vector, twin._est.rounding_vector)
+
+
+def test_row_sums_of_the_blocks_are_numpys_row_sums_of_the_concatenation():
+    """:func:`outer_row_sums_of_parts` adds as NumPy's ``sum`` does: bit for bit, every length, wide magnitudes."""
+    from eqrec.bounds.zonotope import outer_row_sums_of_parts
+
+    rng = np.random.default_rng(0)
+    for q1 in list(range(0, 140)) + [255, 256, 257, 300, 517, 1000, 4000, 5000]:
+        for n in (1, 4, 10):
+            q2 = int(rng.integers(0, 60))
+            P = rng.normal(size=(n, q1)) * 10.0 ** rng.integers(-9, 9, size=(n, q1))
+            N = rng.normal(size=(n, q2)) * 10.0 ** rng.integers(-9, 9, size=(n, q2))
+            ref = outer_row_sums(np.concatenate([P, N], axis=1))
+            assert np.array_equal(outer_row_sums_of_parts(P, N), ref), (q1, q2, n)
+            assert np.array_equal(outer_row_sums_of_parts(np.asfortranarray(P), N[:, ::-1]),
+                                  outer_row_sums(np.concatenate([P, N[:, ::-1]], axis=1))), (q1, q2, n)

@@ -103,6 +103,7 @@ from __future__ import annotations
 
 from typing import Iterable
 
+import numba
 import numpy as np
 
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
@@ -117,6 +118,38 @@ from eqrec.systems.affine import AffineSystem
 
 #: Default reduction order of the error set carried with ``strict=False`` (generators per state).
 DEFAULT_ORDER = 40
+
+
+@numba.njit(cache=True)
+def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight):  # pragma: no cover - compiled
+    r"""The reported estimate and bounds of a step in the design (module docstring), in one compiled pass.
+
+    Per state, the designed bound :math:`b^{\mathrm d}_i = \min(\mathrm{nextafter}(\beta_i + \rho_i, +\infty),
+    \mathrm{level})` (the exact worst case of the designed set plus the rounding allowance, rounded up, and the
+    class's level); with ``tight``, the set-membership pair where its bound is smaller.  Elementwise IEEE operations
+    only, the same as NumPy's ``nextafter``, ``minimum``, ``<`` and ``where``: the same numbers.
+
+    Returns
+    -------
+    tuple
+        ``(x̂, bounds, use_sm, max bound)``.
+    """
+    n = row_sums.shape[0]
+    xhat = np.empty(n)
+    bounds = np.empty(n)
+    use_sm = np.zeros(n, dtype=np.bool_)
+    top = -np.inf
+    for i in range(n):
+        d = np.nextafter(row_sums[i] + rho[i], np.inf)
+        if d > level:  # np.minimum(d, level): d unless level is smaller
+            d = level
+        if tight and sm_bounds[i] < d:
+            use_sm[i] = True
+            xhat[i], bounds[i] = sm_x[i], sm_bounds[i]
+        else:
+            xhat[i], bounds[i] = x[i], d
+        top = max(top, bounds[i])
+    return xhat, bounds, use_sm, top
 
 
 class GuaranteedEstimator:
@@ -464,19 +497,12 @@ class GuaranteedEstimator:
         # the exact worst case of the designed estimate's error set, plus the rounding allowance of its arithmetic
         # (:mod:`eqrec.estimators.intake`); the level carries the allowance already
         state, noise = entry.parts
-        beta = np.nextafter(self._set.advance(ErrorMap(est.period_start, state, noise)) + est._rho, np.inf)
-        designed = np.minimum(beta, level)
-        if self.tight:
-            # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
-            sm_bounds = self._sm._beta
-            use_sm = sm_bounds < designed
-            xhat = np.where(use_sm, self._sm._xhat, xhat)
-            self._bounds = np.where(use_sm, sm_bounds, designed)
-            self._use_sm = use_sm
-        else:
-            self._bounds = designed
+        row_sums = self._set.advance(ErrorMap(est.period_start, state, noise))
+        # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
+        xhat, self._bounds, use_sm, self.bound = _tighter(row_sums, est._rho, level, self._sm._beta, self._sm._xhat,
+                                                           xhat, self.tight)
+        self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
-        self.bound = float(self._bounds.max())
         return xhat.copy(), self.bound
 
     def _new_set_membership(self) -> ZonotopeEstimator:
