@@ -2,9 +2,11 @@
 side by side with the set-membership estimator (figures, not tests).
 
     python benchmarks/bench_tight.py [--steps 120] [--seeds 2] [--loss 0.4] [--repeats 3]
+    python benchmarks/bench_tight.py --part cost [--losses 0,0.2,0.4] [--cost-steps 120,120,60] [--plants ...]
 
-Plants: two carts and a spring (:func:`eqrec.two_mass`, ``n = 4``, one position measured) and a chain of five
-carts (``n = 10``, every position measured, ``p = 5``).  Each is designed by the class engine for delays
+Plants: two carts and a spring (:func:`eqrec.two_mass`, ``n = 4``, one position measured), a cart-pole (``n = 4``,
+one unstable mode, two outputs; the cost table only) and a chain of five carts (``n = 10``, every position
+measured, ``p = 5``).  Each is designed by the class engine for delays
 ``0..2``, at most one loss per block of ``T = 6`` (``delay_classes(max_delay=2, horizon=6, max_lost=1)``, ``μ1``
 free), and run on Bernoulli losses at ``--loss`` with uniform delays ``0..2``, noise at random box corners.
 
@@ -18,7 +20,13 @@ Printed, per plant:
 * µs per step, measured side by side in one run (CPU time of the process, the best of ``--repeats`` runs, each estimator in turn on the
   same data): ``strict=True`` (a trace without losses, in the language), ``strict=False`` in the design (the
   same trace), ``strict=False`` out of it (its out-of-design steps on the lossy trace) and the zonotope estimator
-  alone on each trace, and the ratios ``strict=False`` / zonotope on the same trace (issue 40's target: <= 1.2).
+  alone on each trace, and the ratios ``strict=False`` / zonotope on the same trace (issue 40's target: <= 1.2);
+* the cost table (issue 40 §3, ``--part cost``): per plant and loss rate (Bernoulli, delays ``0..2`` uniform), the
+  CPU µs of ``step()`` alone (the simulation outside the clock), per step the least of ``--repeats`` runs after one
+  warm-up run, each estimator in turn on the same arrivals: ``strict=True`` (its steps in the language; a refused
+  step resets it there, untimed), ``strict=False`` on its steps in the design and on those out of it, and the
+  zonotope estimator alone on the same steps; the ratios ``strict=False`` / zonotope, and the designed side
+  (``strict=False`` in the design minus the zonotope on those steps, and its share of a zonotope step).
 """
 
 from __future__ import annotations

@@ -97,6 +97,29 @@ never exceeds the designed level while the arrivals stay in the language.
 :attr:`GuaranteedEstimator.state_bounds` holds the per-state bounds.
 ``strict=True`` keeps the a priori guarantee of the design (the level of the
 observed prefix or class) and refuses data outside the language.
+
+**Cost.**  With ``strict=False`` the set-membership estimator runs on every
+step (it must hold every packet at a fallback), so a step costs one
+set-membership step plus the designed side.  The two share one intake (the
+packets and the input are checked once).  What the designed side needs that
+depends on the arrivals alone is kept per class ``(d, S)`` of the design,
+a finite set (:class:`eqrec.estimators.error_maps.ClassSteps`): the gain, its
+absolute values, the rounding allowance's map, the error map's parts, and the
+level of each observed prefix.  What is left per step is the class estimate
+(two products), the rounding allowance of this step's own numbers (it
+depends on the magnitudes of the state and the residuals, so it cannot be
+kept), one product :math:`\Phi G(s)` and the row sums of
+:math:`[\Phi G(s), N]` (the set at the period's start depends on the earlier
+periods), and the choice per state, compiled.  Every number is the same as
+when each of them was computed afresh (``tests/test_class_step_cache.py``,
+bit for bit).  Measured side by side in one run (``python
+benchmarks/bench_tight.py --part cost``, CPU µs per step on a shared machine,
+the ratios are the figures to read): on ``n = 4`` the designed side adds
+about 0.3 to 0.7 of a set-membership step (that step is cheap there, about
+200 µs); on the ``n = 10`` chain, whose set-membership step costs some
+milliseconds, it adds a few percent.  ``tight=False`` costs the same as
+``tight=True`` (the set-membership estimator runs for the fallback either
+way).
 """
 
 from __future__ import annotations
@@ -148,7 +171,9 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight):  # pragma: no cov
             xhat[i], bounds[i] = sm_x[i], sm_bounds[i]
         else:
             xhat[i], bounds[i] = x[i], d
-        top = max(top, bounds[i])
+        top = max(top, bounds[i]) if not np.isnan(top) else top  # NaN propagates, as in np.max
+        if np.isnan(bounds[i]):
+            top = np.nan
     return xhat, bounds, use_sm, top
 
 
