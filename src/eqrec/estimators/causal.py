@@ -48,6 +48,7 @@ to the constructor (then it is reset at once); without it, call
 
 from __future__ import annotations
 
+import math
 from typing import Iterable
 
 import numpy as np
@@ -55,7 +56,7 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.bounds.rounding import injection_bound
+from eqrec.bounds.rounding import UNIT_ROUNDOFF, allowance_tail, step_injections
 from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
@@ -440,10 +441,11 @@ class ClassEstimator(StampedEstimator):
         else:
             r = None
             xhat = np.array(xbar, float)
-        rounding = self._class_rounding(step, entry, xbar, r)
-        self._commit(step, rounding)
+        record, rho, top = self._class_rounding(step, entry, xbar, r)
+        self._commit(step, (record, rho))
         self._xbar, self.xhat = xbar, xhat
-        self.bound = self._with_rounding(self._level())
+        level = self._level()  # plus the allowance, rounded up (StampedEstimator._with_rounding, its max known)
+        self.bound = math.nextafter(level + top, math.inf) if math.isfinite(level) else level
         return self.xhat.copy(), self.bound
 
     def _dynamics(self, t: int) -> tuple[np.ndarray, np.ndarray]:
@@ -461,21 +463,32 @@ class ClassEstimator(StampedEstimator):
         return hit
 
     def _class_rounding(self, step: OpenedStep, entry: ClassStep, xbar: np.ndarray,
-                        r: "np.ndarray | None") -> tuple[RoundingRecord, np.ndarray]:
+                        r: "np.ndarray | None") -> tuple[RoundingRecord, np.ndarray, float]:
         """The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
         residuals and of the simulated state and measurements, carried by the class map with identity noise
         gains (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the
-        stacked residuals of the class's data, ``None`` without data)."""
-        sysm = self.system
-        record = self._period_record(step)
+        stacked residuals of the class's data, ``None`` without data); with its largest entry.
+
+        The operations of :meth:`~eqrec.estimators.intake.StampedEstimator._period_record`,
+        ``_state_injection`` and ``_allowance``, the elementwise ones in two compiled calls
+        (:func:`eqrec.bounds.rounding.step_injections`, :func:`eqrec.bounds.rounding.allowance_tail`): the same
+        numbers."""
+        sysm, t = self.system, step.t
+        record = RoundingRecord(self.T, sysm.n, sysm.p, self._rho.copy()) if t == 0 else self._record
+        absA, absB, _, e, _, f = self._absolute_model(t)
+        add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] and step.u.any() else self._drift(t)
+        has_data = r is not None
+        true, extra = step_injections(self.xhat, self._radius(), absA, step.history[t], add,
+                                      sysm.n + sysm.nw + sysm.m + 3, record.w[t],
+                                      entry.abs_gain if has_data else absA, r if has_data else self._zeros,
+                                      self._zero_data(r.size) if has_data else self._zeros, xbar, self._zeros,
+                                      len(entry.key[1]) * sysm.p + 2, has_data)
+        record.true.append(true)  # |x(t)| <= |x̂(t)| + bound
         for tau in self._new_packets(step):
             self._output_injection(record, tau, step.yxi[tau], step.history[tau])
-        self._state_injection(step, record, step.history[step.t], None, sysm.n)
-        extra = 0.0
-        if r is not None:
-            extra = injection_bound(entry.abs_gain, r, 1.0, self._zero_data(r.size), xbar, self._zeros,
-                                    len(entry.key[1]) * sysm.p + 2)
-        return record, self._allowance(record, entry.rounding_map, extra)
+        rho, top = allowance_tail(entry.rounding_map @ record.z, extra,
+                                  1.0 + (2 * sysm.n + 8) * UNIT_ROUNDOFF)
+        return record, rho, top
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,
