@@ -24,6 +24,7 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains, class_error_map
 from eqrec.bounds.stacking import Stacking
 from eqrec.bounds.zonotope import ErrorMap
+from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
 
@@ -302,8 +303,9 @@ class ClassSteps:
         key = (depth, available)
         hit = self._entries.get(key)
         if hit is None:
-            index = self.gains.classes._index.get(key)
-            if index is None:
+            try:
+                index = self.gains.classes.index(depth, available)
+            except InputError:  # no such class: data outside the design (not kept: the language is what is kept)
                 return None
             hit = self._entries[key] = ClassStep(self, depth, available, index)
         return hit
