@@ -2,9 +2,11 @@
 side by side with the set-membership estimator (figures, not tests).
 
     python benchmarks/bench_tight.py [--steps 120] [--seeds 2] [--loss 0.4] [--repeats 3]
+    python benchmarks/bench_tight.py --part cost [--losses 0,0.2,0.4] [--cost-steps 120,120,60] [--plants ...]
 
-Plants: two carts and a spring (:func:`eqrec.two_mass`, ``n = 4``, one position measured) and a chain of five
-carts (``n = 10``, every position measured, ``p = 5``).  Each is designed by the class engine for delays
+Plants: two carts and a spring (:func:`eqrec.two_mass`, ``n = 4``, one position measured), a cart-pole (``n = 4``,
+one unstable mode, two outputs; the cost table only) and a chain of five carts (``n = 10``, every position
+measured, ``p = 5``).  Each is designed by the class engine for delays
 ``0..2``, at most one loss per block of ``T = 6`` (``delay_classes(max_delay=2, horizon=6, max_lost=1)``, ``μ1``
 free), and run on Bernoulli losses at ``--loss`` with uniform delays ``0..2``, noise at random box corners.
 
@@ -18,7 +20,13 @@ Printed, per plant:
 * µs per step, measured side by side in one run (CPU time of the process, the best of ``--repeats`` runs, each estimator in turn on the
   same data): ``strict=True`` (a trace without losses, in the language), ``strict=False`` in the design (the
   same trace), ``strict=False`` out of it (its out-of-design steps on the lossy trace) and the zonotope estimator
-  alone on each trace, and the ratios ``strict=False`` / zonotope on the same trace (issue 40's target: <= 1.2).
+  alone on each trace, and the ratios ``strict=False`` / zonotope on the same trace (issue 40's target: <= 1.2);
+* the cost table (issue 40 §3, ``--part cost``): per plant and loss rate (Bernoulli, delays ``0..2`` uniform), the
+  CPU µs of ``step()`` alone (the simulation outside the clock), per step the least of ``--repeats`` runs after one
+  warm-up run, each estimator in turn on the same arrivals: ``strict=True`` (its steps in the language; a refused
+  step resets it there, untimed), ``strict=False`` on its steps in the design and on those out of it, and the
+  zonotope estimator alone on the same steps; the ratios ``strict=False`` / zonotope, and the designed side
+  (``strict=False`` in the design minus the zonotope on those steps, and its share of a zonotope step).
 """
 
 from __future__ import annotations
@@ -33,7 +41,8 @@ from eqrec.bounds.information import information_limit
 from eqrec.design.delay.design import design_delay_global
 from eqrec.design.delay.languages import delay_classes
 from eqrec.estimators.zonotope import ZonotopeEstimator
-from eqrec.simulate.loop import closed_loop
+from eqrec.errors import InputError
+from eqrec.simulate.loop import closed_loop, what_arrived
 from eqrec.systems.affine import AffineSystem
 from eqrec.systems.examples import two_mass, zoh
 
@@ -61,6 +70,16 @@ def cart_chain(carts: int = 5, k: float = 1.0, c: float = 0.02, Ts: float = 0.1)
     C = np.zeros((carts, n))
     C[np.arange(carts), 2 * np.arange(carts)] = 1.0
     return AffineSystem(A=A, B=B, C=C, E=E, eta_w=0.01, eta_v=0.05, name=f"chain of {carts} carts", dt=Ts)
+
+
+def cart_pole(Ts: float = 0.05) -> AffineSystem:
+    """A cart-pole linearised about the upright pole (one unstable mode, signed ``A``), the cart's position and the
+    pole's angle measured (``n = 4``, ``p = 2``; the plant of ``tests/test_rounding.py``)."""
+    from scipy.linalg import expm
+
+    Ac = np.array([[0, 1, 0, 0], [0, -0.1, -1.0, 0], [0, 0, 0, 1], [0, 0.2, 9.81 / 0.5 * 0.3, -0.01]])
+    return AffineSystem(A=expm(Ac * Ts), C=[[1.0, 0, 0, 0], [0, 0, 1.0, 0]], E=0.01 * np.eye(4), eta_w=0.1,
+                        eta_v=0.01, name="cart-pole", dt=Ts)
 
 
 def _runs(system, design, trace, seed):
@@ -150,14 +169,101 @@ def speed(system, design, args) -> None:
             f"out of it {best.get('strict=False, out of it', np.nan) / best['zonotope alone, lossy trace']:.2f}")
 
 
+def _arrivals(system, design, trace, seed):
+    """What reaches an estimator at each step of ``trace`` (the protocol's form), from one simulated run."""
+    w, v, xi0 = _runs(system, design, trace, seed)
+    x0 = np.zeros(system.n)
+    run = closed_loop(system, ZonotopeEstimator(system, x0_radius=design.mu1, max_delay=HORIZON), trace, x0, xi0,
+                      w, v)
+    schedule = trace.schedule()
+    return [what_arrived(schedule[k], k, run.y) for k in range(trace.steps)], x0 - xi0
+
+
+def _step_times(make, arrived, xhat0, strict: bool) -> tuple[np.ndarray, np.ndarray]:
+    """CPU time of each ``step`` call and whether the estimator was in the design after it.
+
+    ``strict=True`` refuses a step outside the language (nothing changes): the estimator is then reset at that
+    time from its estimate and the step taken again; the refused call and the retried step are not timed
+    (``nan``), so its times are those of the steps in the language."""
+    est = make().reset(xhat0)
+    times, flags = np.full(len(arrived), np.nan), np.zeros(len(arrived), bool)
+    clock = time.process_time
+    for k, y in enumerate(arrived):
+        try:
+            t0 = clock()
+            est.step(y)
+            times[k] = clock() - t0
+        except InputError:
+            if not strict:
+                raise
+            est.reset(est.x, t0=est.time)
+            est.step(y)
+        flags[k] = getattr(est, "in_design", True)
+    return times, flags
+
+
+def cost_table(plants, args) -> None:
+    """Issue 40 §3: µs per step of ``strict=True``, ``strict=False`` in the design and out of it, and the zonotope
+    estimator alone, side by side in one run, at each loss rate (module docstring)."""
+    losses = [float(x) for x in args.losses.split(",")]
+    print(f"\nus per step (CPU time of step() alone, per step the least of {args.repeats} runs, each estimator in turn "
+          f"on the same arrivals; delays 0..{MAX_DELAY} uniform, Bernoulli loss; the zonotope on the same steps)")
+    head = (f"{'plant':22s} {'loss':>5s} {'in/out':>7s} {'strict=True':>11s} {'False in':>9s} {'zono in':>8s} "
+            f"{'ratio':>6s} {'False out':>9s} {'zono out':>8s} {'ratio':>6s} {'designed side':>14s}")
+    print(head)
+    for system, design, steps in plants:
+        for loss in losses:
+            rng = np.random.default_rng(11)
+            trace = with_uniform_delays(rng, bernoulli_trace(rng, steps, loss), MAX_DELAY)
+            arrived, xhat0 = _arrivals(system, design, trace, 3)
+            cases = {"true": (lambda: design.estimator(), True),
+                     "false": (lambda: design.estimator(strict=False), False),
+                     "zono": (lambda: ZonotopeEstimator(system, x0_radius=design.mu1, max_delay=HORIZON), False)}
+            best, flags = {}, None
+            for rep in range(args.repeats + 1):  # the first run warms the caches (compiled code, class maps)
+                for name, (make, strict) in cases.items():
+                    dt, fl = _step_times(make, arrived, xhat0, strict)
+                    if name == "false":
+                        flags = fl
+                    if rep:
+                        best[name] = dt if name not in best else np.fmin(best[name], dt)
+            us = {k: v * 1e6 for k, v in best.items()}
+            inside, outside = flags.copy(), ~flags
+            inside[0] = outside[0] = False  # the first step holds the estimators' first-use work
+
+            def mean(name, where):
+                sel = us[name][where]
+                sel = sel[np.isfinite(sel)]
+                return float(np.mean(sel)) if sel.size else np.nan
+
+            f_in, z_in, f_out, z_out = mean("false", inside), mean("zono", inside), mean("false", outside), \
+                mean("zono", outside)
+            side = f_in - z_in
+            print(f"{system.name[:22]:22s} {loss:5.0%} {int(inside.sum()):3d}/{int(outside.sum()):<3d} "
+                  f"{mean('true', np.isfinite(us['true'])):11.0f} {f_in:9.0f} {z_in:8.0f} {f_in / z_in:6.2f} "
+                  f"{f_out:9.0f} {z_out:8.0f} {f_out / z_out:6.2f} {side:7.0f} ({side / z_in:4.0%})")
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=120)
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--loss", type=float, default=0.4)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--part", choices=("all", "tightness", "cost"), default="all",
+                    help="tightness and speed per plant, the cost table (issue 40 §3), or both (default)")
+    ap.add_argument("--losses", default="0,0.2,0.4", help="loss rates of the cost table (comma-separated)")
+    ap.add_argument("--cost-steps", default="120,120,60",
+                    help="steps of the cost table per plant: two carts, cart-pole, chain of five carts")
+    ap.add_argument("--plants", default="carts,cart-pole,chain",
+                    help="plants to run (comma-separated): carts (two carts), cart-pole, chain (five carts)")
     args = ap.parse_args(argv)
-    for system in (two_mass(), cart_chain(5)):
+    plants = []
+    chosen = args.plants.split(",")
+    for key, system, steps in zip(("carts", "cart-pole", "chain"), (two_mass(), cart_pole(), cart_chain(5)),
+                                  (int(x) for x in args.cost_steps.split(","))):
+        if key not in chosen:
+            continue
         t0 = time.perf_counter()
         try:
             design = design_delay_global(system, delay_classes(max_delay=MAX_DELAY, horizon=HORIZON,
@@ -165,10 +271,14 @@ def main(argv: list[str] | None = None) -> None:
         except Exception as err:  # a plant the language cannot be designed for: say so, go on
             print(f"{system.name}: no design ({type(err).__name__}: {err})")
             continue
-        print(f"\n{system.name} (n = {system.n}, p = {system.p}): delays 0..{MAX_DELAY}, <= {MAX_LOST} of "
-              f"{HORIZON} lost, mu1 = {design.mu1:.4g} ({time.perf_counter() - t0:.1f} s)")
-        tightness(system, design, args)
-        speed(system, design, args)
+        plants.append((system, design, steps))
+        if args.part in ("all", "tightness"):
+            print(f"\n{system.name} (n = {system.n}, p = {system.p}): delays 0..{MAX_DELAY}, <= {MAX_LOST} of "
+                  f"{HORIZON} lost, mu1 = {design.mu1:.4g} ({time.perf_counter() - t0:.1f} s)")
+            tightness(system, design, args)
+            speed(system, design, args)
+    if args.part in ("all", "cost"):
+        cost_table(plants, args)
 
 
 if __name__ == "__main__":

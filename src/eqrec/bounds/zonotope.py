@@ -101,6 +101,115 @@ def outer_row_sums(G: np.ndarray) -> np.ndarray:
     return np.nextafter(s * (1.0 + (q + 2) * _U), np.inf)
 
 
+#: Longest row :func:`outer_row_sums_of_parts` sums (NumPy reduces a longer one in buffered chunks).
+_PARTS_LIMIT = 4096
+
+
+@numba.njit(cache=True)
+def _block(a, lo, n):  # pragma: no cover - compiled
+    """NumPy's pairwise sum of ``a[lo:lo+n]`` for ``n <= 128``: plainly below 8 terms, else 8 accumulators."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    m = n - n % 8
+    while i < m:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@numba.njit(cache=True)
+def _pairwise(a, lo, n):  # pragma: no cover - compiled
+    """NumPy's pairwise summation of ``a[lo:lo+n]`` (``pairwise_sum`` of its ``loops_utils``): blocks of at most
+    128 (:func:`_block`), longer runs halved at a multiple of 8 and the halves' sums added; the same additions in
+    the same order.  The recursion is unrolled on an explicit stack (a cached compiled function must not call
+    itself)."""
+    los = np.empty(128, np.int64)
+    ns = np.empty(128, np.int64)
+    stage = np.zeros(128, np.int64)
+    vals = np.empty(128)
+    los[0], ns[0], stage[0] = lo, n, 0
+    sp, vp = 1, 0
+    while sp > 0:
+        f = sp - 1
+        if ns[f] <= 128:
+            vals[vp] = _block(a, los[f], ns[f])
+            vp += 1
+            sp -= 1
+            continue
+        half = ns[f] // 2
+        half -= half % 8
+        if stage[f] == 0:  # the first half
+            stage[f] = 1
+            los[sp], ns[sp], stage[sp] = los[f], half, 0
+            sp += 1
+        elif stage[f] == 1:  # the second half
+            stage[f] = 2
+            los[sp], ns[sp], stage[sp] = los[f] + half, ns[f] - half, 0
+            sp += 1
+        else:  # both done: their sum, first + second
+            vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
+            vp -= 1
+            sp -= 1
+    return vals[0]
+
+
+@numba.njit(cache=True)
+def _row_sums_of_parts(P, N):  # pragma: no cover - compiled
+    """:func:`outer_row_sums` of ``[P, N]`` without forming it: per row the absolute values end to end, summed as
+    NumPy's ``sum`` does (from ``0.0``, pairwise), then rounded outward with the same factor."""
+    n, qp = P.shape
+    qn = N.shape[1]
+    q = qp + qn
+    row = np.empty(q)
+    out = np.empty(n)
+    factor = 1.0 + (q + 2) * _U
+    for i in range(n):
+        for j in range(qp):
+            row[j] = abs(P[i, j])
+        for j in range(qn):
+            row[qp + j] = abs(N[i, j])
+        out[i] = np.nextafter((0.0 + _pairwise(row, 0, q)) * factor, np.inf)
+    return out
+
+
+def outer_row_sums_of_parts(P: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """``outer_row_sums(np.concatenate([P, N], axis=1))``, the same numbers, without the concatenation.
+
+    Compiled for rows of at most ``4096`` entries (the same additions in the same order as NumPy's ``sum``,
+    ``tests/test_class_step_cache.py``); longer rows are concatenated and summed by NumPy.
+
+    Parameters
+    ----------
+    P, N : numpy.ndarray, shapes (n, q1) and (n, q2)
+        The two blocks of generators.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The outward-rounded row sums of ``|[P, N]|``.
+    """
+    if P.shape[1] + N.shape[1] > _PARTS_LIMIT:
+        return outer_row_sums(np.concatenate([P, N], axis=1))
+    return _row_sums_of_parts(P, N)
+
+
 def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:
     """An outer reduction to at most ``limit`` generators: Girard's box of the smallest (module docstring).
 
@@ -316,7 +425,14 @@ class ErrorSet:
     @property
     def current(self) -> np.ndarray:
         """The current set's generators as the last step made them (not reduced unless used as an anchor)."""
-        return self._stored[self.time]
+        return self._formed(self.time)
+
+    def _formed(self, time: int) -> np.ndarray:
+        """The stored set of ``time``, its blocks ``[Φ G(s), N]`` concatenated on first use (:meth:`advance`)."""
+        G = self._stored[time]
+        if type(G) is tuple:
+            G = self._stored[time] = np.concatenate(G, axis=1)
+        return G
 
     @classmethod
     def box(cls, radius: "float | np.ndarray", n: int, t0: int, order: "float | None" = None) -> "ErrorSet":
@@ -360,7 +476,7 @@ class ErrorSet:
         """
         time = int(time)
         try:
-            G = self._stored[time]
+            G = self._formed(time)
         except KeyError:
             raise InputError(f"no error set is kept for time {time} (kept: {sorted(self._stored)})",
                              field="anchor") from None
@@ -401,8 +517,12 @@ class ErrorSet:
         ndarray, shape (n,)
             The exact per-state bound of the new set (before reduction), rounded outward.
         """
-        G = self.propose(emap) if generators is None else generators
-        bounds = outer_row_sums(G)
+        if generators is None:  # the blocks, summed without forming [Φ G(s), N] (formed when asked for)
+            G = (emap.state @ self.at(emap.anchor), emap.noise)
+            bounds = outer_row_sums_of_parts(*G)
+        else:
+            G = generators
+            bounds = outer_row_sums(G)
         self.time += 1
         self._stored = {s: g for s, g in self._stored.items() if s >= emap.anchor}
         self._reduced = {s for s in self._reduced if s >= emap.anchor}

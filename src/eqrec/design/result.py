@@ -23,6 +23,37 @@ if TYPE_CHECKING:
     from eqrec.design.weighted import WeightedEstimator
 
 
+class ClassLevels:
+    """The level of an observed prefix in a class-engine design: the certified level of its class.
+
+    The rule ``bound_of(prefix) -> level`` of :meth:`Design.estimator`; two rules over the same classes and levels
+    are equal (so the estimators of one design share the levels they have looked up,
+    :mod:`eqrec.estimators.intake`).
+
+    Parameters
+    ----------
+    classes : ClassSet
+        The design's classes.
+    levels : numpy.ndarray
+        The certified level of each class.
+    """
+
+    __slots__ = ("classes", "levels", "__weakref__")
+
+    def __init__(self, classes, levels):
+        self.classes, self.levels = classes, levels
+
+    def __call__(self, prefix: ArrivalPattern) -> float:
+        depth = prefix.T
+        return float(self.levels[self.classes.index(depth, prefix.available(depth - 1))])
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ClassLevels) and other.classes is self.classes and other.levels is self.levels
+
+    def __hash__(self) -> int:
+        return hash((id(self.classes), id(self.levels)))
+
+
 @dataclass
 class Mu1Free:
     """How the recovery level of a ``μ1``-free design was found (the μ1-free theorem,
@@ -271,11 +302,7 @@ class Design:
 
         if self.class_gains is not None:
             gains, cert = self.class_gains, self.class_certificate
-            classes = gains.classes
-
-            def bound_of(prefix):
-                depth = prefix.T
-                return float(cert.levels[classes.index(depth, prefix.available(depth - 1))])
+            bound_of = ClassLevels(gains.classes, cert.levels)
         else:
             if self.schedule is None:
                 raise InputError("this design has no gains to run")

@@ -48,6 +48,7 @@ to the constructor (then it is reset at once); without it, call
 
 from __future__ import annotations
 
+import math
 from typing import Iterable
 
 import numpy as np
@@ -55,8 +56,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.bounds.rounding import injection_bound
-from eqrec.estimators.error_maps import ClassErrorMaps, RoundingMaps
+from eqrec.bounds.rounding import UNIT_ROUNDOFF, allowance_tail, step_injections
+from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -306,8 +307,7 @@ class ClassEstimator(StampedEstimator):
                                  f"{(system.n, len(cls.available) * system.p)}")
         self.gains = gains
         self._maps: ClassErrorMaps | None = None
-        self._rounding_maps: RoundingMaps | None = None  # the rounding allowance's maps (shared by the design)
-        self._abs_gains: dict = {}  # (d, S) -> |K_{d,S}|
+        self._class_steps: ClassSteps | None = None  # per class: K, |K|, the rounding map (shared by the design)
         self._xbar: "np.ndarray | None" = None
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
 
@@ -406,25 +406,55 @@ class ClassEstimator(StampedEstimator):
         """
         return self._advance(self._open(y, u))
 
-    def _advance(self, step: OpenedStep) -> tuple[np.ndarray, float]:
-        """The step of :meth:`step` from its checked state (the class lookup may still raise; nothing changes)."""
+    def _steps(self) -> ClassSteps:
+        """The design's per-class cache (:class:`eqrec.estimators.error_maps.ClassSteps`, shared by the gains)."""
+        steps = self._class_steps
+        if steps is None:
+            steps = self._class_steps = ClassSteps.of(self.system, self.gains)
+        return steps
+
+    def _class(self, step: OpenedStep) -> "ClassStep | None":
+        """The class ``(t+1, S)`` of an opened step, or ``None`` when the design has none (nothing changes)."""
+        return self._steps().get(step.t + 1, tuple(sorted(step.yxi)))
+
+    def _advance(self, step: OpenedStep, entry: "ClassStep | None" = None) -> tuple[np.ndarray, float]:
+        """The step of :meth:`step` from its checked state (``entry``: its class, if already looked up; the class
+        lookup may still raise; nothing changes)."""
         sys = self.system
         k, t = step.k, step.t
-        S = tuple(sorted(step.yxi))
+        if entry is None:
+            entry = self._class(step)
+            if entry is None:
+                S = tuple(sorted(step.yxi))
+                raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
+                                 f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
+                                 f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains "
+                                 f"have no class ({t + 1}, {list(S)})", field="y")
+        S = entry.key[1]
         xbar0 = self.xhat if step.restarted else self._xbar
-        xbar = sys.A_at(t) @ xbar0 + sys.B_at(t) @ step.u + sys.f
-        try:
-            xhat = self.gains.estimate(t + 1, S, xbar, [step.yxi[tau] for tau in S])
-        except InputError:
-            raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
-                             f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
-                             f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains have "
-                             f"no class ({t + 1}, {list(S)})", field="y") from None
-        rounding = self._class_rounding(step, S, xbar)
-        self._commit(step, rounding)
+        A, B = self._dynamics(t)
+        xbar = A @ xbar0 + B @ step.u + sys.f
+        # the class form x̂ = x̄ + K r (the operations of ClassGains.estimate, with the class looked up once)
+        if S:
+            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
+            xhat = xbar + entry.gain @ r
+        else:
+            r = None
+            xhat = np.array(xbar, float)
+        record, rho, top = self._class_rounding(step, entry, xbar, r)
+        self._commit(step, (record, rho))
         self._xbar, self.xhat = xbar, xhat
-        self.bound = self._with_rounding(self._level())
+        level = self._level()  # plus the allowance, rounded up (StampedEstimator._with_rounding, its max known)
+        self.bound = math.nextafter(level + top, math.inf) if math.isfinite(level) else level
         return self.xhat.copy(), self.bound
+
+    def _dynamics(self, t: int) -> tuple[np.ndarray, np.ndarray]:
+        """``A(t), B(t)`` (the system's own arrays; cached by time for a time-varying system)."""
+        key = ("AB", t if self.system.is_time_varying else 0)
+        hit = self._norms.get(key)
+        if hit is None:
+            hit = self._norms[key] = (self.system.A_at(t), self.system.B_at(t))
+        return hit
 
     def _zero_data(self, size: int) -> np.ndarray:
         hit = self._norms.get(("zeros", size))
@@ -432,27 +462,33 @@ class ClassEstimator(StampedEstimator):
             hit = self._norms[("zeros", size)] = np.zeros(size)
         return hit
 
-    def _class_rounding(self, step: OpenedStep, S: tuple[int, ...], xbar: np.ndarray) -> tuple[RoundingRecord,
-                                                                                              np.ndarray]:
+    def _class_rounding(self, step: OpenedStep, entry: ClassStep, xbar: np.ndarray,
+                        r: "np.ndarray | None") -> tuple[RoundingRecord, np.ndarray, float]:
         """The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
         residuals and of the simulated state and measurements, carried by the class map with identity noise
-        gains (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself."""
-        sysm, d = self.system, step.t + 1
-        record = self._period_record(step)
+        gains (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the
+        stacked residuals of the class's data, ``None`` without data); with its largest entry.
+
+        The operations of :meth:`~eqrec.estimators.intake.StampedEstimator._period_record`,
+        ``_state_injection`` and ``_allowance``, the elementwise ones in two compiled calls
+        (:func:`eqrec.bounds.rounding.step_injections`, :func:`eqrec.bounds.rounding.allowance_tail`): the same
+        numbers."""
+        sysm, t = self.system, step.t
+        record = RoundingRecord(self.T, sysm.n, sysm.p, self._rho.copy()) if t == 0 else self._record
+        absA, absB, _, e, _, f = self._absolute_model(t)
+        add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] and step.u.any() else self._drift(t)
+        has_data = r is not None
+        true, extra = step_injections(self.xhat, self._radius(), absA, step.history[t], add,
+                                      sysm.n + sysm.nw + sysm.m + 3, record.w[t],
+                                      entry.abs_gain if has_data else absA, r if has_data else self._zeros,
+                                      self._zero_data(r.size) if has_data else self._zeros, xbar, self._zeros,
+                                      len(entry.key[1]) * sysm.p + 2, has_data)
+        record.true.append(true)  # |x(t)| <= |x̂(t)| + bound
         for tau in self._new_packets(step):
             self._output_injection(record, tau, step.yxi[tau], step.history[tau])
-        self._state_injection(step, record, step.history[step.t], None, sysm.n)
-        if self._rounding_maps is None:
-            self._rounding_maps = RoundingMaps.of(sysm, self.gains)
-        maps = self._rounding_maps.absolute(d, S)
-        extra = 0.0
-        if S:
-            hit = self._abs_gains.get((d, S))
-            if hit is None:
-                hit = self._abs_gains[(d, S)] = np.abs(self.gains.gain(d, S))
-            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
-            extra = injection_bound(hit, r, 1.0, self._zero_data(r.size), xbar, self._zeros, len(S) * sysm.p + 2)
-        return record, self._allowance(record, maps, extra)
+        rho, top = allowance_tail(entry.rounding_map @ record.z, extra,
+                                  1.0 + (2 * sysm.n + 8) * UNIT_ROUNDOFF)
+        return record, rho, top
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,

@@ -24,6 +24,7 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains, class_error_map
 from eqrec.bounds.stacking import Stacking
 from eqrec.bounds.zonotope import ErrorMap
+from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
 
@@ -178,6 +179,135 @@ class RoundingMaps:
         if hit is None:
             state, noise = self._maps.parts(depth, available)
             hit = self._parts[key] = np.abs(np.concatenate([noise, state], axis=1))
+        return hit
+
+
+class ClassStep:
+    r"""What the class form needs at a step of the class ``(depth, available)``, each computed on first use and
+    kept (:class:`ClassSteps`): the gain ``K``, its absolute values, the rounding allowance's absolute map and the
+    error map's parts.  Functions of the class alone, never of a measured value, so keeping them changes no number.
+
+    Parameters
+    ----------
+    steps : ClassSteps
+        The cache it belongs to.
+    depth : int
+        Period time of the estimate.
+    available : tuple of int
+        Period times of the measurements received (increasing).
+    index : int
+        Position of the class in the design's classes.
+
+    Attributes
+    ----------
+    index : int
+        Position of the class.
+    gain : numpy.ndarray, shape (n, |S| p)
+        ``K`` of the class.
+    """
+
+    __slots__ = ("_steps", "key", "index", "gain", "_abs_gain", "_rounding", "_parts")
+
+    def __init__(self, steps: "ClassSteps", depth: int, available: tuple[int, ...], index: int):
+        self._steps, self.key, self.index = steps, (depth, available), index
+        self.gain = steps.gains.K[index]
+        self._abs_gain = self._rounding = self._parts = None
+
+    @property
+    def abs_gain(self) -> np.ndarray:
+        """``|K|`` of the class."""
+        if self._abs_gain is None:
+            self._abs_gain = np.abs(self.gain)
+        return self._abs_gain
+
+    @property
+    def rounding_map(self) -> np.ndarray:
+        """:meth:`RoundingMaps.absolute` of the class."""
+        if self._rounding is None:
+            self._rounding = self._steps.rounding.absolute(*self.key)
+        return self._rounding
+
+    @property
+    def parts(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`ClassErrorMaps.parts` of the class, ``(Φ, N)``."""
+        if self._parts is None:
+            self._parts = self._steps.maps.parts(*self.key)
+        return self._parts
+
+
+class ClassSteps:
+    r"""Per class of a design, its :class:`ClassStep`, made on first use and kept (a design has finitely many
+    classes, so the cache is bounded by their number); one lookup per step instead of one per quantity.
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The model.
+    gains : ClassGains
+        The design's class gains.
+    """
+
+    def __init__(self, system: AffineSystem, gains: ClassGains):
+        self.system, self.gains = system, gains
+        self._entries: dict = {}
+        self._maps: "ClassErrorMaps | None" = None
+        self._rounding: "RoundingMaps | None" = None
+
+    @classmethod
+    def of(cls, system: AffineSystem, gains: ClassGains) -> "ClassSteps":
+        """The cache of these gains on this system, built once and kept on the gains.
+
+        Parameters
+        ----------
+        system : AffineSystem
+            The model.
+        gains : ClassGains
+            The design's class gains.
+
+        Returns
+        -------
+        ClassSteps
+            The shared cache.
+        """
+        return _kept_on(gains, "_class_steps", system, cls)
+
+    @property
+    def maps(self) -> ClassErrorMaps:
+        """The design's :class:`ClassErrorMaps` (shared)."""
+        if self._maps is None:
+            self._maps = ClassErrorMaps.of(self.system, self.gains)
+        return self._maps
+
+    @property
+    def rounding(self) -> RoundingMaps:
+        """The design's :class:`RoundingMaps` (shared)."""
+        if self._rounding is None:
+            self._rounding = RoundingMaps.of(self.system, self.gains)
+        return self._rounding
+
+    def get(self, depth: int, available: tuple[int, ...]) -> "ClassStep | None":
+        """The class ``(depth, available)`` (``available`` increasing), or ``None`` if the design has none.
+
+        Parameters
+        ----------
+        depth : int
+            Period time of the estimate.
+        available : tuple of int
+            Period times of the measurements received, increasing.
+
+        Returns
+        -------
+        ClassStep or None
+            The kept entry.
+        """
+        key = (depth, available)
+        hit = self._entries.get(key)
+        if hit is None:
+            try:
+                index = self.gains.classes.index(depth, available)
+            except InputError:  # no such class: data outside the design (not kept: the language is what is kept)
+                return None
+            hit = self._entries[key] = ClassStep(self, depth, available, index)
         return hit
 
 

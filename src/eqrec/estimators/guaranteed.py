@@ -97,26 +97,87 @@ never exceeds the designed level while the arrivals stay in the language.
 :attr:`GuaranteedEstimator.state_bounds` holds the per-state bounds.
 ``strict=True`` keeps the a priori guarantee of the design (the level of the
 observed prefix or class) and refuses data outside the language.
+
+**Cost.**  With ``strict=False`` the set-membership estimator runs on every
+step (it must hold every packet at a fallback), so a step costs one
+set-membership step plus the designed side.  The two share one intake (the
+packets and the input are checked once).  What the designed side needs that
+depends on the arrivals alone is kept per class ``(d, S)`` of the design,
+a finite set (:class:`eqrec.estimators.error_maps.ClassSteps`): the gain, its
+absolute values, the rounding allowance's map, the error map's parts, and the
+level of each observed prefix.  What is left per step is the class estimate
+(two products), the rounding allowance of this step's own numbers (it
+depends on the magnitudes of the state and the residuals, so it cannot be
+kept), one product :math:`\Phi G(s)` and the row sums of
+:math:`[\Phi G(s), N]` (the set at the period's start depends on the earlier
+periods), and the choice per state, compiled.  Every number is the same as
+when each of them was computed afresh (``tests/test_class_step_cache.py``,
+bit for bit).  Measured side by side in one run (``python
+benchmarks/bench_tight.py --part cost``, CPU µs per step on a shared machine,
+the ratios are the figures to read; two runs, 0/20/40 % loss): in the
+design ``strict=False`` costs 1.4–1.8× the set-membership estimator alone on
+the two carts (whose set-membership step is cheap, about 200–300 µs),
+1.1–1.4× on the cart-pole and 1.0–1.1× on the ``n = 10`` chain (a step of
+some milliseconds); the designed side itself is about 100–130 µs, the cost
+of ``strict=True`` (about 70 µs) plus the exact bound and the choice.  Out of
+the design it is the set-membership step.  ``tight=False`` costs the same as
+``tight=True`` (the set-membership estimator runs for the fallback either
+way).
 """
 
 from __future__ import annotations
 
 from typing import Iterable
 
+import numba
 import numpy as np
 
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
-from eqrec.bounds.zonotope import ErrorSet, check_order, outer_row_sums
+from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
 from eqrec.errors import InputError
-from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, has_class, make_estimator
+from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
 
 #: Default reduction order of the error set carried with ``strict=False`` (generators per state).
 DEFAULT_ORDER = 40
+
+
+@numba.njit(cache=True)
+def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight):  # pragma: no cover - compiled
+    r"""The reported estimate and bounds of a step in the design (module docstring), in one compiled pass.
+
+    Per state, the designed bound :math:`b^{\mathrm d}_i = \min(\mathrm{nextafter}(\beta_i + \rho_i, +\infty),
+    \mathrm{level})` (the exact worst case of the designed set plus the rounding allowance, rounded up, and the
+    class's level); with ``tight``, the set-membership pair where its bound is smaller.  Elementwise IEEE operations
+    only, the same as NumPy's ``nextafter``, ``minimum``, ``<`` and ``where``: the same numbers.
+
+    Returns
+    -------
+    tuple
+        ``(x̂, bounds, use_sm, max bound)``.
+    """
+    n = row_sums.shape[0]
+    xhat = np.empty(n)
+    bounds = np.empty(n)
+    use_sm = np.zeros(n, dtype=np.bool_)
+    top = -np.inf
+    for i in range(n):
+        d = np.nextafter(row_sums[i] + rho[i], np.inf)
+        if d > level:  # np.minimum(d, level): d unless level is smaller
+            d = level
+        if tight and sm_bounds[i] < d:
+            use_sm[i] = True
+            xhat[i], bounds[i] = sm_x[i], sm_bounds[i]
+        else:
+            xhat[i], bounds[i] = x[i], d
+        top = max(top, bounds[i]) if not np.isnan(top) else top  # NaN propagates, as in np.max
+        if np.isnan(bounds[i]):
+            top = np.nan
+    return xhat, bounds, use_sm, top
 
 
 class GuaranteedEstimator:
@@ -451,29 +512,25 @@ class GuaranteedEstimator:
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
-        opened = est._open(packets, u)  # every input checked; nothing changes
-        t, S = opened.t, tuple(sorted(opened.yxi))
-        if not has_class(self.gains, t + 1, S):  # out of the language: the set-membership estimate from now on
-            xhat, _ = self._sm.step(packets, opened.u)
+        opened = est._open(packets, u)  # every input checked once, for both estimators; nothing changes
+        entry = est._class(opened)  # the class (t+1, S) and what it needs, kept per class (ClassSteps)
+        # the set-membership estimator takes the checked packets and input as they are (one intake)
+        checked_u = None if u is None else opened.u
+        if entry is None:  # out of the language: the set-membership estimate from now on
+            xhat, _ = self._sm.step(packets, checked_u)
             self._outside = True
             return self._outside_bounds(xhat)
-        self._sm.step(packets, opened.u)  # all-or-nothing; the class step below cannot raise (its class exists)
-        xhat, level = est._advance(opened)  # level: μ1 at the period's end, else the class's level
+        self._sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
+        xhat, level = est._advance(opened, entry)  # level: μ1 at the period's end, else the class's level
         # the exact worst case of the designed estimate's error set, plus the rounding allowance of its arithmetic
         # (:mod:`eqrec.estimators.intake`); the level carries the allowance already
-        beta = np.nextafter(self._set.advance(est.error_map()) + est.rounding_vector, np.inf)
-        designed = np.minimum(beta, level)
-        if self.tight:
-            # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
-            sm_bounds = self._sm._beta
-            use_sm = sm_bounds < designed
-            xhat = np.where(use_sm, self._sm._xhat, xhat)
-            self._bounds = np.where(use_sm, sm_bounds, designed)
-            self._use_sm = use_sm
-        else:
-            self._bounds = designed
+        state, noise = entry.parts
+        row_sums = self._set.advance(ErrorMap(est.period_start, state, noise))
+        # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
+        xhat, self._bounds, use_sm, self.bound = _tighter(row_sums, est._rho, level, self._sm._beta, self._sm._xhat,
+                                                           xhat, self.tight)
+        self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
-        self.bound = float(self._bounds.max())
         return xhat.copy(), self.bound
 
     def _new_set_membership(self) -> ZonotopeEstimator:

@@ -70,6 +70,7 @@ error.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -80,6 +81,26 @@ from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.bounds.rounding import UNIT_ROUNDOFF, injection_bound, rounding_allowance
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
+
+#: Levels of observed prefixes kept per estimator (:meth:`StampedEstimator._level`; cleared when full).
+_LEVELS_KEPT = 4096
+
+_SHARED_LEVELS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _levels_kept(rule: "BoundRule | None") -> dict:
+    """The levels looked up with ``rule``, shared by every estimator built with an equal rule while one lives
+    (a rule that cannot be weakly referenced or hashed gets a dict of its own)."""
+    if rule is None:
+        return {}
+    try:
+        kept = _SHARED_LEVELS.get(rule)
+        if kept is None:
+            kept = _SHARED_LEVELS[rule] = {}
+    except TypeError:
+        return {}
+    return kept
+
 
 #: ``bound_of(prefix)``: the guarantee on ``ξ(t+1)`` after the observed arrival prefix of length ``t + 1``.
 BoundRule = Callable[[ArrivalPattern], float]
@@ -252,6 +273,7 @@ class StampedEstimator:
         self._rho = np.zeros(system.n)  # the rounding allowance ρ of the current estimate, per state (module docstring)
         self.error_radius: "float | None" = None  # the true error's size, when a wrapper knows it (else the bound)
         self._norms: dict = {}
+        self._levels = _levels_kept(self.bound_of)  # observed prefix -> its level (:meth:`_level`)
         self._zeros = np.zeros(system.n)
         self._clear(int(t0))
         if xhat0 is not None:
@@ -369,7 +391,8 @@ class StampedEstimator:
         estimator's (``own``: the magnitude of its update beyond ``|A| |reference|``, dot products of ``length``)
         and the simulated state's ``x(t+1) = A x + B u + f + E w``."""
         absA, absB, _, e, _, f = self._absolute_model(step.t)
-        add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] else self._drift(step.t)
+        # without input (u = 0: |B| |u| = 0 exactly) the magnitude is e + 2 |f|, kept per time: the same numbers
+        add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] and step.u.any() else self._drift(step.t)
         if own is not None:
             add = add + own
         record.w[step.t] = injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
@@ -402,7 +425,7 @@ class StampedEstimator:
         """The reported bound: the level plus the allowance, rounded up (``inf`` stays ``inf``)."""
         if not math.isfinite(level):
             return level
-        return float(np.nextafter(level + self.rounding, np.inf))
+        return math.nextafter(level + self.rounding, math.inf)  # the IEEE nextafter, as np.nextafter
 
     @property
     def rounding(self) -> float:
@@ -422,7 +445,16 @@ class StampedEstimator:
         the observed prefix; ``inf`` without levels."""
         if self.bound_of is None:
             return math.inf
-        return self.mu1 if self._t == self.T else float(self.bound_of(self.observed_prefix))
+        if self._t == self.T:
+            return self.mu1
+        # the rule is a function of the prefix, and a period has finitely many prefixes: kept (bounded)
+        key = tuple(self._arrivals)
+        hit = self._levels.get(key)
+        if hit is None:
+            if len(self._levels) >= _LEVELS_KEPT:
+                self._levels.clear()
+            hit = self._levels[key] = float(self.bound_of(ArrivalPattern(key)))
+        return hit
 
     @property
     def x(self) -> np.ndarray:
