@@ -24,9 +24,8 @@ words (:func:`validate_language`, :func:`eqrec.design_prefix`, :func:`eqrec.desi
 
 from __future__ import annotations
 
+import itertools
 from typing import Iterable, Sequence
-
-import numpy as np
 
 from eqrec.checks import integer
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -361,8 +360,9 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     6
     """
     T, max_delay = integer(T, "T", low=1), integer(max_delay, "max_delay", high=MAX_DELAY)
-    digits = np.indices((max_delay + 1,) * T).reshape(T, -1).T
-    return tuple("".join(map(str, row)) for row in digits)
+    # lexicographic (the first delay varies slowest); itertools, not numpy.indices: numpy arrays have at most 64
+    # dimensions, and {0}^80 (one word) raised a raw ValueError
+    return tuple(map("".join, itertools.product("0123456789"[:max_delay + 1], repeat=T)))
 
 
 # ---------------------------------------------------------------------------
