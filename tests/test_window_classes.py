@@ -161,3 +161,44 @@ def test_a_full_language_past_64_letters():
     assert full_delay_language(80, 0) == ("0" * 80,)
     assert full_delay_language(3, 1) == ("000", "001", "010", "011", "100", "101", "110", "111")
     assert len(full_delay_language(70, 0)) == 1 and len(full_delay_language(5, 3)) == 4 ** 5
+
+
+# --- issue 41 §2: messages quote a 1,000-character label by its ends and its length ----------------------------
+
+def _short(message: str, label: str) -> None:
+    assert label not in message and len(message) < 600, message
+    assert "…" in message and f"({len(label)} characters)" in message
+
+
+def test_long_class_labels_and_words_are_shortened_in_messages():
+    from eqrec.arrivals.patterns import ArrivalPattern
+    from eqrec.arrivals.prefix_tree import PrefixTree
+    from eqrec.arrivals.words import as_language, parse_delay_word
+    from eqrec.errors import InputError
+
+    T = 1000
+    classes = classes_of_full_language(T, 1)
+    with pytest.raises(InputError) as exc:  # no such class: the data list (4,000 characters) is shortened
+        classes.index(T, range(0, T, 2))
+    _short(str(exc.value), str(list(range(0, T, 2))))
+    word = "0" * 999 + "7"
+    with pytest.raises(InputError) as exc:
+        parse_delay_word(word, max_delay=1)
+    _short(str(exc.value), repr(word))
+    with pytest.raises(InputError) as exc:
+        parse_delay_word("0" * 999 + "a")
+    _short(str(exc.value), repr("0" * 999 + "a"))
+    with pytest.raises(InputError) as exc:  # mixed lengths: the list of labels is shortened
+        as_language(["0" * 1000, "0" * 999], kind="delay")
+    assert "mixed lengths" in str(exc.value) and len(str(exc.value)) < 600
+    with pytest.raises(InputError) as exc:  # the two readings of 0/1 words: each word shortened
+        as_language(["1" * 1000])
+    assert "1" * 200 not in str(exc.value) and "(1000 characters)" in str(exc.value)
+    tree = PrefixTree([ArrivalPattern(tuple(range(T)), "1" * T)])
+    with pytest.raises(InputError) as exc:
+        tree.node(ArrivalPattern((None,) * T, "0" * T))
+    _short(str(exc.value), "0" * T)
+    pattern = ArrivalPattern(tuple(range(T)), "1" * T)
+    with pytest.raises(InputError) as exc:
+        pattern.extend(3)
+    _short(str(exc.value), "1" * T)

@@ -47,7 +47,7 @@ import numpy as np
 
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.bounds.stacking import Stacking
-from eqrec.checks import integer
+from eqrec.checks import integer, short_label
 from eqrec.errors import InputError
 
 
@@ -271,7 +271,8 @@ class ClassSet:
         try:
             return self._index[(int(depth), tuple(sorted(int(i) for i in available)))]
         except KeyError:
-            raise InputError(f"no class of depth {depth} with data {sorted(available)} in this language") from None
+            raise InputError(f"no class of depth {depth} with data {short_label(sorted(available))} in this "
+                             "language") from None
 
     @property
     def _index(self) -> dict:
