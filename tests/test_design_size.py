@@ -291,3 +291,39 @@ def test_the_cli_search_on_the_real_cart_pole_ends_within_its_budget(tmp_path, m
     assert spent < 5.0 + 30.0  # the design itself, then at most the search's 5 s (and a child stopped)
     last = err.strip().splitlines()[-1]
     assert "--horizon 39 solves" in last or "no horizon below" in last, last  # a loaded machine: 39 may time out
+
+
+def test_an_infeasible_verdict_past_what_an_lp_resolves_starts_the_search(tmp_path, monkeypatch, capsys):
+    """The gallery cart-pole at (1, 1000) is "infeasible" (no gain makes the initial error contract along a class
+    that has every measurement but one): a verdict on error maps grown by 1.097^1000 = 2e40, which a longer
+    horizon cannot deserve.  Past RESOLVED_GROWTH an infeasible design gets the reason and the search; below it
+    (a genuine infeasibility, e.g. mu1 too small) neither."""
+    from eqrec.errors import InfeasibleDesign
+
+    def infeasible_past_37(args):
+        if args.horizon > 37:
+            raise InfeasibleDesign("no recovery level is feasible: along the terminal class ...")
+        return {}
+
+    monkeypatch.setattr(cli, "run_design", infeasible_past_37)
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100", "--mu1", "free"])
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INFEASIBLE
+    assert "this verdict may be the solver's, not the plant's: the horizon 100 is too long" in err
+    assert "--horizon 37 solves and 38 does not" in err
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "60", "--mu1", "free"])  # 1.3^60 = 7e6: the LP resolves it, the verdict stands
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INFEASIBLE and "searching" not in err and "too long" not in err
+
+
+def test_python_says_why_on_the_real_cart_pole_past_the_resolved_growth():
+    """At T = 54 (1.59^54 = 8e10) the cart-pole's design fails, as "infeasible" or as a solver failure depending on
+    the LP's round-off; either way the message gives the reason and the call that finds a horizon that solves."""
+    from eqrec.errors import InfeasibleDesign
+
+    with pytest.raises((InfeasibleDesign, SolverFailure)) as exc:
+        eqrec.design_delay_global(_cart_pole(), delay_classes(max_delay=0, horizon=54), n_jobs=1)
+    assert "the horizon 54 is too long for so unstable a plant" in str(exc.value)
+    assert "eqrec.longest_horizon(system, max_delay, 54)" in str(exc.value)

@@ -467,7 +467,8 @@ def _probe_design(args: argparse.Namespace, seconds: float) -> tuple[str, str]:
     return probe_in_child(run, seconds)
 
 
-def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float | None = None) -> str:
+def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float | None = None, *,
+                   suspect: bool = False) -> str:
     """For a failed ``--horizon`` design of an unstable plant: the longest horizon that solves, found by bisection.
 
     Every error map of the horizon grows like ``ρ^T`` (``ρ`` the spectral radius of ``A``): past about
@@ -478,7 +479,8 @@ def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float |
     :data:`HORIZON_SEARCH_SECONDS`).  Each design is estimated first
     (:func:`eqrec.design.inputs.estimate_delay_design`) and skipped when its estimate exceeds the time left; one
     that runs past the time left is stopped and counts as failed; each is printed.  Empty when ``ρ^T`` is below
-    :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with ``T`` in the system file.
+    :data:`UNSTABLE_GROWTH` (``suspect``, after a design found infeasible: below
+    :data:`~eqrec.design.inputs.RESOLVED_GROWTH`), without ``--horizon``, or with ``T`` in the system file.
     """
     import copy
 
@@ -494,7 +496,7 @@ def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float |
         return ""
     rho = spectral_radius(system)
     budget = HORIZON_SEARCH_SECONDS if budget is None else budget
-    reason = growth_hint(system, args.horizon)
+    reason = growth_hint(system, args.horizon, suspect=suspect)
     head = reason.split("; horizons up to")[0]
     if T_file is not None or not head or not rho > 1:
         return ""
@@ -513,6 +515,16 @@ def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float |
     found = search_horizon(lambda T, seconds: _probe_design(probe_args(T), seconds), int(args.horizon), rho,
                            estimate=estimate, budget=budget, max_tries=max_tries, flag="--horizon ", reason=reason)
     return head + "; " + found.summary("--horizon ")
+
+
+def _print_hint(exc: Exception, hint: str) -> None:
+    """Print the horizon search's answer, without the reason when the design's message gave it already
+    (:func:`eqrec.design.inputs.growth_hint`)."""
+    head = hint.split("; ")[0]
+    if hint and head in str(exc):
+        hint = hint[len(head) + 2:]
+    if hint:
+        print(f"eqrec: {hint}", file=sys.stderr)
 
 
 def _check_out(out: str | None) -> Path | None:
@@ -555,15 +567,11 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     except InfeasibleDesign as exc:
         print(f"eqrec: infeasible: {exc}", file=sys.stderr)
+        _print_hint(exc, _unstable_hint(args, suspect=True))  # past what an LP resolves: maybe the solver's verdict
         return EXIT_INFEASIBLE
     except (SolverFailure, CertificationFailure) as exc:
         print(f"eqrec: failed: {exc}", file=sys.stderr)
-        hint = _unstable_hint(args)
-        head = hint.split("; ")[0]
-        if hint and head in str(exc):  # the design's message said why already (eqrec.design.inputs.growth_hint)
-            hint = hint[len(head) + 2:]
-        if hint:
-            print(f"eqrec: {hint}", file=sys.stderr)
+        _print_hint(exc, _unstable_hint(args))
         return EXIT_SOLVER
     if "mu1_requested" in result:
         print(f"eqrec: note: {raise_note(result['mu1_requested'], result['mu1'])}, the smallest level these gains "

@@ -880,7 +880,7 @@ UNSTABLE_GROWTH = 1e3
 RESOLVED_GROWTH = 1e8
 
 
-def growth_hint(system: AffineSystem, horizon: int) -> str:
+def growth_hint(system: AffineSystem, horizon: int, *, suspect: bool = False) -> str:
     """Why a design of an unstable plant over a long horizon fails, and the horizon that usually solves.
 
     Parameters
@@ -889,12 +889,16 @@ def growth_hint(system: AffineSystem, horizon: int) -> str:
         The plant.
     horizon : int
         The horizon ``T`` that failed.
+    suspect : bool, optional
+        For a design found infeasible: only past :data:`RESOLVED_GROWTH`, where the verdict may be the
+        solver's (a longer horizon never makes a design harder for the plant: more data), and said so.
 
     Returns
     -------
     str
-        Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH` (``ρ`` the spectral radius of ``A``, time-varying:
-        of its first matrix); else the reason and ``log(RESOLVED_GROWTH) / log ρ``.
+        Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH` (``suspect``: :data:`RESOLVED_GROWTH`; ``ρ`` the
+        spectral radius of ``A``, time-varying: of its first matrix); else the reason and
+        ``log(RESOLVED_GROWTH) / log ρ``.
     """
     try:
         rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
@@ -902,10 +906,12 @@ def growth_hint(system: AffineSystem, horizon: int) -> str:
         return ""
     with np.errstate(over="ignore"):
         growth = rho ** int(horizon)
-    if not growth > UNSTABLE_GROWTH:
+    if not growth > (RESOLVED_GROWTH if suspect else UNSTABLE_GROWTH):
         return ""
     usual = max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho)))
-    return (f"the horizon {horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so the "
+    verdict = "this verdict may be the solver's, not the plant's: " if suspect else ""
+    return (f"{verdict}the horizon {horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, "
+            "so the "
             f"error maps grow like {rho:.4g}^T = {growth:.3g}, past what a double-precision LP resolves; horizons up "
             f"to about {usual} usually solve (eqrec design --horizon searches for the longest; from Python "
             f"eqrec.longest_horizon(system, max_delay, {horizon}))")
