@@ -44,6 +44,16 @@ d. Issue 27: the batch reactor's full language ``{0..τ̄}^T`` with ``μ1`` free
    (4, 60) <= 5 s; (30, 4) = (τ̄, T) = (4, 30) not slower than the one block LP;
    speed-up from 1 to 2 workers >= 1.7x at (4, 60) (warm, and cold beside it).
 
+e. Issue 41: the construction of the classes of ``{0..τ̄}^T`` alone
+   (:func:`eqrec.delay_classes`, no word, no design) at ``T`` = 1,000 / 2,000
+   / 4,000 / 8,000 (``--class-horizons``), ``τ̄`` = 1 and 2
+   (``--class-delays``), beside the previous construction (data as tuples,
+   weights as integers, quadratic in ``T``; kept in
+   ``tests/test_window_classes.py``) in the same run, with the growth
+   exponent of each (least squares of ``log t`` on ``log T``) and the size
+   model's estimate (:meth:`eqrec.design.inputs.ClassShape.build_cost`).
+   Target: exponent <= 1.2 (linear in ``T``); the same classes.
+
 Medians over ``--repeats`` (part c: ``--size-repeats`` fresh processes per
 size, peak memory the largest).  The last table lists every target with
 PASS or MISS.  Timings depend on the machine's load (2 shared cores here).
@@ -274,9 +284,59 @@ def part_d(sizes, configs, warm_repeats: int, mono_max_classes: int, verdicts: l
                                  "bytes", same))
 
 
+def part_e(horizons, delays, repeats: int, verdicts: list) -> None:
+    import importlib.util
+    from pathlib import Path
+
+    import numpy as np
+
+    from eqrec.design.delay.languages import delay_classes
+    from eqrec.design.inputs import class_shape
+
+    spec = importlib.util.spec_from_file_location(
+        "reference", Path(__file__).resolve().parents[1] / "tests" / "test_window_classes.py")
+    reference = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(reference)
+    print(f"\ne. the classes of {{0..tau}}^T alone (delay_classes), median | best of {repeats}, beside the previous "
+          f"construction (tuples, quadratic; tests/test_window_classes.py); load average {os.getloadavg()[0]:.2f}")
+    print(f"   {'tau':>3} {'T':>6} {'classes':>8} {'new s':>8} {'best':>8} {'estimate s':>10} {'previous s':>10} "
+          f"{'ratio':>7}  same")
+    import gc
+
+    def timed(fn):  # each construction from a collected heap, its result dropped before the next one
+        times = []
+        for _ in range(repeats):
+            gc.collect()
+            t0 = time.perf_counter()
+            out = fn()
+            times.append(time.perf_counter() - t0)
+            del out
+        return statistics.median(times), min(times)
+
+    for tau in delays:
+        new_t, old_t = [], []
+        for T in horizons:
+            med, best = timed(lambda: delay_classes(max_delay=tau, horizon=T))
+            old_med, _ = timed(lambda: reference.old_classes(T, tau))
+            classes = delay_classes(max_delay=tau, horizon=T)
+            same = [reference.fields(c) for c in classes] == reference.old_classes(T, tau)
+            estimate = class_shape(tau, T).build_cost(T, tau)[0]
+            new_t.append(med), old_t.append(old_med)
+            print(f"   {tau:>3} {T:>6} {len(classes):>8} {med:8.3f} {best:8.3f} {estimate:10.3f} {old_med:10.3f} "
+                  f"{old_med / med:6.1f}x  {same}", flush=True)
+            del classes
+            verdicts.append(("e", f"({tau},{T}) same classes as the previous construction", str(same), "True", same))
+        logT = np.log(np.asarray(horizons, float))
+        slope_new = float(np.polyfit(logT, np.log(new_t), 1)[0])
+        slope_old = float(np.polyfit(logT, np.log(old_t), 1)[0])
+        print(f"   tau = {tau}: growth exponent (time ~ T^k) new k = {slope_new:.2f}, previous k = {slope_old:.2f}")
+        verdicts.append(("e", f"tau = {tau}: growth exponent of delay_classes", f"{slope_new:.2f}", "<= 1.2",
+                         slope_new <= 1.2))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--only", choices=["a", "b", "c", "d"], action="append")
+    ap.add_argument("--only", choices=["a", "b", "c", "d", "e"], action="append")
     ap.add_argument("--repeats", type=int, default=20, help="repeats of parts a and b")
     ap.add_argument("--ipopt-repeats", type=int, default=3)
     ap.add_argument("--sizes", nargs="+", default=["8,3", "20,4", "30,4", "40,4", "30,5"], help="T,tau pairs (part c)")
@@ -288,13 +348,16 @@ def main() -> None:
     ap.add_argument("--warm-repeats", type=int, default=2, help="part d: designs after the first, per process")
     ap.add_argument("--mono-max-classes", type=int, default=1000,
                     help="part d: the one block LP only up to this many classes (it takes minutes beyond)")
+    ap.add_argument("--class-horizons", type=int, nargs="+", default=[1000, 2000, 4000, 8000], help="part e: T")
+    ap.add_argument("--class-delays", type=int, nargs="+", default=[1, 2], help="part e: tau")
+    ap.add_argument("--class-repeats", type=int, default=3, help="part e: repeats per size")
     ap.add_argument("--free-worker", default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.free_worker:
         w = json.loads(a.free_worker)
         print(json.dumps(free_worker(w["tau"], w["T"], w["config"], w["warm"])))
         return
-    parts = a.only or ["a", "b", "c", "d"]
+    parts = a.only or ["a", "b", "c", "d", "e"]
     verdicts: list = []
     if "a" in parts:
         part_a(a.repeats, verdicts)
@@ -306,6 +369,8 @@ def main() -> None:
     if "d" in parts:
         part_d([tuple(int(v) for v in s.split(",")) for s in a.free_sizes], a.configs, a.warm_repeats,
                a.mono_max_classes, verdicts)
+    if "e" in parts:
+        part_e(a.class_horizons, a.class_delays, a.class_repeats, verdicts)
     print("\nTargets")
     print(f"   {'part':4} {'case':42} {'measured':>12} {'target':>10}  verdict")
     for part, case, measured, target, ok in verdicts:

@@ -185,7 +185,7 @@ def test_class_shape_counts_the_classes_of_every_language():
 def test_huge_class_sets_and_languages_are_estimated_and_refused_at_once(capsys):
     from eqrec.design.delay.design import delay_classes, delay_language
 
-    _refused_fast(lambda: delay_classes(max_delay=1, horizon=100_000), "horizon")
+    _refused_fast(lambda: delay_classes(max_delay=1, horizon=10**8), "horizon")  # 10^5: built in seconds (linear)
     _refused_fast(lambda: delay_classes(max_delay=2, horizon=10**6, max_lost=1), "horizon")
     message = _refused_fast(lambda: delay_language(max_delay=2, horizon=30, max_lost=1), "horizon")
     assert "force=True" in message and "delay_classes" in message
@@ -230,3 +230,100 @@ def test_compare_estimates_and_refuses_a_long_run(tmp_path, capsys, size, field)
     err = capsys.readouterr().err
     assert rc == cli.EXIT_INPUT and f"field '{field}': refused" in err and "--force" in err
     assert not (tmp_path / "cmp").exists()
+
+
+# --- issue 41 §2: the horizon search on a real unstable plant (no fake design) ------------------------------------
+
+def _cart_pole(Ts: float = 0.1):
+    """The gallery's cart-pole (examples/gallery/plot_cart_pole.py) sampled at 100 ms: one unstable mode,
+    spectral radius 1.59, so a design fails past about 50 steps (its error maps grow like 1.59^T)."""
+    from scipy.linalg import expm
+
+    M, m, length, g = 1.0, 0.1, 0.5, 9.81
+    Ac = np.array([[0, 1, 0, 0], [0, 0, -m * g / M, 0], [0, 0, 0, 1], [0, 0, (M + m) * g / (M * length), 0]])
+    Bc = np.array([[0], [1 / M], [0], [-1 / (M * length)]])
+    big = expm(np.block([[Ac, Bc], [np.zeros((1, 5))]]) * Ts)
+    return eqrec.AffineSystem(A=big[:4, :4], B=big[:4, 4:], C=[[1, 0, 0, 0], [0, 0, 1, 0]],
+                              E=np.diag([0, Ts, 0, Ts]) + np.diag([Ts ** 2 / 2, 0, Ts ** 2 / 2], 1), eta_w=0.05,
+                              eta_v=0.002, name="cart-pole")
+
+
+def test_python_finds_the_longest_horizon_of_the_real_cart_pole(capsys):
+    """The design at T = 80 fails (the solver cannot resolve 1.59^80) and says what to call; longest_horizon then
+    answers with a horizon that solves (the first guess, log(1e8)/log(1.59) = 39) and one that does not."""
+    import time
+
+    plant = _cart_pole()
+    with pytest.raises(SolverFailure) as exc:
+        eqrec.design_delay_global(plant, delay_classes(max_delay=0, horizon=80), n_jobs=1)
+    assert "too long for so unstable a plant" in str(exc.value) and "eqrec.longest_horizon(" in str(exc.value)
+    t0 = time.perf_counter()
+    found = eqrec.longest_horizon(plant, 0, 80, max_tries=2, budget=60)
+    assert time.perf_counter() - t0 < 60
+    assert [t[:2] for t in found.tries] == [(39, "solves"), (59, "fails")]
+    assert found.longest == 39 and found.shortest_failing == 59 and not found.exact
+    assert found.summary().startswith("horizon 39 solves (the longest found in 2 designs")
+    assert found.summary().endswith("59 does not)") and found.tries[1][3]  # the failure's message is kept
+    assert "too long for so unstable a plant" in found.reason
+    err = capsys.readouterr().err
+    assert "at most 2 designs and 60 s" in err and "trying horizon 39: solves" in err
+    eqrec.design_delay_global(plant, delay_classes(max_delay=0, horizon=found.longest), n_jobs=1)  # it does solve
+
+
+def test_the_cli_search_on_the_real_cart_pole_ends_within_its_budget(tmp_path, monkeypatch, capsys):
+    """eqrec design at T = 80 fails; the search, given 5 s, ends with what it found in them (no fake design)."""
+    import time
+
+    plant = _cart_pole()
+    path = tmp_path / "cart_pole.yaml"
+    path.write_text("\n".join(f"{k}: {np.asarray(v).tolist()}" for k, v in
+                              (("A", plant.A), ("B", plant.B), ("C", plant.C), ("E", plant.E))) +
+                    "\neta_w: 0.05\neta_v: 0.002\n")
+    monkeypatch.setattr(cli, "HORIZON_SEARCH_SECONDS", 5.0)
+    t0 = time.perf_counter()
+    rc = cli.main(["design", str(path), "--method", "delay", "--max-delay", "0", "--horizon", "80", "--mu1", "free",
+                   "--jobs", "1"])
+    spent = time.perf_counter() - t0
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_SOLVER, err
+    assert "the horizon 80 is too long for so unstable a plant" in err
+    assert "at most 8 designs and 5 s" in err and "eqrec: trying --horizon 39: " in err
+    assert spent < 5.0 + 30.0  # the design itself, then at most the search's 5 s (and a child stopped)
+    last = err.strip().splitlines()[-1]
+    assert "--horizon 39 solves" in last or "no horizon below" in last, last  # a loaded machine: 39 may time out
+
+
+def test_an_infeasible_verdict_past_what_an_lp_resolves_starts_the_search(tmp_path, monkeypatch, capsys):
+    """The gallery cart-pole at (1, 1000) is "infeasible" (no gain makes the initial error contract along a class
+    that has every measurement but one): a verdict on error maps grown by 1.097^1000 = 2e40, which a longer
+    horizon cannot deserve.  Past RESOLVED_GROWTH an infeasible design gets the reason and the search; below it
+    (a genuine infeasibility, e.g. mu1 too small) neither."""
+    from eqrec.errors import InfeasibleDesign
+
+    def infeasible_past_37(args):
+        if args.horizon > 37:
+            raise InfeasibleDesign("no recovery level is feasible: along the terminal class ...")
+        return {}
+
+    monkeypatch.setattr(cli, "run_design", infeasible_past_37)
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "100", "--mu1", "free"])
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INFEASIBLE
+    assert "this verdict may be the solver's, not the plant's: the horizon 100 is too long" in err
+    assert "--horizon 37 solves and 38 does not" in err
+    rc = cli.main(["design", str(_unstable_system(tmp_path)), "--method", "delay", "--max-delay", "1",
+                   "--horizon", "60", "--mu1", "free"])  # 1.3^60 = 7e6: the LP resolves it, the verdict stands
+    err = capsys.readouterr().err
+    assert rc == cli.EXIT_INFEASIBLE and "searching" not in err and "too long" not in err
+
+
+def test_python_says_why_on_the_real_cart_pole_past_the_resolved_growth():
+    """At T = 54 (1.59^54 = 8e10) the cart-pole's design fails, as "infeasible" or as a solver failure depending on
+    the LP's round-off; either way the message gives the reason and the call that finds a horizon that solves."""
+    from eqrec.errors import InfeasibleDesign
+
+    with pytest.raises((InfeasibleDesign, SolverFailure)) as exc:
+        eqrec.design_delay_global(_cart_pole(), delay_classes(max_delay=0, horizon=54), n_jobs=1)
+    assert "the horizon 54 is too long for so unstable a plant" in str(exc.value)
+    assert "eqrec.longest_horizon(system, max_delay, 54)" in str(exc.value)

@@ -53,7 +53,7 @@ def test_window_rule_with_losses_equals_brute_force(T, D, m):
 
 @pytest.mark.parametrize("T,D", [(1, 0), (3, 1), (5, 2), (6, 3), (8, 2)])
 def test_no_loss_is_the_full_delay_language(T, D):
-    """max_lost=0 gives today's classes (None is today's code path, unchanged)."""
+    """max_lost=0 gives the classes of the language without losses (the same construction since issue 41)."""
     assert [KEY(c) for c in classes_of_full_language(T, D, 0)] == [KEY(c) for c in classes_of_full_language(T, D)]
     assert full_language_counts(T, D, 0) == full_language_counts(T, D)
     assert full_language_class_count(T, D) == len(classes_of_full_language(T, D))

@@ -31,7 +31,9 @@ Arrival patterns (languages)
     :class:`PrefixTree`, :class:`ArrivalTrace` (a run's arrivals: each measurement's delay, or lost)
 Designs (each returns a certified :class:`Design`)
     :func:`design_time_based`, :func:`design_prefix`, :func:`design_delay`,
-    :func:`design_delay_global`, :func:`design_augmented`, :func:`min_recovery_level`
+    :func:`design_delay_global`, :func:`design_augmented`, :func:`min_recovery_level`,
+    :func:`longest_horizon` (after a failed design of an unstable plant: the longest horizon that solves, by a
+    bisection bounded in time)
 Certificates
     :func:`certify_schedule`, :func:`information_limit` (the smallest bound any estimator can guarantee on a trace),
     :func:`consistent_set` (the exact hull of the states consistent with the measured data, filtered and
@@ -93,6 +95,7 @@ _PUBLIC: dict[str, str] = {
     "load_design": "eqrec.design.saved",
     "design_delay": "eqrec.design.delay.design",
     "design_delay_global": "eqrec.design.delay.design",
+    "longest_horizon": "eqrec.design.delay.horizon",
     "design_augmented": "eqrec.design.augmented.design",
     "min_recovery_level": "eqrec.design.classes.mu1_min",
     # certificates

@@ -34,8 +34,7 @@ import numpy as np
 
 from eqrec.arrivals.words import MAX_DELAY
 from eqrec.lp.solvers import SOLVER_NAMES, retry_log
-from eqrec.design.inputs import (ESTIMATE_PRINT_SECONDS, MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION, RESOLVED_GROWTH,
-                                 UNSTABLE_GROWTH)
+from eqrec.design.inputs import ESTIMATE_PRINT_SECONDS, MAX_ESTIMATED_SECONDS, MAX_MEMORY_FRACTION, UNSTABLE_GROWTH
 from eqrec.errors import CertificationFailure, InfeasibleDesign, InputError, SolverFailure
 from eqrec.cli_help import SYSTEM_HELP
 from eqrec.io import write_text
@@ -44,7 +43,8 @@ if TYPE_CHECKING:
     from eqrec.design.result import Design
 
 EXIT_INPUT, EXIT_USAGE, EXIT_INFEASIBLE, EXIT_SOLVER = 1, 2, 3, 4
-#: Seconds the search for the longest horizon that solves may take in all (:func:`_unstable_hint`).
+#: Seconds the search for the longest horizon that solves may take in all (:func:`_unstable_hint`; the default of
+#: :func:`eqrec.longest_horizon`, :data:`eqrec.design.delay.horizon.HORIZON_SEARCH_SECONDS`).
 HORIZON_SEARCH_SECONDS = 120.0
 #: Largest recovery level the LPs take reliably (HiGHS refuses bounds near 1e15).  The class engine certifies
 #: designs up to it (class levels raised by the LP's round-off times mu1: under 0.5 % at 1e12 on the example
@@ -454,49 +454,37 @@ def _check_size(args: argparse.Namespace, system, mu1_free: bool, par: dict) -> 
                 advice="shorten --horizon or --max-delay" + (" or lower --max-lost" if args.max_lost else ""))
 
 
-def _probe_design(args: argparse.Namespace, seconds: float) -> str:
-    """One design of the horizon search in a child process, stopped after ``seconds``: ``"solves"``, ``"fails"``
-    or ``"no answer"`` (a solver that does not return in time is stopped, so the search stays bounded)."""
-    import multiprocessing
+def _probe_design(args: argparse.Namespace, seconds: float) -> tuple[str, str]:
+    """One design of the horizon search in a child process, stopped after ``seconds``: ``("solves" | "fails" |
+    "no answer", failure message)`` (:func:`eqrec.design.delay.horizon.probe_in_child`: a solver that does not
+    return in time is stopped, so the search stays bounded)."""
+    from eqrec.design.delay.horizon import probe_in_child
 
-    def run() -> None:  # in the child: its progress lines and messages are the search's noise
-        try:
-            os.dup2(os.open(os.devnull, os.O_WRONLY), 2)
-        except OSError:
-            pass
-        sys.stderr = open(os.devnull, "w")
-        try:
-            with retry_log():
-                run_design(args)
-        except (InfeasibleDesign, SolverFailure, CertificationFailure, InputError):
-            os._exit(1)
-        os._exit(0)
+    def run() -> None:
+        with retry_log():
+            run_design(args)
 
-    child = multiprocessing.get_context("fork").Process(target=run, daemon=True)
-    child.start()
-    child.join(seconds)
-    if child.is_alive():
-        child.kill()
-        child.join()
-        return "no answer"
-    return "solves" if child.exitcode == 0 else "fails"
+    return probe_in_child(run, seconds)
 
 
-def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float | None = None) -> str:
+def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float | None = None, *,
+                   suspect: bool = False) -> str:
     """For a failed ``--horizon`` design of an unstable plant: the longest horizon that solves, found by bisection.
 
     Every error map of the horizon grows like ``ρ^T`` (``ρ`` the spectral radius of ``A``): past about
     ``log(1e8) / log ρ`` steps its entries span more than a double-precision LP resolves
-    (:func:`eqrec.design.inputs.growth_hint`).  The search starts there and halves the interval between a horizon
-    that solved and one that did not: at most ``max_tries`` designs and ``budget`` seconds in all, announced
-    first (default :data:`HORIZON_SEARCH_SECONDS`).  Each design is estimated first (:func:`eqrec.design.inputs.estimate_delay_design`) and skipped when
-    its estimate exceeds the time left; one that runs past the time left is stopped and counts as failed; each is
-    printed.  Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH`, without ``--horizon``, or with ``T`` in the
-    system file.
+    (:func:`eqrec.design.inputs.growth_hint`).  The search (:func:`eqrec.design.delay.horizon.search_horizon`, the
+    one of :func:`eqrec.longest_horizon`) starts there and halves the interval between a horizon that solved and
+    one that did not: at most ``max_tries`` designs and ``budget`` seconds in all, announced first (default
+    :data:`HORIZON_SEARCH_SECONDS`).  Each design is estimated first
+    (:func:`eqrec.design.inputs.estimate_delay_design`) and skipped when its estimate exceeds the time left; one
+    that runs past the time left is stopped and counts as failed; each is printed.  Empty when ``ρ^T`` is below
+    :data:`UNSTABLE_GROWTH` (``suspect``, after a design found infeasible: below
+    :data:`~eqrec.design.inputs.RESOLVED_GROWTH`), without ``--horizon``, or with ``T`` in the system file.
     """
     import copy
-    import time
 
+    from eqrec.design.delay.horizon import search_horizon, spectral_radius
     from eqrec.design.inputs import estimate_delay_design, growth_hint
     from eqrec.systems.files import load_system
 
@@ -504,50 +492,39 @@ def _unstable_hint(args: argparse.Namespace, max_tries: int = 8, budget: float |
         return ""
     try:
         system, T_file = load_system(args.system)
-        rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
-    except (InputError, np.linalg.LinAlgError, ValueError):
+    except (InputError, ValueError):
         return ""
+    rho = spectral_radius(system)
     budget = HORIZON_SEARCH_SECONDS if budget is None else budget
-    head = growth_hint(system, args.horizon).split("; horizons up to")[0]
-    if T_file is not None or not head:
+    reason = growth_hint(system, args.horizon, suspect=suspect)
+    head = reason.split("; horizons up to")[0]
+    if T_file is not None or not head or not rho > 1:
         return ""
-    print(f"eqrec: searching for the longest horizon that solves: at most {max_tries} designs and "
-          f"{budget:.0f} s", file=sys.stderr)
-    start = time.perf_counter()
 
-    def solves(T: int) -> bool:
-        left = budget - (time.perf_counter() - start)
+    def probe_args(T: int) -> argparse.Namespace:
         probe = copy.copy(args)
         probe.horizon, probe.out, probe.jobs, probe.scheduler = T, None, 1, None
-        if probe.max_delay is not None:
-            est = estimate_delay_design(system, probe.max_delay, T, max_lost=probe.max_lost,
-                                        mu1_free=str(probe.mu1).strip().lower() == "free")
-            if est.seconds > left:
-                print(f"eqrec: trying --horizon {T}: skipped (estimated {est.seconds:.0f} s, {left:.0f} s left)",
-                      file=sys.stderr)
-                return False
-        outcome = _probe_design(probe, max(1.0, left))
-        print(f"eqrec: trying --horizon {T}: {outcome}" + (f" within {left:.0f} s" if outcome == "no answer" else ""),
-              file=sys.stderr)
-        return outcome == "solves"
+        return probe
 
-    lo, hi = 0, int(args.horizon)  # lo: solves (0: none found yet), hi: fails
-    guess = min(hi - 1, max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho))))
-    tries = 0
-    while hi - lo > 1 and tries < max_tries and time.perf_counter() - start < budget:
-        T = guess if tries == 0 else (lo + hi) // 2
-        tries += 1
-        if solves(T):
-            lo = T
-        else:
-            hi = T
-    spent = time.perf_counter() - start
-    if lo == 0:
-        return head + f"; no horizon below {hi} solved either ({tries} designs in {spent:.0f} s)"
-    exact = hi - lo == 1
-    return head + (f"; --horizon {lo} solves" + (f" and {hi} does not" if exact else
-                                                 f" (the longest found in {tries} designs and {spent:.0f} s; {hi} "
-                                                 "does not)"))
+    def estimate(T: int) -> float:
+        if args.max_delay is None:
+            return 0.0
+        return estimate_delay_design(system, args.max_delay, T, max_lost=args.max_lost,
+                                     mu1_free=str(args.mu1).strip().lower() == "free").seconds
+
+    found = search_horizon(lambda T, seconds: _probe_design(probe_args(T), seconds), int(args.horizon), rho,
+                           estimate=estimate, budget=budget, max_tries=max_tries, flag="--horizon ", reason=reason)
+    return head + "; " + found.summary("--horizon ")
+
+
+def _print_hint(exc: Exception, hint: str) -> None:
+    """Print the horizon search's answer, without the reason when the design's message gave it already
+    (:func:`eqrec.design.inputs.growth_hint`)."""
+    head = hint.split("; ")[0]
+    if hint and head in str(exc):
+        hint = hint[len(head) + 2:]
+    if hint:
+        print(f"eqrec: {hint}", file=sys.stderr)
 
 
 def _check_out(out: str | None) -> Path | None:
@@ -590,15 +567,11 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     except InfeasibleDesign as exc:
         print(f"eqrec: infeasible: {exc}", file=sys.stderr)
+        _print_hint(exc, _unstable_hint(args, suspect=True))  # past what an LP resolves: maybe the solver's verdict
         return EXIT_INFEASIBLE
     except (SolverFailure, CertificationFailure) as exc:
         print(f"eqrec: failed: {exc}", file=sys.stderr)
-        hint = _unstable_hint(args)
-        head = hint.split("; ")[0]
-        if hint and head in str(exc):  # the design's message said why already (eqrec.design.inputs.growth_hint)
-            hint = hint[len(head) + 2:]
-        if hint:
-            print(f"eqrec: {hint}", file=sys.stderr)
+        _print_hint(exc, _unstable_hint(args))
         return EXIT_SOLVER
     if "mu1_requested" in result:
         print(f"eqrec: note: {raise_note(result['mu1_requested'], result['mu1'])}, the smallest level these gains "

@@ -108,7 +108,10 @@ An LP that ends without a usable status (HiGHS 'Not Set' or 'Unknown' after
 a numerical breakdown) is solved again with other settings (HiGHS defaults,
 presolve off, primal simplex, interior point, a scaled model), then with
 Clarabel; the summary and the JSON key solver_retries say which answered.
-When all fail on a plant with spectral radius above 1 and a long --horizon,
-the message says the horizon is too long for so unstable a plant and names
-the longest horizon that solves (a few smaller designs, by bisection).
+When all fail on a plant with spectral radius above 1 and a long --horizon
+(or the design is found infeasible where the error maps grow past 1e8, a
+verdict the LP cannot be trusted with), the message says the horizon is too
+long for so unstable a plant and names the longest horizon that solves: a
+bisection of at most 8 smaller designs and 120 s in all, each estimated
+first and stopped when the time is up (eqrec.longest_horizon from Python).
 """

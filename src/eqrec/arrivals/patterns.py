@@ -38,6 +38,7 @@ from typing import Sequence
 import numpy as np
 
 from eqrec.errors import InputError
+from eqrec.checks import short_label
 
 
 @dataclass(frozen=True)
@@ -283,7 +284,7 @@ class ArrivalPattern:
             The pattern followed by ``length - T`` on-time measurements.
         """
         if length < self.T:
-            raise InputError(f"cannot shorten pattern {self.label!r} to length {length}")
+            raise InputError(f"cannot shorten pattern {short_label(self.label)!r} to length {length}")
         arr = self.arrivals + tuple(range(self.T, length))
         label = self.label + "1" * (length - self.T) if self.is_missing_data else ""
         return ArrivalPattern(arr, label)

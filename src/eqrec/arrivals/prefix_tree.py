@@ -14,6 +14,7 @@ import numpy as np
 
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.words import as_language, as_pattern
+from eqrec.checks import short_label
 from eqrec.errors import InputError
 
 
@@ -64,6 +65,12 @@ class PrefixNode:
     def available(self) -> tuple[int, ...]:
         """``A(t)`` of this node: the measurement times its gain row multiplies."""
         return self.prefix.available(self.prefix.T - 1)
+
+
+def _shorter(q: ArrivalPattern) -> ArrivalPattern:
+    """``q.prefix(q.T - 1)`` without caching every prefix of ``q``."""
+    n = q.T - 1
+    return ArrivalPattern(tuple(a if a is not None and a < n else None for a in q.arrivals[:n]))
 
 
 class PrefixTree:
@@ -131,7 +138,9 @@ class PrefixTree:
         self.index_of: dict[ArrivalPattern, int] = {}
         self.nodes: list[PrefixNode] = []
         for q in ordered:
-            parent = self.index_of[q.prefix(q.T - 1)] if q.T > 1 else None
+            # the parent is q's prefix one shorter, made directly (O(T)): q.prefix() would build and cache every
+            # prefix of every node (O(T^2) each, O(T^3) for one word of length T: 62 s at T = 1000)
+            parent = self.index_of[_shorter(q)] if q.T > 1 else None
             node = PrefixNode(index=len(self.nodes), prefix=q, parent=parent, terminal=q in terminal)
             self.index_of[q] = node.index
             self.nodes.append(node)
@@ -198,8 +207,8 @@ class PrefixTree:
         try:
             return self.nodes[self.index_of[key]]
         except KeyError:
-            raise InputError(f"prefix {key.label!r} is not a prefix of any word of the language "
-                             f"{list(self.words)}") from None
+            raise InputError(f"prefix {short_label(key.label)!r} is not a prefix of any word of the language "
+                             f"{short_label(list(self.words))}") from None
 
     def path(self, pattern: "ArrivalPattern | str") -> list[PrefixNode]:
         """Nodes of the prefixes of length ``1, 2, ..., len(pattern)``.

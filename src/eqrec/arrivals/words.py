@@ -24,11 +24,10 @@ words (:func:`validate_language`, :func:`eqrec.design_prefix`, :func:`eqrec.desi
 
 from __future__ import annotations
 
+import itertools
 from typing import Iterable, Sequence
 
-import numpy as np
-
-from eqrec.checks import integer
+from eqrec.checks import integer, short_label
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.errors import InputError
 
@@ -58,13 +57,13 @@ def validate_word(word: str, *, field_name: str = "word", source: str | None = N
         The word, surrounding whitespace stripped.
     """
     if not isinstance(word, str):
-        raise InputError(f"a word must be a string of 0 and 1, got {word!r}", source, field_name)
+        raise InputError(f"a word must be a string of 0 and 1, got {short_label(repr(word))}", source, field_name)
     word = word.strip()
     if not word:
         raise InputError("empty word", source, field_name)
     bad = set(word) - MISSING_ALPHABET
     if bad:
-        raise InputError(f"word {word!r} has letters {sorted(bad)} outside the alphabet {{0, 1}}",
+        raise InputError(f"word {short_label(repr(word))} has letters {sorted(bad)} outside the alphabet {{0, 1}}",
                          source, field_name)
     return word
 
@@ -101,19 +100,19 @@ def parse_delays(word: str, max_delay: int | None = None, *, field_name: str = "
         ``max_delay``, or a ``max_delay`` that is not an integer >= 0 (field ``max_delay``).
     """
     if not isinstance(word, str):
-        raise InputError(f"a delay word must be a string of digits, got {word!r}", source, field_name)
+        raise InputError(f"a delay word must be a string of digits, got {short_label(repr(word))}", source, field_name)
     word = word.strip()
     if not word:
         raise InputError("empty delay word", source, field_name)
     bad = sorted({c for c in word if not c.isdigit() or not c.isascii()})
     if bad:
-        raise InputError(f"delay word {word!r} has letters {bad} that are not digits 0-9", source, field_name)
+        raise InputError(f"delay word {short_label(repr(word))} has letters {bad} that are not digits 0-9", source, field_name)
     delays = tuple(int(c) for c in word)
     if max_delay is not None:
         integer(max_delay, "max_delay", source=source)
         over = [d for d in delays if d > max_delay]
         if over:
-            raise InputError(f"delay word {word!r} has delays {sorted(set(over))} above the maximum delay "
+            raise InputError(f"delay word {short_label(repr(word))} has delays {sorted(set(over))} above the maximum delay "
                              f"{max_delay}", source, field_name)
     return delays
 
@@ -199,7 +198,7 @@ def _reading(words: list, kind: str | None, field_name: str, source: str | None)
     strings = [w.strip() for w in words if isinstance(w, str)]
     if not strings or any(set(w) - MISSING_ALPHABET for w in strings):
         return "delay"  # patterns only (nothing to read), or a letter beyond 0/1: not a missing-data word
-    shown = strings if len(strings) <= 4 else strings[:4] + ["..."]
+    shown = [short_label(w) for w in strings[:4]] + ([] if len(strings) <= 4 else ["..."])
     raise InputError(f"the words {shown} are made of 0 and 1 only, so they read two ways: as missing-data words "
                      "(1 = the measurement arrives, 0 = it is lost) or as delay words (each measurement on time "
                      "or one step late); say which with kind='missing' or kind='delay' (or give "
@@ -280,11 +279,11 @@ def as_language(words: Iterable["ArrivalPattern | str"], *, kind: str | None = N
     lengths = sorted({p.T for p in pats})
     if fixed_length and len(lengths) > 1:
         raise InputError(f"words of mixed lengths {lengths} in a fixed-length language: "
-                         f"{[p.label for p in pats]}", source, field_name)
+                         f"{short_label([p.label for p in pats])}", source, field_name)
     if length is not None:
         wrong = [p.label for p in pats if p.T != length]
         if wrong:
-            raise InputError(f"words {wrong} do not have the required length {length}", source, field_name)
+            raise InputError(f"words {short_label(wrong)} do not have the required length {length}", source, field_name)
     return pats
 
 
@@ -361,8 +360,9 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     6
     """
     T, max_delay = integer(T, "T", low=1), integer(max_delay, "max_delay", high=MAX_DELAY)
-    digits = np.indices((max_delay + 1,) * T).reshape(T, -1).T
-    return tuple("".join(map(str, row)) for row in digits)
+    # lexicographic (the first delay varies slowest); itertools, not numpy.indices: numpy arrays have at most 64
+    # dimensions, and {0}^80 (one word) raised a raw ValueError
+    return tuple(map("".join, itertools.product("0123456789"[:max_delay + 1], repeat=T)))
 
 
 # ---------------------------------------------------------------------------

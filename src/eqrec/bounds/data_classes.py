@@ -38,19 +38,20 @@ stacked output maps of the measurements in ``S``), come from
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from itertools import combinations
-from math import comb, prod
+from itertools import chain, combinations
+from math import comb, factorial, prod
 
 import numpy as np
 
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.bounds.stacking import Stacking
-from eqrec.checks import integer
+from eqrec.checks import integer, short_label
 from eqrec.errors import InputError
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False, slots=True)
 class DataClass:
     """The nodes of depth ``depth`` whose available data at time ``depth - 1`` is ``available``.
 
@@ -58,8 +59,9 @@ class DataClass:
     ----------
     depth : int
         ``d``: the class bounds the error :math:`\\xi(d)` (``1 <= d <= T``).
-    available : tuple of int
-        ``S``: the measurement times available at ``d - 1``, increasing.
+    available : tuple of int or WindowData
+        ``S``: the measurement times available at ``d - 1``, increasing (the classes of
+        :func:`classes_of_full_language` hold a :class:`WindowData`, which reads as that tuple).
     terminal : bool
         A word of the language ends at a node of this class (its level must
         be at most ``μ1``: the terminal constraint).
@@ -84,11 +86,134 @@ class DataClass:
         """``(d, S)``."""
         return self.depth, self.available
 
+    def _fields(self) -> tuple:
+        return self.depth, self.available, self.terminal, self.inner, self.weight, self.nodes
+
+    def __eq__(self, other) -> bool:
+        """Equal fields (whatever the representation of the data: a tuple or a :class:`WindowData`)."""
+        if not isinstance(other, DataClass):
+            return NotImplemented
+        return self._fields() == other._fields()
+
+    def __hash__(self) -> int:
+        return hash(self._fields())
+
     @property
     def label(self) -> str:
         """``d:S`` with ``S`` as a 0/1 string over the times ``0..d-1`` (``1``: available)."""
         s = set(self.available)
         return f"{self.depth}:" + "".join("1" if i in s else "0" for i in range(self.depth))
+
+
+class WindowData(Sequence):
+    """The data ``S`` of a class of the full language, ``(0, 1, ..., old - 1) + chosen``, without its tuple.
+
+    The old times of a class of depth ``d`` (every time ``<= d - 1 - τ̄``) have all arrived, so ``S`` is them
+    and a subset ``chosen`` of the window (at most ``τ̄`` times): held as ``old`` and ``chosen`` it costs
+    ``O(τ̄)`` whatever ``d``, and the ``T 2^τ̄`` classes of ``{0..τ̄}^T`` are built in time and memory linear in
+    ``T`` (as tuples they hold ``Σ|S| ≈ 2^τ̄ T² / 2`` entries).  It reads as the tuple it stands for: length,
+    indexing, iteration, ``in`` (``O(1)``), equality and hash (a dict key interchangeable with the tuple).
+
+    Parameters
+    ----------
+    old : int
+        The times ``0..old-1``, all available.
+    chosen : tuple of int
+        The available window times, increasing, all ``>= old``.
+    """
+
+    __slots__ = ("old", "chosen", "_hash")
+
+    def __init__(self, old: int, chosen: tuple[int, ...]) -> None:
+        self.old, self.chosen, self._hash = old, chosen, None
+
+    def __len__(self) -> int:
+        return self.old + len(self.chosen)
+
+    def __iter__(self):
+        return chain(range(self.old), self.chosen)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return tuple(self)[i]
+        n = len(self)
+        i = i + n if i < 0 else i
+        if not 0 <= i < n:
+            raise IndexError("index out of range")
+        return i if i < self.old else self.chosen[i - self.old]
+
+    def __contains__(self, x) -> bool:
+        return (isinstance(x, int) and 0 <= x < self.old) or x in self.chosen
+
+    def as_tuple(self) -> tuple[int, ...]:
+        """The tuple it stands for.
+
+        Returns
+        -------
+        tuple of int
+            ``(0, ..., old - 1) + chosen`` (``O(|S|)`` work).
+        """
+        return tuple(self)
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, WindowData):
+            return self.old == other.old and self.chosen == other.chosen
+        if isinstance(other, tuple):
+            return len(other) == len(self) and other == tuple(self)
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        if self._hash is None:
+            self._hash = hash(tuple(self))
+        return self._hash
+
+    def __lt__(self, other) -> bool:
+        return tuple(self) < tuple(other)
+
+    def __repr__(self) -> str:
+        return repr(tuple(self))
+
+    def __reduce__(self):
+        return WindowData, (self.old, self.chosen)
+
+
+class _WindowClass(DataClass):
+    """A class of :func:`classes_of_full_language`: its data a :class:`WindowData` made when read, its weight and
+    node count ``(τ̄+1)^exp * small`` expanded when read (the exponents grow with ``T``, the factors do not), so
+    that a class holds neither an ``O(T)``-bit integer nor an ``O(T)`` tuple (two objects: itself and its
+    window's tuple)."""
+
+    __slots__ = ("_old", "_chosen", "_base", "_weight_power", "_node_power")
+
+    def __init__(self, depth: int, old: int, chosen: tuple[int, ...], inner: bool, base: int,
+                 weight_power: tuple[int, int], node_power: tuple[int, int]) -> None:
+        set_ = object.__setattr__  # frozen: set once, here
+        set_(self, "depth", depth)
+        set_(self, "terminal", not inner)
+        set_(self, "inner", inner)
+        set_(self, "_old", old)
+        set_(self, "_chosen", chosen)
+        set_(self, "_base", base)
+        set_(self, "_weight_power", weight_power)
+        set_(self, "_node_power", node_power)
+
+    @property
+    def available(self) -> WindowData:  # type: ignore[override]
+        return WindowData(self._old, self._chosen)
+
+    @property
+    def weight(self) -> int:  # type: ignore[override]
+        exp, small = self._weight_power
+        return self._base ** exp * small if small else 0
+
+    @property
+    def nodes(self) -> int:  # type: ignore[override]
+        exp, small = self._node_power
+        return self._base ** exp * small
+
+    def __reduce__(self):
+        return _WindowClass, (self.depth, self._old, self._chosen, self.inner, self._base, self._weight_power,
+                              self._node_power)
 
 
 @dataclass
@@ -146,7 +271,8 @@ class ClassSet:
         try:
             return self._index[(int(depth), tuple(sorted(int(i) for i in available)))]
         except KeyError:
-            raise InputError(f"no class of depth {depth} with data {sorted(available)} in this language") from None
+            raise InputError(f"no class of depth {depth} with data {short_label(sorted(available))} in this "
+                             "language") from None
 
     @property
     def _index(self) -> dict:
@@ -248,16 +374,27 @@ def full_language_counts(T: int, max_delay: int, max_lost: int | None = None) ->
     if max_lost is not None:
         return _loss_counts(int(T), int(max_delay), int(max_lost))
     T, D = int(T), int(max_delay)
-    sequences = prod(_arrival_values(i, T, D) for i in range(T))
-    # the nodes of depth d: per old time (i <= d-1-D) its D + 1 arrival times, per window time its arrival times
-    # by d-1 or 'not yet'; the old times' factor grows by D + 1 per depth (linear in T, not quadratic)
-    nodes, old_power = 0, 1
-    for d in range(1, T + 1):
-        n_old = max(0, d - D)
-        if n_old:
-            old_power *= D + 1
-        nodes += old_power * prod(_arrived_by(i, d - 1, D) + 1 for i in range(n_old, d))
+    sequences = _tail(0, T, D)
+    # the nodes of depth d: (D + 1)^|old| (each old time arrived at one of D + 1 times) times, per window time
+    # i = d-1-j (j < w = min(D, d)), its j + 1 arrival times by d-1 or 'not yet': (w + 1)! in all.  From d = D on
+    # the window is full, a geometric series: closed form, no O(T)-bit integer per depth
+    nodes = sum(factorial(d + 1) for d in range(1, min(T, D - 1) + 1))
+    if T >= max(D, 1):
+        first = max(D, 1)  # D = 0: every depth has one node
+        terms = T - first + 1
+        nodes += factorial(D + 1) * (D + 1) ** (first - D) * (terms if D == 0 else ((D + 1) ** terms - 1) // D)
     return {"words": (D + 1) ** T, "sequences": sequences, "nodes": nodes}
+
+
+def _tail(d: int, T: int, D: int) -> int:
+    """The outcomes of the times ``d..T-1`` together, ``∏ _arrival_values(i)``: ``D + 1`` for each time
+    ``i < T - D`` (every delay lands in the block), ``T - i + 1`` for the later ones."""
+    return (D + 1) ** max(0, T - D - d) * _tail_small(d, T, D)
+
+
+def _tail_small(d: int, T: int, D: int) -> int:
+    """The factor of :func:`_tail` of the times ``max(d, T-D)..T-1`` (at most ``D`` of them)."""
+    return prod(T - i + 1 for i in range(max(d, T - D), T))
 
 
 def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None) -> ClassSet:
@@ -315,13 +452,18 @@ def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None
     max_delay : int
         Largest delay ``τ̄``, ``>= 0``.
     max_lost : int or None, optional
-        At most this many measurements lost per block, ``0..T`` (``None``, default: the language without
-        losses, today's classes bit for bit).
+        At most this many measurements lost per block, ``0..T`` (``None``, default, or ``0``: the language
+        without losses).
 
     Returns
     -------
     ClassSet
-        The classes (``source="window"``, no tree) and the counts of :func:`full_language_counts`.
+        The classes (``source="window"``, no tree) and the counts of :func:`full_language_counts`.  Without
+        losses built in time and memory linear in ``T`` (``O(τ̄)`` per class): each class's data is a
+        :class:`WindowData` (the old times as a count, the window's as a tuple) and its weight and node count
+        are expanded from ``(τ̄+1)^e`` times a small factor only when read (as tuples and integers the
+        ``T 2^τ̄`` classes hold ``Σ|S| ≈ 2^τ̄ T²/2`` entries and ``O(T)``-bit weights each).  With losses each
+        class holds its data tuple and weight.
 
     Raises
     ------
@@ -332,36 +474,30 @@ def classes_of_full_language(T: int, max_delay: int, max_lost: int | None = None
     if T < 1 or D < 0:
         raise InputError(f"the full language needs horizon >= 1 and max delay >= 0, got ({T}, {D})",
                          field="max_delay")
-    if max_lost is not None:
+    if max_lost is not None and _check_lost(max_lost, T):  # m = 0: the language without losses, its classes
         return _classes_with_losses(T, D, _check_lost(max_lost, T))
-    counts = full_language_counts(T, D)
-    # suffix products of the outcomes of the times d..T-1 (the tail of every class of depth d), built once: the
-    # work per class is then its window's (at most D times) and its data tuple, linear in the classes' size
-    tail = [1] * (T + 1)
-    for i in range(T - 1, -1, -1):
-        tail[i] = tail[i + 1] * _arrival_values(i, T, D)
+    counts = full_language_counts(T, D, max_lost)
+    # per class O(D) work and memory whatever T: its data a WindowData (the old times 0..n_old-1 and the chosen
+    # window times), its weight and node count (D+1)^exp times a small factor, expanded only when read; the
+    # weight is tail(d) (the outcomes of the times d..T-1) times (D+1)^n_old times the window's factor
     classes = []
-    old_power, n_old = 1, 0  # (D + 1)^|old|: every old time arrived by k, D + 1 ways (its nodes and weight factor)
-    times = tuple(range(T))  # slices of one tuple: the classes' data share its integers
+    base = D + 1
     for d in range(1, T + 1):
         k = d - 1
-        if k - D + 1 > n_old:  # one more old time (the old times are 0..k-D, one more per depth)
-            n_old, old_power = n_old + 1, old_power * (D + 1)
-        always = times[:n_old]
-        window = times[n_old:k + 1]
+        n_old = max(0, d - D)  # the old times 0..k-D: every one arrived by k, D + 1 ways
+        window = tuple(range(n_old, d))
         inner = d < T
         by_k = {i: _arrived_by(i, k, D) for i in window}
         not_yet = {i: _arrival_values(i, T, D) - by_k[i] for i in window}
+        weight_exp, tail_small = max(0, T - D - d) + n_old, _tail_small(d, T, D)
         for r in range(len(window) + 1):
             for chosen in combinations(window, r):
-                S = always + chosen
                 s = set(chosen)
                 # nodes: per i < d, an arrival time <= k if i ∈ S, else 'not yet' (the window makes it possible)
-                nodes = old_power * prod(by_k[i] for i in chosen)
-                weight = 0
-                if inner:
-                    weight = tail[d] * old_power * prod(by_k[i] if i in s else not_yet[i] for i in window)
-                classes.append(DataClass(d, S, terminal=not inner, inner=inner, weight=weight, nodes=nodes))
+                node_power = (n_old, prod(by_k[i] for i in chosen))
+                weight_power = (weight_exp, tail_small * prod(by_k[i] if i in s else not_yet[i] for i in window)
+                                if inner else 0)
+                classes.append(_WindowClass(d, n_old, chosen, inner, base, weight_power, node_power))
     # made in the order of _ordered (depth, then |S|, then S: combinations are lexicographic), each key once
     return ClassSet(classes=tuple(classes), horizon=T, source="window", **counts)
 

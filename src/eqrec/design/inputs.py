@@ -476,10 +476,16 @@ def _class_sizes(max_delay: int, horizon: int) -> tuple[np.ndarray, np.ndarray, 
 
 #: Estimated seconds from which a size estimate is printed (the CLI and the Python entries alike).
 ESTIMATE_PRINT_SECONDS = 10.0
-#: The time model of a class set's construction (:func:`eqrec.delay_classes`): seconds per class and per entry of
-#: its data (measured 2026-11-29: (1, 8000), 16,000 classes and 1.3e8 entries, in 3.3 to 7 s on the shared
-#: 2-core machine) and bytes per class and per entry (585 MB at (1, 8000), its weights' big integers included).
+#: The time model of a loss-aware class set's construction (:func:`eqrec.delay_classes` with ``max_lost >= 1``,
+#: whose classes hold their data as tuples): seconds per class and per entry of its data (measured 2026-11-29:
+#: (1, 8000), 16,000 classes and 1.3e8 entries, in 3.3 to 7 s on the shared 2-core machine) and bytes per class
+#: and per entry (585 MB at (1, 8000), its weights' big integers included).
 SECONDS_PER_CLASS, SECONDS_PER_ENTRY, BYTES_PER_CLASS, BYTES_PER_ENTRY = 2e-5, 5e-8, 400.0, 9.0
+#: The same without losses, linear in the classes (:class:`eqrec.bounds.data_classes.WindowData`: a class holds
+#: ``O(τ̄)`` whatever ``T``, its weight expanded only when read): seconds and bytes per class (measured
+#: 2026-11-29 on the shared 2-core machine at a load of 6: 16 µs and 630 bytes a class at (2, 100000),
+#: 400,000 classes in 6.3 s; 15 µs at (4, 100000); ``benchmarks/bench_classes.py --only e``).
+SECONDS_PER_WINDOW_CLASS, BYTES_PER_WINDOW_CLASS = 2e-5, 700.0
 #: Depths :func:`class_shape` reads one by one; a longer horizon is sampled (an estimate within a few per cent).
 SHAPE_DEPTHS = 20_000
 #: Classes past which the closed-form count stops (the estimate then says "more than"; refused whatever the plant).
@@ -501,6 +507,10 @@ class ClassShape:
         Classes in the group (float: the count of a large loss-aware language exceeds 64-bit integers).
     truncated : bool
         The count stopped at :data:`MAX_COUNTED_CLASSES` (more classes exist).
+    windows : bool
+        The classes are built as window classes (no loss: their data are views,
+        :class:`eqrec.bounds.data_classes.WindowData`, and their weights expanded when read), in time and
+        memory linear in the classes; else each holds its data and weight (the loss-aware language).
     """
 
     depth: np.ndarray
@@ -508,6 +518,7 @@ class ClassShape:
     terminal: np.ndarray
     count: np.ndarray
     truncated: bool = False
+    windows: bool = False
 
     @property
     def classes(self) -> float:
@@ -520,7 +531,9 @@ class ClassShape:
         return float((self.count * self.size).sum())
 
     def build_cost(self, horizon: int, max_delay: int) -> tuple[float, float]:
-        """Seconds and bytes to build the class set (:data:`SECONDS_PER_CLASS` and the others).
+        """Seconds and bytes to build the class set: :data:`SECONDS_PER_WINDOW_CLASS` and
+        :data:`BYTES_PER_WINDOW_CLASS` a class without losses (linear in ``T``), else :data:`SECONDS_PER_CLASS`
+        and the others (per class and per entry of its data).
 
         Parameters
         ----------
@@ -536,6 +549,8 @@ class ClassShape:
         memory : float
             Expected peak bytes.
         """
+        if self.windows:
+            return self.classes * SECONDS_PER_WINDOW_CLASS, 2e8 + self.classes * BYTES_PER_WINDOW_CLASS
         weight_bytes = horizon * np.log2(max_delay + 2) / 8
         return (self.classes * SECONDS_PER_CLASS + self.entries * SECONDS_PER_ENTRY,
                 2e8 + self.classes * (BYTES_PER_CLASS + weight_bytes) + self.entries * BYTES_PER_ENTRY)
@@ -597,7 +612,7 @@ def class_shape(max_delay: int, horizon: int, max_lost: int | None = None) -> Cl
                 truncated = j < int(max_lost) and bool((o > j).any())
                 break
     depth_a, size_a, count_a = np.concatenate(depth), np.concatenate(size), np.concatenate(count)
-    return ClassShape(depth_a, size_a, depth_a == T, count_a, truncated)
+    return ClassShape(depth_a, size_a, depth_a == T, count_a, truncated, windows=not max_lost)
 
 
 def _log_comb(n: np.ndarray, j: int) -> np.ndarray:
@@ -865,7 +880,7 @@ UNSTABLE_GROWTH = 1e3
 RESOLVED_GROWTH = 1e8
 
 
-def growth_hint(system: AffineSystem, horizon: int) -> str:
+def growth_hint(system: AffineSystem, horizon: int, *, suspect: bool = False) -> str:
     """Why a design of an unstable plant over a long horizon fails, and the horizon that usually solves.
 
     Parameters
@@ -874,12 +889,16 @@ def growth_hint(system: AffineSystem, horizon: int) -> str:
         The plant.
     horizon : int
         The horizon ``T`` that failed.
+    suspect : bool, optional
+        For a design found infeasible: only past :data:`RESOLVED_GROWTH`, where the verdict may be the
+        solver's (a longer horizon never makes a design harder for the plant: more data), and said so.
 
     Returns
     -------
     str
-        Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH` (``ρ`` the spectral radius of ``A``, time-varying:
-        of its first matrix); else the reason and ``log(RESOLVED_GROWTH) / log ρ``.
+        Empty when ``ρ^T`` is below :data:`UNSTABLE_GROWTH` (``suspect``: :data:`RESOLVED_GROWTH`; ``ρ`` the
+        spectral radius of ``A``, time-varying: of its first matrix); else the reason and
+        ``log(RESOLVED_GROWTH) / log ρ``.
     """
     try:
         rho = float(np.max(np.abs(np.linalg.eigvals(np.asarray(system.A_at(0), float)))))
@@ -887,9 +906,12 @@ def growth_hint(system: AffineSystem, horizon: int) -> str:
         return ""
     with np.errstate(over="ignore"):
         growth = rho ** int(horizon)
-    if not growth > UNSTABLE_GROWTH:
+    if not growth > (RESOLVED_GROWTH if suspect else UNSTABLE_GROWTH):
         return ""
     usual = max(1, int(np.log(RESOLVED_GROWTH) / np.log(rho)))
-    return (f"the horizon {horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, so the "
+    verdict = "this verdict may be the solver's, not the plant's: " if suspect else ""
+    return (f"{verdict}the horizon {horizon} is too long for so unstable a plant: A has spectral radius {rho:.4g}, "
+            "so the "
             f"error maps grow like {rho:.4g}^T = {growth:.3g}, past what a double-precision LP resolves; horizons up "
-            f"to about {usual} usually solve (eqrec design --horizon searches for the longest)")
+            f"to about {usual} usually solve (eqrec design --horizon searches for the longest; from Python "
+            f"eqrec.longest_horizon(system, max_delay, {horizon}))")

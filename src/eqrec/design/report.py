@@ -13,6 +13,7 @@ import numpy as np
 
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import parse_delay_word
+from eqrec.checks import short_label
 from eqrec.design.cost import node_bounds
 from eqrec.errors import InputError
 
@@ -100,7 +101,7 @@ def word_certificate(design: Design, word):
     for p in design.patterns:
         if p == pat:
             return design.certificate.words[p.label]
-    raise InputError(f"{pat.label!r} is not an event sequence of the designed language", field="pattern")
+    raise InputError(f"{short_label(pat.label)!r} is not an event sequence of the designed language", field="pattern")
 
 
 def class_table(design: Design) -> list[dict]:

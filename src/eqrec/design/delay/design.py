@@ -131,7 +131,8 @@ def design_from_solution(model: PrefixLP, tree: PrefixTree, x: np.ndarray, mu1: 
 @contextlib.contextmanager
 def _horizon_hint(system: AffineSystem, horizon: int):
     """A solver or certification failure of an unstable plant over a long horizon says why
-    (:func:`eqrec.design.inputs.growth_hint`)."""
+    (:func:`eqrec.design.inputs.growth_hint`); so does an infeasibility past what an LP resolves (``ρ^T`` over
+    :data:`~eqrec.design.inputs.RESOLVED_GROWTH`), which may be the solver's and not the plant's."""
     try:
         yield
     except (SolverFailure, CertificationFailure) as exc:
@@ -139,6 +140,11 @@ def _horizon_hint(system: AffineSystem, horizon: int):
         if not hint or hint in str(exc):
             raise
         raise type(exc)(f"{exc}; {hint}") from exc
+    except InfeasibleDesign as exc:  # past what an LP resolves, "infeasible" may be the solver's verdict, not the plant's
+        hint = growth_hint(system, horizon, suspect=True)
+        if not hint or hint in str(exc):
+            raise
+        raise InfeasibleDesign(f"{exc}; {hint}", mu1_min=exc.mu1_min) from exc
 
 
 def check_design_size(system: AffineSystem, classes, *, mu1_free: bool, n_jobs, scheduler, force: bool) -> None:

@@ -163,8 +163,8 @@ def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None, 
         delay language as before).
     force : bool, optional
         Build a class set past the documented size anyway.  Its size is estimated first, in closed form
-        (:func:`eqrec.design.inputs.class_shape`: ``Σ |S|`` data entries, about quadratic in ``T``, and
-        ``T^(m+1)`` classes with ``m`` lost): printed from
+        (:func:`eqrec.design.inputs.class_shape`: ``T 2^τ̄`` classes without losses, built in time and memory
+        linear in ``T``; with ``m >= 1`` lost about ``T^(m+1)`` classes holding ``Σ |S|`` data entries): printed from
         :data:`~eqrec.design.inputs.ESTIMATE_PRINT_SECONDS` on and refused past
         :data:`~eqrec.design.inputs.MAX_ESTIMATED_SECONDS` or the memory limit unless ``force``
         (:func:`eqrec.design.inputs.report_size`).
@@ -196,8 +196,8 @@ def delay_classes(*, max_delay: int, horizon: int, max_lost: int | None = None, 
     shape = class_shape(D, T, m)
     seconds, memory = shape.build_cost(T, D)
     what = (f"the classes of {{0..{D}}}^{T}" + (f" with at most {m} lost" if m is not None else "")
-            + f": {'more than ' if shape.truncated else ''}{shape.classes:.4g} classes holding {shape.entries:.3g} "
-            "data entries")
+            + f": {'more than ' if shape.truncated else ''}{shape.classes:.4g} classes"
+            + ("" if shape.windows else f" holding {shape.entries:.3g} data entries"))
     report_size(SetEstimate(what, seconds, memory), force=force, field="horizon",
                 advice="shorten the horizon or lower max_lost")
     return classes_of_full_language(T, D) if m is None else classes_of_full_language(T, D, m)
