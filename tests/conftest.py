@@ -3,6 +3,7 @@ import os
 # The BLAS kernels of the workflow (Snakefile): set before numpy loads OpenBLAS, so that recomputed results equal
 # the stored ones on any x86-64 machine.
 os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # as the Snakefile: results independent of the core count
 
 import numpy as np
 import pytest
