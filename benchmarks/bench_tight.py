@@ -5,7 +5,7 @@ side by side with the set-membership estimator (figures, not tests).
     python benchmarks/bench_tight.py --part cost [--losses 0,0.2,0.4] [--cost-steps 120,120,60] [--plants ...]
 
 Plants: two carts and a spring (:func:`eqrec.two_mass`, ``n = 4``, one position measured), a cart-pole (``n = 4``,
-one unstable mode, two outputs; the cost table only) and a chain of five carts (``n = 10``, every position
+one unstable mode, two outputs) and a chain of five carts (``n = 10``, every position
 measured, ``p = 5``).  Each is designed by the class engine for delays
 ``0..2``, at most one loss per block of ``T = 6`` (``delay_classes(max_delay=2, horizon=6, max_lost=1)``, ``μ1``
 free), and run on Bernoulli losses at ``--loss`` with uniform delays ``0..2``, noise at random box corners.
@@ -15,8 +15,11 @@ Printed, per plant:
 * bound / information limit per step (median, p95, max; the limit :func:`eqrec.information_limit`, max over
   states, for the initial box of radius ``μ1``) on the steps in the design and out of it, for
   ``design.estimator(strict=False)`` (tight, the default), ``strict=False, tight=False`` (the designed estimate
-  alone) and the zonotope estimator alone (:class:`eqrec.ZonotopeEstimator`, ``max_delay = T``, the one
-  ``strict=False`` runs beside the gains), and the largest error / bound of any step (must be <= 1);
+  alone), the zonotope estimator alone (:class:`eqrec.ZonotopeEstimator`, ``max_delay = T``, the one
+  ``strict=False`` runs beside the gains) and the prefix-based paper's estimator (:func:`eqrec.design_prefix` for
+  at most one of ``T`` lost, ``μ1`` free, ``strict=False``, fed the on-time packets only: a late packet counts as
+  lost, as in the compare study), and the largest error / bound of any step (must be <= 1).  "In the design" is
+  the class design's (the steps where ``strict=False`` runs its designed gains), for every row;
 * µs per step, measured side by side in one run (CPU time of the process, the best of ``--repeats`` runs, each estimator in turn on the
   same data): ``strict=True`` (a trace without losses, in the language), ``strict=False`` in the design (the
   same trace), ``strict=False`` out of it (its out-of-design steps on the lossy trace) and the zonotope estimator
@@ -40,8 +43,11 @@ from eqrec.arrivals.draws import bernoulli_trace, with_uniform_delays
 from eqrec.bounds.information import information_limit
 from eqrec.design.delay.design import design_delay_global
 from eqrec.design.delay.languages import delay_classes
+from eqrec.design.inputs import missing_words_at_most
+from eqrec.design.prefix.design import design_prefix
 from eqrec.estimators.zonotope import ZonotopeEstimator
-from eqrec.errors import InputError
+from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
+from eqrec.estimators.protocol import OnTimeOnly
 from eqrec.simulate.loop import closed_loop, what_arrived
 from eqrec.systems.affine import AffineSystem
 from eqrec.systems.examples import two_mass, zoh
@@ -101,13 +107,23 @@ def tightness(system, design, args) -> None:
     makers = {"strict=False (tight)": lambda: design.estimator(strict=False),
               "strict=False, tight=False": lambda: design.estimator(strict=False, tight=False),
               "zonotope alone": lambda: ZonotopeEstimator(system, x0_radius=design.mu1, max_delay=HORIZON)}
+    radius = dict.fromkeys(makers, design.mu1)  # the initial box each estimator assumes (its limit's too)
+    try:  # the prefix-based paper's estimator: on-time packets only, at most MAX_LOST of HORIZON lost
+        prefix = design_prefix(system, missing_words_at_most(HORIZON, MAX_LOST), "free")
+        makers["prefix (P1), on time only"] = lambda: OnTimeOnly(prefix.estimator(strict=False), system.p)
+        radius["prefix (P1), on time only"] = prefix.mu1
+        print(f"  prefix (P1): mu1 = {prefix.mu1:.4g}; the initial error is drawn in the smaller box, each bound is "
+              "divided by the limit for its own initial box")
+    except (InfeasibleDesign, SolverFailure) as err:
+        print(f"  prefix (P1): no design ({type(err).__name__}: {err})")
     ratios = {name: ([], []) for name in makers}
     worst = 0.0
     for seed in range(args.seeds):
         rng = np.random.default_rng(seed)
         trace = with_uniform_delays(rng, bernoulli_trace(rng, args.steps, args.loss), MAX_DELAY)
         w, v, xi0 = _runs(system, design, trace, seed + 100)
-        limit = information_limit(system, trace, design.mu1).max(axis=1)
+        xi0 = xi0 * (min(radius.values()) / design.mu1)  # inside every estimator's initial box
+        limits = {r: information_limit(system, trace, r).max(axis=1) for r in set(radius.values())}
         flags = []
         tight = design.estimator(strict=False)
         closed_loop(system, tight, trace, np.zeros(system.n), xi0, w, v,
@@ -115,7 +131,7 @@ def tightness(system, design, args) -> None:
         flags = np.array(flags)
         for name, make in makers.items():
             out = closed_loop(system, make(), trace, np.zeros(system.n), xi0, w, v)
-            r = np.asarray(out.bound) / limit
+            r = np.asarray(out.bound) / limits[radius[name]]
             ratios[name][0].append(r[flags])
             ratios[name][1].append(r[~flags])
             err = np.abs(out.error[1:]).max(axis=1)
