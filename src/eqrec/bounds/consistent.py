@@ -283,6 +283,8 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     solver_info(solver)
     if solver_options is not None:
         instance(solver_options, dict, "solver_options")
+    if not isinstance(force, (bool, np.bool_)):  # a string such as "no" would read as true
+        raise InputError(f"must be True or False, got {force!r}", field="force")
     lim = system.horizon_limit
     if lim is not None and lim < N:
         raise InputError(f"the time-varying system covers {lim} steps, the trace has {N}", field="trace")

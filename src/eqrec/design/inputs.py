@@ -94,7 +94,8 @@ def missing_words_at_most(T: int, m: int) -> tuple[ArrivalPattern, ...]:
     Raises
     ------
     InputError
-        ``T`` not an integer >= 1 or ``m`` not one in ``0..T`` (the field is named).
+        ``T`` not an integer >= 1 or ``m`` not one in ``0..T`` (the field is named), or more than
+        :data:`eqrec.arrivals.words.MAX_LISTED_WORDS` words (field ``T``).
 
     Examples
     --------
@@ -102,8 +103,13 @@ def missing_words_at_most(T: int, m: int) -> tuple[ArrivalPattern, ...]:
     >>> [p.label for p in eqrec.missing_words_at_most(4, 1)]
     ['1111', '0111', '1011', '1101', '1110']
     """
+    from math import comb
+
+    from eqrec.arrivals.words import check_listed_words
+
     T = integer(T, "T", low=1)
     m = integer(m, "m", high=T)
+    check_listed_words(sum(comb(T, j) for j in range(m + 1)), f"at most {m} of {T} lost", "T")
     words = []
     for j in range(m + 1):
         for zeros in combinations(range(T), j):
@@ -788,6 +794,7 @@ def report_size(estimate: "WorkEstimate | SetEstimate", *, force: bool, field: s
     """
     import sys
 
+    check_flags(force=force)  # a string such as "no" would read as true, and run past the limits
     if size_checked():
         return
     reason = estimate.too_large()
