@@ -91,7 +91,7 @@ import numpy as np
 from eqrec.arrivals.packets import Packet, as_packets, check_input
 from eqrec.bounds.rounding import rounding_allowance
 from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
-from eqrec.checks import integer, radii
+from eqrec.checks import check_allocation, integer, radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
@@ -145,6 +145,9 @@ class ExactBound:
                 raise InputError("a column or copy run needs the number of steps to allocate (an integer >= 1)",
                                  field="steps")
             integer(steps, "steps", low=1)
+            # a column run holds n x (2 + n + steps (nw + nv)) numbers per column set: refused past the memory
+            K = 2 + system.n + int(steps) * (system.nw + system.nv)
+            check_allocation(8.0 * K * (system.n + 4), "steps", f"an exact-bound run of {int(steps)} steps")
         self.steps = None if steps is None else int(steps)
         self.bound = np.nan
         self._bounds = np.full(system.n, np.nan)
