@@ -88,7 +88,7 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.arrivals.packets import Packet, as_packets, check_input
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance
 from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
 from eqrec.checks import check_allocation, integer, radii
@@ -187,9 +187,7 @@ class ExactBound:
             self.estimator.reset(xhat0, t0)
             self._set = ErrorSet.box(self.x0_radius, n, int(t0), self.order)
         else:
-            x = np.asarray(xhat0, dtype=float)
-            if x.shape != (n,) or not np.all(np.isfinite(x)):
-                raise InputError(f"need {n} finite entries, got {xhat0!r:.60}", field="xhat0")
+            x = check_estimate(xhat0, n)
             K = 2 + n + self.steps * (sysm.nw + sysm.nv)
             one = np.zeros(K)
             one[:2] = 1.0
