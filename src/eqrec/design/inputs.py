@@ -614,6 +614,13 @@ def _log_comb(n: np.ndarray, j: int) -> np.ndarray:
     return gammaln(n + 1) - gammaln(j + 1) - gammaln(n - j + 1)
 
 
+#: The longest horizon whose classes :func:`estimate_delay_design` lists one by one (:func:`_class_sizes`: an array
+#: entry per class, about ``T`` times the classes of one depth); past it the closed form of :func:`class_shape`
+#: (counted up to :data:`MAX_COUNTED_CLASSES`), which answers at once (at ``T = 10^9`` the list took minutes and
+#: gigabytes before any estimate).
+MAX_LISTED_HORIZON = 100_000
+
+
 def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *, max_lost: int | None = None,
                           mu1_free: bool = False, workers: int = 1) -> WorkEstimate:
     """Estimate the size, time and memory of the class-engine design of ``{0..max_delay}^horizon``.
@@ -645,7 +652,7 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
     WorkEstimate
         The estimate.
     """
-    if max_lost is None:
+    if max_lost is None and int(horizon) <= MAX_LISTED_HORIZON:
         depth, size, terminal = _class_sizes(int(max_delay), int(horizon))
         shape = ClassShape(depth, size, terminal, np.ones(depth.size))
     else:
