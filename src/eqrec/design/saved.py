@@ -91,7 +91,12 @@ def _finite_array(value: Any, shape: tuple, source: str, field: str) -> np.ndarr
 def _pattern(label: Any, kind: str, source: str, T: int, field: str = "gains") -> ArrivalPattern:
     if not isinstance(label, str):
         raise InputError(f"a word is a string, got {short_label(repr(label))}", source, field)
-    pattern = as_pattern(label, kind=kind, field_name=field, source=source)
+    if kind == "delay" and "x" in label:  # a loss-aware word (--max-lost): x is a measurement lost
+        digits = as_pattern(label.replace("x", "0"), kind=kind, field_name=field, source=source)  # checks the rest
+        arrivals = tuple(None if c == "x" else a for c, a in zip(label, digits.arrivals))
+        pattern = ArrivalPattern(arrivals, label)
+    else:
+        pattern = as_pattern(label, kind=kind, field_name=field, source=source)
     if pattern.T != T:
         raise InputError(f"the word {short_label(label)!r} has length {pattern.T}, not the file's horizon T = {T}",
                          source, "T")
@@ -352,15 +357,15 @@ def _check_class_set(class_set: ClassSet, data: dict, kind: str, T: int, source:
     from eqrec.design.delay.languages import delay_classes
 
     words = data.get("words")
-    if isinstance(words, list) and words:
-        expected = language_classes([_pattern(w, kind, source, T, "words") for w in words], kind=kind,
-                                    field_name="words")
-    elif isinstance(words, int) and "max_delay" in data and "horizon" in data:
+    if "max_delay" in data and "horizon" in data:  # a --max-delay language (its listed words write a loss as x)
         try:
             expected = delay_classes(max_delay=data["max_delay"], horizon=data["horizon"],
                                      max_lost=data.get("max_lost"), force=True)
         except InputError as exc:
             raise InputError(str(exc).split(": ", 1)[-1], source, exc.field) from None
+    elif isinstance(words, list) and words:
+        expected = language_classes([_pattern(w, kind, source, T, "words") for w in words], kind=kind,
+                                    field_name="words")
     else:  # a class set of Python (Design.save of delay_classes): its language is not named in the file
         return
     have = {c.key: c for c in class_set.classes}
@@ -478,8 +483,10 @@ def load_design(path: "str | os.PathLike") -> Design:
                 if method == "prefix" and listed != {pat.label for pat in patterns}:
                     raise InputError("must be the words the gains are designed for (the keys of 'gains'), got "
                                      f"{short_label(str(sorted(listed)))}", source, "words")
-    else:
-        patterns = tuple(_pattern(w, kind, source, T, "words") for w in words) if isinstance(words, list) else ()
+    elif isinstance(words, list) and "max_delay" not in data:
+        patterns = tuple(_pattern(w, kind, source, T, "words") for w in words)
+    else:  # no words, or a --max-delay language's (a loss written x): its classes are checked against it
+        patterns = ()
     # what the gains are certified on: the designed words, and a time-based or augmented design's language
     certified_words = list(patterns)
     if schedule is not None and method in ("time", "augmented") and isinstance(words, list):
