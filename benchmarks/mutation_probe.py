@@ -25,6 +25,17 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "eqrec"
 
 
+#: Address space of a mutant's test run (bytes): a planted bug that drops a size refusal makes its tests start the
+#: huge job; they then fail with a MemoryError instead of taking the shared machine's memory (one took 17 GB).
+MEMORY_LIMIT = 6 * 2**30
+
+
+def _limit_memory() -> None:
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+
+
 @dataclass(frozen=True)
 class Mutation:
     id: str
@@ -65,10 +76,12 @@ MUTATIONS = [
              "    _check_cost(design, check)\n",
              "    pass\n",
              DESIGN_FILES, "a delay design's stored J is not compared with the cost of its levels"),
+    # the tests of a refusal run the huge job when the refusal is gone: a few of them, under the memory limit
     Mutation("size-refusal-dropped", "design/inputs.py",
              "    if reason is not None and not force:\n",
              "    if reason is not None and force == 'never':\n",
-             ("tests/test_design_size.py",), "the size model prints its estimate but never refuses"),
+             ("tests/test_design_size.py", "-k", "huge_class_sets or min_recovery_level_is_estimated"),
+             "the size model prints its estimate but never refuses"),
     Mutation("force-string-read-as-true", "design/inputs.py",
              "    check_flags(force=force)  # a string such as \"no\" would read as true, and run past the limits\n",
              "    pass\n",
@@ -135,7 +148,7 @@ def probe(m: Mutation, timeout: float) -> dict:
         try:
             run = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
                                   "-p", "no:randomly", *m.tests], cwd=ROOT, env=env, capture_output=True, text=True,
-                                 timeout=timeout)
+                                 timeout=timeout, preexec_fn=_limit_memory)
         except subprocess.TimeoutExpired:
             return {"id": m.id, "status": "timeout", "by": f"no verdict in {timeout:.0f} s",
                     "seconds": time.perf_counter() - start}
@@ -144,7 +157,10 @@ def probe(m: Mutation, timeout: float) -> dict:
     failed = [line for line in run.stdout.splitlines() if line.startswith(("FAILED", "ERROR"))]
     status = "caught" if run.returncode != 0 else "survived"
     by = failed[0].split(" - ")[0].replace("FAILED ", "").replace("ERROR ", "") if failed else ""
-    if status == "caught" and not by:
+    if status == "caught" and not by and "MemoryError" in run.stdout:
+        by = (f"{' '.join(m.tests)}: a test started the job and ran out of the probe's {MEMORY_LIMIT / 2**30:.0f} GiB "
+              "(MemoryError)")
+    elif status == "caught" and not by:
         by = f"exit {run.returncode}: " + (run.stdout.strip().splitlines() or [""])[-1][:120]
     return {"id": m.id, "status": status, "by": by, "seconds": time.perf_counter() - start}
 
@@ -152,7 +168,7 @@ def probe(m: Mutation, timeout: float) -> dict:
 def main(argv: "list[str] | None" = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-k", default="", help="only the mutations whose id contains this")
-    parser.add_argument("--timeout", type=float, default=900.0, help="seconds per mutation's tests")
+    parser.add_argument("--timeout", type=float, default=600.0, help="seconds per mutation's tests")
     args = parser.parse_args(argv)
     signal.signal(signal.SIGINT, _on_signal)
     signal.signal(signal.SIGTERM, _on_signal)
