@@ -274,7 +274,13 @@ MEMORY_FRACTION = 0.8
 
 
 def available_memory() -> "float | None":
-    """Bytes of memory available (Linux ``/proc/meminfo``), or ``None`` where it cannot be read."""
+    """The memory available (Linux ``/proc/meminfo``).
+
+    Returns
+    -------
+    float or None
+        Bytes available, or ``None`` where it cannot be read.
+    """
     try:
         with open("/proc/meminfo") as fh:
             for line in fh:
