@@ -77,6 +77,10 @@ BAD_CALLS = [
     ("u wrong length", np.zeros(1), np.zeros(3)),
     ("u a string", np.zeros(1), "0"),
     ("malformed packet", [("a", np.zeros(1))], None),
+    # issue 41 census: data whose propagation overflows (an inf / NaN estimate and bound before)
+    ("y overflows", np.array([1e308]), None),
+    ("packet overflows", [Packet(1, np.array([1e200]))], None),
+    ("u overflows", np.zeros(1), np.array([-1e300])),
 ]
 
 
@@ -257,3 +261,46 @@ def test_weighted_estimator_reset_and_steps_are_all_or_nothing(plant):
         a, b = est.step(y), twin.step(y)
         assert np.array_equal(a[0], b[0]) and a[1] == b[1]
     assert np.array_equal(est.error_box, twin.error_box)
+
+
+# --- issue 41 census: every estimator refuses data whose propagation overflows, atomically ------------------------
+
+def _overflow_estimators(plant, class_design):
+    import eqrec
+    from eqrec.estimators.kalman import TimestampedKalman
+    from eqrec.systems.noise import GaussianDesign
+
+    gauss = GaussianDesign.from_box(plant, 1.0)
+    return {
+        "zonotope": lambda: eqrec.ZonotopeEstimator(plant, x0_radius=0.5, max_delay=1),
+        "exact set": lambda: eqrec.ExactSetEstimator(plant, x0_radius=0.5, max_delay=1),
+        "kalman, exact bound": lambda: eqrec.exact_bound(TimestampedKalman(plant, gauss), plant, 0.5, steps=20),
+        "guaranteed": lambda: class_design.estimator(),
+        "class form": lambda: ClassEstimator(plant, class_design.class_gains, periodic=True),
+    }
+
+
+@pytest.mark.parametrize("kind", ["zonotope", "exact set", "kalman, exact bound", "guaranteed", "class form"])
+@pytest.mark.parametrize("bad_y,bad_u", [(np.array([1e308]), None), (np.zeros(1), np.array([1e200]))],
+                         ids=["y 1e308", "u 1e200"])
+def test_overflowing_data_is_refused_by_every_estimator_atomically(plant, class_design, kind, bad_y, bad_u):
+    make = _overflow_estimators(plant, class_design)[kind]
+    est, twin = make().reset(np.zeros(2)), make().reset(np.zeros(2))
+    est.step(np.array([0.3]), np.array([0.1]))
+    twin.step(np.array([0.3]), np.array([0.1]))
+    with pytest.raises(InputError) as exc:
+        est.step(bad_y, bad_u)
+    assert exc.value.field == ("y" if bad_u is None else "u")
+    for y in (np.array([0.2]), None, np.array([0.1])):
+        a, b = est.step(y, np.zeros(1)), twin.step(y, np.zeros(1))
+        assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]) and np.all(np.isfinite(a[0]))
+
+
+@pytest.mark.parametrize("kind", ["zonotope", "exact set", "kalman, exact bound", "guaranteed", "class form"])
+def test_an_initial_estimate_that_overflows_is_refused(plant, class_design, kind):
+    est = _overflow_estimators(plant, class_design)[kind]()
+    with pytest.raises(InputError) as exc:
+        est.reset(np.full(2, 1e308))
+    assert exc.value.field == "xhat0"
+    x, bound = est.reset(np.full(2, 1e100)).step(np.array([0.0]))  # large but in scale: finite
+    assert np.all(np.isfinite(x)) and (np.isfinite(bound) or kind == "class form")  # no levels: bound inf

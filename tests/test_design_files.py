@@ -86,6 +86,14 @@ TAMPERED = {
     "delay: a level halved": ("delay", lambda d: d["levels"][2].__setitem__("level", 1.0), "levels"),
     "delay: a certified level edited": ("delay", lambda d: d["levels"][2].__setitem__("certified", 1.0), "levels"),
     "delay: T 4 -> 3": ("delay", lambda d: d.__setitem__("T", 3), "T"),
+    # issue 41 census: accepted before
+    "tree: a word with a bad letter": ("tree", lambda d: d.__setitem__("words", ["1x1111"]), "words"),
+    "tree: a word dropped": ("tree", lambda d: d["words"].pop(), "words"),
+    "classes: a class row dropped": ("classes", lambda d: d["classes"].pop(3), "classes"),
+    "classes: a word dropped": ("classes", lambda d: d["words"].pop(), "classes"),
+    "delay: J edited": ("delay", lambda d: d.__setitem__("J", 0.1), "J"),
+    "delay: J_certified edited": ("delay", lambda d: d.__setitem__("J_certified", 2 * d["J_certified"]),
+                                  "J_certified"),
 }
 
 
@@ -206,3 +214,25 @@ def test_design_save_refuses_a_path_it_cannot_write(tmp_path):
             design.save(path)
         assert exc.value.field == field
     assert list(tmp_path.iterdir()) == []
+
+
+
+@pytest.mark.parametrize("D,T,listed", [(1, 4, True), (2, 10, False)], ids=["words listed", "words counted"])
+def test_a_max_delay_class_file_is_checked_against_its_language(tmp_path, D, T, listed):
+    """A ``--max-delay`` file's classes are checked against ``delay_classes`` of its ``max_delay``, ``horizon``
+    and ``max_lost`` (issue 41 census: a class row dropped was accepted); its listed words and node gains write a
+    lost measurement as ``x`` and load (they were refused as "not digits")."""
+    path = tmp_path / "window.json"
+    assert main(["design", str(REACTOR), "--method", "delay", "--max-delay", str(D), "--horizon", str(T),
+                 "--max-lost", "1", "--mu1", "2", "--out", str(path)]) == 0
+    data = json.loads(path.read_text())
+    assert isinstance(data["words"], list) == listed and data["max_lost"] == 1
+    assert not listed or any("x" in w for w in data["words"])
+    assert eqrec.load_design(path).J == data["J"]
+    for edit in (lambda d: d["classes"].pop(5), lambda d: d.__setitem__("max_lost", 0)):
+        edited = copy.deepcopy(data)
+        edit(edited)
+        (tmp_path / "edited.json").write_text(json.dumps(edited))
+        with pytest.raises(InputError) as exc:
+            eqrec.load_design(tmp_path / "edited.json")
+        assert exc.value.field == "classes"

@@ -307,3 +307,75 @@ def test_cli_inputs_once_silent(tmp_path, capsys, monkeypatch, case):
     err = capsys.readouterr().err
     assert text in err and "Traceback" not in err, err
     assert not out.exists()
+
+
+# --- issue 41 census: inputs accepted silently before -------------------------------------------------------------
+
+@pytest.mark.parametrize("call,field", [
+    (lambda: eqrec.acc_system(Ts=-0.5), "Ts"),
+    (lambda: eqrec.acc_system(m=0.0), "m"),  # a raw ZeroDivisionError before
+    (lambda: eqrec.acc_system(k1=float("nan")), "k1"),
+    (lambda: eqrec.two_mass(m2=-1.0), "m2"),
+])
+def test_example_plants_check_their_constants(call, field):
+    with pytest.raises(InputError) as exc:
+        call()
+    assert exc.value.field == field
+
+
+def test_flags_given_as_strings_are_refused():
+    from eqrec.arrivals.draws import ArrivalTrace
+
+    acc = eqrec.acc_system()
+    trace = ArrivalTrace([0, 1, 0])
+    data = np.zeros((3, acc.p))
+    plant = eqrec.AffineSystem(A=[[1.0, 0.1], [0.0, 1.0]], C=[[1.0, 0.0]], E=0.1 * np.eye(2), eta_w=0.1, eta_v=0.05)
+    for call in (lambda: eqrec.information_limit(acc, trace, 0.5, force="no"),
+                 lambda: eqrec.consistent_set(acc, trace, data, 0.5, force="no"),
+                 lambda: eqrec.design_delay(plant, ["0000", "1000"], 1.0, kind="delay", force="no"),
+                 lambda: eqrec.design_delay_global(plant, ["0000", "1000"], kind="delay", force="no")):
+        with pytest.raises(InputError) as exc:
+            call()
+        assert exc.value.field == "force"
+
+
+@pytest.mark.parametrize("centre", [1e20, 1e300])
+def test_consistent_set_refuses_a_centre_the_lp_cannot_represent(centre):
+    """x0_centre = 1e20 made data inconsistent with the box "consistent" (HiGHS reads 1e20 as infinite)."""
+    from eqrec.arrivals.draws import ArrivalTrace
+
+    acc = eqrec.acc_system()
+    data = np.random.default_rng(0).normal(size=(4, acc.p)) * 0.01
+    trace = ArrivalTrace([0, 1, 0, 0])
+    with pytest.raises(InputError) as exc:
+        eqrec.consistent_set(acc, trace, data, 0.5, [centre] * 3)
+    assert exc.value.field == "x0_centre"
+    with pytest.raises(InputError) as exc:  # a centre far from the data, within range: inconsistent, and said so
+        eqrec.consistent_set(acc, trace, data, 0.5, [100.0] * 3)
+    assert exc.value.field == "data"
+
+
+def test_a_system_file_name_must_be_a_string(tmp_path):
+    path = tmp_path / "named.yaml"
+    path.write_text("A: [[1.0]]\nC: [[1.0]]\nE: [[1.0]]\neta_w: 0.1\neta_v: 0.1\nname: [1, 2]\n")
+    with pytest.raises(InputError) as exc:
+        eqrec.load_system(path)
+    assert exc.value.field == "name"
+    path.write_text("A: [[1.0]]\nC: [[1.0]]\nE: [[1.0]]\neta_w: 0.1\neta_v: 0.1\nname: plant one\n")
+    assert eqrec.load_system(path)[0].name == "plant one"
+
+
+def test_compare_refuses_a_system_file_whose_T_is_not_the_horizon(tmp_path, capsys):
+    from eqrec.cli import main
+
+    rc = main(["compare", str(ROOT / "examples" / "acc_system.yaml"), "--loss", "0.1", "--max-delay", "1",
+               "--horizon", "4", "--runs", "2", "--periods", "2", "--out", str(tmp_path / "cmp")])
+    err = capsys.readouterr().err
+    assert rc == 1 and "field 'T'" in err and "--horizon 4" in err and not (tmp_path / "cmp").exists()
+
+
+def test_a_short_time_varying_system_names_its_matrix():
+    tv = eqrec.AffineSystem(A=[np.eye(2)] * 2, C=[[1.0, 0.0]], E=np.eye(2), eta_w=0.1, eta_v=0.1)
+    with pytest.raises(InputError) as exc:
+        tv.check_horizon(3)
+    assert exc.value.field == "A"

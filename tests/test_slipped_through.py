@@ -156,3 +156,17 @@ def test_the_raised_mu1_note_prints_digits_that_differ():
     requested, raised = note.split("requested ")[1].split(" (")[0].split(" to ")
     assert requested != raised and float(raised) == 0.203903307 + 3e-15
     assert "by 3e-15" in note
+
+
+@pytest.mark.parametrize("radius", [1e308, 1e301])
+def test_a_zonotope_set_whose_first_prediction_overflows_is_refused_at_reset(radius):
+    """The initial set, not only the data, must stay in floating point: a radius of 1e308 (each entry of the
+    initial estimate in scale) is refused by reset, naming it, before any step (mutation probe of issue 41: without
+    the reset check every later step was refused instead, and the estimator was unusable)."""
+    carts = eqrec.two_mass()
+    est = ZonotopeEstimator(carts, x0_radius=radius)
+    with pytest.raises(eqrec.InputError) as exc:
+        est.reset(np.zeros(carts.n))
+    assert exc.value.field == "xhat0" and "radius" in str(exc.value)
+    x, bound = ZonotopeEstimator(carts, x0_radius=1e100).reset(np.zeros(carts.n)).step(np.zeros(carts.p))
+    assert np.all(np.isfinite(x)) and np.isfinite(bound)

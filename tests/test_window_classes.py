@@ -202,3 +202,17 @@ def test_long_class_labels_and_words_are_shortened_in_messages():
     with pytest.raises(InputError) as exc:
         pattern.extend(3)
     _short(str(exc.value), "1" * T)
+
+
+def test_class_sets_and_classes_print_at_any_horizon():
+    """repr of a long horizon's class set and classes: their counts have more digits than Python prints (raw
+    ValueError before), so they are shown by order of magnitude; a short one prints its counts in full."""
+    from eqrec.design.delay.languages import delay_classes
+
+    long = delay_classes(max_delay=1, horizon=20000)
+    text = repr(long)
+    assert text.startswith(f"ClassSet({len(long)} classes, horizon=20000, words=~1e") and len(text) < 300
+    inner = repr(next(c for c in reversed(long.classes) if c.inner and c.depth > 10000))
+    assert "weight=~1e" in inner and "nodes=~1e" in inner and len(inner) < 300
+    short = delay_classes(max_delay=1, horizon=3)
+    assert f"words={short.words}," in repr(short) and f"weight={short.classes[0].weight}," in repr(short.classes[0])

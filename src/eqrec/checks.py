@@ -266,3 +266,50 @@ def instance(value: Any, kind: "type | tuple[type, ...]", field: str, what: str 
         names = what or " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
         raise InputError(f"expected {names}, got {type(value).__name__}", field=field)
     return value
+
+
+#: The fraction of the available memory above which an allocation is refused (the size model's limit,
+#: :data:`eqrec.design.inputs.MAX_MEMORY_FRACTION`).
+MEMORY_FRACTION = 0.8
+
+
+def available_memory() -> "float | None":
+    """The memory available (Linux ``/proc/meminfo``).
+
+    Returns
+    -------
+    float or None
+        Bytes available, or ``None`` where it cannot be read.
+    """
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return None
+
+
+def check_allocation(nbytes: float, field: str, what: str) -> None:
+    """Refuse, before it starts, an allocation past :data:`MEMORY_FRACTION` of the available memory.
+
+    Parameters
+    ----------
+    nbytes : float
+        The bytes the call would allocate.
+    field : str
+        The input that sets the size (named by the refusal).
+    what : str
+        What would be allocated, in words.
+
+    Raises
+    ------
+    InputError
+        Past the limit (field ``field``); nothing allocated.
+    """
+    avail = available_memory()
+    limit = MEMORY_FRACTION * avail if avail is not None else 2.0**40
+    if nbytes > limit:
+        raise InputError(f"refused: {what} would take {nbytes / 2**30:.3g} GiB of memory, more than "
+                         f"{MEMORY_FRACTION:.0%} of the {limit / MEMORY_FRACTION / 2**30:.3g} GiB available", field=field)

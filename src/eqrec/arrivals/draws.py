@@ -379,6 +379,10 @@ def block_loss_probabilities(horizon: int, loss: float, burst: float | None = No
     return good + bad
 
 
+#: The longest block :func:`loss_coverage` computes the law of (its cost grows as ``T^2``: about 2 s here).
+MAX_COVERAGE_HORIZON = 10_000
+
+
 def loss_coverage(max_delay: int, horizon: int, loss: float, coverage: float = 0.99,
                   burst: float | None = None) -> int:
     """The smallest loss budget ``m`` whose block probability under the trace model reaches ``coverage``.
@@ -416,7 +420,7 @@ def loss_coverage(max_delay: int, horizon: int, loss: float, coverage: float = 0
     Raises
     ------
     InputError
-        A value out of range (the field is named).
+        A value out of range (the field is named; ``horizon`` at most :data:`MAX_COVERAGE_HORIZON`).
 
     Examples
     --------
@@ -425,6 +429,8 @@ def loss_coverage(max_delay: int, horizon: int, loss: float, coverage: float = 0
     (6, 13)
     """
     integer(max_delay, "max_delay")
+    # the block law costs about T^2 (0.15 s at T = 3000): past the limit it would run for hours, at once refused
+    integer(horizon, "horizon", low=1, high=MAX_COVERAGE_HORIZON)
     try:
         c = float(coverage)
     except (TypeError, ValueError):

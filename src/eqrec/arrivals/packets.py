@@ -182,8 +182,45 @@ def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y
         if int(tau) in seen:
             raise InputError(f"a second packet stamped {tau} received at time {now}", field=field)
         seen.add(int(tau))
-        out.append(Stamped(int(tau), finite_array(val, shape, field, f"the measurement of time {tau}", "p")))
+        y_tau = finite_array(val, shape, field, f"the measurement of time {tau}", "p")
+        out.append(Stamped(int(tau), in_scale(y_tau, field, f"the measurement of time {tau}")))
     return out
+
+
+#: The largest magnitude of a measurement, input or initial estimate an estimator takes.  Every estimate is a
+#: sum of products of such data with the plant's matrices and gains: past this, a propagation overflows in
+#: floating point to an infinite or NaN estimate and bound (``1e308`` did), so the data are refused at once
+#: (nothing changes) and the message says why.
+MAX_DATA_MAGNITUDE = 1e150
+
+
+def in_scale(value: np.ndarray, field: str, what: str) -> np.ndarray:
+    """``value`` if its entries are at most :data:`MAX_DATA_MAGNITUDE` in magnitude, else an :class:`InputError`.
+
+    Parameters
+    ----------
+    value : numpy.ndarray
+        Finite numbers.
+    field : str
+        The field named in the error.
+    what : str
+        What the value is, in words.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` itself.
+
+    Raises
+    ------
+    InputError
+        An entry above :data:`MAX_DATA_MAGNITUDE` in magnitude: its propagation would overflow.
+    """
+    if value.size and float(np.max(np.abs(value))) > MAX_DATA_MAGNITUDE:
+        raise InputError(f"{what} has an entry of magnitude {float(np.max(np.abs(value))):.3g}, above "
+                         f"{MAX_DATA_MAGNITUDE:g}: its propagation through the plant would overflow in floating "
+                         "point (an infinite estimate and bound); scale the data (nothing changed)", field=field)
+    return value
 
 
 @dataclass(frozen=True)
@@ -231,11 +268,12 @@ def check_input(u, m: int) -> np.ndarray:
     ------
     InputError
         (field ``u``) a string, the wrong number of entries, a nested array (a column ``(m, 1)`` or
-        ``(1, 1)``: give a flat vector), or NaN/inf.
+        ``(1, 1)``: give a flat vector), NaN/inf, or an entry above :data:`MAX_DATA_MAGNITUDE`.
     """
     if u is None:
         return np.zeros(m)
-    return _flat(u, finite_array(u, (m,), "u", "the input u", "m"), "u", "the input u")
+    return in_scale(_flat(u, finite_array(u, (m,), "u", "the input u", "m"), "u", "the input u"), "u",
+                    "the input u")
 
 
 def _flat(value, checked: np.ndarray, field: str, what: str) -> np.ndarray:
@@ -272,6 +310,8 @@ def check_estimate(xhat0, n: int, field: str = "xhat0") -> np.ndarray:
     ------
     InputError
         A string, the wrong number of entries, a nested array (a column ``(n, 1)``: give a flat
-        vector), or NaN/inf.
+        vector), NaN/inf, or an entry above :data:`MAX_DATA_MAGNITUDE`.
     """
-    return _flat(xhat0, finite_array(xhat0, (n,), field, "the initial estimate", "n"), field, "the initial estimate")
+    checked = _flat(xhat0, finite_array(xhat0, (n,), field, "the initial estimate", "n"), field,
+                    "the initial estimate")
+    return in_scale(checked, field, "the initial estimate")

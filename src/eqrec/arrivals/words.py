@@ -325,6 +325,35 @@ def validate_language(words: Iterable[str], *, fixed_length: bool = True, length
                                               field_name=field_name, source=source))
 
 
+#: The most words a language is listed with (:func:`full_delay_language`, :func:`eqrec.missing_words_at_most`):
+#: about a minute and a gigabyte of strings; larger languages are designed from their classes
+#: (:func:`eqrec.delay_classes`), never listed.
+MAX_LISTED_WORDS = 10**6
+
+
+def check_listed_words(words: int, what: str, field: str) -> None:
+    """Refuse to list a language of more than :data:`MAX_LISTED_WORDS` words, at once (nothing built).
+
+    Parameters
+    ----------
+    words : int
+        The number of words the call would list.
+    what : str
+        The language, in words (for the message).
+    field : str
+        The input named by the refusal.
+
+    Raises
+    ------
+    InputError
+        ``words`` above :data:`MAX_LISTED_WORDS` (field ``field``).
+    """
+    if words > MAX_LISTED_WORDS:
+        raise InputError(f"refused: {what} has {float(words):.3g} words, more than the {MAX_LISTED_WORDS:.0e} "
+                         "that are listed; eqrec.delay_classes(max_delay=..., horizon=..., max_lost=...) gives the "
+                         "classes of such a language without listing a word", field=field)
+
+
 def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     """All ``(τ̄+1)^T`` delay words of length ``T`` with delays ``0..τ̄``, in lexicographic order.
 
@@ -349,7 +378,8 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     Raises
     ------
     InputError
-        If ``T`` is not an integer >= 1 or ``max_delay`` not one in ``0..9`` (the field is named).
+        If ``T`` is not an integer >= 1 or ``max_delay`` not one in ``0..9`` (the field is named), or the
+        language has more than :data:`MAX_LISTED_WORDS` words (field ``T``).
 
     Examples
     --------
@@ -360,6 +390,7 @@ def full_delay_language(T: int, max_delay: int) -> tuple[str, ...]:
     6
     """
     T, max_delay = integer(T, "T", low=1), integer(max_delay, "max_delay", high=MAX_DELAY)
+    check_listed_words((max_delay + 1) ** T, f"{{0..{max_delay}}}^{T}", "T")
     # lexicographic (the first delay varies slowest); itertools, not numpy.indices: numpy arrays have at most 64
     # dimensions, and {0}^80 (one word) raised a raw ValueError
     return tuple(map("".join, itertools.product("0123456789"[:max_delay + 1], repeat=T)))

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from eqrec.arrivals.traces import ArrivalTrace
-from eqrec.bounds.information import (MAX_ESTIMATED_SECONDS, PROGRESS_SECONDS, SEGMENT, TraceLP,
+from eqrec.bounds.information import (MAX_ESTIMATED_SECONDS, MAX_X0_RADIUS, PROGRESS_SECONDS, SEGMENT, TraceLP,
                                       check_x0_radius, delivery_steps, estimate_seconds, solve_range, trace_lp)
 from eqrec.checks import instance
 from eqrec.errors import InfeasibleDesign, InputError
@@ -283,6 +283,8 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     solver_info(solver)
     if solver_options is not None:
         instance(solver_options, dict, "solver_options")
+    if not isinstance(force, (bool, np.bool_)):  # a string such as "no" would read as true
+        raise InputError(f"must be True or False, got {force!r}", field="force")
     lim = system.horizon_limit
     if lim is not None and lim < N:
         raise InputError(f"the time-varying system covers {lim} steps, the trace has {N}", field="trace")
@@ -310,6 +312,12 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     for tau, rows in tlp.meas.items():
         res = ys[tau] - system.C_at(tau) @ xbar[tau]
         rhs.update(zip(rows.tolist(), res.tolist()))
+    if rhs and max(abs(v) for v in rhs.values()) > MAX_X0_RADIUS:
+        # the LP solver reads 1e20 as infinite (a residual of 1e20 made inconsistent data "consistent"), and past
+        # about 1e15 the rows lose the noise bounds' digits: refuse, as information_limit refuses such a radius
+        raise InputError(f"a measurement's residual against the noise-free run from x0_centre exceeds "
+                         f"{MAX_X0_RADIUS:.0e} (the LP would read it as infinite or lose the noise bounds' digits): "
+                         "centre the box near the data, or rescale the plant's units", field="x0_centre")
     try:
         progress = Progress(N, "consistent set: steps") if seconds >= PROGRESS_SECONDS else None
         solved = solve_range(tlp, 0, list(range(N)), delivered_at, None, solver, solver_options,

@@ -98,6 +98,12 @@ class DataClass:
     def __hash__(self) -> int:
         return hash(self._fields())
 
+    def __repr__(self) -> str:
+        """The fields, with a long label and a huge weight shortened (Python refuses to print an ``int`` of more
+        than 4,300 digits, and the weights of long horizons have more)."""
+        return (f"DataClass({self.depth}, {short_label(self.label)}, terminal={self.terminal}, inner={self.inner}, "
+                f"weight={_count(self.weight)}, nodes={_count(self.nodes)})")
+
     @property
     def label(self) -> str:
         """``d:S`` with ``S`` as a 0/1 string over the times ``0..d-1`` (``1``: available)."""
@@ -216,7 +222,14 @@ class _WindowClass(DataClass):
                               self._node_power)
 
 
-@dataclass
+def _count(value: int) -> str:
+    """An integer as text; past 30 digits its order of magnitude (``~1e3010``), from its bit length."""
+    if abs(value) < 10 ** 30:
+        return str(value)
+    return f"~1e{int(value.bit_length() * 0.30102999566398120)}"
+
+
+@dataclass(repr=False)
 class ClassSet:
     """The classes of a language, ordered by depth then by data set.
 
@@ -252,6 +265,11 @@ class ClassSet:
 
     def __iter__(self):
         return iter(self.classes)
+
+    def __repr__(self) -> str:
+        """A summary (the classes themselves can number millions, their counts thousands of digits)."""
+        return (f"ClassSet({len(self.classes)} classes, horizon={self.horizon}, words={_count(self.words)}, "
+                f"sequences={_count(self.sequences)}, nodes={_count(self.nodes)}, source={self.source!r})")
 
     def index(self, depth: int, available) -> int:
         """Position of the class ``(depth, available)``; :class:`InputError` if the language has none.

@@ -710,6 +710,8 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     [0.6, 0.7, 0.6]
     """
     r0, window = _check(system, trace, x0_radius, solver, window, solver_options)
+    if not isinstance(force, (bool, np.bool_)):  # a string such as "no" would read as true
+        raise InputError(f"must be True or False, got {force!r}", field="force")
     N, n = trace.steps, system.n
     out = np.zeros((N, n))
     if N == 0:

@@ -178,7 +178,9 @@ def run(args: argparse.Namespace) -> str:
     setup = CompareSetup(loss=args.loss, max_delay=args.max_delay, horizon=args.horizon, runs=args.runs,
                          periods=args.periods, burst=args.burst, seed=args.seed, coverage=args.coverage,
                          exact_runs=getattr(args, "exact_runs", 4))
-    system, _ = load_system(args.system)
+    system, T_file = load_system(args.system)
+    if T_file is not None and T_file != args.horizon:  # as eqrec design: the file's T is the designs' horizon
+        raise InputError(f"T = {T_file} in the system file but --horizon {args.horizon}", args.system, "T")
     check_size(system, setup, force=getattr(args, "force", False))
     with open(args.system, encoding="utf-8") as fh:
         gaussian = (yaml.safe_load(fh) or {}).get("gaussian")

@@ -94,7 +94,8 @@ def missing_words_at_most(T: int, m: int) -> tuple[ArrivalPattern, ...]:
     Raises
     ------
     InputError
-        ``T`` not an integer >= 1 or ``m`` not one in ``0..T`` (the field is named).
+        ``T`` not an integer >= 1 or ``m`` not one in ``0..T`` (the field is named), or more than
+        :data:`eqrec.arrivals.words.MAX_LISTED_WORDS` words (field ``T``).
 
     Examples
     --------
@@ -102,8 +103,13 @@ def missing_words_at_most(T: int, m: int) -> tuple[ArrivalPattern, ...]:
     >>> [p.label for p in eqrec.missing_words_at_most(4, 1)]
     ['1111', '0111', '1011', '1101', '1110']
     """
+    from math import comb
+
+    from eqrec.arrivals.words import check_listed_words
+
     T = integer(T, "T", low=1)
     m = integer(m, "m", high=T)
+    check_listed_words(sum(comb(T, j) for j in range(m + 1)), f"at most {m} of {T} lost", "T")
     words = []
     for j in range(m + 1):
         for zeros in combinations(range(T), j):
@@ -623,6 +629,13 @@ def _log_comb(n: np.ndarray, j: int) -> np.ndarray:
     return gammaln(n + 1) - gammaln(j + 1) - gammaln(n - j + 1)
 
 
+#: The longest horizon whose classes :func:`estimate_delay_design` lists one by one (:func:`_class_sizes`: an array
+#: entry per class, about ``T`` times the classes of one depth); past it the closed form of :func:`class_shape`
+#: (counted up to :data:`MAX_COUNTED_CLASSES`), which answers at once (at ``T = 10^9`` the list took minutes and
+#: gigabytes before any estimate).
+MAX_LISTED_HORIZON = 100_000
+
+
 def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *, max_lost: int | None = None,
                           mu1_free: bool = False, workers: int = 1) -> WorkEstimate:
     """Estimate the size, time and memory of the class-engine design of ``{0..max_delay}^horizon``.
@@ -654,7 +667,7 @@ def estimate_delay_design(system: AffineSystem, max_delay: int, horizon: int, *,
     WorkEstimate
         The estimate.
     """
-    if max_lost is None:
+    if max_lost is None and int(horizon) <= MAX_LISTED_HORIZON:
         depth, size, terminal = _class_sizes(int(max_delay), int(horizon))
         shape = ClassShape(depth, size, terminal, np.ones(depth.size))
     else:
@@ -803,6 +816,7 @@ def report_size(estimate: "WorkEstimate | SetEstimate", *, force: bool, field: s
     """
     import sys
 
+    check_flags(force=force)  # a string such as "no" would read as true, and run past the limits
     if size_checked():
         return
     reason = estimate.too_large()

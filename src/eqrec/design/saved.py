@@ -91,7 +91,12 @@ def _finite_array(value: Any, shape: tuple, source: str, field: str) -> np.ndarr
 def _pattern(label: Any, kind: str, source: str, T: int, field: str = "gains") -> ArrivalPattern:
     if not isinstance(label, str):
         raise InputError(f"a word is a string, got {short_label(repr(label))}", source, field)
-    pattern = as_pattern(label, kind=kind, field_name=field, source=source)
+    if kind == "delay" and "x" in label:  # a loss-aware word (--max-lost): x is a measurement lost
+        digits = as_pattern(label.replace("x", "0"), kind=kind, field_name=field, source=source)  # checks the rest
+        arrivals = tuple(None if c == "x" else a for c, a in zip(label, digits.arrivals))
+        pattern = ArrivalPattern(arrivals, label)
+    else:
+        pattern = as_pattern(label, kind=kind, field_name=field, source=source)
     if pattern.T != T:
         raise InputError(f"the word {short_label(label)!r} has length {pattern.T}, not the file's horizon T = {T}",
                          source, "T")
@@ -318,6 +323,60 @@ def _recertify(design: Design, data: dict, words: list, file_classes: tuple | No
         certify_design(design, words, rtol=check.rtol)
     except CertificationFailure as exc:
         raise InputError(f"the gains do not certify the file's levels ({exc})", source, "mu2") from None
+    _check_cost(design, check)
+
+
+def _check_cost(design: Design, check: "_Recertification") -> None:
+    """A delay design's stored cost ``J`` (and ``J_certified``) must be the cost of its levels (and certificate)."""
+    from eqrec.arrivals.prefix_tree import PrefixTree
+    from eqrec.design.cost import certified_cost, class_cost, paper_cost
+
+    if design.J is None and design.J_certified is None:
+        return
+    cost = design.cost or "sum"
+    if design.class_gains is not None:
+        classes = design.class_gains.classes
+        earned = class_cost(classes, design.mu1, design.class_levels, cost)
+        earned_certified = class_cost(classes, design.mu1, design.class_certificate.levels, cost)
+    elif design.schedule is not None and design.patterns:
+        tree = PrefixTree(design.patterns)
+        earned = paper_cost(tree, design.mu1, design.levels if cost == "sum" else {"*": design.mu2}, cost)
+        earned_certified = certified_cost(design, tree, cost, design.certificate)
+    else:
+        return
+    for key, stored, value in (("J", design.J, earned), ("J_certified", design.J_certified, earned_certified)):
+        if stored is not None and check.off(float(stored), float(value)):
+            check.refuse(key, f"{key} (the cost of the {'certified ' if key != 'J' else ''}levels)", float(stored),
+                         float(value))
+
+
+def _check_class_set(class_set: ClassSet, data: dict, kind: str, T: int, source: str) -> None:
+    """The file's classes must be those of its language (its words, or its ``max_delay``, ``horizon`` and
+    ``max_lost``): a class dropped, added or edited is refused (a language the gains do not cover)."""
+    from eqrec.design.inputs import language_classes
+    from eqrec.design.delay.languages import delay_classes
+
+    words = data.get("words")
+    if "max_delay" in data and "horizon" in data:  # a --max-delay language (its listed words write a loss as x)
+        try:
+            expected = delay_classes(max_delay=data["max_delay"], horizon=data["horizon"],
+                                     max_lost=data.get("max_lost"), force=True)
+        except InputError as exc:
+            raise InputError(str(exc).split(": ", 1)[-1], source, exc.field) from None
+    elif isinstance(words, list) and words:
+        expected = language_classes([_pattern(w, kind, source, T, "words") for w in words], kind=kind,
+                                    field_name="words")
+    else:  # a class set of Python (Design.save of delay_classes): its language is not named in the file
+        return
+    have = {c.key: c for c in class_set.classes}
+    want = {c.key: c for c in expected.classes}
+    missing = [c for key, c in want.items() if key not in have]
+    extra = [c for key, c in have.items() if key not in want]
+    if missing or extra:
+        what = (f"the class {short_label(missing[0].label)} of the language is missing" if missing
+                else f"the class {short_label(extra[0].label)} is no class of the language")
+        raise InputError(f"{what} ({len(missing)} missing, {len(extra)} extra): the classes do not cover the "
+                         "file's words (an edited file?)", source, "classes")
 
 
 def load_design(path: "str | os.PathLike") -> Design:
@@ -396,6 +455,8 @@ def load_design(path: "str | os.PathLike") -> Design:
     if data.get("classes"):
         class_gains, certified, class_levels = _class_gains(data["classes"], system, T, weights, data, source)
         file_classes = (certified, class_levels)
+        if method in ("prefix", "delay"):  # a time-based design's classes are those of its worst-case word
+            _check_class_set(class_gains.classes, data, kind, T, source)
     schedule = None
     gains = data.get("gains")
     if gains:
@@ -417,8 +478,15 @@ def load_design(path: "str | os.PathLike") -> Design:
             patterns = tuple(_pattern(w, kind, source, T, "event_sequences") for w in sequences)
         else:
             patterns = schedule.designed
-    else:
-        patterns = tuple(_pattern(w, kind, source, T, "words") for w in words) if isinstance(words, list) else ()
+            if isinstance(words, list):
+                listed = {_pattern(w, kind, source, T, "words").label for w in words}
+                if method == "prefix" and listed != {pat.label for pat in patterns}:
+                    raise InputError("must be the words the gains are designed for (the keys of 'gains'), got "
+                                     f"{short_label(str(sorted(listed)))}", source, "words")
+    elif isinstance(words, list) and "max_delay" not in data:
+        patterns = tuple(_pattern(w, kind, source, T, "words") for w in words)
+    else:  # no words, or a --max-delay language's (a loss written x): its classes are checked against it
+        patterns = ()
     # what the gains are certified on: the designed words, and a time-based or augmented design's language
     certified_words = list(patterns)
     if schedule is not None and method in ("time", "augmented") and isinstance(words, list):

@@ -100,10 +100,10 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.arrivals.packets import Packet, as_packets, check_input
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance
 from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
-from eqrec.checks import integer, radii
+from eqrec.checks import check_allocation, integer, radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
 
@@ -157,6 +157,9 @@ class ExactBound:
                 raise InputError("a column or copy run needs the number of steps to allocate (an integer >= 1)",
                                  field="steps")
             integer(steps, "steps", low=1)
+            # a column run holds n x (2 + n + steps (nw + nv)) numbers per column set: refused past the memory
+            K = 2 + system.n + int(steps) * (system.nw + system.nv)
+            check_allocation(8.0 * K * (system.n + 4), "steps", f"an exact-bound run of {int(steps)} steps")
         self.steps = None if steps is None else int(steps)
         self.bound = np.nan
         self._bounds = np.full(system.n, np.nan)
@@ -196,9 +199,7 @@ class ExactBound:
             self.estimator.reset(xhat0, t0)
             self._set = ErrorSet.box(self.x0_radius, n, int(t0), self.order)
         else:
-            x = np.asarray(xhat0, dtype=float)
-            if x.shape != (n,) or not np.all(np.isfinite(x)):
-                raise InputError(f"need {n} finite entries, got {xhat0!r:.60}", field="xhat0")
+            x = check_estimate(xhat0, n)
             K = 2 + n + self.steps * (sysm.nw + sysm.nv)
             one = np.zeros(K)
             one[:2] = 1.0

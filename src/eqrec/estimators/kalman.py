@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.arrivals.packets import as_packets
+from eqrec.arrivals.packets import as_packets, in_scale
 from eqrec.systems.noise import GaussianDesign
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
@@ -173,7 +173,7 @@ class _Filter:
             raise InputError(f"not numeric: {xhat0!r}", field="xhat0") from None
         if x.ndim not in (1, 2) or x.shape[0] != n:
             raise InputError(f"shape {x.shape}, expected ({n},) or ({n}, K)", field="xhat0")
-        x = _finite(x, x.shape, "xhat0")
+        x = in_scale(_finite(x, x.shape, "xhat0"), "xhat0", "the initial estimate")
         K = 1 if x.ndim == 1 else x.shape[1]
         one = np.ones(K) if one is None else _finite(one, (K,), "one")
         if isinstance(t0, (bool, np.bool_)) or not isinstance(t0, (int, np.integer)):
@@ -257,7 +257,7 @@ class _Filter:
         else:
             packets = [(pk.time, pk.y) for pk in packets]
         if u is not None:
-            u = _finite(u, (sysm.m,), "u")
+            u = in_scale(_finite(u, (sysm.m,), "u"), "u", "the input u")
         drive = self._drive(t, u)
         filt, pred, P, commit = self._advance(t, packets, drive)
         commit()

@@ -21,13 +21,15 @@ accepts both (:func:`eqrec.estimators.causal.make_estimator`).
 
 from __future__ import annotations
 
+import time
+
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
 
 from eqrec.arrivals.draws import ArrivalTrace, uniform_words
-from eqrec.checks import floats, instance, integer, positive, seeded
+from eqrec.checks import check_allocation, floats, instance, integer, positive, seeded
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.estimators.causal import Packet, make_estimator
 from eqrec.estimators.protocol import check_estimator
@@ -357,9 +359,13 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     return Trajectory(word=pattern.label, x=run.x, xhat=run.xhat)
 
 
+#: Estimated seconds past which :func:`monte_carlo` refuses unless ``force`` (the size model's 10 min).
+MAX_MONTE_CARLO_SECONDS = 600.0
+
+
 def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", words, mu1: float, runs: int, seed: int,
                 kind: str = "uniform", x0: np.ndarray | None = None, inputs: np.ndarray | None = None,
-                word_choice: str = "random") -> tuple[np.ndarray, list[str]]:
+                word_choice: str = "random", force: bool = False) -> tuple[np.ndarray, list[str]]:
     """Errors of ``runs`` simulations with random patterns (or 0/1 words) of the language.
 
     Each run draws the uncertainty ``δ = (w, v, ξ0)`` in the box of radii
@@ -392,6 +398,10 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     word_choice : {"random", "cycle"}, optional
         Draw each run's pattern at random (default) or cycle through the
         language in order (any value other than ``"random"`` cycles).
+    force : bool, optional
+        Run past the documented size anyway: the runs are refused when their errors would take more than 80 %
+        of the available memory, or when the second run's time times ``runs`` exceeds
+        :data:`MAX_MONTE_CARLO_SECONDS`.
 
     Returns
     -------
@@ -404,7 +414,8 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     ------
     InputError
         Malformed, no or mixed-length words, an unknown ``kind``, ``runs`` not an integer >= 0, a bad
-        ``seed``, ``mu1`` not a positive number, or the errors of :func:`simulate_run` (the field is named).
+        ``seed``, ``mu1`` not a positive number, or the errors of :func:`simulate_run` (the field is named);
+        runs past the documented size without ``force`` (field ``runs``).
 
     Examples
     --------
@@ -428,11 +439,21 @@ def monte_carlo(system: AffineSystem, schedule: "GainSchedule | ClassGains", wor
     lay = UncertaintyLayout(T, system.nw, system.nv, system.n)
     radius = lay.radius(system.eta_w, system.eta_v, mu1)
     x0 = np.zeros(system.n) if x0 is None else finite_array(x0, (system.n,), "x0", "the initial state", "n")
+    if not isinstance(force, (bool, np.bool_)):
+        raise InputError(f"must be True or False, got {force!r}", field="force")
+    check_allocation(8.0 * runs * (T + 1) * system.n, "runs", f"the errors of {runs} runs")
     errs = np.zeros((runs, T + 1, system.n))
     used = []
     for i in range(runs):
+        start = time.perf_counter()
         word = uniform_words(rng, words) if word_choice == "random" else words[i % len(words)]
         delta = sample_uncertainty(lay, radius, rng, kind)
         errs[i] = simulate_run(system, schedule, word, delta, x0, inputs).error
         used.append(word.label)
+        if i == 1 and not force:  # the time model: the second run's time (the first warms caches) times the runs
+            seconds = (time.perf_counter() - start) * runs
+            if seconds > MAX_MONTE_CARLO_SECONDS:
+                raise InputError(f"refused: {runs} runs would take about {seconds:.3g} s (one takes "
+                                 f"{seconds / runs:.2g} s), more than {MAX_MONTE_CARLO_SECONDS:.0f} s; pass "
+                                 "force=True to run them anyway, or fewer runs", field="runs")
     return errs, used

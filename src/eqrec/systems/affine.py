@@ -328,11 +328,12 @@ class AffineSystem:
         Raises
         ------
         InputError
-            If the time-varying data covers fewer than ``T`` steps.
+            If the time-varying data covers fewer than ``T`` steps (the field is the first time-varying matrix).
         """
         lim = self.horizon_limit
         if lim is not None and lim < T:
-            raise InputError(f"time-varying data covers {lim} steps, horizon needs {T}", self.source)
+            name = next(k for k in "ACEV" if getattr(self, k).ndim == 3)  # the time-varying matrices share a length
+            raise InputError(f"time-varying data covers {lim} steps, horizon needs {T}", self.source, name)
 
     def scaled(self, weights: Any) -> "AffineSystem":
         r"""The system in the weighted state ``z = W x``, ``W = diag(weights)``.

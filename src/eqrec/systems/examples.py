@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from eqrec.checks import positive
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
@@ -218,6 +219,12 @@ def acc_system(m: float = ACC_CONSTANTS["m"], k0: float = ACC_CONSTANTS["k0"],
         Named ``"ACC"``, with ``n = 3``, ``p = 2``, ``m = 1``,
         ``E = [0, Ts^2/2, Ts]^T`` and ``V = I``.
 
+    Raises
+    ------
+    InputError
+        ``m``, ``k1`` or ``Ts`` not a positive number, ``k0`` not one ``>= 0``, or malformed noise bounds
+        (the field is named).
+
     Examples
     --------
     >>> import eqrec
@@ -227,6 +234,8 @@ def acc_system(m: float = ACC_CONSTANTS["m"], k0: float = ACC_CONSTANTS["k0"],
     >>> acc.eta_w, acc.eta_v
     (0.1, 0.05)
     """
+    m, k1, Ts = positive(m, "m"), positive(k1, "k1"), positive(Ts, "Ts")
+    k0 = positive(k0, "k0", zero_ok=True)
     kappa = k1 / m
     a = np.exp(-kappa * Ts)
     A = np.array([[a, 0.0, 0.0],
@@ -284,7 +293,8 @@ def two_mass(m1: float = 1.0, m2: float = 1.0, k: float = 1.0, c: float = 0.02, 
     Raises
     ------
     InputError
-        If ``Ts`` is not a positive number, or the noise bounds are malformed.
+        If ``Ts``, ``m1`` or ``m2`` is not a positive number, ``k`` or ``c`` not one ``>= 0``, or the noise
+        bounds are malformed.
 
     Examples
     --------
@@ -296,6 +306,8 @@ def two_mass(m1: float = 1.0, m2: float = 1.0, k: float = 1.0, c: float = 0.02, 
     >>> bool(np.abs(np.linalg.eigvals(carts.A)).max() <= 1.0 + 1e-6)  # a double eigenvalue 1 (rounding splits it)
     True
     """
+    m1, m2 = positive(m1, "m1"), positive(m2, "m2")
+    k, c = positive(k, "k", zero_ok=True), positive(c, "c", zero_ok=True)
     Ac = np.array([[0.0, 1.0, 0.0, 0.0],
                    [-k / m1, -c / m1, k / m1, c / m1],
                    [0.0, 0.0, 0.0, 1.0],

@@ -103,7 +103,7 @@ def system_from_mapping(data: Any, source: str = "<mapping>") -> tuple[AffineSys
             raise InputError(f"must be a positive integer, got {T!r}", source, "T")
     sys = AffineSystem(A=data["A"], C=data["C"], E=data["E"], eta_w=data["eta_w"], eta_v=data["eta_v"],
                        B=data.get("B"), f=data.get("f"), V=data.get("V"),
-                       name=str(data.get("name", Path(source).stem)), source=source)
+                       name=_name(data.get("name", Path(source).stem), source), source=source)
     return sys, T
 
 
@@ -167,3 +167,10 @@ def load_system(path: str | Path) -> tuple[AffineSystem, int | None]:
     except (OSError, UnicodeDecodeError) as exc:  # unreadable, or not a text file
         raise InputError(f"cannot read the file ({exc})", str(path)) from None
     return system_from_mapping(data, str(path))
+
+
+def _name(value: object, source: str) -> str:
+    """The system's ``name``: a string (a list or a number is a malformed file, not a name)."""
+    if not isinstance(value, str):
+        raise InputError(f"must be a string, got {type(value).__name__} {value!r:.60}", source, "name")
+    return value

@@ -232,9 +232,21 @@ def _monolithic_ratios(st: Stacking, classes: ClassSet, term: list[int], solver:
     return gains, block_objectives(model, sol), recomputed, lps, model.block_class, model.block_row
 
 
+def _check_size(system: AffineSystem, classes, n_jobs, scheduler, force: bool) -> None:
+    """The size check of a call from Python: estimated from the class sizes, refused past the limits."""
+    from eqrec.design.inputs import check_flags, estimate_classes, report_size
+
+    check_flags(force=force)
+    if len(classes) < 200:  # seconds at most (the design's SIZE_CHECK_CLASSES)
+        return
+    workers = 1 if scheduler is not None else check_jobs(n_jobs)
+    report_size(estimate_classes(system, classes, mu1_free=False, workers=workers), force=force, field="classes",
+                advice="a shorter horizon or a smaller language")
+
+
 def min_recovery_level(system: "AffineSystem | Stacking", classes: "ClassSet | PrefixTree | Iterable", *,
                        kind: str | None = None, solver: str = "highs", lower_rtol: float = MU1_LOWER_RTOL,
-                       n_jobs=None, scheduler=None, path: str = "auto") -> MinRecoveryLevel:
+                       n_jobs=None, scheduler=None, path: str = "auto", force: bool = False) -> MinRecoveryLevel:
     r"""``μ1,min``: the smallest recovery level any estimator on the language reaches (module docstring).
 
     The smallest ``μ1`` for which some prefix-tree estimator recovers,
@@ -278,6 +290,9 @@ def min_recovery_level(system: "AffineSystem | Stacking", classes: "ClassSet | P
         One block LP, one LP per terminal (class, row), or by size (default;
         :func:`eqrec.design.classes.blocks.choose_path`).
 
+    force : bool, optional
+        Run past the documented size anyway (the estimate is printed either way).
+
     Returns
     -------
     MinRecoveryLevel
@@ -290,7 +305,9 @@ def min_recovery_level(system: "AffineSystem | Stacking", classes: "ClassSet | P
         No ``μ1`` is feasible (some terminal row has ``min_k a(k) >= 1``),
         naming the class and row.
     InputError
-        ``μ1,min = 0`` (no noise reaches the end of the horizon): fix ``μ1``.
+        ``μ1,min = 0`` (no noise reaches the end of the horizon): fix ``μ1``; a class set estimated past the
+        documented size without ``force`` (field ``classes``, nothing solved; the design's size model,
+        :func:`eqrec.design.inputs.report_size`, which errs upward here: it counts every class's LPs).
     SolverFailure
         If the LP has no optimum or its gains do not contract the initial error.
 
@@ -314,6 +331,8 @@ def min_recovery_level(system: "AffineSystem | Stacking", classes: "ClassSet | P
     classes = language_classes(classes, kind=kind, fixed_length=False, field_name="classes")
     check_jobs(n_jobs)
     scheduler = check_scheduler(scheduler)
+    if stacked is None:  # a call from Python (a design hands down its stacked model, already size-checked)
+        _check_size(system, classes, n_jobs, scheduler, force)
     st = Stacking.of(stacked or system, classes.horizon)
     term = [i for i, c in enumerate(classes.classes) if c.terminal]
     if choose_path(path, classes, term, system) == "blocks":

@@ -170,9 +170,10 @@ def check_design_size(system: AffineSystem, classes, *, mu1_free: bool, n_jobs, 
     InputError
         Past the documented size without ``force`` (field ``patterns``; nothing started).
     """
-    from eqrec.design.inputs import estimate_classes, report_size, size_checked
+    from eqrec.design.inputs import check_flags, estimate_classes, report_size, size_checked
     from eqrec.lp.parallel import check_jobs
 
+    check_flags(force=force)
     if size_checked():  # the command line checked this design already (and printed its estimate)
         return
     if len(classes) < SIZE_CHECK_CLASSES:  # small designs: seconds at most, no estimate needed
