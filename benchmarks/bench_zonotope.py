@@ -17,21 +17,24 @@ exact hull of the whole horizon (a direct LP, ``tests/exact_hull_reference.py``)
 worst over the steps checked.  Then ``--exact-scale-n`` (default 30): both estimators on the tank chain of that
 size, process time per step over ``--exact-scale-steps`` steps (no reference: its LP takes minutes there).
 
-Measured 2026-11-29 in one run (issue 45 §3-4; process time, 2 shared cores, 150 steps; hull / exact: filtered at
-the last step and worst, predicted at the last step and worst):
+Measured 2026-11-29 after the zonotope's new defaults (window 30, shared reweighted solves; issue 45 §4), in one
+run (process time, 2 cores shared with the test suite, 150 steps; hull / exact: filtered at the last step and
+worst, predicted at the last step and worst). The zonotope's reported bound is its largest state's, which the
+per-state solves refine; the hull of its other states is looser than with window 20 and a solve per state (two
+carts: filtered last 1.27 before, 1.37 now):
 
 =====================  =========  ==========  =======================  =======================
 plant                  estimator  µs / step   filtered last / worst    predicted last / worst
 =====================  =========  ==========  =======================  =======================
-oscillator n = 2       zonotope   330         1.110 / 1.591            1.113 / 1.627
-oscillator n = 2       exact      7,287       1.0000 / 1.0000          1.0000 / 1.0000
-two carts n = 4        zonotope   429         1.273 / 1.981            1.260 / 1.947
-two carts n = 4        exact      1,587       1.0122 / 1.0288          1.0105 / 1.0283
-tanks n = 4            zonotope   530         1.344 / 1.344            1.273 / 1.273
-tanks n = 4            exact      1,134       1.0009 / 1.0047          1.0008 / 1.0044
-tanks n = 6            zonotope   1,013       1.210 / 1.475            1.179 / 1.377
-tanks n = 6            exact      5,121       1.0001 / 1.0001          1.0001 / 1.0001
-tanks n = 30, p = 5    zonotope   56,920      (60 steps, time only)
+oscillator n = 2       zonotope   467         1.219 / 1.658            1.125 / 1.761
+oscillator n = 2       exact      3,456       1.0000 / 1.0000          1.0000 / 1.0000
+two carts n = 4        zonotope   291         1.370 / 2.162            1.326 / 2.107
+two carts n = 4        exact      819         1.0122 / 1.0288          1.0105 / 1.0283
+tanks n = 4            zonotope   295         1.528 / 1.814            1.347 / 1.347
+tanks n = 4            exact      831         1.0009 / 1.0047          1.0008 / 1.0044
+tanks n = 6            zonotope   591         1.305 / 1.796            1.206 / 1.411
+tanks n = 6            exact      4,613       1.0001 / 1.0001          1.0001 / 1.0001
+tanks n = 30, p = 5    zonotope   56,920      (60 steps, time only; before the zonotope's new defaults)
 tanks n = 30, p = 5    exact      798,379     (60 steps, time only)
 =====================  =========  ==========  =======================  =======================
 
