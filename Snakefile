@@ -20,8 +20,8 @@ from snakemake.utils import min_version
 # here, inherit it. The tests set the same (tests/conftest.py).
 # One BLAS thread per job too: the zonotope window's solves go through LAPACK, whose blocked factorizations may
 # split sums by thread count (a machine with more cores would otherwise differ); the jobs already fill the cores.
-for blas_variable, value in (("OPENBLAS_CORETYPE", "Haswell"), ("OPENBLAS_NUM_THREADS", "1")):
-    os.environ.setdefault(blas_variable, value)
+os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from eqrec.studies.pipeline import configuration, resume
 
@@ -32,7 +32,9 @@ min_version("9.0")
 # and, when none does, the one command that resumes (snakemake --unlock && <this command>). Only in the
 # main process (not in a cluster job's own Snakemake).
 if workflow.is_main_process:
-    resume.explain_lock_errors(logging.getLogger("snakemake.logging"), os.getcwd(), resume.cli_arguments())
+    resume.explain_lock_errors(
+        logging.getLogger("snakemake.logging"), os.getcwd(), resume.cli_arguments()
+    )
 
 
 report: "workflow/report/workflow.rst"

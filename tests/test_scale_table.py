@@ -10,6 +10,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 import pytest
 
 from eqrec.studies.p3.size_run import FIELDS, class_count, measure_size, run_size
@@ -152,3 +154,13 @@ def test_table_reads_old_tree_rows_and_names_the_slow_sizes(tmp_path):
     assert "solve [s]" in timed_md and "peak [MB]" in timed_md and "classes total [s]" in timed_md
     assert "peak_mb" not in Path(out["csv"]).read_text().splitlines()[0]
     assert Path(out["timings_csv"]).read_text().splitlines()[0].startswith("engine,T,tau,")
+
+
+def test_a_worker_reports_its_own_peak_not_its_parents(reactor):
+    """A parent of 400 MB starts a small size: the worker's peak is its own (ru_maxrss survived the fork and exec
+    of a memory-limited worker and reported the parent's size; a long test session's made this size's 200 MB
+    read 1,060 MB)."""
+    ballast = np.ones(50_000_000)  # 400 MB, touched
+    r = run_size(reactor, 3, 1, "simplex", 0.5, time_limit=60, mem_limit_gb=4, engine="classes", wall_margin=60)
+    assert r["status"] == "optimal", r
+    assert r["peak_mb"] < 0.6 * ballast.nbytes / 2**20, r["peak_mb"]

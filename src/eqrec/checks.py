@@ -291,6 +291,30 @@ def available_memory() -> "float | None":
     return None
 
 
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process in MB: ``VmHWM`` of ``/proc/self/status`` on Linux, else ``ru_maxrss``.
+
+    ``ru_maxrss`` survives ``exec``: a worker started by a parent that forks (``subprocess`` with a memory limit
+    set before ``exec``) reports at least the parent's size at the fork (a long test session's 700 MB, say).
+    ``VmHWM`` is the high-water mark of the worker's own address space.
+
+    Returns
+    -------
+    float
+        Megabytes.
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0  # kB
+    except OSError:
+        pass
+    import resource  # not on every platform: only where /proc is not
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def check_allocation(nbytes: float, field: str, what: str) -> None:
     """Refuse, before it starts, an allocation past :data:`MEMORY_FRACTION` of the available memory.
 

@@ -64,6 +64,7 @@ import subprocess
 import sys
 import time
 
+from eqrec.checks import peak_memory_mb
 from eqrec.systems.files import system_from_mapping
 from eqrec.systems.affine import AffineSystem
 
@@ -105,17 +106,6 @@ def _size_fields(engine: str, T: int, tau: int, method: str, builder: str, mu1: 
 def _status(raw: str) -> str:
     low = raw.lower()
     return "time limit" if "time limit" in low else "memory limit" if "memory" in low else raw
-
-
-def peak_memory_mb() -> float:
-    """Peak resident memory of this process in MB (``ru_maxrss``, kB on Linux).
-
-    Returns
-    -------
-    float
-        Megabytes.
-    """
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def class_count(T: int, tau: int) -> int:
