@@ -233,12 +233,10 @@ def dual_bound(row: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndar
     float
         :math:`\sum_j \max(y_j\underline b_j, y_j\overline b_j) + \|c - M^\top y\|_1 + \kappa u\mu`.
     """
-    res = row - y @ M
-    l1 = float(np.abs(res).sum())
-    dual = float(np.maximum(y * lower, y * upper).sum())
-    ay = np.abs(y)
-    mu = mag_row + float(ay @ mag_rows) + l1 + abs(dual) + float(np.abs(row).sum()) + float(ay @ np.abs(M).sum(axis=1))
-    return float(np.nextafter(dual + l1 + kappa * _U * mu, np.inf))
+    # one objective of bounds_from_multipliers (one implementation of the bound and its allowance)
+    return float(bounds_from_multipliers(np.asarray(row, dtype=float)[None], M, lower, upper,
+                                         np.asarray(y, dtype=float)[None], np.array([mag_row], dtype=float),
+                                         mag_rows, kappa)[0])
 
 
 def bounds_from_multipliers(rows: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndarray, y: np.ndarray,

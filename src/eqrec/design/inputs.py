@@ -22,7 +22,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from eqrec.checks import integer
+from eqrec.checks import available_memory as _memory_available, integer
 from eqrec.bounds.data_classes import ClassSet, classes_of_tree
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.arrivals.prefix_tree import PrefixTree
@@ -442,18 +442,6 @@ class WorkEstimate:
             The reason, or ``None`` when it is within the limits.
         """
         return _too_large(self.seconds, self.memory, available_memory)
-
-
-def _available_memory() -> float | None:
-    """Bytes of memory available (Linux ``/proc/meminfo``), or ``None``."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return None
 
 
 def _class_sizes(max_delay: int, horizon: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -878,7 +866,7 @@ def _duration(t: float) -> str:
 
 
 def _too_large(seconds: float, memory: float, available_memory: float | None) -> str | None:
-    mem = _available_memory() if available_memory is None else available_memory
+    mem = _memory_available() if available_memory is None else available_memory
     if mem is not None and memory > MAX_MEMORY_FRACTION * mem:
         return f"it needs about {memory / 2**30:.3g} GiB, more than {MAX_MEMORY_FRACTION:.0%} of the " \
                f"{mem / 2**30:.3g} GiB available"
