@@ -143,7 +143,7 @@ shown.astype(object).where(shown.notna(), "").set_index(["system", "setting", "f
 # One figure per (system, setting): per family, the band of the error between
 # two quantiles over the runs and its median, on one logarithmic scale; the
 # median (dashed) and the largest (dotted) bound; the median information limit
-# (black) and the smallest design's $\mu_1$ (dash-dot). Ticks on the top edge
+# (black) and the smallest design's $\mu_1$ (thick green line). Ticks on the top edge
 # mark the ends of the periods of $T$ steps. The report's caption of each figure,
 # its alt text here, gives its setting, its designs and its numbers.
 
