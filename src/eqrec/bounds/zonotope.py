@@ -256,7 +256,33 @@ def reduce_pca(G: np.ndarray, limit: int, axes: "np.ndarray | None" = None) -> n
 
     As :func:`reduce_girard`, in the orthonormal basis ``U`` of the eigenvectors of :math:`GG^\top` (Kopetzki,
     Schürmann, Althoff, "Methods for order reduction of zonotopes", CDC 2017): the removed generators are
-    replaced by ``U diag(sum_j |U^T g_j|)``, a parallelotope that contains their zonotope.
+    replaced by ``U diag(sum_j |U^T g_j|)``, a parallelotope that contains their zonotope, plus an axis-aligned
+    box that covers the floating point of the change of axes (the computed ``U`` is not exactly orthogonal, the
+    computed coordinates ``U^T g`` are rounded, and so are the products ``U diag(box)``): ``2n`` new generators.
+
+    **Why the result contains the zonotope of** ``G``, **in floating point.**  Write :math:`T = \mathrm{fl}(U^\top
+    G)` for the computed coordinates and, for each boxed generator, :math:`e_j = g_j - U T_j` (exact) for what
+    :math:`U T_j` misses.  Then :math:`\sum_j \varepsilon_j g_j = U \sum_j \varepsilon_j T_j + \sum_j
+    \varepsilon_j e_j` exactly, for any ``U``.  The first term lies in :math:`U\operatorname{diag}(b)[-1,1]^n` with
+    :math:`b_a \ge \sum_j |T_{aj}|` (the sum of the stored coordinates, rounded up), the second in the box of
+    radius :math:`\sum_j |e_j|`.  With :math:`E = I - UU^\top`,
+    :math:`e_j = E g_j + U(U^\top g_j - T_j)` and :math:`|U^\top g_j - T_j| \le \gamma_n |U|^\top |g_j|` for any
+    order of the sums (Higham, *Accuracy and Stability of Numerical Algorithms*, 2nd ed., eq. (3.13)), so
+
+    .. math:: \sum_j |e_j| \le (|E| + \gamma_n |U||U|^\top)\, s, \qquad s = \sum_j |g_j| .
+
+    :math:`|E|` is bounded from the computed :math:`\hat D = \mathrm{fl}(I - \mathrm{fl}(UU^\top))`:
+    :math:`|E| \le (1 + 2u)|\hat D| + \gamma_n |U||U|^\top`.  Finally the stored generators are
+    :math:`P_{ea} = \mathrm{fl}(U_{ea} b_a)`, within :math:`2u|P_{ea}|` of :math:`U_{ea} b_a`, so
+    :math:`U\operatorname{diag}(b)[-1,1]^n \subseteq P[-1,1]^n \oplus` the box of radius :math:`2u|P|\mathbf 1`.
+    The ``n`` axis-aligned generators added have radius
+
+    .. math:: d = \big(|\hat D| + 4(n+1)u\,|U||U|^\top\big)\, s + 2u\,|P|\mathbf 1 ,
+
+    each product and sum of nonnegative terms inflated by :math:`1 + (4n + 8)u` and rounded up (:math:`2\gamma_n
+    \le 4nu` for :math:`nu \le 1/2`).  So any ``axes`` give an outer reduction (a far from orthogonal ``U`` only a
+    looser one); for the computed eigenvectors :math:`|\hat D| \approx nu` and ``d`` is a relative
+    :math:`10^{-14}`-order of the boxed generators' hull.
 
     Parameters
     ----------
@@ -271,7 +297,8 @@ def reduce_pca(G: np.ndarray, limit: int, axes: "np.ndarray | None" = None) -> n
     Returns
     -------
     numpy.ndarray, shape (n, q') or (K, n, q')
-        ``G`` itself when ``q <= limit``, else the kept generators followed by the ``n`` new ones.
+        ``G`` itself when ``q <= limit``, else the ``max(limit - 2n, 0)`` kept generators followed by the ``n`` new
+        ones in the axes and the ``n`` axis-aligned ones of the rounding (``q' = max(limit, 2n)``).
     """
     if G.ndim == 3 or G.shape[1] <= limit:
         return _reduce(G, limit, principal=True, axes=axes) if G.ndim == 3 else G
@@ -295,14 +322,18 @@ def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None
 @numba.njit(cache=True)
 def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
     """The loop of :func:`_reduce` (compiled): per member, the generators' absolute coordinates in the axes, the
-    cost, the boxed ones (the smallest costs; a stable sort, so the lower index first on a tie) and the box."""
+    cost, the boxed ones (the smallest costs; a stable sort, so the lower index first on a tie) and the box; in the
+    axes ``U`` (``principal``), the box of the rounding of the change of axes besides (:func:`reduce_pca`)."""
     K, n, q = G.shape
-    keep = max(limit - n, 0)  # room for the n box generators
+    nnew = 2 * n if principal else n  # the box, and (in the axes U) the box of the change of axes' rounding
+    keep = max(limit - nnew, 0)
     nbox = q - keep
-    slack = nbox + 2 + (2 * n + 2 if principal else 0)
-    out = np.empty((K, n, keep + n))
+    slack = nbox + 2  # the box's sum of nbox nonnegative terms, rounded up (outer_row_sums)
+    grow = 1.0 + (4 * n + 8) * _U  # the rounding of the sums of nonnegative terms of the residual's bound
+    out = np.empty((K, n, keep + nnew))
     absT = np.empty((n, q))
     cost = np.empty(q)
+    s = np.empty(n)
     for k in range(K):
         if principal:
             T = np.dot(np.ascontiguousarray(U[k].T), np.ascontiguousarray(G[k]))  # U^T G, the coordinates in the axes
@@ -314,12 +345,12 @@ def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
                 for j in range(q):
                     absT[a, j] = abs(G[k, a, j])
         for j in range(q):
-            s = 0.0
+            sj = 0.0
             big = 0.0
             for a in range(n):
-                s += absT[a, j]
+                sj += absT[a, j]
                 big = max(big, absT[a, j])
-            cost[j] = s - big
+            cost[j] = sj - big
         order = np.argsort(cost, kind="mergesort")
         boxed = np.zeros(q, dtype=np.bool_)
         for j in range(nbox):
@@ -331,13 +362,38 @@ def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
                     out[k, a, col] = G[k, a, j]
                 col += 1
         for a in range(n):
-            s = 0.0
+            sa = 0.0
             for j in range(q):
                 if boxed[j]:
-                    s += absT[a, j]
-            box = np.nextafter(s * (1.0 + slack * _U), np.inf)
+                    sa += absT[a, j]
+            box = np.nextafter(sa * (1.0 + slack * _U), np.inf)
             for e in range(n):
                 out[k, e, keep + a] = (U[k, e, a] if principal else (1.0 if e == a else 0.0)) * box
+        if principal:  # the box of what the change of axes misses in floating point (reduce_pca's docstring)
+            Uk = np.ascontiguousarray(U[k])
+            UU = np.dot(Uk, np.ascontiguousarray(Uk.T))
+            for e in range(n):  # s: the boxed generators' absolute row sums, rounded up
+                se = 0.0
+                for j in range(q):
+                    if boxed[j]:
+                        se += abs(G[k, e, j])
+                s[e] = np.nextafter(se * (1.0 + slack * _U), np.inf)
+            v = np.zeros(n)  # |U|^T s
+            for e in range(n):
+                for a in range(n):
+                    v[a] += abs(Uk[e, a]) * s[e]
+            for e in range(n):
+                z = 0.0  # (|D| s)_e, D = fl(I - fl(U U^T))
+                w = 0.0  # (|U| |U|^T s)_e
+                p = 0.0  # (|P| 1)_e
+                for f in range(n):
+                    z += abs((1.0 if e == f else 0.0) - UU[e, f]) * s[f]
+                    w += abs(Uk[e, f]) * v[f]
+                    p += abs(out[k, e, keep + f])
+                d = (z + 4.0 * (n + 1) * _U * w) * grow
+                d = np.nextafter(np.nextafter(d, np.inf) + np.nextafter(2.0 * _U * p * grow, np.inf), np.inf)
+                for f in range(n):
+                    out[k, f, keep + n + e] = d if f == e else 0.0
     return out
 
 

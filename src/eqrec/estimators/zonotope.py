@@ -96,7 +96,11 @@ principal axes ``U`` of :math:`GG^\top` (Kopetzki, Schürmann, Althoff, CDC 2017
 Each removed segment :math:`[-g, g]` lies in its box, and a Minkowski sum of supersets is a superset, so the
 reduced zonotope contains the original one: every support function
 :math:`h(d) = d^\top c + \sum_j |d^\top g_j|` can only grow, since
-:math:`\sum_{j\in S} |d^\top g_j| \le \sum_i |d_i| \sum_{j\in S} |g_{ij}|`.  The box sums are rounded outward.
+:math:`\sum_{j\in S} |d^\top g_j| \le \sum_i |d_i| \sum_{j\in S} |g_{ij}|`.  The box sums are rounded outward;
+in the axes ``U``, ``n`` more axis-aligned generators cover what the change of axes misses in floating point (the
+computed ``U`` is not exactly orthogonal, ``U^T g`` and ``U diag(box)`` are rounded), with a bound proved in
+:func:`eqrec.bounds.zonotope.reduce_pca`, so the reduction is outer by itself, whatever the axes; ``order · n``
+generators are kept in all.
 
 Floating point
 --------------
