@@ -137,7 +137,29 @@ def _symmetric_ridge(M: np.ndarray) -> None:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cover - compiled
+def sparse_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """The nonzeros of each ``A[j]`` (``(L, n, n)``) by row: ``ptr`` (``(L, n + 1)``), ``col`` and ``val``
+    (``(L, n · n)``), row ``a`` of ``A[j]`` being ``acol[j, aptr[j, a]:aptr[j, a + 1]]`` and its values (the window's
+    recursions run over them: a plant's ``A`` is often sparse, e.g. a chain)."""
+    L, n = A.shape[0], A.shape[1]
+    aptr = np.zeros((L, n + 1), dtype=np.int64)
+    acol = np.zeros((L, n * n), dtype=np.int64)
+    aval = np.zeros((L, n * n))
+    for j in range(L):
+        z = 0
+        for a in range(n):
+            for e in range(n):
+                f = A[j, a, e]
+                if f != 0.0:
+                    acol[j, z] = e
+                    aval[j, z] = f
+                    z += 1
+            aptr[j, a + 1] = z
+    return aptr, acol, aval
+
+
+@numba.njit(cache=True)
+def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval):  # pragma: no cover - compiled
     r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
 
     With the column weights ``W`` read as variances (prior :math:`S = G_0 W G_0^\top`, process noise
@@ -145,12 +167,14 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cove
     covariance of the measured outputs and :math:`XWH^\top` that of ``x(t+1)`` with them.  Forward in time,
     :math:`\Sigma(s+1) = A\Sigma A^\top + E D E^\top`; the rows of a measured time ``s`` are
     :math:`C\Sigma(s)`, carried to the later times by :math:`A^\top` (``BT``, transposed: ``n × m``).  Fills the lower
-    triangle of ``M`` (``m × m``) and ``BT`` (``n × m``, :math:`XWH^\top`)."""
+    triangle of ``M`` (``m × m``) and ``BT`` (``n × m``, :math:`XWH^\top`).  ``ptr``, ``col``, ``val``: the
+    nonzeros of ``A`` by row (:func:`sparse_rows`)."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     Lnw = L * nw
     Sig = S.copy()
     tmp = np.empty((n, n))
+    tmpT = np.empty((n, n))
     newB = np.empty((n, BT.shape[1]))
     rows = 0
     tt = 0
@@ -165,10 +189,12 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cove
                         for r in range(rows):
                             M[rows + a, r] += f * BT[e, r]
                 for b in range(n):  # the new row C_j Sigma(j), stored as a column of BT
-                    s = 0.0
-                    for e in range(n):
-                        s += C[j, a, e] * Sig[e, b]
-                    BT[b, rows + a] = s
+                    BT[b, rows + a] = 0.0
+                for e in range(n):  # over the nonzeros of C_j (the same sums, in the same order over e)
+                    f = C[j, a, e]
+                    if f != 0.0:
+                        for b in range(n):
+                            BT[b, rows + a] += f * Sig[e, b]
             for a in range(p):
                 for c in range(a + 1):
                     s = 0.0
@@ -179,35 +205,37 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cove
                     M[rows + a, rows + c] = s
             rows += p
             tt += 1
-        # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T
+        # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T (over the nonzeros of A, by row)
         for a in range(n):
             for r in range(rows):
                 newB[a, r] = 0.0
-            for e in range(n):
-                f = A[j, a, e]
-                if f != 0.0:
-                    for r in range(rows):
-                        newB[a, r] += f * BT[e, r]
+            for z in range(aptr[j, a], aptr[j, a + 1]):
+                f = aval[j, z]
+                e = acol[j, z]
+                for r in range(rows):
+                    newB[a, r] += f * BT[e, r]
         for a in range(n):
             for r in range(rows):
                 BT[a, r] = newB[a, r]
-        for a in range(n):  # tmp = (A Sigma)^T = Sigma A^T (Sigma symmetric)
+        for a in range(n):  # tmp = A Sigma
             for b in range(n):
-                tmp[b, a] = 0.0
-        for a in range(n):
-            for e in range(n):
-                f = A[j, a, e]
-                if f != 0.0:
-                    for b in range(n):
-                        tmp[b, a] += f * Sig[e, b]
-        for a in range(n):  # Sigma = A tmp
+                tmp[a, b] = 0.0
+            for z in range(aptr[j, a], aptr[j, a + 1]):
+                f = aval[j, z]
+                e = acol[j, z]
+                for b in range(n):
+                    tmp[a, b] += f * Sig[e, b]
+        for a in range(n):  # tmpT = (A Sigma)^T = Sigma A^T (Sigma symmetric)
+            for b in range(n):
+                tmpT[b, a] = tmp[a, b]
+        for a in range(n):  # Sigma = A tmpT
             for b in range(n):
                 Sig[a, b] = 0.0
-            for e in range(n):
-                f = A[j, a, e]
-                if f != 0.0:
-                    for b in range(n):
-                        Sig[a, b] += f * tmp[e, b]
+            for z in range(aptr[j, a], aptr[j, a + 1]):
+                f = aval[j, z]
+                e = acol[j, z]
+                for b in range(n):
+                    Sig[a, b] += f * tmpT[e, b]
         for q in range(nw):
             w = W[q0 + j * nw + q]
             if w == 0.0:
@@ -220,14 +248,15 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT):  # pragma: no cove
 
 
 @numba.njit(cache=True)
-def _residuals(A, C, E, V, measured, lamT, TT, RTn):  # pragma: no cover - compiled
+def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval):  # pragma: no cover - compiled
     r"""The noise columns of the residuals :math:`X_i - \lambda_i H` of ``k`` states, backwards in time.
 
     :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
     :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`; the residual on :math:`w(s)` is :math:`T(s+1)E(s)`, on :math:`v(s)`
     :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
     on return).  ``lamT`` (``m × k``): the weights of the states, by measured row; ``RTn`` (``Q × k``): the
-    residuals on the noise columns (process noise by time, then the measurement noise of the measured times)."""
+    residuals on the noise columns (process noise by time, then the measurement noise of the measured times).
+    ``ptr``, ``col``, ``val``: the nonzeros of ``A`` by row (:func:`sparse_rows`)."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     k = TT.shape[1]
@@ -247,15 +276,15 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn):  # pragma: no cover - compi
                 if f != 0.0:
                     for i in range(k):
                         RTn[col, i] += f * TT[a, i]
-        for a in range(n):  # T <- T A(j), transposed: TT <- A^T TT
+        for a in range(n):  # T <- T A(j), transposed: TT <- A^T TT (over the nonzeros of A, by row)
             for i in range(k):
                 newT[a, i] = 0.0
         for e in range(n):
-            for a in range(n):
-                f = A[j, e, a]
-                if f != 0.0:
-                    for i in range(k):
-                        newT[a, i] += f * TT[e, i]
+            for z in range(aptr[j, e], aptr[j, e + 1]):
+                f = aval[j, z]
+                a = acol[j, z]
+                for i in range(k):
+                    newT[a, i] += f * TT[e, i]
         for a in range(n):
             for i in range(k):
                 TT[a, i] = newT[a, i]
@@ -337,6 +366,7 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     m = times * p
     Lnw = L * nw
     Qn = Lnw + times * nv
+    aptr, acol, aval = sparse_rows(A)
     # first weights of the noise columns: inverse lengths of the columns of (X, H), by the backward Gramian
     # O(s) = A^T O(s+1) A + C^T C [measured s], O(L) = I: the column of w(s, q) has length^2 E_q^T O(s+1) E_q
     wn = np.zeros(Qn)
@@ -352,23 +382,22 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                     for b in range(n):
                         s += fa * O[a, b] * E[j, b, q]
             wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
-        for a in range(n):  # O <- A^T O A + C^T C
+        for a in range(n):  # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
             for b in range(n):
                 tmp[a, b] = 0.0
-            for e in range(n):
-                f = A[j, e, a]
-                if f != 0.0:
-                    for b in range(n):
-                        tmp[a, b] += f * O[e, b]
-        for a in range(n):
+        for e in range(n):  # tmp = A^T O
+            for z in range(aptr[j, e], aptr[j, e + 1]):
+                f = aval[j, z]
+                a = acol[j, z]
+                for b in range(n):
+                    tmp[a, b] += f * O[e, b]
+        for a in range(n):  # O = tmp A
             for b in range(n):
                 O[a, b] = 0.0
-        for a in range(n):
             for e in range(n):
-                f = tmp[a, e]
-                if f != 0.0:
-                    for b in range(n):
-                        O[a, b] += f * A[j, e, b]
+                t = tmp[a, e]
+                for z in range(aptr[j, e], aptr[j, e + 1]):
+                    O[a, acol[j, z]] += t * aval[j, z]
         if measured[j]:
             tt -= 1
             for c in range(p):
@@ -420,8 +449,10 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                 s = drive[j, a]
                 sm = abs(drive[j, a])
                 for e in range(n):
-                    s += A[j, a, e] * xc[e]
-                    sm += abs(A[j, a, e]) * zm[e]
+                    f = A[j, a, e]
+                    if f != 0.0:
+                        s += f * xc[e]
+                        sm += abs(f) * zm[e]
                 for q in range(nw):
                     sm += abs(E[j, a, q])
                 nx[a] = s
@@ -452,12 +483,12 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                     for q in range(q0):
                         GW[a, q] = Gk[a, q] * W[q]
                 S = np.dot(GW, Gk.T)  # G0 W G0^T
-                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT)
+                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval)
                 _symmetric_ridge(M)
                 lamT[:, :] = np.linalg.solve(M, BT.T)  # the weights of every state, (m, n): one factorization (LAPACK)
             TT = np.eye(n)
-            _residuals(A, C, E, V, measured, lamT, TT, resT)
-            RP = np.dot(TT.T, Gk)  # residual on the prior generators, (n, q0)
+            _residuals(A, C, E, V, measured, lamT, TT, resT, aptr, acol, aval)
+            RP = np.dot(np.ascontiguousarray(TT.T), Gk)  # residual on the prior generators, (n, q0)
             for i in range(n):
                 s = 0.0
                 for q in range(q0):
@@ -532,14 +563,14 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                         for q in range(q0):
                             GW[a, q] = Gk[a, q] * Wi[q]
                     S = np.dot(GW, Gk.T)
-                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT)
+                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT, aptr, acol, aval)
                     _symmetric_ridge(M)
                     for r in range(m):
                         lam1[r, 0] = BT[i, r]
                     lam1[:, :] = np.linalg.solve(M, lam1)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
-                    _residuals(A, C, E, V, measured, lam1, T1, res1)
+                    _residuals(A, C, E, V, measured, lam1, T1, res1, aptr, acol, aval)
                     rp = np.dot(T1.T, Gk)
                     r1 = 0.0
                     big = 0.0

@@ -305,6 +305,34 @@ def reduce_pca(G: np.ndarray, limit: int, axes: "np.ndarray | None" = None) -> n
     return _reduce(G[None], limit, principal=True, axes=None if axes is None else axes[None])[0]
 
 
+def reduce_pca_pair(G: np.ndarray, limit: int, limit2: int,
+                    axes: "np.ndarray | None" = None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`reduce_pca` of a stack to two orders at once, from one change of axes (its products with ``G`` once).
+
+    Parameters
+    ----------
+    G : numpy.ndarray, shape (K, n, q)
+        A stack of ``K`` centred zonotopes.
+    limit, limit2 : int
+        The two largest numbers of generators kept (each ``>= n``).
+    axes : numpy.ndarray, shape (K, n, n), optional
+        As in :func:`reduce_pca`.
+
+    Returns
+    -------
+    reduced, reduced2 : numpy.ndarray, shapes (K, n, q') and (K, n, q'')
+        ``reduce_pca(G, limit, axes)`` and ``reduce_pca(G, limit2, axes)`` (each ``G`` itself when not more than
+        its limit), the same numbers.
+    """
+    K, n, q = G.shape
+    if q <= limit and q <= limit2:
+        return G, G
+    U = principal_axes(G) if axes is None else np.asarray(axes, dtype=float)
+    a, b = _reduce_stack(np.ascontiguousarray(G, dtype=float), int(min(limit, q + 2 * n)), True,
+                         np.ascontiguousarray(U), int(min(limit2, q + 2 * n)))
+    return (G if q <= limit else a), (G if q <= limit2 else b)
+
+
 def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None" = None) -> np.ndarray:
     r""":func:`reduce_girard` (or :func:`reduce_pca`) on each of a stack ``(K, n, q)`` of zonotopes, in one pass
     (the one implementation: a single zonotope is a stack of one).
@@ -316,27 +344,82 @@ def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None
     if q <= limit:
         return G
     U = (principal_axes(G) if axes is None else np.asarray(axes, dtype=float)) if principal else np.zeros((K, n, n))
-    return _reduce_stack(np.ascontiguousarray(G, dtype=float), int(limit), bool(principal), np.ascontiguousarray(U))
+    return _reduce_stack(np.ascontiguousarray(G, dtype=float), int(limit), bool(principal), np.ascontiguousarray(U),
+                         0)[0]
 
 
 @numba.njit(cache=True)
-def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
+def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - compiled
+    """One reduction of :func:`_reduce_stack` into ``out`` (``(n, keep + n)``, or ``(n, keep + 2n)`` in the axes):
+    the generators of ``order[:nbox]`` (of ``G``, ``(n, q)``, coordinates ``absT`` in the axes ``U``) boxed, the
+    others kept in their order; in the axes, the box of the change of axes' rounding (:func:`reduce_pca`)."""
+    n, q = G.shape
+    nnew = 2 * n if principal else n
+    keep = out.shape[1] - nnew
+    slack = nbox + 2  # the box's sum of nbox nonnegative terms, rounded up (outer_row_sums)
+    boxed = np.zeros(q, dtype=np.bool_)
+    for j in range(nbox):
+        boxed[order[j]] = True
+    col = 0
+    for j in range(q):  # the kept generators, in their order
+        if not boxed[j]:
+            for a in range(n):
+                out[a, col] = G[a, j]
+            col += 1
+    for a in range(n):
+        sa = 0.0
+        for j in range(q):
+            if boxed[j]:
+                sa += absT[a, j]
+        box = np.nextafter(sa * (1.0 + slack * _U), np.inf)
+        for e in range(n):
+            out[e, keep + a] = (U[e, a] if principal else (1.0 if e == a else 0.0)) * box
+    if principal:  # the box of what the change of axes misses in floating point (reduce_pca's docstring)
+        grow = 1.0 + (4 * n + 8) * _U  # the rounding of the sums of nonnegative terms of the bound
+        UU = np.dot(U, np.ascontiguousarray(U.T))
+        s = np.empty(n)
+        for e in range(n):  # s: the boxed generators' absolute row sums, rounded up
+            se = 0.0
+            for j in range(q):
+                if boxed[j]:
+                    se += abs(G[e, j])
+            s[e] = np.nextafter(se * (1.0 + slack * _U), np.inf)
+        v = np.zeros(n)  # |U|^T s
+        for e in range(n):
+            for a in range(n):
+                v[a] += abs(U[e, a]) * s[e]
+        for e in range(n):
+            z = 0.0  # (|D| s)_e, D = fl(I - fl(U U^T))
+            w = 0.0  # (|U| |U|^T s)_e
+            p = 0.0  # (|P| 1)_e
+            for f in range(n):
+                z += abs((1.0 if e == f else 0.0) - UU[e, f]) * s[f]
+                w += abs(U[e, f]) * v[f]
+                p += abs(out[e, keep + f])
+            d = (z + 4.0 * (n + 1) * _U * w) * grow
+            d = np.nextafter(np.nextafter(d, np.inf) + np.nextafter(2.0 * _U * p * grow, np.inf), np.inf)
+            for f in range(n):
+                out[f, keep + n + e] = d if f == e else 0.0
+
+
+@numba.njit(cache=True)
+def _reduce_stack(G, limit, principal, U, limit2):  # pragma: no cover - compiled
     """The loop of :func:`_reduce` (compiled): per member, the generators' absolute coordinates in the axes, the
     cost, the boxed ones (the smallest costs; a stable sort, so the lower index first on a tie) and the box; in the
-    axes ``U`` (``principal``), the box of the rounding of the change of axes besides (:func:`reduce_pca`)."""
+    axes ``U`` (``principal``), the box of the rounding of the change of axes besides (:func:`reduce_pca`).  With
+    ``limit2 > 0``, the reduction to ``limit2`` too, from the same coordinates (else an empty second result)."""
     K, n, q = G.shape
     nnew = 2 * n if principal else n  # the box, and (in the axes U) the box of the change of axes' rounding
     keep = max(limit - nnew, 0)
-    nbox = q - keep
-    slack = nbox + 2  # the box's sum of nbox nonnegative terms, rounded up (outer_row_sums)
-    grow = 1.0 + (4 * n + 8) * _U  # the rounding of the sums of nonnegative terms of the residual's bound
+    keep2 = max(limit2 - nnew, 0)
     out = np.empty((K, n, keep + nnew))
+    out2 = np.empty((K, n, keep2 + nnew if limit2 > 0 else 0))
     absT = np.empty((n, q))
     cost = np.empty(q)
-    s = np.empty(n)
     for k in range(K):
+        Uk = np.ascontiguousarray(U[k])
         if principal:
-            T = np.dot(np.ascontiguousarray(U[k].T), np.ascontiguousarray(G[k]))  # U^T G, the coordinates in the axes
+            T = np.dot(np.ascontiguousarray(Uk.T), np.ascontiguousarray(G[k]))  # U^T G, the coordinates in the axes
             for a in range(n):
                 for j in range(q):
                     absT[a, j] = abs(T[a, j])
@@ -352,49 +435,11 @@ def _reduce_stack(G, limit, principal, U):  # pragma: no cover - compiled
                 big = max(big, absT[a, j])
             cost[j] = sj - big
         order = np.argsort(cost, kind="mergesort")
-        boxed = np.zeros(q, dtype=np.bool_)
-        for j in range(nbox):
-            boxed[order[j]] = True
-        col = 0
-        for j in range(q):  # the kept generators, in their order
-            if not boxed[j]:
-                for a in range(n):
-                    out[k, a, col] = G[k, a, j]
-                col += 1
-        for a in range(n):
-            sa = 0.0
-            for j in range(q):
-                if boxed[j]:
-                    sa += absT[a, j]
-            box = np.nextafter(sa * (1.0 + slack * _U), np.inf)
-            for e in range(n):
-                out[k, e, keep + a] = (U[k, e, a] if principal else (1.0 if e == a else 0.0)) * box
-        if principal:  # the box of what the change of axes misses in floating point (reduce_pca's docstring)
-            Uk = np.ascontiguousarray(U[k])
-            UU = np.dot(Uk, np.ascontiguousarray(Uk.T))
-            for e in range(n):  # s: the boxed generators' absolute row sums, rounded up
-                se = 0.0
-                for j in range(q):
-                    if boxed[j]:
-                        se += abs(G[k, e, j])
-                s[e] = np.nextafter(se * (1.0 + slack * _U), np.inf)
-            v = np.zeros(n)  # |U|^T s
-            for e in range(n):
-                for a in range(n):
-                    v[a] += abs(Uk[e, a]) * s[e]
-            for e in range(n):
-                z = 0.0  # (|D| s)_e, D = fl(I - fl(U U^T))
-                w = 0.0  # (|U| |U|^T s)_e
-                p = 0.0  # (|P| 1)_e
-                for f in range(n):
-                    z += abs((1.0 if e == f else 0.0) - UU[e, f]) * s[f]
-                    w += abs(Uk[e, f]) * v[f]
-                    p += abs(out[k, e, keep + f])
-                d = (z + 4.0 * (n + 1) * _U * w) * grow
-                d = np.nextafter(np.nextafter(d, np.inf) + np.nextafter(2.0 * _U * p * grow, np.inf), np.inf)
-                for f in range(n):
-                    out[k, f, keep + n + e] = d if f == e else 0.0
-    return out
+        Gk = G[k]
+        _box_into(Gk, Uk, principal, absT, order, q - keep, out[k])
+        if limit2 > 0:
+            _box_into(Gk, Uk, principal, absT, order, q - keep2, out2[k])
+    return out, out2
 
 
 def reduce_order(G: np.ndarray, order: float | None) -> np.ndarray:

@@ -130,7 +130,8 @@ import numpy as np
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance_compiled
 from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
-from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca
+from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca, \
+    reduce_pca_pair
 from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
@@ -145,8 +146,11 @@ DEFAULT_GAINS = ("reweighted",)
 #: The default length of the exact window (steps; module docstring).
 DEFAULT_WINDOW = 30
 
+#: The default order of the window's prior (generators per state; module docstring, *The window*).
+DEFAULT_WINDOW_ORDER = 10
+
 #: The default number of per-state reweighted solves of the window (module docstring).
-DEFAULT_ITERATIONS = 2
+DEFAULT_ITERATIONS = 1
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
 #: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
@@ -422,7 +426,7 @@ class ZonotopeEstimator:
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: "float | None" = 40,
                  gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca", window: int = DEFAULT_WINDOW,
-                 iterations: int = DEFAULT_ITERATIONS):
+                 iterations: int = DEFAULT_ITERATIONS, window_order: "float | None" = DEFAULT_WINDOW_ORDER):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         n = system.n
@@ -434,6 +438,11 @@ class ZonotopeEstimator:
                              f"steps, at most MAX_WINDOW = {MAX_WINDOW}), got {max_delay!r}; a packet later than "
                              "max_delay is dropped and counted, which stays guaranteed", field="max_delay")
         order = check_order(order)
+        try:
+            window_order = check_order(window_order)
+        except InputError as err:
+            raise InputError(str(err).replace("order is", "window_order is"), field="window_order") from None
+        self.window_order = window_order
         gains = _gain_names(gain)
         if reduction not in _REDUCTIONS:
             raise InputError(f"unknown reduction {reduction!r}; choose one of {list(_REDUCTIONS)}", field="reduction")
@@ -456,6 +465,10 @@ class ZonotopeEstimator:
         self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
         self._no_y = np.zeros(system.p)
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
+        # the window's prior: at most window_order · n generators (and not more than the filters' sets)
+        self._wlimit = None if self.window_order is None else max(2 * n, int(np.floor(self.window_order * n)))
+        if self._limit is not None and self._wlimit is not None:
+            self._wlimit = min(self._wlimit, max(self._limit, 2 * n))
         self._time: int | None = None
         self.dropped_packets = 0
         self.replays = 0
@@ -564,6 +577,8 @@ class ZonotopeEstimator:
         K, sysm = len(self.gain), self.system
         self._c = np.tile(c, (K, 1))  # every filter starts from the same set, at the window's start
         self._G = np.ascontiguousarray(np.tile(G, (K, 1, 1)))
+        P = G if self._wlimit is None or G.shape[1] <= self._wlimit else _REDUCTIONS[self.reduction](G, self._wlimit)
+        self._P = np.ascontiguousarray(np.tile(P, (K, 1, 1)))  # the window's prior (module docstring)
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
         self._R, self._pick = None, np.zeros(n, dtype=int)  # the window's error maps (none yet), its picks
         self._filtered: "StateSet | None" = None  # the filtered set, computed on demand
@@ -604,7 +619,7 @@ class ZonotopeEstimator:
         xhat, beta, extra = self._estimate(intake)
         sets = intake["carried"]
         if not (np.all(np.isfinite(xhat)) and np.all(np.isfinite(beta)) and np.all(np.isfinite(sets["c"]))
-                and np.all(np.isfinite(sets["G"]))):  # refuse data whose propagation overflows (nothing committed)
+                and np.all(np.isfinite(sets["G"])) and np.all(np.isfinite(sets["P"]))):  # refuse data whose propagation overflows (nothing committed)
             raise InputError(f"the data of time {t} overflow in floating point (the estimate or its bound is not "
                              "finite): a measurement or input too large for the plant's scale; the estimator is "
                              "left unchanged", field="y" if intake["packets"] else "u" if np.any(intake["u"])
@@ -645,13 +660,13 @@ class ZonotopeEstimator:
 
     def _carried(self) -> dict:
         """The sets carried at the window's start, by attribute name (without the leading underscore)."""
-        return {"c": self._c, "G": self._G, "axes": self._axes}
+        return {"c": self._c, "G": self._G, "axes": self._axes, "P": self._P}
 
     def _take_in(self, s: int, drive: np.ndarray, y: "np.ndarray | None") -> dict:
         """The carried sets after time ``s`` leaves the window (filter step and reduction; nothing changed)."""
         c, G = self._advance(s, self._c, self._G, drive, y)
-        G, axes = self._reduced(G, (s - self._t0) % PCA_AXES_EVERY == 0)
-        return {"c": c, "G": np.ascontiguousarray(G), "axes": axes}
+        G, axes, P = self._reduced(G, (s - self._t0) % PCA_AXES_EVERY == 0)
+        return {"c": c, "G": np.ascontiguousarray(G), "axes": axes, "P": np.ascontiguousarray(P)}
 
     def _estimate(self, intake: dict) -> tuple[np.ndarray, np.ndarray, dict]:
         """The window's estimate of ``x(t+1)`` and its per-state bound from the proposed state (nothing
@@ -659,7 +674,7 @@ class ZonotopeEstimator:
         first, drive = intake["first"], intake["drive"]
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
-        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["G"],
+        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
                                            SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
                                            self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
@@ -712,15 +727,19 @@ class ZonotopeEstimator:
         has_y = y is not None
         return filter_step(A, C, Ew, Vn, drive, y if has_y else self._no_y, has_y, c, G, self._alpha)
 
-    def _reduced(self, G: np.ndarray, new_axes: bool) -> tuple[np.ndarray, "np.ndarray | None"]:
-        """``G`` reduced to ``order · n`` generators per filter, and the principal axes used (``reduction="pca"``:
-        computed again from ``G`` when ``new_axes`` or none yet, else those last computed; module docstring)."""
-        if self._limit is None or G.shape[2] <= self._limit:
-            return G, self._axes
+    def _reduced(self, G: np.ndarray, new_axes: bool) -> tuple[np.ndarray, "np.ndarray | None", np.ndarray]:
+        """``G`` reduced to ``order · n`` generators per filter, the principal axes used (``reduction="pca"``:
+        computed again from ``G`` when ``new_axes`` or none yet, else those last computed; module docstring), and
+        ``G`` reduced to ``window_order · n``, the window's prior (both from one change of axes)."""
+        lim = G.shape[2] if self._limit is None else self._limit
+        wlim = G.shape[2] if self._wlimit is None else self._wlimit
+        if G.shape[2] <= lim and G.shape[2] <= wlim:
+            return G, self._axes, G
         if self.reduction == "girard":
-            return reduce_girard(G, self._limit), self._axes
+            return reduce_girard(G, lim), self._axes, reduce_girard(G, wlim)
         axes = principal_axes(G) if new_axes or self._axes is None else self._axes
-        return reduce_pca(G, self._limit, axes=axes), axes
+        Gr, P = reduce_pca_pair(G, lim, wlim, axes=axes)
+        return Gr, axes, P
 
     # -- reading ----------------------------------------------------------------------------------------------
     @property
@@ -792,7 +811,7 @@ class ZonotopeEstimator:
             A[-1], E[-1] = np.eye(self.system.n), 0.0
             drive = self._drive.copy()
             drive[-1] = 0.0
-            xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._G,
+            xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._P,
                                                SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
                                                self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
             pick = np.argmin(radii_, axis=0)
@@ -804,7 +823,7 @@ class ZonotopeEstimator:
     def _window_generators(self, R: np.ndarray, pick: np.ndarray, beta: np.ndarray) -> np.ndarray:
         """The zonotope of a window's estimate: per state, the error map of the filter it was taken from, then the
         window's noise, then an axis-aligned pad up to the bound (:attr:`carried_set`)."""
-        n, q0 = self.system.n, self._G.shape[2]
+        n, q0 = self.system.n, self._P.shape[2]
         states = np.arange(n)
         blocks = [np.where((pick == k)[:, None], R[k, :, :q0], 0.0) for k in range(R.shape[0])]
         G = np.concatenate(blocks + [R[pick, states, q0:]], axis=1)
