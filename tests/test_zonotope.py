@@ -218,6 +218,8 @@ def test_atomic_errors():
     (dict(gain=("fradius", "fradius")), "gain"), (dict(gain=("fradius", 3)), "gain"),
     (dict(reduction="none"), "reduction"), (dict(gain="interval"), "gain"), (dict(window=0), "window"),
     (dict(window=2.5), "window"), (dict(iterations=-1), "iterations"), (dict(iterations="2"), "iterations"),
+    (dict(window_generators=0), "window_generators"), (dict(window_generators=2.5), "window_generators"),
+    (dict(window_generators=True), "window_generators"),
 ])
 def test_constructor_checks(kwargs, field):
     with pytest.raises(InputError) as info:
@@ -487,3 +489,45 @@ def test_pca_reduction_rounding_box_is_tiny_for_principal_axes():
     d = np.diag(R[:, -n:])
     assert np.all(d > 0) and np.all(np.count_nonzero(R[:, -n:], axis=0) == 1)
     assert np.all(d <= 1e-13 * np.abs(G).sum(axis=1))
+
+
+def test_reduce_pca_pair_is_two_reductions():
+    """Both results of :func:`eqrec.bounds.zonotope.reduce_pca_pair` are those of :func:`reduce_pca` (the same
+    numbers), and a limit not below the generators gives ``G`` itself."""
+    from eqrec.bounds.zonotope import principal_axes, reduce_pca_pair
+
+    rng = np.random.default_rng(8)
+    G = rng.normal(size=(2, 5, 70)) * rng.exponential(size=70)
+    U = principal_axes(G)
+    a, b = reduce_pca_pair(G, 40, 15, axes=U)
+    assert np.array_equal(a, reduce_pca(G, 40, axes=U)) and np.array_equal(b, reduce_pca(G, 15, axes=U))
+    assert a.shape == (2, 5, 40) and b.shape == (2, 5, 15)
+    a, b = reduce_pca_pair(G, 80, 15, axes=U)
+    assert a is G and np.array_equal(b, reduce_pca(G, 15, axes=U))
+
+
+@pytest.mark.parametrize("reduction", ["pca", "girard"])
+def test_window_prior_reduced_stays_guaranteed_and_none_is_the_filters_set(reduction):
+    """With a small ``window_generators`` the window starts from the filters' set reduced once more: at most that
+    many generators (``>= 2n``), the guarantee holds exactly at random box corners, and the bound stays close to
+    the one from the filters' own set (the reduced set contains the filters', but the window's weights are
+    approximate, so either can be the smaller).  With ``None`` the prior is the filters' set."""
+    system = rotating_plant()
+    N, r0 = 60, 0.5
+    rng = np.random.default_rng(11)
+    trace = lossy_trace(11, N)
+    w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
+    v = system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv))
+    xi0 = r0 * rng.choice([-1.0, 1.0], system.n)
+    bounds = {}
+    for wg in (None, 8):
+        est = ZonotopeEstimator(system, x0_radius=r0, max_delay=2, order=10, reduction=reduction,
+                                window_generators=wg)
+        out, beta = run(system, est, trace, xi0, w, v)
+        assert np.all(np.abs(out.error[1:]) <= beta)
+        if wg is None:
+            assert est._P is est._G
+        else:
+            assert est._P.shape[2] <= max(wg, 2 * system.n) and est._G.shape[2] > est._P.shape[2]
+        bounds[wg] = out.bound
+    assert 0.99 <= np.median(bounds[8] / bounds[None]) <= 1.10  # close: the weights are approximate, either way

@@ -71,6 +71,19 @@ information limit per step, two carts, 30 % loss, delays 0..2, order 40): withou
 own sets, replayed for late packets) median 1.18, with a window of 20 steps 1.12, with the default window of 30
 steps 1.055 (:mod:`eqrec.bounds.window` for the cost; ``benchmarks/bench_zonotope.py`` for the figures).
 
+*The window's prior.*  The window's cost grows with the number of generators of its prior zonotope at
+:math:`s_0` (two products with them per solve, :mod:`eqrec.bounds.window`), ``order · n`` for the filters' sets:
+``n^3 · order``.  The window therefore starts from the filters' set reduced once more, to at most
+``max(window_generators, 2n)`` generators (default :data:`DEFAULT_WINDOW_GENERATORS` = 400: the filters' sets
+themselves up to ``n = 10`` at the default order 40), by the filters' own reduction from the same change of axes
+(:func:`eqrec.bounds.zonotope.reduce_pca_pair`).  The reduced set contains the filters', so the bound stays a
+guarantee; the filters keep ``order · n`` generators, so what the reduction loses is lost once, not once a step.
+Measured on the tank chains of ``benchmarks/bench_zonotope.py --part scale`` (bound relative to the window on the
+filters' set, median over 150 steps): ``n = 20`` (800 generators reduced to 400) +0.4 %, ``n = 30`` (1,200 to 400)
++5.9 % (600 generators: +2.8 %), for a window about 30 % cheaper at ``n = 30``; on the two carts (n = 4, 160
+generators) nothing changes, and there a prior of 40 generators would loosen the bound by 5 %
+(``window_generators=None``: the filters' sets at any ``n``).
+
 Late packets: the window, ``L >= D + 1``
 ----------------------------------------
 A packet stamped ``τ`` arriving at ``t`` with :math:`t - D \le \tau \le t` (``D = max_delay``) is stored in the
@@ -146,11 +159,12 @@ DEFAULT_GAINS = ("reweighted",)
 #: The default length of the exact window (steps; module docstring).
 DEFAULT_WINDOW = 30
 
-#: The default order of the window's prior (generators per state; module docstring, *The window*).
-DEFAULT_WINDOW_ORDER = 10
+#: The default largest number of generators of the window's prior (module docstring, *The window*): the filters'
+#: sets themselves up to n = 10 at the default order 40, reduced beyond.
+DEFAULT_WINDOW_GENERATORS = 400
 
 #: The default number of per-state reweighted solves of the window (module docstring).
-DEFAULT_ITERATIONS = 1
+DEFAULT_ITERATIONS = 2
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
 #: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
@@ -346,6 +360,22 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
     return c1, G1
 
 
+@numba.njit(cache=True)
+def _finite(values):  # pragma: no cover - compiled
+    """Whether every entry of a flat array is finite."""
+    for v in values:
+        if not np.isfinite(v):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _all_finite(xhat, beta, c, G, P):  # pragma: no cover - compiled
+    """Whether every entry of the step's results and sets is finite (one compiled call: the check of every step)."""
+    return (_finite(xhat.ravel()) and _finite(beta.ravel()) and _finite(c.ravel()) and _finite(G.ravel())
+            and _finite(P.ravel()))
+
+
 def _gain_names(gain: Any) -> tuple[str, ...]:
     """The gains asked for, as a tuple of known names (raises naming the field ``gain``)."""
     names = (gain,) if isinstance(gain, str) else tuple(gain) if isinstance(gain, (tuple, list)) else None
@@ -383,6 +413,10 @@ class ZonotopeEstimator:
     window : int, optional
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
+    window_generators : int or None, optional
+        The most generators of the window's prior zonotope (``>= 1``; at least ``2n`` are kept; default
+        :data:`DEFAULT_WINDOW_GENERATORS` = 400); ``None``: the filters' sets themselves (module docstring, *The
+        window's prior*).
     iterations : int, optional
         Reweighted solves of the window per state (``>= 0``; default 2), after the :data:`SHARED_SOLVES` shared
         solves, for the state of the largest bound and, while the largest is not yet solved so, the next (at most
@@ -406,7 +440,8 @@ class ZonotopeEstimator:
         A ``system`` that is not an :class:`AffineSystem`, a negative, non-finite or wrongly sized
         ``x0_radius``, ``max_delay`` not an integer ``0..MAX_WINDOW - 1``, ``order`` not ``None`` nor a number
         ``>= 1``, an unknown ``gain`` or ``reduction``, ``window`` not an integer ``1..``:data:`MAX_WINDOW`,
-        ``iterations`` not an integer ``0..``:data:`MAX_ITERATIONS` (the field is named).
+        ``iterations`` not an integer ``0..``:data:`MAX_ITERATIONS`, ``window_generators`` not ``None`` nor an integer
+        ``>= 1`` (the field is named).
 
     Examples
     --------
@@ -426,7 +461,7 @@ class ZonotopeEstimator:
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: "float | None" = 40,
                  gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca", window: int = DEFAULT_WINDOW,
-                 iterations: int = DEFAULT_ITERATIONS, window_order: "float | None" = DEFAULT_WINDOW_ORDER):
+                 iterations: int = DEFAULT_ITERATIONS, window_generators: "int | None" = DEFAULT_WINDOW_GENERATORS):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         n = system.n
@@ -438,11 +473,10 @@ class ZonotopeEstimator:
                              f"steps, at most MAX_WINDOW = {MAX_WINDOW}), got {max_delay!r}; a packet later than "
                              "max_delay is dropped and counted, which stays guaranteed", field="max_delay")
         order = check_order(order)
-        try:
-            window_order = check_order(window_order)
-        except InputError as err:
-            raise InputError(str(err).replace("order is", "window_order is"), field="window_order") from None
-        self.window_order = window_order
+        if window_generators is not None and (not is_stamp(window_generators) or window_generators < 1):
+            raise InputError(f"window_generators is None or an integer >= 1 (the most generators of the window's "
+                             f"prior), got {window_generators!r}", field="window_generators")
+        self.window_generators = None if window_generators is None else int(window_generators)
         gains = _gain_names(gain)
         if reduction not in _REDUCTIONS:
             raise InputError(f"unknown reduction {reduction!r}; choose one of {list(_REDUCTIONS)}", field="reduction")
@@ -464,11 +498,12 @@ class ZonotopeEstimator:
         self._models: dict[int, tuple] = {}
         self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
         self._no_y = np.zeros(system.p)
+        self._one_pick = np.zeros(n, dtype=np.int64)  # with one filter, every state is taken from it
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
-        # the window's prior: at most window_order · n generators (and not more than the filters' sets)
-        self._wlimit = None if self.window_order is None else max(2 * n, int(np.floor(self.window_order * n)))
-        if self._limit is not None and self._wlimit is not None:
-            self._wlimit = min(self._wlimit, max(self._limit, 2 * n))
+        # the window's prior: at most max(window_generators, 2n) generators (not more than the filters' sets)
+        self._wlimit = None if self.window_generators is None else max(2 * n, self.window_generators)
+        if self._limit is not None and self._wlimit is not None and self._wlimit >= self._limit:
+            self._wlimit = None  # the filters' sets themselves
         self._time: int | None = None
         self.dropped_packets = 0
         self.replays = 0
@@ -618,8 +653,8 @@ class ZonotopeEstimator:
         intake = self._intake(y, u)
         xhat, beta, extra = self._estimate(intake)
         sets = intake["carried"]
-        if not (np.all(np.isfinite(xhat)) and np.all(np.isfinite(beta)) and np.all(np.isfinite(sets["c"]))
-                and np.all(np.isfinite(sets["G"])) and np.all(np.isfinite(sets["P"]))):  # refuse data whose propagation overflows (nothing committed)
+        if not _all_finite(xhat, beta, sets["c"], sets["G"], sets["P"]):  # refuse data whose propagation overflows
+
             raise InputError(f"the data of time {t} overflow in floating point (the estimate or its bound is not "
                              "finite): a measurement or input too large for the plant's scale; the estimator is "
                              "left unchanged", field="y" if intake["packets"] else "u" if np.any(intake["u"])
@@ -677,6 +712,8 @@ class ZonotopeEstimator:
         xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
                                            SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
                                            self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
+        if xs.shape[0] == 1:  # one filter: its window's estimate
+            return xs[0], radii_[0], {"_R": R, "_pick": self._one_pick}
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
         states = np.arange(self.system.n)
         return xs[pick, states], radii_[pick, states], {"_R": R, "_pick": pick}
@@ -730,11 +767,21 @@ class ZonotopeEstimator:
     def _reduced(self, G: np.ndarray, new_axes: bool) -> tuple[np.ndarray, "np.ndarray | None", np.ndarray]:
         """``G`` reduced to ``order · n`` generators per filter, the principal axes used (``reduction="pca"``:
         computed again from ``G`` when ``new_axes`` or none yet, else those last computed; module docstring), and
-        ``G`` reduced to ``window_order · n``, the window's prior (both from one change of axes)."""
-        lim = G.shape[2] if self._limit is None else self._limit
-        wlim = G.shape[2] if self._wlimit is None else self._wlimit
-        if G.shape[2] <= lim and G.shape[2] <= wlim:
+        ``G`` reduced to ``max(window_generators, 2n)`` generators, the window's prior (both from one change of axes;
+        ``G`` itself when the filters' sets are not larger)."""
+        lim, wlim, q = self._limit, self._wlimit, G.shape[2]
+        if wlim is None:  # the window's prior is the filters' set
+            if lim is None or q <= lim:
+                return G, self._axes, G
+            if self.reduction == "girard":
+                Gr = reduce_girard(G, lim)
+                return Gr, self._axes, Gr
+            axes = principal_axes(G) if new_axes or self._axes is None else self._axes
+            Gr = reduce_pca(G, lim, axes=axes)
+            return Gr, axes, Gr
+        if q <= wlim:  # (then wlim < lim: nothing to reduce)
             return G, self._axes, G
+        lim = q if lim is None else lim
         if self.reduction == "girard":
             return reduce_girard(G, lim), self._axes, reduce_girard(G, wlim)
         axes = principal_axes(G) if new_axes or self._axes is None else self._axes
@@ -767,7 +814,7 @@ class ZonotopeEstimator:
 
         Its interval hull is :attr:`state_bounds`.  State ``i`` is the window's estimate from the zonotope of the
         filter it was taken from (module docstring), so the generators are, per filter, the window's error maps
-        on that filter's generators (on the rows of the states taken from it, zero elsewhere; the filters'
+        on the generators of that filter's window prior (module docstring, *The window's prior*; on the rows of the states taken from it, zero elsewhere; the filters'
         zonotopes are different parametrisations of the same state), then the window's noise (shared), then
         the rounding allowance as ``n`` axis-aligned generators.  The set to hand over to another estimator
         (:class:`eqrec.estimators.guaranteed.GuaranteedEstimator`).
