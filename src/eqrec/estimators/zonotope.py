@@ -840,9 +840,11 @@ class ZonotopeEstimator:
         the same packets, with the last step's dynamics replaced by the identity, its drive and process noise by
         zero, so that the window's "next state" is :math:`x(t)` itself, estimated from every packet of times
         :math:`s_0..t` (:func:`eqrec.bounds.window.window_estimate`: per state the best of the filters, its bound
-        the exact worst case of its estimate, rounding included).  Computed on the first request after a step
-        (the cost of one more window) and kept until the next step.  The zonotope: the window's error maps on
-        the filters' generators and the noise, as :attr:`carried_set`.
+        the exact worst case of its estimate, rounding included), with every state solved one by one (not only the
+        largest, as in :meth:`step`: each state's hull is then as tight as the largest's).  Computed on the first
+        request after a step (the cost of one more window and ``n`` states' own solves) and kept until the next
+        step.  The zonotope: the window's error maps on the generators of the window's prior and the noise, as
+        :attr:`carried_set`.
 
         Raises
         ------
@@ -860,7 +862,7 @@ class ZonotopeEstimator:
             drive[-1] = 0.0
             xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._P,
                                                SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                               self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
+                                               self.iterations, 1.0, self.system.n)  # every state solved one by one
             pick = np.argmin(radii_, axis=0)
             states = np.arange(self.system.n)
             xhat, beta = xs[pick, states], radii_[pick, states]
