@@ -21,7 +21,7 @@ Measured 2026-11-29 after the zonotope's new defaults (window 30, shared reweigh
 run (process time, 2 cores shared with the test suite, 150 steps; hull / exact: filtered at the last step and
 worst, predicted at the last step and worst). The zonotope's reported bound is its largest state's, which the
 per-state solves refine; the hull of its other states is looser than with window 20 and a solve per state (two
-carts: filtered last 1.27 before, 1.37 now):
+carts: filtered last 1.27 before, 1.37 now; fixed below, where the filtered set solves every state):
 
 =====================  =========  ==========  =======================  =======================
 plant                  estimator  µs / step   filtered last / worst    predicted last / worst
@@ -73,23 +73,42 @@ and 1.133 with a window of 20; ``tests/test_slipped_through.py`` pins them withi
 the ratios within the run are the figures to read): default (window 30) 500 µs, median 1.055, max 1.165;
 window 20: 422 µs, 1.119 / 1.263; window 40: 439 µs, 1.029 / 1.056; the reference filter 126 µs, 1.230 / 1.568.
 
-The scale part, one run (2026-11-29, CPU µs per step, 3 repeats, same loaded machine):
+The zonotope's filtered set now solves every state one by one (:attr:`eqrec.ZonotopeEstimator.filtered`, on
+request; the step still refines only the largest), measured again (the same command, one run, loaded machine;
+filtered last / worst, predicted last / worst; the predicted columns are the step's and unchanged): oscillator
+1.114 / 1.613, 1.125 / 1.761; two carts 1.213 / 1.918, 1.326 / 2.107; tanks n = 4 1.349 / 1.349, 1.347 / 1.347;
+tanks n = 6 1.190 / 1.482, 1.206 / 1.411 (filtered last before: 1.219, 1.370, 1.528, 1.305).  The exact
+estimator's rows moved in the last digits (its order-4 prior keeps ``n`` fewer generators, for the PCA
+reduction's rounding box, :func:`eqrec.bounds.zonotope.reduce_pca`): tanks n = 4 filtered 1.0011 / 1.0054 (was
+1.0009 / 1.0047), tanks n = 6 1.0002 / 1.0002, two carts 1.0122 / 1.0288 (unchanged), oscillator exact.
 
-====  ===  ===============  ============  =====  ====================
- n     p   zonotope µs      crude µs      ratio  bound/limit med / max
-====  ===  ===============  ============  =====  ====================
- 4     1   278              82            3.4    1.003 / 1.039
- 10    2   1,194            216           5.5    1.014 / 1.021
- 20    4   3,424            782           4.4    (limit not computed)
- 30    5   7,848            1,888         4.2    (limit not computed)
-====  ===  ===============  ============  =====  ====================
+The scale part (2026-11-29, CPU µs per step, 3 repeats, a machine loaded by other jobs: read the ratios within a
+run).  Two runs one after the other, the code of the session's start, then the current code:
 
-Growth exponents: zonotope estimator 1.63, crude filter 1.55.  Before the window's shared solves (the same
-command on the previous version, wall clock, one run): ratios 4.9 / 9.9 / 24 / 32 at n = 4 / 10 / 20 / 30
-(exponent 2.37 against 1.41).  Not reached: the issue's 1 ms at n = 30 and "never slower than the crude filter":
-at n = 30 one shared solve of the window (all states) costs about 1 ms, two products with the 1,200 prior
-generators and the covariance recursion, and a per-state solve about as much; at n = 4 the Python around the
-compiled loops (intake, checks, dispatch of five compiled calls a step) costs more than the crude filter.
+====  ===  ==========================  ==========================  ==============  ====================
+ n     p   zonotope µs before / after  crude µs before / after     ratio b. / a.   bound/limit med / max
+====  ===  ==========================  ==========================  ==============  ====================
+ 4     1   474 / 326                   124 / 106                   3.83 / 3.09     1.003 / 1.039
+ 10    2   1,211 / 726                 206 / 168                   5.89 / 4.33     1.014 / 1.021
+ 20    4   3,448 / 1,813               709 / 615                   4.86 / 2.95     1.045 (separate run)
+ 30    5   8,798 / 3,794               1,789 / 1,541               4.92 / 2.46     (limit not computed)
+====  ===  ==========================  ==========================  ==============  ====================
+
+Growth exponents in n: zonotope 1.42 before, 1.20 after; crude 1.31 and 1.32.  Another pair of runs (the same
+command, minutes apart): after 274 / 825 / 3,137 / 4,734 µs against crude 94 / 216 / 702 / 1,919 (ratios 2.92 /
+3.82 / 4.47 / 2.47); the n = 30 cost alone, alternately with the old code, twice: 6.4 / 6.9 ms before, 4.0 / 3.7
+ms after.  What changed: the window's recursions run over the nonzeros of ``A`` (:mod:`eqrec.bounds.window`; the
+same numbers), the window's prior is capped at 400 generators (n >= 20 here; :mod:`eqrec.estimators.zonotope`),
+one compiled finiteness check per step.  At n = 20 the bound / limit median is 1.045 (the limit computed
+separately, 416 s; 1.040 with ``window_generators=None``); n <= 10 is unchanged (the same prior).
+
+Not reached: the issue's 1 ms at n = 30 and "never slower than the crude filter".  At n = 30 the filters' own
+step and order reduction (order 40: 1,200 generators) take about 0.7 ms on this machine, the window's shared
+solves and the per-state solves of the largest state about 2 ms (each solve: the covariance recursion over 30
+steps and ~95 measured rows, one LAPACK solve, the residual recursion); at n = 4 the Python around the compiled
+calls (packet intake, the window's arrays, five compiled calls) costs about as much as the whole crude filter.
+Lower settings trade tightness (tank chain n = 20, bound relative to the default, median): no per-state solves
++2.6 % (half the cost), a window of 20 steps +3 %, filter order 20 at n = 30 +6.5 %.
 """
 
 from __future__ import annotations

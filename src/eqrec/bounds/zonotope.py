@@ -320,9 +320,10 @@ def reduce_pca_pair(G: np.ndarray, limit: int, limit2: int,
 
     Returns
     -------
-    reduced, reduced2 : numpy.ndarray, shapes (K, n, q') and (K, n, q'')
-        ``reduce_pca(G, limit, axes)`` and ``reduce_pca(G, limit2, axes)`` (each ``G`` itself when not more than
-        its limit), the same numbers.
+    reduced : numpy.ndarray, shape (K, n, q')
+        ``reduce_pca(G, limit, axes)`` (``G`` itself when ``q <= limit``), the same numbers.
+    reduced2 : numpy.ndarray, shape (K, n, q'')
+        ``reduce_pca(G, limit2, axes)`` (``G`` itself when ``q <= limit2``), the same numbers.
     """
     K, n, q = G.shape
     if q <= limit and q <= limit2:

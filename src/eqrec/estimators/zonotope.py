@@ -413,15 +413,15 @@ class ZonotopeEstimator:
     window : int, optional
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
-    window_generators : int or None, optional
-        The most generators of the window's prior zonotope (``>= 1``; at least ``2n`` are kept; default
-        :data:`DEFAULT_WINDOW_GENERATORS` = 400); ``None``: the filters' sets themselves (module docstring, *The
-        window's prior*).
     iterations : int, optional
         Reweighted solves of the window per state (``>= 0``; default 2), after the :data:`SHARED_SOLVES` shared
         solves, for the state of the largest bound and, while the largest is not yet solved so, the next (at most
         :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
         :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
+    window_generators : int or None, optional
+        The most generators of the window's prior zonotope (``>= 1``; at least ``2n`` are kept; default
+        :data:`DEFAULT_WINDOW_GENERATORS` = 400); ``None``: the filters' sets themselves (module docstring, *The
+        window's prior*).
 
     Attributes
     ----------
