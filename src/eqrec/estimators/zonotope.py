@@ -653,7 +653,8 @@ class ZonotopeEstimator:
         intake = self._intake(y, u)
         xhat, beta, extra = self._estimate(intake)
         sets = intake["carried"]
-        if not _all_finite(xhat, beta, sets["c"], sets["G"], sets["P"]):  # refuse data whose propagation overflows
+        P = sets["P"] if sets["P"] is not sets["G"] else sets["c"]  # (the filters' set itself: checked once)
+        if not _all_finite(xhat, beta, sets["c"], sets["G"], P):  # refuse data whose propagation overflows
 
             raise InputError(f"the data of time {t} overflow in floating point (the estimate or its bound is not "
                              "finite): a measurement or input too large for the plant's scale; the estimator is "
