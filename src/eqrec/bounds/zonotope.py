@@ -523,11 +523,23 @@ class ErrorSet:
         else:
             G = generators
             bounds = outer_row_sums(G)
-        self.time += 1
-        self._stored = {s: g for s, g in self._stored.items() if s >= emap.anchor}
-        self._reduced = {s for s in self._reduced if s >= emap.anchor}
-        self._stored[self.time] = G  # reduced when first used as an anchor (:meth:`at`)
+        self.enter(emap.anchor, G)
         return bounds
+
+    def enter(self, anchor: int, generators: "np.ndarray | tuple[np.ndarray, np.ndarray]") -> None:
+        """Move to the next time with its set formed elsewhere (:meth:`advance` without the product and the sums).
+
+        Parameters
+        ----------
+        anchor : int
+            The step's map's anchor (sets older than it are dropped).
+        generators : ndarray or tuple
+            The new set, or its blocks ``(Φ G(s), N)`` (concatenated when first asked for).
+        """
+        self.time += 1
+        self._stored = {s: g for s, g in self._stored.items() if s >= anchor}
+        self._reduced = {s for s in self._reduced if s >= anchor}
+        self._stored[self.time] = generators  # reduced when first used as an anchor (:meth:`at`)
 
     def replace(self, generators: np.ndarray) -> None:
         """Set the current set (a set-membership update made elsewhere, e.g. a fallback estimator's).

@@ -135,9 +135,11 @@ import numpy as np
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
-from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
+from eqrec.bounds.zonotope import (_PARTS_LIMIT, ErrorMap, ErrorSet, _row_sums_of_parts, check_order,
+                                   outer_row_sums)
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
+from eqrec.estimators.error_maps import blas_ready, class_step
 from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
@@ -147,37 +149,64 @@ DEFAULT_ORDER = 40
 
 
 @numba.njit(cache=True)
-def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight):  # pragma: no cover - compiled
+def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
+             use_sm):  # pragma: no cover - compiled
     r"""The reported estimate and bounds of a step in the design (module docstring), in one compiled pass.
 
     Per state, the designed bound :math:`b^{\mathrm d}_i = \min(\mathrm{nextafter}(\beta_i + \rho_i, +\infty),
     \mathrm{level})` (the exact worst case of the designed set plus the rounding allowance, rounded up, and the
     class's level); with ``tight``, the set-membership pair where its bound is smaller.  Elementwise IEEE operations
-    only, the same as NumPy's ``nextafter``, ``minimum``, ``<`` and ``where``: the same numbers.
+    only, the same as NumPy's ``nextafter``, ``minimum``, ``<`` and ``where``: the same numbers.  The reported
+    estimate, the bounds and the choice are written into ``xhat``, ``bounds`` and ``use_sm`` (shape ``(n,)``).
 
     Returns
     -------
-    tuple
-        ``(x̂, bounds, use_sm, max bound)``.
+    float
+        The largest bound (NaN if any is).
     """
     n = row_sums.shape[0]
-    xhat = np.empty(n)
-    bounds = np.empty(n)
-    use_sm = np.zeros(n, dtype=np.bool_)
     top = -np.inf
     for i in range(n):
         d = np.nextafter(row_sums[i] + rho[i], np.inf)
         if d > level:  # np.minimum(d, level): d unless level is smaller
             d = level
-        if tight and sm_bounds[i] < d:
-            use_sm[i] = True
+        use_sm[i] = tight and sm_bounds[i] < d
+        if use_sm[i]:
             xhat[i], bounds[i] = sm_x[i], sm_bounds[i]
         else:
             xhat[i], bounds[i] = x[i], d
         top = max(top, bounds[i]) if not np.isnan(top) else top  # NaN propagates, as in np.max
         if np.isnan(bounds[i]):
             top = np.nan
-    return xhat, bounds, use_sm, top
+    return top
+
+
+@numba.njit(cache=True)
+def _designed_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
+                   output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
+                   data_terms, rounding_map, z, factor, level, state, start_set, noise, sm_bounds, sm_x, tight, out,
+                   use_sm):  # pragma: no cover - compiled
+    r"""A step in the design with ``strict=False`` in one compiled call: the class step
+    (:func:`eqrec.estimators.error_maps.class_step`, its first 32 arguments, writing ``x̄``, the designed ``x̂``
+    and ``ρ`` into ``out[:3]``), its bound ``nextafter(level + max ρ, +inf)``, the designed set's new blocks
+    :math:`(\Phi G(s), N)` with their exact row sums (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`,
+    ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice per state (:func:`_tighter`, writing the reported
+    estimate and bounds into ``out[3:5]`` and the choice into ``use_sm``).  The operations of the uncompiled step
+    in the same order: the same numbers.
+
+    Returns
+    -------
+    tuple
+        ``(Φ G(s), the designed bound, the largest reported bound)``.
+    """
+    top = class_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
+                     output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
+                     data_terms, rounding_map, z, factor, out)
+    bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
+    P = np.dot(state, start_set)
+    row_sums = _row_sums_of_parts(P, noise)
+    top_rep = _tighter(row_sums, out[2], bound, sm_bounds, sm_x, out[1], tight, out[3], out[4], use_sm)
+    return P, bound, top_rep
 
 
 class GuaranteedEstimator:
@@ -520,15 +549,28 @@ class GuaranteedEstimator:
             xhat, _ = self._sm.step(packets, checked_u)
             self._outside = True
             return self._outside_bounds(xhat)
-        self._sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
-        xhat, level = est._advance(opened, entry)  # level: μ1 at the period's end, else the class's level
-        # the exact worst case of the designed estimate's error set, plus the rounding allowance of its arithmetic
-        # (:mod:`eqrec.estimators.intake`); the level carries the allowance already
+        sm = self._sm
+        sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
+        # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
+        # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
+        # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
+        # smaller of two exact bounds, each a function of the arrivals only (module docstring): one compiled call
+        record, args = est._class_step_args(opened, entry)
+        level = est._level_at(opened.t + 1, opened.arrivals)
         state, noise = entry.parts
-        row_sums = self._set.advance(ErrorMap(est.period_start, state, noise))
-        # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
-        xhat, self._bounds, use_sm, self.bound = _tighter(row_sums, est._rho, level, self._sm._beta, self._sm._xhat,
-                                                           xhat, self.tight)
+        start_set = blas_ready(self._set.at(opened.start))
+        out, use_sm = np.empty((5, self.system.n)), np.empty(self.system.n, np.bool_)
+        if start_set.shape[1] + noise.shape[1] <= _PARTS_LIMIT:
+            P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
+                                                  self.tight, out, use_sm)
+            self._set.enter(opened.start, (P, noise))
+        else:  # rows too long for the compiled sums: the same steps, the sums by NumPy
+            bound = est._plus_rounding(level, class_step(*args, out[:3]))
+            row_sums = self._set.advance(ErrorMap(opened.start, state, noise))
+            self.bound = _tighter(row_sums, out[2], bound, sm._beta, sm._xhat, out[1], self.tight, out[3], out[4],
+                                  use_sm)
+        xbar, designed, rho, xhat, self._bounds = out
+        est._finish(opened, record, xbar, designed, rho, bound)
         self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
         return xhat.copy(), self.bound
