@@ -313,6 +313,8 @@ class ClassEstimator(StampedEstimator):
         self._terms = (system.n + system.nw + system.m + 3, 1.0 + (2 * system.n + 8) * UNIT_ROUNDOFF)
         self._no_packets = (np.zeros(0, dtype=np.int64), np.zeros((0, system.n)), np.zeros((0, system.p)))
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
+        if self.bound_of is not None:  # the levels looked up, shared by the estimators of these gains and rule
+            self._levels = self._steps().levels(self.bound_of)
 
     def _on_reset(self) -> None:
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)

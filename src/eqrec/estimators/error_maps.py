@@ -257,6 +257,7 @@ class ClassSteps:
         self._entries: dict = {}
         self._maps: "ClassErrorMaps | None" = None
         self._rounding: "RoundingMaps | None" = None
+        self._levels: dict = {}
 
     @classmethod
     def of(cls, system: AffineSystem, gains: ClassGains) -> "ClassSteps":
@@ -289,6 +290,31 @@ class ClassSteps:
         if self._rounding is None:
             self._rounding = RoundingMaps.of(self.system, self.gains)
         return self._rounding
+
+    def levels(self, rule) -> dict:
+        """The levels looked up with ``rule`` (observed prefix -> level), kept here for every estimator of these
+        gains whose rule is equal (:class:`eqrec.design.result.ClassLevels` of one design are), so that a new
+        estimator of a design does not look them up again (:meth:`eqrec.estimators.intake.StampedEstimator._level`).
+
+        Parameters
+        ----------
+        rule : callable
+            The estimator's ``bound_of``.
+
+        Returns
+        -------
+        dict
+            The shared levels of ``rule`` (a new dict if ``rule`` cannot be hashed).
+        """
+        try:
+            kept = self._levels.get(rule)
+            if kept is None:
+                if len(self._levels) >= 8:  # a bounded number of rules per design
+                    self._levels.clear()
+                kept = self._levels[rule] = {}
+        except TypeError:
+            return {}
+        return kept
 
     def get(self, depth: int, available: tuple[int, ...]) -> "ClassStep | None":
         """The class ``(depth, available)`` (``available`` increasing), or ``None`` if the design has none.

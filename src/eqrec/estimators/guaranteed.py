@@ -536,8 +536,9 @@ class GuaranteedEstimator:
         T = self.gains.horizon
         if self._outside:
             now = self._sm.time
-            if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._sm.carried_set[1]) <= self.mu1):
-                est = self._return_to_design(now, packets, u)  # checked first: nothing changes if it raises
+            carried = self._sm.carried_set if (now - self._t0) % T == 0 else None
+            if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
+                est = self._return_to_design(now, packets, u, carried)  # checked first: nothing changes if it raises
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
@@ -585,9 +586,10 @@ class GuaranteedEstimator:
         self.bound = float(self._bounds.max())
         return xhat, self.bound
 
-    def _return_to_design(self, now: int, packets, u) -> ClassEstimator:
-        """The designed gains again from the set-membership centre (its set lies in the ``μ1`` box)."""
-        centre, generators = self._sm.carried_set
+    def _return_to_design(self, now: int, packets, u, carried: tuple[np.ndarray, np.ndarray]) -> ClassEstimator:
+        """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
+        in the ``μ1`` box)."""
+        centre, generators = carried
         # a spare class estimator, made once and reset at each return (making one checks every class gain)
         est = self._spare
         if est is None:
