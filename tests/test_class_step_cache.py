@@ -195,3 +195,42 @@ def test_row_sums_of_the_blocks_are_numpys_row_sums_of_the_concatenation():
             assert np.array_equal(outer_row_sums_of_parts(P, N), ref), (q1, q2, n)
             assert np.array_equal(outer_row_sums_of_parts(np.asfortranarray(P), N[:, ::-1]),
                                   outer_row_sums(np.concatenate([P, N[:, ::-1]], axis=1))), (q1, q2, n)
+
+
+def test_compiled_products_are_numpys_for_every_layout():
+    """:func:`matrix_vector` on :func:`blas_ready` arrays gives NumPy's ``M @ x`` bit for bit: C, Fortran and strided
+    matrices (the column block Φ of a class map, a plant's ``B`` column), one row, no column."""
+    from eqrec.estimators.error_maps import blas_ready, matrix_vector
+
+    rng = np.random.default_rng(1)
+    for trial in range(300):
+        n, k = int(rng.integers(1, 12)), int(rng.integers(0, 80))
+        big = rng.normal(size=(n, 2 * k + 3)) * 10.0 ** rng.integers(-6, 6, size=(n, 2 * k + 3))
+        x = rng.normal(size=k)
+        for M in (big[:, :k].copy(), np.asfortranarray(big[:, :k]), big[:, k + 3:], big.T[:k].T, big[:, 1:k + 1]):
+            ready = blas_ready(M)
+            assert ready.flags.c_contiguous or ready.flags.f_contiguous
+            assert _same(matrix_vector(ready, x), M @ x), (trial, n, k, M.strides)
+
+
+def test_the_long_row_path_gives_the_same_numbers(design, monkeypatch):
+    """Rows past the compiled sums' limit take the NumPy sums (``ErrorSet.advance``): the same numbers."""
+    import eqrec.estimators.guaranteed as guaranteed
+
+    system, d = design
+    rng = np.random.default_rng(5)
+    N = 40
+    trace = with_uniform_delays(rng, bernoulli_trace(rng, N, 0.3), 2)
+    w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
+    v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
+    xi0 = rng.choice([-1.0, 1.0], system.n) * d.mu1
+    rows = []
+    for limit in (guaranteed._PARTS_LIMIT, 0):
+        monkeypatch.setattr(guaranteed, "_PARTS_LIMIT", limit)
+        est = d.estimator(strict=False)
+        got = []
+        closed_loop(system, est, trace, np.ones(system.n), xi0, w, v,
+                    after_step=lambda k: got.append((est.x, est.bound, est.state_bounds, est.rounding_vector)))
+        rows.append(got)
+    for a, b in zip(*rows):
+        assert _same(a[0], b[0]) and a[1] == b[1] and _same(a[2], b[2]) and _same(a[3], b[3])

@@ -141,6 +141,7 @@ from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.error_maps import blas_ready, class_step
 from eqrec.estimators.intake import BoundRule
+from eqrec.estimators.protocol import StateSet
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
 
@@ -411,6 +412,65 @@ class GuaranteedEstimator:
             return np.full(self.system.n, self.bound)
         self._running()
         return self._bounds.copy()
+
+    @property
+    def predicted(self) -> StateSet:
+        r"""The set of ``x(t+1)`` the estimator reports (:class:`~eqrec.estimators.protocol.StateSet`, the protocol's
+        sets): centre :attr:`x`, per-state bounds :attr:`state_bounds` (rounded outward), and a zonotope.
+
+        * ``strict=False``, in the design: the error set of the *reported* estimate, row by row as
+          :meth:`linear_error_model` gives it (with ``tight=True`` the designed set's row for a state reported from
+          the designed estimate, the set-membership carried set's row for a state reported from it; the designed
+          set alone with ``tight=False``; right after :meth:`reset` the ``μ1`` box, right after a return to the
+          design the set-membership set it starts from), each row padded on the diagonal up to its reported bound
+          (the pad covers the rounding allowance :attr:`rounding_vector`); a row whose exact worst case lies above
+          the designed level (the level is then the bound, a guarantee of its own) is replaced by the box of that
+          level.  So the zonotope contains ``x(t+1)`` and its interval hull is the reported bounds (up to the
+          rounding of its row sums).
+        * ``strict=False``, out of the design: the set-membership estimator's
+          (:attr:`eqrec.estimators.zonotope.ZonotopeEstimator.predicted`), whose estimate is the one reported.
+        * ``strict=True``: the box of the design's level, the one guarantee it carries (generators ``bound · I``).
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`.
+        """
+        est = self._running()
+        n = self.system.n
+        if self.strict:
+            return StateSet.around(self.time, est.xhat, np.full(n, self.bound), self.bound * np.eye(n))
+        if self._outside:
+            return self._sm.predicted
+        G = self.linear_error_model() if self._use_sm is not None else self._set.current
+        bounds = self._bounds
+        sums = np.abs(G).sum(axis=1)  # the pad as the set-membership estimator's (ZonotopeEstimator.carried_set)
+        over = sums > bounds  # the level is below the designed set's worst case: the level's box for that state
+        if self._use_sm is not None:  # a set-membership row is its carried set's, padded to its own bound already
+            over &= ~self._use_sm
+        G = np.where(over[:, None], 0.0, G)
+        pad = np.where(over, bounds, np.nextafter(np.maximum(bounds - sums, 0.0), np.inf))
+        return StateSet.around(self.time, self._xhat, bounds, np.concatenate([G, np.diag(pad)], axis=1))
+
+    @property
+    def filtered(self) -> StateSet:
+        """The set of ``x(t)`` given the data received up to ``t`` (:class:`~eqrec.estimators.protocol.StateSet`).
+
+        With ``strict=False``: the set-membership estimator's filtered set
+        (:attr:`eqrec.estimators.zonotope.ZonotopeEstimator.filtered`), in and out of the design: it runs on every
+        packet, and the designed gains give a prediction of ``x(t+1)``, not an estimate of ``x(t)``.
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`, right after it (no data yet), or with ``strict=True`` (the design's gains carry
+            no set of ``x(t)``: ``design.estimator(strict=False)`` does).
+        """
+        self._running()
+        if self.strict:
+            raise InputError("strict=True carries no set of x(t) given the data (only the design's level of the "
+                             "prediction): design.estimator(strict=False) gives the filtered set", field="filtered")
+        return self._sm.filtered
 
     @property
     def error_box(self) -> np.ndarray:
