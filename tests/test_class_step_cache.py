@@ -234,3 +234,17 @@ def test_the_long_row_path_gives_the_same_numbers(design, monkeypatch):
         rows.append(got)
     for a, b in zip(*rows):
         assert _same(a[0], b[0]) and a[1] == b[1] and _same(a[2], b[2]) and _same(a[3], b[3])
+
+
+def test_the_estimators_of_a_design_share_the_levels_they_look_up(design):
+    """Two rules of one design are equal (the certificate gives its levels as a new array each time), so a new
+    estimator of the design finds the levels its predecessors looked up, even after they are gone."""
+    system, d = design
+    a = d.estimator(strict=False).reset(np.zeros(system.n))
+    assert a.bound_of == d.estimator().bound_of and hash(a.bound_of) == hash(d.estimator().bound_of)
+    a.step(np.zeros(system.p))
+    kept = dict(a._est._levels)
+    assert kept
+    del a
+    b = d.estimator(strict=False).reset(np.zeros(system.n))
+    assert all(b._est._levels.get(key) == level for key, level in kept.items())

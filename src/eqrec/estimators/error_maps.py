@@ -384,7 +384,7 @@ def matrix_vector(M, x):  # pragma: no cover - compiled
         return np.zeros(n)
     if n == 1:
         out = np.empty(1)
-        out[0] = np.dot(M[0], x)
+        out[0] = np.dot(np.ascontiguousarray(M[0]), x)  # a row of a Fortran matrix: typed non-contiguous
         return out
     return np.dot(M, x)
 
