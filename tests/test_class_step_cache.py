@@ -225,8 +225,8 @@ def test_the_long_row_path_gives_the_same_numbers(design, monkeypatch):
     v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
     xi0 = rng.choice([-1.0, 1.0], system.n) * d.mu1
     rows = []
-    for limit in (guaranteed._PARTS_LIMIT, 0):
-        monkeypatch.setattr(guaranteed, "_PARTS_LIMIT", limit)
+    for limit in (guaranteed.PARTS_LIMIT, 0):
+        monkeypatch.setattr(guaranteed, "PARTS_LIMIT", limit)
         est = d.estimator(strict=False)
         got = []
         closed_loop(system, est, trace, np.ones(system.n), xi0, w, v,

@@ -189,6 +189,14 @@ def _row_sums_of_parts(P, N):  # pragma: no cover - compiled
     return out
 
 
+#: The compiled row sums of :func:`outer_row_sums_of_parts`, for compiled callers (an estimator's compiled step),
+#: on rows of at most :data:`PARTS_LIMIT` entries.
+row_sums_of_parts_compiled = _row_sums_of_parts
+
+#: Longest row the compiled sums take (:func:`outer_row_sums_of_parts`).
+PARTS_LIMIT = _PARTS_LIMIT
+
+
 def outer_row_sums_of_parts(P: np.ndarray, N: np.ndarray) -> np.ndarray:
     """``outer_row_sums(np.concatenate([P, N], axis=1))``, the same numbers, without the concatenation.
 

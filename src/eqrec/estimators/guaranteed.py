@@ -135,8 +135,8 @@ import numpy as np
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
-from eqrec.bounds.zonotope import (_PARTS_LIMIT, ErrorMap, ErrorSet, _row_sums_of_parts, check_order,
-                                   outer_row_sums)
+from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order, outer_row_sums,
+                                   row_sums_of_parts_compiled)
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.error_maps import blas_ready, class_step
@@ -205,7 +205,7 @@ def _designed_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, tau
                      data_terms, rounding_map, z, factor, out)
     bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
     P = np.dot(state, start_set)
-    row_sums = _row_sums_of_parts(P, noise)
+    row_sums = row_sums_of_parts_compiled(P, noise)
     top_rep = _tighter(row_sums, out[2], bound, sm_bounds, sm_x, out[1], tight, out[3], out[4], use_sm)
     return P, bound, top_rep
 
@@ -621,7 +621,7 @@ class GuaranteedEstimator:
         state, noise = entry.parts
         start_set = blas_ready(self._set.at(opened.start))
         out, use_sm = np.empty((5, self.system.n)), np.empty(self.system.n, np.bool_)
-        if start_set.shape[1] + noise.shape[1] <= _PARTS_LIMIT:
+        if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
             P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
                                                   self.tight, out, use_sm)
             self._set.enter(opened.start, (P, noise))
