@@ -105,24 +105,30 @@ packets and the input are checked once).  What the designed side needs that
 depends on the arrivals alone is kept per class ``(d, S)`` of the design,
 a finite set (:class:`eqrec.estimators.error_maps.ClassSteps`): the gain, its
 absolute values, the rounding allowance's map, the error map's parts, and the
-level of each observed prefix.  What is left per step is the class estimate
-(two products), the rounding allowance of this step's own numbers (it
-depends on the magnitudes of the state and the residuals, so it cannot be
-kept), one product :math:`\Phi G(s)` and the row sums of
-:math:`[\Phi G(s), N]` (the set at the period's start depends on the earlier
-periods), and the choice per state, compiled.  Every number is the same as
-when each of them was computed afresh (``tests/test_class_step_cache.py``,
-bit for bit).  Measured side by side in one run (``python
-benchmarks/bench_tight.py --part cost``, CPU µs per step on a shared machine,
-the ratios are the figures to read; two runs, 0/20/40 % loss): in the
-design ``strict=False`` costs 1.4–1.8× the set-membership estimator alone on
-the two carts (whose set-membership step is cheap, about 200–300 µs),
-1.1–1.4× on the cart-pole and 1.0–1.1× on the ``n = 10`` chain (a step of
-some milliseconds); the designed side itself is about 100–130 µs, the cost
-of ``strict=True`` (about 70 µs) plus the exact bound and the choice.  Out of
-the design it is the set-membership step.  ``tight=False`` costs the same as
-``tight=True`` (the set-membership estimator runs for the fallback either
-way).
+levels looked up (shared by every estimator of the design).  The rest of a
+step in the design is one compiled call (``_designed_step``): the class
+estimate, the rounding allowance of this step's own numbers (it depends on
+the magnitudes of the state and the residuals, so it cannot be kept), the
+product :math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the
+set at the period's start depends on the earlier periods) and the choice per
+state.  Its products go through BLAS as NumPy's ``@`` does and its sums run
+in NumPy's order, so every number is the one of the uncompiled step
+(``tests/test_class_step_cache.py``, bit for bit).  Measured side by side
+(``python benchmarks/bench_tight.py --part cost``: the estimators in lockstep
+on the same arrivals, CPU µs per step on a loaded shared machine, so read the
+ratios; 0/20/40 % loss; two runs): in the design ``strict=False`` costs
+1.25–1.38× the set-membership estimator alone on the two carts (a
+set-membership step of 300–450 µs there), 1.17–1.28× on the cart-pole and
+1.03–1.10× on the ``n = 10`` chain (a step of some milliseconds); the
+previous, uncompiled step measured 1.38–1.52×, 1.19–1.34× and 1.06–1.13× in
+the same way.  The designed side is about 90–125 µs at ``n = 4`` on that
+machine, and ``strict=True`` costs about 30 % less than before (56–61 µs
+against 74–83 µs per step, measured back to back).
+What is left is Python around the compiled call (the class form's intake,
+the class lookup, the period's record) and the Girard reduction of the
+designed set at each period start.  Out of the design a step is the
+set-membership step.  ``tight=False`` costs the same as ``tight=True`` (the
+set-membership estimator runs for the fallback either way).
 """
 
 from __future__ import annotations
