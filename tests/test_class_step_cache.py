@@ -248,3 +248,31 @@ def test_the_estimators_of_a_design_share_the_levels_they_look_up(design):
     del a
     b = d.estimator(strict=False).reset(np.zeros(system.n))
     assert all(b._est._levels.get(key) == level for key, level in kept.items())
+
+
+def test_the_compiled_step_on_a_time_varying_plant_is_the_uncached_one():
+    """A, B, C read per period time, a drift f and inputs: the compiled class step gives the numbers of the step
+    computed afresh, bit for bit."""
+    import eqrec
+    from eqrec.systems.affine import AffineSystem
+
+    acc = eqrec.acc_system()
+    A = np.stack([acc.A * (1 + 0.02 * k) for k in range(5)])
+    C = np.stack([acc.C * (1 + 0.05 * k) for k in range(5)])
+    plant = AffineSystem(A=A, B=np.stack([acc.B] * 5), C=C, E=acc.E, eta_w=acc.eta_w, eta_v=acc.eta_v,
+                         f=acc.f + 0.1)
+    words = ["10111", "11011", "11101"]
+    d = eqrec.design_prefix(plant, words, 1.0)
+    rule = d.estimator().bound_of
+    rng = np.random.default_rng(0)
+    x0 = rng.normal(size=plant.n)
+    fast = ClassEstimator(plant, d.class_gains, x0, periodic=True, bound_of=rule, mu1=d.mu1)
+    slow = UncachedClassEstimator(plant, d.class_gains, x0, periodic=True, bound_of=rule, mu1=d.mu1)
+    k = 0
+    for word in words * 4:
+        for ch in word:
+            y = rng.normal(size=plant.p) if ch == "1" else None
+            u = rng.normal(size=plant.m) if k % 2 else None
+            a, b = fast.step(y, u), slow.step(y, u)
+            assert _same(a[0], b[0]) and a[1] == b[1] and _same(fast.rounding_vector, slow.rounding_vector), k
+            k += 1
