@@ -26,7 +26,8 @@ Printed, per plant:
   alone on each trace, and the ratios ``strict=False`` / zonotope on the same trace (issue 40's target: <= 1.2);
 * the cost table (issue 40 §3, ``--part cost``): per plant and loss rate (Bernoulli, delays ``0..2`` uniform), the
   CPU µs of ``step()`` alone (the simulation outside the clock), per step the least of ``--repeats`` runs after one
-  warm-up run, each estimator in turn on the same arrivals: ``strict=True`` (its steps in the language; a refused
+  warm-up run, the estimators in lockstep on the same arrivals (at each time each takes its step in turn, the order
+  rotated from run to run, so that both sides of a ratio meet the same load of a shared machine): ``strict=True`` (its steps in the language; a refused
   step resets it there, untimed), ``strict=False`` on its steps in the design and on those out of it, and the
   zonotope estimator alone on the same steps; the ratios ``strict=False`` / zonotope, and the designed side
   (``strict=False`` in the design minus the zonotope on those steps, and its share of a zonotope step).
@@ -195,35 +196,42 @@ def _arrivals(system, design, trace, seed):
     return [what_arrived(schedule[k], k, run.y) for k in range(trace.steps)], x0 - xi0
 
 
-def _step_times(make, arrived, xhat0, strict: bool) -> tuple[np.ndarray, np.ndarray]:
-    """CPU time of each ``step`` call and whether the estimator was in the design after it.
-
-    ``strict=True`` refuses a step outside the language (nothing changes): the estimator is then reset at that
-    time from its estimate and the step taken again; the refused call and the retried step are not timed
-    (``nan``), so its times are those of the steps in the language."""
-    est = make().reset(xhat0)
-    times, flags = np.full(len(arrived), np.nan), np.zeros(len(arrived), bool)
+def _lockstep_times(makes: list, arrived, xhat0, stricts: list, rotate: int) -> tuple[np.ndarray, np.ndarray]:
+    """CPU time of each ``step`` call of several estimators run in lockstep on the same arrivals (at each time every
+    estimator takes its step in turn, the order rotated by ``rotate``, so that each side of a ratio meets the same
+    load of a shared machine), and whether each was in the design after it.  ``strict=True`` refuses a step outside
+    the language (nothing changes): it is then reset at that time from its estimate and the step taken again,
+    untimed (``nan``), so its times are those of the steps in the language."""
+    ests = [make().reset(xhat0) for make in makes]
+    times = np.full((len(ests), len(arrived)), np.nan)
+    flags = np.zeros((len(ests), len(arrived)), bool)
     clock = time.process_time
+    order = list(range(len(ests)))
+    order = order[rotate % len(order):] + order[:rotate % len(order)]
     for k, y in enumerate(arrived):
-        try:
-            t0 = clock()
-            est.step(y)
-            times[k] = clock() - t0
-        except InputError:
-            if not strict:
-                raise
-            est.reset(est.x, t0=est.time)
-            est.step(y)
-        flags[k] = getattr(est, "in_design", True)
+        for j in order:
+            est = ests[j]
+            try:
+                t0 = clock()
+                est.step(y)
+                times[j, k] = clock() - t0
+            except InputError:
+                if not stricts[j]:
+                    raise
+                est.reset(est.x, t0=est.time)
+                est.step(y)
+            flags[j, k] = getattr(est, "in_design", True)
     return times, flags
 
 
 def cost_table(plants, args) -> None:
     """Issue 40 §3: µs per step of ``strict=True``, ``strict=False`` in the design and out of it, and the zonotope
-    estimator alone, side by side in one run, at each loss rate (module docstring)."""
+    estimator alone, side by side in one run, at each loss rate (module docstring): the three run in lockstep, and
+    each step's time is the least over ``--repeats`` runs."""
     losses = [float(x) for x in args.losses.split(",")]
-    print(f"\nus per step (CPU time of step() alone, per step the least of {args.repeats} runs, each estimator in turn "
-          f"on the same arrivals; delays 0..{MAX_DELAY} uniform, Bernoulli loss; the zonotope on the same steps)")
+    print(f"\nus per step (CPU time of step() alone, per step the least of {args.repeats} runs; the estimators run in "
+          f"lockstep on the same arrivals, each step in turn, order rotated per run; delays 0..{MAX_DELAY} uniform, "
+          "Bernoulli loss; the zonotope on the same steps)")
     head = (f"{'plant':22s} {'loss':>5s} {'in/out':>7s} {'strict=True':>11s} {'False in':>9s} {'zono in':>8s} "
             f"{'ratio':>6s} {'False out':>9s} {'zono out':>8s} {'ratio':>6s} {'designed side':>14s}")
     print(head)
@@ -232,18 +240,16 @@ def cost_table(plants, args) -> None:
             rng = np.random.default_rng(11)
             trace = with_uniform_delays(rng, bernoulli_trace(rng, steps, loss), MAX_DELAY)
             arrived, xhat0 = _arrivals(system, design, trace, 3)
-            cases = {"true": (lambda: design.estimator(), True),
-                     "false": (lambda: design.estimator(strict=False), False),
-                     "zono": (lambda: ZonotopeEstimator(system, x0_radius=design.mu1, max_delay=HORIZON), False)}
-            best, flags = {}, None
+            names = ["true", "false", "zono"]
+            makes = [lambda: design.estimator(), lambda: design.estimator(strict=False),
+                     lambda: ZonotopeEstimator(system, x0_radius=design.mu1, max_delay=HORIZON)]
+            best = None
             for rep in range(args.repeats + 1):  # the first run warms the caches (compiled code, class maps)
-                for name, (make, strict) in cases.items():
-                    dt, fl = _step_times(make, arrived, xhat0, strict)
-                    if name == "false":
-                        flags = fl
-                    if rep:
-                        best[name] = dt if name not in best else np.fmin(best[name], dt)
-            us = {k: v * 1e6 for k, v in best.items()}
+                dt, fl = _lockstep_times(makes, arrived, xhat0, [True, False, False], rep)
+                if rep:
+                    best = dt if best is None else np.fmin(best, dt)
+            flags = fl[1]
+            us = {name: best[j] * 1e6 for j, name in enumerate(names)}
             inside, outside = flags.copy(), ~flags
             inside[0] = outside[0] = False  # the first step holds the estimators' first-use work
 

@@ -70,7 +70,7 @@ class UncachedGuaranteed(GuaranteedEstimator):
             if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._sm.carried_set[1]) <= self.mu1):
                 self._spare = UncachedClassEstimator(self.system, self.gains, periodic=True, bound_of=self.bound_of,
                                                      mu1=self.mu1)
-                est = self._return_to_design(now, packets, u)
+                est = self._return_to_design(now, packets, u, self._sm.carried_set)
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
@@ -195,3 +195,84 @@ def test_row_sums_of_the_blocks_are_numpys_row_sums_of_the_concatenation():
             assert np.array_equal(outer_row_sums_of_parts(P, N), ref), (q1, q2, n)
             assert np.array_equal(outer_row_sums_of_parts(np.asfortranarray(P), N[:, ::-1]),
                                   outer_row_sums(np.concatenate([P, N[:, ::-1]], axis=1))), (q1, q2, n)
+
+
+def test_compiled_products_are_numpys_for_every_layout():
+    """:func:`matrix_vector` on :func:`blas_ready` arrays gives NumPy's ``M @ x`` bit for bit: C, Fortran and strided
+    matrices (the column block Φ of a class map, a plant's ``B`` column), one row, no column."""
+    from eqrec.estimators.error_maps import blas_ready, matrix_vector
+
+    rng = np.random.default_rng(1)
+    for trial in range(300):
+        n, k = int(rng.integers(1, 12)), int(rng.integers(0, 80))
+        big = rng.normal(size=(n, 2 * k + 3)) * 10.0 ** rng.integers(-6, 6, size=(n, 2 * k + 3))
+        x = rng.normal(size=k)
+        for M in (big[:, :k].copy(), np.asfortranarray(big[:, :k]), big[:, k + 3:], big.T[:k].T, big[:, 1:k + 1]):
+            ready = blas_ready(M)
+            assert ready.flags.c_contiguous or ready.flags.f_contiguous
+            assert _same(matrix_vector(ready, x), M @ x), (trial, n, k, M.strides)
+
+
+def test_the_long_row_path_gives_the_same_numbers(design, monkeypatch):
+    """Rows past the compiled sums' limit take the NumPy sums (``ErrorSet.advance``): the same numbers."""
+    import eqrec.estimators.guaranteed as guaranteed
+
+    system, d = design
+    rng = np.random.default_rng(5)
+    N = 40
+    trace = with_uniform_delays(rng, bernoulli_trace(rng, N, 0.3), 2)
+    w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
+    v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
+    xi0 = rng.choice([-1.0, 1.0], system.n) * d.mu1
+    rows = []
+    for limit in (guaranteed.PARTS_LIMIT, 0):
+        monkeypatch.setattr(guaranteed, "PARTS_LIMIT", limit)
+        est = d.estimator(strict=False)
+        got = []
+        closed_loop(system, est, trace, np.ones(system.n), xi0, w, v,
+                    after_step=lambda k: got.append((est.x, est.bound, est.state_bounds, est.rounding_vector)))
+        rows.append(got)
+    for a, b in zip(*rows):
+        assert _same(a[0], b[0]) and a[1] == b[1] and _same(a[2], b[2]) and _same(a[3], b[3])
+
+
+def test_the_estimators_of_a_design_share_the_levels_they_look_up(design):
+    """Two rules of one design are equal (the certificate gives its levels as a new array each time), so a new
+    estimator of the design finds the levels its predecessors looked up, even after they are gone."""
+    system, d = design
+    a = d.estimator(strict=False).reset(np.zeros(system.n))
+    assert a.bound_of == d.estimator().bound_of and hash(a.bound_of) == hash(d.estimator().bound_of)
+    a.step(np.zeros(system.p))
+    kept = dict(a._est._levels)
+    assert kept
+    del a
+    b = d.estimator(strict=False).reset(np.zeros(system.n))
+    assert all(b._est._levels.get(key) == level for key, level in kept.items())
+
+
+def test_the_compiled_step_on_a_time_varying_plant_is_the_uncached_one():
+    """A, B, C read per period time, a drift f and inputs: the compiled class step gives the numbers of the step
+    computed afresh, bit for bit."""
+    import eqrec
+    from eqrec.systems.affine import AffineSystem
+
+    acc = eqrec.acc_system()
+    A = np.stack([acc.A * (1 + 0.02 * k) for k in range(5)])
+    C = np.stack([acc.C * (1 + 0.05 * k) for k in range(5)])
+    plant = AffineSystem(A=A, B=np.stack([acc.B] * 5), C=C, E=acc.E, eta_w=acc.eta_w, eta_v=acc.eta_v,
+                         f=acc.f + 0.1)
+    words = ["10111", "11011", "11101"]
+    d = eqrec.design_prefix(plant, words, 1.0)
+    rule = d.estimator().bound_of
+    rng = np.random.default_rng(0)
+    x0 = rng.normal(size=plant.n)
+    fast = ClassEstimator(plant, d.class_gains, x0, periodic=True, bound_of=rule, mu1=d.mu1)
+    slow = UncachedClassEstimator(plant, d.class_gains, x0, periodic=True, bound_of=rule, mu1=d.mu1)
+    k = 0
+    for word in words * 4:
+        for ch in word:
+            y = rng.normal(size=plant.p) if ch == "1" else None
+            u = rng.normal(size=plant.m) if k % 2 else None
+            a, b = fast.step(y, u), slow.step(y, u)
+            assert _same(a[0], b[0]) and a[1] == b[1] and _same(fast.rounding_vector, slow.rounding_vector), k
+            k += 1

@@ -105,48 +105,6 @@ def injection_bound(M, a, scale, b, c, add, terms):  # pragma: no cover - compil
 
 
 @numba.njit(cache=True)
-def step_injections(xhat, radius, absA, reference, add, state_terms, w_row, absK, r, zeros_r, xbar, zeros_n,
-                    data_terms, has_data):  # pragma: no cover - compiled
-    r"""The injections of one class step in one compiled call: the true state's magnitude, the state update's
-    rounding and that of ``x̄ + K r`` (:mod:`eqrec.estimators.intake`), by the same operations as
-    ``np.abs(xhat) + radius`` and :func:`injection_bound` called for each (so the same numbers).
-
-    Parameters
-    ----------
-    xhat : numpy.ndarray, shape (n,)
-        The estimate of the step's time.
-    radius : float
-        The true error's size assumed.
-    absA, reference, add, state_terms
-        :func:`injection_bound`'s ``M``, ``a``, ``add`` and ``terms`` of the state update (``scale`` 1, ``c`` 0,
-        ``b`` the true state's magnitude).
-    w_row : numpy.ndarray, shape (n,)
-        Where the state update's injection is written (the record's row of the step).
-    absK, r, zeros_r, xbar, zeros_n, data_terms
-        :func:`injection_bound`'s arguments for ``x̄ + K r`` (used when ``has_data``).
-    has_data : bool
-        Whether the class has data (else that injection is ``0``).
-
-    Returns
-    -------
-    true : numpy.ndarray, shape (n,)
-        ``|x̂| + radius``, the true state's magnitude.
-    extra : numpy.ndarray, shape (n,)
-        The injection of ``x̄ + K r`` (zeros without data).
-    """
-    n = xhat.shape[0]
-    true = np.empty(n)
-    for i in range(n):
-        true[i] = abs(xhat[i]) + radius
-    w_row[:] = injection_bound(absA, reference, 1.0, true, zeros_n, add, state_terms)
-    if has_data:
-        extra = injection_bound(absK, r, 1.0, zeros_r, xbar, zeros_n, data_terms)
-    else:
-        extra = np.zeros(n)
-    return true, extra
-
-
-@numba.njit(cache=True)
 def allowance_tail(carried, extra, factor):  # pragma: no cover - compiled
     r"""``ρ = nextafter((carried + extra) · factor, +inf)`` and ``max(0, max_i ρ_i)`` in one pass (the operations of
     :meth:`eqrec.estimators.intake.StampedEstimator._allowance` after its product, and of ``ρ.max(initial=0)``).

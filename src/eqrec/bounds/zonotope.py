@@ -189,6 +189,14 @@ def _row_sums_of_parts(P, N):  # pragma: no cover - compiled
     return out
 
 
+#: The compiled row sums of :func:`outer_row_sums_of_parts`, for compiled callers (an estimator's compiled step),
+#: on rows of at most :data:`PARTS_LIMIT` entries.
+row_sums_of_parts_compiled = _row_sums_of_parts
+
+#: Longest row the compiled sums take (:func:`outer_row_sums_of_parts`).
+PARTS_LIMIT = _PARTS_LIMIT
+
+
 def outer_row_sums_of_parts(P: np.ndarray, N: np.ndarray) -> np.ndarray:
     """``outer_row_sums(np.concatenate([P, N], axis=1))``, the same numbers, without the concatenation.
 
@@ -625,11 +633,23 @@ class ErrorSet:
         else:
             G = generators
             bounds = outer_row_sums(G)
-        self.time += 1
-        self._stored = {s: g for s, g in self._stored.items() if s >= emap.anchor}
-        self._reduced = {s for s in self._reduced if s >= emap.anchor}
-        self._stored[self.time] = G  # reduced when first used as an anchor (:meth:`at`)
+        self.enter(emap.anchor, G)
         return bounds
+
+    def enter(self, anchor: int, generators: "np.ndarray | tuple[np.ndarray, np.ndarray]") -> None:
+        """Move to the next time with its set formed elsewhere (:meth:`advance` without the product and the sums).
+
+        Parameters
+        ----------
+        anchor : int
+            The step's map's anchor (sets older than it are dropped).
+        generators : ndarray or tuple
+            The new set, or its blocks ``(Φ G(s), N)`` (concatenated when first asked for).
+        """
+        self.time += 1
+        self._stored = {s: g for s, g in self._stored.items() if s >= anchor}
+        self._reduced = {s for s in self._reduced if s >= anchor}
+        self._stored[self.time] = generators  # reduced when first used as an anchor (:meth:`at`)
 
     def replace(self, generators: np.ndarray) -> None:
         """Set the current set (a set-membership update made elsewhere, e.g. a fallback estimator's).

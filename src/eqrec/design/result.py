@@ -38,20 +38,22 @@ class ClassLevels:
         The certified level of each class.
     """
 
-    __slots__ = ("classes", "levels", "__weakref__")
+    __slots__ = ("classes", "levels", "_key", "__weakref__")
 
     def __init__(self, classes, levels):
         self.classes, self.levels = classes, levels
+        # the levels by value: a design's certificate gives them as a new array at each request
+        self._key = np.asarray(levels, dtype=float).tobytes()
 
     def __call__(self, prefix: ArrivalPattern) -> float:
         depth = prefix.T
         return float(self.levels[self.classes.index(depth, prefix.available(depth - 1))])
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, ClassLevels) and other.classes is self.classes and other.levels is self.levels
+        return isinstance(other, ClassLevels) and other.classes is self.classes and other._key == self._key
 
     def __hash__(self) -> int:
-        return hash((id(self.classes), id(self.levels)))
+        return hash((id(self.classes), self._key))
 
 
 @dataclass

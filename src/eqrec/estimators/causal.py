@@ -56,8 +56,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.bounds.rounding import UNIT_ROUNDOFF, allowance_tail, step_injections
-from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps
+from eqrec.bounds.rounding import UNIT_ROUNDOFF
+from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps, blas_ready, class_step
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -309,7 +309,12 @@ class ClassEstimator(StampedEstimator):
         self._maps: ClassErrorMaps | None = None
         self._class_steps: ClassSteps | None = None  # per class: K, |K|, the rounding map (shared by the design)
         self._xbar: "np.ndarray | None" = None
+        # the state update's length (the terms of its rounding injection) and the allowance's factor 1 + (2n + 8) u
+        self._terms = (system.n + system.nw + system.m + 3, 1.0 + (2 * system.n + 8) * UNIT_ROUNDOFF)
+        self._no_packets = (np.zeros(0, dtype=np.int64), np.zeros((0, system.n)), np.zeros((0, system.p)))
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
+        if self.bound_of is not None:  # the levels looked up, shared by the estimators of these gains and rule
+            self._levels = self._steps().levels(self.bound_of)
 
     def _on_reset(self) -> None:
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
@@ -420,75 +425,84 @@ class ClassEstimator(StampedEstimator):
     def _advance(self, step: OpenedStep, entry: "ClassStep | None" = None) -> tuple[np.ndarray, float]:
         """The step of :meth:`step` from its checked state (``entry``: its class, if already looked up; the class
         lookup may still raise; nothing changes)."""
-        sys = self.system
-        k, t = step.k, step.t
         if entry is None:
             entry = self._class(step)
             if entry is None:
                 S = tuple(sorted(step.yxi))
-                raise InputError(f"observed data outside the design: at time {k} (step {t} of the period started at "
-                                 f"{step.start}, arrival prefix {ArrivalPattern(tuple(step.arrivals)).label!r}) the "
-                                 f"measurements of times {[step.start + tau for tau in S]} have arrived; the gains "
-                                 f"have no class ({t + 1}, {list(S)})", field="y")
-        S = entry.key[1]
-        xbar0 = self.xhat if step.restarted else self._xbar
-        A, B = self._dynamics(t)
-        xbar = A @ xbar0 + B @ step.u + sys.f
-        # the class form x̂ = x̄ + K r (the operations of ClassGains.estimate, with the class looked up once)
-        if S:
-            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
-            xhat = xbar + entry.gain @ r
-        else:
-            r = None
-            xhat = np.array(xbar, float)
-        record, rho, top = self._class_rounding(step, entry, xbar, r)
-        self._commit(step, (record, rho))
-        self._xbar, self.xhat = xbar, xhat
-        level = self._level()  # plus the allowance, rounded up (StampedEstimator._with_rounding, its max known)
-        self.bound = math.nextafter(level + top, math.inf) if math.isfinite(level) else level
+                raise InputError(f"observed data outside the design: at time {step.k} (step {step.t} of the period "
+                                 f"started at {step.start}, arrival prefix "
+                                 f"{ArrivalPattern(tuple(step.arrivals)).label!r}) the measurements of times "
+                                 f"{[step.start + tau for tau in S]} have arrived; the gains have no class "
+                                 f"({step.t + 1}, {list(S)})", field="y")
+        record, args = self._class_step_args(step, entry)
+        out = np.empty((3, self.system.n))
+        top = class_step(*args, out)
+        level = self._level_at(step.t + 1, step.arrivals)
+        xbar, xhat, rho = out
+        self._finish(step, record, xbar, xhat, rho, self._plus_rounding(level, top))
         return self.xhat.copy(), self.bound
 
-    def _dynamics(self, t: int) -> tuple[np.ndarray, np.ndarray]:
-        """``A(t), B(t)`` (the system's own arrays; cached by time for a time-varying system)."""
-        key = ("AB", t if self.system.is_time_varying else 0)
+    @staticmethod
+    def _plus_rounding(level: float, top: float) -> float:
+        """The reported bound: the level plus the allowance's largest entry, rounded up (``inf`` stays ``inf``)."""
+        return math.nextafter(level + top, math.inf) if math.isfinite(level) else level
+
+    def _finish(self, step: OpenedStep, record: RoundingRecord, xbar: np.ndarray, xhat: np.ndarray,
+                rho: np.ndarray, bound: float) -> None:
+        """Install a computed class step (it can no longer fail)."""
+        self._commit(step, (record, rho))
+        self._xbar, self.xhat = xbar, xhat
+        self.bound = bound
+
+    def _class_model(self, t: int) -> tuple[np.ndarray, ...]:
+        """What the compiled class step takes of the model at period time ``t``, in one lookup (cached by time for
+        a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`), ``|A|, |B|``,
+        ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`)."""
+        key = ("class", t if self._varying else 0)
         hit = self._norms.get(key)
         if hit is None:
-            hit = self._norms[key] = (self.system.A_at(t), self.system.B_at(t))
+            absA, absB, _, e, _, f = self._absolute_model(t)
+            hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absA, absB,
+                                      e, f, self._drift(t), absB.shape[1] > 0)
         return hit
 
-    def _zero_data(self, size: int) -> np.ndarray:
-        hit = self._norms.get(("zeros", size))
-        if hit is None:
-            hit = self._norms[("zeros", size)] = np.zeros(size)
-        return hit
+    def _class_step_args(self, step: OpenedStep, entry: ClassStep) -> tuple[RoundingRecord, tuple]:
+        """The period's rounding record (a new one at a period's start, else the period's: the compiled step
+        extends it in place) and the arguments of the compiled class step
+        (:func:`eqrec.estimators.error_maps.class_step`).
 
-    def _class_rounding(self, step: OpenedStep, entry: ClassStep, xbar: np.ndarray,
-                        r: "np.ndarray | None") -> tuple[RoundingRecord, np.ndarray, float]:
-        """The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
+        The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
         residuals and of the simulated state and measurements, carried by the class map with identity noise
         gains (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the
-        stacked residuals of the class's data, ``None`` without data); with its largest entry.
-
-        The operations of :meth:`~eqrec.estimators.intake.StampedEstimator._period_record`,
-        ``_state_injection`` and ``_allowance``, the elementwise ones in two compiled calls
-        (:func:`eqrec.bounds.rounding.step_injections`, :func:`eqrec.bounds.rounding.allowance_tail`): the same
-        numbers."""
+        stacked residuals of the class's data).  The operations of
+        :meth:`~eqrec.estimators.intake.StampedEstimator._period_record`, ``_state_injection`` and
+        ``_allowance``: the same numbers.  Called once the step's class is known (the step can no longer fail)."""
         sysm, t = self.system, step.t
+        S = entry.key[1]
         record = RoundingRecord(self.T, sysm.n, sysm.p, self._rho.copy()) if t == 0 else self._record
-        absA, absB, _, e, _, f = self._absolute_model(t)
-        add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] and step.u.any() else self._drift(t)
-        has_data = r is not None
-        true, extra = step_injections(self.xhat, self._radius(), absA, step.history[t], add,
-                                      sysm.n + sysm.nw + sysm.m + 3, record.w[t],
-                                      entry.abs_gain if has_data else absA, r if has_data else self._zeros,
-                                      self._zero_data(r.size) if has_data else self._zeros, xbar, self._zeros,
-                                      len(entry.key[1]) * sysm.p + 2, has_data)
-        record.true.append(true)  # |x(t)| <= |x̂(t)| + bound
-        for tau in self._new_packets(step):
-            self._output_injection(record, tau, step.yxi[tau], step.history[tau])
-        rho, top = allowance_tail(entry.rounding_map @ record.z, extra,
-                                  1.0 + (2 * sysm.n + 8) * UNIT_ROUNDOFF)
-        return record, rho, top
+        new = self._new_packets(step)
+        if not new:
+            taus, references, residuals = self._no_packets
+        elif len(new) == 1:
+            tau = new[0]
+            taus = np.array(new, dtype=np.int64)
+            references, residuals = step.history[tau].reshape(1, -1), step.yxi[tau].reshape(1, -1)
+        else:
+            taus = np.array(new, dtype=np.int64)
+            references = np.array([step.history[tau] for tau in new])
+            residuals = np.array([step.yxi[tau] for tau in new])
+        absC, v, output_terms = self._output_model()
+        A, B, absA, absB, e, f, drift, has_input = self._class_model(t)
+        has_data = bool(S)
+        if has_data:
+            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
+        else:
+            r = self._zeros
+        args = (A, self.xhat if step.restarted else self._xbar, B, step.u, sysm.f, entry.gain, r, has_data, self.xhat,
+                self._radius(), t, record.true, taus, references, residuals, absC, v, output_terms, record.v, absA,
+                absB, e, f, drift, has_input, self._terms[0], record.w, entry.abs_gain, len(S) * sysm.p + 2,
+                entry.rounding_map, record.z, self._terms[1])
+        return record, args
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,

@@ -105,24 +105,30 @@ packets and the input are checked once).  What the designed side needs that
 depends on the arrivals alone is kept per class ``(d, S)`` of the design,
 a finite set (:class:`eqrec.estimators.error_maps.ClassSteps`): the gain, its
 absolute values, the rounding allowance's map, the error map's parts, and the
-level of each observed prefix.  What is left per step is the class estimate
-(two products), the rounding allowance of this step's own numbers (it
-depends on the magnitudes of the state and the residuals, so it cannot be
-kept), one product :math:`\Phi G(s)` and the row sums of
-:math:`[\Phi G(s), N]` (the set at the period's start depends on the earlier
-periods), and the choice per state, compiled.  Every number is the same as
-when each of them was computed afresh (``tests/test_class_step_cache.py``,
-bit for bit).  Measured side by side in one run (``python
-benchmarks/bench_tight.py --part cost``, CPU µs per step on a shared machine,
-the ratios are the figures to read; two runs, 0/20/40 % loss): in the
-design ``strict=False`` costs 1.4–1.8× the set-membership estimator alone on
-the two carts (whose set-membership step is cheap, about 200–300 µs),
-1.1–1.4× on the cart-pole and 1.0–1.1× on the ``n = 10`` chain (a step of
-some milliseconds); the designed side itself is about 100–130 µs, the cost
-of ``strict=True`` (about 70 µs) plus the exact bound and the choice.  Out of
-the design it is the set-membership step.  ``tight=False`` costs the same as
-``tight=True`` (the set-membership estimator runs for the fallback either
-way).
+levels looked up (shared by every estimator of the design).  The rest of a
+step in the design is one compiled call (``_designed_step``): the class
+estimate, the rounding allowance of this step's own numbers (it depends on
+the magnitudes of the state and the residuals, so it cannot be kept), the
+product :math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the
+set at the period's start depends on the earlier periods) and the choice per
+state.  Its products go through BLAS as NumPy's ``@`` does and its sums run
+in NumPy's order, so every number is the one of the uncompiled step
+(``tests/test_class_step_cache.py``, bit for bit).  Measured side by side
+(``python benchmarks/bench_tight.py --part cost``: the estimators in lockstep
+on the same arrivals, CPU µs per step on a loaded shared machine, so read the
+ratios; 0/20/40 % loss; two runs): in the design ``strict=False`` costs
+1.25–1.38× the set-membership estimator alone on the two carts (a
+set-membership step of 300–450 µs there), 1.17–1.28× on the cart-pole and
+1.03–1.10× on the ``n = 10`` chain (a step of some milliseconds); the
+previous, uncompiled step measured 1.38–1.52×, 1.19–1.34× and 1.06–1.13× in
+the same way.  The designed side is about 90–125 µs at ``n = 4`` on that
+machine, and ``strict=True`` costs about 30 % less than before (56–61 µs
+against 74–83 µs per step, measured back to back).
+What is left is Python around the compiled call (the class form's intake,
+the class lookup, the period's record) and the Girard reduction of the
+designed set at each period start.  Out of the design a step is the
+set-membership step.  ``tight=False`` costs the same as ``tight=True`` (the
+set-membership estimator runs for the fallback either way).
 """
 
 from __future__ import annotations
@@ -135,10 +141,13 @@ import numpy as np
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
-from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
+from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order, outer_row_sums,
+                                   row_sums_of_parts_compiled)
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
+from eqrec.estimators.error_maps import blas_ready, class_step
 from eqrec.estimators.intake import BoundRule
+from eqrec.estimators.protocol import StateSet
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
 
@@ -147,37 +156,64 @@ DEFAULT_ORDER = 40
 
 
 @numba.njit(cache=True)
-def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight):  # pragma: no cover - compiled
+def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
+             use_sm):  # pragma: no cover - compiled
     r"""The reported estimate and bounds of a step in the design (module docstring), in one compiled pass.
 
     Per state, the designed bound :math:`b^{\mathrm d}_i = \min(\mathrm{nextafter}(\beta_i + \rho_i, +\infty),
     \mathrm{level})` (the exact worst case of the designed set plus the rounding allowance, rounded up, and the
     class's level); with ``tight``, the set-membership pair where its bound is smaller.  Elementwise IEEE operations
-    only, the same as NumPy's ``nextafter``, ``minimum``, ``<`` and ``where``: the same numbers.
+    only, the same as NumPy's ``nextafter``, ``minimum``, ``<`` and ``where``: the same numbers.  The reported
+    estimate, the bounds and the choice are written into ``xhat``, ``bounds`` and ``use_sm`` (shape ``(n,)``).
 
     Returns
     -------
-    tuple
-        ``(x̂, bounds, use_sm, max bound)``.
+    float
+        The largest bound (NaN if any is).
     """
     n = row_sums.shape[0]
-    xhat = np.empty(n)
-    bounds = np.empty(n)
-    use_sm = np.zeros(n, dtype=np.bool_)
     top = -np.inf
     for i in range(n):
         d = np.nextafter(row_sums[i] + rho[i], np.inf)
         if d > level:  # np.minimum(d, level): d unless level is smaller
             d = level
-        if tight and sm_bounds[i] < d:
-            use_sm[i] = True
+        use_sm[i] = tight and sm_bounds[i] < d
+        if use_sm[i]:
             xhat[i], bounds[i] = sm_x[i], sm_bounds[i]
         else:
             xhat[i], bounds[i] = x[i], d
         top = max(top, bounds[i]) if not np.isnan(top) else top  # NaN propagates, as in np.max
         if np.isnan(bounds[i]):
             top = np.nan
-    return xhat, bounds, use_sm, top
+    return top
+
+
+@numba.njit(cache=True)
+def _designed_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
+                   output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
+                   data_terms, rounding_map, z, factor, level, state, start_set, noise, sm_bounds, sm_x, tight, out,
+                   use_sm):  # pragma: no cover - compiled
+    r"""A step in the design with ``strict=False`` in one compiled call: the class step
+    (:func:`eqrec.estimators.error_maps.class_step`, its first 32 arguments, writing ``x̄``, the designed ``x̂``
+    and ``ρ`` into ``out[:3]``), its bound ``nextafter(level + max ρ, +inf)``, the designed set's new blocks
+    :math:`(\Phi G(s), N)` with their exact row sums (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`,
+    ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice per state (:func:`_tighter`, writing the reported
+    estimate and bounds into ``out[3:5]`` and the choice into ``use_sm``).  The operations of the uncompiled step
+    in the same order: the same numbers.
+
+    Returns
+    -------
+    tuple
+        ``(Φ G(s), the designed bound, the largest reported bound)``.
+    """
+    top = class_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
+                     output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
+                     data_terms, rounding_map, z, factor, out)
+    bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
+    P = np.dot(state, start_set)
+    row_sums = row_sums_of_parts_compiled(P, noise)
+    top_rep = _tighter(row_sums, out[2], bound, sm_bounds, sm_x, out[1], tight, out[3], out[4], use_sm)
+    return P, bound, top_rep
 
 
 class GuaranteedEstimator:
@@ -384,6 +420,65 @@ class GuaranteedEstimator:
         return self._bounds.copy()
 
     @property
+    def predicted(self) -> StateSet:
+        r"""The set of ``x(t+1)`` the estimator reports (:class:`~eqrec.estimators.protocol.StateSet`, the protocol's
+        sets): centre :attr:`x`, per-state bounds :attr:`state_bounds` (rounded outward), and a zonotope.
+
+        * ``strict=False``, in the design: the error set of the *reported* estimate, row by row as
+          :meth:`linear_error_model` gives it (with ``tight=True`` the designed set's row for a state reported from
+          the designed estimate, the set-membership carried set's row for a state reported from it; the designed
+          set alone with ``tight=False``; right after :meth:`reset` the ``μ1`` box, right after a return to the
+          design the set-membership set it starts from), each row padded on the diagonal up to its reported bound
+          (the pad covers the rounding allowance :attr:`rounding_vector`); a row whose exact worst case lies above
+          the designed level (the level is then the bound, a guarantee of its own) is replaced by the box of that
+          level.  So the zonotope contains ``x(t+1)`` and its interval hull is the reported bounds (up to the
+          rounding of its row sums).
+        * ``strict=False``, out of the design: the set-membership estimator's
+          (:attr:`eqrec.estimators.zonotope.ZonotopeEstimator.predicted`), whose estimate is the one reported.
+        * ``strict=True``: the box of the design's level, the one guarantee it carries (generators ``bound · I``).
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`.
+        """
+        est = self._running()
+        n = self.system.n
+        if self.strict:
+            return StateSet.around(self.time, est.xhat, np.full(n, self.bound), self.bound * np.eye(n))
+        if self._outside:
+            return self._sm.predicted
+        G = self.linear_error_model() if self._use_sm is not None else self._set.current
+        bounds = self._bounds
+        sums = np.abs(G).sum(axis=1)  # the pad as the set-membership estimator's (ZonotopeEstimator.carried_set)
+        over = sums > bounds  # the level is below the designed set's worst case: the level's box for that state
+        if self._use_sm is not None:  # a set-membership row is its carried set's, padded to its own bound already
+            over &= ~self._use_sm
+        G = np.where(over[:, None], 0.0, G)
+        pad = np.where(over, bounds, np.nextafter(np.maximum(bounds - sums, 0.0), np.inf))
+        return StateSet.around(self.time, self._xhat, bounds, np.concatenate([G, np.diag(pad)], axis=1))
+
+    @property
+    def filtered(self) -> StateSet:
+        """The set of ``x(t)`` given the data received up to ``t`` (:class:`~eqrec.estimators.protocol.StateSet`).
+
+        With ``strict=False``: the set-membership estimator's filtered set
+        (:attr:`eqrec.estimators.zonotope.ZonotopeEstimator.filtered`), in and out of the design: it runs on every
+        packet, and the designed gains give a prediction of ``x(t+1)``, not an estimate of ``x(t)``.
+
+        Raises
+        ------
+        InputError
+            Before :meth:`reset`, right after it (no data yet), or with ``strict=True`` (the design's gains carry
+            no set of ``x(t)``: ``design.estimator(strict=False)`` does).
+        """
+        self._running()
+        if self.strict:
+            raise InputError("strict=True carries no set of x(t) given the data (only the design's level of the "
+                             "prediction): design.estimator(strict=False) gives the filtered set", field="filtered")
+        return self._sm.filtered
+
+    @property
     def error_box(self) -> np.ndarray:
         """The same as :attr:`state_bounds` (the name of earlier versions)."""
         return self.state_bounds
@@ -507,8 +602,9 @@ class GuaranteedEstimator:
         T = self.gains.horizon
         if self._outside:
             now = self._sm.time
-            if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._sm.carried_set[1]) <= self.mu1):
-                est = self._return_to_design(now, packets, u)  # checked first: nothing changes if it raises
+            carried = self._sm.carried_set if (now - self._t0) % T == 0 else None
+            if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
+                est = self._return_to_design(now, packets, u, carried)  # checked first: nothing changes if it raises
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
@@ -520,15 +616,28 @@ class GuaranteedEstimator:
             xhat, _ = self._sm.step(packets, checked_u)
             self._outside = True
             return self._outside_bounds(xhat)
-        self._sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
-        xhat, level = est._advance(opened, entry)  # level: μ1 at the period's end, else the class's level
-        # the exact worst case of the designed estimate's error set, plus the rounding allowance of its arithmetic
-        # (:mod:`eqrec.estimators.intake`); the level carries the allowance already
+        sm = self._sm
+        sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
+        # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
+        # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
+        # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
+        # smaller of two exact bounds, each a function of the arrivals only (module docstring): one compiled call
+        record, args = est._class_step_args(opened, entry)
+        level = est._level_at(opened.t + 1, opened.arrivals)
         state, noise = entry.parts
-        row_sums = self._set.advance(ErrorMap(est.period_start, state, noise))
-        # per state, the smaller of two exact bounds, each a function of the arrivals only (module docstring)
-        xhat, self._bounds, use_sm, self.bound = _tighter(row_sums, est._rho, level, self._sm._beta, self._sm._xhat,
-                                                           xhat, self.tight)
+        start_set = blas_ready(self._set.at(opened.start))
+        out, use_sm = np.empty((5, self.system.n)), np.empty(self.system.n, np.bool_)
+        if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
+            P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
+                                                  self.tight, out, use_sm)
+            self._set.enter(opened.start, (P, noise))
+        else:  # rows too long for the compiled sums: the same steps, the sums by NumPy
+            bound = est._plus_rounding(level, class_step(*args, out[:3]))
+            row_sums = self._set.advance(ErrorMap(opened.start, state, noise))
+            self.bound = _tighter(row_sums, out[2], bound, sm._beta, sm._xhat, out[1], self.tight, out[3], out[4],
+                                  use_sm)
+        xbar, designed, rho, xhat, self._bounds = out
+        est._finish(opened, record, xbar, designed, rho, bound)
         self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
         return xhat.copy(), self.bound
@@ -543,9 +652,10 @@ class GuaranteedEstimator:
         self.bound = float(self._bounds.max())
         return xhat, self.bound
 
-    def _return_to_design(self, now: int, packets, u) -> ClassEstimator:
-        """The designed gains again from the set-membership centre (its set lies in the ``μ1`` box)."""
-        centre, generators = self._sm.carried_set
+    def _return_to_design(self, now: int, packets, u, carried: tuple[np.ndarray, np.ndarray]) -> ClassEstimator:
+        """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
+        in the ``μ1`` box)."""
+        centre, generators = carried
         # a spare class estimator, made once and reset at each return (making one checks every class gain)
         est = self._spare
         if est is None:

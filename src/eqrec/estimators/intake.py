@@ -195,8 +195,8 @@ class RoundingRecord:
     v : numpy.ndarray, shape (T, p)
         Per period time ``τ``, the bound of the rounding injected into the measurement of ``τ`` (its residual
         and the simulated ``y(τ)``).
-    true : list of numpy.ndarray
-        Per period time, the magnitude ``|x̂| + bound`` of the true state.
+    true : numpy.ndarray, shape (T, n)
+        Per period time entered, the magnitude ``|x̂| + bound`` of the true state.
     maps : list
         What a node-gain estimator propagates (its error maps per period time).
     """
@@ -206,7 +206,7 @@ class RoundingRecord:
         self.z = np.zeros(T * (n + p) + n)
         self.w, self.v = self.z[:T * n].reshape(T, n), self.z[T * n:T * (n + p)].reshape(T, p)
         self.z[T * (n + p):] = rho0
-        self.true: list = []
+        self.true = np.zeros((T, n))
         self.maps: list = []
 
 
@@ -273,6 +273,7 @@ class StampedEstimator:
         self._rho = np.zeros(system.n)  # the rounding allowance ρ of the current estimate, per state (module docstring)
         self.error_radius: "float | None" = None  # the true error's size, when a wrapper knows it (else the bound)
         self._norms: dict = {}
+        self._varying = system.is_time_varying  # a frozen system: asked once (its matrices are cached by time)
         self._levels = _levels_kept(self.bound_of)  # observed prefix -> its level (:meth:`_level`)
         self._zeros = np.zeros(system.n)
         self._clear(int(t0))
@@ -360,13 +361,24 @@ class StampedEstimator:
     def _absolute_model(self, t: int) -> tuple[np.ndarray, ...]:
         """``|A|, |B|, |C|, |E| η_w 1, |V| η_v 1, |f|`` at period time ``t`` (cached)."""
         sysm = self.system
-        key = t if sysm.is_time_varying else 0
+        key = t if self._varying else 0
         hit = self._norms.get(key)
         if hit is None:
             B = sysm.B_at(t)
             hit = self._norms[key] = (np.abs(sysm.A_at(t)), np.abs(B) if B is not None else np.zeros((sysm.n, 0)),
                                       np.abs(sysm.C_at(t)), np.abs(sysm.E_at(t)).sum(axis=1) * sysm.eta_w,
                                       np.abs(sysm.V_at(t)).sum(axis=1) * sysm.eta_v, np.abs(sysm.f))
+        return hit
+
+    def _output_model(self) -> tuple[np.ndarray, np.ndarray, int]:
+        """``|C(τ)|`` and ``|V(τ)| η_v 1`` stacked over the period times ``τ = 0..T-1`` (arrays ``(T, p, n)`` and
+        ``(T, p)``, made once) and the ``terms`` of an output injection (:meth:`_output_injection`)."""
+        hit = self._norms.get("outputs")
+        if hit is None:
+            models = [self._absolute_model(tau) for tau in range(self.T)]
+            hit = self._norms["outputs"] = (np.ascontiguousarray([m[2] for m in models], dtype=float),
+                                            np.ascontiguousarray([m[4] for m in models], dtype=float),
+                                            self.system.n + self.system.nv + 2)
         return hit
 
     def _period_record(self, step: OpenedStep) -> "RoundingRecord":
@@ -377,7 +389,7 @@ class StampedEstimator:
             record = RoundingRecord(self.T, sysm.n, sysm.p, self._rho.copy())
         else:
             record = self._record
-        record.true.append(np.abs(self.xhat) + self._radius())  # |x(t)| <= |x̂(t)| + bound
+        record.true[step.t] = np.abs(self.xhat) + self._radius()  # |x(t)| <= |x̂(t)| + bound
         return record
 
     def _new_packets(self, step: OpenedStep) -> list[int]:
@@ -400,7 +412,7 @@ class StampedEstimator:
 
     def _drift(self, t: int) -> np.ndarray:
         """``|E| η_w 1 + 2 |f|`` at period time ``t`` (cached): the part of a state update's magnitude without input."""
-        key = ("drift", t if self.system.is_time_varying else 0)
+        key = ("drift", t if self._varying else 0)
         hit = self._norms.get(key)
         if hit is None:
             _, _, _, e, _, f = self._absolute_model(t)
@@ -443,12 +455,17 @@ class StampedEstimator:
     def _level(self) -> float:
         """The bound of the current estimate (module docstring): ``μ1`` at the period's end, else the level of
         the observed prefix; ``inf`` without levels."""
+        return self._level_at(self._t, self._arrivals)
+
+    def _level_at(self, t: int, arrivals: list) -> float:
+        """:meth:`_level` of the estimate reached after ``t`` steps of a period with these observed arrivals (a step
+        under way: its level before it is committed)."""
         if self.bound_of is None:
             return math.inf
-        if self._t == self.T:
+        if t == self.T:
             return self.mu1
         # the rule is a function of the prefix, and a period has finitely many prefixes: kept (bounded)
-        key = tuple(self._arrivals)
+        key = tuple(arrivals)
         hit = self._levels.get(key)
         if hit is None:
             if len(self._levels) >= _LEVELS_KEPT:

@@ -29,7 +29,9 @@ Sets: predicted and filtered
 ----------------------------
 An estimator that carries a *set* of states (the set-membership estimators,
 :class:`~eqrec.estimators.zonotope.ZonotopeEstimator` and
-:class:`~eqrec.estimators.exact_set.ExactSetEstimator`) also gives, after a step at
+:class:`~eqrec.estimators.exact_set.ExactSetEstimator`, and
+:class:`~eqrec.estimators.guaranteed.GuaranteedEstimator`, whose predicted set is that of
+the estimate it reports) also gives, after a step at
 time ``t`` (``est.time == t + 1``), two :class:`StateSet`:
 
 * ``est.predicted``: the set of :math:`x(t+1)` given the data received up to
