@@ -17,15 +17,19 @@ time model's estimate (:func:`eqrec.bounds.information.estimate_seconds`), and t
 squares of log process time on log ``n``); then the consistent set of the same traces on simulated data at the
 sizes of ``--consistent-sizes``.
 
-Measured 2026-11-29 (issue 45 §4; tank chains, 150 steps, process time, 2 cores shared by six jobs, so the wall
-time ran 9 times the process time): n = 10 in 7.8 s, n = 20 in 133 s (the previous session: 6.9 and 159 s), n = 30
-not finished before the session's end (559 s the session before; the time model says 883 s).  Those two rows ran
-with the dual simplex, Devex pricing and the states in alternating order from step to step; against the current
-settings (primal simplex, states in fixed order) in one run at n = 30 (p = 5), 60 steps: 27.8 s against 34.8 s
-(values equal to 8e-11), and at n = 20, 60 steps: 7.1 s against 12.0 s (separate runs).  Not adopted: the limit's
-trailing digits move (1e-14 on ACC), so ``results/compare/*.json`` (``limit_median`` at full precision) would need
-regenerating, for 1.25-1.7 times.  The goal, 60 s at n = 30 over 150 steps, is not met: the LPs (the whole past,
-about 5,000 columns at n = 30, a few hundred simplex iterations each) are the cost.
+Measured 2026-11-29, second session (issue 45 §4; tank chains, 150 steps, process time, one run each, 2 cores
+shared with other jobs, load 4-9): before, the primal simplex with the states in fixed order at every size: n = 4,
+10, 20, 30 in 0.49, 5.58, 151, 542 s; after (from ``LIMIT_DUAL_FROM_N`` = 16 states on the dual simplex with Devex
+pricing and the states in alternating order, :data:`eqrec.bounds.information.LIMIT_HIGHS_OPTIONS`): 0.54, 6.90
+(n < 16: the same method, so these two differ by the load only), 129 and 459 s, growth about n^3.4.  The switch
+gains 1.7 times at n = 20 over 60 steps but only 1.2 times over 150.  Tried on the way and not kept (n = 20, 60
+steps unless said): the redundant box of the eliminated states (slower with the dual simplex), HiGHS's interior
+point (4 times slower, no warm start), models of 16 or 64 steps (slower at 90 steps), a per-state basis carried
+from step to step (no fewer iterations: about 100 per LP either way), segments of 1, 2, 16 and 32 steps (8 stays
+the fastest).  The goal, 60 s at n = 30 over 150 steps, is not met: each of the 4,500 LPs holds the whole past
+(about 5,000 columns at n = 30) and takes a few hundred simplex iterations, and no old block can be dropped
+exactly here (an old block drops out only where the dual's adjoint is zero, and with p = 5 outputs for n = 30
+states the multipliers generically cannot cancel it).
 """
 
 from __future__ import annotations

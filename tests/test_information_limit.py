@@ -286,3 +286,37 @@ def test_an_unbounded_answer_is_a_solver_failure_naming_x0_radius(acc, monkeypat
     monkeypatch.setattr(info, "solve_range", unbounded)
     with pytest.raises(eqrec.SolverFailure, match="x0_radius"):
         information_limit(acc, ArrivalTrace([0, 0]), 0.5, cache=False)
+
+
+def _tank_chain(n: int, p: int) -> eqrec.AffineSystem:
+    A = np.eye(n)
+    for i in range(n - 1):  # neighbours exchange a fifth of their difference; the last tank leaks
+        A[i, i] -= 0.2
+        A[i + 1, i + 1] -= 0.2
+        A[i, i + 1] += 0.2
+        A[i + 1, i] += 0.2
+    A[-1, -1] -= 0.05
+    sensors = np.unique(np.linspace(0, n - 1, p).round().astype(int))
+    C = np.zeros((sensors.size, n))
+    C[np.arange(sensors.size), sensors] = 1.0
+    return eqrec.AffineSystem(A=A, C=C, E=np.eye(n), eta_w=0.01, eta_v=0.05)
+
+
+@pytest.mark.parametrize("window", [None, 6])
+def test_large_plants_dual_simplex_in_alternating_order_gives_the_same_rows(window, monkeypatch):
+    """From LIMIT_DUAL_FROM_N states on the limit solves with the dual simplex and the states in alternating order
+    (lowered here to reach that path on a small asymmetric chain): every row, in state order, equals the primal
+    simplex's in fixed order and an independent solver's (a row stored in the solve order would differ: the
+    chain's sensors and leak make its states differ)."""
+    import eqrec.bounds.information as info
+
+    plant = _tank_chain(5, 2)
+    trace = _random_trace(20, 0.3, 2, 45)
+    primal = information_limit(plant, trace, 1.0, cache=False, window=window)
+    monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
+    assert list(info._limit_order(1, 5)) == [4, 3, 2, 1, 0]
+    dual = information_limit(plant, trace, 1.0, cache=False, window=window)
+    np.testing.assert_allclose(dual, primal, rtol=REL, atol=1e-12)
+    assert np.max(np.abs(primal - primal[:, ::-1])) > 1e-3  # the order matters on this chain
+    np.testing.assert_allclose(dual, information_limit(plant, trace, 1.0, solver="scipy", cache=False, window=window),
+                               rtol=1e-7, atol=1e-9)
