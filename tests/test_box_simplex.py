@@ -99,3 +99,15 @@ def test_window_hull_dense_equals_highs_and_vectorised_bound_is_dual_bound():
     one = [dual_bound(r, ws.M, ws.lower, ws.upper, yk, mg, ws.mag_rows, ws.kappa)
            for r, yk, mg in zip(rows, y, ws.mag_pred[:3])]
     np.testing.assert_allclose(vec, one, rtol=1e-12)
+
+
+def test_exactly_singular_basis_is_reported_not_raised():
+    """``_refactor`` on an exactly singular basis returns False (the solver then hands the objective over), as its
+    docstring says, instead of raising LAPACK's LinAlgError out of the compiled solver."""
+    from eqrec.lp.box_simplex import _refactor
+
+    M = np.array([[1.0, 2.0, 0.0], [2.0, 4.0, 0.0]])  # columns 0 and 1 are parallel: that basis is singular
+    Binv = np.full((2, 2), 7.0)
+    assert _refactor(M, np.array([0, 1]), M.shape[1], Binv) is False
+    assert np.all(Binv == 7.0)  # nothing written
+    assert _refactor(M, np.array([0, 4]), M.shape[1], Binv) is True  # column 0 and the second row's slack

@@ -103,7 +103,10 @@ def _refactor(M, basis, Q, Binv):
         B[:, p] = col
     if m == 0:
         return True
-    inv = np.linalg.inv(B)
+    try:  # an exactly singular basis raises inside LAPACK's getrf: report it as singular, as documented
+        inv = np.linalg.inv(B)
+    except Exception:  # noqa: BLE001 - Numba catches only the bare class
+        return False
     if not np.all(np.isfinite(inv)):
         return False
     Binv[:, :] = inv
