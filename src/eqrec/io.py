@@ -157,8 +157,11 @@ def compiled_once() -> Iterator[None]:
         yield
         return
     with lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
-        if marker.exists():  # another job compiled while this one waited
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
+        except OSError:  # a file system without locks (some network ones): every job compiles, as before
+            lock.close()
+        if lock.closed or marker.exists():  # no lock, or another job compiled while this one waited
             lock.close()
             yield
             return
