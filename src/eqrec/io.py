@@ -114,3 +114,56 @@ def save_figure(fig, *paths: "str | Path") -> None:
                 fig.savefig(tmp, format=fmt, metadata=meta)
     finally:
         plt.close(fig)
+
+
+@contextlib.contextmanager
+def compiled_once() -> Iterator[None]:
+    """Run the body alone while the package's Numba kernels are not compiled yet; concurrently once they are.
+
+    The kernels are compiled on their first call and cached on disk (``@numba.njit(cache=True)``: in the
+    ``__pycache__`` folders of the package, or in ``NUMBA_CACHE_DIR``).  Jobs started together on a fresh clone
+    would each compile them (tens of seconds of CPU each).  Here the first job holds an exclusive lock
+    (:func:`fcntl.flock`) on a file of the cache folder while its body runs, then leaves a marker; a job that
+    finds the marker runs at once, one that waits for the lock finds the marker when it gets the lock and loads
+    the kernels from the cache.  The marker is named by a hash of the package's sources that use Numba and of
+    the Numba and Python versions, so an edited kernel is compiled once again.  Where the cache folder cannot be
+    written, the body runs without the lock.
+
+    Yields
+    ------
+    None
+    """
+    import fcntl
+    import hashlib
+    import platform
+
+    import numba
+
+    package = Path(__file__).resolve().parent
+    digest = hashlib.sha256(f"{numba.__version__} {platform.python_version()}".encode())
+    for source in sorted(package.rglob("*.py")):
+        text = source.read_bytes()
+        if b"numba" in text:
+            digest.update(source.relative_to(package).as_posix().encode() + b"\0" + text)
+    folder = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else package / "__pycache__"
+    marker = folder / f"eqrec-compiled-{digest.hexdigest()[:16]}"
+    if marker.exists():
+        yield
+        return
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        lock = open(folder / "eqrec-compile.lock", "a")
+    except OSError:  # a read-only installation: Numba caches elsewhere, or not at all
+        yield
+        return
+    with lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
+        except OSError:  # a file system without locks (some network ones): every job compiles, as before
+            lock.close()
+        if lock.closed or marker.exists():  # no lock, or another job compiled while this one waited
+            lock.close()
+            yield
+            return
+        yield
+        marker.touch()

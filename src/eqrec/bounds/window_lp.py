@@ -126,13 +126,13 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
     """
     L, n = drive.shape
     p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
-    measured = np.asarray(measured, dtype=np.bool_)
+    measured = np.require(measured, np.bool_, ("C", "W"))
     k_meas = int(np.count_nonzero(measured))
     Q = q0 + L * nw + k_meas * nv
+    # C-contiguous and writable, as a frozen system's arrays are not: one compiled kernel serves every plant
     xc, xf, X_pred, X_filt, Mm, r, magy, zm, zf = _window_kernel(
-        *(np.ascontiguousarray(a, dtype=float) for a in (A, C, E, V, drive)), measured,
-        np.ascontiguousarray(Y, dtype=float), np.ascontiguousarray(c0, dtype=float),
-        np.ascontiguousarray(G0, dtype=float))
+        *(np.require(a, float, ("C", "W")) for a in (A, C, E, V, drive)), measured,
+        *(np.require(a, float, ("C", "W")) for a in (Y, c0, G0)))
     blocks, rhs, mags = [], [], []
     if prior_rows is not None and prior_rows[0].shape[0]:
         A0, b0 = (np.asarray(a, float) for a in prior_rows)

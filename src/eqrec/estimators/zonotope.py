@@ -737,7 +737,7 @@ class ZonotopeEstimator:
         by time (C-contiguous, as the compiled window expects; cached for a time-invariant plant)."""
         if not self.system.is_time_varying:
             if self._tiles is None:
-                self._tiles = tuple(np.ascontiguousarray(np.broadcast_to(M, (self._W,) + M.shape))
+                self._tiles = tuple(np.broadcast_to(M, (self._W,) + M.shape).copy()  # writable: one compile
                                     for M in self._model(0))
             return tuple(M[:length] for M in self._tiles)
         parts = [self._model(s) for s in range(first, first + length)]
