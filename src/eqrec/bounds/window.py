@@ -163,6 +163,35 @@ def sparse_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # 
 
 
 @numba.njit(cache=True)
+def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - compiled
+    """``out[:, :cols] = A[j] X[:, :cols]`` over the nonzeros of ``A[j]`` by row (:func:`sparse_rows`), each row's
+    sum in the order of its nonzeros."""
+    for a in range(out.shape[0]):
+        for r in range(cols):
+            out[a, r] = 0.0
+        for z in range(aptr[j, a], aptr[j, a + 1]):
+            f = aval[j, z]
+            e = acol[j, z]
+            for r in range(cols):
+                out[a, r] += f * X[e, r]
+
+
+@numba.njit(cache=True)
+def _transpose_times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - compiled
+    """``out[:, :cols] = A[j]^T X[:, :cols]`` over the nonzeros of ``A[j]`` by row (:func:`sparse_rows`), the sums
+    in the order of ``A[j]``'s rows."""
+    for a in range(out.shape[0]):
+        for r in range(cols):
+            out[a, r] = 0.0
+    for e in range(out.shape[0]):
+        for z in range(aptr[j, e], aptr[j, e + 1]):
+            f = aval[j, z]
+            a = acol[j, z]
+            for r in range(cols):
+                out[a, r] += f * X[e, r]
+
+
+@numba.njit(cache=True)
 def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval):  # pragma: no cover - compiled
     r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
 
@@ -210,36 +239,15 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval): 
             rows += p
             tt += 1
         # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T (over the nonzeros of A, by row)
-        for a in range(n):
-            for r in range(rows):
-                newB[a, r] = 0.0
-            for z in range(aptr[j, a], aptr[j, a + 1]):
-                f = aval[j, z]
-                e = acol[j, z]
-                for r in range(rows):
-                    newB[a, r] += f * BT[e, r]
+        _times_sparse(aptr, acol, aval, j, BT, rows, newB)
         for a in range(n):
             for r in range(rows):
                 BT[a, r] = newB[a, r]
-        for a in range(n):  # tmp = A Sigma
-            for b in range(n):
-                tmp[a, b] = 0.0
-            for z in range(aptr[j, a], aptr[j, a + 1]):
-                f = aval[j, z]
-                e = acol[j, z]
-                for b in range(n):
-                    tmp[a, b] += f * Sig[e, b]
+        _times_sparse(aptr, acol, aval, j, Sig, n, tmp)  # tmp = A Sigma
         for a in range(n):  # tmpT = (A Sigma)^T = Sigma A^T (Sigma symmetric)
             for b in range(n):
                 tmpT[b, a] = tmp[a, b]
-        for a in range(n):  # Sigma = A tmpT
-            for b in range(n):
-                Sig[a, b] = 0.0
-            for z in range(aptr[j, a], aptr[j, a + 1]):
-                f = aval[j, z]
-                e = acol[j, z]
-                for b in range(n):
-                    Sig[a, b] += f * tmpT[e, b]
+        _times_sparse(aptr, acol, aval, j, tmpT, n, Sig)  # Sigma = A tmpT
         for q in range(nw):
             w = W[q0 + j * nw + q]
             if w == 0.0:
@@ -280,15 +288,7 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval):  # pragma
                 if f != 0.0:
                     for i in range(k):
                         RTn[col, i] += f * TT[a, i]
-        for a in range(n):  # T <- T A(j), transposed: TT <- A^T TT (over the nonzeros of A, by row)
-            for i in range(k):
-                newT[a, i] = 0.0
-        for e in range(n):
-            for z in range(aptr[j, e], aptr[j, e + 1]):
-                f = aval[j, z]
-                a = acol[j, z]
-                for i in range(k):
-                    newT[a, i] += f * TT[e, i]
+        _transpose_times_sparse(aptr, acol, aval, j, TT, k, newT)  # T <- T A(j), transposed: TT <- A^T TT
         for a in range(n):
             for i in range(k):
                 TT[a, i] = newT[a, i]
@@ -386,15 +386,8 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                     for b in range(n):
                         s += fa * O[a, b] * E[j, b, q]
             wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
-        for a in range(n):  # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
-            for b in range(n):
-                tmp[a, b] = 0.0
-        for e in range(n):  # tmp = A^T O
-            for z in range(aptr[j, e], aptr[j, e + 1]):
-                f = aval[j, z]
-                a = acol[j, z]
-                for b in range(n):
-                    tmp[a, b] += f * O[e, b]
+        # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
+        _transpose_times_sparse(aptr, acol, aval, j, O, n, tmp)  # tmp = A^T O
         for a in range(n):  # O = tmp A
             for b in range(n):
                 O[a, b] = 0.0
