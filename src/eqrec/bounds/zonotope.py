@@ -101,6 +101,26 @@ def outer_row_sums(G: np.ndarray) -> np.ndarray:
     return np.nextafter(s * (1.0 + (q + 2) * _U), np.inf)
 
 
+def hull_pad(G: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    r"""The radii of the ``n`` axis-aligned generators that bring the interval hull of ``G ε`` up to ``bounds``:
+    :math:`\mathrm{nextafter}(\max(b_i - \sum_j |G_{ij}|, 0), +\infty)` (an estimator's reported set, ``[G,
+    diag(pad)]``, whose pad covers what its bound holds beyond ``G``: the rounding allowance).
+
+    Parameters
+    ----------
+    G : ndarray, shape (n, q)
+        Generators.
+    bounds : ndarray, shape (n,)
+        Per-state bounds.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The pad, rounded up (zero or more).
+    """
+    return np.nextafter(np.maximum(bounds - np.abs(G).sum(axis=1), 0.0), np.inf)
+
+
 #: Longest row :func:`outer_row_sums_of_parts` sums (NumPy reduces a longer one in buffered chunks).
 _PARTS_LIMIT = 4096
 

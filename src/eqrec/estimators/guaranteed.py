@@ -141,7 +141,7 @@ import numpy as np
 from eqrec.arrivals.packets import Packet, as_packets, check_estimate
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
-from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order, outer_row_sums,
+from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order, hull_pad, outer_row_sums,
                                    row_sums_of_parts_compiled)
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
@@ -450,12 +450,12 @@ class GuaranteedEstimator:
             return self._sm.predicted
         G = self.linear_error_model() if self._use_sm is not None else self._set.current
         bounds = self._bounds
-        sums = np.abs(G).sum(axis=1)  # the pad as the set-membership estimator's (ZonotopeEstimator.carried_set)
-        over = sums > bounds  # the level is below the designed set's worst case: the level's box for that state
+        # a row whose worst case lies above its bound (the designed level): the level's box for that state
+        over = np.abs(G).sum(axis=1) > bounds
         if self._use_sm is not None:  # a set-membership row is its carried set's, padded to its own bound already
             over &= ~self._use_sm
-        G = np.where(over[:, None], 0.0, G)
-        pad = np.where(over, bounds, np.nextafter(np.maximum(bounds - sums, 0.0), np.inf))
+        G = np.where(over[:, None], 0.0, G)  # the other rows keep their sums: their pad as the estimator's
+        pad = np.where(over, bounds, hull_pad(G, bounds))
         return StateSet.around(self.time, self._xhat, bounds, np.concatenate([G, np.diag(pad)], axis=1))
 
     @property

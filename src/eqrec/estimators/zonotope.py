@@ -143,8 +143,8 @@ import numpy as np
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance_compiled
 from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
-from eqrec.bounds.zonotope import check_order, outer_row_sums, principal_axes, reduce_girard, reduce_pca, \
-    reduce_pca_pair
+from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
+    reduce_pca, reduce_pca_pair
 from eqrec.checks import radii
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
@@ -877,8 +877,7 @@ class ZonotopeEstimator:
         states = np.arange(n)
         blocks = [np.where((pick == k)[:, None], R[k, :, :q0], 0.0) for k in range(R.shape[0])]
         G = np.concatenate(blocks + [R[pick, states, q0:]], axis=1)
-        pad = np.nextafter(np.maximum(beta - np.abs(G).sum(axis=1), 0.0), np.inf)
-        return np.concatenate([G, np.diag(pad)], axis=1)
+        return np.concatenate([G, np.diag(hull_pad(G, beta))], axis=1)
 
     def linear_error_model(self) -> np.ndarray:
         """The generators of the error set of the current estimate (:attr:`carried_set`): what
