@@ -154,9 +154,17 @@ def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y
         return []
     if isinstance(y, _Checked) and y.now == now and y.shape == shape:
         return y
+    if type(y) is np.ndarray:  # the common form, y(now) on time: checked without the general reader's steps
+        fast = _plain_measurement(y, shape)
+        if fast is not None:
+            out = _Checked([Stamped(int(now), fast)])
+            out.now, out.shape = now, shape
+            return out
     if isinstance(y, (str, bytes)):
         raise InputError("a measurement must be numbers, got a string", field=field)
-    if _is_packet(y) or _is_pair(y):
+    if type(y) is list and all(type(item) is Packet for item in y):  # late packets as the simulation gives them
+        items = y
+    elif _is_packet(y) or _is_pair(y):
         items = [y]
     elif isinstance(y, np.ndarray) or _is_number(y) or (isinstance(y, (list, tuple)) and all(_is_number(e) for e in y)):
         items = [Stamped(int(now), y)]
@@ -168,7 +176,7 @@ def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y
     out.now, out.shape = now, shape
     seen: set[int] = set()
     for item in items:
-        if _is_packet(item):
+        if type(item) is Packet or _is_packet(item):
             tau, val = item.time, item.y
         elif isinstance(item, (tuple, list)) and len(item) == 2 and not np.isscalar(item[1]):
             tau, val = item
@@ -182,9 +190,28 @@ def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y
         if int(tau) in seen:
             raise InputError(f"a second packet stamped {tau} received at time {now}", field=field)
         seen.add(int(tau))
-        y_tau = finite_array(val, shape, field, f"the measurement of time {tau}", "p")
-        out.append(Stamped(int(tau), in_scale(y_tau, field, f"the measurement of time {tau}")))
+        y_tau = _plain_measurement(val, shape) if type(val) is np.ndarray else None
+        if y_tau is None:  # any other form, or a value the general checks refuse (they name it)
+            y_tau = finite_array(val, shape, field, f"the measurement of time {tau}", "p")
+            y_tau = in_scale(y_tau, field, f"the measurement of time {tau}")
+        out.append(Stamped(int(tau), y_tau))
     return out
+
+
+def _plain_measurement(value: np.ndarray, shape: tuple[int, ...]) -> "np.ndarray | None":
+    """A float array of exactly ``shape`` with finite entries of magnitude at most :data:`MAX_DATA_MAGNITUDE`, as a
+    new array (what :func:`finite_array` and :func:`in_scale` return for it); ``None`` for anything else, which the
+    general checks then read (and refuse with their message, or accept in another form).
+
+    A NaN fails ``<=`` and an infinity exceeds the limit, so both are left to the general checks."""
+    if value.dtype != np.float64 or value.shape != shape or value.size > 64:
+        return None
+    arr = np.array(value, dtype=float)  # the general reader's copy (its memory order too)
+    limit = MAX_DATA_MAGNITUDE
+    for entry in arr.ravel().tolist():
+        if not -limit <= entry <= limit:
+            return None
+    return arr
 
 
 #: The largest magnitude of a measurement, input or initial estimate an estimator takes.  Every estimate is a
@@ -272,6 +299,10 @@ def check_input(u, m: int) -> np.ndarray:
     """
     if u is None:
         return np.zeros(m)
+    if type(u) is np.ndarray:  # the common form: a flat float vector, checked without the general steps
+        fast = _plain_measurement(u, (m,))
+        if fast is not None:
+            return fast
     return in_scale(_flat(u, finite_array(u, (m,), "u", "the input u", "m"), "u", "the input u"), "u",
                     "the input u")
 
