@@ -70,11 +70,11 @@ class UncachedGuaranteed(GuaranteedEstimator):
             if (now - self._t0) % T == 0 and np.all(outer_row_sums(self._sm.carried_set[1]) <= self.mu1):
                 self._spare = UncachedClassEstimator(self.system, self.gains, periodic=True, bound_of=self.bound_of,
                                                      mu1=self.mu1)
-                est = self._return_to_design(now, packets, u, self._sm.carried_set)
+                est, _ = self._return_to_design(now, packets, u, self._sm.carried_set)
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
-        opened = est._open(packets, u)
+        opened = est._open(packets, u)  # opened again, on purpose: the twin does what the step did before
         t, S = opened.t, tuple(sorted(opened.yxi))
         if not has_class(self.gains, t + 1, S):
             xhat, _ = self._sm.step(packets, u)

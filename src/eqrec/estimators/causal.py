@@ -312,6 +312,10 @@ class ClassEstimator(StampedEstimator):
         # the state update's length (the terms of its rounding injection) and the allowance's factor 1 + (2n + 8) u
         self._terms = (system.n + system.nw + system.m + 3, 1.0 + (2 * system.n + 8) * UNIT_ROUNDOFF)
         self._no_packets = (np.zeros(0, dtype=np.int64), np.zeros((0, system.n)), np.zeros((0, system.p)))
+        # what the compiled step takes of the model, looked up once (:meth:`_class_step_args`): the output model,
+        # and the state model of a time-invariant system
+        self._outputs: "tuple | None" = None
+        self._fixed_model: "tuple | None" = None
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
         if self.bound_of is not None:  # the levels looked up, shared by the estimators of these gains and rule
             self._levels = self._steps().levels(self.bound_of)
@@ -479,8 +483,9 @@ class ClassEstimator(StampedEstimator):
         ``_allowance``: the same numbers.  Called once the step's class is known (the step can no longer fail)."""
         sysm, t = self.system, step.t
         S = entry.key[1]
-        record = RoundingRecord(self.T, sysm.n, sysm.p, self._rho.copy()) if t == 0 else self._record
-        new = self._new_packets(step)
+        record = RoundingRecord(self.T, sysm.n, self._p, self._rho.copy()) if t == 0 else self._record
+        before = {} if t == 0 else self._yxi  # the packets first received at this step (:meth:`_new_packets`)
+        new = [tau for tau in step.yxi if tau not in before]
         if not new:
             taus, references, residuals = self._no_packets
         elif len(new) == 1:
@@ -491,16 +496,28 @@ class ClassEstimator(StampedEstimator):
             taus = np.array(new, dtype=np.int64)
             references = np.array([step.history[tau] for tau in new])
             residuals = np.array([step.yxi[tau] for tau in new])
-        absC, v, output_terms = self._output_model()
-        A, B, absA, absB, e, f, drift, has_input = self._class_model(t)
+        outputs = self._outputs
+        if outputs is None:
+            outputs = self._outputs = self._output_model()
+        absC, v, output_terms = outputs
+        model = self._fixed_model if not self._varying else None
+        if model is None:
+            model = self._class_model(t)
+            if not self._varying:
+                self._fixed_model = model
+        A, B, absA, absB, e, f, drift, has_input = model
         has_data = bool(S)
         if has_data:
             r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
         else:
             r = self._zeros
+        if self.error_radius is not None:  # :meth:`_radius`, inline
+            radius = float(self.error_radius)
+        else:
+            radius = float(self.bound) if math.isfinite(self.bound) else 0.0
         args = (A, self.xhat if step.restarted else self._xbar, B, step.u, sysm.f, entry.gain, r, has_data, self.xhat,
-                self._radius(), t, record.true, taus, references, residuals, absC, v, output_terms, record.v, absA,
-                absB, e, f, drift, has_input, self._terms[0], record.w, entry.abs_gain, len(S) * sysm.p + 2,
+                radius, t, record.true, taus, references, residuals, absC, v, output_terms, record.v, absA,
+                absB, e, f, drift, has_input, self._terms[0], record.w, entry.abs_gain, len(S) * self._p + 2,
                 entry.rounding_map, record.z, self._terms[1])
         return record, args
 

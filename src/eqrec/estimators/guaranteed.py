@@ -146,7 +146,7 @@ from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order,
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.error_maps import blas_ready, class_step
-from eqrec.estimators.intake import BoundRule
+from eqrec.estimators.intake import BoundRule, OpenedStep
 from eqrec.estimators.protocol import StateSet
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
@@ -300,6 +300,7 @@ class GuaranteedEstimator:
             raise InputError("strict=False needs class gains (a design of the class engine, engine='classes'): the "
                              "bound outside the language is computed from the class maps", field="strict")
         self.system, self.gains, self.bound_of = system, gains, bound_of
+        self._p = system.p
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
         self.strict = bool(strict)
@@ -577,10 +578,12 @@ class GuaranteedEstimator:
             arrival prefix outside the design, or a step past the horizon of
             a non-periodic estimator.
         """
-        est = self._running()
-        packets = as_packets(y, self.time, self.system.p)
-        if not self.strict:
-            return self._relaxed_step(est, packets, u)
+        est = self._est
+        if est is None:
+            self._running()  # raises: reset first
+        if not self.strict:  # (the time: :attr:`time`)
+            return self._relaxed_step(est, as_packets(y, self._sm.time if self._outside else est._k, self._p), u)
+        packets = as_packets(y, est.time, self._p)
         try:
             xhat, bound = est.step(packets, u)  # bound: μ1 at the period's end, else the observed prefix's level
         except InputError as err:
@@ -599,16 +602,18 @@ class GuaranteedEstimator:
         it is ready, with all the information of the run.  In the design, with ``tight=True``, each state is
         reported from whichever of the two has the smaller exact bound (module docstring).
         """
-        T = self.gains.horizon
         if self._outside:
+            T = self.gains.horizon
             now = self._sm.time
             carried = self._sm.carried_set if (now - self._t0) % T == 0 else None
             if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
-                est = self._return_to_design(now, packets, u, carried)  # checked first: nothing changes if it raises
+                # checked first: nothing changes if it raises; the step opened there is the one taken below
+                est, opened = self._return_to_design(now, packets, u, carried)
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
-        opened = est._open(packets, u)  # every input checked once, for both estimators; nothing changes
+        else:
+            opened = est._open(packets, u)  # every input checked once, for both estimators; nothing changes
         entry = est._class(opened)  # the class (t+1, S) and what it needs, kept per class (ClassSteps)
         # the set-membership estimator takes the checked packets and input as they are (one intake)
         checked_u = None if u is None else opened.u
@@ -652,21 +657,22 @@ class GuaranteedEstimator:
         self.bound = float(self._bounds.max())
         return xhat, self.bound
 
-    def _return_to_design(self, now: int, packets, u, carried: tuple[np.ndarray, np.ndarray]) -> ClassEstimator:
+    def _return_to_design(self, now: int, packets, u,
+                          carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, OpenedStep]":
         """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
-        in the ``μ1`` box)."""
+        in the ``μ1`` box), and the step opened on them (the step is opened once, on the estimator reset here)."""
         centre, generators = carried
         # a spare class estimator, made once and reset at each return (making one checks every class gain)
         est = self._spare
         if est is None:
             est = make_estimator(self.system, self.gains, None, periodic=True, bound_of=self.bound_of, mu1=self.mu1)
         est.reset(centre, t0=now)
-        est._open(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
+        opened = est._open(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
         self._use_sm = None
         self._xhat = centre
-        return est
+        return est, opened
 
     def update(self, y=None, u=None) -> np.ndarray:
         """The filterpy spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.

@@ -274,6 +274,9 @@ class StampedEstimator:
         self.error_radius: "float | None" = None  # the true error's size, when a wrapper knows it (else the bound)
         self._norms: dict = {}
         self._varying = system.is_time_varying  # a frozen system: asked once (its matrices are cached by time)
+        # asked once per estimator, not per step: the input and output sizes, and C when it does not vary in time
+        self._m, self._p = system.m, system.p
+        self._C_fixed = system.C if system.C.ndim == 2 else None
         self._levels = _levels_kept(self.bound_of)  # observed prefix -> its level (:meth:`_level`)
         self._zeros = np.zeros(system.n)
         self._clear(int(t0))
@@ -504,7 +507,7 @@ class StampedEstimator:
         return self._start
 
     def _packets(self, y) -> list[Stamped]:
-        return as_packets(y, self._k, self.system.p)
+        return as_packets(y, self._k, self._p)
 
     def _reference(self, restarted: bool) -> np.ndarray:
         """The state of the current time whose predicted output the measurements of this time are compared with."""
@@ -512,7 +515,8 @@ class StampedEstimator:
 
     def _residual(self, tau: int, y: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """The residual ``y(τ) − C(τ) ref(τ)`` of a packet stamped at period time ``τ``."""
-        return y - self.system.C_at(tau) @ reference
+        C = self._C_fixed  # C_at(τ) is C itself for a C without a time axis: the same product
+        return y - (self.system.C_at(tau) if C is None else C) @ reference
 
     def _open(self, y, u, restart_at_now: bool = False) -> OpenedStep:
         """Check what arrived at the current time and ``u``, and build the step's state aside (nothing changes).
@@ -523,10 +527,10 @@ class StampedEstimator:
         stamped before the current period are dropped and counted in
         :attr:`dropped_packets` when the step commits.
         """
-        sys = self.system
-        self._running()
+        if self.xhat is None:
+            self._running()  # raises: reset first
         packets = self._packets(y)
-        u = check_input(u, sys.m)
+        u = check_input(u, self._m)
         restarted = restart_at_now or self._t == self.T
         if self._t == self.T and not self.periodic and not restart_at_now:
             raise InputError(f"the estimator's horizon T = {self.T} is over{self._restart_hint}")
