@@ -315,6 +315,7 @@ class ClassEstimator(StampedEstimator):
         # what the compiled step takes of the model, looked up once (:meth:`_class_step_args`): the output model,
         # and the state model of a time-invariant system
         self._outputs: "tuple | None" = None
+        self._one_tau = [np.array([tau], dtype=np.int64) for tau in range(gains.horizon)]
         self._fixed_model: "tuple | None" = None
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
         if self.bound_of is not None:  # the levels looked up, shared by the estimators of these gains and rule
@@ -490,7 +491,7 @@ class ClassEstimator(StampedEstimator):
             taus, references, residuals = self._no_packets
         elif len(new) == 1:
             tau = new[0]
-            taus = np.array(new, dtype=np.int64)
+            taus = self._one_tau[tau]  # np.array([τ], dtype=np.int64), made once per period time (only read)
             references, residuals = step.history[tau].reshape(1, -1), step.yxi[tau].reshape(1, -1)
         else:
             taus = np.array(new, dtype=np.int64)

@@ -321,6 +321,8 @@ class GuaranteedEstimator:
         self._xhat: np.ndarray | None = None  # strict=False: the reported estimate
         self._spare: ClassEstimator | None = None  # strict=False: the class estimator not in use (returns)
         self._use_sm: np.ndarray | None = None  # tight, in the design: the states reported from the set-membership
+        # strict=False: (error set, period start, its generators as the compiled step takes them), kept per period
+        self._anchor: "tuple[ErrorSet, int, np.ndarray] | None" = None
 
     @property
     def in_design(self) -> bool:
@@ -630,7 +632,12 @@ class GuaranteedEstimator:
         record, args = est._class_step_args(opened, entry)
         level = est._level_at(opened.t + 1, opened.arrivals)
         state, noise = entry.parts
-        start_set = blas_ready(self._set.at(opened.start))
+        anchor = self._anchor  # the set of the period's start, as the compiled product takes it: once per period
+        if anchor is not None and anchor[0] is self._set and anchor[1] == opened.start:
+            start_set = anchor[2]
+        else:
+            start_set = blas_ready(self._set.at(opened.start))  # (reduced on this first use, then kept as it is)
+            self._anchor = (self._set, opened.start, start_set)
         out, use_sm = np.empty((5, self.system.n)), np.empty(self.system.n, np.bool_)
         if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
             P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,

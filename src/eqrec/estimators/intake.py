@@ -277,6 +277,7 @@ class StampedEstimator:
         # asked once per estimator, not per step: the input and output sizes, and C when it does not vary in time
         self._m, self._p = system.m, system.p
         self._C_fixed = system.C if system.C.ndim == 2 else None
+        self._no_input = np.zeros(self._m)  # u = None: the zero input, shared by the steps (read only)
         self._levels = _levels_kept(self.bound_of)  # observed prefix -> its level (:meth:`_level`)
         self._zeros = np.zeros(system.n)
         self._clear(int(t0))
@@ -530,18 +531,18 @@ class StampedEstimator:
         if self.xhat is None:
             self._running()  # raises: reset first
         packets = self._packets(y)
-        u = check_input(u, self._m)
-        restarted = restart_at_now or self._t == self.T
-        if self._t == self.T and not self.periodic and not restart_at_now:
+        u = self._no_input if u is None else check_input(u, self._m)  # (the zero input is only read, never written)
+        at_end = self._t == self.T
+        restarted = restart_at_now or at_end
+        if at_end and not self.periodic and not restart_at_now:
             raise InputError(f"the estimator's horizon T = {self.T} is over{self._restart_hint}")
         k = self._k
         if restarted:
-            t, start, arrivals, history, yxi = 0, k, [], [], {}
+            t, start, arrivals, history, yxi = 0, k, [None], [], {}
         else:
             t, start = self._t, self._start
-            arrivals, history, yxi = list(self._arrivals), list(self._history), dict(self._yxi)
+            arrivals, history, yxi = self._arrivals + [None], self._history.copy(), self._yxi.copy()
         history.append(self._reference(restarted).copy())
-        arrivals.append(None)
         dropped = 0
         for pk in packets:
             tau = pk.time - start
