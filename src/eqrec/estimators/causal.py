@@ -158,7 +158,7 @@ class RecoveryEstimator(StampedEstimator):
         """The allowance of the node estimate (:mod:`eqrec.estimators.intake`): the period's error maps with
         identity noise gains, ``G(t+1) = A G(t) + I_w(t) + Σ_τ F_τ (C(τ) G(τ) + I_v(τ))`` over ``(w, v, ξ(s))``
         (``τ`` received; ``ξ`` gains ``+u_e``), carry the roundings injected into the state and the measurements."""
-        sysm, t, p, n, T = self.system, step.t, self.system.p, self.system.n, self.T
+        sysm, t, p, n, T = self.system, step.t, self._p, self._n, self.T
         record = self._period_record(step)
         if t == 0:
             G0 = np.zeros((n, T * (n + p) + n))
@@ -440,7 +440,7 @@ class ClassEstimator(StampedEstimator):
                                  f"{[step.start + tau for tau in S]} have arrived; the gains have no class "
                                  f"({step.t + 1}, {list(S)})", field="y")
         record, args = self._class_step_args(step, entry)
-        out = np.empty((3, self.system.n))
+        out = np.empty((3, self._n))
         top = class_step(*args, out)
         level = self._level_at(step.t + 1, step.arrivals)
         xbar, xhat, rho = out
@@ -484,7 +484,7 @@ class ClassEstimator(StampedEstimator):
         ``_allowance``: the same numbers.  Called once the step's class is known (the step can no longer fail)."""
         sysm, t = self.system, step.t
         S = entry.key[1]
-        record = RoundingRecord(self.T, sysm.n, self._p, self._rho.copy()) if t == 0 else self._record
+        record = RoundingRecord(self.T, self._n, self._p, self._rho.copy()) if t == 0 else self._record
         before = {} if t == 0 else self._yxi  # the packets first received at this step (:meth:`_new_packets`)
         new = [tau for tau in step.yxi if tau not in before]
         if not new:

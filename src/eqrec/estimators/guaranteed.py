@@ -300,7 +300,7 @@ class GuaranteedEstimator:
             raise InputError("strict=False needs class gains (a design of the class engine, engine='classes'): the "
                              "bound outside the language is computed from the class maps", field="strict")
         self.system, self.gains, self.bound_of = system, gains, bound_of
-        self._p = system.p
+        self._n, self._p = system.n, system.p
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
         self.strict = bool(strict)
@@ -638,7 +638,8 @@ class GuaranteedEstimator:
         else:
             start_set = blas_ready(self._set.at(opened.start))  # (reduced on this first use, then kept as it is)
             self._anchor = (self._set, opened.start, start_set)
-        out, use_sm = np.empty((5, self.system.n)), np.empty(self.system.n, np.bool_)
+        n = self._n
+        out, use_sm = np.empty((5, n)), np.empty(n, np.bool_)
         if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
             P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
                                                   self.tight, out, use_sm)

@@ -275,7 +275,10 @@ class StampedEstimator:
         self._norms: dict = {}
         self._varying = system.is_time_varying  # a frozen system: asked once (its matrices are cached by time)
         # asked once per estimator, not per step: the input and output sizes, and C when it does not vary in time
-        self._m, self._p = system.m, system.p
+        self._n, self._m, self._p = system.n, system.m, system.p
+        # the lengths of the rounding injections' dot products beyond the estimator's own (module docstring)
+        self._state_terms_extra = system.nw + system.m + 3
+        self._output_terms = system.n + system.nv + 2
         self._C_fixed = system.C if system.C.ndim == 2 else None
         self._no_input = np.zeros(self._m)  # u = None: the zero input, shared by the steps (read only)
         self._levels = _levels_kept(self.bound_of)  # observed prefix -> its level (:meth:`_level`)
@@ -412,7 +415,7 @@ class StampedEstimator:
         if own is not None:
             add = add + own
         record.w[step.t] = injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
-                                           length + self.system.nw + self.system.m + 3)
+                                           length + self._state_terms_extra)
 
     def _drift(self, t: int) -> np.ndarray:
         """``|E| η_w 1 + 2 |f|`` at period time ``t`` (cached): the part of a state update's magnitude without input."""
@@ -428,14 +431,13 @@ class StampedEstimator:
         """Enter the rounding of a residual ``y(τ) − C ref(τ)`` and of the simulated ``y(τ) = C x(τ) + V v(τ)``,
         an injection into the measurement of ``τ``."""
         _, _, absC, _, v, _ = self._absolute_model(tau)
-        record.v[tau] = injection_bound(absC, reference, 2.0, record.true[tau], residual, v,
-                                        self.system.n + self.system.nv + 2)
+        record.v[tau] = injection_bound(absC, reference, 2.0, record.true[tau], residual, v, self._output_terms)
 
     def _allowance(self, record: "RoundingRecord", maps: np.ndarray, extra: "np.ndarray | float" = 0.0) -> np.ndarray:
         """``ρ = |G| (ι_w, ι_v, ρ(s)) + extra``, rounded up (module docstring); ``maps`` is ``|G|``, the absolute
         error map of the current estimate with identity noise gains, columns ``(w, v, ξ0)``."""
         total = maps @ record.z + extra
-        return np.nextafter(total * (1.0 + (2 * self.system.n + 8) * UNIT_ROUNDOFF), np.inf)
+        return np.nextafter(total * (1.0 + (2 * self._n + 8) * UNIT_ROUNDOFF), np.inf)
 
     def _with_rounding(self, level: float) -> float:
         """The reported bound: the level plus the allowance, rounded up (``inf`` stays ``inf``)."""
