@@ -114,21 +114,31 @@ set at the period's start depends on the earlier periods) and the choice per
 state.  Its products go through BLAS as NumPy's ``@`` does and its sums run
 in NumPy's order, so every number is the one of the uncompiled step
 (``tests/test_class_step_cache.py``, bit for bit).  Measured side by side
-(``python benchmarks/bench_tight.py --part cost``: the estimators in lockstep
-on the same arrivals, CPU µs per step on a loaded shared machine, so read the
-ratios; 0/20/40 % loss; two runs): in the design ``strict=False`` costs
-1.25–1.38× the set-membership estimator alone on the two carts (a
-set-membership step of 300–450 µs there), 1.17–1.28× on the cart-pole and
-1.03–1.10× on the ``n = 10`` chain (a step of some milliseconds); the
-previous, uncompiled step measured 1.38–1.52×, 1.19–1.34× and 1.06–1.13× in
-the same way.  The designed side is about 90–125 µs at ``n = 4`` on that
-machine, and ``strict=True`` costs about 30 % less than before (56–61 µs
-against 74–83 µs per step, measured back to back).
-What is left is Python around the compiled call (the class form's intake,
-the class lookup, the period's record) and the Girard reduction of the
-designed set at each period start.  Out of the design a step is the
-set-membership step.  ``tight=False`` costs the same as ``tight=True`` (the
-set-membership estimator runs for the fallback either way).
+(``python benchmarks/bench_versions.py --old <src>``: this version and the
+previous one in one lockstep on the same arrivals, the cost table of
+``python benchmarks/bench_tight.py --part cost``; CPU µs per step on a shared
+machine loaded to 4–5 processes on 2 cores, so read the ratios; 0/20/40 %
+loss; three runs): in the design ``strict=False`` costs 1.30–1.54× the
+set-membership estimator alone on the two carts (a set-membership step of
+280–430 µs there), 1.23–1.42× on the cart-pole and 1.05–1.16× on the
+``n = 10`` chain; the previous version measured 1.27–1.49×, 1.22–1.42× and
+1.05–1.11× in the same runs.  Both sides got faster by about the same number
+of µs: the packet intake's fast path (:func:`eqrec.arrivals.packets.as_packets`,
+20–60 µs per step at ``n = 4``) speeds the set-membership estimator alone as
+much as ``strict=False``, so ``strict=False`` is 5–12 % faster per step but its
+ratio did not fall; ``strict=True`` is 25–30 % faster (74–125 µs against
+103–179 µs in the same runs).  The designed side (``strict=False`` in the
+design minus the set-membership step) is about 85–180 µs at ``n = 4`` in the
+lockstep, against about 30 µs when its pieces run back to back on their own
+(``timeit``: opening the step 5 µs, the compiled call's arguments 6 µs, the
+compiled call 13 µs of which 5–6 µs pass its 42 arguments, the rest 5 µs):
+its many small Python and NumPy operations run cold after a set-membership
+step.  What is left is that Python around the compiled call (the class form's
+intake, the residuals and the stacked data, the class lookup, the period's
+record) and the Girard reduction of the designed set at each period start;
+the ``1.2×`` of issue 40 needs them in fewer, compiled steps.  Out of the
+design a step is the set-membership step.  ``tight=False`` costs the same as
+``tight=True`` (the set-membership estimator runs for the fallback either way).
 """
 
 from __future__ import annotations
