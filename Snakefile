@@ -40,6 +40,22 @@ if workflow.is_main_process:
 report: "workflow/report/workflow.rst"
 
 
+# Snakemake's scheduler (9.x) ends every scheduling pass by starting a timer for its job rate limiter
+# (--max-jobs-per-timespan, default 100/1s) that wakes it for another pass a second later; each finished job
+# starts one more such chain, so by the end of the main job dozens of passes run per second, each reading the
+# size of every input of every waiting job (a rule's inputs include the package modules its step imports).
+# On 2 cores that took tens of seconds of CPU from the jobs per forced run. Local jobs are not submitted to
+# any queue the limit protects, so on the local executor the limiter is dropped (a pass then runs when a job
+# ends); a cluster executor (the SLURM profile) keeps it.
+onstart:
+    scheduler = getattr(workflow, "scheduler", None)
+    if (
+        workflow.local_exec
+        and getattr(scheduler, "job_rate_limiter", None) is not None
+    ):
+        scheduler.job_rate_limiter = None
+
+
 configfile: "config/config.yaml"
 configfile: "config/p2.yaml"
 configfile: "config/p3.yaml"
