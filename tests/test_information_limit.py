@@ -304,10 +304,10 @@ def _tank_chain(n: int, p: int) -> eqrec.AffineSystem:
 
 @pytest.mark.parametrize("window", [None, 6])
 def test_large_plants_dual_simplex_in_alternating_order_gives_the_same_rows(window, monkeypatch):
-    """From LIMIT_DUAL_FROM_N states on the limit solves with the dual simplex and the states in alternating order
-    (lowered here to reach that path on a small asymmetric chain): every row, in state order, equals the primal
-    simplex's in fixed order and an independent solver's (a row stored in the solve order would differ: the
-    chain's sensors and leak make its states differ)."""
+    """From LIMIT_DUAL_FROM_N states on the limit solves with the primal-then-dual fallback and the states in
+    alternating order (lowered here to reach that path on a small asymmetric chain): every row, in state order,
+    equals the primal simplex's in fixed order and an independent solver's (a row stored in the solve order would
+    differ: the chain's sensors and leak make its states differ)."""
     import eqrec.bounds.information as info
 
     plant = _tank_chain(5, 2)

@@ -46,8 +46,9 @@ times on the batch reactor at 400 steps, with the same values to 4e-11).  A meas
 :math:`C(\tau)x(\tau) + V(\tau)v(\tau)` are free until it is delivered and fixed to 0 from then on: going from
 step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps one model per chunk of
 :data:`CHUNK` steps (the LP up to the chunk's last step) and starts every solve from the previous optimal basis
-(primal simplex, :data:`HIGHS_OPTIONS`; from :data:`LIMIT_DUAL_FROM_N` states on, the dual simplex with the
-states in alternating order, :data:`LIMIT_HIGHS_OPTIONS`); other solvers solve each LP from scratch.  The cost of
+(primal simplex, :data:`HIGHS_OPTIONS`; from :data:`LIMIT_DUAL_FROM_N` states on, the states in alternating
+order and each objective the primal simplex for at most :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then the dual
+simplex of :data:`LIMIT_HIGHS_OPTIONS` from where it stopped); other solvers solve each LP from scratch.  The cost of
 a step grows with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).
 Rows are cached by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree,
 and repeated calls on one trace, share their LPs (:func:`cache_info`).
@@ -379,10 +380,13 @@ LIMIT_HIGHS_OPTIONS = {"simplex_strategy": 1, "simplex_dual_edge_weight_strategy
 #: it goes on with the dual simplex (:data:`LIMIT_HIGHS_OPTIONS`): 150 and 400 took the same time at n = 30.
 LIMIT_PRIMAL_ITERATIONS = 200
 
-#: The smallest state dimension whose limit uses :data:`LIMIT_HIGHS_OPTIONS` and the alternating order of
-#: :func:`_limit_order`; below it, the primal simplex with the states in increasing order (on ACC, n = 3, and
-#: the batch reactor, n = 4, at 400 steps the dual simplex took 1.0-1.5 times as long, on tank chains of
-#: n = 4 and 10 at 150 steps 2.0 and 1.05 times).
+#: The smallest state dimension whose limit uses the fallback to :data:`LIMIT_HIGHS_OPTIONS` and the alternating
+#: order of :func:`_limit_order`; below it, the primal simplex to the end with the states in increasing order, so
+#: the limits of the compare study's plants (n <= 4) are those of before, byte for byte.  (On ACC, n = 3, and the
+#: batch reactor, n = 4, at 400 steps the dual simplex alone took 1.0-1.5 times as long, on tank chains of n = 4
+#: and 10 at 150 steps 2.0 and 1.05 times.  The primal-then-dual fallback at 150 steps: n = 6, 1.2-1.3 times as
+#: long; n = 10, 0.7 times, but its values differ from the primal path's by up to 5e-9, past the 1e-9 between solve
+#: orders documented here, so the threshold stays.)
 LIMIT_DUAL_FROM_N = 16
 
 
