@@ -60,7 +60,10 @@ and the message offers a window (below) with its own estimate.  The same LP with
 delivered rows' values gives the exact consistent set on the data (:func:`eqrec.bounds.consistent.consistent_set`).
 
 Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity with the class levels holds to
-1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.
+1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.  On a
+150-step tank chain of n = 30 the primal-then-dual fallback (below 16 states unused) and the dual simplex alone
+agree to 1e-9 on 4,499 of the 4,500 values (median 6e-13); on the last the fallback's warm solve stopped 5.4e-9
+(relative 1.5e-8) below the optimum that cold solves (either simplex, the interior point with crossover) agree on.
 
 Window (``window=W``): the rows ``kW .. (k+1)W - 1`` use the box :math:`[-r(s), r(s)]` at the start
 ``s = (k-1)W`` rounded down to a multiple of ``K`` (:math:`r(s)` is row ``s - 1``) and the data of times
@@ -370,10 +373,12 @@ HIGHS_OPTIONS = {"simplex_strategy": 4, "primal_feasibility_tolerance": 1e-9, "d
 #: states (those next to a sensor) need thousands of iterations with either method from their neighbour's basis,
 #: where the primal simplex stalls (5,000-6,000 iterations, more than a cold solve) and the dual does not: the
 #: hybrid takes 152-168 ms per LP at n = 30 and 77-81 ms at n = 20, against 325 and 138 ms with the dual simplex
-#: alone (the values agree to 2e-10).  Before (dual simplex alone), measured on n = 20 at 60 steps: 7.3 s against
-#: 12.3 s with the primal simplex in fixed order and 11.0 s with the primal simplex alternating (the values agree
-#: to 6e-11); keeping the eliminated states boxed by a data-free reachable box (a redundant bound, so the same
-#: LP) made the dual simplex slower (9.0 s), and so did models of 16 or 64 steps instead of :data:`CHUNK`.
+#: alone (the values agree to 2e-10).  Over the whole 150 steps, back to back (process time): n = 20 131.6 ->
+#: 76.6 s, n = 30 426.3 -> 309.3 s (the early rows, on smaller LPs, gain less).  Before (dual simplex alone),
+#: measured on n = 20 at 60 steps: 7.3 s against 12.3 s with the primal simplex in fixed order and 11.0 s with the
+#: primal simplex alternating (the values agree to 6e-11); keeping the eliminated states boxed by a data-free
+#: reachable box (a redundant bound, so the same LP) made the dual simplex slower (9.0 s), and so did models of 16
+#: or 64 steps instead of :data:`CHUNK`.
 LIMIT_HIGHS_OPTIONS = {"simplex_strategy": 1, "simplex_dual_edge_weight_strategy": 1}
 
 #: The primal simplex iterations an objective of the limit gets, from :data:`LIMIT_DUAL_FROM_N` states on, before
