@@ -30,6 +30,20 @@ the fastest).  The goal, 60 s at n = 30 over 150 steps, is not met: each of the 
 (about 5,000 columns at n = 30) and takes a few hundred simplex iterations, and no old block can be dropped
 exactly here (an old block drops out only where the dual's adjoint is zero, and with p = 5 outputs for n = 30
 states the multipliers generically cannot cancel it).
+
+Measured 2026-11-29, third session (same tank chains and traces, 150 steps, process time, old = the dual simplex
+alone from 16 states on, new = each objective 200 primal simplex iterations, then the dual simplex from where they
+stopped, a state that needed the dual going to it at once from its own basis of the step before,
+:data:`eqrec.bounds.information.LIMIT_PRIMAL_ITERATIONS`; the two codes back to back in one script, 2 cores shared,
+load 2-6): n = 4, 10 (path unchanged, values byte-identical) 0.43 / 0.46 and 5.44 / 6.19 s; n = 20 131.6 ->
+76.6 s; n = 30 426.3 -> 309.3 s (growth about n^3.3, from n = 10 to 30).  Why: from a neighbour's optimum most
+states need 0-150 primal iterations (10-20 ms each at n = 30), but about a third (next to a sensor) need thousands
+with either simplex, and there the primal stalls; on the last rows the LP takes 152-168 ms against 325 ms, over
+the whole trace 1.4 times less.  Values: n = 20 within 7e-11 of before; n = 30 within 1e-9 but one of 4,500,
+5.4e-9 below the optimum that cold solves agree on.  Tried and not kept: the sparse form, the state at every step
+(``K = 1``: 1.5 times slower than ``K = 8`` with the dual simplex on the last 8 rows at n = 30, 1.3 with the
+primal); steepest-edge pricing (dual: 1.4 times slower; primal: 3 times); a dual feasibility tolerance of 1e-10
+in the dual phase (no closer to the cold optima).  The goal (60 s at n = 30) is still not met.
 """
 
 from __future__ import annotations

@@ -304,10 +304,10 @@ def _tank_chain(n: int, p: int) -> eqrec.AffineSystem:
 
 @pytest.mark.parametrize("window", [None, 6])
 def test_large_plants_dual_simplex_in_alternating_order_gives_the_same_rows(window, monkeypatch):
-    """From LIMIT_DUAL_FROM_N states on the limit solves with the dual simplex and the states in alternating order
-    (lowered here to reach that path on a small asymmetric chain): every row, in state order, equals the primal
-    simplex's in fixed order and an independent solver's (a row stored in the solve order would differ: the
-    chain's sensors and leak make its states differ)."""
+    """From LIMIT_DUAL_FROM_N states on the limit solves with the primal-then-dual fallback and the states in
+    alternating order (lowered here to reach that path on a small asymmetric chain): every row, in state order,
+    equals the primal simplex's in fixed order and an independent solver's (a row stored in the solve order would
+    differ: the chain's sensors and leak make its states differ)."""
     import eqrec.bounds.information as info
 
     plant = _tank_chain(5, 2)
@@ -320,3 +320,53 @@ def test_large_plants_dual_simplex_in_alternating_order_gives_the_same_rows(wind
     assert np.max(np.abs(primal - primal[:, ::-1])) > 1e-3  # the order matters on this chain
     np.testing.assert_allclose(dual, information_limit(plant, trace, 1.0, solver="scipy", cache=False, window=window),
                                rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("primal_iterations", [0, 3])
+def test_large_plants_primal_then_dual_fallback_gives_the_same_rows(primal_iterations, monkeypatch):
+    """From LIMIT_DUAL_FROM_N states on each objective gets LIMIT_PRIMAL_ITERATIONS primal simplex iterations and
+    goes on with the dual simplex from where they stopped (lowered here so that the fallback is taken, and with
+    0 iterations taken on every solve; a state that needed it goes to the dual simplex at once on the next
+    step): every row equals the plain primal simplex's and an independent solver's, and the fallback ran."""
+    import eqrec.bounds.information as info
+
+    plant = _tank_chain(6, 2)
+    trace = _random_trace(24, 0.3, 2, 46)
+    primal = information_limit(plant, trace, 1.0, cache=False)
+    monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
+    monkeypatch.setattr(info, "LIMIT_PRIMAL_ITERATIONS", primal_iterations)
+    runs = {"primal": 0, "dual": 0}
+    original = info._HighsModel._run
+
+    def counted(self, key=None):
+        before = set(self.hard)
+        status = original(self, key)
+        runs["dual" if key in self.hard or key in before else "primal"] += 1
+        return status
+
+    monkeypatch.setattr(info._HighsModel, "_run", counted)
+    hybrid = information_limit(plant, trace, 1.0, cache=False)
+    assert runs["dual"] > 0  # the fallback was exercised
+    np.testing.assert_allclose(hybrid, primal, rtol=REL, atol=1e-12)
+    np.testing.assert_allclose(hybrid, information_limit(plant, trace, 1.0, solver="scipy", cache=False),
+                               rtol=1e-7, atol=1e-9)
+
+
+def test_the_fallback_restores_the_primal_settings(monkeypatch):
+    """After a fallback to the dual simplex the model's strategy and iteration limit are the primal phase's
+    again (a model left on the dual simplex would silently change the method of every later solve)."""
+    import eqrec.bounds.information as info
+
+    monkeypatch.setattr(info, "LIMIT_PRIMAL_ITERATIONS", 0)
+    plant = _tank_chain(6, 2)
+    trace = _random_trace(10, 0.3, 2, 47)
+    tlp = info.trace_lp(plant, trace, np.ones(6), info.SEGMENT)
+    lp, c0, r0 = tlp.window(0, 10)
+    model = info._HighsModel(lp, c0, r0, None, info.LIMIT_HIGHS_OPTIONS)
+    cols, M = tlp.xmap[10]
+    for i in range(6):  # the first run may end in HiGHS's presolve; the warm ones hit the limit of 0
+        assert model.maximise(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}", f"state {i}") > 0
+    assert model.hard  # some objective fell back to the dual simplex
+    assert info._option(model.h, "simplex_strategy") == info.HIGHS_OPTIONS["simplex_strategy"]
+    assert info._option(model.h, "simplex_iteration_limit") == 0
+    assert model.restore["simplex_iteration_limit"] == 2**31 - 1

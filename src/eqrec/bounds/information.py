@@ -46,8 +46,9 @@ times on the batch reactor at 400 steps, with the same values to 4e-11).  A meas
 :math:`C(\tau)x(\tau) + V(\tau)v(\tau)` are free until it is delivered and fixed to 0 from then on: going from
 step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps one model per chunk of
 :data:`CHUNK` steps (the LP up to the chunk's last step) and starts every solve from the previous optimal basis
-(primal simplex, :data:`HIGHS_OPTIONS`; from :data:`LIMIT_DUAL_FROM_N` states on, the dual simplex with the
-states in alternating order, :data:`LIMIT_HIGHS_OPTIONS`); other solvers solve each LP from scratch.  The cost of
+(primal simplex, :data:`HIGHS_OPTIONS`; from :data:`LIMIT_DUAL_FROM_N` states on, the states in alternating
+order and each objective the primal simplex for at most :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then the dual
+simplex of :data:`LIMIT_HIGHS_OPTIONS` from where it stopped); other solvers solve each LP from scratch.  The cost of
 a step grows with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).
 Rows are cached by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree,
 and repeated calls on one trace, share their LPs (:func:`cache_info`).
@@ -59,7 +60,10 @@ and the message offers a window (below) with its own estimate.  The same LP with
 delivered rows' values gives the exact consistent set on the data (:func:`eqrec.bounds.consistent.consistent_set`).
 
 Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity with the class levels holds to
-1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.
+1e-14 relative on short blocks; on 400-step batch-reactor traces two solve orders agree to 1e-9 absolute.  On a
+150-step tank chain of n = 30 the primal-then-dual fallback (below 16 states unused) and the dual simplex alone
+agree to 1e-9 on 4,499 of the 4,500 values (median 6e-13); on the last the fallback's warm solve stopped 5.4e-9
+(relative 1.5e-8) below the optimum that cold solves (either simplex, the interior point with crossover) agree on.
 
 Window (``window=W``): the rows ``kW .. (k+1)W - 1`` use the box :math:`[-r(s), r(s)]` at the start
 ``s = (k-1)W`` rounded down to a multiple of ``K`` (:math:`r(s)` is row ``s - 1``) and the data of times
@@ -360,19 +364,41 @@ SEGMENT = 8
 #: move by 1e-7 to 2e-5 between solve orders; at 1e-9, by 1e-9).
 HIGHS_OPTIONS = {"simplex_strategy": 4, "primal_feasibility_tolerance": 1e-9, "dual_feasibility_tolerance": 1e-9}
 
-#: What the limit's own solves change in :data:`HIGHS_OPTIONS` from :data:`LIMIT_DUAL_FROM_N` states on (the
-#: consistent set keeps the primal simplex): the dual simplex with Devex pricing, the states in alternating order
-#: (:func:`_limit_order`).  Measured on tank chains (n = 20, 60 steps, process time): 7.3 s against 12.3 s with
-#: the primal simplex in fixed order and 11.0 s with the primal simplex alternating (the values agree to 6e-11);
-#: keeping the eliminated states boxed by a data-free reachable box (a redundant bound, so the same LP) made the
-#: dual simplex slower (9.0 s), and so did models of 16 or 64 steps instead of :data:`CHUNK` (n = 20, 90 steps).
+#: The limit's own solves from :data:`LIMIT_DUAL_FROM_N` states on (the consistent set keeps the primal simplex):
+#: each objective first runs the primal simplex of :data:`HIGHS_OPTIONS` from the previous optimal basis for at
+#: most :data:`LIMIT_PRIMAL_ITERATIONS` iterations, and only if that does not reach the optimum it goes on from
+#: where it stopped with these options, the dual simplex with Devex pricing (and no iteration limit); the states
+#: in alternating order (:func:`_limit_order`).  Measured on tank chains (process time, the last rows of
+#: 150 steps): most warm solves need 0-150 primal iterations (10-20 ms at n = 30), but about a third of the
+#: states (those next to a sensor) need thousands of iterations with either method from their neighbour's basis,
+#: where the primal simplex stalls (5,000-6,000 iterations, more than a cold solve) and the dual does not: the
+#: hybrid takes 152-168 ms per LP at n = 30 and 77-81 ms at n = 20, against 325 and 138 ms with the dual simplex
+#: alone (the values agree to 2e-10).  Over the whole 150 steps, back to back (process time): n = 20 131.6 ->
+#: 76.6 s, n = 30 426.3 -> 309.3 s (the early rows, on smaller LPs, gain less).  Before (dual simplex alone),
+#: measured on n = 20 at 60 steps: 7.3 s against 12.3 s with the primal simplex in fixed order and 11.0 s with the
+#: primal simplex alternating (the values agree to 6e-11); keeping the eliminated states boxed by a data-free
+#: reachable box (a redundant bound, so the same LP) made the dual simplex slower (9.0 s), and so did models of 16
+#: or 64 steps instead of :data:`CHUNK`.
 LIMIT_HIGHS_OPTIONS = {"simplex_strategy": 1, "simplex_dual_edge_weight_strategy": 1}
 
-#: The smallest state dimension whose limit uses :data:`LIMIT_HIGHS_OPTIONS` and the alternating order of
-#: :func:`_limit_order`; below it, the primal simplex with the states in increasing order (on ACC, n = 3, and
-#: the batch reactor, n = 4, at 400 steps the dual simplex took 1.0-1.5 times as long, on tank chains of
-#: n = 4 and 10 at 150 steps 2.0 and 1.05 times).
+#: The primal simplex iterations an objective of the limit gets, from :data:`LIMIT_DUAL_FROM_N` states on, before
+#: it goes on with the dual simplex (:data:`LIMIT_HIGHS_OPTIONS`): 150 and 400 took the same time at n = 30.
+LIMIT_PRIMAL_ITERATIONS = 200
+
+#: The smallest state dimension whose limit uses the fallback to :data:`LIMIT_HIGHS_OPTIONS` and the alternating
+#: order of :func:`_limit_order`; below it, the primal simplex to the end with the states in increasing order, so
+#: the limits of the compare study's plants (n <= 4) are those of before, byte for byte.  (On ACC, n = 3, and the
+#: batch reactor, n = 4, at 400 steps the dual simplex alone took 1.0-1.5 times as long, on tank chains of n = 4
+#: and 10 at 150 steps 2.0 and 1.05 times.  The primal-then-dual fallback at 150 steps: n = 6, 1.2-1.3 times as
+#: long; n = 10, 0.7 times, but its values differ from the primal path's by up to 5e-9, past the 1e-9 between solve
+#: orders documented here, so the threshold stays.)
 LIMIT_DUAL_FROM_N = 16
+
+
+def _option(h, key: str):
+    """HiGHS option ``key`` of ``h`` (highspy returns ``(status, value)``; some versions the value alone)."""
+    val = h.getOptionValue(key)
+    return val[1] if isinstance(val, tuple) else val
 
 
 class _HighsModel:
@@ -383,12 +409,55 @@ class _HighsModel:
     the model is loaded afresh.
     """
 
-    def __init__(self, lp: LinearProgram, col_offset: int, row_offset: int, options: dict | None):
+    def __init__(self, lp: LinearProgram, col_offset: int, row_offset: int, options: dict | None,
+                 fallback: dict | None = None):
         self.lp, self.c0, self.r0 = lp, col_offset, row_offset
         self.cost_cols = np.zeros(0, np.int32)
         self.options = {**HIGHS_OPTIONS, **(options or {})}
-        self.h = highs_model(lp, self.options)
+        # fallback: each run first stops after LIMIT_PRIMAL_ITERATIONS, then goes on with these options
+        self.fallback = None if fallback is None else {**fallback, **(options or {})}
+        self.h = self._load()
         self.retries = 0
+        self.hard: set = set()  # objectives whose last solve needed the dual simplex (fallback only)
+        self.bases: dict = {}  # their optimal bases (fallback only)
+
+    def _load(self):
+        h = highs_model(self.lp, self.options)
+        if self.fallback is not None:  # the primal phase's settings, restored after each fallback
+            self.restore = {key: _option(h, key) for key in (*self.fallback, "simplex_iteration_limit")}
+            h.setOptionValue("simplex_iteration_limit", LIMIT_PRIMAL_ITERATIONS)
+        return h
+
+    def _run(self, key=None) -> str:
+        """Run from the current basis.  With the fallback: the primal simplex for at most
+        :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then, if it has not reached the optimum, the dual simplex from
+        where it stopped.  An objective ``key`` that needed the dual simplex last time (the same state at the step
+        before) goes to it at once, from its own optimal basis of then (the rows delivered since change bounds
+        only, and its objective moves by one step: closer than the neighbour's optimum, 15 % fewer seconds at
+        n = 30), until it takes fewer than :data:`LIMIT_PRIMAL_ITERATIONS` iterations there."""
+        dual_first = self.fallback is not None and key is not None and key in self.hard
+        if not dual_first:
+            self.h.run()
+            status, _ = highs_status(int(self.h.getModelStatus()))
+            if self.fallback is None or status != "Iteration limit reached":
+                self.hard.discard(key)
+                return status
+        self.hard.add(key)
+        if dual_first and key in self.bases:  # its own optimal basis of the step before (same model)
+            self.h.setBasis(self.bases[key])
+        for name, val in self.fallback.items():
+            self.h.setOptionValue(name, val)
+        self.h.setOptionValue("simplex_iteration_limit", self.restore["simplex_iteration_limit"])
+        self.h.run()
+        status, _ = highs_status(int(self.h.getModelStatus()))
+        if self.h.getInfo().simplex_iteration_count < LIMIT_PRIMAL_ITERATIONS:  # easy this time: primal next
+            self.hard.discard(key)
+        elif status == "optimal":
+            self.bases[key] = self.h.getBasis()
+        for name, val in self.restore.items():
+            self.h.setOptionValue(name, val)
+        self.h.setOptionValue("simplex_iteration_limit", LIMIT_PRIMAL_ITERATIONS)
+        return status
 
     def deliver(self, rows: np.ndarray, values: np.ndarray | None = None) -> None:
         """Fix the measurement rows ``rows`` (global indices) to ``values`` (default 0: the zero-data LP)."""
@@ -397,8 +466,9 @@ class _HighsModel:
         self.lp.row_lower[idx] = self.lp.row_upper[idx] = val
         self.h.changeRowsBounds(idx.size, idx, val, val)
 
-    def maximise(self, cols: np.ndarray, coef: np.ndarray, what: str) -> float:
-        """``max coef · z[cols]`` (global columns) over the current LP."""
+    def maximise(self, cols: np.ndarray, coef: np.ndarray, what: str, key=None) -> float:
+        """``max coef · z[cols]`` (global columns) over the current LP (``key``: the objective's name across
+        steps, for the fallback's choice of method)."""
         j = (cols - self.c0).astype(np.int32)
         if self.cost_cols.size:
             self.h.changeColsCost(self.cost_cols.size, self.cost_cols, np.zeros(self.cost_cols.size))
@@ -406,13 +476,12 @@ class _HighsModel:
         self.h.changeColsCost(j.size, j, -coef)
         self.lp.c[j] = -coef
         self.cost_cols = j
-        self.h.run()
-        status, _ = highs_status(int(self.h.getModelStatus()))
+        status = self._run(key)
         if status == "optimal":
             return -float(self.h.getInfo().objective_function_value)
         self.retries += 1
         sol = solve_lp(self.lp, "highs", self.options).require_optimal(f"{what} (warm HiGHS: {status!r})")
-        self.h = highs_model(self.lp, self.options)
+        self.h = self._load()
         return -float(sol.objective)
 
 
@@ -448,7 +517,8 @@ def _limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, s
 
 def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
                 solver: str, options: dict | None, targets=_limit_targets, rhs: dict | None = None,
-                what: str = "information limit", progress=None) -> dict[int, np.ndarray]:
+                what: str = "information limit", progress=None, fallback: dict | None = None
+                ) -> dict[int, np.ndarray]:
     """``max`` of each objective ``targets(tlp, t)`` for the steps ``rows`` (increasing, all ``>= start``) on the
     LP from block ``start`` on.
 
@@ -482,6 +552,9 @@ def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndar
         What is solved, for error messages.
     progress : eqrec.lp.parallel.Progress or None, optional
         Advanced by one per row solved.
+    fallback : dict or None, optional
+        HiGHS only: each objective gets :data:`LIMIT_PRIMAL_ITERATIONS` primal simplex iterations, then goes on
+        with these options (:data:`LIMIT_HIGHS_OPTIONS`); ``None`` (default): the primal simplex to the end.
 
     Returns
     -------
@@ -515,13 +588,13 @@ def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndar
             fixed += by_step.get(t, [])
         t_next = chunk[0]
         if solver == "highs":
-            model = _HighsModel(*_window_lp(tlp, start, chunk[-1] + 1, fixed, box, rhs), options)
+            model = _HighsModel(*_window_lp(tlp, start, chunk[-1] + 1, fixed, box, rhs), options, fallback)
             for t in range(chunk[0], chunk[-1] + 1):
                 if t in by_step:
                     model.deliver(np.concatenate(by_step[t]), values(by_step[t]))
                 fixed += by_step.get(t, [])
                 if t in chunk:
-                    out[t] = np.array([model.maximise(cols, coef, f"{what}, step {t}, {label}")
+                    out[t] = np.array([model.maximise(cols, coef, f"{what}, step {t}, {label}", label)
                                        for cols, coef, label in targets(tlp, t)])
                     if progress is not None:
                         progress.advance(1)
@@ -785,10 +858,10 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
                  options: dict | None, out: np.ndarray, progress=None) -> None:
     """Fill the rows ``todo`` of ``out`` (exact, or windowed: module docstring)."""
     N = out.shape[0]
-    if solver == "highs" and out.shape[1] >= LIMIT_DUAL_FROM_N:
-        options = {**LIMIT_HIGHS_OPTIONS, **(options or {})}
+    fallback = LIMIT_HIGHS_OPTIONS if solver == "highs" and out.shape[1] >= LIMIT_DUAL_FROM_N else None
     if window is None:  # one growing model from time 0
-        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options, progress=progress).items():
+        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options, progress=progress,
+                                fallback=fallback).items():
             # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
             out[t, _limit_order(t, out.shape[1])] = np.maximum(v, 0.0)
         return
@@ -800,7 +873,8 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
             continue
         s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
         box = None if s == 0 else out[s - 1]
-        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options, progress=progress).items():
+        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options, progress=progress,
+                                fallback=fallback).items():
             out[t, _limit_order(t, out.shape[1])] = np.maximum(v, 0.0)
 
 
