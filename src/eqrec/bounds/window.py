@@ -147,8 +147,8 @@ def sparse_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # 
     recursions run over them: a plant's ``A`` is often sparse, e.g. a chain)."""
     L, n = A.shape[0], A.shape[1]
     aptr = np.zeros((L, n + 1), dtype=np.int64)
-    acol = np.zeros((L, n * n), dtype=np.int64)
-    aval = np.zeros((L, n * n))
+    acol = np.empty((L, n * n), dtype=np.int64)  # (only the first ptr[j, n] entries of a row are read)
+    aval = np.empty((L, n * n))
     for j in range(L):
         z = 0
         for a in range(n):
@@ -160,6 +160,28 @@ def sparse_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # 
                     z += 1
             aptr[j, a + 1] = z
     return aptr, acol, aval
+
+
+@numba.njit(cache=True)
+def sparse_columns(E: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """The nonzeros of each ``E[j]`` (``(L, n, nw)``) by column: ``ptr`` (``(L, nw + 1)``), ``row`` and ``val``
+    (``(L, n · nw)``), column ``q`` of ``E[j]`` being ``erow[j, eptr[j, q]:eptr[j, q + 1]]`` (rows in increasing
+    order) and its values (the noise gains of a plant are often diagonal or a few columns)."""
+    L, n, nw = E.shape
+    eptr = np.zeros((L, nw + 1), dtype=np.int64)
+    erow = np.empty((L, n * nw), dtype=np.int64)  # (only the first ptr[j, nw] entries of a row are read)
+    evals = np.empty((L, n * nw))
+    for j in range(L):
+        z = 0
+        for q in range(nw):
+            for a in range(n):
+                f = E[j, a, q]
+                if f != 0.0:
+                    erow[j, z] = a
+                    evals[j, z] = f
+                    z += 1
+            eptr[j, q + 1] = z
+    return eptr, erow, evals
 
 
 @numba.njit(cache=True)
@@ -192,7 +214,7 @@ def _transpose_times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no co
 
 
 @numba.njit(cache=True)
-def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval):  # pragma: no cover - compiled
+def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
     r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
 
     With the column weights ``W`` read as variances (prior :math:`S = G_0 W G_0^\top`, process noise
@@ -201,13 +223,17 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval): 
     :math:`\Sigma(s+1) = A\Sigma A^\top + E D E^\top`; the rows of a measured time ``s`` are
     :math:`C\Sigma(s)`, carried to the later times by :math:`A^\top` (``BT``, transposed: ``n × m``).  Fills the lower
     triangle of ``M`` (``m × m``) and ``BT`` (``n × m``, :math:`XWH^\top`).  ``ptr``, ``col``, ``val``: the
-    nonzeros of ``A`` by row (:func:`sparse_rows`)."""
+    nonzeros of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``: those of ``E`` by column
+    (:func:`sparse_columns`; the terms skipped are exact zeros added to sums that start from ``+0.0``, so the
+    same numbers).  The rows carried forward alternate between ``BT`` and a second buffer (no copy per step)."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     Lnw = L * nw
     Sig = S.copy()
     tmp = np.empty((n, n))
     tmpT = np.empty((n, n))
+    cur = BT  # the rows carried to time j (BT or newB, alternately)
+    swapped = False
     newB = np.empty((n, BT.shape[1]))
     rows = 0
     tt = 0
@@ -220,29 +246,28 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval): 
                     f = C[j, a, e]
                     if f != 0.0:
                         for r in range(rows):
-                            M[rows + a, r] += f * BT[e, r]
+                            M[rows + a, r] += f * cur[e, r]
                 for b in range(n):  # the new row C_j Sigma(j), stored as a column of BT
-                    BT[b, rows + a] = 0.0
+                    cur[b, rows + a] = 0.0
                 for e in range(n):  # over the nonzeros of C_j (the same sums, in the same order over e)
                     f = C[j, a, e]
                     if f != 0.0:
                         for b in range(n):
-                            BT[b, rows + a] += f * Sig[e, b]
+                            cur[b, rows + a] += f * Sig[e, b]
             for a in range(p):
                 for c in range(a + 1):
                     s = 0.0
                     for e in range(n):
-                        s += C[j, c, e] * BT[e, rows + a]
+                        s += C[j, c, e] * cur[e, rows + a]
                     for q in range(nv):
                         s += V[j, a, q] * W[q0 + Lnw + tt * nv + q] * V[j, c, q]
                     M[rows + a, rows + c] = s
             rows += p
             tt += 1
         # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T (over the nonzeros of A, by row)
-        _times_sparse(aptr, acol, aval, j, BT, rows, newB)
-        for a in range(n):
-            for r in range(rows):
-                BT[a, r] = newB[a, r]
+        _times_sparse(aptr, acol, aval, j, cur, rows, newB)
+        newB, cur = cur, newB
+        swapped = not swapped
         _times_sparse(aptr, acol, aval, j, Sig, n, tmp)  # tmp = A Sigma
         for a in range(n):  # tmpT = (A Sigma)^T = Sigma A^T (Sigma symmetric)
             for b in range(n):
@@ -252,15 +277,20 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval): 
             w = W[q0 + j * nw + q]
             if w == 0.0:
                 continue
-            for a in range(n):
-                fa = E[j, a, q] * w
+            for za in range(eptr[j, q], eptr[j, q + 1]):
+                fa = evals[j, za] * w
                 if fa != 0.0:
-                    for b in range(n):
-                        Sig[a, b] += fa * E[j, b, q]
+                    a = erow[j, za]
+                    for zb in range(eptr[j, q], eptr[j, q + 1]):
+                        Sig[a, erow[j, zb]] += fa * evals[j, zb]
+    if swapped:  # the last rows carried are in the second buffer
+        for a in range(n):
+            for r in range(rows):
+                BT[a, r] = cur[a, r]
 
 
 @numba.njit(cache=True)
-def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval):  # pragma: no cover - compiled
+def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
     r"""The noise columns of the residuals :math:`X_i - \lambda_i H` of ``k`` states, backwards in time.
 
     :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
@@ -268,7 +298,8 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval):  # pragma
     :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
     on return).  ``lamT`` (``m × k``): the weights of the states, by measured row; ``RTn`` (``Q × k``): the
     residuals on the noise columns (process noise by time, then the measurement noise of the measured times).
-    ``ptr``, ``col``, ``val``: the nonzeros of ``A`` by row (:func:`sparse_rows`)."""
+    ``ptr``, ``col``, ``val``: the nonzeros of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``:
+    those of ``E`` by column (:func:`sparse_columns`)."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     k = TT.shape[1]
@@ -283,11 +314,11 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval):  # pragma
             col = j * nw + q
             for i in range(k):
                 RTn[col, i] = 0.0
-            for a in range(n):
-                f = E[j, a, q]
-                if f != 0.0:
-                    for i in range(k):
-                        RTn[col, i] += f * TT[a, i]
+            for z in range(eptr[j, q], eptr[j, q + 1]):  # the nonzeros of E's column, rows in increasing order
+                f = evals[j, z]
+                a = erow[j, z]
+                for i in range(k):
+                    RTn[col, i] += f * TT[a, i]
         _transpose_times_sparse(aptr, acol, aval, j, TT, k, newT)  # T <- T A(j), transposed: TT <- A^T TT
         for a in range(n):
             for i in range(k):
@@ -315,6 +346,18 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval):  # pragma
 @numba.njit(cache=True)
 def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
                     gain, iterations, margin, states):
+    r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring): the
+    nonzeros of ``A`` and ``E`` found (:func:`sparse_rows`, :func:`sparse_columns`), then
+    :func:`window_estimate_sparse` (same parameters and returns)."""
+    aptr, acol, aval = sparse_rows(A)
+    eptr, erow, evals = sparse_columns(E)
+    return window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra, gain, iterations,
+                                  margin, states, aptr, acol, aval, eptr, erow, evals)
+
+
+@numba.njit(cache=True)
+def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
+                           gain, iterations, margin, states, aptr, acol, aval, eptr, erow, evals):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -347,6 +390,11 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
         Relative margin of the states solved one by one (``< 0``: none).
     states : int
         At most this many states solved one by one per filter.
+    aptr, acol, aval : ndarray
+        The nonzeros of ``A`` by row (:func:`sparse_rows`; those of a time-invariant plant's window are found once
+        by the caller).
+    eptr, erow, evals : ndarray
+        The nonzeros of ``E`` by column (:func:`sparse_columns`).
 
     Returns
     -------
@@ -370,7 +418,6 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     m = times * p
     Lnw = L * nw
     Qn = Lnw + times * nv
-    aptr, acol, aval = sparse_rows(A)
     # first weights of the noise columns: inverse lengths of the columns of (X, H), by the backward Gramian
     # O(s) = A^T O(s+1) A + C^T C [measured s], O(L) = I: the column of w(s, q) has length^2 E_q^T O(s+1) E_q
     wn = np.zeros(Qn)
@@ -378,13 +425,13 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     tmp = np.empty((n, n))
     tt = times
     for j in range(L - 1, -1, -1):
-        for q in range(nw):
+        for q in range(nw):  # over the nonzeros of E's column (the terms skipped are exact zeros)
             s = 0.0
-            for a in range(n):
-                fa = E[j, a, q]
-                if fa != 0.0:
-                    for b in range(n):
-                        s += fa * O[a, b] * E[j, b, q]
+            for za in range(eptr[j, q], eptr[j, q + 1]):
+                fa = evals[j, za]
+                a = erow[j, za]
+                for zb in range(eptr[j, q], eptr[j, q + 1]):
+                    s += fa * O[a, erow[j, zb]] * evals[j, zb]
             wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
         # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
         _transpose_times_sparse(aptr, acol, aval, j, O, n, tmp)  # tmp = A^T O
@@ -480,11 +527,11 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                     for q in range(q0):
                         GW[a, q] = Gk[a, q] * W[q]
                 S = np.dot(GW, Gk.T)  # G0 W G0^T
-                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval)
+                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals)
                 _symmetric_ridge(M)
                 lamT[:, :] = np.linalg.solve(M, BT.T)  # the weights of every state, (m, n): one factorization (LAPACK)
             TT = np.eye(n)
-            _residuals(A, C, E, V, measured, lamT, TT, resT, aptr, acol, aval)
+            _residuals(A, C, E, V, measured, lamT, TT, resT, aptr, acol, aval, eptr, erow, evals)
             RP = np.dot(np.ascontiguousarray(TT.T), Gk)  # residual on the prior generators, (n, q0)
             for i in range(n):
                 s = 0.0
@@ -560,14 +607,14 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
                         for q in range(q0):
                             GW[a, q] = Gk[a, q] * Wi[q]
                     S = np.dot(GW, Gk.T)
-                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT, aptr, acol, aval)
+                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT, aptr, acol, aval, eptr, erow, evals)
                     _symmetric_ridge(M)
                     for r in range(m):
                         lam1[r, 0] = BT[i, r]
                     lam1[:, :] = np.linalg.solve(M, lam1)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
-                    _residuals(A, C, E, V, measured, lam1, T1, res1, aptr, acol, aval)
+                    _residuals(A, C, E, V, measured, lam1, T1, res1, aptr, acol, aval, eptr, erow, evals)
                     rp = np.dot(T1.T, Gk)
                     r1 = 0.0
                     big = 0.0

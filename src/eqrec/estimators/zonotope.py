@@ -142,7 +142,8 @@ import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance_compiled
-from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
+from eqrec.bounds.window import accumulate_product, sparse_columns, sparse_rows, spd_solve, window_estimate, \
+    window_estimate_sparse
 from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
     reduce_pca, reduce_pca_pair
 from eqrec.checks import radii
@@ -497,6 +498,7 @@ class ZonotopeEstimator:
         self._alpha = np.array([1.0 if g == "reweighted" else 0.0 for g in gains])
         self._models: dict[int, tuple] = {}
         self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
+        self._sparse: "tuple[np.ndarray, ...] | None" = None  # the nonzeros of the tiles' A and E (:meth:`_window`)
         self._no_y = np.zeros(system.p)
         self._one_pick = np.zeros(n, dtype=np.int64)  # with one filter, every state is taken from it
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
@@ -710,9 +712,8 @@ class ZonotopeEstimator:
         first, drive = intake["first"], intake["drive"]
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
-        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
-                                           SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                           self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
+        xs, radii_, _, R = self._window(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
+                                        self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
         if xs.shape[0] == 1:  # one filter: its window's estimate
             return xs[0], radii_[0], {"_R": R, "_pick": self._one_pick}
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
@@ -731,6 +732,21 @@ class ZonotopeEstimator:
         self._time = intake["t"] + 1
         self.dropped_packets += intake["dropped"]
         self.replays += intake["late"]
+
+    def _window(self, A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive: np.ndarray,
+                known: np.ndarray, ys: np.ndarray, c: np.ndarray, P: np.ndarray, iterations: int, margin: float,
+                states: int) -> tuple[np.ndarray, ...]:
+        """:func:`eqrec.bounds.window.window_estimate` on the window's plant as :meth:`_window_model` gives it, with
+        the nonzeros of ``A`` and ``E`` found once for a time-invariant plant (the same numbers)."""
+        if self._tiles is None:  # a time-varying plant: found in each window
+            return window_estimate(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
+                                   WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states)
+        if self._sparse is None:
+            self._sparse = sparse_rows(self._tiles[0]) + sparse_columns(self._tiles[2])
+        L = A.shape[0]
+        return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
+                                      WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states,
+                                      *(M[:L] for M in self._sparse))
 
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
