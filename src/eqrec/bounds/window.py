@@ -423,6 +423,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     wn = np.zeros(Qn)
     O = np.eye(n)
     tmp = np.empty((n, n))
+    tmpT = np.empty((n, n))
     tt = times
     for j in range(L - 1, -1, -1):
         for q in range(nw):  # over the nonzeros of E's column (the terms skipped are exact zeros)
@@ -435,13 +436,13 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
         # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
         _transpose_times_sparse(aptr, acol, aval, j, O, n, tmp)  # tmp = A^T O
-        for a in range(n):  # O = tmp A
+        for a in range(n):  # O = tmp A, as (A^T tmp^T)^T: each sum over e in increasing order from 0.0, as before
             for b in range(n):
-                O[a, b] = 0.0
-            for e in range(n):
-                t = tmp[a, e]
-                for z in range(aptr[j, e], aptr[j, e + 1]):
-                    O[a, acol[j, z]] += t * aval[j, z]
+                tmpT[b, a] = tmp[a, b]
+        _transpose_times_sparse(aptr, acol, aval, j, tmpT, n, tmp)  # tmp = A^T tmp^T = (tmp A)^T
+        for a in range(n):
+            for b in range(n):
+                O[a, b] = tmp[b, a]
         if measured[j]:
             tt -= 1
             for c in range(p):
