@@ -130,6 +130,56 @@ def accumulate_product(M: np.ndarray, G: np.ndarray, out: np.ndarray) -> None:  
 
 
 @numba.njit(cache=True)
+def add_abs_rows(X: np.ndarray, cols: int, acc: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``acc[a] += |X[a, 0]| + |X[a, 1]| + ... + |X[a, cols - 1]|``, the terms added one by one in that order
+    (the same numbers as a loop over ``j`` per row); four rows at a time, so that four independent sums advance
+    together instead of one sum waiting for each addition."""
+    n = X.shape[0]
+    a = 0
+    while a + 4 <= n:
+        r0, r1, r2, r3 = acc[a], acc[a + 1], acc[a + 2], acc[a + 3]
+        for j in range(cols):
+            r0 += abs(X[a, j])
+            r1 += abs(X[a + 1, j])
+            r2 += abs(X[a + 2, j])
+            r3 += abs(X[a + 3, j])
+        acc[a], acc[a + 1], acc[a + 2], acc[a + 3] = r0, r1, r2, r3
+        a += 4
+    while a < n:
+        r0 = acc[a]
+        for j in range(cols):
+            r0 += abs(X[a, j])
+        acc[a] = r0
+        a += 1
+
+
+@numba.njit(cache=True)
+def weighted_products(X: np.ndarray, w: np.ndarray, Y: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    """``out[a, b] = sum_j (X[a, j] w[j]) Y[b, j]``, each sum from ``0.0`` over ``j`` in increasing order (the same
+    numbers as that loop per entry); four rows of ``X`` at a time (independent sums advancing together)."""
+    na, nb, q = X.shape[0], Y.shape[0], X.shape[1]
+    for b in range(nb):
+        a = 0
+        while a + 4 <= na:
+            r0 = r1 = r2 = r3 = 0.0
+            for j in range(q):
+                wj = w[j]
+                y = Y[b, j]
+                r0 += X[a, j] * wj * y
+                r1 += X[a + 1, j] * wj * y
+                r2 += X[a + 2, j] * wj * y
+                r3 += X[a + 3, j] * wj * y
+            out[a, b], out[a + 1, b], out[a + 2, b], out[a + 3, b] = r0, r1, r2, r3
+            a += 4
+        while a < na:
+            r0 = 0.0
+            for j in range(q):
+                r0 += X[a, j] * w[j] * Y[b, j]
+            out[a, b] = r0
+            a += 1
+
+
+@numba.njit(cache=True)
 def _symmetric_ridge(M: np.ndarray) -> None:  # pragma: no cover - compiled
     """Copy the lower triangle of ``M`` to the upper and add a relative ridge to the diagonal (``M`` is singular when
     two measured rows coincide)."""
@@ -534,11 +584,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             TT = np.eye(n)
             _residuals(A, C, E, V, measured, lamT, TT, resT, aptr, acol, aval, eptr, erow, evals)
             RP = np.dot(np.ascontiguousarray(TT.T), Gk)  # residual on the prior generators, (n, q0)
-            for i in range(n):
-                s = 0.0
-                for q in range(q0):
-                    s += abs(RP[i, q])
-                rad[i] = s
+            rad[:] = 0.0
+            add_abs_rows(RP, q0, rad)
             for q in range(Qn):
                 for e in range(n):
                     rad[e] += abs(resT[q, e])

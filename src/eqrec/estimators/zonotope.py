@@ -142,8 +142,8 @@ import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance_compiled
-from eqrec.bounds.window import accumulate_product, sparse_columns, sparse_rows, spd_solve, window_estimate, \
-    window_estimate_sparse
+from eqrec.bounds.window import accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, window_estimate, \
+    weighted_products, window_estimate_sparse
 from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
     reduce_pca, reduce_pca_pair
 from eqrec.checks import radii
@@ -251,16 +251,15 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
     wq = np.empty(q)
     num = np.empty((n, p))
     S = np.empty((p, p))
+    CWC = np.empty((p, p))
     Lam = np.empty((n, p))
     ALam = np.empty((n, p))
     r = np.empty(p)
     mag = np.empty(n)
     rowabs = np.empty(n)
     for k in range(K):
-        for a in range(n):  # A G, A c + drive, and the magnitudes
-            rowabs[a] = 0.0
-            for j in range(q):
-                rowabs[a] += abs(G[k, a, j])
+        rowabs[:] = 0.0  # A G, A c + drive, and the magnitudes
+        add_abs_rows(G[k], q, rowabs)
         accumulate_product(A, G[k], G1[k])
         for a in range(n):
             s = drive[a]
@@ -279,25 +278,24 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
                 r[b] = s
             CG[:, :] = 0.0
             accumulate_product(C, G[k], CG)
-            for j in range(q):  # generator weights (module docstring of the estimator)
-                s = 0.0
-                for a in range(n):
-                    s += G[k, a, j] * G[k, a, j]
-                for b in range(p):
-                    s += CG[b, j] * CG[b, j]
-                ln = np.sqrt(s)
+            # generator weights (module docstring of the estimator): the squared lengths summed row by row (per
+            # generator the same terms in the same order from 0.0, over contiguous rows)
+            for j in range(q):
+                wq[j] = 0.0
+            for a in range(n):
+                for j in range(q):
+                    wq[j] += G[k, a, j] * G[k, a, j]
+            for b in range(p):
+                for j in range(q):
+                    wq[j] += CG[b, j] * CG[b, j]
+            for j in range(q):
+                ln = np.sqrt(wq[j])
                 wq[j] = 1.0 if alpha[k] == 0.0 or ln == 0.0 else 1.0 / ln
-            for a in range(n):  # G W (CG)^T
-                for b in range(p):
-                    s = 0.0
-                    for j in range(q):
-                        s += G[k, a, j] * wq[j] * CG[b, j]
-                    num[a, b] = s
+            weighted_products(G[k], wq, CG, num)  # G W (CG)^T
+            weighted_products(CG, wq, CG, CWC)  # CG W CG^T
             for b in range(p):  # S = CG W CG^T + V Wv V^T
                 for d in range(b + 1):
-                    s = 0.0
-                    for j in range(q):
-                        s += CG[b, j] * wq[j] * CG[d, j]
+                    s = CWC[b, d]
                     for j in range(nv):
                         ln = 0.0
                         for e in range(p):
@@ -351,9 +349,10 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
                     mag[a] += abs(A[a, e]) * s2
         # process noise and the rounding allowance
         for a in range(n):
-            s = abs(c1[k, a])
-            for j in range(q + extra):
-                s += abs(G1[k, a, j])
+            rowabs[a] = abs(c1[k, a])
+        add_abs_rows(G1[k], q + extra, rowabs)
+        for a in range(n):
+            s = rowabs[a]
             for j in range(nw):
                 G1[k, a, q + extra + j] = Ew[a, j]
                 s += abs(Ew[a, j])
