@@ -496,6 +496,7 @@ class ZonotopeEstimator:
         # per filter: the exponent of the gain's generator weights (0: F-radius, 1: reweighted)
         self._alpha = np.array([1.0 if g == "reweighted" else 0.0 for g in gains])
         self._models: dict[int, tuple] = {}
+        self._horizon = system.horizon_limit  # the time-varying data's length (None: time-invariant), read once
         self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
         self._sparse: "tuple[np.ndarray, ...] | None" = None  # the nonzeros of the tiles' A and E (:meth:`_window`)
         self._no_y = np.zeros(system.p)
@@ -671,7 +672,7 @@ class ZonotopeEstimator:
         sysm = self.system
         packets = as_packets(y, t, (sysm.p,))
         u = check_input(u, sysm.m)
-        lim = sysm.horizon_limit
+        lim = self._horizon
         if lim is not None and self._model_time(t) >= lim:
             raise InputError(f"time-varying data covers times 0..{lim - 1}, not {t}", field="system")
         first = t - self._drive.shape[0]  # the window's start, time t appended
@@ -750,7 +751,7 @@ class ZonotopeEstimator:
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
         by time (C-contiguous, as the compiled window expects; cached for a time-invariant plant)."""
-        if not self.system.is_time_varying:
+        if self._horizon is None:  # time-invariant
             if self._tiles is None:
                 self._tiles = tuple(np.broadcast_to(M, (self._W,) + M.shape).copy()  # writable: one compile
                                     for M in self._model(0))
@@ -763,7 +764,7 @@ class ZonotopeEstimator:
         """The model's matrices at time ``s``: ``A``, ``C``, ``η_w E``, ``η_v V`` (C-contiguous; cached: one entry
         when the plant is time-invariant, one per model time otherwise)."""
         m = self._model_time(s)
-        key = m if self.system.is_time_varying else 0
+        key = 0 if self._horizon is None else m
         hit = self._models.get(key)
         if hit is None:
             sysm = self.system
