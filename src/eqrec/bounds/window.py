@@ -402,6 +402,51 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval, eptr, erow
 
 
 @numba.njit(cache=True)
+def _residuals_one(A, C, E, V, measured, lam, t, RT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
+    """:func:`_residuals` of one state (``k = 1``) on vectors: ``lam`` (``m``) its weights, ``t`` (``n``) the row
+    :math:`T(L)` on entry and :math:`T(0)` on return, ``RT`` (``Q``) the residuals on the noise columns.  The same
+    operations in the same order as :func:`_residuals` (the same numbers), without its loops over the states."""
+    L, n = A.shape[0], A.shape[1]
+    p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
+    Lnw = L * nw
+    m = lam.shape[0]
+    times = m // p if p > 0 else 0
+    cur = t.copy()
+    nxt = np.empty(n)
+    rows = m
+    tt = times
+    for j in range(L - 1, -1, -1):
+        for q in range(nw):  # w(j): T(j+1) E(j)
+            r = 0.0
+            for z in range(eptr[j, q], eptr[j, q + 1]):
+                r += evals[j, z] * cur[erow[j, z]]
+            RT[j * nw + q] = r
+        for a in range(n):  # T <- T A(j), transposed: A^T T^T over the nonzeros of A, by row
+            nxt[a] = 0.0
+        for e in range(n):
+            x = cur[e]
+            for z in range(aptr[j, e], aptr[j, e + 1]):
+                nxt[acol[j, z]] += aval[j, z] * x
+        cur, nxt = nxt, cur
+        if measured[j]:
+            rows -= p
+            tt -= 1
+            for c in range(p):
+                for a in range(n):
+                    f = C[j, c, a]
+                    if f != 0.0:
+                        cur[a] -= f * lam[rows + c]
+            for q in range(nv):  # v(j): -lambda_j V(j)
+                r = 0.0
+                for c in range(p):
+                    f = V[j, c, q]
+                    if f != 0.0:
+                        r -= f * lam[rows + c]
+                RT[Lnw + tt * nv + q] = r
+    t[:] = cur
+
+
+@numba.njit(cache=True)
 def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
                     gain, iterations, margin, states):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring): the
@@ -670,7 +715,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     lam1[:, :] = np.linalg.solve(M, lam1)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
-                    _residuals(A, C, E, V, measured, lam1, T1, res1, aptr, acol, aval, eptr, erow, evals)
+                    _residuals_one(A, C, E, V, measured, lam1[:, 0], T1[:, 0], res1[:, 0], aptr, acol, aval, eptr,
+                                   erow, evals)
                     rp = np.dot(T1.T, Gk)
                     r1 = 0.0
                     big = 0.0
