@@ -247,13 +247,29 @@ def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - comp
     """``out[:, :cols] = A[j] X[:, :cols]`` over the nonzeros of ``A[j]`` by row (:func:`sparse_rows`), each row's
     sum in the order of its nonzeros."""
     for a in range(out.shape[0]):
-        for r in range(cols):
-            out[a, r] = 0.0
-        for z in range(aptr[j, a], aptr[j, a + 1]):
-            f = aval[j, z]
-            e = acol[j, z]
+        z0 = aptr[j, a]
+        nz = aptr[j, a + 1] - z0
+        if nz == 1:  # rows of one to three nonzeros (a chain, a band) in one pass: the same sums from 0.0
+            f0, e0 = aval[j, z0], acol[j, z0]
             for r in range(cols):
-                out[a, r] += f * X[e, r]
+                out[a, r] = 0.0 + f0 * X[e0, r]
+        elif nz == 2:
+            f0, e0, f1, e1 = aval[j, z0], acol[j, z0], aval[j, z0 + 1], acol[j, z0 + 1]
+            for r in range(cols):
+                out[a, r] = (0.0 + f0 * X[e0, r]) + f1 * X[e1, r]
+        elif nz == 3:
+            f0, e0, f1, e1 = aval[j, z0], acol[j, z0], aval[j, z0 + 1], acol[j, z0 + 1]
+            f2, e2 = aval[j, z0 + 2], acol[j, z0 + 2]
+            for r in range(cols):
+                out[a, r] = ((0.0 + f0 * X[e0, r]) + f1 * X[e1, r]) + f2 * X[e2, r]
+        else:
+            for r in range(cols):
+                out[a, r] = 0.0
+            for z in range(z0, z0 + nz):
+                f = aval[j, z]
+                e = acol[j, z]
+                for r in range(cols):
+                    out[a, r] += f * X[e, r]
 
 
 @numba.njit(cache=True)
