@@ -273,21 +273,6 @@ def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - comp
 
 
 @numba.njit(cache=True)
-def _transpose_times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - compiled
-    """``out[:, :cols] = A[j]^T X[:, :cols]`` over the nonzeros of ``A[j]`` by row (:func:`sparse_rows`), the sums
-    in the order of ``A[j]``'s rows."""
-    for a in range(out.shape[0]):
-        for r in range(cols):
-            out[a, r] = 0.0
-    for e in range(out.shape[0]):
-        for z in range(aptr[j, e], aptr[j, e + 1]):
-            f = aval[j, z]
-            a = acol[j, z]
-            for r in range(cols):
-                out[a, r] += f * X[e, r]
-
-
-@numba.njit(cache=True)
 def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
     r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
 
@@ -364,7 +349,7 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, e
 
 
 @numba.njit(cache=True)
-def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
+def _residuals(A, C, E, V, measured, lamT, TT, RTn, cptr, crow, cval, eptr, erow, evals):  # pragma: no cover
     r"""The noise columns of the residuals :math:`X_i - \lambda_i H` of ``k`` states, backwards in time.
 
     :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
@@ -372,8 +357,9 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval, eptr, erow
     :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
     on return).  ``lamT`` (``m × k``): the weights of the states, by measured row; ``RTn`` (``Q × k``): the
     residuals on the noise columns (process noise by time, then the measurement noise of the measured times).
-    ``ptr``, ``col``, ``val``: the nonzeros of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``:
-    those of ``E`` by column (:func:`sparse_columns`)."""
+    ``cptr``, ``crow``, ``cval``: the nonzeros of ``A`` by column (:func:`sparse_columns`: the rows of
+    :math:`A^\top`, so that :math:`A^\top X` is :func:`_times_sparse`, each sum over the rows of ``A`` in increasing
+    order); ``eptr``, ``erow``, ``evals``: those of ``E`` by column."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     k = TT.shape[1]
@@ -393,7 +379,7 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, aptr, acol, aval, eptr, erow
                 a = erow[j, z]
                 for i in range(k):
                     RTn[col, i] += f * TT[a, i]
-        _transpose_times_sparse(aptr, acol, aval, j, TT, k, newT)  # T <- T A(j), transposed: TT <- A^T TT
+        _times_sparse(cptr, crow, cval, j, TT, k, newT)  # T <- T A(j), transposed: TT <- A^T TT (A's columns)
         for a in range(n):
             for i in range(k):
                 TT[a, i] = newT[a, i]
@@ -470,13 +456,15 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     :func:`window_estimate_sparse` (same parameters and returns)."""
     aptr, acol, aval = sparse_rows(A)
     eptr, erow, evals = sparse_columns(E)
+    cptr, crow, cval = sparse_columns(A)
     return window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra, gain, iterations,
-                                  margin, states, aptr, acol, aval, eptr, erow, evals)
+                                  margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow, cval)
 
 
 @numba.njit(cache=True)
 def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
-                           gain, iterations, margin, states, aptr, acol, aval, eptr, erow, evals):
+                           gain, iterations, margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow,
+                           cval):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -514,6 +502,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         by the caller).
     eptr, erow, evals : ndarray
         The nonzeros of ``E`` by column (:func:`sparse_columns`).
+    cptr, crow, cval : ndarray
+        The nonzeros of ``A`` by column (:func:`sparse_columns`; the products with :math:`A^\top`).
 
     Returns
     -------
@@ -554,11 +544,11 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     s += fa * O[a, erow[j, zb]] * evals[j, zb]
             wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
         # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
-        _transpose_times_sparse(aptr, acol, aval, j, O, n, tmp)  # tmp = A^T O
+        _times_sparse(cptr, crow, cval, j, O, n, tmp)  # tmp = A^T O (over A's columns)
         for a in range(n):  # O = tmp A, as (A^T tmp^T)^T: each sum over e in increasing order from 0.0, as before
             for b in range(n):
                 tmpT[b, a] = tmp[a, b]
-        _transpose_times_sparse(aptr, acol, aval, j, tmpT, n, tmp)  # tmp = A^T tmp^T = (tmp A)^T
+        _times_sparse(cptr, crow, cval, j, tmpT, n, tmp)  # tmp = A^T tmp^T = (tmp A)^T
         for a in range(n):
             for b in range(n):
                 O[a, b] = tmp[b, a]
@@ -651,7 +641,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 _symmetric_ridge(M)
                 lamT[:, :] = np.linalg.solve(M, BT.T)  # the weights of every state, (m, n): one factorization (LAPACK)
             TT = np.eye(n)
-            _residuals(A, C, E, V, measured, lamT, TT, resT, aptr, acol, aval, eptr, erow, evals)
+            _residuals(A, C, E, V, measured, lamT, TT, resT, cptr, crow, cval, eptr, erow, evals)
             RP = np.dot(np.ascontiguousarray(TT.T), Gk)  # residual on the prior generators, (n, q0)
             rad[:] = 0.0
             add_abs_rows(RP, q0, rad)

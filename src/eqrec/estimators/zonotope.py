@@ -742,7 +742,8 @@ class ZonotopeEstimator:
             return window_estimate(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
                                    WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states)
         if self._sparse is None:
-            self._sparse = sparse_rows(self._tiles[0]) + sparse_columns(self._tiles[2])
+            A_, E_ = self._tiles[0], self._tiles[2]
+            self._sparse = sparse_rows(A_) + sparse_columns(E_) + sparse_columns(A_)
         L = A.shape[0]
         return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
                                       WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states,
