@@ -102,6 +102,33 @@ same numbers), the window's prior is capped at 400 generators (n >= 20 here; :mo
 one compiled finiteness check per step.  At n = 20 the bound / limit median is 1.045 (the limit computed
 separately, 416 s; 1.040 with ``window_generators=None``); n <= 10 is unchanged (the same prior).
 
+Then (2026-11-29, later; single-threaded BLAS for both, see below) four pairs of runs, the code before and after
+the same-numbers speed-ups of the window, filter step and reduction (estimates, bounds and sets bit-identical):
+median over the pairs of µs per step, the crude filter measured in the same run (it is built from the package's
+filter step and Girard reduction, so it got faster too):
+
+====  ===  ====================  ====================  ==================  ====================
+ n     p   zonotope before/after crude before / after  ratio before/after  bound/limit med / max
+====  ===  ====================  ====================  ==================  ====================
+ 4     1   326 / 270             91 / 108              3.19 / 3.03         1.003 / 1.039
+ 10    2   1,081 / 693           232 / 208             4.39 / 3.58         1.014 / 1.021
+ 20    4   3,135 / 1,872         660 / 474             4.55 / 4.09         (not computed)
+ 30    5   3,563 / 2,724         1,564 / 1,204         2.28 / 2.35         (not computed)
+====  ===  ====================  ====================  ==================  ====================
+
+Growth exponents (of the medians): zonotope 1.25 before, 1.18 after; crude 1.39 and 1.15.  Per step on those
+chains the window makes about 2 shared solves and 3 to 6 per-state solves (n = 4: 2.1 and 2.9; n = 10 and 20: 2.0
+and 5.9; n = 30: 2.0 and 3.3); at n = 30 the window is about 73 % of a step (a shared solve about 0.45 ms, a
+per-state solve 0.35 ms, :mod:`eqrec.bounds.window`), the filter step 0.11 ms, the PCA reduction 0.25 ms; at n = 4
+the window is about half of a step and the packet intake and input check (``as_packets``, ``check_input``) about
+30 µs.  The settings of the window's solves trade cost for tightness (tank chains, the code before, bound relative
+to the default's, median / max over 150 steps, cost relative to the default's): no per-state solves n = 10 +0.9 % /
++2.6 % at 0.50x, n = 20 +2.7 % / +3.9 % at 0.52x, n = 30 +3.6 % / +8.4 % at 0.65x; one per-state state n = 10 +0.7 %,
+n = 20 +2.6 %, n = 30 +0.0 % / +1.4 % at 0.72-0.92x; no shared reweighting (``SHARED_SOLVES = 0``) n = 10 +0.6 % /
++1.8 % at 0.59x, n = 20 +0.0 % at 0.67x, n = 30 -0.1 % / +0.6 % at 0.80x.  Measured before this benchmark set
+single-threaded BLAS: with OpenBLAS's threads, a loaded 2-core machine and process time, the zonotope at n = 30 took
+35.8 ms per step against 4.9 ms single-threaded, one run after the other.
+
 Not reached: the issue's 1 ms at n = 30 and "never slower than the crude filter".  At n = 30 the filters' own
 step and order reduction (order 40: 1,200 generators) take about 0.7 ms on this machine, the window's shared
 solves and the per-state solves of the largest state about 2 ms (each solve: the covariance recursion over 30
@@ -114,17 +141,24 @@ Lower settings trade tightness (tank chain n = 20, bound relative to the default
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 
-import numpy as np
+# single-threaded BLAS, as the workflow (Snakefile) and the tests (tests/conftest.py) run: set before numpy loads its
+# BLAS.  With OpenBLAS's threads on a loaded 2-core machine, the window's and the reduction's small products spin
+# the idle threads, and the process time counts them: the zonotope estimator at n = 30 measured 35.8 ms per step with
+# the threads and 4.9 ms without, one after the other (the crude filter, which calls no BLAS, 1.7 and 2.0 ms).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from eqrec.arrivals.draws import bernoulli_trace, with_uniform_delays
-from eqrec.arrivals.packets import as_packets
-from eqrec.bounds.zonotope import outer_row_sums, reduce_girard
-from eqrec.estimators.zonotope import ZonotopeEstimator, filter_step
-from eqrec.simulate.loop import closed_loop, what_arrived
-from eqrec.systems.examples import two_mass
+import numpy as np  # noqa: E402
+
+from eqrec.arrivals.draws import bernoulli_trace, with_uniform_delays  # noqa: E402
+from eqrec.arrivals.packets import as_packets  # noqa: E402
+from eqrec.bounds.zonotope import outer_row_sums, reduce_girard  # noqa: E402
+from eqrec.estimators.zonotope import ZonotopeEstimator, filter_step  # noqa: E402
+from eqrec.simulate.loop import closed_loop, what_arrived  # noqa: E402
+from eqrec.systems.examples import two_mass  # noqa: E402
 
 X0_RADIUS, LOSS, MAX_DELAY = 0.5, 0.3, 2
 

@@ -378,6 +378,36 @@ def _reduce(G: np.ndarray, limit: int, principal: bool, axes: "np.ndarray | None
 
 
 @numba.njit(cache=True)
+def _sums_over(X, idx, absolute, out):  # pragma: no cover - compiled
+    """Per row ``a``, ``out[a] = 0.0 + X[a, idx[0]] + X[a, idx[1]] + ...`` (of ``|X|`` when ``absolute``), the terms
+    in the order of ``idx`` (the same numbers as that loop per row); four rows at a time, so that four independent
+    sums advance together."""
+    n = X.shape[0]
+    a = 0
+    while a + 4 <= n:
+        r0 = r1 = r2 = r3 = 0.0
+        for j in idx:
+            if absolute:
+                r0 += abs(X[a, j])
+                r1 += abs(X[a + 1, j])
+                r2 += abs(X[a + 2, j])
+                r3 += abs(X[a + 3, j])
+            else:
+                r0 += X[a, j]
+                r1 += X[a + 1, j]
+                r2 += X[a + 2, j]
+                r3 += X[a + 3, j]
+        out[a], out[a + 1], out[a + 2], out[a + 3] = r0, r1, r2, r3
+        a += 4
+    while a < n:
+        r0 = 0.0
+        for j in idx:
+            r0 += abs(X[a, j]) if absolute else X[a, j]
+        out[a] = r0
+        a += 1
+
+
+@numba.njit(cache=True)
 def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - compiled
     """One reduction of :func:`_reduce_stack` into ``out`` (``(n, keep + n)``, or ``(n, keep + 2n)`` in the axes):
     the generators of ``order[:nbox]`` (of ``G``, ``(n, q)``, coordinates ``absT`` in the axes ``U``) boxed, the
@@ -389,30 +419,26 @@ def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - co
     boxed = np.zeros(q, dtype=np.bool_)
     for j in range(nbox):
         boxed[order[j]] = True
+    idx = np.sort(order[:nbox])  # the boxed generators in increasing order: the box sums run over them in it
     col = 0
     for j in range(q):  # the kept generators, in their order
         if not boxed[j]:
             for a in range(n):
                 out[a, col] = G[a, j]
             col += 1
+    sums = np.empty(n)
+    _sums_over(absT, idx, False, sums)
     for a in range(n):
-        sa = 0.0
-        for j in range(q):
-            if boxed[j]:
-                sa += absT[a, j]
-        box = np.nextafter(sa * (1.0 + slack * _U), np.inf)
+        box = np.nextafter(sums[a] * (1.0 + slack * _U), np.inf)
         for e in range(n):
             out[e, keep + a] = (U[e, a] if principal else (1.0 if e == a else 0.0)) * box
     if principal:  # the box of what the change of axes misses in floating point (reduce_pca's docstring)
         grow = 1.0 + (4 * n + 8) * _U  # the rounding of the sums of nonnegative terms of the bound
         UU = np.dot(U, np.ascontiguousarray(U.T))
         s = np.empty(n)
+        _sums_over(G, idx, True, s)
         for e in range(n):  # s: the boxed generators' absolute row sums, rounded up
-            se = 0.0
-            for j in range(q):
-                if boxed[j]:
-                    se += abs(G[e, j])
-            s[e] = np.nextafter(se * (1.0 + slack * _U), np.inf)
+            s[e] = np.nextafter(s[e] * (1.0 + slack * _U), np.inf)
         v = np.zeros(n)  # |U|^T s
         for e in range(n):
             for a in range(n):

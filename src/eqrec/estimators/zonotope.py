@@ -142,7 +142,8 @@ import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance_compiled
-from eqrec.bounds.window import accumulate_product, spd_solve, window_estimate
+from eqrec.bounds.window import accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, window_estimate, \
+    weighted_products, window_estimate_sparse
 from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
     reduce_pca, reduce_pca_pair
 from eqrec.checks import radii
@@ -250,16 +251,15 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
     wq = np.empty(q)
     num = np.empty((n, p))
     S = np.empty((p, p))
+    CWC = np.empty((p, p))
     Lam = np.empty((n, p))
     ALam = np.empty((n, p))
     r = np.empty(p)
     mag = np.empty(n)
     rowabs = np.empty(n)
     for k in range(K):
-        for a in range(n):  # A G, A c + drive, and the magnitudes
-            rowabs[a] = 0.0
-            for j in range(q):
-                rowabs[a] += abs(G[k, a, j])
+        rowabs[:] = 0.0  # A G, A c + drive, and the magnitudes
+        add_abs_rows(G[k], q, rowabs)
         accumulate_product(A, G[k], G1[k])
         for a in range(n):
             s = drive[a]
@@ -278,25 +278,24 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
                 r[b] = s
             CG[:, :] = 0.0
             accumulate_product(C, G[k], CG)
-            for j in range(q):  # generator weights (module docstring of the estimator)
-                s = 0.0
-                for a in range(n):
-                    s += G[k, a, j] * G[k, a, j]
-                for b in range(p):
-                    s += CG[b, j] * CG[b, j]
-                ln = np.sqrt(s)
+            # generator weights (module docstring of the estimator): the squared lengths summed row by row (per
+            # generator the same terms in the same order from 0.0, over contiguous rows)
+            for j in range(q):
+                wq[j] = 0.0
+            for a in range(n):
+                for j in range(q):
+                    wq[j] += G[k, a, j] * G[k, a, j]
+            for b in range(p):
+                for j in range(q):
+                    wq[j] += CG[b, j] * CG[b, j]
+            for j in range(q):
+                ln = np.sqrt(wq[j])
                 wq[j] = 1.0 if alpha[k] == 0.0 or ln == 0.0 else 1.0 / ln
-            for a in range(n):  # G W (CG)^T
-                for b in range(p):
-                    s = 0.0
-                    for j in range(q):
-                        s += G[k, a, j] * wq[j] * CG[b, j]
-                    num[a, b] = s
+            weighted_products(G[k], wq, CG, num)  # G W (CG)^T
+            weighted_products(CG, wq, CG, CWC)  # CG W CG^T
             for b in range(p):  # S = CG W CG^T + V Wv V^T
                 for d in range(b + 1):
-                    s = 0.0
-                    for j in range(q):
-                        s += CG[b, j] * wq[j] * CG[d, j]
+                    s = CWC[b, d]
                     for j in range(nv):
                         ln = 0.0
                         for e in range(p):
@@ -350,9 +349,10 @@ def filter_step(A, C, Ew, Vn, drive, y, has_y, c, G, alpha):  # pragma: no cover
                     mag[a] += abs(A[a, e]) * s2
         # process noise and the rounding allowance
         for a in range(n):
-            s = abs(c1[k, a])
-            for j in range(q + extra):
-                s += abs(G1[k, a, j])
+            rowabs[a] = abs(c1[k, a])
+        add_abs_rows(G1[k], q + extra, rowabs)
+        for a in range(n):
+            s = rowabs[a]
             for j in range(nw):
                 G1[k, a, q + extra + j] = Ew[a, j]
                 s += abs(Ew[a, j])
@@ -496,7 +496,9 @@ class ZonotopeEstimator:
         # per filter: the exponent of the gain's generator weights (0: F-radius, 1: reweighted)
         self._alpha = np.array([1.0 if g == "reweighted" else 0.0 for g in gains])
         self._models: dict[int, tuple] = {}
+        self._horizon = system.horizon_limit  # the time-varying data's length (None: time-invariant), read once
         self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
+        self._sparse: "tuple[np.ndarray, ...] | None" = None  # the nonzeros of the tiles' A and E (:meth:`_window`)
         self._no_y = np.zeros(system.p)
         self._one_pick = np.zeros(n, dtype=np.int64)  # with one filter, every state is taken from it
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
@@ -670,7 +672,7 @@ class ZonotopeEstimator:
         sysm = self.system
         packets = as_packets(y, t, (sysm.p,))
         u = check_input(u, sysm.m)
-        lim = sysm.horizon_limit
+        lim = self._horizon
         if lim is not None and self._model_time(t) >= lim:
             raise InputError(f"time-varying data covers times 0..{lim - 1}, not {t}", field="system")
         first = t - self._drive.shape[0]  # the window's start, time t appended
@@ -710,9 +712,8 @@ class ZonotopeEstimator:
         first, drive = intake["first"], intake["drive"]
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
-        xs, radii_, _, R = window_estimate(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
-                                           SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                           self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
+        xs, radii_, _, R = self._window(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
+                                        self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
         if xs.shape[0] == 1:  # one filter: its window's estimate
             return xs[0], radii_[0], {"_R": R, "_pick": self._one_pick}
         pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
@@ -732,10 +733,26 @@ class ZonotopeEstimator:
         self.dropped_packets += intake["dropped"]
         self.replays += intake["late"]
 
+    def _window(self, A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive: np.ndarray,
+                known: np.ndarray, ys: np.ndarray, c: np.ndarray, P: np.ndarray, iterations: int, margin: float,
+                states: int) -> tuple[np.ndarray, ...]:
+        """:func:`eqrec.bounds.window.window_estimate` on the window's plant as :meth:`_window_model` gives it, with
+        the nonzeros of ``A`` and ``E`` found once for a time-invariant plant (the same numbers)."""
+        if self._tiles is None:  # a time-varying plant: found in each window
+            return window_estimate(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
+                                   WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states)
+        if self._sparse is None:
+            A_, E_ = self._tiles[0], self._tiles[2]
+            self._sparse = sparse_rows(A_) + sparse_columns(E_) + sparse_columns(A_)
+        L = A.shape[0]
+        return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
+                                      WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states,
+                                      *(M[:L] for M in self._sparse))
+
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
         by time (C-contiguous, as the compiled window expects; cached for a time-invariant plant)."""
-        if not self.system.is_time_varying:
+        if self._horizon is None:  # time-invariant
             if self._tiles is None:
                 self._tiles = tuple(np.broadcast_to(M, (self._W,) + M.shape).copy()  # writable: one compile
                                     for M in self._model(0))
@@ -748,7 +765,7 @@ class ZonotopeEstimator:
         """The model's matrices at time ``s``: ``A``, ``C``, ``η_w E``, ``η_v V`` (C-contiguous; cached: one entry
         when the plant is time-invariant, one per model time otherwise)."""
         m = self._model_time(s)
-        key = m if self.system.is_time_varying else 0
+        key = 0 if self._horizon is None else m
         hit = self._models.get(key)
         if hit is None:
             sysm = self.system
