@@ -48,12 +48,8 @@ report: "workflow/report/workflow.rst"
 # any queue the limit protects, so on the local executor the limiter is dropped (a pass then runs when a job
 # ends); a cluster executor (the SLURM profile) keeps it.
 onstart:
-    scheduler = getattr(workflow, "scheduler", None)
-    if (
-        workflow.local_exec
-        and getattr(scheduler, "job_rate_limiter", None) is not None
-    ):
-        scheduler.job_rate_limiter = None
+    if workflow.local_exec:
+        workflow.scheduler.job_rate_limiter = None
 
 
 configfile: "config/config.yaml"
