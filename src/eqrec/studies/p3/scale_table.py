@@ -188,8 +188,6 @@ def scale_markdown(frame: pd.DataFrame, missing_tree: list | None = None, timing
 def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
     """Per size run by both engines: LP sizes, total times (language + build + solve), peak memory and J of each
     (without times and memory when ``timings`` is false)."""
-    import pandas as pd  # imported here, as in scale_frame: the size jobs do not need it
-
     by = {(int(_value(r["T"])), int(_value(r["tau"])), r["engine"]): r for _, r in frame.iterrows()}
     sizes = sorted({(T, tau) for T, tau, e in by if (T, tau, "tree") in by and (T, tau, "classes") in by})
     if not sizes:
@@ -198,7 +196,7 @@ def _side_by_side(frame: pd.DataFrame, timings: bool = True) -> str:
     def total(r):  # a size that did not solve has no total (its build time is in the table above)
         if r["status"] != "optimal":
             return None
-        vals = [_value(r[c]) for c in ("tree_time", "classes_time", "build_time", "solve_time") if pd.notna(r[c])]
+        vals = [_value(r[c]) for c in ("tree_time", "classes_time", "build_time", "solve_time") if r.notna()[c]]
         return float(sum(vals)) if vals else float("nan")
 
     # (header, engine of the row, field; "total" is the sum above)
