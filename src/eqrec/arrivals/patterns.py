@@ -374,3 +374,19 @@ def gain_zero_pattern(pattern: ArrivalPattern, gain: str = "M") -> list[list[str
     T = pattern.T
     return [["*" if E[k, i] and (gain == "M" or i == k) else "0" for i in range(T)] for k in range(T)]
 
+
+def pattern_text(rows: Sequence[Sequence[str]]) -> str:
+    """A zero pattern (:func:`gain_zero_pattern`) on one line, rows separated by ``;``.
+
+    Parameters
+    ----------
+    rows : sequence of sequence of str
+        Blocks row by row, ``"*"`` (free) or ``"0"`` (zero).
+
+    Returns
+    -------
+    str
+        ``"[a, b; c, d]"``.
+    """
+    return "[" + "; ".join(", ".join(r) for r in rows) + "]"
+

@@ -32,7 +32,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm
 
 from eqrec.arrivals.draws import bernoulli_arrivals
 from eqrec.errors import InputError
@@ -170,6 +169,10 @@ def bonferroni_z(alpha: float, k: int) -> float:
     float
         ``z_crit = Phi^{-1}(1 - alpha / (2 k))`` (``Phi`` the standard normal distribution function).
     """
+    # imported here: only the Monte Carlo check needs it, and scipy.stats costs ~1 s CPU per job to import
+    # (the tracking and sweep jobs of P4 import this module and never test moments)
+    from scipy.stats import norm
+
     return float(norm.ppf(1.0 - alpha / (2.0 * max(int(k), 1))))
 
 

@@ -17,23 +17,36 @@ from __future__ import annotations
 
 import itertools
 import time
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from eqrec.arrivals.words import worst_case_word
-from eqrec.simulate.loop import monte_carlo, simulate_run
 from eqrec.systems.examples import ACC_CONSTANTS, acc_system
 from eqrec.systems.affine import AffineSystem
-from eqrec.design.prefix.design import design_prefix
-from eqrec.design.result import Design
-from eqrec.studies.searches import mu2_curve, lower_bound_probe, min_feasible_mu1, min_recovery_time
-from eqrec.design.prefix.time_based import design_time_based
 from eqrec.studies.pipeline.logs import Progress, get_logger
 from eqrec.studies.pipeline.outputs import read_json, write_json, write_npz
 
+if TYPE_CHECKING:
+    from eqrec.design.result import Design
+
 log = get_logger("p1")
 
-METHODS = {"prefix": design_prefix, "time": design_time_based}
+
+def design_methods() -> dict[str, Callable[..., Design]]:
+    """The two designs of P1 by name: ``prefix`` (:func:`~eqrec.design.prefix.design.design_prefix`) and ``time``
+    (:func:`~eqrec.design.prefix.time_based.design_time_based`).
+
+    Returns
+    -------
+    dict of str to callable
+        ``fn(system, language, mu1) -> Design`` per method name.
+    """
+    # The design, simulation and search modules are imported in the steps that use them: the model and values
+    # steps design nothing (saves ~0.6 s CPU of imports, numba and the LP layer, per job).
+    from eqrec.design.prefix import design, time_based
+
+    return {"prefix": design.design_prefix, "time": time_based.design_time_based}
 
 
 def system_from_config(cfg: dict) -> AffineSystem:
@@ -73,11 +86,13 @@ def _certified(d: Design) -> dict:
 
 def step_designs(cfg, inputs, outputs, wildcards) -> dict:
     """P1-M2 / P1-TIME: optimal M2 of the prefix- and time-based estimators on L1, per solver."""
+    from eqrec.studies.searches import lower_bound_probe
+
     system = system_from_config(cfg)
     L1, mu1 = cfg["language"], float(cfg["mu1"])
     gap = float(cfg["probe_gap"])
     result: dict = {"language": L1, "worst_case_word": worst_case_word(L1), "M1": mu1, "designs": {}}
-    for method, fn in METHODS.items():
+    for method, fn in design_methods().items():
         entry: dict = {"solvers": {}}
         for solver in cfg["solvers"]:
             log.info("%s-based design with %s", method, solver)
@@ -114,10 +129,10 @@ def design_variants(cfg: dict) -> dict:
     rounded = AffineSystem(A=np.round(base.A, 4), C=base.C, E=np.round(base.E, 4), eta_w=base.eta_w,
                            eta_v=base.eta_v, name="ACC rounded")
     eye = AffineSystem(A=base.A, C=base.C, E=np.eye(3), eta_w=base.eta_w, eta_v=base.eta_v, name="ACC E=I")
-    out = {}
+    out, methods = {}, design_methods()
     for name, s in (("rounded_matrices", rounded), ("identity_noise_gain", eye)):
         log.info("reading %s", name)
-        out[name] = {m: fn(s, L1, mu1).mu2 for m, fn in METHODS.items()}
+        out[name] = {m: fn(s, L1, mu1).mu2 for m, fn in methods.items()}
     return out
 
 
@@ -125,6 +140,8 @@ def design_variants(cfg: dict) -> dict:
 
 def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
     """P1-F1: Monte Carlo error trajectories of both estimators (same draws) and worst-vertex checks."""
+    from eqrec.simulate.loop import monte_carlo, simulate_run
+
     system = system_from_config(cfg)
     L1, mu1 = cfg["language"], float(cfg["mu1"])
     sim = cfg["simulation"]
@@ -132,7 +149,7 @@ def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
     x0 = np.asarray(sim["x0"], float)
     u = np.full((T, 1), float(sim["input_force"]))
     arrays: dict = {}
-    for method, fn in METHODS.items():
+    for method, fn in design_methods().items():
         d = fn(system, L1, mu1, engine="tree")  # the gains of designs.json (the paper's LP)
         log.info("simulating %d runs of the %s-based estimator", sim["runs"], method)
         errs, words = monte_carlo(system, d.schedule, L1, mu1, int(sim["runs"]), int(sim["seed"]),
@@ -155,22 +172,24 @@ def step_simulate(cfg, inputs, outputs, wildcards) -> dict:
 
 def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     """P1-EXT: M2*(M1) curve, smallest M1, a finite-length language, minimum recovery time."""
+    from eqrec.studies.searches import min_feasible_mu1, min_recovery_time, mu2_curve
+
     system = system_from_config(cfg)
     L1 = cfg["language"]
     ext = cfg["extensions"]
     res: dict = {}
     log.info("smallest feasible M1 (exact: the class engine's Charnes-Cooper LP)")
-    smallest = {m: min_feasible_mu1(system, L1, m) for m in METHODS}
+    smallest = {m: min_feasible_mu1(system, L1, m) for m in design_methods()}
     res["min_M1"] = {m: r.upper for m, r in smallest.items()}
     res["min_M1_bracket"] = {m: {"lower": r.lower, "upper": r.upper, "binding": r.binding}
                              for m, r in smallest.items()}
     grid = np.linspace(float(ext["M1_min_plot"]), float(ext["M1_max"]), int(ext["M1_points"]))
     res["curve"] = {"M1": grid.tolist()}
-    for m in METHODS:
+    for m in design_methods():
         prog = Progress(log, grid.size, f"M2*(M1) curve, {m}-based", "levels")
         res["curve"][m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
-    fin = ext["finite_language"]
-    d = design_prefix(system, fin, float(cfg["mu1"]), fixed_length=False)  # Section V: a finite-length language
+    fin = ext["finite_language"]  # Section V: a finite-length language
+    d = design_methods()["prefix"](system, fin, float(cfg["mu1"]), fixed_length=False)
     res["finite_language"] = {"words": fin, **_certified(d), "per_word_terminal": {
         w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}
     res["min_T"] = []

@@ -32,10 +32,9 @@ from __future__ import annotations
 import json
 
 import numpy as np
-import pandas as pd
 
 from eqrec.bounds.certify import certify_schedule, no_data_growth
-from eqrec.arrivals.patterns import event_indices, event_matrix, event_sequence_label, gain_zero_pattern
+from eqrec.arrivals.patterns import event_indices, event_matrix, event_sequence_label, gain_zero_pattern, pattern_text
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import full_delay_language, parse_delay_word
 from eqrec.simulate.loop import sample_uncertainty, simulate_run
@@ -75,11 +74,6 @@ def reactor_language(cfg: dict) -> tuple[str, ...]:
 
 
 # --------------------------------------------------------------------------- P3-LANG
-
-def pattern_text(rows: list[list[str]]) -> str:
-    """A zero pattern (rows of entries) on one line: ``[a, b; c, d]``."""
-    return "[" + "; ".join(", ".join(r) for r in rows) + "]"
-
 
 def language_examples(T: int, max_delay: int) -> dict:
     """Examples 1-5 for the full delay language ``{0..τ̄}^T``: per word and per reduced sequence."""
@@ -139,6 +133,8 @@ def _examples_markdown(ex: dict) -> str:
 
 def step_languages(cfg, inputs, outputs, wildcards) -> dict:
     """P3-LANG: Examples 1-5 as tables, and the language counts for a few ``(T, τ̄)``."""
+    import pandas as pd  # imported here: the only step of this module writing frames (saves ~0.3-0.5 s CPU per job)
+
     lc = cfg["languages"]
     ex = language_examples(int(lc["example_T"]), int(lc["example_max_delay"]))
     counts = []

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.studies.p3.steps import pattern_text
+from eqrec.arrivals.patterns import pattern_text
 from eqrec.studies.pipeline.outputs import write_json
 
 #: Relative tolerance for "the same optimum" and for comparing certified bounds.
