@@ -34,7 +34,7 @@ from eqrec.design.prefix.design import design_prefix  # noqa: E402
 from eqrec.errors import InputError  # noqa: E402
 from eqrec.estimators.protocol import OnTimeOnly  # noqa: E402
 from eqrec.estimators.zonotope import ZonotopeEstimator  # noqa: E402
-from eqrec.simulate.loop import closed_loop, what_arrived  # noqa: E402
+from eqrec.simulate.loop import closed_loop, draw_box, what_arrived  # noqa: E402
 from eqrec.systems.examples import acc_system, batch_reactor, two_mass  # noqa: E402
 
 PLANTS = {"carts": (two_mass, HORIZON, MAX_DELAY, MAX_LOST), "cart-pole": (cart_pole, HORIZON, MAX_DELAY, MAX_LOST),
@@ -53,9 +53,9 @@ def _arrivals(system, design, trace, u, seed):
     """What reaches an estimator at each step (from one simulated run, noise at random box corners)."""
     rng = np.random.default_rng(seed)
     N = trace.steps
-    w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
-    v = system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv))
-    xi0 = design.mu1 * rng.choice([-1.0, 1.0], system.n)
+    w = draw_box(rng, system.eta_w, (N, system.nw), "vertex")
+    v = draw_box(rng, system.eta_v, (N, system.nv), "vertex")
+    xi0 = draw_box(rng, design.mu1, (system.n,), "vertex")
     x0 = np.linspace(-1.0, 1.0, system.n)
     u_at = None if u is None else (lambda k, xhat: u[k])
     run = closed_loop(system, ZonotopeEstimator(system, x0_radius=design.mu1, max_delay=HORIZON), trace, x0, xi0,

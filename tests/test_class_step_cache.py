@@ -17,7 +17,7 @@ from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, has_class
 from eqrec.estimators.error_maps import ClassErrorMaps, ClassSteps, RoundingMaps
 from eqrec.estimators.guaranteed import GuaranteedEstimator
-from eqrec.simulate.loop import closed_loop
+from eqrec.simulate.loop import closed_loop, draw_box
 from eqrec.systems.examples import two_mass
 
 
@@ -130,9 +130,9 @@ def test_cached_step_is_bit_identical_to_the_uncached_one(design, loss, inputs, 
             for k in lost[1:]:
                 delays[k] = 0
         trace = ArrivalTrace(delays)
-    w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
-    v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
-    xi0 = rng.choice([-1.0, 1.0], system.n) * d.mu1
+    w = draw_box(rng, system.eta_w, (N, system.nw), "vertex")
+    v = draw_box(rng, system.eta_v, (N, system.nv), "vertex")
+    xi0 = draw_box(rng, d.mu1, (system.n,), "vertex")
     x0 = rng.normal(size=system.n) * 5.0
     u_at = (lambda k, xhat: np.array([np.sin(0.3 * k) * 2.0])) if inputs else None
     fast, slow = _twin(design, strict, tight)
@@ -221,9 +221,9 @@ def test_the_long_row_path_gives_the_same_numbers(design, monkeypatch):
     rng = np.random.default_rng(5)
     N = 40
     trace = with_uniform_delays(rng, bernoulli_trace(rng, N, 0.3), 2)
-    w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
-    v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
-    xi0 = rng.choice([-1.0, 1.0], system.n) * d.mu1
+    w = draw_box(rng, system.eta_w, (N, system.nw), "vertex")
+    v = draw_box(rng, system.eta_v, (N, system.nv), "vertex")
+    xi0 = draw_box(rng, d.mu1, (system.n,), "vertex")
     rows = []
     for limit in (guaranteed.PARTS_LIMIT, 0):
         monkeypatch.setattr(guaranteed, "PARTS_LIMIT", limit)

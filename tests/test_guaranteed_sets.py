@@ -10,7 +10,7 @@ from eqrec.design.delay.design import design_delay_global
 from eqrec.design.delay.languages import delay_classes
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
-from eqrec.simulate.loop import closed_loop
+from eqrec.simulate.loop import closed_loop, draw_box
 from eqrec.systems.examples import two_mass
 
 
@@ -24,9 +24,9 @@ def _run(design, tight: bool, loss: float, seed: int = 2, N: int = 72):
     system, d = design
     rng = np.random.default_rng(seed)
     trace = with_uniform_delays(rng, bernoulli_trace(rng, N, loss), 2)
-    w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
-    v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
-    xi0 = rng.choice([-1.0, 1.0], system.n) * d.mu1
+    w = draw_box(rng, system.eta_w, (N, system.nw), "vertex")
+    v = draw_box(rng, system.eta_v, (N, system.nv), "vertex")
+    xi0 = draw_box(rng, d.mu1, (system.n,), "vertex")
     est = d.estimator(strict=False, tight=tight)
     seen = []
 
@@ -71,8 +71,8 @@ def test_the_predicted_rows_follow_the_per_state_choice(design):
     rng = np.random.default_rng(4)
     N = 30
     trace = with_uniform_delays(rng, bernoulli_trace(rng, N, 0.0), 2)
-    w = rng.choice([-1.0, 1.0], (N, system.nw)) * system.eta_w
-    v = rng.choice([-1.0, 1.0], (N, system.nv)) * system.eta_v
+    w = draw_box(rng, system.eta_w, (N, system.nw), "vertex")
+    v = draw_box(rng, system.eta_v, (N, system.nv), "vertex")
     est = d.estimator(strict=False)
     checked = 0
 

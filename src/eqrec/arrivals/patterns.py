@@ -389,4 +389,3 @@ def pattern_text(rows: Sequence[Sequence[str]]) -> str:
         ``"[a, b; c, d]"``.
     """
     return "[" + "; ".join(", ".join(r) for r in rows) + "]"
-

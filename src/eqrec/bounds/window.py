@@ -201,23 +201,10 @@ def _symmetric_ridge(M: np.ndarray) -> None:  # pragma: no cover - compiled
 @numba.njit(cache=True)
 def sparse_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
     """The nonzeros of each ``A[j]`` (``(L, n, n)``) by row: ``ptr`` (``(L, n + 1)``), ``col`` and ``val``
-    (``(L, n · n)``), row ``a`` of ``A[j]`` being ``acol[j, aptr[j, a]:aptr[j, a + 1]]`` and its values (the window's
-    recursions run over them: a plant's ``A`` is often sparse, e.g. a chain)."""
-    L, n = A.shape[0], A.shape[1]
-    aptr = np.zeros((L, n + 1), dtype=np.int64)
-    acol = np.empty((L, n * n), dtype=np.int64)  # (only the first ptr[j, n] entries of a row are read)
-    aval = np.empty((L, n * n))
-    for j in range(L):
-        z = 0
-        for a in range(n):
-            for e in range(n):
-                f = A[j, a, e]
-                if f != 0.0:
-                    acol[j, z] = e
-                    aval[j, z] = f
-                    z += 1
-            aptr[j, a + 1] = z
-    return aptr, acol, aval
+    (``(L, n · n)``), row ``a`` of ``A[j]`` being ``acol[j, aptr[j, a]:aptr[j, a + 1]]`` (columns in increasing
+    order) and its values (the window's recursions run over them: a plant's ``A`` is often sparse, e.g. a chain).
+    The rows of ``A`` are the columns of its transpose (:func:`sparse_columns`)."""
+    return sparse_columns(np.ascontiguousarray(np.transpose(A, (0, 2, 1))))
 
 
 @numba.njit(cache=True)

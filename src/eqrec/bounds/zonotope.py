@@ -121,8 +121,8 @@ def hull_pad(G: np.ndarray, bounds: np.ndarray) -> np.ndarray:
     return np.nextafter(np.maximum(bounds - np.abs(G).sum(axis=1), 0.0), np.inf)
 
 
-#: Longest row :func:`outer_row_sums_of_parts` sums (NumPy reduces a longer one in buffered chunks).
-_PARTS_LIMIT = 4096
+#: Longest row :func:`outer_row_sums_of_parts` sums compiled (NumPy reduces a longer one in buffered chunks).
+PARTS_LIMIT = 4096
 
 
 @numba.njit(cache=True)
@@ -191,9 +191,10 @@ def _pairwise(a, lo, n):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _row_sums_of_parts(P, N):  # pragma: no cover - compiled
+def row_sums_of_parts_compiled(P, N):  # pragma: no cover - compiled
     """:func:`outer_row_sums` of ``[P, N]`` without forming it: per row the absolute values end to end, summed as
-    NumPy's ``sum`` does (from ``0.0``, pairwise), then rounded outward with the same factor."""
+    NumPy's ``sum`` does (from ``0.0``, pairwise), then rounded outward with the same factor (rows of at most
+    :data:`PARTS_LIMIT` entries; called by compiled code too, an estimator's compiled step)."""
     n, qp = P.shape
     qn = N.shape[1]
     q = qp + qn
@@ -209,19 +210,11 @@ def _row_sums_of_parts(P, N):  # pragma: no cover - compiled
     return out
 
 
-#: The compiled row sums of :func:`outer_row_sums_of_parts`, for compiled callers (an estimator's compiled step),
-#: on rows of at most :data:`PARTS_LIMIT` entries.
-row_sums_of_parts_compiled = _row_sums_of_parts
-
-#: Longest row the compiled sums take (:func:`outer_row_sums_of_parts`).
-PARTS_LIMIT = _PARTS_LIMIT
-
-
 def outer_row_sums_of_parts(P: np.ndarray, N: np.ndarray) -> np.ndarray:
     """``outer_row_sums(np.concatenate([P, N], axis=1))``, the same numbers, without the concatenation.
 
-    Compiled for rows of at most ``4096`` entries (the same additions in the same order as NumPy's ``sum``,
-    ``tests/test_class_step_cache.py``); longer rows are concatenated and summed by NumPy.
+    Compiled for rows of at most :data:`PARTS_LIMIT` (4096) entries (the same additions in the same order as
+    NumPy's ``sum``, ``tests/test_class_step_cache.py``); longer rows are concatenated and summed by NumPy.
 
     Parameters
     ----------
@@ -233,9 +226,9 @@ def outer_row_sums_of_parts(P: np.ndarray, N: np.ndarray) -> np.ndarray:
     numpy.ndarray, shape (n,)
         The outward-rounded row sums of ``|[P, N]|``.
     """
-    if P.shape[1] + N.shape[1] > _PARTS_LIMIT:
+    if P.shape[1] + N.shape[1] > PARTS_LIMIT:
         return outer_row_sums(np.concatenate([P, N], axis=1))
-    return _row_sums_of_parts(P, N)
+    return row_sums_of_parts_compiled(P, N)
 
 
 def reduce_girard(G: np.ndarray, limit: int) -> np.ndarray:

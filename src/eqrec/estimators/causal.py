@@ -56,7 +56,6 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.bounds.rounding import UNIT_ROUNDOFF
 from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps, blas_ready, class_step
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
@@ -309,8 +308,6 @@ class ClassEstimator(StampedEstimator):
         self._maps: ClassErrorMaps | None = None
         self._class_steps: ClassSteps | None = None  # per class: K, |K|, the rounding map (shared by the design)
         self._xbar: "np.ndarray | None" = None
-        # the state update's length (the terms of its rounding injection) and the allowance's factor 1 + (2n + 8) u
-        self._terms = (system.n + system.nw + system.m + 3, 1.0 + (2 * system.n + 8) * UNIT_ROUNDOFF)
         self._no_packets = (np.zeros(0, dtype=np.int64), np.zeros((0, system.n)), np.zeros((0, system.p)))
         # what the compiled step takes of the model, looked up once (:meth:`_class_step_args`): the output model,
         # and the state model of a time-invariant system
@@ -518,8 +515,8 @@ class ClassEstimator(StampedEstimator):
             radius = float(self.bound) if math.isfinite(self.bound) else 0.0
         args = (A, self.xhat if step.restarted else self._xbar, B, step.u, sysm.f, entry.gain, r, has_data, self.xhat,
                 radius, t, record.true, taus, references, residuals, absC, v, output_terms, record.v, absA,
-                absB, e, f, drift, has_input, self._terms[0], record.w, entry.abs_gain, len(S) * self._p + 2,
-                entry.rounding_map, record.z, self._terms[1])
+                absB, e, f, drift, has_input, self._n + self._state_terms_extra, record.w, entry.abs_gain,
+                len(S) * self._p + 2, entry.rounding_map, record.z, self._allowance_factor)
         return record, args
 
 

@@ -279,6 +279,7 @@ class StampedEstimator:
         # the lengths of the rounding injections' dot products beyond the estimator's own (module docstring)
         self._state_terms_extra = system.nw + system.m + 3
         self._output_terms = system.n + system.nv + 2
+        self._allowance_factor = 1.0 + (2 * system.n + 8) * UNIT_ROUNDOFF  # ρ's factor (:meth:`_allowance`)
         self._C_fixed = system.C if system.C.ndim == 2 else None
         self._no_input = np.zeros(self._m)  # u = None: the zero input, shared by the steps (read only)
         self._levels = _levels_kept(self.bound_of)  # observed prefix -> its level (:meth:`_level`)
@@ -385,7 +386,7 @@ class StampedEstimator:
             models = [self._absolute_model(tau) for tau in range(self.T)]
             hit = self._norms["outputs"] = (np.ascontiguousarray([m[2] for m in models], dtype=float),
                                             np.ascontiguousarray([m[4] for m in models], dtype=float),
-                                            self.system.n + self.system.nv + 2)
+                                            self._output_terms)
         return hit
 
     def _period_record(self, step: OpenedStep) -> "RoundingRecord":
@@ -437,7 +438,7 @@ class StampedEstimator:
         """``ρ = |G| (ι_w, ι_v, ρ(s)) + extra``, rounded up (module docstring); ``maps`` is ``|G|``, the absolute
         error map of the current estimate with identity noise gains, columns ``(w, v, ξ0)``."""
         total = maps @ record.z + extra
-        return np.nextafter(total * (1.0 + (2 * self._n + 8) * UNIT_ROUNDOFF), np.inf)
+        return np.nextafter(total * self._allowance_factor, np.inf)
 
     def _with_rounding(self, level: float) -> float:
         """The reported bound: the level plus the allowance, rounded up (``inf`` stays ``inf``)."""

@@ -142,8 +142,8 @@ import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding import rounding_allowance_compiled
-from eqrec.bounds.window import accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, window_estimate, \
-    weighted_products, window_estimate_sparse
+from eqrec.bounds.window import accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, \
+    weighted_products, window_estimate, window_estimate_sparse
 from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
     reduce_pca, reduce_pca_pair
 from eqrec.checks import radii

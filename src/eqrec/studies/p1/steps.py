@@ -177,19 +177,19 @@ def step_extensions(cfg, inputs, outputs, wildcards) -> dict:
     system = system_from_config(cfg)
     L1 = cfg["language"]
     ext = cfg["extensions"]
-    res: dict = {}
+    res, methods = {}, design_methods()
     log.info("smallest feasible M1 (exact: the class engine's Charnes-Cooper LP)")
-    smallest = {m: min_feasible_mu1(system, L1, m) for m in design_methods()}
+    smallest = {m: min_feasible_mu1(system, L1, m) for m in methods}
     res["min_M1"] = {m: r.upper for m, r in smallest.items()}
     res["min_M1_bracket"] = {m: {"lower": r.lower, "upper": r.upper, "binding": r.binding}
                              for m, r in smallest.items()}
     grid = np.linspace(float(ext["M1_min_plot"]), float(ext["M1_max"]), int(ext["M1_points"]))
     res["curve"] = {"M1": grid.tolist()}
-    for m in design_methods():
+    for m in methods:
         prog = Progress(log, grid.size, f"M2*(M1) curve, {m}-based", "levels")
         res["curve"][m] = mu2_curve(system, L1, grid, m, on_point=lambda k, mu1: prog.advance())
     fin = ext["finite_language"]  # Section V: a finite-length language
-    d = design_methods()["prefix"](system, fin, float(cfg["mu1"]), fixed_length=False)
+    d = methods["prefix"](system, fin, float(cfg["mu1"]), fixed_length=False)
     res["finite_language"] = {"words": fin, **_certified(d), "per_word_terminal": {
         w: float(c.bounds[-1].max()) for w, c in d.certificate.words.items()}}
     res["min_T"] = []
