@@ -326,6 +326,8 @@ def exact_part(args) -> None:
                        E=0.1 * np.eye(2), eta_w=0.1, eta_v=0.05, name="oscillator")
     plants = [("oscillator n=2", osc), ("two carts n=4", two_mass()), ("tanks n=4", tank_chain(4, 1)),
               ("tanks n=6", tank_chain(6, 2))]
+    exact_kw = {} if args.exact_window is None else {"window": args.exact_window}
+    plants = [pl for pl in plants if args.exact_plants is None or pl[0].split()[0] in args.exact_plants]
     N = args.exact_steps
     print(f"cost and tightness: loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, uniform noise; hull / exact hull "
           f"of the whole horizon (max over states) at the last step and the worst over every 5th step")
@@ -334,7 +336,7 @@ def exact_part(args) -> None:
     for label, system in plants:
         n = system.n
         makers = {"zonotope": lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY),
-                  "exact": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY)}
+                  "exact": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw)}
         rng = np.random.default_rng(7)
         trace = _trace(7, N)
         w, v = rng.uniform(-1, 1, (N, system.nw)), rng.uniform(-1, 1, (N, system.nv))
@@ -368,7 +370,7 @@ def exact_part(args) -> None:
         w, v = rng.uniform(-1, 1, (Ns, system.nw)), rng.uniform(-1, 1, (Ns, system.nv))
         x, y, arrivals = simulate(system, trace, np.zeros(n), X0_RADIUS * rng.uniform(-1, 1, n), w, v)
         for name, make in (("zonotope", lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)),
-                           ("exact", lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY))):
+                           ("exact", lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw))):
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
@@ -394,6 +396,10 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--exact-scale-n", type=int, nargs="*", default=[30],
                     help="exact part: tank chains timed without the reference (default 30)")
     ap.add_argument("--exact-scale-steps", type=int, default=60)
+    ap.add_argument("--exact-window", type=int, default=None,
+                    help="exact part: the exact estimator's window (default: its own default)")
+    ap.add_argument("--exact-plants", nargs="*", default=None,
+                    help="exact part: the small plants to run, by first word (oscillator two tanks; default all)")
     args = ap.parse_args(argv)
     if args.part == "scale":
         return scale_part(args)

@@ -222,3 +222,90 @@ def test_dual_bound_is_a_bound_for_any_multipliers():
         y = rng.normal(size=ws.M.shape[0])
         b = dual_bound(ws.X_pred[0], ws.M, ws.lower, ws.upper, y, ws.mag_pred[0], ws.mag_rows, ws.kappa)
         assert ws.centre_pred[0] + b >= hi[0] - 1e-12
+
+
+def tank_chain(n: int = 4, p: int = 1, a: float = 0.2, leak: float = 0.05) -> eqrec.AffineSystem:
+    """A chain of coupled tanks (benchmarks/bench_zonotope.py's tank_chain): slow modes, few level sensors."""
+    A = np.eye(n)
+    for i in range(n - 1):
+        A[i, i] -= a
+        A[i + 1, i + 1] -= a
+        A[i, i + 1] += a
+        A[i + 1, i] += a
+    A[-1, -1] -= leak
+    sensors = np.unique(np.round(np.linspace(0, n - 1, p)).astype(int)) if p > 1 else np.array([n - 1])
+    return eqrec.AffineSystem(A=A, C=np.eye(n)[sensors], E=np.eye(n), eta_w=0.01, eta_v=0.02, name=f"tanks{n}")
+
+
+@pytest.mark.parametrize("plant", [oscillator, tank_chain])
+def test_box_prior_guarantee_at_box_corners(plant):
+    """box_prior=True: error <= bound at every step, no tolerance, with the noise at random corners of its box and a
+    short window (the prior's box then binds at every step; a box that missed the state would show here)."""
+    system = plant()
+    n, N = system.n, 60
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        trace = lossy_trace(seed, N)
+        est = ExactSetEstimator(system, 0.5, max_delay=2, window=4, box_prior=True)
+        out = eqrec.simulate.loop.closed_loop(system, est, trace, np.zeros(n), 0.5 * rng.choice([-1.0, 1.0], n),
+                                              system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw)),
+                                              system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)))
+        assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
+        assert est.lp_fallbacks == 0
+
+
+def test_box_prior_contains_the_exact_hull_and_is_tighter():
+    """box_prior=True on the tank chain n = 6 (two sensors), window 5: every set contains the exact hull and the
+    true state; each is no wider than without the box (a subset's LP optimum, up to the rounding allowance), and
+    strictly tighter somewhere (the prior's box binds on this slow plant)."""
+    system = tank_chain(6, 2)
+    rows = _run(system, {"box": lambda: ExactSetEstimator(system, 0.5, max_delay=2, window=5, box_prior=True),
+                         "plain": lambda: ExactSetEstimator(system, 0.5, max_delay=2, window=5)}, 40, 3, every=3)
+    gains = []
+    for t, sets, ref, x_t, x_t1 in rows:
+        for k in ("box", "plain"):
+            filt, pred, _ = sets[k]
+            _check_contains(filt, ref[0], x_t)
+            _check_contains(pred, ref[1], x_t1)
+        for S_box, S_plain in zip(sets["box"][:2], sets["plain"][:2]):
+            w_box, w_plain = S_box.upper - S_box.lower, S_plain.upper - S_plain.lower
+            assert np.all(w_box <= w_plain * (1 + 1e-9) + 1e-12)
+            gains.append(float(np.max(w_plain / w_box)))
+    assert max(gains) > 1.05, max(gains)
+    with pytest.raises(InputError) as info:
+        ExactSetEstimator(system, 0.5, box_prior="yes")
+    assert info.value.field == "box_prior"
+
+
+def test_window_set_ranged_prior_rows():
+    """window_set's ranged prior rows (A0, lower, upper): the rows are the prior's then the measured ones, and the
+    LP hull equals SciPy's optimum of the same LP written independently (inequalities for the ranged rows)."""
+    from scipy.optimize import linprog
+
+    rng = np.random.default_rng(5)
+    system = eqrec.two_mass()
+    L, n = 6, 4
+    A = np.broadcast_to(system.A, (L, n, n)).copy()
+    C = np.broadcast_to(system.C, (L, 1, n)).copy()
+    E = np.broadcast_to(system.eta_w * system.E, (L, n, 2)).copy()
+    V = np.broadcast_to(system.eta_v * system.V, (L, 1, 1)).copy()
+    measured = np.array([True, True, False, True, True, True])
+    G0 = 0.5 * np.eye(n) + 0.1 * rng.normal(size=(n, n))
+    Y = rng.normal(scale=0.05, size=(L, 1))
+    lo, hi = -0.2 * np.ones(n), 0.1 * np.ones(n)
+    plain = window_set(A, C, E, V, np.zeros((L, n)), measured, Y, np.zeros(n), G0)
+    boxed = window_set(A, C, E, V, np.zeros((L, n)), measured, Y, np.zeros(n), G0, (G0, lo, hi))
+    Q = plain.M.shape[1]
+    G0_rows = np.concatenate([G0, np.zeros((n, Q - n))], axis=1)
+    assert np.array_equal(boxed.M, np.concatenate([G0_rows, plain.M]))
+    assert np.array_equal(boxed.lower[:n], lo) and np.array_equal(boxed.upper[:n], hi)
+    low, up, fb = lp_hull(boxed, "pred")
+    assert fb == 0
+    for i in range(n):
+        for sign, end in ((-1.0, up[i]), (1.0, low[i])):
+            res = linprog(sign * boxed.X_pred[i], A_ub=np.vstack([G0_rows, -G0_rows]), b_ub=np.concatenate([hi, -lo]),
+                          A_eq=plain.M, b_eq=plain.lower, bounds=(-1, 1), method="highs")
+            assert res.status == 0
+            opt = boxed.centre_pred[i] + sign * res.fun
+            assert abs(end - opt) <= 1e-7 * (1 + abs(opt)), (i, sign, end, opt)
+            assert (end >= opt - REF_TOL) if sign < 0 else (end <= opt + REF_TOL)

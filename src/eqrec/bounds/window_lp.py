@@ -73,7 +73,7 @@ class WindowSet:
     M : numpy.ndarray, shape (m + k, Q)
         The constraint rows: the prior's rows (if any), then the measured outputs.
     lower, upper : numpy.ndarray, shape (m + k,)
-        Their bounds (equal: the prior's right-hand side, then :math:`r`).
+        Their bounds (the prior's rows' bounds, then :math:`r` for both).
     mag_pred, mag_filt : numpy.ndarray, shape (n,)
         Magnitudes of the computation of each state's row and nominal value (rounding allowance).
     mag_rows : numpy.ndarray, shape (m + k,)
@@ -116,8 +116,10 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         Its generators.
     prior_rows : tuple of numpy.ndarray, optional
         ``(A0, b0)``, shapes ``(k, q0)`` and ``(k,)``: the prior at :math:`s_0` is the constrained zonotope
-        :math:`\{c_0 + G_0\varepsilon : A_0\varepsilon = b_0\}` (:mod:`eqrec.bounds.constrained`); ``None``:
-        the zonotope.
+        :math:`\{c_0 + G_0\varepsilon : A_0\varepsilon = b_0\}` (:mod:`eqrec.bounds.constrained`); or
+        ``(A0, b0_lower, b0_upper)``: ranged rows :math:`b_{0,\rm lower} \le A_0\varepsilon \le b_{0,\rm upper}`
+        (the zonotope within a box, ``A0 = G0``: :class:`eqrec.estimators.exact_set.ExactSetEstimator`,
+        ``box_prior``); ``None``: the zonotope.
 
     Returns
     -------
@@ -134,17 +136,22 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         *(np.require(a, float, ("C", "W")) for a in (A, C, E, V, drive)), measured,
         *(np.require(a, float, ("C", "W")) for a in (Y, c0, G0)))
     blocks, rhs, mags = [], [], []
+    lows = []
     if prior_rows is not None and prior_rows[0].shape[0]:
-        A0, b0 = (np.asarray(a, float) for a in prior_rows)
+        A0, b0 = np.asarray(prior_rows[0], float), np.asarray(prior_rows[1], float)
+        b0_hi = b0 if len(prior_rows) == 2 else np.asarray(prior_rows[2], float)
         blocks.append(np.concatenate([A0, np.zeros((A0.shape[0], Q - q0))], axis=1))
-        rhs.append(b0)
-        mags.append(np.abs(b0) + np.abs(A0).sum(axis=1))
+        lows.append(b0)
+        rhs.append(b0_hi)
+        mags.append(np.maximum(np.abs(b0), np.abs(b0_hi)) + np.abs(A0).sum(axis=1))
     if k_meas:
         blocks.append(Mm)
+        lows.append(r)
         rhs.append(r)
         mags.append(magy)
     M = np.concatenate(blocks) if blocks else np.zeros((0, Q))
-    lower = upper = np.concatenate(rhs) if rhs else np.zeros(0)
+    lower = np.concatenate(lows) if lows else np.zeros(0)
+    upper = np.concatenate(rhs) if rhs else np.zeros(0)
     mags = np.concatenate(mags) if mags else np.zeros(0)
     kappa = 4.0 * (L + 2) * (n + M.shape[0] + Q)
     return WindowSet(xc, xf, X_pred, X_filt, M, lower, upper, zm + np.abs(xc), zf + np.abs(xf), mags, kappa)
