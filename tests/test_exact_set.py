@@ -237,16 +237,18 @@ def tank_chain(n: int = 4, p: int = 1, a: float = 0.2, leak: float = 0.05) -> eq
     return eqrec.AffineSystem(A=A, C=np.eye(n)[sensors], E=np.eye(n), eta_w=0.01, eta_v=0.02, name=f"tanks{n}")
 
 
+@pytest.mark.parametrize("prior", ["zonotope+box", "box"])
 @pytest.mark.parametrize("plant", [oscillator, tank_chain])
-def test_box_prior_guarantee_at_box_corners(plant):
-    """box_prior=True: error <= bound at every step, no tolerance, with the noise at random corners of its box and a
-    short window (the prior's box then binds at every step; a box that missed the state would show here)."""
+def test_box_prior_guarantee_at_box_corners(plant, prior):
+    """The earlier hull as the prior: error <= bound at every step, no tolerance, with the noise at random corners of
+    its box and a short window (the prior's box then binds at every step; a box that missed the state, e.g. keyed to
+    the wrong time, fails here)."""
     system = plant()
     n, N = system.n, 60
     for seed in range(3):
         rng = np.random.default_rng(seed)
         trace = lossy_trace(seed, N)
-        est = ExactSetEstimator(system, 0.5, max_delay=2, window=4, box_prior=True)
+        est = ExactSetEstimator(system, 0.5, max_delay=2, window=4, prior=prior)
         out = eqrec.simulate.loop.closed_loop(system, est, trace, np.zeros(n), 0.5 * rng.choice([-1.0, 1.0], n),
                                               system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw)),
                                               system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)))
@@ -255,15 +257,17 @@ def test_box_prior_guarantee_at_box_corners(plant):
 
 
 def test_box_prior_contains_the_exact_hull_and_is_tighter():
-    """box_prior=True on the tank chain n = 6 (two sensors), window 5: every set contains the exact hull and the
-    true state; each is no wider than without the box (a subset's LP optimum, up to the rounding allowance), and
-    strictly tighter somewhere (the prior's box binds on this slow plant)."""
+    """The tank chain n = 6 (two sensors), window 5: with each prior every set contains the exact hull and the
+    true state; with "zonotope+box" each is no wider than with the zonotope (a subset's LP optimum, up to the
+    rounding allowance), and strictly tighter somewhere (the prior's box binds on this slow plant)."""
     system = tank_chain(6, 2)
-    rows = _run(system, {"box": lambda: ExactSetEstimator(system, 0.5, max_delay=2, window=5, box_prior=True),
-                         "plain": lambda: ExactSetEstimator(system, 0.5, max_delay=2, window=5)}, 40, 3, every=3)
+    make = {k: (lambda k=k: ExactSetEstimator(system, 0.5, max_delay=2, window=5, prior=k))
+            for k in ("zonotope+box", "box", "zonotope")}
+    rows = _run(system, make, 40, 3, every=3)
     gains = []
     for t, sets, ref, x_t, x_t1 in rows:
-        for k in ("box", "plain"):
+        sets["plain"], sets["box"] = sets["zonotope"], sets["zonotope+box"]
+        for k in make:
             filt, pred, _ = sets[k]
             _check_contains(filt, ref[0], x_t)
             _check_contains(pred, ref[1], x_t1)
@@ -273,8 +277,8 @@ def test_box_prior_contains_the_exact_hull_and_is_tighter():
             gains.append(float(np.max(w_plain / w_box)))
     assert max(gains) > 1.05, max(gains)
     with pytest.raises(InputError) as info:
-        ExactSetEstimator(system, 0.5, box_prior="yes")
-    assert info.value.field == "box_prior"
+        ExactSetEstimator(system, 0.5, prior="boxes")
+    assert info.value.field == "prior"
 
 
 def test_window_set_ranged_prior_rows():

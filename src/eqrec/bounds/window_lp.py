@@ -119,7 +119,7 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         :math:`\{c_0 + G_0\varepsilon : A_0\varepsilon = b_0\}` (:mod:`eqrec.bounds.constrained`); or
         ``(A0, b0_lower, b0_upper)``: ranged rows :math:`b_{0,\rm lower} \le A_0\varepsilon \le b_{0,\rm upper}`
         (the zonotope within a box, ``A0 = G0``: :class:`eqrec.estimators.exact_set.ExactSetEstimator`,
-        ``box_prior``); ``None``: the zonotope.
+        ``prior="zonotope+box"``); ``None``: the zonotope.
 
     Returns
     -------

@@ -32,21 +32,29 @@ the exact hull (1.59 at worst), window 30 at 1.13 (1.19), window 40 (default) at
 (Scott et al.'s measurement and prediction are exact) needs a reduction of its constraints and generators; with
 their variable elimination and the lifted Girard reduction the set drifted on that plant, so the window is used.
 
-A tighter prior: the earlier hull (``box_prior=True``)
------------------------------------------------------
-With ``box_prior=True`` the prior at :math:`s_0` is the filter's zonotope **within the box of the hull of**
-:math:`x(s_0)` **this estimator reported at step** :math:`s_0 - 1` (its prediction, given the data before
-:math:`s_0`): :math:`\{c_0 + G_0\varepsilon : \underline x(s_0) - c_0 \le G_0\varepsilon \le \overline x(s_0) -
-c_0\}`, ``n`` ranged rows of the LP (:func:`eqrec.bounds.window_lp.window_set`, ``prior_rows``; the ends
-:math:`\underline x - c_0`, :math:`\overline x - c_0` rounded outward).  Both sets contain :math:`x(s_0)`, so their
-intersection does, and every end stays a guarantee; the box carries what the data before the window said about
-:math:`x(s_0)` beyond the filter's reduced zonotope, recursively from every earlier window (a moving-horizon
-estimate whose arrival cost is a zonotope within a box).  It pays where the filter's zonotope is far from the
-consistent set: on the tank chain n = 30, p = 5 (``benchmarks/bench_zonotope.py``, 60 steps, predicted hull over
-the exact hull of the whole horizon at steps 29 / 59), window 40 without it 1.00 / 1.51, window 15 with it
-1.07 / 1.05.  On the n <= 6 plants it changes the ratios in the third decimal (tanks n = 4: 1.0007 against 1.0011
-at the last step), on the two carts nothing (their excess is the zonotope's position-velocity correlation, which a
-box does not carry), for ``n`` more rows per LP: hence off by default.
+The prior: the filter's zonotope, or the earlier hull (``prior=``)
+------------------------------------------------------------------
+``prior="zonotope"`` (default) is the above.  The estimator's own earlier answer is a second outer set of
+:math:`x(s_0)`: the hull it reported at step :math:`s_0 - 1` (its prediction, given the data before :math:`s_0`,
+itself from the window before, and so on: a moving-horizon estimate whose arrival cost is that box).
+
+* ``"zonotope+box"``: the filter's zonotope within that box,
+  :math:`\{c_0 + G_0\varepsilon : \underline x(s_0) - c_0 \le G_0\varepsilon \le \overline x(s_0) - c_0\}`, ``n``
+  ranged rows more per LP (:func:`eqrec.bounds.window_lp.window_set`, ``prior_rows``; the ends rounded outward);
+* ``"box"``: the box alone, centre and radius rounded outward (:func:`_centre_radius`): ``n`` columns instead of
+  the zonotope's ``order · n``, no rows.
+
+Each contains :math:`x(s_0)`, so every end stays a guarantee (``tests/test_exact_set.py`` plays the noise back at
+box corners with a window of 4 steps, where the box binds at every step).  The box pays where the filter's reduced
+zonotope is far from the consistent set and the window is short; it loses the zonotope's correlations, which the
+data of a long window recover.  Measured (``benchmarks/bench_zonotope.py``, process time on a loaded 2-core
+machine; predicted hull over the exact hull of the whole horizon): tank chain n = 30, p = 5, 60 steps, at steps
+29 / 59: ``"zonotope"`` window 40 (default) 1.00 / 1.51 at 650-730 ms per step, window 10 6.2 at step 59;
+``"zonotope+box"`` window 10 1.20 / 1.10 (475 ms: 65 rows, HiGHS), window 15 1.07 / 1.05; ``"box"`` window 10
+1.20 / 1.10 at 11.9 ms per step (35 rows, the dense solver), window 5 1.38 / 1.26 at 2.2 ms.  On the n <= 6 plants
+at the default window the box changes the ratios in the third decimal or not at all (tanks n = 4, 150 steps:
+``"zonotope+box"`` 1.0007 against 1.0011 at the last step; two carts 1.0122 both), for ``n`` more rows per LP;
+hence the default.
 
 Estimate, bound, and what that means for ``exact_bound``
 --------------------------------------------------------
@@ -81,6 +89,9 @@ from eqrec.systems.affine import AffineSystem
 #: Default window of :class:`ExactSetEstimator` in steps (at least ``max_delay + 1`` are used).
 EXACT_WINDOW = 40
 
+#: The window's priors of :class:`ExactSetEstimator` (module docstring, *The prior*).
+EXACT_PRIORS = ("zonotope", "zonotope+box", "box")
+
 #: Default order of the filter's zonotope at the window's start (generators per state).
 EXACT_ORDER = 4
 
@@ -112,9 +123,9 @@ class ExactSetEstimator(ZonotopeEstimator):
         The filter's gain (``"reweighted"``, default, or ``"fradius"``; one filter).
     reduction : {"pca", "girard"}, optional
         The filter's order reduction.
-    box_prior : bool, optional
-        Intersect the window's prior with the box of the hull this estimator reported for the window's start
-        (module docstring, *A tighter prior*; default ``False``).
+    prior : {"zonotope", "zonotope+box", "box"}, optional
+        The window's prior (module docstring, *The prior*): the filter's zonotope (default), the zonotope within
+        the box of the hull this estimator reported for the window's start, or that box alone.
 
     Attributes
     ----------
@@ -130,7 +141,7 @@ class ExactSetEstimator(ZonotopeEstimator):
     ------
     InputError
         As :class:`~eqrec.estimators.zonotope.ZonotopeEstimator` (the field is named); several gains; a
-        ``box_prior`` that is not a bool.
+        ``prior`` not in :data:`EXACT_PRIORS`.
 
     Examples
     --------
@@ -149,15 +160,15 @@ class ExactSetEstimator(ZonotopeEstimator):
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: float = EXACT_ORDER,
                  window: int = EXACT_WINDOW, gain: str = "reweighted", reduction: str = "pca",
-                 box_prior: bool = False):
+                 prior: str = "zonotope"):
         if order is None:
             raise InputError("the exact estimator needs a reduction order (a number >= 1), got None", field="order")
         if not isinstance(gain, str):
             raise InputError(f"the exact estimator runs one filter: gain is one name, got {gain!r}", field="gain")
-        if not isinstance(box_prior, (bool, np.bool_)):
-            raise InputError(f"box_prior is True or False, got {box_prior!r}", field="box_prior")
+        if not isinstance(prior, str) or prior not in EXACT_PRIORS:
+            raise InputError(f"the window's prior is one of {', '.join(EXACT_PRIORS)}, got {prior!r}", field="prior")
         super().__init__(system, x0_radius, max_delay, order=order, gain=gain, reduction=reduction, window=window)
-        self.box_prior = bool(box_prior)
+        self.prior = prior
         self.lp_fallbacks = 0
 
     def start_from(self, xhat0: Any, generators: Any, t0: int = 0) -> "ExactSetEstimator":
@@ -191,15 +202,18 @@ class ExactSetEstimator(ZonotopeEstimator):
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
         c0, G0 = sets["c"][0], sets["G"][0]
-        box = self._boxes.get(first) if self.box_prior else None
+        box = self._boxes.get(first) if self.prior != "zonotope" else None
         rows = None
-        if box is not None:  # the prior is the filter's zonotope within the box: G0 ε in [lower - c0, upper - c0]
+        if box is not None and self.prior == "box":  # the box alone: centre and radius rounded outward
+            c0, radius = _centre_radius(*box)
+            G0 = np.diag(radius)
+        elif box is not None:  # the filter's zonotope within the box: G0 ε in [lower - c0, upper - c0]
             rows = (G0, np.nextafter(box[0] - c0, -np.inf), np.nextafter(box[1] - c0, np.inf))
         ws = window_set(A, C, E, V, drive, intake["known"], intake["ys"], c0, G0, rows)
         lower, upper, fallbacks = lp_hull(ws, "pred")
         xhat, beta = _centre_radius(lower, upper)
         extra = {"_ws": ws, "_lower": lower, "_upper": upper, "lp_fallbacks": self.lp_fallbacks + fallbacks}
-        if self.box_prior:  # the hulls of the times still to start a window (a new dict: the step stays atomic)
+        if self.prior != "zonotope":  # the hulls of the times still to start a window (a new dict: the step stays atomic)
             boxes = {s: b for s, b in self._boxes.items() if s > first}
             boxes[intake["t"] + 1] = (lower, upper)
             extra["_boxes"] = boxes
