@@ -12,10 +12,13 @@ information limit, for ``n <= --limit-up-to``: it takes minutes beyond), and the
 ``n`` (least squares on log µs against log n).
 
 ``--part exact`` (§3): the cost-tightness trade-off, zonotope estimator against the exact estimator
-(:class:`eqrec.ExactSetEstimator`) on small plants: µs per step, and the filtered and predicted hulls over the
-exact hull of the whole horizon (a direct LP, ``tests/exact_hull_reference.py``), at the last step and the
-worst over the steps checked.  Then ``--exact-scale-n`` (default 30): both estimators on the tank chain of that
-size, process time per step over ``--exact-scale-steps`` steps (no reference: its LP takes minutes there).
+(:class:`eqrec.ExactSetEstimator`, default and ``prior="zonotope+box"``) on small plants (``--exact-plants`` to
+choose, ``--exact-window`` to set the exact estimator's window): µs per step, and the filtered and predicted hulls
+over the exact hull of the whole horizon (a direct LP, ``tests/exact_hull_reference.py``), at the last step and the
+worst over the steps checked.  Then ``--exact-scale-n`` (default 30): the zonotope estimator, the exact one and the
+exact one with ``prior="box"`` at windows 10 and 5 on the tank chain of that size, process time per step over
+``--exact-scale-steps`` steps, and the predicted hull over the exact hull of the whole horizon at the middle and
+last steps (:func:`_full_horizon_hull`).
 
 Measured 2026-11-29 after the zonotope's new defaults (window 30, shared reweighted solves; issue 45 §4), in one
 run (process time, 2 cores shared with the test suite, 150 steps; hull / exact: filtered at the last step and
@@ -41,6 +44,49 @@ tanks n = 30, p = 5    exact      798,379     (60 steps, time only)
 The exact estimator's window sets its trade-off (two carts, same run conditions, ``ExactSetEstimator(window=)``):
 window 40 (the default) 0.9-1.1 ms per step, filtered hull / exact 1.0122 last, 1.0288 worst; 45: 1.0 ms, 1.0122 /
 1.0122; 50: 1.7 ms, 1.0076 / 1.011; 60: 3.2 ms, 1.0000 / 1.0003; 80: 23 ms, exact.
+
+The window's prior (2026-11-29, later; ``ExactSetEstimator(prior=)``, issue 45 §3/§4).  The part now also runs the
+exact estimator with ``prior="zonotope+box"`` on the small plants (row "exact, z+box") and, on the tank chain, with
+``prior="box"`` and windows 10 and 5, and checks the chain's predicted hull against the exact hull of the whole
+horizon at the middle and last steps (:func:`_full_horizon_hull`, the window LP from the initial box with HiGHS: 17
+s at n = 30; it agrees with the test-only reference to 1e-9 on tanks n = 4 and 10).  The code before and after, one
+run each, one after the other (process time; the machine loaded by other jobs, load 5-7, and by this session's
+tests during the second run, so its µs are high: the default rows run the same code and give the same hulls):
+
+=====================  ============================  ===============  =============================
+plant                  estimator                     µs / step b. / a.  filt. last / worst (both runs)
+=====================  ============================  ===============  =============================
+oscillator n = 2       exact (default)               3,461 / 3,781    1.0000 / 1.0000
+oscillator n = 2       exact, zonotope+box           - / 4,186        1.0000 / 1.0000
+two carts n = 4        exact (default)               693 / 1,315      1.0122 / 1.0288
+two carts n = 4        exact, zonotope+box           - / 1,435        1.0122 / 1.0288
+tanks n = 4            exact (default)               1,068 / 1,400    1.0011 / 1.0054
+tanks n = 4            exact, zonotope+box           - / 1,378        1.0007 / 1.0034
+tanks n = 6            exact (default)               4,342 / 4,418    1.0002 / 1.0002
+tanks n = 6            exact, zonotope+box           - / 8,857        1.0001 / 1.0001
+=====================  ============================  ===============  =============================
+
+Tank chain n = 30, p = 5, 60 steps (the second run; predicted hull / exact hull at steps 29 and 59; the default's
+time in the first run 658 ms):
+
+=============================  ==========  =================
+estimator                      ms / step   hull / exact
+=============================  ==========  =================
+zonotope (default)             2.0         1.639 / 1.559
+exact (default: window 40)     667.7       1.000 / 1.513
+exact, prior "box", window 10  9.2         1.201 / 1.105
+exact, prior "box", window 5   1.8         1.382 / 1.260
+=============================  ==========  =================
+
+So at n = 30 the default exact estimator is not exact (1.51 at step 59: its window's prior, the filter's zonotope
+reduced to order 4, is far from the consistent set, and a shorter window is worse: window 15 3.86, window 10 6.2,
+separate runs), and it is slow (HiGHS on 145 rows).  The box of its own earlier hull as the prior is tighter and,
+without the zonotope's 120 generators and with 35 rows at window 10, goes to the dense solver: 9.2 ms per step at
+1.10, under the issue's 20 ms.  With the zonotope kept (``"zonotope+box"``, 30 rows more) the hulls are the same
+to 1e-4 (window 10: 1.2009 / 1.1044) but the LPs go to HiGHS (475 ms per step; the dense solver stalls on those
+rows: ~1,000 pivots per objective).  On the small plants the box changes little (two carts: nothing; the
+lightly damped plant's excess is the position-velocity correlation the box lacks) for ``n`` rows more, so the
+default prior stays the zonotope and no default changed.
 
 The exact estimator's LPs go to the compiled dense dual simplex (:mod:`eqrec.lp.box_simplex`) up to 64 measured rows
 (n <= 6 here) and to HiGHS beyond (n = 30: 145 rows, 1,465 columns). Before (HiGHS for every window, the window
@@ -331,12 +377,14 @@ def exact_part(args) -> None:
     N = args.exact_steps
     print(f"cost and tightness: loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, uniform noise; hull / exact hull "
           f"of the whole horizon (max over states) at the last step and the worst over every 5th step")
-    print(f"{'plant':16s} {'estimator':10s} {'us/step':>8s} {'filt last':>9s} {'filt max':>8s} {'pred last':>9s} "
+    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'filt last':>9s} {'filt max':>8s} {'pred last':>9s} "
           f"{'pred max':>8s}")
     for label, system in plants:
         n = system.n
         makers = {"zonotope": lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY),
-                  "exact": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw)}
+                  "exact": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw),
+                  "exact, z+box": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, prior="zonotope+box",
+                                                            **exact_kw)}
         rng = np.random.default_rng(7)
         trace = _trace(7, N)
         w, v = rng.uniform(-1, 1, (N, system.nw)), rng.uniform(-1, 1, (N, system.nv))
@@ -360,27 +408,57 @@ def exact_part(args) -> None:
                         row.append(float(np.max((S.upper - S.lower) / (hi - lo))))
                     ratios.append(row)
             r = np.array(ratios)
-            print(f"{label:16s} {name:10s} {spent / N * 1e6:8.0f} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
+            print(f"{label:16s} {name:12s} {spent / N * 1e6:8.0f} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
                   f"{r[-1, 1]:9.4f} {r[:, 1].max():8.4f}", flush=True)
-    for n in args.exact_scale_n:  # the cost at scale (§4): tank chains, time only (the reference LP takes long)
+    for n in args.exact_scale_n:  # the cost at scale (§4): tank chains; the reference at two steps only
         system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
         Ns = args.exact_scale_steps
         rng = np.random.default_rng(7)
         trace = _trace(7, Ns)
         w, v = rng.uniform(-1, 1, (Ns, system.nw)), rng.uniform(-1, 1, (Ns, system.nv))
         x, y, arrivals = simulate(system, trace, np.zeros(n), X0_RADIUS * rng.uniform(-1, 1, n), w, v)
-        for name, make in (("zonotope", lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)),
-                           ("exact", lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw))):
+        checked = sorted({Ns // 2 - 1, Ns - 1})
+        refs = {t: _full_horizon_hull(system, trace, y, t) for t in checked}
+        rows = [("zonotope", lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)),
+                ("exact", lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw))]
+        rows += [(f"exact, {prior}, window {W}",
+                  lambda prior=prior, W=W: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, window=W, prior=prior))
+                 for prior, W in (("box", 10), ("box", 5))]
+        print(f"tank chain n = {n}, p = {system.p}, {Ns} steps: predicted hull / exact hull of the whole horizon at "
+              f"steps {checked}")
+        for name, make in rows:
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
             est = make().reset(np.zeros(n))
-            t0 = time.process_time()
+            spent, ratios = 0.0, []
             for t in range(Ns):
+                t0 = time.process_time()
                 est.step(arrivals[t])
-            spent = time.process_time() - t0
-            print(f"{f'tanks n={n} p={system.p}':16s} {name:10s} {spent / Ns * 1e6:8.0f} (time only, {Ns} steps)",
-                  flush=True)
+                spent += time.process_time() - t0
+                if t in refs:
+                    lo, hi = refs[t]
+                    S = est.predicted
+                    ratios.append(float(np.max((S.upper - S.lower) / (hi - lo))))
+            print(f"{f'tanks n={n} p={system.p}':16s} {name:26s} {spent / Ns * 1e6:10.0f} us/step  "
+                  + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
+
+
+def _full_horizon_hull(system, trace, y, t):
+    """The hull of x(t+1) given the packets delivered by step t, from the initial box and every datum since (the
+    window LP of :mod:`eqrec.bounds.window_lp` over the whole horizon, HiGHS; for the tank chains, where the
+    test-only reference takes minutes; it agrees with it to 1e-9 on tanks n = 4 and 10)."""
+    from eqrec.bounds.window_lp import lp_hull, window_set
+
+    n, L = system.n, t + 1
+    delivered = np.array([trace.delays[s] >= 0 and s + trace.delays[s] <= t for s in range(L)])
+    tiles = [np.ascontiguousarray(np.broadcast_to(M, (L,) + M.shape)) for M in
+             (system.A, system.C, system.eta_w * system.E, system.eta_v * system.V)]
+    ws = window_set(*tiles, np.zeros((L, n)), delivered, np.ascontiguousarray(y[:L]), np.zeros(n),
+                    X0_RADIUS * np.eye(n))
+    lo, hi, fallbacks = lp_hull(ws, "pred", solver="highs")
+    assert fallbacks == 0
+    return lo, hi
 
 
 def main(argv: list[str] | None = None) -> None:
