@@ -313,3 +313,30 @@ def test_window_set_ranged_prior_rows():
             opt = boxed.centre_pred[i] + sign * res.fun
             assert abs(end - opt) <= 1e-7 * (1 + abs(opt)), (i, sign, end, opt)
             assert (end >= opt - REF_TOL) if sign < 0 else (end <= opt + REF_TOL)
+
+
+@pytest.mark.parametrize("prior", ["zonotope+box", "box"])
+def test_box_prior_atomic_and_reset(prior):
+    """With the earlier hull as the prior, a refused step changes nothing (the hulls kept for later windows
+    included), and reset starts from scratch: the same outputs twice; a start time other than 0 keys the hulls by
+    absolute time."""
+    system = tank_chain(4, 1)
+    seq = [np.array([0.1]), None, np.array([0.3]), [Packet(1, np.array([0.2]))], np.array([0.25]), None,
+           np.array([0.0]), np.array([0.1]), None, np.array([0.2])]
+    est = ExactSetEstimator(system, 0.5, max_delay=2, window=3, prior=prior)
+    outs = []
+    for t0 in (0, 0, 7):
+        est.reset(np.zeros(4), t0=t0)
+        run = []
+        for y in seq:
+            if isinstance(y, list):
+                y = [Packet(p.time + t0, p.y) for p in y]
+            run.append(est.step(y))
+            before = pickle.dumps(est)
+            with pytest.raises(InputError):
+                est.step(np.array([np.nan]))
+            assert pickle.dumps(est) == before
+        outs.append(run)
+    for runs in (outs[1], outs[2]):
+        for (a, ba), (b, bb) in zip(outs[0], runs):
+            assert np.array_equal(a, b) and ba == bb
