@@ -3,6 +3,7 @@ its cost at scale; the exact estimator's cost and tightness (figures, not tests)
 
     python benchmarks/bench_zonotope.py [--steps 300] [--seeds 3] [--timing-steps 5000] [--repeats 3]
     python benchmarks/bench_zonotope.py --part scale [--scale-n 4 10 20 30] [--limit-up-to 10]
+    python benchmarks/bench_zonotope.py --part where [--scale-n 4 10 20 30]
     python benchmarks/bench_zonotope.py --part exact [--exact-steps 150] [--exact-scale-n 30] [--exact-scale-steps 60]
 
 ``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`tank_chain`), n = 4 / 10 / 20 / 30 with
@@ -10,6 +11,12 @@ p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default sett
 against the crude reference filter (order 40), µs per step measured side by side in one run, bound / limit (the
 information limit, for ``n <= --limit-up-to``: it takes minutes beyond), and the growth exponent of each cost in
 ``n`` (least squares on log µs against log n).
+
+``--part where``: where a step's time goes on the same chains (the zonotope estimator at its defaults, the same
+150 steps and arrivals as the timing of ``--part scale``): CPU µs per step in the window
+(:func:`eqrec.bounds.window.window_estimate_sparse`), the filter step, the order reductions (with the principal
+axes), and the rest (the Python around them: packet intake, the window's arrays, the calls themselves), each
+compiled call timed from Python (its call and the boxing of its results included).
 
 ``--part exact`` (§3): the cost-tightness trade-off, zonotope estimator against the exact estimator
 (:class:`eqrec.ExactSetEstimator`) on small plants: µs per step, and the filtered and predicted hulls over the
@@ -310,6 +317,57 @@ def scale_part(args) -> None:
               f"crude filter k = {_exponent(ns, uc):.2f}")
 
 
+def where_part(args) -> None:
+    """Where a step's time goes on the tank chains (module docstring, ``--part where``)."""
+    import eqrec.estimators.zonotope as zmod
+
+    parts = {"window": ("window_estimate_sparse",), "filter step": ("filter_step",),
+             "reduction": ("reduce_pca_pair", "reduce_pca", "reduce_girard", "principal_axes")}
+    spent = dict.fromkeys(parts, 0.0)
+    originals = {name: getattr(zmod, name) for names in parts.values() for name in names}
+
+    def timed(fn, part):
+        def call(*a, **k):
+            t0 = time.process_time()
+            try:
+                return fn(*a, **k)
+            finally:
+                spent[part] += time.process_time() - t0
+        return call
+
+    N = 150
+    print(f"tank chains, {N} steps, default settings: CPU us per step (median of {args.repeats} runs)")
+    print(f"{'n':>3s} {'p':>2s} {'step':>7s} " + " ".join(f"{k:>12s}" for k in parts) + f" {'rest':>7s}")
+    try:
+        for part, names in parts.items():
+            for name in names:
+                setattr(zmod, name, timed(originals[name], part))
+        for n in args.scale_n:
+            system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
+            rng = np.random.default_rng(100)
+            sched = _trace(100, N).schedule()
+            y = 0.1 * rng.normal(size=(N, system.p))
+            arrivals = [what_arrived(sched[k], k, y) for k in range(N)]
+            u = np.zeros(system.m)
+            runs = []
+            for r in range(args.repeats + 1):  # the first loads the compiled loops
+                for k in spent:
+                    spent[k] = 0.0
+                est = ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY).reset(np.zeros(n))
+                t0 = time.process_time()
+                for a in arrivals:
+                    est.step(a, u)
+                runs.append(((time.process_time() - t0) / N, {k: v / N for k, v in spent.items()}))
+            total, split = sorted(runs[1:], key=lambda run: run[0])[len(runs[1:]) // 2]
+            rest = total - sum(split.values())
+            print(f"{n:3d} {system.p:2d} {total * 1e6:7.0f} " + " ".join(
+                f"{split[k] * 1e6:7.0f} {100 * split[k] / total:3.0f}%" for k in parts)
+                + f" {rest * 1e6:7.0f}", flush=True)
+    finally:
+        for name, fn in originals.items():
+            setattr(zmod, name, fn)
+
+
 def exact_part(args) -> None:
     """Issue 45 §3: µs per step and hull / exact hull, zonotope against exact estimator (module docstring)."""
     import pathlib
@@ -383,7 +441,7 @@ def exact_part(args) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", choices=["carts", "scale", "exact"], default="carts")
+    ap.add_argument("--part", choices=["carts", "scale", "where", "exact"], default="carts")
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--timing-steps", type=int, default=5000)
@@ -397,6 +455,8 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     if args.part == "scale":
         return scale_part(args)
+    if args.part == "where":
+        return where_part(args)
     if args.part == "exact":
         return exact_part(args)
     system = two_mass()
