@@ -615,6 +615,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         lamT = np.zeros((m, n))
         rad = np.empty(n)
         agg = np.empty(q0 + Qn)
+        invrad = np.empty(n)
         it = 0
         top = np.inf
         # --- shared solves: one factorization for every state (nothing measured: the prediction alone) ----------
@@ -659,10 +660,11 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
                 for q in range(q0):
                     agg[q] += abs(RP[i, q]) * inv
+            for e in range(n):  # (the same quotients, once per state)
+                invrad[e] = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
             for q in range(Qn):
                 for e in range(n):
-                    inv = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
-                    agg[q0 + q] += abs(resT[q, e]) * inv
+                    agg[q0 + q] += abs(resT[q, e]) * invrad[e]
             big = 0.0
             for q in range(q0 + Qn):
                 big = max(big, agg[q])
