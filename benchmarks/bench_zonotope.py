@@ -143,6 +143,44 @@ steps and ~95 measured rows, one LAPACK solve, the residual recursion); at n = 4
 calls (packet intake, the window's arrays, five compiled calls) costs about as much as the whole crude filter.
 Lower settings trade tightness (tank chain n = 20, bound relative to the default, median): no per-state solves
 +2.6 % (half the cost), a window of 20 steps +3 %, filter order 20 at n = 30 +6.5 %.
+
+Where the time goes (2026-11-29, ``--part where``, the code after a few allocation and loop-order changes that
+keep every number, a machine loaded by other jobs), CPU µs per step and share of the step:
+
+====  ===  ======  ============  ===========  ===========  =====
+ n     p   step    window        filter step  reductions   rest
+====  ===  ======  ============  ===========  ===========  =====
+ 4     1   241     126 (52 %)    10 (4 %)     28 (12 %)    76
+ 10    2   641     472 (74 %)    21 (3 %)     57 (9 %)     91
+ 20    4   1,630   1,215 (75 %)  64 (4 %)     191 (12 %)   159
+ 30    5   2,398   1,705 (71 %)  142 (6 %)    363 (15 %)   188
+====  ===  ======  ============  ===========  ===========  =====
+
+The rest is the Python around the compiled calls, the calls themselves and the boxing of their results (about 2 µs
+per array returned on the loaded machine; the window returns four). So at n = 4 the window alone (one call, about
+120 µs, timed on its own) costs more than the crude filter's whole step (63-81 µs in this session's scale runs):
+removing every line of Python would not close the gap. Inside the window (n = 30, one call timed on its own, loaded
+machine): a call with one shared solve and no per-state solve (the least a window can do) about 0.55 ms, the default
+2.1 ms; a per-state solve's LAPACK LU solve 0.11 ms (0.17 ms with 30 right-hand sides for a shared one), its
+covariance recursion 0.09 ms, the product with the prior's generators 0.03 ms. With the filters' step and reductions
+(0.5 ms, order 40: 1,200 generators) and the rest (0.2 ms), a step at n = 30 stays above 1 ms even with one solve.
+Tried and left out: LAPACK's Cholesky for the normal equations (the numbers move in the last bits; bounds equal to
+1e-15): 0.84-1.05x per step in one interleaved run (two carts 0.84x, n = 30 0.99x), within this machine's noise; the
+parts' timings predict about 5 % at n = 30 (the triangular solves with 30 right-hand sides cost what the
+factorization saves). None of the ideas of sharing work between solves applies: the per-state weights differ from
+the shared ones in every column (no low-rank update of one factorization), each per-state system has its own matrix
+and waits for the previous (the next state solved depends on the last result), and the window slides every step (the
+prior changes with the filters' step and reduction), so no solve repeats the last step's.
+
+The solve settings' trade-off measured again (the same chains and two carts, 150 steps, cost of 2 interleaved
+rounds relative to the default's, bound = largest state, hull = sum of the state bounds, relative to the default,
+median / max over the steps): ``iterations=1`` costs 0.73-0.90x (carts 0.88x, n = 4 0.84x, 10 0.73x, 20 0.79x,
+30 0.90x) for bound +0.4 / +1.7 % (carts), +0.0 / +1.0, +0.2 / +0.6, +0.2 / +0.4, +0.2 / +1.0 % and hull at most
++0.2 % at the median; ``SHARED_SOLVES = 0`` 0.76-0.92x, bound +0.5 / +5.3 % (carts), -0.1 to +0.6 % median at n >=
+10, but hull +1.1 to +7.3 % at the median (the states not refined one by one lose the second shared solve); both
+together 0.59-0.67x at n >= 10 (n = 30: 1.9 ms), bound +0.1 to +0.9 % median, hull +1.2 to +7.6 %; no per-state
+solves 0.47-0.76x, bound +0.3 to +3.9 % median, +23.5 % max (carts).  The defaults are unchanged (the stored
+results keep their numbers); ``iterations=1`` is the cheapest of these in tightness.
 """
 
 from __future__ import annotations
