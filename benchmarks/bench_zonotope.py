@@ -3,6 +3,7 @@ its cost at scale; the exact estimator's cost and tightness (figures, not tests)
 
     python benchmarks/bench_zonotope.py [--steps 300] [--seeds 3] [--timing-steps 5000] [--repeats 3]
     python benchmarks/bench_zonotope.py --part scale [--scale-n 4 10 20 30] [--limit-up-to 10]
+    python benchmarks/bench_zonotope.py --part where [--scale-n 4 10 20 30]
     python benchmarks/bench_zonotope.py --part exact [--exact-steps 150] [--exact-scale-n 30] [--exact-scale-steps 60]
 
 ``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`tank_chain`), n = 4 / 10 / 20 / 30 with
@@ -10,6 +11,12 @@ p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default sett
 against the crude reference filter (order 40), µs per step measured side by side in one run, bound / limit (the
 information limit, for ``n <= --limit-up-to``: it takes minutes beyond), and the growth exponent of each cost in
 ``n`` (least squares on log µs against log n).
+
+``--part where``: where a step's time goes on the same chains (the zonotope estimator at its defaults, the same
+150 steps and arrivals as the timing of ``--part scale``): CPU µs per step in the window
+(:func:`eqrec.bounds.window.window_estimate_sparse`), the filter step, the order reductions (with the principal
+axes), and the rest (the Python around them: packet intake, the window's arrays, the calls themselves), each
+compiled call timed from Python (its call and the boxing of its results included).
 
 ``--part exact`` (§3): the cost-tightness trade-off, zonotope estimator against the exact estimator
 (:class:`eqrec.ExactSetEstimator`, default and ``prior="zonotope+box"``) on small plants (``--exact-plants`` to
@@ -182,6 +189,44 @@ steps and ~95 measured rows, one LAPACK solve, the residual recursion); at n = 4
 calls (packet intake, the window's arrays, five compiled calls) costs about as much as the whole crude filter.
 Lower settings trade tightness (tank chain n = 20, bound relative to the default, median): no per-state solves
 +2.6 % (half the cost), a window of 20 steps +3 %, filter order 20 at n = 30 +6.5 %.
+
+Where the time goes (2026-11-29, ``--part where``, the code after a few allocation and loop-order changes that
+keep every number, a machine loaded by other jobs), CPU µs per step and share of the step:
+
+====  ===  ======  ============  ===========  ===========  =====
+ n     p   step    window        filter step  reductions   rest
+====  ===  ======  ============  ===========  ===========  =====
+ 4     1   241     126 (52 %)    10 (4 %)     28 (12 %)    76
+ 10    2   641     472 (74 %)    21 (3 %)     57 (9 %)     91
+ 20    4   1,630   1,215 (75 %)  64 (4 %)     191 (12 %)   159
+ 30    5   2,398   1,705 (71 %)  142 (6 %)    363 (15 %)   188
+====  ===  ======  ============  ===========  ===========  =====
+
+The rest is the Python around the compiled calls, the calls themselves and the boxing of their results (about 2 µs
+per array returned on the loaded machine; the window returns four). So at n = 4 the window alone (one call, about
+120 µs, timed on its own) costs more than the crude filter's whole step (63-81 µs in this session's scale runs):
+removing every line of Python would not close the gap. Inside the window (n = 30, one call timed on its own, loaded
+machine): a call with one shared solve and no per-state solve (the least a window can do) about 0.55 ms, the default
+2.1 ms; a per-state solve's LAPACK LU solve 0.11 ms (0.17 ms with 30 right-hand sides for a shared one), its
+covariance recursion 0.09 ms, the product with the prior's generators 0.03 ms. With the filters' step and reductions
+(0.5 ms, order 40: 1,200 generators) and the rest (0.2 ms), a step at n = 30 stays above 1 ms even with one solve.
+Tried and left out: LAPACK's Cholesky for the normal equations (the numbers move in the last bits; bounds equal to
+1e-15): 0.84-1.05x per step in one interleaved run (two carts 0.84x, n = 30 0.99x), within this machine's noise; the
+parts' timings predict about 5 % at n = 30 (the triangular solves with 30 right-hand sides cost what the
+factorization saves). None of the ideas of sharing work between solves applies: the per-state weights differ from
+the shared ones in every column (no low-rank update of one factorization), each per-state system has its own matrix
+and waits for the previous (the next state solved depends on the last result), and the window slides every step (the
+prior changes with the filters' step and reduction), so no solve repeats the last step's.
+
+The solve settings' trade-off measured again (the same chains and two carts, 150 steps, cost of 2 interleaved
+rounds relative to the default's, bound = largest state, hull = sum of the state bounds, relative to the default,
+median / max over the steps): ``iterations=1`` costs 0.73-0.90x (carts 0.88x, n = 4 0.84x, 10 0.73x, 20 0.79x,
+30 0.90x) for bound +0.4 / +1.7 % (carts), +0.0 / +1.0, +0.2 / +0.6, +0.2 / +0.4, +0.2 / +1.0 % and hull at most
++0.2 % at the median; ``SHARED_SOLVES = 0`` 0.76-0.92x, bound +0.5 / +5.3 % (carts), -0.1 to +0.6 % median at n >=
+10, but hull +1.1 to +7.3 % at the median (the states not refined one by one lose the second shared solve); both
+together 0.59-0.67x at n >= 10 (n = 30: 1.9 ms), bound +0.1 to +0.9 % median, hull +1.2 to +7.6 %; no per-state
+solves 0.47-0.76x, bound +0.3 to +3.9 % median, +23.5 % max (carts).  The defaults are unchanged (the stored
+results keep their numbers); ``iterations=1`` is the cheapest of these in tightness.
 """
 
 from __future__ import annotations
@@ -356,6 +401,57 @@ def scale_part(args) -> None:
               f"crude filter k = {_exponent(ns, uc):.2f}")
 
 
+def where_part(args) -> None:
+    """Where a step's time goes on the tank chains (module docstring, ``--part where``)."""
+    import eqrec.estimators.zonotope as zmod
+
+    parts = {"window": ("window_estimate_sparse",), "filter step": ("filter_step",),
+             "reduction": ("reduce_pca_pair", "reduce_pca", "reduce_girard", "principal_axes")}
+    spent = dict.fromkeys(parts, 0.0)
+    originals = {name: getattr(zmod, name) for names in parts.values() for name in names}
+
+    def timed(fn, part):
+        def call(*a, **k):
+            t0 = time.process_time()
+            try:
+                return fn(*a, **k)
+            finally:
+                spent[part] += time.process_time() - t0
+        return call
+
+    N = 150
+    print(f"tank chains, {N} steps, default settings: CPU us per step (median of {args.repeats} runs)")
+    print(f"{'n':>3s} {'p':>2s} {'step':>7s} " + " ".join(f"{k:>12s}" for k in parts) + f" {'rest':>7s}")
+    try:
+        for part, names in parts.items():
+            for name in names:
+                setattr(zmod, name, timed(originals[name], part))
+        for n in args.scale_n:
+            system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
+            rng = np.random.default_rng(100)
+            sched = _trace(100, N).schedule()
+            y = 0.1 * rng.normal(size=(N, system.p))
+            arrivals = [what_arrived(sched[k], k, y) for k in range(N)]
+            u = np.zeros(system.m)
+            runs = []
+            for r in range(args.repeats + 1):  # the first loads the compiled loops
+                for k in spent:
+                    spent[k] = 0.0
+                est = ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY).reset(np.zeros(n))
+                t0 = time.process_time()
+                for a in arrivals:
+                    est.step(a, u)
+                runs.append(((time.process_time() - t0) / N, {k: v / N for k, v in spent.items()}))
+            total, split = sorted(runs[1:], key=lambda run: run[0])[len(runs[1:]) // 2]
+            rest = total - sum(split.values())
+            print(f"{n:3d} {system.p:2d} {total * 1e6:7.0f} " + " ".join(
+                f"{split[k] * 1e6:7.0f} {100 * split[k] / total:3.0f}%" for k in parts)
+                + f" {rest * 1e6:7.0f}", flush=True)
+    finally:
+        for name, fn in originals.items():
+            setattr(zmod, name, fn)
+
+
 def exact_part(args) -> None:
     """Issue 45 §3: µs per step and hull / exact hull, zonotope against exact estimator (module docstring)."""
     import pathlib
@@ -463,7 +559,7 @@ def _full_horizon_hull(system, trace, y, t):
 
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--part", choices=["carts", "scale", "exact"], default="carts")
+    ap.add_argument("--part", choices=["carts", "scale", "where", "exact"], default="carts")
     ap.add_argument("--steps", type=int, default=300)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--timing-steps", type=int, default=5000)
@@ -481,6 +577,8 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv)
     if args.part == "scale":
         return scale_part(args)
+    if args.part == "where":
+        return where_part(args)
     if args.part == "exact":
         return exact_part(args)
     system = two_mass()

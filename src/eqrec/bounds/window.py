@@ -570,6 +570,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             zm[a] = abs(xc[a]) + s
         resid = np.zeros(m)
         magy = np.zeros(m)
+        nx = np.empty(n)
+        nm = np.empty(n)
         row = 0
         for j in range(L):
             if measured[j]:
@@ -584,8 +586,6 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     resid[row + a] = Y[j, a] - s
                     magy[row + a] = sm + abs(Y[j, a]) + abs(s)
                 row += p
-            nx = np.empty(n)
-            nm = np.empty(n)
             for a in range(n):
                 s = drive[j, a]
                 sm = abs(drive[j, a])
@@ -598,8 +598,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     sm += abs(E[j, a, q])
                 nx[a] = s
                 nm[a] = sm
-            xc = nx
-            zm = nm
+            xc, nx = nx, xc  # two buffers each, alternately (no allocation per time)
+            zm, nm = nm, zm
         best = np.full(n, np.inf)
         lam_best = np.zeros((n, m))
         W = np.empty(q0 + Qn)
@@ -615,6 +615,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         lamT = np.zeros((m, n))
         rad = np.empty(n)
         agg = np.empty(q0 + Qn)
+        invrad = np.empty(n)
         it = 0
         top = np.inf
         # --- shared solves: one factorization for every state (nothing measured: the prediction alone) ----------
@@ -659,10 +660,11 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
                 for q in range(q0):
                     agg[q] += abs(RP[i, q]) * inv
+            for e in range(n):  # (the same quotients, once per state)
+                invrad[e] = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
             for q in range(Qn):
                 for e in range(n):
-                    inv = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
-                    agg[q0 + q] += abs(resT[q, e]) * inv
+                    agg[q0 + q] += abs(resT[q, e]) * invrad[e]
             big = 0.0
             for q in range(q0 + Qn):
                 big = max(big, agg[q])

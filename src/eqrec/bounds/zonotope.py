@@ -413,12 +413,12 @@ def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - co
     for j in range(nbox):
         boxed[order[j]] = True
     idx = np.sort(order[:nbox])  # the boxed generators in increasing order: the box sums run over them in it
-    col = 0
-    for j in range(q):  # the kept generators, in their order
-        if not boxed[j]:
-            for a in range(n):
+    for a in range(n):  # the kept generators, in their order (row by row: contiguous reads and writes)
+        col = 0
+        for j in range(q):
+            if not boxed[j]:
                 out[a, col] = G[a, j]
-            col += 1
+                col += 1
     sums = np.empty(n)
     _sums_over(absT, idx, False, sums)
     for a in range(n):
@@ -464,6 +464,8 @@ def _reduce_stack(G, limit, principal, U, limit2):  # pragma: no cover - compile
     out2 = np.empty((K, n, keep2 + nnew if limit2 > 0 else 0))
     absT = np.empty((n, q))
     cost = np.empty(q)
+    csum = np.empty(q)
+    cbig = np.empty(q)
     for k in range(K):
         Uk = np.ascontiguousarray(U[k])
         if principal:
@@ -475,13 +477,18 @@ def _reduce_stack(G, limit, principal, U, limit2):  # pragma: no cover - compile
             for a in range(n):
                 for j in range(q):
                     absT[a, j] = abs(G[k, a, j])
+        # per generator j: sum_a |T[a, j]| from 0.0, a in increasing order, minus the largest (row by row over
+        # the contiguous rows: the same sums in the same order per j)
         for j in range(q):
-            sj = 0.0
-            big = 0.0
-            for a in range(n):
-                sj += absT[a, j]
-                big = max(big, absT[a, j])
-            cost[j] = sj - big
+            csum[j] = 0.0
+            cbig[j] = 0.0
+        for a in range(n):
+            for j in range(q):
+                x = absT[a, j]
+                csum[j] += x
+                cbig[j] = max(cbig[j], x)
+        for j in range(q):
+            cost[j] = csum[j] - cbig[j]
         order = np.argsort(cost, kind="mergesort")
         Gk = G[k]
         _box_into(Gk, Uk, principal, absT, order, q - keep, out[k])

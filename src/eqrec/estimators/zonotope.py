@@ -206,6 +206,9 @@ PER_STATE_STATES = 2
 
 _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
 
+#: The flag of the time appended to the window (its packet not yet known).
+_NOT_KNOWN = np.zeros(1, dtype=bool)
+
 #: With ``reduction="pca"``, the principal axes are computed again every this many steps (module docstring).
 PCA_AXES_EVERY = 4
 
@@ -499,6 +502,8 @@ class ZonotopeEstimator:
         self._horizon = system.horizon_limit  # the time-varying data's length (None: time-invariant), read once
         self._tiles: "tuple[np.ndarray, ...] | None" = None  # a time-invariant plant's matrices, W times over
         self._sparse: "tuple[np.ndarray, ...] | None" = None  # the nonzeros of the tiles' A and E (:meth:`_window`)
+        self._tiles_at: dict = {}  # views of the tiles' first L times, by L (:meth:`_window_model`)
+        self._sparse_at: dict = {}  # views of the nonzeros' first L times, by L (:meth:`_window`)
         self._no_y = np.zeros(system.p)
         self._one_pick = np.zeros(n, dtype=np.int64)  # with one filter, every state is taken from it
         self._limit = None if order is None else max(n, int(np.floor(self.order * n)))
@@ -677,8 +682,8 @@ class ZonotopeEstimator:
             raise InputError(f"time-varying data covers times 0..{lim - 1}, not {t}", field="system")
         first = t - self._drive.shape[0]  # the window's start, time t appended
         drive = np.concatenate([self._drive, (sysm.B_at(self._model_time(t)) @ u + sysm.f)[None]])
-        known = np.append(self._known, False)
-        ys = np.concatenate([self._y, np.zeros((1, sysm.p))])
+        known = np.concatenate((self._known, _NOT_KNOWN))
+        ys = np.concatenate((self._y, self._no_y[None]))  # (a new array: the row of zeros is not written)
         dropped = late = 0
         for pk in packets:
             if pk.time < max(first, t - self.max_delay):
@@ -745,9 +750,11 @@ class ZonotopeEstimator:
             A_, E_ = self._tiles[0], self._tiles[2]
             self._sparse = sparse_rows(A_) + sparse_columns(E_) + sparse_columns(A_)
         L = A.shape[0]
+        sparse = self._sparse_at.get(L)
+        if sparse is None:  # the nonzeros of the first L times (views, kept per length)
+            sparse = self._sparse_at[L] = tuple(M[:L] for M in self._sparse)
         return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
-                                      WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states,
-                                      *(M[:L] for M in self._sparse))
+                                      WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states, *sparse)
 
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
@@ -756,7 +763,10 @@ class ZonotopeEstimator:
             if self._tiles is None:
                 self._tiles = tuple(np.broadcast_to(M, (self._W,) + M.shape).copy()  # writable: one compile
                                     for M in self._model(0))
-            return tuple(M[:length] for M in self._tiles)
+            tiles = self._tiles_at.get(length)
+            if tiles is None:  # views of the first `length` times, kept per length
+                tiles = self._tiles_at[length] = tuple(M[:length] for M in self._tiles)
+            return tiles
         parts = [self._model(s) for s in range(first, first + length)]
         return tuple(np.ascontiguousarray(np.stack([p[k] for p in parts])) for k in range(4))
 
