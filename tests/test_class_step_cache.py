@@ -22,7 +22,12 @@ from eqrec.systems.examples import two_mass
 
 
 class UncachedClassEstimator(ClassEstimator):
-    """The class step as it was before the cache: every quantity recomputed (module docstring)."""
+    """The class step as it was before the cache: every quantity recomputed (module docstring), with the generic
+    intake of :class:`eqrec.estimators.intake.StampedEstimator` (the residuals formed in Python as packets arrive,
+    the period's state in lists and dicts) instead of the class form's arrays and compiled residuals."""
+
+    def step(self, y=None, u=None):
+        return self._advance(self._open(y, u))
 
     def _advance(self, step, entry=None):
         sysm = self.system

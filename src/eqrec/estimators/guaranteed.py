@@ -156,7 +156,7 @@ from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order,
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.error_maps import blas_ready, class_step
-from eqrec.estimators.intake import BoundRule, OpenedStep
+from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.protocol import StateSet
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
@@ -199,26 +199,24 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
 
 
 @numba.njit(cache=True)
-def _designed_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
-                   output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
-                   data_terms, rounding_map, z, factor, level, state, start_set, noise, sm_bounds, sm_x, tight, out,
-                   use_sm):  # pragma: no cover - compiled
-    r"""A step in the design with ``strict=False`` in one compiled call: the class step
-    (:func:`eqrec.estimators.error_maps.class_step`, its first 32 arguments, writing ``x̄``, the designed ``x̂``
-    and ``ρ`` into ``out[:3]``), its bound ``nextafter(level + max ρ, +inf)``, the designed set's new blocks
-    :math:`(\Phi G(s), N)` with their exact row sums (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`,
-    ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice per state (:func:`_tighter`, writing the reported
-    estimate and bounds into ``out[3:5]`` and the choice into ``use_sm``).  The operations of the uncompiled step
-    in the same order: the same numbers.
+def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, u, xbar0, xhat, rho0,
+                   radius, t, refs, res, z, true, taus, ys, K, absK, S, rounding_map, level, state, start_set, noise,
+                   sm_bounds, sm_x, tight, out, use_sm):  # pragma: no cover - compiled
+    r"""A step in the design with ``strict=False`` in one compiled call: the class step from the packets as they
+    arrived (:func:`eqrec.estimators.error_maps.class_step`, its first 27 arguments: the residuals, the stacked
+    data, ``x̄``, the designed ``x̂`` and ``ρ`` written into ``out[:3]``), its bound ``nextafter(level + max ρ,
+    +inf)``, the designed set's new blocks :math:`(\Phi G(s), N)` with their exact row sums
+    (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`, ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice
+    per state (:func:`_tighter`, writing the reported estimate and bounds into ``out[3:5]`` and the choice into
+    ``use_sm``).  The operations of the uncompiled step in the same order: the same numbers.
 
     Returns
     -------
     tuple
         ``(Φ G(s), the designed bound, the largest reported bound)``.
     """
-    top = class_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
-                     output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
-                     data_terms, rounding_map, z, factor, out)
+    top = class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, u, xbar0, xhat, rho0,
+                     radius, t, refs, res, z, true, taus, ys, K, absK, S, rounding_map, out)
     bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
     P = np.dot(state, start_set)
     row_sums = row_sums_of_parts_compiled(P, noise)
@@ -323,7 +321,10 @@ class GuaranteedEstimator:
         self._est: "RecoveryEstimator | ClassEstimator | None" = None
         self.bound = np.nan
         # strict=False: the error set, the fallback (None while in the design), the period's record
-        self._set: ErrorSet | None = None
+        self._error_set: ErrorSet | None = None
+        # the designed set's blocks of the last step not yet entered into it, (anchor, Φ G(s), N, time): entered
+        # when the set is read (:attr:`_set`), so a step does not pay for the error set's bookkeeping
+        self._pending: "tuple | None" = None
         self._outside = False  # out of the design: the set-membership estimator's estimate is reported
         self._sm: ZonotopeEstimator | None = None  # the set-membership estimator, run on every step
         self._t0 = 0
@@ -331,8 +332,24 @@ class GuaranteedEstimator:
         self._xhat: np.ndarray | None = None  # strict=False: the reported estimate
         self._spare: ClassEstimator | None = None  # strict=False: the class estimator not in use (returns)
         self._use_sm: np.ndarray | None = None  # tight, in the design: the states reported from the set-membership
-        # strict=False: (error set, period start, its generators as the compiled step takes them), kept per period
-        self._anchor: "tuple[ErrorSet, int, np.ndarray] | None" = None
+        # strict=False: (period start, the designed set there as the compiled step takes it), kept per period
+        self._anchor: "tuple[int, np.ndarray] | None" = None
+
+    @property
+    def _set(self) -> "ErrorSet | None":
+        """The designed estimate's error set (:class:`eqrec.bounds.zonotope.ErrorSet`), up to date: the last step's
+        blocks entered (only the last step's set and the period starts' are ever read)."""
+        pending = self._pending
+        if pending is not None:
+            anchor, P, noise, time = pending
+            self._pending = None
+            self._error_set.time = time - 1  # the steps in between: no set of theirs is read
+            self._error_set.enter(anchor, (P, noise))
+        return self._error_set
+
+    @_set.setter
+    def _set(self, error_set: "ErrorSet | None") -> None:
+        self._error_set, self._pending, self._anchor = error_set, None, None
 
     @property
     def in_design(self) -> bool:
@@ -619,48 +636,49 @@ class GuaranteedEstimator:
             now = self._sm.time
             carried = self._sm.carried_set if (now - self._t0) % T == 0 else None
             if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
-                # checked first: nothing changes if it raises; the step opened there is the one taken below
-                est, opened = self._return_to_design(now, packets, u, carried)
+                # checked first: nothing changes if it raises; the packets checked there are the step taken below
+                est, taken = self._return_to_design(now, packets, u, carried)
             else:
                 xhat, _ = self._sm.step(packets, u)
                 return self._outside_bounds(xhat)
         else:
-            opened = est._open(packets, u)  # every input checked once, for both estimators; nothing changes
-        entry = est._class(opened)  # the class (t+1, S) and what it needs, kept per class (ClassSteps)
+            taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
+        # the class (t+1, S) and its level, kept per observed prefix (ClassSteps.prefixes)
+        entry, level = est._lookup(taken[0], taken[2])
         # the set-membership estimator takes the checked packets and input as they are (one intake)
-        checked_u = None if u is None else opened.u
+        checked_u = None if u is None else taken[5]
+        sm = self._sm
         if entry is None:  # out of the language: the set-membership estimate from now on
-            xhat, _ = self._sm.step(packets, checked_u)
+            xhat, _ = sm.step(packets, checked_u)
             self._outside = True
             return self._outside_bounds(xhat)
-        sm = self._sm
         sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
         # smaller of two exact bounds, each a function of the arrivals only (module docstring): one compiled call
-        record, args = est._class_step_args(opened, entry)
-        level = est._level_at(opened.t + 1, opened.arrivals)
+        args = est._kernel_args(taken, entry)
         state, noise = entry.parts
+        start = taken[1]
         anchor = self._anchor  # the set of the period's start, as the compiled product takes it: once per period
-        if anchor is not None and anchor[0] is self._set and anchor[1] == opened.start:
-            start_set = anchor[2]
+        if anchor is not None and anchor[0] == start:
+            start_set = anchor[1]
         else:
-            start_set = blas_ready(self._set.at(opened.start))  # (reduced on this first use, then kept as it is)
-            self._anchor = (self._set, opened.start, start_set)
+            start_set = blas_ready(self._set.at(start))  # (reduced on this first use, then kept as it is)
+            self._anchor = (start, start_set)
         n = self._n
         out, use_sm = np.empty((5, n)), np.empty(n, np.bool_)
         if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
             P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
                                                   self.tight, out, use_sm)
-            self._set.enter(opened.start, (P, noise))
+            self._pending = (start, P, noise, est._k + 1)
         else:  # rows too long for the compiled sums: the same steps, the sums by NumPy
-            bound = est._plus_rounding(level, class_step(*args, out[:3]))
-            row_sums = self._set.advance(ErrorMap(opened.start, state, noise))
+            bound = est._plus_rounding(level, class_step(*args, out))
+            row_sums = self._set.advance(ErrorMap(start, state, noise))
             self.bound = _tighter(row_sums, out[2], bound, sm._beta, sm._xhat, out[1], self.tight, out[3], out[4],
                                   use_sm)
-        xbar, designed, rho, xhat, self._bounds = out
-        est._finish(opened, record, xbar, designed, rho, bound)
+        est._install(taken, entry, out, bound)
+        self._bounds, xhat = out[4], out[3]
         self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
         return xhat.copy(), self.bound
@@ -676,21 +694,22 @@ class GuaranteedEstimator:
         return xhat, self.bound
 
     def _return_to_design(self, now: int, packets, u,
-                          carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, OpenedStep]":
+                          carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, tuple]":
         """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
-        in the ``μ1`` box), and the step opened on them (the step is opened once, on the estimator reset here)."""
+        in the ``μ1`` box), and the step's packets checked on them (:meth:`ClassEstimator._take`, once, on the
+        estimator reset here)."""
         centre, generators = carried
         # a spare class estimator, made once and reset at each return (making one checks every class gain)
         est = self._spare
         if est is None:
             est = make_estimator(self.system, self.gains, None, periodic=True, bound_of=self.bound_of, mu1=self.mu1)
         est.reset(centre, t0=now)
-        opened = est._open(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
+        taken = est._take(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
         self._use_sm = None
         self._xhat = centre
-        return est, opened
+        return est, taken
 
     def update(self, y=None, u=None) -> np.ndarray:
         """The filterpy spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.
