@@ -56,7 +56,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps, blas_ready, class_step
+from eqrec.estimators.error_maps import (ClassErrorMaps, ClassStep, ClassSteps, blas_ready, class_step, period_layout,
+                                        period_views)
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -311,13 +312,14 @@ class ClassEstimator(StampedEstimator):
         T, n, p = gains.horizon, system.n, system.p
         # the period's state, kept in arrays made once (:meth:`_take`, :func:`class_step`): the reference state and
         # the residual per period time, the rounding record, the period times of the data received (increasing)
-        self._refs, self._res = np.zeros((T, n)), np.zeros((T, p))
-        self._period = RoundingRecord(T, n, p, np.zeros(n))
+        self._period_buffer = np.zeros(sum(period_layout(T, n, p)))
+        refs, res, z, true = period_views(self._period_buffer, T, n, p)
+        self._period = RoundingRecord(T, n, p, np.zeros(n), z, true)
         self._S: tuple = ()
         self._no_taus, self._no_ys = np.zeros(0, dtype=np.int64), np.zeros(0)
         self._one_tau = [np.array([tau], dtype=np.int64) for tau in range(T)]
         # what the compiled step takes of the model, looked up once (:meth:`_kernel_args`): the output model, and
-        # the state model of a time-invariant system
+        # the whole model of a time-invariant system
         self._outputs: "tuple | None" = None
         self._fixed_model: "tuple | None" = None
         self._prefixes: dict = {}
@@ -491,7 +493,7 @@ class ClassEstimator(StampedEstimator):
         if entry is None:
             raise self._refuse(taken)
         out = np.empty((3, self._n))
-        top = class_step(*self._kernel_args(taken, entry), out)
+        top = class_step(*self._kernel_args(taken, entry.kernel[:4]), out)
         self._install(taken, entry, out, self._plus_rounding(level, top))
         return self.xhat.copy(), self.bound
 
@@ -504,6 +506,7 @@ class ClassEstimator(StampedEstimator):
         """Install a computed class step (it can no longer fail; ``out``: ``x̄``, ``x̂`` and ``ρ`` in rows)."""
         t, start, arrivals, _, _, _, dropped = taken
         self._xbar, self.xhat, self._rho = out[0], out[1], out[2]
+        self._rows = out
         self._t, self._start, self._k = t + 1, start, self._k + 1
         self._arrivals, self._S = arrivals, entry.key[1]
         self._record = self._period
@@ -511,37 +514,37 @@ class ClassEstimator(StampedEstimator):
             self.dropped_packets += dropped
         self.bound = bound
 
-    def _class_model(self, t: int) -> tuple:
-        """What the compiled class step takes of the state model at period time ``t``, in one lookup (cached by
-        time for a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`),
-        ``|A|, |B|`` and the rows ``f``, ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`)."""
+    def _model(self, t: int) -> tuple:
+        """What the compiled class step takes of the model at period time ``t``, in its order, in one lookup (kept
+        by time for a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`),
+        ``|A|, |B|``, the rows ``f``, ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`),
+        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (row-major), the ``terms`` of an output and of
+        a state injection and the allowance's factor, then the period buffer.
+
+        A row-major ``C`` (the systems' own: made from nested lists) is multiplied by the BLAS kernel of NumPy's
+        ``C @ ref``, so the residuals are the numbers of the uncompiled step; a column-major one is copied to
+        row-major, whose product may round differently, still within the allowance (its bound holds for any order
+        of the sums, :func:`eqrec.bounds.rounding.injection_bound`)."""
         key = ("class", t if self._varying else 0)
         hit = self._norms.get(key)
         if hit is None:
             absA, absB, _, e, _, f = self._absolute_model(t)
             vecs = np.ascontiguousarray([self.system.f, e, f, self._drift(t)], dtype=float)
+            outputs = self._outputs
+            if outputs is None:
+                absC, v, output_terms = self._output_model()
+                Cs = np.ascontiguousarray([self.system.C_at(tau) for tau in range(self.T)], dtype=float)
+                outputs = self._outputs = (absC, v, Cs, output_terms, self._n + self._state_terms_extra,
+                                           self._allowance_factor, self._period_buffer)
             hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absA, absB,
-                                      vecs)
+                                      vecs) + outputs
         return hit
 
-    def _output_kernel(self) -> tuple:
-        """What the compiled class step takes of the output model (made once): ``|C(τ)|``, ``|V(τ)| η_v 1`` and
-        ``C(τ)`` per period time (row-major), the ``terms`` of an output and of a state injection and the
-        allowance's factor.  A row-major ``C`` (the systems' own: made from nested lists) is multiplied by the BLAS
-        kernel of NumPy's ``C @ ref``, so the residuals are the numbers of the uncompiled step; a column-major one
-        is copied to row-major, whose product may round differently, still within the allowance (its bound
-        holds for any order of the sums, :func:`eqrec.bounds.rounding.injection_bound`)."""
-        hit = self._outputs
-        if hit is None:
-            absC, v, output_terms = self._output_model()
-            Cs = np.ascontiguousarray([self.system.C_at(tau) for tau in range(self.T)], dtype=float)
-            hit = self._outputs = (absC, v, Cs, output_terms, self._n + self._state_terms_extra,
-                                   self._allowance_factor)
-        return hit
-
-    def _kernel_args(self, taken: tuple, entry: ClassStep) -> tuple:
+    def _kernel_args(self, taken: tuple, kernel: tuple) -> tuple:
         """The arguments of the compiled class step (:func:`eqrec.estimators.error_maps.class_step`) but ``out``:
-        the model, the step's input and estimates, the period's arrays and the class's.  The allowance of the class
+        the model and the period buffer (:meth:`_model`), the class's ``kernel`` (the first four of
+        :attr:`~eqrec.estimators.error_maps.ClassStep.kernel`, or all six for the designed step), the input, the
+        estimates, the magnitudes' radius, the period time and the new packets.  The allowance of the class
         estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the residuals and of the simulated
         state and measurements, carried by the class map with identity noise gains
         (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the stacked
@@ -549,25 +552,24 @@ class ClassEstimator(StampedEstimator):
         t, _, _, taus, ys, u, _ = taken
         model = self._fixed_model
         if model is None:
-            model = self._class_model(t)
+            model = self._model(t)
             if not self._varying:
                 self._fixed_model = model
-        absC, v, Cs, output_terms, state_terms, factor = self._outputs or self._output_kernel()
         if not taus:
             taus, ys = self._no_taus, self._no_ys
         elif len(taus) == 1:
             taus, ys = self._one_tau[taus[0]], ys[0]  # (made once per period time; only read)
         else:
             taus, ys = np.array(taus, dtype=np.int64), np.concatenate(ys)
-        if self.error_radius is not None:  # :meth:`_radius`, inline
-            radius = float(self.error_radius)
+        error_radius = self.error_radius
+        if error_radius is not None:  # :meth:`_radius`, inline
+            radius = float(error_radius)
         else:
             radius = float(self.bound) if math.isfinite(self.bound) else 0.0
-        record = self._period
-        A, B, absA, absB, vecs = model
-        return (A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, u,
-                self.xhat if t == 0 else self._xbar, self.xhat, self._rho, radius, t, self._refs, self._res, record.z,
-                record.true, taus, ys, entry.gain, entry.abs_gain, entry.data, entry.rounding_map)
+        rows = self._rows
+        if rows is None:  # after a reset (or a carried allowance): made once from the estimates
+            rows = self._rows = np.array([self._xbar, self.xhat, self._rho])
+        return model + kernel + (u, rows, radius, t, taus, ys)
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,

@@ -210,13 +210,21 @@ class ClassStep:
         ``S``, the period times of the class's data (increasing), as the compiled step takes them.
     """
 
-    __slots__ = ("_steps", "key", "index", "gain", "data", "_abs_gain", "_rounding", "_parts")
+    __slots__ = ("_steps", "key", "index", "gain", "data", "_abs_gain", "_rounding", "_parts", "_kernel")
 
     def __init__(self, steps: "ClassSteps", depth: int, available: tuple[int, ...], index: int):
         self._steps, self.key, self.index = steps, (depth, available), index
         self.gain = blas_ready(steps.gains.K[index])
         self.data = np.array(available, dtype=np.int64)
-        self._abs_gain = self._rounding = self._parts = None
+        self._abs_gain = self._rounding = self._parts = self._kernel = None
+
+    @property
+    def kernel(self) -> tuple:
+        """What the compiled steps take of the class, in their order: ``K``, ``|K|``, ``S`` (:attr:`data`), the
+        rounding map, and the error map's parts ``(Φ, N)`` (:func:`class_step` takes the first four)."""
+        if self._kernel is None:
+            self._kernel = (self.gain, self.abs_gain, self.data, self.rounding_map) + self.parts
+        return self._kernel
 
     @property
     def abs_gain(self) -> np.ndarray:
@@ -419,9 +427,37 @@ def matrix_vector(M, x):  # pragma: no cover - compiled
     return np.dot(M, x)
 
 
+def period_layout(T: int, n: int, p: int) -> tuple[int, int, int, int]:
+    """The lengths of the parts of a class estimator's period buffer, in order: the reference states ``(T, n)``, the
+    residuals ``(T, p)``, the record's injections ``z`` (``T (n + p) + n``) and the true state's magnitudes
+    ``(T, n)`` (:func:`period_views`).
+
+    Parameters
+    ----------
+    T, n, p : int
+        Period, state and output dimensions.
+
+    Returns
+    -------
+    tuple of int
+        The four lengths.
+    """
+    return T * n, T * p, T * (n + p) + n, T * n
+
+
 @numba.njit(cache=True)
-def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, u, xbar0, xhat, rho0, radius,
-               t, refs, res, z, true, taus, ys, K, absK, S, rounding_map, out):  # pragma: no cover - compiled
+def period_views(period, T, n, p):  # pragma: no cover - compiled
+    """The parts of a period buffer (:func:`period_layout`) as views: ``refs (T, n)``, ``res (T, p)``, ``z`` and
+    ``true (T, n)``."""
+    a = T * n
+    b = a + T * p
+    c = b + T * (n + p) + n
+    return period[:a].reshape((T, n)), period[a:b].reshape((T, p)), period[b:c], period[c:c + T * n].reshape((T, n))
+
+
+@numba.njit(cache=True)
+def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
+               rounding_map, u, rows, radius, t, taus, ys, out):  # pragma: no cover - compiled
     r"""One step of the class form (:class:`eqrec.estimators.causal.ClassEstimator`) in one compiled call, from the
     packets as they arrived: the residuals of the new packets, the stacked data of the class, the estimate and its
     rounding allowance, by the operations of the uncompiled step (BLAS products as NumPy's ``@``,
@@ -450,34 +486,31 @@ def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, f
         The ``terms`` of an output injection and of the state update's.
     factor : float
         ``1 + (2n + 8) u``.
-    u : numpy.ndarray, shape (m,)
-        The checked input.
-    xbar0 : numpy.ndarray, shape (n,)
-        ``x̄(t)`` (the period's estimate at its start): the reference state of time ``t``.
-    xhat : numpy.ndarray, shape (n,)
-        The estimate of the step's time.
-    rho0 : numpy.ndarray, shape (n,)
-        The allowance of the current estimate (the start of a new period's record when ``t = 0``).
-    radius : float
-        The true error's size assumed by the magnitudes.
-    t : int
-        The period time of the step.
-    refs, res : numpy.ndarray
-        The period's reference states ``(T, n)`` (row ``t`` written) and residuals ``(T, p)`` (rows ``taus``
-        written).
-    z, true : numpy.ndarray
-        The period's record (:class:`eqrec.estimators.intake.RoundingRecord`): its injections ``w``, ``v``, ``ρ(s)``
-        end to end and the magnitudes of the true state (started again when ``t = 0``).
-    taus : numpy.ndarray of int64
-        The period times of the packets first received at this step.
-    ys : numpy.ndarray, shape (len(taus) p,)
-        Their measurements end to end.
+    period : numpy.ndarray
+        The period's state end to end (:func:`period_layout`): the reference states ``(T, n)`` (row ``t``
+        written), the residuals ``(T, p)`` (rows ``taus`` written) and the record
+        (:class:`eqrec.estimators.intake.RoundingRecord`): its injections ``w``, ``v``, ``ρ(s)`` (``z``) and the
+        magnitudes of the true state ``(T, n)`` (started again when ``t = 0``).
     K, absK : numpy.ndarray
         The class gain and ``|K|``.
     S : numpy.ndarray of int64
         The period times of the class's data, increasing.
     rounding_map : numpy.ndarray, shape (n, len(z))
         ``|G|`` of the class with identity noise gains (:class:`RoundingMaps`).
+    u : numpy.ndarray, shape (m,)
+        The checked input.
+    rows : numpy.ndarray, shape (3, n)
+        ``x̄(t)``, ``x̂(t)`` and the allowance ``ρ`` of ``x̂(t)`` (the ``out`` of the step before, or made at a reset).
+        The reference state of time ``t`` is ``x̄(t)``, or ``x̂(t)`` at a period's start (``t = 0``); ``ρ`` starts a
+        new period's record.
+    radius : float
+        The true error's size assumed by the magnitudes.
+    t : int
+        The period time of the step.
+    taus : numpy.ndarray of int64
+        The period times of the packets first received at this step.
+    ys : numpy.ndarray, shape (len(taus) p,)
+        Their measurements end to end.
     out : numpy.ndarray, shape (3, n)
         Where ``x̄(t+1)``, ``x̂(t+1)`` and ``ρ`` are written (rows; one new array per step: its rows are what the
         estimator keeps, and returning three arrays from a compiled call costs more than writing them).
@@ -487,11 +520,14 @@ def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, f
     float
         ``max(0, max ρ)``.
     """
-    n = xbar0.shape[0]
-    T, p = res.shape
+    n = rows.shape[1]
+    T, p = absC.shape[0], absC.shape[1]
+    xhat = rows[1]
+    xbar0 = xhat if t == 0 else rows[0]
+    refs, res, z, true = period_views(period, T, n, p)
     if t == 0:  # a new period's record: no injection yet, ρ(s) the allowance of the estimate it starts from
         z[:] = 0.0
-        z[T * (n + p):] = rho0
+        z[T * (n + p):] = rows[2]
         true[:] = 0.0
     w_record = z[:T * n].reshape((T, n))
     v_record = z[T * n:T * (n + p)].reshape((T, p))

@@ -199,11 +199,12 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
 
 
 @numba.njit(cache=True)
-def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, u, xbar0, xhat, rho0,
-                   radius, t, refs, res, z, true, taus, ys, K, absK, S, rounding_map, level, state, start_set, noise,
-                   sm_bounds, sm_x, tight, out, use_sm):  # pragma: no cover - compiled
+def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
+                   rounding_map, state, noise, u, rows, radius, t, taus, ys, level, start_set, sm_bounds, sm_x, tight,
+                   out, use_sm):  # pragma: no cover - compiled
     r"""A step in the design with ``strict=False`` in one compiled call: the class step from the packets as they
-    arrived (:func:`eqrec.estimators.error_maps.class_step`, its first 27 arguments: the residuals, the stacked
+    arrived (:func:`eqrec.estimators.error_maps.class_step`, with the class's error map parts ``state`` = Φ and
+    ``noise`` = N after its rounding map: the residuals, the stacked
     data, ``x̄``, the designed ``x̂`` and ``ρ`` written into ``out[:3]``), its bound ``nextafter(level + max ρ,
     +inf)``, the designed set's new blocks :math:`(\Phi G(s), N)` with their exact row sums
     (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`, ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice
@@ -215,8 +216,8 @@ def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_term
     tuple
         ``(Φ G(s), the designed bound, the largest reported bound)``.
     """
-    top = class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, u, xbar0, xhat, rho0,
-                     radius, t, refs, res, z, true, taus, ys, K, absK, S, rounding_map, out)
+    top = class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
+                     rounding_map, u, rows, radius, t, taus, ys, out)
     bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
     P = np.dot(state, start_set)
     row_sums = row_sums_of_parts_compiled(P, noise)
@@ -657,8 +658,8 @@ class GuaranteedEstimator:
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
         # smaller of two exact bounds, each a function of the arrivals only (module docstring): one compiled call
-        args = est._kernel_args(taken, entry)
-        state, noise = entry.parts
+        kernel = entry.kernel
+        state, noise = kernel[4:]
         start = taken[1]
         anchor = self._anchor  # the set of the period's start, as the compiled product takes it: once per period
         if anchor is not None and anchor[0] == start:
@@ -669,11 +670,11 @@ class GuaranteedEstimator:
         n = self._n
         out, use_sm = np.empty((5, n)), np.empty(n, np.bool_)
         if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
-            P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
-                                                  self.tight, out, use_sm)
+            P, bound, self.bound = _designed_step(*est._kernel_args(taken, kernel), level, start_set, sm._beta,
+                                                  sm._xhat, self.tight, out, use_sm)
             self._pending = (start, P, noise, est._k + 1)
         else:  # rows too long for the compiled sums: the same steps, the sums by NumPy
-            bound = est._plus_rounding(level, class_step(*args, out))
+            bound = est._plus_rounding(level, class_step(*est._kernel_args(taken, kernel[:4]), out))
             row_sums = self._set.advance(ErrorMap(start, state, noise))
             self.bound = _tighter(row_sums, out[2], bound, sm._beta, sm._xhat, out[1], self.tight, out[3], out[4],
                                   use_sm)

@@ -201,12 +201,13 @@ class RoundingRecord:
         What a node-gain estimator propagates (its error maps per period time).
     """
 
-    def __init__(self, T: int, n: int, p: int, rho0: np.ndarray):
+    def __init__(self, T: int, n: int, p: int, rho0: np.ndarray, z: "np.ndarray | None" = None,
+                 true: "np.ndarray | None" = None):
         #: all the injections in the order of the error maps' columns ``(w, v, ξ0)``: one product carries them
-        self.z = np.zeros(T * (n + p) + n)
+        self.z = np.zeros(T * (n + p) + n) if z is None else z  # (given: views of a class estimator's period buffer)
         self.w, self.v = self.z[:T * n].reshape(T, n), self.z[T * n:T * (n + p)].reshape(T, p)
         self.z[T * (n + p):] = rho0
-        self.true = np.zeros((T, n))
+        self.true = np.zeros((T, n)) if true is None else true
         self.maps: list = []
 
 
@@ -271,6 +272,7 @@ class StampedEstimator:
         self.xhat: "np.ndarray | None" = None  # set by reset
         self.bound = math.nan  # nan until reset (then μ1, or inf without levels)
         self._rho = np.zeros(system.n)  # the rounding allowance ρ of the current estimate, per state (module docstring)
+        self._rows: "np.ndarray | None" = None  # the class form's x̄, x̂, ρ as its compiled step wrote them
         self.error_radius: "float | None" = None  # the true error's size, when a wrapper knows it (else the bound)
         self._norms: dict = {}
         self._varying = system.is_time_varying  # a frozen system: asked once (its matrices are cached by time)
@@ -335,6 +337,7 @@ class StampedEstimator:
         self.bound = self.mu1
         # the simulated x(t0) = x̂(t0) + ξ(t0) is itself rounded: half an ulp of its size
         self._rho = rounding_allowance(0.0, 1, np.abs(x) + self._radius())
+        self._rows = None  # (the class form's x̄, x̂, ρ in one array: made again from these at its next step)
         return self
 
     def carry_rounding(self, rounding: float, error_radius: "float | None") -> None:
@@ -358,6 +361,7 @@ class StampedEstimator:
             The estimator is changed in place.
         """
         self._rho = np.broadcast_to(np.asarray(rounding, float), (self.system.n,)).copy()
+        self._rows = None  # (the class form's x̄, x̂, ρ in one array: made again at its next step)
         self.error_radius = error_radius
 
     def _radius(self) -> float:
