@@ -56,7 +56,7 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.estimators.error_maps import (ClassErrorMaps, ClassStep, ClassSteps, blas_ready, class_step, period_layout,
+from eqrec.estimators.error_maps import (ClassErrorMaps, ClassSteps, blas_ready, class_step, period_layout,
                                         period_views)
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
@@ -385,8 +385,8 @@ class ClassEstimator(StampedEstimator):
         InputError
             As :meth:`step`, except for a class the gains lack.
         """
-        t, _, arrivals, _, _, _, _ = self._take(self._packets(y), u)
-        return t + 1, tuple(tau for tau, a in enumerate(arrivals) if a is not None)
+        taken = self._take(self._packets(y), u)
+        return taken[0] + 1, taken[7][3]
 
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None" = None,
              u: np.ndarray | None = None) -> tuple[np.ndarray, float]:
@@ -434,7 +434,8 @@ class ClassEstimator(StampedEstimator):
     def _take(self, packets: list, u) -> tuple:
         """Check a step's packets (:func:`eqrec.arrivals.packets.as_packets`'s list) and input: the step's period
         time, the period's start, the observed arrivals with this step's, the period times of the new packets and
-        their measurements, the checked input and the packets dropped (stamped before the period).  Nothing changes.
+        their measurements, the checked input, the packets dropped (stamped before the period) and the step's class
+        with its level (:meth:`_lookup`).  Nothing changes.
 
         Raises :class:`InputError` when the horizon is over (not periodic), for a packet whose stamp was already
         received in this period, or a malformed input (the intake of
@@ -461,20 +462,30 @@ class ClassEstimator(StampedEstimator):
             arrivals[tau] = t
             taus.append(tau)
             ys.append(pk.y)
-        return t, start, arrivals, taus, ys, u, dropped
+        # the class (t+1, S) and its level, kept per observed prefix (one lookup; :meth:`_lookup`)
+        hit = self._prefixes.get(tuple(arrivals))
+        if hit is None:
+            hit = self._lookup(t, arrivals)
+        return t, start, arrivals, taus, ys, u, dropped, hit
 
-    def _lookup(self, t: int, arrivals: list) -> "tuple[ClassStep | None, float]":
-        """The class ``(t+1, S)`` of a step with these observed arrivals (``None`` when the design has none) and its
-        level (:meth:`_level_at`; NaN without a class), kept per prefix for the design's estimators of this rule
-        (:meth:`eqrec.estimators.error_maps.ClassSteps.prefixes`): one lookup per step."""
+    def _lookup(self, t: int, arrivals: list) -> tuple:
+        """The class ``(t+1, S)`` of a step with these observed arrivals and what the step needs of it: ``(entry,
+        level, kernel, S)``, the :class:`~eqrec.estimators.error_maps.ClassStep` (``None`` when the design has no
+        such class), its level (:meth:`_level_at`; NaN without a class), its
+        :attr:`~eqrec.estimators.error_maps.ClassStep.kernel` and ``S``; kept per prefix for the design's estimators
+        of this rule (:meth:`eqrec.estimators.error_maps.ClassSteps.prefixes`)."""
         key = tuple(arrivals)
         hit = self._prefixes.get(key)
         if hit is None:
-            entry = self._steps().get(t + 1, tuple(tau for tau, a in enumerate(arrivals) if a is not None))
-            level = self._level_at(t + 1, arrivals) if entry is not None else math.nan
+            S = tuple(tau for tau, a in enumerate(arrivals) if a is not None)
+            entry = self._steps().get(t + 1, S)
+            if entry is None:
+                hit = (None, math.nan, None, S)
+            else:
+                hit = (entry, self._level_at(t + 1, arrivals), entry.kernel, S)
             if len(self._prefixes) >= 4096:  # bounded (a period has finitely many prefixes)
                 self._prefixes.clear()
-            hit = self._prefixes[key] = (entry, level)
+            self._prefixes[key] = hit
         return hit
 
     def _refuse(self, taken: tuple) -> InputError:
@@ -489,12 +500,12 @@ class ClassEstimator(StampedEstimator):
     def _advance(self, taken: tuple) -> tuple[np.ndarray, float]:
         """The step of :meth:`step` from its checked packets (:meth:`_take`; the class lookup may still raise, then
         nothing changes)."""
-        entry, level = self._lookup(taken[0], taken[2])
+        entry, level, kernel, _ = taken[7]
         if entry is None:
             raise self._refuse(taken)
         out = np.empty((3, self._n))
-        top = class_step(*self._kernel_args(taken, entry.kernel[:4]), out)
-        self._install(taken, entry, out, self._plus_rounding(level, top))
+        top = class_step(*self._kernel_args(taken, kernel[:4]), out)
+        self._install(taken, out, self._plus_rounding(level, top))
         return self.xhat.copy(), self.bound
 
     @staticmethod
@@ -502,13 +513,13 @@ class ClassEstimator(StampedEstimator):
         """The reported bound: the level plus the allowance's largest entry, rounded up (``inf`` stays ``inf``)."""
         return math.nextafter(level + top, math.inf) if math.isfinite(level) else level
 
-    def _install(self, taken: tuple, entry: ClassStep, out: np.ndarray, bound: float) -> None:
+    def _install(self, taken: tuple, out: np.ndarray, bound: float) -> None:
         """Install a computed class step (it can no longer fail; ``out``: ``x̄``, ``x̂`` and ``ρ`` in rows)."""
-        t, start, arrivals, _, _, _, dropped = taken
+        t, start, arrivals, _, _, _, dropped, hit = taken
         self._xbar, self.xhat, self._rho = out[0], out[1], out[2]
         self._rows = out
         self._t, self._start, self._k = t + 1, start, self._k + 1
-        self._arrivals, self._S = arrivals, entry.key[1]
+        self._arrivals, self._S = arrivals, hit[3]
         self._record = self._period
         if dropped:
             self.dropped_packets += dropped
@@ -549,7 +560,7 @@ class ClassEstimator(StampedEstimator):
         state and measurements, carried by the class map with identity noise gains
         (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the stacked
         residuals of the class's data)."""
-        t, _, _, taus, ys, u, _ = taken
+        t, _, _, taus, ys, u, _, _ = taken
         model = self._fixed_model
         if model is None:
             model = self._model(t)

@@ -644,8 +644,8 @@ class GuaranteedEstimator:
                 return self._outside_bounds(xhat)
         else:
             taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
-        # the class (t+1, S) and its level, kept per observed prefix (ClassSteps.prefixes)
-        entry, level = est._lookup(taken[0], taken[2])
+        # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
+        entry, level, kernel, _ = taken[7]
         # the set-membership estimator takes the checked packets and input as they are (one intake)
         checked_u = None if u is None else taken[5]
         sm = self._sm
@@ -658,7 +658,6 @@ class GuaranteedEstimator:
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
         # smaller of two exact bounds, each a function of the arrivals only (module docstring): one compiled call
-        kernel = entry.kernel
         state, noise = kernel[4:]
         start = taken[1]
         anchor = self._anchor  # the set of the period's start, as the compiled product takes it: once per period
@@ -678,7 +677,7 @@ class GuaranteedEstimator:
             row_sums = self._set.advance(ErrorMap(start, state, noise))
             self.bound = _tighter(row_sums, out[2], bound, sm._beta, sm._xhat, out[1], self.tight, out[3], out[4],
                                   use_sm)
-        est._install(taken, entry, out, bound)
+        est._install(taken, out, bound)
         self._bounds, xhat = out[4], out[3]
         self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
