@@ -479,10 +479,9 @@ class ClassEstimator(StampedEstimator):
         if hit is None:
             S = tuple(tau for tau, a in enumerate(arrivals) if a is not None)
             entry = self._steps().get(t + 1, S)
-            if entry is None:
-                hit = (None, math.nan, None, S)
-            else:
-                hit = (entry, self._level_at(t + 1, arrivals), entry.kernel, S)
+            if entry is None:  # not kept (a refused step changes nothing, caches included: the language is kept)
+                return None, math.nan, None, S
+            hit = (entry, self._level_at(t + 1, arrivals), entry.kernel, S)
             if len(self._prefixes) >= 4096:  # bounded (a period has finitely many prefixes)
                 self._prefixes.clear()
             self._prefixes[key] = hit
