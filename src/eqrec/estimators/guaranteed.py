@@ -633,15 +633,18 @@ class GuaranteedEstimator:
         reported from whichever of the two has the smaller exact bound (module docstring).
         """
         if self._outside:
-            T = self.gains.horizon
-            now = self._sm.time
-            carried = self._sm.carried_set if (now - self._t0) % T == 0 else None
+            sm = self._sm
+            now = sm.time
+            # at a period start, the return needs the carried set's row sums within μ1; they are at least the
+            # set-membership bounds (ZonotopeEstimator.linear_error_model), so a bound above μ1 rules it out
+            # without forming the set (the same decision)
+            carried = sm.carried_set if (now - self._t0) % self.gains.horizon == 0 \
+                and not (sm._beta > self.mu1).any() else None
             if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
                 # checked first: nothing changes if it raises; the packets checked there are the step taken below
                 est, taken = self._return_to_design(now, packets, u, carried)
             else:
-                xhat, _ = self._sm.step(packets, u)
-                return self._outside_bounds(xhat)
+                return self._outside_bounds(*sm.step(packets, u))
         else:
             taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
         # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
@@ -650,9 +653,9 @@ class GuaranteedEstimator:
         checked_u = None if u is None else taken[5]
         sm = self._sm
         if entry is None:  # out of the language: the set-membership estimate from now on
-            xhat, _ = sm.step(packets, checked_u)
+            reported = sm.step(packets, checked_u)
             self._outside = True
-            return self._outside_bounds(xhat)
+            return self._outside_bounds(*reported)
         sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
@@ -687,11 +690,13 @@ class GuaranteedEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
 
-    def _outside_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
+    def _outside_bounds(self, xhat: np.ndarray, bound: float) -> tuple[np.ndarray, float]:
+        """A step out of the design: the set-membership estimate and its bounds (``bound``: the largest, as its
+        ``step`` returned it)."""
         self._use_sm = None
         self._bounds = self._sm.state_bounds
-        self.bound = float(self._bounds.max())
-        return xhat, self.bound
+        self.bound = bound
+        return xhat, bound
 
     def _return_to_design(self, now: int, packets, u,
                           carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, tuple]":
