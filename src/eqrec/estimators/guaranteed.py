@@ -100,44 +100,48 @@ observed prefix or class) and refuses data outside the language.
 
 **Cost.**  With ``strict=False`` the set-membership estimator runs on every
 step (it must hold every packet at a fallback), so a step costs one
-set-membership step plus the designed side.  The two share one intake (the
-packets and the input are checked once).  What the designed side needs that
-depends on the arrivals alone is kept per class ``(d, S)`` of the design,
-a finite set (:class:`eqrec.estimators.error_maps.ClassSteps`): the gain, its
-absolute values, the rounding allowance's map, the error map's parts, and the
-levels looked up (shared by every estimator of the design).  The rest of a
-step in the design is one compiled call (``_designed_step``): the class
-estimate, the rounding allowance of this step's own numbers (it depends on
-the magnitudes of the state and the residuals, so it cannot be kept), the
-product :math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the
-set at the period's start depends on the earlier periods) and the choice per
-state.  Its products go through BLAS as NumPy's ``@`` does and its sums run
-in NumPy's order, so every number is the one of the uncompiled step
-(``tests/test_class_step_cache.py``, bit for bit).  Measured side by side
-(``python benchmarks/bench_versions.py --old <src>``: this version and the
-previous one in one lockstep on the same arrivals, the cost table of
-``python benchmarks/bench_tight.py --part cost``; CPU µs per step on a shared
-machine loaded to 4–5 processes on 2 cores, so read the ratios; 0/20/40 %
-loss; three runs): in the design ``strict=False`` costs 1.30–1.54× the
-set-membership estimator alone on the two carts (a set-membership step of
-280–430 µs there), 1.23–1.42× on the cart-pole and 1.05–1.16× on the
-``n = 10`` chain; the previous version measured 1.27–1.49×, 1.22–1.42× and
-1.05–1.11× in the same runs.  Both sides got faster by about the same number
-of µs: the packet intake's fast path (:func:`eqrec.arrivals.packets.as_packets`,
-20–60 µs per step at ``n = 4``) speeds the set-membership estimator alone as
-much as ``strict=False``, so ``strict=False`` is 5–12 % faster per step but its
-ratio did not fall; ``strict=True`` is 25–30 % faster (74–125 µs against
-103–179 µs in the same runs).  The designed side (``strict=False`` in the
-design minus the set-membership step) is about 85–180 µs at ``n = 4`` in the
-lockstep, against about 30 µs when its pieces run back to back on their own
-(``timeit``: opening the step 5 µs, the compiled call's arguments 6 µs, the
-compiled call 13 µs of which 5–6 µs pass its 42 arguments, the rest 5 µs):
-its many small Python and NumPy operations run cold after a set-membership
-step.  What is left is that Python around the compiled call (the class form's
-intake, the residuals and the stacked data, the class lookup, the period's
-record) and the Girard reduction of the designed set at each period start;
-the ``1.2×`` of issue 40 needs them in fewer, compiled steps.  Out of the
-design a step is the set-membership step.  ``tight=False`` costs the same as
+set-membership step plus the designed side.  The two share one intake: the
+packets and the input are checked once (:func:`eqrec.arrivals.packets.as_packets`,
+:meth:`ClassEstimator._take`), and the set-membership estimator takes them as
+checked.  What the designed side needs that depends on the arrivals alone is
+kept per observed prefix of a period, a finite set (the class ``(d, S)``, its
+level and its arrays: the gain, its absolute values, the rounding allowance's
+map and the error map's parts; :class:`eqrec.estimators.error_maps.ClassSteps`,
+shared by every estimator of the design), and found in one dictionary lookup
+while the packets are checked.  The class form's period (reference states,
+residuals, rounding record) lives in one buffer made once.  The rest of a step
+in the design is one compiled call (``_designed_step``, 34 arguments): the
+residuals of the new packets and the stacked data of the class, the class
+estimate, the rounding allowance of this step's own numbers (it depends on the
+magnitudes of the state and the residuals, so it cannot be kept), the product
+:math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the set at
+the period's start depends on the earlier periods) and the choice per state;
+the designed set's blocks are entered into its :class:`~eqrec.bounds.zonotope.ErrorSet`
+only when read (at the next period start, where the set is reduced to the
+order, or by :attr:`predicted`).  Its products go through BLAS as NumPy's
+``@`` does and its sums run in NumPy's order, so every number is the one of
+the uncompiled step (``tests/test_class_step_cache.py``, bit for bit;
+``benchmarks/hash_estimates.py``: 132 digests unchanged by this layout).
+Measured side by side (``python benchmarks/bench_versions.py --old <src>``:
+this version and the previous one in one lockstep on the same arrivals, the
+cost table of ``python benchmarks/bench_tight.py --part cost``; CPU µs per
+step, per step the least of three runs, on a 2-core machine shared with
+3.5–4.5 other processes, so read the ratios; 0/20/40 % loss): in the design
+``strict=False`` costs 1.25–1.34× the set-membership estimator alone on the
+two carts, 1.19–1.26× on the cart-pole and 1.05–1.09× on the ``n = 10``
+chain, against 1.32–1.42×, 1.21–1.35× and 1.07–1.09× for the previous
+version in the same run; the designed side (``strict=False`` in the design
+minus the set-membership step) fell from 108–160 µs to 80–120 µs at ``n = 4``;
+``strict=True`` costs 56–88 µs per step against 90–144 µs.  What is left of
+the designed side at ``n = 4``: the compiled call (about 15 µs on its own, a
+third of it passing its arguments, 20–30 µs in the lockstep, where it runs
+cold after a set-membership step), about 15–20 µs of Python around it, and
+the Girard reduction of the designed set at each period start once it has
+more than ``order · n`` generators (:func:`eqrec.bounds.zonotope.reduce_order`,
+60 µs on its own with ``n = 4``, 100–170 µs in the lockstep: 15–25 µs per step
+on average).  Out of the design a step is the set-membership step, with the
+return's check at each period start (the carried set is formed only when no
+set-membership bound exceeds ``μ1``).  ``tight=False`` costs the same as
 ``tight=True`` (the set-membership estimator runs for the fallback either way).
 """
 
@@ -635,11 +639,12 @@ class GuaranteedEstimator:
         if self._outside:
             sm = self._sm
             now = sm.time
-            # at a period start, the return needs the carried set's row sums within μ1; they are at least the
-            # set-membership bounds (ZonotopeEstimator.linear_error_model), so a bound above μ1 rules it out
-            # without forming the set (the same decision)
+            # at a period start, the return needs the carried set's row sums within μ1.  Its pad brings them up to the
+            # set-membership bounds (ZonotopeEstimator._window_generators, hull_pad), up to the rounding of a sum of
+            # positive terms (relative q u, far below 1e-6), so a bound above μ1 (1 + 1e-6) rules the return out
+            # without forming the set: the same decision
             carried = sm.carried_set if (now - self._t0) % self.gains.horizon == 0 \
-                and not (sm._beta > self.mu1).any() else None
+                and not (sm._beta > self.mu1 * (1.0 + 1e-6)).any() else None
             if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
                 # checked first: nothing changes if it raises; the packets checked there are the step taken below
                 est, taken = self._return_to_design(now, packets, u, carried)

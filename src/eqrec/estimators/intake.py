@@ -7,7 +7,13 @@ Shared by :class:`~eqrec.estimators.causal.RecoveryEstimator`,
 a reference state per period time and the residuals of the packets received;
 a step is opened aside (:class:`OpenedStep`, every input checked, nothing
 changed), the estimator computes its estimate from it, and only then is it
-committed, so a step that raises leaves the estimator as it was.
+committed, so a step that raises leaves the estimator as it was.  The class
+form checks a step the same way (:meth:`~eqrec.estimators.causal.ClassEstimator._take`:
+the same checks and errors, nothing changed) but keeps its period in arrays
+made once, which its compiled step writes only once the step can no longer
+fail (the reference state of the step's time, the residuals of the new
+packets, the record below); the node-gain and augmented forms keep the lists
+and dictionaries of :class:`OpenedStep`.
 
 The protocol (:mod:`eqrec.estimators.protocol`): ``reset(xhat0, t0=0)``
 returns the estimator, ``step(y, u)`` returns ``(x̂(t+1), bound)``.  These
@@ -184,6 +190,9 @@ class RoundingRecord:
         Period, state and output dimensions.
     rho0 : numpy.ndarray, shape (n,)
         The allowance of the period's initial estimate.
+    z, true : numpy.ndarray or None, optional
+        Arrays to hold :attr:`z` and :attr:`true` (views of a class estimator's period buffer, whose compiled step
+        writes them); ``None``: new ones.
 
     Attributes
     ----------
