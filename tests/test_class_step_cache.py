@@ -22,7 +22,12 @@ from eqrec.systems.examples import two_mass
 
 
 class UncachedClassEstimator(ClassEstimator):
-    """The class step as it was before the cache: every quantity recomputed (module docstring)."""
+    """The class step as it was before the cache: every quantity recomputed (module docstring), with the generic
+    intake of :class:`eqrec.estimators.intake.StampedEstimator` (the residuals formed in Python as packets arrive,
+    the period's state in lists and dicts) instead of the class form's arrays and compiled residuals."""
+
+    def step(self, y=None, u=None):
+        return self._advance(self._open(y, u))
 
     def _advance(self, step, entry=None):
         sysm = self.system
@@ -73,13 +78,13 @@ class UncachedGuaranteed(GuaranteedEstimator):
                 est, _ = self._return_to_design(now, packets, u, self._sm.carried_set)
             else:
                 xhat, _ = self._sm.step(packets, u)
-                return self._outside_bounds(xhat)
+                return self._outside_bounds(xhat, float(self._sm.state_bounds.max()))
         opened = est._open(packets, u)  # opened again, on purpose: the twin does what the step did before
         t, S = opened.t, tuple(sorted(opened.yxi))
         if not has_class(self.gains, t + 1, S):
             xhat, _ = self._sm.step(packets, u)
             self._outside = True
-            return self._outside_bounds(xhat)
+            return self._outside_bounds(xhat, float(self._sm.state_bounds.max()))
         self._sm.step(packets, u)
         xhat, level = est._advance(opened)
         beta = np.nextafter(self._set.advance(est.error_map()) + est.rounding_vector, np.inf)

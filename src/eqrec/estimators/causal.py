@@ -56,7 +56,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.estimators.error_maps import ClassErrorMaps, ClassStep, ClassSteps, blas_ready, class_step
+from eqrec.estimators.error_maps import (ClassErrorMaps, ClassSteps, blas_ready, class_step, period_layout,
+                                        period_views)
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -308,18 +309,28 @@ class ClassEstimator(StampedEstimator):
         self._maps: ClassErrorMaps | None = None
         self._class_steps: ClassSteps | None = None  # per class: K, |K|, the rounding map (shared by the design)
         self._xbar: "np.ndarray | None" = None
-        self._no_packets = (np.zeros(0, dtype=np.int64), np.zeros((0, system.n)), np.zeros((0, system.p)))
-        # what the compiled step takes of the model, looked up once (:meth:`_class_step_args`): the output model,
-        # and the state model of a time-invariant system
+        T, n, p = gains.horizon, system.n, system.p
+        # the period's state, kept in arrays made once (:meth:`_take`, :func:`class_step`): the reference state and
+        # the residual per period time, the rounding record, the period times of the data received (increasing)
+        self._period_buffer = np.zeros(sum(period_layout(T, n, p)))
+        refs, res, z, true = period_views(self._period_buffer, T, n, p)
+        self._period = RoundingRecord(T, n, p, np.zeros(n), z, true)
+        self._S: tuple = ()
+        self._no_taus, self._no_ys = np.zeros(0, dtype=np.int64), np.zeros(0)
+        self._one_tau = [np.array([tau], dtype=np.int64) for tau in range(T)]
+        # what the compiled step takes of the model, looked up once (:meth:`_kernel_args`): the output model, and
+        # the whole model of a time-invariant system
         self._outputs: "tuple | None" = None
-        self._one_tau = [np.array([tau], dtype=np.int64) for tau in range(gains.horizon)]
         self._fixed_model: "tuple | None" = None
+        self._prefixes: dict = {}
         super().__init__(system, gains.horizon, xhat0, periodic, t0, bound_of, mu1)
         if self.bound_of is not None:  # the levels looked up, shared by the estimators of these gains and rule
             self._levels = self._steps().levels(self.bound_of)
+        self._prefixes = self._steps().prefixes((self.bound_of, self.mu1))
 
     def _on_reset(self) -> None:
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
+        self._S = ()
 
     def error_map(self) -> ErrorMap:
         r"""How the error of the current estimate depends on the period's initial error and noise.
@@ -342,7 +353,7 @@ class ClassEstimator(StampedEstimator):
             raise InputError("no step of the period has been taken: the current estimate is its initial one")
         if self._maps is None:
             self._maps = ClassErrorMaps.of(self.system, self.gains)
-        return self._maps.error_map(self._start, self._t, tuple(sorted(self._yxi)))
+        return self._maps.error_map(self._start, self._t, self._S)
 
     @property
     def prediction(self) -> np.ndarray:
@@ -374,8 +385,8 @@ class ClassEstimator(StampedEstimator):
         InputError
             As :meth:`step`, except for a class the gains lack.
         """
-        step = self._open(y, u)
-        return step.t + 1, tuple(sorted(step.yxi))
+        taken = self._take(self._packets(y), u)
+        return taken[0] + 1, taken[7][3]
 
     def step(self, y: "np.ndarray | Packet | Iterable[Packet] | None" = None,
              u: np.ndarray | None = None) -> tuple[np.ndarray, float]:
@@ -411,7 +422,7 @@ class ClassEstimator(StampedEstimator):
             wrong length, or observed data whose class ``(t+1, S)`` the
             gains do not have.
         """
-        return self._advance(self._open(y, u))
+        return self._advance(self._take(self._packets(y), u))
 
     def _steps(self) -> ClassSteps:
         """The design's per-class cache (:class:`eqrec.estimators.error_maps.ClassSteps`, shared by the gains)."""
@@ -420,28 +431,80 @@ class ClassEstimator(StampedEstimator):
             steps = self._class_steps = ClassSteps.of(self.system, self.gains)
         return steps
 
-    def _class(self, step: OpenedStep) -> "ClassStep | None":
-        """The class ``(t+1, S)`` of an opened step, or ``None`` when the design has none (nothing changes)."""
-        return self._steps().get(step.t + 1, tuple(sorted(step.yxi)))
+    def _take(self, packets: list, u) -> tuple:
+        """Check a step's packets (:func:`eqrec.arrivals.packets.as_packets`'s list) and input: the step's period
+        time, the period's start, the observed arrivals with this step's, the period times of the new packets and
+        their measurements, the checked input, the packets dropped (stamped before the period) and the step's class
+        with its level (:meth:`_lookup`).  Nothing changes.
 
-    def _advance(self, step: OpenedStep, entry: "ClassStep | None" = None) -> tuple[np.ndarray, float]:
-        """The step of :meth:`step` from its checked state (``entry``: its class, if already looked up; the class
-        lookup may still raise; nothing changes)."""
+        Raises :class:`InputError` when the horizon is over (not periodic), for a packet whose stamp was already
+        received in this period, or a malformed input (the intake of
+        :meth:`eqrec.estimators.intake.StampedEstimator._open`, without the residuals: the compiled step forms them).
+        """
+        if self.xhat is None:
+            self._running()  # raises: reset first
+        u = self._no_input if u is None else check_input(u, self._m)  # (the zero input is only read, never written)
+        t = self._t
+        if t == self.T:
+            if not self.periodic:
+                raise InputError(f"the estimator's horizon T = {self.T} is over{self._restart_hint}")
+            t, start, arrivals = 0, self._k, [None]
+        else:
+            start, arrivals = self._start, self._arrivals + [None]
+        taus, ys, dropped = [], [], 0
+        for pk in packets:
+            tau = pk.time - start
+            if tau < 0:
+                dropped += 1  # stamped before this period: its gains are no longer in use (counted, not used)
+                continue
+            if arrivals[tau] is not None:
+                raise InputError(f"a second packet stamped {pk.time} received at time {self._k}", field="y")
+            arrivals[tau] = t
+            taus.append(tau)
+            ys.append(pk.y)
+        # the class (t+1, S) and its level, kept per observed prefix (one lookup; :meth:`_lookup`)
+        hit = self._prefixes.get(tuple(arrivals))
+        if hit is None:
+            hit = self._lookup(t, arrivals)
+        return t, start, arrivals, taus, ys, u, dropped, hit
+
+    def _lookup(self, t: int, arrivals: list) -> tuple:
+        """The class ``(t+1, S)`` of a step with these observed arrivals and what the step needs of it: ``(entry,
+        level, kernel, S)``, the :class:`~eqrec.estimators.error_maps.ClassStep` (``None`` when the design has no
+        such class), its level (:meth:`_level_at`; NaN without a class), its
+        :attr:`~eqrec.estimators.error_maps.ClassStep.kernel` and ``S``; kept per prefix for the design's estimators
+        of this rule (:meth:`eqrec.estimators.error_maps.ClassSteps.prefixes`)."""
+        key = tuple(arrivals)
+        hit = self._prefixes.get(key)
+        if hit is None:
+            S = tuple(tau for tau, a in enumerate(arrivals) if a is not None)
+            entry = self._steps().get(t + 1, S)
+            if entry is None:  # not kept (a refused step changes nothing, caches included: the language is kept)
+                return None, math.nan, None, S
+            hit = (entry, self._level_at(t + 1, arrivals), entry.kernel, S)
+            if len(self._prefixes) >= 4096:  # bounded (a period has finitely many prefixes)
+                self._prefixes.clear()
+            self._prefixes[key] = hit
+        return hit
+
+    def _refuse(self, taken: tuple) -> InputError:
+        """The error of a step whose data the design has no class for."""
+        t, start, arrivals = taken[:3]
+        S = [tau for tau, a in enumerate(arrivals) if a is not None]
+        return InputError(f"observed data outside the design: at time {self._k} (step {t} of the period "
+                          f"started at {start}, arrival prefix {ArrivalPattern(tuple(arrivals)).label!r}) the "
+                          f"measurements of times {[start + tau for tau in S]} have arrived; the gains have no class "
+                          f"({t + 1}, {S})", field="y")
+
+    def _advance(self, taken: tuple) -> tuple[np.ndarray, float]:
+        """The step of :meth:`step` from its checked packets (:meth:`_take`; the class lookup may still raise, then
+        nothing changes)."""
+        entry, level, kernel, _ = taken[7]
         if entry is None:
-            entry = self._class(step)
-            if entry is None:
-                S = tuple(sorted(step.yxi))
-                raise InputError(f"observed data outside the design: at time {step.k} (step {step.t} of the period "
-                                 f"started at {step.start}, arrival prefix "
-                                 f"{ArrivalPattern(tuple(step.arrivals)).label!r}) the measurements of times "
-                                 f"{[step.start + tau for tau in S]} have arrived; the gains have no class "
-                                 f"({step.t + 1}, {list(S)})", field="y")
-        record, args = self._class_step_args(step, entry)
+            raise self._refuse(taken)
         out = np.empty((3, self._n))
-        top = class_step(*args, out)
-        level = self._level_at(step.t + 1, step.arrivals)
-        xbar, xhat, rho = out
-        self._finish(step, record, xbar, xhat, rho, self._plus_rounding(level, top))
+        top = class_step(*self._kernel_args(taken, kernel[:4]), out)
+        self._install(taken, out, self._plus_rounding(level, top))
         return self.xhat.copy(), self.bound
 
     @staticmethod
@@ -449,75 +512,74 @@ class ClassEstimator(StampedEstimator):
         """The reported bound: the level plus the allowance's largest entry, rounded up (``inf`` stays ``inf``)."""
         return math.nextafter(level + top, math.inf) if math.isfinite(level) else level
 
-    def _finish(self, step: OpenedStep, record: RoundingRecord, xbar: np.ndarray, xhat: np.ndarray,
-                rho: np.ndarray, bound: float) -> None:
-        """Install a computed class step (it can no longer fail)."""
-        self._commit(step, (record, rho))
-        self._xbar, self.xhat = xbar, xhat
+    def _install(self, taken: tuple, out: np.ndarray, bound: float) -> None:
+        """Install a computed class step (it can no longer fail; ``out``: ``x̄``, ``x̂`` and ``ρ`` in rows)."""
+        t, start, arrivals, _, _, _, dropped, hit = taken
+        self._xbar, self.xhat, self._rho = out[0], out[1], out[2]
+        self._rows = out
+        self._t, self._start, self._k = t + 1, start, self._k + 1
+        self._arrivals, self._S = arrivals, hit[3]
+        self._record = self._period
+        if dropped:
+            self.dropped_packets += dropped
         self.bound = bound
 
-    def _class_model(self, t: int) -> tuple[np.ndarray, ...]:
-        """What the compiled class step takes of the model at period time ``t``, in one lookup (cached by time for
-        a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`), ``|A|, |B|``,
-        ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`)."""
+    def _model(self, t: int) -> tuple:
+        """What the compiled class step takes of the model at period time ``t``, in its order, in one lookup (kept
+        by time for a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`),
+        ``|A|, |B|``, the rows ``f``, ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`),
+        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (row-major), the ``terms`` of an output and of
+        a state injection and the allowance's factor, then the period buffer.
+
+        A row-major ``C`` (the systems' own: made from nested lists) is multiplied by the BLAS kernel of NumPy's
+        ``C @ ref``, so the residuals are the numbers of the uncompiled step; a column-major one is copied to
+        row-major, whose product may round differently, still within the allowance (its bound holds for any order
+        of the sums, :func:`eqrec.bounds.rounding.injection_bound`)."""
         key = ("class", t if self._varying else 0)
         hit = self._norms.get(key)
         if hit is None:
             absA, absB, _, e, _, f = self._absolute_model(t)
+            vecs = np.ascontiguousarray([self.system.f, e, f, self._drift(t)], dtype=float)
+            outputs = self._outputs
+            if outputs is None:
+                absC, v, output_terms = self._output_model()
+                Cs = np.ascontiguousarray([self.system.C_at(tau) for tau in range(self.T)], dtype=float)
+                outputs = self._outputs = (absC, v, Cs, output_terms, self._n + self._state_terms_extra,
+                                           self._allowance_factor, self._period_buffer)
             hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absA, absB,
-                                      e, f, self._drift(t), absB.shape[1] > 0)
+                                      vecs) + outputs
         return hit
 
-    def _class_step_args(self, step: OpenedStep, entry: ClassStep) -> tuple[RoundingRecord, tuple]:
-        """The period's rounding record (a new one at a period's start, else the period's: the compiled step
-        extends it in place) and the arguments of the compiled class step
-        (:func:`eqrec.estimators.error_maps.class_step`).
-
-        The allowance of the class estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the
-        residuals and of the simulated state and measurements, carried by the class map with identity noise
-        gains (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the
-        stacked residuals of the class's data).  The operations of
-        :meth:`~eqrec.estimators.intake.StampedEstimator._period_record`, ``_state_injection`` and
-        ``_allowance``: the same numbers.  Called once the step's class is known (the step can no longer fail)."""
-        sysm, t = self.system, step.t
-        S = entry.key[1]
-        record = RoundingRecord(self.T, self._n, self._p, self._rho.copy()) if t == 0 else self._record
-        before = {} if t == 0 else self._yxi  # the packets first received at this step (:meth:`_new_packets`)
-        new = [tau for tau in step.yxi if tau not in before]
-        if not new:
-            taus, references, residuals = self._no_packets
-        elif len(new) == 1:
-            tau = new[0]
-            taus = self._one_tau[tau]  # np.array([τ], dtype=np.int64), made once per period time (only read)
-            references, residuals = step.history[tau].reshape(1, -1), step.yxi[tau].reshape(1, -1)
-        else:
-            taus = np.array(new, dtype=np.int64)
-            references = np.array([step.history[tau] for tau in new])
-            residuals = np.array([step.yxi[tau] for tau in new])
-        outputs = self._outputs
-        if outputs is None:
-            outputs = self._outputs = self._output_model()
-        absC, v, output_terms = outputs
-        model = self._fixed_model if not self._varying else None
+    def _kernel_args(self, taken: tuple, kernel: tuple) -> tuple:
+        """The arguments of the compiled class step (:func:`eqrec.estimators.error_maps.class_step`) but ``out``:
+        the model and the period buffer (:meth:`_model`), the class's ``kernel`` (the first four of
+        :attr:`~eqrec.estimators.error_maps.ClassStep.kernel`, or all six for the designed step), the input, the
+        estimates, the magnitudes' radius, the period time and the new packets.  The allowance of the class
+        estimate (:mod:`eqrec.estimators.intake`): the roundings of ``x̄``, of the residuals and of the simulated
+        state and measurements, carried by the class map with identity noise gains
+        (:class:`eqrec.estimators.error_maps.RoundingMaps`), plus that of ``x̄ + K r`` itself (``r`` the stacked
+        residuals of the class's data)."""
+        t, _, _, taus, ys, u, _, _ = taken
+        model = self._fixed_model
         if model is None:
-            model = self._class_model(t)
+            model = self._model(t)
             if not self._varying:
                 self._fixed_model = model
-        A, B, absA, absB, e, f, drift, has_input = model
-        has_data = bool(S)
-        if has_data:
-            r = np.concatenate([step.yxi[tau] for tau in S]) if len(S) > 1 else step.yxi[S[0]]
+        if not taus:
+            taus, ys = self._no_taus, self._no_ys
+        elif len(taus) == 1:
+            taus, ys = self._one_tau[taus[0]], ys[0]  # (made once per period time; only read)
         else:
-            r = self._zeros
-        if self.error_radius is not None:  # :meth:`_radius`, inline
-            radius = float(self.error_radius)
+            taus, ys = np.array(taus, dtype=np.int64), np.concatenate(ys)
+        error_radius = self.error_radius
+        if error_radius is not None:  # :meth:`_radius`, inline
+            radius = float(error_radius)
         else:
             radius = float(self.bound) if math.isfinite(self.bound) else 0.0
-        args = (A, self.xhat if step.restarted else self._xbar, B, step.u, sysm.f, entry.gain, r, has_data, self.xhat,
-                radius, t, record.true, taus, references, residuals, absC, v, output_terms, record.v, absA,
-                absB, e, f, drift, has_input, self._n + self._state_terms_extra, record.w, entry.abs_gain,
-                len(S) * self._p + 2, entry.rounding_map, record.z, self._allowance_factor)
-        return record, args
+        rows = self._rows
+        if rows is None:  # after a reset (or a carried allowance): made once from the estimates
+            rows = self._rows = np.array([self._xbar, self.xhat, self._rho])
+        return model + kernel + (u, rows, radius, t, taus, ys)
 
 
 def make_estimator(system: AffineSystem, gains: "GainSchedule | ClassGains", xhat0: "np.ndarray | None" = None,

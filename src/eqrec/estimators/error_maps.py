@@ -206,14 +206,25 @@ class ClassStep:
         Position of the class.
     gain : numpy.ndarray, shape (n, |S| p)
         ``K`` of the class.
+    data : numpy.ndarray of int64
+        ``S``, the period times of the class's data (increasing), as the compiled step takes them.
     """
 
-    __slots__ = ("_steps", "key", "index", "gain", "_abs_gain", "_rounding", "_parts")
+    __slots__ = ("_steps", "key", "index", "gain", "data", "_abs_gain", "_rounding", "_parts", "_kernel")
 
     def __init__(self, steps: "ClassSteps", depth: int, available: tuple[int, ...], index: int):
         self._steps, self.key, self.index = steps, (depth, available), index
         self.gain = blas_ready(steps.gains.K[index])
-        self._abs_gain = self._rounding = self._parts = None
+        self.data = np.array(available, dtype=np.int64)
+        self._abs_gain = self._rounding = self._parts = self._kernel = None
+
+    @property
+    def kernel(self) -> tuple:
+        """What the compiled steps take of the class, in their order: ``K``, ``|K|``, ``S`` (:attr:`data`), the
+        rounding map, and the error map's parts ``(Φ, N)`` (:func:`class_step` takes the first four)."""
+        if self._kernel is None:
+            self._kernel = (self.gain, self.abs_gain, self.data, self.rounding_map) + self.parts
+        return self._kernel
 
     @property
     def abs_gain(self) -> np.ndarray:
@@ -258,6 +269,7 @@ class ClassSteps:
         self._maps: "ClassErrorMaps | None" = None
         self._rounding: "RoundingMaps | None" = None
         self._levels: dict = {}
+        self._prefixes: dict = {}
 
     @classmethod
     def of(cls, system: AffineSystem, gains: ClassGains) -> "ClassSteps":
@@ -312,6 +324,32 @@ class ClassSteps:
                 if len(self._levels) >= 8:  # a bounded number of rules per design
                     self._levels.clear()
                 kept = self._levels[rule] = {}
+        except TypeError:
+            return {}
+        return kept
+
+    def prefixes(self, rule) -> dict:
+        """Per observed arrival prefix of a period (a tuple), its class and level, kept here for every estimator of
+        these gains with an equal rule (``None`` included): one lookup per step for both
+        (:meth:`eqrec.estimators.causal.ClassEstimator._lookup`).  Functions of the prefix alone, so keeping them
+        changes no number; a period has finitely many prefixes.
+
+        Parameters
+        ----------
+        rule : callable or None
+            The estimator's ``bound_of``.
+
+        Returns
+        -------
+        dict
+            The shared prefixes of ``rule`` (a new dict if ``rule`` cannot be hashed).
+        """
+        try:
+            kept = self._prefixes.get(rule)
+            if kept is None:
+                if len(self._prefixes) >= 8:  # a bounded number of rules per design
+                    self._prefixes.clear()
+                kept = self._prefixes[rule] = {}
         except TypeError:
             return {}
         return kept
@@ -389,63 +427,90 @@ def matrix_vector(M, x):  # pragma: no cover - compiled
     return np.dot(M, x)
 
 
-@numba.njit(cache=True)
-def class_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
-               output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK, data_terms,
-               rounding_map, z, factor, out):  # pragma: no cover - compiled
-    r"""One step of the class form (:class:`eqrec.estimators.causal.ClassEstimator`) in one compiled call: the
-    estimate and its rounding allowance, by the operations of the uncompiled step (BLAS products as NumPy's
-    ``@``, :func:`eqrec.bounds.rounding.injection_bound` and :func:`eqrec.bounds.rounding.allowance_tail`), so the
-    same numbers.
-
-    .. math:: \bar x(t+1) = A\bar x_0 + B u + f, \qquad \hat x(t+1) = \bar x(t+1) + K r,
-        \qquad \rho = |G| z + \iota, \text{ rounded up},
-
-    with ``z`` the period's injections (:mod:`eqrec.estimators.intake`): this step enters the true state's
-    magnitude ``|x̂(t)| + radius``, the output injections of its new packets and its state update's injection,
-    and :math:`\iota` is that of ``x̄ + K r``.
+def period_layout(T: int, n: int, p: int) -> tuple[int, int, int, int]:
+    """The lengths of the parts of a class estimator's period buffer, in order: the reference states ``(T, n)``, the
+    residuals ``(T, p)``, the record's injections ``z`` (``T (n + p) + n``) and the true state's magnitudes
+    ``(T, n)`` (:func:`period_views`).
 
     Parameters
     ----------
-    A, xbar0, B, u, f : numpy.ndarray
-        The prediction :math:`A\bar x_0 + B u + f` (``A``, ``B`` as :func:`blas_ready` gives them).
-    K, r : numpy.ndarray
-        The class gain and the stacked residuals of its data (used when ``has_data``).
-    has_data : bool
-        Whether the class has data.
-    xhat : numpy.ndarray, shape (n,)
-        The estimate of the step's time.
+    T, n, p : int
+        Period, state and output dimensions.
+
+    Returns
+    -------
+    tuple of int
+        The four lengths.
+    """
+    return T * n, T * p, T * (n + p) + n, T * n
+
+
+@numba.njit(cache=True)
+def period_views(period, T, n, p):  # pragma: no cover - compiled
+    """The parts of a period buffer (:func:`period_layout`) as views: ``refs (T, n)``, ``res (T, p)``, ``z`` and
+    ``true (T, n)``."""
+    a = T * n
+    b = a + T * p
+    c = b + T * (n + p) + n
+    return period[:a].reshape((T, n)), period[a:b].reshape((T, p)), period[b:c], period[c:c + T * n].reshape((T, n))
+
+
+@numba.njit(cache=True)
+def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
+               rounding_map, u, rows, radius, t, taus, ys, out):  # pragma: no cover - compiled
+    r"""One step of the class form (:class:`eqrec.estimators.causal.ClassEstimator`) in one compiled call, from the
+    packets as they arrived: the residuals of the new packets, the stacked data of the class, the estimate and its
+    rounding allowance, by the operations of the uncompiled step (BLAS products as NumPy's ``@``,
+    :func:`eqrec.bounds.rounding.injection_bound` and :func:`eqrec.bounds.rounding.allowance_tail`), so the same
+    numbers.
+
+    .. math:: r_\tau = y(\tau) - C(\tau)\,\mathrm{ref}(\tau), \qquad \bar x(t+1) = A\bar x_0 + B u + f,
+        \qquad \hat x(t+1) = \bar x(t+1) + K (r_\tau)_{\tau \in S}, \qquad \rho = |G| z + \iota, \text{ rounded up},
+
+    with ``z`` the period's injections (:mod:`eqrec.estimators.intake`): this step enters the true state's
+    magnitude ``|x̂(t)| + radius``, the output injections of its new packets and its state update's injection,
+    and :math:`\iota` is that of ``x̄ + K r``.  Called only for a step that commits (its class is known): it writes
+    the period's arrays in place (the reference of time ``t``, the residuals of the new packets, the record).
+
+    Parameters
+    ----------
+    A, B : numpy.ndarray
+        ``A(t)``, ``B(t)`` as :func:`blas_ready` gives them.
+    absA, absB : numpy.ndarray
+        ``|A(t)|``, ``|B(t)|``.
+    vecs : numpy.ndarray, shape (4, n)
+        Rows ``f``, ``|E| η_w 1``, ``|f|`` and ``|E| η_w 1 + 2 |f|`` (the magnitude without input).
+    absC, v, Cs : numpy.ndarray
+        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (``(T, p, n)``, ``(T, p)``, ``(T, p, n)``).
+    output_terms, state_terms : int
+        The ``terms`` of an output injection and of the state update's.
+    factor : float
+        ``1 + (2n + 8) u``.
+    period : numpy.ndarray
+        The period's state end to end (:func:`period_layout`): the reference states ``(T, n)`` (row ``t``
+        written), the residuals ``(T, p)`` (rows ``taus`` written) and the record
+        (:class:`eqrec.estimators.intake.RoundingRecord`): its injections ``w``, ``v``, ``ρ(s)`` (``z``) and the
+        magnitudes of the true state ``(T, n)`` (started again when ``t = 0``).
+    K, absK : numpy.ndarray
+        The class gain and ``|K|``.
+    S : numpy.ndarray of int64
+        The period times of the class's data, increasing.
+    rounding_map : numpy.ndarray, shape (n, len(z))
+        ``|G|`` of the class with identity noise gains (:class:`RoundingMaps`).
+    u : numpy.ndarray, shape (m,)
+        The checked input.
+    rows : numpy.ndarray, shape (3, n)
+        ``x̄(t)``, ``x̂(t)`` and the allowance ``ρ`` of ``x̂(t)`` (the ``out`` of the step before, or made at a reset).
+        The reference state of time ``t`` is ``x̄(t)``, or ``x̂(t)`` at a period's start (``t = 0``); ``ρ`` starts a
+        new period's record.
     radius : float
         The true error's size assumed by the magnitudes.
     t : int
         The period time of the step.
-    true : numpy.ndarray, shape (T, n)
-        The record's magnitudes of the true state (row ``t`` written).
-    taus, references, residuals : numpy.ndarray
-        The period times of the packets first received at this step, their reference states ``(k, n)`` and
-        residuals ``(k, p)``.
-    absC, v : numpy.ndarray
-        ``|C(τ)|`` and ``|V(τ)| η_v 1`` per period time (``(T, p, n)``, ``(T, p)``).
-    output_terms : int
-        The ``terms`` of an output injection.
-    v_record : numpy.ndarray, shape (T, p)
-        The record's output injections (rows ``taus`` written).
-    absA, absB, e, absf, drift : numpy.ndarray
-        ``|A|``, ``|B|``, ``|E| η_w 1``, ``|f|`` and ``e + 2 |f|`` (the magnitude without input).
-    has_input : bool
-        Whether the model has inputs (then a nonzero ``u`` enters the magnitude).
-    state_terms, data_terms : int
-        The ``terms`` of the state update's and of ``x̄ + K r``'s injections.
-    w_record : numpy.ndarray, shape (T, n)
-        The record's state-update injections (row ``t`` written).
-    absK : numpy.ndarray
-        ``|K|``.
-    rounding_map : numpy.ndarray, shape (n, len(z))
-        ``|G|`` of the class with identity noise gains (:class:`RoundingMaps`).
-    z : numpy.ndarray
-        The period's injections, ``w``, ``v``, ``ρ(s)`` (:class:`eqrec.estimators.intake.RoundingRecord`).
-    factor : float
-        ``1 + (2n + 8) u``.
+    taus : numpy.ndarray of int64
+        The period times of the packets first received at this step.
+    ys : numpy.ndarray, shape (len(taus) p,)
+        Their measurements end to end.
     out : numpy.ndarray, shape (3, n)
         Where ``x̄(t+1)``, ``x̂(t+1)`` and ``ρ`` are written (rows; one new array per step: its rows are what the
         estimator keeps, and returning three arrays from a compiled call costs more than writing them).
@@ -455,32 +520,48 @@ def class_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, r
     float
         ``max(0, max ρ)``.
     """
-    n = xbar0.shape[0]
+    n = rows.shape[1]
+    T, p = absC.shape[0], absC.shape[1]
+    xhat = rows[1]
+    xbar0 = xhat if t == 0 else rows[0]
+    refs, res, z, true = period_views(period, T, n, p)
+    if t == 0:  # a new period's record: no injection yet, ρ(s) the allowance of the estimate it starts from
+        z[:] = 0.0
+        z[T * (n + p):] = rows[2]
+        true[:] = 0.0
+    w_record = z[:T * n].reshape((T, n))
+    v_record = z[T * n:T * (n + p)].reshape((T, p))
+    refs[t] = xbar0  # the state whose predicted output the measurements of time t are compared with
     for i in range(n):
         true[t, i] = abs(xhat[i]) + radius  # |x(t)| <= |x̂(t)| + bound
     for j in range(taus.shape[0]):
         tau = taus[j]
-        v_record[tau] = injection_bound(absC[tau], references[j], 2.0, true[tau], residuals[j], v[tau],
-                                        output_terms)
-    xbar = matrix_vector(A, xbar0) + matrix_vector(B, u) + f
+        res[tau] = ys[j * p:(j + 1) * p] - matrix_vector(Cs[tau], refs[tau])  # y(τ) − C(τ) ref(τ), as NumPy's
+        v_record[tau] = injection_bound(absC[tau], refs[tau], 2.0, true[tau], res[tau], v[tau], output_terms)
+    xbar = matrix_vector(A, xbar0) + matrix_vector(B, u) + vecs[0]
+    k = S.shape[0]
+    has_data = k > 0
     if has_data:
+        r = np.empty(k * p)  # the class's data stacked in time order (NumPy's concatenate: copies)
+        for i in range(k):
+            r[i * p:(i + 1) * p] = res[S[i]]
         xhat_new = xbar + matrix_vector(K, r)
     else:
+        r = np.zeros(0)
         xhat_new = xbar.copy()
     use_u = False
-    if has_input:
-        for j in range(u.shape[0]):
-            if u[j] != 0.0:  # u.any()
-                use_u = True
+    for j in range(absB.shape[1]):
+        if u[j] != 0.0:  # u.any()
+            use_u = True
     if use_u:
-        add = e + 2.0 * (matrix_vector(absB, np.abs(u)) + absf)
+        add = vecs[1] + 2.0 * (matrix_vector(absB, np.abs(u)) + vecs[2])
     else:  # without input (u = 0: |B| |u| = 0 exactly) the magnitude is e + 2 |f|: the same numbers
-        add = drift
+        add = vecs[3]
     zeros_n = np.zeros(n)
     # the state update's reference is x̄0 itself (the reference state of the step's time, ClassEstimator._reference)
     w_record[t] = injection_bound(absA, xbar0, 1.0, true[t], zeros_n, add, state_terms)
     if has_data:
-        extra = injection_bound(absK, r, 1.0, np.zeros(r.shape[0]), xbar, zeros_n, data_terms)
+        extra = injection_bound(absK, r, 1.0, np.zeros(r.shape[0]), xbar, zeros_n, k * p + 2)
     else:
         extra = np.zeros(n)
     rho, top = allowance_tail(matrix_vector(rounding_map, z), extra, factor)

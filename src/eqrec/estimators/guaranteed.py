@@ -100,44 +100,48 @@ observed prefix or class) and refuses data outside the language.
 
 **Cost.**  With ``strict=False`` the set-membership estimator runs on every
 step (it must hold every packet at a fallback), so a step costs one
-set-membership step plus the designed side.  The two share one intake (the
-packets and the input are checked once).  What the designed side needs that
-depends on the arrivals alone is kept per class ``(d, S)`` of the design,
-a finite set (:class:`eqrec.estimators.error_maps.ClassSteps`): the gain, its
-absolute values, the rounding allowance's map, the error map's parts, and the
-levels looked up (shared by every estimator of the design).  The rest of a
-step in the design is one compiled call (``_designed_step``): the class
-estimate, the rounding allowance of this step's own numbers (it depends on
-the magnitudes of the state and the residuals, so it cannot be kept), the
-product :math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the
-set at the period's start depends on the earlier periods) and the choice per
-state.  Its products go through BLAS as NumPy's ``@`` does and its sums run
-in NumPy's order, so every number is the one of the uncompiled step
-(``tests/test_class_step_cache.py``, bit for bit).  Measured side by side
-(``python benchmarks/bench_versions.py --old <src>``: this version and the
-previous one in one lockstep on the same arrivals, the cost table of
-``python benchmarks/bench_tight.py --part cost``; CPU µs per step on a shared
-machine loaded to 4–5 processes on 2 cores, so read the ratios; 0/20/40 %
-loss; three runs): in the design ``strict=False`` costs 1.30–1.54× the
-set-membership estimator alone on the two carts (a set-membership step of
-280–430 µs there), 1.23–1.42× on the cart-pole and 1.05–1.16× on the
-``n = 10`` chain; the previous version measured 1.27–1.49×, 1.22–1.42× and
-1.05–1.11× in the same runs.  Both sides got faster by about the same number
-of µs: the packet intake's fast path (:func:`eqrec.arrivals.packets.as_packets`,
-20–60 µs per step at ``n = 4``) speeds the set-membership estimator alone as
-much as ``strict=False``, so ``strict=False`` is 5–12 % faster per step but its
-ratio did not fall; ``strict=True`` is 25–30 % faster (74–125 µs against
-103–179 µs in the same runs).  The designed side (``strict=False`` in the
-design minus the set-membership step) is about 85–180 µs at ``n = 4`` in the
-lockstep, against about 30 µs when its pieces run back to back on their own
-(``timeit``: opening the step 5 µs, the compiled call's arguments 6 µs, the
-compiled call 13 µs of which 5–6 µs pass its 42 arguments, the rest 5 µs):
-its many small Python and NumPy operations run cold after a set-membership
-step.  What is left is that Python around the compiled call (the class form's
-intake, the residuals and the stacked data, the class lookup, the period's
-record) and the Girard reduction of the designed set at each period start;
-the ``1.2×`` of issue 40 needs them in fewer, compiled steps.  Out of the
-design a step is the set-membership step.  ``tight=False`` costs the same as
+set-membership step plus the designed side.  The two share one intake: the
+packets and the input are checked once (:func:`eqrec.arrivals.packets.as_packets`,
+:meth:`ClassEstimator._take`), and the set-membership estimator takes them as
+checked.  What the designed side needs that depends on the arrivals alone is
+kept per observed prefix of a period, a finite set (the class ``(d, S)``, its
+level and its arrays: the gain, its absolute values, the rounding allowance's
+map and the error map's parts; :class:`eqrec.estimators.error_maps.ClassSteps`,
+shared by every estimator of the design), and found in one dictionary lookup
+while the packets are checked.  The class form's period (reference states,
+residuals, rounding record) lives in one buffer made once.  The rest of a step
+in the design is one compiled call (``_designed_step``, 34 arguments): the
+residuals of the new packets and the stacked data of the class, the class
+estimate, the rounding allowance of this step's own numbers (it depends on the
+magnitudes of the state and the residuals, so it cannot be kept), the product
+:math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the set at
+the period's start depends on the earlier periods) and the choice per state;
+the designed set's blocks are entered into its :class:`~eqrec.bounds.zonotope.ErrorSet`
+only when read (at the next period start, where the set is reduced to the
+order, or by :attr:`predicted`).  Its products go through BLAS as NumPy's
+``@`` does and its sums run in NumPy's order, so every number is the one of
+the uncompiled step (``tests/test_class_step_cache.py``, bit for bit;
+``benchmarks/hash_estimates.py``: 132 digests unchanged by this layout).
+Measured side by side (``python benchmarks/bench_versions.py --old <src>``:
+this version and the previous one in one lockstep on the same arrivals, the
+cost table of ``python benchmarks/bench_tight.py --part cost``; CPU µs per
+step, per step the least of three runs, on a 2-core machine shared with
+3.5–4.5 other processes, so read the ratios; 0/20/40 % loss): in the design
+``strict=False`` costs 1.25–1.34× the set-membership estimator alone on the
+two carts, 1.19–1.26× on the cart-pole and 1.05–1.09× on the ``n = 10``
+chain, against 1.32–1.42×, 1.21–1.35× and 1.07–1.09× for the previous
+version in the same run; the designed side (``strict=False`` in the design
+minus the set-membership step) fell from 108–160 µs to 80–120 µs at ``n = 4``;
+``strict=True`` costs 56–88 µs per step against 90–144 µs.  What is left of
+the designed side at ``n = 4``: the compiled call (about 15 µs on its own, a
+third of it passing its arguments, 20–30 µs in the lockstep, where it runs
+cold after a set-membership step), about 15–20 µs of Python around it, and
+the Girard reduction of the designed set at each period start once it has
+more than ``order · n`` generators (:func:`eqrec.bounds.zonotope.reduce_order`,
+60 µs on its own with ``n = 4``, 100–170 µs in the lockstep: 15–25 µs per step
+on average).  Out of the design a step is the set-membership step, with the
+return's check at each period start (the carried set is formed only when no
+set-membership bound exceeds ``μ1``).  ``tight=False`` costs the same as
 ``tight=True`` (the set-membership estimator runs for the fallback either way).
 """
 
@@ -156,7 +160,7 @@ from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order,
 from eqrec.errors import InputError
 from eqrec.estimators.causal import ClassEstimator, RecoveryEstimator, make_estimator
 from eqrec.estimators.error_maps import blas_ready, class_step
-from eqrec.estimators.intake import BoundRule, OpenedStep
+from eqrec.estimators.intake import BoundRule
 from eqrec.estimators.protocol import StateSet
 from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
@@ -199,26 +203,25 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
 
 
 @numba.njit(cache=True)
-def _designed_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
-                   output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
-                   data_terms, rounding_map, z, factor, level, state, start_set, noise, sm_bounds, sm_x, tight, out,
-                   use_sm):  # pragma: no cover - compiled
-    r"""A step in the design with ``strict=False`` in one compiled call: the class step
-    (:func:`eqrec.estimators.error_maps.class_step`, its first 32 arguments, writing ``x̄``, the designed ``x̂``
-    and ``ρ`` into ``out[:3]``), its bound ``nextafter(level + max ρ, +inf)``, the designed set's new blocks
-    :math:`(\Phi G(s), N)` with their exact row sums (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`,
-    ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice per state (:func:`_tighter`, writing the reported
-    estimate and bounds into ``out[3:5]`` and the choice into ``use_sm``).  The operations of the uncompiled step
-    in the same order: the same numbers.
+def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
+                   rounding_map, state, noise, u, rows, radius, t, taus, ys, level, start_set, sm_bounds, sm_x, tight,
+                   out, use_sm):  # pragma: no cover - compiled
+    r"""A step in the design with ``strict=False`` in one compiled call: the class step from the packets as they
+    arrived (:func:`eqrec.estimators.error_maps.class_step`, with the class's error map parts ``state`` = Φ and
+    ``noise`` = N after its rounding map: the residuals, the stacked
+    data, ``x̄``, the designed ``x̂`` and ``ρ`` written into ``out[:3]``), its bound ``nextafter(level + max ρ,
+    +inf)``, the designed set's new blocks :math:`(\Phi G(s), N)` with their exact row sums
+    (:func:`eqrec.bounds.zonotope.outer_row_sums_of_parts`, ``Φ G(s)`` by BLAS as NumPy's ``@``) and the choice
+    per state (:func:`_tighter`, writing the reported estimate and bounds into ``out[3:5]`` and the choice into
+    ``use_sm``).  The operations of the uncompiled step in the same order: the same numbers.
 
     Returns
     -------
     tuple
         ``(Φ G(s), the designed bound, the largest reported bound)``.
     """
-    top = class_step(A, xbar0, B, u, f, K, r, has_data, xhat, radius, t, true, taus, references, residuals, absC, v,
-                     output_terms, v_record, absA, absB, e, absf, drift, has_input, state_terms, w_record, absK,
-                     data_terms, rounding_map, z, factor, out)
+    top = class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
+                     rounding_map, u, rows, radius, t, taus, ys, out)
     bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
     P = np.dot(state, start_set)
     row_sums = row_sums_of_parts_compiled(P, noise)
@@ -323,7 +326,10 @@ class GuaranteedEstimator:
         self._est: "RecoveryEstimator | ClassEstimator | None" = None
         self.bound = np.nan
         # strict=False: the error set, the fallback (None while in the design), the period's record
-        self._set: ErrorSet | None = None
+        self._error_set: ErrorSet | None = None
+        # the designed set's blocks of the last step not yet entered into it, (anchor, Φ G(s), N, time): entered
+        # when the set is read (:attr:`_set`), so a step does not pay for the error set's bookkeeping
+        self._pending: "tuple | None" = None
         self._outside = False  # out of the design: the set-membership estimator's estimate is reported
         self._sm: ZonotopeEstimator | None = None  # the set-membership estimator, run on every step
         self._t0 = 0
@@ -331,8 +337,24 @@ class GuaranteedEstimator:
         self._xhat: np.ndarray | None = None  # strict=False: the reported estimate
         self._spare: ClassEstimator | None = None  # strict=False: the class estimator not in use (returns)
         self._use_sm: np.ndarray | None = None  # tight, in the design: the states reported from the set-membership
-        # strict=False: (error set, period start, its generators as the compiled step takes them), kept per period
-        self._anchor: "tuple[ErrorSet, int, np.ndarray] | None" = None
+        # strict=False: (period start, the designed set there as the compiled step takes it), kept per period
+        self._anchor: "tuple[int, np.ndarray] | None" = None
+
+    @property
+    def _set(self) -> "ErrorSet | None":
+        """The designed estimate's error set (:class:`eqrec.bounds.zonotope.ErrorSet`), up to date: the last step's
+        blocks entered (only the last step's set and the period starts' are ever read)."""
+        pending = self._pending
+        if pending is not None:
+            anchor, P, noise, time = pending
+            self._pending = None
+            self._error_set.time = time - 1  # the steps in between: no set of theirs is read
+            self._error_set.enter(anchor, (P, noise))
+        return self._error_set
+
+    @_set.setter
+    def _set(self, error_set: "ErrorSet | None") -> None:
+        self._error_set, self._pending, self._anchor = error_set, None, None
 
     @property
     def in_design(self) -> bool:
@@ -615,52 +637,56 @@ class GuaranteedEstimator:
         reported from whichever of the two has the smaller exact bound (module docstring).
         """
         if self._outside:
-            T = self.gains.horizon
-            now = self._sm.time
-            carried = self._sm.carried_set if (now - self._t0) % T == 0 else None
+            sm = self._sm
+            now = sm.time
+            # at a period start, the return needs the carried set's row sums within μ1.  Its pad brings them up to the
+            # set-membership bounds (ZonotopeEstimator._window_generators, hull_pad), up to the rounding of a sum of
+            # positive terms (relative q u, far below 1e-6), so a bound above μ1 (1 + 1e-6) rules the return out
+            # without forming the set: the same decision
+            carried = sm.carried_set if (now - self._t0) % self.gains.horizon == 0 \
+                and not (sm._beta > self.mu1 * (1.0 + 1e-6)).any() else None
             if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
-                # checked first: nothing changes if it raises; the step opened there is the one taken below
-                est, opened = self._return_to_design(now, packets, u, carried)
+                # checked first: nothing changes if it raises; the packets checked there are the step taken below
+                est, taken = self._return_to_design(now, packets, u, carried)
             else:
-                xhat, _ = self._sm.step(packets, u)
-                return self._outside_bounds(xhat)
+                return self._outside_bounds(*sm.step(packets, u))
         else:
-            opened = est._open(packets, u)  # every input checked once, for both estimators; nothing changes
-        entry = est._class(opened)  # the class (t+1, S) and what it needs, kept per class (ClassSteps)
+            taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
+        # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
+        entry, level, kernel, _ = taken[7]
         # the set-membership estimator takes the checked packets and input as they are (one intake)
-        checked_u = None if u is None else opened.u
-        if entry is None:  # out of the language: the set-membership estimate from now on
-            xhat, _ = self._sm.step(packets, checked_u)
-            self._outside = True
-            return self._outside_bounds(xhat)
+        checked_u = None if u is None else taken[5]
         sm = self._sm
+        if entry is None:  # out of the language: the set-membership estimate from now on
+            reported = sm.step(packets, checked_u)
+            self._outside = True
+            return self._outside_bounds(*reported)
         sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
         # smaller of two exact bounds, each a function of the arrivals only (module docstring): one compiled call
-        record, args = est._class_step_args(opened, entry)
-        level = est._level_at(opened.t + 1, opened.arrivals)
-        state, noise = entry.parts
+        state, noise = kernel[4:]
+        start = taken[1]
         anchor = self._anchor  # the set of the period's start, as the compiled product takes it: once per period
-        if anchor is not None and anchor[0] is self._set and anchor[1] == opened.start:
-            start_set = anchor[2]
+        if anchor is not None and anchor[0] == start:
+            start_set = anchor[1]
         else:
-            start_set = blas_ready(self._set.at(opened.start))  # (reduced on this first use, then kept as it is)
-            self._anchor = (self._set, opened.start, start_set)
+            start_set = blas_ready(self._set.at(start))  # (reduced on this first use, then kept as it is)
+            self._anchor = (start, start_set)
         n = self._n
         out, use_sm = np.empty((5, n)), np.empty(n, np.bool_)
         if start_set.shape[1] + noise.shape[1] <= PARTS_LIMIT:
-            P, bound, self.bound = _designed_step(*args, level, state, start_set, noise, sm._beta, sm._xhat,
-                                                  self.tight, out, use_sm)
-            self._set.enter(opened.start, (P, noise))
+            P, bound, self.bound = _designed_step(*est._kernel_args(taken, kernel), level, start_set, sm._beta,
+                                                  sm._xhat, self.tight, out, use_sm)
+            self._pending = (start, P, noise, est._k + 1)
         else:  # rows too long for the compiled sums: the same steps, the sums by NumPy
-            bound = est._plus_rounding(level, class_step(*args, out[:3]))
-            row_sums = self._set.advance(ErrorMap(opened.start, state, noise))
+            bound = est._plus_rounding(level, class_step(*est._kernel_args(taken, kernel[:4]), out))
+            row_sums = self._set.advance(ErrorMap(start, state, noise))
             self.bound = _tighter(row_sums, out[2], bound, sm._beta, sm._xhat, out[1], self.tight, out[3], out[4],
                                   use_sm)
-        xbar, designed, rho, xhat, self._bounds = out
-        est._finish(opened, record, xbar, designed, rho, bound)
+        est._install(taken, out, bound)
+        self._bounds, xhat = out[4], out[3]
         self._use_sm = use_sm if self.tight else None
         self._xhat = xhat
         return xhat.copy(), self.bound
@@ -669,28 +695,31 @@ class GuaranteedEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
 
-    def _outside_bounds(self, xhat: np.ndarray) -> tuple[np.ndarray, float]:
+    def _outside_bounds(self, xhat: np.ndarray, bound: float) -> tuple[np.ndarray, float]:
+        """A step out of the design: the set-membership estimate and its bounds (``bound``: the largest, as its
+        ``step`` returned it)."""
         self._use_sm = None
         self._bounds = self._sm.state_bounds
-        self.bound = float(self._bounds.max())
-        return xhat, self.bound
+        self.bound = bound
+        return xhat, bound
 
     def _return_to_design(self, now: int, packets, u,
-                          carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, OpenedStep]":
+                          carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, tuple]":
         """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
-        in the ``μ1`` box), and the step opened on them (the step is opened once, on the estimator reset here)."""
+        in the ``μ1`` box), and the step's packets checked on them (:meth:`ClassEstimator._take`, once, on the
+        estimator reset here)."""
         centre, generators = carried
         # a spare class estimator, made once and reset at each return (making one checks every class gain)
         est = self._spare
         if est is None:
             est = make_estimator(self.system, self.gains, None, periodic=True, bound_of=self.bound_of, mu1=self.mu1)
         est.reset(centre, t0=now)
-        opened = est._open(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
+        taken = est._take(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
         self._use_sm = None
         self._xhat = centre
-        return est, opened
+        return est, taken
 
     def update(self, y=None, u=None) -> np.ndarray:
         """The filterpy spelling: ``update(y)``, ``update(None)`` for a lost packet; returns the new estimate.

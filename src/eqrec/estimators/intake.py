@@ -7,7 +7,13 @@ Shared by :class:`~eqrec.estimators.causal.RecoveryEstimator`,
 a reference state per period time and the residuals of the packets received;
 a step is opened aside (:class:`OpenedStep`, every input checked, nothing
 changed), the estimator computes its estimate from it, and only then is it
-committed, so a step that raises leaves the estimator as it was.
+committed, so a step that raises leaves the estimator as it was.  The class
+form checks a step the same way (:meth:`~eqrec.estimators.causal.ClassEstimator._take`:
+the same checks and errors, nothing changed) but keeps its period in arrays
+made once, which its compiled step writes only once the step can no longer
+fail (the reference state of the step's time, the residuals of the new
+packets, the record below); the node-gain and augmented forms keep the lists
+and dictionaries of :class:`OpenedStep`.
 
 The protocol (:mod:`eqrec.estimators.protocol`): ``reset(xhat0, t0=0)``
 returns the estimator, ``step(y, u)`` returns ``(x̂(t+1), bound)``.  These
@@ -184,6 +190,9 @@ class RoundingRecord:
         Period, state and output dimensions.
     rho0 : numpy.ndarray, shape (n,)
         The allowance of the period's initial estimate.
+    z, true : numpy.ndarray or None, optional
+        Arrays to hold :attr:`z` and :attr:`true` (views of a class estimator's period buffer, whose compiled step
+        writes them); ``None``: new ones.
 
     Attributes
     ----------
@@ -201,12 +210,13 @@ class RoundingRecord:
         What a node-gain estimator propagates (its error maps per period time).
     """
 
-    def __init__(self, T: int, n: int, p: int, rho0: np.ndarray):
+    def __init__(self, T: int, n: int, p: int, rho0: np.ndarray, z: "np.ndarray | None" = None,
+                 true: "np.ndarray | None" = None):
         #: all the injections in the order of the error maps' columns ``(w, v, ξ0)``: one product carries them
-        self.z = np.zeros(T * (n + p) + n)
+        self.z = np.zeros(T * (n + p) + n) if z is None else z  # (given: views of a class estimator's period buffer)
         self.w, self.v = self.z[:T * n].reshape(T, n), self.z[T * n:T * (n + p)].reshape(T, p)
         self.z[T * (n + p):] = rho0
-        self.true = np.zeros((T, n))
+        self.true = np.zeros((T, n)) if true is None else true
         self.maps: list = []
 
 
@@ -271,6 +281,7 @@ class StampedEstimator:
         self.xhat: "np.ndarray | None" = None  # set by reset
         self.bound = math.nan  # nan until reset (then μ1, or inf without levels)
         self._rho = np.zeros(system.n)  # the rounding allowance ρ of the current estimate, per state (module docstring)
+        self._rows: "np.ndarray | None" = None  # the class form's x̄, x̂, ρ as its compiled step wrote them
         self.error_radius: "float | None" = None  # the true error's size, when a wrapper knows it (else the bound)
         self._norms: dict = {}
         self._varying = system.is_time_varying  # a frozen system: asked once (its matrices are cached by time)
@@ -335,6 +346,7 @@ class StampedEstimator:
         self.bound = self.mu1
         # the simulated x(t0) = x̂(t0) + ξ(t0) is itself rounded: half an ulp of its size
         self._rho = rounding_allowance(0.0, 1, np.abs(x) + self._radius())
+        self._rows = None  # (the class form's x̄, x̂, ρ in one array: made again from these at its next step)
         return self
 
     def carry_rounding(self, rounding: float, error_radius: "float | None") -> None:
@@ -358,6 +370,7 @@ class StampedEstimator:
             The estimator is changed in place.
         """
         self._rho = np.broadcast_to(np.asarray(rounding, float), (self.system.n,)).copy()
+        self._rows = None  # (the class form's x̄, x̂, ρ in one array: made again at its next step)
         self.error_radius = error_radius
 
     def _radius(self) -> float:
