@@ -175,6 +175,30 @@ def test_reduction_is_outer(reduce):
     assert reduce(G, 100) is G
 
 
+def test_girard_of_one_zonotope_is_the_stack_path():
+    """reduce_girard of one zonotope (one compiled call) gives the bytes of the stack's reduction of a stack of
+    one, and of that reduction with its zero box columns dropped (there are none: each box is rounded up), the
+    path it replaces."""
+    from eqrec.bounds.zonotope import _reduce
+
+    rng = np.random.default_rng(3)
+    for trial in range(300):
+        n = int(rng.integers(1, 7))
+        q = int(rng.integers(n + 1, 60))
+        limit = int(rng.integers(n, q))
+        G = rng.normal(size=(n, q))
+        if trial % 3 == 0:
+            G[rng.integers(0, n), :] = 0.0
+        if trial % 4 == 0:
+            G = np.asfortranarray(G)
+        stack = _reduce(np.ascontiguousarray(G)[None], limit, principal=False)[0]
+        kept = stack.shape[1] - n
+        expected = np.concatenate([stack[:, :kept], stack[:, kept:][:, np.any(stack[:, kept:] != 0, axis=0)]], axis=1)
+        got = reduce_girard(G, limit)
+        assert stack.tobytes() == np.ascontiguousarray(expected).tobytes()
+        assert got.shape == expected.shape and got.tobytes() == np.ascontiguousarray(expected).tobytes()
+
+
 def state_of(est):
     return (est.time, est.x, est.generators, est.state_bounds, est.dropped_packets, est.replays,
             est._known.copy(), est._y.copy(), est._drive.copy(), est.carried_set[1])
