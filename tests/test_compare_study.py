@@ -65,6 +65,20 @@ def test_the_table_step_refuses_jobs_that_do_not_cover_the_pairs(tmp_path):
     assert not out["csv"].exists()
 
 
+def test_the_run_step_refuses_outputs_that_are_not_one_per_setting(tmp_path):
+    # one job per system: its outputs are named <system>_<setting>.<ext>, one per setting of the section
+    settings = list(CFG["settings"])
+    files = {ext: [tmp_path / f"acc_{k}.{ext}" for k in settings] for ext in ("csv", "json", "png", "pdf")}
+    files["timings"] = [tmp_path / "timings" / f"acc_{k}.json" for k in settings[:-1]]  # one setting short
+    with pytest.raises(InputError, match="not one per setting"):
+        harness.run_step(COMPARE + "run", CFG, outputs=files, wildcards={"system": "acc"})
+    files["timings"].append(tmp_path / "timings" / f"acc_{settings[-1]}.json")
+    files["csv"][-1] = tmp_path / f"reactor_{settings[-1]}.csv"  # another system's name
+    with pytest.raises(InputError, match="not one per setting"):
+        harness.run_step(COMPARE + "run", CFG, outputs=files, wildcards={"system": "acc"})
+    assert not list(tmp_path.glob("*.csv"))
+
+
 def test_the_merged_table_puts_system_and_setting_first():
     import pandas as pd
 

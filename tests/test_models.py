@@ -26,6 +26,21 @@ def test_zoh_is_the_matrix_exponential():
     np.testing.assert_allclose(B, E[:n, n:], atol=1e-12)
 
 
+@pytest.mark.parametrize(("n", "m", "Ts"), [(4, 2, 0.05), (1, 1, 0.3), (3, 2, 1.0), (7, 3, 0.01)])
+def test_zoh_gives_the_bits_of_scipy_cont2discrete(n, m, Ts):
+    # zoh does cont2discrete's arithmetic without importing scipy.signal: the results (and every study built on the
+    # batch reactor) keep their bytes
+    from scipy.signal import cont2discrete
+
+    from eqrec.systems.examples import BATCH_REACTOR_AC, BATCH_REACTOR_BC
+
+    rng = np.random.default_rng(n)
+    Ac, Bc = (BATCH_REACTOR_AC, BATCH_REACTOR_BC) if n == 4 else (rng.standard_normal((n, n)), rng.standard_normal((n, m)))
+    A, B = zoh(Ac, Bc, Ts)
+    Ad, Bd, *_ = cont2discrete((Ac, Bc, np.eye(n), np.zeros((n, m))), Ts, method="zoh")
+    assert A.tobytes() == np.asarray(Ad).tobytes() and B.tobytes() == np.asarray(Bd).tobytes()
+
+
 def test_batch_reactor_system():
     s = batch_reactor()
     assert (s.n, s.p, s.m, s.nw) == (4, 2, 2, 0)

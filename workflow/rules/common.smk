@@ -97,11 +97,16 @@ from eqrec.studies.notebooks.captions import FACTS_KEY, report_facts
 config[FACTS_KEY] = report_facts(workflow.basedir)
 
 
-def in_report(path, caption, category, **kwargs):
+def in_report(path, caption, category, each=None, **kwargs):
     """An output shown in ``snakemake --report``: ``path`` with the caption
     ``workflow/report/<caption>.rst``, under ``category`` (``kwargs``:
-    ``subcategory`` and the other options of Snakemake's ``report``)."""
-    return report(path, caption=f"../report/{caption}.rst", category=category, **kwargs)
+    ``subcategory`` and the other options of Snakemake's ``report``). ``each``:
+    wildcards given their values here (``{"setting": [...]}``), for a job that
+    writes one such file per value: the list of them."""
+    paths = expand(path, **each, allow_missing=True) if each else path
+    return report(
+        paths, caption=f"../report/{caption}.rst", category=category, **kwargs
+    )
 
 
 def figure(stem, caption, category):

@@ -4,13 +4,17 @@ Pipeline steps (``step_<name>``; one per rule of ``workflow/rules/compare.smk``,
 :mod:`eqrec.studies.pipeline.harness`), each ``step(cfg, inputs, outputs, wildcards)``
 with ``cfg`` the validated ``compare`` section (``config/compare.yaml``):
 
-``run``     one (system, setting) pair (``wildcards.system``, ``wildcards.setting``):
-            :func:`eqrec.compare.compare_families` on that plant and those traces; its table
+``run``     one system (``wildcards.system``), every setting of the section (the rule's order): per (system,
+            setting) pair, :func:`eqrec.compare.compare_families` on that plant and those traces; its table
             (``<system>_<setting>.csv``, :func:`eqrec.compare.write_table`), its figure
             (``.png``/``.pdf``, :func:`eqrec.compare.compare_figure`) and what the table does not hold
             (``.json``: the settings, the ``μ1`` of each guaranteed design, the bounds inside and outside the
-            designed language, the other families' errors against the class engine's bound); the job's wall
-            time and peak memory are its rule's benchmark (``results/timings/compare/``).
+            designed language, the other families' errors against the class engine's bound).  The settings
+            of a system share one process (its imports, the compiled kernels and the plotting machinery are
+            loaded once: about 3 s of CPU a pair on a 2-core machine); each pair's files are those of a
+            process of its own (the information limit's row cache is emptied before each pair).  The job's
+            wall time and peak memory are its rule's benchmark (``results/timings/compare/<system>.tsv``),
+            each pair's µs per step its ``results/timings/compare/<system>_<setting>.json``.
 ``table``   every pair's table in one, ``compare.csv`` (the columns ``system, setting, loss, burst,
             max_delay, horizon`` first, each cell as its job wrote it), and ``summary.json`` (the pairs'
             ``.json``), in the configuration's order; checks that the jobs cover the configured pairs
@@ -131,25 +135,40 @@ def title_of(name: str, setup: CompareSetup) -> str:
 
 # --------------------------------------------------------------------------- steps
 
-def step_run(cfg, inputs, outputs, wildcards) -> dict:
-    """One (system, setting) pair: the comparison's table, figure and summary."""
-    system, setting, plant = wildcards["system"], wildcards["setting"], cfg["systems"][wildcards["system"]]
-    setup = setup_of(cfg, system, setting)
-    model = MODELS[plant["model"]]()
-    with compiled_once():  # on a fresh clone the first job compiles the kernels, the others load them
-        result = compare_families(model, setup, progress=lambda line: log.info("%s %s: %s", system, setting, line))
-    with atomic_path(outputs.csv) as tmp:
-        write_table(result, str(tmp))
-    compare_figure(result, outputs.png, outputs.pdf, title=title_of(plant["name"], setup))
-    write_json(outputs.timings, {"us_per_step": {f: round(v, 1) for f, v in result.us_per_step.items()}})
-    report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"], "n": model.n,
-              "p": model.p, "setup": {key: getattr(setup, key) for key in (
-                  "loss", "burst", "max_delay", "horizon", "runs", "periods", "steps", "seed", "sigmas",
-                  "on_time_rate", "exact_subset")},
-              **summary_of(result)}
-    write_json(outputs.json, report)
-    log.info("%s %s: %d runs x %d steps, %d families", system, setting, setup.runs, setup.steps, len(FAMILIES))
-    return report
+def step_run(cfg, inputs, outputs, wildcards) -> list[dict]:
+    """One system, every setting of the section: each pair's table, figure and summary.
+
+    The outputs ``csv``, ``json``, ``png``, ``pdf`` and ``timings`` are lists of one file per setting, in one order
+    (``<system>_<setting>.<ext>``: the settings are read from the names of the ``csv`` files; a section with one
+    setting runs that pair alone, with the same files).
+    """
+    from eqrec.bounds import information  # here: the table step needs no LP modules
+
+    system, keys = wildcards["system"], ("csv", "json", "png", "pdf", "timings")
+    files = {key: [outputs[key]] if isinstance(outputs[key], str) else list(outputs[key]) for key in keys}
+    settings = [Path(path).stem.removeprefix(f"{system}_") for path in files["csv"]]
+    if sorted(settings) != sorted(cfg["settings"]) or any(len(paths) != len(settings) for paths in files.values()):
+        raise InputError(f"the rule's outputs {files} are not one per setting of {sorted(cfg['settings'])}",
+                         field="settings")
+    reports = []
+    for i, setting in enumerate(settings):
+        information.clear_cache()  # an earlier pair's cached rows were solved warm from another basis
+        out, plant = {key: paths[i] for key, paths in files.items()}, cfg["systems"][system]
+        setup = setup_of(cfg, system, setting)
+        model = MODELS[plant["model"]]()
+        with compiled_once():  # on a fresh clone the first job compiles the kernels, the others load them
+            result = compare_families(model, setup, progress=lambda msg: log.info("%s %s: %s", system, setting, msg))
+        with atomic_path(out["csv"]) as tmp:
+            write_table(result, str(tmp))
+        compare_figure(result, out["png"], out["pdf"], title=title_of(plant["name"], setup))
+        write_json(out["timings"], {"us_per_step": {f: round(v, 1) for f, v in result.us_per_step.items()}})
+        reports.append({"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
+                        "n": model.n, "p": model.p, "setup": {key: getattr(setup, key) for key in (
+                            "loss", "burst", "max_delay", "horizon", "runs", "periods", "steps", "seed", "sigmas",
+                            "on_time_rate", "exact_subset")}, **summary_of(result)})
+        write_json(out["json"], reports[-1])
+        log.info("%s %s: %d runs x %d steps, %d families", system, setting, setup.runs, setup.steps, len(FAMILIES))
+    return reports
 
 
 def step_table(cfg, inputs, outputs, wildcards) -> None:
