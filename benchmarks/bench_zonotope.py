@@ -6,7 +6,7 @@ its cost at scale; the exact estimator's cost and tightness (figures, not tests)
     python benchmarks/bench_zonotope.py --part where [--scale-n 4 10 20 30]
     python benchmarks/bench_zonotope.py --part exact [--exact-steps 150] [--exact-scale-n 30] [--exact-scale-steps 60]
 
-``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`tank_chain`), n = 4 / 10 / 20 / 30 with
+``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`eqrec.systems.examples.tank_chain`), n = 4 / 10 / 20 / 30 with
 p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default settings; the zonotope estimator
 against the crude reference filter (order 40), µs per step measured side by side in one run, bound / limit (the
 information limit, for ``n <= --limit-up-to``: it takes minutes beyond), and the growth exponent of each cost in
@@ -249,7 +249,7 @@ from eqrec.arrivals.packets import as_packets  # noqa: E402
 from eqrec.bounds.zonotope import outer_row_sums, reduce_girard  # noqa: E402
 from eqrec.estimators.zonotope import ZonotopeEstimator, filter_step  # noqa: E402
 from eqrec.simulate.loop import closed_loop, what_arrived  # noqa: E402
-from eqrec.systems.examples import two_mass  # noqa: E402
+from eqrec.systems.examples import tank_chain, two_mass  # noqa: E402
 
 X0_RADIUS, LOSS, MAX_DELAY = 0.5, 0.3, 2
 
@@ -335,26 +335,6 @@ ROWS = [("default", {}),
         ("iterations 4", {"iterations": 4}),
         ("order 20", {"order": 20}),
         ("reduction girard", {"reduction": "girard"})]
-
-
-def tank_chain(n: int, p: int, a: float = 0.2, leak: float = 0.05, eta_w: float = 0.01, eta_v: float = 0.02):
-    """A chain of ``n`` coupled tanks: level ``i`` exchanges ``a`` times the difference with its neighbours, the
-    last leaks ``leak`` of its level, inflow to tank 1; process noise on every level, ``p`` level sensors evenly
-    spread along the chain (the first and the last included when ``p >= 2``)."""
-    from eqrec.systems.affine import AffineSystem
-
-    A = np.eye(n)
-    for i in range(n - 1):
-        A[i, i] -= a
-        A[i + 1, i + 1] -= a
-        A[i, i + 1] += a
-        A[i + 1, i] += a
-    A[-1, -1] -= leak
-    sensors = np.unique(np.round(np.linspace(0, n - 1, p)).astype(int)) if p > 1 else np.array([n - 1])
-    C = np.eye(n)[sensors]
-    B = np.zeros((n, 1))
-    B[0, 0] = 1.0
-    return AffineSystem(A=A, C=C, E=np.eye(n), eta_w=eta_w, eta_v=eta_v, B=B, name=f"tanks{n}")
 
 
 #: The chains of ``--part scale``: (n, p).

@@ -14,6 +14,7 @@ import pytest
 import eqrec
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
 from eqrec.bounds.information import block_limit, cache_info, clear_cache, information_limit
+from eqrec.systems.examples import tank_chain
 
 REL = 1e-9  # two LP optima of the same problem (module docstring of the test)
 
@@ -288,20 +289,6 @@ def test_an_unbounded_answer_is_a_solver_failure_naming_x0_radius(acc, monkeypat
         information_limit(acc, ArrivalTrace([0, 0]), 0.5, cache=False)
 
 
-def _tank_chain(n: int, p: int) -> eqrec.AffineSystem:
-    A = np.eye(n)
-    for i in range(n - 1):  # neighbours exchange a fifth of their difference; the last tank leaks
-        A[i, i] -= 0.2
-        A[i + 1, i + 1] -= 0.2
-        A[i, i + 1] += 0.2
-        A[i + 1, i] += 0.2
-    A[-1, -1] -= 0.05
-    sensors = np.unique(np.linspace(0, n - 1, p).round().astype(int))
-    C = np.zeros((sensors.size, n))
-    C[np.arange(sensors.size), sensors] = 1.0
-    return eqrec.AffineSystem(A=A, C=C, E=np.eye(n), eta_w=0.01, eta_v=0.05)
-
-
 @pytest.mark.parametrize("window", [None, 6])
 def test_large_plants_dual_simplex_in_alternating_order_gives_the_same_rows(window, monkeypatch):
     """From LIMIT_DUAL_FROM_N states on the limit solves with the primal-then-dual fallback and the states in
@@ -310,7 +297,7 @@ def test_large_plants_dual_simplex_in_alternating_order_gives_the_same_rows(wind
     differ: the chain's sensors and leak make its states differ)."""
     import eqrec.bounds.information as info
 
-    plant = _tank_chain(5, 2)
+    plant = tank_chain(5, 2, eta_v=0.05)
     trace = _random_trace(20, 0.3, 2, 45)
     primal = information_limit(plant, trace, 1.0, cache=False, window=window)
     monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
@@ -330,7 +317,7 @@ def test_large_plants_primal_then_dual_fallback_gives_the_same_rows(primal_itera
     step): every row equals the plain primal simplex's and an independent solver's, and the fallback ran."""
     import eqrec.bounds.information as info
 
-    plant = _tank_chain(6, 2)
+    plant = tank_chain(6, 2, eta_v=0.05)
     trace = _random_trace(24, 0.3, 2, 46)
     primal = information_limit(plant, trace, 1.0, cache=False)
     monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
@@ -358,7 +345,7 @@ def test_the_fallback_restores_the_primal_settings(monkeypatch):
     import eqrec.bounds.information as info
 
     monkeypatch.setattr(info, "LIMIT_PRIMAL_ITERATIONS", 0)
-    plant = _tank_chain(6, 2)
+    plant = tank_chain(6, 2, eta_v=0.05)
     trace = _random_trace(10, 0.3, 2, 47)
     tlp = info.trace_lp(plant, trace, np.ones(6), info.SEGMENT)
     lp, c0, r0 = tlp.window(0, 10)

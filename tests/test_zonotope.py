@@ -15,6 +15,7 @@ from eqrec.errors import InputError
 from eqrec.estimators.protocol import Estimator
 from eqrec.estimators.zonotope import ZonotopeEstimator, reduce_girard, reduce_pca
 from eqrec.simulate.loop import closed_loop
+from eqrec.systems.examples import tank_chain
 
 
 def rotating_plant() -> eqrec.AffineSystem:
@@ -441,19 +442,6 @@ def test_time_varying_model_reads_the_window_per_time():
         est = ZonotopeEstimator(period, r0, max_delay=2, order=5, window=7).periodic_model(T)
         out, beta = run(plant, est, lossy_trace(seed, N), *noise)
         assert np.all(np.abs(out.error[1:]) <= beta)
-
-
-def tank_chain(n: int, p: int) -> eqrec.AffineSystem:
-    """Coupled tanks in a row (``benchmarks/bench_zonotope.py``): a larger plant, with several sensors."""
-    A = np.eye(n)
-    for i in range(n - 1):
-        A[i, i] -= 0.2
-        A[i + 1, i + 1] -= 0.2
-        A[i, i + 1] += 0.2
-        A[i + 1, i] += 0.2
-    A[-1, -1] -= 0.05
-    C = np.eye(n)[np.unique(np.round(np.linspace(0, n - 1, p)).astype(int))]
-    return eqrec.AffineSystem(A=A, C=C, E=np.eye(n), eta_w=0.01, eta_v=0.02, name=f"tanks{n}")
 
 
 @pytest.mark.parametrize("gain", ["reweighted", ("fradius", "reweighted")])

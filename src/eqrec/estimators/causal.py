@@ -451,17 +451,7 @@ class ClassEstimator(StampedEstimator):
             t, start, arrivals = 0, self._k, [None]
         else:
             start, arrivals = self._start, self._arrivals + [None]
-        taus, ys, dropped = [], [], 0
-        for pk in packets:
-            tau = pk.time - start
-            if tau < 0:
-                dropped += 1  # stamped before this period: its gains are no longer in use (counted, not used)
-                continue
-            if arrivals[tau] is not None:
-                raise InputError(f"a second packet stamped {pk.time} received at time {self._k}", field="y")
-            arrivals[tau] = t
-            taus.append(tau)
-            ys.append(pk.y)
+        taus, ys, dropped = self._place(packets, start, arrivals, t)
         # the class (t+1, S) and its level, kept per observed prefix (one lookup; :meth:`_lookup`)
         hit = self._prefixes.get(tuple(arrivals))
         if hit is None:

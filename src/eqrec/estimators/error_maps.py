@@ -251,6 +251,20 @@ class ClassStep:
         return self._parts
 
 
+def _per_rule(store: dict, rule) -> dict:
+    """The dictionary ``store`` keeps for ``rule`` (made empty on first use; past 8 rules all are forgotten and
+    the count starts again), or a new one not kept if ``rule`` cannot be hashed."""
+    try:
+        kept = store.get(rule)
+        if kept is None:
+            if len(store) >= 8:  # a bounded number of rules per design
+                store.clear()
+            kept = store[rule] = {}
+    except TypeError:
+        return {}
+    return kept
+
+
 class ClassSteps:
     r"""Per class of a design, its :class:`ClassStep`, made on first use and kept (a design has finitely many
     classes, so the cache is bounded by their number); one lookup per step instead of one per quantity.
@@ -318,15 +332,7 @@ class ClassSteps:
         dict
             The shared levels of ``rule`` (a new dict if ``rule`` cannot be hashed).
         """
-        try:
-            kept = self._levels.get(rule)
-            if kept is None:
-                if len(self._levels) >= 8:  # a bounded number of rules per design
-                    self._levels.clear()
-                kept = self._levels[rule] = {}
-        except TypeError:
-            return {}
-        return kept
+        return _per_rule(self._levels, rule)
 
     def prefixes(self, rule) -> dict:
         """Per observed arrival prefix of a period (a tuple), its class and level, kept here for every estimator of
@@ -344,15 +350,7 @@ class ClassSteps:
         dict
             The shared prefixes of ``rule`` (a new dict if ``rule`` cannot be hashed).
         """
-        try:
-            kept = self._prefixes.get(rule)
-            if kept is None:
-                if len(self._prefixes) >= 8:  # a bounded number of rules per design
-                    self._prefixes.clear()
-                kept = self._prefixes[rule] = {}
-        except TypeError:
-            return {}
-        return kept
+        return _per_rule(self._prefixes, rule)
 
     def get(self, depth: int, available: tuple[int, ...]) -> "ClassStep | None":
         """The class ``(depth, available)`` (``available`` increasing), or ``None`` if the design has none.

@@ -535,6 +535,27 @@ class StampedEstimator:
         C = self._C_fixed  # C_at(τ) is C itself for a C without a time axis: the same product
         return y - (self.system.C_at(tau) if C is None else C) @ reference
 
+    def _place(self, packets: list, start: int, arrivals: list, t: int) -> tuple[list, list, int]:
+        """Mark the packets of this step in ``arrivals`` (the period's observed arrivals, this step's entry
+        appended: a new list, written here) with the period time ``t`` at which each arrived.
+
+        Returns the period times of the new packets and their measurements, in the packets' order, and the number
+        of packets stamped before the period's ``start`` (dropped: their gains are no longer in use).  Raises
+        :class:`InputError` for a packet whose stamp was already received in this period.
+        """
+        taus, ys, dropped = [], [], 0
+        for pk in packets:
+            tau = pk.time - start
+            if tau < 0:
+                dropped += 1  # stamped before this period: its gains are no longer in use (counted, not used)
+                continue
+            if arrivals[tau] is not None:
+                raise InputError(f"a second packet stamped {pk.time} received at time {self._k}", field="y")
+            arrivals[tau] = t
+            taus.append(tau)
+            ys.append(pk.y)
+        return taus, ys, dropped
+
     def _open(self, y, u, restart_at_now: bool = False) -> OpenedStep:
         """Check what arrived at the current time and ``u``, and build the step's state aside (nothing changes).
 
@@ -559,16 +580,9 @@ class StampedEstimator:
             t, start = self._t, self._start
             arrivals, history, yxi = self._arrivals + [None], self._history.copy(), self._yxi.copy()
         history.append(self._reference(restarted).copy())
-        dropped = 0
-        for pk in packets:
-            tau = pk.time - start
-            if tau < 0:
-                dropped += 1  # stamped before this period: its gains are no longer in use (counted, not used)
-                continue
-            if arrivals[tau] is not None:
-                raise InputError(f"a second packet stamped {pk.time} received at time {k}", field="y")
-            arrivals[tau] = t
-            yxi[tau] = self._residual(tau, pk.y, history[tau])
+        taus, ys, dropped = self._place(packets, start, arrivals, t)
+        for tau, y_tau in zip(taus, ys):
+            yxi[tau] = self._residual(tau, y_tau, history[tau])
         return OpenedStep(k, t, start, arrivals, history, yxi, restarted, u, dropped)
 
     def _commit(self, step: OpenedStep, rounding: "tuple[RoundingRecord, np.ndarray] | None" = None) -> None:

@@ -6,6 +6,8 @@ r"""The example plants of the papers, built from first principles: one home for 
     The batch reactor of the delayed/missing-data paper (P3).
 :func:`two_mass`
     Two carts and a lightly damped spring, one position measured (a user's kind of plant, not from a paper).
+:func:`tank_chain`
+    A chain of ``n`` coupled tanks with ``p`` level sensors: plants of any size (the scale benchmarks and tests).
 
 The batch reactor
 -----------------
@@ -31,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.checks import positive
+from eqrec.checks import integer, positive
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
@@ -323,3 +325,63 @@ def two_mass(m1: float = 1.0, m2: float = 1.0, k: float = 1.0, c: float = 0.02, 
     E = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0], [0.0, 1.0]])
     return AffineSystem(A=A, B=B, C=[[1.0, 0.0, 0.0, 0.0]], E=E, eta_w=list(np.broadcast_to(eta_w, (2,))),
                         eta_v=eta_v, name="two carts", dt=Ts)
+
+
+def tank_chain(n: int, p: int, a: float = 0.2, leak: float = 0.05, eta_w: float = 0.01,
+               eta_v: float = 0.02) -> AffineSystem:
+    r"""A chain of ``n`` coupled tanks: level ``i`` exchanges ``a`` times the difference with its neighbours, the
+    last tank leaks ``leak`` of its level, the input flows into tank 1.
+
+    .. math::
+        x_i(k+1) = x_i(k) + a\,(x_{i-1}(k) - x_i(k)) + a\,(x_{i+1}(k) - x_i(k)) + w_i(k)
+        \ (\text{minus } \mathrm{leak}\cdot x_n(k) \text{ for } i = n), \qquad y = C x + v,
+
+    with process noise on every level (``E = I``, ``|w| <= eta_w``) and ``p`` level sensors: the last tank when
+    ``p = 1`` (the furthest from the inflow), else spread evenly along the chain with the first and the last
+    among them (``|v| <= eta_v``).  Slow modes and few sensors at any size: the plant of the scale benchmarks
+    (``benchmarks/bench_zonotope.py``) and of the tests at larger ``n``.
+
+    Parameters
+    ----------
+    n : int
+        Number of tanks, ``>= 1``.
+    p : int
+        Number of level sensors, ``1..n``.
+    a : float, optional
+        Exchange rate between neighbours per step.
+    leak : float, optional
+        Leak rate of the last tank per step.
+    eta_w, eta_v : float, optional
+        Bounds of the process and measurement noise.
+
+    Returns
+    -------
+    AffineSystem
+        Named ``"tanks{n}"``, ``m = 1``, ``nw = n``.
+
+    Raises
+    ------
+    InputError
+        If ``n`` or ``p`` is out of range, or a rate or bound is not a number ``>= 0``.
+
+    Examples
+    --------
+    >>> from eqrec.systems.examples import tank_chain
+    >>> plant = tank_chain(6, 2)
+    >>> plant.n, plant.p, plant.m, [int(i) for i in plant.C.argmax(axis=1)]
+    (6, 2, 1, [0, 5])
+    """
+    n = integer(n, "n", low=1)
+    p = integer(p, "p", low=1, high=n)
+    a, leak = positive(a, "a", zero_ok=True), positive(leak, "leak", zero_ok=True)
+    A = np.eye(n)
+    for i in range(n - 1):
+        A[i, i] -= a
+        A[i + 1, i + 1] -= a
+        A[i, i + 1] += a
+        A[i + 1, i] += a
+    A[-1, -1] -= leak
+    sensors = np.unique(np.round(np.linspace(0, n - 1, p)).astype(int)) if p > 1 else np.array([n - 1])
+    B = np.zeros((n, 1))
+    B[0, 0] = 1.0
+    return AffineSystem(A=A, C=np.eye(n)[sensors], E=np.eye(n), eta_w=eta_w, eta_v=eta_v, B=B, name=f"tanks{n}")
