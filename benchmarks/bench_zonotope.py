@@ -453,12 +453,14 @@ def exact_part(args) -> None:
     N = args.exact_steps
     print(f"cost and tightness: loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, uniform noise; hull / exact hull "
           f"of the whole horizon (max over states) at the last step and the worst over every 5th step")
-    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'filt last':>9s} {'filt max':>8s} {'pred last':>9s} "
-          f"{'pred max':>8s}")
+    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'piv/step':>8s} {'filt last':>9s} {'filt max':>8s} "
+          f"{'pred last':>9s} {'pred max':>8s}")
     for label, system in plants:
         n = system.n
         makers = {"zonotope": lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY),
                   "exact": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw),
+                  "exact, cold": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, warm_start=False,
+                                                           **exact_kw),
                   "exact, z+box": lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, prior="zonotope+box",
                                                             **exact_kw)}
         rng = np.random.default_rng(7)
@@ -473,18 +475,21 @@ def exact_part(args) -> None:
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
             est = make().reset(np.zeros(n))
-            spent, ratios = 0.0, []
+            spent, ratios, pivots = 0.0, [], 0
             for t in range(N):
+                before = getattr(est, "lp_pivots", 0)
                 t0 = time.process_time()
                 est.step(arrivals[t])
                 spent += time.process_time() - t0
+                pivots += getattr(est, "lp_pivots", 0) - before  # the step's LPs (not the filtered set's)
                 if t in refs:
                     row = []
                     for S, (lo, hi) in zip((est.filtered, est.predicted), refs[t]):
                         row.append(float(np.max((S.upper - S.lower) / (hi - lo))))
                     ratios.append(row)
             r = np.array(ratios)
-            print(f"{label:16s} {name:12s} {spent / N * 1e6:8.0f} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
+            piv = f"{pivots / N:8.1f}" if hasattr(est, "lp_pivots") else f"{'-':>8s}"
+            print(f"{label:16s} {name:12s} {spent / N * 1e6:8.0f} {piv} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
                   f"{r[-1, 1]:9.4f} {r[:, 1].max():8.4f}", flush=True)
     for n in args.exact_scale_n:  # the cost at scale (§4): tank chains; the reference at two steps only
         system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
@@ -507,17 +512,19 @@ def exact_part(args) -> None:
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
             est = make().reset(np.zeros(n))
-            spent, ratios = 0.0, []
+            spent, ratios, pivots = 0.0, [], 0
             for t in range(Ns):
+                before = getattr(est, "lp_pivots", 0)
                 t0 = time.process_time()
                 est.step(arrivals[t])
                 spent += time.process_time() - t0
+                pivots += getattr(est, "lp_pivots", 0) - before
                 if t in refs:
                     lo, hi = refs[t]
                     S = est.predicted
                     ratios.append(float(np.max((S.upper - S.lower) / (hi - lo))))
             print(f"{f'tanks n={n} p={system.p}':16s} {name:26s} {spent / Ns * 1e6:10.0f} us/step  "
-                  + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
+                  f"{pivots / Ns:8.1f} piv/step  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
 
 
 def _full_horizon_hull(system, trace, y, t):

@@ -9,7 +9,7 @@ import scipy.optimize
 
 from eqrec.bounds.window_lp import bounds_from_multipliers, dual_bound, lp_hull, window_set
 from eqrec.errors import InputError
-from eqrec.lp.box_simplex import box_lp_multipliers
+from eqrec.lp.box_simplex import box_lp_multipliers, box_lp_solve
 
 
 def weak_dual(g, M, lo, hi, y):
@@ -111,3 +111,75 @@ def test_exactly_singular_basis_is_reported_not_raised():
     assert _refactor(M, np.array([0, 1]), M.shape[1], Binv) is False
     assert np.all(Binv == 7.0)  # nothing written
     assert _refactor(M, np.array([0, 4]), M.shape[1], Binv) is True  # column 0 and the second row's slack
+
+
+def _feasible_lp(seed, m=20, Q=70):
+    """A random box LP with equality rows through a known point ``z`` (feasible up to the rows' rounding)."""
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(m, Q)) * (rng.random((m, Q)) < 0.6)
+    z = rng.uniform(-1, 1, Q)
+    b = M @ z
+    return rng, M, b, z
+
+
+def test_warm_start_from_the_own_optimum_needs_no_pivot():
+    """Started from the final basis of the same LP and objective, the dense solver ends at once (no pivot) with the
+    same certified bound; the final basis has one basic variable per row."""
+    rng, M, b, _ = _feasible_lp(21)
+    g = rng.normal(size=(1, M.shape[1]))
+    ones = np.ones(M.shape[1])
+    cold = box_lp_solve(M, b, b, -ones, ones, g, "dense")
+    assert cold.optimal.all() and not cold.warm and cold.pivots > 0
+    assert cold.is_basic.sum() == M.shape[0]
+    warm = box_lp_solve(M, b, b, -ones, ones, g, "dense", start=(cold.is_basic, cold.at_upper))
+    assert warm.warm and warm.optimal.all() and warm.pivots == 0
+    assert weak_dual(g[0], M, b, b, warm.y[0]) == pytest.approx(weak_dual(g[0], M, b, b, cold.y[0]), rel=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["random", "all columns", "singular", "no slack"])
+def test_a_bad_start_basis_still_gives_sound_bounds(kind):
+    """Any start is valid (the module docstring's claim): a random wanted set with random bound sides, every column
+    wanted, two parallel columns wanted (the basis must drop one), no slack wanted: each objective's bound from
+    the multipliers (the window's rounded-upward bound) is >= g·z at the known feasible point, no tolerance, and
+    equals the cold start's optimum to 1e-7."""
+    rng, M, b, z = _feasible_lp(33)
+    m, Q = M.shape
+    if kind == "singular":
+        M[:, 1] = 2.0 * M[:, 0]
+        b = M @ z
+    G = rng.normal(size=(5, Q))
+    ones = np.ones(Q)
+    want = {"random": rng.random(Q + m) < 0.5, "all columns": np.r_[np.ones(Q, bool), np.zeros(m, bool)],
+            "singular": np.r_[np.isin(np.arange(Q), [0, 1]), np.zeros(m, bool)],
+            "no slack": np.r_[rng.random(Q) < 0.3, np.zeros(m, bool)]}[kind]
+    upper = rng.random(Q + m) < 0.5
+    cold = box_lp_solve(M, b, b, -ones, ones, G, "dense")
+    warm = box_lp_solve(M, b, b, -ones, ones, G, "dense", start=(want, upper))
+    assert cold.optimal.all() and warm.optimal.all() and warm.warm  # the start completed to a nonsingular basis
+    mags = np.abs(G) @ np.ones(Q)
+    mag_rows = np.abs(M).sum(axis=1) + np.abs(b)
+    for res in (cold, warm):
+        bounds = bounds_from_multipliers(G, M, b, b, res.y, mags, mag_rows, 4.0 * (m + Q))
+        assert np.all(bounds >= G @ z)  # sound, whatever the start
+    for g, a, c in zip(G, warm.y, cold.y):
+        assert weak_dual(g, M, b, b, a) == pytest.approx(weak_dual(g, M, b, b, c), rel=1e-7, abs=1e-9)
+
+
+def test_start_of_the_wrong_size_is_refused():
+    M = np.ones((2, 3))
+    with pytest.raises(InputError) as info:
+        box_lp_solve(M, [0.0, 0.0], [0.0, 0.0], -np.ones(3), np.ones(3), [[1.0, 0.0, 0.0]], "dense",
+                     start=(np.zeros(4, bool), np.zeros(5, bool)))
+    assert info.value.field == "start"
+
+
+def test_start_basis_is_nonsingular_and_keeps_independent_wanted_columns():
+    """``_start_basis``: of two parallel wanted columns one is kept; every row whose slack is wanted keeps it; the
+    basis is nonsingular (``_refactor``)."""
+    from eqrec.lp.box_simplex import _refactor, _start_basis
+
+    M = np.array([[1.0, 2.0, 0.0, 1.0], [2.0, 4.0, 1.0, 0.0], [0.0, 0.0, 0.0, 3.0]])
+    want = np.array([True, True, True, False, False, False, True])  # columns 0, 1, 2; the third row's slack
+    basis = _start_basis(M, 4, want)
+    assert sorted(basis) == [0, 2, 6] or sorted(basis) == [1, 2, 6]
+    assert _refactor(M, basis, 4, np.empty((3, 3)))

@@ -330,3 +330,115 @@ def test_box_prior_atomic_and_reset(prior):
     for runs in (outs[1], outs[2]):
         for (a, ba), (b, bb) in zip(outs[0], runs):
             assert np.array_equal(a, b) and ba == bb
+
+
+def _lossy_arrivals(system, steps, seed):
+    rng = np.random.default_rng(seed)
+    trace = lossy_trace(seed, steps)
+    n = system.n
+    x, y, arrivals = simulate(system, trace, np.zeros(n), 0.5 * rng.uniform(-1, 1, n),
+                              rng.uniform(-1, 1, (steps, system.nw)), rng.uniform(-1, 1, (steps, system.nv)))
+    return x, arrivals
+
+
+@pytest.mark.parametrize("plant", [eqrec.two_mass, lambda: tank_chain(4, 1)], ids=["carts", "tanks4"])
+def test_warm_start_across_steps_same_hulls_fewer_pivots(plant):
+    """The LPs started from the previous window's basis (the default) give the hulls of the slack-basis start to
+    1e-7 of their width, predicted and filtered, with fewer pivots; every step with data after the first is
+    warm-started."""
+    system = plant()
+    x, arrivals = _lossy_arrivals(system, 50, 4)
+    ests = {w: ExactSetEstimator(system, 0.5, max_delay=2, window=20, warm_start=w).reset(np.zeros(system.n))
+            for w in (False, True)}
+    with_rows = 0  # steps whose window has measured rows (the others solve no LP)
+    for t, a in enumerate(arrivals):
+        for e in ests.values():
+            e.step(a)
+        cold, warm = ests[False], ests[True]
+        with_rows += warm._ws.M.shape[0] > 0
+        for S, T in ((cold.predicted, warm.predicted), (cold.filtered, warm.filtered)):
+            tol = 1e-7 * (S.upper - S.lower)
+            assert np.all(np.abs(S.lower - T.lower) <= tol) and np.all(np.abs(S.upper - T.upper) <= tol)
+        assert np.all(warm.predicted.lower <= x[t + 1]) and np.all(x[t + 1] <= warm.predicted.upper)
+    assert ests[True].lp_warm_starts == with_rows - 1 and ests[False].lp_warm_starts == 0
+    assert ests[True].lp_pivots < ests[False].lp_pivots, (ests[True].lp_pivots, ests[False].lp_pivots)
+    assert ests[True].lp_fallbacks == ests[False].lp_fallbacks == 0
+
+
+def test_warm_start_pickled_copy_steps_the_same_and_reset_forgets_the_basis():
+    """The carried basis is part of the state: a pickled copy steps exactly as the original; reset drops it (the
+    run after reset repeats the first run bit for bit, its first step from the slack basis)."""
+    system = eqrec.two_mass()
+    _, arrivals = _lossy_arrivals(system, 30, 6)
+    est = ExactSetEstimator(system, 0.5, max_delay=2, window=12).reset(np.zeros(4))
+    first = [est.step(a) for a in arrivals[:15]]
+    assert est._lp_carry is not None
+    copy = pickle.loads(pickle.dumps(est))
+    for a in arrivals[15:]:
+        (x1, b1), (x2, b2) = est.step(a), copy.step(a)
+        assert np.array_equal(x1, x2) and b1 == b2
+        assert np.array_equal(est.filtered.lower, copy.filtered.lower)
+    est.reset(np.zeros(4))
+    assert est._lp_carry is None and est.lp_warm_starts == 0 and est.lp_pivots == 0
+    again = [est.step(a) for a in arrivals[:15]]
+    for (a, ba), (b, bb) in zip(first, again):
+        assert np.array_equal(a, b) and ba == bb
+
+
+def test_a_wrong_carried_basis_costs_pivots_never_the_guarantee(monkeypatch):
+    """A deliberately bad start at every step (a random wanted set and random bound sides in place of the carried
+    basis): every end is still a guarantee (the true state inside, no tolerance; the exact hull inside, the
+    reference's tolerance) and the hull is the good start's to 1e-7 of its width."""
+    import eqrec.estimators.exact_set as exact_module
+
+    system = eqrec.two_mass()
+    rng = np.random.default_rng(8)
+    _, arrivals = _lossy_arrivals(system, 40, 9)
+    x, _ = _lossy_arrivals(system, 40, 9)
+
+    def bad(old_labels, old_basis, labels):
+        size = labels[0].shape[0] + labels[1].shape[0]
+        return rng.random(size) < 0.5, rng.random(size) < 0.5
+
+    good = ExactSetEstimator(system, 0.5, max_delay=2, window=15).reset(np.zeros(4))
+    good_out = [(good.step(a), good.predicted) for a in arrivals]
+    monkeypatch.setattr(exact_module, "carry_basis", bad)
+    est = ExactSetEstimator(system, 0.5, max_delay=2, window=15).reset(np.zeros(4))
+    for t, a in enumerate(arrivals):
+        est.step(a)
+        S, G = est.predicted, good_out[t][1]
+        assert np.all(S.lower <= x[t + 1]) and np.all(x[t + 1] <= S.upper)
+        tol = 1e-7 * (G.upper - G.lower)
+        assert np.all(np.abs(S.lower - G.lower) <= tol) and np.all(np.abs(S.upper - G.upper) <= tol)
+    assert est.lp_warm_starts > 0
+
+
+def test_window_kernel_matches_a_plain_propagation():
+    """The compiled window (explicit loops) against the states propagated in plain NumPy: x(t+1) and x(t) in ζ and
+    the measured rows, to 1e-13."""
+    rng = np.random.default_rng(12)
+    L, n, p, nw, nv, q0 = 7, 3, 2, 2, 1, 4
+    A = rng.normal(size=(L, n, n)) * 0.6
+    C, E, V = rng.normal(size=(L, p, n)), rng.normal(size=(L, n, nw)), rng.normal(size=(L, p, nv))
+    drive, Y = rng.normal(size=(L, n)), rng.normal(size=(L, p))
+    measured = np.array([True, False, True, True, False, True, True])
+    c0, G0 = rng.normal(size=n), rng.normal(size=(n, q0))
+    ws = window_set(A, C, E, V, drive, measured, Y, c0, G0)
+    Q = q0 + L * nw + measured.sum() * nv
+    xc, X = c0.copy(), np.concatenate([G0, np.zeros((n, Q - q0))], axis=1)
+    rows, r, col_v = [], [], q0 + L * nw
+    for j in range(L):
+        if j == L - 1:
+            xf, Xf = xc.copy(), X.copy()
+        if measured[j]:
+            H = C[j] @ X
+            H[:, col_v:col_v + nv] = V[j]
+            col_v += nv
+            rows.append(H)
+            r.append(Y[j] - C[j] @ xc)
+        X = A[j] @ X
+        X[:, q0 + j * nw:q0 + (j + 1) * nw] = E[j]
+        xc = A[j] @ xc + drive[j]
+    for got, want in ((ws.centre_pred, xc), (ws.X_pred, X), (ws.centre_filt, xf), (ws.X_filt, Xf),
+                      (ws.M, np.concatenate(rows)), (ws.lower, np.concatenate(r))):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * (1 + np.abs(want).max()))

@@ -54,9 +54,12 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from eqrec.lp.box_simplex import box_lp_multipliers
+from eqrec.lp.box_simplex import box_lp_solve
 
 _U = np.finfo(float).eps / 2
+
+#: The label of a column or row new in every window (the prior's): :func:`window_labels`.
+NO_LABEL = np.iinfo(np.int64).min
 
 
 
@@ -160,55 +163,100 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
 @numba.njit(cache=True)
 def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     r"""The propagation of :func:`window_set` (compiled): the nominal states, the rows of ``x(t+1)`` and ``x(t)`` in
-    :math:`\zeta`, the measured rows and residuals, and the magnitudes of their computation."""
+    :math:`\zeta`, the measured rows and residuals, and the magnitudes of their computation.
+
+    Written as explicit loops over the small dimensions, with every array allocated once: the state's map of the
+    prior's generators :math:`\Phi G_0` and of the process noise (rows: columns) are carried from one time to the
+    next."""
     L, n = drive.shape
     p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
     k_meas = 0
     for j in range(L):
         k_meas += measured[j]
     Q = q0 + L * nw + k_meas * nv
-    Phi = np.eye(n)
+    PG = G0.copy()  # Φ G0, the prior's generators mapped to the current time
     NwT = np.zeros((L * nw, n))  # the process-noise columns of the current state, transposed (rows: columns)
     xc = c0.copy()
     zm = np.abs(c0) + np.abs(G0).sum(axis=1)
     Mm = np.zeros((k_meas * p, Q))
     r = np.zeros(k_meas * p)
     magy = np.zeros(k_meas * p)
-    Phi_f = Phi.copy()
+    PG_f = PG.copy()
     NwT_f = NwT.copy()
     xf = xc.copy()
     zf = zm.copy()
+    tmp = np.empty(n)
+    new_z = np.empty(n)
+    tmpq = np.empty((n, q0))
     ri = 0
     col_v = q0 + L * nw
     for j in range(L):
         if j == L - 1:
-            Phi_f = Phi.copy()
-            NwT_f = NwT.copy()
-            xf = xc.copy()
-            zf = zm.copy()
+            PG_f[:, :] = PG
+            NwT_f[:, :] = NwT
+            xf[:] = xc
+            zf[:] = zm
         if measured[j]:
-            Cj = np.ascontiguousarray(C[j])
-            yc = Cj @ xc
-            Mm[ri:ri + p, :q0] = (Cj @ Phi) @ G0
-            if j:
-                Mm[ri:ri + p, q0:q0 + j * nw] = (NwT[:j * nw] @ np.ascontiguousarray(Cj.T)).T
-            Mm[ri:ri + p, col_v:col_v + nv] = V[j]
+            for i in range(p):
+                row = ri + i
+                yc = 0.0
+                mag = 0.0
+                for b in range(n):
+                    yc += C[j, i, b] * xc[b]
+                    mag += abs(C[j, i, b]) * zm[b]
+                for c in range(q0):
+                    acc = 0.0
+                    for b in range(n):
+                        acc += C[j, i, b] * PG[b, c]
+                    Mm[row, c] = acc
+                for k in range(j * nw):
+                    acc = 0.0
+                    for b in range(n):
+                        acc += C[j, i, b] * NwT[k, b]
+                    Mm[row, q0 + k] = acc
+                vs = 0.0
+                for c in range(nv):
+                    Mm[row, col_v + c] = V[j, i, c]
+                    vs += abs(V[j, i, c])
+                r[row] = Y[j, i] - yc
+                magy[row] = mag + vs + abs(Y[j, i]) + abs(yc)
             col_v += nv
-            r[ri:ri + p] = Y[j] - yc
-            magy[ri:ri + p] = np.abs(Cj) @ zm + np.abs(V[j]).sum(axis=1) + np.abs(Y[j]) + np.abs(yc)
             ri += p
-        Aj = np.ascontiguousarray(A[j])
-        Phi = Aj @ Phi
-        if j:
-            NwT[:j * nw] = NwT[:j * nw] @ np.ascontiguousarray(Aj.T)
-        NwT[j * nw:(j + 1) * nw] = E[j].T
-        zm = np.abs(Aj) @ zm + np.abs(drive[j]) + np.abs(E[j]).sum(axis=1)
-        xc = Aj @ xc + drive[j]
+        for a in range(n):  # Φ G0 <- A_j Φ G0
+            for c in range(q0):
+                acc = 0.0
+                for b in range(n):
+                    acc += A[j, a, b] * PG[b, c]
+                tmpq[a, c] = acc
+        PG[:, :] = tmpq
+        for k in range(j * nw):  # each earlier noise column through A_j
+            for a in range(n):
+                acc = 0.0
+                for b in range(n):
+                    acc += A[j, a, b] * NwT[k, b]
+                tmp[a] = acc
+            for a in range(n):
+                NwT[k, a] = tmp[a]
+        for c in range(nw):
+            for a in range(n):
+                NwT[j * nw + c, a] = E[j, a, c]
+        for a in range(n):  # x̂ <- A_j x̂ + drive, and its magnitude (every new entry reads the old vectors)
+            acc = 0.0
+            accz = abs(drive[j, a])
+            for b in range(n):
+                acc += A[j, a, b] * xc[b]
+                accz += abs(A[j, a, b]) * zm[b]
+            for c in range(nw):
+                accz += abs(E[j, a, c])
+            tmp[a] = acc + drive[j, a]
+            new_z[a] = accz
+        zm[:] = new_z
+        xc[:] = tmp
     X_pred = np.zeros((n, Q))
     X_filt = np.zeros((n, Q))
-    X_pred[:, :q0] = Phi @ G0
+    X_pred[:, :q0] = PG
     X_pred[:, q0:q0 + L * nw] = NwT.T
-    X_filt[:, :q0] = Phi_f @ G0
+    X_filt[:, :q0] = PG_f
     X_filt[:, q0:q0 + L * nw] = NwT_f.T
     return xc, xf, X_pred, X_filt, Mm, r, magy, zm, zf
 
@@ -280,6 +328,36 @@ def bounds_from_multipliers(rows: np.ndarray, M: np.ndarray, lower: np.ndarray, 
     return np.nextafter(dual + l1 + kappa * _U * mu, np.inf)
 
 
+@dataclass(frozen=True)
+class WindowHull:
+    """What :func:`lp_hull_solve` found.
+
+    Parameters
+    ----------
+    lower, upper : numpy.ndarray, shape (n,)
+        The hull's ends, each a guarantee (rounded outward).
+    fallbacks : int
+        LPs that ended without an optimum (their end is still a guarantee).
+    pivots : int
+        Simplex pivots (and HiGHS iterations) spent on the ``2n`` LPs.
+    basis : tuple of numpy.ndarray of bool or None
+        ``(is_basic, at_upper)`` over the LP's columns, then its rows' slacks, after the last objective (a start for
+        the next window: :func:`carry_basis`); ``None`` when HiGHS solved them or there were no rows.
+    minima_first : bool
+        The order the objectives were solved in: the minima first (the last objective a maximum), or the maxima.
+    warm : bool
+        Whether the given start was used.
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    fallbacks: int
+    pivots: int
+    basis: "tuple[np.ndarray, np.ndarray] | None"
+    minima_first: bool
+    warm: bool
+
+
 def lp_hull(ws: WindowSet, which: str = "pred", solver: str = "auto") -> tuple[np.ndarray, np.ndarray, int]:
     r"""Per state, a lower and an upper end of the window set's interval hull, each a guarantee (module docstring).
 
@@ -302,29 +380,157 @@ def lp_hull(ws: WindowSet, which: str = "pred", solver: str = "auto") -> tuple[n
         How many of the ``2n`` LPs ended without an optimum (their end is the bound of the multipliers the solve
         ended with, still a guarantee).
     """
+    res = lp_hull_solve(ws, which, solver)
+    return res.lower, res.upper, res.fallbacks
+
+
+def lp_hull_solve(ws: WindowSet, which: str = "pred", solver: str = "auto",
+                  start: "tuple[np.ndarray, np.ndarray] | None" = None, minima_first: bool = False) -> WindowHull:
+    r""":func:`lp_hull` from a given basis, in a given order, with the pivots and the final basis.
+
+    Parameters
+    ----------
+    ws : WindowSet
+        The set.
+    which : {"pred", "filt"}
+        The hull of :math:`x(t+1)` or of :math:`x(t)`.
+    solver : str, optional
+        As :func:`lp_hull`.
+    start : tuple of numpy.ndarray of bool, optional
+        ``(wanted, at_upper)`` over the LP's columns, then its rows' slacks: the first objective's start basis
+        (:func:`eqrec.lp.box_simplex.box_lp_solve`; any start gives guaranteed ends, a poor one costs pivots);
+        ``None``: the slack basis.
+    minima_first : bool, optional
+        ``False`` (default): the maxima of the states in order, then the minima in reverse (ends with the minimum
+        of the first state); ``True``: the minima in order, then the maxima in reverse (ends with its maximum).
+        Each objective starts from the basis of the one before, and neighbouring states share more of their
+        optimal vertex than a state's maximum and minimum do; alternating the order from one window to the next
+        makes a window's first objective the previous window's last.
+
+    Returns
+    -------
+    WindowHull
+        The ends, the fallbacks, the pivots and the final basis.
+    """
     centre, X, mag = (ws.centre_pred, ws.X_pred, ws.mag_pred) if which == "pred" else \
         (ws.centre_filt, ws.X_filt, ws.mag_filt)
     n, Q = X.shape
     k = ws.M.shape[0]
     hi = np.empty(n)
     lo = np.empty(n)
-    fallbacks = 0
+    fallbacks = pivots = 0
+    basis, warm = None, False
     if k == 0:  # no constraint: the zonotope's own hull
         for i in range(n):
             hi[i] = dual_bound(X[i], ws.M, ws.lower, ws.upper, np.zeros(0), mag[i], ws.mag_rows, ws.kappa)
         lo[:] = -hi
     else:
-        # the maxima of the states in order, then the minima in reverse: each objective starts from the basis of
-        # the one before, and neighbouring states share more of their optimal vertex than a state's
-        # maximum and minimum do
-        objectives = np.concatenate([X, -X[::-1]])
+        sign = -1.0 if minima_first else 1.0
+        objectives = np.concatenate([sign * X, -sign * X[::-1]])
         ones = np.ones(Q)
-        y, optimal = box_lp_multipliers(ws.M, ws.lower, ws.upper, -ones, ones, objectives, solver)
-        fallbacks = int(np.count_nonzero(~optimal))
-        bounds = bounds_from_multipliers(objectives, ws.M, ws.lower, ws.upper, y,
+        res = box_lp_solve(ws.M, ws.lower, ws.upper, -ones, ones, objectives, solver, start=start)
+        fallbacks = int(np.count_nonzero(~res.optimal))
+        pivots, warm = res.pivots, res.warm
+        if res.is_basic is not None:
+            basis = (res.is_basic, res.at_upper)
+        bounds = bounds_from_multipliers(objectives, ws.M, ws.lower, ws.upper, res.y,
                                          np.concatenate([mag, mag[::-1]]), ws.mag_rows, ws.kappa)
-        hi[:] = bounds[:n]
-        lo[:] = -bounds[n:][::-1]
+        first, second = bounds[:n], bounds[n:][::-1]
+        hi[:], lo[:] = (second, -first) if minima_first else (first, -second)
     upper = np.nextafter(centre + hi + 2 * _U * (np.abs(centre) + np.abs(hi)), np.inf)
     lower = np.nextafter(centre + lo - 2 * _U * (np.abs(centre) + np.abs(lo)), -np.inf)
-    return lower, upper, fallbacks
+    return WindowHull(lower, upper, fallbacks, pivots, basis, minima_first, warm)
+
+
+def window_labels(first: int, measured: np.ndarray, p: int, nw: int, nv: int, q0: int,
+                  k_prior: int) -> tuple[np.ndarray, np.ndarray]:
+    """Labels of the columns and rows of :func:`window_set`'s LP that name the same quantity in every window.
+
+    Parameters
+    ----------
+    first : int
+        Absolute time of the window's first step.
+    measured : numpy.ndarray of bool, shape (L,)
+        Which times' outputs are in the rows.
+    p, nw, nv : int
+        Outputs, process noises, measurement noises per time.
+    q0 : int
+        The prior's generators (its columns come first).
+    k_prior : int
+        The prior's rows (they come first).
+
+    Returns
+    -------
+    columns : numpy.ndarray of int64, shape (Q,)
+        ``w_a(s)``: ``s (nw + nv) + a``; ``v_b(s)``: ``s (nw + nv) + nw + b``; the prior's: :data:`NO_LABEL`
+        (new in every window).
+    rows : numpy.ndarray of int64, shape (k_prior + p · #measured,)
+        ``y_i(s)``: ``s p + i``; the prior's: :data:`NO_LABEL`.
+    """
+    L = measured.shape[0]
+    stride = nw + nv
+    times = first + np.arange(L, dtype=np.int64)
+    w = (times[:, None] * stride + np.arange(nw, dtype=np.int64)).ravel()
+    mt = times[measured]
+    v = (mt[:, None] * stride + nw + np.arange(nv, dtype=np.int64)).ravel()
+    y = (mt[:, None] * p + np.arange(p, dtype=np.int64)).ravel()
+    columns = np.concatenate([np.full(q0, NO_LABEL, np.int64), w, v])
+    rows = np.concatenate([np.full(k_prior, NO_LABEL, np.int64), y])
+    return columns, rows
+
+
+def carry_basis(old_labels: "tuple[np.ndarray, np.ndarray]", old_basis: "tuple[np.ndarray, np.ndarray]",
+                new_labels: "tuple[np.ndarray, np.ndarray]") -> tuple[np.ndarray, np.ndarray]:
+    """A start for the next window's LP from the last basis of the previous window's (:func:`lp_hull_solve`).
+
+    A column or row with the same label keeps its status (basic, or nonbasic at its upper or lower bound); a
+    column new to the window (the prior's) is nonbasic at its lower bound; a row new to the window (a packet that
+    arrived, the prior's rows) has its slack basic.  The solver completes the wanted set to a nonsingular basis
+    (:func:`eqrec.lp.box_simplex.box_lp_solve`, ``start``); any start gives guaranteed ends.
+
+    Parameters
+    ----------
+    old_labels : tuple of numpy.ndarray of int64
+        ``(columns, rows)`` of the previous LP (:func:`window_labels`).
+    old_basis : tuple of numpy.ndarray of bool
+        ``(is_basic, at_upper)`` of the previous LP (its columns, then its rows' slacks).
+    new_labels : tuple of numpy.ndarray of int64
+        ``(columns, rows)`` of the new LP.
+
+    Returns
+    -------
+    tuple of numpy.ndarray of bool
+        ``(wanted, at_upper)`` over the new LP's columns, then its rows' slacks.
+    """
+    (oc, orow), (nc, nrow) = old_labels, new_labels
+    basic, upper = old_basis
+    return _carry_kernel(oc, orow, basic, upper, nc, nrow)
+
+
+@numba.njit(cache=True)
+def _carry_kernel(oc, orow, basic, upper, nc, nrow):
+    """:func:`carry_basis` (compiled): a column or row keeps the status of the old one with its label; a new
+    column is nonbasic at its lower bound, a new row's slack basic; :data:`NO_LABEL` is never matched."""
+    Qo, Qn = oc.shape[0], nc.shape[0]
+    want = np.zeros(Qn + nrow.shape[0], np.bool_)
+    up = np.zeros(Qn + nrow.shape[0], np.bool_)
+    for block in range(2):
+        old = oc if block == 0 else orow
+        new = nc if block == 0 else nrow
+        off_o = 0 if block == 0 else Qo
+        off_n = 0 if block == 0 else Qn
+        order = np.argsort(old)
+        srt = old[order]
+        for i in range(new.shape[0]):
+            lab = new[i]
+            found = -1
+            if lab != NO_LABEL and srt.shape[0]:
+                at = np.searchsorted(srt, lab)
+                if at < srt.shape[0] and srt[at] == lab:
+                    found = order[at]
+            if found >= 0:
+                want[off_n + i] = basic[off_o + found]
+                up[off_n + i] = upper[off_o + found]
+            elif block == 1:  # a row new to the window (or the prior's): its slack basic
+                want[off_n + i] = True
+    return want, up

@@ -80,7 +80,7 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.bounds.window_lp import lp_hull, window_set
+from eqrec.bounds.window_lp import carry_basis, lp_hull_solve, window_labels, window_set
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
 from eqrec.estimators.zonotope import ZonotopeEstimator
@@ -126,6 +126,9 @@ class ExactSetEstimator(ZonotopeEstimator):
     prior : {"zonotope", "zonotope+box", "box"}, optional
         The window's prior (module docstring, *The prior*): the filter's zonotope (default), the zonotope within
         the box of the hull this estimator reported for the window's start, or that box alone.
+    warm_start : bool, optional
+        Start each window's LPs from the last basis of the previous window's, carried over by label (module
+        docstring, *Warm start across steps*; default ``True``); ``False``: from the slack basis at every step.
 
     Attributes
     ----------
@@ -134,8 +137,13 @@ class ExactSetEstimator(ZonotopeEstimator):
     name : str
         ``"set-membership, exact"``.
     lp_fallbacks : int
-        Hull LPs since :meth:`reset` that ended without an optimum (their end was the prediction's own bound,
-        still a guarantee).
+        Hull LPs since :meth:`reset` that ended without an optimum (their end was the bound of the multipliers the
+        solve ended with, still a guarantee).
+    lp_pivots : int
+        Simplex pivots (and HiGHS iterations) of the hull LPs since :meth:`reset`, the filtered set's included.
+    lp_warm_starts : int
+        Steps since :meth:`reset` whose LPs started from the previous window's basis (the others: from the slack
+        basis, the first step, or a carried basis that was singular).
 
     Raises
     ------
@@ -160,7 +168,7 @@ class ExactSetEstimator(ZonotopeEstimator):
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: float = EXACT_ORDER,
                  window: int = EXACT_WINDOW, gain: str = "reweighted", reduction: str = "pca",
-                 prior: str = "zonotope"):
+                 prior: str = "zonotope", warm_start: bool = True):
         if order is None:
             raise InputError("the exact estimator needs a reduction order (a number >= 1), got None", field="order")
         if not isinstance(gain, str):
@@ -169,7 +177,9 @@ class ExactSetEstimator(ZonotopeEstimator):
             raise InputError(f"the window's prior is one of {', '.join(EXACT_PRIORS)}, got {prior!r}", field="prior")
         super().__init__(system, x0_radius, max_delay, order=order, gain=gain, reduction=reduction, window=window)
         self.prior = prior
-        self.lp_fallbacks = 0
+        self.warm_start = bool(warm_start)
+        self._lp_carry = None
+        self.lp_fallbacks = self.lp_pivots = self.lp_warm_starts = 0
 
     def start_from(self, xhat0: Any, generators: Any, t0: int = 0) -> "ExactSetEstimator":
         """Start a run from a given set (:meth:`ZonotopeEstimator.start_from`).
@@ -193,7 +203,8 @@ class ExactSetEstimator(ZonotopeEstimator):
         start = StateSet.around(self.time, self._xhat, self._beta)
         self._lower, self._upper = start.lower, start.upper
         self._boxes = {}
-        self.lp_fallbacks = 0
+        self._lp_carry = None
+        self.lp_fallbacks = self.lp_pivots = self.lp_warm_starts = 0
         return self
 
     def _estimate(self, intake: dict) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -210,9 +221,22 @@ class ExactSetEstimator(ZonotopeEstimator):
         elif box is not None:  # the filter's zonotope within the box: G0 ε in [lower - c0, upper - c0]
             rows = (G0, np.nextafter(box[0] - c0, -np.inf), np.nextafter(box[1] - c0, np.inf))
         ws = window_set(A, C, E, V, drive, intake["known"], intake["ys"], c0, G0, rows)
-        lower, upper, fallbacks = lp_hull(ws, "pred")
+        start, minima_first, labels = None, False, None
+        if self.warm_start:  # the last basis of the previous window's LPs, carried over by label (module docstring)
+            sysm = self.system
+            labels = window_labels(first, intake["known"], sysm.p, sysm.nw, sysm.nv, G0.shape[1],
+                                   0 if rows is None else rows[0].shape[0])
+            if self._lp_carry is not None:
+                old_labels, old_basis, old_minima_first = self._lp_carry
+                start = carry_basis(old_labels, old_basis, labels)
+                minima_first = not old_minima_first  # the first objective is the previous window's last
+        hull = lp_hull_solve(ws, "pred", start=start, minima_first=minima_first)
+        lower, upper = hull.lower, hull.upper
         xhat, beta = _centre_radius(lower, upper)
-        extra = {"_ws": ws, "_lower": lower, "_upper": upper, "lp_fallbacks": self.lp_fallbacks + fallbacks}
+        carry = None if hull.basis is None or not self.warm_start else (labels, hull.basis, hull.minima_first)
+        extra = {"_ws": ws, "_lower": lower, "_upper": upper, "lp_fallbacks": self.lp_fallbacks + hull.fallbacks,
+                 "lp_pivots": self.lp_pivots + hull.pivots, "lp_warm_starts": self.lp_warm_starts + hull.warm,
+                 "_lp_carry": carry}
         if self.prior != "zonotope":  # the hulls of the times still to start a window (a new dict: the step stays atomic)
             boxes = {s: b for s, b in self._boxes.items() if s > first}
             boxes[intake["t"] + 1] = (lower, upper)
@@ -262,8 +286,14 @@ class ExactSetEstimator(ZonotopeEstimator):
         if self._ws is None:
             raise InputError("no step since reset: the filtered set needs the data of one step", field="filtered")
         if self._filtered is None:
-            lower, upper, fallbacks = lp_hull(self._ws, "filt")
-            self.lp_fallbacks += fallbacks
+            start, minima_first = None, False
+            if self._lp_carry is not None:  # the same LP as the step's: start from its last basis
+                _, start, step_minima_first = self._lp_carry
+                minima_first = not step_minima_first
+            hull = lp_hull_solve(self._ws, "filt", start=start, minima_first=minima_first)
+            lower, upper = hull.lower, hull.upper
+            self.lp_fallbacks += hull.fallbacks
+            self.lp_pivots += hull.pivots
             centre, _ = _centre_radius(lower, upper)
             self._filtered = StateSet(t1 - 1, centre, lower, upper, None)
         return self._filtered

@@ -47,6 +47,8 @@ with (zero from HiGHS alone) and is counted; the bound they give still holds.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numba
 import numpy as np
 import scipy.sparse as sp
@@ -69,6 +71,8 @@ DENSE_PIVOTS_PER_ROW = 20
 #: Pivots between two fresh inverses of the dense dual simplex's basis (the product-form updates in between).
 REFACTOR_EVERY = 50
 
+_NO_START = np.zeros(0, np.bool_)  # the slack basis
+
 #: HiGHS options of the ``"highs"`` backend: the simplex (warm starts between objectives), no presolve (redone at
 #: every run otherwise), one thread.
 HIGHS_BOX_OPTIONS = {"solver": "simplex", "presolve": "off", "threads": 1}
@@ -77,6 +81,8 @@ _PRIMAL_TOL = 1e-9  # a basic variable this far outside its bounds (relative to 
 _DUAL_TOL = 1e-9  # Harris's relaxation of the ratio test
 _PIVOT_TOL = 1e-9  # smallest pivot accepted (relative to the row's largest entry)
 _PERTURB = 1e-7  # the costs' perturbation (relative to the objective's largest entry)
+_START_PIVOT_TOL = 1e-9  # a start basis: smallest pivot of its elimination (relative to the block's largest entry)
+_START_MAX_COND = 1e10  # a start basis whose inverse is larger than this (times the basis's size) is not used
 
 
 @numba.njit(cache=True)
@@ -114,24 +120,50 @@ def _refactor(M, basis, Q, Binv):
 
 
 @numba.njit(cache=True)
+def _well_conditioned(M, basis, Q, Binv):
+    """Whether ``‖B‖_max ‖B⁻¹‖_max · m`` (a cheap bound of the condition number's size) is below
+    :data:`_START_MAX_COND`."""
+    m = M.shape[0]
+    bmax = 0.0
+    for p in range(m):
+        j = basis[p]
+        if j < Q:
+            for i in range(m):
+                bmax = max(bmax, abs(M[i, j]))
+        else:
+            bmax = max(bmax, 1.0)
+    imax = 0.0
+    for p in range(m):
+        for i in range(m):
+            imax = max(imax, abs(Binv[p, i]))
+    return bmax * imax * m < _START_MAX_COND
+
+
+@numba.njit(cache=True)
 def _primal_values(M, basis, nonbasic_value, is_basic, Q, Binv, x):
     """``x`` of the nonbasic variables at their bounds and of the basic ones from ``B x_B = -A_N x_N``."""
     m = M.shape[0]
-    rhs = np.zeros(m)
+    xn = np.zeros(Q)
     for j in range(Q):
         if not is_basic[j]:
             x[j] = nonbasic_value[j]
-            if x[j] != 0.0:
-                for i in range(m):
-                    rhs[i] -= M[i, j] * x[j]
+            xn[j] = x[j]
+    rhs = np.empty(m)
+    for i in range(m):  # row by row (M is C-contiguous)
+        acc = 0.0
+        for j in range(Q):
+            acc -= M[i, j] * xn[j]
+        rhs[i] = acc
     for k in range(m):
         j = Q + k
         if not is_basic[j]:
             x[j] = nonbasic_value[j]
             rhs[k] += x[j]  # column -e_k
-    xb = Binv @ rhs
     for p in range(m):
-        x[basis[p]] = xb[p]
+        acc = 0.0
+        for i in range(m):
+            acc += Binv[p, i] * rhs[i]
+        x[basis[p]] = acc
 
 
 @numba.njit(cache=True)
@@ -139,10 +171,12 @@ def _reduced_costs(M, basis, f, Q, Binv, d, y):
     """``y = B⁻ᵀ f_B`` and ``d = f - Aᵀy`` for ``A = [M, -I]``."""
     m = M.shape[0]
     for i in range(m):
-        acc = 0.0
-        for p in range(m):
-            acc += Binv[p, i] * f[basis[p]]
-        y[i] = acc
+        y[i] = 0.0
+    for p in range(m):  # row by row of B⁻¹ (C-contiguous)
+        fp = f[basis[p]]
+        if fp != 0.0:
+            for i in range(m):
+                y[i] += Binv[p, i] * fp
     for j in range(Q):
         d[j] = f[j]
     for i in range(m):
@@ -155,11 +189,70 @@ def _reduced_costs(M, basis, f, Q, Binv, d, y):
 
 
 @numba.njit(cache=True)
-def _dual_simplex(M, lo, hi, objectives, max_iter, perturb):
-    """The dense dual simplex over the objectives in order, from the slack basis (module docstring).
+def _start_basis(M, Q, want):
+    """A nonsingular basis of ``[M, -I]`` close to the wanted variables ``want`` (bool, ``Q + m``): the wanted
+    columns of ``M`` that are independent on the rows whose slack is not wanted (Gaussian elimination with partial
+    pivoting on that block, column by column: a column without a pivot is dropped), and the slacks of every other
+    row.  Returns the basis (``m`` variable indices)."""
+    m = M.shape[0]
+    rows = np.empty(m, np.int64)
+    nr = 0
+    for i in range(m):
+        if not want[Q + i]:
+            rows[nr] = i
+            nr += 1
+    cols = np.empty(Q, np.int64)
+    nc = 0
+    for j in range(Q):
+        if want[j]:
+            cols[nc] = j
+            nc += 1
+    T = np.empty((nr, nc))
+    scale = 0.0
+    for a in range(nr):
+        for b in range(nc):
+            T[a, b] = M[rows[a], cols[b]]
+            scale = max(scale, abs(T[a, b]))
+    used_r = np.zeros(nr, np.bool_)
+    covered = np.zeros(m, np.bool_)  # rows whose slack leaves the basis for a wanted column
+    basis = np.empty(m, np.int64)
+    nb = 0
+    for b in range(nc):  # the wanted columns in order, each pivoted on its largest remaining entry (or dropped)
+        best, pa = 0.0, -1
+        for a in range(nr):
+            if not used_r[a] and abs(T[a, b]) > best:
+                best, pa = abs(T[a, b]), a
+        if pa < 0 or best <= _START_PIVOT_TOL * scale:
+            continue
+        used_r[pa] = True
+        inv = 1.0 / T[pa, b]
+        for a in range(nr):
+            if not used_r[a] and T[a, b] != 0.0:
+                fac = T[a, b] * inv
+                for c in range(b + 1, nc):
+                    T[a, c] -= fac * T[pa, c]
+        covered[rows[pa]] = True
+        basis[nb] = cols[b]
+        nb += 1
+    for i in range(m):
+        if not covered[i]:
+            basis[nb] = Q + i
+            nb += 1
+    return basis
+
+
+@numba.njit(cache=True)
+def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_upper):
+    """The dense dual simplex over the objectives in order (module docstring), from the slack basis, or (when
+    ``start_want`` has ``Q + m`` entries) from the nonsingular basis nearest the wanted variables
+    (:func:`_start_basis`), each nonbasic variable first at its upper bound where ``start_upper`` says so (the
+    first objective's reduced costs then move the others to the bound they ask for: dual feasible whatever the
+    start).  A start basis that is singular or ill-conditioned to working precision is replaced by the slacks'.
 
     Returns the multipliers in the maximisation convention (``g ≈ Mᵀy`` plus the box part), per objective,
-    the status per objective (0 optimal, 1 iteration limit, 2 infeasible, 3 singular basis) and the pivots.
+    the status per objective (0 optimal, 1 iteration limit, 2 infeasible, 3 singular basis), the pivots, the
+    final basis (``is_basic``, and which nonbasic variables sit at their upper bound) and whether the given start
+    was used.
     """
     m, Q = M.shape
     nv = Q + m
@@ -168,14 +261,26 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb):
     status = np.zeros(K, np.int64)
     basis = np.arange(Q, Q + m)
     is_basic = np.zeros(nv, np.bool_)
-    for p in range(m):
-        is_basic[Q + p] = True
     Binv = -np.eye(m)
+    started = False
+    if start_want.shape[0] == nv:
+        trial = _start_basis(M, Q, start_want)
+        if _refactor(M, trial, Q, Binv) and _well_conditioned(M, trial, Q, Binv):
+            basis = trial
+            started = True
+        else:
+            Binv = -np.eye(m)
+    for p in range(m):
+        is_basic[basis[p]] = True
     x = np.zeros(nv)
     d = np.zeros(nv)
     y = np.zeros(m)
     f = np.zeros(nv)
     nb_value = lo.copy()
+    if start_upper.shape[0] == nv:
+        for j in range(nv):
+            if start_upper[j] and not is_basic[j]:
+                nb_value[j] = hi[j]
     alpha = np.empty(nv)
     col = np.empty(m)
     cand = np.empty(nv, np.int64)
@@ -365,14 +470,84 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb):
         for i in range(m):
             ys[k, i] = -y[i]  # of min -g: the maximisation's multipliers are their negatives
         status[k] = st
-    return ys, status, pivots
+    at_upper = np.zeros(nv, np.bool_)
+    for j in range(nv):
+        at_upper[j] = (not is_basic[j]) and nb_value[j] == hi[j] and lo[j] != hi[j]
+    return ys, status, pivots, is_basic, at_upper, started
+
+
+@dataclass(frozen=True)
+class BoxLPResult:
+    """What :func:`box_lp_solve` found.
+
+    Parameters
+    ----------
+    y : numpy.ndarray, shape (K, m)
+        Multipliers per objective (optimal ones where ``optimal``); any of them gives a bound.
+    optimal : numpy.ndarray of bool, shape (K,)
+        Whether the solve of each objective ended at an optimum.
+    pivots : int
+        Simplex pivots of the dense solver plus simplex iterations of HiGHS, over all the objectives.
+    is_basic, at_upper : numpy.ndarray of bool, shape (Q + m,) or None
+        The dense solver's final basis (the columns, then the rows' slacks) and its nonbasic variables at their
+        upper bound: a start for a neighbouring LP (``start=``).  ``None`` when HiGHS solved them all.
+    warm : bool
+        Whether the given ``start`` was used (``False`` without one, or when its basis was singular).
+    """
+
+    y: np.ndarray
+    optimal: np.ndarray
+    pivots: int
+    is_basic: "np.ndarray | None"
+    at_upper: "np.ndarray | None"
+    warm: bool
 
 
 def box_lp_multipliers(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, col_lower: np.ndarray,
                        col_upper: np.ndarray, objectives: np.ndarray, solver: str = "auto",
                        max_iterations: int | None = None, perturb: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    r"""Row multipliers of :math:`\max g_k^\top z` over one box LP, for every objective ``g_k`` in order, from the
+    slack basis (:func:`box_lp_solve` without a start; module docstring).
+
+    Parameters
+    ----------
+    M : numpy.ndarray, shape (m, Q)
+        The rows.
+    row_lower, row_upper : numpy.ndarray, shape (m,)
+        Their bounds (finite; equal for an equality).
+    col_lower, col_upper : numpy.ndarray, shape (Q,)
+        The box (finite).
+    objectives : numpy.ndarray, shape (K, Q)
+        The objectives ``g_k``, maximised.
+    solver : {"auto", "dense", "highs"}, optional
+        :data:`BOX_SOLVERS` (:func:`box_lp_solve`).
+    max_iterations : int, optional
+        Pivots per objective of the dense solver (default ``DENSE_PIVOTS_PER_ROW · m + 50``).
+    perturb : bool, optional
+        Dense solver: cost perturbation first (:func:`box_lp_solve`).
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (K, m)
+        Multipliers per objective: ``g_k - Mᵀy_k`` is the box's part (optimal ones when ``optimal[k]``).
+    optimal : numpy.ndarray of bool, shape (K,)
+        Whether the solve of each objective ended at an optimum.
+
+    Raises
+    ------
+    InputError
+        An unknown ``solver``, or a bound that is not finite.
+    """
+    res = box_lp_solve(M, row_lower, row_upper, col_lower, col_upper, objectives, solver, max_iterations, perturb)
+    return res.y, res.optimal
+
+
+def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, col_lower: np.ndarray,
+                 col_upper: np.ndarray, objectives: np.ndarray, solver: str = "auto",
+                 max_iterations: int | None = None, perturb: bool = False,
+                 start: "tuple[np.ndarray, np.ndarray] | None" = None) -> BoxLPResult:
     r"""Row multipliers of :math:`\max g_k^\top z` over one box LP, for every objective ``g_k`` in order (module
-    docstring).
+    docstring), optionally warm-started from a basis, with the pivots spent and the final basis.
 
     Parameters
     ----------
@@ -393,18 +568,24 @@ def box_lp_multipliers(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarr
         Dense solver: solve each objective first with its costs perturbed by about 1e-7 of their size (breaks
         the ties on which the dual simplex can stall), then from that basis with the true costs.  Default
         ``False``: on the exact estimator's windows (n = 4) it costs a third more pivots and time.
+    start : tuple of numpy.ndarray of bool, optional
+        Dense solver: ``(wanted, at_upper)``, each of ``Q + m`` entries (the columns, then the rows' slacks): the
+        first objective starts from the nonsingular basis nearest the wanted variables (the wanted columns
+        independent on the rows whose slack is not wanted, and the other rows' slacks), the nonbasic variables
+        marked at their upper bound, the others at their lower one, then each moved to the bound its reduced
+        cost asks for.  With boxed variables any nonsingular basis so placed is dual feasible, so any start is
+        a valid one: a poor one costs pivots, never a wrong answer.  A start whose basis is singular or
+        ill-conditioned is replaced by the slack basis.  Ignored by HiGHS.
 
     Returns
     -------
-    y : numpy.ndarray, shape (K, m)
-        Multipliers per objective: ``g_k - Mᵀy_k`` is the box's part (optimal ones when ``optimal[k]``).
-    optimal : numpy.ndarray of bool, shape (K,)
-        Whether the solve of each objective ended at an optimum.
+    BoxLPResult
+        Multipliers, optimality, pivots, the final basis.
 
     Raises
     ------
     InputError
-        An unknown ``solver``, or a bound that is not finite.
+        An unknown ``solver``, a bound that is not finite, or a ``start`` of the wrong size.
     """
     if solver not in BOX_SOLVERS:
         raise InputError(f"unknown box-LP solver {solver!r}; one of {', '.join(BOX_SOLVERS)}", field="solver")
@@ -415,29 +596,38 @@ def box_lp_multipliers(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarr
     hi = np.concatenate([np.asarray(col_upper, float), np.asarray(row_upper, float)])
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
         raise InputError("a box LP needs finite bounds on every row and column", field="bounds")
+    if start is None:
+        want = upper = _NO_START
+    else:
+        want, upper = (np.require(a, np.bool_, ("C",)) for a in start)
+        if want.shape != (Q + m,) or upper.shape != (Q + m,):
+            raise InputError(f"a start basis has one entry per column and row ({Q + m}), got {want.shape} and "
+                             f"{upper.shape}", field="start")
     K = objectives.shape[0]
     if m == 0:
-        return np.zeros((K, 0)), np.ones(K, dtype=bool)
+        return BoxLPResult(np.zeros((K, 0)), np.ones(K, dtype=bool), 0, None, None, False)
     if solver == "auto":
         solver = "dense" if m <= DENSE_MAX_ROWS else "highs"
-    if solver == "dense":
-        iters = DENSE_PIVOTS_PER_ROW * m + 50 if max_iterations is None else int(max_iterations)
-        y, status, _ = _dual_simplex(M, lo, hi, objectives, iters, perturb)
-        optimal = status == 0
-        if optimal.all():
-            return y, optimal
+    if solver == "highs":
+        y, optimal, its = _highs_multipliers(M, lo, hi, objectives)
+        return BoxLPResult(y, optimal, its, None, None, False)
+    iters = DENSE_PIVOTS_PER_ROW * m + 50 if max_iterations is None else int(max_iterations)
+    y, status, pivots, is_basic, at_upper, warm = _dual_simplex(M, lo, hi, objectives, iters, perturb, want, upper)
+    optimal = status == 0
+    if not optimal.all():
         again = np.flatnonzero(~optimal)  # HiGHS for the objectives the dense solver left without an optimum
-        y2, opt2 = _highs_multipliers(M, lo, hi, objectives[again])
+        y2, opt2, its = _highs_multipliers(M, lo, hi, objectives[again])
+        pivots += its
         keep = opt2  # a HiGHS answer replaces the dense one only when it is an optimum
         y[again[keep]] = y2[keep]
         optimal[again[keep]] = True
-        return y, optimal
-    return _highs_multipliers(M, lo, hi, objectives)
+    return BoxLPResult(y, optimal, int(pivots), is_basic, at_upper, bool(warm))
 
 
 def _highs_multipliers(M: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                       objectives: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The ``"highs"`` backend: one model, each objective warm-started from the previous optimal basis."""
+                       objectives: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """The ``"highs"`` backend: one model, each objective warm-started from the previous optimal basis; the
+    multipliers, which objectives ended optimal, and HiGHS's simplex iterations."""
     m, Q = M.shape
     K = objectives.shape[0]
     lp = LinearProgram(c=np.zeros(Q), A=sp.csc_matrix(M), row_lower=lo[Q:], row_upper=hi[Q:],
@@ -446,13 +636,15 @@ def _highs_multipliers(M: np.ndarray, lo: np.ndarray, hi: np.ndarray,
     cols = np.arange(Q, dtype=np.int32)
     y = np.zeros((K, m))
     optimal = np.zeros(K, dtype=bool)
+    its = 0
     for k in range(K):
         h.changeColsCost(Q, cols, np.ascontiguousarray(-objectives[k]))
         h.run()
+        its += max(int(h.getInfo().simplex_iteration_count), 0)
         sol = h.getSolution()
         if int(h.getModelStatus()) == 7 and sol.dual_valid:
             y[k] = -np.asarray(sol.row_dual)  # HiGHS: c - Mᵀ(row_dual) = reduced costs, c = -g
             optimal[k] = True
         else:
             h.clearSolver()  # the next objective from scratch
-    return y, optimal
+    return y, optimal, its
