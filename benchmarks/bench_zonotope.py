@@ -104,6 +104,53 @@ unchanged (the issue's goal there, 20 ms per step, is not met). The oscillator's
 dense solver (hundreds of pivots per objective, some objectives handed to HiGHS after its pivot budget): 7.3 ms in
 this run, 6.8 after the dual-tolerance change of the same day (separate run).
 
+Warm start across steps and the loop-written window (2026-11-29, later; ``ExactSetEstimator(warm_start=)``, the
+rows "exact" (warm, the default) and "exact, cold" (``warm_start=False``), column piv/step: the pivots of a step's
+LPs, HiGHS iterations included).  The code before (aa67921) and after, one process each, back to back per plant
+and window (process time, 150 steps, machine load 5-6 on 2 cores: the zonotope rows, unchanged code, moved by up
+to 1.3x between processes).  Hulls / exact hull: identical to 4 decimals before and after in every row.
+
+=================  ======  ===================  ===================  ==========================  =============
+plant              window  before µs/step       after µs/step        after, cold start µs/step   piv/step w/c
+=================  ======  ===================  ===================  ==========================  =============
+oscillator n = 2   40      3,875                3,128                3,849                       393 / 513
+two carts n = 4    40      1,081                891                  715                         47.1 / 60.6
+tanks n = 4        40      1,269                811                  830                         27.7 / 48.2
+tanks n = 6        40      4,866                3,558                4,595                       150 / 211
+oscillator n = 2   50      16,129               11,282               14,071                      1,178 / 1,480
+two carts n = 4    50      1,372                1,650                1,630                       72.1 / 94.6
+tanks n = 4        50      1,151                1,359                1,464                       31.3 / 58.6
+tanks n = 6        50      17,091               17,970               20,266                      469 / 475
+tanks n = 30, p=5  40      732,088              612,974              -                           8,992 (HiGHS)
+=================  ======  ===================  ===================  ==========================  =============
+
+(n = 30: "box" prior, window 10: 11,787 before, 9,437 after, 754 pivots per step; window 5: 1,425 / 1,437.)
+Timing only (the same plants, arrivals and 150 steps, no reference LPs, every estimator run once untimed first),
+5 interleaved repeats per process, old and new processes alternating twice; min / median µs per step of the calmer
+first round (the second, under load spikes, 1.2-1.5x slower, kept the ordering):
+
+=================  ======  ===================  ===================  ==========================
+plant              window  before               after (warm)         after, cold start
+=================  ======  ===================  ===================  ==========================
+two carts n = 4    40      660 / 815            636 / 650            590 / 600
+two carts n = 4    50      1,055 / 1,108        885 / 898            904 / 922
+tanks n = 4        40      744 / 813            620 / 647            663 / 703
+tanks n = 4        50      972 / 1,018          763 / 798            881 / 914
+tanks n = 6        40      3,671 / 4,015        3,401 / 3,835        3,725 / 4,217
+tanks n = 6        50      14,909 / 15,308      16,450 / 17,311      15,914 / 17,567
+=================  ======  ===================  ===================  ==========================
+
+The warm start saves 20-45 % of the pivots (the first objective of a step: about 35 pivots instead of 61 on the
+two carts at window 50; the other objectives start from the one before, as before), but a start costs a
+completion to a nonsingular basis and one inverse (about 100-150 µs at 38 rows), so it pays where a cold first
+objective is long (tanks, window 50, the oscillator) and not on the two carts at window 40.  The window kernel's
+explicit loops (no BLAS call or allocation per time) cut it from about 300 µs to 60-120 µs at window 50.  So at
+window 50 a step costs 0.8-0.9 ms on the two carts and tanks n = 4 in the calmer round (1.0-1.2 in the loaded
+one): about the 1 ms goal, which the tightness goals need (two carts, window 50: 1.0076 / 1.011; window 40: 1.0122
+/ 1.0288).  But tanks n = 6 (p = 2) goes from 3.5-4 ms at window 40 to 15-18 ms at window 50: its window's rows
+reach 64 (the dense solver's limit; HiGHS beyond) and its LPs need 3x the pivots, and raising DENSE_MAX_ROWS to
+128 did not help (22-32 ms, separate run).  The default window stays 40.
+
 The two-cart part (default, ``--part carts``):
 
 Plant :func:`eqrec.two_mass` (lightly damped, n = 4, one output), Bernoulli losses 0.3, each delivered packet
@@ -523,8 +570,9 @@ def exact_part(args) -> None:
                     lo, hi = refs[t]
                     S = est.predicted
                     ratios.append(float(np.max((S.upper - S.lower) / (hi - lo))))
+            piv = f"{pivots / Ns:8.1f}" if hasattr(est, "lp_pivots") else f"{'-':>8s}"
             print(f"{f'tanks n={n} p={system.p}':16s} {name:26s} {spent / Ns * 1e6:10.0f} us/step  "
-                  f"{pivots / Ns:8.1f} piv/step  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
+                  f"{piv} piv/step  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
 
 
 def _full_horizon_hull(system, trace, y, t):

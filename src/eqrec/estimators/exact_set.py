@@ -56,6 +56,24 @@ at the default window the box changes the ratios in the third decimal or not at 
 ``"zonotope+box"`` 1.0007 against 1.0011 at the last step; two carts 1.0122 both), for ``n`` more rows per LP;
 hence the default.
 
+Warm start across steps (``warm_start=``)
+-----------------------------------------
+Consecutive windows share most of their LP: the rows of the measurements of the common times and the columns of
+their noises; only the prior's generators (the filter's reduced zonotope at the new window start) and the newest
+and oldest times change.  With ``warm_start=True`` (default) the last basis of a step's ``2n`` LPs is kept with
+the labels of its columns and rows (:func:`eqrec.bounds.window_lp.window_labels`); the next window's first LP
+starts from it (:func:`eqrec.bounds.window_lp.carry_basis`: a noise column or measured row of a common time keeps
+its status, the prior's new columns are nonbasic, a new row's slack basic; the solver completes that to a
+nonsingular basis, or falls back to the slack basis), and the order of the objectives alternates from one step to
+the next (maxima first, then minima first) so that the first objective of a window is the last of the previous
+one.  With boxed variables any nonsingular basis is dual feasible once each nonbasic variable sits at the bound
+its reduced cost asks for, so any start is valid and a poor one costs pivots only; the ends stay the weak-duality
+bounds of the multipliers found (``tests/test_exact_set.py`` replaces the carried basis by a random one at every
+step).  The carried basis is part of the estimator's state (pickled with it, dropped by :meth:`reset`, set only
+by a step that completes).  The ends differ from the slack-basis start's only where the optimum is degenerate or
+within the solver's tolerances (measured on the benchmark's n = 4 plants: about 1e-8 of the hull's width at
+most).  :attr:`lp_pivots` counts the pivots.
+
 Estimate, bound, and what that means for ``exact_bound``
 --------------------------------------------------------
 The estimate :math:`\hat x(t+1)` is the centre of the hull, per state the midpoint of its two ends.  The ends

@@ -29,7 +29,9 @@ optimal.  So a solver here only decides how *tight* the bound is, never whether 
     2.5 times fewer pivots than the textbook test on the exact estimator's windows), then takes the largest pivot
     within Harris's relaxation (1e-9) among the rest; the inverse is updated in product form and computed afresh
     every :data:`REFACTOR_EVERY` pivots (the reduced costs and values then too, and a variable whose fresh reduced
-    cost changed sign moves to its other bound).  No HiGHS call and no Python per pivot: on the exact
+    cost changed sign moves to its other bound).  The first basis may also be given (:func:`box_lp_solve`,
+    ``start``: a neighbouring LP's last basis, completed to a nonsingular one); by the same argument any start is
+    dual feasible, so it changes the pivots, never the validity of the multipliers.  No HiGHS call and no Python per pivot: on the exact
     estimator's windows at n = 4 (30 rows, 126 to 206 columns) the ``2n`` objectives of a step cost about
     0.5-0.7 ms against 5 ms for a warm-started HiGHS model (about 600 µs per run, most of it HiGHS's fixed cost
     per run).  On large windows (145 rows and 1,465 columns at n = 30) it is no match for HiGHS's sparse factors
