@@ -467,15 +467,33 @@ def window_labels(first: int, measured: np.ndarray, p: int, nw: int, nv: int, q0
     rows : numpy.ndarray of int64, shape (k_prior + p · #measured,)
         ``y_i(s)``: ``s p + i``; the prior's: :data:`NO_LABEL`.
     """
+    return _labels_kernel(int(first), np.require(measured, np.bool_, ("C",)), int(p), int(nw), int(nv), int(q0),
+                          int(k_prior))
+
+
+@numba.njit(cache=True)
+def _labels_kernel(first, measured, p, nw, nv, q0, k_prior):
+    """:func:`window_labels` (compiled)."""
     L = measured.shape[0]
+    k_meas = 0
+    for j in range(L):
+        k_meas += measured[j]
     stride = nw + nv
-    times = first + np.arange(L, dtype=np.int64)
-    w = (times[:, None] * stride + np.arange(nw, dtype=np.int64)).ravel()
-    mt = times[measured]
-    v = (mt[:, None] * stride + nw + np.arange(nv, dtype=np.int64)).ravel()
-    y = (mt[:, None] * p + np.arange(p, dtype=np.int64)).ravel()
-    columns = np.concatenate([np.full(q0, NO_LABEL, np.int64), w, v])
-    rows = np.concatenate([np.full(k_prior, NO_LABEL, np.int64), y])
+    columns = np.full(q0 + L * nw + k_meas * nv, NO_LABEL, np.int64)
+    rows = np.full(k_prior + k_meas * p, NO_LABEL, np.int64)
+    c, r = q0, k_prior
+    for j in range(L):
+        for a in range(nw):
+            columns[c] = (first + j) * stride + a
+            c += 1
+    for j in range(L):
+        if measured[j]:
+            for b in range(nv):
+                columns[c] = (first + j) * stride + nw + b
+                c += 1
+            for i in range(p):
+                rows[r] = (first + j) * p + i
+                r += 1
     return columns, rows
 
 

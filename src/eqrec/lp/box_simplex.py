@@ -169,9 +169,9 @@ def _primal_values(M, basis, nonbasic_value, is_basic, Q, Binv, x):
 
 
 @numba.njit(cache=True)
-def _reduced_costs(M, basis, f, Q, Binv, d, y):
-    """``y = B⁻ᵀ f_B`` and ``d = f - Aᵀy`` for ``A = [M, -I]``."""
-    m = M.shape[0]
+def _multipliers(basis, f, Binv, y):
+    """``y = B⁻ᵀ f_B``."""
+    m = Binv.shape[0]
     for i in range(m):
         y[i] = 0.0
     for p in range(m):  # row by row of B⁻¹ (C-contiguous)
@@ -179,6 +179,13 @@ def _reduced_costs(M, basis, f, Q, Binv, d, y):
         if fp != 0.0:
             for i in range(m):
                 y[i] += Binv[p, i] * fp
+
+
+@numba.njit(cache=True)
+def _reduced_costs(M, basis, f, Q, Binv, d, y):
+    """``y = B⁻ᵀ f_B`` and ``d = f - Aᵀy`` for ``A = [M, -I]``."""
+    m = M.shape[0]
+    _multipliers(basis, f, Binv, y)
     for j in range(Q):
         d[j] = f[j]
     for i in range(m):
@@ -468,7 +475,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
                 _primal_values(M, basis, nb_value, is_basic, Q, Binv, x)
         if perturbed:
             continue
-        _reduced_costs(M, basis, f, Q, Binv, d, y)  # the multipliers of the final basis, computed afresh
+        _multipliers(basis, f, Binv, y)  # the multipliers of the final basis, computed afresh
         for i in range(m):
             ys[k, i] = -y[i]  # of min -g: the maximisation's multipliers are their negatives
         status[k] = st
