@@ -140,16 +140,30 @@ tanks n = 6        40      3,671 / 4,015        3,401 / 3,835        3,725 / 4,2
 tanks n = 6        50      14,909 / 15,308      16,450 / 17,311      15,914 / 17,567
 =================  ======  ===================  ===================  ==========================
 
+The same timing-only runs again after the final multipliers' shortcut and the compiled labels (same bits; two
+rounds, old and new alternating, load 6 on 2 cores; min µs per step of round 1 / round 2):
+
+=================  ======  ===================  ===================  ==========================
+plant              window  before               after (warm)         after, cold start
+=================  ======  ===================  ===================  ==========================
+two carts n = 4    40      756 / 667            658 / 696            663 / 677
+two carts n = 4    50      1,056 / 1,077        943 / 1,052          1,032 / 1,002
+tanks n = 4        40      803 / 756            637 / 692            704 / 735
+tanks n = 4        50      959 / 990            803 / 868            923 / 1,029
+tanks n = 6        40      3,744 / 3,818        3,047 / 3,229        3,778 / 3,572
+tanks n = 6        50      15,485 / 16,283      15,161 / 15,683      14,267 / 16,284
+=================  ======  ===================  ===================  ==========================
+
 The warm start saves 20-45 % of the pivots (the first objective of a step: about 35 pivots instead of 61 on the
 two carts at window 50; the other objectives start from the one before, as before), but a start costs a
 completion to a nonsingular basis and one inverse (about 100-150 µs at 38 rows), so it pays where a cold first
 objective is long (tanks, window 50, the oscillator) and not on the two carts at window 40.  The window kernel's
 explicit loops (no BLAS call or allocation per time) cut it from about 300 µs to 60-120 µs at window 50.  So at
-window 50 a step costs 0.8-0.9 ms on the two carts and tanks n = 4 in the calmer round (1.0-1.2 in the loaded
-one): about the 1 ms goal, which the tightness goals need (two carts, window 50: 1.0076 / 1.011; window 40: 1.0122
-/ 1.0288).  But tanks n = 6 (p = 2) goes from 3.5-4 ms at window 40 to 15-18 ms at window 50: its window's rows
-reach 64 (the dense solver's limit; HiGHS beyond) and its LPs need 3x the pivots, and raising DENSE_MAX_ROWS to
-128 did not help (22-32 ms, separate run).  The default window stays 40.
+window 50 a step costs 0.8-1.05 ms on the two carts and tanks n = 4 (min over repeats; medians up to 1.1 ms under
+load): about the 1 ms goal, not clearly under it; the tightness goals need window 50 there (two carts, window
+50: 1.0076 / 1.011; window 40: 1.0122 / 1.0288).  But tanks n = 6 (p = 2) goes from 3-4 ms at window 40 to 15-18
+ms at window 50: its window's rows reach 64 (the dense solver's limit; HiGHS beyond) and its LPs need 3x the
+pivots, and raising DENSE_MAX_ROWS to 128 did not help (22-32 ms, separate run).  The default window stays 40.
 
 The two-cart part (default, ``--part carts``):
 
