@@ -152,7 +152,7 @@ from typing import Iterable
 import numba
 import numpy as np
 
-from eqrec.arrivals.packets import Packet, as_packets, check_estimate
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order, hull_pad, outer_row_sums,
@@ -313,7 +313,7 @@ class GuaranteedEstimator:
             raise InputError("strict=False needs class gains (a design of the class engine, engine='classes'): the "
                              "bound outside the language is computed from the class maps", field="strict")
         self.system, self.gains, self.bound_of = system, gains, bound_of
-        self._n, self._p = system.n, system.p
+        self._n, self._p, self._m = system.n, system.p, system.m
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
         self.strict = bool(strict)
@@ -649,19 +649,19 @@ class GuaranteedEstimator:
                 # checked first: nothing changes if it raises; the packets checked there are the step taken below
                 est, taken = self._return_to_design(now, packets, u, carried)
             else:
-                return self._outside_bounds(*sm.step(packets, u))
+                sm._step_checked(packets, check_input(u, self._m))
+                return self._outside_bounds()
         else:
             taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
         # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
         entry, level, kernel, _ = taken[7]
-        # the set-membership estimator takes the checked packets and input as they are (one intake)
-        checked_u = None if u is None else taken[5]
+        # the set-membership estimator takes the packets and the input as checked (one intake: its private entry)
         sm = self._sm
         if entry is None:  # out of the language: the set-membership estimate from now on
-            reported = sm.step(packets, checked_u)
+            sm._step_checked(packets, taken[5])
             self._outside = True
-            return self._outside_bounds(*reported)
-        sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
+            return self._outside_bounds()
+        sm._step_checked(packets, taken[5])  # all-or-nothing; the class step below cannot raise (its class exists)
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
@@ -695,13 +695,15 @@ class GuaranteedEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
 
-    def _outside_bounds(self, xhat: np.ndarray, bound: float) -> tuple[np.ndarray, float]:
-        """A step out of the design: the set-membership estimate and its bounds (``bound``: the largest, as its
-        ``step`` returned it)."""
+    def _outside_bounds(self) -> tuple[np.ndarray, float]:
+        """A step out of the design: the set-membership estimate and its bounds (the largest, as its ``step``
+        returns it), after its step."""
+        sm = self._sm
+        beta = sm._beta
         self._use_sm = None
-        self._bounds = self._sm.state_bounds
-        self.bound = bound
-        return xhat, bound
+        self._bounds = beta.copy()
+        self.bound = bound = float(beta.max()) if beta.size else 0.0
+        return sm._xhat.copy(), bound
 
     def _return_to_design(self, now: int, packets, u,
                           carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, tuple]":
@@ -713,7 +715,7 @@ class GuaranteedEstimator:
         est = self._spare
         if est is None:
             est = make_estimator(self.system, self.gains, None, periodic=True, bound_of=self.bound_of, mu1=self.mu1)
-        est.reset(centre, t0=now)
+        est._restart(centre.copy(), now)  # reset(centre, now) without its checks: the centre is checked finite
         taken = est._take(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
