@@ -328,6 +328,31 @@ class ClassEstimator(StampedEstimator):
             self._levels = self._steps().levels(self.bound_of)
         self._prefixes = self._steps().prefixes((self.bound_of, self.mu1))
 
+    def _twin(self) -> "ClassEstimator":
+        """A new estimator of these gains, levels and system, not yet reset (call :meth:`_restart`): what the
+        constructor would make, with its checks of the gains and its per-design lookups taken from this one (the
+        spare of :class:`eqrec.estimators.guaranteed.GuaranteedEstimator`, made at its first return to the design).
+
+        The read-only parts are shared (the gains, the design's per-class and per-prefix stores, the model's
+        arrays); the period's buffer, its record and what holds them (the compiled step's model tuples) are its own.
+        """
+        twin = object.__new__(type(self))
+        twin.__dict__.update(self.__dict__)
+        T, n, p = self.T, self._n, self._p
+        twin._period_buffer = np.zeros(self._period_buffer.shape[0])
+        refs, res, z, true = period_views(twin._period_buffer, T, n, p)
+        twin._period = RoundingRecord(T, n, p, np.zeros(n), z, true)
+        # the model tuples of the compiled step end with the period buffer: made again (the model's arrays kept)
+        twin._outputs = twin._fixed_model = None
+        twin._norms = {key: hit for key, hit in self._norms.items() if not (type(key) is tuple and key[0] == "class")}
+        twin.xhat, twin._xbar, twin._rows = None, None, None
+        twin.bound = math.nan
+        twin._rho = np.zeros(n)
+        twin.error_radius = None
+        twin._S = ()
+        twin._clear(0)
+        return twin
+
     def _on_reset(self) -> None:
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
         self._S = ()

@@ -711,10 +711,11 @@ class GuaranteedEstimator:
         in the ``μ1`` box), and the step's packets checked on them (:meth:`ClassEstimator._take`, once, on the
         estimator reset here)."""
         centre, generators = carried
-        # a spare class estimator, made once and reset at each return (making one checks every class gain)
+        # a spare class estimator, made once and reset at each return (a twin of the one in use: making one anew
+        # checks every class gain again)
         est = self._spare
         if est is None:
-            est = make_estimator(self.system, self.gains, None, periodic=True, bound_of=self.bound_of, mu1=self.mu1)
+            est = self._est._twin()
         est._restart(centre.copy(), now)  # reset(centre, now) without its checks: the centre is checked finite
         taken = est._take(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
         self._set = ErrorSet(generators, now, self.order)
