@@ -56,8 +56,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.estimators.error_maps import (ClassErrorMaps, ClassSteps, blas_ready, class_step, period_layout,
-                                        period_views)
+from eqrec.estimators.error_maps import (ClassErrorMaps, ClassSteps, blas_ready, class_step, model_buffer,
+                                        period_layout, period_views)
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -542,9 +542,10 @@ class ClassEstimator(StampedEstimator):
     def _model(self, t: int) -> tuple:
         """What the compiled class step takes of the model at period time ``t``, in its order, in one lookup (kept
         by time for a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`),
-        ``|A|, |B|``, the rows ``f``, ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`),
-        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (row-major), the ``terms`` of an output and of
-        a state injection and the allowance's factor, then the period buffer.
+        ``|B|``, then in one array (:func:`eqrec.estimators.error_maps.model_buffer`) ``|A|``, the rows ``f``,
+        ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`), ``|C(τ)|``, ``|V(τ)| η_v 1`` and
+        ``C(τ)`` per period time (row-major), the ``terms`` of an output and of a state injection and the
+        allowance's factor, then the period buffer.
 
         A row-major ``C`` (the systems' own: made from nested lists) is multiplied by the BLAS kernel of NumPy's
         ``C @ ref``, so the residuals are the numbers of the uncompiled step; a column-major one is copied to
@@ -560,9 +561,9 @@ class ClassEstimator(StampedEstimator):
                 absC, v, output_terms = self._output_model()
                 Cs = np.ascontiguousarray([self.system.C_at(tau) for tau in range(self.T)], dtype=float)
                 outputs = self._outputs = (absC, v, Cs, output_terms, self._n + self._state_terms_extra,
-                                           self._allowance_factor, self._period_buffer)
-            hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absA, absB,
-                                      vecs) + outputs
+                                           self._allowance_factor)
+            hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absB,
+                                      model_buffer(absA, vecs, *outputs), self._period_buffer)
         return hit
 
     def _kernel_args(self, taken: tuple, kernel: tuple) -> tuple:

@@ -203,9 +203,8 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
 
 
 @numba.njit(cache=True)
-def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
-                   rounding_map, state, noise, u, rows, radius, t, taus, ys, level, start_set, sm_bounds, sm_x, tight,
-                   out, use_sm):  # pragma: no cover - compiled
+def _designed_step(A, B, absB, fixed, period, K, absK, S, rounding_map, state, noise, u, rows, radius, t, taus, ys,
+                   level, start_set, sm_bounds, sm_x, tight, out, use_sm):  # pragma: no cover - compiled
     r"""A step in the design with ``strict=False`` in one compiled call: the class step from the packets as they
     arrived (:func:`eqrec.estimators.error_maps.class_step`, with the class's error map parts ``state`` = Φ and
     ``noise`` = N after its rounding map: the residuals, the stacked
@@ -220,8 +219,7 @@ def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_term
     tuple
         ``(Φ G(s), the designed bound, the largest reported bound)``.
     """
-    top = class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
-                     rounding_map, u, rows, radius, t, taus, ys, out)
+    top = class_step(A, B, absB, fixed, period, K, absK, S, rounding_map, u, rows, radius, t, taus, ys, out)
     bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
     P = np.dot(state, start_set)
     row_sums = row_sums_of_parts_compiled(P, noise)
