@@ -203,6 +203,25 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
 
 
 @numba.njit(cache=True)
+def _row_sums_within(G, level):  # pragma: no cover - compiled
+    """Whether every outward-rounded row sum of ``|G|`` is at most ``level`` (:func:`_within`, compiled)."""
+    sums = row_sums_of_parts_compiled(G, G[:, :0])
+    for i in range(sums.shape[0]):
+        if not sums[i] <= level:
+            return False
+    return True
+
+
+def _within(G: np.ndarray, level: float) -> bool:
+    """``np.all(outer_row_sums(G) <= level)``, the same decision: the row sums of :func:`outer_row_sums` are those of
+    :func:`eqrec.bounds.zonotope.row_sums_of_parts_compiled` with an empty second part (the same additions in the
+    same order, up to :data:`PARTS_LIMIT` columns), in one compiled call (the return's check of the carried set)."""
+    if G.shape[1] > PARTS_LIMIT or not G.flags.c_contiguous:
+        return bool(np.all(outer_row_sums(G) <= level))
+    return _row_sums_within(G, float(level))
+
+
+@numba.njit(cache=True)
 def _designed_step(A, B, absB, fixed, period, K, absK, S, rounding_map, state, noise, u, rows, radius, t, taus, ys,
                    level, start_set, sm_bounds, sm_x, tight, out, use_sm):  # pragma: no cover - compiled
     r"""A step in the design with ``strict=False`` in one compiled call: the class step from the packets as they
@@ -643,7 +662,7 @@ class GuaranteedEstimator:
             # without forming the set: the same decision
             carried = sm.carried_set if (now - self._t0) % self.gains.horizon == 0 \
                 and not (sm._beta > self.mu1 * (1.0 + 1e-6)).any() else None
-            if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
+            if carried is not None and _within(carried[1], self.mu1):
                 # checked first: nothing changes if it raises; the packets checked there are the step taken below
                 est, taken = self._return_to_design(now, packets, u, carried)
             else:
