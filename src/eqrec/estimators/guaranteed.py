@@ -662,23 +662,30 @@ class GuaranteedEstimator:
             # without forming the set: the same decision
             carried = sm.carried_set if (now - self._t0) % self.gains.horizon == 0 \
                 and not (sm._beta > self.mu1 * (1.0 + 1e-6)).any() else None
-            if carried is not None and _within(carried[1], self.mu1):
-                # checked first: nothing changes if it raises; the packets checked there are the step taken below
-                est, taken = self._return_to_design(now, packets, u, carried)
-            else:
-                sm._step_checked(packets, check_input(u, self._m))
+            checked_u = check_input(u, self._m)  # (raises before anything changes)
+            if carried is None or not _within(carried[1], self.mu1):
+                sm._step_checked(packets, checked_u)
+                return self._outside_bounds()
+            # the return: the set-membership step first (the one step that may still refuse the data: a packet its
+            # window already holds, stamped before the new period, which the class form drops), then the designed
+            # gains from the carried set, which the set-membership step does not read (it was formed before)
+            sm._step_checked(packets, checked_u)
+            est, taken = self._return_to_design(now, packets, u, carried)  # (cannot raise: the data are checked)
+            entry, level, kernel, _ = taken[7]
+            if entry is None:  # the data of the period's first step already out of the language
+                self._outside = True
                 return self._outside_bounds()
         else:
             taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
-        # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
-        entry, level, kernel, _ = taken[7]
-        # the set-membership estimator takes the packets and the input as checked (one intake: its private entry)
-        sm = self._sm
-        if entry is None:  # out of the language: the set-membership estimate from now on
-            sm._step_checked(packets, taken[5])
-            self._outside = True
-            return self._outside_bounds()
-        sm._step_checked(packets, taken[5])  # all-or-nothing; the class step below cannot raise (its class exists)
+            # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
+            entry, level, kernel, _ = taken[7]
+            # the set-membership estimator takes the packets and the input as checked (one intake: its private entry)
+            sm = self._sm
+            if entry is None:  # out of the language: the set-membership estimate from now on
+                sm._step_checked(packets, taken[5])
+                self._outside = True
+                return self._outside_bounds()
+            sm._step_checked(packets, taken[5])  # all-or-nothing; the class step below cannot raise (its class exists)
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
@@ -724,9 +731,11 @@ class GuaranteedEstimator:
 
     def _return_to_design(self, now: int, packets, u,
                           carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, tuple]":
-        """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
-        in the ``μ1`` box), and the step's packets checked on them (:meth:`ClassEstimator._take`, once, on the
-        estimator reset here)."""
+        """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set` before this
+        step's, which lies in the ``μ1`` box), and the step's packets placed on them (:meth:`ClassEstimator._take`,
+        on the estimator reset here).  Called after the set-membership step has taken the packets (the one part of
+        a return that may refuse them), with the packets and the input checked: it cannot raise, so a refused
+        return changes nothing."""
         centre, generators = carried
         # a spare class estimator, made once and reset at each return (a twin of the one in use: making one anew
         # checks every class gain again)
@@ -734,7 +743,7 @@ class GuaranteedEstimator:
         if est is None:
             est = self._est._twin()
         est._restart(centre.copy(), now)  # reset(centre, now) without its checks: the centre is checked finite
-        taken = est._take(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
+        taken = est._take(packets, u)  # (the packets and the input already checked: it cannot raise here)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
         self._use_sm = None
