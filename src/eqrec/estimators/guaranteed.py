@@ -202,23 +202,13 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
     return top
 
 
-@numba.njit(cache=True)
-def _row_sums_within(G, level):  # pragma: no cover - compiled
-    """Whether every outward-rounded row sum of ``|G|`` is at most ``level`` (:func:`_within`, compiled)."""
-    sums = row_sums_of_parts_compiled(G, G[:, :0])
-    for i in range(sums.shape[0]):
-        if not sums[i] <= level:
-            return False
-    return True
-
-
 def _within(G: np.ndarray, level: float) -> bool:
     """``np.all(outer_row_sums(G) <= level)``, the same decision: the row sums of :func:`outer_row_sums` are those of
     :func:`eqrec.bounds.zonotope.row_sums_of_parts_compiled` with an empty second part (the same additions in the
-    same order, up to :data:`PARTS_LIMIT` columns), in one compiled call (the return's check of the carried set)."""
+    same order, up to :data:`PARTS_LIMIT` columns), one compiled call (the return's check of the carried set)."""
     if G.shape[1] > PARTS_LIMIT or not G.flags.c_contiguous:
         return bool(np.all(outer_row_sums(G) <= level))
-    return _row_sums_within(G, float(level))
+    return bool((row_sums_of_parts_compiled(G, np.zeros((G.shape[0], 0))) <= level).all())
 
 
 @numba.njit(cache=True)
