@@ -103,15 +103,19 @@ step (it must hold every packet at a fallback), so a step costs one
 set-membership step plus the designed side.  The two share one intake: the
 packets and the input are checked once (:func:`eqrec.arrivals.packets.as_packets`,
 :meth:`ClassEstimator._take`), and the set-membership estimator takes them as
-checked.  What the designed side needs that depends on the arrivals alone is
-kept per observed prefix of a period, a finite set (the class ``(d, S)``, its
-level and its arrays: the gain, its absolute values, the rounding allowance's
-map and the error map's parts; :class:`eqrec.estimators.error_maps.ClassSteps`,
-shared by every estimator of the design), and found in one dictionary lookup
-while the packets are checked.  The class form's period (reference states,
-residuals, rounding record) lives in one buffer made once.  The rest of a step
-in the design is one compiled call (``_designed_step``, 34 arguments): the
-residuals of the new packets and the stacked data of the class, the class
+checked through its private entry (``ZonotopeEstimator._step_checked``: no
+second check, no copy of its estimate; its window still refuses what only it
+can see, a packet it already holds).  What the designed side needs that
+depends on the arrivals alone is kept per observed prefix of a period, a
+finite set (the class ``(d, S)``, its level and its arrays: the gain, its
+absolute values, the rounding allowance's map and the error map's parts;
+:class:`eqrec.estimators.error_maps.ClassSteps`, shared by every estimator of
+the design), and found in one dictionary lookup while the packets are
+checked.  The class form's period (reference states, residuals, rounding
+record) lives in one buffer made once, and the model's parts the step reads
+in another (:func:`eqrec.estimators.error_maps.model_buffer`).  The rest of a
+step in the design is one compiled call (``_designed_step``, 24 arguments):
+the residuals of the new packets and the stacked data of the class, the class
 estimate, the rounding allowance of this step's own numbers (it depends on the
 magnitudes of the state and the residuals, so it cannot be kept), the product
 :math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the set at
@@ -122,27 +126,33 @@ order, or by :attr:`predicted`).  Its products go through BLAS as NumPy's
 ``@`` does and its sums run in NumPy's order, so every number is the one of
 the uncompiled step (``tests/test_class_step_cache.py``, bit for bit;
 ``benchmarks/hash_estimates.py``: 132 digests unchanged by this layout).
+A return to the design restarts a spare class estimator (a twin of the one in
+use, made at the first return) and checks the carried set's row sums in one
+compiled call.
 Measured side by side (``python benchmarks/bench_versions.py --old <src>``:
 this version and the previous one in one lockstep on the same arrivals, the
 cost table of ``python benchmarks/bench_tight.py --part cost``; CPU µs per
-step, per step the least of three runs, on a 2-core machine shared with
-3.5–4.5 other processes, so read the ratios; 0/20/40 % loss): in the design
-``strict=False`` costs 1.25–1.34× the set-membership estimator alone on the
-two carts, 1.19–1.26× on the cart-pole and 1.05–1.09× on the ``n = 10``
-chain, against 1.32–1.42×, 1.21–1.35× and 1.07–1.09× for the previous
-version in the same run; the designed side (``strict=False`` in the design
-minus the set-membership step) fell from 108–160 µs to 80–120 µs at ``n = 4``;
-``strict=True`` costs 56–88 µs per step against 90–144 µs.  What is left of
-the designed side at ``n = 4``: the compiled call (about 15 µs on its own, a
-third of it passing its arguments, 20–30 µs in the lockstep, where it runs
-cold after a set-membership step), about 15–20 µs of Python around it, and
-the Girard reduction of the designed set at each period start once it has
-more than ``order · n`` generators (:func:`eqrec.bounds.zonotope.reduce_order`,
-60 µs on its own with ``n = 4``, 100–170 µs in the lockstep: 15–25 µs per step
-on average).  Out of the design a step is the set-membership step, with the
-return's check at each period start (the carried set is formed only when no
-set-membership bound exceeds ``μ1``).  ``tight=False`` costs the same as
-``tight=True`` (the set-membership estimator runs for the fallback either way).
+step, per step the least of three runs, three runs on a 2-core machine shared
+with 4–6 other processes, so read the ratios; 0/20/40 % loss): in the design
+``strict=False`` costs 1.11–1.18×, 1.17–1.21× and 1.19–1.25× the
+set-membership estimator alone on the two carts, 1.07–1.13×, 1.10–1.17× and
+1.16–1.23× on the cart-pole and 1.02–1.08× on the ``n = 10`` chain, against
+1.17–1.25×, 1.21–1.29×, 1.26–1.39×; 1.09–1.13×, 1.13–1.23×, 1.19–1.28×;
+1.03–1.07× for the previous version in the same runs; ``strict=True`` costs
+the same as before (33–110 µs per step, as the previous version's 33–104 µs
+in the same runs).  What is left of the designed side at ``n = 4`` (two carts,
+40 % loss, about 45–70 µs a step in the design): the compiled call (6 µs on
+its own, a third of it passing its arguments, 14–20 µs after a set-membership
+step, whose work leaves the caches cold), about 15 µs of Python around it, the
+Girard reduction of the designed set at each period start (about 25 µs, 4 µs
+per step on average) and the returns to the design (9 of the 103 steps in the
+design on that trace, each about 150–200 µs beyond a designed step: the
+set-membership estimator's carried set formed by NumPy, about 70–90 µs, and
+its reduction to the order, 30–40 µs; 13–16 µs per step on average).  Out of
+the design a step is the set-membership step, with the return's check at each
+period start (the carried set is formed only when no set-membership bound
+exceeds ``μ1``).  ``tight=False`` costs the same as ``tight=True`` (the
+set-membership estimator runs for the fallback either way).
 """
 
 from __future__ import annotations
