@@ -172,6 +172,36 @@ def test_the_outside_of_the_language_is_refused_atomically(class_design):
         assert np.array_equal(est.step(y)[0], twin.step(y)[0])
 
 
+def test_a_refused_return_to_the_design_changes_nothing(class_design):
+    """strict=False out of the design: at every step, and so at the period starts where the designed gains take over
+    again, a bad input and a packet the set-membership window already holds (stamped before the new period, which the
+    class form would drop) raise and change nothing, the spare class estimator included; a twin that never saw them
+    gives the same numbers, over two departures from the design and two returns."""
+    rng = np.random.default_rng(3)
+    est, twin = (class_design.estimator(strict=False).reset(np.zeros(2)) for _ in range(2))
+    arrivals = [True] * 4 + [False, False] + [True] * 10 + [False, False] + [True] * 10
+    last, returns, checked = None, 0, 0
+    for t, arrived in enumerate(arrivals):
+        y = rng.normal(size=1) if arrived else None
+        if not est.in_design:
+            bad_calls = [(y, np.array([np.nan]))]
+            if last is not None:  # the last packet that arrived, again
+                bad_calls.append(([Packet(*last)] + ([Packet(t, y)] if arrived else []), None))
+            for bad_y, bad_u in bad_calls:
+                before = state_of(est)
+                with pytest.raises(InputError):
+                    est.step(bad_y, bad_u)
+                assert state_of(est) == before, f"a refused step at time {t} changed the estimator"
+                checked += 1
+        was_in = est.in_design
+        (xa, ba), (xb, bb) = est.step(y), twin.step(y)
+        assert np.array_equal(xa, xb) and ba == bb
+        assert np.array_equal(est.state_bounds, twin.state_bounds)
+        returns += est.in_design and not was_in
+        last = (t, y) if arrived else last
+    assert returns == 2 and checked >= 4, (returns, checked)
+
+
 def test_recovery_estimator_and_node_gains_refuse_atomically(acc, node_design):
     est, twin = (RecoveryEstimator(acc, node_design.schedule, periodic=True).reset(np.zeros(3)) for _ in range(2))
     for e in (est, twin):

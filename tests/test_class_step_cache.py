@@ -77,14 +77,14 @@ class UncachedGuaranteed(GuaranteedEstimator):
                                                      mu1=self.mu1)
                 est, _ = self._return_to_design(now, packets, u, self._sm.carried_set)
             else:
-                xhat, _ = self._sm.step(packets, u)
-                return self._outside_bounds(xhat, float(self._sm.state_bounds.max()))
+                self._sm.step(packets, u)
+                return self._outside_bounds()
         opened = est._open(packets, u)  # opened again, on purpose: the twin does what the step did before
         t, S = opened.t, tuple(sorted(opened.yxi))
         if not has_class(self.gains, t + 1, S):
-            xhat, _ = self._sm.step(packets, u)
+            self._sm.step(packets, u)
             self._outside = True
-            return self._outside_bounds(xhat, float(self._sm.state_bounds.max()))
+            return self._outside_bounds()
         self._sm.step(packets, u)
         xhat, level = est._advance(opened)
         beta = np.nextafter(self._set.advance(est.error_map()) + est.rounding_vector, np.inf)

@@ -56,8 +56,8 @@ import numpy as np
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import ErrorMap
-from eqrec.estimators.error_maps import (ClassErrorMaps, ClassSteps, blas_ready, class_step, period_layout,
-                                        period_views)
+from eqrec.estimators.error_maps import (ClassErrorMaps, ClassSteps, blas_ready, class_step, model_buffer,
+                                        period_layout, period_views)
 from eqrec.estimators.intake import BoundRule, OpenedStep, RoundingRecord, StampedEstimator
 from eqrec.arrivals.packets import Packet, check_estimate, check_input  # noqa: F401  (re-exported: the runtime API)
 from eqrec.arrivals.patterns import ArrivalPattern
@@ -328,6 +328,31 @@ class ClassEstimator(StampedEstimator):
             self._levels = self._steps().levels(self.bound_of)
         self._prefixes = self._steps().prefixes((self.bound_of, self.mu1))
 
+    def _twin(self) -> "ClassEstimator":
+        """A new estimator of these gains, levels and system, not yet reset (call :meth:`_restart`): what the
+        constructor would make, with its checks of the gains and its per-design lookups taken from this one (the
+        spare of :class:`eqrec.estimators.guaranteed.GuaranteedEstimator`, made at its first return to the design).
+
+        The read-only parts are shared (the gains, the design's per-class and per-prefix stores, the model's
+        arrays); the period's buffer, its record and what holds them (the compiled step's model tuples) are its own.
+        """
+        twin = object.__new__(type(self))
+        twin.__dict__.update(self.__dict__)
+        T, n, p = self.T, self._n, self._p
+        twin._period_buffer = np.zeros(self._period_buffer.shape[0])
+        refs, res, z, true = period_views(twin._period_buffer, T, n, p)
+        twin._period = RoundingRecord(T, n, p, np.zeros(n), z, true)
+        # the model tuples of the compiled step end with the period buffer: made again (the model's arrays kept)
+        twin._outputs = twin._fixed_model = None
+        twin._norms = {key: hit for key, hit in self._norms.items() if not (type(key) is tuple and key[0] == "class")}
+        twin.xhat, twin._xbar, twin._rows = None, None, None
+        twin.bound = math.nan
+        twin._rho = np.zeros(n)
+        twin.error_radius = None
+        twin._S = ()
+        twin._clear(0)
+        return twin
+
     def _on_reset(self) -> None:
         self._xbar = self.xhat.copy()  # x̄(t): noise-free prediction from the period's x̂(0)
         self._S = ()
@@ -517,9 +542,10 @@ class ClassEstimator(StampedEstimator):
     def _model(self, t: int) -> tuple:
         """What the compiled class step takes of the model at period time ``t``, in its order, in one lookup (kept
         by time for a time-varying system): ``A(t), B(t)`` (:func:`eqrec.estimators.error_maps.blas_ready`),
-        ``|A|, |B|``, the rows ``f``, ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`),
-        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (row-major), the ``terms`` of an output and of
-        a state injection and the allowance's factor, then the period buffer.
+        ``|B|``, then in one array (:func:`eqrec.estimators.error_maps.model_buffer`) ``|A|``, the rows ``f``,
+        ``|E| η_w 1``, ``|f|`` and the magnitude without input (:meth:`_drift`), ``|C(τ)|``, ``|V(τ)| η_v 1`` and
+        ``C(τ)`` per period time (row-major), the ``terms`` of an output and of a state injection and the
+        allowance's factor, then the period buffer.
 
         A row-major ``C`` (the systems' own: made from nested lists) is multiplied by the BLAS kernel of NumPy's
         ``C @ ref``, so the residuals are the numbers of the uncompiled step; a column-major one is copied to
@@ -535,9 +561,9 @@ class ClassEstimator(StampedEstimator):
                 absC, v, output_terms = self._output_model()
                 Cs = np.ascontiguousarray([self.system.C_at(tau) for tau in range(self.T)], dtype=float)
                 outputs = self._outputs = (absC, v, Cs, output_terms, self._n + self._state_terms_extra,
-                                           self._allowance_factor, self._period_buffer)
-            hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absA, absB,
-                                      vecs) + outputs
+                                           self._allowance_factor)
+            hit = self._norms[key] = (blas_ready(self.system.A_at(t)), blas_ready(self.system.B_at(t)), absB,
+                                      model_buffer(absA, vecs, *outputs), self._period_buffer)
         return hit
 
     def _kernel_args(self, taken: tuple, kernel: tuple) -> tuple:

@@ -453,9 +453,54 @@ def period_views(period, T, n, p):  # pragma: no cover - compiled
     return period[:a].reshape((T, n)), period[a:b].reshape((T, p)), period[b:c], period[c:c + T * n].reshape((T, n))
 
 
+def model_buffer(absA: np.ndarray, vecs: np.ndarray, absC: np.ndarray, v: np.ndarray, Cs: np.ndarray,
+                 output_terms: int, state_terms: int, factor: float) -> np.ndarray:
+    """The parts of the model :func:`class_step` reads, end to end in one array (one argument of the compiled call
+    instead of eight; :func:`model_views` reads them back): the period ``T``, the outputs ``p``, the ``terms`` of
+    an output and of a state injection and the allowance's factor, then ``|A|``, the rows ``vecs``, ``|C(τ)|``,
+    ``|V(τ)| η_v 1`` and ``C(τ)``, each row-major (the same numbers; ``C(τ)`` row-major as given, so its product
+    is NumPy's).
+
+    Parameters
+    ----------
+    absA : numpy.ndarray, shape (n, n)
+        ``|A(t)|``.
+    vecs : numpy.ndarray, shape (4, n)
+        The rows of :func:`class_step`'s ``vecs``.
+    absC, v, Cs : numpy.ndarray
+        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (``(T, p, n)``, ``(T, p)``, ``(T, p, n)``).
+    output_terms, state_terms : int
+        The ``terms`` of an output injection and of the state update's.
+    factor : float
+        The allowance's factor.
+
+    Returns
+    -------
+    numpy.ndarray, shape (5 + n² + 4n + T p (2n + 1),)
+        The buffer (the integers are exact in floating point).
+    """
+    T, p = v.shape
+    head = np.array([T, p, output_terms, state_terms, factor], dtype=float)
+    return np.concatenate([head] + [np.ascontiguousarray(M, dtype=float).ravel() for M in (absA, vecs, absC, v, Cs)])
+
+
 @numba.njit(cache=True)
-def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
-               rounding_map, u, rows, radius, t, taus, ys, out):  # pragma: no cover - compiled
+def model_views(fixed, n):  # pragma: no cover - compiled
+    """The parts of a :func:`model_buffer` as views: ``absA (n, n)``, ``vecs (4, n)``, ``absC (T, p, n)``,
+    ``v (T, p)``, ``Cs (T, p, n)``, and ``output_terms``, ``state_terms``, ``factor``."""
+    T, p = int(fixed[0]), int(fixed[1])
+    a = 5 + n * n
+    b = a + 4 * n
+    c = b + T * p * n
+    d = c + T * p
+    return (fixed[5:a].reshape((n, n)), fixed[a:b].reshape((4, n)), fixed[b:c].reshape((T, p, n)),
+            fixed[c:d].reshape((T, p)), fixed[d:d + T * p * n].reshape((T, p, n)), int(fixed[2]), int(fixed[3]),
+            fixed[4])
+
+
+@numba.njit(cache=True)
+def class_step(A, B, absB, fixed, period, K, absK, S, rounding_map, u, rows, radius, t, taus, ys,
+               out):  # pragma: no cover - compiled
     r"""One step of the class form (:class:`eqrec.estimators.causal.ClassEstimator`) in one compiled call, from the
     packets as they arrived: the residuals of the new packets, the stacked data of the class, the estimate and its
     rounding allowance, by the operations of the uncompiled step (BLAS products as NumPy's ``@``,
@@ -474,16 +519,13 @@ def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, f
     ----------
     A, B : numpy.ndarray
         ``A(t)``, ``B(t)`` as :func:`blas_ready` gives them.
-    absA, absB : numpy.ndarray
-        ``|A(t)|``, ``|B(t)|``.
-    vecs : numpy.ndarray, shape (4, n)
-        Rows ``f``, ``|E| η_w 1``, ``|f|`` and ``|E| η_w 1 + 2 |f|`` (the magnitude without input).
-    absC, v, Cs : numpy.ndarray
-        ``|C(τ)|``, ``|V(τ)| η_v 1`` and ``C(τ)`` per period time (``(T, p, n)``, ``(T, p)``, ``(T, p, n)``).
-    output_terms, state_terms : int
-        The ``terms`` of an output injection and of the state update's.
-    factor : float
-        ``1 + (2n + 8) u``.
+    absB : numpy.ndarray
+        ``|B(t)|`` (in its own memory order: NumPy's product of it).
+    fixed : numpy.ndarray
+        The rest of the model (:func:`model_buffer`): ``|A(t)|``; the rows ``vecs`` = ``f``, ``|E| η_w 1``,
+        ``|f|`` and ``|E| η_w 1 + 2 |f|`` (the magnitude without input); ``|C(τ)|``, ``|V(τ)| η_v 1`` and
+        ``C(τ)`` per period time (``(T, p, n)``, ``(T, p)``, ``(T, p, n)``); the ``terms`` of an output injection
+        and of the state update's; the allowance's factor ``1 + (2n + 8) u``.
     period : numpy.ndarray
         The period's state end to end (:func:`period_layout`): the reference states ``(T, n)`` (row ``t``
         written), the residuals ``(T, p)`` (rows ``taus`` written) and the record
@@ -519,6 +561,7 @@ def class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, f
         ``max(0, max ρ)``.
     """
     n = rows.shape[1]
+    absA, vecs, absC, v, Cs, output_terms, state_terms, factor = model_views(fixed, n)
     T, p = absC.shape[0], absC.shape[1]
     xhat = rows[1]
     xbar0 = xhat if t == 0 else rows[0]

@@ -103,15 +103,19 @@ step (it must hold every packet at a fallback), so a step costs one
 set-membership step plus the designed side.  The two share one intake: the
 packets and the input are checked once (:func:`eqrec.arrivals.packets.as_packets`,
 :meth:`ClassEstimator._take`), and the set-membership estimator takes them as
-checked.  What the designed side needs that depends on the arrivals alone is
-kept per observed prefix of a period, a finite set (the class ``(d, S)``, its
-level and its arrays: the gain, its absolute values, the rounding allowance's
-map and the error map's parts; :class:`eqrec.estimators.error_maps.ClassSteps`,
-shared by every estimator of the design), and found in one dictionary lookup
-while the packets are checked.  The class form's period (reference states,
-residuals, rounding record) lives in one buffer made once.  The rest of a step
-in the design is one compiled call (``_designed_step``, 34 arguments): the
-residuals of the new packets and the stacked data of the class, the class
+checked through its private entry (``ZonotopeEstimator._step_checked``: no
+second check, no copy of its estimate; its window still refuses what only it
+can see, a packet it already holds).  What the designed side needs that
+depends on the arrivals alone is kept per observed prefix of a period, a
+finite set (the class ``(d, S)``, its level and its arrays: the gain, its
+absolute values, the rounding allowance's map and the error map's parts;
+:class:`eqrec.estimators.error_maps.ClassSteps`, shared by every estimator of
+the design), and found in one dictionary lookup while the packets are
+checked.  The class form's period (reference states, residuals, rounding
+record) lives in one buffer made once, and the model's parts the step reads
+in another (:func:`eqrec.estimators.error_maps.model_buffer`).  The rest of a
+step in the design is one compiled call (``_designed_step``, 24 arguments):
+the residuals of the new packets and the stacked data of the class, the class
 estimate, the rounding allowance of this step's own numbers (it depends on the
 magnitudes of the state and the residuals, so it cannot be kept), the product
 :math:`\Phi G(s)`, the exact row sums of :math:`[\Phi G(s), N]` (the set at
@@ -122,27 +126,33 @@ order, or by :attr:`predicted`).  Its products go through BLAS as NumPy's
 ``@`` does and its sums run in NumPy's order, so every number is the one of
 the uncompiled step (``tests/test_class_step_cache.py``, bit for bit;
 ``benchmarks/hash_estimates.py``: 132 digests unchanged by this layout).
+A return to the design restarts a spare class estimator (a twin of the one in
+use, made at the first return) and checks the carried set's row sums in one
+compiled call.
 Measured side by side (``python benchmarks/bench_versions.py --old <src>``:
 this version and the previous one in one lockstep on the same arrivals, the
 cost table of ``python benchmarks/bench_tight.py --part cost``; CPU µs per
-step, per step the least of three runs, on a 2-core machine shared with
-3.5–4.5 other processes, so read the ratios; 0/20/40 % loss): in the design
-``strict=False`` costs 1.25–1.34× the set-membership estimator alone on the
-two carts, 1.19–1.26× on the cart-pole and 1.05–1.09× on the ``n = 10``
-chain, against 1.32–1.42×, 1.21–1.35× and 1.07–1.09× for the previous
-version in the same run; the designed side (``strict=False`` in the design
-minus the set-membership step) fell from 108–160 µs to 80–120 µs at ``n = 4``;
-``strict=True`` costs 56–88 µs per step against 90–144 µs.  What is left of
-the designed side at ``n = 4``: the compiled call (about 15 µs on its own, a
-third of it passing its arguments, 20–30 µs in the lockstep, where it runs
-cold after a set-membership step), about 15–20 µs of Python around it, and
-the Girard reduction of the designed set at each period start once it has
-more than ``order · n`` generators (:func:`eqrec.bounds.zonotope.reduce_order`,
-60 µs on its own with ``n = 4``, 100–170 µs in the lockstep: 15–25 µs per step
-on average).  Out of the design a step is the set-membership step, with the
-return's check at each period start (the carried set is formed only when no
-set-membership bound exceeds ``μ1``).  ``tight=False`` costs the same as
-``tight=True`` (the set-membership estimator runs for the fallback either way).
+step, per step the least of three runs, three runs on a 2-core machine shared
+with 4–6 other processes, so read the ratios; 0/20/40 % loss): in the design
+``strict=False`` costs 1.11–1.18×, 1.17–1.21× and 1.19–1.25× the
+set-membership estimator alone on the two carts, 1.07–1.13×, 1.10–1.17× and
+1.16–1.23× on the cart-pole and 1.02–1.08× on the ``n = 10`` chain, against
+1.17–1.25×, 1.21–1.29×, 1.26–1.39×; 1.09–1.13×, 1.13–1.23×, 1.19–1.28×;
+1.03–1.07× for the previous version in the same runs; ``strict=True`` costs
+the same as before (33–110 µs per step, as the previous version's 33–104 µs
+in the same runs).  What is left of the designed side at ``n = 4`` (two carts,
+40 % loss, about 45–70 µs a step in the design): the compiled call (6 µs on
+its own, a third of it passing its arguments, 14–20 µs after a set-membership
+step, whose work leaves the caches cold), about 15 µs of Python around it, the
+Girard reduction of the designed set at each period start (about 25 µs, 4 µs
+per step on average) and the returns to the design (9 of the 103 steps in the
+design on that trace, each about 150–200 µs beyond a designed step: the
+set-membership estimator's carried set formed by NumPy, about 70–90 µs, and
+its reduction to the order, 30–40 µs; 13–16 µs per step on average).  Out of
+the design a step is the set-membership step, with the return's check at each
+period start (the carried set is formed only when no set-membership bound
+exceeds ``μ1``).  ``tight=False`` costs the same as ``tight=True`` (the
+set-membership estimator runs for the fallback either way).
 """
 
 from __future__ import annotations
@@ -152,7 +162,7 @@ from typing import Iterable
 import numba
 import numpy as np
 
-from eqrec.arrivals.packets import Packet, as_packets, check_estimate
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input
 from eqrec.bounds.data_classes import ClassGains
 from eqrec.bounds.gains import GainSchedule
 from eqrec.bounds.zonotope import (PARTS_LIMIT, ErrorMap, ErrorSet, check_order, hull_pad, outer_row_sums,
@@ -202,10 +212,18 @@ def _tighter(row_sums, rho, level, sm_bounds, sm_x, x, tight, xhat, bounds,
     return top
 
 
+def _within(G: np.ndarray, level: float) -> bool:
+    """``np.all(outer_row_sums(G) <= level)``, the same decision: the row sums of :func:`outer_row_sums` are those of
+    :func:`eqrec.bounds.zonotope.row_sums_of_parts_compiled` with an empty second part (the same additions in the
+    same order, up to :data:`PARTS_LIMIT` columns), one compiled call (the return's check of the carried set)."""
+    if G.shape[1] > PARTS_LIMIT or not G.flags.c_contiguous:
+        return bool(np.all(outer_row_sums(G) <= level))
+    return bool((row_sums_of_parts_compiled(G, np.zeros((G.shape[0], 0))) <= level).all())
+
+
 @numba.njit(cache=True)
-def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
-                   rounding_map, state, noise, u, rows, radius, t, taus, ys, level, start_set, sm_bounds, sm_x, tight,
-                   out, use_sm):  # pragma: no cover - compiled
+def _designed_step(A, B, absB, fixed, period, K, absK, S, rounding_map, state, noise, u, rows, radius, t, taus, ys,
+                   level, start_set, sm_bounds, sm_x, tight, out, use_sm):  # pragma: no cover - compiled
     r"""A step in the design with ``strict=False`` in one compiled call: the class step from the packets as they
     arrived (:func:`eqrec.estimators.error_maps.class_step`, with the class's error map parts ``state`` = Φ and
     ``noise`` = N after its rounding map: the residuals, the stacked
@@ -220,8 +238,7 @@ def _designed_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_term
     tuple
         ``(Φ G(s), the designed bound, the largest reported bound)``.
     """
-    top = class_step(A, B, absA, absB, vecs, absC, v, Cs, output_terms, state_terms, factor, period, K, absK, S,
-                     rounding_map, u, rows, radius, t, taus, ys, out)
+    top = class_step(A, B, absB, fixed, period, K, absK, S, rounding_map, u, rows, radius, t, taus, ys, out)
     bound = np.nextafter(level + top, np.inf) if np.isfinite(level) else level
     P = np.dot(state, start_set)
     row_sums = row_sums_of_parts_compiled(P, noise)
@@ -313,7 +330,7 @@ class GuaranteedEstimator:
             raise InputError("strict=False needs class gains (a design of the class engine, engine='classes'): the "
                              "bound outside the language is computed from the class maps", field="strict")
         self.system, self.gains, self.bound_of = system, gains, bound_of
-        self._n, self._p = system.n, system.p
+        self._n, self._p, self._m = system.n, system.p, system.m
         self.mu1 = float(mu1)
         self.periodic = bool(periodic)
         self.strict = bool(strict)
@@ -645,23 +662,30 @@ class GuaranteedEstimator:
             # without forming the set: the same decision
             carried = sm.carried_set if (now - self._t0) % self.gains.horizon == 0 \
                 and not (sm._beta > self.mu1 * (1.0 + 1e-6)).any() else None
-            if carried is not None and np.all(outer_row_sums(carried[1]) <= self.mu1):
-                # checked first: nothing changes if it raises; the packets checked there are the step taken below
-                est, taken = self._return_to_design(now, packets, u, carried)
-            else:
-                return self._outside_bounds(*sm.step(packets, u))
+            checked_u = check_input(u, self._m)  # (raises before anything changes)
+            if carried is None or not _within(carried[1], self.mu1):
+                sm._step_checked(packets, checked_u)
+                return self._outside_bounds()
+            # the return: the set-membership step first (the one step that may still refuse the data: a packet its
+            # window already holds, stamped before the new period, which the class form drops), then the designed
+            # gains from the carried set, which the set-membership step does not read (it was formed before)
+            sm._step_checked(packets, checked_u)
+            est, taken = self._return_to_design(now, packets, u, carried)  # (cannot raise: the data are checked)
+            entry, level, kernel, _ = taken[7]
+            if entry is None:  # the data of the period's first step already out of the language
+                self._outside = True
+                return self._outside_bounds()
         else:
             taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
-        # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
-        entry, level, kernel, _ = taken[7]
-        # the set-membership estimator takes the checked packets and input as they are (one intake)
-        checked_u = None if u is None else taken[5]
-        sm = self._sm
-        if entry is None:  # out of the language: the set-membership estimate from now on
-            reported = sm.step(packets, checked_u)
-            self._outside = True
-            return self._outside_bounds(*reported)
-        sm.step(packets, checked_u)  # all-or-nothing; the class step below cannot raise (its class exists)
+            # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
+            entry, level, kernel, _ = taken[7]
+            # the set-membership estimator takes the packets and the input as checked (one intake: its private entry)
+            sm = self._sm
+            if entry is None:  # out of the language: the set-membership estimate from now on
+                sm._step_checked(packets, taken[5])
+                self._outside = True
+                return self._outside_bounds()
+            sm._step_checked(packets, taken[5])  # all-or-nothing; the class step below cannot raise (its class exists)
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
@@ -695,26 +719,31 @@ class GuaranteedEstimator:
         return ZonotopeEstimator(self.system, x0_radius=self.mu1, max_delay=self.gains.horizon,
                                  order=self.order).periodic_model(self.gains.horizon, self._t0)
 
-    def _outside_bounds(self, xhat: np.ndarray, bound: float) -> tuple[np.ndarray, float]:
-        """A step out of the design: the set-membership estimate and its bounds (``bound``: the largest, as its
-        ``step`` returned it)."""
+    def _outside_bounds(self) -> tuple[np.ndarray, float]:
+        """A step out of the design: the set-membership estimate and its bounds (the largest, as its ``step``
+        returns it), after its step."""
+        sm = self._sm
+        beta = sm._beta
         self._use_sm = None
-        self._bounds = self._sm.state_bounds
-        self.bound = bound
-        return xhat, bound
+        self._bounds = beta.copy()
+        self.bound = bound = float(beta.max()) if beta.size else 0.0
+        return sm._xhat.copy(), bound
 
     def _return_to_design(self, now: int, packets, u,
                           carried: tuple[np.ndarray, np.ndarray]) -> "tuple[ClassEstimator, tuple]":
-        """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set`, which lies
-        in the ``μ1`` box), and the step's packets checked on them (:meth:`ClassEstimator._take`, once, on the
-        estimator reset here)."""
+        """The designed gains again from the set-membership centre (``carried``: its :attr:`carried_set` before this
+        step's, which lies in the ``μ1`` box), and the step's packets placed on them (:meth:`ClassEstimator._take`,
+        on the estimator reset here).  Called after the set-membership step has taken the packets (the one part of
+        a return that may refuse them), with the packets and the input checked: it cannot raise, so a refused
+        return changes nothing."""
         centre, generators = carried
-        # a spare class estimator, made once and reset at each return (making one checks every class gain)
+        # a spare class estimator, made once and reset at each return (a twin of the one in use: making one anew
+        # checks every class gain again)
         est = self._spare
         if est is None:
-            est = make_estimator(self.system, self.gains, None, periodic=True, bound_of=self.bound_of, mu1=self.mu1)
-        est.reset(centre, t0=now)
-        taken = est._take(packets, u)  # raises before anything of this estimator changes (the spare is not in use)
+            est = self._est._twin()
+        est._restart(centre.copy(), now)  # reset(centre, now) without its checks: the centre is checked finite
+        taken = est._take(packets, u)  # (the packets and the input already checked: it cannot raise here)
         self._set = ErrorSet(generators, now, self.order)
         self._est, self._spare, self._outside = est, self._est, False
         self._use_sm = None

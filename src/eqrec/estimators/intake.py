@@ -339,15 +339,20 @@ class StampedEstimator:
         """
         if not is_stamp(t0):
             raise InputError(f"the start time must be an integer, got {t0!r}", field="t0")
-        x = check_estimate(xhat0, self.system.n)
-        self._clear(int(t0))
+        self._restart(check_estimate(xhat0, self.system.n), int(t0))
+        return self
+
+    def _restart(self, x: np.ndarray, t0: int) -> None:
+        """:meth:`reset` from an estimate already checked: ``x`` a finite float vector of ``n`` entries (kept, not
+        copied: a new array of the caller's) and ``t0`` an ``int`` (the return of
+        :class:`eqrec.estimators.guaranteed.GuaranteedEstimator` to the design, from the set-membership centre)."""
+        self._clear(t0)
         self.xhat = x
         self._on_reset()
         self.bound = self.mu1
         # the simulated x(t0) = x̂(t0) + ξ(t0) is itself rounded: half an ulp of its size
         self._rho = rounding_allowance(0.0, 1, np.abs(x) + self._radius())
         self._rows = None  # (the class form's x̄, x̂, ρ in one array: made again from these at its next step)
-        return self
 
     def carry_rounding(self, rounding: float, error_radius: "float | None") -> None:
         """Start the current period with the allowance of the estimate it starts from (module docstring).

@@ -656,8 +656,21 @@ class ZonotopeEstimator:
             stamped in the future or received twice, a time past a time-varying system's data, data whose
             propagation overflows in floating point (the estimator is left unchanged).
         """
-        t = self.time
-        intake = self._intake(y, u)
+        t = self.time  # (raises before reset)
+        self._step_checked(as_packets(y, t, (self.system.p,)), check_input(u, self.system.m))
+        beta = self._beta
+        return self._xhat.copy(), float(beta.max()) if beta.size else 0.0
+
+    def _step_checked(self, packets: list, u: np.ndarray) -> None:
+        """:meth:`step` from packets and an input already checked (the call path of an estimator that runs this one
+        beside its own and has checked them once for both, :class:`eqrec.estimators.guaranteed.GuaranteedEstimator`):
+        ``packets`` as :func:`eqrec.arrivals.packets.as_packets` returns them for the current time and ``(p,)``,
+        ``u`` as :func:`eqrec.arrivals.packets.check_input` returns it (read only).  The estimate and the bounds are
+        then ``_xhat`` and ``_beta`` (not copied).  Raises :class:`InputError` as :meth:`step` does for what the
+        window refuses (a second packet of one time, a time past a time-varying system's data, an overflow);
+        nothing changes then."""
+        t = self._time
+        intake = self._intake(packets, u)
         xhat, beta, extra = self._estimate(intake)
         sets = intake["carried"]
         P = sets["P"] if sets["P"] is not sets["G"] else sets["c"]  # (the filters' set itself: checked once)
@@ -668,15 +681,12 @@ class ZonotopeEstimator:
                              "left unchanged", field="y" if intake["packets"] else "u" if np.any(intake["u"])
                              else "xhat0")
         self._commit(intake, xhat, beta, extra)
-        return xhat.copy(), float(beta.max()) if beta.size else 0.0
 
-    def _intake(self, y: Any, u: Any) -> dict:
-        """Check what arrived at ``t`` and the input, store the packets in the window and let the filters take
-        in the time that leaves it: the proposed new state, nothing changed (raises on bad input)."""
-        t = self.time
+    def _intake(self, packets: list, u: np.ndarray) -> dict:
+        """Store the checked packets of time ``t`` in the window (:meth:`_step_checked`) and let the filters take
+        in the time that leaves it: the proposed new state, nothing changed (raises on what the window refuses)."""
+        t = self._time
         sysm = self.system
-        packets = as_packets(y, t, (sysm.p,))
-        u = check_input(u, sysm.m)
         lim = self._horizon
         if lim is not None and self._model_time(t) >= lim:
             raise InputError(f"time-varying data covers times 0..{lim - 1}, not {t}", field="system")
