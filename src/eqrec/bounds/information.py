@@ -447,7 +447,8 @@ class _HighsModel:
         self.h = self._load()
         self.retries = 0
         self.hard: set = set()  # objectives whose last solve needed the dual simplex (fallback only)
-        self.bases: dict = {}  # their optimal bases (fallback only)
+        self.bases: dict = {}  # their optimal bases and len(batches) then (fallback only)
+        self.batches: list = []  # the deliveries so far: (local rows, values)
 
     def _load(self):
         h = highs_model(self.lp, self.options)
@@ -459,32 +460,67 @@ class _HighsModel:
     def _run(self, key=None) -> str:
         """Run from the current basis.  With the fallback: the primal simplex for at most
         :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then, if it has not reached the optimum, the dual simplex from
-        where it stopped.  An objective ``key`` that needed the dual simplex last time (the same state at the step
-        before) goes to it at once, from its own optimal basis of then (the rows delivered since change bounds
-        only, and its objective moves by one step: closer than the neighbour's optimum, 15 % fewer seconds at
-        n = 30), until it takes fewer than :data:`LIMIT_PRIMAL_ITERATIONS` iterations there."""
-        dual_first = self.fallback is not None and key is not None and key in self.hard
-        if not dual_first:
+        where it stopped.  An objective ``key`` that needed the dual simplex last time (the same state at an
+        earlier step of this model) starts from its own optimal basis of then instead (:meth:`_run_own`), until
+        it takes fewer than :data:`LIMIT_PRIMAL_ITERATIONS` iterations there."""
+        hard = self.fallback is not None and key is not None and key in self.hard
+        if hard and key in self.bases:
+            return self._run_own(key)
+        if not hard:
             self.h.run()
             status, _ = highs_status(int(self.h.getModelStatus()))
             if self.fallback is None or status != "Iteration limit reached":
                 self.hard.discard(key)
                 return status
         self.hard.add(key)
-        if dual_first and key in self.bases:  # its own optimal basis of the step before (same model)
-            self.h.setBasis(self.bases[key])
+        status, iterations = self._dual()
+        if iterations < LIMIT_PRIMAL_ITERATIONS:  # easy this time: primal next
+            self.hard.discard(key)
+        elif status == "optimal":
+            self.bases[key] = (self.h.getBasis(), len(self.batches))
+        return status
+
+    def _dual(self) -> tuple[str, int]:
+        """The dual simplex of the fallback options, without an iteration limit, from the current basis; then the
+        primal phase's settings again.  Its status and iterations."""
         for name, val in self.fallback.items():
             self.h.setOptionValue(name, val)
         self.h.setOptionValue("simplex_iteration_limit", self.restore["simplex_iteration_limit"])
         self.h.run()
         status, _ = highs_status(int(self.h.getModelStatus()))
-        if self.h.getInfo().simplex_iteration_count < LIMIT_PRIMAL_ITERATIONS:  # easy this time: primal next
-            self.hard.discard(key)
-        elif status == "optimal":
-            self.bases[key] = self.h.getBasis()
+        iterations = int(self.h.getInfo().simplex_iteration_count)
         for name, val in self.restore.items():
             self.h.setOptionValue(name, val)
         self.h.setOptionValue("simplex_iteration_limit", LIMIT_PRIMAL_ITERATIONS)
+        return status, iterations
+
+    def _run_own(self, key) -> str:
+        """Solve the objective ``key`` from its own optimal basis of an earlier step, in two phases: with the rows
+        delivered since then free again (as they were then) the basis stays primal feasible and only the objective
+        has moved (by a step), which the primal simplex follows in a few iterations (14-109 on the hard states at
+        n = 30, against about 2,000 for the dual simplex); then the rows are fixed again, which leaves that optimum
+        dual feasible, and the dual simplex takes in the new measurements (about 700 iterations at n = 30, against
+        2,400-3,900 for the primal simplex).  The last run solves the current LP, so the value is its optimum as
+        before."""
+        basis, seen = self.bases[key]
+        self.h.setBasis(basis)
+        since = self.batches[seen:]
+        idx = np.concatenate([b[0] for b in since]) if since else np.zeros(0, np.int32)
+        if idx.size:
+            self.h.changeRowsBounds(idx.size, idx, np.full(idx.size, -INF), np.full(idx.size, INF))
+        self.h.run()  # primal, at most LIMIT_PRIMAL_ITERATIONS
+        status, _ = highs_status(int(self.h.getModelStatus()))
+        iterations = int(self.h.getInfo().simplex_iteration_count)
+        if idx.size:
+            val = np.concatenate([b[1] for b in since])
+            self.h.changeRowsBounds(idx.size, idx, val, val)
+        if idx.size or status != "optimal":
+            status, more = self._dual()
+            iterations += more
+        if status == "optimal":
+            self.bases[key] = (self.h.getBasis(), len(self.batches))
+        if iterations < LIMIT_PRIMAL_ITERATIONS:
+            self.hard.discard(key)
         return status
 
     def deliver(self, rows: np.ndarray, values: np.ndarray | None = None) -> None:
@@ -493,6 +529,7 @@ class _HighsModel:
         val = np.zeros(idx.size) if values is None else np.asarray(values, float)
         self.lp.row_lower[idx] = self.lp.row_upper[idx] = val
         self.h.changeRowsBounds(idx.size, idx, val, val)
+        self.batches.append((idx, val))
 
     def maximise(self, cols: np.ndarray, coef: np.ndarray, what: str, key=None) -> float:
         """``max coef · z[cols]`` (global columns) over the current LP (``key``: the objective's name across
