@@ -413,3 +413,35 @@ def test_small_plants_never_start_worker_processes(acc):
     two = information_limit(acc, trace, 0.5, cache=False, n_jobs=2)
     assert info.last_solve_info() == {"workers": 1, "tasks": 0, "task_seconds": 0.0}
     np.testing.assert_array_equal(one, two)
+
+
+def test_hard_states_from_their_own_basis_in_two_phases_give_the_same_rows(monkeypatch):
+    """From LIMIT_DUAL_FROM_N states on (lowered here, with 3 primal iterations so that states fall back) a state
+    that needed the dual simplex starts the next step from its own optimal basis, the rows delivered since freed
+    for a primal phase and fixed again for the dual one: the path is taken, with rows to free and without, the
+    model's rows are fixed again afterwards, and every row equals the plain primal simplex's and an independent
+    solver's."""
+    import eqrec.bounds.information as info
+
+    plant = tank_chain(6, 2, eta_v=0.05)
+    trace = _random_trace(40, 0.3, 2, 50)
+    primal = information_limit(plant, trace, 1.0, cache=False)
+    monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
+    monkeypatch.setattr(info, "LIMIT_PRIMAL_ITERATIONS", 3)
+    freed = []
+    original = info._HighsModel._run_own
+
+    def counted(self, key):
+        freed.append(len(self.batches) - self.bases[key][1])
+        status = original(self, key)
+        for idx, val in self.batches:  # every delivered row is fixed again in the model
+            lower = np.array(self.h.getLp().row_lower_)[idx]
+            np.testing.assert_array_equal(lower, val)
+        return status
+
+    monkeypatch.setattr(info._HighsModel, "_run_own", counted)
+    hybrid = information_limit(plant, trace, 1.0, cache=False)
+    assert any(f > 0 for f in freed) and any(f == 0 for f in freed)
+    np.testing.assert_allclose(hybrid, primal, rtol=REL, atol=1e-12)
+    np.testing.assert_allclose(hybrid, information_limit(plant, trace, 1.0, solver="scipy", cache=False),
+                               rtol=1e-7, atol=1e-9)

@@ -50,6 +50,18 @@ step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps on
 order and each objective the primal simplex for at most :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then the dual
 simplex of :data:`LIMIT_HIGHS_OPTIONS` from where it stopped); other solvers solve each LP from scratch.  The cost of
 a step grows with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).
+
+From :data:`LIMIT_DUAL_FROM_N` states on, two more things.  A state that needed the dual simplex (next to a
+sensor) starts on the next step from its own optimal basis, in two phases: with the rows delivered since freed
+again, that basis is still primal feasible and only the objective has moved by a step, which the primal simplex
+follows in tens of iterations; fixing the rows again leaves it dual feasible, and the dual simplex takes in the
+new measurements (``_HighsModel._run_own``: about 800 iterations in all at n = 30, against about 2,000 for the
+dual simplex alone from that basis, whose objective step is what costs it).  And the states of a row are
+independent LPs: they are solved in tasks of one chunk and one group of neighbouring states
+(:func:`state_groups`), each on a HiGHS model of its own, on ``n_jobs`` worker processes (by default every core
+once the estimate reaches :data:`PARALLEL_SECONDS`).  Each task is a fixed sequence of solves whatever process runs
+it, so the values do not depend on the number of workers (byte for byte); against one model for all the states
+they move within the LP tolerance (different warm starts).
 Rows are cached by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree,
 and repeated calls on one trace, share their LPs (:func:`cache_info`).
 
