@@ -76,6 +76,10 @@ Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity w
 150-step tank chain of n = 30 the primal-then-dual fallback (below 16 states unused) and the dual simplex alone
 agree to 1e-9 on 4,499 of the 4,500 values (median 6e-13); on the last the fallback's warm solve stopped 5.4e-9
 (relative 1.5e-8) below the optimum that cold solves (either simplex, the interior point with crossover) agree on.
+The groups and the two-phase start of hard states (below) agree with that fallback to 1e-9 on 4,498 of the 4,500
+values (median 2e-13); of the other two, one is that value, now on the cold optimum (3e-16 from it), and one (row
+67, state 20) is 1.5e-8 (relative 3.8e-8) above the cold optimum, which the old path was on (6e-14): warm solves
+drift by that much at n = 30, either way.
 
 Window (``window=W``): the rows ``kW .. (k+1)W - 1`` use the box :math:`[-r(s), r(s)]` at the start
 ``s = (k-1)W`` rounded down to a multiple of ``K`` (:math:`r(s)` is row ``s - 1``) and the data of times
@@ -877,7 +881,8 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
         ``system`` not an :class:`AffineSystem`, ``trace`` not an :class:`ArrivalTrace` or longer than a
         time-varying system (field ``system``, ``trace``); ``x0_radius`` negative, NaN, infinite, of the wrong
         length or above :data:`MAX_X0_RADIUS` (field ``x0_radius``); unknown ``solver``; ``window`` not an
-        integer ``>= 1``; ``solver_options`` not a dict; ``n_jobs`` not a positive integer, ``-1`` or ``None``; the rows estimated past :data:`MAX_ESTIMATED_SECONDS`
+        integer ``>= 1``; ``solver_options`` not a dict; ``n_jobs`` not a positive integer, ``-1`` or ``None``
+        (field ``n_jobs``); the rows estimated past :data:`MAX_ESTIMATED_SECONDS`
         without ``force`` (field ``trace``).
     SolverFailure
         An LP without an optimal solution (it is feasible and bounded, so a solver fault; an 'infeasible' or
