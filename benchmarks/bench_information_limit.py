@@ -44,6 +44,54 @@ the whole trace 1.4 times less.  Values: n = 20 within 7e-11 of before; n = 30 w
 (``K = 1``: 1.5 times slower than ``K = 8`` with the dual simplex on the last 8 rows at n = 30, 1.3 with the
 primal); steepest-edge pricing (dual: 1.4 times slower; primal: 3 times); a dual feasibility tolerance of 1e-10
 in the dual phase (no closer to the cold optima).  The goal (60 s at n = 30) is still not met.
+
+Measured 2026-11-29, fourth session (same tank chains and traces, 150 steps; old = the third session's code, new
+= this one with ``n_jobs=1`` and with ``n_jobs=None`` (2 workers from n = 20 on), the three back to back in one
+script; process time including the worker processes' tasks; 2 cores shared with three other helpers, load 4-7, so
+the wall clock is far from an idle machine's):
+
+====  =======================  =======================  =======================
+n     old wall / cpu s         new, 1 process           new, 2 workers
+====  =======================  =======================  =======================
+4     0.79 / 0.36              0.63 / 0.33              0.68 / 0.34 (1 process)
+10    11.44 / 5.45             17.12 / 5.20             13.79 / 5.14 (1 process)
+20    279.5 / 84.2             103.0 / 59.4             101.3 / 58.7
+30    557.7 / 300.6            262.6 / 167.5            293.0 / 198.8
+====  =======================  =======================  =======================
+
+n = 4 and 10: the same path, values byte-identical.  n = 20 and 30: 1 process and 2 workers byte-identical to each
+other; against the old code within 1.5e-10 at n = 20; at n = 30 within 1e-9 on 4,498 of 4,500 values (median
+2e-13), the other two checked against cold solves: the old code's one known miss (row 131, state 16, 5.4e-9 below
+the cold optimum) is on it now (3e-16), and row 67, state 20 is now 1.5e-8 above it (relative 3.8e-8; the old
+value was on it).  What was kept, and why:
+
+* Hard states from their own basis in two phases (``_HighsModel._run_own``).  Where the time goes (rows 128-135
+  at n = 30, 240 LPs, 41.5 s): the 89 LPs of more than 1,000 iterations take 36.9 s (164 µs per iteration), the
+  others 10-25 ms each.  From a hard state's own optimal basis of the step before, moving only its objective by a
+  step costs the dual simplex 1,931-2,349 iterations and the primal 14-109; fixing only the newly delivered rows
+  (5) costs the dual 706-738 and the primal 2,390-3,928.  So: free the rows delivered since, primal simplex, fix
+  them again, dual simplex: about 800-1,000 iterations instead of 2,000-2,500; rows 128-149 at n = 30: 126.7 ->
+  71.0 s.
+* Tasks of one chunk and one group of 8 neighbouring states on worker processes (:func:`state_groups`,
+  ``n_jobs``).  In one process the groups cost 0-10 % (one cold start per group and chunk) and make the values
+  independent of the number of workers; with 2 workers the process time is about the same, so the wall time
+  halves only where a second core is free: here it was not (load 4-7 from other jobs), and the wall clock gained
+  nothing measurable.
+
+Tried and not kept:
+
+* Row generation on the delivered measurement rows: the hypothesis fails.  At n = 30, row 149 (LP of 1,045 rows
+  and 5,575 columns, 505 delivered measurement rows), the rows with a nonzero dual at a cold optimum number
+  278-417 per state (55-83 %), 475 (94 %) over the 30 states; at n = 20, row 59: 57-100 of 136 per state, 118
+  over all.  A working set would hold most of them and save nothing.
+* Cost perturbation: HiGHS's primal bound perturbation (multiplier 0, 10, 100) and dual cost perturbation (0, 10,
+  100) at n = 20, 60 steps: 6.5-9.3 s against 7.1-7.4 s (the load's noise); on rows 128-131 at n = 30 the dual
+  cost perturbation off 10.6 s, default 11.7, 20 times 15.8.  Our own random cost perturbation (1e-7 relative,
+  then a clean-up solve on the exact costs): more iterations (81,649 against 70,006) in the same time.
+
+The goal (60 s at n = 30 over 150 steps) is still not met: 167.5 s of process time in one process (1.8 times
+less than 300.6; growth from n = 10 to 30 about n^3.2, against n^3.7 before), so about 85-100 s of wall clock
+with 2 workers on an idle 2-core machine (not measured here: no core was idle).
 """
 
 from __future__ import annotations
@@ -56,7 +104,8 @@ import numpy as np
 
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
 from eqrec.bounds.consistent import consistent_set
-from eqrec.bounds.information import cache_info, clear_cache, estimate_seconds, information_limit
+from eqrec.bounds.information import (cache_info, clear_cache, estimate_seconds, information_limit,
+                                      last_solve_info)
 from eqrec.systems.affine import AffineSystem
 from eqrec.systems.examples import tank_chain
 from eqrec.systems.examples import acc_system, batch_reactor
@@ -79,19 +128,29 @@ def tanks(n: int, p: int, flow: float = 0.2, leak: float = 0.05, eta_w: float = 
     return AffineSystem(A=chain.A, C=np.eye(n)[sensors], E=np.eye(n), eta_w=eta_w, eta_v=eta_v, name=f"{n} tanks")
 
 
-def scale(sizes: list[tuple[int, int]], steps: int, consistent_sizes: list[int]) -> None:
-    """The scale table (module docstring): the exact limit at every size, its growth exponent, the consistent set."""
+def scale(sizes: list[tuple[int, int]], steps: int, consistent_sizes: list[int], jobs: list) -> None:
+    """The scale table (module docstring): the exact limit at every size with each ``n_jobs`` of ``jobs``, its
+    growth exponent (of the first), the consistent set."""
     print(f"scale: chains of coupled tanks, 30 % loss, delays <= 2, {steps} steps, x0_radius 1 (one run)")
-    print(f"{'n':>3s} {'p':>2s} {'wall s':>8s} {'cpu s':>8s} {'ms/step':>8s} {'estimate s':>10s} {'max limit':>10s}")
+    print(f"{'n':>3s} {'p':>2s} {'n_jobs':>6s} {'workers':>7s} {'wall s':>8s} {'cpu s':>8s} {'ms/step':>8s} "
+          f"{'estimate s':>10s} {'max limit':>10s} {'max |diff|':>10s}")
     cpu_by_n = {}
     for n, p in sizes:
         plant = tanks(n, p)
         trace = _trace(steps, 0.3, 45 + n, max_delay=2)
-        clear_cache()
-        limit, wall, cpu = _timed(lambda: information_limit(plant, trace, 1.0, cache=False, force=True))
-        cpu_by_n[n] = cpu
-        print(f"{n:3d} {p:2d} {wall:8.2f} {cpu:8.2f} {1e3 * wall / steps:8.1f} "
-              f"{estimate_seconds(plant, steps):10.2f} {float(limit.max()):10.4f}", flush=True)
+        first = None
+        for jobs_ in jobs:
+            clear_cache()
+            limit, wall, cpu = _timed(lambda: information_limit(plant, trace, 1.0, cache=False, force=True,
+                                                                n_jobs=jobs_))
+            ran = last_solve_info()
+            if ran["workers"] > 1:  # the tasks' process time on the worker processes
+                cpu += ran["task_seconds"]
+            first = limit if first is None else first
+            cpu_by_n.setdefault(n, cpu)
+            print(f"{n:3d} {p:2d} {str(jobs_):>6s} {ran['workers']:7d} {wall:8.2f} {cpu:8.2f} "
+                  f"{1e3 * wall / steps:8.1f} {estimate_seconds(plant, steps):10.2f} {float(limit.max()):10.4f} "
+                  f"{float(np.abs(limit - first).max()):10.1e}", flush=True)
     if len(cpu_by_n) >= 2:
         ns = np.array(sorted(cpu_by_n), float)
         slope = np.polyfit(np.log(ns), np.log([cpu_by_n[int(v)] for v in ns]), 1)[0]
@@ -134,11 +193,14 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--sizes", default="4:1,10:2,20:4,30:5", help="scale: n:p pairs")
     ap.add_argument("--scale-steps", type=int, default=150)
     ap.add_argument("--consistent-sizes", default="4,10", help="scale: the n at which to time the consistent set")
+    ap.add_argument("--jobs", default="1,auto", help="scale: the n_jobs of information_limit to time, one after the "
+                    "other at every size (auto: None, every core when the estimate reaches PARALLEL_SECONDS)")
     args = ap.parse_args(argv)
     parts = set(args.only or ["plants", "cache", "scale"])
     if "scale" in parts:
         sizes = [tuple(int(v) for v in pair.split(":")) for pair in args.sizes.split(",")]
-        scale(sizes, args.scale_steps, [int(v) for v in args.consistent_sizes.split(",") if v])
+        jobs = [None if v == "auto" else int(v) for v in args.jobs.split(",")]
+        scale(sizes, args.scale_steps, [int(v) for v in args.consistent_sizes.split(",") if v], jobs)
         print()
         if parts == {"scale"}:
             return

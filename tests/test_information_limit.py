@@ -170,6 +170,8 @@ def test_other_solver_agrees(acc):
     ({"solver": "gurobi"}, "solver"),
     ({"window": 0}, "window"),
     ({"solver_options": 3}, "solver_options"),
+    ({"n_jobs": 0}, "n_jobs"),
+    ({"n_jobs": 1.5}, "n_jobs"),
 ])
 def test_bad_input(acc, kwargs, field):
     args = {"system": acc, "trace": ArrivalTrace([0, 1]), "x0_radius": 0.5, **kwargs}
@@ -357,3 +359,89 @@ def test_the_fallback_restores_the_primal_settings(monkeypatch):
     assert info._option(model.h, "simplex_strategy") == info.HIGHS_OPTIONS["simplex_strategy"]
     assert info._option(model.h, "simplex_iteration_limit") == 0
     assert model.restore["simplex_iteration_limit"] == 2**31 - 1
+
+
+def test_state_groups_partition_the_states_into_neighbours():
+    """Below LIMIT_DUAL_FROM_N one group (the path of before); from there contiguous groups of at most
+    LIMIT_GROUP_STATES states, sizes differing by at most one, covering every state once."""
+    import eqrec.bounds.information as info
+
+    assert [g.tolist() for g in info.state_groups(5)] == [[0, 1, 2, 3, 4]]
+    for n in (info.LIMIT_DUAL_FROM_N, 20, 30, 33):
+        groups = info.state_groups(n)
+        assert np.array_equal(np.concatenate(groups), np.arange(n))
+        sizes = [g.size for g in groups]
+        assert max(sizes) <= info.LIMIT_GROUP_STATES and max(sizes) - min(sizes) <= 1
+        assert len(groups) == -(-n // info.LIMIT_GROUP_STATES)
+
+
+@pytest.mark.parametrize("window", [None, 12])
+def test_groups_on_worker_processes_give_the_serial_rows_byte_for_byte(window, monkeypatch):
+    """From LIMIT_DUAL_FROM_N states on (lowered here, with groups of 2 states, on a 5-state chain over 70 steps:
+    3 chunks of CHUNK steps) the limit is solved in tasks of one group and one chunk: on 2 worker processes the
+    rows are the same bytes as in this process (each task carries its settings; the workers see the module's
+    defaults), every state is filled (none left at 0 by a misplaced group), and they agree with the path of one
+    model for all the states and with an independent solver to the LP tolerance."""
+    import eqrec.bounds.information as info
+
+    plant = tank_chain(5, 2, eta_v=0.05)
+    trace = _random_trace(70, 0.3, 2, 48)
+    whole = information_limit(plant, trace, 1.0, cache=False, window=window)
+    monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
+    monkeypatch.setattr(info, "LIMIT_GROUP_STATES", 2)
+    serial = information_limit(plant, trace, 1.0, cache=False, window=window, n_jobs=1)
+    assert info.last_solve_info()["workers"] == 1
+    parallel = information_limit(plant, trace, 1.0, cache=False, window=window, n_jobs=2)
+    ran = info.last_solve_info()
+    assert ran["workers"] == 2 and ran["task_seconds"] > 0
+    # 3 groups (2, 2, 1 states) times 3 chunks (rows 0-31, 32-63, 64-69), or 6 windows of one chunk each
+    assert ran["tasks"] == 3 * (3 if window is None else 6)
+    np.testing.assert_array_equal(parallel, serial)
+    assert np.all(serial > 0)
+    np.testing.assert_allclose(serial, whole, rtol=REL, atol=1e-12)
+    np.testing.assert_allclose(serial, information_limit(plant, trace, 1.0, solver="scipy", cache=False,
+                                                         window=window), rtol=1e-7, atol=1e-9)
+
+
+def test_small_plants_never_start_worker_processes(acc):
+    """Below LIMIT_DUAL_FROM_N states the limit solves in this process whatever n_jobs says (one model per chunk
+    for all the states: the values of before, byte for byte, as the results' plants need)."""
+    import eqrec.bounds.information as info
+
+    trace = _random_trace(40, 0.3, 2, 49)
+    one = information_limit(acc, trace, 0.5, cache=False, n_jobs=1)
+    two = information_limit(acc, trace, 0.5, cache=False, n_jobs=2)
+    assert info.last_solve_info() == {"workers": 1, "tasks": 0, "task_seconds": 0.0}
+    np.testing.assert_array_equal(one, two)
+
+
+def test_hard_states_from_their_own_basis_in_two_phases_give_the_same_rows(monkeypatch):
+    """From LIMIT_DUAL_FROM_N states on (lowered here, with 3 primal iterations so that states fall back) a state
+    that needed the dual simplex starts the next step from its own optimal basis, the rows delivered since freed
+    for a primal phase and fixed again for the dual one: the path is taken, with rows to free and without, the
+    model's rows are fixed again afterwards, and every row equals the plain primal simplex's and an independent
+    solver's."""
+    import eqrec.bounds.information as info
+
+    plant = tank_chain(6, 2, eta_v=0.05)
+    trace = _random_trace(40, 0.3, 2, 50)
+    primal = information_limit(plant, trace, 1.0, cache=False)
+    monkeypatch.setattr(info, "LIMIT_DUAL_FROM_N", 1)
+    monkeypatch.setattr(info, "LIMIT_PRIMAL_ITERATIONS", 3)
+    freed = []
+    original = info._HighsModel._run_own
+
+    def counted(self, key):
+        freed.append(len(self.batches) - self.bases[key][1])
+        status = original(self, key)
+        for idx, val in self.batches:  # every delivered row is fixed again in the model
+            lower = np.array(self.h.getLp().row_lower_)[idx]
+            np.testing.assert_array_equal(lower, val)
+        return status
+
+    monkeypatch.setattr(info._HighsModel, "_run_own", counted)
+    hybrid = information_limit(plant, trace, 1.0, cache=False)
+    assert any(f > 0 for f in freed) and any(f == 0 for f in freed)
+    np.testing.assert_allclose(hybrid, primal, rtol=REL, atol=1e-12)
+    np.testing.assert_allclose(hybrid, information_limit(plant, trace, 1.0, solver="scipy", cache=False),
+                               rtol=1e-7, atol=1e-9)

@@ -50,6 +50,18 @@ step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps on
 order and each objective the primal simplex for at most :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then the dual
 simplex of :data:`LIMIT_HIGHS_OPTIONS` from where it stopped); other solvers solve each LP from scratch.  The cost of
 a step grows with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).
+
+From :data:`LIMIT_DUAL_FROM_N` states on, two more things.  A state that needed the dual simplex (next to a
+sensor) starts on the next step from its own optimal basis, in two phases: with the rows delivered since freed
+again, that basis is still primal feasible and only the objective has moved by a step, which the primal simplex
+follows in tens of iterations; fixing the rows again leaves it dual feasible, and the dual simplex takes in the
+new measurements (``_HighsModel._run_own``: about 800 iterations in all at n = 30, against about 2,000 for the
+dual simplex alone from that basis, whose objective step is what costs it).  And the states of a row are
+independent LPs: they are solved in tasks of one chunk and one group of neighbouring states
+(:func:`state_groups`), each on a HiGHS model of its own, on ``n_jobs`` worker processes (by default every core
+once the estimate reaches :data:`PARALLEL_SECONDS`).  Each task is a fixed sequence of solves whatever process runs
+it, so the values do not depend on the number of workers (byte for byte); against one model for all the states
+they move within the LP tolerance (different warm starts).
 Rows are cached by (system, ``x0_radius``, solver, ``t``, :math:`\mathcal D_t`): runs whose delivered sets agree,
 and repeated calls on one trace, share their LPs (:func:`cache_info`).
 
@@ -64,6 +76,10 @@ Accuracy.  The values are LP optima to HiGHS's tolerances (1e-9): the identity w
 150-step tank chain of n = 30 the primal-then-dual fallback (below 16 states unused) and the dual simplex alone
 agree to 1e-9 on 4,499 of the 4,500 values (median 6e-13); on the last the fallback's warm solve stopped 5.4e-9
 (relative 1.5e-8) below the optimum that cold solves (either simplex, the interior point with crossover) agree on.
+The groups and the two-phase start of hard states (below) agree with that fallback to 1e-9 on 4,498 of the 4,500
+values (median 2e-13); of the other two, one is that value, now on the cold optimum (3e-16 from it), and one (row
+67, state 20) is 1.5e-8 (relative 3.8e-8) above the cold optimum, which the old path was on (6e-14): warm solves
+drift by that much at n = 30, either way.
 
 Window (``window=W``): the rows ``kW .. (k+1)W - 1`` use the box :math:`[-r(s), r(s)]` at the start
 ``s = (k-1)W`` rounded down to a multiple of ``K`` (:math:`r(s)` is row ``s - 1``) and the data of times
@@ -83,7 +99,9 @@ against 1 + 1e-12 on ACC (``benchmarks/bench_information_limit.py``).
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import time
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -94,7 +112,7 @@ from eqrec.arrivals.traces import NEVER, ArrivalTrace
 from eqrec.checks import instance, integer, radii
 from eqrec.errors import InfeasibleDesign, InputError, SolverFailure
 from eqrec.lp.model import INF, LinearProgram, LPBuilder
-from eqrec.lp.parallel import Progress
+from eqrec.lp.parallel import Progress, check_jobs, cpu_count, run_tasks
 from eqrec.lp.solvers import highs_model, highs_status, solve_lp, solver_info
 from eqrec.systems.affine import AffineSystem
 
@@ -394,6 +412,32 @@ LIMIT_PRIMAL_ITERATIONS = 200
 #: orders documented here, so the threshold stays.)
 LIMIT_DUAL_FROM_N = 16
 
+#: From :data:`LIMIT_DUAL_FROM_N` states on, the states of a row are solved in contiguous groups of at most this many
+#: (:func:`state_groups`), one task per group and chunk of :data:`CHUNK` steps, each on a HiGHS model of its own
+#: warm-starting along its own states and steps: the tasks are independent, so they run on several processes, and
+#: the values do not depend on how many (the same tasks, the same solves, whichever process runs them).
+LIMIT_GROUP_STATES = 8
+
+#: Estimated seconds (:func:`estimate_seconds`) from which :func:`information_limit` with ``n_jobs=None`` runs the
+#: tasks of a plant of at least :data:`LIMIT_DUAL_FROM_N` states on every core (below: in this process; starting
+#: the worker processes and sending them the trace's LP costs about a second).
+PARALLEL_SECONDS = 10.0
+
+_LAST_SOLVE = {"workers": 1, "tasks": 0, "task_seconds": 0.0}
+
+
+def last_solve_info() -> dict:
+    """How the last :func:`information_limit` call that solved LPs ran.
+
+    Returns
+    -------
+    dict
+        ``workers``: processes used (1: this one); ``tasks``: the tasks of :func:`state_groups` (0 below
+        :data:`LIMIT_DUAL_FROM_N` states); ``task_seconds``: their process time, summed over the processes that ran
+        them (on worker processes it is not in this process's ``time.process_time()``).
+    """
+    return dict(_LAST_SOLVE)
+
 
 def _option(h, key: str):
     """HiGHS option ``key`` of ``h`` (highspy returns ``(status, value)``; some versions the value alone)."""
@@ -419,7 +463,8 @@ class _HighsModel:
         self.h = self._load()
         self.retries = 0
         self.hard: set = set()  # objectives whose last solve needed the dual simplex (fallback only)
-        self.bases: dict = {}  # their optimal bases (fallback only)
+        self.bases: dict = {}  # their optimal bases and len(batches) then (fallback only)
+        self.batches: list = []  # the deliveries so far: (local rows, values)
 
     def _load(self):
         h = highs_model(self.lp, self.options)
@@ -431,32 +476,67 @@ class _HighsModel:
     def _run(self, key=None) -> str:
         """Run from the current basis.  With the fallback: the primal simplex for at most
         :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then, if it has not reached the optimum, the dual simplex from
-        where it stopped.  An objective ``key`` that needed the dual simplex last time (the same state at the step
-        before) goes to it at once, from its own optimal basis of then (the rows delivered since change bounds
-        only, and its objective moves by one step: closer than the neighbour's optimum, 15 % fewer seconds at
-        n = 30), until it takes fewer than :data:`LIMIT_PRIMAL_ITERATIONS` iterations there."""
-        dual_first = self.fallback is not None and key is not None and key in self.hard
-        if not dual_first:
+        where it stopped.  An objective ``key`` that needed the dual simplex last time (the same state at an
+        earlier step of this model) starts from its own optimal basis of then instead (:meth:`_run_own`), until
+        it takes fewer than :data:`LIMIT_PRIMAL_ITERATIONS` iterations there."""
+        hard = self.fallback is not None and key is not None and key in self.hard
+        if hard and key in self.bases:
+            return self._run_own(key)
+        if not hard:
             self.h.run()
             status, _ = highs_status(int(self.h.getModelStatus()))
             if self.fallback is None or status != "Iteration limit reached":
                 self.hard.discard(key)
                 return status
         self.hard.add(key)
-        if dual_first and key in self.bases:  # its own optimal basis of the step before (same model)
-            self.h.setBasis(self.bases[key])
+        status, iterations = self._dual()
+        if iterations < LIMIT_PRIMAL_ITERATIONS:  # easy this time: primal next
+            self.hard.discard(key)
+        elif status == "optimal":
+            self.bases[key] = (self.h.getBasis(), len(self.batches))
+        return status
+
+    def _dual(self) -> tuple[str, int]:
+        """The dual simplex of the fallback options, without an iteration limit, from the current basis; then the
+        primal phase's settings again.  Its status and iterations."""
         for name, val in self.fallback.items():
             self.h.setOptionValue(name, val)
         self.h.setOptionValue("simplex_iteration_limit", self.restore["simplex_iteration_limit"])
         self.h.run()
         status, _ = highs_status(int(self.h.getModelStatus()))
-        if self.h.getInfo().simplex_iteration_count < LIMIT_PRIMAL_ITERATIONS:  # easy this time: primal next
-            self.hard.discard(key)
-        elif status == "optimal":
-            self.bases[key] = self.h.getBasis()
+        iterations = int(self.h.getInfo().simplex_iteration_count)
         for name, val in self.restore.items():
             self.h.setOptionValue(name, val)
         self.h.setOptionValue("simplex_iteration_limit", LIMIT_PRIMAL_ITERATIONS)
+        return status, iterations
+
+    def _run_own(self, key) -> str:
+        """Solve the objective ``key`` from its own optimal basis of an earlier step, in two phases: with the rows
+        delivered since then free again (as they were then) the basis stays primal feasible and only the objective
+        has moved (by a step), which the primal simplex follows in a few iterations (14-109 on the hard states at
+        n = 30, against about 2,000 for the dual simplex); then the rows are fixed again, which leaves that optimum
+        dual feasible, and the dual simplex takes in the new measurements (about 700 iterations at n = 30, against
+        2,400-3,900 for the primal simplex).  The last run solves the current LP, so the value is its optimum as
+        before."""
+        basis, seen = self.bases[key]
+        self.h.setBasis(basis)
+        since = self.batches[seen:]
+        idx = np.concatenate([b[0] for b in since]) if since else np.zeros(0, np.int32)
+        if idx.size:
+            self.h.changeRowsBounds(idx.size, idx, np.full(idx.size, -INF), np.full(idx.size, INF))
+        self.h.run()  # primal, at most LIMIT_PRIMAL_ITERATIONS
+        status, _ = highs_status(int(self.h.getModelStatus()))
+        iterations = int(self.h.getInfo().simplex_iteration_count)
+        if idx.size:
+            val = np.concatenate([b[1] for b in since])
+            self.h.changeRowsBounds(idx.size, idx, val, val)
+        if idx.size or status != "optimal":
+            status, more = self._dual()
+            iterations += more
+        if status == "optimal":
+            self.bases[key] = (self.h.getBasis(), len(self.batches))
+        if iterations < LIMIT_PRIMAL_ITERATIONS:
+            self.hard.discard(key)
         return status
 
     def deliver(self, rows: np.ndarray, values: np.ndarray | None = None) -> None:
@@ -465,6 +545,7 @@ class _HighsModel:
         val = np.zeros(idx.size) if values is None else np.asarray(values, float)
         self.lp.row_lower[idx] = self.lp.row_upper[idx] = val
         self.h.changeRowsBounds(idx.size, idx, val, val)
+        self.batches.append((idx, val))
 
     def maximise(self, cols: np.ndarray, coef: np.ndarray, what: str, key=None) -> float:
         """``max coef · z[cols]`` (global columns) over the current LP (``key``: the objective's name across
@@ -501,18 +582,69 @@ def _window_lp(tlp: TraceLP, start: int, stop: int, fixed: list, box: np.ndarray
     return lp, c0, r0
 
 
-def _limit_order(t: int, n: int) -> np.ndarray:
-    """The states in the order row ``t`` solves them: increasing on even steps, decreasing on odd ones (each
-    warm solve starts from the previous objective's optimal basis, and the first state of a step is the last of
-    the step before: neighbouring states share more of their optimal vertex than the two ends of the chain)."""
-    return np.arange(n) if t % 2 == 0 or n < LIMIT_DUAL_FROM_N else np.arange(n)[::-1]
+def _limit_order(t: int, n: int, states: np.ndarray | None = None, alternate: bool | None = None) -> np.ndarray:
+    """The states in the order row ``t`` solves them (``states``: one group's, default all): with ``alternate``
+    (default: from :data:`LIMIT_DUAL_FROM_N` states on) increasing on even steps and decreasing on odd ones, else
+    increasing (each warm solve starts from the previous objective's optimal basis, and the first state of a step
+    is then the last of the step before: neighbouring states share more of their optimal vertex than the two ends
+    of the chain)."""
+    states = np.arange(n) if states is None else np.asarray(states)
+    alternate = n >= LIMIT_DUAL_FROM_N if alternate is None else alternate
+    return states[::-1] if alternate and t % 2 == 1 else states
 
 
-def _limit_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
-    """The objectives of row ``t`` of the limit: :math:`x_i(t+1)` for every state ``i`` (columns, coefficients,
-    label), in the order of :func:`_limit_order`."""
+def _limit_targets(tlp: TraceLP, t: int, states: np.ndarray | None = None,
+                   alternate: bool | None = None) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    """The objectives of row ``t`` of the limit: :math:`x_i(t+1)` for every state ``i`` (of ``states``, default
+    all; columns, coefficients, label), in the order of :func:`_limit_order`."""
     cols, M = tlp.xmap[t + 1]
-    return [(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}") for i in _limit_order(t, tlp.n)]
+    return [(cols[M[i] != 0], M[i][M[i] != 0], f"state {i}") for i in _limit_order(t, tlp.n, states, alternate)]
+
+
+def state_groups(n: int) -> list[np.ndarray]:
+    """The groups of neighbouring states whose LPs one task solves (:func:`information_limit`, Computation):
+    all ``n`` states below :data:`LIMIT_DUAL_FROM_N`, else ``ceil(n / LIMIT_GROUP_STATES)`` contiguous groups of
+    sizes differing by at most one.
+
+    Parameters
+    ----------
+    n : int
+        State dimension.
+
+    Returns
+    -------
+    list of numpy.ndarray of int
+        The groups, in increasing order of their states; together ``0 .. n-1`` once each.
+    """
+    if n < LIMIT_DUAL_FROM_N:
+        return [np.arange(n)]
+    return [g for g in np.array_split(np.arange(n), -(-n // LIMIT_GROUP_STATES)) if g.size]
+
+
+def _limit_task(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
+                solver: str, options: dict | None, fallback: dict | None, states: np.ndarray, alternate: bool
+                ) -> tuple[dict[int, tuple[np.ndarray, np.ndarray]], float]:
+    """One task of the limit: the rows ``rows`` (one chunk) for the states ``states`` (one group), on a model of
+    its own.  Everything it depends on is an argument (a worker process sees the module's defaults): per row the
+    states in their solve order (:func:`_limit_order`) and their maxima, and the task's process time (seconds)."""
+    cpu = time.process_time()
+    vals = solve_range(tlp, start, rows, delivered_at, box, solver, options,
+                       targets=functools.partial(_limit_targets, states=states, alternate=alternate), fallback=fallback)
+    return {t: (_limit_order(t, tlp.n, states, alternate), v) for t, v in vals.items()}, time.process_time() - cpu
+
+
+class _LPsAsRows:
+    """Adapts a row :class:`~eqrec.lp.parallel.Progress` to tasks that report LPs (``n`` LPs make a row)."""
+
+    def __init__(self, progress, n: int):
+        self.progress, self.n, self.lps, self.rows = progress, n, 0, 0
+
+    def advance(self, lps: int) -> None:
+        self.lps += int(lps)
+        rows = self.lps // self.n
+        if rows > self.rows:
+            self.progress.advance(rows - self.rows)
+            self.rows = rows
 
 
 def solve_range(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
@@ -697,7 +829,8 @@ def _refusal(system: AffineSystem, steps: int, todo: list, window: int | None, s
 
 def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, solver: str = "highs",
                       window: int | None = None, cache: bool = True,
-                      solver_options: dict | None = None, force: bool = False) -> np.ndarray:
+                      solver_options: dict | None = None, force: bool = False, n_jobs: int | None = None
+                      ) -> np.ndarray:
     r"""Per step and state, the smallest worst-case error any estimator can guarantee on ``trace``.
 
     Row ``t`` is :math:`r(t+1)`, the radius of information of the estimate :math:`\hat x(t+1)` that an
@@ -731,6 +864,11 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
         Run even when the trace's rows are estimated (:func:`estimate_seconds`, before anything is read or
         solved) to take more than :data:`MAX_ESTIMATED_SECONDS`; default ``False``: refuse them (the message gives
         the estimate and a window, with its own estimate, whose values err upward).
+    n_jobs : int or None, optional
+        Worker processes for a plant of at least :data:`LIMIT_DUAL_FROM_N` states (HiGHS), whose LPs are solved in
+        independent tasks (:func:`state_groups`); the values do not depend on it.  ``None`` (default): every core
+        when the rows are estimated to take :data:`PARALLEL_SECONDS` or more, else this process; ``-1``: every
+        core; ``1``: this process.  Smaller plants solve in this process whatever it says.
 
     Returns
     -------
@@ -743,7 +881,8 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
         ``system`` not an :class:`AffineSystem`, ``trace`` not an :class:`ArrivalTrace` or longer than a
         time-varying system (field ``system``, ``trace``); ``x0_radius`` negative, NaN, infinite, of the wrong
         length or above :data:`MAX_X0_RADIUS` (field ``x0_radius``); unknown ``solver``; ``window`` not an
-        integer ``>= 1``; ``solver_options`` not a dict; the rows estimated past :data:`MAX_ESTIMATED_SECONDS`
+        integer ``>= 1``; ``solver_options`` not a dict; ``n_jobs`` not a positive integer, ``-1`` or ``None``
+        (field ``n_jobs``); the rows estimated past :data:`MAX_ESTIMATED_SECONDS`
         without ``force`` (field ``trace``).
     SolverFailure
         An LP without an optimal solution (it is feasible and bounded, so a solver fault; an 'infeasible' or
@@ -807,6 +946,7 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
     r0, window = _check(system, trace, x0_radius, solver, window, solver_options)
     if not isinstance(force, (bool, np.bool_)):  # a string such as "no" would read as true
         raise InputError(f"must be True or False, got {force!r}", field="force")
+    workers = None if n_jobs is None else check_jobs(n_jobs)
     N, n = trace.steps, system.n
     out = np.zeros((N, n))
     if N == 0:
@@ -841,7 +981,9 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
         seconds = estimate_seconds(system, todo, window)
         progress = Progress(len(todo), "information limit: rows") if seconds >= PROGRESS_SECONDS else None
         try:
-            _solve_limit(tlp, todo, delivered_at, window, solver, solver_options, out, progress)
+            if workers is None:
+                workers = cpu_count() if n >= LIMIT_DUAL_FROM_N and seconds >= PARALLEL_SECONDS else 1
+            _solve_limit(tlp, todo, delivered_at, window, solver, solver_options, out, progress, workers)
         except InfeasibleDesign as exc:  # the zero-data LP is feasible (δ = 0) and bounded: a solver fault
             raise SolverFailure(f"{exc}, although the zero-data LP is feasible and bounded; x0_radius (largest "
                                 f"{float(r0.max()):.3g}) and the noise bounds (eta_w {system.eta_w:.3g}, eta_v "
@@ -855,15 +997,13 @@ def information_limit(system: AffineSystem, trace: ArrivalTrace, x0_radius, *, s
 
 
 def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window: int | None, solver: str,
-                 options: dict | None, out: np.ndarray, progress=None) -> None:
-    """Fill the rows ``todo`` of ``out`` (exact, or windowed: module docstring)."""
+                 options: dict | None, out: np.ndarray, progress=None, workers: int = 1) -> None:
+    """Fill the rows ``todo`` of ``out`` (exact, or windowed: module docstring) on ``workers`` processes."""
     N = out.shape[0]
     fallback = LIMIT_HIGHS_OPTIONS if solver == "highs" and out.shape[1] >= LIMIT_DUAL_FROM_N else None
+    _LAST_SOLVE.update(workers=1, tasks=0, task_seconds=0.0)
     if window is None:  # one growing model from time 0
-        for t, v in solve_range(tlp, 0, todo, delivered_at, None, solver, options, progress=progress,
-                                fallback=fallback).items():
-            # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
-            out[t, _limit_order(t, out.shape[1])] = np.maximum(v, 0.0)
+        _limit_rows(tlp, 0, todo, delivered_at, None, solver, options, fallback, out, workers, progress)
         return
     # chunk k holds the rows kW..(k+1)W-1 and starts at s = (k-1)W with the box of row s-1
     pending = set(todo)
@@ -873,9 +1013,36 @@ def _solve_limit(tlp: TraceLP, todo: list[int], delivered_at: np.ndarray, window
             continue
         s = max(0, c0 - window) // SEGMENT * SEGMENT  # x(s) is a variable
         box = None if s == 0 else out[s - 1]
-        for t, v in solve_range(tlp, s, rows, delivered_at, box, solver, options, progress=progress,
+        _limit_rows(tlp, s, rows, delivered_at, box, solver, options, fallback, out, workers, progress)
+
+
+def _limit_rows(tlp: TraceLP, start: int, rows: list[int], delivered_at: np.ndarray, box: np.ndarray | None,
+                solver: str, options: dict | None, fallback: dict | None, out: np.ndarray, workers: int,
+                progress) -> None:
+    """Fill the rows ``rows`` of ``out`` from the LP of block ``start`` on: one task per chunk of :data:`CHUNK`
+    steps and group of :func:`state_groups` (HiGHS from :data:`LIMIT_DUAL_FROM_N` states on), on ``workers``
+    processes, the largest chunks first; else, below, one model per chunk for all the states, as before."""
+    n = out.shape[1]
+    groups = state_groups(n)
+    if solver != "highs" or len(groups) == 1:
+        for t, v in solve_range(tlp, start, rows, delivered_at, box, solver, options, progress=progress,
                                 fallback=fallback).items():
-            out[t, _limit_order(t, out.shape[1])] = np.maximum(v, 0.0)
+            # the set is symmetric: the maximum is >= 0 (a solver's -0.0 reads 0)
+            out[t, _limit_order(t, n)] = np.maximum(v, 0.0)
+        return
+    chunks = [[t for t in rows if c <= t < c + CHUNK] for c in range(start, rows[-1] + 1, CHUNK)]
+    tasks = [(tlp, start, chunk, delivered_at, box, solver, options, fallback, g, True)
+             for chunk in reversed(chunks) if chunk for g in groups]
+    workers = min(workers, len(tasks))
+    results = run_tasks(_limit_task, tasks, n_jobs=workers,
+                        progress=None if progress is None else _LPsAsRows(progress, n),
+                        units=[len(task[2]) * task[8].size for task in tasks])
+    for vals, seconds in results:
+        for t, (order, v) in vals.items():
+            out[t, order] = np.maximum(v, 0.0)
+        _LAST_SOLVE["task_seconds"] += seconds
+    _LAST_SOLVE["workers"] = max(_LAST_SOLVE["workers"], workers)
+    _LAST_SOLVE["tasks"] += len(tasks)
 
 
 def block_limit(system: AffineSystem, depth: int, available, x0_radius) -> np.ndarray:
