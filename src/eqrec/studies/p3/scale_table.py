@@ -40,7 +40,11 @@ key                        default                                 meaning
 from __future__ import annotations
 
 import math
+import re
+from pathlib import Path
 from typing import TYPE_CHECKING
+
+from eqrec.errors import InputError
 
 from eqrec.studies.p3.size_run import ENGINES, FIELDS, class_count, run_size, tree_J
 from eqrec.systems.examples import batch_reactor
@@ -60,9 +64,40 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     class engine (:data:`eqrec.studies.p3.size_run.ENGINES`).  A size that hits
     the time or memory limit is recorded with that status (the step succeeds).
     """
+    return _one_size(cfg, int(wildcards.T), int(wildcards.tau), wildcards.get("engine", "tree"), outputs.json,
+                     outputs.timings)
+
+
+#: A per-size JSON of the scale table: ``[<engine>_]T<T>_tau<τ̄>.json`` (no engine: the tree LP).
+_SIZE_FILE = re.compile(r"(?:(?P<engine>[a-z]+)_)?T(?P<T>\d+)_tau(?P<tau>\d+)\.json")
+
+
+def step_scale_sizes(cfg, inputs, outputs, wildcards) -> list[dict]:
+    """Several rows of the scale table in one job: each size of the outputs ``json`` (one file per size, named
+    ``[<engine>_]T<T>_tau<τ̄>.json``, with its ``timings`` file in the same order), one after the other, each
+    in a fresh worker process (:func:`step_scale_size`'s row, the same files).
+
+    For the class engine's sizes, seconds each: a job per size spent more CPU on starting than on the size.
+    The sizes must be those of ``scale.class_sizes`` (the rule's outputs), each once.
+    """
+    files, timings = ([paths] if isinstance(paths, str) else list(paths) for paths in (outputs.json, outputs.timings))
+    sizes = []
+    for path in files:
+        match = _SIZE_FILE.fullmatch(Path(path).name)
+        if match is None or match["engine"] not in (None, *ENGINES):
+            raise InputError(f"output {path!r} is not a size file [<engine>_]T<T>_tau<tau>.json", field="scale")
+        sizes.append((match["engine"] or "tree", int(match["T"]), int(match["tau"])))
+    wanted = sorted(("classes", int(T), int(tau)) for T, tau in cfg["scale"]["class_sizes"])
+    if sorted(sizes) != wanted or len(timings) != len(files):
+        raise InputError(f"the rule's outputs {files} are not one per size of scale.class_sizes {wanted}",
+                         field="scale.class_sizes")
+    return [_one_size(cfg, T, tau, engine, path, timing)
+            for (engine, T, tau), path, timing in zip(sizes, files, timings)]
+
+
+def _one_size(cfg: dict, T: int, tau: int, engine: str, json_path: str, timings_path: str) -> dict:
+    """One size in a fresh process (:func:`eqrec.studies.p3.size_run.run_size`), logged and written."""
     sc = cfg["scale"]
-    T, tau = int(wildcards.T), int(wildcards.tau)
-    engine = wildcards.get("engine", "tree")
     log.info("scale (T, tau) = (%d, %d), %s engine: %s, builder %s, mu1 = %g, limits %g s / %g GB", T, tau, engine,
              sc["method"], sc["builder"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]))
     r = run_size(batch_reactor(), T, tau, sc["method"], float(sc["mu1"]), float(sc["time_limit"]),
@@ -70,7 +105,7 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     log.info("scale (%d, %d), %s: %s; %s classes, %s columns, build %.2f s, solve %.2f s, peak %.0f MB, J = %s", T,
              tau, engine, r.get("status"), r.get("classes"), r.get("cols"), r.get("build_time", float("nan")),
              r.get("solve_time", float("nan")), r.get("peak_mb", float("nan")), r.get("J"))
-    write_json(outputs.json, r, timings=outputs.timings)
+    write_json(json_path, r, timings=timings_path)
     return r
 
 
