@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from eqrec.errors import InputError
@@ -68,31 +67,24 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
                      outputs.timings)
 
 
-#: A per-size JSON of the scale table: ``[<engine>_]T<T>_tau<τ̄>.json`` (no engine: the tree LP).
-_SIZE_FILE = re.compile(r"(?:(?P<engine>[a-z]+)_)?T(?P<T>\d+)_tau(?P<tau>\d+)\.json")
+#: A per-size JSON of the class engine's rows of the scale table: ``classes_T<T>_tau<τ̄>.json``.
+_CLASS_SIZE_FILE = re.compile(r"classes_T(\d+)_tau(\d+)\.json")
 
 
 def step_scale_sizes(cfg, inputs, outputs, wildcards) -> list[dict]:
-    """Several rows of the scale table in one job: each size of the outputs ``json`` (one file per size, named
-    ``[<engine>_]T<T>_tau<τ̄>.json``, with its ``timings`` file in the same order), one after the other, each
-    in a fresh worker process (:func:`step_scale_size`'s row, the same files).
+    """The class engine's rows of the scale table in one job: each size of the outputs ``json`` (one file per size
+    of ``scale.class_sizes``, each once, named ``classes_T<T>_tau<τ̄>.json``, with its ``timings`` file in the same
+    order), one after the other, each in a fresh worker process (:func:`step_scale_size`'s row, the same files).
 
-    For the class engine's sizes, seconds each: a job per size spent more CPU on starting than on the size.
-    The sizes must be those of ``scale.class_sizes`` (the rule's outputs), each once.
+    Seconds a size: a job per size spent more CPU on starting than on the size.
     """
     files, timings = ([paths] if isinstance(paths, str) else list(paths) for paths in (outputs.json, outputs.timings))
-    sizes = []
-    for path in files:
-        match = _SIZE_FILE.fullmatch(Path(path).name)
-        if match is None or match["engine"] not in (None, *ENGINES):
-            raise InputError(f"output {path!r} is not a size file [<engine>_]T<T>_tau<tau>.json", field="scale")
-        sizes.append((match["engine"] or "tree", int(match["T"]), int(match["tau"])))
-    wanted = sorted(("classes", int(T), int(tau)) for T, tau in cfg["scale"]["class_sizes"])
-    if sorted(sizes) != wanted or len(timings) != len(files):
-        raise InputError(f"the rule's outputs {files} are not one per size of scale.class_sizes {wanted}",
-                         field="scale.class_sizes")
-    return [_one_size(cfg, T, tau, engine, path, timing)
-            for (engine, T, tau), path, timing in zip(sizes, files, timings)]
+    found = [_CLASS_SIZE_FILE.fullmatch(path.rsplit("/", 1)[-1]) for path in files]
+    sizes = [(int(m[1]), int(m[2])) for m in found if m]
+    if len(sizes) != len(files) or len(timings) != len(files) \
+            or sorted(sizes) != sorted(map(tuple, cfg["scale"]["class_sizes"])):
+        raise InputError(f"the rule's outputs {files} are not one per size", field="scale.class_sizes")
+    return [_one_size(cfg, T, tau, "classes", *paths) for (T, tau), *paths in zip(sizes, files, timings)]
 
 
 def _one_size(cfg: dict, T: int, tau: int, engine: str, json_path: str, timings_path: str) -> dict:
