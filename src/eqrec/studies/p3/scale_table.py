@@ -1,6 +1,7 @@
 r"""The P3 scale table: steps of the delayed/missing-data study (P3).
 
-The scale table (steps ``scale_size`` per ``(T, τ̄)`` and engine, ``scale_table``): the
+The scale table (steps ``scale_size`` per ``(T, τ̄)`` of the tree LP, ``scale_sizes`` for every size of the class
+engine in one job, ``scale_table``): the
 batch reactor's full-language design (sum cost, ``μ1`` fixed) solved by one
 HiGHS method in a fresh process with time and memory limits
 (:func:`eqrec.studies.p3.size_run.run_size`), by two engines side by side:
