@@ -184,3 +184,27 @@ def test_cli_compare_takes_state_weights(tmp_path):
     assert (tmp_path / "w" / "compare.csv").exists()
     assert main(["compare", acc, "--loss", "0.1", "--max-delay", "1", "--horizon", "6", "--runs", "2",
                  "--state-weights", "1,2", "--out", str(tmp_path / "bad")]) == 1
+
+
+def test_a_memo_shared_by_settings_of_one_system_changes_no_byte(tmp_path):
+    """The settings of one system share their guaranteed designs through ``memo`` (the compare study's job): the
+    tables are those of fresh calls, and a setting whose loss budgets were all tried makes no design again."""
+    from eqrec.bounds import information
+
+    system = batch_reactor()
+    setups = [CompareSetup(loss=loss, max_delay=1, horizon=4, runs=3, periods=2, seed=5, exact_runs=1)
+              for loss in (0.3, 0.1, 0.3)]
+    memo, made = {}, []
+    for i, setup in enumerate(setups):
+        information.clear_cache()
+        write_table(compare_families(system, setup), str(tmp_path / f"fresh{i}.csv"))
+        information.clear_cache()
+        before = len(memo)
+        write_table(compare_families(system, setup, memo=memo), str(tmp_path / f"memo{i}.csv"))
+        made.append(len(memo) - before)
+        assert (tmp_path / f"fresh{i}.csv").read_bytes() == (tmp_path / f"memo{i}.csv").read_bytes()
+    assert made[0] > 0 and made[2] == 0  # the third setting is the first's: nothing made again
+    other = {}
+    compare_families(system, setups[1], memo=other)
+    compare_families(batch_reactor(), setups[1], memo=other)  # another system object: the memo starts again
+    assert other["system"] is not system and sum(k[0] == "design" for k in other if k != "system") > 0

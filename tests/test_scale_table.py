@@ -20,6 +20,7 @@ from eqrec.studies.pipeline import harness
 from eqrec.studies.p3 import scale_table as p3_scale
 from eqrec.studies.pipeline import outputs
 from eqrec.studies.pipeline import configuration
+from eqrec.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -164,3 +165,34 @@ def test_a_worker_reports_its_own_peak_not_its_parents(reactor):
     r = run_size(reactor, 3, 1, "simplex", 0.5, time_limit=60, mem_limit_gb=4, engine="classes", wall_margin=60)
     assert r["status"] == "optimal", r
     assert r["peak_mb"] < 0.6 * ballast.nbytes / 2**20, r["peak_mb"]
+
+
+# --------------------------------------------------------------------------- the class engine's sizes in one job
+
+def test_default_run_plans_the_class_sizes_as_one_job():
+    text = _planned("all")
+    assert text.count("rule p3_scale_class_sizes:") == 1 and "p3_scale_class_size:" not in text
+
+
+@pytest.mark.parametrize("names", [["classes_T6_tau2.json"],  # not the configured size
+                                   ["classes_T5_tau2.json", "classes_T5_tau2.json"],  # twice
+                                   ["classes_T5_tau2.csv"],  # not a size file
+                                   ["T5_tau2.json"]])  # the tree LP's file
+def test_sizes_step_refuses_outputs_that_are_not_the_configured_class_sizes(cfg, tmp_path, names):
+    section = {**cfg, "scale": {**cfg["scale"], "class_sizes": [[5, 2]]}}
+    outs = harness.Files(json=[str(tmp_path / n) for n in names], timings=[str(tmp_path / "t" / n) for n in names])
+    with pytest.raises(InputError, match="scale"):
+        p3_scale.step_scale_sizes(section, harness.Files(), outs, harness.Wildcards())
+    assert not any(tmp_path.rglob("*.json"))  # refused before any size ran
+
+
+def test_sizes_step_writes_each_size_as_its_own_job_would(cfg, tmp_path):
+    one = {**cfg, "scale": {**cfg["scale"], "class_sizes": [[5, 2]]}}
+    a = harness.Files(json=str(tmp_path / "a" / "classes_T5_tau2.json"),
+                      timings=str(tmp_path / "a" / "t" / "classes_T5_tau2.json"))
+    b = harness.Files(json=[str(tmp_path / "b" / "classes_T5_tau2.json")],
+                      timings=[str(tmp_path / "b" / "t" / "classes_T5_tau2.json")])
+    p3_scale.step_scale_size(one, harness.Files(), a, harness.Wildcards(T="5", tau="2", engine="classes"))
+    p3_scale.step_scale_sizes(one, harness.Files(), b, harness.Wildcards())
+    assert Path(a.json).read_bytes() == Path(b.json[0]).read_bytes()
+    assert json.loads(Path(b.json[0]).read_text())["status"] == "optimal"

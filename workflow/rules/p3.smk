@@ -206,18 +206,23 @@ use rule step as p3_scale_size with:
         cfg=step_config("p3", scale="builder mem_limit_gb method mu1 time_limit"),
 
 
-# Scale table, one size of the class engine: the classes of {0..tau}^T by the window
-# rule, fresh process (the same step; the engine comes from the output path).
-use rule p3_scale_size as p3_scale_class_size with:
+# Scale table, the class engine at every size of scale.class_sizes in one job: seconds
+# each, so a job per size spent more CPU starting than solving; each size still runs
+# in a fresh worker process (its own peak memory), with the same files as one job each.
+use rule step as p3_scale_class_sizes with:
+    """Scale table, the class engine at every configured size: the classes of {0..tau}^T by the window rule, fresh process each."""
+    input:
+        code=code_inputs("eqrec.studies.p3.scale_table:step_scale_sizes"),
     output:
-        json="results/p3/scale/{engine}_T{T}_tau{tau}.json",
-        timings="results/timings/p3/scale/{engine}_T{T}_tau{tau}.json",
+        json=P3_SCALE_CLASSES,
+        timings=timings_of(P3_SCALE_CLASSES),
     log:
-        "logs/p3/scale_{engine}_T{T}_tau{tau}.log",
-    wildcard_constraints:
-        engine="classes",
-        T=r"\d+",
-        tau=r"\d+",
+        "logs/p3/scale_classes.log",
+    params:
+        step="eqrec.studies.p3.scale_table:step_scale_sizes",
+        cfg=step_config(
+            "p3", scale="builder class_sizes mem_limit_gb method mu1 time_limit"
+        ),
 
 
 use rule step as p3_scale_table with:

@@ -291,7 +291,7 @@ class CompareResult:
 
 
 def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = "highs",
-                       state_weights: "np.ndarray | None" = None) -> dict[str, Any]:
+                       state_weights: "np.ndarray | None" = None, memo: "dict | None" = None) -> dict[str, Any]:
     """The two guaranteed designs of the comparison on a loss-aware language, each at its smallest ``μ1``.
 
     The class engine designs for delays ``0..D`` and at most ``m`` of the ``T`` measurements of a block lost
@@ -311,6 +311,9 @@ def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = 
         LP solver (default HiGHS).
     state_weights : ndarray or None, optional
         Designs on ``z = W x`` (every level bounds ``max_i w_i |x_i − x̂_i|``); ``None``: unweighted.
+    memo : dict or None, optional
+        Kept between calls on the same ``system``: each attempt (family, ``m``, ``D``, ``T``, solver, weights)
+        made once, its design or why there is none (the same LP on the same data gives the same answer).
 
     Returns
     -------
@@ -328,15 +331,27 @@ def guaranteed_designs(system: AffineSystem, setup: CompareSetup, solver: str = 
                                                          solver=solver, state_weights=w).design,
               FAMILIES[1]: lambda m: design_prefix(system, missing_words_at_most(T, m), "free", solver=solver,
                                                    state_weights=w)}
+
+    def attempt(family: str, m: int) -> Any:
+        """The design of ``family`` at ``m``, or why there is none (a string)."""
+        try:
+            return makers[family](m)
+        except (InfeasibleDesign, SolverFailure, CertificationFailure) as exc:
+            return f"no design: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
+
+    weights = None if w is None else tuple(np.asarray(w, dtype=float).tolist())
     out: dict[str, Any] = {}
-    for family, make in makers.items():
+    for family in makers:
         first = None
         for m in range(setup.max_lost, -1, -1):
-            try:
-                out[family] = (make(m), m)
+            key = ("design", family, m, D, T, solver, weights)
+            found = memo[key] if memo is not None and key in memo else attempt(family, m)
+            if memo is not None:
+                memo[key] = found
+            if not isinstance(found, str):
+                out[family] = (found, m)
                 break
-            except (InfeasibleDesign, SolverFailure, CertificationFailure) as exc:
-                first = first or f"no design: {type(exc).__name__}: {str(exc).splitlines()[0][:160]}"
+            first = first or found
         else:
             out[family] = (first, None)
     return out
@@ -421,7 +436,7 @@ def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar:
 
 def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "GaussianNoise | dict | None" = None,
                      solver: str = "highs", progress: Callable[[str], None] | None = None,
-                     state_weights: Any = None) -> CompareResult:
+                     state_weights: Any = None, memo: "dict | None" = None) -> CompareResult:
     """Run every family (module docstring) on the same traces, noise and initial errors, with the information limit.
 
     Every family with a bound (:data:`BOUNDED`) reports the exact worst case of its own error on the run's
@@ -449,6 +464,12 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         ``w`` (``n`` positive numbers): every error, bound and limit is measured as ``max_i w_i |·_i|`` (a state
         vector of mixed units), the guaranteed designs are made on ``z = W x`` and the initial error is drawn in
         the box ``|ξ_i(0)| <= μ1 / w_i``; ``None``: the infinity norm.
+    memo : dict or None, optional
+        A dict kept between calls on the same ``system`` object (the settings of one plant): the guaranteed
+        designs of a loss budget, delays and horizon already made, and their class levels against the
+        information limit (:func:`class_limit_identity`), are taken from it instead of being made again (the
+        same LPs on the same data; settings that differ only in their traces share the design).  ``None``: made
+        here.
 
     Returns
     -------
@@ -484,7 +505,10 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
                 from None
         if not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise InputError(f"weights must be finite and > 0, got {w.tolist()}", field="state_weights")
-    found = guaranteed_designs(system, setup, solver, state_weights=w)
+    if memo is not None and memo.get("system") is not system:
+        memo.clear()
+        memo["system"] = system  # kept alive with its entries: they are this object's
+    found = guaranteed_designs(system, setup, solver, state_weights=w, memo=memo)
     designs = {f: d for f, (d, _) in found.items() if not isinstance(d, str)}
     words = {f: (d if isinstance(d, str) else design_in_words(f, setup, m)) for f, (d, m) in found.items()}
     words.update({f: design_in_words(f, setup) for f in FAMILIES if f not in found})
@@ -614,7 +638,20 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     return CompareResult(setup=setup, table=table, errors=errors, bounds=bounds,
                          mu1={f: float(d.mu1) for f, d in designs.items()}, outside=outside, limit=limit,
                          designs=words, us_per_step=us, state_weights=w, exact_hull=hull,
-                         identity=class_limit_identity(designs[FAMILIES[0]]) if FAMILIES[0] in designs else {})
+                         identity=_identity(designs, memo))
+
+
+def _identity(designs: dict, memo: "dict | None") -> dict[str, Any]:
+    """:func:`class_limit_identity` of the class-engine design (``{}`` without one), from ``memo`` when it holds it."""
+    if FAMILIES[0] not in designs:
+        return {}
+    design = designs[FAMILIES[0]]
+    if memo is None:
+        return class_limit_identity(design)
+    key = ("identity", id(design))  # the design is kept alive by the memo's designs
+    if key not in memo:
+        memo[key] = class_limit_identity(design)
+    return memo[key]
 
 
 def _gaussian(system: AffineSystem, given: "GaussianNoise | dict | None", mu1: float, sigmas: float) -> GaussianNoise:

@@ -22,13 +22,10 @@ import numpy as np
 import pandas as pd
 
 from eqrec.systems.examples import acc_system
-from eqrec.design.augmented.model import default_runtime
-from eqrec.studies.searches import fixed_L_sweep, observer_for
 from eqrec.errors import InputError
 from eqrec.studies.pipeline.chunks import check_coverage, scatter_indices
 from eqrec.studies.pipeline.logs import Progress, get_logger
 from eqrec.studies.pipeline.outputs import INTERMEDIATE, write_csv
-from eqrec.studies.p2.readings import heatmap_poles, variant_word
 from eqrec.studies.p2.grids import heatmap_grid, realaxis_grid
 
 log = get_logger("p2")
@@ -43,6 +40,11 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> It
     estimator that runs (``theorem2`` for the text of Theorem 2, ``hold`` -
     constant ``L`` kept - for the design-only readings).
     """
+    # here, not at the top: the merge step needs none of the design, LP and Numba layers (about 0.5 s of CPU)
+    from eqrec.design.augmented.model import default_runtime
+    from eqrec.studies.p2.readings import variant_word
+    from eqrec.studies.searches import fixed_L_sweep, observer_for
+
     h = cfg["heatmap"]
     observers = [observer_for(system, p) for p in poles]
     for variant in h["variants"]:
@@ -55,6 +57,8 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> It
 
 def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """P2-F3a, one θ-chunk of every variant."""
+    from eqrec.studies.p2.readings import heatmap_poles
+
     r_grid, th_grid = heatmap_grid(cfg)
     chunk, thetas = scatter_indices(wildcards, len(th_grid), field="heatmap.chunks")
     pts = [(r, th_grid[j]) for j in thetas for r in r_grid]

@@ -1,6 +1,7 @@
 r"""The P3 scale table: steps of the delayed/missing-data study (P3).
 
-The scale table (steps ``scale_size`` per ``(T, τ̄)`` and engine, ``scale_table``): the
+The scale table (steps ``scale_size`` per ``(T, τ̄)`` of the tree LP, ``scale_sizes`` for every size of the class
+engine in one job, ``scale_table``): the
 batch reactor's full-language design (sum cost, ``μ1`` fixed) solved by one
 HiGHS method in a fresh process with time and memory limits
 (:func:`eqrec.studies.p3.size_run.run_size`), by two engines side by side:
@@ -40,7 +41,10 @@ key                        default                                 meaning
 from __future__ import annotations
 
 import math
+import re
 from typing import TYPE_CHECKING
+
+from eqrec.errors import InputError
 
 from eqrec.studies.p3.size_run import ENGINES, FIELDS, class_count, run_size, tree_J
 from eqrec.systems.examples import batch_reactor
@@ -60,9 +64,33 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     class engine (:data:`eqrec.studies.p3.size_run.ENGINES`).  A size that hits
     the time or memory limit is recorded with that status (the step succeeds).
     """
+    return _one_size(cfg, int(wildcards.T), int(wildcards.tau), wildcards.get("engine", "tree"), outputs.json,
+                     outputs.timings)
+
+
+#: A per-size JSON of the class engine's rows of the scale table: ``classes_T<T>_tau<τ̄>.json``.
+_CLASS_SIZE_FILE = re.compile(r"classes_T(\d+)_tau(\d+)\.json")
+
+
+def step_scale_sizes(cfg, inputs, outputs, wildcards) -> list[dict]:
+    """The class engine's rows of the scale table in one job: each size of the outputs ``json`` (one file per size
+    of ``scale.class_sizes``, each once, named ``classes_T<T>_tau<τ̄>.json``, with its ``timings`` file in the same
+    order), one after the other, each in a fresh worker process (:func:`step_scale_size`'s row, the same files).
+
+    Seconds a size: a job per size spent more CPU on starting than on the size.
+    """
+    files, timings = ([paths] if isinstance(paths, str) else list(paths) for paths in (outputs.json, outputs.timings))
+    found = [_CLASS_SIZE_FILE.fullmatch(path.rsplit("/", 1)[-1]) for path in files]
+    sizes = [(int(m[1]), int(m[2])) for m in found if m]
+    if len(sizes) != len(files) or len(timings) != len(files) \
+            or sorted(sizes) != sorted(map(tuple, cfg["scale"]["class_sizes"])):
+        raise InputError(f"the rule's outputs {files} are not one per size", field="scale.class_sizes")
+    return [_one_size(cfg, T, tau, "classes", *paths) for (T, tau), *paths in zip(sizes, files, timings)]
+
+
+def _one_size(cfg: dict, T: int, tau: int, engine: str, json_path: str, timings_path: str) -> dict:
+    """One size in a fresh process (:func:`eqrec.studies.p3.size_run.run_size`), logged and written."""
     sc = cfg["scale"]
-    T, tau = int(wildcards.T), int(wildcards.tau)
-    engine = wildcards.get("engine", "tree")
     log.info("scale (T, tau) = (%d, %d), %s engine: %s, builder %s, mu1 = %g, limits %g s / %g GB", T, tau, engine,
              sc["method"], sc["builder"], float(sc["mu1"]), float(sc["time_limit"]), float(sc["mem_limit_gb"]))
     r = run_size(batch_reactor(), T, tau, sc["method"], float(sc["mu1"]), float(sc["time_limit"]),
@@ -70,7 +98,7 @@ def step_scale_size(cfg, inputs, outputs, wildcards) -> dict:
     log.info("scale (%d, %d), %s: %s; %s classes, %s columns, build %.2f s, solve %.2f s, peak %.0f MB, J = %s", T,
              tau, engine, r.get("status"), r.get("classes"), r.get("cols"), r.get("build_time", float("nan")),
              r.get("solve_time", float("nan")), r.get("peak_mb", float("nan")), r.get("J"))
-    write_json(outputs.json, r, timings=outputs.timings)
+    write_json(json_path, r, timings=timings_path)
     return r
 
 
