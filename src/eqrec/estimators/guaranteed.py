@@ -671,21 +671,17 @@ class GuaranteedEstimator:
             # gains from the carried set, which the set-membership step does not read (it was formed before)
             sm._step_checked(packets, checked_u)
             est, taken = self._return_to_design(now, packets, u, carried)  # (cannot raise: the data are checked)
-            entry, level, kernel, _ = taken[7]
-            if entry is None:  # the data of the period's first step already out of the language
-                self._outside = True
-                return self._outside_bounds()
         else:
             taken = est._take(packets, u)  # every input checked once, for both estimators; nothing changes
-            # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
-            entry, level, kernel, _ = taken[7]
-            # the set-membership estimator takes the packets and the input as checked (one intake: its private entry)
+            # the set-membership estimator takes the packets and the input as checked (one intake: its private
+            # entry); all-or-nothing, and nothing below can raise
             sm = self._sm
-            if entry is None:  # out of the language: the set-membership estimate from now on
-                sm._step_checked(packets, taken[5])
-                self._outside = True
-                return self._outside_bounds()
-            sm._step_checked(packets, taken[5])  # all-or-nothing; the class step below cannot raise (its class exists)
+            sm._step_checked(packets, taken[5])
+        # the class (t+1, S), its level and its arrays, kept per observed prefix (ClassSteps.prefixes)
+        entry, level, kernel, _ = taken[7]
+        if entry is None:  # out of the language (on a return: at the period's first step)
+            self._outside = True  # the set-membership estimate from now on
+            return self._outside_bounds()
         # the class step (its level: μ1 at the period's end, else the class's; plus the rounding allowance of its
         # arithmetic, :mod:`eqrec.estimators.intake`), the exact worst case of the designed estimate's error set
         # (the error map's blocks applied to the set of the period's start) plus that allowance, and per state the
