@@ -413,6 +413,32 @@ def test_a_wrong_carried_basis_costs_pivots_never_the_guarantee(monkeypatch):
     assert est.lp_warm_starts > 0
 
 
+
+def test_a_wrong_carried_basis_keeps_error_within_bound_at_box_corners(monkeypatch):
+    """The bad start of the test above at every step, with the noise at random corners of its box and the initial
+    error at a corner: error <= bound at every step in floating point, no tolerance (the ends are the weak-duality
+    bounds of whatever multipliers the solve ends with)."""
+    import eqrec.estimators.exact_set as exact_module
+
+    rng = np.random.default_rng(11)
+
+    def bad(old_labels, old_basis, labels):
+        size = labels[0].shape[0] + labels[1].shape[0]
+        return rng.random(size) < 0.5, rng.random(size) < 0.5
+
+    monkeypatch.setattr(exact_module, "carry_basis", bad)
+    system = eqrec.two_mass()
+    N, n = 60, system.n
+    for seed in range(2):
+        noise = np.random.default_rng(seed)
+        trace = lossy_trace(seed, N)
+        est = ExactSetEstimator(system, 0.5, max_delay=2, window=10)
+        out = eqrec.simulate.loop.closed_loop(system, est, trace, np.zeros(n), 0.5 * noise.choice([-1.0, 1.0], n),
+                                              system.eta_w * noise.choice([-1.0, 1.0], (N, system.nw)),
+                                              system.eta_v * noise.choice([-1.0, 1.0], (N, system.nv)))
+        assert est.lp_warm_starts > 0
+        assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
+
 def test_window_kernel_matches_a_plain_propagation():
     """The compiled window (explicit loops) against the states propagated in plain NumPy: x(t+1) and x(t) in ζ and
     the measured rows, to 1e-13."""
