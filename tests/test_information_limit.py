@@ -359,6 +359,28 @@ def test_the_fallback_restores_the_primal_settings(monkeypatch):
     assert info._option(model.h, "simplex_strategy") == info.HIGHS_OPTIONS["simplex_strategy"]
     assert info._option(model.h, "simplex_iteration_limit") == 0
     assert model.restore["simplex_iteration_limit"] == 2**31 - 1
+    for key, val in info.LIMIT_SHARED_OPTIONS.items():  # both phases: no scaling, the tighter dual tolerance
+        assert info._option(model.h, key) == val
+
+
+def test_the_unscaled_options_are_those_of_large_plants_only():
+    """LIMIT_SHARED_OPTIONS (no scaling, dual feasibility tolerance 1e-10) go to the models of the fallback path
+    (from LIMIT_DUAL_FROM_N states on) and not to the primal path below it, whose models keep HiGHS's scaling and
+    HIGHS_OPTIONS' tolerance (the limits of the compare study's small plants stay those of before, byte for
+    byte); the caller's solver_options override them."""
+    import eqrec.bounds.information as info
+
+    plant = tank_chain(6, 2, eta_v=0.05)
+    tlp = info.trace_lp(plant, _random_trace(10, 0.3, 2, 47), np.ones(6), info.SEGMENT)
+    lp, c0, r0 = tlp.window(0, 10)
+    large = info._HighsModel(lp, c0, r0, None, info.LIMIT_HIGHS_OPTIONS)
+    small = info._HighsModel(lp, c0, r0, None)
+    assert info._option(large.h, "simplex_scale_strategy") == 0
+    assert info._option(large.h, "dual_feasibility_tolerance") == 1e-10
+    assert info._option(small.h, "simplex_scale_strategy") != 0
+    assert info._option(small.h, "dual_feasibility_tolerance") == info.HIGHS_OPTIONS["dual_feasibility_tolerance"]
+    mine = info._HighsModel(lp, c0, r0, {"simplex_scale_strategy": 2}, info.LIMIT_HIGHS_OPTIONS)
+    assert info._option(mine.h, "simplex_scale_strategy") == 2
 
 
 def test_state_groups_partition_the_states_into_neighbours():
