@@ -98,6 +98,7 @@ with 2 workers on an idle 2-core machine (not measured here: no core was idle).
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import time
 
@@ -129,29 +130,33 @@ def tanks(n: int, p: int, flow: float = 0.2, leak: float = 0.05, eta_w: float = 
     return AffineSystem(A=chain.A, C=np.eye(n)[sensors], E=np.eye(n), eta_w=eta_w, eta_v=eta_v, name=f"{n} tanks")
 
 
-def scale(sizes: list[tuple[int, int]], steps: int, consistent_sizes: list[int], jobs: list) -> None:
-    """The scale table (module docstring): the exact limit at every size with each ``n_jobs`` of ``jobs``, its
-    growth exponent (of the first), the consistent set."""
+def scale(sizes: list[tuple[int, int]], steps: int, consistent_sizes: list[int], jobs: list,
+          versus: dict | None = None) -> None:
+    """The scale table (module docstring): the exact limit at every size with each ``n_jobs`` of ``jobs`` (and,
+    with ``versus``, also with those ``solver_options``, the rows ``vs``: e.g. the settings of before, to time
+    old and new in one run; ``max |diff|`` is then against the first row of the size), its growth exponent (of the
+    first), the consistent set."""
     print(f"scale: chains of coupled tanks, 30 % loss, delays <= 2, {steps} steps, x0_radius 1 (one run)")
-    print(f"{'n':>3s} {'p':>2s} {'n_jobs':>6s} {'workers':>7s} {'wall s':>8s} {'cpu s':>8s} {'ms/step':>8s} "
-          f"{'estimate s':>10s} {'max limit':>10s} {'max |diff|':>10s}")
+    print(f"{'n':>3s} {'p':>2s} {'opts':>4s} {'n_jobs':>6s} {'workers':>7s} {'wall s':>8s} {'cpu s':>8s} "
+          f"{'ms/step':>8s} {'estimate s':>10s} {'max limit':>10s} {'max |diff|':>10s}")
     cpu_by_n = {}
     for n, p in sizes:
         plant = tanks(n, p)
         trace = _trace(steps, 0.3, 45 + n, max_delay=2)
         first = None
-        for jobs_ in jobs:
+        for opts, jobs_ in [(o, j) for o in ([None] if versus is None else [versus, None]) for j in jobs]:
             clear_cache()
             limit, wall, cpu = _timed(lambda: information_limit(plant, trace, 1.0, cache=False, force=True,
-                                                                n_jobs=jobs_))
+                                                                n_jobs=jobs_, solver_options=opts))
             ran = last_solve_info()
             if ran["workers"] > 1:  # the tasks' process time on the worker processes
                 cpu += ran["task_seconds"]
             first = limit if first is None else first
-            cpu_by_n.setdefault(n, cpu)
-            print(f"{n:3d} {p:2d} {str(jobs_):>6s} {ran['workers']:7d} {wall:8.2f} {cpu:8.2f} "
-                  f"{1e3 * wall / steps:8.1f} {estimate_seconds(plant, steps):10.2f} {float(limit.max()):10.4f} "
-                  f"{float(np.abs(limit - first).max()):10.1e}", flush=True)
+            if opts is None:
+                cpu_by_n.setdefault(n, cpu)
+            print(f"{n:3d} {p:2d} {'vs' if opts else '':>4s} {str(jobs_):>6s} {ran['workers']:7d} {wall:8.2f} "
+                  f"{cpu:8.2f} {1e3 * wall / steps:8.1f} {estimate_seconds(plant, steps):10.2f} "
+                  f"{float(limit.max()):10.4f} {float(np.abs(limit - first).max()):10.1e}", flush=True)
     if len(cpu_by_n) >= 2:
         ns = np.array(sorted(cpu_by_n), float)
         slope = np.polyfit(np.log(ns), np.log([cpu_by_n[int(v)] for v in ns]), 1)[0]
@@ -194,6 +199,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--sizes", default="4:1,10:2,20:4,30:5", help="scale: n:p pairs")
     ap.add_argument("--scale-steps", type=int, default=150)
     ap.add_argument("--consistent-sizes", default="4,10", help="scale: the n at which to time the consistent set")
+    ap.add_argument("--versus", default=None, help="scale: also time every size and n_jobs with these HiGHS "
+                    "solver_options (JSON), first; e.g. the settings before LIMIT_SHARED_OPTIONS: "
+                    "'{\"simplex_scale_strategy\": 2, \"dual_feasibility_tolerance\": 1e-9}'")
     ap.add_argument("--jobs", default="1,auto", help="scale: the n_jobs of information_limit to time, one after the "
                     "other at every size (auto: None, every core when the estimate reaches PARALLEL_SECONDS)")
     args = ap.parse_args(argv)
@@ -201,7 +209,8 @@ def main(argv: list[str] | None = None) -> None:
     if "scale" in parts:
         sizes = [tuple(int(v) for v in pair.split(":")) for pair in args.sizes.split(",")]
         jobs = [None if v == "auto" else int(v) for v in args.jobs.split(",")]
-        scale(sizes, args.scale_steps, [int(v) for v in args.consistent_sizes.split(",") if v], jobs)
+        scale(sizes, args.scale_steps, [int(v) for v in args.consistent_sizes.split(",") if v], jobs,
+              None if args.versus is None else json.loads(args.versus))
         print()
         if parts == {"scale"}:
             return

@@ -48,8 +48,9 @@ step ``t`` to ``t+1`` changes row bounds and the objective only.  HiGHS keeps on
 :data:`CHUNK` steps (the LP up to the chunk's last step) and starts every solve from the previous optimal basis
 (primal simplex, :data:`HIGHS_OPTIONS`; from :data:`LIMIT_DUAL_FROM_N` states on, the states in alternating
 order and each objective the primal simplex for at most :data:`LIMIT_PRIMAL_ITERATIONS` iterations, then the dual
-simplex of :data:`LIMIT_HIGHS_OPTIONS` from where it stopped); other solvers solve each LP from scratch.  The cost of
-a step grows with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).
+simplex of :data:`LIMIT_HIGHS_OPTIONS` from where it stopped, both on the LP unscaled with a dual feasibility
+tolerance of 1e-10, :data:`LIMIT_SHARED_OPTIONS`); other solvers solve each LP from scratch.  The cost of a step
+grows with ``t`` (the LP holds the whole past; ``benchmarks/bench_information_limit.py`` prints it).
 
 From :data:`LIMIT_DUAL_FROM_N` states on, two more things.  A state that needed the dual simplex (next to a
 sensor) starts on the next step from its own optimal basis, in two phases: with the rows delivered since freed
