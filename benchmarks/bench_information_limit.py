@@ -93,6 +93,61 @@ Tried and not kept:
 The goal (60 s at n = 30 over 150 steps) is still not met: 167.5 s of process time in one process (1.8 times
 less than 300.6; growth from n = 10 to 30 about n^3.2, against n^3.7 before), so about 85-100 s of wall clock
 with 2 workers on an idle 2-core machine (not measured here: no core was idle).
+
+Measured 2026-11-29, fifth session (same tank chains and traces, 150 steps; old = the fourth session's settings,
+given as ``--versus '{"simplex_scale_strategy": 2, "dual_feasibility_tolerance": 1e-9}'``, new = this code, from 16
+states on both simplex phases on the LP unscaled with a dual feasibility tolerance of 1e-10,
+:data:`eqrec.bounds.information.LIMIT_SHARED_OPTIONS`; all in one run, ``--only scale --sizes 4:1,10:2,20:4,30:5
+--consistent-sizes "" --jobs 1,auto``; process time including the worker processes' tasks; 2 cores shared with
+three other helpers, load 4-8, so the wall clock is far from an idle machine's, and worst for the 2-worker rows):
+
+====  =======================  =======================  =======================  =======================
+n     old, 1 process           old, 2 workers           new, 1 process           new, 2 workers
+      wall / cpu s             wall / cpu s             wall / cpu s             wall / cpu s
+====  =======================  =======================  =======================  =======================
+4     0.69 / 0.46              0.64 / 0.46 (1 process)  0.68 / 0.47              0.59 / 0.45 (1 process)
+10    7.79 / 6.83              10.63 / 7.12 (1 process) 7.90 / 6.88              10.15 / 6.92 (1 process)
+20    116.1 / 65.3             101.0 / 61.3             61.4 / 33.3              55.2 / 30.4
+30    364.3 / 198.4            433.2 / 216.8            212.0 / 102.3            188.8 / 100.4
+====  =======================  =======================  =======================  =======================
+
+n = 4 and 10: the same path (below ``LIMIT_DUAL_FROM_N`` nothing changed), values byte-identical.  n = 20: new
+within 1.5e-10 of old; n = 30: at most 1.5e-8, at row 67, state 20, the old path's known drift (in the task holding
+it, old 1.5e-8 above the cold optimum, new 1.7e-16 from it).  Old, 1 process and 2 workers: identical (the table
+prints each row's difference to the first row of its size, the old 1 process; new 1 process and 2 workers are
+byte-identical by construction, the same tasks, and ``tests/test_information_limit.py`` checks it).  Growth
+of the new process time from n = 10 to 30: about n^2.5 (old: n^3.1); n = 4 to 30, n^2.65.
+Process time, old / new: n = 20, 1.96 in one process and 2.02 with 2 workers; n = 30, 1.94 and 2.16.
+
+Where the time went (rows 128-135 at n = 30, states 8-15, one task of 64 LPs): old 5.0 s, 29,975 simplex
+iterations (166 µs each); the 13 LPs of more than 1,000 iterations 3.5 s, the 29 of fewer than 50 iterations
+0.25 s (about 7 ms each, a run's fixed cost).  New: 2.4 s, 12,697 iterations (190 µs each), 2 LPs above 1,000
+iterations and 21 of 200-1,000.  The lever was the number of iterations of the hard states, not their cost:
+HiGHS's default scaling (strategy 2) made the dual simplex take 1.6-2.7 times the iterations it takes on the LP as
+built (tasks of 6 rows and 8 states at rows 60, 100, 128 and 140: 17,014 -> 10,930, 23,403 -> 13,127, 17,250 ->
+10,158, 60,717 -> 22,374), at the same cost per iteration.  Unscaled with the dual tolerance of before (1e-9) the
+warm optima ended up to 1.9e-9 below the cold ones (32 LPs of rows 140-143, states 0-7, against the dual simplex
+cold at tolerances 1e-10); at 1e-10 within 1.1e-10 (old: 1.9e-10), for 10-30 % more iterations than at 1e-9.
+
+Tried and not kept (tasks of 6 rows and 8 states at n = 30, process time, about 15 % noise between repeats):
+scaling strategies 1 and 3 (the default's iterations exactly), 4 (as off, within 5 %); a simplex update limit of 50
+or 1,000 (no change); price strategies 0, 1, 2 (the same iterations, no faster); dual steepest edge
+(3 % fewer iterations, the same time) and Dantzig pricing (17 % more iterations, the same time); 100 or 400 primal
+iterations before the dual simplex instead of 200 (2-14 % slower); without the hard states' own bases or
+without remembering which states are hard (1.2-2.3 times slower: the fourth session's two-phase start still pays
+without scaling); groups of 4, 5, 6, 10 or 20 states instead of 8 (n = 20, 60 steps, one process: 4.8-6.0 s
+against 4.6-5.3 s for 8; fewer, larger groups are not cheaper, so they cannot remove the 2-worker overhead
+below); chunks of 16 steps instead of 32 (n = 30, 60 steps: 12.2 s against 10.8-13.3 s).  Not tried for lack of
+time: the condensed form, presolve per chunk, column generation (issue 45's list).
+
+The 2 workers' extra process time: old 216.8 against 198.4 s in one process (+9 %), new 100.4 against 102.3 s (none)
+in this run; the fourth session measured 198.8 against 167.5 s in one run, so it varies with what else runs on the
+machine.  It is not the groups' cold starts (the same tasks run in one process, and larger groups were not cheaper
+above), so the groups stay as they were (the values independent of ``n_jobs``).  The goal, 60 s of wall at n = 30 on
+2 cores, was not measured on an idle machine: here, at load 5-8, the 2-worker run took 188.8 s of wall.  Its process
+time, 100.4 s, is half of before and no more than one process's, so on an idle 2-core machine about 50-60 s of wall
+is expected (half the process time plus the imbalance of the last chunk's four tasks): to be confirmed there with
+``--only scale --sizes 30:5 --jobs auto``.
 """
 
 from __future__ import annotations

@@ -80,7 +80,10 @@ agree to 1e-9 on 4,499 of the 4,500 values (median 6e-13); on the last the fallb
 The groups and the two-phase start of hard states (below) agree with that fallback to 1e-9 on 4,498 of the 4,500
 values (median 2e-13); of the other two, one is that value, now on the cold optimum (3e-16 from it), and one (row
 67, state 20) is 1.5e-8 (relative 3.8e-8) above the cold optimum, which the old path was on (6e-14): warm solves
-drift by that much at n = 30, either way.
+drift by that much at n = 30, either way.  Without scaling and at a dual tolerance of 1e-10
+(:data:`LIMIT_SHARED_OPTIONS`) the same 4,500 values agree with that path's to 1.5e-8, and that largest difference is
+the row 67, state 20 above: on the cold optimum now (1.7e-16); on 32 LPs of rows 140-143 (states 0-7) the warm
+optima are within 1.1e-10 of cold ones (the scaled path: 1.9e-10); n = 20 over 150 steps moves by at most 1.5e-10.
 
 Window (``window=W``): the rows ``kW .. (k+1)W - 1`` use the box :math:`[-r(s), r(s)]` at the start
 ``s = (k-1)W`` rounded down to a multiple of ``K`` (:math:`r(s)` is row ``s - 1``) and the data of times
