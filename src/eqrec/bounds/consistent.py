@@ -294,7 +294,7 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     empty = np.zeros((N, n))
     if N == 0:
         return ConsistentSet(empty, empty.copy(), empty.copy(), empty.copy())
-    seconds = 4 * estimate_seconds(system, N)
+    seconds = 4 * estimate_seconds(system, N, primal=True)  # the primal simplex path at every n
     if seconds > MAX_ESTIMATED_SECONDS and not force:
         raise InputError(f"refused: the consistent set of {N} steps at n = {n} would take about {seconds:.0f} s "
                          f"(documented limit {MAX_ESTIMATED_SECONDS:.0f} s; the cost grows as the square of the "

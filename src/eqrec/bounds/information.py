@@ -770,7 +770,8 @@ MAX_ESTIMATED_SECONDS = 600.0
 #: Estimated seconds from which a call shows its progress on stderr (:class:`eqrec.lp.parallel.Progress`: a bar
 #: on a terminal, a line at the start and one at the end otherwise).
 PROGRESS_SECONDS = 20.0
-#: The time model of :func:`estimate_seconds`: a row ``t`` of the exact limit costs about
+#: The time model of :func:`estimate_seconds` (below :data:`LIMIT_DUAL_FROM_N` states, and for the consistent set at
+#: every ``n``; above, :data:`LIMIT_SECONDS_PER_STATE_STEP`): a row ``t`` of the exact limit costs about
 #: ``SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n**STATE_EXPONENT * t`` seconds of process time (``n``
 #: warm LPs over the ``t`` steps of the past: the simplex iterations and their cost both grow with ``t``, so the
 #: sum over the rows is at least quadratic in the trace's length).  A windowed row's LP holds ``W`` to
@@ -783,10 +784,18 @@ PROGRESS_SECONDS = 20.0
 #: high on short traces of large plants (n = 30 at 60 steps: 140 s estimated, 38 s measured).
 SECONDS_PER_STATE, SECONDS_PER_STATE_STEP, STATE_EXPONENT = 2.7e-4, 2.5e-8, 4.4
 
+#: The second term of the time model for the limit's own path from :data:`LIMIT_DUAL_FROM_N` states on (the
+#: primal-then-dual fallback, unscaled, :data:`LIMIT_SHARED_OPTIONS`): ``LIMIT_SECONDS_PER_STATE_STEP *
+#: n**LIMIT_STATE_EXPONENT * t`` instead.  Fit on the tank chains at 150 steps (issue 45, fifth session, one
+#: process, process time, load 4-8): n = 20 and 30 in 33.3 and 102.3 s (the model 33.7 and 103.6); n = 30 at 60
+#: steps 10.8-13.3 s (the model 16.2).  The model of before said 149 and 883 s there, past the refusal at n = 30.
+LIMIT_SECONDS_PER_STATE_STEP, LIMIT_STATE_EXPONENT = 6.7e-7, 2.8
 
-def estimate_seconds(system: AffineSystem, rows, window: int | None = None) -> float:
+
+def estimate_seconds(system: AffineSystem, rows, window: int | None = None, *, primal: bool = False) -> float:
     """The estimated seconds of the rows ``rows`` of :func:`information_limit` (time model:
-    :data:`SECONDS_PER_STATE_STEP`), before anything is solved.
+    :data:`SECONDS_PER_STATE_STEP`, from :data:`LIMIT_DUAL_FROM_N` states on :data:`LIMIT_SECONDS_PER_STATE_STEP`),
+    before anything is solved.
 
     Parameters
     ----------
@@ -796,6 +805,10 @@ def estimate_seconds(system: AffineSystem, rows, window: int | None = None) -> f
         The steps ``t`` to solve, or a trace length ``N`` (every row ``0..N-1``).
     window : int or None, optional
         ``None``: exact rows; ``W``: windowed rows.
+    primal : bool, optional
+        ``True``: the primal simplex path at every ``n`` (the consistent set's,
+        :func:`eqrec.bounds.consistent.consistent_set`), so the first model whatever ``n``; default ``False``: the
+        limit's.
 
     Returns
     -------
@@ -806,6 +819,9 @@ def estimate_seconds(system: AffineSystem, rows, window: int | None = None) -> f
     if window is not None:
         t = np.minimum(t, 1.5 * window + SEGMENT)
     n = system.n
+    if n >= LIMIT_DUAL_FROM_N and not primal:
+        return float(t.size * SECONDS_PER_STATE * n
+                     + LIMIT_SECONDS_PER_STATE_STEP * n ** LIMIT_STATE_EXPONENT * t.sum())
     return float(t.size * SECONDS_PER_STATE * n + SECONDS_PER_STATE_STEP * n ** STATE_EXPONENT * t.sum())
 
 
