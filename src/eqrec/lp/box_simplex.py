@@ -84,6 +84,7 @@ _DUAL_TOL = 1e-9  # Harris's relaxation of the ratio test
 _PIVOT_TOL = 1e-9  # smallest pivot accepted (relative to the row's largest entry)
 _PERTURB = 1e-7  # the costs' perturbation (relative to the objective's largest entry)
 _START_PIVOT_TOL = 1e-9  # a start basis: smallest pivot of its elimination (relative to the block's largest entry)
+_SELECT_PASSES = 8  # bound flipping: breakpoints found by selection before the rest is sorted
 _START_MAX_COND = 1e10  # a start basis whose inverse is larger than this (times the basis's size) is not used
 
 
@@ -375,35 +376,62 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
             if nc == 0:
                 st = 2  # no entering column: no point satisfies the rows and the box
                 break
-            # bound flipping: pass the breakpoints in order while the leaving row's infeasibility stays positive
-            order = np.argsort(ratio[:nc])
+            # bound flipping: pass the breakpoints in increasing order while the leaving row's infeasibility stays
+            # positive.  Selection, not a sort: the smallest remaining ratio is swapped to the front, one pass over
+            # the candidates per breakpoint passed (few per pivot); past _SELECT_PASSES of them the rest is sorted.
+            # cand[:kq] end as the passed breakpoints in order, cand[kq:] the others (in any order).
             slope = abs(x[r] - (lo[r] if to_lower else hi[r]))
             kq = nc - 1
-            for kk in range(nc):
-                j = cand[order[kk]]
+            kk = 0
+            while kk < nc:
+                if kk == _SELECT_PASSES:  # many breakpoints passed: sort the rest once
+                    order = np.argsort(ratio[kk:nc]) + kk
+                    cs = cand[order].copy()
+                    rs = ratio[order].copy()
+                    cand[kk:nc] = cs
+                    ratio[kk:nc] = rs
+                else:
+                    bi = kk
+                    for c2 in range(kk + 1, nc):
+                        if ratio[c2] < ratio[bi]:
+                            bi = c2
+                    if bi != kk:
+                        cand[kk], cand[bi] = cand[bi], cand[kk]
+                        ratio[kk], ratio[bi] = ratio[bi], ratio[kk]
+                j = cand[kk]
                 slope -= abs(alpha[j]) * (hi[j] - lo[j])
                 if slope < 0.0:
                     kq = kk
                     break
+                kk += 1
+                if kk > _SELECT_PASSES:  # the rest is sorted: walk it
+                    while kk < nc:
+                        j = cand[kk]
+                        slope -= abs(alpha[j]) * (hi[j] - lo[j])
+                        if slope < 0.0:
+                            kq = kk
+                            break
+                        kk += 1
+                    break
             # Harris: among the breakpoints not passed, the largest pivot within the relaxed step
             theta_max = np.inf
             for kk in range(kq, nc):
-                j = cand[order[kk]]
-                t = (ratio[order[kk]] * abs(alpha[j]) + _DUAL_TOL) / abs(alpha[j])
+                j = cand[kk]
+                t = (ratio[kk] * abs(alpha[j]) + _DUAL_TOL) / abs(alpha[j])
                 if t < theta_max:
                     theta_max = t
             q = -1
             best = 0.0
             for kk in range(kq, nc):
-                j = cand[order[kk]]
-                if ratio[order[kk]] <= theta_max and abs(alpha[j]) > best:
+                j = cand[kk]
+                if ratio[kk] <= theta_max and abs(alpha[j]) > best:
                     best, q = abs(alpha[j]), j
             # the passed breakpoints flip to their other bound
             nflip = 0
             for i in range(m):
                 dlt[i] = 0.0
             for kk in range(kq):
-                j = cand[order[kk]]
+                j = cand[kk]
                 if j == q:
                     continue
                 new = lo[j] if nb_value[j] == hi[j] else hi[j]
