@@ -37,7 +37,8 @@ optimal.  So a solver here only decides how *tight* the bound is, never whether 
     per run).  On large windows (145 rows and 1,465 columns at n = 30) it is no match for HiGHS's sparse factors
     and stalls on the degenerate vertices (thousands of pivots where HiGHS needs 200-500), hence ``"auto"``.
 ``"auto"`` (default)
-    ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows, ``"highs"`` beyond.
+    ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows, and beyond for equality rows up to :data:`DENSE_MAX_ENTRIES`
+    entries of ``M``; ``"highs"`` otherwise.
 ``"highs"``
     One HiGHS model (:func:`eqrec.lp.solvers.highs_model`) for all the objectives, each run warm-started from the
     previous optimal basis (dual simplex, no presolve, one thread); its row duals are the multipliers.
@@ -62,10 +63,20 @@ from eqrec.lp.solvers import highs_model
 #: The solvers of :func:`box_lp_multipliers`.
 BOX_SOLVERS = ("auto", "dense", "highs")
 
-#: ``solver="auto"`` uses the dense dual simplex up to this many rows, HiGHS beyond (at 145 rows and 1,465
+#: ``solver="auto"`` uses the dense dual simplex up to this many rows whatever the LP (at 145 rows and 1,465
 #: columns, the exact estimator's window at n = 30, the dense solver's explicit inverse and full pricing cost more
 #: than HiGHS's sparse factors, and its pivots on those degenerate LPs run into the thousands).
 DENSE_MAX_ROWS = 64
+
+#: ... and beyond :data:`DENSE_MAX_ROWS` rows, for LPs whose rows are all equalities, up to this many entries of
+#: ``M`` (rows times columns): a dense pivot costs about ``m·Q`` operations (the pivot row and its pricing).
+#: Measured on the exact estimator's windows (each LP's ``2n`` objectives, min of repeats, warm-started as in the
+#: estimator): tanks n = 6, window 50 (64-82 rows, 388-406 columns, about 33,000 entries) dense 4-8 ms against
+#: 15-26 ms for HiGHS (which keeps no basis from one step to the next); tank chain n = 20, window 40, dense against
+#: HiGHS 0.27-0.86 up to 35,000 entries, 0.44-2.1 at 51,000-116,000.  LPs with ranged rows (the
+#: ``"zonotope+box"`` prior) stay at :data:`DENSE_MAX_ROWS`: the dense solver stalls on them (n = 30, window 10:
+#: 55-65 rows, 5,000-72,000 pivots against HiGHS's 1,400-10,800).
+DENSE_MAX_ENTRIES = 40_000
 
 #: The dense solver's pivot budget per objective: this many per row (plus 50); past it the objective goes to HiGHS.
 DENSE_PIVOTS_PER_ROW = 20
@@ -597,8 +608,9 @@ def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, co
     objectives : numpy.ndarray, shape (K, Q)
         The objectives ``g_k``, maximised.
     solver : {"auto", "dense", "highs"}, optional
-        :data:`BOX_SOLVERS`.  ``"auto"`` (default): ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows, ``"highs"``
-        beyond; either way the objectives the dense solver leaves without an optimum are solved again by HiGHS.
+        :data:`BOX_SOLVERS`.  ``"auto"`` (default): ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows (and beyond, for
+        equality rows, up to :data:`DENSE_MAX_ENTRIES` entries of ``M``), ``"highs"`` otherwise; either way the
+        objectives the dense solver leaves without an optimum are solved again by HiGHS.
     max_iterations : int, optional
         Pivots per objective of the dense solver (default ``DENSE_PIVOTS_PER_ROW · m + 50``).
     perturb : bool, optional
@@ -644,7 +656,7 @@ def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, co
     if m == 0:
         return BoxLPResult(np.zeros((K, 0)), np.ones(K, dtype=bool), 0, None, None, False)
     if solver == "auto":
-        solver = "dense" if m <= DENSE_MAX_ROWS else "highs"
+        solver = "dense" if _dense_by_default(M, lo[Q:], hi[Q:]) else "highs"
     if solver == "highs":
         y, optimal, its = _highs_multipliers(M, lo, hi, objectives)
         return BoxLPResult(y, optimal, its, None, None, False)
@@ -659,6 +671,15 @@ def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, co
         y[again[keep]] = y2[keep]
         optimal[again[keep]] = True
     return BoxLPResult(y, optimal, int(pivots), is_basic, at_upper, bool(warm))
+
+
+def _dense_by_default(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray) -> bool:
+    """``solver="auto"``'s choice: the dense solver up to :data:`DENSE_MAX_ROWS` rows, or up to
+    :data:`DENSE_MAX_ENTRIES` entries of ``M`` when every row is an equality; HiGHS otherwise."""
+    m, Q = M.shape
+    if m <= DENSE_MAX_ROWS:
+        return True
+    return m * Q <= DENSE_MAX_ENTRIES and bool(np.array_equal(row_lower, row_upper))
 
 
 def _highs_multipliers(M: np.ndarray, lo: np.ndarray, hi: np.ndarray,
