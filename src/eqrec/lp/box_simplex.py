@@ -134,6 +134,17 @@ def _refactor(M, basis, Q, Binv):
 
 
 @numba.njit(cache=True)
+def _row_norms(Binv, weight):
+    """``weight[p] = ‖row p of B⁻¹‖²`` (the dual steepest-edge weights; never below the smallest normal number)."""
+    m = Binv.shape[0]
+    for p in range(m):
+        acc = 0.0
+        for c in range(m):
+            acc += Binv[p, c] * Binv[p, c]
+        weight[p] = max(acc, 1e-300)
+
+
+@numba.njit(cache=True)
 def _well_conditioned(M, basis, Q, Binv):
     """Whether ``‖B‖_max ‖B⁻¹‖_max · m`` (a cheap bound of the condition number's size) is below
     :data:`_START_MAX_COND`."""
@@ -302,6 +313,8 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
         for j in range(nv):
             if start_upper[j] and not is_basic[j]:
                 nb_value[j] = hi[j]
+    weight = np.empty(m)  # dual steepest edge: the squared norms of the rows of B⁻¹
+    _row_norms(Binv, weight)
     alpha = np.empty(nv)
     col = np.empty(m)
     cand = np.empty(nv, np.int64)
@@ -336,7 +349,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
         _primal_values(M, basis, nb_value, is_basic, Q, Binv, x)
         st = 1
         for _ in range(max_iter):
-            # leaving: the most infeasible basic variable
+            # leaving: the largest infeasibility relative to its row of B⁻¹ (dual steepest edge, exact weights)
             p_out = -1
             worst = 0.0
             for p in range(m):
@@ -348,6 +361,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
                     v = x[j] - hi[j]
                 else:
                     continue
+                v = v * v / weight[p]
                 if v > worst:
                     worst, p_out = v, p
             if p_out < 0:
@@ -486,14 +500,21 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
             x[r] = bound
             nb_value[r] = bound
             # the inverse: product-form update
+            # (and the rows' squared norms, the steepest-edge weights, computed afresh from the rows changed)
             piv = a_col[p_out]
+            acc = 0.0
             for c in range(m):
                 Binv[p_out, c] /= piv
+                acc += Binv[p_out, c] * Binv[p_out, c]
+            weight[p_out] = acc
             for p in range(m):
                 if p != p_out and a_col[p] != 0.0:
                     f_ = a_col[p]
+                    acc = 0.0
                     for c in range(m):
                         Binv[p, c] -= f_ * Binv[p_out, c]
+                        acc += Binv[p, c] * Binv[p, c]
+                    weight[p] = acc
             basis[p_out] = q
             is_basic[q] = True
             is_basic[r] = False
@@ -504,6 +525,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
                 if not _refactor(M, basis, Q, Binv):
                     st = 3
                     break
+                _row_norms(Binv, weight)
                 _reduced_costs(M, basis, f, Q, Binv, d, y)
                 for j in range(nv):  # the fresh reduced costs may disagree in sign: move to the other bound
                     if not is_basic[j]:
