@@ -511,11 +511,12 @@ def exact_part(args) -> None:
               ("tanks n=6", tank_chain(6, 2))]
     exact_kw = {} if args.exact_window is None else {"window": args.exact_window}
     plants = [pl for pl in plants if args.exact_plants is None or pl[0].split()[0] in args.exact_plants]
+    keep = (lambda name: True) if args.exact_estimators is None else (lambda name: name in args.exact_estimators)
     N = args.exact_steps
     print(f"cost and tightness: loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, uniform noise; hull / exact hull "
           f"of the whole horizon (max over states) at the last step and the worst over every 5th step")
-    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'piv/step':>8s} {'filt last':>9s} {'filt max':>8s} "
-          f"{'pred last':>9s} {'pred max':>8s}")
+    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'piv/step':>8s} {'us/piv':>6s} {'filt last':>9s} "
+          f"{'filt max':>8s} {'pred last':>9s} {'pred max':>8s}")
     for label, system in plants:
         n = system.n
         makers = {"zonotope": lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY),
@@ -532,6 +533,8 @@ def exact_part(args) -> None:
         checked = [t for t in range(N) if t % 5 == 4 or t == N - 1]
         refs = {t: exact_hulls(system, trace, np.zeros(n), X0_RADIUS, y, t) for t in checked}
         for name, make in makers.items():
+            if not keep(name):
+                continue
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
@@ -548,8 +551,14 @@ def exact_part(args) -> None:
                     for S, (lo, hi) in zip((est.filtered, est.predicted), refs[t]):
                         row.append(float(np.max((S.upper - S.lower) / (hi - lo))))
                     ratios.append(row)
+            for _ in range(args.exact_repeats - 1):  # timing only: the same steps again, the least time kept
+                est = make().reset(np.zeros(n))
+                t0 = time.process_time()
+                for t in range(N):
+                    est.step(arrivals[t])
+                spent = min(spent, time.process_time() - t0)
             r = np.array(ratios)
-            piv = f"{pivots / N:8.1f}" if hasattr(est, "lp_pivots") else f"{'-':>8s}"
+            piv = f"{pivots / N:8.1f} {spent / pivots * 1e6:6.1f}" if getattr(est, "lp_pivots", 0) else f"{'-':>15s}"
             print(f"{label:16s} {name:12s} {spent / N * 1e6:8.0f} {piv} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
                   f"{r[-1, 1]:9.4f} {r[:, 1].max():8.4f}", flush=True)
     for n in args.exact_scale_n:  # the cost at scale (§4): tank chains; the reference at two steps only
@@ -569,6 +578,8 @@ def exact_part(args) -> None:
         print(f"tank chain n = {n}, p = {system.p}, {Ns} steps: predicted hull / exact hull of the whole horizon at "
               f"steps {checked}")
         for name, make in rows:
+            if not keep(name):
+                continue
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
@@ -584,9 +595,10 @@ def exact_part(args) -> None:
                     lo, hi = refs[t]
                     S = est.predicted
                     ratios.append(float(np.max((S.upper - S.lower) / (hi - lo))))
-            piv = f"{pivots / Ns:8.1f}" if hasattr(est, "lp_pivots") else f"{'-':>8s}"
+            piv = f"{pivots / Ns:8.1f} piv/step {spent / pivots * 1e6:6.1f} us/piv" if getattr(est, "lp_pivots", 0) \
+                else f"{'-':>8s} piv/step"
             print(f"{f'tanks n={n} p={system.p}':16s} {name:26s} {spent / Ns * 1e6:10.0f} us/step  "
-                  f"{piv} piv/step  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
+                  f"{piv}  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
 
 
 def _full_horizon_hull(system, trace, y, t):
@@ -623,6 +635,12 @@ def main(argv: list[str] | None = None) -> None:
                     help="exact part: the exact estimator's window (default: its own default)")
     ap.add_argument("--exact-plants", nargs="*", default=None,
                     help="exact part: the small plants to run, by first word (oscillator two tanks; default all)")
+    ap.add_argument("--exact-estimators", nargs="*", default=None,
+                    help="exact part: the rows to run, by name ('zonotope', 'exact', 'exact, cold', 'exact, z+box', "
+                         "'exact, box, window 10', ...; default all)")
+    ap.add_argument("--exact-repeats", type=int, default=1,
+                    help="exact part, small plants: timed runs per row, the least time kept (the first also "
+                         "checks the hulls)")
     args = ap.parse_args(argv)
     if args.part == "scale":
         return scale_part(args)

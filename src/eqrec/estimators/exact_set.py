@@ -14,8 +14,9 @@ the last :math:`L` steps **with its data** as linear programs (:mod:`eqrec.bound
   :math:`|y(s) - C(s)x(s)| \le \eta_v|V(s)|\mathbf 1` in its exact form,
 
 is a constrained zonotope (Scott, Raimondo, Marseglia, Braatz, Automatica 69, 2016); its interval hull is two LPs
-per state (:func:`eqrec.lp.box_simplex.box_lp_multipliers`: a compiled dense dual simplex up to 64 measured rows,
-HiGHS beyond, warm-started from one objective to the next), each end bounded by weak
+per state (:func:`eqrec.lp.box_simplex.box_lp_multipliers`: a compiled dense dual simplex up to 64 rows, and for
+equality rows up to 40,000 entries, HiGHS beyond; warm-started from one objective to the next), each end bounded
+by weak
 duality from the LP's duals with a rounding allowance, so every reported end is a guarantee in floating point
 whatever the LP's accuracy (:mod:`eqrec.bounds.window_lp`).
 
