@@ -141,7 +141,7 @@ def _refactor(M, basis, Q, Binv):
 
 @numba.njit(cache=True)
 def _row_norms(Binv, weight):
-    """``weight[p] = ‖row p of B⁻¹‖²`` (the dual steepest-edge weights; never below the smallest normal number)."""
+    """``weight[p] = ‖row p of B⁻¹‖²`` (the dual steepest-edge weights; at least 1e-300)."""
     m = Binv.shape[0]
     for p in range(m):
         acc = 0.0
