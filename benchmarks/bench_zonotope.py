@@ -5,6 +5,7 @@ its cost at scale; the exact estimator's cost and tightness (figures, not tests)
     python benchmarks/bench_zonotope.py --part scale [--scale-n 4 10 20 30] [--limit-up-to 10]
     python benchmarks/bench_zonotope.py --part where [--scale-n 4 10 20 30]
     python benchmarks/bench_zonotope.py --part exact [--exact-steps 150] [--exact-scale-n 30] [--exact-scale-steps 60]
+        [--exact-window W] [--exact-plants ...] [--exact-estimators NAME ...] [--exact-repeats 1]
 
 ``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`eqrec.systems.examples.tank_chain`), n = 4 / 10 / 20 / 30 with
 p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default settings; the zonotope estimator
@@ -163,7 +164,62 @@ window 50 a step costs 0.8-1.05 ms on the two carts and tanks n = 4 (min over re
 load): about the 1 ms goal, not clearly under it; the tightness goals need window 50 there (two carts, window
 50: 1.0076 / 1.011; window 40: 1.0122 / 1.0288).  But tanks n = 6 (p = 2) goes from 3-4 ms at window 40 to 15-18
 ms at window 50: its window's rows reach 64 (the dense solver's limit; HiGHS beyond) and its LPs need 3x the
-pivots, and raising DENSE_MAX_ROWS to 128 did not help (22-32 ms, separate run).  The default window stays 40.
+pivots, and raising DENSE_MAX_ROWS to 128 did not help (22-32 ms, separate run).  The default window stays 40
+(changed to 50 later: see below).
+
+The solver's cost per pivot and the window-50 default (2026-11-29, issue 45 §3, session 52).  The "500-700 µs per
+pivot" noted on tanks n = 6 at window 50 was not the compiled solver's: those windows have 65-82 rows, past
+``DENSE_MAX_ROWS = 64``, so their LPs went to HiGHS (80-100 µs per HiGHS iteration with its per-run cost, 469
+iterations per step against 150 at window 40, and no basis carried to the next step: HiGHS returns none).  The
+same LPs replayed through the dense solver (captured from the estimator, each LP's ``2n`` objectives from the
+carried start, min of repeats): 17-33 µs per pivot at 64-82 rows and 388-406 columns, 5-8 µs at 33 rows and 150
+columns (two carts), about ``m·Q`` operations per pivot (the pivot row and its pricing; a few ``m²`` for the
+inverse): no refactorisation storm, no object mode, no fallback; single-threaded BLAS or not made no difference.
+Per LP besides the pivots: the start basis and its inverse about 40 µs, each objective's reduced costs and values
+about 5 µs.  (The earlier "DENSE_MAX_ROWS = 128 did not help, 22-32 ms" is not reproduced: with the code of the
+session's start and only that constant changed, tanks n = 6 at window 50 took 5.9 ms per step against 19.3 ms.)
+Changed (``eqrec.lp.box_simplex``, ``eqrec.bounds.window_lp``): the bound-flipping ratio test finds its breakpoints
+by selection instead of sorting every candidate per pivot (11-25 % of the LPs' time in the replay); the leaving row
+by dual steepest edge with exact weights (pivots -7 to -30 % at n = 4 to 6, the oscillator's degenerate windows
+-75 %); the dense solver beyond 64 rows for equality rows up to 40,000 entries (``DENSE_MAX_ENTRIES``; ranged rows
+and larger LPs stay with HiGHS: the tank chain n = 20 at window 40 has 51,000-116,000 entries, dense 0.44-2.1x
+HiGHS's time, and the ``"zonotope+box"`` prior at n = 30 stalls the dense solver); the prior's columns carried by
+place (two carts, window 50: 64.0 -> 55.5 pivots per step).  Every end is still the weak-duality bound of whatever
+multipliers the solve ends with.
+
+``--part exact --exact-estimators exact "exact, box, window 10" --exact-repeats 3 --exact-window W``, the code of
+the session's start (old) and after (new), four processes back to back (old 40, new 40, old 50, new 50; process
+time, min of 3 runs of 150 steps; the machine loaded by other jobs, load 5-7.5 on 2 cores, so the µs move by 20 %
+between runs of the same code; the pivots are exact).  µs / pivot is the step's time over its pivots (the window,
+the filter and the bounds included).  Hull / exact hull: filtered, last step / worst; the same to 4 decimals old
+and new in every row.  n = 30: 60 steps, the predicted hull at steps 29 / 59.
+
+=================  ======  ===================  ==================  ================  ===============
+plant              window  µs/step old / new    piv/step old / new  µs/piv old / new  hull / exact
+=================  ======  ===================  ==================  ================  ===============
+oscillator n = 2   40      2,938 / 982          393.0 / 98.4        7.5 / 10.0        1.0000 / 1.0000
+two carts n = 4    40      705 / 774            47.1 / 36.6         15.0 / 21.2       1.0122 / 1.0288
+tanks n = 4        40      1,043 / 867          27.7 / 22.3         37.7 / 38.9       1.0011 / 1.0054
+tanks n = 6        40      3,245 / 2,971        150.3 / 105.7       21.6 / 28.1       1.0002 / 1.0002
+oscillator n = 2   50      10,482 / 2,090       1,177.9 / 175.5     8.9 / 11.9        1.0000 / 1.0000
+two carts n = 4    50      1,455 / 743          72.1 / 55.5         20.2 / 13.4       1.0076 / 1.0110
+tanks n = 4        50      1,090 / 848          31.3 / 24.5         34.8 / 34.6       1.0002 / 1.0013
+tanks n = 6        50      18,435 / 4,919       468.6 / 130.6       39.3 / 37.7       1.0000 / 1.0000
+tanks n = 30, box  10      10,790 / 12,540      754.0 / 733.8       14.3 / 17.1       1.2010 / 1.1045
+(second pair)      10      8,949 / 11,524       754.0 / 733.8       11.9 / 15.7       1.2010 / 1.1045
+tanks n = 30       40      737,351 / 704,513    8,992 / 8,907       82.0 / 79.1       1.0000 / 1.5128
+tanks n = 30       50      987,455 / 1,037,794  10,831 / 10,745     91.2 / 96.6       1.0000 / 1.1925
+=================  ======  ===================  ==================  ================  ===============
+
+Timing only (``/tmp`` scripts of the session: the same plants and arrivals, 150 steps, 5 timed runs per process,
+old and new processes alternating, three rounds; min over the rounds): two carts window 50 old 902 / new 758 µs,
+window 40 699 / 612; tanks n = 4 window 50 772 / 665, window 40 648 / 537; tanks n = 6 (one round) window 50
+19,123 / 4,421, window 40 3,636 / 3,190.  So the window-50 step now costs what the window-40 step did, within
+0.85 ms at the minimum on the two carts and tanks n = 4 (not at every repeat on this loaded machine: the medians
+reach 0.9-1.1 ms), and tanks n = 6 goes from 3.2 to 4.4 ms instead of to 19 ms: the default window is now 50
+(the two carts' hull goal, <= 1.01 at the last step, is met: 1.0076; it was 1.0122 at window 40).  The tank chain
+n = 30 at the default (HiGHS, 145 rows) is unchanged in cost and tighter at window 50 (1.19 against 1.51 at step
+59, about 1 s per step); the issue's 20 ms there is met only by ``prior="box"`` with window 10 (9-12.5 ms, 1.10).
 
 The two-cart part (default, ``--part carts``):
 
