@@ -28,14 +28,10 @@ exact hull of the whole trace; the window's data shrink the prior's excess with 
 documented approximation, in place of a constrained zonotope's order reduction).  A longer ``window`` is
 tighter and costs more.  Measured against the full-horizon LP on the two-cart plant (lightly damped, a double
 integrator: the slowest to forget its prior), 30 % loss, delays 0..2, 150 steps: window 20 ends at 1.35 times
-the exact hull (1.59 at worst), window 30 at 1.13 (1.19); the filtered hull at window 40 at 1.0122 (1.0288 at
-worst, every 5th step), window 50 (default) at 1.0076 (1.0110), where tanks n = 4 and 6 are at 1.0002 (1.0013)
-and 1.0000 (``tests/test_exact_set.py``, ``benchmarks/bench_zonotope.py``).  A step at window 50 costs about as
-much as one at window 40 did before the solver's dual steepest edge and the dense solver's wider range (issue 45:
-0.7-0.85 ms on the two carts and tanks n = 4, 4-5 ms on tanks n = 6, on a loaded 2-core machine).  Carrying the
-constrained zonotope itself (Scott et al.'s measurement and prediction are exact) needs a reduction of its
-constraints and generators; with their variable elimination and the lifted Girard reduction the set drifted on
-that plant, so the window is used.
+the exact hull (1.59 at worst), window 30 at 1.13 (1.19), window 40 (default) at 1.001 (1.06)
+(``tests/test_exact_set.py``, ``benchmarks/bench_zonotope.py``).  Carrying the constrained zonotope itself
+(Scott et al.'s measurement and prediction are exact) needs a reduction of its constraints and generators; with
+their variable elimination and the lifted Girard reduction the set drifted on that plant, so the window is used.
 
 The prior: the filter's zonotope, or the earlier hull (``prior=``)
 ------------------------------------------------------------------
@@ -54,8 +50,7 @@ box corners with a window of 4 steps, where the box binds at every step).  The b
 zonotope is far from the consistent set and the window is short; it loses the zonotope's correlations, which the
 data of a long window recover.  Measured (``benchmarks/bench_zonotope.py``, process time on a loaded 2-core
 machine; predicted hull over the exact hull of the whole horizon): tank chain n = 30, p = 5, 60 steps, at steps
-29 / 59: ``"zonotope"`` window 40 1.00 / 1.51 at 650-730 ms per step (window 50, the default: 1.00 / 1.19 at
-about 1 s per step), window 10 6.2 at step 59;
+29 / 59: ``"zonotope"`` window 40 (default) 1.00 / 1.51 at 650-730 ms per step, window 10 6.2 at step 59;
 ``"zonotope+box"`` window 10 1.20 / 1.10 (475 ms: 65 rows, HiGHS), window 15 1.07 / 1.05; ``"box"`` window 10
 1.20 / 1.10 at 11.9 ms per step (35 rows, the dense solver), window 5 1.38 / 1.26 at 2.2 ms.  On the n <= 6 plants
 at the default window the box changes the ratios in the third decimal or not at all (tanks n = 4, 150 steps:
@@ -113,7 +108,7 @@ from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
 
 #: Default window of :class:`ExactSetEstimator` in steps (at least ``max_delay + 1`` are used).
-EXACT_WINDOW = 50
+EXACT_WINDOW = 40
 
 #: The window's priors of :class:`ExactSetEstimator` (module docstring, *The prior*).
 EXACT_PRIORS = ("zonotope", "zonotope+box", "box")
