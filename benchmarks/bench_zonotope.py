@@ -5,6 +5,7 @@ its cost at scale; the exact estimator's cost and tightness (figures, not tests)
     python benchmarks/bench_zonotope.py --part scale [--scale-n 4 10 20 30] [--limit-up-to 10]
     python benchmarks/bench_zonotope.py --part where [--scale-n 4 10 20 30]
     python benchmarks/bench_zonotope.py --part exact [--exact-steps 150] [--exact-scale-n 30] [--exact-scale-steps 60]
+        [--exact-window W] [--exact-plants ...] [--exact-estimators NAME ...] [--exact-repeats 1]
 
 ``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`eqrec.systems.examples.tank_chain`), n = 4 / 10 / 20 / 30 with
 p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default settings; the zonotope estimator
@@ -164,6 +165,68 @@ load): about the 1 ms goal, not clearly under it; the tightness goals need windo
 50: 1.0076 / 1.011; window 40: 1.0122 / 1.0288).  But tanks n = 6 (p = 2) goes from 3-4 ms at window 40 to 15-18
 ms at window 50: its window's rows reach 64 (the dense solver's limit; HiGHS beyond) and its LPs need 3x the
 pivots, and raising DENSE_MAX_ROWS to 128 did not help (22-32 ms, separate run).  The default window stays 40.
+
+The solver's cost per pivot and the window-50 default (2026-11-29, issue 45 §3, session 52).  The "500-700 µs per
+pivot" noted on tanks n = 6 at window 50 was not the compiled solver's: those windows have 65-82 rows, past
+``DENSE_MAX_ROWS = 64``, so their LPs went to HiGHS (80-100 µs per HiGHS iteration with its per-run cost, 469
+iterations per step against 150 at window 40, and no basis carried to the next step: HiGHS returns none).  The
+same LPs replayed through the dense solver (captured from the estimator, each LP's ``2n`` objectives from the
+carried start, min of repeats): 17-33 µs per pivot at 64-82 rows and 388-406 columns, 5-8 µs at 33 rows and 150
+columns (two carts), about ``m·Q`` operations per pivot (the pivot row and its pricing; a few ``m²`` for the
+inverse): no refactorisation storm, no object mode, no fallback; single-threaded BLAS or not made no difference.
+Per LP besides the pivots: the start basis and its inverse about 40 µs, each objective's reduced costs and values
+about 5 µs.  (The earlier "DENSE_MAX_ROWS = 128 did not help, 22-32 ms" is not reproduced: with the code of the
+session's start and only that constant changed, tanks n = 6 at window 50 took 5.9 ms per step against 19.3 ms.)
+Changed (``eqrec.lp.box_simplex``, ``eqrec.bounds.window_lp``): the bound-flipping ratio test finds its breakpoints
+by selection instead of sorting every candidate per pivot (11-25 % of the LPs' time in the replay); the leaving row
+by dual steepest edge with exact weights (pivots -7 to -30 % at n = 4 to 6, the oscillator's degenerate windows
+-75 %); the dense solver beyond 64 rows for equality rows up to 40,000 entries (``DENSE_MAX_ENTRIES``; ranged rows
+and larger LPs stay with HiGHS: the tank chain n = 20 at window 40 has 51,000-116,000 entries, dense 0.44-2.1x
+HiGHS's time, and the ``"zonotope+box"`` prior at n = 30 stalls the dense solver); the prior's columns carried by
+place (two carts, window 50: 64.0 -> 55.5 pivots per step).  Every end is still the weak-duality bound of whatever
+multipliers the solve ends with.
+
+``--part exact --exact-estimators exact "exact, box, window 10" --exact-repeats 3 --exact-window W``, the code of
+the session's start (old) and after (new), four processes back to back (old 40, new 40, old 50, new 50; process
+time, min of 3 runs of 150 steps; the machine loaded by other jobs, load 5-7.5 on 2 cores, so the µs move by 20 %
+between runs of the same code; the pivots are exact).  µs / pivot is the step's time over its pivots (the window,
+the filter and the bounds included).  Hull / exact hull: filtered, last step / worst; the same to 4 decimals old
+and new in every row.  n = 30: 60 steps, the predicted hull at steps 29 / 59.
+
+=================  ======  ===================  ==================  ================  ===============
+plant              window  µs/step old / new    piv/step old / new  µs/piv old / new  hull / exact
+=================  ======  ===================  ==================  ================  ===============
+oscillator n = 2   40      2,938 / 982          393.0 / 98.4        7.5 / 10.0        1.0000 / 1.0000
+two carts n = 4    40      705 / 774            47.1 / 36.6         15.0 / 21.2       1.0122 / 1.0288
+tanks n = 4        40      1,043 / 867          27.7 / 22.3         37.7 / 38.9       1.0011 / 1.0054
+tanks n = 6        40      3,245 / 2,971        150.3 / 105.7       21.6 / 28.1       1.0002 / 1.0002
+oscillator n = 2   50      10,482 / 2,090       1,177.9 / 175.5     8.9 / 11.9        1.0000 / 1.0000
+two carts n = 4    50      1,455 / 743          72.1 / 55.5         20.2 / 13.4       1.0076 / 1.0110
+tanks n = 4        50      1,090 / 848          31.3 / 24.5         34.8 / 34.6       1.0002 / 1.0013
+tanks n = 6        50      18,435 / 4,919       468.6 / 130.6       39.3 / 37.7       1.0000 / 1.0000
+tanks n = 30, box  10      10,790 / 12,540      754.0 / 733.8       14.3 / 17.1       1.2010 / 1.1045
+(second pair)      10      8,949 / 11,524       754.0 / 733.8       11.9 / 15.7       1.2010 / 1.1045
+tanks n = 30       40      737,351 / 704,513    8,992 / 8,907       82.0 / 79.1       1.0000 / 1.5128
+tanks n = 30       50      987,455 / 1,037,794  10,831 / 10,745     91.2 / 96.6       1.0000 / 1.1925
+=================  ======  ===================  ==================  ================  ===============
+
+Timing only (``/tmp`` scripts of the session: the same plants and arrivals, 150 steps, 5 timed runs per process,
+old and new processes alternating, three rounds; min over the rounds): two carts window 50 old 902 / new 758 µs,
+window 40 699 / 612; tanks n = 4 window 50 772 / 665, window 40 648 / 537; tanks n = 6 (one round) window 50
+19,123 / 4,421, window 40 3,636 / 3,190.  So the window-50 step now costs what the window-40 step did, within
+0.85 ms at the minimum on the two carts and tanks n = 4 (not at every repeat on this loaded machine: the medians
+reach 0.9-1.1 ms), and tanks n = 6 goes from 3.2 to 4.4 ms instead of to 19 ms.  But the default window stays
+40: at window 50 the held-out six-state plant of ``tests/test_exact_set.py`` (60 steps) ends at 1.3312 times the
+exact hull (the goal 1.01; 1.0 at window 40), with the old solver too, so window 50 trades the two carts' goal
+(1.0076 against 1.0122) for that plant's.  Not the LP: the dense solver and HiGHS give the same ends, and the raw
+dual bound is close to the exact hull; it is the rounding allowance :math:`\kappa u\mu` of
+:mod:`eqrec.bounds.window_lp`, whose magnitudes propagate through :math:`|A|` step by step (growing like
+:math:`\rho(|A|)^L`, above 1 for that plant with negative entries although :math:`\rho(A) = 0.9`): the rows'
+magnitudes reach 7e8 at window 46 and 7e9 at window 50 (60 steps), an allowance of 0.001-0.03 on ends of 0.02-0.7.
+A window-50 default needs a tighter sound allowance first (the error of the propagated rows is bounded through
+:math:`|A^k|`, not :math:`|A|^k`).  The tank chain
+n = 30 at the default (HiGHS, 145 rows) is unchanged in cost and tighter at window 50 (1.19 against 1.51 at step
+59, about 1 s per step); the issue's 20 ms there is met only by ``prior="box"`` with window 10 (9-12.5 ms, 1.10).
 
 The two-cart part (default, ``--part carts``):
 
@@ -511,11 +574,12 @@ def exact_part(args) -> None:
               ("tanks n=6", tank_chain(6, 2))]
     exact_kw = {} if args.exact_window is None else {"window": args.exact_window}
     plants = [pl for pl in plants if args.exact_plants is None or pl[0].split()[0] in args.exact_plants]
+    keep = (lambda name: True) if args.exact_estimators is None else (lambda name: name in args.exact_estimators)
     N = args.exact_steps
     print(f"cost and tightness: loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, uniform noise; hull / exact hull "
           f"of the whole horizon (max over states) at the last step and the worst over every 5th step")
-    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'piv/step':>8s} {'filt last':>9s} {'filt max':>8s} "
-          f"{'pred last':>9s} {'pred max':>8s}")
+    print(f"{'plant':16s} {'estimator':12s} {'us/step':>8s} {'piv/step':>8s} {'us/piv':>6s} {'filt last':>9s} "
+          f"{'filt max':>8s} {'pred last':>9s} {'pred max':>8s}")
     for label, system in plants:
         n = system.n
         makers = {"zonotope": lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY),
@@ -532,6 +596,8 @@ def exact_part(args) -> None:
         checked = [t for t in range(N) if t % 5 == 4 or t == N - 1]
         refs = {t: exact_hulls(system, trace, np.zeros(n), X0_RADIUS, y, t) for t in checked}
         for name, make in makers.items():
+            if not keep(name):
+                continue
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
@@ -548,8 +614,14 @@ def exact_part(args) -> None:
                     for S, (lo, hi) in zip((est.filtered, est.predicted), refs[t]):
                         row.append(float(np.max((S.upper - S.lower) / (hi - lo))))
                     ratios.append(row)
+            for _ in range(args.exact_repeats - 1):  # timing only: the same steps again, the least time kept
+                est = make().reset(np.zeros(n))
+                t0 = time.process_time()
+                for t in range(N):
+                    est.step(arrivals[t])
+                spent = min(spent, time.process_time() - t0)
             r = np.array(ratios)
-            piv = f"{pivots / N:8.1f}" if hasattr(est, "lp_pivots") else f"{'-':>8s}"
+            piv = f"{pivots / N:8.1f} {spent / pivots * 1e6:6.1f}" if getattr(est, "lp_pivots", 0) else f"{'-':>15s}"
             print(f"{label:16s} {name:12s} {spent / N * 1e6:8.0f} {piv} {r[-1, 0]:9.4f} {r[:, 0].max():8.4f} "
                   f"{r[-1, 1]:9.4f} {r[:, 1].max():8.4f}", flush=True)
     for n in args.exact_scale_n:  # the cost at scale (§4): tank chains; the reference at two steps only
@@ -569,6 +641,8 @@ def exact_part(args) -> None:
         print(f"tank chain n = {n}, p = {system.p}, {Ns} steps: predicted hull / exact hull of the whole horizon at "
               f"steps {checked}")
         for name, make in rows:
+            if not keep(name):
+                continue
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)
                 est.step(arrivals[t])
@@ -584,9 +658,10 @@ def exact_part(args) -> None:
                     lo, hi = refs[t]
                     S = est.predicted
                     ratios.append(float(np.max((S.upper - S.lower) / (hi - lo))))
-            piv = f"{pivots / Ns:8.1f}" if hasattr(est, "lp_pivots") else f"{'-':>8s}"
+            piv = f"{pivots / Ns:8.1f} piv/step {spent / pivots * 1e6:6.1f} us/piv" if getattr(est, "lp_pivots", 0) \
+                else f"{'-':>8s} piv/step"
             print(f"{f'tanks n={n} p={system.p}':16s} {name:26s} {spent / Ns * 1e6:10.0f} us/step  "
-                  f"{piv} piv/step  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
+                  f"{piv}  " + "  ".join(f"{r:.4f}" for r in ratios), flush=True)
 
 
 def _full_horizon_hull(system, trace, y, t):
@@ -623,6 +698,12 @@ def main(argv: list[str] | None = None) -> None:
                     help="exact part: the exact estimator's window (default: its own default)")
     ap.add_argument("--exact-plants", nargs="*", default=None,
                     help="exact part: the small plants to run, by first word (oscillator two tanks; default all)")
+    ap.add_argument("--exact-estimators", nargs="*", default=None,
+                    help="exact part: the rows to run, by name ('zonotope', 'exact', 'exact, cold', 'exact, z+box', "
+                         "'exact, box, window 10', ...; default all)")
+    ap.add_argument("--exact-repeats", type=int, default=1,
+                    help="exact part, small plants: timed runs per row, the least time kept (the first also "
+                         "checks the hulls)")
     args = ap.parse_args(argv)
     if args.part == "scale":
         return scale_part(args)

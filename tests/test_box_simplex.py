@@ -183,3 +183,37 @@ def test_start_basis_is_nonsingular_and_keeps_independent_wanted_columns():
     basis = _start_basis(M, 4, want)
     assert sorted(basis) == [0, 2, 6] or sorted(basis) == [1, 2, 6]
     assert _refactor(M, basis, 4, np.empty((3, 3)))
+
+
+@pytest.mark.parametrize("b", [39.5, 10.25, -37.0])
+def test_one_pivot_passes_many_breakpoints(b):
+    """One row ``Σ z_j = b`` far from the sum at the slack basis's vertex: the bound-flipping ratio test passes most
+    breakpoints in one pivot (more than the selection's passes, so the sorted rest is walked too), and the
+    multipliers certify the optimum (SciPy's HiGHS)."""
+    rng = np.random.default_rng(5)
+    Q = 40
+    M = np.ones((1, Q))
+    g = rng.normal(size=(1, Q))
+    ones = np.ones(Q)
+    res = box_lp_solve(M, np.array([b]), np.array([b]), -ones, ones, g, "dense")
+    assert res.optimal.all() and res.pivots <= 2
+    ref = scipy.optimize.linprog(-g[0], A_eq=M, b_eq=[b], bounds=(-1, 1), method="highs")
+    bound = weak_dual(g[0], M, np.array([b]), np.array([b]), res.y[0])
+    assert bound == pytest.approx(-ref.fun, rel=1e-9, abs=1e-9)
+
+
+@pytest.mark.parametrize("m,Q,ranged,dense", [(60, 700, True, True), (70, 300, False, True), (70, 300, True, False),
+                                              (70, 600, False, False)])
+def test_auto_chooses_the_dense_solver_by_rows_entries_and_equalities(m, Q, ranged, dense):
+    """``solver="auto"``: dense up to 64 rows whatever the LP; beyond, only for equality rows and at most 40,000
+    entries of ``M`` (the dense solver returns its basis, HiGHS none); both certify the optimum."""
+    rng = np.random.default_rng(m + Q)
+    M, lo, hi = random_box_lp(rng, m, Q, ranged)
+    g = rng.normal(size=(1, Q))
+    ones = np.ones(Q)
+    res = box_lp_solve(M, lo, hi, -ones, ones, g)
+    assert (res.is_basic is not None) == dense
+    assert res.optimal.all()
+    ref = scipy.optimize.linprog(-g[0], A_ub=np.vstack([M, -M]), b_ub=np.concatenate([hi, -lo]), bounds=(-1, 1),
+                                 method="highs")
+    assert weak_dual(g[0], M, lo, hi, res.y[0]) == pytest.approx(-ref.fun, rel=1e-7, abs=1e-7)

@@ -468,3 +468,33 @@ def test_window_kernel_matches_a_plain_propagation():
     for got, want in ((ws.centre_pred, xc), (ws.X_pred, X), (ws.centre_filt, xf), (ws.X_filt, Xf),
                       (ws.M, np.concatenate(rows)), (ws.lower, np.concatenate(r))):
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * (1 + np.abs(want).max()))
+
+
+def test_carried_basis_keeps_the_priors_columns_and_rows_by_place():
+    """window_labels names the prior's generators and rows by their place (negative labels, never a noise's or an
+    output's); carry_basis gives them the status of the previous prior's in the same place, a common noise column
+    and measured row keep theirs, a new column is nonbasic at its lower bound and a new row's slack basic."""
+    from eqrec.bounds.window_lp import carry_basis, window_labels
+
+    measured = np.array([True, False, True])
+    cols, rows = window_labels(7, measured, 1, 1, 1, 3, 2)  # q0 = 3 generators, 2 prior rows
+    assert list(cols[:3]) == [-1, -2, -3] and list(rows[:2]) == [-1, -2]
+    assert np.all(cols[3:] >= 0) and np.all(rows[2:] >= 0)
+    new_cols, new_rows = window_labels(8, measured, 1, 1, 1, 3, 2)  # the window one step later
+    Qo, Qn = cols.size, new_cols.size
+    basic = np.zeros(Qo + rows.size, bool)
+    upper = np.zeros(Qo + rows.size, bool)
+    basic[1] = True  # the prior's second generator basic, its third at its upper bound
+    upper[2] = True
+    basic[Qo + 0] = False  # the first prior row's slack nonbasic, the second basic
+    basic[Qo + 1] = True
+    w_idx = int(np.flatnonzero(cols == 8 * 2 + 0)[0])  # w(8): in both windows
+    basic[w_idx] = True
+    want, up = carry_basis((cols, rows), (basic, upper), (new_cols, new_rows))
+    assert want[1] and not want[0] and not want[2] and up[2] and not up[1]
+    assert not want[Qn + 0] and want[Qn + 1]
+    assert want[int(np.flatnonzero(new_cols == 8 * 2 + 0)[0])]
+    newest = int(np.flatnonzero(new_cols == 10 * 2 + 0)[0])  # w(10): new to the window
+    assert not want[newest] and not up[newest]
+    newest_row = int(np.flatnonzero(new_rows == 10)[0])  # y(10): a new row, its slack basic
+    assert want[Qn + newest_row]

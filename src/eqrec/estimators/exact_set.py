@@ -14,8 +14,9 @@ the last :math:`L` steps **with its data** as linear programs (:mod:`eqrec.bound
   :math:`|y(s) - C(s)x(s)| \le \eta_v|V(s)|\mathbf 1` in its exact form,
 
 is a constrained zonotope (Scott, Raimondo, Marseglia, Braatz, Automatica 69, 2016); its interval hull is two LPs
-per state (:func:`eqrec.lp.box_simplex.box_lp_multipliers`: a compiled dense dual simplex up to 64 measured rows,
-HiGHS beyond, warm-started from one objective to the next), each end bounded by weak
+per state (:func:`eqrec.lp.box_simplex.box_lp_multipliers`: a compiled dense dual simplex up to 64 rows, and for
+equality rows up to 40,000 entries, HiGHS beyond; warm-started from one objective to the next), each end bounded
+by weak
 duality from the LP's duals with a rounding allowance, so every reported end is a guarantee in floating point
 whatever the LP's accuracy (:mod:`eqrec.bounds.window_lp`).
 
@@ -63,7 +64,8 @@ their noises; only the prior's generators (the filter's reduced zonotope at the 
 and oldest times change.  With ``warm_start=True`` (default) the last basis of a step's ``2n`` LPs is kept with
 the labels of its columns and rows (:func:`eqrec.bounds.window_lp.window_labels`); the next window's first LP
 starts from it (:func:`eqrec.bounds.window_lp.carry_basis`: a noise column or measured row of a common time keeps
-its status, the prior's new columns are nonbasic, a new row's slack basic; the solver completes that to a
+its status, the prior's columns and rows take the status of the previous prior's in the same place (a different
+vector, but the filter's reduction keeps a similar order), a new row's slack is basic; the solver completes that to a
 nonsingular basis, or falls back to the slack basis), and the order of the objectives alternates from one step to
 the next (maxima first, then minima first) so that the first objective of a window is the last of the previous
 one.  With boxed variables any nonsingular basis is dual feasible once each nonbasic variable sits at the bound

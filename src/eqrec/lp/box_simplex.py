@@ -24,20 +24,27 @@ optimal.  So a solver here only decides how *tight* the bound is, never whether 
     the bound its reduced cost asks for, so a new objective needs no phase 1: the reduced costs are recomputed,
     the nonbasic variables moved to their bounds, and the dual simplex goes on from the previous basis.  The rows
     are written with slacks, :math:`Mz - s = 0`, :math:`\underline b \le s \le \overline b`, and the first basis is
-    the slacks'.  The leaving row is the most infeasible one; the ratio test flips the bounded variables whose
-    breakpoints the step passes while the leaving row stays infeasible (the bound-flipping ratio test: about
-    2.5 times fewer pivots than the textbook test on the exact estimator's windows), then takes the largest pivot
-    within Harris's relaxation (1e-9) among the rest; the inverse is updated in product form and computed afresh
+    the slacks'.  The leaving row is the one of largest infeasibility relative to the norm of its row of the
+    inverse (dual steepest edge; the weights exact, recomputed from the rows each update changes: 7-30 % fewer
+    pivots than the most infeasible row on the exact estimator's windows at n = 4 to 6); the ratio test flips the
+    bounded variables whose breakpoints the step passes while the leaving row stays infeasible (the
+    bound-flipping ratio test: about 2.5 times fewer pivots than the textbook test on the exact estimator's
+    windows; the breakpoints found by selection, few per pivot, not by sorting them all), then takes the largest
+    pivot within Harris's relaxation (1e-9) among the rest; the inverse is updated in product form and computed afresh
     every :data:`REFACTOR_EVERY` pivots (the reduced costs and values then too, and a variable whose fresh reduced
     cost changed sign moves to its other bound).  The first basis may also be given (:func:`box_lp_solve`,
     ``start``: a neighbouring LP's last basis, completed to a nonsingular one); by the same argument any start is
     dual feasible, so it changes the pivots, never the validity of the multipliers.  No HiGHS call and no Python per pivot: on the exact
     estimator's windows at n = 4 (30 rows, 126 to 206 columns) the ``2n`` objectives of a step cost about
     0.5-0.7 ms against 5 ms for a warm-started HiGHS model (about 600 µs per run, most of it HiGHS's fixed cost
-    per run).  On large windows (145 rows and 1,465 columns at n = 30) it is no match for HiGHS's sparse factors
-    and stalls on the degenerate vertices (thousands of pivots where HiGHS needs 200-500), hence ``"auto"``.
+    per run).  A pivot costs about ``m·Q`` operations (the pivot row and its pricing; a few ``m²`` for the
+    inverse): measured 5-8 µs at 33 rows and 150 columns, 17-33 µs at 78 rows and 402 columns (min over repeats).
+    On large windows (145 rows and 1,465 columns at n = 30) it is no match for HiGHS's sparse factors and stalls
+    on the degenerate vertices (thousands of pivots where HiGHS needs 200-500), and on ranged rows beyond about 50
+    rows (the ``"zonotope+box"`` prior at n = 30: up to 7 times HiGHS's iterations), hence ``"auto"``.
 ``"auto"`` (default)
-    ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows, ``"highs"`` beyond.
+    ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows, and beyond for equality rows up to :data:`DENSE_MAX_ENTRIES`
+    entries of ``M``; ``"highs"`` otherwise.
 ``"highs"``
     One HiGHS model (:func:`eqrec.lp.solvers.highs_model`) for all the objectives, each run warm-started from the
     previous optimal basis (dual simplex, no presolve, one thread); its row duals are the multipliers.
@@ -62,10 +69,20 @@ from eqrec.lp.solvers import highs_model
 #: The solvers of :func:`box_lp_multipliers`.
 BOX_SOLVERS = ("auto", "dense", "highs")
 
-#: ``solver="auto"`` uses the dense dual simplex up to this many rows, HiGHS beyond (at 145 rows and 1,465
+#: ``solver="auto"`` uses the dense dual simplex up to this many rows whatever the LP (at 145 rows and 1,465
 #: columns, the exact estimator's window at n = 30, the dense solver's explicit inverse and full pricing cost more
 #: than HiGHS's sparse factors, and its pivots on those degenerate LPs run into the thousands).
 DENSE_MAX_ROWS = 64
+
+#: ... and beyond :data:`DENSE_MAX_ROWS` rows, for LPs whose rows are all equalities, up to this many entries of
+#: ``M`` (rows times columns): a dense pivot costs about ``m·Q`` operations (the pivot row and its pricing).
+#: Measured on the exact estimator's windows (each LP's ``2n`` objectives, min of repeats, warm-started as in the
+#: estimator): tanks n = 6, window 50 (64-82 rows, 388-406 columns, about 33,000 entries) dense 4-8 ms against
+#: 15-26 ms for HiGHS (which keeps no basis from one step to the next); tank chain n = 20, window 40, dense against
+#: HiGHS 0.27-0.86 up to 35,000 entries, 0.44-2.1 at 51,000-116,000.  LPs with ranged rows (the
+#: ``"zonotope+box"`` prior) stay at :data:`DENSE_MAX_ROWS`: the dense solver stalls on them (n = 30, window 10:
+#: 55-65 rows, 5,000-72,000 pivots against HiGHS's 1,400-10,800).
+DENSE_MAX_ENTRIES = 40_000
 
 #: The dense solver's pivot budget per objective: this many per row (plus 50); past it the objective goes to HiGHS.
 DENSE_PIVOTS_PER_ROW = 20
@@ -84,6 +101,7 @@ _DUAL_TOL = 1e-9  # Harris's relaxation of the ratio test
 _PIVOT_TOL = 1e-9  # smallest pivot accepted (relative to the row's largest entry)
 _PERTURB = 1e-7  # the costs' perturbation (relative to the objective's largest entry)
 _START_PIVOT_TOL = 1e-9  # a start basis: smallest pivot of its elimination (relative to the block's largest entry)
+_SELECT_PASSES = 8  # bound flipping: breakpoints found by selection before the rest is sorted
 _START_MAX_COND = 1e10  # a start basis whose inverse is larger than this (times the basis's size) is not used
 
 
@@ -119,6 +137,17 @@ def _refactor(M, basis, Q, Binv):
         return False
     Binv[:, :] = inv
     return True
+
+
+@numba.njit(cache=True)
+def _row_norms(Binv, weight):
+    """``weight[p] = ‖row p of B⁻¹‖²`` (the dual steepest-edge weights; at least 1e-300)."""
+    m = Binv.shape[0]
+    for p in range(m):
+        acc = 0.0
+        for c in range(m):
+            acc += Binv[p, c] * Binv[p, c]
+        weight[p] = max(acc, 1e-300)
 
 
 @numba.njit(cache=True)
@@ -290,6 +319,8 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
         for j in range(nv):
             if start_upper[j] and not is_basic[j]:
                 nb_value[j] = hi[j]
+    weight = np.empty(m)  # dual steepest edge: the squared norms of the rows of B⁻¹
+    _row_norms(Binv, weight)
     alpha = np.empty(nv)
     col = np.empty(m)
     cand = np.empty(nv, np.int64)
@@ -324,7 +355,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
         _primal_values(M, basis, nb_value, is_basic, Q, Binv, x)
         st = 1
         for _ in range(max_iter):
-            # leaving: the most infeasible basic variable
+            # leaving: the largest infeasibility relative to its row of B⁻¹ (dual steepest edge, exact weights)
             p_out = -1
             worst = 0.0
             for p in range(m):
@@ -336,6 +367,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
                     v = x[j] - hi[j]
                 else:
                     continue
+                v = v * v / weight[p]
                 if v > worst:
                     worst, p_out = v, p
             if p_out < 0:
@@ -375,35 +407,62 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
             if nc == 0:
                 st = 2  # no entering column: no point satisfies the rows and the box
                 break
-            # bound flipping: pass the breakpoints in order while the leaving row's infeasibility stays positive
-            order = np.argsort(ratio[:nc])
+            # bound flipping: pass the breakpoints in increasing order while the leaving row's infeasibility stays
+            # positive.  Selection, not a sort: the smallest remaining ratio is swapped to the front, one pass over
+            # the candidates per breakpoint passed (few per pivot); past _SELECT_PASSES of them the rest is sorted.
+            # cand[:kq] end as the passed breakpoints in order, cand[kq:] the others (in any order).
             slope = abs(x[r] - (lo[r] if to_lower else hi[r]))
             kq = nc - 1
-            for kk in range(nc):
-                j = cand[order[kk]]
+            kk = 0
+            while kk < nc:
+                if kk == _SELECT_PASSES:  # many breakpoints passed: sort the rest once
+                    order = np.argsort(ratio[kk:nc]) + kk
+                    cs = cand[order].copy()
+                    rs = ratio[order].copy()
+                    cand[kk:nc] = cs
+                    ratio[kk:nc] = rs
+                else:
+                    bi = kk
+                    for c2 in range(kk + 1, nc):
+                        if ratio[c2] < ratio[bi]:
+                            bi = c2
+                    if bi != kk:
+                        cand[kk], cand[bi] = cand[bi], cand[kk]
+                        ratio[kk], ratio[bi] = ratio[bi], ratio[kk]
+                j = cand[kk]
                 slope -= abs(alpha[j]) * (hi[j] - lo[j])
                 if slope < 0.0:
                     kq = kk
                     break
+                kk += 1
+                if kk > _SELECT_PASSES:  # the rest is sorted: walk it
+                    while kk < nc:
+                        j = cand[kk]
+                        slope -= abs(alpha[j]) * (hi[j] - lo[j])
+                        if slope < 0.0:
+                            kq = kk
+                            break
+                        kk += 1
+                    break
             # Harris: among the breakpoints not passed, the largest pivot within the relaxed step
             theta_max = np.inf
             for kk in range(kq, nc):
-                j = cand[order[kk]]
-                t = (ratio[order[kk]] * abs(alpha[j]) + _DUAL_TOL) / abs(alpha[j])
+                j = cand[kk]
+                t = (ratio[kk] * abs(alpha[j]) + _DUAL_TOL) / abs(alpha[j])
                 if t < theta_max:
                     theta_max = t
             q = -1
             best = 0.0
             for kk in range(kq, nc):
-                j = cand[order[kk]]
-                if ratio[order[kk]] <= theta_max and abs(alpha[j]) > best:
+                j = cand[kk]
+                if ratio[kk] <= theta_max and abs(alpha[j]) > best:
                     best, q = abs(alpha[j]), j
             # the passed breakpoints flip to their other bound
             nflip = 0
             for i in range(m):
                 dlt[i] = 0.0
             for kk in range(kq):
-                j = cand[order[kk]]
+                j = cand[kk]
                 if j == q:
                     continue
                 new = lo[j] if nb_value[j] == hi[j] else hi[j]
@@ -447,14 +506,21 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
             x[r] = bound
             nb_value[r] = bound
             # the inverse: product-form update
+            # (and the rows' squared norms, the steepest-edge weights, computed afresh from the rows changed)
             piv = a_col[p_out]
+            acc = 0.0
             for c in range(m):
                 Binv[p_out, c] /= piv
+                acc += Binv[p_out, c] * Binv[p_out, c]
+            weight[p_out] = acc
             for p in range(m):
                 if p != p_out and a_col[p] != 0.0:
                     f_ = a_col[p]
+                    acc = 0.0
                     for c in range(m):
                         Binv[p, c] -= f_ * Binv[p_out, c]
+                        acc += Binv[p, c] * Binv[p, c]
+                    weight[p] = acc
             basis[p_out] = q
             is_basic[q] = True
             is_basic[r] = False
@@ -465,6 +531,7 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
                 if not _refactor(M, basis, Q, Binv):
                     st = 3
                     break
+                _row_norms(Binv, weight)
                 _reduced_costs(M, basis, f, Q, Binv, d, y)
                 for j in range(nv):  # the fresh reduced costs may disagree in sign: move to the other bound
                     if not is_basic[j]:
@@ -569,8 +636,9 @@ def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, co
     objectives : numpy.ndarray, shape (K, Q)
         The objectives ``g_k``, maximised.
     solver : {"auto", "dense", "highs"}, optional
-        :data:`BOX_SOLVERS`.  ``"auto"`` (default): ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows, ``"highs"``
-        beyond; either way the objectives the dense solver leaves without an optimum are solved again by HiGHS.
+        :data:`BOX_SOLVERS`.  ``"auto"`` (default): ``"dense"`` up to :data:`DENSE_MAX_ROWS` rows (and beyond, for
+        equality rows, up to :data:`DENSE_MAX_ENTRIES` entries of ``M``), ``"highs"`` otherwise; either way the
+        objectives the dense solver leaves without an optimum are solved again by HiGHS.
     max_iterations : int, optional
         Pivots per objective of the dense solver (default ``DENSE_PIVOTS_PER_ROW · m + 50``).
     perturb : bool, optional
@@ -616,7 +684,7 @@ def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, co
     if m == 0:
         return BoxLPResult(np.zeros((K, 0)), np.ones(K, dtype=bool), 0, None, None, False)
     if solver == "auto":
-        solver = "dense" if m <= DENSE_MAX_ROWS else "highs"
+        solver = "dense" if _dense_by_default(M, lo[Q:], hi[Q:]) else "highs"
     if solver == "highs":
         y, optimal, its = _highs_multipliers(M, lo, hi, objectives)
         return BoxLPResult(y, optimal, its, None, None, False)
@@ -631,6 +699,15 @@ def box_lp_solve(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray, co
         y[again[keep]] = y2[keep]
         optimal[again[keep]] = True
     return BoxLPResult(y, optimal, int(pivots), is_basic, at_upper, bool(warm))
+
+
+def _dense_by_default(M: np.ndarray, row_lower: np.ndarray, row_upper: np.ndarray) -> bool:
+    """``solver="auto"``'s choice: the dense solver up to :data:`DENSE_MAX_ROWS` rows, or up to
+    :data:`DENSE_MAX_ENTRIES` entries of ``M`` when every row is an equality; HiGHS otherwise."""
+    m, Q = M.shape
+    if m <= DENSE_MAX_ROWS:
+        return True
+    return m * Q <= DENSE_MAX_ENTRIES and bool(np.array_equal(row_lower, row_upper))
 
 
 def _highs_multipliers(M: np.ndarray, lo: np.ndarray, hi: np.ndarray,
