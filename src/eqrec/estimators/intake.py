@@ -181,13 +181,13 @@ class OpenedStep:
     dropped: int = 0  # packets stamped before the period: not used (counted in dropped_packets)
 
 
-def injection_bound(M, a, scale, b, c, add, terms):
+def _injection_bound(M, a, scale, b, c, add, terms):
     """:func:`eqrec.bounds.rounding_kernels.injection_bound`, imported at its first call (with Numba, about 0.35 s
     of CPU that a job building estimators without stepping them does not pay); the compiled kernel then takes this
     name's place in the module."""
-    global injection_bound
+    global _injection_bound
     from eqrec.bounds.rounding_kernels import injection_bound as compiled
-    injection_bound = compiled
+    _injection_bound = compiled
     return compiled(M, a, scale, b, c, add, terms)
 
 
@@ -446,7 +446,7 @@ class StampedEstimator:
         add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] and step.u.any() else self._drift(step.t)
         if own is not None:
             add = add + own
-        record.w[step.t] = injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
+        record.w[step.t] = _injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
                                            length + self._state_terms_extra)
 
     def _drift(self, t: int) -> np.ndarray:
@@ -463,7 +463,7 @@ class StampedEstimator:
         """Enter the rounding of a residual ``y(τ) − C ref(τ)`` and of the simulated ``y(τ) = C x(τ) + V v(τ)``,
         an injection into the measurement of ``τ``."""
         _, _, absC, _, v, _ = self._absolute_model(tau)
-        record.v[tau] = injection_bound(absC, reference, 2.0, record.true[tau], residual, v, self._output_terms)
+        record.v[tau] = _injection_bound(absC, reference, 2.0, record.true[tau], residual, v, self._output_terms)
 
     def _allowance(self, record: "RoundingRecord", maps: np.ndarray, extra: "np.ndarray | float" = 0.0) -> np.ndarray:
         """``ρ = |G| (ι_w, ι_v, ρ(s)) + extra``, rounded up (module docstring); ``maps`` is ``|G|``, the absolute
