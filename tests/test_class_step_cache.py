@@ -9,7 +9,7 @@ import pytest
 
 from eqrec.arrivals.draws import bernoulli_trace, with_uniform_delays
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
-from eqrec.bounds.rounding import injection_bound
+from eqrec.bounds.rounding_kernels import injection_bound
 from eqrec.bounds.zonotope import outer_row_sums
 from eqrec.design.delay.design import design_delay_global
 from eqrec.design.delay.languages import delay_classes

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from eqrec.arrivals.traces import NEVER, ArrivalTrace
-from eqrec.bounds.rounding import rounding_allowance, rounding_allowance_compiled
+from eqrec.bounds.rounding import rounding_allowance
+from eqrec.bounds.rounding_kernels import rounding_allowance_compiled
 from eqrec.design.delay.design import design_delay_global
 from eqrec.design.delay.languages import delay_classes
 from eqrec.simulate.loop import closed_loop

@@ -17,6 +17,8 @@ classes of a language and their error maps, and the certificate computed from th
     The exact consistent set: the interval hull of the states consistent with the measured data, per step.
 :mod:`~eqrec.bounds.rounding`
     The rounding allowance: the one formula by which every reported bound covers the floating-point arithmetic.
+:mod:`~eqrec.bounds.rounding_kernels`
+    The same allowance compiled with Numba for the kernels (apart, so that the formula imports no Numba).
 :mod:`~eqrec.bounds.window`
     The exact window: per state, the best linear estimate over the last steps given a zonotope at their start.
 :mod:`~eqrec.bounds.window_lp`

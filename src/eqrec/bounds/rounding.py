@@ -22,7 +22,8 @@ magnitudes themselves (computed forwards, they are within a relative :math:`\gam
 that of the simulated true state of the same size.
 
 **Where it is used.**  The zonotope filters' rounding generators and the exact window's radius
-(:mod:`eqrec.estimators.zonotope`, :mod:`eqrec.bounds.window`, compiled: :func:`rounding_allowance_compiled`), the
+(:mod:`eqrec.estimators.zonotope`, :mod:`eqrec.bounds.window`, compiled:
+:func:`eqrec.bounds.rounding_kernels.rounding_allowance_compiled`), the
 causal estimators' reported bound (the design's level plus the allowance, carried across periods by the
 estimator's own error map: :mod:`eqrec.estimators.intake`) and the exact run-time bound of any linear estimator
 (:mod:`eqrec.estimators.exact`).  Measured sizes, relative to the bound, are given there (about ``1e-13`` to
@@ -32,7 +33,6 @@ state, not of its error).
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 #: Unit roundoff of float64.
@@ -43,8 +43,9 @@ def rounding_allowance(bound, terms, magnitude):
     r"""``bound`` inflated by the rounding allowance :math:`4\,\mathrm{terms}\,u\,(\mu + b)`, rounded up (module
     docstring).
 
-    Works on floats and on NumPy arrays (elementwise); :func:`rounding_allowance_compiled` is the same formula
-    for compiled loops (the same operations in the same order, so the same bytes).
+    Works on floats and on NumPy arrays (elementwise);
+    :func:`eqrec.bounds.rounding_kernels.rounding_allowance_compiled` is the same formula for compiled loops (the
+    same operations in the same order, so the same bytes).
 
     Parameters
     ----------
@@ -63,73 +64,6 @@ def rounding_allowance(bound, terms, magnitude):
     return np.nextafter(bound + 4.0 * terms * UNIT_ROUNDOFF * (magnitude + bound), np.inf)
 
 
-#: :func:`rounding_allowance` compiled with Numba (no ``fastmath``: the same IEEE operations), for the kernels.
-rounding_allowance_compiled = numba.njit(cache=True)(rounding_allowance)
-
-
-@numba.njit(cache=True)
-def injection_bound(M, a, scale, b, c, add, terms):  # pragma: no cover - compiled
-    r"""The rounding allowance of one step's update, :func:`rounding_allowance` of its magnitude
-    :math:`\mu = M(s|a| + b) + |c| + \mathrm{add}` (``M``, ``b``, ``add`` nonnegative), in one compiled call.
-
-    Parameters
-    ----------
-    M : numpy.ndarray, shape (n, k)
-        The absolute values of the update's matrix.
-    a : numpy.ndarray, shape (k,)
-        The vector it multiplies (its absolute values are taken).
-    scale : float
-        ``s``.
-    b : numpy.ndarray, shape (k,)
-        A nonnegative magnitude added to ``s |a|`` (e.g. the true state's).
-    c : numpy.ndarray, shape (n,)
-        A vector whose absolute values are added.
-    add : numpy.ndarray, shape (n,)
-        A nonnegative magnitude added.
-    terms : float
-        As in :func:`rounding_allowance`.
-
-    Returns
-    -------
-    numpy.ndarray, shape (n,)
-        ``nextafter(4 · terms · u · μ, +inf)``.
-    """
-    n, k = M.shape
-    out = np.empty(n)
-    for i in range(n):
-        s = abs(c[i]) + add[i]
-        for j in range(k):
-            s += M[i, j] * (scale * abs(a[j]) + b[j])
-        out[i] = np.nextafter(4.0 * terms * UNIT_ROUNDOFF * s, np.inf)
-    return out
-
-
-@numba.njit(cache=True)
-def allowance_tail(carried, extra, factor):  # pragma: no cover - compiled
-    r"""``ρ = nextafter((carried + extra) · factor, +inf)`` and ``max(0, max_i ρ_i)`` in one pass (the operations of
-    :meth:`eqrec.estimators.intake.StampedEstimator._allowance` after its product, and of ``ρ.max(initial=0)``).
-
-    Parameters
-    ----------
-    carried : numpy.ndarray, shape (n,)
-        ``|G| z``: the injections carried to the estimate.
-    extra : numpy.ndarray, shape (n,)
-        The step's own injection.
-    factor : float
-        ``1 + (2n + 8) u``.
-
-    Returns
-    -------
-    rho : numpy.ndarray, shape (n,)
-        The allowance per state.
-    top : float
-        Its largest entry (``0`` at least).
-    """
-    n = carried.shape[0]
-    rho = np.empty(n)
-    top = 0.0
-    for i in range(n):
-        rho[i] = np.nextafter((carried[i] + extra[i]) * factor, np.inf)
-        if rho[i] > top or np.isnan(rho[i]):
-            top = rho[i]
-    return rho, top
+# The compiled forms (rounding_allowance_compiled, injection_bound, allowance_tail) are in
+# eqrec.bounds.rounding_kernels, which imports numba: this module does not (about 0.35 s of CPU in a job that
+# calls no kernel).  rounding_allowance is compiled from here, so this file is hashed by eqrec.io.compiled_once.

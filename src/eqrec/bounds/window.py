@@ -95,7 +95,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from eqrec.bounds.rounding import rounding_allowance_compiled
+from eqrec.bounds.rounding_kernels import rounding_allowance_compiled
 
 
 @numba.njit(cache=True)

@@ -160,23 +160,35 @@ class RecoveryEstimator(StampedEstimator):
         (``τ`` received; ``ξ`` gains ``+u_e``), carry the roundings injected into the state and the measurements."""
         sysm, t, p, n, T = self.system, step.t, self._p, self._n, self.T
         record = self._period_record(step)
+        eye = self._norms.get("eye")
+        if eye is None:
+            eye = self._norms["eye"] = np.eye(n)
         if t == 0:
             G0 = np.zeros((n, T * (n + p) + n))
-            G0[:, T * (n + p):] = np.eye(n)
+            G0[:, T * (n + p):] = eye
             record.maps = [G0]
+            record.output_maps = {}
         for tau in self._new_packets(step):
             self._output_injection(record, tau, step.yxi[tau], step.history[tau])
-        F = np.asarray(gain.F, float)
+        hit = self._norms.get(("gain", id(gain)))  # |F| and |u0| of a node's gains, made once (the row kept alive)
+        if hit is None or hit[0] is not gain:
+            F = np.asarray(gain.F, float)
+            hit = self._norms[("gain", id(gain))] = (gain, F, np.abs(F), np.abs(gain.u0))
+        _, F, absF, absu0 = hit
         yxi = np.zeros((t + 1) * p)
         for tau, v in step.yxi.items():
             yxi[tau * p:(tau + 1) * p] = np.abs(v)
-        own = np.abs(gain.u0) + np.abs(F) @ yxi
+        own = absu0 + absF @ yxi
         self._state_injection(step, record, self.xhat, own, n + (t + 1) * p)
         G = sysm.A_at(t) @ record.maps[t]
-        G[:, t * n:(t + 1) * n] += np.eye(n)
+        G[:, t * n:(t + 1) * n] += eye
+        outputs = record.output_maps  # C(τ) G(τ) per received τ: fixed once G(τ) is, made once per period
         for tau in sorted(step.yxi):
             Ft = F[:, tau * p:(tau + 1) * p]
-            G += Ft @ (sysm.C_at(tau) @ record.maps[tau])
+            CG = outputs.get(tau)
+            if CG is None:
+                CG = outputs[tau] = sysm.C_at(tau) @ record.maps[tau]
+            G += Ft @ CG
             G[:, T * n + tau * p:T * n + (tau + 1) * p] += Ft
         record.maps.append(G)
         return record, self._allowance(record, np.abs(G))
@@ -550,7 +562,7 @@ class ClassEstimator(StampedEstimator):
         A row-major ``C`` (the systems' own: made from nested lists) is multiplied by the BLAS kernel of NumPy's
         ``C @ ref``, so the residuals are the numbers of the uncompiled step; a column-major one is copied to
         row-major, whose product may round differently, still within the allowance (its bound holds for any order
-        of the sums, :func:`eqrec.bounds.rounding.injection_bound`)."""
+        of the sums, :func:`eqrec.bounds.rounding_kernels.injection_bound`)."""
         key = ("class", t if self._varying else 0)
         hit = self._norms.get(key)
         if hit is None:

@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from eqrec.bounds.data_classes import ClassGains, class_error_map
-from eqrec.bounds.rounding import allowance_tail, injection_bound
+from eqrec.bounds.rounding_kernels import allowance_tail, injection_bound
 from eqrec.bounds.stacking import Stacking
 from eqrec.bounds.zonotope import ErrorMap
 from eqrec.errors import InputError
@@ -504,7 +504,7 @@ def class_step(A, B, absB, fixed, period, K, absK, S, rounding_map, u, rows, rad
     r"""One step of the class form (:class:`eqrec.estimators.causal.ClassEstimator`) in one compiled call, from the
     packets as they arrived: the residuals of the new packets, the stacked data of the class, the estimate and its
     rounding allowance, by the operations of the uncompiled step (BLAS products as NumPy's ``@``,
-    :func:`eqrec.bounds.rounding.injection_bound` and :func:`eqrec.bounds.rounding.allowance_tail`), so the same
+    :func:`eqrec.bounds.rounding_kernels.injection_bound` and :func:`eqrec.bounds.rounding_kernels.allowance_tail`), so the same
     numbers.
 
     .. math:: r_\tau = y(\tau) - C(\tau)\,\mathrm{ref}(\tau), \qquad \bar x(t+1) = A\bar x_0 + B u + f,

@@ -45,7 +45,7 @@ state update (the prediction ``x̄`` of the class form, ``x̂`` of the node
 form) and of a simulated true state of the same size, acts on the error
 :math:`\xi = x - \hat x` exactly as a process noise with ``E = I`` would; the
 rounding of a residual and of a simulated measurement as a measurement noise
-with ``V = I``.  Their per-step bounds (:func:`eqrec.bounds.rounding.injection_bound`
+with ``V = I``.  Their per-step bounds (:func:`eqrec.bounds.rounding_kernels.injection_bound`
 of the step's actual magnitudes: ``|A| (|ref| + |x̂| + bound) + 2 |B u + f| +
 |E| η_w`` and ``|r| + |C| (2 |ref| + |x̂| + bound) + |V| η_v``, the true state
 being within ``bound`` of the estimate) are carried to the estimate by the
@@ -84,7 +84,7 @@ import numpy as np
 
 from eqrec.arrivals.packets import Stamped, is_stamp, as_packets, check_estimate, check_input
 from eqrec.arrivals.patterns import ArrivalPattern
-from eqrec.bounds.rounding import UNIT_ROUNDOFF, injection_bound, rounding_allowance
+from eqrec.bounds.rounding import UNIT_ROUNDOFF, rounding_allowance
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 
@@ -181,6 +181,16 @@ class OpenedStep:
     dropped: int = 0  # packets stamped before the period: not used (counted in dropped_packets)
 
 
+def _injection_bound(M, a, scale, b, c, add, terms):
+    """:func:`eqrec.bounds.rounding_kernels.injection_bound`, imported at its first call (with Numba, about 0.35 s
+    of CPU that a job building estimators without stepping them does not pay); the compiled kernel then takes this
+    name's place in the module."""
+    global _injection_bound
+    from eqrec.bounds.rounding_kernels import injection_bound as compiled
+    _injection_bound = compiled
+    return compiled(M, a, scale, b, c, add, terms)
+
+
 class RoundingRecord:
     """The rounding allowance's record of a period (:class:`StampedEstimator`, module docstring).
 
@@ -208,6 +218,8 @@ class RoundingRecord:
         Per period time entered, the magnitude ``|x̂| + bound`` of the true state.
     maps : list
         What a node-gain estimator propagates (its error maps per period time).
+    output_maps : dict
+        A node-gain estimator's ``C(τ) G(τ)`` per period time ``τ`` received (made once, read at every later step).
     """
 
     def __init__(self, T: int, n: int, p: int, rho0: np.ndarray, z: "np.ndarray | None" = None,
@@ -218,6 +230,7 @@ class RoundingRecord:
         self.z[T * (n + p):] = rho0
         self.true = np.zeros((T, n)) if true is None else true
         self.maps: list = []
+        self.output_maps: dict = {}
 
 
 class StampedEstimator:
@@ -433,7 +446,7 @@ class StampedEstimator:
         add = e + 2.0 * (absB @ np.abs(step.u) + f) if absB.shape[1] and step.u.any() else self._drift(step.t)
         if own is not None:
             add = add + own
-        record.w[step.t] = injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
+        record.w[step.t] = _injection_bound(absA, reference, 1.0, record.true[step.t], self._zeros, add,
                                            length + self._state_terms_extra)
 
     def _drift(self, t: int) -> np.ndarray:
@@ -450,7 +463,7 @@ class StampedEstimator:
         """Enter the rounding of a residual ``y(τ) − C ref(τ)`` and of the simulated ``y(τ) = C x(τ) + V v(τ)``,
         an injection into the measurement of ``τ``."""
         _, _, absC, _, v, _ = self._absolute_model(tau)
-        record.v[tau] = injection_bound(absC, reference, 2.0, record.true[tau], residual, v, self._output_terms)
+        record.v[tau] = _injection_bound(absC, reference, 2.0, record.true[tau], residual, v, self._output_terms)
 
     def _allowance(self, record: "RoundingRecord", maps: np.ndarray, extra: "np.ndarray | float" = 0.0) -> np.ndarray:
         """``ρ = |G| (ι_w, ι_v, ρ(s)) + extra``, rounded up (module docstring); ``maps`` is ``|G|``, the absolute

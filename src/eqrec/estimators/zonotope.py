@@ -141,7 +141,7 @@ import numba
 import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
-from eqrec.bounds.rounding import rounding_allowance_compiled
+from eqrec.bounds.rounding_kernels import rounding_allowance_compiled
 from eqrec.bounds.window import accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, \
     weighted_products, window_estimate, window_estimate_sparse
 from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
