@@ -117,6 +117,34 @@ def finite_array(value: Any, shape: tuple[int, ...], field: str, what: str, symb
     return arr
 
 
+def checked_columns(packets: "list[tuple[int, np.ndarray]]", now: int) -> "list[Stamped] | None":
+    """Stamped measurements made by a caller that has read their stamps with :func:`as_packets` already (distinct,
+    none from the future), marked as checked for ``now`` when every value is a finite float array of one shape
+    with entries of magnitude at most :data:`MAX_DATA_MAGNITUDE`: :func:`as_packets` then returns them as they are
+    (the arrays themselves, not copies).  ``None`` otherwise (pass them on as packets, :class:`Packet`: the reader
+    checks them and refuses with its message).
+
+    Parameters
+    ----------
+    packets : list of (int, numpy.ndarray)
+        ``(τ, y(τ))`` with distinct integer stamps ``τ <= now`` (``eqrec.exact_bound``'s affine columns).
+    now : int
+        Absolute time of the step.
+
+    Returns
+    -------
+    list of Stamped or None
+        The packets, marked as checked for ``now`` and their shape; ``None`` if a value is not in scale.
+    """
+    out = _Checked(Stamped(int(tau), y) for tau, y in packets)
+    shapes = {pk.y.shape for pk in out}
+    if len(shapes) > 1 or any(pk.y.dtype != np.float64 or not np.abs(pk.y).max(initial=0.0) <= MAX_DATA_MAGNITUDE
+                              for pk in out):
+        return None  # a NaN fails <=, an infinity exceeds the limit
+    out.now, out.shape = now, (shapes.pop() if shapes else ())
+    return out
+
+
 def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y") -> list[Stamped]:
     """Read what arrived at time ``now`` in any of the protocol's forms, checked before anything is used.
 
@@ -212,6 +240,26 @@ def _plain_measurement(value: np.ndarray, shape: tuple[int, ...]) -> "np.ndarray
         if not -limit <= entry <= limit:
             return None
     return arr
+
+
+def plain_vector(value: Any, shape: tuple[int, ...]) -> "np.ndarray | None":
+    """``value`` as a new float array when it is a NumPy float array of exactly ``shape`` with finite entries in
+    scale (at most 64 of them), the form that needs no general reading; ``None`` for anything else (read it with
+    the general checks, which accept it in another form or refuse it with their message).
+
+    Parameters
+    ----------
+    value : object
+        A measurement or input as given.
+    shape : tuple of int
+        The shape it must have.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        A copy of ``value``, or ``None``.
+    """
+    return _plain_measurement(value, shape) if type(value) is np.ndarray else None
 
 
 #: The largest magnitude of a measurement, input or initial estimate an estimator takes.  Every estimate is a
