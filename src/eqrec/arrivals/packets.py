@@ -117,32 +117,48 @@ def finite_array(value: Any, shape: tuple[int, ...], field: str, what: str, symb
     return arr
 
 
-def checked_columns(packets: "list[tuple[int, np.ndarray]]", now: int) -> "list[Stamped] | None":
-    """Stamped measurements made by a caller that has read their stamps with :func:`as_packets` already (distinct,
-    none from the future), marked as checked for ``now`` when every value is a finite float array of one shape
-    with entries of magnitude at most :data:`MAX_DATA_MAGNITUDE`: :func:`as_packets` then returns them as they are
-    (the arrays themselves, not copies).  ``None`` otherwise (pass them on as packets, :class:`Packet`: the reader
-    checks them and refuses with its message).
+def checked_columns(packets: "list[tuple[int, np.ndarray]]", now: int, shape: tuple[int, ...]) -> list[Stamped]:
+    """Stamped measurements that their caller has checked already, marked so: :func:`as_packets` returns them as
+    they are (the arrays themselves, not copies) for the time ``now`` and the shape ``shape``.
+
+    For a caller that makes the measurements it passes on (``eqrec.exact_bound``'s affine columns): their stamps
+    read by :func:`as_packets` (integers, distinct, none after ``now``) and every value a float array of ``shape``
+    with finite entries of magnitude at most :data:`MAX_DATA_MAGNITUDE` (what the reader would check).
 
     Parameters
     ----------
     packets : list of (int, numpy.ndarray)
-        ``(τ, y(τ))`` with distinct integer stamps ``τ <= now`` (``eqrec.exact_bound``'s affine columns).
+        ``(τ, y(τ))``, checked as above.
     now : int
         Absolute time of the step.
+    shape : tuple of int
+        Their shape.
 
     Returns
     -------
-    list of Stamped or None
-        The packets, marked as checked for ``now`` and their shape; ``None`` if a value is not in scale.
+    list of Stamped
+        The packets, marked as checked for ``now`` and ``shape``.
     """
     out = _Checked(Stamped(int(tau), y) for tau, y in packets)
-    shapes = {pk.y.shape for pk in out}
-    if len(shapes) > 1 or any(pk.y.dtype != np.float64 or not np.abs(pk.y).max(initial=0.0) <= MAX_DATA_MAGNITUDE
-                              for pk in out):
-        return None  # a NaN fails <=, an infinity exceeds the limit
-    out.now, out.shape = now, (shapes.pop() if shapes else ())
+    out.now, out.shape = now, tuple(shape)
     return out
+
+
+def in_scale_array(value: np.ndarray) -> bool:
+    """Whether every entry of a float array is finite and at most :data:`MAX_DATA_MAGNITUDE` in magnitude (a NaN
+    fails the comparison, an infinity exceeds the limit).
+
+    Parameters
+    ----------
+    value : numpy.ndarray
+        A float array.
+
+    Returns
+    -------
+    bool
+        What :func:`as_packets` would accept of its values.
+    """
+    return value.dtype == np.float64 and bool(np.abs(value).max(initial=0.0) <= MAX_DATA_MAGNITUDE)
 
 
 def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y") -> list[Stamped]:

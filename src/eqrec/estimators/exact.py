@@ -100,12 +100,21 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input, checked_columns
-from eqrec.bounds.rounding import rounding_allowance
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input, checked_columns, in_scale_array
+from eqrec.bounds.rounding import UNIT_ROUNDOFF, rounding_allowance
 from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
 from eqrec.checks import check_allocation, integer, radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
+
+
+def _allowance(bound: Any, terms: float, magnitude: Any) -> Any:
+    """:func:`eqrec.bounds.rounding.rounding_allowance`, the same numbers with two operations fewer for the float
+    ``bound = 0.0`` of the allowance alone (a magnitude is a sum of absolute values, at least ``+0``, so adding
+    ``0.0`` to it or to its multiple changes no bit)."""
+    if type(bound) is float and bound == 0.0:
+        return np.nextafter(4.0 * terms * UNIT_ROUNDOFF * magnitude, np.inf)
+    return rounding_allowance(bound, terms, magnitude)
 
 
 class ExactBound:
@@ -207,7 +216,7 @@ class ExactBound:
                 X = np.zeros((n, K))
                 X[:, 0] = X[:, 1] = x
                 if "allowance" in inspect.signature(self.estimator.reset).parameters:  # it carries its rounding
-                    self.estimator.reset(X, t0, one=one, allowance=rounding_allowance)
+                    self.estimator.reset(X, t0, one=one, allowance=_allowance)
                 else:
                     self.estimator.reset(X, t0, one=one)
             else:  # copy 0 is the estimator itself; every copy starts at x̂(t0) (the nominal start)
@@ -220,6 +229,7 @@ class ExactBound:
             self._one_sum = np.abs(one).sum()
             self._truth_dev = np.zeros(n)  # the rounding of the true columns, summed over them (module docstring)
             self._sent: dict[int, np.ndarray] = {}
+            self._scaled: dict[int, bool] = {}
         self._bounds = self.x0_radius.copy()
         self.bound = float(self._bounds.max())
         return self
@@ -344,6 +354,9 @@ class ExactBound:
         sent_t = sysm.C_at(t) @ self._truth
         sent_t[:, base + nw: base + nw + nv] += v_block
         sent[t] = sent_t
+        scaled = dict(self._scaled)  # the stamps whose columns are in scale (the reader's checks, made once)
+        if in_scale_array(sent_t):
+            scaled[t] = True
         cols = []
         for pk in packets:
             if pk.time not in sent:
@@ -351,8 +364,8 @@ class ExactBound:
             Y = sent[pk.time].copy()
             Y[:, 0] = pk.y
             cols.append(Packet(pk.time, Y))
-        # their stamps are those just read: marked as checked when in scale (else the estimator's reader refuses)
-        cols = checked_columns([(pk.time, pk.y) for pk in cols], t) or cols
+        if all(pk.time in scaled for pk in cols):  # column 0 read above: marked as checked (else the reader refuses)
+            cols = checked_columns([(pk.time, pk.y) for pk in cols], t, (sysm.p, self._K))
         if self.mode == "columns":
             xhat_cols, _ = self.estimator.step(cols, u)
         else:
@@ -367,9 +380,9 @@ class ExactBound:
             w_cols[:, base: base + nw] = w_block
             w_sums = np.abs(w_cols).sum(axis=1)
         fresh = absA @ np.abs(self._truth[:, 1:]).sum(axis=1) + np.abs(drive) * self._one_sum + w_sums
-        truth_dev = absA @ self._truth_dev + rounding_allowance(0.0, n + sysm.nw + sysm.m + 2, fresh)
-        self._truth, self._sent, self._truth_dev = truth, sent, truth_dev
-        slack = truth_dev + rounding_allowance(0.0, 1, np.abs(err).sum(axis=1)) + self._copies_rounding() \
+        truth_dev = absA @ self._truth_dev + _allowance(0.0, n + sysm.nw + sysm.m + 2, fresh)
+        self._truth, self._sent, self._truth_dev, self._scaled = truth, sent, truth_dev, scaled
+        slack = truth_dev + _allowance(0.0, 1, np.abs(err).sum(axis=1)) + self._copies_rounding() \
             + self._columns_rounding()
         self._bounds = np.nextafter(outer_row_sums(err) + slack, np.inf)
         return xhat_cols[:, 0].copy()

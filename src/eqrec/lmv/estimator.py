@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.arrivals.packets import as_packets
+from eqrec.arrivals.packets import as_packets, plain_vector
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 from eqrec.lmv.model import MultNoiseSystem, check_ms_stable
@@ -260,6 +260,9 @@ class LMVEstimator:
                     raise InputError("this estimator has no input model (give system=...)", self.sys.name, "u")
             return None
         m = self.system.m
+        plain = None if u is None else plain_vector(u, (m,))  # a flat float vector in scale: read at once
+        if plain is not None:
+            return self.system.B_at(t) @ plain + self.system.f
         try:
             uu = np.zeros(m) if u is None else np.asarray(u, dtype=float).reshape(m)
         except (TypeError, ValueError):
