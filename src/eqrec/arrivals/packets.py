@@ -117,6 +117,50 @@ def finite_array(value: Any, shape: tuple[int, ...], field: str, what: str, symb
     return arr
 
 
+def checked_columns(packets: "list[tuple[int, np.ndarray]]", now: int, shape: tuple[int, ...]) -> list[Stamped]:
+    """Stamped measurements that their caller has checked already, marked so: :func:`as_packets` returns them as
+    they are (the arrays themselves, not copies) for the time ``now`` and the shape ``shape``.
+
+    For a caller that makes the measurements it passes on (``eqrec.exact_bound``'s affine columns): their stamps
+    read by :func:`as_packets` (integers, distinct, none after ``now``) and every value a float array of ``shape``
+    with finite entries of magnitude at most :data:`MAX_DATA_MAGNITUDE` (what the reader would check).
+
+    Parameters
+    ----------
+    packets : list of (int, numpy.ndarray)
+        ``(τ, y(τ))``, checked as above.
+    now : int
+        Absolute time of the step.
+    shape : tuple of int
+        Their shape.
+
+    Returns
+    -------
+    list of Stamped
+        The packets, marked as checked for ``now`` and ``shape``.
+    """
+    out = _Checked(Stamped(int(tau), y) for tau, y in packets)
+    out.now, out.shape = now, tuple(shape)
+    return out
+
+
+def in_scale_array(value: np.ndarray) -> bool:
+    """Whether every entry of a float array is finite and at most :data:`MAX_DATA_MAGNITUDE` in magnitude (a NaN
+    fails the comparison, an infinity exceeds the limit).
+
+    Parameters
+    ----------
+    value : numpy.ndarray
+        A float array.
+
+    Returns
+    -------
+    bool
+        What :func:`as_packets` would accept of its values.
+    """
+    return value.dtype == np.float64 and bool(np.abs(value).max(initial=0.0) <= MAX_DATA_MAGNITUDE)
+
+
 def as_packets(y: Any, now: int, shape: "tuple[int, ...] | int", field: str = "y") -> list[Stamped]:
     """Read what arrived at time ``now`` in any of the protocol's forms, checked before anything is used.
 
@@ -212,6 +256,26 @@ def _plain_measurement(value: np.ndarray, shape: tuple[int, ...]) -> "np.ndarray
         if not -limit <= entry <= limit:
             return None
     return arr
+
+
+def plain_vector(value: Any, shape: tuple[int, ...]) -> "np.ndarray | None":
+    """``value`` as a new float array when it is a NumPy float array of exactly ``shape`` with finite entries in
+    scale (at most 64 of them), the form that needs no general reading; ``None`` for anything else (read it with
+    the general checks, which accept it in another form or refuse it with their message).
+
+    Parameters
+    ----------
+    value : object
+        A measurement or input as given.
+    shape : tuple of int
+        The shape it must have.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        A copy of ``value``, or ``None``.
+    """
+    return _plain_measurement(value, shape) if type(value) is np.ndarray else None
 
 
 #: The largest magnitude of a measurement, input or initial estimate an estimator takes.  Every estimate is a

@@ -431,7 +431,10 @@ def _lmv(system: AffineSystem, gaussian: GaussianNoise, mechanism: str, eta_bar:
     plant = Plant.from_description(NoisySystem(system, gaussian))
     sys = system_of(plant, mechanism, eta_bar)
     gains = lmv_recursion(sys, steps + 1, check_stability=False)  # the same gains for every run
-    return lambda: LMVEstimator(sys, gains, system=system)
+    # one estimator for every run (each starts with reset): the matrices of a step that depend on its index alone
+    # are made once (LMVEstimator._step_matrices), not once per run
+    estimator = LMVEstimator(sys, gains, system=system)
+    return lambda: estimator
 
 
 def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "GaussianNoise | dict | None" = None,

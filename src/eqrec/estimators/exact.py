@@ -100,12 +100,21 @@ from typing import Any
 
 import numpy as np
 
-from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input
-from eqrec.bounds.rounding import rounding_allowance
+from eqrec.arrivals.packets import Packet, as_packets, check_estimate, check_input, checked_columns, in_scale_array
+from eqrec.bounds.rounding import UNIT_ROUNDOFF, rounding_allowance
 from eqrec.bounds.zonotope import ErrorMap, ErrorSet, check_order, outer_row_sums
 from eqrec.checks import check_allocation, integer, radii
 from eqrec.errors import InputError
 from eqrec.systems.affine import AffineSystem
+
+
+def _allowance(bound: Any, terms: float, magnitude: Any) -> Any:
+    """:func:`eqrec.bounds.rounding.rounding_allowance`, the same numbers with two operations fewer for the float
+    ``bound = 0.0`` of the allowance alone (a magnitude is a sum of absolute values, at least ``+0``, so adding
+    ``0.0`` to it or to its multiple changes no bit)."""
+    if type(bound) is float and bound == 0.0:
+        return np.nextafter(4.0 * terms * UNIT_ROUNDOFF * magnitude, np.inf)
+    return rounding_allowance(bound, terms, magnitude)
 
 
 class ExactBound:
@@ -207,7 +216,7 @@ class ExactBound:
                 X = np.zeros((n, K))
                 X[:, 0] = X[:, 1] = x
                 if "allowance" in inspect.signature(self.estimator.reset).parameters:  # it carries its rounding
-                    self.estimator.reset(X, t0, one=one, allowance=rounding_allowance)
+                    self.estimator.reset(X, t0, one=one, allowance=_allowance)
                 else:
                     self.estimator.reset(X, t0, one=one)
             else:  # copy 0 is the estimator itself; every copy starts at x̂(t0) (the nominal start)
@@ -217,8 +226,10 @@ class ExactBound:
             truth[:, 1] = x
             truth[:, 2:2 + n] = np.diag(self.x0_radius)
             self._truth, self._one, self._K, self._t0 = truth, one, K, int(t0)
+            self._one_sum = np.abs(one).sum()
             self._truth_dev = np.zeros(n)  # the rounding of the true columns, summed over them (module docstring)
             self._sent: dict[int, np.ndarray] = {}
+            self._scaled: dict[int, bool] = {}
         self._bounds = self.x0_radius.copy()
         self.bound = float(self._bounds.max())
         return self
@@ -305,6 +316,28 @@ class ExactBound:
         self._bounds = bounds if rho is None else np.nextafter(bounds + rho, np.inf)
         return xhat
 
+    def _noise_blocks(self, t: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``V(t) diag(η_v)``, ``E(t) diag(η_w)``, the row sums of ``|E(t) diag(η_w)|`` (``None`` past two noise
+        entries) and ``|A(t)|``: the nonzero blocks of the noise columns of a step, made once on a time-invariant
+        system.
+
+        Each entry of ``V(t) @ v_cols`` (``v_cols`` zero but its block ``diag(η_v)``) is one product plus exact
+        zeros, so the block alone gives the same numbers (the sign of a zero aside, which no bound or estimate
+        reads: the columns enter through absolute values and column-wise maps only).  A row sum of ``|E w_cols|``
+        with at most two nonzero terms is the same float in any order of summation.
+        """
+        cached = getattr(self, "_blocks", None)
+        if cached is not None:
+            return cached
+        sysm = self.system
+        eye_v, eye_w = sysm.eta_v * np.eye(sysm.nv), sysm.eta_w * np.eye(sysm.nw)
+        Ew = sysm.E_at(t) @ eye_w
+        blocks = (sysm.V_at(t) @ eye_v, Ew, np.abs(Ew).sum(axis=1) if sysm.nw <= 2 else None,
+                  np.abs(sysm.A_at(t)))
+        if not sysm.is_time_varying:
+            self._blocks = blocks
+        return blocks
+
     def _column_step(self, y: Any, u: Any) -> np.ndarray:
         sysm, t = self.system, self.time
         k = t - self._t0
@@ -315,11 +348,15 @@ class ExactBound:
         u = check_input(u, sysm.m)
         nw, nv, n = sysm.nw, sysm.nv, sysm.n
         base = 2 + n + k * (nw + nv)
-        # the columns of y(t) = C x(t) + V v(t), sent now and read when its packet arrives
-        v_cols = np.zeros((nv, self._K))
-        v_cols[:, base + nw: base + nw + nv] = sysm.eta_v * np.eye(nv)
+        v_block, w_block, w_sums, absA = self._noise_blocks(t)
+        # the columns of y(t) = C x(t) + V v(t), sent now and read when its packet arrives (V v(t): its block)
         sent = dict(self._sent)
-        sent[t] = sysm.C_at(t) @ self._truth + sysm.V_at(t) @ v_cols
+        sent_t = sysm.C_at(t) @ self._truth
+        sent_t[:, base + nw: base + nw + nv] += v_block
+        sent[t] = sent_t
+        scaled = dict(self._scaled)  # the stamps whose columns are in scale (the reader's checks, made once)
+        if in_scale_array(sent_t):
+            scaled[t] = True
         cols = []
         for pk in packets:
             if pk.time not in sent:
@@ -327,22 +364,25 @@ class ExactBound:
             Y = sent[pk.time].copy()
             Y[:, 0] = pk.y
             cols.append(Packet(pk.time, Y))
+        if all(pk.time in scaled for pk in cols):  # column 0 read above: marked as checked (else the reader refuses)
+            cols = checked_columns([(pk.time, pk.y) for pk in cols], t, (sysm.p, self._K))
         if self.mode == "columns":
             xhat_cols, _ = self.estimator.step(cols, u)
         else:
             xhat_cols = self._copies_step(cols, u)
-        w_cols = np.zeros((nw, self._K))
-        w_cols[:, base: base + nw] = sysm.eta_w * np.eye(nw)
         drive = sysm.B_at(t) @ u + sysm.f
-        truth = sysm.A_at(t) @ self._truth + np.outer(drive, self._one) + sysm.E_at(t) @ w_cols
+        truth = sysm.A_at(t) @ self._truth + np.outer(drive, self._one)
+        truth[:, base: base + nw] += w_block  # + E w(t): its block
         err = truth[:, 1:] - xhat_cols[:, 1:]
         # the rounding of the columns: the true ones' (propagated with |A|), the copies' own allowances
-        absA = np.abs(sysm.A_at(t))
-        fresh = absA @ np.abs(self._truth[:, 1:]).sum(axis=1) + np.abs(drive) * np.abs(self._one).sum() \
-            + np.abs(sysm.E_at(t) @ w_cols).sum(axis=1)
-        truth_dev = absA @ self._truth_dev + rounding_allowance(0.0, n + sysm.nw + sysm.m + 2, fresh)
-        self._truth, self._sent, self._truth_dev = truth, sent, truth_dev
-        slack = truth_dev + rounding_allowance(0.0, 1, np.abs(err).sum(axis=1)) + self._copies_rounding() \
+        if w_sums is None:  # more than two noise entries: the row sums of |E w_cols| in the order of the full row
+            w_cols = np.zeros((n, self._K))
+            w_cols[:, base: base + nw] = w_block
+            w_sums = np.abs(w_cols).sum(axis=1)
+        fresh = absA @ np.abs(self._truth[:, 1:]).sum(axis=1) + np.abs(drive) * self._one_sum + w_sums
+        truth_dev = absA @ self._truth_dev + _allowance(0.0, n + sysm.nw + sysm.m + 2, fresh)
+        self._truth, self._sent, self._truth_dev, self._scaled = truth, sent, truth_dev, scaled
+        slack = truth_dev + _allowance(0.0, 1, np.abs(err).sum(axis=1)) + self._copies_rounding() \
             + self._columns_rounding()
         self._bounds = np.nextafter(outer_row_sums(err) + slack, np.inf)
         return xhat_cols[:, 0].copy()

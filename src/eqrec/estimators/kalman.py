@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.arrivals.packets import as_packets, in_scale
+from eqrec.arrivals.packets import as_packets, in_scale, plain_vector
 from eqrec.systems.noise import GaussianDesign
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
@@ -256,8 +256,9 @@ class _Filter:
             packets = [(pk.time, pk.y.reshape(sysm.p, 1)) for pk in packets]
         else:
             packets = [(pk.time, pk.y) for pk in packets]
-        if u is not None:
-            u = in_scale(_finite(u, (sysm.m,), "u"), "u", "the input u")
+        if u is not None:  # a plain float vector in scale at once, anything else through the general checks
+            plain = plain_vector(u, (sysm.m,))
+            u = plain if plain is not None else in_scale(_finite(u, (sysm.m,), "u"), "u", "the input u")
         drive = self._drive(t, u)
         filt, pred, P, commit = self._advance(t, packets, drive)
         commit()

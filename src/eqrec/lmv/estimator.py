@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eqrec.arrivals.packets import as_packets
+from eqrec.arrivals.packets import as_packets, plain_vector
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
 from eqrec.lmv.model import MultNoiseSystem, check_ms_stable
@@ -115,6 +115,7 @@ class LMVEstimator:
         self._one: np.ndarray | None = None
         self.filtered: np.ndarray | None = None
         self.P_filtered: np.ndarray | None = None
+        self._per_step: dict[int, tuple] = {}  # _step_matrices, by step index (the gains never change)
 
     # -- gains ----------------------------------------------------------------
     def _gains(self, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -130,6 +131,20 @@ class LMVEstimator:
             if len(self._q) <= j + 1:
                 self._q.append(q_next)
         return self._L[k], self._Qe[k]
+
+    def _step_matrices(self, k: int) -> tuple:
+        """What step ``k`` uses that depends on ``k`` alone, made once per estimator (a run started again with
+        :meth:`reset` reuses it): the smoother's gain and ``P(t|t)`` (:func:`eqrec.lmv.recursion.smoother_step`)
+        and the absolute values of ``A``, ``L(k)``, ``C`` and ``A − L(k) C`` of :meth:`_rounding`, each computed
+        as it would be at the step (the same numbers)."""
+        cached = self._per_step.get(k)
+        if cached is None:
+            sys = self.sys
+            L, Qe = self._gains(k)
+            K, P_filt, _ = smoother_step(sys, self._P[k], self._P[k], Qe, sys.A - L @ sys.C)
+            cached = (K, P_filt, np.abs(sys.A), np.abs(L), np.abs(sys.C), np.abs(sys.A - L @ sys.C))
+            self._per_step[k] = cached
+        return cached
 
     # -- the protocol -----------------------------------------------------------
     def reset(self, xhat0: "np.ndarray | None" = None, t0: int = 0, one: "np.ndarray | None" = None,
@@ -245,6 +260,9 @@ class LMVEstimator:
                     raise InputError("this estimator has no input model (give system=...)", self.sys.name, "u")
             return None
         m = self.system.m
+        plain = None if u is None else plain_vector(u, (m,))  # a flat float vector in scale: read at once
+        if plain is not None:
+            return self.system.B_at(t) @ plain + self.system.f
         try:
             uu = np.zeros(m) if u is None else np.asarray(u, dtype=float).reshape(m)
         except (TypeError, ValueError):
@@ -268,13 +286,12 @@ class LMVEstimator:
         through ``|A − L C|`` (the map that carries an error of the estimate), plus the allowance of this step's products and sums on the columns'
         magnitudes."""
         sys = self.sys
-        L, _ = self._gains(k)
-        aA, aL, aC = np.abs(sys.A), np.abs(L), np.abs(sys.C)
+        _, _, aA, aL, aC, aF = self._step_matrices(k)
         mag = np.abs(X).reshape(-1, sys.n).sum(axis=0)  # a plain run is one column
         mu = aA @ mag + aL @ (np.abs(y_c).reshape(-1, sys.m).sum(axis=0) + aC @ mag)
         if drive is not None:
             mu[: sys.n_x] += np.abs(drive) * (1.0 if self._one is None else np.abs(self._one).sum())
-        return np.abs(sys.A - L @ sys.C) @ self._dev + self._allowance(0.0, sys.n + sys.m + 3, mu)
+        return aF @ self._dev + self._allowance(0.0, sys.n + sys.m + 3, mu)
 
     def step(self, y=None, u=None) -> tuple[np.ndarray, np.ndarray]:
         """Process time ``t``: ``y(t)`` or ``None`` (lost), and the input; return ``(x̂(t+1|t), P(t+1|t))``.
@@ -306,11 +323,10 @@ class LMVEstimator:
         y_c, arrived = self._compensated(y, t)
         drive = self._drive(t, u)
         eps, X_next = self._predict(X, y_c, k, drive)
-        L, Qe = self._gains(k)
-        K, P_filt, _ = smoother_step(sys, self._P[k], self._P[k], Qe, sys.A - L @ sys.C)
+        K, P_filt = self._step_matrices(k)[:2]
         filtered = (X + np.einsum("ij,...j->...i", K, eps))[..., :nx]
         self.filtered = filtered if self._one is None else filtered.T
-        self.P_filtered = P_filt[:nx, :nx]
+        self.P_filtered = P_filt[:nx, :nx].copy()
         if arrived and self.compensation == "hold-input":
             self._held = y_c.copy()
         if self._dev is not None:
