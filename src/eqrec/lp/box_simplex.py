@@ -413,15 +413,8 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
             # cand[:kq] end as the passed breakpoints in order, cand[kq:] the others (in any order).
             slope = abs(x[r] - (lo[r] if to_lower else hi[r]))
             kq = nc - 1
-            kk = 0
-            while kk < nc:
-                if kk == _SELECT_PASSES:  # many breakpoints passed: sort the rest once
-                    order = np.argsort(ratio[kk:nc]) + kk
-                    cs = cand[order].copy()
-                    rs = ratio[order].copy()
-                    cand[kk:nc] = cs
-                    ratio[kk:nc] = rs
-                else:
+            for kk in range(nc):
+                if kk < _SELECT_PASSES:
                     bi = kk
                     for c2 in range(kk + 1, nc):
                         if ratio[c2] < ratio[bi]:
@@ -429,20 +422,16 @@ def _dual_simplex(M, lo, hi, objectives, max_iter, perturb, start_want, start_up
                     if bi != kk:
                         cand[kk], cand[bi] = cand[bi], cand[kk]
                         ratio[kk], ratio[bi] = ratio[bi], ratio[kk]
+                elif kk == _SELECT_PASSES:  # many breakpoints passed: sort the rest once, then walk it
+                    order = np.argsort(ratio[kk:nc]) + kk
+                    cs = cand[order].copy()
+                    rs = ratio[order].copy()
+                    cand[kk:nc] = cs
+                    ratio[kk:nc] = rs
                 j = cand[kk]
                 slope -= abs(alpha[j]) * (hi[j] - lo[j])
                 if slope < 0.0:
                     kq = kk
-                    break
-                kk += 1
-                if kk > _SELECT_PASSES:  # the rest is sorted: walk it
-                    while kk < nc:
-                        j = cand[kk]
-                        slope -= abs(alpha[j]) * (hi[j] - lo[j])
-                        if slope < 0.0:
-                            kq = kk
-                            break
-                        kk += 1
                     break
             # Harris: among the breakpoints not passed, the largest pivot within the relaxed step
             theta_max = np.inf
