@@ -57,6 +57,8 @@ import numpy as np
 from eqrec.lp.box_simplex import box_lp_solve
 
 _U = np.finfo(float).eps / 2
+#: The smallest positive (subnormal) double: the absolute error of a product that underflows is at most half of it.
+_ETA = 2.0 ** -1074
 
 #: The label of a column or row new in every window (the prior's): :func:`window_labels`.
 NO_LABEL = np.iinfo(np.int64).min
@@ -135,7 +137,7 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
     k_meas = int(np.count_nonzero(measured))
     Q = q0 + L * nw + k_meas * nv
     # C-contiguous and writable, as a frozen system's arrays are not: one compiled kernel serves every plant
-    xc, xf, X_pred, X_filt, Mm, r, magy, zm, zf = _window_kernel(
+    xc, xf, X_pred, X_filt, Mm, r, err_meas, err_pred, err_filt = _window_kernel(
         *(np.require(a, float, ("C", "W")) for a in (A, C, E, V, drive)), measured,
         *(np.require(a, float, ("C", "W")) for a in (Y, c0, G0)))
     blocks, rhs, mags = [], [], []
@@ -146,64 +148,78 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         blocks.append(np.concatenate([A0, np.zeros((A0.shape[0], Q - q0))], axis=1))
         lows.append(b0)
         rhs.append(b0_hi)
-        mags.append(np.maximum(np.abs(b0), np.abs(b0_hi)) + np.abs(A0).sum(axis=1))
+        mags.append(np.zeros(A0.shape[0]))  # given rows: no error of their own (their evaluation: kappa)
     if k_meas:
         blocks.append(Mm)
         lows.append(r)
         rhs.append(r)
-        mags.append(magy)
+        mags.append(err_meas)
     M = np.concatenate(blocks) if blocks else np.zeros((0, Q))
     lower = np.concatenate(lows) if lows else np.zeros(0)
     upper = np.concatenate(rhs) if rhs else np.zeros(0)
     mags = np.concatenate(mags) if mags else np.zeros(0)
-    kappa = 4.0 * (L + 2) * (n + M.shape[0] + Q)
-    return WindowSet(xc, xf, X_pred, X_filt, M, lower, upper, zm + np.abs(xc), zf + np.abs(xf), mags, kappa)
+    kappa = 2.0 * (M.shape[0] + Q + 8)
+    return WindowSet(xc, xf, X_pred, X_filt, M, lower, upper, err_pred, err_filt, mags, kappa)
 
 
 @numba.njit(cache=True)
 def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     r"""The propagation of :func:`window_set` (compiled): the nominal states, the rows of ``x(t+1)`` and ``x(t)`` in
-    :math:`\zeta`, the measured rows and residuals, and the magnitudes of their computation.
+    :math:`\zeta`, the measured rows and residuals, and the bounds of their rounding errors (module docstring,
+    *Soundness*).
 
     Written as explicit loops over the small dimensions, with every array allocated once: the state's map of the
     prior's generators :math:`\Phi G_0` and of the process noise (rows: columns) are carried from one time to the
-    next."""
+    next; per time the local error bound :math:`\delta_j` (from the computed vectors of that time), then the
+    backward products of :func:`_propagated_error` carry them to the two objectives' times and to each measured
+    time."""
     L, n = drive.shape
     p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
     k_meas = 0
     for j in range(L):
         k_meas += measured[j]
     Q = q0 + L * nw + k_meas * nv
+    g1 = 1.01 * (n + 1) * _U  # >= gamma_{n+1} = (n+1)u / (1 - (n+1)u)
+    tiny = (Q + 2.0) * (n + 2.0) * _ETA  # the products' underflow, per entry of a row sum (Q columns, n terms)
     PG = G0.copy()  # Φ G0, the prior's generators mapped to the current time
     NwT = np.zeros((L * nw, n))  # the process-noise columns of the current state, transposed (rows: columns)
     xc = c0.copy()
-    zm = np.abs(c0) + np.abs(G0).sum(axis=1)
     Mm = np.zeros((k_meas * p, Q))
     r = np.zeros(k_meas * p)
-    magy = np.zeros(k_meas * p)
+    local_rows = np.zeros(k_meas * p)  # each measured row's own rounding (its errors of earlier times: below)
+    meas_time = np.zeros(k_meas, np.int64)
+    delta = np.zeros((L, n))  # δ_j: the local rounding of step j (columns' row sums and centre), module docstring
     PG_f = PG.copy()
     NwT_f = NwT.copy()
     xf = xc.copy()
-    zf = zm.copy()
     tmp = np.empty(n)
-    new_z = np.empty(n)
+    srow = np.empty(n)
     tmpq = np.empty((n, q0))
     ri = 0
+    mi = 0
     col_v = q0 + L * nw
     for j in range(L):
         if j == L - 1:
             PG_f[:, :] = PG
             NwT_f[:, :] = NwT
             xf[:] = xc
-            zf[:] = zm
+        for a in range(n):  # s_j + |x̂_j|: the row sums of the computed state's columns and its centre
+            acc = abs(xc[a])
+            for c in range(q0):
+                acc += abs(PG[a, c])
+            for k in range(j * nw):
+                acc += abs(NwT[k, a])
+            srow[a] = acc
         if measured[j]:
+            meas_time[mi] = j
+            mi += 1
             for i in range(p):
                 row = ri + i
                 yc = 0.0
                 mag = 0.0
                 for b in range(n):
                     yc += C[j, i, b] * xc[b]
-                    mag += abs(C[j, i, b]) * zm[b]
+                    mag += abs(C[j, i, b]) * srow[b]
                 for c in range(q0):
                     acc = 0.0
                     for b in range(n):
@@ -219,9 +235,18 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
                     Mm[row, col_v + c] = V[j, i, c]
                     vs += abs(V[j, i, c])
                 r[row] = Y[j, i] - yc
-                magy[row] = mag + vs + abs(Y[j, i]) + abs(yc)
+                # C_j X̂_j and y - C_j x̂_j in n-term sums (and one subtraction); η V scaled in floating point
+                local_rows[row] = g1 * (mag + abs(Y[j, i])) + 2.0 * _U * vs + tiny
             col_v += nv
             ri += p
+        for a in range(n):  # δ_j = γ_{n+1}(|A_j|(s_j + |x̂_j|) + |drive_j|) + 2u|E_j|1 (+ underflow)
+            acc = abs(drive[j, a])
+            for b in range(n):
+                acc += abs(A[j, a, b]) * srow[b]
+            es = 0.0
+            for c in range(nw):
+                es += abs(E[j, a, c])
+            delta[j, a] = g1 * acc + 2.0 * _U * es + tiny
         for a in range(n):  # Φ G0 <- A_j Φ G0
             for c in range(q0):
                 acc = 0.0
@@ -240,17 +265,11 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
         for c in range(nw):
             for a in range(n):
                 NwT[j * nw + c, a] = E[j, a, c]
-        for a in range(n):  # x̂ <- A_j x̂ + drive, and its magnitude (every new entry reads the old vectors)
+        for a in range(n):  # x̂ <- A_j x̂ + drive
             acc = 0.0
-            accz = abs(drive[j, a])
             for b in range(n):
                 acc += A[j, a, b] * xc[b]
-                accz += abs(A[j, a, b]) * zm[b]
-            for c in range(nw):
-                accz += abs(E[j, a, c])
             tmp[a] = acc + drive[j, a]
-            new_z[a] = accz
-        zm[:] = new_z
         xc[:] = tmp
     X_pred = np.zeros((n, Q))
     X_filt = np.zeros((n, Q))
@@ -258,7 +277,71 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     X_pred[:, q0:q0 + L * nw] = NwT.T
     X_filt[:, :q0] = PG_f
     X_filt[:, q0:q0 + L * nw] = NwT_f.T
-    return xc, xf, X_pred, X_filt, Mm, r, magy, zm, zf
+    # every bound below is a sum of products of nonnegative floating numbers, at most `depth` operations from each
+    # leaf to the root: rounded to nearest it is >= (1 - u)^depth times its exact value (module docstring)
+    depth = Q + 2 * n + L + 16
+    up = 1.0 + 2.0 * depth * _U
+    floor = (L + 2.0) * (n + 2.0) * (Q + 2.0) * _ETA  # the underflow of these sums' own products
+    eye = np.eye(n)
+    err_pred = _propagated_error(eye, A, L, delta)
+    err_filt = _propagated_error(eye, A, L - 1, delta)
+    err_rows = np.empty(k_meas * p)
+    for m in range(k_meas):
+        j = meas_time[m]
+        prop = _propagated_error(C[j].copy(), A, j, delta)
+        for i in range(p):
+            err_rows[m * p + i] = local_rows[m * p + i] + prop[i]
+    for vec in (err_pred, err_filt, err_rows):
+        for a in range(vec.shape[0]):
+            vec[a] = np.nextafter(vec[a] * up + floor, np.inf)
+    return xc, xf, X_pred, X_filt, Mm, r, err_rows, err_pred, err_filt
+
+
+@numba.njit(cache=True)
+def _propagated_error(W0, A, T, delta):
+    r"""Per row of ``W0``, an upper bound of :math:`\sum_{i<T} (|W_0\Phi(T, i+1)|\,\delta_i)` (module docstring,
+    *Soundness*): the backward products :math:`\hat P_i = \mathrm{fl}(\hat P_{i+1} A_{i+1})` from
+    :math:`\hat P_{T-1} = W_0`, with :math:`|W_0\Phi(T, i+1)| \le |\hat P_i| + 2k(n+1)u\,R_i + \mathbf 1 z_i^\top`,
+    :math:`R_i = |W_0||A_{T-1}|\cdots|A_{i+1}|` (the product's rounding, :math:`k = T-1-i` products) and :math:`z_i`
+    the underflow carried through :math:`|A|` (rounded to nearest here; the caller's factor makes the sum an upper
+    bound)."""
+    r, n = W0.shape
+    W = W0.copy()
+    R = np.abs(W0)
+    z = np.zeros(n)
+    acc = np.zeros(r)
+    Wn = np.empty((r, n))
+    Rn = np.empty((r, n))
+    zn = np.empty(n)
+    for i in range(T - 1, -1, -1):
+        theta = 2.0 * (T - 1 - i) * (n + 1) * _U
+        zd = 0.0
+        for b in range(n):
+            zd += z[b] * delta[i, b]
+        for a in range(r):
+            s = zd
+            for b in range(n):
+                s += (abs(W[a, b]) + theta * R[a, b]) * delta[i, b]
+            acc[a] += s
+        if i > 0:  # P̂_{i-1} = P̂_i A_i, R_{i-1} = R_i |A_i|, z_{i-1} = z_i |A_i| + 2nη
+            for a in range(r):
+                for c in range(n):
+                    s = 0.0
+                    t = 0.0
+                    for b in range(n):
+                        s += W[a, b] * A[i, b, c]
+                        t += R[a, b] * abs(A[i, b, c])
+                    Wn[a, c] = s
+                    Rn[a, c] = t
+            for c in range(n):
+                t = 2.0 * n * _ETA
+                for b in range(n):
+                    t += z[b] * abs(A[i, b, c])
+                zn[c] = t
+            W[:, :] = Wn
+            R[:, :] = Rn
+            z[:] = zn
+    return acc
 
 
 def dual_bound(row: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndarray, y: np.ndarray,
@@ -324,8 +407,11 @@ def bounds_from_multipliers(rows: np.ndarray, M: np.ndarray, lower: np.ndarray, 
     l1 = np.abs(res).sum(axis=1)
     dual = np.maximum(y * lower, y * upper).sum(axis=1)
     ay = np.abs(y)
-    mu = mag_rows_obj + ay @ mag_rows + l1 + np.abs(dual) + np.abs(rows).sum(axis=1) + ay @ np.abs(M).sum(axis=1)
-    return np.nextafter(dual + l1 + kappa * _U * mu, np.inf)
+    err = mag_rows_obj + ay @ mag_rows  # the computed data's own errors (module docstring, *Soundness*)
+    mu = (err + l1 + np.abs(dual) + np.abs(rows).sum(axis=1) + ay @ np.abs(M).sum(axis=1)
+          + ay @ np.maximum(np.abs(lower), np.abs(upper)))
+    floor = kappa * (M.shape[1] + 1) * _ETA  # the products' underflow
+    return np.nextafter(dual + l1 + err + (kappa * _U * mu + floor), np.inf)
 
 
 @dataclass(frozen=True)
