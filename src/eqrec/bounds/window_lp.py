@@ -32,17 +32,74 @@ with :math:`M` the rows of ``prior_rows`` and :math:`H`), weak duality gives, fo
     \le \sum_j \max(y_j\underline b_j,\ y_j\overline b_j) + \|X_i - y^\top M\|_1 ,
 
 and the same with :math:`-X_i` for the lower end. The multipliers are the row duals of each optimum (the dense
-solver's :math:`B^{-\top}c_B`, or HiGHS's; so the bound is the optimum when the duals are exact), and the right-hand
-side is evaluated in floating point with an allowance :math:`\kappa u\,\mu` rounded upward (``u`` the unit roundoff,
-:math:`\mu` the magnitudes of every quantity of the computation: the propagated :math:`|c_0| + \sum|G_0|`, the
-drives, the noise row sums, the measured values, :math:`|y|` times the rows' magnitudes; :math:`\kappa =
-4(L+2)(n + m + Q)` as in :mod:`eqrec.bounds.window`). A solve that ends without an optimum keeps the multipliers it ended with
-(any :math:`y` gives a bound; :math:`y = 0` gives the prediction's own bound :math:`\|X_i\|_1`). So the hull
-reported always contains the exact one, and is equal to it up to the duals' accuracy and the allowance.
+solver's :math:`B^{-\top}c_B`, or HiGHS's; so the bound is the optimum when the duals are exact). A solve that ends
+without an optimum keeps the multipliers it ended with (any :math:`y` gives a bound; :math:`y = 0` gives the
+prediction's own bound :math:`\|X_i\|_1`). The rows, centres and residuals are computed in floating point, so the
+bound is evaluated on the computed :math:`\hat X_i, \hat M, \hat r, \hat x` with two allowances, rounded upward:
+
+.. math::
+    \hat x_i + \sum_j \max(y_j\underline{\hat b}_j, y_j\overline{\hat b}_j) + \|\hat X_i - y^\top\hat M\|_1
+    + e_i + |y|^\top e_{\rm rows} + \kappa u\,\mu ,
+
+where :math:`e_i \ge \|\hat X_i - X_i\|_1 + |\hat x_i - x_i|` and :math:`e_{{\rm rows},k} \ge \|\hat M_k - M_k\|_1 +
+|\hat r_k - r_k|` bound the computed data's errors (below; the prior's rows are given data: no error), and
+:math:`\kappa u\mu` with :math:`\kappa = 2(k + Q + 8)` (``k`` rows) and :math:`\mu` the magnitudes of the
+evaluation (:math:`|\hat X_i|`, :math:`|y|^\top|\hat M|`, :math:`|y|^\top\max(|\underline b|, |\overline b|)`,
+the sums and the :math:`e` terms) covers the evaluation's own rounding: a product :math:`y^\top\hat M` of ``k``
+terms and a subtraction, each of ``Q`` entries, (:math:`\gamma_{k+1}`), the sums of ``Q`` and ``k`` terms, three
+additions, and the magnitudes' own rounding, together below :math:`\gamma_{k+Q+8} \le 1.01(k+Q+8)u` relative to
+:math:`\mu`, half of :math:`\kappa u`; plus :math:`\kappa(Q+1)\eta` for products that underflow (:math:`\eta =
+2^{-1074}`). Since :math:`X_i\zeta = y^\top r + (X_i - y^\top M)\zeta` for every :math:`\zeta` of the exact set,
+the right-hand side bounds :math:`x_i + X_i\zeta` there. So the hull reported always contains the exact one, and
+is equal to it up to the duals' accuracy and the allowances.
+
+The computed data's errors: every computed vector of the window obeys a linear recursion *exactly*,
+:math:`\hat v_{j+1} = A_j\hat v_j + d_j + \Delta_j`, with :math:`\hat v_j` the computed columns of :math:`\Phi G_0`
+and of the noises and the computed centre, and the local rounding of the step bounded componentwise from the
+**computed** quantities of that step (``n``-term sums, one addition of the drive):
+
+.. math::
+    \textstyle\sum_{\rm columns}|\Delta_j| \le \delta_j = \gamma_{n+1}\bigl(|A_j|(s_j + |\hat x_j|) + |d_j|\bigr)
+    + 2u|E_j|\mathbf 1 + (Q+2)(n+2)\eta ,
+
+:math:`s_j` the row sums of the computed columns' magnitudes, :math:`\gamma_{n+1} \le 1.01(n+1)u`; the
+:math:`2u|E_j|\mathbf 1` covers ``E`` scaled by the noise bound in floating point (``V`` likewise in the measured
+rows), the last term the products' underflow. Hence :math:`\hat v_T - v_T = \sum_{i<T}\Phi(T, i+1)\Delta_i`
+exactly, :math:`\Phi(T, i+1) = A_{T-1}\cdots A_{i+1}`, and for any rows :math:`W_0`
+
+.. math::
+    \textstyle\sum_{\rm columns}|W_0(\hat v_T - v_T)| \le \sum_{i<T}|W_0\Phi(T, i+1)|\,\delta_i .
+
+With :math:`W_0 = I` and :math:`T = L` (:math:`T = L-1`) this is :math:`e_i` of the predicted (filtered) rows; with
+:math:`W_0 = C_j` and :math:`T = j`, the measured row's error from the earlier times, to which its own rounding
+:math:`\gamma_{n+1}(|C_j|(s_j + |\hat x_j|) + |y_j|) + 2u|V_j|\mathbf 1` is added (the rows :math:`C_j\hat X_j` and
+the residual :math:`y_j - C_j\hat x_j`). The factors :math:`|W_0\Phi(T, i+1)|` decay like the true products, not
+like :math:`|A|^{T-i}` (the earlier allowance propagated magnitudes through :math:`|A|` and grew like
+:math:`\rho(|A|)^L`, above 1 for many plants with :math:`\rho(A) < 1`). They are computed as backward products
+:math:`\hat P_{i-1} = \mathrm{fl}(\hat P_i A_i)`, :math:`\hat P_{T-1} = W_0` (:func:`_product_table`, one table for every time when the window is time-invariant), and the
+products' own rounding is bounded, not neglected: after ``k`` products,
+:math:`|\hat P - W_0\Phi| \le ((1+\gamma_n)^k - 1)|W_0||A_{T-1}|\cdots|A_{i+1}| + \mathbf 1 z^\top`, so
+:math:`|W_0\Phi| \le |\hat P| + 2k(n+1)u\,\hat R + \mathbf 1 z^\top` with :math:`\hat R` the computed product of
+the magnitudes (it is within :math:`(1 \pm \gamma_n)^k` of the exact one) and :math:`z \leftarrow z|A_i| + 2n\eta`
+the underflow carried along. The term :math:`2k(n+1)u\hat R\,\delta_i` is of order :math:`u^2\rho(|A|)^k`: tiny,
+but kept (``tests/test_window_lp_allowance.py`` builds a product that cancels to 0 in floating point, where only
+it covers the error). Each of these bounds is a sum of products of nonnegative floating numbers, at most
+``depth = Q + 2n + L + 16`` operations from any leaf to the root, so rounded to nearest it is at least
+:math:`(1-u)^{\rm depth}` times its exact value: it is multiplied by :math:`1 + 2\,{\rm depth}\,u`, an underflow
+floor :math:`(L+2)(n+2)(Q+2)\eta` is added, and the result is rounded upward (``np.nextafter``). (All of this
+assumes :math:`(Q + n + L + 16)u \le 10^{-3}`, and no overflow.) The data ``A``, ``C``, the drive, ``y``,
+:math:`c_0`, :math:`G_0` and the prior's rows are taken as given (the drive :math:`Bu + f` is the caller's number).
+
+Measured (``tests/test_window_lp_allowance.py``, the multipliers of the optimum): on the six-state plant of
+``tests/test_exact_set.py`` (:math:`\rho(A) = 0.9`, :math:`\rho(|A|) > 1.5`) at windows 40 and 50 the allowance
+is below :math:`10^{-10}` of each end's bound, against 0.031 and 0.13 with the magnitudes propagated through
+:math:`|A|`.
 
 Cost
 ----
-Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)`, compiled (:func:`_window_kernel`); each LP has
+Building the window costs :math:`O(L n^2 (n + L n_w) + m q_0 n)`, compiled (:func:`_window_kernel`); its error
+bounds :math:`O(L n^3)` for the two objectives' backward products and :math:`O(L^2 p n^2)` for the measured rows'
+(one backward product from each :math:`C_j`); each LP has
 ``m`` rows (the measured outputs, and the prior's rows if any) and :math:`q_0 + L n_w + m_v` columns, all bounded
 (the simplex handles the unit box implicitly).
 """
@@ -80,11 +137,13 @@ class WindowSet:
     lower, upper : numpy.ndarray, shape (m + k,)
         Their bounds (the prior's rows' bounds, then :math:`r` for both).
     mag_pred, mag_filt : numpy.ndarray, shape (n,)
-        Magnitudes of the computation of each state's row and nominal value (rounding allowance).
+        Bounds of the rounding error of each state's computed row and nominal value,
+        :math:`e_i \ge \|\hat X_i - X_i\|_1 + |\hat x_i - x_i|` (module docstring, *Soundness*).
     mag_rows : numpy.ndarray, shape (m + k,)
-        Magnitudes of each constraint row's computation.
+        Bounds of each constraint row's error, :math:`\|\hat M_k - M_k\|_1 + |\hat r_k - r_k|` (0 for the
+        prior's rows, given data).
     kappa : float
-        The allowance's factor :math:`4(L+2)(n + m + Q)`.
+        The factor of the bound's evaluation allowance, :math:`2(k + Q + 8)` (``k`` rows).
     """
 
     centre_pred: np.ndarray
@@ -171,7 +230,7 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     Written as explicit loops over the small dimensions, with every array allocated once: the state's map of the
     prior's generators :math:`\Phi G_0` and of the process noise (rows: columns) are carried from one time to the
     next; per time the local error bound :math:`\delta_j` (from the computed vectors of that time), then the
-    backward products of :func:`_propagated_error` carry them to the two objectives' times and to each measured
+    backward products of :func:`_product_table` carry them to the two objectives' times and to each measured
     time."""
     L, n = drive.shape
     p, nw, nv, q0 = C.shape[1], E.shape[2], V.shape[2], G0.shape[1]
@@ -193,7 +252,8 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     NwT_f = NwT.copy()
     xf = xc.copy()
     tmp = np.empty(n)
-    srow = np.empty(n)
+    srow = np.abs(c0) + np.abs(G0).sum(axis=1)  # s_j + |x̂_j|: the computed state's columns' row sums and centre
+    snext = np.empty(n)
     tmpq = np.empty((n, q0))
     ri = 0
     mi = 0
@@ -203,13 +263,6 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
             PG_f[:, :] = PG
             NwT_f[:, :] = NwT
             xf[:] = xc
-        for a in range(n):  # s_j + |x̂_j|: the row sums of the computed state's columns and its centre
-            acc = abs(xc[a])
-            for c in range(q0):
-                acc += abs(PG[a, c])
-            for k in range(j * nw):
-                acc += abs(NwT[k, a])
-            srow[a] = acc
         if measured[j]:
             meas_time[mi] = j
             mi += 1
@@ -247,12 +300,15 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
             for c in range(nw):
                 es += abs(E[j, a, c])
             delta[j, a] = g1 * acc + 2.0 * _U * es + tiny
-        for a in range(n):  # Φ G0 <- A_j Φ G0
+        for a in range(n):  # Φ G0 <- A_j Φ G0; the next s + |x̂| summed with the new columns
+            sa = 0.0
             for c in range(q0):
                 acc = 0.0
                 for b in range(n):
                     acc += A[j, a, b] * PG[b, c]
                 tmpq[a, c] = acc
+                sa += abs(acc)
+            snext[a] = sa
         PG[:, :] = tmpq
         for k in range(j * nw):  # each earlier noise column through A_j
             for a in range(n):
@@ -262,15 +318,19 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
                 tmp[a] = acc
             for a in range(n):
                 NwT[k, a] = tmp[a]
+                snext[a] += abs(tmp[a])
         for c in range(nw):
             for a in range(n):
                 NwT[j * nw + c, a] = E[j, a, c]
+                snext[a] += abs(E[j, a, c])
         for a in range(n):  # x̂ <- A_j x̂ + drive
             acc = 0.0
             for b in range(n):
                 acc += A[j, a, b] * xc[b]
             tmp[a] = acc + drive[j, a]
-        xc[:] = tmp
+        for a in range(n):
+            xc[a] = tmp[a]
+            srow[a] = snext[a] + abs(tmp[a])
     X_pred = np.zeros((n, Q))
     X_filt = np.zeros((n, Q))
     X_pred[:, :q0] = PG
@@ -282,13 +342,27 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     depth = Q + 2 * n + L + 16
     up = 1.0 + 2.0 * depth * _U
     floor = (L + 2.0) * (n + 2.0) * (Q + 2.0) * _ETA  # the underflow of these sums' own products
+    invariant = True  # a time-invariant window: one table of products serves every time (the same numbers)
+    for j in range(1, L):
+        for a in range(n):
+            for b in range(n):
+                invariant = invariant and A[j, a, b] == A[0, a, b]
+            for i in range(p):
+                invariant = invariant and C[j, i, a] == C[0, i, a]
     eye = np.eye(n)
-    err_pred = _propagated_error(eye, A, L, delta)
-    err_filt = _propagated_error(eye, A, L - 1, delta)
+    table_x, z_x = _product_table(eye, A, L, invariant)
+    err_pred = _apply_table(table_x, z_x, delta, L)
+    if not invariant:
+        table_x, z_x = _product_table(eye, A, L - 1, False)
+    err_filt = _apply_table(table_x, z_x, delta, L - 1)
     err_rows = np.empty(k_meas * p)
+    if invariant and k_meas:
+        table_c, z_c = _product_table(C[0].copy(), A, L, True)
     for m in range(k_meas):
         j = meas_time[m]
-        prop = _propagated_error(C[j].copy(), A, j, delta)
+        if not invariant:
+            table_c, z_c = _product_table(C[j].copy(), A, j, False)
+        prop = _apply_table(table_c, z_c, delta, j)
         for i in range(p):
             err_rows[m * p + i] = local_rows[m * p + i] + prop[i]
     for vec in (err_pred, err_filt, err_rows):
@@ -298,49 +372,68 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
 
 
 @numba.njit(cache=True)
-def _propagated_error(W0, A, T, delta):
-    r"""Per row of ``W0``, an upper bound of :math:`\sum_{i<T} (|W_0\Phi(T, i+1)|\,\delta_i)` (module docstring,
-    *Soundness*): the backward products :math:`\hat P_i = \mathrm{fl}(\hat P_{i+1} A_{i+1})` from
-    :math:`\hat P_{T-1} = W_0`, with :math:`|W_0\Phi(T, i+1)| \le |\hat P_i| + 2k(n+1)u\,R_i + \mathbf 1 z_i^\top`,
-    :math:`R_i = |W_0||A_{T-1}|\cdots|A_{i+1}|` (the product's rounding, :math:`k = T-1-i` products) and :math:`z_i`
-    the underflow carried through :math:`|A|` (rounded to nearest here; the caller's factor makes the sum an upper
-    bound)."""
+def _product_table(W0, A, T, invariant):
+    r"""Bounds of :math:`|W_0\Phi(T, T-k)|`, :math:`k = 0..T-1` (``k`` factors :math:`A_{T-1}\cdots A_{T-k}`;
+    module docstring, *Soundness*): the backward products :math:`\hat P_k = \mathrm{fl}(\hat P_{k-1}A_{T-k})` from
+    :math:`\hat P_0 = W_0`, with :math:`|W_0\Phi| \le |\hat P_k| + 2k(n+1)u\,\hat R_k + \mathbf 1 z_k^\top`,
+    :math:`\hat R_k = |W_0||A_{T-1}|\cdots|A_{T-k}|` (the products' rounding) and :math:`z_k` the underflow carried
+    through :math:`|A|` (rounded to nearest here; the caller's factor makes the sums upper bounds).  ``invariant``:
+    every :math:`A_j` is :math:`A_0` (the table then serves every :math:`T` up to its length).
+
+    Returns ``(table, z)``, shapes ``(T, r, n)`` and ``(T, n)``: ``table[k]`` :math:`= |\hat P_k| + 2k(n+1)u\hat R_k`."""
     r, n = W0.shape
+    table = np.empty((T, r, n))
+    zt = np.empty((T, n))
     W = W0.copy()
     R = np.abs(W0)
     z = np.zeros(n)
-    acc = np.zeros(r)
     Wn = np.empty((r, n))
     Rn = np.empty((r, n))
     zn = np.empty(n)
-    for i in range(T - 1, -1, -1):
-        theta = 2.0 * (T - 1 - i) * (n + 1) * _U
-        zd = 0.0
-        for b in range(n):
-            zd += z[b] * delta[i, b]
+    for k in range(T):
+        theta = 2.0 * k * (n + 1) * _U
         for a in range(r):
-            s = zd
             for b in range(n):
-                s += (abs(W[a, b]) + theta * R[a, b]) * delta[i, b]
-            acc[a] += s
-        if i > 0:  # P̂_{i-1} = P̂_i A_i, R_{i-1} = R_i |A_i|, z_{i-1} = z_i |A_i| + 2nη
+                table[k, a, b] = abs(W[a, b]) + theta * R[a, b]
+        zt[k, :] = z
+        if k < T - 1:  # P̂_{k+1} = P̂_k A, R̂_{k+1} = R̂_k |A|, z_{k+1} = z_k |A| + 2nη
+            At = A[0] if invariant else A[T - 1 - k]
             for a in range(r):
                 for c in range(n):
                     s = 0.0
                     t = 0.0
                     for b in range(n):
-                        s += W[a, b] * A[i, b, c]
-                        t += R[a, b] * abs(A[i, b, c])
+                        s += W[a, b] * At[b, c]
+                        t += R[a, b] * abs(At[b, c])
                     Wn[a, c] = s
                     Rn[a, c] = t
             for c in range(n):
                 t = 2.0 * n * _ETA
                 for b in range(n):
-                    t += z[b] * abs(A[i, b, c])
+                    t += z[b] * abs(At[b, c])
                 zn[c] = t
             W[:, :] = Wn
             R[:, :] = Rn
             z[:] = zn
+    return table, zt
+
+
+@numba.njit(cache=True)
+def _apply_table(table, zt, delta, T):
+    r""":math:`\sum_{i<T}(\mathrm{table}[T-1-i] + \mathbf 1 z_{T-1-i}^\top)\,\delta_i` per row (:func:`_product_table`;
+    rounded to nearest, the caller's factor makes it an upper bound)."""
+    r, n = table.shape[1], table.shape[2]
+    acc = np.zeros(r)
+    for i in range(T):
+        k = T - 1 - i
+        zd = 0.0
+        for b in range(n):
+            zd += zt[k, b] * delta[i, b]
+        for a in range(r):
+            s = zd
+            for b in range(n):
+                s += table[k, a, b] * delta[i, b]
+            acc[a] += s
     return acc
 
 
@@ -360,16 +453,17 @@ def dual_bound(row: np.ndarray, M: np.ndarray, lower: np.ndarray, upper: np.ndar
     y : numpy.ndarray, shape (k,)
         Any multipliers.
     mag_row : float
-        Magnitude of the objective's computation.
+        Bound of the objective's error (:math:`\|\hat c - c\|_1`, and its centre's; :attr:`WindowSet.mag_pred`).
     mag_rows : numpy.ndarray, shape (k,)
-        Magnitudes of the rows' computations.
+        Bounds of the rows' errors (:math:`\|\hat M_k - M_k\|_1 + |\hat b_k - b_k|`; :attr:`WindowSet.mag_rows`).
     kappa : float
-        The allowance's factor.
+        The factor of the evaluation's allowance (at least :math:`2(k + Q + 8)`).
 
     Returns
     -------
     float
-        :math:`\sum_j \max(y_j\underline b_j, y_j\overline b_j) + \|c - M^\top y\|_1 + \kappa u\mu`.
+        :math:`\sum_j \max(y_j\underline b_j, y_j\overline b_j) + \|c - M^\top y\|_1 + e + |y|^\top e_{\rm rows}
+        + \kappa u\mu + \kappa(Q+1)\eta` (module docstring, *Soundness*).
     """
     # one objective of bounds_from_multipliers (one implementation of the bound and its allowance)
     return float(bounds_from_multipliers(np.asarray(row, dtype=float)[None], M, lower, upper,
@@ -392,11 +486,11 @@ def bounds_from_multipliers(rows: np.ndarray, M: np.ndarray, lower: np.ndarray, 
     y : numpy.ndarray, shape (K, k)
         Multipliers per objective (any).
     mag_rows_obj : numpy.ndarray, shape (K,)
-        Magnitude of each objective's computation.
+        Bound of each objective's error (:func:`dual_bound`).
     mag_rows : numpy.ndarray, shape (k,)
-        Magnitudes of the rows' computations.
+        Bounds of the rows' errors.
     kappa : float
-        The allowance's factor.
+        The factor of the evaluation's allowance (at least :math:`2(k + Q + 8)`).
 
     Returns
     -------
