@@ -76,15 +76,22 @@ With :math:`W_0 = I` and :math:`T = L` (:math:`T = L-1`) this is :math:`e_i` of 
 the residual :math:`y_j - C_j\hat x_j`). The factors :math:`|W_0\Phi(T, i+1)|` decay like the true products, not
 like :math:`|A|^{T-i}` (the earlier allowance propagated magnitudes through :math:`|A|` and grew like
 :math:`\rho(|A|)^L`, above 1 for many plants with :math:`\rho(A) < 1`). They are computed as backward products
-:math:`\hat P_{i-1} = \mathrm{fl}(\hat P_i A_i)`, :math:`\hat P_{T-1} = W_0` (:func:`_product_table`, one table for every time when the window is time-invariant), and the
-products' own rounding is bounded, not neglected: after ``k`` products,
+:math:`\hat P_{i-1} = \mathrm{fl}(\hat P_i A_i)`, :math:`\hat P_{T-1} = W_0` (:func:`_product_table`, one
+table for every time when the window is time-invariant), and the products' own rounding is bounded, not neglected: after ``k`` products,
 :math:`|\hat P - W_0\Phi| \le ((1+\gamma_n)^k - 1)|W_0||A_{T-1}|\cdots|A_{i+1}| + \mathbf 1 z^\top`, so
-:math:`|W_0\Phi| \le |\hat P| + 2k(n+1)u\,\hat R + \mathbf 1 z^\top` with :math:`\hat R` the computed product of
-the magnitudes (it is within :math:`(1 \pm \gamma_n)^k` of the exact one) and :math:`z \leftarrow z|A_i| + 2n\eta`
-the underflow carried along. The term :math:`2k(n+1)u\hat R\,\delta_i` is of order :math:`u^2\rho(|A|)^k`: tiny,
+:math:`|W_0\Phi| \le |\hat P| + 2k(n+1)u\,|W_0||A_{T-1}|\cdots|A_{i+1}| + \mathbf 1 z_k^\top` (the factor
+:math:`2k(n+1)u` is about twice the :math:`1.04\,knu` needed, which covers the rounding of its own computation),
+with :math:`z_k` the products' underflow (:math:`\le n\eta/2` per entry and product) carried through :math:`|A|`.
+Summed against :math:`\delta_i`, these two terms are computed forward in :math:`O(Ln^2)`: with
+:math:`a_{j+1} = |A_j|a_j + \delta_j` and :math:`b_{j+1} = |A_j|(b_j + a_j)` (:math:`a_0 = b_0 = 0`),
+:math:`\sum_{i<T}(T-1-i)|A_{T-1}|\cdots|A_{i+1}|\delta_i = b_T`, so the rounding term is
+:math:`2(n+1)u\,|W_0|b_T`, and the underflow term is at most :math:`2n\eta\sum_{t<T}\mathbf 1^\top a_t`.
+The rounding term is of order :math:`u^2\rho(|A|)^k`: tiny,
 but kept (``tests/test_window_lp_allowance.py`` builds a product that cancels to 0 in floating point, where only
 it covers the error). Each of these bounds is a sum of products of nonnegative floating numbers, at most
-``depth = Q + 2n + L + 16`` operations from any leaf to the root, so rounded to nearest it is at least
+``depth = Q + 2n + L + 16`` operations from any leaf to the root (the forward sums :math:`b`, :math:`a` are
+deeper, :math:`L(n+2)`: their factors :math:`2(n+1)u` and :math:`2n\eta` are at least 1.9 times what is needed, which
+covers that), so rounded to nearest it is at least
 :math:`(1-u)^{\rm depth}` times its exact value: it is multiplied by :math:`1 + 2\,{\rm depth}\,u`, an underflow
 floor :math:`(L+2)(n+2)(Q+2)\eta` is added, and the result is rounded upward (``np.nextafter``). (All of this
 assumes :math:`(Q + n + L + 16)u \le 10^{-3}`, and no overflow.) The data ``A``, ``C``, the drive, ``y``,
@@ -248,6 +255,9 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     local_rows = np.zeros(k_meas * p)  # each measured row's own rounding (its errors of earlier times: below)
     meas_time = np.zeros(k_meas, np.int64)
     delta = np.zeros((L, n))  # δ_j: the local rounding of step j (columns' row sums and centre), module docstring
+    fa = np.zeros((L + 1, n))
+    fb = np.zeros((L + 1, n))
+    zsum = np.zeros(L + 1)
     PG_f = PG.copy()
     NwT_f = NwT.copy()
     xf = xc.copy()
@@ -300,6 +310,18 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
             for c in range(nw):
                 es += abs(E[j, a, c])
             delta[j, a] = g1 * acc + 2.0 * _U * es + tiny
+        # the products' rounding and underflow, as forward sums (module docstring): a_{j+1} = |A_j| a_j + δ_j,
+        # b_{j+1} = |A_j|(b_j + a_j), Z_{j+1} = Z_j + 1ᵀa_j
+        zsum[j + 1] = zsum[j]
+        for a in range(n):
+            zsum[j + 1] += fa[j, a]
+            acc_a = delta[j, a]
+            acc_b = 0.0
+            for b in range(n):
+                acc_a += abs(A[j, a, b]) * fa[j, b]
+                acc_b += abs(A[j, a, b]) * (fb[j, b] + fa[j, b])
+            fa[j + 1, a] = acc_a
+            fb[j + 1, a] = acc_b
         for a in range(n):  # Φ G0 <- A_j Φ G0; the next s + |x̂| summed with the new columns
             sa = 0.0
             for c in range(q0):
@@ -350,21 +372,29 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
             for i in range(p):
                 invariant = invariant and C[j, i, a] == C[0, i, a]
     eye = np.eye(n)
-    table_x, z_x = _product_table(eye, A, L, invariant)
-    err_pred = _apply_table(table_x, z_x, delta, L)
+    theta = 2.0 * (n + 1) * _U  # |W0 Φ| <= |P̂| + k θ |W0||A|...|A| + 1 z^T: the last two summed forward (fb, zsum)
+    under = 2.0 * n * _ETA
+    table_x = _product_table(eye, A, L, invariant)
+    err_pred = _apply_table(table_x, delta, L)
     if not invariant:
-        table_x, z_x = _product_table(eye, A, L - 1, False)
-    err_filt = _apply_table(table_x, z_x, delta, L - 1)
+        table_x = _product_table(eye, A, L - 1, False)
+    err_filt = _apply_table(table_x, delta, L - 1)
+    for a in range(n):
+        err_pred[a] += theta * fb[L, a] + under * zsum[L]
+        err_filt[a] += theta * fb[L - 1, a] + under * zsum[L - 1]
     err_rows = np.empty(k_meas * p)
     if invariant and k_meas:
-        table_c, z_c = _product_table(C[0].copy(), A, L, True)
+        table_c = _product_table(C[0].copy(), A, L, True)
     for m in range(k_meas):
         j = meas_time[m]
         if not invariant:
-            table_c, z_c = _product_table(C[j].copy(), A, j, False)
-        prop = _apply_table(table_c, z_c, delta, j)
+            table_c = _product_table(C[j].copy(), A, j, False)
+        prop = _apply_table(table_c, delta, j)
         for i in range(p):
-            err_rows[m * p + i] = local_rows[m * p + i] + prop[i]
+            second = under * zsum[j]
+            for b in range(n):
+                second += theta * abs(C[j, i, b]) * fb[j, b]
+            err_rows[m * p + i] = local_rows[m * p + i] + prop[i] + second
     for vec in (err_pred, err_filt, err_rows):
         for a in range(vec.shape[0]):
             vec[a] = np.nextafter(vec[a] * up + floor, np.inf)
@@ -373,64 +403,41 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
 
 @numba.njit(cache=True)
 def _product_table(W0, A, T, invariant):
-    r"""Bounds of :math:`|W_0\Phi(T, T-k)|`, :math:`k = 0..T-1` (``k`` factors :math:`A_{T-1}\cdots A_{T-k}`;
-    module docstring, *Soundness*): the backward products :math:`\hat P_k = \mathrm{fl}(\hat P_{k-1}A_{T-k})` from
-    :math:`\hat P_0 = W_0`, with :math:`|W_0\Phi| \le |\hat P_k| + 2k(n+1)u\,\hat R_k + \mathbf 1 z_k^\top`,
-    :math:`\hat R_k = |W_0||A_{T-1}|\cdots|A_{T-k}|` (the products' rounding) and :math:`z_k` the underflow carried
-    through :math:`|A|` (rounded to nearest here; the caller's factor makes the sums upper bounds).  ``invariant``:
-    every :math:`A_j` is :math:`A_0` (the table then serves every :math:`T` up to its length).
-
-    Returns ``(table, z)``, shapes ``(T, r, n)`` and ``(T, n)``: ``table[k]`` :math:`= |\hat P_k| + 2k(n+1)u\hat R_k`."""
+    r""":math:`|\hat P_k|`, :math:`k = 0..T-1`: the backward products :math:`\hat P_k = \mathrm{fl}(\hat P_{k-1}
+    A_{T-k})` from :math:`\hat P_0 = W_0` (``k`` factors :math:`A_{T-1}\cdots A_{T-k}`; module docstring,
+    *Soundness*: their rounding and underflow are added by the caller).  ``invariant``: every :math:`A_j` is
+    :math:`A_0` (the table then serves every :math:`T` up to its length).  Shape ``(T, r, n)``."""
     r, n = W0.shape
     table = np.empty((T, r, n))
-    zt = np.empty((T, n))
     W = W0.copy()
-    R = np.abs(W0)
-    z = np.zeros(n)
     Wn = np.empty((r, n))
-    Rn = np.empty((r, n))
-    zn = np.empty(n)
+    At = np.empty((n, n))
     for k in range(T):
-        theta = 2.0 * k * (n + 1) * _U
         for a in range(r):
             for b in range(n):
-                table[k, a, b] = abs(W[a, b]) + theta * R[a, b]
-        zt[k, :] = z
-        if k < T - 1:  # P̂_{k+1} = P̂_k A, R̂_{k+1} = R̂_k |A|, z_{k+1} = z_k |A| + 2nη
-            At = A[0] if invariant else A[T - 1 - k]
+                table[k, a, b] = abs(W[a, b])
+        if k < T - 1:  # P̂_{k+1} = P̂_k A_{T-1-k}
+            At[:, :] = A[0] if invariant else A[T - 1 - k]
             for a in range(r):
                 for c in range(n):
                     s = 0.0
-                    t = 0.0
                     for b in range(n):
                         s += W[a, b] * At[b, c]
-                        t += R[a, b] * abs(At[b, c])
                     Wn[a, c] = s
-                    Rn[a, c] = t
-            for c in range(n):
-                t = 2.0 * n * _ETA
-                for b in range(n):
-                    t += z[b] * abs(At[b, c])
-                zn[c] = t
             W[:, :] = Wn
-            R[:, :] = Rn
-            z[:] = zn
-    return table, zt
+    return table
 
 
 @numba.njit(cache=True)
-def _apply_table(table, zt, delta, T):
-    r""":math:`\sum_{i<T}(\mathrm{table}[T-1-i] + \mathbf 1 z_{T-1-i}^\top)\,\delta_i` per row (:func:`_product_table`;
-    rounded to nearest, the caller's factor makes it an upper bound)."""
+def _apply_table(table, delta, T):
+    r""":math:`\sum_{i<T}\mathrm{table}[T-1-i]\,\delta_i` per row (:func:`_product_table`; rounded to nearest, the
+    caller's factor makes it an upper bound)."""
     r, n = table.shape[1], table.shape[2]
     acc = np.zeros(r)
     for i in range(T):
         k = T - 1 - i
-        zd = 0.0
-        for b in range(n):
-            zd += zt[k, b] * delta[i, b]
         for a in range(r):
-            s = zd
+            s = 0.0
             for b in range(n):
                 s += table[k, a, b] * delta[i, b]
             acc[a] += s
