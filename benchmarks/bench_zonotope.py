@@ -50,7 +50,7 @@ tanks n = 30, p = 5    exact      798,379     (60 steps, time only)
 =====================  =========  ==========  =======================  =======================
 
 The exact estimator's window sets its trade-off (two carts, same run conditions, ``ExactSetEstimator(window=)``):
-window 40 (the default) 0.9-1.1 ms per step, filtered hull / exact 1.0122 last, 1.0288 worst; 45: 1.0 ms, 1.0122 /
+window 40 (then the default) 0.9-1.1 ms per step, filtered hull / exact 1.0122 last, 1.0288 worst; 45: 1.0 ms, 1.0122 /
 1.0122; 50: 1.7 ms, 1.0076 / 1.011; 60: 3.2 ms, 1.0000 / 1.0003; 80: 23 ms, exact.
 
 The window's prior (2026-11-29, later; ``ExactSetEstimator(prior=)``, issue 45 §3/§4).  The part now also runs the
@@ -81,7 +81,7 @@ time in the first run 658 ms):
 estimator                      ms / step   hull / exact
 =============================  ==========  =================
 zonotope (default)             2.0         1.639 / 1.559
-exact (default: window 40)     667.7       1.000 / 1.513
+exact (then default, W 40)     667.7       1.000 / 1.513
 exact, prior "box", window 10  9.2         1.201 / 1.105
 exact, prior "box", window 5   1.8         1.382 / 1.260
 =============================  ==========  =================
@@ -227,6 +227,37 @@ A window-50 default needs a tighter sound allowance first (the error of the prop
 :math:`|A^k|`, not :math:`|A|^k`).  The tank chain
 n = 30 at the default (HiGHS, 145 rows) is unchanged in cost and tighter at window 50 (1.19 against 1.51 at step
 59, about 1 s per step); the issue's 20 ms there is met only by ``prior="box"`` with window 10 (9-12.5 ms, 1.10).
+
+The allowance that follows the true products (2026-11-29, later; :mod:`eqrec.bounds.window_lp`, *Soundness*).  The
+error of the window's computed rows is now bounded by each step's local rounding (from the computed vectors) mapped
+by :math:`|C_j\Phi|` and :math:`|\Phi|`, computed as backward products (with their own rounding, of order
+:math:`u^2`, kept), not by magnitudes propagated through :math:`|A|`.  Allowance over each end's bound, six-state
+plant of ``tests/test_exact_set.py`` (``tests/test_window_lp_allowance.py``): window 40 0.031 before, below 1e-10
+now; window 50 0.13 before, below 1e-10 now.  Filtered hull / exact hull on the 60-step runs of
+``tests/test_exact_set.py`` (last / worst; old and new allowance, ``/tmp`` script of the session):
+
+=================  ====================================  ====================================
+plant              window 40 old / new                   window 50 old / new
+=================  ====================================  ====================================
+oscillator n = 2   1.0000 / 1.0000, same                 1.0000 / 1.0000, same
+six states n = 6   1.0041 / 1.0049 -> 1.0000 / 1.0000    1.3312 / 1.5305 -> 1.0000 / 1.0000
+two carts n = 4    1.0003 / 1.0235, same                 1.0001 / 1.0039, same
+tanks n = 4        1.0015 / 1.0030, same                 1.0003 / 1.0003, same
+=================  ====================================  ====================================
+
+The benchmark's own runs (``--part exact --exact-plants two tanks --exact-estimators exact --exact-repeats 5
+--exact-window W``) give the same ratios to 4 decimals old and new (two carts 1.0122 / 1.0288 at window 40, 1.0076 /
+1.0110 at 50; tanks n = 4 1.0011 / 1.0054 and 1.0002 / 1.0013; tanks n = 6 1.0002 and 1.0000), so the window 50
+became the default (``EXACT_WINDOW``).  Cost: the compiled window (``_window_kernel``) takes 20-25 µs more per
+step at n = 4, window 50 (58 -> 80 µs on the two carts, 94 -> 115-119 µs on tanks n = 4, min of 15 x 200 calls,
+both in one process); at n = 30, p = 5 (``window_set`` alone, min of 6 x 5 calls): window 10 with the box prior 0.86 ->
+1.08 ms, window 40 18.3 -> 18.8 ms, window 50 26.6 -> 27.7 ms, against steps of 9-12 ms and about 1 s.  Whole steps
+(a ``/tmp`` script: the exact part's run, 150 steps, old and new window_lp swapped into the same estimator class in
+one process, alternating, process time; the machine loaded by another job at 100 % of one core, load 2 on 2
+cores, so the minima move by 30 % between runs): run 1 (8 timed repeats each) two carts window 50 old 1,084 / new
+801 µs min, tanks n = 4 761 / 835; run 2 (20 repeats) two carts 770 / 861, tanks n = 4 828 / 953 (medians 947 / 956
+and 977 / 1,057); window 40 in run 2 two carts 552 / 590, tanks n = 4 601 / 587.  So under this load the window-50
+step is near 0.85 ms at the minimum, for the old code as well (its minimum 770-1,084 µs), above it at the median.
 
 The two-cart part (default, ``--part carts``):
 

@@ -77,7 +77,8 @@ the residual :math:`y_j - C_j\hat x_j`). The factors :math:`|W_0\Phi(T, i+1)|` d
 like :math:`|A|^{T-i}` (the earlier allowance propagated magnitudes through :math:`|A|` and grew like
 :math:`\rho(|A|)^L`, above 1 for many plants with :math:`\rho(A) < 1`). They are computed as backward products
 :math:`\hat P_{i-1} = \mathrm{fl}(\hat P_i A_i)`, :math:`\hat P_{T-1} = W_0` (:func:`_product_table`, one
-table for every time when the window is time-invariant), and the products' own rounding is bounded, not neglected: after ``k`` products,
+table for every time when the window is time-invariant), and the products' own rounding is bounded, not
+neglected: after ``k`` products,
 :math:`|\hat P - W_0\Phi| \le ((1+\gamma_n)^k - 1)|W_0||A_{T-1}|\cdots|A_{i+1}| + \mathbf 1 z^\top`, so
 :math:`|W_0\Phi| \le |\hat P| + 2k(n+1)u\,|W_0||A_{T-1}|\cdots|A_{i+1}| + \mathbf 1 z_k^\top` (the factor
 :math:`2k(n+1)u` is about twice the :math:`1.04\,knu` needed, which covers the rounding of its own computation),
