@@ -256,8 +256,11 @@ both in one process); at n = 30, p = 5 (``window_set`` alone, min of 6 x 5 calls
 one process, alternating, process time; the machine loaded by another job at 100 % of one core, load 2 on 2
 cores, so the minima move by 30 % between runs): run 1 (8 timed repeats each) two carts window 50 old 1,084 / new
 801 µs min, tanks n = 4 761 / 835; run 2 (20 repeats) two carts 770 / 861, tanks n = 4 828 / 953 (medians 947 / 956
-and 977 / 1,057); window 40 in run 2 two carts 552 / 590, tanks n = 4 601 / 587.  So under this load the window-50
-step is near 0.85 ms at the minimum, for the old code as well (its minimum 770-1,084 µs), above it at the median.
+and 977 / 1,057); run 3 (20 repeats) two carts 820 / 851, tanks n = 4 787 / 774 (medians 1,003 / 1,057 and 871 /
+923); window 40 in runs 2 / 3 two carts 552 / 590 and 563 / 579, tanks n = 4 601 / 587 and 679 / 736.  So under this
+load the window-50 step is near 0.85 ms at the minimum (new: 774-953 µs over the three runs, best 801 and 774), for
+the old code as well (761-1,084 µs), and above it at the median; the new allowance adds about 20-25 µs (the kernel)
+to 30-80 µs (the medians) per step.
 
 The two-cart part (default, ``--part carts``):
 
