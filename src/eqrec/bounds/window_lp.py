@@ -56,15 +56,22 @@ is equal to it up to the duals' accuracy and the allowances.
 The computed data's errors: every computed vector of the window obeys a linear recursion *exactly*,
 :math:`\hat v_{j+1} = A_j\hat v_j + d_j + \Delta_j`, with :math:`\hat v_j` the computed columns of :math:`\Phi G_0`
 and of the noises and the computed centre, and the local rounding of the step bounded componentwise from the
-**computed** quantities of that step (``n``-term sums, one addition of the drive):
+**computed** quantities of that step (``n``-term sums, one addition of the drive :math:`d_j = Bu_j + f`, itself
+computed with ``drive_terms`` :math:`= m + 1` terms of magnitude :math:`|B||u_j| + |f|`):
 
 .. math::
-    \textstyle\sum_{\rm columns}|\Delta_j| \le \delta_j = \gamma_{n+1}\bigl(|A_j|(s_j + |\hat x_j|) + |d_j|\bigr)
-    + 2u|E_j|\mathbf 1 + (Q+2)(n+2)\eta ,
+    \textstyle\sum_{\rm columns}|\Delta_j| \le \delta_j = 2\gamma_K\bigl(|A_j|(s_j + |\hat x_j|) + |B||u_j| + |f|
+    + |E_j|\mathbf 1\bigr) + 2u|E_j|\mathbf 1 + (Q+2)(n+2)\eta , \qquad K = n + n_w + m + 3,
 
-:math:`s_j` the row sums of the computed columns' magnitudes, :math:`\gamma_{n+1} \le 1.01(n+1)u`; the
-:math:`2u|E_j|\mathbf 1` covers ``E`` scaled by the noise bound in floating point (``V`` likewise in the measured
-rows), the last term the products' underflow. Hence :math:`\hat v_T - v_T = \sum_{i<T}\Phi(T, i+1)\Delta_i`
+:math:`s_j` the row sums of the computed columns' magnitudes, :math:`\gamma_K \le 1.01Ku`. One
+:math:`\gamma_K` covers the estimator's step, :math:`\gamma_{n+1}` for :math:`A_j\hat x_j + \hat d_j` plus
+:math:`\gamma_{m+1}` for :math:`\hat d_j` (where :math:`Bu` and :math:`f` cancel, :math:`|\hat d_j|` is far below
+the magnitudes of its computation, so those are what enter); the other covers a **simulated true state**
+:math:`x(s+1) = \mathrm{fl}(Ax + Bu + f + Ew)` of the same size (:math:`|x(s)| \le s_j + |\hat x_j|` up to terms
+of order :math:`u`, which the factor 1.01 and the rounding up below absorb), the convention of every bound of the
+package (:mod:`eqrec.bounds.rounding`): the simulation's rounding acts as a small extra noise, carried by the same
+products. The :math:`2u|E_j|\mathbf 1` covers ``E`` scaled by the noise bound in floating point (``V`` likewise
+in the measured rows), the last term the products' underflow. Hence :math:`\hat v_T - v_T = \sum_{i<T}\Phi(T, i+1)\Delta_i`
 exactly, :math:`\Phi(T, i+1) = A_{T-1}\cdots A_{i+1}`, and for any rows :math:`W_0`
 
 .. math::
@@ -72,8 +79,8 @@ exactly, :math:`\Phi(T, i+1) = A_{T-1}\cdots A_{i+1}`, and for any rows :math:`W
 
 With :math:`W_0 = I` and :math:`T = L` (:math:`T = L-1`) this is :math:`e_i` of the predicted (filtered) rows; with
 :math:`W_0 = C_j` and :math:`T = j`, the measured row's error from the earlier times, to which its own rounding
-:math:`\gamma_{n+1}(|C_j|(s_j + |\hat x_j|) + |y_j|) + 2u|V_j|\mathbf 1` is added (the rows :math:`C_j\hat X_j` and
-the residual :math:`y_j - C_j\hat x_j`). The factors :math:`|W_0\Phi(T, i+1)|` decay like the true products, not
+:math:`2\gamma_{n+n_v+2}(|C_j|(s_j + |\hat x_j|) + |y_j| + |V_j|\mathbf 1) + 2u|V_j|\mathbf 1` is added (the rows
+:math:`C_j\hat X_j` and the residual :math:`y_j - C_j\hat x_j`, and a simulated :math:`y = \mathrm{fl}(Cx + Vv)`). The factors :math:`|W_0\Phi(T, i+1)|` decay like the true products, not
 like :math:`|A|^{T-i}` (the earlier allowance propagated magnitudes through :math:`|A|` and grew like
 :math:`\rho(|A|)^L`, above 1 for many plants with :math:`\rho(A) < 1`). They are computed as backward products
 :math:`\hat P_{i-1} = \mathrm{fl}(\hat P_i A_i)`, :math:`\hat P_{T-1} = W_0` (:func:`_product_table`, one
@@ -95,13 +102,15 @@ deeper, :math:`L(n+2)`: their factors :math:`2(n+1)u` and :math:`2n\eta` are at 
 covers that), so rounded to nearest it is at least
 :math:`(1-u)^{\rm depth}` times its exact value: it is multiplied by :math:`1 + 2\,{\rm depth}\,u`, an underflow
 floor :math:`(L+2)(n+2)(Q+2)\eta` is added, and the result is rounded upward (``np.nextafter``). (All of this
-assumes :math:`(Q + n + L + 16)u \le 10^{-3}`, and no overflow.) The data ``A``, ``C``, the drive, ``y``,
-:math:`c_0`, :math:`G_0` and the prior's rows are taken as given (the drive :math:`Bu + f` is the caller's number).
+assumes :math:`(Q + n + L + 16)u \le 10^{-3}`, and no overflow.) The data ``A``, ``C``, ``u``, ``y``,
+:math:`c_0`, :math:`G_0` and the prior's rows are taken as given; the drive's magnitudes :math:`|B||u| + |f|` are
+the caller's (``drive_magnitude``; :class:`eqrec.estimators.exact_set.ExactSetEstimator` passes them).
 
 Measured (``tests/test_window_lp_allowance.py``, the multipliers of the optimum): on the six-state plant of
 ``tests/test_exact_set.py`` (:math:`\rho(A) = 0.9`, :math:`\rho(|A|) > 1.5`) at windows 40 and 50 the allowance
-is below :math:`10^{-10}` of each end's bound, against 0.031 and 0.13 with the magnitudes propagated through
-:math:`|A|`.
+is at most :math:`1.2\cdot 10^{-10}` and :math:`8\cdot 10^{-12}` of each end's bound, against 0.031 and 0.13
+with the magnitudes propagated through :math:`|A|`; on the two carts :math:`3\cdot 10^{-11}` and
+:math:`4\cdot 10^{-12}`.
 
 Cost
 ----
@@ -169,7 +178,8 @@ class WindowSet:
 
 def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive: np.ndarray, measured: np.ndarray,
                Y: np.ndarray, c0: np.ndarray, G0: np.ndarray,
-               prior_rows: "tuple[np.ndarray, np.ndarray] | None" = None) -> WindowSet:
+               prior_rows: "tuple[np.ndarray, np.ndarray] | None" = None,
+               drive_magnitude: "np.ndarray | None" = None, drive_terms: int = 1) -> WindowSet:
     r"""The constrained zonotope of :math:`x(t)` and :math:`x(t+1)` given the zonotope at :math:`s_0` and the data.
 
     Parameters
@@ -192,6 +202,13 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
         ``(A0, b0_lower, b0_upper)``: ranged rows :math:`b_{0,\rm lower} \le A_0\varepsilon \le b_{0,\rm upper}`
         (the zonotope within a box, ``A0 = G0``: :class:`eqrec.estimators.exact_set.ExactSetEstimator`,
         ``prior="zonotope+box"``); ``None``: the zonotope.
+    drive_magnitude : numpy.ndarray, shape (L, n), optional
+        The magnitudes of the drive's computation, :math:`|B||u| + |f|` per time (default ``|drive|``: a drive
+        given exactly). With :math:`B u + f` computed in floating point, its rounding is covered only through
+        these: where :math:`Bu` and :math:`f` cancel, ``|drive|`` is far below them (module docstring,
+        *Soundness*).
+    drive_terms : int, optional
+        The number of terms of each drive entry's computation (``m + 1`` for :math:`Bu + f`; default 1).
 
     Returns
     -------
@@ -204,9 +221,14 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
     k_meas = int(np.count_nonzero(measured))
     Q = q0 + L * nw + k_meas * nv
     # C-contiguous and writable, as a frozen system's arrays are not: one compiled kernel serves every plant
+    dmag = np.abs(drive) if drive_magnitude is None else drive_magnitude
+    # one step's rounding, the estimator's and a simulated true state's (module docstring, *Soundness*):
+    # 2 γ_K with K = n + nw + drive_terms + 2 for the state, n + nv + 2 for a measured row; 1.01 K u >= γ_K
+    g_step = 2.0 * 1.01 * (n + nw + int(drive_terms) + 2) * _U
+    g_meas = 2.0 * 1.01 * (n + nv + 2) * _U
     xc, xf, X_pred, X_filt, Mm, r, err_meas, err_pred, err_filt = _window_kernel(
-        *(np.require(a, float, ("C", "W")) for a in (A, C, E, V, drive)), measured,
-        *(np.require(a, float, ("C", "W")) for a in (Y, c0, G0)))
+        *(np.require(a, float, ("C", "W")) for a in (A, C, E, V, drive, dmag)), measured,
+        *(np.require(a, float, ("C", "W")) for a in (Y, c0, G0)), g_step, g_meas)
     blocks, rhs, mags = [], [], []
     lows = []
     if prior_rows is not None and prior_rows[0].shape[0]:
@@ -230,7 +252,7 @@ def window_set(A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive
 
 
 @numba.njit(cache=True)
-def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
+def _window_kernel(A, C, E, V, drive, dmag, measured, Y, c0, G0, g_step, g_meas):
     r"""The propagation of :func:`window_set` (compiled): the nominal states, the rows of ``x(t+1)`` and ``x(t)`` in
     :math:`\zeta`, the measured rows and residuals, and the bounds of their rounding errors (module docstring,
     *Soundness*).
@@ -246,7 +268,6 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
     for j in range(L):
         k_meas += measured[j]
     Q = q0 + L * nw + k_meas * nv
-    g1 = 1.01 * (n + 1) * _U  # >= gamma_{n+1} = (n+1)u / (1 - (n+1)u)
     tiny = (Q + 2.0) * (n + 2.0) * _ETA  # the products' underflow, per entry of a row sum (Q columns, n terms)
     PG = G0.copy()  # Φ G0, the prior's generators mapped to the current time
     NwT = np.zeros((L * nw, n))  # the process-noise columns of the current state, transposed (rows: columns)
@@ -299,18 +320,19 @@ def _window_kernel(A, C, E, V, drive, measured, Y, c0, G0):
                     Mm[row, col_v + c] = V[j, i, c]
                     vs += abs(V[j, i, c])
                 r[row] = Y[j, i] - yc
-                # C_j X̂_j and y - C_j x̂_j in n-term sums (and one subtraction); η V scaled in floating point
-                local_rows[row] = g1 * (mag + abs(Y[j, i])) + 2.0 * _U * vs + tiny
+                # C_j X̂_j and y - C_j x̂_j in n-term sums (and one subtraction), a simulated y = C x + V v;
+                # η V scaled in floating point
+                local_rows[row] = g_meas * (mag + abs(Y[j, i]) + vs) + 2.0 * _U * vs + tiny
             col_v += nv
             ri += p
-        for a in range(n):  # δ_j = γ_{n+1}(|A_j|(s_j + |x̂_j|) + |drive_j|) + 2u|E_j|1 (+ underflow)
-            acc = abs(drive[j, a])
+        for a in range(n):  # δ_j = 2γ_K(|A_j|(s_j + |x̂_j|) + |B||u_j| + |f| + |E_j|1) + 2u|E_j|1 (+ underflow)
+            acc = dmag[j, a]
             for b in range(n):
                 acc += abs(A[j, a, b]) * srow[b]
             es = 0.0
             for c in range(nw):
                 es += abs(E[j, a, c])
-            delta[j, a] = g1 * acc + 2.0 * _U * es + tiny
+            delta[j, a] = g_step * (acc + es) + 2.0 * _U * es + tiny
         # the products' rounding and underflow, as forward sums (module docstring): a_{j+1} = |A_j| a_j + δ_j,
         # b_{j+1} = |A_j|(b_j + a_j), Z_{j+1} = Z_j + 1ᵀa_j
         zsum[j + 1] = zsum[j]
