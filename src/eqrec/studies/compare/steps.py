@@ -153,9 +153,9 @@ def step_run(cfg, inputs, outputs, wildcards) -> list[dict]:
         raise InputError(f"the rule's outputs {files} are not one per setting of {sorted(cfg['settings'])}",
                          field="settings")
     reports, plant = [], cfg["systems"][system]
-    # the guaranteed designs of a loss budget, made once for the settings that share it (compare_families' memo)
-    model, memo = MODELS[plant["model"]](), {}
-    figures: dict = {}  # the figure's panels, made once and drawn again for each setting (compare_figure's memo)
+    # the guaranteed designs of a loss budget, made once for the settings that share it (compare_families' memo),
+    # and the figure's panels, made once and drawn again for each setting (compare_figure's memo)
+    model, memo, figures = MODELS[plant["model"]](), {}, {}
     for i, setting in enumerate(settings):
         information.clear_cache()  # an earlier pair's cached rows were solved warm from another basis
         out = {key: paths[i] for key, paths in files.items()}
