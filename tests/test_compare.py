@@ -208,3 +208,28 @@ def test_a_memo_shared_by_settings_of_one_system_changes_no_byte(tmp_path):
     compare_families(system, setups[1], memo=other)
     compare_families(batch_reactor(), setups[1], memo=other)  # another system object: the memo starts again
     assert other["system"] is not system and sum(k[0] == "design" for k in other if k != "system") > 0
+
+
+def test_figures_drawn_again_on_a_memo_are_the_bytes_of_figures_of_their_own(tmp_path):
+    """The compare job draws its settings' figures on one figure kept in ``compare_figure``'s memo: every file is
+    the one a figure of its own gives, whatever the figure before it drew (other axis limits and titles, a panel
+    without a design, a weighted norm's label)."""
+    from eqrec.compare import compare_figure
+    from eqrec.systems.examples import acc_system
+
+    results = [compare_families(batch_reactor(), CompareSetup(loss=0.2, max_delay=1, horizon=4, runs=3, periods=2,
+                                                              seed=3, exact_runs=1)),
+               compare_families(batch_reactor(), CompareSetup(loss=0.3, max_delay=2, horizon=2, runs=2, periods=2,
+                                                              exact_runs=0)),
+               compare_families(acc_system(), CompareSetup(loss=0.1, max_delay=1, horizon=3, runs=2, periods=2,
+                                                           exact_runs=1), state_weights=[1.0, 2.0, 1.0])]
+    assert "no design" in results[1].designs[FAMILIES[0]] and FAMILIES[1] in results[1].errors
+    memo: dict = {}
+    for i, result in enumerate([*results, results[0]]):
+        own = [str(tmp_path / f"own{i}.{ext}") for ext in ("png", "pdf")]
+        again = [str(tmp_path / f"again{i}.{ext}") for ext in ("png", "pdf")]
+        compare_figure(result, *own, title=f"figure {i}")
+        compare_figure(result, *again, title=f"figure {i}", memo=memo)
+        for a, b in zip(own, again):
+            assert Path(a).read_bytes() == Path(b).read_bytes(), f"{b} differs from a figure of its own"
+    assert "panels" in memo  # one figure, drawn four times

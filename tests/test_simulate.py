@@ -101,3 +101,15 @@ def test_closed_loop_refuses_a_bad_initial_state(acc, rng):
         with pytest.raises(InputError) as exc:
             closed_loop(acc, object(), [[0], [1]], bad_x0, bad_xi0, w, v)
         assert exc.value.field == field
+
+
+def test_importing_the_loop_and_the_table_steps_loads_no_numba():
+    """The P2 and P3 steps import the loop at the top; the steps that run no estimator (their tables) must not
+    pay for loading Numba (about 0.35 s of CPU a job): the causal estimators are imported where they run."""
+    import subprocess
+    import sys
+
+    code = ("import sys, eqrec.simulate.loop, eqrec.studies.p2.steps, eqrec.studies.p3.steps; "
+            "print('numba' in sys.modules); from eqrec.simulate.loop import simulate_run, Packet")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert res.stdout.split() == ["False"], res.stdout

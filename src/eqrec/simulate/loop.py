@@ -31,13 +31,12 @@ import numpy as np
 from eqrec.arrivals.draws import ArrivalTrace, uniform_words
 from eqrec.checks import check_allocation, floats, instance, integer, positive, seeded
 from eqrec.bounds.data_classes import ClassGains
-from eqrec.estimators.causal import Packet, make_estimator
 from eqrec.estimators.protocol import check_estimator
 from eqrec.bounds.gains import GainSchedule
 from eqrec.arrivals.patterns import ArrivalPattern
 from eqrec.bounds.stacking import UncertaintyLayout
 from eqrec.systems.affine import AffineSystem
-from eqrec.arrivals.packets import finite_array
+from eqrec.arrivals.packets import Packet, finite_array
 from eqrec.arrivals.words import as_language, as_pattern
 from eqrec.errors import InputError
 
@@ -353,6 +352,10 @@ def simulate_run(system: AffineSystem, schedule: "GainSchedule | ClassGains", wo
     w, v, xi0 = lay.split(finite_array(delta, (lay.size,), "delta", "the uncertainty delta"))
     x0 = finite_array(x0, (system.n,), "x0", "the initial state", "n")
     inputs = None if inputs is None else _noise(inputs, T, system.m, "inputs")
+    # here, not at the top: the steps that import this module without running an estimator (the P2 and P3 tables)
+    # do not load Numba, which the causal estimators' kernels need (about 0.35 s of CPU a job)
+    from eqrec.estimators.causal import make_estimator
+
     est = make_estimator(system, schedule, periodic=periodic)  # reset by the loop at x̂(0) = x0 − ξ0
     run = closed_loop(system, est, ArrivalTrace.from_pattern(pattern), x0, xi0, w, v,
                       None if inputs is None else (lambda t, _xhat: inputs[t]))

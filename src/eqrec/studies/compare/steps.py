@@ -12,7 +12,8 @@ with ``cfg`` the validated ``compare`` section (``config/compare.yaml``):
             designed language, the other families' errors against the class engine's bound).  The settings
             of a system share one process (its imports, the compiled kernels and the plotting machinery are
             loaded once: about 3 s of CPU a pair on a 2-core machine), and the guaranteed designs of each loss
-            budget they try (``compare_families(..., memo=)``: about 1.4 s of CPU a job); each pair's files are
+            budget they try (``compare_families(..., memo=)``: about 1.4 s of CPU a job) and the figure's panels
+            (``compare_figure(..., memo=)``: about 1 s of CPU a job); each pair's files are
             those of a process of its own (the information limit's row cache is emptied before each pair).  The job's
             wall time and peak memory are its rule's benchmark (``results/timings/compare/<system>.tsv``),
             each pair's µs per step its ``results/timings/compare/<system>_<setting>.json``.
@@ -152,8 +153,9 @@ def step_run(cfg, inputs, outputs, wildcards) -> list[dict]:
         raise InputError(f"the rule's outputs {files} are not one per setting of {sorted(cfg['settings'])}",
                          field="settings")
     reports, plant = [], cfg["systems"][system]
-    # the guaranteed designs of a loss budget, made once for the settings that share it (compare_families' memo)
-    model, memo = MODELS[plant["model"]](), {}
+    # the guaranteed designs of a loss budget, made once for the settings that share it (compare_families' memo),
+    # and the figure's panels, made once and drawn again for each setting (compare_figure's memo)
+    model, memo, figures = MODELS[plant["model"]](), {}, {}
     for i, setting in enumerate(settings):
         information.clear_cache()  # an earlier pair's cached rows were solved warm from another basis
         out = {key: paths[i] for key, paths in files.items()}
@@ -163,7 +165,7 @@ def step_run(cfg, inputs, outputs, wildcards) -> list[dict]:
                                       progress=lambda msg: log.info("%s %s: %s", system, setting, msg))
         with atomic_path(out["csv"]) as tmp:
             write_table(result, str(tmp))
-        compare_figure(result, out["png"], out["pdf"], title=title_of(plant["name"], setup))
+        compare_figure(result, out["png"], out["pdf"], title=title_of(plant["name"], setup), memo=figures)
         write_json(out["timings"], {"us_per_step": {f: round(v, 1) for f, v in result.us_per_step.items()}})
         reports.append({"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
                         "n": model.n, "p": model.p, "setup": {key: getattr(setup, key) for key in (
