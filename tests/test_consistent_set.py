@@ -167,6 +167,10 @@ def test_inconsistent_data_name_the_step():
     (dict(inputs=np.zeros((2, 1))), "inputs"),
     (dict(trace=[0, 0, 0]), "trace"),
     (dict(system="walk"), "system"),
+    (dict(kinds=("smoothed",)), "kinds"),
+    (dict(kinds=()), "kinds"),
+    (dict(kinds=("predicted", "predicted")), "kinds"),
+    (dict(kinds="predicted"), "kinds"),
 ])
 def test_bad_input(kwargs, field):
     walk = eqrec.AffineSystem(A=[[1.0]], C=[[1.0]], E=[[1.0]], eta_w=0.1, eta_v=0.5, B=[[1.0]])
@@ -192,3 +196,22 @@ def test_other_solver_agrees():
     b = consistent_set(system, trace, run.y, 0.5, x0_centre=run.xhat[0], solver="scipy")
     np.testing.assert_allclose(a.predicted_lower, b.predicted_lower, atol=1e-7)
     np.testing.assert_allclose(a.filtered_upper, b.filtered_upper, atol=1e-7)
+
+
+def test_one_kind_agrees_with_both():
+    """``kinds=`` one hull alone (the compare study's predicted hulls at half the LPs): the same hull as with both,
+    to the solver's tolerance (the warm starts differ), and the other kind NaN."""
+    system = _random_plant(3)
+    trace = _random_trace(20, 0.3, 2, 4)
+    run, _ = _run(system, trace, 0.5, 4)
+    both = consistent_set(system, trace, run.y, 0.5, x0_centre=run.xhat[0])
+    pred = consistent_set(system, trace, run.y, 0.5, x0_centre=run.xhat[0], kinds=("predicted",))
+    filt = consistent_set(system, trace, run.y, 0.5, x0_centre=run.xhat[0], kinds=("filtered",))
+    np.testing.assert_allclose(pred.predicted_lower, both.predicted_lower, atol=1e-7)
+    np.testing.assert_allclose(pred.predicted_upper, both.predicted_upper, atol=1e-7)
+    np.testing.assert_allclose(filt.filtered_lower, both.filtered_lower, atol=1e-7)
+    np.testing.assert_allclose(filt.filtered_upper, both.filtered_upper, atol=1e-7)
+    assert np.isnan(pred.filtered_lower).all() and np.isnan(filt.predicted_upper).all()
+    assert not np.isnan(pred.predicted_radius).any() and not np.isnan(filt.filtered_radius).any()
+    again = consistent_set(system, trace, run.y, 0.5, x0_centre=run.xhat[0], kinds=("predicted", "filtered"))
+    np.testing.assert_array_equal(again.predicted_upper, both.predicted_upper)  # the LPs' order is fixed

@@ -48,6 +48,7 @@ value).  A dict ``{τ: y(τ)}`` of the delivered packets alone is accepted too.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -59,6 +60,9 @@ from eqrec.errors import InfeasibleDesign, InputError
 from eqrec.lp.parallel import Progress
 from eqrec.lp.solvers import solver_info
 from eqrec.systems.affine import AffineSystem
+
+#: The hulls :func:`consistent_set` computes: of x(t) and of x(t+1) given the data up to t.
+HULL_KINDS = ("filtered", "predicted")
 
 
 @dataclass(frozen=True)
@@ -153,33 +157,35 @@ def _inputs(inputs, N: int, m: int) -> np.ndarray:
     return u
 
 
-def _hull_order(t: int, n: int) -> np.ndarray:
-    """The order of step ``t``'s ``4n`` objectives, as indices into (kind, state, max/min) flattened: the maxima
-    of the filtered then the predicted states, then the minima in reverse, and the reverse of that on odd steps
-    (a warm solve starts from the previous objective's optimum: neighbouring objectives share most of their
-    optimal vertex, a maximum and the minimum of the same state share none)."""
-    idx = np.arange(4 * n).reshape(2, n, 2)  # (kind, state, max/min)
+def _hull_order(t: int, n: int, kinds: int = 2) -> np.ndarray:
+    """The order of step ``t``'s ``2 kinds n`` objectives, as indices into (kind, state, max/min) flattened: the
+    maxima of the filtered then the predicted states (or of the one kind asked), then the minima in reverse, and
+    the reverse of that on odd steps (a warm solve starts from the previous objective's optimum: neighbouring
+    objectives share most of their optimal vertex, a maximum and the minimum of the same state share none)."""
+    idx = np.arange(2 * kinds * n).reshape(kinds, n, 2)  # (kind, state, max/min)
     maxima = idx[:, :, 0].ravel()
     order = np.concatenate([maxima, idx[:, :, 1].ravel()[::-1]])
     return order if t % 2 == 0 else order[::-1]
 
 
-def _hull_targets(tlp: TraceLP, t: int) -> list[tuple[np.ndarray, np.ndarray, str]]:
-    """Per step ``t``: max and min of every :math:`\\delta x_i(t)` and :math:`\\delta x_i(t+1)`, in the order of
-    :func:`_hull_order`."""
+def _hull_targets(tlp: TraceLP, t: int,
+                  kinds: tuple[str, ...] = HULL_KINDS) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    """Per step ``t``: max and min of every :math:`\\delta x_i(t)` (filtered) and :math:`\\delta x_i(t+1)`
+    (predicted), of the ``kinds`` asked, in the order of :func:`_hull_order`."""
     out = []
-    for k, kind in ((t, "filtered"), (t + 1, "predicted")):
+    for kind in kinds:
+        k = t + (kind == "predicted")
         cols, M = tlp.xmap[k]
         for i in range(tlp.n):
             nz = M[i] != 0
             out.append((cols[nz], M[i][nz], f"{kind} x{i} max"))
             out.append((cols[nz], -M[i][nz], f"{kind} x{i} min"))
-    return [out[j] for j in _hull_order(t, tlp.n)]
+    return [out[j] for j in _hull_order(t, tlp.n, len(kinds))]
 
 
 def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x0_centre=None, *,
                    inputs=None, solver: str = "highs", solver_options: dict | None = None,
-                   force: bool = False) -> ConsistentSet:
+                   force: bool = False, kinds: tuple[str, ...] = HULL_KINDS) -> ConsistentSet:
     r"""The exact interval hull of the states consistent with the measured data, filtered and predicted.
 
     Row ``t`` of the result: the hull of :math:`x(t)` and of :math:`x(t+1)` over every initial state, process
@@ -211,6 +217,10 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     force : bool, optional
         Run even when estimated past :data:`eqrec.bounds.information.MAX_ESTIMATED_SECONDS` (four times the
         limit's LPs); default ``False``: refuse.
+    kinds : tuple of str, optional
+        The hulls to compute: ``("filtered", "predicted")`` (default) or one of them, at half the cost (the
+        other's arrays are then NaN). A warm solve starts from the previous objective's optimum, so the values
+        of one kind alone may differ from those of both in the last digits (within the solver's tolerance).
 
     Returns
     -------
@@ -294,7 +304,11 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     empty = np.zeros((N, n))
     if N == 0:
         return ConsistentSet(empty, empty.copy(), empty.copy(), empty.copy())
-    seconds = 4 * estimate_seconds(system, N, primal=True)  # the primal simplex path at every n
+    if not isinstance(kinds, tuple) or not kinds or len(set(kinds)) != len(kinds) or \
+            not set(kinds) <= set(HULL_KINDS):
+        raise InputError(f"kinds is a tuple of distinct names among {HULL_KINDS}, got {kinds!r}", field="kinds")
+    kinds = tuple(k for k in HULL_KINDS if k in kinds)  # (filtered first: the order of the LPs is fixed)
+    seconds = 2 * len(kinds) * estimate_seconds(system, N, primal=True)  # the primal simplex path at every n
     if seconds > MAX_ESTIMATED_SECONDS and not force:
         raise InputError(f"refused: the consistent set of {N} steps at n = {n} would take about {seconds:.0f} s "
                          f"(documented limit {MAX_ESTIMATED_SECONDS:.0f} s; the cost grows as the square of the "
@@ -321,15 +335,18 @@ def consistent_set(system: AffineSystem, trace: ArrivalTrace, data, x0_radius, x
     try:
         progress = Progress(N, "consistent set: steps") if seconds >= PROGRESS_SECONDS else None
         solved = solve_range(tlp, 0, list(range(N)), delivered_at, None, solver, solver_options,
-                             targets=_hull_targets, rhs=rhs, what="consistent set", progress=progress)
+                             targets=partial(_hull_targets, kinds=kinds), rhs=rhs, what="consistent set",
+                             progress=progress)
     except InfeasibleDesign as exc:
         step = str(exc).split("step ")[1].split(",")[0] if "step " in str(exc) else "?"
         raise InputError(f"no state is consistent with the data delivered by step {step} ({exc}): the plant, "
                          "its noise bounds, x0_radius or x0_centre do not describe these measurements",
                          field="data") from exc
-    vals = np.empty((N, 4 * n))
+    vals = np.full((N, 2, n, 2), np.nan)  # (step, kind, state, max/min)
+    asked = [HULL_KINDS.index(k) for k in kinds]
     for t in range(N):
-        vals[t, _hull_order(t, n)] = solved[t]
-    vals = vals.reshape(N, 2, n, 2)  # (step, kind, state, max/min)
+        row = np.empty(2 * len(kinds) * n)
+        row[_hull_order(t, n, len(kinds))] = solved[t]
+        vals[t, asked] = row.reshape(len(kinds), n, 2)
     return ConsistentSet(filtered_lower=xbar[:N] - vals[:, 0, :, 1], filtered_upper=xbar[:N] + vals[:, 0, :, 0],
                          predicted_lower=xbar[1:] - vals[:, 1, :, 1], predicted_upper=xbar[1:] + vals[:, 1, :, 0])

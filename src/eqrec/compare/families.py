@@ -624,8 +624,10 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         if progress is not None:
             progress(f"{family}: rms {row['rms']:.4g}, max error {row['max_error']:.4g}")
     # the exact consistent set of each of the first K runs' data (the same initial box as the estimators': centre
-    # x̂(0) = x(0) − ξ(0) = −ξ(0), radius r0), and each family's hull over it
-    hull = np.stack([(consistent_set(system, runs[r][0], data[r], r0, x0 - runs[r][3], solver=solver)
+    # x̂(0) = x(0) − ξ(0) = −ξ(0), radius r0), predicted only (what the families report), and each family's hull
+    # over it
+    hull = np.stack([(consistent_set(system, runs[r][0], data[r], r0, x0 - runs[r][3], solver=solver,
+                                     kinds=("predicted",))
                       .predicted_radius * scale_of).max(axis=1) for r in range(K)]) if K else np.zeros((0, N))
     for row in rows:
         if row["estimator"] in bounds and K:
