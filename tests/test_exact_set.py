@@ -76,6 +76,16 @@ def _check_contains(S: StateSet, ref, x):
         "the set misses part of the exact hull"
 
 
+def corner_run(system: eqrec.AffineSystem, est, seed: int, N: int, radius: float = 0.5):
+    """A closed-loop run of ``est`` on ``lossy_trace(seed, N)`` with the initial error and the noise at random
+    corners of their boxes (seeded by ``seed``): the played-back worst cases of the guarantee tests."""
+    rng = np.random.default_rng(seed)
+    return eqrec.simulate.loop.closed_loop(system, est, lossy_trace(seed, N), np.zeros(system.n),
+                                           radius * rng.choice([-1.0, 1.0], system.n),
+                                           system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw)),
+                                           system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)))
+
+
 @pytest.mark.parametrize("plant", [oscillator, six_states])
 def test_exact_estimator_meets_the_goals_on_small_plants(plant):
     """Filtered hull / exact hull <= 1.01 at the last step and <= 1.05 at every step (issue 45 §3), every set
@@ -187,12 +197,7 @@ def test_exact_estimator_guarantee_at_box_corners():
     system = oscillator()
     N = 60
     for seed in range(3):
-        rng = np.random.default_rng(seed)
-        trace = lossy_trace(seed, N)
-        out = eqrec.simulate.loop.closed_loop(system, ExactSetEstimator(system, 0.5, max_delay=2, window=10), trace,
-                                              np.zeros(2), 0.5 * rng.choice([-1.0, 1.0], 2),
-                                              system.eta_w * rng.choice([-1.0, 1.0], (N, 2)),
-                                              system.eta_v * rng.choice([-1.0, 1.0], (N, 1)))
+        out = corner_run(system, ExactSetEstimator(system, 0.5, max_delay=2, window=10), seed, N)
         assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
 
 
@@ -238,14 +243,10 @@ def test_box_prior_guarantee_at_box_corners(plant, prior):
     its box and a short window (the prior's box then binds at every step; a box that missed the state, e.g. keyed to
     the wrong time, fails here)."""
     system = plant()
-    n, N = system.n, 60
+    N = 60
     for seed in range(3):
-        rng = np.random.default_rng(seed)
-        trace = lossy_trace(seed, N)
         est = ExactSetEstimator(system, 0.5, max_delay=2, window=4, prior=prior)
-        out = eqrec.simulate.loop.closed_loop(system, est, trace, np.zeros(n), 0.5 * rng.choice([-1.0, 1.0], n),
-                                              system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw)),
-                                              system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)))
+        out = corner_run(system, est, seed, N)
         assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
         assert est.lp_fallbacks == 0
 
@@ -428,14 +429,10 @@ def test_a_wrong_carried_basis_keeps_error_within_bound_at_box_corners(monkeypat
 
     monkeypatch.setattr(exact_module, "carry_basis", bad)
     system = eqrec.two_mass()
-    N, n = 60, system.n
+    N = 60
     for seed in range(2):
-        noise = np.random.default_rng(seed)
-        trace = lossy_trace(seed, N)
         est = ExactSetEstimator(system, 0.5, max_delay=2, window=10)
-        out = eqrec.simulate.loop.closed_loop(system, est, trace, np.zeros(n), 0.5 * noise.choice([-1.0, 1.0], n),
-                                              system.eta_w * noise.choice([-1.0, 1.0], (N, system.nw)),
-                                              system.eta_v * noise.choice([-1.0, 1.0], (N, system.nv)))
+        out = corner_run(system, est, seed, N)
         assert est.lp_warm_starts > 0
         assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
 

@@ -19,8 +19,7 @@ import eqrec
 from eqrec.bounds.window_lp import bounds_from_multipliers, window_set
 from eqrec.estimators.exact_set import ExactSetEstimator
 from eqrec.lp.box_simplex import box_lp_solve
-from test_exact_set import six_states
-from test_zonotope import lossy_trace
+from test_exact_set import corner_run, six_states
 
 
 def _tiles(system, L):
@@ -292,13 +291,8 @@ def test_window_50_guarantee_at_box_corners(plant):
     """error <= bound at every step, no tolerance, window 50 (the allowance of every window from 1 to 50 steps),
     the noise and the initial error at random corners of their boxes."""
     system = plant()
-    N, n = 70, system.n
     for seed in range(2):
-        rng = np.random.default_rng(seed)
-        trace = lossy_trace(seed, N)
         est = ExactSetEstimator(system, 0.5, max_delay=2, window=50)
-        out = eqrec.simulate.loop.closed_loop(system, est, trace, np.zeros(n), 0.5 * rng.choice([-1.0, 1.0], n),
-                                              system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw)),
-                                              system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv)))
+        out = corner_run(system, est, seed, 70)
         assert np.all(np.abs(out.error[1:]).max(axis=1) <= out.bound)
         assert est.lp_fallbacks == 0
