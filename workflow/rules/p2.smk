@@ -79,7 +79,7 @@ use rule step as p2_realaxis with:
     params:
         step="eqrec.studies.p2.sweeps:step_realaxis",
         cfg=step_config(
-            "p2", "mu1 realaxis", heatmap="second_solver solver variants word"
+            "p2", "mu1 realaxis", heatmap="second_solver solver variants warm_start word"
         ),
 
 

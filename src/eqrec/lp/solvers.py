@@ -514,6 +514,43 @@ def solve_lp(lp: LinearProgram, solver: str = "highs", options: dict | None = No
     return first
 
 
+def solve_lp_warm(lp: LinearProgram, basis=None, options: dict | None = None):
+    """Solve ``lp`` with HiGHS from ``basis``, the optimal basis of an LP of the same shape (e.g. the previous
+    point of a sweep whose coefficients move a little): the answer and its own optimal basis, for the next.
+
+    The basis is only a starting point: the optimum is the LP's own, but where it is not unique (a vertex, or
+    its last bits) a warm start may end at another optimal vertex than a cold one, so a sweep's answers then
+    depend on the order of its points (kept fixed by the caller).  Without ``basis`` (or with one of another
+    shape) this is the cold HiGHS solve of :func:`solve_lp`, the same numbers.  A run that ends without a usable
+    status is solved again from scratch with the retries of :func:`solve_lp`.
+
+    Parameters
+    ----------
+    lp : LinearProgram
+        The problem.
+    basis : highspy.HighsBasis or None, optional
+        Where to start (``None``: from scratch).
+    options : dict or None, optional
+        HiGHS options, as :func:`solve_lp`.
+
+    Returns
+    -------
+    solution : LPSolution
+        The answer (never raises for infeasibility).
+    basis : highspy.HighsBasis or None
+        Its optimal basis (``None`` when it is not optimal or came from a retry).
+    """
+    nr, nc = lp.A.shape
+    h = highs_model(lp, dict(options or {}))
+    warm = basis is not None and len(basis.col_status) == nc and len(basis.row_status) == nr
+    if warm:
+        h.setBasis(basis)
+    sol = _highs_run(h, lp, lp.c)
+    if sol.status not in FINAL_STATUSES:  # from scratch, with the retries (a cold run: exactly solve_lp's answer)
+        return solve_lp(lp, "highs", options, tried=(f"highs, warm start: {sol.status}",) if warm else ()), None
+    return sol, (h.getBasis() if sol.status == "optimal" else None)
+
+
 def solve_lp_grid(lp: LinearProgram, costs, bounds=None, solver: str = "highs",
                   options: dict | None = None) -> list[list[LPSolution]]:
     """Solve ``lp`` for every column-bound pair of ``bounds`` and, under each, every objective of ``costs``.

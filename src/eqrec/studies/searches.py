@@ -27,7 +27,7 @@ from eqrec.bounds.certify import certify_schedule
 from eqrec.bounds.data_classes import classes_of_tree
 from eqrec.arrivals.prefix_tree import PrefixTree
 from eqrec.arrivals.words import as_language, extend_word, worst_case_pattern
-from eqrec.lp.solvers import solve_lp
+from eqrec.lp.solvers import solve_lp, solve_lp_warm
 from eqrec.systems.affine import AffineSystem
 from eqrec.design.augmented.word_lp import AugmentedLP
 from eqrec.design.augmented.runtime import schedule_from_augmented
@@ -207,7 +207,8 @@ def observer_for(system: AffineSystem, poles: np.ndarray, seed: int = 0):
 def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_list: Iterable[np.ndarray],
                   solver: str = "highs", on_point: Callable[[], None] | None = None,
                   second_solver: str | None = "clarabel", certify_runtime: str | None = None,
-                  deadbeat_seed: int = 0, observers: Sequence[tuple[PolePlacement, str]] | None = None) -> list[dict]:
+                  deadbeat_seed: int = 0, observers: Sequence[tuple[PolePlacement, str]] | None = None,
+                  warm_start: int = 0) -> list[dict]:
     """Optimal ``μ2`` of the augmented LP (``s0 = 0``, ``L`` by pole placement) for each pole set.
 
     Each record has ``status`` (``optimal``, ``infeasible``, ``placement_failed``
@@ -226,6 +227,14 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
     ``observers``: the :func:`observer_for` result of each pole set, when the
     caller has them already (a sweep of several words or readings over the same
     pole sets places each ``L`` once).
+
+    ``warm_start``: the pole sets come in runs of that many consecutive ones (e.g. one θ line of the heat map,
+    ``L`` moving a little from point to point), and with HiGHS each LP of a run starts from the optimal basis of
+    the run's previous point (:func:`eqrec.lp.solvers.solve_lp_warm`; the first of each run, and the point after
+    one that is not optimal, from scratch).  The optimum is each LP's own; where it is not unique the vertex (and
+    so the certified gains, or the last bits of ``μ2``) may differ from a cold solve's, and depends on the order
+    within a run only, never on how the runs are split into jobs.  About five times fewer simplex iterations on
+    the augmented paper's sweeps.
 
     Parameters
     ----------
@@ -251,6 +260,8 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
         Seed of :func:`observer_for` for all-zero pole sets.
     observers : sequence of (PolePlacement, str) or None, optional
         Precomputed :func:`observer_for` results, one per pole set.
+    warm_start : int, optional
+        Length of the runs of warm-started LPs (``0``, the default: every LP from scratch; HiGHS only).
 
     Returns
     -------
@@ -264,8 +275,14 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
         observers = [observer_for(system, poles, deadbeat_seed) for poles in poles_list]
     if len(observers) != len(poles_list):
         raise InputError(f"{len(observers)} observers for {len(poles_list)} pole sets", None, "observers")
-    for pp, how in observers:
+    if warm_start < 0:
+        raise InputError(f"warm_start = {warm_start} < 0", None, "warm_start")
+    warm = warm_start > 0 and solver == "highs"
+    basis = None  # the optimal basis of the run's previous point
+    for k, (pp, how) in enumerate(observers):
         t0 = time.perf_counter()
+        if warm and k % warm_start == 0:
+            basis = None
         rec = {"status": "placement_failed", "mu2": np.nan, "message": pp.message, "observer": how,
                "solver": "", "status_first": "", "status_second": ""}
         if certify_runtime:
@@ -275,7 +292,10 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
                 model = AugmentedLP(system, word, mu1, pp.L, mode=mode)
             else:
                 model.set_L(pp.L)
-            sol = model.solve(solver)
+            if warm:
+                sol, basis = solve_lp_warm(model.lp, basis)
+            else:
+                sol = model.solve(solver)
             rec.update(solver=solver, status_first=sol.status)
             if sol.status not in DEFINITIVE and second_solver:
                 sol2 = model.solve(second_solver)
@@ -290,6 +310,8 @@ def fixed_L_sweep(system: AffineSystem, word: str, mu1: float, mode: str, poles_
                 cert = certify_schedule(system, schedule_from_augmented(system, model.gains(sol), certify_runtime),
                                         [word], mu1)
                 rec.update(certified_mu2=cert.mu2, certified_terminal=cert.terminal)
+        else:
+            basis = None
         rec["solve_time"] = time.perf_counter() - t0
         rows.append(rec)
         if on_point is not None:

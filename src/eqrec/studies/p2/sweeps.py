@@ -11,7 +11,10 @@ Steps ``heatmap_chunk`` (``wildcards.scatteritem``: a θ-chunk of every variant)
 configured variant exactly once) and ``realaxis``.  In each job the LP of
 each variant is built once and only its ``L``-dependent coefficients change
 from point to point (:func:`eqrec.studies.searches.fixed_L_sweep`), and each
-observer gain is placed once for all variants.
+observer gain is placed once for all variants.  With ``heatmap.warm_start``
+each LP starts from the optimal basis of the previous point of its θ line (of
+the real axis): the first point of each line is solved from scratch, so the
+answers do not depend on how the lines are split into chunks.
 """
 
 from __future__ import annotations
@@ -31,14 +34,17 @@ from eqrec.studies.p2.grids import heatmap_grid, realaxis_grid
 log = get_logger("p2")
 
 
-def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> Iterator[tuple]:
+def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str, run: int) -> Iterator[tuple]:
     """Every configured variant over the same pole sets, one after the other: ``(variant, mode, word, records)``.
 
     The observer gain of a pole set does not depend on the variant, so each
     ``L`` is placed once (:func:`eqrec.studies.searches.observer_for`) and
     shared by the variants' LPs.  Each point's gains are certified as the
     estimator that runs (``theorem2`` for the text of Theorem 2, ``hold`` -
-    constant ``L`` kept - for the design-only readings).
+    constant ``L`` kept - for the design-only readings).  With
+    ``heatmap.warm_start`` each LP starts from the previous point's optimal
+    basis within runs of ``run`` consecutive pole sets (a θ line of the heat
+    map, the whole real axis), so the answers do not depend on the chunks.
     """
     # here, not at the top: the merge step needs none of the design, LP and Numba layers (about 0.5 s of CPU)
     from eqrec.design.augmented.model import default_runtime
@@ -52,7 +58,7 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str) -> It
         yield variant, mode, word, fixed_L_sweep(
             system, word, float(cfg["mu1"]), mode, poles, h["solver"], second_solver=h["second_solver"],
             on_point=Progress(log, len(poles), f"{what} {variant}").advance, certify_runtime=default_runtime(mode),
-            observers=observers)
+            observers=observers, warm_start=run if h["warm_start"] else 0)
 
 
 def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
@@ -62,7 +68,8 @@ def step_heatmap_chunk(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     r_grid, th_grid = heatmap_grid(cfg)
     chunk, thetas = scatter_indices(wildcards, len(th_grid), field="heatmap.chunks")
     pts = [(r, th_grid[j]) for j in thetas for r in r_grid]
-    swept = _sweep_variants(cfg, acc_system(), [heatmap_poles(r, th) for r, th in pts], f"heat map chunk {chunk}:")
+    swept = _sweep_variants(cfg, acc_system(), [heatmap_poles(r, th) for r, th in pts], f"heat map chunk {chunk}:",
+                            run=len(r_grid))  # the chunks are whole θ lines
     df = pd.DataFrame([{"variant": variant, "word": word, "mode": mode, "r": r, "theta": th, **rec}
                        for variant, mode, word, recs in swept for (r, th), rec in zip(pts, recs)])
     write_csv(outputs.csv, df, timings=INTERMEDIATE)  # a temporary chunk: the merge splits the timings off
@@ -108,7 +115,7 @@ def step_heatmap_merge(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
 def step_realaxis(cfg, inputs, outputs, wildcards) -> pd.DataFrame:
     """P2-F3b: eigenvalues ``{0, λ, λ}`` for real ``λ`` (the heat map at θ = 0 and π, finer)."""
     lam = realaxis_grid(cfg)
-    swept = _sweep_variants(cfg, acc_system(), [np.array([0.0, x, x]) for x in lam], "real axis")
+    swept = _sweep_variants(cfg, acc_system(), [np.array([0.0, x, x]) for x in lam], "real axis", run=len(lam))
     df = pd.DataFrame([{"variant": variant, "word": word, "lam": x, **rec}
                        for variant, _, word, recs in swept for x, rec in zip(lam, recs)])
     write_csv(outputs.csv, df, timings=outputs.timings, keys=["variant", "lam"])
