@@ -25,7 +25,7 @@ that form literally so the two can be compared.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -88,6 +88,9 @@ class RobustRowsIndex:
         ``(handle, sign)`` pairs: the LP coefficient at
         ``lp.positions(handle)[i]`` equals ``sign * Gx[gx_entries[i], gx_cols[i]]``.
         Rewriting these values updates the LP in place when only ``Gx`` changes.
+    g0_rows : list of (ndarray, float)
+        ``"abs"`` form with ``track_gx``: the rows ``a_e ∓ Gx_e x >= ±G0_e`` of the ``x``-dependent entries, with
+        their sign (:meth:`update_g0`).
     """
 
     form: str
@@ -96,6 +99,7 @@ class RobustRowsIndex:
     gx_entries: np.ndarray
     gx_cols: np.ndarray
     gx_handles: list[tuple[int, float]]
+    g0_rows: list[tuple[np.ndarray, float]] = field(default_factory=list)
 
     def update_gx(self, lp, values: np.ndarray) -> None:
         """Write new ``Gx`` values (ordered as ``gx_entries, gx_cols``) into a built LP.
@@ -109,6 +113,33 @@ class RobustRowsIndex:
         """
         for handle, sign in self.gx_handles:
             lp.A.data[lp.positions(handle)] = sign * values
+
+    def update_g0(self, lp, rows: UncertainAffineRows, radius: np.ndarray, level_const: np.ndarray | float) -> None:
+        """Write the row bounds of new constant coefficients ``rows.G0`` (and certain terms ``rows.c0``) into a
+        built LP, ``"abs"`` form with ``track_gx``: the bounds :func:`add_robust_rows` gives those rows, computed
+        the same way (the same numbers as a rebuild).
+
+        Parameters
+        ----------
+        lp : LinearProgram
+            The LP built with ``track_gx=True``; its row bounds are changed in place.
+        rows : UncertainAffineRows
+            The rows with the new ``G0`` and ``c0`` (entries, coordinates and the pattern of ``Gx`` as built).
+        radius : ndarray, shape (D,)
+            Box radii, as built.
+        level_const : ndarray, shape (R,), or float
+            Constant part of the bounds, as built.
+        """
+        if self.form != "abs" or not self.g0_rows:
+            raise ValueError("update_g0 needs the 'abs' form built with track_gx=True")
+        var_entries, const_part = _variable_entries(rows, rows.Gx.tocsr(), np.asarray(radius, float)[rows.entry_coord])
+        for new_rows, sign in self.g0_rows:
+            lp.row_lower[new_rows] = sign * rows.G0[var_entries]
+        if len(self.level_rows) == 1 and np.any(rows.c0):
+            raise ValueError("built with no certain term (one level row per row); rebuild for a nonzero c0")
+        level_const = np.broadcast_to(np.asarray(level_const, float), (rows.num_rows,))
+        for level_rows, sign in zip(self.level_rows, (+1.0, -1.0)):
+            lp.row_upper[level_rows] = level_const - const_part - sign * rows.c0
 
 
 def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.ndarray,
@@ -208,16 +239,17 @@ def _add_abs_form(builder, rows, Gx, cx, b, levels, track_gx) -> RobustRowsIndex
     aux = builder.add_variables(k, lower=0.0)
     # a_e - Gx_e x >= G0_e  and  a_e + Gx_e x >= -G0_e
     sub = Gx[var_entries].tocoo()
-    handles = []
+    handles, g0_rows = [], []
     for sign in (+1.0, -1.0):
         new_rows = builder.add_rows(np.arange(k), aux, np.ones(k), lower=sign * rows.G0[var_entries], upper=np.inf,
                                     count=k)
         h = builder.add_entries(new_rows[sub.row], sub.col, -sign * sub.data, track=track_gx)
         if track_gx:
             handles.append((h, -sign))
+            g0_rows.append((new_rows, sign))
     level_rows = _add_level_rows(builder, rows, cx, aux, rows.entry_row[var_entries], b[var_entries], const_part,
                                  levels)
-    return RobustRowsIndex("abs", level_rows, aux, var_entries[sub.row], sub.col, handles)
+    return RobustRowsIndex("abs", level_rows, aux, var_entries[sub.row], sub.col, handles, g0_rows)
 
 
 def _add_split_form(builder, rows, Gx, cx, b, levels, track_gx) -> RobustRowsIndex:

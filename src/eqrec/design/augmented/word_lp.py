@@ -19,6 +19,7 @@ a reordered LP).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -124,7 +125,7 @@ class AugmentedLP:
         phis = np.concatenate(phis) if phis else np.zeros(0)
         zidx = np.concatenate(zidx) if zidx else np.zeros(0, int)
         # constant part of G: the open-loop map, or (the "masked_gain" reading) the L-dependent literal G0,
-        # whose generic pattern fixes the structure; such LPs are rebuilt at every L
+        # whose generic pattern fixes the structure (its row bounds are rewritten at every L)
         self._rebuild = mode == "masked_gain"
         Olflat = (generic.G0 if self._rebuild else self.st.open_loop).reshape(-1)  # index (t*n + a)*D + d
         ent_keys = np.union1d(np.flatnonzero(Olflat), keys)
@@ -150,8 +151,8 @@ class AugmentedLP:
         self.level_const[T * n:] = mu1
         self.level_coef[T * n:] = 0.0
         self.radius = lay.radius(system.eta_w, system.eta_v, mu1)
-        # in-place L updates when only the coefficients Gx depend on L (s0 = 0, not the literal reading)
-        self.updatable = not (np.any(self.s0) or self._rebuild)
+        # in-place L updates when s0 = 0: the coefficients Gx (and, in the literal reading, the row bounds of G0)
+        self.updatable = not np.any(self.s0)
         self.lp = self._assemble(L)
         self.build_time = time.perf_counter() - t0
 
@@ -171,7 +172,7 @@ class AugmentedLP:
             self._gx_order = np.searchsorted(keys_ours, keys_lp)
             if not np.array_equal(keys_ours[np.minimum(self._gx_order, keys_ours.size - 1)], keys_lp):
                 raise AssertionError("the robust layer placed coefficients AugmentedLP did not create")  # pragma: no cover
-            self._robust_index = index
+            self._robust_index, self._rows = index, rows
         return b.build()
 
     def add_decision_variables(self, b: LPBuilder, cost: bool = True) -> int:
@@ -252,15 +253,19 @@ class AugmentedLP:
         Returns
         -------
         LinearProgram
-            The LP at ``L`` (rebuilt in the ``"masked_gain"`` reading, whose constant part depends on ``L``).
+            The LP at ``L`` (rebuilt in the ``"masked_gain"`` reading with ``s0 ≠ 0``, whose certain part depends
+            on ``L``).
         """
-        if self._rebuild:
+        if self._rebuild and not self.updatable:  # the literal reading with s0 ≠ 0: its certain part moves too
             self.lp = self._assemble(L)
             return self.lp
         if not self.updatable:
             raise InputError("fast L updates need s0 = 0; build a new AugmentedLP for s0 ≠ 0", field="s0")
         self.aug = AugmentedStacking(self.st, self.word, L, self.mode)
         self._robust_index.update_gx(self.lp, self._gx_values(self.aug)[self._gx_order])
+        if self._rebuild:  # the literal reading: G0 depends on L too (c0 = Hs s0 = 0), the bounds of its rows
+            self._rows = replace(self._rows, G0=self.aug.G0.reshape(-1)[self.entry_keys])
+            self._robust_index.update_g0(self.lp, self._rows, self.radius, self.level_const)
         self.L = self.aug.L
         return self.lp
 
