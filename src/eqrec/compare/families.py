@@ -489,7 +489,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     # imported here, as the estimators below: the compare study's table step merges CSVs and needs no simulation
     # (saves ~0.4 s CPU of numba and scipy.linalg imports in that job)
     from eqrec.bounds.stacking import UncertaintyLayout
-    from eqrec.simulate.loop import closed_loop
+    from eqrec.simulate.loop import closed_loop, plant_run
     from eqrec.bounds.information import information_limit
     from eqrec.bounds.consistent import consistent_set
     from eqrec.estimators.exact import exact_bound
@@ -559,6 +559,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         progress(f"information limit: median {np.median(limit):.4g} ({setup.runs} runs x {N} steps)")
     errors, bounds, outside, rows, us = {}, {}, {}, [], {}
     x0 = np.zeros(n)
+    # the true states and measurements of each run, the same for every family (zero input): simulated once
+    plants = [plant_run(system, N, x0, w_noise, v) for _, w_noise, v, _ in runs]
     K = setup.exact_subset
     data: dict[int, np.ndarray] = {}  # the measurements of the first K runs (the same for every family)
     for family in FAMILIES:
@@ -592,7 +594,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
                 elif w is not None:
                     per_state.append(float((w * est.state_bounds).max()))
             t_start = time.perf_counter()
-            run = closed_loop(system, est, trace, x0, xi0, w_noise, v, after_step=after)
+            run = closed_loop(system, est, trace, x0, xi0, w_noise, v, after_step=after, plant=plants[r])
             elapsed += time.perf_counter() - t_start
             if r < K and r not in data:
                 data[r] = run.y
