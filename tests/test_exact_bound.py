@@ -157,6 +157,34 @@ def test_exact_bound_of_the_kalman_filters_equals_the_unit_perturbation_worst_ca
     assert np.all(spread >= exact * (1 - 1e-12)) and np.all(spread <= exact * (1 + 1e-9))
 
 
+def test_exact_bound_shares_the_true_columns_and_gives_the_same_bits():
+    """``truths=``: the runs that simulate the same true columns share them (one simulation per start and inputs)
+    and report the same bounds, bit for bit, as runs of their own; a run whose inputs differ from the shared
+    trail's leaves it at that step."""
+    osc = _oscillator()
+    sysm = AffineSystem(A=osc.A, C=osc.C, E=osc.E, eta_w=osc.eta_w, eta_v=osc.eta_v, B=[[0.0], [1.0]])
+    design = GaussianNoise(Qw=np.eye(2) * 0.002, Qv=np.eye(1) * 0.0004, x0_cov=np.eye(2) * 0.04).design(sysm)
+    trace, N = _trace(5, 16, 0.2, 2), 16
+    rng = np.random.default_rng(1)
+    w, v, xi0 = 0.1 * rng.uniform(-1, 1, (N, 2)), 0.05 * rng.uniform(-1, 1, (N, 1)), rng.uniform(-0.5, 0.5, 2)
+    x0 = np.array([1.0, -2.0])
+    inputs = {"zero": lambda k, xhat: np.zeros(1), "late kick": lambda k, xhat: np.array([0.3 * (k >= 6)])}
+
+    def spreads(family, u_at, truths):
+        run = closed_loop(sysm, exact_bound(family(sysm, design), sysm, 0.5, steps=N, truths=truths), trace, x0, xi0,
+                          w, v, u_at=u_at)
+        return np.array(run.spread), run.xhat
+
+    shared: dict = {}
+    for family in (TimestampedKalman, DelayUnawareKalman):
+        for u_at in inputs.values():
+            alone, together = spreads(family, u_at, None), spreads(family, u_at, shared)
+            assert np.array_equal(alone[0], together[0]) and np.array_equal(alone[1], together[1])
+    (trail,) = [steps for _, steps in shared.values()]  # one start: one trail, of the first inputs' N steps
+    assert len(trail) == N and trail[0].u == np.zeros(1).tobytes()
+    assert not trail[-1].truth.flags.writeable  # shared: read only
+
+
 def test_exact_bound_of_a_design_equals_plain_strict_false_inside_the_language(oscillator, osc_design):
     trace = ArrivalTrace.from_arrived([1, 0, 1, 1, 1, 0] * 3)
     rng = np.random.default_rng(2)

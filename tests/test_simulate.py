@@ -57,6 +57,34 @@ def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, r
     assert abs(prot.bound.max() - d.mu2) <= 1e-9 and 1.0 <= prot.bound[5] <= 1.0 + 1e-9
 
 
+def test_a_shared_plant_run_gives_the_same_bits(acc, L1_words, rng):
+    """closed_loop(plant=plant_run(...)): the true states and measurements simulated once for several estimators
+    give each the run it gives without them, bit for bit; a plant run of another start, or with an input, is
+    refused."""
+    import pytest
+    from eqrec.arrivals.draws import uniform_words, ArrivalTrace
+    from eqrec.errors import InputError
+    from eqrec.simulate.loop import closed_loop, plant_run
+
+    d = design_prefix(acc, L1_words, 1.0)
+    trace = ArrivalTrace.from_pattern("".join(uniform_words(rng, L1_words, size=4)))
+    N = trace.steps
+    w, v, x0, xi0 = _acc_run_data(acc, rng, N)
+    plant = plant_run(acc, N, x0, w, v)
+    for make in (lambda: d.estimator(), lambda: d.estimator(strict=False)):
+        alone, shared = closed_loop(acc, make(), trace, x0, xi0, w, v), closed_loop(acc, make(), trace, x0, xi0, w,
+                                                                                    v, plant=plant)
+        for name in ("x", "xhat", "y"):
+            np.testing.assert_array_equal(getattr(shared, name), getattr(alone, name))
+        assert shared.spread == alone.spread and shared.x is not plant[0]  # copied: a run cannot change the plant's
+    with pytest.raises(InputError) as exc:
+        closed_loop(acc, d.estimator(), trace, x0 + 1.0, xi0, w, v, plant=plant)
+    assert exc.value.field == "plant"
+    with pytest.raises(InputError) as exc:
+        closed_loop(acc, d.estimator(), trace, x0, xi0, w, v, lambda k, xh: np.ones(1), plant=plant)
+    assert exc.value.field == "plant"
+
+
 def test_what_arrived_is_the_protocol_form():
     from eqrec.estimators.causal import Packet
     from eqrec.simulate.loop import what_arrived

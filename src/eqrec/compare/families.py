@@ -489,7 +489,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     # imported here, as the estimators below: the compare study's table step merges CSVs and needs no simulation
     # (saves ~0.4 s CPU of numba and scipy.linalg imports in that job)
     from eqrec.bounds.stacking import UncertaintyLayout
-    from eqrec.simulate.loop import closed_loop
+    from eqrec.simulate.loop import closed_loop, plant_run
     from eqrec.bounds.information import information_limit
     from eqrec.bounds.consistent import consistent_set
     from eqrec.estimators.exact import exact_bound
@@ -525,11 +525,12 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
     gaussian = _gaussian(system, gaussian, mu1, setup.sigmas)
     kalman = gaussian.design(system)  # P0, Q = E Qw Eᵀ, R = V Qv Vᵀ
     N, n, p = setup.steps, system.n, system.p
+    truths: dict = {}  # the true columns of each run, simulated once for the four families run on columns
     makers: dict[str, Callable[[], Any]] = {
         FAMILIES[2]: lambda: ZonotopeEstimator(system, x0_radius=r0, max_delay=setup.max_delay, order=ORDER),
         EXACT: lambda: ExactSetEstimator(system, x0_radius=r0, max_delay=setup.max_delay),
-        FAMILIES[4]: lambda: exact_bound(TimestampedKalman(system, kalman), system, r0, steps=N),
-        FAMILIES[5]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, r0, steps=N),
+        FAMILIES[4]: lambda: exact_bound(TimestampedKalman(system, kalman), system, r0, steps=N, truths=truths),
+        FAMILIES[5]: lambda: exact_bound(DelayUnawareKalman(system, kalman), system, r0, steps=N, truths=truths),
     }
     if FAMILIES[0] in designs:
         makers[FAMILIES[0]] = lambda: designs[FAMILIES[0]].estimator(strict=False)
@@ -537,7 +538,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         makers[FAMILIES[1]] = lambda: OnTimeOnly(designs[FAMILIES[1]].estimator(strict=False), p)
     for family, mechanism in ((FAMILIES[6], "zero-input"), (FAMILIES[7], "hold-input")):
         make = _lmv(system, gaussian, mechanism, setup.on_time_rate, N)  # a late packet counts as lost
-        makers[family] = (lambda make=make: exact_bound(make(), system, r0, steps=N))
+        makers[family] = (lambda make=make: exact_bound(make(), system, r0, steps=N, truths=truths))
     # the draws, in order, per run: the trace, then the noise and the initial error
     rng = np.random.default_rng(setup.seed)
     lay = UncertaintyLayout(N, system.nw, system.nv, n)
@@ -558,6 +559,8 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
         progress(f"information limit: median {np.median(limit):.4g} ({setup.runs} runs x {N} steps)")
     errors, bounds, outside, rows, us = {}, {}, {}, [], {}
     x0 = np.zeros(n)
+    # the true states and measurements of each run, the same for every family (zero input): simulated once
+    plants = [plant_run(system, N, x0, w_noise, v) for _, w_noise, v, _ in runs]
     K = setup.exact_subset
     data: dict[int, np.ndarray] = {}  # the measurements of the first K runs (the same for every family)
     for family in FAMILIES:
@@ -591,7 +594,7 @@ def compare_families(system: AffineSystem, setup: CompareSetup, *, gaussian: "Ga
                 elif w is not None:
                     per_state.append(float((w * est.state_bounds).max()))
             t_start = time.perf_counter()
-            run = closed_loop(system, est, trace, x0, xi0, w_noise, v, after_step=after)
+            run = closed_loop(system, est, trace, x0, xi0, w_noise, v, after_step=after, plant=plants[r])
             elapsed += time.perf_counter() - t_start
             if r < K and r not in data:
                 data[r] = run.y

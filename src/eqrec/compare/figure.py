@@ -133,6 +133,10 @@ def _draw(result: CompareResult, title: str | None, paths: tuple[str, ...], memo
     for ax in axes[:, 0]:
         ax.set_ylabel(r"$\|x - \hat x\|_\infty$ (largest state error)" if result.state_weights is None
                       else r"$\max_i w_i |x_i - \hat x_i|$ (weighted)", fontsize=8)
+    for axis in (axis for ax in axes.flat for axis in (ax.xaxis, ax.yaxis) if not axis.get_label_text()):
+        # an axis without a label: nothing to place (Matplotlib would measure its tick labels once more at each
+        # draw to move the empty label clear of them; an empty text draws nothing wherever it is)
+        axis.set_label_coords(*axis.label.get_position())
     handles, labels = axes[0, 2].get_legend_handles_labels()
     handles.append(matplotlib.lines.Line2D([], [], color="C7", linewidth=1.2))
     labels.append("period end (tick on the top edge)")

@@ -96,7 +96,7 @@ from __future__ import annotations
 
 import copy
 import inspect
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -117,6 +117,16 @@ def _allowance(bound: Any, terms: float, magnitude: Any) -> Any:
     return rounding_allowance(bound, terms, magnitude)
 
 
+class _TrueStep(NamedTuple):
+    """One step of the true columns of a column or copy run (:meth:`ExactBound._simulate_truth`)."""
+
+    u: bytes  #: the input of the step, as bytes (a trail is followed while the inputs are the same)
+    sent: np.ndarray  #: the columns of ``y(t)`` sent at ``t``
+    in_scale: bool  #: whether they are in scale (:func:`eqrec.arrivals.packets.in_scale_array`)
+    truth: np.ndarray  #: the columns of ``x(t+1)``
+    truth_dev: np.ndarray  #: the rounding of the true columns, summed over them
+
+
 class ExactBound:
     r"""A linear estimator with its exact worst-case bound at every step (module docstring).
 
@@ -133,6 +143,10 @@ class ExactBound:
         Reduction order of the error set (error-map estimators only; ``None``: exact).
     steps : int or None, optional
         Steps allocated for a column or copy run (required unless the estimator has ``error_map()``).
+    truths : dict or None, optional
+        Shared by the column or copy runs that simulate the same true columns (:func:`exact_bound`): each step of
+        the true columns is computed once per start (system, ``x̂(t0)``, ``t0``, columns, ``x0_radius``) and
+        inputs, and read back by the other runs (the same numbers).  ``None``: computed here.
 
     Attributes
     ----------
@@ -147,7 +161,7 @@ class ExactBound:
     kind = "guaranteed"
 
     def __init__(self, estimator: Any, system: AffineSystem, x0_radius: Any, order: "float | None" = None,
-                 steps: "int | None" = None):
+                 steps: "int | None" = None, truths: "dict | None" = None):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         self.estimator, self.system = estimator, system
@@ -170,6 +184,8 @@ class ExactBound:
             K = 2 + system.n + int(steps) * (system.nw + system.nv)
             check_allocation(8.0 * K * (system.n + 4), "steps", f"an exact-bound run of {int(steps)} steps")
         self.steps = None if steps is None else int(steps)
+        self.truths = truths
+        self._trail: "list[_TrueStep] | None" = None
         self.bound = np.nan
         self._bounds = np.full(system.n, np.nan)
         self._set: ErrorSet | None = None
@@ -230,6 +246,7 @@ class ExactBound:
             self._truth_dev = np.zeros(n)  # the rounding of the true columns, summed over them (module docstring)
             self._sent: dict[int, np.ndarray] = {}
             self._scaled: dict[int, bool] = {}
+            self._trail = self._shared_trail(x, int(t0), K)
         self._bounds = self.x0_radius.copy()
         self.bound = float(self._bounds.max())
         return self
@@ -338,6 +355,50 @@ class ExactBound:
             self._blocks = blocks
         return blocks
 
+    def _shared_trail(self, xhat0: np.ndarray, t0: int, K: int) -> "list[_TrueStep] | None":
+        """The steps of the true columns already simulated from this start by a run sharing :attr:`truths` (the
+        list this run extends), or ``None`` without ``truths``."""
+        if self.truths is None:
+            return None
+        key = (id(self.system), xhat0.tobytes(), t0, K, self.x0_radius.tobytes())
+        entry = self.truths.setdefault(key, (self.system, []))  # the system kept alive: its id stays its own
+        return entry[1]
+
+    def _true_step(self, t: int, k: int, u: np.ndarray) -> "_TrueStep":
+        """Step ``k`` (time ``t``, input ``u``) of the true columns: from the shared trail where a run with the same
+        start and the same inputs simulated it already, else simulated here (and added to the trail)."""
+        trail, key = self._trail, u.tobytes()
+        if trail is not None and len(trail) > k:
+            if trail[k].u == key:
+                return trail[k]
+            self._trail = trail = None  # other inputs: this run's true columns are its own from here on
+        found = self._simulate_truth(t, k, u, key)
+        if trail is not None and len(trail) == k:
+            trail.append(found)
+        return found
+
+    def _simulate_truth(self, t: int, k: int, u: np.ndarray, key: bytes) -> "_TrueStep":
+        """The columns of ``y(t) = C x(t) + V v(t)`` sent at ``t``, whether they are in scale, and the true columns
+        of ``x(t+1)`` with their rounding (module docstring)."""
+        sysm = self.system
+        nw, nv, n = sysm.nw, sysm.nv, sysm.n
+        base = 2 + n + k * (nw + nv)
+        v_block, w_block, w_sums, absA = self._noise_blocks(t)
+        sent_t = sysm.C_at(t) @ self._truth
+        sent_t[:, base + nw: base + nw + nv] += v_block  # V v(t): its block
+        drive = sysm.B_at(t) @ u + sysm.f
+        truth = sysm.A_at(t) @ self._truth + np.outer(drive, self._one)
+        truth[:, base: base + nw] += w_block  # + E w(t): its block
+        if w_sums is None:  # more than two noise entries: the row sums of |E w_cols| in the order of the full row
+            w_cols = np.zeros((n, self._K))
+            w_cols[:, base: base + nw] = w_block
+            w_sums = np.abs(w_cols).sum(axis=1)
+        fresh = absA @ np.abs(self._truth[:, 1:]).sum(axis=1) + np.abs(drive) * self._one_sum + w_sums
+        truth_dev = absA @ self._truth_dev + _allowance(0.0, n + sysm.nw + sysm.m + 2, fresh)
+        for array in (sent_t, truth, truth_dev):  # shared by the runs of a trail: read only
+            array.flags.writeable = False
+        return _TrueStep(key, sent_t, in_scale_array(sent_t), truth, truth_dev)
+
     def _column_step(self, y: Any, u: Any) -> np.ndarray:
         sysm, t = self.system, self.time
         k = t - self._t0
@@ -346,16 +407,12 @@ class ExactBound:
                              field="steps")
         packets = as_packets(y, t, sysm.p)
         u = check_input(u, sysm.m)
-        nw, nv, n = sysm.nw, sysm.nv, sysm.n
-        base = 2 + n + k * (nw + nv)
-        v_block, w_block, w_sums, absA = self._noise_blocks(t)
-        # the columns of y(t) = C x(t) + V v(t), sent now and read when its packet arrives (V v(t): its block)
+        true = self._true_step(t, k, u)
+        # the columns of y(t) = C x(t) + V v(t), sent now and read when its packet arrives
         sent = dict(self._sent)
-        sent_t = sysm.C_at(t) @ self._truth
-        sent_t[:, base + nw: base + nw + nv] += v_block
-        sent[t] = sent_t
+        sent[t] = true.sent
         scaled = dict(self._scaled)  # the stamps whose columns are in scale (the reader's checks, made once)
-        if in_scale_array(sent_t):
+        if true.in_scale:
             scaled[t] = True
         cols = []
         for pk in packets:
@@ -370,19 +427,10 @@ class ExactBound:
             xhat_cols, _ = self.estimator.step(cols, u)
         else:
             xhat_cols = self._copies_step(cols, u)
-        drive = sysm.B_at(t) @ u + sysm.f
-        truth = sysm.A_at(t) @ self._truth + np.outer(drive, self._one)
-        truth[:, base: base + nw] += w_block  # + E w(t): its block
-        err = truth[:, 1:] - xhat_cols[:, 1:]
+        err = true.truth[:, 1:] - xhat_cols[:, 1:]
         # the rounding of the columns: the true ones' (propagated with |A|), the copies' own allowances
-        if w_sums is None:  # more than two noise entries: the row sums of |E w_cols| in the order of the full row
-            w_cols = np.zeros((n, self._K))
-            w_cols[:, base: base + nw] = w_block
-            w_sums = np.abs(w_cols).sum(axis=1)
-        fresh = absA @ np.abs(self._truth[:, 1:]).sum(axis=1) + np.abs(drive) * self._one_sum + w_sums
-        truth_dev = absA @ self._truth_dev + _allowance(0.0, n + sysm.nw + sysm.m + 2, fresh)
-        self._truth, self._sent, self._truth_dev, self._scaled = truth, sent, truth_dev, scaled
-        slack = truth_dev + _allowance(0.0, 1, np.abs(err).sum(axis=1)) + self._copies_rounding() \
+        self._truth, self._sent, self._truth_dev, self._scaled = true.truth, sent, true.truth_dev, scaled
+        slack = true.truth_dev + _allowance(0.0, 1, np.abs(err).sum(axis=1)) + self._copies_rounding() \
             + self._columns_rounding()
         self._bounds = np.nextafter(outer_row_sums(err) + slack, np.inf)
         return xhat_cols[:, 0].copy()
@@ -416,7 +464,7 @@ class ExactBound:
 
 
 def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "float | None" = None,
-                steps: "int | None" = None) -> ExactBound:
+                steps: "int | None" = None, truths: "dict | None" = None) -> ExactBound:
     r"""Give a linear estimator of the protocol its exact worst-case bound at every step (module docstring).
 
     Parameters
@@ -433,6 +481,10 @@ def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "fl
         Outer reduction of the error set to ``order · n`` generators (error-map estimators).
     steps : int or None, optional
         Steps to allocate for a column or copy run.
+    truths : dict or None, optional
+        One dict given to the column or copy runs of several estimators on the same uncertainty (the same system,
+        ``x0_radius``, steps, start and inputs): the true columns they all simulate are simulated once
+        (:class:`ExactBound`); the bounds are the same numbers.  ``None``: each run simulates its own.
 
     Returns
     -------
@@ -457,4 +509,4 @@ def exact_bound(estimator: Any, system: AffineSystem, x0_radius: Any, order: "fl
     >>> bool(np.isfinite(bound)) and bound > 0
     True
     """
-    return ExactBound(estimator, system, x0_radius, order=order, steps=steps)
+    return ExactBound(estimator, system, x0_radius, order=order, steps=steps, truths=truths)

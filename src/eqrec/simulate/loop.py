@@ -187,11 +187,62 @@ def _noise(arr, N: int, rows: int, name: str) -> np.ndarray:
     return a
 
 
+def _measured(system: AffineSystem, t: int, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``y(t) = C(t) x(t) + V(t) v``: the measurement sent at ``t``."""
+    return system.C_at(t) @ x + system.V_at(t) @ v
+
+
+def _next_state(system: AffineSystem, t: int, x: np.ndarray, u: np.ndarray, w: np.ndarray,
+                one: np.ndarray | None) -> np.ndarray:
+    """``x(t+1) = A(t) x(t) + B(t) u + f + E(t) w`` (``one``: an affine run, the known part ``B u + f`` entering
+    the columns as ``outer(B u + f, one)``)."""
+    if one is None:
+        return system.A_at(t) @ x + system.B_at(t) @ u + system.f + system.E_at(t) @ w
+    return system.A_at(t) @ x + np.outer(system.B_at(t) @ u + system.f, one) + system.E_at(t) @ w
+
+
+def plant_run(system: AffineSystem, steps: int, x0: np.ndarray, w: np.ndarray, v: np.ndarray, *,
+              t0: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The true states and the measurements of a plain run with zero input: what :func:`closed_loop` simulates
+    whatever its estimator, so the runs of several estimators on the same noise can share it (``plant=``).
+
+    Parameters
+    ----------
+    system : AffineSystem
+        The true system.
+    steps : int
+        ``N``, the steps of the run.
+    x0 : ndarray, shape (n,)
+        The initial state.
+    w, v : ndarray
+        Noise by step index, shapes ``(N, nw)`` and ``(N, nv)`` (at least ``N`` rows, checked by
+        :func:`closed_loop`).
+    t0 : int, optional
+        Absolute time of step 0.
+
+    Returns
+    -------
+    x : ndarray, shape (N+1, n)
+        ``x(t0..t0+N)``, the same numbers as :attr:`LoopRun.x` of a run with ``u_at=None``.
+    y : ndarray, shape (N, p)
+        ``y(t0..t0+N-1)``, the same numbers as :attr:`LoopRun.y`.
+    """
+    x = np.zeros((steps + 1,) + np.shape(x0))
+    y = np.zeros((steps, system.p))
+    x[0] = x0
+    for k in range(steps):
+        t = t0 + k
+        y[k] = _measured(system, t, x[k], v[k])
+        x[k + 1] = _next_state(system, t, x[k], np.zeros(system.m), w[k], None)
+    return x, y
+
+
 def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequence[int]]", x0: np.ndarray,
                 xi0: np.ndarray, w: np.ndarray, v: np.ndarray,
                 u_at: Callable[[int, np.ndarray], np.ndarray] | None = None,
                 after_step: Callable[[int], None] | None = None, *, t0: int = 0,
-                one: np.ndarray | None = None) -> LoopRun:
+                one: np.ndarray | None = None,
+                plant: "tuple[np.ndarray, np.ndarray] | None" = None) -> LoopRun:
     """The one simulation loop: the true system (eq. (3) of the prefix-based paper) and any estimator on a trace.
 
     At each step ``k = 0..N-1`` (absolute time ``t = t0 + k``): the input
@@ -242,6 +293,10 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
         Absolute time of step 0 (time-varying systems, packet stamps; default 0).
     one : ndarray, shape (K,), or None, optional
         How a constant enters the columns of an affine run (``None``: a plain run).
+    plant : tuple of ndarray, or None, optional
+        ``(x, y)`` of :func:`plant_run` on the same ``system``, ``x0``, ``w``, ``v`` and ``t0`` (a plain run
+        with zero input, ``u_at`` and ``one`` ``None``): the true states and measurements taken from it (copied)
+        instead of simulated again, the same numbers.  ``None``: simulated here.
 
     Returns
     -------
@@ -264,23 +319,32 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
             raise InputError(f"need finite entries, shape ({n},) (or ({n}, K) with one), got {arr.shape}",
                              field=name)
     check_estimator(est)
-    x = np.zeros((N + 1,) + x0.shape)
+    simulate = plant is None
+    if simulate:
+        x = np.zeros((N + 1,) + x0.shape)
+        x[0] = x0
+        y = np.zeros((N, system.p) + x0.shape[1:])
+    else:
+        if u_at is not None or one is not None:
+            raise InputError("a shared plant run has zero input and no columns: u_at and one must be None",
+                             field="plant")
+        x, y = (np.array(a, dtype=float) for a in plant)
+        if x.shape != (N + 1,) + x0.shape or y.shape != (N, system.p) or not np.array_equal(x[0], x0):
+            raise InputError(f"need plant_run's (x, y) of this run: shapes {(N + 1,) + x0.shape} and "
+                             f"{(N, system.p)} from x0, got {x.shape} and {y.shape}", field="plant")
     xhat = np.zeros((N + 1,) + x0.shape)
-    x[0] = x0
     xhat[0] = x0 - xi0
     est.reset(xhat[0].copy(), t0) if one is None else est.reset(xhat[0].copy(), t0, one=one)
-    y = np.zeros((N, system.p) + x0.shape[1:])
     run = LoopRun(x=x, xhat=xhat, y=y)
     for k in range(N):
         t = t0 + k
         u = np.zeros(system.m) if u_at is None else u_at(k, xhat[k])
-        y[k] = system.C_at(t) @ x[k] + system.V_at(t) @ v[k]
+        if simulate:
+            y[k] = _measured(system, t, x[k], v[k])
         xhat[k + 1], spread = est.step(what_arrived(schedule[k], k, y, t0), u)
         run.spread.append(spread)
-        if one is None:
-            x[k + 1] = system.A_at(t) @ x[k] + system.B_at(t) @ u + system.f + system.E_at(t) @ w[k]
-        else:
-            x[k + 1] = system.A_at(t) @ x[k] + np.outer(system.B_at(t) @ u + system.f, one) + system.E_at(t) @ w[k]
+        if simulate:
+            x[k + 1] = _next_state(system, t, x[k], u, w[k], one)
         if after_step is not None:
             after_step(k)
     return run
