@@ -90,3 +90,27 @@ def test_the_merged_table_puts_system_and_setting_first():
     assert ran.loc[~ran["estimator"].str.startswith("guaranteed"), "outside_design"].isna().all()
     missing = table[table["rms"].isna()]  # a design that does not exist: the row says why
     assert missing["design"].str.startswith("no design").all()
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_the_run_step_pauses_the_garbage_collector_and_restores_it(tmp_path, monkeypatch, enabled):
+    """The pairs run with the garbage collector paused; after the step, also one that raises, it is as before."""
+    import gc
+
+    seen = []
+
+    def pair(*args, **kwargs):
+        seen.append(gc.isenabled())
+        raise RuntimeError("a pair that fails")
+
+    monkeypatch.setattr(compare, "_run_pair", pair)
+    files = {k: [str(tmp_path / f"acc_{s}.{k}") for s in sorted(CFG["settings"])]
+             for k in ("csv", "json", "png", "pdf", "timings")}
+    was = gc.isenabled()
+    (gc.enable if enabled else gc.disable)()
+    try:
+        with pytest.raises(RuntimeError, match="a pair that fails"):
+            compare.step_run(CFG, None, files, {"system": "acc"})
+        assert seen == [False] and gc.isenabled() is enabled
+    finally:
+        (gc.enable if was else gc.disable)()
