@@ -29,6 +29,16 @@
 # runs again on resume and workflow/scripts/run_step.py removes it first
 # (eqrec.io.remove_stale_temporaries).
 #
+# Scheduling: the rules of the nine longest jobs of the default run carry a
+# `priority` of about their seconds of CPU (measured on 2 cores, 2026-11-30),
+# so that Snakemake starts the long jobs first and the short ones fill the
+# gaps (longest-processing-time-first). Without it a 10-second job could start
+# last and hold the values, the claims and the notebooks behind it while the
+# other core waited (about 7 s of one core idle in a forced run). The head of
+# the longest chain of short jobs (P2: designs, simulate, the trajectory
+# figures, the values) gets a priority too, so that the chain does not end
+# alone. Only the order of the jobs changes, never a result.
+#
 # The step is named twice, in `code=code_inputs(...)` and `step=...`, because
 # no directive sees the other: input functions get only the wildcards, and
 # `input: **d` / `params: **d` (valid Snakemake) fill one directive each.

@@ -26,6 +26,7 @@ COMPARE_FILES = {
 
 use rule step as compare_run with:
     """One system, every setting: per pair the table, the figure and the summary of every family on the same traces."""
+    priority: 9  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.compare.steps:step_run"),
     output:

@@ -12,6 +12,7 @@ scattergather:
 
 use rule step as p2_designs with:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
+    priority: 3  # the head of a chain of four jobs before the P2 values (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.steps:step_designs"),
     output:
@@ -27,6 +28,7 @@ use rule step as p2_designs with:
 
 use rule step as p2_simulate with:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
+    priority: 3  # the head of a chain of four jobs before the P2 values (common.smk, "Scheduling")
     input:
         designs="results/p2/designs.npz",
         code=code_inputs("eqrec.studies.p2.steps:step_simulate"),
@@ -41,6 +43,7 @@ use rule step as p2_simulate with:
 
 use rule step as p2_heatmap_chunk with:
     """P2-F3a: one theta-chunk of the eigenvalue sweep, every variant (one LP per variant, L values updated)."""
+    priority: 7  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_chunk"),
     output:
@@ -69,6 +72,7 @@ use rule step as p2_heatmap_merge with:
 
 use rule step as p2_realaxis with:
     """P2-F3b: real double eigenvalue sweep."""
+    priority: 5  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_realaxis"),
     output:
@@ -85,6 +89,7 @@ use rule step as p2_realaxis with:
 
 use rule step as p2_checks with:
     """P2-S0, P2-SOLVER."""
+    priority: 4  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.steps:step_checks"),
     output:

@@ -34,6 +34,7 @@ use rule step as p4_tracking with:
 
 use rule step as p4_mc with:
     """P4-THEORY: theory against Monte Carlo for one example (both mechanisms, same draws)."""
+    priority: 4  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_mc"),
     output:
