@@ -3,7 +3,7 @@
     python benchmarks/bench_p2.py [--n 31] [--variant theorem2] [--jobs 2]
 
 The LP is built once per job; each grid point only rewrites the L-dependent
-matrix values (eqrec.design.augmented.word_lp.AugmentedLP.set_L, as eqrec.studies.searches.fixed_L_sweep does) and re-solves.
+matrix values (eqrec.design.augmented.word_lp.AugmentedLP.set_L, as eqrec.design.augmented.sweep.fixed_L_sweep does) and re-solves.
 With --jobs 2 the θ-chunks run in two processes, as two Snakemake jobs would.
 """
 from __future__ import annotations

@@ -171,7 +171,7 @@ def test_a_package_docstring_names_its_modules(folder):
 
 #: The house goal (issue 25) is at most 4,000 code lines in the studies, the rules and the Snakefile; this ceiling is
 #: where they stand (lower it when they shrink, never raise it without saying why in the commit).
-ORCHESTRATION_CEILING = 5_112
+ORCHESTRATION_CEILING = 5_073
 ORCHESTRATION = ("src/eqrec/studies", "workflow/rules", "Snakefile")
 
 

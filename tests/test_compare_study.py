@@ -99,11 +99,11 @@ def test_the_run_step_pauses_the_garbage_collector_and_restores_it(tmp_path, mon
 
     seen = []
 
-    def pair(*args, **kwargs):
+    def families(*args, **kwargs):
         seen.append(gc.isenabled())
         raise RuntimeError("a pair that fails")
 
-    monkeypatch.setattr(compare, "_run_pair", pair)
+    monkeypatch.setattr(compare, "compare_families", families)
     files = {k: [str(tmp_path / f"acc_{s}.{k}") for s in sorted(CFG["settings"])]
              for k in ("csv", "json", "png", "pdf", "timings")}
     was = gc.isenabled()

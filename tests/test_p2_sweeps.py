@@ -5,7 +5,7 @@ import pytest
 
 from eqrec.lp.model import LPSolution
 from eqrec.design.augmented.word_lp import AugmentedLP
-from eqrec.studies.searches import fixed_L_sweep, observer_for
+from eqrec.design.augmented.sweep import fixed_L_sweep, observer_for
 from eqrec.studies.p2.readings import heatmap_poles
 from eqrec.studies.p2.values import CLASSES, class_counts
 

@@ -117,6 +117,30 @@ def save_figure(fig, *paths: "str | Path") -> None:
 
 
 @contextlib.contextmanager
+def gc_paused() -> Iterator[None]:
+    """Run the body with Python's cyclic garbage collector paused, then restore it as it was (also on an error).
+
+    For a job's long loop over objects that stay to its end (modules, compiled kernels, designs, figures): each
+    full pass of the collector scans them all again, while the loop leaves little cyclic garbage (the compare
+    job: about 0.3 s of CPU less, its peak memory 3 MB higher of 320).  Reference counting still frees the rest;
+    no number depends on it.
+
+    Yields
+    ------
+    None
+    """
+    import gc
+
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if collecting:
+            gc.enable()
+
+
+@contextlib.contextmanager
 def compiled_once() -> Iterator[None]:
     """Run the body alone while the package's Numba kernels are not compiled yet; concurrently once they are.
 

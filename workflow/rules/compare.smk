@@ -26,7 +26,6 @@ COMPARE_FILES = {
 
 use rule step as compare_run with:
     """One system, every setting: per pair the table, the figure and the summary of every family on the same traces."""
-    priority: 9  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.compare.steps:step_run"),
     output:
@@ -44,6 +43,7 @@ use rule step as compare_run with:
         "results/timings/compare/{system}.tsv"
     wildcard_constraints:
         system="|".join(COMPARE_PAIRS["system"]),
+    priority: 9  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.compare.steps:step_run",
         cfg=step_config("compare", "periods runs seed settings systems exact_runs"),

@@ -12,7 +12,6 @@ scattergather:
 
 use rule step as p2_designs with:
     """P2-F1, P2-F2: time-based, augmented LP and IPOPT designs and the readings, certified."""
-    priority: 3  # the head of a chain of four jobs before the P2 values (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.steps:step_designs"),
     output:
@@ -21,6 +20,7 @@ use rule step as p2_designs with:
         npz="results/p2/designs.npz",
     log:
         "logs/p2/designs.log",
+    priority: 3  # the head of a chain of four jobs before the P2 values (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p2.steps:step_designs",
         cfg=step_config("p2", "T f1_words f2_words init_poles mu1"),
@@ -28,7 +28,6 @@ use rule step as p2_designs with:
 
 use rule step as p2_simulate with:
     """P2-F1, P2-F2: Monte Carlo, every estimator on the same draws."""
-    priority: 3  # the head of a chain of four jobs before the P2 values (common.smk, "Scheduling")
     input:
         designs="results/p2/designs.npz",
         code=code_inputs("eqrec.studies.p2.steps:step_simulate"),
@@ -36,6 +35,7 @@ use rule step as p2_simulate with:
         npz="results/p2/simulation.npz",
     log:
         "logs/p2/simulate.log",
+    priority: 3  # the head of a chain of four jobs before the P2 values (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p2.steps:step_simulate",
         cfg=step_config("p2", "f1_words f2_words mu1 noise runs seed x0"),
@@ -43,13 +43,13 @@ use rule step as p2_simulate with:
 
 use rule step as p2_heatmap_chunk with:
     """P2-F3a: one theta-chunk of the eigenvalue sweep, every variant (one LP per variant, L values updated)."""
-    priority: 7  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_heatmap_chunk"),
     output:
         csv=temp("intermediate/p2/heatmap/chunk_{scatteritem}.csv"),
     log:
         "logs/p2/heatmap_chunk_{scatteritem}.log",
+    priority: 7  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p2.sweeps:step_heatmap_chunk",
         cfg=step_config("p2", "heatmap mu1"),
@@ -72,7 +72,6 @@ use rule step as p2_heatmap_merge with:
 
 use rule step as p2_realaxis with:
     """P2-F3b: real double eigenvalue sweep."""
-    priority: 5  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.sweeps:step_realaxis"),
     output:
@@ -80,16 +79,18 @@ use rule step as p2_realaxis with:
         timings="results/timings/p2/realaxis.csv",
     log:
         "logs/p2/realaxis.log",
+    priority: 5  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p2.sweeps:step_realaxis",
         cfg=step_config(
-            "p2", "mu1 realaxis", heatmap="second_solver solver variants warm_start word"
+            "p2",
+            "mu1 realaxis",
+            heatmap="second_solver solver variants warm_start word",
         ),
 
 
 use rule step as p2_checks with:
     """P2-S0, P2-SOLVER."""
-    priority: 4  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p2.steps:step_checks"),
     output:
@@ -97,6 +98,7 @@ use rule step as p2_checks with:
         timings="results/timings/p2/checks.json",
     log:
         "logs/p2/checks.log",
+    priority: 4  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p2.steps:step_checks",
         cfg=step_config(

@@ -33,7 +33,6 @@ use rule step as p3_reactor_model with:
 
 use rule step as p3_reactor_designs with:
     """P3-BR: mu1 free (certified global route and IPOPT on (10)) and at the configured readings of mu1."""
-    priority: 10  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_reactor_designs"),
     output:
@@ -41,6 +40,7 @@ use rule step as p3_reactor_designs with:
         timings="results/timings/p3/reactor_designs.json",
     log:
         "logs/p3/reactor_designs.log",
+    priority: 10  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p3.steps:step_reactor_designs",
         cfg=step_config("p3", "batch_reactor kalman.x0"),
@@ -48,13 +48,13 @@ use rule step as p3_reactor_designs with:
 
 use rule step as p3_augmented with:
     """The augmented form (4) with fixed L and s0: optimum against pole placements and s0."""
-    priority: 3  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p3.steps:step_augmented"),
     output:
         json="results/p3/augmented.json",
     log:
         "logs/p3/augmented.log",
+    priority: 3  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p3.steps:step_augmented",
         cfg=step_config(
@@ -164,7 +164,6 @@ P3_SCALE_FULL = list(
 
 use rule step as p3_strategy with:
     """P3-IMPL: gains reused every T (batch reactor, ACC) and the switching scheme; 10^4-step runs vs the guarantees."""
-    priority: 5  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p3.strategy:step_strategy"),
     output:
@@ -173,6 +172,7 @@ use rule step as p3_strategy with:
         timings="results/timings/p3/strategy_values.json",
     log:
         "logs/p3/strategy.log",
+    priority: 5  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p3.strategy:step_strategy",
         cfg=step_config("p3", strategy="acc cost noise reactor seed steps switching"),
@@ -214,7 +214,6 @@ use rule step as p3_scale_size with:
 # in a fresh worker process (its own peak memory), with the same files as one job each.
 use rule step as p3_scale_class_sizes with:
     """Scale table, the class engine at every configured size: the classes of {0..tau}^T by the window rule, fresh process each."""
-    priority: 10  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p3.scale_table:step_scale_sizes"),
     output:
@@ -222,6 +221,7 @@ use rule step as p3_scale_class_sizes with:
         timings=timings_of(P3_SCALE_CLASSES),
     log:
         "logs/p3/scale_classes.log",
+    priority: 10  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p3.scale_table:step_scale_sizes",
         cfg=step_config(

@@ -34,7 +34,6 @@ use rule step as p4_tracking with:
 
 use rule step as p4_mc with:
     """P4-THEORY: theory against Monte Carlo for one example (both mechanisms, same draws)."""
-    priority: 4  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     input:
         code=code_inputs("eqrec.studies.p4.steps:step_mc"),
     output:
@@ -47,6 +46,7 @@ use rule step as p4_mc with:
         "results/timings/p4/mc_{example}.tsv"
     wildcard_constraints:
         example="|".join(P4_EXAMPLES),
+    priority: 4  # about its seconds of CPU: the long jobs start first (common.smk, "Scheduling")
     params:
         step="eqrec.studies.p4.steps:step_mc",
         cfg=step_config("p4", "T eta_bar examples mc pred_steps smoother_lag"),

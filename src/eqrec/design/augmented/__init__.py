@@ -8,6 +8,8 @@ paper's form (4).
     :class:`eqrec.estimators.augmented.AugmentedEstimator`).
 :mod:`~eqrec.design.augmented.word_lp`
     The LP of one missing-data word at fixed ``L`` and ``s0`` (P2 Remark 1).
+:mod:`~eqrec.design.augmented.sweep`
+    That LP over a list of pole-placement gains, warm-started along runs of neighbouring points (P2 Fig. 3).
 :mod:`~eqrec.design.augmented.tree_lp`
     The LP with gains per event prefix of a delay language (P3 form (4)).
 :mod:`~eqrec.design.augmented.nlp`

@@ -28,7 +28,6 @@ the plants are the package's models (:func:`eqrec.systems.examples.acc_system`, 
 
 from __future__ import annotations
 
-import gc
 from pathlib import Path
 from typing import Any, Callable
 
@@ -38,7 +37,7 @@ from eqrec.compare import FAMILIES, CompareResult, CompareSetup, compare_familie
 from eqrec.systems.examples import acc_system, batch_reactor
 from eqrec.systems.affine import AffineSystem
 from eqrec.errors import InputError
-from eqrec.io import atomic_path, compiled_once
+from eqrec.io import atomic_path, compiled_once, gc_paused
 from eqrec.studies.pipeline.logs import get_logger
 from eqrec.studies.pipeline.outputs import read_json, write_json, write_text
 
@@ -143,9 +142,10 @@ def step_run(cfg, inputs, outputs, wildcards) -> list[dict]:
 
     The outputs ``csv``, ``json``, ``png``, ``pdf`` and ``timings`` are lists of one file per setting, in one order
     (``<system>_<setting>.<ext>``: the settings are read from the names of the ``csv`` files; a section with one
-    setting runs that pair alone, with the same files).  The garbage collector is paused while the pairs run
-    (restored as the caller had it).
+    setting runs that pair alone, with the same files).
     """
+    from eqrec.bounds import information  # here: the table step needs no LP modules
+
     system, keys = wildcards["system"], ("csv", "json", "png", "pdf", "timings")
     files = {key: [outputs[key]] if isinstance(outputs[key], str) else list(outputs[key]) for key in keys}
     settings = [Path(path).stem.removeprefix(f"{system}_") for path in files["csv"]]
@@ -156,44 +156,25 @@ def step_run(cfg, inputs, outputs, wildcards) -> list[dict]:
     # the guaranteed designs of a loss budget, made once for the settings that share it (compare_families' memo),
     # and the figure's panels, made once and drawn again for each setting (compare_figure's memo)
     model, memo, figures = MODELS[plant["model"]](), {}, {}
-    # the cyclic garbage collector paused for the pairs: its full passes would scan again and again what stays
-    # to the end (modules, kernels, designs, the figure: about 0.3 s of CPU a job), while the pairs leave little
-    # cyclic garbage (the job's peak memory grows by about 3 MB of 320); the numbers do not depend on it
-    collecting = gc.isenabled()
-    gc.disable()
-    try:
+    with gc_paused():  # what stays to the end is not scanned again and again (about 0.3 s of CPU a job)
         for i, setting in enumerate(settings):
-            reports.append(_run_pair(cfg, system, setting, {key: paths[i] for key, paths in files.items()}, model,
-                                     memo, figures))
-    finally:
-        if collecting:
-            gc.enable()
+            information.clear_cache()  # an earlier pair's cached rows were solved warm from another basis
+            out = {key: paths[i] for key, paths in files.items()}
+            setup = setup_of(cfg, system, setting)
+            with compiled_once():  # on a fresh clone the first job compiles the kernels, the others load them
+                result = compare_families(model, setup, memo=memo,
+                                          progress=lambda msg: log.info("%s %s: %s", system, setting, msg))
+            with atomic_path(out["csv"]) as tmp:
+                write_table(result, str(tmp))
+            compare_figure(result, out["png"], out["pdf"], title=title_of(plant["name"], setup), memo=figures)
+            write_json(out["timings"], {"us_per_step": {f: round(v, 1) for f, v in result.us_per_step.items()}})
+            reports.append({"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
+                            "n": model.n, "p": model.p, "setup": {key: getattr(setup, key) for key in (
+                                "loss", "burst", "max_delay", "horizon", "runs", "periods", "steps", "seed", "sigmas",
+                                "on_time_rate", "exact_subset")}, **summary_of(result)})
+            write_json(out["json"], reports[-1])
+            log.info("%s %s: %d runs x %d steps, %d families", system, setting, setup.runs, setup.steps, len(FAMILIES))
     return reports
-
-
-def _run_pair(cfg: dict, system: str, setting: str, out: dict[str, str], model: AffineSystem, memo: dict,
-              figures: dict) -> dict:
-    """One (system, setting) pair of :func:`step_run`: its table, figure, timings and summary (``out``: the file of
-    each output key); ``memo`` and ``figures`` are the job's (shared by its pairs)."""
-    from eqrec.bounds import information  # here: the table step needs no LP modules
-
-    plant = cfg["systems"][system]
-    information.clear_cache()  # an earlier pair's cached rows were solved warm from another basis
-    setup = setup_of(cfg, system, setting)
-    with compiled_once():  # on a fresh clone the first job compiles the kernels, the others load them
-        result = compare_families(model, setup, memo=memo,
-                                  progress=lambda msg: log.info("%s %s: %s", system, setting, msg))
-    with atomic_path(out["csv"]) as tmp:
-        write_table(result, str(tmp))
-    compare_figure(result, out["png"], out["pdf"], title=title_of(plant["name"], setup), memo=figures)
-    write_json(out["timings"], {"us_per_step": {f: round(v, 1) for f, v in result.us_per_step.items()}})
-    report = {"system": system, "setting": setting, "name": plant["name"], "model": plant["model"],
-              "n": model.n, "p": model.p, "setup": {key: getattr(setup, key) for key in (
-                  "loss", "burst", "max_delay", "horizon", "runs", "periods", "steps", "seed", "sigmas",
-                  "on_time_rate", "exact_subset")}, **summary_of(result)}
-    write_json(out["json"], report)
-    log.info("%s %s: %d runs x %d steps, %d families", system, setting, setup.runs, setup.steps, len(FAMILIES))
-    return report
 
 
 def step_table(cfg, inputs, outputs, wildcards) -> None:

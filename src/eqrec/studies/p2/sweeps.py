@@ -1,7 +1,7 @@
 """P2 eigenvalue sweeps: the Fig. 3a heat map (in θ-chunks) and the Fig. 3b real axis.
 
 Every point has a class (``optimal``, ``infeasible``, ``solver_failed``,
-``placement_failed``; :func:`eqrec.studies.searches.fixed_L_sweep` re-solves an
+``placement_failed``; :func:`eqrec.design.augmented.sweep.fixed_L_sweep` re-solves an
 undecided point with the second solver and gives the all-zero pole set an
 exact nilpotent ``L``) and, when optimal, the certified worst case of its gains
 as the estimator that runs.
@@ -10,7 +10,7 @@ Steps ``heatmap_chunk`` (``wildcards.scatteritem``: a θ-chunk of every variant)
 ``heatmap_merge`` (checks that the chunks cover the configured grid of every
 configured variant exactly once) and ``realaxis``.  In each job the LP of
 each variant is built once and only its ``L``-dependent coefficients change
-from point to point (:func:`eqrec.studies.searches.fixed_L_sweep`), and each
+from point to point (:func:`eqrec.design.augmented.sweep.fixed_L_sweep`), and each
 observer gain is placed once for all variants.  With ``heatmap.warm_start``
 each LP starts from the optimal basis of the previous point of its θ line (of
 the real axis): the first point of each line is solved from scratch, so the
@@ -38,7 +38,7 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str, run: 
     """Every configured variant over the same pole sets, one after the other: ``(variant, mode, word, records)``.
 
     The observer gain of a pole set does not depend on the variant, so each
-    ``L`` is placed once (:func:`eqrec.studies.searches.observer_for`) and
+    ``L`` is placed once (:func:`eqrec.design.augmented.sweep.observer_for`) and
     shared by the variants' LPs.  Each point's gains are certified as the
     estimator that runs (``theorem2`` for the text of Theorem 2, ``hold`` -
     constant ``L`` kept - for the design-only readings).  With
@@ -49,7 +49,7 @@ def _sweep_variants(cfg: dict, system, poles: list[np.ndarray], what: str, run: 
     # here, not at the top: the merge step needs none of the design, LP and Numba layers (about 0.5 s of CPU)
     from eqrec.design.augmented.model import default_runtime
     from eqrec.studies.p2.readings import variant_word
-    from eqrec.studies.searches import fixed_L_sweep, observer_for
+    from eqrec.design.augmented.sweep import fixed_L_sweep, observer_for
 
     h = cfg["heatmap"]
     observers = [observer_for(system, p) for p in poles]
