@@ -132,14 +132,14 @@ class RobustRowsIndex:
         """
         if self.form != "abs" or not self.g0_rows:
             raise ValueError("update_g0 needs the 'abs' form built with track_gx=True")
+        if len(self.level_rows) == 1 and np.any(rows.c0):  # checked first: a refused update changes nothing
+            raise ValueError("built with no certain term (one level row per row); rebuild for a nonzero c0")
         var_entries, const_part = _variable_entries(rows, rows.Gx.tocsr(), np.asarray(radius, float)[rows.entry_coord])
         for new_rows, sign in self.g0_rows:
             lp.row_lower[new_rows] = sign * rows.G0[var_entries]
-        if len(self.level_rows) == 1 and np.any(rows.c0):
-            raise ValueError("built with no certain term (one level row per row); rebuild for a nonzero c0")
         level_const = np.broadcast_to(np.asarray(level_const, float), (rows.num_rows,))
         for level_rows, sign in zip(self.level_rows, (+1.0, -1.0)):
-            lp.row_upper[level_rows] = level_const - const_part - sign * rows.c0
+            lp.row_upper[level_rows] = _level_upper(level_const, const_part, rows.c0, sign)
 
 
 def add_robust_rows(builder: LPBuilder, rows: UncertainAffineRows, radius: np.ndarray,
@@ -214,6 +214,11 @@ def _level_triplets(levels, R: int) -> tuple[list, list, list]:
     return [k], [cols[has]], [-coef[has]]
 
 
+def _level_upper(level_const: np.ndarray, const_part: np.ndarray, c0: np.ndarray, sign: float) -> np.ndarray:
+    """The upper bound ``level_const - const_part - sign c0`` of the level rows of one sign (built and updated)."""
+    return level_const - const_part - sign * c0
+
+
 def _add_level_rows(builder, rows, cx, bound_cols, bound_rows, bound_vals, const_part, levels) -> list[np.ndarray]:
     """``±(c0 + cx x) + Σ (bound of |G_e|) b_e + const_part <= level_const + level_coef x[level_col]``.
 
@@ -229,7 +234,7 @@ def _add_level_rows(builder, rows, cx, bound_cols, bound_rows, bound_vals, const
         c = [cx.col, bound_cols] + lc
         v = [sign * cx.data, bound_vals] + lv
         out.append(builder.add_rows(np.concatenate(r), np.concatenate(c), np.concatenate(v), lower=-np.inf,
-                                    upper=level_const - const_part - sign * rows.c0, count=R))
+                                    upper=_level_upper(level_const, const_part, rows.c0, sign), count=R))
     return out
 
 

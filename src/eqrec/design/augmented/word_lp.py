@@ -126,8 +126,8 @@ class AugmentedLP:
         zidx = np.concatenate(zidx) if zidx else np.zeros(0, int)
         # constant part of G: the open-loop map, or (the "masked_gain" reading) the L-dependent literal G0,
         # whose generic pattern fixes the structure (its row bounds are rewritten at every L)
-        self._rebuild = mode == "masked_gain"
-        Olflat = (generic.G0 if self._rebuild else self.st.open_loop).reshape(-1)  # index (t*n + a)*D + d
+        self._g0_moves = mode == "masked_gain"
+        Olflat = (generic.G0 if self._g0_moves else self.st.open_loop).reshape(-1)  # index (t*n + a)*D + d
         ent_keys = np.union1d(np.flatnonzero(Olflat), keys)
         ent_of = np.searchsorted(ent_keys, keys)
         order = np.lexsort((cols, ent_of))  # canonical CSR order: by entry, then column
@@ -233,7 +233,7 @@ class AugmentedLP:
                 c_.append(mc[kk])
                 v_.append(coef[rr, kk])
         cx = sp.csr_matrix((np.concatenate(v_), (np.concatenate(r_), np.concatenate(c_))), shape=(R, self.num_columns))
-        G0 = aug.G0.reshape(-1)[self.entry_keys] if self._rebuild else self._G0
+        G0 = aug.G0.reshape(-1)[self.entry_keys] if self._g0_moves else self._G0
         D = self.st.layout.size
         rows = UncertainAffineRows(
             entry_row=self.entry_keys // D, entry_coord=self.entry_keys % D, G0=G0,
@@ -256,14 +256,14 @@ class AugmentedLP:
             The LP at ``L`` (rebuilt in the ``"masked_gain"`` reading with ``s0 ≠ 0``, whose certain part depends
             on ``L``).
         """
-        if self._rebuild and not self.updatable:  # the literal reading with s0 ≠ 0: its certain part moves too
+        if self._g0_moves and not self.updatable:  # the literal reading with s0 ≠ 0: its certain part moves too
             self.lp = self._assemble(L)
             return self.lp
         if not self.updatable:
             raise InputError("fast L updates need s0 = 0; build a new AugmentedLP for s0 ≠ 0", field="s0")
         self.aug = AugmentedStacking(self.st, self.word, L, self.mode)
         self._robust_index.update_gx(self.lp, self._gx_values(self.aug)[self._gx_order])
-        if self._rebuild:  # the literal reading: G0 depends on L too (c0 = Hs s0 = 0), the bounds of its rows
+        if self._g0_moves:  # the literal reading: G0 depends on L too (c0 = Hs s0 = 0), the bounds of its rows
             self._rows = replace(self._rows, G0=self.aug.G0.reshape(-1)[self.entry_keys])
             self._robust_index.update_g0(self.lp, self._rows, self.radius, self.level_const)
         self.L = self.aug.L
