@@ -1,4 +1,4 @@
-"""The zonotopic set-membership estimator on the two-cart plant: cost of ``step`` and bound / information limit;
+r"""The zonotopic set-membership estimator on the two-cart plant: cost of ``step`` and bound / information limit;
 its cost at scale; the exact estimator's cost and tightness (figures, not tests).
 
     python benchmarks/bench_zonotope.py [--steps 300] [--seeds 3] [--timing-steps 5000] [--repeats 3]
@@ -490,7 +490,9 @@ ROWS = [("default", {}),
         ("window 40", {"window": 40}),
         ("iterations 0", {"iterations": 0}),
         ("iterations 1", {"iterations": 1}),
+        ("iterations 2", {"iterations": 2}),
         ("iterations 4", {"iterations": 4}),
+        ("warm start off", {"warm_start": False}),
         ("order 20", {"order": 20}),
         ("reduction girard", {"reduction": "girard"})]
 

@@ -543,3 +543,83 @@ def test_window_prior_reduced_stays_guaranteed_and_none_is_the_filters_set(reduc
             assert est._P.shape[2] <= max(wg, 2 * system.n) and est._G.shape[2] > est._P.shape[2]
         bounds[wg] = out.bound
     assert 0.99 <= np.median(bounds[8] / bounds[None]) <= 1.10  # close: the weights are approximate, either way
+
+
+# -- the window's linear algebra and its warm start (issue 45 §4) ------------------------------------------------
+def test_cholesky_solve_matches_lapack_and_falls_back_to_lu_when_not_definite():
+    from eqrec.bounds.window import cholesky_solve
+
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(40, 90))
+    M = X @ X.T
+    for k in (1, 7):  # the one-right-hand-side path and the general one
+        B = rng.normal(size=(40, k))
+        out = B.copy()
+        cholesky_solve(M, out)
+        assert np.allclose(out, np.linalg.solve(M, B), rtol=1e-10, atol=1e-12)
+    bad = M.copy()
+    bad[3, 3] = -1.0  # not positive definite: LAPACK's LU instead
+    B = rng.normal(size=(40, 2))
+    out = B.copy()
+    cholesky_solve(bad, out)
+    assert np.allclose(bad @ out, B, rtol=1e-8, atol=1e-8)
+
+
+def test_warm_weights_map_the_last_window_by_distance_from_its_end():
+    from eqrec.bounds.window import _warm_weights
+
+    rng = np.random.default_rng(4)
+    n, q0p, q0, nw, nv, L, delta = 3, 5, 4, 2, 1, 6, 0.01
+    known_prev = np.array([True, False, True, True, False, True])
+    known = np.array([False, True, True, False, True, True])  # the window slid by one; the last time measured
+    times_p = int(known_prev.sum())
+    row = rng.uniform(0.5, 2.0, q0p + L * nw + times_p * nv)
+    G0 = rng.normal(size=(n, q0))
+    Tm = rng.normal(size=(2, n))
+    scale = np.array([0.5, 2.0])
+    W = np.empty(q0 + L * nw + int(known.sum()) * nv)
+    _warm_weights(row, Tm, scale, known_prev, known, G0, nw, nv, delta, W)
+    a = np.empty_like(W)
+    a[:q0] = (np.abs(Tm @ G0) * scale[:, None]).sum(axis=0)
+    a[q0:q0 + L * nw] = row[q0p:q0p + L * nw]  # the same distance from the end: the same position (equal lengths)
+    v_old = row[q0p + L * nw:]  # by the last window's measured times 0, 2, 3, 5
+    # the new measured positions 1, 2, 4, 5 -> the nearest old measured 0 (tie with 2: the earlier), 2, 3 (tie with
+    # 5: the earlier), 5
+    a[q0 + L * nw:] = v_old[[0, 1, 2, 3]]
+    expected = 1.0 / np.maximum(a, delta * a.max())
+    assert np.allclose(W, expected, rtol=1e-14, atol=0.0)
+    # a longer new window: its oldest times take the last window's oldest
+    W2 = np.empty(q0 + (L + 2) * nw + int(known.sum()) * nv)
+    known2 = np.concatenate([[False, False], known])
+    _warm_weights(row, Tm, scale, known_prev, known2, G0, nw, nv, delta, W2)
+    aw = 1.0 / np.maximum(np.concatenate([row[q0p:q0p + nw]] * 2 + [row[q0p:q0p + L * nw]]), delta * a.max())
+    assert np.allclose(W2[q0:q0 + (L + 2) * nw], aw, rtol=1e-14, atol=0.0)
+
+
+def test_warm_start_changes_nothing_until_the_window_is_full_then_stays_as_tight():
+    system = eqrec.two_mass()
+    N, W = 120, 30
+    trace = lossy_trace(11, N)
+    rng = np.random.default_rng(11)
+    w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
+    v = system.eta_v * rng.choice([-1.0, 1.0], (N, system.nv))
+    xi0 = 0.5 * rng.choice([-1.0, 1.0], system.n)
+    outs = {}
+    for warm in (True, False):
+        est = ZonotopeEstimator(system, x0_radius=0.5, max_delay=2, window=W, warm_start=warm)
+        outs[warm], beta = run(system, est, trace, xi0, w, v)
+        assert np.all(np.abs(outs[warm].error[1:]) <= beta)  # guaranteed either way, per state, exactly
+    hot, cold = np.asarray(outs[True].bound), np.asarray(outs[False].bound)
+    assert np.array_equal(hot[:W], cold[:W])  # the window still growing: both start cold
+    assert not np.array_equal(hot[W + 1:], cold[W + 1:])  # then the carried weights are used
+    assert 0.98 <= np.median(hot[W:] / cold[W:]) <= 1.02  # and the bound stays as tight
+    again = ZonotopeEstimator(system, x0_radius=0.5, max_delay=2, window=W)
+    run(system, again, trace, xi0, w, v)
+    replay, _ = run(system, again, trace, xi0, w, v)  # reset drops the carried weights: the same run again
+    assert np.array_equal(np.asarray(replay.bound), hot)
+
+
+def test_warm_start_must_be_a_bool():
+    with pytest.raises(InputError, match="warm_start") as err:
+        ZonotopeEstimator(eqrec.two_mass(), x0_radius=0.5, warm_start="yes")
+    assert err.value.field == "warm_start"

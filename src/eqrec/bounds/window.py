@@ -33,13 +33,32 @@ The ``L1`` problem is solved approximately by iteratively reweighted least squar
   :math:`a_q = \sum_i |R_{iq}| / \|R_i\|_1` (each state's residual relative to its radius, summed over the
   states), then again while the last solve tightened the largest radius by more than a relative ``gain``, at most
   ``extra`` more times.  With shared weights, :math:`\Lambda = X W H^\top (H W H^\top)^{-1}` for all states at
-  once: one matrix :math:`HWH^\top`, one factorization (LAPACK), ``n`` right-hand sides.
+  once: one matrix :math:`HWH^\top`, one Cholesky factorization (LAPACK; :func:`cholesky_solve`), ``n``
+  right-hand sides.
 * **Per-state solves**, greedily: the state of largest radius (the one that sets the reported bound
   :math:`\max_i \beta_i`), then the state of largest radius among those not yet solved while its radius is within
   a relative ``margin`` of the largest, at most ``states`` of them: from :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
   of the state's best residual, solve :math:`\lambda_i = (X_i W H^\top)(H W H^\top)^{-1}` and reweight,
   ``iterations`` times, then again while the last solve tightened the radius by more than ``gain``, at most
   ``extra`` more times.
+
+Warm start
+----------
+A window that slides by one step asks nearly the same question as the last one, so the shared weights can start
+where the last window's ended instead of from the inverse column lengths (the ``carried_*`` arguments of
+:func:`window_estimate_sparse`; :data:`COLD`: none).  The last window's relative residuals :math:`a_q` (of its last
+shared solve), its :math:`T(0)` and radii give the new window's first :math:`a_q` (:func:`_warm_weights`): on the
+new prior's generators :math:`\sum_i |(T(0) g_q)_i| / \rho_i`, the last window's map from its start applied to
+them; on the noise of a time, the last window's at the same distance from the window's end, the quantity that
+stays put when the window slides (for a measured time, the last window's nearest measured time).  The zonotope
+estimator carries them once its window is full and then makes one shared solve instead of two
+(``warm_start=True``, :data:`eqrec.estimators.zonotope.SHARED_SOLVES_WARM`), which also skips the Gramian of the
+first weights: the iteration continues across steps instead of starting again at each.  The weights still depend
+on the arrivals and the filters' generators only (now those of the earlier steps too), never on the measured
+values, and every solve's bound is still the exact worst case of its own estimate.  Measured on the tank chains of
+``benchmarks/bench_zonotope.py`` and the two carts (150 steps, the same trace, against two cold shared solves,
+both with one reweighted per-state solve): a step 0.72-0.8 times the cost; the largest bound the same at the
+median (-0.5 % to +0.6 %), the sum of the state bounds -1.3 % to +0.3 % at the median.
 
 Every iterate is a valid estimate; per state the one with the smallest radius is kept (so more iterations never
 loosen the bound: the shared solves do not depend on ``iterations``, and the per-state sequence with more
@@ -59,7 +78,9 @@ backwards: :math:`T(L) = I`, :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`, the res
 :math:`T(s+1)E(s)`, on :math:`v(s)` :math:`-\lambda_s V(s)`, on the prior :math:`T(0)G_0` (:func:`_residuals`).
 A shared solve for all ``n`` states then costs :math:`O(n^2 q_0)` (the two products with :math:`G_0`, BLAS),
 :math:`O(L(n\,\mathrm{nnz}(A) + n m + p n^2))` for the recursions and one LAPACK solve with ``n`` right-hand sides
-(:math:`O(m^3 + n m^2)`); a per-state solve the same with one right-hand side.  Measured on the tank chains of
+(:math:`O(m^3 + n m^2)`, a Cholesky factorization: half the work of LU, measured 98 against 118 µs at
+``m = 120`` with 30 right-hand sides, 41 against 80 µs with one); a per-state solve the same with one right-hand
+side.  Measured on the tank chains of
 ``benchmarks/bench_zonotope.py --part scale`` (n = 30, p = 5, a window of 30 steps: m ≈ 110 measured rows,
 :math:`q_0 = 1200`): about 1 ms a shared solve, against about 7 ms for the explicit normal equations of the earlier
 per-state kernel, which solved every state 3 to 11 times.  The recursions run over the nonzeros of ``A``
@@ -73,8 +94,11 @@ n = 10, the same numbers (each sum over the same terms in the same order; the sk
 added to sums that start from ``+0.0``).  Where the time goes then (n = 30, fastest of 300 calls on a loaded
 machine): a shared solve about 0.45 ms (normal equations 0.17, LAPACK 0.13 with 30 right-hand sides, residuals
 0.07, the products with :math:`G_0` 0.07), a per-state solve about 0.35 ms (LAPACK 0.08 with one), the Gramian
-0.15 ms once a call; about 2 shared and 3 to 6 per-state solves a step on those chains (n = 4 to 30).  The rest is
-compiled with Numba (no ``fastmath``); the
+0.15 ms once a call; about 2 shared and 3 to 6 per-state solves a step on those chains (n = 4 to 30).  Since
+then (2026-11-30): Cholesky instead of LU, the warm start (one shared solve, no Gramian once the window is full),
+one reweighted per-state solve by default (:data:`eqrec.estimators.zonotope.DEFAULT_ITERATIONS`) and
+:math:`A\Sigma A^\top` without forming a transpose: the window at n = 30 takes about 0.6 ms a step, against
+1.1 ms before (``--part where``).  The rest is compiled with Numba (no ``fastmath``); the
 bytes are those of the machine's BLAS and LAPACK (the same on one machine; the rounding allowance below holds for
 any order of the sums).
 
@@ -124,6 +148,54 @@ def spd_solve(M: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:  # pragma:
         for c in range(a + 1, m):
             s -= M[c, a] * out[c]
         out[a] = s / M[a, a]
+
+
+@numba.njit(cache=True)
+def cholesky_solve(M: np.ndarray, B: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Overwrite ``B`` (``m × k``) by :math:`M^{-1}B` for the symmetric positive definite ``M`` of the window's normal
+    equations: LAPACK's Cholesky factor (half the work of an LU factorization), then the two triangular solves (each
+    row of ``B`` updated from an accumulator, so that the loops over the ``k`` right-hand sides vectorise).  When the
+    factorization fails (``M`` not positive definite in floating point: two measured rows alike), LAPACK's LU solve
+    instead.  ``M`` is not changed.  Any solution keeps the window's bound valid (module docstring): only the weights
+    change."""
+    try:
+        F = np.linalg.cholesky(M)  # lower, M = F F^T
+    except Exception:  # noqa: BLE001 - numba raises LinAlgError; LU is the fallback
+        B[:, :] = np.linalg.solve(M, B)
+        return
+    m, k = B.shape
+    if k == 1:  # one right-hand side: dot products forward, column updates backward (contiguous rows of F)
+        for r in range(m):
+            s = B[r, 0]
+            for c in range(r):
+                s -= F[r, c] * B[c, 0]
+            B[r, 0] = s / F[r, r]
+        for r in range(m - 1, -1, -1):
+            x = B[r, 0] / F[r, r]
+            B[r, 0] = x
+            for c in range(r):
+                B[c, 0] -= F[r, c] * x
+        return
+    acc = np.empty(k)
+    for r in range(m):  # F Z = B
+        for i in range(k):
+            acc[i] = B[r, i]
+        for c in range(r):
+            f = F[r, c]
+            for i in range(k):
+                acc[i] -= f * B[c, i]
+        d = F[r, r]
+        for i in range(k):
+            B[r, i] = acc[i] / d
+    for r in range(m - 1, -1, -1):  # F^T X = Z, by the rows of F (contiguous)
+        d = F[r, r]
+        for i in range(k):
+            acc[i] = B[r, i] / d
+            B[r, i] = acc[i]
+        for c in range(r):
+            f = F[r, c]
+            for i in range(k):
+                B[c, i] -= f * acc[i]
 
 
 @numba.njit(cache=True)
@@ -260,6 +332,36 @@ def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - comp
 
 
 @numba.njit(cache=True)
+def _times_sparse_t(aptr, acol, aval, j, X, out):  # pragma: no cover - compiled
+    """``out = A[j] X^T`` (``X`` square) over the nonzeros of ``A[j]`` by row (:func:`sparse_rows`): the numbers of
+    :func:`_times_sparse` on the transpose of ``X`` (each sum in the order of the row's nonzeros, from ``0.0``),
+    without forming it."""
+    n = out.shape[1]
+    for a in range(out.shape[0]):
+        z0 = aptr[j, a]
+        nz = aptr[j, a + 1] - z0
+        if nz == 1:
+            f0, e0 = aval[j, z0], acol[j, z0]
+            for r in range(n):
+                out[a, r] = 0.0 + f0 * X[r, e0]
+        elif nz == 2:
+            f0, e0, f1, e1 = aval[j, z0], acol[j, z0], aval[j, z0 + 1], acol[j, z0 + 1]
+            for r in range(n):
+                out[a, r] = (0.0 + f0 * X[r, e0]) + f1 * X[r, e1]
+        elif nz == 3:
+            f0, e0, f1, e1 = aval[j, z0], acol[j, z0], aval[j, z0 + 1], acol[j, z0 + 1]
+            f2, e2 = aval[j, z0 + 2], acol[j, z0 + 2]
+            for r in range(n):
+                out[a, r] = ((0.0 + f0 * X[r, e0]) + f1 * X[r, e1]) + f2 * X[r, e2]
+        else:
+            for r in range(n):
+                s = 0.0
+                for z in range(z0, z0 + nz):
+                    s += aval[j, z] * X[r, acol[j, z]]
+                out[a, r] = s
+
+
+@numba.njit(cache=True)
 def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
     r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
 
@@ -277,7 +379,6 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, e
     Lnw = L * nw
     Sig = S.copy()
     tmp = np.empty((n, n))
-    tmpT = np.empty((n, n))
     cur = BT  # the rows carried to time j (BT or newB, alternately)
     swapped = False
     newB = np.empty((n, BT.shape[1]))
@@ -315,10 +416,7 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, e
         newB, cur = cur, newB
         swapped = not swapped
         _times_sparse(aptr, acol, aval, j, Sig, n, tmp)  # tmp = A Sigma
-        for a in range(n):  # tmpT = (A Sigma)^T = Sigma A^T (Sigma symmetric)
-            for b in range(n):
-                tmpT[b, a] = tmp[a, b]
-        _times_sparse(aptr, acol, aval, j, tmpT, n, Sig)  # Sigma = A tmpT
+        _times_sparse_t(aptr, acol, aval, j, tmp, Sig)  # Sigma = A (A Sigma)^T
         for q in range(nw):
             w = W[q0 + j * nw + q]
             if w == 0.0:
@@ -436,8 +534,66 @@ def _residuals_one(A, C, E, V, measured, lam, t, RT, aptr, acol, aval, eptr, ero
 
 
 @numba.njit(cache=True)
+def _warm_weights(row, Tm, scale, known_prev, measured, G0, nw, nv, delta, W):  # pragma: no cover - compiled
+    r"""First weights of a window from the last step's residuals (module docstring, *Warm start*).
+
+    ``row`` (``q_0' + Q'``): the last window's residual magnitudes over its columns (its prior's, then its noise
+    columns), ``known_prev`` its measured times; ``Tm`` (``r × n``) and ``scale`` (``r``): the rows of its
+    :math:`T(0)` and their scales.  The new window's magnitudes :math:`a_q`: on the prior,
+    :math:`\sum_r \mathrm{scale}_r |(T_m g_q)_r|` (the last window's map from its start applied to the new prior's
+    generators); on the noise of a time, the last window's at the same distance from the window's end (the oldest
+    when the new window is longer; for a measured time, the last window's nearest measured time, the earlier on a
+    tie).  Then :math:`W_q = 1/\max(a_q, \delta\max_q a_q)`, as in the reweightings.  Writes ``W``."""
+    n, q0 = G0.shape
+    Lp, L = known_prev.shape[0], measured.shape[0]
+    times_p = 0
+    for j in range(Lp):
+        if known_prev[j]:
+            times_p += 1
+    q0p = row.shape[0] - Lp * nw - times_p * nv
+    X = np.dot(Tm, G0)  # (r, q0)
+    for q in range(q0):
+        W[q] = 0.0
+    for r in range(Tm.shape[0]):
+        for q in range(q0):
+            W[q] += abs(X[r, q]) * scale[r]
+    for j in range(L):
+        jp = max(Lp - L + j, 0)
+        for q in range(nw):
+            W[q0 + j * nw + q] = abs(row[q0p + jp * nw + q])
+    tt_old = np.full(Lp, -1)
+    c = 0
+    for jp in range(Lp):
+        if known_prev[jp]:
+            tt_old[jp] = c
+            c += 1
+    tt = 0
+    for j in range(L):
+        if measured[j]:
+            target = Lp - L + j
+            near = -1
+            for jp in range(Lp):
+                if known_prev[jp] and (near < 0 or abs(jp - target) < abs(near - target)):
+                    near = jp
+            for q in range(nv):
+                W[q0 + L * nw + tt * nv + q] = abs(row[q0p + Lp * nw + tt_old[near] * nv + q])
+            tt += 1
+    big = 0.0
+    for q in range(W.shape[0]):
+        big = max(big, W[q])
+    floor = delta * big
+    for q in range(W.shape[0]):
+        d = max(W[q], floor)
+        W[q] = 1.0 / d if d > 0.0 else 0.0
+
+
+#: The carried weights of a window that starts cold (:func:`window_estimate_sparse`'s last four arguments): none.
+COLD = (np.empty((0, 0)), np.empty((0, 0, 0)), np.empty((0, 0)), np.empty(0, dtype=np.bool_))
+
+
+@numba.njit(cache=True)
 def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
-                    gain, iterations, margin, states):
+                    gain, iterations, margin, states, carried_agg, carried_T0, carried_rad, carried_measured):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring): the
     nonzeros of ``A`` and ``E`` found (:func:`sparse_rows`, :func:`sparse_columns`), then
     :func:`window_estimate_sparse` (same parameters and returns)."""
@@ -445,13 +601,14 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     eptr, erow, evals = sparse_columns(E)
     cptr, crow, cval = sparse_columns(A)
     return window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra, gain, iterations,
-                                  margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow, cval)
+                                  margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow, cval,
+                                  carried_agg, carried_T0, carried_rad, carried_measured)
 
 
 @numba.njit(cache=True)
 def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
                            gain, iterations, margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow,
-                           cval):
+                           cval, carried_agg, carried_T0, carried_rad, carried_measured):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -517,45 +674,54 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     # first weights of the noise columns: inverse lengths of the columns of (X, H), by the backward Gramian
     # O(s) = A^T O(s+1) A + C^T C [measured s], O(L) = I: the column of w(s, q) has length^2 E_q^T O(s+1) E_q
     wn = np.zeros(Qn)
-    O = np.eye(n)
-    tmp = np.empty((n, n))
-    tmpT = np.empty((n, n))
-    tt = times
-    for j in range(L - 1, -1, -1):
-        for q in range(nw):  # over the nonzeros of E's column (the terms skipped are exact zeros)
-            s = 0.0
-            for za in range(eptr[j, q], eptr[j, q + 1]):
-                fa = evals[j, za]
-                a = erow[j, za]
-                for zb in range(eptr[j, q], eptr[j, q + 1]):
-                    s += fa * O[a, erow[j, zb]] * evals[j, zb]
-            wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
-        # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
-        _times_sparse(cptr, crow, cval, j, O, n, tmp)  # tmp = A^T O (over A's columns)
-        for a in range(n):  # O = tmp A, as (A^T tmp^T)^T: each sum over e in increasing order from 0.0, as before
-            for b in range(n):
-                tmpT[b, a] = tmp[a, b]
-        _times_sparse(cptr, crow, cval, j, tmpT, n, tmp)  # tmp = A^T tmp^T = (tmp A)^T
-        for a in range(n):
-            for b in range(n):
-                O[a, b] = tmp[b, a]
-        if measured[j]:
-            tt -= 1
-            for c in range(p):
-                for a in range(n):
-                    f = C[j, c, a]
-                    if f != 0.0:
-                        for b in range(n):
-                            O[a, b] += f * C[j, c, b]
-            for q in range(nv):
+    times_prev = 0
+    for j in range(carried_measured.shape[0]):
+        if carried_measured[j]:
+            times_prev += 1
+    warm = carried_measured.shape[0] > 0 and (times == 0 or times_prev > 0)
+    if not warm:  # cold: the Gramian's inverse column lengths
+        O = np.eye(n)
+        tmp = np.empty((n, n))
+        tmpT = np.empty((n, n))
+        tt = times
+        for j in range(L - 1, -1, -1):
+            for q in range(nw):  # over the nonzeros of E's column (the terms skipped are exact zeros)
                 s = 0.0
+                for za in range(eptr[j, q], eptr[j, q + 1]):
+                    fa = evals[j, za]
+                    a = erow[j, za]
+                    for zb in range(eptr[j, q], eptr[j, q + 1]):
+                        s += fa * O[a, erow[j, zb]] * evals[j, zb]
+                wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+            # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
+            _times_sparse(cptr, crow, cval, j, O, n, tmp)  # tmp = A^T O (over A's columns)
+            for a in range(n):  # O = tmp A, as (A^T tmp^T)^T: each sum over e in increasing order from 0.0, as before
+                for b in range(n):
+                    tmpT[b, a] = tmp[a, b]
+            _times_sparse(cptr, crow, cval, j, tmpT, n, tmp)  # tmp = A^T tmp^T = (tmp A)^T
+            for a in range(n):
+                for b in range(n):
+                    O[a, b] = tmp[b, a]
+            if measured[j]:
+                tt -= 1
                 for c in range(p):
-                    s += V[j, c, q] * V[j, c, q]
-                wn[Lnw + tt * nv + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
+                    for a in range(n):
+                        f = C[j, c, a]
+                        if f != 0.0:
+                            for b in range(n):
+                                O[a, b] += f * C[j, c, b]
+                for q in range(nv):
+                    s = 0.0
+                    for c in range(p):
+                        s += V[j, c, q] * V[j, c, q]
+                    wn[Lnw + tt * nv + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
     xhat = np.empty((K, n))
     radius = np.empty((K, n))
     lam_out = np.zeros((K, n, m))
     R_out = np.zeros((K, n, q0 + Qn))
+    agg_out = np.zeros((K, q0 + Qn))
+    T0_out = np.zeros((K, n, n))
+    rad_out = np.zeros((K, n))
     M = np.empty((m, m))
     BT = np.empty((n, m))
     for k in range(K):
@@ -589,11 +755,11 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             for a in range(n):
                 s = drive[j, a]
                 sm = abs(drive[j, a])
-                for e in range(n):
-                    f = A[j, a, e]
-                    if f != 0.0:
-                        s += f * xc[e]
-                        sm += abs(f) * zm[e]
+                for z in range(aptr[j, a], aptr[j, a + 1]):  # over the nonzeros of A's row (increasing e)
+                    f = aval[j, z]
+                    e = acol[j, z]
+                    s += f * xc[e]
+                    sm += abs(f) * zm[e]
                 for q in range(nw):
                     sm += abs(E[j, a, q])
                 nx[a] = s
@@ -610,6 +776,12 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             W[q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
         for q in range(Qn):
             W[q0 + q] = wn[q]
+        if warm:  # the weights carried from the last step
+            invr = np.empty(n)
+            for i in range(n):
+                invr[i] = 1.0 / carried_rad[k, i] if carried_rad[k, i] > 0.0 else 0.0
+            _warm_weights(carried_agg[k], np.ascontiguousarray(carried_T0[k].T), invr, carried_measured, measured, Gk, nw, nv,
+                          delta, W)
         GW = np.empty((n, q0))
         resT = np.empty((Qn, n))
         lamT = np.zeros((m, n))
@@ -627,7 +799,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 S = np.dot(GW, Gk.T)  # G0 W G0^T
                 _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals)
                 _symmetric_ridge(M)
-                lamT[:, :] = np.linalg.solve(M, BT.T)  # the weights of every state, (m, n): one factorization (LAPACK)
+                lamT[:, :] = BT.T
+                cholesky_solve(M, lamT)  # the weights of every state, (m, n): one factorization
             TT = np.eye(n)
             _residuals(A, C, E, V, measured, lamT, TT, resT, cptr, crow, cval, eptr, erow, evals)
             RP = np.dot(np.ascontiguousarray(TT.T), Gk)  # residual on the prior generators, (n, q0)
@@ -671,6 +844,16 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             floor = delta * big
             for q in range(q0 + Qn):
                 W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
+        # what the next step's first weights start from: the last shared solve's relative residuals
+        for i in range(n):
+            inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
+            rad_out[k, i] = rad[i]
+            for a in range(n):
+                T0_out[k, a, i] = TT[a, i]
+            for q in range(q0):
+                agg_out[k, q] += abs(RP[i, q]) * inv
+            for q in range(Qn):
+                agg_out[k, q0 + q] += abs(resT[q, i]) * inv
         # --- per-state solves for the states near the largest radius ----------------------------------------
         if m > 0 and margin >= 0.0:
             lam1 = np.empty((m, 1))
@@ -707,7 +890,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     _symmetric_ridge(M)
                     for r in range(m):
                         lam1[r, 0] = BT[i, r]
-                    lam1[:, :] = np.linalg.solve(M, lam1)
+                    cholesky_solve(M, lam1)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
                     _residuals_one(A, C, E, V, measured, lam1[:, 0], T1[:, 0], res1[:, 0], aptr, acol, aval, eptr,
@@ -746,4 +929,4 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             xhat[k, i] = est
             radius[k, i] = rounding_allowance_compiled(best[i], (L + 2) * (n + m + q0 + Qn), mag)
             lam_out[k, i, :] = lam_best[i]
-    return xhat, radius, lam_out, R_out
+    return xhat, radius, lam_out, R_out, agg_out, T0_out, rad_out

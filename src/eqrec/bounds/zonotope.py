@@ -410,13 +410,19 @@ def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - co
     boxed = np.zeros(q, dtype=np.bool_)
     for j in range(nbox):
         boxed[order[j]] = True
-    idx = np.sort(order[:nbox])  # the boxed generators in increasing order: the box sums run over them in it
-    for a in range(n):  # the kept generators, in their order (row by row: contiguous reads and writes)
-        col = 0
-        for j in range(q):
-            if not boxed[j]:
-                out[a, col] = G[a, j]
-                col += 1
+    idx = np.empty(nbox, dtype=np.int64)  # the boxed generators in increasing order: the box sums run over them in it
+    kept = np.empty(q - nbox, dtype=np.int64)  # the kept ones, in their order
+    bi = ki = 0
+    for j in range(q):
+        if boxed[j]:
+            idx[bi] = j
+            bi += 1
+        else:
+            kept[ki] = j
+            ki += 1
+    for a in range(n):  # the kept generators, in their order (row by row)
+        for col in range(q - nbox):
+            out[a, col] = G[a, kept[col]]
     sums = np.empty(n)
     _sums_over(absT, idx, False, sums)
     for a in range(n):
@@ -466,23 +472,16 @@ def _reduce_stack(G, limit, principal, U, limit2):  # pragma: no cover - compile
     cbig = np.empty(q)
     for k in range(K):
         Uk = np.ascontiguousarray(U[k])
-        if principal:
-            T = np.dot(np.ascontiguousarray(Uk.T), np.ascontiguousarray(G[k]))  # U^T G, the coordinates in the axes
-            for a in range(n):
-                for j in range(q):
-                    absT[a, j] = abs(T[a, j])
-        else:
-            for a in range(n):
-                for j in range(q):
-                    absT[a, j] = abs(G[k, a, j])
+        T = np.dot(np.ascontiguousarray(Uk.T), np.ascontiguousarray(G[k])) if principal else G[k]  # U^T G: in the axes
         # per generator j: sum_a |T[a, j]| from 0.0, a in increasing order, minus the largest (row by row over
-        # the contiguous rows: the same sums in the same order per j)
+        # the contiguous rows: the same sums in the same order per j), in the pass that stores |T|
         for j in range(q):
             csum[j] = 0.0
             cbig[j] = 0.0
         for a in range(n):
             for j in range(q):
-                x = absT[a, j]
+                x = abs(T[a, j])
+                absT[a, j] = x
                 csum[j] += x
                 cbig[j] = max(cbig[j], x)
         for j in range(q):

@@ -17,7 +17,8 @@ convergence", Automatica 55, 2015):
 * **the exact window** over the last :math:`L = \max(\text{window}, D + 1)` steps
   (:func:`eqrec.bounds.window.window_estimate`): per state, the best linear estimate of :math:`x_i(t+1)` given
   the filter's zonotope at :math:`s_0` and every packet of times :math:`s_0..t` received so far, found by
-  iteratively reweighted least squares: solves whose weights all states share (one factorization for all), then
+  iteratively reweighted least squares: solves whose weights all states share (one factorization for all; once
+  the window is full, one solve from the weights where the last step's window ended, ``warm_start``), then
   solves one state at a time for the states whose bound is near the largest.  Its bound :math:`\beta_i = \|X_i - \lambda_i H\|_1` is the exact worst
   case of that estimate (:mod:`eqrec.bounds.window`).
 
@@ -142,7 +143,7 @@ import numpy as np
 
 from eqrec.arrivals.packets import is_stamp, as_packets, check_estimate, check_input
 from eqrec.bounds.rounding_kernels import rounding_allowance_compiled
-from eqrec.bounds.window import accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, \
+from eqrec.bounds.window import COLD, accumulate_product, add_abs_rows, sparse_columns, sparse_rows, spd_solve, \
     weighted_products, window_estimate, window_estimate_sparse
 from eqrec.bounds.zonotope import check_order, hull_pad, outer_row_sums, principal_axes, reduce_girard, \
     reduce_pca, reduce_pca_pair
@@ -165,7 +166,7 @@ DEFAULT_WINDOW = 30
 DEFAULT_WINDOW_GENERATORS = 400
 
 #: The default number of per-state reweighted solves of the window (module docstring).
-DEFAULT_ITERATIONS = 2
+DEFAULT_ITERATIONS = 1
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
 #: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
@@ -194,6 +195,11 @@ WINDOW_SOLVE_GAIN = 0.03
 #: (:mod:`eqrec.bounds.window`).
 SHARED_SOLVES = 1
 
+#: Shared solves of a window that starts from the weights carried from the last step (``warm_start=True``, once the
+#: window is full; :mod:`eqrec.bounds.window`, *Warm start*): none after the first, then at most
+#: :data:`WINDOW_EXTRA_SOLVES` more while the largest bound tightens by more than :data:`WINDOW_SOLVE_GAIN`.
+SHARED_SOLVES_WARM = 0
+
 #: After the shared solves, states are solved one by one, the largest bound first, while the unsolved state of
 #: largest bound is within this relative margin of the largest (0: while it is the largest; ``iterations``
 #: reweighted solves each, then more while they tighten; :mod:`eqrec.bounds.window`).
@@ -210,7 +216,7 @@ _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
 _NOT_KNOWN = np.zeros(1, dtype=bool)
 
 #: With ``reduction="pca"``, the principal axes are computed again every this many steps (module docstring).
-PCA_AXES_EVERY = 4
+PCA_AXES_EVERY = 8
 
 
 @numba.njit(cache=True)
@@ -417,14 +423,18 @@ class ZonotopeEstimator:
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
     iterations : int, optional
-        Reweighted solves of the window per state (``>= 0``; default 2), after the :data:`SHARED_SOLVES` shared
-        solves, for the state of the largest bound and, while the largest is not yet solved so, the next (at most
+        Reweighted solves of the window per state after its first (``>= 0``; default 1), after the shared solves,
+        for the state of the largest bound and, while the largest is not yet solved so, the next (at most
         :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
         :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
     window_generators : int or None, optional
         The most generators of the window's prior zonotope (``>= 1``; at least ``2n`` are kept; default
         :data:`DEFAULT_WINDOW_GENERATORS` = 400); ``None``: the filters' sets themselves (module docstring, *The
         window's prior*).
+    warm_start : bool, optional
+        Once the window is full, start its shared solve from the weights of the last step's window and solve it
+        once (:data:`SHARED_SOLVES_WARM`; default ``True``, module docstring, *The window*); ``False``: every window
+        starts from the inverse column lengths and solves :data:`SHARED_SOLVES` + 1 times.
 
     Attributes
     ----------
@@ -444,7 +454,7 @@ class ZonotopeEstimator:
         ``x0_radius``, ``max_delay`` not an integer ``0..MAX_WINDOW - 1``, ``order`` not ``None`` nor a number
         ``>= 1``, an unknown ``gain`` or ``reduction``, ``window`` not an integer ``1..``:data:`MAX_WINDOW`,
         ``iterations`` not an integer ``0..``:data:`MAX_ITERATIONS`, ``window_generators`` not ``None`` nor an integer
-        ``>= 1`` (the field is named).
+        ``>= 1``, ``warm_start`` not a bool (the field is named).
 
     Examples
     --------
@@ -464,7 +474,8 @@ class ZonotopeEstimator:
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: "float | None" = 40,
                  gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca", window: int = DEFAULT_WINDOW,
-                 iterations: int = DEFAULT_ITERATIONS, window_generators: "int | None" = DEFAULT_WINDOW_GENERATORS):
+                 iterations: int = DEFAULT_ITERATIONS, window_generators: "int | None" = DEFAULT_WINDOW_GENERATORS,
+                 warm_start: bool = True):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         n = system.n
@@ -490,6 +501,9 @@ class ZonotopeEstimator:
             raise InputError(f"iterations is an integer 0..{MAX_ITERATIONS} (each a solve of the window per step), "
                              f"got {iterations!r}", field="iterations")
         self.window, self.iterations = int(window), int(iterations)
+        if not isinstance(warm_start, (bool, np.bool_)):
+            raise InputError(f"warm_start is True or False, got {warm_start!r}", field="warm_start")
+        self.warm_start = bool(warm_start)
         # the window's length: every packet up to max_delay late reaches it before its time leaves (module docstring)
         self._W = max(self.window, int(max_delay) + 1)
         self.reduction = reduction
@@ -623,6 +637,7 @@ class ZonotopeEstimator:
         self._P = np.ascontiguousarray(np.tile(P, (K, 1, 1)))  # the window's prior (module docstring)
         self._xhat, self._beta = c, outer_row_sums(G)  # one set for all: its centre and radius
         self._R, self._pick = None, np.zeros(n, dtype=int)  # the window's error maps (none yet), its picks
+        self._carry = None  # the last window's weights: its relative residuals, T(0), radii, measured times
         self._filtered: "StateSet | None" = None  # the filtered set, computed on demand
         self._axes: "np.ndarray | None" = None  # the principal axes last computed (reduction="pca")
         # the window, times t0 .. time-1 (at most W of them): drives, which outputs are known, their values
@@ -727,13 +742,17 @@ class ZonotopeEstimator:
         first, drive = intake["first"], intake["drive"]
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
-        xs, radii_, _, R = self._window(A, C, E, V, drive, intake["known"], intake["ys"], sets["c"], sets["P"],
-                                        self.iterations, PER_STATE_MARGIN, PER_STATE_STATES)
+        known = intake["known"]
+        # the weights carried from the last window, once the window is full (the same length as the last one)
+        carry = self._carry if self._carry is not None and self._carry[3].shape[0] == known.shape[0] else COLD
+        xs, radii_, _, R, *kept = self._window(A, C, E, V, drive, known, intake["ys"], sets["c"], sets["P"],
+                                               self.iterations, PER_STATE_MARGIN, PER_STATE_STATES, carry)
+        extra = {"_R": R, "_pick": self._one_pick, "_carry": (*kept, known) if self.warm_start else None}
         if xs.shape[0] == 1:  # one filter: its window's estimate
-            return xs[0], radii_[0], {"_R": R, "_pick": self._one_pick}
-        pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest (first on a tie)
-        states = np.arange(self.system.n)
-        return xs[pick, states], radii_[pick, states], {"_R": R, "_pick": pick}
+            return xs[0], radii_[0], extra
+        extra["_pick"] = pick = np.argmin(radii_, axis=0)  # per state, the filter whose window is the tightest
+        states = np.arange(self.system.n)  # (the first on a tie)
+        return xs[pick, states], radii_[pick, states], extra
 
     def _commit(self, intake: dict, xhat: np.ndarray, beta: np.ndarray, extra: dict) -> None:
         """Make the proposed state the estimator's (the only place a step changes it: atomic steps)."""
@@ -750,12 +769,14 @@ class ZonotopeEstimator:
 
     def _window(self, A: np.ndarray, C: np.ndarray, E: np.ndarray, V: np.ndarray, drive: np.ndarray,
                 known: np.ndarray, ys: np.ndarray, c: np.ndarray, P: np.ndarray, iterations: int, margin: float,
-                states: int) -> tuple[np.ndarray, ...]:
+                states: int, carry: tuple) -> tuple[np.ndarray, ...]:
         """:func:`eqrec.bounds.window.window_estimate` on the window's plant as :meth:`_window_model` gives it, with
-        the nonzeros of ``A`` and ``E`` found once for a time-invariant plant (the same numbers)."""
+        the nonzeros of ``A`` and ``E`` found once for a time-invariant plant (the same numbers); ``carry``: the
+        last window's weights (:data:`eqrec.bounds.window.COLD`: none), one shared solve fewer with them."""
+        shared = SHARED_SOLVES_WARM if carry[3].size else SHARED_SOLVES
         if self._tiles is None:  # a time-varying plant: found in each window
-            return window_estimate(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
-                                   WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states)
+            return window_estimate(A, C, E, V, drive, known, ys, c, P, shared, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES,
+                                   WINDOW_SOLVE_GAIN, iterations, margin, states, *carry)
         if self._sparse is None:
             A_, E_ = self._tiles[0], self._tiles[2]
             self._sparse = sparse_rows(A_) + sparse_columns(E_) + sparse_columns(A_)
@@ -763,8 +784,8 @@ class ZonotopeEstimator:
         sparse = self._sparse_at.get(L)
         if sparse is None:  # the nonzeros of the first L times (views, kept per length)
             sparse = self._sparse_at[L] = tuple(M[:L] for M in self._sparse)
-        return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, SHARED_SOLVES, _IRLS_FLOOR,
-                                      WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN, iterations, margin, states, *sparse)
+        return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, shared, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES,
+                                      WINDOW_SOLVE_GAIN, iterations, margin, states, *sparse, *carry)
 
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
@@ -900,7 +921,7 @@ class ZonotopeEstimator:
             drive[-1] = 0.0
             xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._P,
                                                SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                               self.iterations, 1.0, self.system.n)  # every state solved one by one
+                                               self.iterations, 1.0, self.system.n, *COLD)[:4]  # every state alone
             pick = np.argmin(radii_, axis=0)
             states = np.arange(self.system.n)
             xhat, beta = xs[pick, states], radii_[pick, states]
