@@ -332,36 +332,6 @@ def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - comp
 
 
 @numba.njit(cache=True)
-def _times_sparse_t(aptr, acol, aval, j, X, out):  # pragma: no cover - compiled
-    """``out = A[j] X^T`` (``X`` square) over the nonzeros of ``A[j]`` by row (:func:`sparse_rows`): the numbers of
-    :func:`_times_sparse` on the transpose of ``X`` (each sum in the order of the row's nonzeros, from ``0.0``),
-    without forming it."""
-    n = out.shape[1]
-    for a in range(out.shape[0]):
-        z0 = aptr[j, a]
-        nz = aptr[j, a + 1] - z0
-        if nz == 1:
-            f0, e0 = aval[j, z0], acol[j, z0]
-            for r in range(n):
-                out[a, r] = 0.0 + f0 * X[r, e0]
-        elif nz == 2:
-            f0, e0, f1, e1 = aval[j, z0], acol[j, z0], aval[j, z0 + 1], acol[j, z0 + 1]
-            for r in range(n):
-                out[a, r] = (0.0 + f0 * X[r, e0]) + f1 * X[r, e1]
-        elif nz == 3:
-            f0, e0, f1, e1 = aval[j, z0], acol[j, z0], aval[j, z0 + 1], acol[j, z0 + 1]
-            f2, e2 = aval[j, z0 + 2], acol[j, z0 + 2]
-            for r in range(n):
-                out[a, r] = ((0.0 + f0 * X[r, e0]) + f1 * X[r, e1]) + f2 * X[r, e2]
-        else:
-            for r in range(n):
-                s = 0.0
-                for z in range(z0, z0 + nz):
-                    s += aval[j, z] * X[r, acol[j, z]]
-                out[a, r] = s
-
-
-@numba.njit(cache=True)
 def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
     r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
 
@@ -416,7 +386,7 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, e
         newB, cur = cur, newB
         swapped = not swapped
         _times_sparse(aptr, acol, aval, j, Sig, n, tmp)  # tmp = A Sigma
-        _times_sparse_t(aptr, acol, aval, j, tmp, Sig)  # Sigma = A (A Sigma)^T
+        _times_sparse(aptr, acol, aval, j, tmp.T, n, Sig)  # Sigma = A (A Sigma)^T (a view, no copy)
         for q in range(nw):
             w = W[q0 + j * nw + q]
             if w == 0.0:
