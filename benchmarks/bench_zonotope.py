@@ -385,6 +385,52 @@ median / max over the steps): ``iterations=1`` costs 0.73-0.90x (carts 0.88x, n 
 together 0.59-0.67x at n >= 10 (n = 30: 1.9 ms), bound +0.1 to +0.9 % median, hull +1.2 to +7.6 %; no per-state
 solves 0.47-0.76x, bound +0.3 to +3.9 % median, +23.5 % max (carts).  The defaults are unchanged (the stored
 results keep their numbers); ``iterations=1`` is the cheapest of these in tightness.
+
+2026-11-30: the 1 ms at n = 30 reached by an option, not by the defaults (``--part scale``, idle machine; µs per
+step, process time).  The code before (3e4e91c) and after this change at its first defaults, one after the other,
+twice (those defaults were then set back, below):
+
+====  ===  ================  ================  ==================
+ n     p   before            fast setting      crude filter
+====  ===  ================  ================  ==================
+ 4     1   116 / 115         85 / 85           35-38
+ 10    2   384 / 391         250 / 254         86-94
+ 20    4   994 / 1,000       613 / 613         236-255
+ 30    5   1,566 / 1,539     950 / 940         598-696
+====  ===  ================  ================  ==================
+
+and the final code in one run (column "fast" of ``--part scale``): defaults 107 / 338 / 865 / 1,358 µs, fast
+(``warm_start=True, iterations=1``) 86 / 247 / 606 / 954 µs, crude filter 34 / 85 / 232 / 548 µs; bound / limit at
+the defaults (median / max) 1.003 / 1.039, 1.014 / 1.021, 1.045 / 1.065, unchanged.  What changed, each measured
+alone on the same traces:
+
+* **Cholesky with better triangular solves** (defaults): the loops over the right-hand sides from an accumulator
+  (they vectorise) and a path for one right-hand side (dot products forward, column updates backward).  The factor
+  and the 30-right-hand-side solve 98 µs against LU's 118; one right-hand side 41 against 80 (m = 120).  The
+  one-side path alone took 50 µs off a step at n = 30: the loop over one column with an accumulator was what had
+  made Cholesky a wash before.  The bounds move in the last bits.
+* **The reduction's loops** (defaults): the kept and boxed generators gathered by index (no sort of the boxed
+  indices, no branch per entry), :math:`|U^\top G|` and the costs in one pass: the pair of reductions 173 -> 156 µs
+  (n = 30), the same numbers.  :math:`A\Sigma A^\top` from a transposed view instead of a copy, and the window's
+  centre over the nonzeros of ``A``: the same numbers.
+* **The window warm-started** (option ``warm_start=True``; :mod:`eqrec.bounds.window`, *Warm start*): once the
+  window is full, one shared solve from the last step's weights, no Gramian.  0.78-0.89x per step; the largest bound
+  the same at the median (-0.5 to +0.5 %).  The earlier paragraph's "no solve repeats the last step's" holds for
+  the matrices, not for the weights: IRLS continues across steps.  Not the default: the cold start's first solve
+  (inverse column lengths) is what the small states need, and without it their hulls fluctuate (``--part exact``,
+  two carts: the zonotope's predicted hull over the exact hull, worst state and check, 5.33 against 2.11).  Carried
+  from the step after reset, it was also up to 4.8 % looser on the steps where the window grows (n = 30, steps
+  13-27): the carried weights are used only once the last window was as long as this one.
+* **One reweighted per-state solve** (option ``iterations=1``): 0.81-0.89x per step; largest bound +0.2 % (n = 30),
+  +0.6 % (n = 20), +0.1 % (n = 10), +0.5 % (carts) at the median.  In the compare study (with the warm start) the
+  zonotope's bound/limit medians moved by +0.2 to +1.1 %, so neither option became a default.  Principal axes
+  every 8 steps (``PCA_AXES_EVERY``) saved about 15 µs a step at n = 30 for up to 0.4 % at some step; left at 4.
+
+Where the time goes in the fast setting (``--part where`` before the defaults were set back): n = 30, a step
+1,006-1,049 µs with the timers: window 613-672 (64-66 %), filter step 91-98, reductions 172-193, rest 65-86.  Not
+reached: 1 ms at the defaults (1.36 ms), "never slower than the crude filter" (3.1x at n = 4, 2.5x at n = 30; at
+n = 4 the window alone, about 47 µs, costs more than the crude filter's step), the exact estimator's 20 ms at
+n = 30.
 """
 
 from __future__ import annotations
@@ -511,14 +557,17 @@ def scale_part(args) -> None:
     N = 150
     print(f"tank chains, loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, default settings; crude filter: F-radius "
           f"gain, Girard, order 40, replay of late packets, no window")
-    print(f"{'n':>3s} {'p':>2s} {'zonotope us/step':>17s} {'crude us/step':>14s} {'ratio':>6s} "
+    print(f"fast: ZonotopeEstimator(warm_start=True, iterations=1) (eqrec.bounds.window, Warm start), time only")
+    print(f"{'n':>3s} {'p':>2s} {'zonotope us/step':>17s} {'fast':>6s} {'crude us/step':>14s} {'ratio':>6s} "
           f"{'bound/limit median':>19s} {'max':>6s} {'viol':>4s}")
     ns, uz, uc = [], [], []
     for n in args.scale_n:
         system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
         make_z = lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)  # noqa: E731
+        make_f = lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY, warm_start=True, iterations=1)  # noqa: E731
         make_c = lambda: PlainFilter(system, X0_RADIUS, MAX_DELAY, 40)  # noqa: E731
         tz = _us_per_step(make_z, system, N, args.repeats)
+        tf = _us_per_step(make_f, system, N, args.repeats)
         tc = _us_per_step(make_c, system, N, args.repeats)
         trace = _trace(0, N)
         rng = np.random.default_rng(1000)
@@ -532,7 +581,7 @@ def scale_part(args) -> None:
             lim = f"{np.median(r):19.3f} {r.max():6.3f}"
         else:
             lim = f"{'-':>19s} {'-':>6s}"
-        print(f"{n:3d} {system.p:2d} {tz:17.0f} {tc:14.0f} {tz / tc:6.2f} {lim} {viol:4d}", flush=True)
+        print(f"{n:3d} {system.p:2d} {tz:17.0f} {tf:6.0f} {tc:14.0f} {tz / tc:6.2f} {lim} {viol:4d}", flush=True)
         ns.append(n)
         uz.append(tz)
         uc.append(tc)

@@ -613,7 +613,7 @@ def test_warm_start_changes_nothing_until_the_window_is_full_then_stays_as_tight
     assert np.array_equal(hot[:W], cold[:W])  # the window still growing: both start cold
     assert not np.array_equal(hot[W + 1:], cold[W + 1:])  # then the carried weights are used
     assert 0.98 <= np.median(hot[W:] / cold[W:]) <= 1.02  # and the bound stays as tight
-    again = ZonotopeEstimator(system, x0_radius=0.5, max_delay=2, window=W)
+    again = ZonotopeEstimator(system, x0_radius=0.5, max_delay=2, window=W, warm_start=True)
     run(system, again, trace, xi0, w, v)
     replay, _ = run(system, again, trace, xi0, w, v)  # reset drops the carried weights: the same run again
     assert np.array_equal(np.asarray(replay.bound), hot)

@@ -56,9 +56,16 @@ estimator carries them once its window is full and then makes one shared solve i
 first weights: the iteration continues across steps instead of starting again at each.  The weights still depend
 on the arrivals and the filters' generators only (now those of the earlier steps too), never on the measured
 values, and every solve's bound is still the exact worst case of its own estimate.  Measured on the tank chains of
-``benchmarks/bench_zonotope.py`` and the two carts (150 steps, the same trace, against two cold shared solves,
-both with one reweighted per-state solve): a step 0.72-0.8 times the cost; the largest bound the same at the
-median (-0.5 % to +0.6 %), the sum of the state bounds -1.3 % to +0.3 % at the median.
+``benchmarks/bench_zonotope.py`` and the two carts (150 steps, the same trace, one reweighted per-state solve both
+ways): a step 0.78-0.89 times the cost; the largest bound, which the per-state solves refine, the same at the
+median (-0.5 % to +0.5 %).  But the cold start keeps, per state, the better of its two solves, and the first one
+(the inverse column lengths) is what the states far below the largest bound need: with the warm start their hull
+is noisier, on the two carts between 0.76 and 2.5 times the cold start's from step to step (the predicted hull of
+the worst state over the exact hull, worst over the checked steps, 5.3 against 2.1; median over the steps 1.73
+against 1.55), on the tank chains of 4 and 6 tanks about as tight at the median (1.16, 1.17 against 1.16, 1.22) but
+with spikes (1.5, 1.9 against 1.35, 1.4).  So it is an option (``ZonotopeEstimator(warm_start=True)``), not the
+default.  Mixing the carried weights with the inverse column lengths (a geometric mean) in one solve was worse
+than either.
 
 Every iterate is a valid estimate; per state the one with the smallest radius is kept (so more iterations never
 loosen the bound: the shared solves do not depend on ``iterations``, and the per-state sequence with more
@@ -95,12 +102,12 @@ added to sums that start from ``+0.0``).  Where the time goes then (n = 30, fast
 machine): a shared solve about 0.45 ms (normal equations 0.17, LAPACK 0.13 with 30 right-hand sides, residuals
 0.07, the products with :math:`G_0` 0.07), a per-state solve about 0.35 ms (LAPACK 0.08 with one), the Gramian
 0.15 ms once a call; about 2 shared and 3 to 6 per-state solves a step on those chains (n = 4 to 30).  Since
-then (2026-11-30): Cholesky instead of LU, the warm start (one shared solve, no Gramian once the window is full),
-one reweighted per-state solve by default (:data:`eqrec.estimators.zonotope.DEFAULT_ITERATIONS`) and
-:math:`A\Sigma A^\top` without forming a transpose: the window at n = 30 takes about 0.6 ms a step, against
-1.1 ms before (``--part where``).  The rest is compiled with Numba (no ``fastmath``); the
-bytes are those of the machine's BLAS and LAPACK (the same on one machine; the rounding allowance below holds for
-any order of the sums).
+then (2026-11-30): Cholesky instead of LU with triangular solves that vectorise and a path for one right-hand side,
+and :math:`A\Sigma A^\top` from a transposed view: a step at n = 30 about 1.2 times faster at the defaults; with
+``warm_start=True, iterations=1`` (one shared solve, no Gramian, one reweighted per-state solve) the window takes
+about 0.6 ms and a step under 1 ms (``benchmarks/bench_zonotope.py``, 2026-11-30).  The rest is compiled with
+Numba (no ``fastmath``); the bytes are those of the machine's BLAS and LAPACK (the same on one machine; the rounding
+allowance below holds for any order of the sums).
 
 Floating point
 --------------
@@ -618,6 +625,10 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         The nonzeros of ``E`` by column (:func:`sparse_columns`).
     cptr, crow, cval : ndarray
         The nonzeros of ``A`` by column (:func:`sparse_columns`; the products with :math:`A^\top`).
+    carried_agg, carried_T0, carried_rad, carried_measured : ndarray
+        The last window's ``agg``, ``T0``, ``rad`` (returned below) and measured times: the shared weights start
+        from them (module docstring, *Warm start*; :data:`COLD`, empty arrays: from the inverse column lengths, and
+        also when this window measures a time but the last measured none).
 
     Returns
     -------
@@ -630,6 +641,13 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     R : ndarray, shape (K, n, q0 + Q)
         The error maps: :math:`x_i(t+1) - \hat x_i = R_i \zeta` (prior generators, then the window's process
         noises by time, then the measurement noises of the measured times), rounding apart.
+    agg : ndarray, shape (K, q0 + Q)
+        The last shared solve's relative residuals :math:`\sum_i |R_{iq}| / \rho_i` (what the next window's warm
+        start reads).
+    T0 : ndarray, shape (K, n, n)
+        That solve's :math:`T(0)`, transposed (``T0[k, a, i]`` is :math:`T(0)_{ia}`).
+    rad : ndarray, shape (K, n)
+        That solve's radii :math:`\rho_i` (before the per-state solves and the rounding allowance).
     """
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
@@ -750,8 +768,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             invr = np.empty(n)
             for i in range(n):
                 invr[i] = 1.0 / carried_rad[k, i] if carried_rad[k, i] > 0.0 else 0.0
-            _warm_weights(carried_agg[k], np.ascontiguousarray(carried_T0[k].T), invr, carried_measured, measured, Gk, nw, nv,
-                          delta, W)
+            _warm_weights(carried_agg[k], np.ascontiguousarray(carried_T0[k].T), invr, carried_measured, measured, Gk,
+                          nw, nv, delta, W)
         GW = np.empty((n, q0))
         resT = np.empty((Qn, n))
         lamT = np.zeros((m, n))

@@ -17,8 +17,8 @@ convergence", Automatica 55, 2015):
 * **the exact window** over the last :math:`L = \max(\text{window}, D + 1)` steps
   (:func:`eqrec.bounds.window.window_estimate`): per state, the best linear estimate of :math:`x_i(t+1)` given
   the filter's zonotope at :math:`s_0` and every packet of times :math:`s_0..t` received so far, found by
-  iteratively reweighted least squares: solves whose weights all states share (one factorization for all; once
-  the window is full, one solve from the weights where the last step's window ended, ``warm_start``), then
+  iteratively reweighted least squares: solves whose weights all states share (one factorization for all; with
+  ``warm_start=True``, once the window is full, one solve from the weights where the last step's window ended), then
   solves one state at a time for the states whose bound is near the largest.  Its bound :math:`\beta_i = \|X_i - \lambda_i H\|_1` is the exact worst
   case of that estimate (:mod:`eqrec.bounds.window`).
 
@@ -166,7 +166,7 @@ DEFAULT_WINDOW = 30
 DEFAULT_WINDOW_GENERATORS = 400
 
 #: The default number of per-state reweighted solves of the window (module docstring).
-DEFAULT_ITERATIONS = 1
+DEFAULT_ITERATIONS = 2
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
 #: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
@@ -216,7 +216,7 @@ _REDUCTIONS = {"girard": reduce_girard, "pca": reduce_pca}
 _NOT_KNOWN = np.zeros(1, dtype=bool)
 
 #: With ``reduction="pca"``, the principal axes are computed again every this many steps (module docstring).
-PCA_AXES_EVERY = 8
+PCA_AXES_EVERY = 4
 
 
 @numba.njit(cache=True)
@@ -423,7 +423,7 @@ class ZonotopeEstimator:
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
     iterations : int, optional
-        Reweighted solves of the window per state after its first (``>= 0``; default 1), after the shared solves,
+        Reweighted solves of the window per state after its first (``>= 0``; default 2), after the shared solves,
         for the state of the largest bound and, while the largest is not yet solved so, the next (at most
         :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
         :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
@@ -432,9 +432,13 @@ class ZonotopeEstimator:
         :data:`DEFAULT_WINDOW_GENERATORS` = 400); ``None``: the filters' sets themselves (module docstring, *The
         window's prior*).
     warm_start : bool, optional
-        Once the window is full, start its shared solve from the weights of the last step's window and solve it
-        once (:data:`SHARED_SOLVES_WARM`; default ``True``, module docstring, *The window*); ``False``: every window
-        starts from the inverse column lengths and solves :data:`SHARED_SOLVES` + 1 times.
+        ``True``: once the window is full, start its shared solve from the weights of the last step's window and
+        solve it once (:data:`SHARED_SOLVES_WARM`; :mod:`eqrec.bounds.window`, *Warm start*): about 0.8 times the
+        cost of a step, the largest bound the same at the median, but the states whose bound is far below the
+        largest lose the cold start's first solve, and their hull becomes noisier (on the two carts up to 2.5
+        times the cold start's at some steps).  Default ``False``: every window starts from the inverse column
+        lengths and solves :data:`SHARED_SOLVES` + 1 times.  With ``iterations=1`` too, the fast setting of the
+        scale benchmark (:mod:`eqrec.bounds.window`, *Cost*).
 
     Attributes
     ----------
@@ -475,7 +479,7 @@ class ZonotopeEstimator:
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: "float | None" = 40,
                  gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca", window: int = DEFAULT_WINDOW,
                  iterations: int = DEFAULT_ITERATIONS, window_generators: "int | None" = DEFAULT_WINDOW_GENERATORS,
-                 warm_start: bool = True):
+                 warm_start: bool = False):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
         n = system.n
