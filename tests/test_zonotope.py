@@ -623,3 +623,15 @@ def test_warm_start_must_be_a_bool():
     with pytest.raises(InputError, match="warm_start") as err:
         ZonotopeEstimator(eqrec.two_mass(), x0_radius=0.5, warm_start="yes")
     assert err.value.field == "warm_start"
+
+
+def test_a_warm_window_whose_last_window_measured_nothing_starts_cold():
+    """With nothing measured in the last window there are no weights to carry for the new measurement: the window
+    starts cold, as with ``warm_start=False`` (the same bits at that step)."""
+    system = eqrec.two_mass()
+    ests = [ZonotopeEstimator(system, x0_radius=0.5, window=10, warm_start=w).reset(np.zeros(4)) for w in (True, False)]
+    for _ in range(25):  # nothing arrives: both windows full and empty of measurements
+        outs = [e.step(None) for e in ests]
+    assert outs[0][1] == outs[1][1]
+    outs = [e.step(np.array([0.3])) for e in ests]  # the first measurement
+    assert outs[0][1] == outs[1][1] and np.array_equal(ests[0].state_bounds, ests[1].state_bounds)

@@ -747,8 +747,11 @@ class ZonotopeEstimator:
         A, C, E, V = self._window_model(first, drive.shape[0])
         sets = intake["carried"]
         known = intake["known"]
-        # the weights carried from the last window, once the window is full (the same length as the last one)
-        carry = self._carry if self._carry is not None and self._carry[3].shape[0] == known.shape[0] else COLD
+        # the weights carried from the last window, once the window is full (the same length as the last one) and
+        # unless this window measures a time and the last measured none (then the window starts cold too)
+        last = self._carry
+        carry = (last if last is not None and last[3].shape[0] == known.shape[0] and (last[3].any() or not known.any())
+                 else COLD)
         xs, radii_, _, R, *kept = self._window(A, C, E, V, drive, known, intake["ys"], sets["c"], sets["P"],
                                                self.iterations, PER_STATE_MARGIN, PER_STATE_STATES, carry)
         extra = {"_R": R, "_pick": self._one_pick, "_carry": (*kept, known) if self.warm_start else None}
