@@ -401,8 +401,12 @@ twice (those defaults were then set back, below):
 
 and the final code in one run (column "fast" of ``--part scale``): defaults 107 / 338 / 865 / 1,358 µs, fast
 (``warm_start=True, iterations=1``) 86 / 247 / 606 / 954 µs, crude filter 34 / 85 / 232 / 548 µs; bound / limit at
-the defaults (median / max) 1.003 / 1.039, 1.014 / 1.021, 1.045 / 1.065, unchanged.  What changed, each measured
-alone on the same traces:
+the defaults (median / max) 1.003 / 1.039, 1.014 / 1.021, 1.045 / 1.065, unchanged.  The final defaults against
+3e4e91c, one after the other, twice: 116 -> 107 / 108, 389 / 385 -> 348 / 351, 987 / 982 -> 868 / 861, 1,500 /
+1,505 -> 1,354 / 1,345 µs (1.08-1.14x); fast 88-89 / 253-256 / 613-618 / 954-956.  ``--part exact`` with the final
+code: the zonotope's hull ratios are last session's to the digit (two carts predicted worst 2.1065), its µs per
+step 107 / 145 / 110 / 237 (oscillator, two carts, tanks 4 and 6), the exact estimator's 577 and 497 µs at n = 4.
+What changed, each measured alone on the same traces:
 
 * **Cholesky with better triangular solves** (defaults): the loops over the right-hand sides from an accumulator
   (they vectorise) and a path for one right-hand side (dot products forward, column updates backward).  The factor
