@@ -564,13 +564,32 @@ def _warm_weights(row, Tm, scale, known_prev, measured, G0, nw, nv, delta, W):  
         W[q] = 1.0 / d if d > 0.0 else 0.0
 
 
+@numba.njit(cache=True)
+def _relative_residuals(RP, resT, rad, out):  # pragma: no cover - compiled
+    """``out[q] = sum_i |R_iq| / rad_i`` over the states ``i`` in increasing order (``RP``: the residuals on the prior
+    generators, ``(n, q0)``; ``resT``: on the noise columns, transposed, ``(Q, n)``): what the shared reweighting
+    and the next window's warm start read (module docstring)."""
+    n, q0 = RP.shape
+    inv = np.empty(n)
+    for i in range(n):
+        inv[i] = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
+    for q in range(out.shape[0]):
+        out[q] = 0.0
+    for i in range(n):
+        for q in range(q0):
+            out[q] += abs(RP[i, q]) * inv[i]
+    for q in range(resT.shape[0]):
+        for i in range(n):
+            out[q0 + q] += abs(resT[q, i]) * inv[i]
+
+
 #: The carried weights of a window that starts cold (:func:`window_estimate_sparse`'s last four arguments): none.
 COLD = (np.empty((0, 0)), np.empty((0, 0, 0)), np.empty((0, 0)), np.empty(0, dtype=np.bool_))
 
 
 @numba.njit(cache=True)
 def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
-                    gain, iterations, margin, states, carried_agg, carried_T0, carried_rad, carried_measured):
+                    gain, iterations, margin, states, carried_agg, carried_T0, carried_rad, carried_measured, carry):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring): the
     nonzeros of ``A`` and ``E`` found (:func:`sparse_rows`, :func:`sparse_columns`), then
     :func:`window_estimate_sparse` (same parameters and returns)."""
@@ -579,13 +598,13 @@ def window_estimate(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra
     cptr, crow, cval = sparse_columns(A)
     return window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra, gain, iterations,
                                   margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow, cval,
-                                  carried_agg, carried_T0, carried_rad, carried_measured)
+                                  carried_agg, carried_T0, carried_rad, carried_measured, carry)
 
 
 @numba.njit(cache=True)
 def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta, extra,  # pragma: no cover
                            gain, iterations, margin, states, aptr, acol, aval, eptr, erow, evals, cptr, crow,
-                           cval, carried_agg, carried_T0, carried_rad, carried_measured):
+                           cval, carried_agg, carried_T0, carried_rad, carried_measured, carry):
     r"""Per filter and state, the window's estimate of ``x(t+1)`` and its radius (module docstring).
 
     Parameters
@@ -629,6 +648,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         The last window's ``agg``, ``T0``, ``rad`` (returned below) and measured times: the shared weights start
         from them (module docstring, *Warm start*; :data:`COLD`, empty arrays: from the inverse column lengths, and
         also when this window measures a time but the last measured none).
+    carry : bool
+        Whether to return what the next window's warm start reads (``agg``, ``T0``, ``rad``; zeros otherwise).
 
     Returns
     -------
@@ -645,7 +666,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         The last shared solve's relative residuals :math:`\sum_i |R_{iq}| / \rho_i` (what the next window's warm
         start reads).
     T0 : ndarray, shape (K, n, n)
-        That solve's :math:`T(0)`, transposed (``T0[k, a, i]`` is :math:`T(0)_{ia}`).
+        That solve's :math:`T(0)` (row ``i``: state ``i``'s map from the window's start).
     rad : ndarray, shape (K, n)
         That solve's radii :math:`\rho_i` (before the per-state solves and the rounding allowance).
     """
@@ -768,14 +789,12 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             invr = np.empty(n)
             for i in range(n):
                 invr[i] = 1.0 / carried_rad[k, i] if carried_rad[k, i] > 0.0 else 0.0
-            _warm_weights(carried_agg[k], np.ascontiguousarray(carried_T0[k].T), invr, carried_measured, measured, Gk,
-                          nw, nv, delta, W)
+            _warm_weights(carried_agg[k], carried_T0[k], invr, carried_measured, measured, Gk, nw, nv, delta, W)
         GW = np.empty((n, q0))
         resT = np.empty((Qn, n))
         lamT = np.zeros((m, n))
         rad = np.empty(n)
         agg = np.empty(q0 + Qn)
-        invrad = np.empty(n)
         it = 0
         top = np.inf
         # --- shared solves: one factorization for every state (nothing measured: the prediction alone) ----------
@@ -815,33 +834,17 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             if m == 0 or it > shared + extra or (it > shared and not improved):
                 break
             # shared weights: each state's residual, relative to its radius, summed over the states
-            for q in range(q0 + Qn):
-                agg[q] = 0.0
-            for i in range(n):
-                inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
-                for q in range(q0):
-                    agg[q] += abs(RP[i, q]) * inv
-            for e in range(n):  # (the same quotients, once per state)
-                invrad[e] = 1.0 / rad[e] if rad[e] > 0.0 else 0.0
-            for q in range(Qn):
-                for e in range(n):
-                    agg[q0 + q] += abs(resT[q, e]) * invrad[e]
+            _relative_residuals(RP, resT, rad, agg)
             big = 0.0
             for q in range(q0 + Qn):
                 big = max(big, agg[q])
             floor = delta * big
             for q in range(q0 + Qn):
                 W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
-        # what the next step's first weights start from: the last shared solve's relative residuals
-        for i in range(n):
-            inv = 1.0 / rad[i] if rad[i] > 0.0 else 0.0
-            rad_out[k, i] = rad[i]
-            for a in range(n):
-                T0_out[k, a, i] = TT[a, i]
-            for q in range(q0):
-                agg_out[k, q] += abs(RP[i, q]) * inv
-            for q in range(Qn):
-                agg_out[k, q0 + q] += abs(resT[q, i]) * inv
+        if carry:  # what the next step's first weights start from: the last shared solve's relative residuals
+            _relative_residuals(RP, resT, rad, agg_out[k])
+            rad_out[k] = rad
+            T0_out[k] = TT.T
         # --- per-state solves for the states near the largest radius ----------------------------------------
         if m > 0 and margin >= 0.0:
             lam1 = np.empty((m, 1))

@@ -783,7 +783,7 @@ class ZonotopeEstimator:
         shared = SHARED_SOLVES_WARM if carry[3].size else SHARED_SOLVES
         if self._tiles is None:  # a time-varying plant: found in each window
             return window_estimate(A, C, E, V, drive, known, ys, c, P, shared, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES,
-                                   WINDOW_SOLVE_GAIN, iterations, margin, states, *carry)
+                                   WINDOW_SOLVE_GAIN, iterations, margin, states, *carry, self.warm_start)
         if self._sparse is None:
             A_, E_ = self._tiles[0], self._tiles[2]
             self._sparse = sparse_rows(A_) + sparse_columns(E_) + sparse_columns(A_)
@@ -792,7 +792,8 @@ class ZonotopeEstimator:
         if sparse is None:  # the nonzeros of the first L times (views, kept per length)
             sparse = self._sparse_at[L] = tuple(M[:L] for M in self._sparse)
         return window_estimate_sparse(A, C, E, V, drive, known, ys, c, P, shared, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES,
-                                      WINDOW_SOLVE_GAIN, iterations, margin, states, *sparse, *carry)
+                                      WINDOW_SOLVE_GAIN, iterations, margin, states, *sparse, *carry,
+                                      self.warm_start)
 
     def _window_model(self, first: int, length: int) -> tuple[np.ndarray, ...]:
         """The plant over the window ``first .. first + length - 1``: ``A``, ``C``, ``η_w E``, ``η_v V`` stacked
@@ -928,7 +929,7 @@ class ZonotopeEstimator:
             drive[-1] = 0.0
             xs, radii_, _, R = window_estimate(A, C, E, V, drive, self._known, self._y, self._c, self._P,
                                                SHARED_SOLVES, _IRLS_FLOOR, WINDOW_EXTRA_SOLVES, WINDOW_SOLVE_GAIN,
-                                               self.iterations, 1.0, self.system.n, *COLD)[:4]  # every state alone
+                                               self.iterations, 1.0, self.system.n, *COLD, False)[:4]  # each alone
             pick = np.argmin(radii_, axis=0)
             states = np.arange(self.system.n)
             xhat, beta = xs[pick, states], radii_[pick, states]
