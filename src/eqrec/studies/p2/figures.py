@@ -212,8 +212,9 @@ def step_figure_heatmap(cfg, inputs, outputs, wildcards) -> None:
                     va="center", fontsize=9, bbox={"facecolor": "white", "edgecolor": "0.5",
                                                    "boxstyle": "round,pad=0.3"})
     # one colour bar for the maps, its ticks including the paper's value (labelled as such; the norm includes it)
+    # (pad: the right maps' titles are wider than the maps and must clear the bar)
     cb = f.colorbar(pm, ax=list(axes[:len(variants)]), label=r"design LP optimum $\mu_2$ (all four maps)", shrink=0.7,
-                    pad=0.01)
+                    pad=0.06)
     cb.ax.tick_params(labelsize=9)
     lo, hi = pm.norm.vmin, pm.norm.vmax
     ticks = sorted([t for t in MaxNLocator(6).tick_values(lo, hi)
