@@ -635,3 +635,37 @@ def test_a_warm_window_whose_last_window_measured_nothing_starts_cold():
     assert outs[0][1] == outs[1][1]
     outs = [e.step(np.array([0.3])) for e in ests]  # the first measurement
     assert outs[0][1] == outs[1][1] and np.array_equal(ests[0].state_bounds, ests[1].state_bounds)
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+def test_warm_start_worst_case_played_back_at_every_step_and_never_below_the_limit(plant):
+    """``warm_start=True`` (window 6: warm from step 6 on): at every step, the sign of the worst state's row of the
+    exact error map (unit runs), the initial error at its box corner, played back: the error stays inside the bound
+    exactly, and every state's bound is at least the information limit (tolerance on the LP's side only)."""
+    system, N, r0 = PLANTS[plant](), 18, 0.5
+    trace = lossy_trace(5, N)
+
+    def make():
+        return ZonotopeEstimator(system, x0_radius=r0, max_delay=2, window=6, warm_start=True)
+
+    n, nw, nv = system.n, system.nw, system.nv
+    cols, radii = [], []  # the error at every step of each unit perturbation
+    for kind, size, radius in (("x0", n, r0), ("w", N * nw, system.eta_w), ("v", N * nv, system.eta_v)):
+        for k in range(size):
+            xi0, w, v = np.zeros(n), np.zeros((N, nw)), np.zeros((N, nv))
+            {"x0": xi0.reshape(-1), "w": w.reshape(-1), "v": v.reshape(-1)}[kind][k] = radius
+            cols.append(closed_loop(system, make(), trace, xi0, xi0, w, v).error[1:])
+            radii.append((kind, k, radius))
+    M = np.stack(cols, axis=-1)  # (N, n, columns)
+    lim = reference_limit(system, trace, r0)
+    for t in range(N):
+        est = make()
+        _, beta = run(system, est, trace, np.zeros(n), np.zeros((N, nw)), np.zeros((N, nv)))
+        i = int(np.argmax(beta[t]))
+        xi0, w, v = np.zeros(n), np.zeros((N, nw)), np.zeros((N, nv))
+        for sign, (kind, k, radius) in zip(np.sign(M[t, i]), radii):
+            {"x0": xi0.reshape(-1), "w": w.reshape(-1), "v": v.reshape(-1)}[kind][k] = sign * radius
+        out, beta_played = run(system, make(), trace, xi0, w, v, x0=xi0)
+        assert np.all(np.abs(out.error[1:]) <= beta_played)  # every step, every state, exactly
+        assert abs(out.error[t + 1][i]) >= 0.5 * beta_played[t][i]  # the vertex is the worst one, not a random one
+        assert np.all(beta_played[t] >= lim[t] * (1 - 1e-7) - 1e-12)
