@@ -467,6 +467,9 @@ class PlainFilter:
     ``order · n`` generators, a late packet replayed from the stored prior of its time (time-invariant plant)."""
 
     kind, name = "guaranteed", "plain zonotope filter (reference)"
+    _step = staticmethod(filter_step)  # the package's compiled filter step, reduction and outward row sums
+    _reduce = staticmethod(lambda G, limit: np.ascontiguousarray(reduce_girard(G, limit)))
+    _bounds = staticmethod(outer_row_sums)
 
     def __init__(self, system, x0_radius, max_delay, order):
         self.system, self.r0, self.D, self.limit = system, x0_radius, max_delay, int(order * system.n)
@@ -490,12 +493,48 @@ class PlainFilter:
         for e in entries[start:]:
             e[1], e[2] = c, G
             has_y = e[4] is not None
-            c, G = filter_step(*self.model, e[3], e[4] if has_y else np.zeros(sysm.p), has_y, c, G, np.zeros(1))
-            G = np.ascontiguousarray(reduce_girard(G, self.limit)) if e is entries[-1] else G
+            c, G = self._step(*self.model, e[3], e[4] if has_y else np.zeros(sysm.p), has_y, c, G, np.zeros(1))
+            G = self._reduce(G, self.limit) if e is entries[-1] else G
         self.c, self.G, self.t = c, G, t + 1
         self.buffer = entries[len(entries) - self.D:] if self.D else []
-        self.state_bounds = outer_row_sums(G[0])
+        self.state_bounds = self._bounds(G[0])
         return c[0].copy(), float(self.state_bounds.max())
+
+
+class NumpyFilter(PlainFilter):
+    r"""The crude reference as the issue describes it, in NumPy: :class:`PlainFilter`'s step (F-radius gain
+    :math:`\Lambda = G(CG)^\top(CG(CG)^\top + VV^\top)^{-1}`, Girard's reduction to ``order · n`` generators, late
+    packets replayed) with NumPy's products and sort instead of the package's compiled kernels, and no rounding
+    allowance (time only: its set is not a guarantee in floating point)."""
+
+    name = "plain zonotope filter in NumPy (reference)"
+    _step = staticmethod(lambda A, C, E, V, drive, y, has_y, c, G, _alpha:
+                         _numpy_filter_step(A, C, E, V, drive, y, has_y, c, G))
+    _reduce = staticmethod(lambda G, limit: _numpy_girard(G, limit))
+    _bounds = staticmethod(lambda G: np.abs(G).sum(axis=1))
+
+
+def _numpy_filter_step(A, C, E, V, drive, y, has_y, c, G):
+    """One step of :class:`NumpyFilter` (one filter: ``c`` of shape (1, n), ``G`` (1, n, q))."""
+    c, G = c[0], G[0]
+    if has_y:
+        CG = C @ G
+        Lam = np.linalg.solve(CG @ CG.T + V @ V.T, CG @ G.T).T  # F-radius gain, (n, p)
+        c, G = c + Lam @ (y - C @ c), np.hstack([G - Lam @ CG, -Lam @ V])
+    return (A @ c + drive)[None], np.hstack([A @ G, E])[None]
+
+
+def _numpy_girard(G, limit):
+    r"""Girard's reduction of ``G`` (1, n, q) to ``limit`` generators (the ``q - limit + n`` of smallest
+    :math:`\|g\|_1 - \|g\|_\infty` boxed), in NumPy."""
+    G = G[0]
+    n, q = G.shape
+    if q <= limit:
+        return G[None]
+    absG = np.abs(G)
+    order = np.argsort(absG.sum(axis=0) - absG.max(axis=0), kind="stable")
+    boxed = order[:q - limit + n]
+    return np.hstack([G[:, np.sort(order[q - limit + n:])], np.diag(absG[:, boxed].sum(axis=1))])[None]
 
 
 def _limit(system, trace):
@@ -562,9 +601,11 @@ def scale_part(args) -> None:
     print(f"tank chains, loss {LOSS}, delays 0..{MAX_DELAY}, {N} steps, default settings; crude filter: F-radius "
           f"gain, Girard, order 40, replay of late packets, no window")
     print(f"fast: ZonotopeEstimator(warm_start=True, iterations=1) (eqrec.bounds.window, Warm start), time only")
-    print(f"{'n':>3s} {'p':>2s} {'zonotope us/step':>17s} {'fast':>6s} {'crude us/step':>14s} {'ratio':>6s} "
-          f"{'bound/limit median':>19s} {'max':>6s} {'viol':>4s}")
-    ns, uz, uc = [], [], []
+    print("crude: built from the package's compiled filter step and reduction (PlainFilter); crude NumPy: the "
+          "same in NumPy, as the issue describes it (NumpyFilter); ratio: zonotope / crude, zonotope / crude NumPy")
+    print(f"{'n':>3s} {'p':>2s} {'zonotope us/step':>17s} {'fast':>6s} {'crude us/step':>14s} {'NumPy':>6s} "
+          f"{'ratio':>6s} {'ratio':>6s} {'bound/limit median':>19s} {'max':>6s} {'viol':>4s}")
+    ns, uz, uc, un = [], [], [], []
     for n in args.scale_n:
         system = tank_chain(n, SCALE.get(n, max(1, n // 6)))
         make_z = lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)  # noqa: E731
@@ -573,6 +614,7 @@ def scale_part(args) -> None:
         tz = _us_per_step(make_z, system, N, args.repeats)
         tf = _us_per_step(make_f, system, N, args.repeats)
         tc = _us_per_step(make_c, system, N, args.repeats)
+        tn = _us_per_step(lambda: NumpyFilter(system, X0_RADIUS, MAX_DELAY, 40), system, N, args.repeats)
         trace = _trace(0, N)
         rng = np.random.default_rng(1000)
         w = system.eta_w * rng.choice([-1.0, 1.0], (N, system.nw))
@@ -585,13 +627,15 @@ def scale_part(args) -> None:
             lim = f"{np.median(r):19.3f} {r.max():6.3f}"
         else:
             lim = f"{'-':>19s} {'-':>6s}"
-        print(f"{n:3d} {system.p:2d} {tz:17.0f} {tf:6.0f} {tc:14.0f} {tz / tc:6.2f} {lim} {viol:4d}", flush=True)
+        print(f"{n:3d} {system.p:2d} {tz:17.0f} {tf:6.0f} {tc:14.0f} {tn:6.0f} {tz / tc:6.2f} {tz / tn:6.2f} {lim} "
+              f"{viol:4d}", flush=True)
         ns.append(n)
         uz.append(tz)
         uc.append(tc)
+        un.append(tn)
     if len(ns) >= 2:
         print(f"growth exponent (us/step ~ n^k): zonotope estimator k = {_exponent(ns, uz):.2f}, "
-              f"crude filter k = {_exponent(ns, uc):.2f}")
+              f"crude filter k = {_exponent(ns, uc):.2f}, crude NumPy k = {_exponent(ns, un):.2f}")
 
 
 def where_part(args) -> None:

@@ -546,23 +546,72 @@ def test_window_prior_reduced_stays_guaranteed_and_none_is_the_filters_set(reduc
 
 
 # -- the window's linear algebra and its warm start (issue 45 §4) ------------------------------------------------
-def test_cholesky_solve_matches_lapack_and_falls_back_to_lu_when_not_definite():
-    from eqrec.bounds.window import cholesky_solve
+def _explicit_window(A, C, E, V, measured, G0):
+    """The window's X (``x(t+1)`` on the unit uncertainty) and H (the measured outputs on it), column by column
+    from unit runs: the prior's generators, then w by time, then v of the measured times."""
+    L, n = A.shape[0], A.shape[1]
+    p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
+    times = [j for j in range(L) if measured[j]]
 
-    rng = np.random.default_rng(3)
-    X = rng.normal(size=(40, 90))
-    M = X @ X.T
-    for k in (1, 7):  # the one-right-hand-side path and the general one
-        B = rng.normal(size=(40, k))
-        out = B.copy()
-        cholesky_solve(M, out)
-        assert np.allclose(out, np.linalg.solve(M, B), rtol=1e-10, atol=1e-12)
-    bad = M.copy()
-    bad[3, 3] = -1.0  # not positive definite: LAPACK's LU instead
-    B = rng.normal(size=(40, 2))
-    out = B.copy()
-    cholesky_solve(bad, out)
-    assert np.allclose(bad @ out, B, rtol=1e-8, atol=1e-8)
+    def run(x0, w_at=None, v_at=None):
+        x, ys = x0.copy(), []
+        for j in range(L):
+            if measured[j]:
+                ys.append(C[j] @ x + (v_at[1] if v_at is not None and v_at[0] == j else 0.0))
+            x = A[j] @ x + (w_at[1] if w_at is not None and w_at[0] == j else 0.0)
+        return x, (np.concatenate(ys) if ys else np.zeros(0))
+
+    cols = [run(G0[:, q]) for q in range(G0.shape[1])]
+    cols += [run(np.zeros(n), w_at=(j, E[j][:, q])) for j in range(L) for q in range(nw)]
+    cols += [run(np.zeros(n), v_at=(j, V[j][:, q])) for j in times for q in range(nv)]
+    X = np.column_stack([c[0] for c in cols])
+    H = np.column_stack([c[1] for c in cols]) if times else np.zeros((0, len(cols)))
+    return X, H
+
+
+@pytest.mark.parametrize("duplicate", [False, True])
+def test_window_kalman_weights_are_the_weighted_least_squares_ones(duplicate):
+    """The window's weights from its Kalman filter (:func:`eqrec.bounds.window._kalman_gains`, read back by
+    :func:`~eqrec.bounds.window._residuals`) are :math:`XWH^T(HWH^T)^{-1}`, and the residuals are
+    :math:`X - \\lambda H`, against the explicit matrices of unit runs; with an output repeated without noise
+    (``HWH^T`` singular) the fitted :math:`\\lambda H` is the pseudo-inverse's."""
+    from eqrec.bounds.window import _kalman_gains, _residuals, sparse_columns, sparse_rows
+
+    rng = np.random.default_rng(11)
+    L, n, p, nw, nv, q0 = 7, 4, 2, 3, 2, 5
+    A = rng.normal(scale=0.5, size=(L, n, n)) * (rng.random((L, n, n)) < 0.6)
+    C = rng.normal(size=(L, p, n))
+    E = rng.normal(size=(L, n, nw)) * (rng.random((L, n, nw)) < 0.7)
+    V = rng.normal(scale=0.3, size=(L, p, nv))
+    if duplicate:  # output 1 repeats output 0, with no noise on either
+        C[:, 1] = C[:, 0]
+        V[:, :, :] = 0.0
+        V[:, :, 0] = 0.0
+    measured = np.array([True, False, True, True, False, True, True])
+    G0 = rng.normal(size=(n, q0))
+    X, H = _explicit_window(A, C, E, V, measured, G0)
+    W = rng.uniform(0.2, 5.0, size=X.shape[1])
+    if duplicate:  # a noiseless output: the prior and process noise only
+        W[q0 + L * nw:] = 0.0
+    aptr, acol, aval = sparse_rows(A)
+    eptr, erow, evals = sparse_columns(E)
+    cptr, crow, cval = sparse_columns(A)
+    times = int(measured.sum())
+    K = np.zeros((times, n, p))
+    _kalman_gains(A, C, E, V, measured, (G0 * W[:q0]) @ G0.T, W, q0, K, aptr, acol, aval, eptr, erow, evals)
+    lamT = np.zeros((times * p, n))
+    TT = np.eye(n)
+    resT = np.empty((X.shape[1] - q0, n))
+    _residuals(A, C, E, V, measured, K, lamT, TT, resT, cptr, crow, cval, eptr, erow, evals)
+    M = (H * W) @ H.T
+    lam_ref = (X * W) @ H.T @ np.linalg.pinv(M, rcond=1e-12, hermitian=True)
+    fit, fit_ref = lamT.T @ H, lam_ref @ H
+    assert np.allclose(fit, fit_ref, rtol=1e-9, atol=1e-9 * np.abs(X).max())
+    if not duplicate:
+        assert np.allclose(lamT.T, lam_ref, rtol=1e-9, atol=1e-9 * np.abs(lam_ref).max())
+    R = X - lamT.T @ H  # the residuals the window reports: prior part T(0) G0, then the noise columns
+    assert np.allclose(TT.T @ G0, R[:, :q0], rtol=1e-12, atol=1e-12 * np.abs(X).max())
+    assert np.allclose(resT.T, R[:, q0:], rtol=1e-12, atol=1e-12 * np.abs(X).max())
 
 
 def test_warm_weights_map_the_last_window_by_distance_from_its_end():

@@ -33,8 +33,7 @@ The ``L1`` problem is solved approximately by iteratively reweighted least squar
   :math:`a_q = \sum_i |R_{iq}| / \|R_i\|_1` (each state's residual relative to its radius, summed over the
   states), then again while the last solve tightened the largest radius by more than a relative ``gain``, at most
   ``extra`` more times.  With shared weights, :math:`\Lambda = X W H^\top (H W H^\top)^{-1}` for all states at
-  once: one matrix :math:`HWH^\top`, one Cholesky factorization (LAPACK; :func:`cholesky_solve`), ``n``
-  right-hand sides.
+  once: one Kalman recursion over the window (*Cost*, below) serves every state.
 * **Per-state solves**, greedily: the state of largest radius (the one that sets the reported bound
   :math:`\max_i \beta_i`), then the state of largest radius among those not yet solved while its radius is within
   a relative ``margin`` of the largest, at most ``states`` of them: from :math:`W_q = 1/\max(|R_{iq}|, \delta\max_q|R_{iq}|)`
@@ -76,38 +75,34 @@ problem.
 
 Cost
 ----
-No column of ``H`` is formed.  Read as variances, the weights make :math:`HWH^\top` the covariance of the
-measured outputs and :math:`XWH^\top` their covariance with :math:`x(t+1)`, for the prior covariance
-:math:`S = G_0 W G_0^\top`, process noise :math:`E\,\mathrm{diag}(W)E^\top` and measurement noise
-:math:`V\,\mathrm{diag}(W)V^\top`: a covariance recursion forward in time fills both
-(:func:`_normal_equations`, the rows of each measured time carried forward by :math:`A`).  The residuals come
-backwards: :math:`T(L) = I`, :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`, the residual on :math:`w(s)` is
-:math:`T(s+1)E(s)`, on :math:`v(s)` :math:`-\lambda_s V(s)`, on the prior :math:`T(0)G_0` (:func:`_residuals`).
-A shared solve for all ``n`` states then costs :math:`O(n^2 q_0)` (the two products with :math:`G_0`, BLAS),
-:math:`O(L(n\,\mathrm{nnz}(A) + n m + p n^2))` for the recursions and one LAPACK solve with ``n`` right-hand sides
-(:math:`O(m^3 + n m^2)`, a Cholesky factorization: half the work of LU, measured 98 against 118 µs at
-``m = 120`` with 30 right-hand sides, 41 against 80 µs with one); a per-state solve the same with one right-hand
-side.  Measured on the tank chains of
-``benchmarks/bench_zonotope.py --part scale`` (n = 30, p = 5, a window of 30 steps: m ≈ 110 measured rows,
-:math:`q_0 = 1200`): about 1 ms a shared solve, against about 7 ms for the explicit normal equations of the earlier
-per-state kernel, which solved every state 3 to 11 times.  The recursions run over the nonzeros of ``A``
-(:func:`sparse_rows`; the same sums in the same order as over every entry): on those chains (tridiagonal ``A``,
-n = 30, one measurement on a loaded machine) the normal equations of a solve went from 470 to 176 µs and the
-residuals of all states from 230 to 105 µs, beside 163 µs for LAPACK's solve.  Those of ``E`` are read by column
-(:func:`sparse_columns`; a diagonal ``E`` there), a time-invariant plant's nonzeros are found once per estimator
-(:func:`window_estimate_sparse`), the rows carried forward alternate between two buffers, and the Gramian of the
-first weights multiplies by ``A`` as a vectorised sparse product: a window at n = 30 about 25 % cheaper, 10 % at
-n = 10, the same numbers (each sum over the same terms in the same order; the skipped terms are exact zeros
-added to sums that start from ``+0.0``).  Where the time goes then (n = 30, fastest of 300 calls on a loaded
-machine): a shared solve about 0.45 ms (normal equations 0.17, LAPACK 0.13 with 30 right-hand sides, residuals
-0.07, the products with :math:`G_0` 0.07), a per-state solve about 0.35 ms (LAPACK 0.08 with one), the Gramian
-0.15 ms once a call; about 2 shared and 3 to 6 per-state solves a step on those chains (n = 4 to 30).  Since
-then (2026-11-30): Cholesky instead of LU with triangular solves that vectorise and a path for one right-hand side,
-and :math:`A\Sigma A^\top` from a transposed view: a step at n = 30 about 1.2 times faster at the defaults; with
-``warm_start=True, iterations=1`` (one shared solve, no Gramian, one reweighted per-state solve) the window takes
-about 0.6 ms and a step under 1 ms (``benchmarks/bench_zonotope.py``, 2026-11-30).  The rest is compiled with
-Numba (no ``fastmath``); the bytes are those of the machine's BLAS and LAPACK (the same on one machine; the rounding
-allowance below holds for any order of the sums).
+No column of ``H`` is formed, and neither is :math:`HWH^\top`.  Read as variances, the weights make the weighted
+least-squares estimate of :math:`x(t+1)` the Kalman filter's over the window (the filter's estimate of the last
+state given every measurement is the best linear one; e.g. Anderson and Moore, *Optimal Filtering*, 1979, §5.2),
+for the prior covariance :math:`S = G_0 W G_0^\top`, process noise :math:`E\,\mathrm{diag}(W)E^\top` and
+measurement noise :math:`V\,\mathrm{diag}(W)V^\top`.  So a solve is one covariance recursion forward in time
+(:func:`_kalman_gains`: the gain :math:`K_s` of each measured time, ``n × p``) and one recursion backwards
+(:func:`_residuals`): :math:`T(L) = I`, and at each time :math:`T(s+1)A(s)`, then the weights of the outputs of
+a measured time :math:`\lambda_s = T(s+1)A(s)K_s`, :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`; the residual on
+:math:`w(s)` is :math:`T(s+1)E(s)`, on :math:`v(s)` :math:`-\lambda_s V(s)`, on the prior :math:`T(0)G_0`.  The
+weights are then used as any others: the estimate is :math:`\hat x^{\rm pred} + \lambda(y - \hat y^{\rm pred})`
+and its bound the 1-norm of the residuals, so how they were found changes no guarantee
+(``tests/test_zonotope.py`` checks them against :math:`XWH^\top(HWH^\top)^{-1}` from explicit matrices).
+A shared solve for all ``n`` states costs :math:`O(n^2 q_0)` (the products with :math:`G_0`, BLAS) and
+:math:`O(L(n\,\mathrm{nnz}(A) + p n^2))` for the recursions; a per-state solve the same with one row in the
+backward recursion.  The normal equations :math:`HWH^\top` (``m × m``, ``m`` the measured rows) with a Cholesky
+factorization, used before 2026-11-30, cost :math:`O(m^3)` besides: measured on the tank chains of
+``benchmarks/bench_zonotope.py --part scale`` (n = 30, p = 5, a window of 30 steps, :math:`m \approx 115`,
+:math:`q_0 = 400`) the normal equations and the factorization took 76 + 103 µs for a shared solve and 76 + 38 µs
+for a per-state one, the Kalman recursion 75 µs; a window 0.73 times the cost, the bounds equal to about
+:math:`10^{-13}` (the weights are the same in exact arithmetic).  The recursions run over the nonzeros of ``A``
+(:func:`sparse_rows`) and those of ``E`` by column (:func:`sparse_columns`; the terms skipped are exact zeros added
+to sums that start from ``+0.0``); a time-invariant plant's nonzeros are found once per estimator
+(:func:`window_estimate_sparse`).  Where the time of a full window goes at n = 30 (2026-11-30): about 45 µs for
+the Gramian of the first weights, a shared solve about 0.2 ms (the products with :math:`G_0` 50 µs, the Kalman
+recursion 75, the backward recursion for all states 50) and a per-state solve about 0.13 ms (the product with
+:math:`G_0` 30 µs, the Kalman recursion 75); two shared and three per-state solves a step at the defaults.  The
+rest is compiled with Numba (no ``fastmath``); the bytes are those of the machine's BLAS (the same on one machine;
+the rounding allowance below holds for any order of the sums).
 
 Floating point
 --------------
@@ -155,54 +150,6 @@ def spd_solve(M: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:  # pragma:
         for c in range(a + 1, m):
             s -= M[c, a] * out[c]
         out[a] = s / M[a, a]
-
-
-@numba.njit(cache=True)
-def cholesky_solve(M: np.ndarray, B: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Overwrite ``B`` (``m × k``) by :math:`M^{-1}B` for the symmetric positive definite ``M`` of the window's normal
-    equations: LAPACK's Cholesky factor (half the work of an LU factorization), then the two triangular solves (each
-    row of ``B`` updated from an accumulator, so that the loops over the ``k`` right-hand sides vectorise).  When the
-    factorization fails (``M`` not positive definite in floating point: two measured rows alike), LAPACK's LU solve
-    instead.  ``M`` is not changed.  Any solution keeps the window's bound valid (module docstring): only the weights
-    change."""
-    try:
-        F = np.linalg.cholesky(M)  # lower, M = F F^T
-    except Exception:  # noqa: BLE001 - numba raises LinAlgError; LU is the fallback
-        B[:, :] = np.linalg.solve(M, B)
-        return
-    m, k = B.shape
-    if k == 1:  # one right-hand side: dot products forward, column updates backward (contiguous rows of F)
-        for r in range(m):
-            s = B[r, 0]
-            for c in range(r):
-                s -= F[r, c] * B[c, 0]
-            B[r, 0] = s / F[r, r]
-        for r in range(m - 1, -1, -1):
-            x = B[r, 0] / F[r, r]
-            B[r, 0] = x
-            for c in range(r):
-                B[c, 0] -= F[r, c] * x
-        return
-    acc = np.empty(k)
-    for r in range(m):  # F Z = B
-        for i in range(k):
-            acc[i] = B[r, i]
-        for c in range(r):
-            f = F[r, c]
-            for i in range(k):
-                acc[i] -= f * B[c, i]
-        d = F[r, r]
-        for i in range(k):
-            B[r, i] = acc[i] / d
-    for r in range(m - 1, -1, -1):  # F^T X = Z, by the rows of F (contiguous)
-        d = F[r, r]
-        for i in range(k):
-            acc[i] = B[r, i] / d
-            B[r, i] = acc[i]
-        for c in range(r):
-            f = F[r, c]
-            for i in range(k):
-                B[c, i] -= f * acc[i]
 
 
 @numba.njit(cache=True)
@@ -267,17 +214,6 @@ def weighted_products(X: np.ndarray, w: np.ndarray, Y: np.ndarray, out: np.ndarr
 
 
 @numba.njit(cache=True)
-def _symmetric_ridge(M: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Copy the lower triangle of ``M`` to the upper and add a relative ridge to the diagonal (``M`` is singular when
-    two measured rows coincide)."""
-    m = M.shape[0]
-    for r in range(m):
-        M[r, r] += 1e-14 * M[r, r] + 1e-300
-        for c in range(r):
-            M[c, r] = M[r, c]
-
-
-@numba.njit(cache=True)
 def sparse_rows(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
     """The nonzeros of each ``A[j]`` (``(L, n, n)``) by row: ``ptr`` (``(L, n + 1)``), ``col`` and ``val``
     (``(L, n · n)``), row ``a`` of ``A[j]`` being ``acol[j, aptr[j, a]:aptr[j, a + 1]]`` (columns in increasing
@@ -339,59 +275,95 @@ def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - comp
 
 
 @numba.njit(cache=True)
-def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
-    r"""The weighted normal equations of the window by a covariance recursion (module docstring, *Cost*).
+def _kalman_gains(A, C, E, V, measured, S, W, q0, K, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
+    r"""The gains of the window's weighted least squares by a Kalman filter over it (module docstring, *Cost*).
 
-    With the column weights ``W`` read as variances (prior :math:`S = G_0 W G_0^\top`, process noise
-    :math:`E\,\mathrm{diag}(W)E^\top`, measurement noise :math:`V\,\mathrm{diag}(W)V^\top`), :math:`HWH^\top` is the
-    covariance of the measured outputs and :math:`XWH^\top` that of ``x(t+1)`` with them.  Forward in time,
-    :math:`\Sigma(s+1) = A\Sigma A^\top + E D E^\top`; the rows of a measured time ``s`` are
-    :math:`C\Sigma(s)`, carried to the later times by :math:`A^\top` (``BT``, transposed: ``n × m``).  Fills the lower
-    triangle of ``M`` (``m × m``) and ``BT`` (``n × m``, :math:`XWH^\top`).  ``ptr``, ``col``, ``val``: the
-    nonzeros of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``: those of ``E`` by column
-    (:func:`sparse_columns`; the terms skipped are exact zeros added to sums that start from ``+0.0``, so the
-    same numbers).  The rows carried forward alternate between ``BT`` and a second buffer (no copy per step)."""
+    With the column weights ``W`` read as variances (prior :math:`\Sigma(0) = S = G_0 W G_0^\top`, process noise
+    :math:`E\,\mathrm{diag}(W)E^\top`, measurement noise :math:`V\,\mathrm{diag}(W)V^\top`), the covariance form of
+    the Kalman filter, forward in time: at a measured time ``j`` (its ``tt``-th),
+    :math:`U = \Sigma C^\top`, :math:`S_y = CU + V D V^\top = FF^\top` (Cholesky), :math:`K_{tt} = U S_y^{-1}`
+    (``n × p``, written to ``K[tt]``), :math:`\Sigma \leftarrow \Sigma - ZZ^\top` with :math:`Z = UF^{-\top}`; then
+    :math:`\Sigma \leftarrow A\Sigma A^\top + E D E^\top`.  The filter's estimate of :math:`x(t+1)` is the weighted
+    least-squares one, so its weight on the outputs of time ``j`` is :math:`\lambda_j = T(j+1)A(j)K_{tt}` with
+    :math:`T` the residual recursion's (:func:`_residuals`, which forms it).  An output whose pivot of :math:`S_y` is
+    below :math:`10^{-12}` of its diagonal (a row alike to the earlier ones of its time, with no noise) gets the gain
+    0 (it adds nothing to them; any weights keep the bound valid).
+    ``ptr``, ``col``, ``val``: the nonzeros of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``:
+    those of ``E`` by column (:func:`sparse_columns`)."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     Lnw = L * nw
     Sig = S.copy()
     tmp = np.empty((n, n))
-    cur = BT  # the rows carried to time j (BT or newB, alternately)
-    swapped = False
-    newB = np.empty((n, BT.shape[1]))
-    rows = 0
+    U = np.empty((n, p))
+    F = np.empty((p, p))
+    Zt = np.empty((p, n))
+    Kt = np.empty((p, n))
     tt = 0
     for j in range(L):
         if measured[j]:
+            for b in range(n):  # U = Sigma C^T, over the nonzeros of C_j
+                for a in range(p):
+                    U[b, a] = 0.0
             for a in range(p):
-                for r in range(rows + a + 1):
-                    M[rows + a, r] = 0.0
-                for e in range(n):  # rows of earlier times: C_j (their rows carried to j)
-                    f = C[j, a, e]
-                    if f != 0.0:
-                        for r in range(rows):
-                            M[rows + a, r] += f * cur[e, r]
-                for b in range(n):  # the new row C_j Sigma(j), stored as a column of BT
-                    cur[b, rows + a] = 0.0
-                for e in range(n):  # over the nonzeros of C_j (the same sums, in the same order over e)
+                for e in range(n):
                     f = C[j, a, e]
                     if f != 0.0:
                         for b in range(n):
-                            cur[b, rows + a] += f * Sig[e, b]
-            for a in range(p):
+                            U[b, a] += Sig[b, e] * f
+            for a in range(p):  # S_y = C U + V D V^T (lower triangle), a relative ridge on its diagonal
                 for c in range(a + 1):
                     s = 0.0
                     for e in range(n):
-                        s += C[j, c, e] * cur[e, rows + a]
+                        s += C[j, a, e] * U[e, c]
                     for q in range(nv):
                         s += V[j, a, q] * W[q0 + Lnw + tt * nv + q] * V[j, c, q]
-                    M[rows + a, rows + c] = s
-            rows += p
+                    F[a, c] = s
+                F[a, a] += 1e-14 * abs(F[a, a]) + 1e-300
+            for a in range(p):  # S_y = F F^T; a pivot below 1e-12 of its diagonal: that output is dropped (gain 0)
+                s = F[a, a]
+                for c in range(a):
+                    s -= F[a, c] * F[a, c]
+                d = np.sqrt(s) if s > 1e-12 * F[a, a] else np.inf
+                F[a, a] = d
+                for e in range(a + 1, p):
+                    s = F[e, a]
+                    for c in range(a):
+                        s -= F[e, c] * F[a, c]
+                    F[e, a] = s / d
+            for a in range(p):  # Z^T = F^{-1} U^T
+                for e in range(n):
+                    Zt[a, e] = U[e, a]
+                for c in range(a):
+                    f = F[a, c]
+                    for e in range(n):
+                        Zt[a, e] -= f * Zt[c, e]
+                d = F[a, a]
+                for e in range(n):
+                    Zt[a, e] /= d
+            for a in range(p - 1, -1, -1):  # K^T = F^{-T} Z^T
+                for e in range(n):
+                    Kt[a, e] = Zt[a, e]
+                for c in range(a + 1, p):
+                    f = F[c, a]
+                    for e in range(n):
+                        Kt[a, e] -= f * Kt[c, e]
+                d = F[a, a]
+                for e in range(n):
+                    Kt[a, e] /= d
+            for b in range(n):
+                for a in range(p):
+                    K[tt, b, a] = Kt[a, b]
+            for b in range(n):  # Sigma -= Z Z^T: the lower triangle, then mirrored
+                for a in range(p):
+                    f = Zt[a, b]
+                    for e in range(b + 1):
+                        Sig[b, e] -= f * Zt[a, e]
+            for b in range(n):
+                for e in range(b):
+                    Sig[e, b] = Sig[b, e]
             tt += 1
-        # carry the rows to j + 1: BT <- A BT ; Sigma <- A Sigma A^T + E D E^T (over the nonzeros of A, by row)
-        _times_sparse(aptr, acol, aval, j, cur, rows, newB)
-        newB, cur = cur, newB
-        swapped = not swapped
+        # Sigma <- A Sigma A^T + E D E^T (over the nonzeros of A, by row)
         _times_sparse(aptr, acol, aval, j, Sig, n, tmp)  # tmp = A Sigma
         _times_sparse(aptr, acol, aval, j, tmp.T, n, Sig)  # Sigma = A (A Sigma)^T (a view, no copy)
         for q in range(nw):
@@ -404,20 +376,19 @@ def _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, e
                     a = erow[j, za]
                     for zb in range(eptr[j, q], eptr[j, q + 1]):
                         Sig[a, erow[j, zb]] += fa * evals[j, zb]
-    if swapped:  # the last rows carried are in the second buffer
-        for a in range(n):
-            for r in range(rows):
-                BT[a, r] = cur[a, r]
 
 
 @numba.njit(cache=True)
-def _residuals(A, C, E, V, measured, lamT, TT, RTn, cptr, crow, cval, eptr, erow, evals):  # pragma: no cover
+def _residuals(A, C, E, V, measured, K, lamT, TT, RTn, cptr, crow, cval, eptr, erow, evals):  # pragma: no cover
     r"""The noise columns of the residuals :math:`X_i - \lambda_i H` of ``k`` states, backwards in time.
 
     :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
     :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`; the residual on :math:`w(s)` is :math:`T(s+1)E(s)`, on :math:`v(s)`
     :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
-    on return).  ``lamT`` (``m × k``): the weights of the states, by measured row; ``RTn`` (``Q × k``): the
+    on return).  ``K`` (``times × n × p``): the Kalman gains of the measured times (:func:`_kalman_gains`), from
+    which the weights of the states on the outputs of time ``s`` come as :math:`\lambda_s = T(s+1)A(s)K` once
+    :math:`T(s+1)A(s)` is known (the weighted least-squares weights: module docstring, *Cost*), written to ``lamT``
+    (``m × k``, by measured row); ``RTn`` (``Q × k``): the
     residuals on the noise columns (process noise by time, then the measurement noise of the measured times).
     ``cptr``, ``crow``, ``cval``: the nonzeros of ``A`` by column (:func:`sparse_columns`: the rows of
     :math:`A^\top`, so that :math:`A^\top X` is :func:`_times_sparse`, each sum over the rows of ``A`` in increasing
@@ -429,6 +400,8 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, cptr, crow, cval, eptr, erow
     m = lamT.shape[0]
     times = m // p if p > 0 else 0
     newT = np.empty((n, k))
+    out = TT
+    swapped = False
     rows = m
     tt = times
     for j in range(L - 1, -1, -1):
@@ -442,12 +415,19 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, cptr, crow, cval, eptr, erow
                 for i in range(k):
                     RTn[col, i] += f * TT[a, i]
         _times_sparse(cptr, crow, cval, j, TT, k, newT)  # T <- T A(j), transposed: TT <- A^T TT (A's columns)
-        for a in range(n):
-            for i in range(k):
-                TT[a, i] = newT[a, i]
+        TT, newT = newT, TT  # two buffers, alternately
+        swapped = not swapped
         if measured[j]:
             rows -= p
             tt -= 1
+            for c in range(p):  # lambda_j = T(j+1) A(j) K_tt, the rows of time j's outputs
+                for i in range(k):
+                    lamT[rows + c, i] = 0.0
+                for a in range(n):
+                    f = K[tt, a, c]
+                    if f != 0.0:
+                        for i in range(k):
+                            lamT[rows + c, i] += f * TT[a, i]
             for c in range(p):
                 for a in range(n):
                     f = C[j, c, a]
@@ -463,11 +443,15 @@ def _residuals(A, C, E, V, measured, lamT, TT, RTn, cptr, crow, cval, eptr, erow
                     if f != 0.0:
                         for i in range(k):
                             RTn[col, i] -= f * lamT[rows + c, i]
+    if swapped:  # T(0)^T is in the second buffer
+        for a in range(n):
+            for i in range(k):
+                out[a, i] = TT[a, i]
 
 
 @numba.njit(cache=True)
-def _residuals_one(A, C, E, V, measured, lam, t, RT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
-    """:func:`_residuals` of one state (``k = 1``) on vectors: ``lam`` (``m``) its weights, ``t`` (``n``) the row
+def _residuals_one(A, C, E, V, measured, K, lam, t, RT, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
+    """:func:`_residuals` of one state (``k = 1``) on vectors: ``lam`` (``m``) its weights (written), ``t`` (``n``) the row
     :math:`T(L)` on entry and :math:`T(0)` on return, ``RT`` (``Q``) the residuals on the noise columns.  The same
     operations in the same order as :func:`_residuals` (the same numbers), without its loops over the states."""
     L, n = A.shape[0], A.shape[1]
@@ -495,6 +479,13 @@ def _residuals_one(A, C, E, V, measured, lam, t, RT, aptr, acol, aval, eptr, ero
         if measured[j]:
             rows -= p
             tt -= 1
+            for c in range(p):  # lambda_j = T(j+1) A(j) K_tt
+                r = 0.0
+                for a in range(n):
+                    f = K[tt, a, c]
+                    if f != 0.0:
+                        r += f * cur[a]
+                lam[rows + c] = r
             for c in range(p):
                 for a in range(n):
                     f = C[j, c, a]
@@ -691,7 +682,6 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     if not warm:  # cold: the Gramian's inverse column lengths
         O = np.eye(n)
         tmp = np.empty((n, n))
-        tmpT = np.empty((n, n))
         tt = times
         for j in range(L - 1, -1, -1):
             for q in range(nw):  # over the nonzeros of E's column (the terms skipped are exact zeros)
@@ -704,13 +694,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 wn[j * nw + q] = 1.0 / np.sqrt(s) if s > 0.0 else 0.0
             # O <- A^T O A + C^T C, over the nonzeros of A (the same sums, in the same order)
             _times_sparse(cptr, crow, cval, j, O, n, tmp)  # tmp = A^T O (over A's columns)
-            for a in range(n):  # O = tmp A, as (A^T tmp^T)^T: each sum over e in increasing order from 0.0, as before
-                for b in range(n):
-                    tmpT[b, a] = tmp[a, b]
-            _times_sparse(cptr, crow, cval, j, tmpT, n, tmp)  # tmp = A^T tmp^T = (tmp A)^T
-            for a in range(n):
-                for b in range(n):
-                    O[a, b] = tmp[b, a]
+            _times_sparse(cptr, crow, cval, j, tmp.T, n, O)  # O = A^T tmp^T = (tmp A)^T (symmetric; a view, no copy)
             if measured[j]:
                 tt -= 1
                 for c in range(p):
@@ -731,8 +715,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     agg_out = np.zeros((K, q0 + Qn))
     T0_out = np.zeros((K, n, n))
     rad_out = np.zeros((K, n))
-    M = np.empty((m, m))
-    BT = np.empty((n, m))
+    Kg = np.zeros((times, n, p))  # the Kalman gains of the measured times (one solve's)
     for k in range(K):
         Gk = np.ascontiguousarray(G0[k])
         # centre and magnitudes over the window
@@ -804,12 +787,10 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     for q in range(q0):
                         GW[a, q] = Gk[a, q] * W[q]
                 S = np.dot(GW, Gk.T)  # G0 W G0^T
-                _normal_equations(A, C, E, V, measured, S, W, q0, M, BT, aptr, acol, aval, eptr, erow, evals)
-                _symmetric_ridge(M)
-                lamT[:, :] = BT.T
-                cholesky_solve(M, lamT)  # the weights of every state, (m, n): one factorization
+                _kalman_gains(A, C, E, V, measured, S, W, q0, Kg, aptr, acol, aval, eptr, erow, evals)
             TT = np.eye(n)
-            _residuals(A, C, E, V, measured, lamT, TT, resT, cptr, crow, cval, eptr, erow, evals)
+            # the weights of every state (m, n) from the one filter's gains, and their residuals
+            _residuals(A, C, E, V, measured, Kg, lamT, TT, resT, cptr, crow, cval, eptr, erow, evals)
             RP = np.dot(np.ascontiguousarray(TT.T), Gk)  # residual on the prior generators, (n, q0)
             rad[:] = 0.0
             add_abs_rows(RP, q0, rad)
@@ -877,14 +858,10 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                         for q in range(q0):
                             GW[a, q] = Gk[a, q] * Wi[q]
                     S = np.dot(GW, Gk.T)
-                    _normal_equations(A, C, E, V, measured, S, Wi, q0, M, BT, aptr, acol, aval, eptr, erow, evals)
-                    _symmetric_ridge(M)
-                    for r in range(m):
-                        lam1[r, 0] = BT[i, r]
-                    cholesky_solve(M, lam1)
+                    _kalman_gains(A, C, E, V, measured, S, Wi, q0, Kg, aptr, acol, aval, eptr, erow, evals)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
-                    _residuals_one(A, C, E, V, measured, lam1[:, 0], T1[:, 0], res1[:, 0], aptr, acol, aval, eptr,
+                    _residuals_one(A, C, E, V, measured, Kg, lam1[:, 0], T1[:, 0], res1[:, 0], aptr, acol, aval, eptr,
                                    erow, evals)
                     rp = np.dot(T1.T, Gk)
                     r1 = 0.0

@@ -399,17 +399,47 @@ def _sums_over(X, idx, absolute, out):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - compiled
+def _smallest(cost, nbox):  # pragma: no cover - compiled
+    """The ``nbox`` smallest of ``cost`` as a mask, the lower index first on a tie: the first ``nbox`` of a stable
+    sort (``np.argsort(cost, kind="mergesort")[:nbox]``), found by a selection (``np.partition``, linear time) of the
+    ``nbox``-th smallest value instead of the sort."""
+    q = cost.shape[0]
+    boxed = np.zeros(q, dtype=np.bool_)
+    if nbox <= 0:
+        return boxed
+    if nbox >= q:
+        boxed[:] = True
+        return boxed
+    top = np.partition(cost, nbox - 1)[nbox - 1]
+    if top != top:  # a NaN cost (sorted last by the sort): the sort itself
+        order = np.argsort(cost, kind="mergesort")
+        for j in range(nbox):
+            boxed[order[j]] = True
+        return boxed
+    ties = nbox
+    for j in range(q):
+        if cost[j] < top:
+            boxed[j] = True
+            ties -= 1
+    for j in range(q):  # the ties at the threshold, lowest index first
+        if ties == 0:
+            break
+        if cost[j] == top:
+            boxed[j] = True
+            ties -= 1
+    return boxed
+
+
+@numba.njit(cache=True)
+def _box_into(G, U, principal, absT, boxed, nbox, out):  # pragma: no cover - compiled
     """One reduction of :func:`_reduce_stack` into ``out`` (``(n, keep + n)``, or ``(n, keep + 2n)`` in the axes):
-    the generators of ``order[:nbox]`` (of ``G``, ``(n, q)``, coordinates ``absT`` in the axes ``U``) boxed, the
-    others kept in their order; in the axes, the box of the change of axes' rounding (:func:`reduce_pca`)."""
+    the ``nbox`` generators of the mask ``boxed`` (of ``G``, ``(n, q)``, coordinates ``absT`` in the axes ``U``)
+    boxed, the others kept in their order; in the axes, the box of the change of axes' rounding
+    (:func:`reduce_pca`)."""
     n, q = G.shape
     nnew = 2 * n if principal else n
     keep = out.shape[1] - nnew
     slack = nbox + 2  # the box's sum of nbox nonnegative terms, rounded up (outer_row_sums)
-    boxed = np.zeros(q, dtype=np.bool_)
-    for j in range(nbox):
-        boxed[order[j]] = True
     idx = np.empty(nbox, dtype=np.int64)  # the boxed generators in increasing order: the box sums run over them in it
     kept = np.empty(q - nbox, dtype=np.int64)  # the kept ones, in their order
     bi = ki = 0
@@ -457,7 +487,7 @@ def _box_into(G, U, principal, absT, order, nbox, out):  # pragma: no cover - co
 @numba.njit(cache=True)
 def _reduce_stack(G, limit, principal, U, limit2):  # pragma: no cover - compiled
     """The loop of :func:`_reduce` (compiled): per member, the generators' absolute coordinates in the axes, the
-    cost, the boxed ones (the smallest costs; a stable sort, so the lower index first on a tie) and the box; in the
+    cost, the boxed ones (the smallest costs, the lower index first on a tie: :func:`_smallest`) and the box; in the
     axes ``U`` (``principal``), the box of the rounding of the change of axes besides (:func:`reduce_pca`).  With
     ``limit2 > 0``, the reduction to ``limit2`` too, from the same coordinates (else an empty second result)."""
     K, n, q = G.shape
@@ -486,11 +516,10 @@ def _reduce_stack(G, limit, principal, U, limit2):  # pragma: no cover - compile
                 cbig[j] = max(cbig[j], x)
         for j in range(q):
             cost[j] = csum[j] - cbig[j]
-        order = np.argsort(cost, kind="mergesort")
         Gk = G[k]
-        _box_into(Gk, Uk, principal, absT, order, q - keep, out[k])
+        _box_into(Gk, Uk, principal, absT, _smallest(cost, q - keep), q - keep, out[k])
         if limit2 > 0:
-            _box_into(Gk, Uk, principal, absT, order, q - keep2, out2[k])
+            _box_into(Gk, Uk, principal, absT, _smallest(cost, q - keep2), q - keep2, out2[k])
     return out, out2
 
 
