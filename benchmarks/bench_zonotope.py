@@ -6,6 +6,7 @@ its cost at scale; the exact estimator's cost and tightness (figures, not tests)
     python benchmarks/bench_zonotope.py --part where [--scale-n 4 10 20 30]
     python benchmarks/bench_zonotope.py --part exact [--exact-steps 150] [--exact-scale-n 30] [--exact-scale-steps 60]
         [--exact-window W] [--exact-plants ...] [--exact-estimators NAME ...] [--exact-repeats 1]
+        [--exact-scale-priors box:10 box:5]
 
 ``--part scale`` (issue 45 §4): chains of coupled tanks (:func:`eqrec.systems.examples.tank_chain`), n = 4 / 10 / 20 / 30 with
 p = 1 / 2 / 4 / 5 level sensors, 30 % loss, delays 0..2, 150 steps, default settings; the zonotope estimator
@@ -435,6 +436,37 @@ Where the time goes in the fast setting (``--part where`` before the defaults we
 reached: 1 ms at the defaults (1.36 ms), "never slower than the crude filter" (3.1x at n = 4, 2.5x at n = 30; at
 n = 4 the window alone, about 47 µs, costs more than the crude filter's step), the exact estimator's 20 ms at
 n = 30.
+
+2026-11-30, later: the window's weights by a Kalman recursion (:mod:`eqrec.bounds.window`, *Cost*): the same
+weights in exact arithmetic as the normal equations :math:`HWH^\top` and their Cholesky factorization, found in
+:math:`O(L n^2 p)` instead of :math:`O(m^3)` (the bounds equal to about 1e-13); the reduction selects the
+generators it boxes instead of sorting them all (the same bits).  ``--part scale``, the code before (528a276) and
+after, two rounds one after the other on an idle machine (µs per step; crude: the filter built from the package's
+kernels, whose reduction the selection also speeds up; NumPy: :class:`NumpyFilter`, the same filter written in
+NumPy as the issue describes it):
+
+====  ===  =========================  ===================  =================  =========
+ n     p   defaults b. / a.           fast b. / a.         crude b. / a.      NumPy
+====  ===  =========================  ===================  =================  =========
+ 4     1   108-122 / 94               90 / 79-81           35 / 29-30         69-70
+ 10    2   349-350 / 287-298          255-256 / 211-213    86-87 / 67         111-113
+ 20    4   870-878 / 696-714          620-636 / 516-521    236-245 / 202-204  256-261
+ 30    5   1,386-1,400 / 1,134-1,146  972-984 / 842-853    659-671 / 649-672  587-643
+====  ===  =========================  ===================  =================  =========
+
+The defaults 0.77-0.87 times the cost before (n = 30: 0.82), bound / limit unchanged to three digits (1.003 /
+1.039, 1.014 / 1.021, 1.045 / 1.065 at n = 4, 10, 20, ``--limit-up-to 20``), the hull ratios of ``--part exact``
+unchanged to four digits (the zonotope's µs per step there 91 / 122 / 101 / 183).  ``--part where`` at n = 30: a
+step 1,153 µs, the window 814 (71 %), the filter step 92, the reductions 172, the rest 75.  In a full window at
+n = 30 a shared solve costs about 0.2 ms (the products with the prior's 400 generators 50 µs, the Kalman
+recursion 75, the backward recursion of all states 50) and a per-state solve about 0.13 ms; two shared and three
+per-state solves a step.  Tried and left out: BLAS for the filter step's products :math:`GW(CG)^\top` (36 against
+60 µs) and :math:`\Lambda CG` (57 against 26 µs: a product of inner dimension ``p`` is memory-bound), 6 % of a
+filter step, not worth changing the stored results' last digits; ``dsyrk`` for :math:`G_0WG_0^\top` (no faster
+than ``dgemm`` at 30 x 400).  Not reached: 1 ms at the defaults at n = 30 (1.13-1.15 ms; the fast setting 0.84-0.85
+ms), and "never slower than the crude filter": the estimator runs that filter and its reduction and adds the
+window, so it cannot be faster than a crude filter built from the same kernels (1.7-4.5 times it); against the
+same filter in NumPy it is 1.35 times at n = 4 and 1.8-2.7 times beyond.
 """
 
 from __future__ import annotations
@@ -770,7 +802,7 @@ def exact_part(args) -> None:
                 ("exact", lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw))]
         rows += [(f"exact, {prior}, window {W}",
                   lambda prior=prior, W=W: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, window=W, prior=prior))
-                 for prior, W in (("box", 10), ("box", 5))]
+                 for prior, W in args.exact_scale_priors]
         print(f"tank chain n = {n}, p = {system.p}, {Ns} steps: predicted hull / exact hull of the whole horizon at "
               f"steps {checked}")
         for name, make in rows:
@@ -814,6 +846,14 @@ def _full_horizon_hull(system, trace, y, t):
     return lo, hi
 
 
+def _prior_window(text: str) -> tuple[str, int]:
+    """``--exact-scale-priors``' ``PRIOR:WINDOW``, e.g. ``box:10`` or ``zonotope+box:15``."""
+    prior, _, window = text.rpartition(":")
+    if not prior or not window.isdigit():
+        raise argparse.ArgumentTypeError(f"expected PRIOR:WINDOW (e.g. box:10), got {text!r}")
+    return prior, int(window)
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--part", choices=["carts", "scale", "where", "exact"], default="carts")
@@ -827,6 +867,9 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--exact-scale-n", type=int, nargs="*", default=[30],
                     help="exact part: tank chains timed without the reference (default 30)")
     ap.add_argument("--exact-scale-steps", type=int, default=60)
+    ap.add_argument("--exact-scale-priors", type=_prior_window, nargs="*", default=[("box", 10), ("box", 5)],
+                    metavar="PRIOR:WINDOW", help="exact part, tank chains: the exact estimator's rows besides the "
+                    "default, as prior:window (default box:10 box:5)")
     ap.add_argument("--exact-window", type=int, default=None,
                     help="exact part: the exact estimator's window (default: its own default)")
     ap.add_argument("--exact-plants", nargs="*", default=None,

@@ -62,7 +62,12 @@ machine; predicted hull over the exact hull of the whole horizon): tank chain n 
 29 / 59: ``"zonotope"`` window 50 (default) 1.00 / 1.19 at about 1 s per step, window 40 1.00 / 1.51 at 650-730 ms,
 window 10 6.2 at step 59;
 ``"zonotope+box"`` window 10 1.20 / 1.10 (475 ms: 65 rows, HiGHS), window 15 1.07 / 1.05; ``"box"`` window 10
-1.20 / 1.10 at 11.9 ms per step (35 rows, the dense solver), window 5 1.38 / 1.26 at 2.2 ms.  On the n <= 6 plants
+1.20 / 1.10 at 11.9 ms per step (35 rows, the dense solver), window 5 1.38 / 1.26 at 2.2 ms.  Again on an idle
+machine (2026-11-30, one run, ``--exact-scale-priors box:10 box:15 box:20 zonotope+box:10``): the default 583 ms
+per step (1.00 / 1.19), ``"box"`` window 10 6.9 ms (1.20 / 1.10), 15 84 ms (1.07 / 1.05), 20 103 ms (1.08 / 1.03),
+``"zonotope+box"`` window 10 284 ms (1.20 / 1.10).  The box's LPs take many more pivots as the window grows (about
+13 per LP at window 10, 87 at 15, 80 at 20: degenerate vertices), so ``prior="box", window=10`` is the setting for
+large plants (issue 45 §4's 20 ms per step at n = 30); the default stays the zonotope.  On the n <= 6 plants
 at window 40 the box changes the ratios in the third decimal or not at all (tanks n = 4, 150 steps:
 ``"zonotope+box"`` 1.0007 against 1.0011 at the last step; two carts 1.0122 both), for ``n`` more rows per LP;
 hence the default.
