@@ -125,21 +125,30 @@ from eqrec.bounds.rounding_kernels import rounding_allowance_compiled
 
 
 @numba.njit(cache=True)
-def spd_solve(M: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Solve ``M x = b`` into ``out`` for a symmetric positive definite ``M`` by Cholesky (compiled; the lower
-    triangle is read and overwritten by the factor)."""
+def cholesky_lower(M: np.ndarray, rel: float, fallback: float) -> None:  # pragma: no cover - compiled
+    """Overwrite the lower triangle of the symmetric ``M`` by its Cholesky factor ``F`` (:math:`M = FF^\\top`, read
+    from the lower triangle).  A pivot not above ``rel`` times its diagonal entry becomes ``fallback`` (``1e-300``:
+    kept; ``inf``: that row's column of the factor becomes zero, the row dropped)."""
     m = M.shape[0]
     for a in range(m):
         s = M[a, a]
         for c in range(a):
             s -= M[a, c] * M[a, c]
-        d = np.sqrt(s) if s > 0.0 else 1e-300
+        d = np.sqrt(s) if s > rel * M[a, a] else fallback
         M[a, a] = d
         for e in range(a + 1, m):
             s = M[e, a]
             for c in range(a):
                 s -= M[e, c] * M[a, c]
             M[e, a] = s / d
+
+
+@numba.njit(cache=True)
+def spd_solve(M: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Solve ``M x = b`` into ``out`` for a symmetric positive definite ``M`` by Cholesky (compiled; the lower
+    triangle is read and overwritten by the factor, :func:`cholesky_lower`)."""
+    m = M.shape[0]
+    cholesky_lower(M, 0.0, 1e-300)
     for a in range(m):
         s = b[a]
         for c in range(a):
@@ -275,6 +284,22 @@ def _times_sparse(aptr, acol, aval, j, X, cols, out):  # pragma: no cover - comp
 
 
 @numba.njit(cache=True)
+def _triangular_rows(F, X, transposed):  # pragma: no cover - compiled
+    """Overwrite ``X`` (``p × n``) by :math:`F^{-1}X` (``transposed``: :math:`F^{-\\top}X`) for the lower triangular
+    ``F`` (``p × p``), row by row of ``X`` (the loops over its ``n`` columns vectorise)."""
+    p, n = X.shape
+    for k in range(p):
+        a = p - 1 - k if transposed else k
+        for c in range(a + 1, p) if transposed else range(a):
+            f = F[c, a] if transposed else F[a, c]
+            for e in range(n):
+                X[a, e] -= f * X[c, e]
+        d = F[a, a]
+        for e in range(n):
+            X[a, e] /= d
+
+
+@numba.njit(cache=True)
 def _kalman_gains(A, C, E, V, measured, S, W, q0, K, aptr, acol, aval, eptr, erow, evals):  # pragma: no cover
     r"""The gains of the window's weighted least squares by a Kalman filter over it (module docstring, *Cost*).
 
@@ -320,37 +345,13 @@ def _kalman_gains(A, C, E, V, measured, S, W, q0, K, aptr, acol, aval, eptr, ero
                         s += V[j, a, q] * W[q0 + Lnw + tt * nv + q] * V[j, c, q]
                     F[a, c] = s
                 F[a, a] += 1e-14 * abs(F[a, a]) + 1e-300
-            for a in range(p):  # S_y = F F^T; a pivot below 1e-12 of its diagonal: that output is dropped (gain 0)
-                s = F[a, a]
-                for c in range(a):
-                    s -= F[a, c] * F[a, c]
-                d = np.sqrt(s) if s > 1e-12 * F[a, a] else np.inf
-                F[a, a] = d
-                for e in range(a + 1, p):
-                    s = F[e, a]
-                    for c in range(a):
-                        s -= F[e, c] * F[a, c]
-                    F[e, a] = s / d
-            for a in range(p):  # Z^T = F^{-1} U^T
+            cholesky_lower(F, 1e-12, np.inf)  # S_y = F F^T; a pivot below 1e-12 of its diagonal: output dropped
+            for a in range(p):
                 for e in range(n):
                     Zt[a, e] = U[e, a]
-                for c in range(a):
-                    f = F[a, c]
-                    for e in range(n):
-                        Zt[a, e] -= f * Zt[c, e]
-                d = F[a, a]
-                for e in range(n):
-                    Zt[a, e] /= d
-            for a in range(p - 1, -1, -1):  # K^T = F^{-T} Z^T
-                for e in range(n):
-                    Kt[a, e] = Zt[a, e]
-                for c in range(a + 1, p):
-                    f = F[c, a]
-                    for e in range(n):
-                        Kt[a, e] -= f * Kt[c, e]
-                d = F[a, a]
-                for e in range(n):
-                    Kt[a, e] /= d
+            _triangular_rows(F, Zt, False)  # Z^T = F^{-1} U^T
+            Kt[:, :] = Zt
+            _triangular_rows(F, Kt, True)  # K^T = F^{-T} Z^T
             for b in range(n):
                 for a in range(p):
                     K[tt, b, a] = Kt[a, b]
