@@ -59,8 +59,8 @@ def test_closed_loop_runs_a_protocol_estimator_like_the_raw_one(acc, L1_words, r
 
 def test_a_shared_plant_run_gives_the_same_bits(acc, L1_words, rng):
     """closed_loop(plant=plant_run(...)): the true states and measurements simulated once for several estimators
-    give each the run it gives without them, bit for bit; a plant run of another start, or with an input, is
-    refused."""
+    give each the run it gives without them, bit for bit; a plant run of another start, with an input, or of
+    other noise is refused."""
     import pytest
     from eqrec.arrivals.draws import uniform_words, ArrivalTrace
     from eqrec.errors import InputError
@@ -83,6 +83,10 @@ def test_a_shared_plant_run_gives_the_same_bits(acc, L1_words, rng):
     with pytest.raises(InputError) as exc:
         closed_loop(acc, d.estimator(), trace, x0, xi0, w, v, lambda k, xh: np.ones(1), plant=plant)
     assert exc.value.field == "plant"
+    for other in ((w[::-1].copy(), v), (w, v[::-1].copy())):  # another run's noise: its first or last step differs
+        with pytest.raises(InputError, match="step") as exc:
+            closed_loop(acc, d.estimator(), trace, x0, xi0, *other, plant=plant)
+        assert exc.value.field == "plant"
 
 
 def test_what_arrived_is_the_protocol_form():

@@ -306,7 +306,9 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
     Raises
     ------
     InputError
-        Noise arrays too short or not finite, a bad ``arrive``, ``system`` or ``est``, what the estimator refuses.
+        Noise arrays too short or not finite, a bad ``arrive``, ``system`` or ``est``, what the estimator refuses,
+        a ``plant`` of other shapes, another ``x0``, or whose first or last step does not follow from ``w``,
+        ``v`` and ``t0``.
     """
     trace = arrive if isinstance(arrive, ArrivalTrace) else ArrivalTrace.from_schedule(arrive)  # checked (arrive)
     schedule = trace.schedule()  # each step's stamps in increasing order
@@ -332,6 +334,11 @@ def closed_loop(system: AffineSystem, est, arrive: "ArrivalTrace | Sequence[Sequ
         if x.shape != (N + 1,) + x0.shape or y.shape != (N, system.p) or not np.array_equal(x[0], x0):
             raise InputError(f"need plant_run's (x, y) of this run: shapes {(N + 1,) + x0.shape} and "
                              f"{(N, system.p)} from x0, got {x.shape} and {y.shape}", field="plant")
+        for k in sorted({0, N - 1}) if N else ():  # the first and last steps again: this run's w, v and t0?
+            if not (np.array_equal(y[k], _measured(system, t0 + k, x[k], v[k])) and np.array_equal(
+                    x[k + 1], _next_state(system, t0 + k, x[k], np.zeros(system.m), w[k], None))):
+                raise InputError(f"plant_run's (x, y) were not made with this run's w, v and t0 (step {k} "
+                                 f"differs)", field="plant")
     xhat = np.zeros((N + 1,) + x0.shape)
     xhat[0] = x0 - xi0
     est.reset(xhat[0].copy(), t0) if one is None else est.reset(xhat[0].copy(), t0, one=one)
