@@ -176,6 +176,25 @@ def test_reduction_is_outer(reduce):
     assert reduce(G, 100) is G
 
 
+def test_reduction_boxes_the_first_of_the_stable_sort():
+    """The reduction's selection of the generators to box (np.partition) is the first ``nbox`` of the stable sort
+    of their costs: ties broken by the lower index, NaN costs last, -0.0 equal to 0.0."""
+    from eqrec.bounds.zonotope import _smallest
+
+    rng = np.random.default_rng(5)
+    for trial in range(400):
+        q = int(rng.integers(1, 40))
+        cost = rng.integers(0, 4, q).astype(float) if trial % 2 else rng.normal(size=q)  # many ties, or none
+        if trial % 5 == 0:
+            cost[rng.integers(0, q, 3)] = np.nan
+        if trial % 7 == 0:
+            cost[cost == 0.0] = -0.0
+        for nbox in range(-1, q + 2):
+            want = np.zeros(q, dtype=bool)
+            want[np.argsort(cost, kind="mergesort")[:max(nbox, 0)]] = True
+            assert np.array_equal(_smallest(cost, nbox), want), (cost, nbox)
+
+
 def test_girard_of_one_zonotope_is_the_stack_path():
     """reduce_girard of one zonotope (one compiled call) gives the bytes of the stack's reduction of a stack of
     one, and of that reduction with its zero box columns dropped (there are none: each box is rounded up), the
