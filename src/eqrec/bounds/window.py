@@ -614,7 +614,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     G0 : ndarray, shape (K, n, q0)
         Their generators.
     shared : int
-        Shared reweighted solves after the first (``>= 0``; one factorization for all states).
+        Shared reweighted solves after the first (``>= 0``; one Kalman recursion for all states).
     delta : float
         Relative floor of the IRLS weights' residuals.
     extra : int
@@ -781,7 +781,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         agg = np.empty(q0 + Qn)
         it = 0
         top = np.inf
-        # --- shared solves: one factorization for every state (nothing measured: the prediction alone) ----------
+        # --- shared solves: one Kalman recursion for every state (nothing measured: the prediction alone) -------
         while True:
             if m > 0:
                 for a in range(n):

@@ -17,8 +17,9 @@ convergence", Automatica 55, 2015):
 * **the exact window** over the last :math:`L = \max(\text{window}, D + 1)` steps
   (:func:`eqrec.bounds.window.window_estimate`): per state, the best linear estimate of :math:`x_i(t+1)` given
   the filter's zonotope at :math:`s_0` and every packet of times :math:`s_0..t` received so far, found by
-  iteratively reweighted least squares: solves whose weights all states share (one factorization for all; with
-  ``warm_start=True``, once the window is full, one solve from the weights where the last step's window ended), then
+  iteratively reweighted least squares: solves whose weights all states share (one Kalman recursion over the
+  window for all; with ``warm_start=True``, once the window is full, one solve from the weights where the last
+  step's window ended), then
   solves one state at a time for the states whose bound is near the largest.  Its bound :math:`\beta_i = \|X_i - \lambda_i H\|_1` is the exact worst
   case of that estimate (:mod:`eqrec.bounds.window`).
 
@@ -190,7 +191,7 @@ WINDOW_EXTRA_SOLVES = 2
 WINDOW_SOLVE_GAIN = 0.03
 
 
-#: Reweighted solves of the window shared by all states (one factorization each) after the first, then at most
+#: Reweighted solves of the window shared by all states (one Kalman recursion each) after the first, then at most
 #: :data:`WINDOW_EXTRA_SOLVES` more while the largest bound tightens by more than :data:`WINDOW_SOLVE_GAIN`
 #: (:mod:`eqrec.bounds.window`).
 SHARED_SOLVES = 1
