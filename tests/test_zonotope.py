@@ -616,7 +616,7 @@ def test_window_kalman_weights_are_the_weighted_least_squares_ones(duplicate):
     eptr, erow, evals = sparse_columns(E)
     cptr, crow, cval = sparse_columns(A)
     times = int(measured.sum())
-    K = np.zeros((times, n, p))
+    K = np.zeros((times, p, n))
     _kalman_gains(A, C, E, V, measured, (G0 * W[:q0]) @ G0.T, W, q0, K, aptr, acol, aval, eptr, erow, evals)
     lamT = np.zeros((times * p, n))
     TT = np.eye(n)

@@ -305,16 +305,16 @@ def _kalman_gains(A, C, E, V, measured, S, W, q0, K, aptr, acol, aval, eptr, ero
 
     With the column weights ``W`` read as variances (prior :math:`\Sigma(0) = S = G_0 W G_0^\top`, process noise
     :math:`E\,\mathrm{diag}(W)E^\top`, measurement noise :math:`V\,\mathrm{diag}(W)V^\top`), the covariance form of
-    the Kalman filter, forward in time: at a measured time ``j`` (its ``tt``-th),
-    :math:`U = \Sigma C^\top`, :math:`S_y = CU + V D V^\top = FF^\top` (Cholesky), :math:`K_{tt} = U S_y^{-1}`
-    (``n × p``, written to ``K[tt]``), :math:`\Sigma \leftarrow \Sigma - ZZ^\top` with :math:`Z = UF^{-\top}`; then
+    the Kalman filter, forward in time: at a measured time ``j`` (its ``tt``-th), :math:`U = \Sigma C^\top`,
+    :math:`S_y = CU + V D V^\top = FF^\top` (Cholesky), :math:`K_{tt} = U S_y^{-1}` (``n × p``; its transpose,
+    ``p × n``, written to ``K[tt]``), :math:`\Sigma \leftarrow \Sigma - ZZ^\top` with :math:`Z = UF^{-\top}`; then
     :math:`\Sigma \leftarrow A\Sigma A^\top + E D E^\top`.  The filter's estimate of :math:`x(t+1)` is the weighted
     least-squares one, so its weight on the outputs of time ``j`` is :math:`\lambda_j = T(j+1)A(j)K_{tt}` with
-    :math:`T` the residual recursion's (:func:`_residuals`, which forms it).  An output whose pivot of :math:`S_y` is
-    below :math:`10^{-12}` of its diagonal (a row alike to the earlier ones of its time, with no noise) gets the gain
-    0 (it adds nothing to them; any weights keep the bound valid).
-    ``ptr``, ``col``, ``val``: the nonzeros of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``:
-    those of ``E`` by column (:func:`sparse_columns`)."""
+    :math:`T` the residual recursion's (:func:`_residuals`, which forms it).  An output whose pivot of :math:`S_y`
+    is below :math:`10^{-12}` of its diagonal (a row alike to the earlier ones of its time, with no noise) gets the
+    gain 0 (it adds nothing to them; any weights keep the bound valid).  ``aptr``, ``acol``, ``aval``: the nonzeros
+    of ``A`` by row (:func:`sparse_rows`); ``eptr``, ``erow``, ``evals``: those of ``E`` by column
+    (:func:`sparse_columns`)."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     Lnw = L * nw
@@ -323,7 +323,6 @@ def _kalman_gains(A, C, E, V, measured, S, W, q0, K, aptr, acol, aval, eptr, ero
     U = np.empty((n, p))
     F = np.empty((p, p))
     Zt = np.empty((p, n))
-    Kt = np.empty((p, n))
     tt = 0
     for j in range(L):
         if measured[j]:
@@ -350,11 +349,9 @@ def _kalman_gains(A, C, E, V, measured, S, W, q0, K, aptr, acol, aval, eptr, ero
                 for e in range(n):
                     Zt[a, e] = U[e, a]
             _triangular_rows(F, Zt, False)  # Z^T = F^{-1} U^T
+            Kt = K[tt]  # (a view: written in place)
             Kt[:, :] = Zt
             _triangular_rows(F, Kt, True)  # K^T = F^{-T} Z^T
-            for b in range(n):
-                for a in range(p):
-                    K[tt, b, a] = Kt[a, b]
             for b in range(n):  # Sigma -= Z Z^T: the lower triangle, then mirrored
                 for a in range(p):
                     f = Zt[a, b]
@@ -385,15 +382,14 @@ def _residuals(A, C, E, V, measured, K, lamT, TT, RTn, cptr, crow, cval, eptr, e
 
     :math:`T(L) = I` (rows of the states, stored transposed in ``TT``, ``n × k``, on entry), then
     :math:`T(s) = T(s+1)A(s) - \lambda_s C(s)`; the residual on :math:`w(s)` is :math:`T(s+1)E(s)`, on :math:`v(s)`
-    :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top`
-    on return).  ``K`` (``times × n × p``): the Kalman gains of the measured times (:func:`_kalman_gains`), from
-    which the weights of the states on the outputs of time ``s`` come as :math:`\lambda_s = T(s+1)A(s)K` once
+    :math:`-\lambda_s V(s)`, and on the prior :math:`T(0)G_0` (left to the caller: ``TT`` holds :math:`T(0)^\top` on
+    return).  ``K`` (``times × p × n``): the Kalman gains of the measured times, transposed (:func:`_kalman_gains`),
+    from which the weights of the states on the outputs of time ``s`` come as :math:`\lambda_s = T(s+1)A(s)K` once
     :math:`T(s+1)A(s)` is known (the weighted least-squares weights: module docstring, *Cost*), written to ``lamT``
-    (``m × k``, by measured row); ``RTn`` (``Q × k``): the
-    residuals on the noise columns (process noise by time, then the measurement noise of the measured times).
-    ``cptr``, ``crow``, ``cval``: the nonzeros of ``A`` by column (:func:`sparse_columns`: the rows of
-    :math:`A^\top`, so that :math:`A^\top X` is :func:`_times_sparse`, each sum over the rows of ``A`` in increasing
-    order); ``eptr``, ``erow``, ``evals``: those of ``E`` by column."""
+    (``m × k``, by measured row); ``RTn`` (``Q × k``): the residuals on the noise columns (process noise by time,
+    then the measurement noise of the measured times). ``cptr``, ``crow``, ``cval``: the nonzeros of ``A`` by column
+    (:func:`sparse_columns`: the rows of :math:`A^\top`, so that :math:`A^\top X` is :func:`_times_sparse`, each sum
+    over the rows of ``A`` in increasing order); ``eptr``, ``erow``, ``evals``: those of ``E`` by column."""
     L, n = A.shape[0], A.shape[1]
     p, nw, nv = C.shape[1], E.shape[2], V.shape[2]
     k = TT.shape[1]
@@ -425,7 +421,7 @@ def _residuals(A, C, E, V, measured, K, lamT, TT, RTn, cptr, crow, cval, eptr, e
                 for i in range(k):
                     lamT[rows + c, i] = 0.0
                 for a in range(n):
-                    f = K[tt, a, c]
+                    f = K[tt, c, a]
                     if f != 0.0:
                         for i in range(k):
                             lamT[rows + c, i] += f * TT[a, i]
@@ -483,7 +479,7 @@ def _residuals_one(A, C, E, V, measured, K, lam, t, RT, aptr, acol, aval, eptr, 
             for c in range(p):  # lambda_j = T(j+1) A(j) K_tt
                 r = 0.0
                 for a in range(n):
-                    f = K[tt, a, c]
+                    f = K[tt, c, a]
                     if f != 0.0:
                         r += f * cur[a]
                 lam[rows + c] = r
@@ -716,7 +712,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
     agg_out = np.zeros((K, q0 + Qn))
     T0_out = np.zeros((K, n, n))
     rad_out = np.zeros((K, n))
-    Kg = np.zeros((times, n, p))  # the Kalman gains of the measured times (one solve's)
+    Kg = np.zeros((times, p, n))  # the Kalman gains of the measured times, transposed (one solve's)
     for k in range(K):
         Gk = np.ascontiguousarray(G0[k])
         # centre and magnitudes over the window
@@ -829,9 +825,8 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
             T0_out[k] = TT.T
         # --- per-state solves for the states near the largest radius ----------------------------------------
         if m > 0 and margin >= 0.0:
-            lam1 = np.empty((m, 1))
-            res1 = np.empty((Qn, 1))
-            res = np.empty(q0 + Qn)
+            lam1 = np.empty(m)
+            res = np.empty(q0 + Qn)  # the state's residuals: on the prior, then on the noise columns
             Wi = np.empty(q0 + Qn)
             refined = np.zeros(n, dtype=np.bool_)
             count = 0
@@ -862,15 +857,13 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     _kalman_gains(A, C, E, V, measured, S, Wi, q0, Kg, aptr, acol, aval, eptr, erow, evals)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
-                    _residuals_one(A, C, E, V, measured, Kg, lam1[:, 0], T1[:, 0], res1[:, 0], aptr, acol, aval, eptr,
-                                   erow, evals)
+                    _residuals_one(A, C, E, V, measured, Kg, lam1, T1[:, 0], res[q0:], aptr, acol, aval, eptr, erow,
+                                   evals)
                     rp = np.dot(T1.T, Gk)
                     r1 = 0.0
                     big = 0.0
                     for q in range(q0):
                         res[q] = rp[0, q]
-                    for q in range(Qn):
-                        res[q0 + q] = res1[q, 0]
                     for q in range(q0 + Qn):
                         a1 = abs(res[q])
                         r1 += a1
@@ -880,7 +873,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                         best[i] = r1
                         R_out[k, i, :] = res
                         for r in range(m):
-                            lam_best[i, r] = lam1[r, 0]
+                            lam_best[i, r] = lam1[r]
                     sol += 1
                     if sol > iterations + extra or (sol > iterations and not improved):
                         break
