@@ -633,6 +633,34 @@ def test_window_kalman_weights_are_the_weighted_least_squares_ones(duplicate):
     assert np.allclose(resT.T, R[:, q0:], rtol=1e-12, atol=1e-12 * np.abs(X).max())
 
 
+def test_window_prior_covariance_in_single_precision_and_the_symmetric_products():
+    """The prior covariance :math:`G_0 W G_0^T` the window's weights start from (single precision: it only sets the
+    weights) is the double-precision product to single precision's rounding; the symmetric product of a propagation
+    (``lower=True``) is the full product, its upper triangle mirrored from the lower."""
+    from eqrec.bounds.window import _prior_covariance, _times_sparse, sparse_rows
+
+    rng = np.random.default_rng(5)
+    n, q0 = 6, 40
+    G0 = rng.normal(size=(n, q0))
+    W = rng.uniform(0.01, 1.0, size=q0 + 9)  # the prior's weights first, then the noise columns'
+    S = _prior_covariance(G0, np.ascontiguousarray(G0.T).astype(np.float32), W, np.empty((n, q0), dtype=np.float32))
+    ref = (G0 * W[:q0]) @ G0.T
+    scale = (np.abs(G0) * W[:q0]) @ np.abs(G0).T
+    assert S.dtype == np.float64
+    assert np.all(np.abs(S - ref) <= 1e-5 * scale)
+    assert np.abs(S - ref).max() > 0.0  # (single precision indeed)
+    A = rng.normal(size=(2, n, n)) * (rng.random((2, n, n)) < 0.5)
+    aptr, acol, aval = sparse_rows(A)
+    Sig = ref.copy()
+    tmp = np.empty((n, n))
+    out = np.full((n, n), np.nan)
+    _times_sparse(aptr, acol, aval, 1, Sig, n, tmp)
+    _times_sparse(aptr, acol, aval, 1, tmp.T, n, out, True)
+    full = A[1] @ ref @ A[1].T
+    assert np.allclose(out, full, rtol=1e-12, atol=1e-12 * np.abs(full).max())
+    assert np.array_equal(out, out.T)
+
+
 def test_warm_weights_map_the_last_window_by_distance_from_its_end():
     from eqrec.bounds.window import _warm_weights
 
