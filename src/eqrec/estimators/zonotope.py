@@ -166,8 +166,10 @@ DEFAULT_WINDOW = 30
 #: sets themselves up to n = 10 at the default order 40, reduced beyond.
 DEFAULT_WINDOW_GENERATORS = 400
 
-#: The default number of per-state reweighted solves of the window (module docstring).
-DEFAULT_ITERATIONS = 2
+#: The default number of per-state reweighted solves of the window (module docstring).  One, since 2026-11-30 (two
+#: before): on the tank chains of ``benchmarks/bench_zonotope.py --part scale`` a step 0.86-0.92 times the cost
+#: (n = 30: 0.95 ms against 1.05), the largest bound +0.04 to +0.2 % at the median, at most +1.0 % at a step.
+DEFAULT_ITERATIONS = 1
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
 #: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
@@ -424,7 +426,8 @@ class ZonotopeEstimator:
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
     iterations : int, optional
-        Reweighted solves of the window per state after its first (``>= 0``; default 2), after the shared solves,
+        Reweighted solves of the window per state after its first (``>= 0``; default :data:`DEFAULT_ITERATIONS` =
+        1; 2 costs about 0.1 ms more a step at n = 30 for about 0.2 % on the bound), after the shared solves,
         for the state of the largest bound and, while the largest is not yet solved so, the next (at most
         :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
         :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
@@ -438,8 +441,8 @@ class ZonotopeEstimator:
         cost of a step, the largest bound the same at the median, but the states whose bound is far below the
         largest lose the cold start's first solve, and their hull becomes noisier (on the two carts up to 2.5
         times the cold start's at some steps).  Default ``False``: every window starts from the inverse column
-        lengths and solves :data:`SHARED_SOLVES` + 1 times.  With ``iterations=1`` too, the fast setting of the
-        scale benchmark (:mod:`eqrec.bounds.window`, *Cost*).
+        lengths and solves :data:`SHARED_SOLVES` + 1 times.  The fast setting of the scale benchmark
+        (:mod:`eqrec.bounds.window`, *Cost*).
 
     Attributes
     ----------
