@@ -765,3 +765,20 @@ def test_warm_start_worst_case_played_back_at_every_step_and_never_below_the_lim
         assert np.all(np.abs(out.error[1:]) <= beta_played)  # every step, every state, exactly
         assert abs(out.error[t + 1][i]) >= 0.5 * beta_played[t][i]  # the vertex is the worst one, not a random one
         assert np.all(beta_played[t] >= lim[t] * (1 - 1e-7) - 1e-12)
+
+
+def test_default_per_state_solves_depend_on_the_plant_size():
+    """``iterations=None`` (the default) is two reweighted per-state solves up to ``LARGE_PLANT_STATES`` states and
+    one beyond (:data:`eqrec.estimators.zonotope.DEFAULT_ITERATIONS_LARGE`); an explicit value is kept; a bad one is
+    refused naming the field."""
+    from eqrec.estimators import zonotope as zmod
+
+    small = tank_chain(zmod.LARGE_PLANT_STATES, 2)
+    large = tank_chain(zmod.LARGE_PLANT_STATES + 2, 2)
+    assert ZonotopeEstimator(small).iterations == zmod.DEFAULT_ITERATIONS == 2
+    assert ZonotopeEstimator(large).iterations == zmod.DEFAULT_ITERATIONS_LARGE == 1
+    assert ZonotopeEstimator(large, iterations=2).iterations == 2
+    assert ZonotopeEstimator(small, iterations=0).iterations == 0
+    with pytest.raises(InputError) as err:
+        ZonotopeEstimator(small, iterations=-1)
+    assert err.value.field == "iterations"

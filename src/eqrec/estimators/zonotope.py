@@ -166,10 +166,23 @@ DEFAULT_WINDOW = 30
 #: sets themselves up to n = 10 at the default order 40, reduced beyond.
 DEFAULT_WINDOW_GENERATORS = 400
 
-#: The default number of per-state reweighted solves of the window (module docstring).  One, since 2026-11-30 (two
-#: before): on the tank chains of ``benchmarks/bench_zonotope.py --part scale`` a step 0.86-0.92 times the cost
-#: (n = 30: 0.95 ms against 1.05), the largest bound +0.04 to +0.2 % at the median, at most +1.0 % at a step.
-DEFAULT_ITERATIONS = 1
+#: The default number of per-state reweighted solves of the window (module docstring) on a plant of at most
+#: :data:`LARGE_PLANT_STATES` states.
+DEFAULT_ITERATIONS = 2
+
+#: The default number of per-state reweighted solves on a plant of more than :data:`LARGE_PLANT_STATES` states.  The
+#: second reweighted solve of a state costs about the same share of a step at every size (a step 0.86-0.92 times the
+#: cost with one, tank chains of ``benchmarks/bench_zonotope.py --part scale``, 2026-11-30) but buys less on large
+#: plants: the largest bound +0.2 % at the median at n = 10, 20 and 30 with one (at most +1.0 % at a step), while
+#: on the compare study's plants (n = 4) one solve loosens the zonotope's bound / limit by +0.5 to +1.1 % at the
+#: median.  On a small plant a step takes at most about 0.3 ms either way; at n = 30 one solve brings it from 1.05 to
+#: 0.95 ms (issue 45 §4's 1 ms).
+DEFAULT_ITERATIONS_LARGE = 1
+
+#: The size from which the default per-state solves drop to :data:`DEFAULT_ITERATIONS_LARGE`: more states than this
+#: (the size beyond which the filters' sets, ``order · n`` = 40 n generators, are larger than the window's prior,
+#: :data:`DEFAULT_WINDOW_GENERATORS`, and a step costs more than about 0.3 ms).
+LARGE_PLANT_STATES = 10
 
 #: Longest window (steps) the estimator takes, ``max(window, max_delay + 1)``: its matrices are stored once per
 #: step of the window and its solve is linear in its length (about 4 µs a step of the window on the two-cart plant).
@@ -425,9 +438,11 @@ class ZonotopeEstimator:
     window : int, optional
         Length of the exact window in steps (``>= 1``; default 30); the window used is
         ``max(window, max_delay + 1)`` steps (module docstring).
-    iterations : int, optional
-        Reweighted solves of the window per state after its first (``>= 0``; default :data:`DEFAULT_ITERATIONS` =
-        1; 2 costs about 0.1 ms more a step at n = 30 for about 0.2 % on the bound), after the shared solves,
+    iterations : int or None, optional
+        Reweighted solves of the window per state after its first (``>= 0``; default ``None``:
+        :data:`DEFAULT_ITERATIONS` = 2 up to :data:`LARGE_PLANT_STATES` = 10 states, :data:`DEFAULT_ITERATIONS_LARGE`
+        = 1 beyond, where the second costs about 0.1 ms a step at n = 30 for about 0.2 % on the bound; the value
+        used is the attribute ``iterations``), after the shared solves,
         for the state of the largest bound and, while the largest is not yet solved so, the next (at most
         :data:`PER_STATE_STATES` states; :mod:`eqrec.bounds.window`); then, per state, at most
         :data:`WINDOW_EXTRA_SOLVES` more while each tightens the bound by more than :data:`WINDOW_SOLVE_GAIN`.
@@ -482,7 +497,7 @@ class ZonotopeEstimator:
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: "float | None" = 40,
                  gain: "str | tuple[str, ...]" = DEFAULT_GAINS, reduction: str = "pca", window: int = DEFAULT_WINDOW,
-                 iterations: int = DEFAULT_ITERATIONS, window_generators: "int | None" = DEFAULT_WINDOW_GENERATORS,
+                 iterations: "int | None" = None, window_generators: "int | None" = DEFAULT_WINDOW_GENERATORS,
                  warm_start: bool = False):
         if not isinstance(system, AffineSystem):
             raise InputError(f"expected an AffineSystem, got {type(system).__name__}", field="system")
@@ -505,9 +520,11 @@ class ZonotopeEstimator:
         if not is_stamp(window) or not 1 <= window <= MAX_WINDOW:
             raise InputError(f"the window is an integer 1..{MAX_WINDOW} (steps; its matrices are stored per step and "
                              f"its solve is linear in its length), got {window!r}", field="window")
+        if iterations is None:  # the size's default (DEFAULT_ITERATIONS_LARGE)
+            iterations = DEFAULT_ITERATIONS if n <= LARGE_PLANT_STATES else DEFAULT_ITERATIONS_LARGE
         if not is_stamp(iterations) or not 0 <= iterations <= MAX_ITERATIONS:
-            raise InputError(f"iterations is an integer 0..{MAX_ITERATIONS} (each a solve of the window per step), "
-                             f"got {iterations!r}", field="iterations")
+            raise InputError(f"iterations is None (the size's default) or an integer 0..{MAX_ITERATIONS} (each a "
+                             f"solve of the window per step), got {iterations!r}", field="iterations")
         self.window, self.iterations = int(window), int(iterations)
         if not isinstance(warm_start, (bool, np.bool_)):
             raise InputError(f"warm_start is True or False, got {warm_start!r}", field="warm_start")
