@@ -821,15 +821,17 @@ def exact_part(args) -> None:
         x, y, arrivals = simulate(system, trace, np.zeros(n), X0_RADIUS * rng.uniform(-1, 1, n), w, v)
         checked = sorted({Ns // 2 - 1, Ns - 1})
         refs = {t: _full_horizon_hull(system, trace, y, t) for t in checked}
+        default = ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw)  # its prior and window by size
         rows = [("zonotope", lambda: ZonotopeEstimator(system, X0_RADIUS, MAX_DELAY)),
-                ("exact", lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw))]
+                (f"exact ({default.prior}, window {default.window})",
+                 lambda: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, **exact_kw))]
         rows += [(f"exact, {prior}, window {W}",
                   lambda prior=prior, W=W: ExactSetEstimator(system, X0_RADIUS, MAX_DELAY, window=W, prior=prior))
                  for prior, W in args.exact_scale_priors]
         print(f"tank chain n = {n}, p = {system.p}, {Ns} steps: predicted hull / exact hull of the whole horizon at "
               f"steps {checked}")
         for name, make in rows:
-            if not keep(name):
+            if not keep(name.split(" (")[0]):  # (the default exact row by its name "exact")
                 continue
             est = make().reset(np.zeros(n))
             for t in range(5):  # loads the compiled loops (the LPs' too: the steps with data)

@@ -276,6 +276,28 @@ def test_box_prior_contains_the_exact_hull_and_is_tighter():
     assert info.value.field == "prior"
 
 
+def test_default_prior_and_window_depend_on_the_plant_size():
+    """``prior=None`` is the filter's zonotope up to ``LARGE_PLANT_STATES`` states and the box beyond;
+    ``window=None`` is 50 steps with the zonotope (alone or within the box) and 10 with the box alone; explicit
+    values are kept; a bad system is still refused naming its field."""
+    from eqrec.estimators import exact_set
+    from eqrec.estimators.zonotope import LARGE_PLANT_STATES
+
+    small = tank_chain(LARGE_PLANT_STATES, 2)
+    large = tank_chain(LARGE_PLANT_STATES + 2, 2)
+    est = ExactSetEstimator(small, 0.5)
+    assert (est.prior, est.window) == ("zonotope", exact_set.EXACT_WINDOW) == ("zonotope", 50)
+    est = ExactSetEstimator(large, 0.5)
+    assert (est.prior, est.window) == ("box", exact_set.EXACT_WINDOW_BOX) == ("box", 10)
+    assert (ExactSetEstimator(large, 0.5, prior="zonotope").window, ExactSetEstimator(small, 0.5, prior="box").window,
+            ExactSetEstimator(large, 0.5, prior="zonotope+box").window) == (50, 10, 50)
+    assert ExactSetEstimator(large, 0.5, window=7).window == 7
+    assert ExactSetEstimator(large, 0.5, max_delay=12)._W == 13  # (the window used: at least max_delay + 1 steps)
+    with pytest.raises(InputError) as info:
+        ExactSetEstimator("plant", 0.5)
+    assert info.value.field == "system"
+
+
 def test_window_set_ranged_prior_rows():
     """window_set's ranged prior rows (A0, lower, upper): the rows are the prior's then the measured ones, and the
     LP hull equals SciPy's optimum of the same LP written independently (inequalities for the ranged rows)."""

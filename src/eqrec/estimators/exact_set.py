@@ -67,10 +67,29 @@ machine (2026-11-30, one run, ``--exact-scale-priors box:10 box:15 box:20 zonoto
 per step (1.00 / 1.19), ``"box"`` window 10 6.9 ms (1.20 / 1.10), 15 84 ms (1.07 / 1.05), 20 103 ms (1.08 / 1.03),
 ``"zonotope+box"`` window 10 284 ms (1.20 / 1.10).  The box's LPs take many more pivots as the window grows (about
 13 per LP at window 10, 87 at 15, 80 at 20: degenerate vertices), so ``prior="box", window=10`` is the setting for
-large plants (issue 45 §4's 20 ms per step at n = 30); the default stays the zonotope.  On the n <= 6 plants
-at window 40 the box changes the ratios in the third decimal or not at all (tanks n = 4, 150 steps:
-``"zonotope+box"`` 1.0007 against 1.0011 at the last step; two carts 1.0122 both), for ``n`` more rows per LP;
-hence the default.
+large plants (issue 45 §4's 20 ms per step at n = 30).  On the n <= 6 plants at window 40 the box changes the
+ratios in the third decimal or not at all (tanks n = 4, 150 steps: ``"zonotope+box"`` 1.0007 against 1.0011 at
+the last step; two carts 1.0122 both), for ``n`` more rows per LP.
+
+The default by size
+-------------------
+``prior=None`` (default) takes the zonotope up to
+:data:`~eqrec.estimators.zonotope.LARGE_PLANT_STATES` = 10 states (with :data:`EXACT_WINDOW` = 50 steps) and the
+box beyond (with :data:`EXACT_WINDOW_BOX` = 10 steps), the size from which the zonotope estimator also lightens
+its window.  Measured on the tank chains (``benchmarks/bench_zonotope.py --part exact --exact-scale-n``, 60
+steps, one run each, 2026-11-30; predicted hull over the exact hull of the whole horizon at steps 29 / 59):
+
+* n = 10 (p = 2): the zonotope, window 50, 5.2 ms per step, 1.00 / 1.008; the box, window 10, 0.43 ms,
+  1.26 / 1.20.  The zonotope wins: the filter's set of order 4 is close to the consistent set, and its cost is
+  moderate.
+* n = 20 (p = 4): the zonotope 167 ms, 1.00 / 1.063; the box, window 10, 2.4 ms, 1.17 / 1.064 (window 15:
+  7.1 ms, 1.06 / 1.036).
+* n = 30 (p = 5): the zonotope 583 ms, 1.00 / 1.19; the box, window 10, 6.9 ms, 1.20 / 1.10.
+
+On the large plants the zonotope's advantage at step 29 is the transient of a window that still reaches back to
+the exact initial box; once the window slides (step 59), the box of window 10 is as tight (n = 20) or tighter
+(n = 30), at 1/70 and 1/85 of the cost.  The compare study's plants are small, so their results are those of the
+zonotope prior.
 
 Warm start across steps (``warm_start=``)
 -----------------------------------------
@@ -119,11 +138,16 @@ import numpy as np
 from eqrec.bounds.window_lp import carry_basis, lp_hull_solve, window_labels, window_set
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
-from eqrec.estimators.zonotope import ZonotopeEstimator
+from eqrec.estimators.zonotope import LARGE_PLANT_STATES, ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
 
-#: Default window of :class:`ExactSetEstimator` in steps (at least ``max_delay + 1`` are used).
+#: Default window of :class:`ExactSetEstimator` in steps with the filter's zonotope as its prior (at least
+#: ``max_delay + 1`` are used).
 EXACT_WINDOW = 50
+
+#: Default window with the box prior (``prior="box"``; module docstring, *The prior*): the box pays where the
+#: window is short, and the LPs of longer windows of the box take many more pivots.
+EXACT_WINDOW_BOX = 10
 
 #: The window's priors of :class:`ExactSetEstimator` (module docstring, *The prior*).
 EXACT_PRIORS = ("zonotope", "zonotope+box", "box")
@@ -152,16 +176,19 @@ class ExactSetEstimator(ZonotopeEstimator):
     order : float, optional
         Generators per state kept by the filter whose zonotope is the window's prior (default
         :data:`EXACT_ORDER`).
-    window : int, optional
-        Steps of the window solved with its data (default :data:`EXACT_WINDOW`; at least ``max_delay + 1`` are
-        used).
+    window : int or None, optional
+        Steps of the window solved with its data (at least ``max_delay + 1`` are used); default ``None``:
+        :data:`EXACT_WINDOW` = 50 with the zonotope prior, :data:`EXACT_WINDOW_BOX` = 10 with the box alone.
     gain : str, optional
         The filter's gain (``"reweighted"``, default, or ``"fradius"``; one filter).
     reduction : {"pca", "girard"}, optional
         The filter's order reduction.
-    prior : {"zonotope", "zonotope+box", "box"}, optional
-        The window's prior (module docstring, *The prior*): the filter's zonotope (default), the zonotope within
-        the box of the hull this estimator reported for the window's start, or that box alone.
+    prior : {"zonotope", "zonotope+box", "box"} or None, optional
+        The window's prior (module docstring, *The prior*): the filter's zonotope, the zonotope within the box of
+        the hull this estimator reported for the window's start, or that box alone.  Default ``None``, by the
+        plant's size: ``"zonotope"`` up to :data:`~eqrec.estimators.zonotope.LARGE_PLANT_STATES` = 10 states,
+        ``"box"`` beyond (module docstring, *The default by size*).  The values used are the attributes ``prior``
+        and ``window``.
     warm_start : bool, optional
         Start each window's LPs from the last basis of the previous window's, carried over by label (module
         docstring, *Warm start across steps*; default ``True``); ``False``: from the slack basis at every step.
@@ -203,14 +230,20 @@ class ExactSetEstimator(ZonotopeEstimator):
     name = "set-membership, exact"
 
     def __init__(self, system: AffineSystem, x0_radius: Any = 1.0, max_delay: int = 0, order: float = EXACT_ORDER,
-                 window: int = EXACT_WINDOW, gain: str = "reweighted", reduction: str = "pca",
-                 prior: str = "zonotope", warm_start: bool = True):
+                 window: "int | None" = None, gain: str = "reweighted", reduction: str = "pca",
+                 prior: "str | None" = None, warm_start: bool = True):
         if order is None:
             raise InputError("the exact estimator needs a reduction order (a number >= 1), got None", field="order")
         if not isinstance(gain, str):
             raise InputError(f"the exact estimator runs one filter: gain is one name, got {gain!r}", field="gain")
+        if prior is None:  # by the plant's size (module docstring, *The default by size*)
+            n = system.n if isinstance(system, AffineSystem) else 0  # (a bad system is refused below)
+            prior = "zonotope" if n <= LARGE_PLANT_STATES else "box"
         if not isinstance(prior, str) or prior not in EXACT_PRIORS:
-            raise InputError(f"the window's prior is one of {', '.join(EXACT_PRIORS)}, got {prior!r}", field="prior")
+            raise InputError(f"the window's prior is None (by the plant's size) or one of {', '.join(EXACT_PRIORS)}, "
+                             f"got {prior!r}", field="prior")
+        if window is None:
+            window = EXACT_WINDOW_BOX if prior == "box" else EXACT_WINDOW
         super().__init__(system, x0_radius, max_delay, order=order, gain=gain, reduction=reduction, window=window)
         self.prior = prior
         self.warm_start = bool(warm_start)
