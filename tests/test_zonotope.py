@@ -637,18 +637,22 @@ def test_window_prior_covariance_in_single_precision_and_the_symmetric_products(
     """The prior covariance :math:`G_0 W G_0^T` the window's weights start from (single precision: it only sets the
     weights) is the double-precision product to single precision's rounding; the symmetric product of a propagation
     (``lower=True``) is the full product, its upper triangle mirrored from the lower."""
-    from eqrec.bounds.window import _prior_covariance, _times_sparse, sparse_rows
+    from eqrec.bounds.window import _prior_covariance, _single, _times_sparse, sparse_rows
 
     rng = np.random.default_rng(5)
     n, q0 = 6, 40
-    G0 = rng.normal(size=(n, q0))
-    W = rng.uniform(0.01, 1.0, size=q0 + 9)  # the prior's weights first, then the noise columns'
-    S = _prior_covariance(G0, np.ascontiguousarray(G0.T).astype(np.float32), W, np.empty((n, q0), dtype=np.float32))
-    ref = (G0 * W[:q0]) @ G0.T
-    scale = (np.abs(G0) * W[:q0]) @ np.abs(G0).T
-    assert S.dtype == np.float64
-    assert np.all(np.abs(S - ref) <= 1e-5 * scale)
-    assert np.abs(S - ref).max() > 0.0  # (single precision indeed)
+    G1 = rng.normal(size=(n, q0))
+    W1 = rng.uniform(0.01, 1.0, size=q0 + 9)  # the prior's weights first, then the noise columns'
+    # far outside single precision's range (1e38), both ways: the scalings by powers of two keep it
+    for G0, W in ((G1, W1), (1e100 * G1, 1e-100 * W1), (1e-100 * G1, W1), (1e150 * G1, 1e-30 * W1)):
+        GT32, inv, colmax = _single(G0)
+        S = _prior_covariance(G0, GT32, inv, colmax, W, np.empty((n, q0), dtype=np.float32))
+        ref = (G0 * W[:q0]) @ G0.T
+        scale = (np.abs(G0) * W[:q0]) @ np.abs(G0).T
+        assert S.dtype == np.float64
+        assert np.all(np.abs(S - ref) <= 1e-5 * scale)
+        assert np.abs(S - ref).max() > 0.0  # (single precision indeed)
+    ref = (G1 * W1[:q0]) @ G1.T
     A = rng.normal(size=(2, n, n)) * (rng.random((2, n, n)) < 0.5)
     aptr, acol, aval = sparse_rows(A)
     Sig = ref.copy()

@@ -311,18 +311,57 @@ def _triangular_rows(F, X, transposed):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _prior_covariance(Gk, GkT32, W, GW32):  # pragma: no cover - compiled
-    r"""The Kalman recursion's prior covariance :math:`S = G_0 W G_0^\top` (``Gk``: ``n × q0``; ``W``: the weights,
-    the prior's first), in single precision: ``GkT32`` is :math:`G_0^\top` rounded to it once per window, ``GW32``
-    a buffer (``n × q0``).  :math:`S` only sets the weights, and any weights give a valid bound, exact for its
-    estimate (module docstring), so its rounding changes no guarantee; at single precision the product takes
-    about half the time (measured at n = 30, 400 generators: the radii within :math:`10^{-8}` relative of those from
-    the double-precision product)."""
+def _power_of_two_scale(m):  # pragma: no cover - compiled
+    """``(s, 1/s)`` for the power of two ``s`` that brings ``m > 0`` into ``[0.5, 1)`` (exponent clipped to
+    ``±1000``; ``(1, 1)`` for a zero or non-finite ``m``): a scaling that rounds nothing."""
+    if not (m > 0.0) or not np.isfinite(m):
+        return 1.0, 1.0
+    k = min(max(-(int(np.floor(np.log2(m))) + 1), -1000), 1000)
+    return 2.0 ** k, 2.0 ** (-k)
+
+
+@numba.njit(cache=True)
+def _single(Gk):  # pragma: no cover - compiled
+    r""":math:`G_0^\top` scaled by a power of two into ``[0.5, 1)`` at its largest entry and rounded to single
+    precision once per window, the inverse of that scale, and the largest magnitude of each generator
+    (:func:`_prior_covariance`)."""
     n, q0 = Gk.shape
+    colmax = np.zeros(q0)
     for a in range(n):
         for q in range(q0):
-            GW32[a, q] = Gk[a, q] * W[q]
-    return np.dot(GW32, GkT32).astype(np.float64)
+            colmax[q] = max(colmax[q], abs(Gk[a, q]))
+    big = 0.0
+    for q in range(q0):
+        big = max(big, colmax[q])
+    s, inv = _power_of_two_scale(big)
+    T = np.empty((q0, n), dtype=np.float32)
+    for q in range(q0):
+        for a in range(n):
+            T[q, a] = Gk[a, q] * s
+    return T, inv, colmax
+
+
+@numba.njit(cache=True)
+def _prior_covariance(Gk, GkT32, inv, colmax, W, GW32):  # pragma: no cover - compiled
+    r"""The Kalman recursion's prior covariance :math:`S = G_0 W G_0^\top` (``Gk``: ``n × q0``; ``W``: the weights,
+    the prior's first) in single precision: ``GkT32``, ``inv``, ``colmax`` from :func:`_single`, ``GW32`` a buffer
+    (``n × q0``).  :math:`S` only sets the weights, and any weights give a valid bound, exact for its estimate
+    (module docstring), so its rounding changes no guarantee; at single precision the product takes about half the
+    time (measured at n = 30, 400 generators: the radii within :math:`10^{-8}` relative of those from the
+    double-precision product).  Both factors are scaled by powers of two into single precision's range (a prior of
+    radius :math:`10^{100}` overflows it otherwise), and the product scaled back in double precision."""
+    n, q0 = Gk.shape
+    big = 0.0
+    for q in range(q0):
+        big = max(big, colmax[q] * abs(W[q]))
+    s, inv_w = _power_of_two_scale(big)
+    for a in range(n):
+        for q in range(q0):
+            GW32[a, q] = Gk[a, q] * W[q] * s
+    S = np.dot(GW32, GkT32).astype(np.float64)
+    S *= inv_w  # (two exact scalings: their product may leave the double range where S does not)
+    S *= inv
+    return S
 
 
 @numba.njit(cache=True)
@@ -797,7 +836,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 invr[i] = 1.0 / carried_rad[k, i] if carried_rad[k, i] > 0.0 else 0.0
             _warm_weights(carried_agg[k], carried_T0[k], invr, carried_measured, measured, Gk, nw, nv, delta, W)
         GW = np.empty((n, q0), dtype=np.float32)
-        GkT32 = np.ascontiguousarray(Gk.T).astype(np.float32)
+        GkT32, inv32, colmax = _single(Gk)
         resT = np.empty((Qn, n))
         lamT = np.zeros((m, n))
         rad = np.empty(n)
@@ -807,7 +846,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
         # --- shared solves: one Kalman recursion for every state (nothing measured: the prediction alone) -------
         while True:
             if m > 0:
-                S = _prior_covariance(Gk, GkT32, W, GW)  # G0 W G0^T
+                S = _prior_covariance(Gk, GkT32, inv32, colmax, W, GW)  # G0 W G0^T
                 _kalman_gains(A, C, E, V, measured, S, W, q0, Kg, aptr, acol, aval, eptr, erow, evals)
             TT = np.eye(n)
             # the weights of every state (m, n) from the one filter's gains, and their residuals
@@ -874,7 +913,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     Wi[q] = 1.0 / s if s > 0.0 else 0.0
                 sol = 0
                 while True:
-                    S = _prior_covariance(Gk, GkT32, Wi, GW)
+                    S = _prior_covariance(Gk, GkT32, inv32, colmax, Wi, GW)
                     _kalman_gains(A, C, E, V, measured, S, Wi, q0, Kg, aptr, acol, aval, eptr, erow, evals)
                     T1 = np.zeros((n, 1))
                     T1[i, 0] = 1.0
