@@ -277,14 +277,13 @@ def test_box_prior_contains_the_exact_hull_and_is_tighter():
 
 
 def test_default_prior_and_window_depend_on_the_plant_size():
-    """``prior=None`` is the filter's zonotope up to ``LARGE_PLANT_STATES`` states and the box beyond;
+    """``prior=None`` is the filter's zonotope below ``EXACT_BOX_STATES`` states and the box from there on;
     ``window=None`` is 50 steps with the zonotope (alone or within the box) and 10 with the box alone; explicit
     values are kept; a bad system is still refused naming its field."""
     from eqrec.estimators import exact_set
-    from eqrec.estimators.zonotope import LARGE_PLANT_STATES
 
-    small = tank_chain(LARGE_PLANT_STATES, 2)
-    large = tank_chain(LARGE_PLANT_STATES + 2, 2)
+    small = tank_chain(exact_set.EXACT_BOX_STATES - 1, 2)
+    large = tank_chain(exact_set.EXACT_BOX_STATES, 2)
     est = ExactSetEstimator(small, 0.5)
     assert (est.prior, est.window) == ("zonotope", exact_set.EXACT_WINDOW) == ("zonotope", 50)
     est = ExactSetEstimator(large, 0.5)

@@ -73,23 +73,31 @@ the last step; two carts 1.0122 both), for ``n`` more rows per LP.
 
 The default by size
 -------------------
-``prior=None`` (default) takes the zonotope up to
-:data:`~eqrec.estimators.zonotope.LARGE_PLANT_STATES` = 10 states (with :data:`EXACT_WINDOW` = 50 steps) and the
-box beyond (with :data:`EXACT_WINDOW_BOX` = 10 steps), the size from which the zonotope estimator also lightens
-its window.  Measured on the tank chains (``benchmarks/bench_zonotope.py --part exact --exact-scale-n``, 60
-steps, one run each, 2026-11-30; predicted hull over the exact hull of the whole horizon at steps 29 / 59):
+``prior=None`` (default) takes the zonotope (with :data:`EXACT_WINDOW` = 50 steps) below
+:data:`EXACT_BOX_STATES` = 20 states and the box (with :data:`EXACT_WINDOW_BOX` = 10 steps) from 20 states on.
+Measured on the tank chains (``benchmarks/bench_zonotope.py --part exact --exact-scale-n ... --exact-scale-priors
+zonotope:50 box:15``, 60 steps, one run per size, 2026-11-30; ms per step, and the predicted hull over the exact
+hull of the whole horizon at step 59; at step 29 the zonotope's window still reaches back to the exact initial box
+and ends at 1.00 everywhere, the box's at 1.06-1.26):
 
-* n = 10 (p = 2): the zonotope, window 50, 5.2 ms per step, 1.00 / 1.008; the box, window 10, 0.43 ms,
-  1.26 / 1.20.  The zonotope wins: the filter's set of order 4 is close to the consistent set, and its cost is
-  moderate.
-* n = 20 (p = 4): the zonotope 167 ms, 1.00 / 1.063; the box, window 10, 2.4 ms, 1.17 / 1.064 (window 15:
-  7.1 ms, 1.06 / 1.036).
-* n = 30 (p = 5): the zonotope 583 ms, 1.00 / 1.19; the box, window 10, 6.9 ms, 1.20 / 1.10.
+======  ===  ===================  ===================  ===================
+ n       p   zonotope, window 50  box, window 10       box, window 15
+======  ===  ===================  ===================  ===================
+ 10      2   5.2 ms, 1.008        0.43 ms, 1.20        0.69 ms, 1.09
+ 14      2   11 ms, 1.052         0.46 ms, 1.20        -
+ 16      2   15 ms, 1.079         0.53 ms, 1.18        0.81 ms, 1.09
+ 18      3   52 ms, 1.079         1.1 ms, 1.16         2.3 ms, 1.070
+ 20      4   167 ms, 1.063        2.4 ms, 1.064        7.1 ms, 1.036
+ 24      4   233 ms, 1.134        3.3 ms, 1.139        11.6 ms, 1.065
+ 30      5   583-641 ms, 1.19     6.9-9.5 ms, 1.10     84 ms, 1.05
+======  ===  ===================  ===================  ===================
 
-On the large plants the zonotope's advantage at step 29 is the transient of a window that still reaches back to
-the exact initial box; once the window slides (step 59), the box of window 10 is as tight (n = 20) or tighter
-(n = 30), at 1/70 and 1/85 of the cost.  The compare study's plants are small, so their results are those of the
-zonotope prior.
+Below 20 states the zonotope is the tighter once the window slides, at up to 52 ms per step; from 20 on the box
+of window 10 is as tight (n = 20, 24) or tighter (n = 30) at 1/70 to 1/85 of the cost, which the zonotope's cost
+(its ``4n`` columns per LP and their pivots) makes prohibitive (issue 45 §4: 20 ms per step at n = 30).  A window
+of 15 for the box is tighter still from 16 states on, and cheap up to 24 (12 ms), but its LPs take many more pivots
+at n = 30 (84 ms); pass ``window=15`` there where the cost allows.  The compare study's plants are small, so their
+results are those of the zonotope prior.
 
 Warm start across steps (``warm_start=``)
 -----------------------------------------
@@ -138,12 +146,15 @@ import numpy as np
 from eqrec.bounds.window_lp import carry_basis, lp_hull_solve, window_labels, window_set
 from eqrec.errors import InputError
 from eqrec.estimators.protocol import StateSet
-from eqrec.estimators.zonotope import LARGE_PLANT_STATES, ZonotopeEstimator
+from eqrec.estimators.zonotope import ZonotopeEstimator
 from eqrec.systems.affine import AffineSystem
 
 #: Default window of :class:`ExactSetEstimator` in steps with the filter's zonotope as its prior (at least
 #: ``max_delay + 1`` are used).
 EXACT_WINDOW = 50
+
+#: The size (states) from which the default prior is the box (module docstring, *The default by size*).
+EXACT_BOX_STATES = 20
 
 #: Default window with the box prior (``prior="box"``; module docstring, *The prior*): the box pays where the
 #: window is short, and the LPs of longer windows of the box take many more pivots.
@@ -186,8 +197,8 @@ class ExactSetEstimator(ZonotopeEstimator):
     prior : {"zonotope", "zonotope+box", "box"} or None, optional
         The window's prior (module docstring, *The prior*): the filter's zonotope, the zonotope within the box of
         the hull this estimator reported for the window's start, or that box alone.  Default ``None``, by the
-        plant's size: ``"zonotope"`` up to :data:`~eqrec.estimators.zonotope.LARGE_PLANT_STATES` = 10 states,
-        ``"box"`` beyond (module docstring, *The default by size*).  The values used are the attributes ``prior``
+        plant's size: ``"zonotope"`` below :data:`EXACT_BOX_STATES` = 20 states, ``"box"`` from 20 on (module
+        docstring, *The default by size*).  The values used are the attributes ``prior``
         and ``window``.
     warm_start : bool, optional
         Start each window's LPs from the last basis of the previous window's, carried over by label (module
@@ -238,7 +249,7 @@ class ExactSetEstimator(ZonotopeEstimator):
             raise InputError(f"the exact estimator runs one filter: gain is one name, got {gain!r}", field="gain")
         if prior is None:  # by the plant's size (module docstring, *The default by size*)
             n = system.n if isinstance(system, AffineSystem) else 0  # (a bad system is refused below)
-            prior = "zonotope" if n <= LARGE_PLANT_STATES else "box"
+            prior = "zonotope" if n < EXACT_BOX_STATES else "box"
         if not isinstance(prior, str) or prior not in EXACT_PRIORS:
             raise InputError(f"the window's prior is None (by the plant's size) or one of {', '.join(EXACT_PRIORS)}, "
                              f"got {prior!r}", field="prior")
