@@ -473,20 +473,22 @@ weights; radii within 1e-8 relative) and its symmetric propagations as a lower t
 0.93 times the cost.  Then the per-state solves' default by size (``iterations=None``: 2 up to 10 states, 1
 beyond; one solve a step 0.86-0.92 times the cost at every size, the largest bound +0.2 % at the median at
 n = 10, 20, 30 and at most +1.0 % at a step, but +0.5 to +1.1 % on the compare study's plants).  ``--part scale``
-in one run on an idle machine (µs per step; fast: ``warm_start=True, iterations=1``):
+in one run on an idle machine, the final code of the session (µs per step; fast: ``warm_start=True,
+iterations=1``):
 
 ====  ===  ========  ======  =======  =======  ==========================
  n     p   defaults  fast    crude    NumPy    bound / limit median / max
 ====  ===  ========  ======  =======  =======  ==========================
- 4     1   97        83      30       70       1.003 / 1.039
- 10    2   281       212     71       118      1.014 / 1.021
- 20    4   554       480     193      269      1.047 / 1.069
- 30    5   956       793     498      594      -
+ 4     1   96        82      29       71       1.003 / 1.039
+ 10    2   285       212     68       118      1.014 / 1.021
+ 20    4   559       492     198      270      1.047 / 1.069
+ 30    5   938       760     496      548      -
 ====  ===  ========  ======  =======  =======  ==========================
 
-Growth exponents 1.11 (the estimator), 1.36 (crude), 1.03 (NumPy).  The 1 ms at n = 30 is reached at the
-defaults; bound / limit at n = 20 moves from 1.045 / 1.065 to 1.047 / 1.069 with the one solve.  ``--part where``
-at n = 30: a step 964 µs, the window 629 (65 %), the filter step 92, the reductions 172, the rest 71.  Tried and
+Growth exponents 1.11 (the estimator), 1.37 (crude), 1.00 (NumPy).  The 1 ms at n = 30 is reached at the
+defaults (an earlier run of the same table: 97 / 281 / 554 / 956 µs); bound / limit at n = 20 moves from 1.045 /
+1.065 to 1.047 / 1.069 with the one solve.  ``--part where`` at n = 30: a step 949 µs, the window 623 (66 %), the
+filter step 91, the reductions 164, the rest 70.  Tried and
 left out: the Kalman recursion in single precision (slower: the mixed-precision loops do not vectorise), a
 branch-free finite check of the step's results (no faster than the early exit, 17 µs for 48,000 entries).
 """

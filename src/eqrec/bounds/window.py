@@ -105,8 +105,8 @@ Where the time of a full window goes at n = 30 (2026-11-30, before these two cha
 cost): about 45 µs for the Gramian of the first weights, a shared solve about 0.2 ms (the products with
 :math:`G_0` 50 µs, the Kalman recursion 75, the backward recursion for all states 50) and a per-state solve about
 0.13 ms (the product with :math:`G_0` 30 µs, the Kalman recursion 75); two shared and three per-state solves a
-step at ``iterations=2``.  The rest is compiled with Numba (no ``fastmath``); the bytes are those of the machine's BLAS (the same on one machine;
-the rounding allowance below holds for any order of the sums).
+step at ``iterations=2``.  The rest is compiled with Numba (no ``fastmath``); the bytes are those of the machine's
+BLAS (the same on one machine; the rounding allowance below holds for any order of the sums).
 
 Floating point
 --------------
