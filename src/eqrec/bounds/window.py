@@ -564,6 +564,19 @@ def _residuals_one(A, C, E, V, measured, K, lam, t, RT, aptr, acol, aval, eptr, 
 
 
 @numba.njit(cache=True)
+def _irls_weights(a, delta, out):  # pragma: no cover - compiled
+    """The IRLS weights of residual magnitudes ``a`` (module docstring): ``out[q] = 1 / max(|a_q|, delta max|a|)``
+    (0 where that is 0); ``out`` may be ``a`` itself."""
+    big = 0.0
+    for q in range(a.shape[0]):
+        big = max(big, abs(a[q]))
+    floor = delta * big
+    for q in range(a.shape[0]):
+        d = max(abs(a[q]), floor)
+        out[q] = 1.0 / d if d > 0.0 else 0.0
+
+
+@numba.njit(cache=True)
 def _warm_weights(row, Tm, scale, known_prev, measured, G0, nw, nv, delta, W):  # pragma: no cover - compiled
     r"""First weights of a window from the last step's residuals (module docstring, *Warm start*).
 
@@ -608,13 +621,7 @@ def _warm_weights(row, Tm, scale, known_prev, measured, G0, nw, nv, delta, W):  
             for q in range(nv):
                 W[q0 + L * nw + tt * nv + q] = abs(row[q0p + Lp * nw + tt_old[near] * nv + q])
             tt += 1
-    big = 0.0
-    for q in range(W.shape[0]):
-        big = max(big, W[q])
-    floor = delta * big
-    for q in range(W.shape[0]):
-        d = max(W[q], floor)
-        W[q] = 1.0 / d if d > 0.0 else 0.0
+    _irls_weights(W, delta, W)
 
 
 @numba.njit(cache=True)
@@ -876,12 +883,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                 break
             # shared weights: each state's residual, relative to its radius, summed over the states
             _relative_residuals(RP, resT, rad, agg)
-            big = 0.0
-            for q in range(q0 + Qn):
-                big = max(big, agg[q])
-            floor = delta * big
-            for q in range(q0 + Qn):
-                W[q] = 1.0 / max(agg[q], floor) if max(agg[q], floor) > 0.0 else 0.0
+            _irls_weights(agg, delta, W)
         if carry:  # what the next step's first weights start from: the last shared solve's relative residuals
             _relative_residuals(RP, resT, rad, agg_out[k])
             rad_out[k] = rad
@@ -904,13 +906,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     break
                 refined[i] = True
                 count += 1
-                big = 0.0
-                for q in range(q0 + Qn):
-                    big = max(big, abs(R_out[k, i, q]))
-                floor = delta * big
-                for q in range(q0 + Qn):
-                    s = max(abs(R_out[k, i, q]), floor)
-                    Wi[q] = 1.0 / s if s > 0.0 else 0.0
+                _irls_weights(R_out[k, i], delta, Wi)  # from the state's best residual so far
                 sol = 0
                 while True:
                     S = _prior_covariance(Gk, GkT32, inv32, colmax, Wi, GW)
@@ -921,13 +917,10 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                                    evals)
                     rp = np.dot(T1.T, Gk)
                     r1 = 0.0
-                    big = 0.0
                     for q in range(q0):
                         res[q] = rp[0, q]
                     for q in range(q0 + Qn):
-                        a1 = abs(res[q])
-                        r1 += a1
-                        big = max(big, a1)
+                        r1 += abs(res[q])
                     improved = r1 < best[i] * (1.0 - gain)
                     if r1 < best[i]:
                         best[i] = r1
@@ -937,10 +930,7 @@ def window_estimate_sparse(A, C, E, V, drive, measured, Y, c0, G0, shared, delta
                     sol += 1
                     if sol > iterations + extra or (sol > iterations and not improved):
                         break
-                    floor = delta * big
-                    for q in range(q0 + Qn):
-                        s = max(abs(res[q]), floor)
-                        Wi[q] = 1.0 / s if s > 0.0 else 0.0
+                    _irls_weights(res, delta, Wi)
         for i in range(n):
             # the estimate, its magnitude and the rounding allowance (module docstring)
             est = xc[i]
