@@ -238,14 +238,14 @@ def _played_back(system, make, trace, xhat0, delta):
 
 @pytest.mark.parametrize("loss", [0.0, 0.1, 0.4])
 @pytest.mark.parametrize("family", ["strict=False", "strict=False, plain", "zonotope", "zonotope, window 5, order 3",
-                                    "Kalman, time-stamped"])
+                                    "zonotope, large-plant solves", "Kalman, time-stamped"])
 def test_every_worst_case_played_back_stays_inside_and_no_bound_is_below_the_information_limit(
         oscillator, osc_design, family, loss):
     """For every step ``t``: the noise at the sign of the worst row of the error map at ``t`` (initial error at
     its box corner) played back gives error <= bound at every step (no tolerance: the bounds carry their rounding allowance),
     and the bound is never below the information limit (1e-9 relative: the limit is an LP optimum)."""
     from eqrec.bounds.information import information_limit
-    from eqrec.estimators.zonotope import ZonotopeEstimator
+    from eqrec.estimators.zonotope import DEFAULT_ITERATIONS_LARGE, ZonotopeEstimator
 
     sysm, mu1 = oscillator, osc_design.mu1
     kalman = GaussianNoise(Qw=np.eye(2) * 0.002, Qv=np.eye(1) * 0.0004, x0_cov=np.eye(2) * 0.04).design(sysm)
@@ -255,6 +255,9 @@ def test_every_worst_case_played_back_stays_inside_and_no_bound_is_below_the_inf
             # the filter 5 steps behind, reduced: the window's prior is a filtered, reduced zonotope from step 5 on
             "zonotope, window 5, order 3": lambda: ZonotopeEstimator(sysm, x0_radius=mu1, max_delay=0, order=3,
                                                                      window=5),
+            # the per-state solves a plant of more than LARGE_PLANT_STATES states gets by default (one reweighted)
+            "zonotope, large-plant solves": lambda: ZonotopeEstimator(sysm, x0_radius=mu1, max_delay=0, order=3,
+                                                                      window=5, iterations=DEFAULT_ITERATIONS_LARGE),
             "Kalman, time-stamped": lambda: exact_bound(TimestampedKalman(sysm, kalman), sysm, mu1, steps=18)}[family]
     trace = _trace(7, 18, loss, 0)
     xhat0 = np.array([0.4, -0.2])
